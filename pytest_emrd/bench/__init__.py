@@ -1,0 +1,86 @@
+"""``emrd bench``: the product's own speed and size, measured on this machine.
+
+Each stage module (``world``, ``loop``, ``metrics``, ``replay``, ``report``, ``plugin``)
+exposes ``run(*, repeat: int) -> list[Figure]``. Timings are medians over ``repeat``
+repetitions after one warm-up; ``--json`` prints the figures as one JSON list.
+"""
+
+from __future__ import annotations
+
+import importlib
+import statistics
+import time
+from collections.abc import Callable
+from dataclasses import asdict, dataclass
+
+from pytest_emrd.errors import check_choice
+
+#: Stage name -> module implementing ``run``. Order is the order of ``emrd bench all``.
+STAGES: dict[str, str] = {
+    "world": "pytest_emrd.bench.world",
+    "loop": "pytest_emrd.bench.loop",
+    "metrics": "pytest_emrd.bench.metrics",
+    "replay": "pytest_emrd.bench.replay",
+    "plugin": "pytest_emrd.bench.plugin",
+    "report": "pytest_emrd.bench.report",
+}
+
+
+@dataclass(frozen=True)
+class Figure:
+    """One measured figure, as ``emrd bench --json`` prints it."""
+
+    figure: str
+    """``<stage>.<name>``, e.g. ``world.step_ms``."""
+    value: float
+    unit: str
+    """``ms``, ``s``, ``KB`` or ``ratio``."""
+    target: float | None
+    """The issue's target for this figure, or None."""
+    n: int
+    """Repetitions behind the median (1 for sizes)."""
+
+    def to_dict(self) -> dict[str, object]:
+        return asdict(self)
+
+    @property
+    def meets_target(self) -> bool | None:
+        if self.target is None:
+            return None
+        if self.unit == "ratio":
+            return self.value >= self.target
+        return self.value <= self.target
+
+
+def median_seconds(fn: Callable[[], object], *, repeat: int, warmup: int = 1) -> float:
+    """Median wall time of ``fn()`` in seconds over ``repeat`` runs after ``warmup`` runs."""
+    for _ in range(warmup):
+        fn()
+    samples = []
+    for _ in range(repeat):
+        start = time.perf_counter()
+        fn()
+        samples.append(time.perf_counter() - start)
+    return statistics.median(samples)
+
+
+def run_stages(names: list[str], *, repeat: int) -> list[Figure]:
+    """Run the named stages (``all`` expands to every stage) and collect their figures."""
+    selected = list(STAGES) if "all" in names else names
+    for name in selected:
+        check_choice("stage", name, [*STAGES, "all"])
+    figures: list[Figure] = []
+    for name in selected:
+        module = importlib.import_module(STAGES[name])
+        figures.extend(module.run(repeat=repeat))
+    return figures
+
+
+def format_table(figures: list[Figure]) -> str:
+    """Human-readable table of figures with their targets."""
+    lines = [f"{'figure':<40} {'value':>12} {'unit':<6} {'target':>10} {'n':>4}  ok"]
+    for f in figures:
+        ok = {None: "", True: "yes", False: "NO"}[f.meets_target]
+        target = "" if f.target is None else f"{f.target:g}"
+        lines.append(f"{f.figure:<40} {f.value:>12.4g} {f.unit:<6} {target:>10} {f.n:>4}  {ok}")
+    return "\n".join(lines)

@@ -1,0 +1,51 @@
+"""In-process hand-over of frame identities from the world to the cassette redactor.
+
+A cassette must key a frame by a digest of its rendered *pixels*, never by JPEG bytes,
+so that a recording replays across machines and Pillow versions. The world computes the
+pixel digest; the agent registers the data-URL payload it sends together with that digest
+(:func:`register`); the redactor, seeing only the HTTP body, looks the payload up
+(:func:`pixel_digest_for`). Unknown payloads (a frame this process did not render) fall
+back to a digest of the payload itself, marked ``bytes:`` so the two kinds never collide.
+
+The table is bounded (oldest entries evicted first) and thread-safe.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import threading
+from collections import OrderedDict
+from typing import Final
+
+_CAPACITY: Final = 4096
+_lock = threading.Lock()
+_table: OrderedDict[str, str] = OrderedDict()
+
+
+def _payload_key(b64_payload: str | bytes) -> str:
+    raw = b64_payload.encode() if isinstance(b64_payload, str) else b64_payload
+    return hashlib.sha256(raw).hexdigest()
+
+
+def register(b64_payload: str | bytes, pixel_digest: str) -> None:
+    """Remember that this base64 image payload shows the frame with ``pixel_digest``."""
+    key = _payload_key(b64_payload)
+    with _lock:
+        _table[key] = pixel_digest
+        _table.move_to_end(key)
+        while len(_table) > _CAPACITY:
+            _table.popitem(last=False)
+
+
+def pixel_digest_for(b64_payload: str | bytes) -> str:
+    """``pixels:<sha256>`` for a registered payload, else ``bytes:<sha256 of payload>``."""
+    key = _payload_key(b64_payload)
+    with _lock:
+        digest = _table.get(key)
+    return f"pixels:{digest}" if digest else f"bytes:{key}"
+
+
+def clear() -> None:
+    """Forget every registered frame (tests)."""
+    with _lock:
+        _table.clear()

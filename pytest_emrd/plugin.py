@@ -1,0 +1,1 @@
+"""pytest glue for pytest-emrd (being built: see issue 5)."""

@@ -1,0 +1,200 @@
+"""Data model of the world stage: the layout every backend builds, and what a step returns.
+
+World frame: metres, ``x`` east, ``z`` north, headings in degrees clockwise from north
+(``+z``), the AI2-THOR convention for yaw. The office spans ``[0, width] x [0, depth]``;
+the Office is top-left (small ``x``, large ``z``), the Entrance bottom-right.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, Protocol
+
+import numpy as np
+
+from pytest_emrd._serde import from_dict, to_dict
+from pytest_emrd.trajectory import Pose
+
+
+@dataclass(frozen=True)
+class Room:
+    """An axis-aligned rectangular room."""
+
+    name: str
+    """Canonical room name (see :mod:`pytest_emrd.rooms`)."""
+    x0: float
+    z0: float
+    x1: float
+    z1: float
+
+    def contains(self, x: float, z: float) -> bool:
+        return self.x0 <= x <= self.x1 and self.z0 <= z <= self.z1
+
+
+@dataclass(frozen=True)
+class Doorway:
+    """A gap in the wall shared by two rooms."""
+
+    object_id: str
+    """Instance id, also the ``Goto`` target (``Doorway_1``)."""
+    room_a: str
+    room_b: str
+    x: float
+    """Centre of the gap."""
+    z: float
+    width: float
+    axis: str
+    """``"x"`` if the wall runs along x (gap spans x), ``"z"`` if it runs along z."""
+
+
+@dataclass(frozen=True)
+class WorldObject:
+    """A piece of furniture, a fixture or a landmark (doorways are also listed here)."""
+
+    object_id: str
+    """``Type_N`` instance id, unique in the layout."""
+    object_type: str
+    """AI2-THOR ``objectType`` name."""
+    room: str
+    category: str
+    """``landmark``, ``salient`` or ``clutter``."""
+    x: float
+    """Centre of the footprint."""
+    z: float
+    width: float
+    """Footprint extent along the object's own x axis (before rotation)."""
+    depth: float
+    height: float
+    rotation: float = 0.0
+    """Yaw in degrees; 0/90/180/270 only, so footprints stay axis-aligned."""
+    color: tuple[int, int, int] = (128, 128, 128)
+    """Base RGB colour (baseline palette; the texture condition replaces it)."""
+
+
+@dataclass(frozen=True)
+class Layout:
+    """One procedurally generated office: the single source of truth for every backend."""
+
+    seed: int
+    width: float
+    depth: float
+    rooms: tuple[Room, ...]
+    doorways: tuple[Doorway, ...]
+    objects: tuple[WorldObject, ...]
+    """Every object, doorways and the building exit included."""
+    wall_thickness: float = 0.1
+    version: int = 1
+
+    def room(self, name: str) -> Room:
+        for r in self.rooms:
+            if r.name == name:
+                return r
+        raise KeyError(name)
+
+    def room_at(self, x: float, z: float) -> str | None:
+        for r in self.rooms:
+            if r.contains(x, z):
+                return r.name
+        return None
+
+    def inventory(self) -> dict[str, dict[str, int]]:
+        """Room name -> object type -> count, doorways excluded (the prompt's room overview)."""
+        table: dict[str, dict[str, int]] = {r.name: {} for r in self.rooms}
+        for o in self.objects:
+            if o.object_type == "Doorway":
+                continue
+            counts = table[o.room]
+            counts[o.object_type] = counts.get(o.object_type, 0) + 1
+        return table
+
+    def to_dict(self) -> dict[str, Any]:
+        return to_dict(self)
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> Layout:
+        return from_dict(cls, data)
+
+
+@dataclass(frozen=True)
+class WorldPose:
+    """Agent pose in the world frame."""
+
+    x: float
+    z: float
+    heading: float
+
+
+@dataclass(frozen=True)
+class VisibleObject:
+    """One object in view, as the symbolic (``text``) modality reports it."""
+
+    object_id: str
+    object_type: str
+    bearing: float
+    """Degrees, negative to the left of the view axis, within [-45, 45]."""
+    distance: float
+    """Metres from the agent to the object's centre."""
+
+
+@dataclass(frozen=True)
+class Observation:
+    """What the world returns from ``reset`` and ``step``.
+
+    ``frame`` is the rendered RGB image (``512 x 512 x 3`` uint8). ``frame_digest`` is the
+    SHA-256 of its raw pixel bytes: cassettes key frames by it, never by JPEG bytes, so a
+    recording replays across Pillow versions. ``jpeg`` is the encoded frame the model sees.
+    """
+
+    step: int
+    """Actions executed so far (0 after reset)."""
+    pose: Pose
+    """Agent pose in the *spawn* frame (the perfect odometry the agent is given)."""
+    success: bool
+    """Whether the last action succeeded (True after reset)."""
+    feedback: str
+    """Engine feedback text: action result and pose; never names the room."""
+    visible: tuple[VisibleObject, ...]
+    """Objects in view, sorted by object id."""
+    frame_digest: str
+    jpeg: bytes = field(repr=False)
+    frame: np.ndarray | None = field(default=None, repr=False, compare=False)
+    done: bool = False
+    """True once Term was executed or the budget spent."""
+    terminal_room: str | None = None
+    """The room named by a successful Term."""
+
+
+class Simulator(Protocol):
+    """The interface both backends (``builtin``, ``ai2thor``) implement."""
+
+    def reset(self, layout: Layout, condition: str, spawn_room: str, seed: int) -> Observation:
+        """Place the agent in ``spawn_room`` and return the first observation."""
+        ...
+
+    def step(self, action: str) -> Observation:
+        """Execute one action text (``Goto(Desk_1)``, ``Turn(Left)``, ``Term(Kitchen)``).
+
+        Invalid actions never raise: the step is consumed and the observation says why.
+        """
+        ...
+
+    @property
+    def agent_pose(self) -> WorldPose:
+        """Ground-truth pose in the world frame."""
+        ...
+
+    @property
+    def spawn_pose(self) -> WorldPose:
+        """Where the episode started, world frame (defines the spawn frame)."""
+        ...
+
+    def current_room(self) -> str:
+        """Ground-truth room of the agent."""
+        ...
+
+    def visible_ids(self) -> tuple[str, ...]:
+        """Ground-truth ids visible now (sorted)."""
+        ...
+
+    def close(self) -> None:
+        ...
