@@ -72,12 +72,14 @@ def _build(tp: Any, data: Any, where: str) -> Any:
             raise ProtocolError(f"{where}: expected a list, got {type(data).__name__}")
         if len(args) == 2 and args[1] is Ellipsis:
             return tuple(_build(args[0], v, f"{where}[{i}]") for i, v in enumerate(data))
-        return tuple(_build(a, v, f"{where}[{i}]") for i, (a, v) in enumerate(zip(args, data)))
+        return tuple(
+            _build(a, v, f"{where}[{i}]") for i, (a, v) in enumerate(zip(args, data, strict=True))
+        )
     if origin is frozenset:
         (arg,) = typing.get_args(tp)
         return frozenset(_build(arg, v, where) for v in data)
     if origin is dict:
-        key_tp, value_tp = typing.get_args(tp)
+        _, value_tp = typing.get_args(tp)
         return {k: _build(value_tp, v, f"{where}[{k!r}]") for k, v in data.items()}
     if tp is float and isinstance(data, int):
         return float(data)

@@ -215,7 +215,8 @@ class Trajectory:
     @property
     def rooms_visited(self) -> frozenset[str]:
         """Rooms the agent physically stood in at any time, spawn and final room included."""
-        return frozenset({s.room for s in self.steps} | {self.final_room, self.ground_truth.spawn_room})
+        rooms = {s.room for s in self.steps}
+        return frozenset(rooms | {self.final_room, self.ground_truth.spawn_room})
 
     @property
     def final_map(self) -> tuple[MapEntry, ...]:

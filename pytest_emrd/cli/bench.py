@@ -11,7 +11,10 @@ from pytest_emrd.bench import STAGES, format_table, run_stages
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("bench", help="measure the product's own speed and size on this machine")
     p.add_argument(
-        "stages", nargs="*", default=["all"], metavar="STAGE",
+        "stages",
+        nargs="*",
+        default=["all"],
+        metavar="STAGE",
         help=f"one or more of {', '.join(STAGES)}, or all (default)",
     )
     p.add_argument("--json", action="store_true", help="print one JSON list of figures")
