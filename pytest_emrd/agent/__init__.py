@@ -1,1 +1,50 @@
-"""agent stage of pytest-emrd."""
+"""Agent stage: prompts, reply protocol, history window, model clients and registry.
+
+The built-in scripted agents live in :mod:`pytest_emrd.agent.reference`.
+"""
+
+from pytest_emrd.agent._clients import (
+    AnthropicClient,
+    ChatClient,
+    ChatResponse,
+    OpenAICompatibleClient,
+    make_client,
+)
+from pytest_emrd.agent._config import PROVIDERS, ModelConfig, Registry, load_registry
+from pytest_emrd.agent._history import HISTORY_TURNS, Conversation, UserTurn
+from pytest_emrd.agent._parse import Reply, parse_reply
+from pytest_emrd.agent._prompt import (
+    NEUTRAL_NAMES,
+    PROMPT_VERSION,
+    ROOM_SUFFIXES,
+    build_system_prompt,
+    resolve_room,
+    room_aliases,
+    step_text,
+)
+from pytest_emrd.agent._retry import RetryPolicy
+
+__all__ = [
+    "HISTORY_TURNS",
+    "NEUTRAL_NAMES",
+    "PROMPT_VERSION",
+    "PROVIDERS",
+    "ROOM_SUFFIXES",
+    "AnthropicClient",
+    "ChatClient",
+    "ChatResponse",
+    "Conversation",
+    "ModelConfig",
+    "OpenAICompatibleClient",
+    "Registry",
+    "Reply",
+    "RetryPolicy",
+    "UserTurn",
+    "build_system_prompt",
+    "load_registry",
+    "make_client",
+    "parse_reply",
+    "resolve_room",
+    "room_aliases",
+    "step_text",
+]

@@ -1,0 +1,188 @@
+"""Model clients on httpx (which vcrpy patches): OpenAI-compatible and Anthropic Messages.
+
+Request bodies depend only on the configuration and the messages: no timestamps, no
+request ids, no secrets (keys travel in headers, which cassettes strip).
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+from typing import Any, Final, Protocol
+
+import httpx
+
+from pytest_emrd.agent._config import ModelConfig
+from pytest_emrd.agent._retry import RetryPolicy, post_json
+from pytest_emrd.errors import ConfigError
+from pytest_emrd.trajectory import Usage
+
+ANTHROPIC_VERSION: Final = "2023-06-01"
+_DATA_URL_PREFIX: Final = "data:image/jpeg;base64,"
+
+
+@dataclass(frozen=True)
+class ChatResponse:
+    """The text of a completion and the tokens the provider billed."""
+
+    text: str
+    usage: Usage
+
+
+class ChatClient(Protocol):
+    """Sends one chat request (OpenAI-format messages) and returns the reply."""
+
+    def complete(self, messages: list[dict[str, Any]]) -> ChatResponse: ...
+
+    def close(self) -> None: ...
+
+
+def _api_key(config: ModelConfig) -> str | None:
+    if config.api_key_env is None:
+        return None
+    key = os.environ.get(config.api_key_env, "").strip()
+    if not key:
+        raise ConfigError(
+            f"model {config.name!r} needs an API key in the environment variable "
+            f"{config.api_key_env}; set it, or replay the recorded cassettes (record mode none)."
+        )
+    return key
+
+
+class _HttpClient:
+    """What both providers share: one httpx client, a retry policy, the API key."""
+
+    def __init__(
+        self,
+        config: ModelConfig,
+        *,
+        base_url: str,
+        policy: RetryPolicy | None = None,
+        transport: httpx.BaseTransport | None = None,
+    ) -> None:
+        self.config = config
+        self.base_url = base_url.rstrip("/")
+        self.policy = policy or RetryPolicy(max_retries=config.max_retries)
+        self._key = _api_key(config)
+        self._http = httpx.Client(timeout=httpx.Timeout(config.timeout_s), transport=transport)
+
+    def close(self) -> None:
+        self._http.close()
+
+    def __enter__(self) -> _HttpClient:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+
+def _read_openai(data: Any) -> ChatResponse:
+    message = data["choices"][0]["message"]
+    content = message.get("content")
+    if isinstance(content, list):  # some servers return content parts
+        content = "".join(p.get("text", "") for p in content if isinstance(p, dict))
+    if not isinstance(content, str):
+        raise TypeError(f"choices[0].message.content is {type(content).__name__}")
+    usage = data.get("usage") or {}
+    return ChatResponse(
+        content,
+        Usage(int(usage.get("prompt_tokens") or 0), int(usage.get("completion_tokens") or 0)),
+    )
+
+
+class OpenAICompatibleClient(_HttpClient):
+    """``POST {base_url}/chat/completions``: vLLM, OpenAI, Gemini, the reference server."""
+
+    def complete(self, messages: list[dict[str, Any]]) -> ChatResponse:
+        body: dict[str, Any] = {
+            "model": self.config.model_id,
+            "messages": messages,
+            "temperature": self.config.temperature,
+            self.config.max_tokens_param: self.config.max_tokens,
+        }
+        headers = {"Authorization": f"Bearer {self._key}"} if self._key else {}
+        return post_json(
+            self._http,
+            f"{self.base_url}/chat/completions",
+            body=body,
+            headers=headers,
+            policy=self.policy,
+            read=_read_openai,
+        )
+
+
+def _anthropic_part(part: dict[str, Any]) -> dict[str, Any]:
+    if part.get("type") == "image_url":
+        url = part["image_url"]["url"]
+        if not url.startswith(_DATA_URL_PREFIX):
+            raise ConfigError(f"image url {url[:40]!r}... is not a base64 JPEG data URL.")
+        data = url.removeprefix(_DATA_URL_PREFIX)
+        return {
+            "type": "image",
+            "source": {"type": "base64", "media_type": "image/jpeg", "data": data},
+        }
+    return {"type": "text", "text": part["text"]}
+
+
+def to_anthropic(messages: list[dict[str, Any]]) -> tuple[str, list[dict[str, Any]]]:
+    """(system prompt, Messages-API messages) from OpenAI-format messages."""
+    system = "\n\n".join(m["content"] for m in messages if m["role"] == "system")
+    converted = []
+    for m in messages:
+        if m["role"] == "system":
+            continue
+        content = m["content"]
+        parts = [_anthropic_part(p) for p in content] if isinstance(content, list) else content
+        converted.append({"role": m["role"], "content": parts})
+    return system, converted
+
+
+def _read_anthropic(data: Any) -> ChatResponse:
+    blocks = data["content"]
+    text = "".join(b["text"] for b in blocks if b.get("type") == "text")
+    if not any(b.get("type") == "text" for b in blocks):
+        raise ValueError("no text block in content")
+    usage = data.get("usage") or {}
+    return ChatResponse(
+        text, Usage(int(usage.get("input_tokens") or 0), int(usage.get("output_tokens") or 0))
+    )
+
+
+class AnthropicClient(_HttpClient):
+    """``POST {base_url}/v1/messages`` (Anthropic Messages API)."""
+
+    def complete(self, messages: list[dict[str, Any]]) -> ChatResponse:
+        system, converted = to_anthropic(messages)
+        body = {
+            "model": self.config.model_id,
+            "system": system,
+            "messages": converted,
+            "temperature": self.config.temperature,
+            "max_tokens": self.config.max_tokens,
+        }
+        headers = {"anthropic-version": ANTHROPIC_VERSION}
+        if self._key:
+            headers["x-api-key"] = self._key
+        return post_json(
+            self._http,
+            f"{self.base_url}/v1/messages",
+            body=body,
+            headers=headers,
+            policy=self.policy,
+            read=_read_anthropic,
+        )
+
+
+def make_client(config: ModelConfig, *, policy: RetryPolicy | None = None) -> ChatClient:
+    """The client for ``config``; reference agents get the built-in server (started on demand).
+
+    Raises :class:`ConfigError` when the model's API-key variable is not set.
+    """
+    if config.provider == "anthropic":
+        return AnthropicClient(config, base_url=config.base_url or "", policy=policy)
+    base_url = config.base_url
+    if base_url is None:
+        from pytest_emrd.agent.reference import reference_base_url
+
+        base_url = reference_base_url()
+    return OpenAICompatibleClient(config, base_url=base_url, policy=policy)

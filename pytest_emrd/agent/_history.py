@@ -1,0 +1,97 @@
+"""The conversation a model is sent each step: a sliding window over the episode.
+
+Appendix C: the context keeps the system prompt plus the last 10 dialogue turns; when it
+grows past 21 messages the oldest user/assistant pairs are dropped, never the system
+prompt. A turn is one user message and the model's reply, and the step being asked is
+the newest (still unanswered) turn, so a request carries the system prompt, at most 9
+answered turns and the current user message. In ``single_image`` mode (the paper's
+Claude setting) only the current frame travels as an image; earlier user messages keep
+their text and say that their frame is not re-sent.
+
+Messages are OpenAI chat-completions dicts; :mod:`pytest_emrd.agent._clients` converts
+them for the Anthropic Messages API.
+"""
+
+from __future__ import annotations
+
+import base64
+from collections import deque
+from dataclasses import dataclass
+from typing import Any, Final
+
+from pytest_emrd.errors import check_positive_int
+
+#: Dialogue turns in the window, the current (unanswered) one included.
+HISTORY_TURNS: Final = 10
+FRAME_NOT_RESENT: Final = "[Camera frame of step {step} not re-sent: single-image mode.]"
+
+
+@dataclass(frozen=True)
+class UserTurn:
+    """One step's user message before it is rendered into the wire format."""
+
+    step: int
+    """1-based step the message belongs to."""
+    text: str
+    """Engine feedback, pose, step counter and (text/both) the symbolic list."""
+    jpeg_b64: str | None = None
+    """Base64 JPEG of the frame (vision/both), or None."""
+    frame_digest: str | None = None
+    """Pixel digest of that frame (keys the frame in cassettes)."""
+
+    @classmethod
+    def with_frame(cls, step: int, text: str, jpeg: bytes, frame_digest: str) -> UserTurn:
+        return cls(step, text, base64.b64encode(jpeg).decode("ascii"), frame_digest)
+
+
+def _user_message(turn: UserTurn, *, image: bool) -> dict[str, Any]:
+    if turn.jpeg_b64 is None:
+        return {"role": "user", "content": turn.text}
+    if not image:
+        return {
+            "role": "user",
+            "content": f"{turn.text}\n{FRAME_NOT_RESENT.format(step=turn.step)}",
+        }
+    return {
+        "role": "user",
+        "content": [
+            {"type": "text", "text": turn.text},
+            {"type": "image_url", "image_url": {"url": f"data:image/jpeg;base64,{turn.jpeg_b64}"}},
+        ],
+    }
+
+
+class Conversation:
+    """The episode's dialogue, rendered through the sliding window.
+
+    ``request(current)`` gives the messages to send for the current step;
+    ``record(current, reply)`` appends the answered turn once the model replied.
+    """
+
+    def __init__(self, system: str, *, single_image: bool, turns: int = HISTORY_TURNS) -> None:
+        check_positive_int("turns", turns)
+        self.system = system
+        self.single_image = single_image
+        self._answered: deque[tuple[UserTurn, str]] = deque(maxlen=turns - 1)
+
+    def window(self, current: UserTurn) -> list[UserTurn]:
+        """The user turns inside the window, oldest first, the current one last."""
+        return [user for user, _ in self._answered] + [current]
+
+    def request(self, current: UserTurn) -> list[dict[str, Any]]:
+        """System prompt, the answered turns still in the window, then ``current``."""
+        messages: list[dict[str, Any]] = [{"role": "system", "content": self.system}]
+        for user, reply in self._answered:
+            messages.append(_user_message(user, image=not self.single_image))
+            messages.append({"role": "assistant", "content": reply})
+        messages.append(_user_message(current, image=True))
+        return messages
+
+    def images(self, current: UserTurn) -> list[tuple[str, str]]:
+        """(base64 payload, pixel digest) of every frame :meth:`request` sends as an image."""
+        sent = [current] if self.single_image else self.window(current)
+        return [(t.jpeg_b64, t.frame_digest or "") for t in sent if t.jpeg_b64 is not None]
+
+    def record(self, current: UserTurn, reply: str) -> None:
+        """Append the answered turn; the oldest pair leaves the window first."""
+        self._answered.append((current, reply))

@@ -1,0 +1,128 @@
+"""One chat-completions request in, one scripted reply out: the reference agents' brain.
+
+Pure function of the request: the agent's state is its own previous reply (the last
+assistant message), its randomness is seeded by a hash of the request content, so the
+same request gets the same reply byte for byte. Replies are compact JSON in the same
+protocol a VLM is asked for, plus a ``plan`` key holding the navigation state.
+"""
+
+from __future__ import annotations
+
+import copy
+import hashlib
+import json
+from collections.abc import Callable
+from typing import Any, Final
+
+from pytest_emrd.agent._config import Registry
+from pytest_emrd.agent.reference._memory import uniform
+from pytest_emrd.agent.reference._read import (
+    Briefing,
+    Percept,
+    message_text,
+    previous_reply,
+    read_briefing,
+    read_percept,
+)
+from pytest_emrd.agent.reference._scout import fresh_plan, perceive, prior_action, scout_action
+from pytest_emrd.errors import ConfigError, ProtocolError
+
+Policy = Callable[[dict[str, Any], Briefing, Percept], tuple[str, str]]
+POLICIES: Final[dict[str, Policy]] = {"scout": scout_action, "prior": prior_action}
+#: Deterministic usage estimate: characters per token, tokens per image.
+CHARS_PER_TOKEN: Final = 4
+TOKENS_PER_IMAGE: Final = 255
+
+
+class RequestError(ProtocolError):
+    """A request the reference server cannot answer (HTTP 400 or 404)."""
+
+    def __init__(self, message: str, status: int = 400) -> None:
+        super().__init__(message)
+        self.status = status
+
+
+def _usage(messages: list[dict[str, Any]], reply: str) -> dict[str, int]:
+    chars = sum(len(message_text(m)) for m in messages)
+    images = sum(
+        1
+        for m in messages
+        if isinstance(m.get("content"), list)
+        for p in m["content"]
+        if p.get("type") == "image_url"
+    )
+    prompt = chars // CHARS_PER_TOKEN + TOKENS_PER_IMAGE * images
+    completion = len(reply) // CHARS_PER_TOKEN
+    return {
+        "prompt_tokens": prompt,
+        "completion_tokens": completion,
+        "total_tokens": prompt + completion,
+    }
+
+
+def reply_text(model: str, planted: dict[str, Any], messages: list[dict[str, Any]]) -> str:
+    """The agent's reply (compact JSON) to ``messages``."""
+    system = next((message_text(m) for m in messages if m.get("role") == "system"), None)
+    user = next((message_text(m) for m in reversed(messages) if m.get("role") == "user"), None)
+    if system is None or user is None:
+        raise RequestError("request needs a system message and a user message.")
+    briefing, percept = read_briefing(system), read_percept(user)
+    previous = previous_reply(messages) or {}
+    plan = copy.deepcopy(previous.get("plan")) or fresh_plan()
+    memory = dict(previous.get("cognitive_map") or {})
+    seed = hashlib.sha256(
+        "\x1e".join((model, user, json.dumps(previous, sort_keys=True))).encode()
+    ).digest()
+    kept, new = perceive(
+        plan, memory, briefing, percept, planted=planted, draw=lambda label: uniform(seed, label)
+    )
+    policy = POLICIES.get(planted.get("policy", "scout"))
+    if policy is None:
+        raise RequestError(f"model {model!r}: planted policy={planted.get('policy')!r} is unknown.")
+    action, reasoning = policy(plan, briefing, percept)
+    reply = {
+        "observation": f"{len(percept.visible)} objects in view.",
+        "dedup_check": f"{len(new)} new, {len(percept.visible) - len(new)} already mapped.",
+        "cognitive_map": kept,
+        "action": action,
+        "reasoning": reasoning,
+        "plan": plan,
+    }
+    return json.dumps(reply, separators=(",", ":"))
+
+
+def complete(body: Any, registry: Registry) -> dict[str, Any]:
+    """An OpenAI ``chat.completion`` object answering ``body``; RequestError if unusable."""
+    if not isinstance(body, dict) or not isinstance(body.get("messages"), list):
+        raise RequestError("body must be a JSON object with a 'messages' list.")
+    model = str(body.get("model", ""))
+    try:
+        config = registry.get(model)
+    except ConfigError as exc:
+        raise RequestError(str(exc), status=404) from exc
+    if config.provider != "reference":
+        raise RequestError(f"model={model!r} is not a reference agent.", status=404)
+    messages = body["messages"]
+    text = reply_text(model, config.planted, messages)
+    digest = hashlib.sha256(text.encode()).hexdigest()[:24]
+    return {
+        "id": f"chatcmpl-ref-{digest}",
+        "object": "chat.completion",
+        "created": 0,
+        "model": model,
+        "choices": [
+            {"index": 0, "message": {"role": "assistant", "content": text}, "finish_reason": "stop"}
+        ],
+        "usage": _usage(messages, text),
+    }
+
+
+def model_list(registry: Registry) -> dict[str, Any]:
+    """The ``/v1/models`` listing: every registered reference agent."""
+    names = [n for n in registry.names() if registry.get(n).provider == "reference"]
+    return {
+        "object": "list",
+        "data": [
+            {"id": n, "object": "model", "created": 0, "owned_by": "pytest-emrd"} for n in names
+        ],
+    }

@@ -1,0 +1,128 @@
+"""How a scripted agent reads its request: the prompt, the latest user text, its last reply.
+
+The reference agents see exactly what a VLM is sent and nothing else: the system prompt
+(room list and inventory, under whatever names the variant uses), the ``text`` part of
+the newest user message (step counter, pose, symbolic visible list) and their own
+previous reply, which travels back as the last assistant message.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+from dataclasses import dataclass
+from typing import Any, Final
+
+from pytest_emrd.agent._prompt import GOTO_TYPES_LEAD, OVERVIEW_HEADING, VISIBLE_HEADING
+from pytest_emrd.errors import ProtocolError
+from pytest_emrd.trajectory import Pose
+
+_ROOMS_LINE = re.compile(r"^The building has four rooms: (?P<names>.+)\.$", re.MULTILINE)
+_ROOM_LINE = re.compile(r"^- (?P<room>[^:]+): (?P<items>.*?)\.(?: .*)?$")
+_ITEM = re.compile(r"^(?P<n>\d+) (?P<type>\S+)$")
+_STEP = re.compile(r"^Step (?P<k>\d+) of (?P<n>\d+)\.$", re.MULTILINE)
+_POSE = re.compile(
+    r"^Pose: x=(?P<x>-?\d+(?:\.\d+)?) z=(?P<z>-?\d+(?:\.\d+)?) heading=(?P<h>-?\d+(?:\.\d+)?)$",
+    re.MULTILINE,
+)
+_VISIBLE = re.compile(
+    r"^- (?P<id>\S+) \| (?P<type>\S+) \| (?P<b>-?\d+(?:\.\d+)?) \| (?P<d>\d+(?:\.\d+)?)$"
+)
+NOT_SYMBOLIC: Final = (
+    "reference agents act on the symbolic visible list; run them with modality 'text' or "
+    "'both' (their registry default), not 'vision'."
+)
+
+
+@dataclass(frozen=True)
+class Seen:
+    """One visible object as the symbolic list gives it."""
+
+    object_id: str
+    object_type: str
+    bearing: float
+    distance: float
+
+
+@dataclass(frozen=True)
+class Briefing:
+    """What the system prompt tells the agent about the building."""
+
+    rooms: tuple[str, ...]
+    """Room names as the prompt spells them, in prompt order."""
+    inventory: dict[str, dict[str, int]]
+    """Room (as spelled) -> type -> count; empty under ``no_inventory``."""
+
+
+@dataclass(frozen=True)
+class Percept:
+    """What the newest user message says."""
+
+    step: int
+    max_steps: int
+    pose: Pose
+    visible: tuple[Seen, ...]
+
+
+def read_briefing(system: str) -> Briefing:
+    """Room names and inventory from the system prompt's building overview."""
+    if OVERVIEW_HEADING not in system:
+        raise ProtocolError("system prompt has no building overview; is this an EMRD request?")
+    overview = system.split(OVERVIEW_HEADING, 1)[1].split("\n\n", 1)[0]
+    names = _ROOMS_LINE.search(overview)
+    if names is None:
+        raise ProtocolError("building overview does not list the rooms.")
+    rooms = tuple(n.strip() for n in names["names"].split(","))
+    inventory: dict[str, dict[str, int]] = {}
+    for line in overview.splitlines():
+        if line.startswith(GOTO_TYPES_LEAD) or not (m := _ROOM_LINE.match(line)):
+            continue
+        counts: dict[str, int] = {}
+        for item in m["items"].split(", "):
+            if im := _ITEM.match(item.strip()):
+                counts[im["type"]] = int(im["n"])
+        inventory[m["room"]] = counts
+    return Briefing(rooms, inventory)
+
+
+def read_percept(text: str) -> Percept:
+    """Step counter, pose and visible list from a user message's text part."""
+    step, pose = _STEP.search(text), _POSE.search(text)
+    if step is None or pose is None:
+        raise ProtocolError("user message lacks the 'Step k of N.' or 'Pose:' line.")
+    if VISIBLE_HEADING not in text:
+        raise ProtocolError(NOT_SYMBOLIC)
+    listing = text.split(VISIBLE_HEADING, 1)[1]
+    visible = tuple(
+        Seen(m["id"], m["type"], float(m["b"]), float(m["d"]))
+        for line in listing.splitlines()
+        if (m := _VISIBLE.match(line))
+    )
+    return Percept(
+        int(step["k"]),
+        int(step["n"]),
+        Pose(float(pose["x"]), float(pose["z"]), float(pose["h"])),
+        visible,
+    )
+
+
+def message_text(message: dict[str, Any]) -> str:
+    """The text of an OpenAI-format message (string content or the text parts)."""
+    content = message.get("content")
+    if isinstance(content, str):
+        return content
+    if isinstance(content, list):
+        return "\n".join(p.get("text", "") for p in content if p.get("type") == "text")
+    raise ProtocolError(f"message content is {type(content).__name__}, not text or parts.")
+
+
+def previous_reply(messages: list[dict[str, Any]]) -> dict[str, Any] | None:
+    """The agent's own last reply (decoded JSON), or None at the first step."""
+    for message in reversed(messages):
+        if message.get("role") == "assistant":
+            try:
+                data = json.loads(message_text(message))
+            except ValueError as exc:
+                raise ProtocolError(f"previous assistant message is not JSON: {exc}") from exc
+            return data if isinstance(data, dict) else None
+    return None

@@ -1,0 +1,136 @@
+"""The reference agents behind a real OpenAI-compatible HTTP endpoint on 127.0.0.1.
+
+``POST /v1/chat/completions`` answers with a scripted agent named by ``model``;
+``GET /v1/models`` lists them. The server binds an ephemeral port unless told otherwise
+and serves from a background thread (:class:`ReferenceServer`) or in the foreground
+(``emrd serve``). :func:`reference_base_url` starts one process-wide server on demand.
+"""
+
+from __future__ import annotations
+
+import json
+import threading
+from http import HTTPStatus
+from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
+from typing import Any, Final
+
+from pytest_emrd.agent._config import Registry, load_registry
+from pytest_emrd.agent.reference._agents import complete, model_list
+from pytest_emrd.errors import ProtocolError
+
+MAX_BODY_BYTES: Final = 64 * 1024 * 1024
+
+
+class _Handler(BaseHTTPRequestHandler):
+    server: _Server
+    protocol_version = "HTTP/1.1"
+
+    def log_message(self, format: str, *args: Any) -> None:
+        """Silent: the test and benchmark output is not the place for an access log."""
+
+    def _send(self, status: int, payload: dict[str, Any]) -> None:
+        body = json.dumps(payload, separators=(",", ":")).encode()
+        self.send_response(status)
+        self.send_header("Content-Type", "application/json")
+        self.send_header("Content-Length", str(len(body)))
+        self.end_headers()
+        self.wfile.write(body)
+
+    def _error(self, status: int, message: str) -> None:
+        self._send(status, {"error": {"message": message, "type": "invalid_request_error"}})
+
+    def do_GET(self) -> None:
+        if self.path.rstrip("/") in ("/v1/models", "/models"):
+            self._send(HTTPStatus.OK, model_list(self.server.registry))
+        else:
+            self._error(HTTPStatus.NOT_FOUND, f"no route GET {self.path}")
+
+    def do_POST(self) -> None:
+        length = int(self.headers.get("Content-Length") or 0)
+        if length > MAX_BODY_BYTES:
+            self._error(HTTPStatus.REQUEST_ENTITY_TOO_LARGE, f"body of {length} bytes")
+            return
+        raw = self.rfile.read(length)
+        if self.path.rstrip("/") not in ("/v1/chat/completions", "/chat/completions"):
+            self._error(HTTPStatus.NOT_FOUND, f"no route POST {self.path}")
+            return
+        try:
+            body = json.loads(raw)
+        except ValueError as exc:
+            self._error(HTTPStatus.BAD_REQUEST, f"body is not JSON: {exc}")
+            return
+        try:
+            payload = complete(body, self.server.registry)
+        except ProtocolError as exc:
+            self._error(getattr(exc, "status", HTTPStatus.BAD_REQUEST), str(exc))
+            return
+        self._send(HTTPStatus.OK, payload)
+
+
+class _Server(ThreadingHTTPServer):
+    daemon_threads = True
+    allow_reuse_address = True
+
+    def __init__(self, address: tuple[str, int], registry: Registry) -> None:
+        super().__init__(address, _Handler)
+        self.registry = registry
+
+
+class ReferenceServer:
+    """The reference endpoint on a background thread; use as a context manager.
+
+    ``port=0`` binds an ephemeral port; :attr:`base_url` is ``http://127.0.0.1:<port>/v1``.
+    """
+
+    def __init__(
+        self, *, host: str = "127.0.0.1", port: int = 0, registry: Registry | None = None
+    ) -> None:
+        self._server = _Server((host, port), registry or load_registry())
+        self._thread: threading.Thread | None = None
+
+    @property
+    def port(self) -> int:
+        return int(self._server.server_address[1])
+
+    @property
+    def base_url(self) -> str:
+        host = self._server.server_address[0]
+        return f"http://{host}:{self.port}/v1"
+
+    def start(self) -> ReferenceServer:
+        if self._thread is None:
+            self._thread = threading.Thread(
+                target=self._server.serve_forever, name="emrd-reference-server", daemon=True
+            )
+            self._thread.start()
+        return self
+
+    def serve_forever(self) -> None:
+        """Serve in the calling thread until interrupted (``emrd serve``)."""
+        self._server.serve_forever()
+
+    def close(self) -> None:
+        if self._thread is not None:
+            self._server.shutdown()
+            self._thread.join()
+            self._thread = None
+        self._server.server_close()
+
+    def __enter__(self) -> ReferenceServer:
+        return self.start()
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+
+_lock = threading.Lock()
+_shared: ReferenceServer | None = None
+
+
+def reference_base_url() -> str:
+    """Base URL of the process-wide reference server, started on first use."""
+    global _shared
+    with _lock:
+        if _shared is None:
+            _shared = ReferenceServer().start()
+        return _shared.base_url
