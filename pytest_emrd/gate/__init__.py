@@ -1,1 +1,52 @@
-"""gate stage of pytest-emrd."""
+"""Gates: run settings, the episode grid, the results store, thresholds and verdicts."""
+
+from pytest_emrd.gate._files import load_run_dirs, load_thresholds
+from pytest_emrd.gate._grid import cell_specs, episode_specs, gate_cells, shard
+from pytest_emrd.gate._settings import (
+    BACKENDS,
+    MATCHING_MODES,
+    OPTIONS,
+    RECORD_MODES,
+    SPAWNS,
+    Option,
+    RunSettings,
+    parse_shard,
+    resolve_settings,
+)
+from pytest_emrd.gate._store import ResultsStore, StoredEpisode, iter_run_dir, new_run_dir
+from pytest_emrd.gate._table import UsageRow, gate_tables, usage_table
+from pytest_emrd.gate._thresholds import Bound, Thresholds, parse_thresholds
+from pytest_emrd.gate._verdict import GateCell, Verdict, evaluate_all, evaluate_cell, judge
+
+__all__ = [
+    "BACKENDS",
+    "MATCHING_MODES",
+    "OPTIONS",
+    "RECORD_MODES",
+    "SPAWNS",
+    "Bound",
+    "GateCell",
+    "Option",
+    "ResultsStore",
+    "RunSettings",
+    "StoredEpisode",
+    "Thresholds",
+    "UsageRow",
+    "Verdict",
+    "cell_specs",
+    "episode_specs",
+    "evaluate_all",
+    "evaluate_cell",
+    "gate_cells",
+    "gate_tables",
+    "iter_run_dir",
+    "judge",
+    "load_run_dirs",
+    "load_thresholds",
+    "new_run_dir",
+    "parse_shard",
+    "parse_thresholds",
+    "resolve_settings",
+    "shard",
+    "usage_table",
+]

@@ -1,0 +1,49 @@
+"""Cassettes: one gzip-compressed, redacted, content-addressed vcrpy cassette per episode.
+
+``run_with_cassette`` is the entry point; the rest is exported for tools and tests.
+"""
+
+from pytest_emrd.cassette._drift import first_difference
+from pytest_emrd.cassette._episode import EpisodeRun, run_with_cassette
+from pytest_emrd.cassette._format import CassetteData, FormatError, decode, encode
+from pytest_emrd.cassette._network import network_blocked
+from pytest_emrd.cassette._paths import cassette_path, record_command
+from pytest_emrd.cassette._persister import EpisodePersister
+from pytest_emrd.cassette._redact import (
+    SECRET_HEADERS,
+    MatchKeys,
+    Redacted,
+    canonical_json,
+    match_keys,
+    redact_body,
+)
+from pytest_emrd.cassette._use import (
+    EpisodeCassette,
+    episode_cassette,
+    keep_response,
+    redact_request,
+)
+
+__all__ = [
+    "SECRET_HEADERS",
+    "CassetteData",
+    "EpisodeCassette",
+    "EpisodePersister",
+    "EpisodeRun",
+    "FormatError",
+    "MatchKeys",
+    "Redacted",
+    "canonical_json",
+    "cassette_path",
+    "decode",
+    "encode",
+    "episode_cassette",
+    "first_difference",
+    "keep_response",
+    "match_keys",
+    "network_blocked",
+    "record_command",
+    "redact_body",
+    "redact_request",
+    "run_with_cassette",
+]

@@ -1,0 +1,85 @@
+"""Running one episode inside its cassette: replay, record, and explain failures."""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+from pytest_emrd.cassette._network import network_blocked
+from pytest_emrd.cassette._paths import cassette_path, record_command
+from pytest_emrd.cassette._use import episode_cassette
+from pytest_emrd.errors import check_choice
+from pytest_emrd.gate._settings import MATCHING_MODES, RECORD_MODES
+from pytest_emrd.trajectory import EpisodeSpec, Trajectory
+
+
+@dataclass(frozen=True)
+class EpisodeRun:
+    """The outcome of running one episode through its cassette."""
+
+    trajectory: Trajectory
+    recorded: bool
+    """New traffic was recorded (a live episode), as opposed to a pure replay."""
+    frame_drift: int
+    """Requests matched leniently whose frames differ from the recording."""
+    seconds: float
+    """Wall time of the episode."""
+
+
+class _Discard(Exception):
+    """Raised inside the cassette block so vcrpy does not save a failed episode."""
+
+
+def run_with_cassette(
+    spec: EpisodeSpec,
+    run: Callable[[EpisodeSpec], Trajectory],
+    *,
+    cassettes: Path,
+    protocol: str,
+    record_mode: str = "once",
+    matching: str = "strict",
+) -> EpisodeRun:
+    """Run ``run(spec)`` with the model traffic recorded to / replayed from its cassette.
+
+    ``run`` must behave like :func:`pytest_emrd.episode.run_episode`: failures become an
+    ``errored`` trajectory, never an exception. An errored episode leaves no cassette behind;
+    its ``error`` is replaced by a precise cause when the cassette explains it (missing file
+    in ``none`` mode, with the command that records it; drift, naming the first differing
+    field). A corrupted or stale cassette raises :class:`~pytest_emrd.errors.CassetteError`.
+    """
+    check_choice("record_mode", record_mode, RECORD_MODES)
+    check_choice("matching", matching, MATCHING_MODES)
+    path = cassette_path(cassettes, spec)
+    missing = record_mode == "none" and not path.is_file()
+    start = time.perf_counter()
+    try:
+        with (
+            network_blocked(record_mode == "none"),
+            episode_cassette(
+                path,
+                protocol=protocol,
+                record_mode=record_mode,
+                matching=matching,
+                rerecord_command=record_command(spec, record_mode="all", cassettes=cassettes),
+            ) as cassette,
+        ):
+            trajectory = run(spec)
+            recorded, drift = cassette.dirty, cassette.drift
+            frame_drift = len(cassette.frame_drift)
+            if trajectory.status == "errored":
+                raise _Discard
+    except _Discard:
+        recorded = False
+        cause = trajectory.error
+        if missing:
+            cause = (
+                f"cassette missing: {path} does not exist and record mode 'none' replays only. "
+                f"Record it with: {record_command(spec, record_mode='once', cassettes=cassettes)}"
+            )
+        elif drift is not None:
+            cause = drift
+        trajectory = dataclasses.replace(trajectory, error=cause)
+    return EpisodeRun(trajectory, recorded, frame_drift, time.perf_counter() - start)

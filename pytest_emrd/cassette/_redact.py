@@ -1,0 +1,182 @@
+"""What a request looks like once it is safe to store and ready to match.
+
+Redaction turns a model request into its *canonical* form:
+
+* every image payload becomes the digest of the frame's pixels (``pixels:<sha256>``, handed
+  over by the world through :mod:`pytest_emrd.frames`; ``bytes:<sha256>`` for a payload this
+  process did not render): OpenAI ``image_url`` data URLs, Anthropic ``source.data``, Gemini
+  ``inline_data``/``inlineData``;
+* the body is re-serialised as sorted-key compact JSON (a body that is not JSON is kept as
+  it is and gets no key: it never matches);
+* headers are reduced to ``Content-Type`` (so ``Authorization``, ``x-api-key``, ``api-key``,
+  ``x-goog-api-key`` and anything else a provider may carry never reach a file), and the
+  ``key=`` query parameter is dropped.
+
+vcrpy runs ``before_record_request`` several times for every request, so the work is cached
+by body bytes (a small LRU: a live body is looked up a few times in a row, then never again).
+The two match keys are computed once here: ``strict`` (method, path, canonical body) and
+``lenient`` (the same with every frame digest replaced by a placeholder, so only text, step
+index and image count are compared).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import re
+import threading
+from collections import OrderedDict
+from dataclasses import dataclass
+from typing import Any, Final
+from urllib.parse import parse_qsl, urlencode, urlsplit, urlunsplit
+
+from pytest_emrd import frames
+
+#: Request headers kept in a cassette; everything else (credentials included) is dropped.
+KEPT_HEADERS: Final = frozenset({"content-type"})
+#: Query parameters removed from the URI (Gemini's native API takes its key as ``key=``).
+SECRET_QUERY: Final = frozenset({"key"})
+#: Header names treated as secrets (documented for users; dropped by the allowlist above).
+SECRET_HEADERS: Final = ("authorization", "x-api-key", "api-key", "x-goog-api-key")
+
+_DIGEST = re.compile(r"^(?:pixels|bytes):[0-9a-f]{64}$")
+_IMAGE_PLACEHOLDER: Final = "<image>"
+_MIME_KEYS: Final = ("media_type", "mime_type", "mimeType")
+_CACHE_SIZE: Final = 64
+
+
+@dataclass(frozen=True)
+class Redacted:
+    """The canonical form of one request body."""
+
+    body: bytes
+    """Canonical body bytes (sorted-key compact JSON), or the original bytes if not JSON."""
+    tree: Any
+    """The parsed canonical body (``None`` when the body is not JSON)."""
+    images: int
+    """Number of image payloads in the body."""
+
+    @property
+    def parsed(self) -> bool:
+        return self.tree is not None
+
+
+@dataclass(frozen=True)
+class MatchKeys:
+    """The cached keys a request is matched on (``None``: unparseable, never matches)."""
+
+    strict: str | None
+    lenient: str | None
+
+
+def canonical_json(tree: Any) -> str:
+    """Sorted-key compact JSON, the one serialisation every key and cassette body uses."""
+    return json.dumps(tree, sort_keys=True, separators=(",", ":"), ensure_ascii=False)
+
+
+def _data_url_digest(url: str) -> str | None:
+    head, sep, payload = url.partition(";base64,")
+    if sep and head.startswith("data:image/"):
+        return frames.pixel_digest_for(payload)
+    return None
+
+
+def _redact_tree(node: Any, counter: list[int]) -> Any:
+    if isinstance(node, dict):
+        mime = next((node[k] for k in _MIME_KEYS if isinstance(node.get(k), str)), None)
+        out = {}
+        for key, value in node.items():
+            if key == "data" and isinstance(value, str) and mime and mime.startswith("image/"):
+                counter[0] += 1
+                out[key] = value if _DIGEST.match(value) else frames.pixel_digest_for(value)
+            else:
+                out[key] = _redact_tree(value, counter)
+        return out
+    if isinstance(node, list):
+        return [_redact_tree(v, counter) for v in node]
+    if isinstance(node, str):
+        digest = _data_url_digest(node)
+        if digest is not None:
+            counter[0] += 1
+            return digest
+        if _DIGEST.match(node):
+            counter[0] += 1
+    return node
+
+
+def _without_images(node: Any) -> Any:
+    if isinstance(node, dict):
+        return {k: _without_images(v) for k, v in node.items()}
+    if isinstance(node, list):
+        return [_without_images(v) for v in node]
+    if isinstance(node, str) and _DIGEST.match(node):
+        return _IMAGE_PLACEHOLDER
+    return node
+
+
+def redact_body(body: bytes | str | None) -> Redacted:
+    """Canonical form of a request body (pure; see the module docstring)."""
+    raw = body.encode() if isinstance(body, str) else (body or b"")
+    try:
+        tree = json.loads(raw)
+    except (ValueError, UnicodeDecodeError):
+        return Redacted(body=raw, tree=None, images=0)
+    counter = [0]
+    clean = _redact_tree(tree, counter)
+    return Redacted(body=canonical_json(clean).encode(), tree=clean, images=counter[0])
+
+
+def match_keys(method: str, path: str, redacted: Redacted) -> MatchKeys:
+    """The strict and lenient keys of a canonical request."""
+    if not redacted.parsed:
+        return MatchKeys(None, None)
+    head = f"{method.upper()} {path}\n"
+    strict = head + redacted.body.decode()
+    lenient = head + canonical_json(_without_images(redacted.tree))
+    return MatchKeys(
+        strict=hashlib.sha256(strict.encode()).hexdigest(),
+        lenient=hashlib.sha256(lenient.encode()).hexdigest(),
+    )
+
+
+def scrub_uri(uri: str) -> str:
+    """The URI without secret query parameters (``key=``)."""
+    parts = urlsplit(uri)
+    if not parts.query:
+        return uri
+    query = [
+        (k, v) for k, v in parse_qsl(parts.query, keep_blank_values=True) if k not in SECRET_QUERY
+    ]
+    return urlunsplit(parts._replace(query=urlencode(query)))
+
+
+def scrub_headers(headers: Any) -> dict[str, str]:
+    """Only the headers a cassette keeps (see :data:`KEPT_HEADERS`)."""
+    return {k: v for k, v in dict(headers).items() if k.lower() in KEPT_HEADERS}
+
+
+class RedactionCache:
+    """Thread-safe LRU of :func:`redact_body` + :func:`match_keys` results by body bytes."""
+
+    def __init__(self, capacity: int = _CACHE_SIZE) -> None:
+        self._capacity = capacity
+        self._lock = threading.Lock()
+        self._entries: OrderedDict[tuple[str, str, bytes], tuple[Redacted, MatchKeys]] = (
+            OrderedDict()
+        )
+
+    def get(self, method: str, path: str, body: bytes | str | None) -> tuple[Redacted, MatchKeys]:
+        raw = body.encode() if isinstance(body, str) else (body or b"")
+        key = (method, path, raw)
+        with self._lock:
+            hit = self._entries.get(key)
+            if hit is not None:
+                self._entries.move_to_end(key)
+                return hit
+        redacted = redact_body(raw)
+        value = (redacted, match_keys(method, path, redacted))
+        with self._lock:
+            self._entries[key] = value
+            while len(self._entries) > self._capacity:
+                self._entries.popitem(last=False)
+        return value

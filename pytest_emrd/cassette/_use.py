@@ -1,0 +1,135 @@
+"""One episode's vcrpy cassette: redaction, matching, record modes and drift detection."""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Any, Final
+
+import vcr
+from vcr.cassette import Cassette
+from vcr.request import Request
+
+from pytest_emrd.cassette._drift import drift_message
+from pytest_emrd.cassette._persister import EpisodePersister
+from pytest_emrd.cassette._redact import (
+    MatchKeys,
+    RedactionCache,
+    scrub_headers,
+    scrub_uri,
+)
+
+#: Response headers kept in a cassette (the body is stored decoded, so no Content-Encoding).
+KEPT_RESPONSE_HEADERS: Final = frozenset({"content-type"})
+
+_cache = RedactionCache()
+
+
+def redact_request(request: Request) -> Request:
+    """vcrpy ``before_record_request``: canonical body, secrets dropped, match keys attached."""
+    request.uri = scrub_uri(request.uri)
+    redacted, keys = _cache.get(request.method, request.path, request.body)
+    request.body = redacted.body
+    request.headers = scrub_headers(request.headers)
+    request.emrd_keys = keys  # type: ignore[attr-defined]
+    request.emrd_tree = redacted.tree  # type: ignore[attr-defined]
+    return request
+
+
+def keep_response(response: dict[str, Any]) -> dict[str, Any] | None:
+    """vcrpy ``before_record_response``: drop non-2xx responses and volatile headers."""
+    if not 200 <= int(response["status"]["code"]) < 300:
+        return None
+    response["headers"] = {
+        k: v for k, v in response["headers"].items() if k.lower() in KEPT_RESPONSE_HEADERS
+    }
+    return response
+
+
+def _keys(request: Request) -> MatchKeys:
+    keys = getattr(request, "emrd_keys", None)
+    if keys is None:
+        keys = _cache.get(request.method, request.path, request.body)[1]
+        request.emrd_keys = keys  # type: ignore[attr-defined]
+    return keys
+
+
+def make_matcher(matching: str, frame_drift: set[tuple[str, str]]) -> Callable[..., bool]:
+    """The one vcrpy matcher: strict or lenient key equality (unparseable never matches).
+
+    In lenient mode a match whose frames differ adds the pair of strict keys to
+    ``frame_drift`` so the caller can warn about it.
+    """
+
+    def emrd_body(new: Request, recorded: Request) -> bool:
+        a, b = _keys(new), _keys(recorded)
+        if matching == "strict":
+            return a.strict is not None and a.strict == b.strict
+        same = a.lenient is not None and a.lenient == b.lenient
+        if same and a.strict != b.strict:
+            frame_drift.add((str(a.strict), str(b.strict)))
+        return same
+
+    return emrd_body
+
+
+class EpisodeCassette(Cassette):
+    """A vcrpy cassette that remembers why a replay diverged.
+
+    Requests are counted in the order they are made; the first one that cannot be played
+    while the cassette is write-protected is explained against the recorded request at the
+    same position (:func:`~pytest_emrd.cassette._drift.drift_message`).
+    """
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        super().__init__(*args, **kwargs)
+        self.requests_made = 0
+        self.drift: str | None = None
+        self.frame_drift: set[tuple[str, str]] = set()
+
+    def can_play_response_for(self, request: Request) -> bool:
+        playable = bool(super().can_play_response_for(request))
+        if not playable and self.write_protected and self.drift is None:
+            new = self._before_record_request(request)
+            index = self.requests_made
+            recorded = self.data[index][0] if index < len(self.data) else None
+            self.drift = drift_message(
+                cassette=str(self._path),
+                request_index=index,
+                new_tree=getattr(new, "emrd_tree", None),
+                recorded_tree=getattr(recorded, "emrd_tree", None) if recorded else None,
+                recorded=len(self.data),
+            )
+        self.requests_made += 1
+        return playable
+
+
+@contextmanager
+def episode_cassette(
+    path: Path, *, protocol: str, record_mode: str, matching: str, rerecord_command: str
+) -> Iterator[EpisodeCassette]:
+    """Patch httpx with the episode's cassette for the duration of the block.
+
+    vcrpy settings: ``allow_playback_repeats`` off, ``decode_compressed_response`` on,
+    ``record_on_exception`` off (raise inside the block to discard a failed episode), and
+    in ``all`` mode the file is rebuilt from scratch.
+    """
+    frame_drift: set[tuple[str, str]] = set()
+    recorder = vcr.VCR(decode_compressed_response=True, record_on_exception=False)
+    recorder.register_matcher("emrd", make_matcher(matching, frame_drift))
+    config = recorder.get_merged_config(
+        path=str(path),
+        persister=EpisodePersister(
+            protocol=protocol, fresh=record_mode == "all", rerecord_command=rerecord_command
+        ),
+        record_mode=record_mode,
+        match_on=("emrd",),
+        before_record_request=redact_request,
+        before_record_response=keep_response,
+        allow_playback_repeats=False,
+        drop_unused_requests=record_mode == "all",
+    )
+    with EpisodeCassette.use(**config) as cassette:
+        cassette.frame_drift = frame_drift
+        yield cassette

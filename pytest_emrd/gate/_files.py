@@ -1,0 +1,45 @@
+"""Reading gate inputs from disk: thresholds files and run directories (file I/O only)."""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Collection, Sequence
+from pathlib import Path
+
+from pytest_emrd.errors import ConfigError
+from pytest_emrd.gate._store import iter_run_dir
+from pytest_emrd.gate._thresholds import Thresholds, parse_thresholds
+from pytest_emrd.trajectory import Trajectory
+
+
+def load_thresholds(
+    path: Path,
+    *,
+    is_model: Callable[[str], bool],
+    model_names: Collection[str],
+    metrics: Collection[str],
+) -> Thresholds:
+    """Read and validate a thresholds file; a missing file is a :class:`ConfigError`."""
+    try:
+        text = path.read_text(encoding="utf-8")
+    except FileNotFoundError as exc:
+        raise ConfigError(
+            f"thresholds={str(path)!r} does not exist; point --emrd-thresholds at a "
+            "thresholds.yaml (see the one at the repository root)."
+        ) from exc
+    return parse_thresholds(
+        text, source=str(path), is_model=is_model, model_names=model_names, metrics=metrics
+    )
+
+
+def load_run_dirs(run_dirs: Sequence[Path]) -> list[Trajectory]:
+    """Trajectories of several run directories (shards); the first copy of a case wins."""
+    seen: dict[str, Trajectory] = {}
+    for run_dir in run_dirs:
+        if not (run_dir / "episodes").is_dir():
+            raise ConfigError(
+                f"run_dir={str(run_dir)!r} holds no episodes/ folder; pass the directories "
+                "that `pytest benchmarks --emrd-results DIR` wrote."
+            )
+        for trajectory in iter_run_dir(run_dir):
+            seen.setdefault(trajectory.spec.case_id, trajectory)
+    return [seen[key] for key in sorted(seen)]

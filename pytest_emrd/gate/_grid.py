@@ -1,0 +1,66 @@
+"""Which episodes and which gates a run covers, in one deterministic order (pure)."""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+
+from pytest_emrd.gate._settings import RunSettings
+from pytest_emrd.gate._thresholds import Thresholds
+from pytest_emrd.gate._verdict import GateCell
+from pytest_emrd.trajectory import CONDITIONS, EpisodeSpec
+
+#: model name -> its modality when ``--emrd-modality`` is not given (the registry default).
+ModalityOf = Callable[[str], str]
+
+
+def cell_specs(
+    settings: RunSettings, model: str, condition: str, modality_of: ModalityOf
+) -> list[EpisodeSpec]:
+    """The episodes of one model x condition cell: spawns x episodes, in grid order."""
+    modality = settings.modality or modality_of(model)
+    return [
+        EpisodeSpec(
+            model=model,
+            condition=condition,
+            spawn=spawn,
+            episode=episode,
+            variant=settings.variant,
+            modality=modality,
+            backend=settings.backend,
+        )
+        for spawn in settings.spawns
+        for episode in range(settings.episodes)
+    ]
+
+
+def _models(settings: RunSettings) -> list[str]:
+    return sorted(settings.models)
+
+
+def _conditions(settings: RunSettings) -> list[str]:
+    return sorted(settings.conditions, key=CONDITIONS.index)
+
+
+def episode_specs(settings: RunSettings, modality_of: ModalityOf) -> list[EpisodeSpec]:
+    """Every episode of the run (all shards), sorted: model, condition, spawn, episode."""
+    return [
+        spec
+        for model in _models(settings)
+        for condition in _conditions(settings)
+        for spec in cell_specs(settings, model, condition, modality_of)
+    ]
+
+
+def shard(specs: Sequence[EpisodeSpec], k: int, n: int) -> list[EpisodeSpec]:
+    """The k-th of n round-robin slices (1-based): balanced across models and conditions."""
+    return list(specs[k - 1 :: n])
+
+
+def gate_cells(settings: RunSettings, thresholds: Thresholds) -> list[GateCell]:
+    """One gate per selected model x condition x thresholded metric, in file order."""
+    return [
+        GateCell(bound, settings.variant)
+        for model in _models(settings)
+        for condition in _conditions(settings)
+        for bound in thresholds.for_cell(model, condition)
+    ]

@@ -1,0 +1,175 @@
+"""The run's settings: every ``--emrd-*`` option, its ini twin and default, resolved once.
+
+Precedence is command line > ini file > default, decided in :func:`resolve_settings` and
+nowhere else. The option table :data:`OPTIONS` is what the plugin registers, so ``pytest
+--help``, the ini keys and the resolution cannot drift apart.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Final
+
+from pytest_emrd.errors import ConfigError, check_choice, check_positive_int
+from pytest_emrd.rooms import ROOM_SLUGS
+from pytest_emrd.trajectory import CONDITIONS, MODALITIES, VARIANTS
+
+RECORD_MODES: Final[tuple[str, ...]] = ("none", "once", "new_episodes", "all")
+MATCHING_MODES: Final[tuple[str, ...]] = ("strict", "lenient")
+BACKENDS: Final[tuple[str, ...]] = ("builtin", "ai2thor")
+SPAWNS: Final[tuple[str, ...]] = tuple(ROOM_SLUGS.values())
+
+
+@dataclass(frozen=True)
+class Option:
+    """One ``--emrd-<name>`` option and its ini key ``emrd_<name>``."""
+
+    name: str
+    help: str
+    choices: tuple[str, ...] | None = None
+    repeatable: bool = False
+    metavar: str | None = None
+
+    @property
+    def flag(self) -> str:
+        return "--emrd-" + self.name.replace("_", "-")
+
+    @property
+    def ini(self) -> str:
+        return "emrd_" + self.name
+
+    @property
+    def ini_type(self) -> str:
+        return "args" if self.repeatable else "string"
+
+
+OPTIONS: Final[tuple[Option, ...]] = (
+    Option("model", "model to benchmark, repeatable (default: scout, the built-in reference "
+           "agent); any name of the model registry", repeatable=True, metavar="NAME"),
+    Option("condition", "environmental condition, repeatable (default: all three)",
+           CONDITIONS, repeatable=True),
+    Option("spawn", "spawn room, repeatable (default: all four)", SPAWNS, repeatable=True),
+    Option("episodes", "episodes per spawn room (default: 20, the paper's setting)",
+           metavar="N"),
+    Option("variant", "prompt variant (default: default)", VARIANTS),
+    Option("backend", "world backend (default: builtin)", BACKENDS),
+    Option("modality", "what the model is shown (default: the model's registry entry)",
+           MODALITIES),
+    Option("record_mode", "cassette record mode: none replays only with the network blocked, "
+           "once records missing cassettes, new_episodes adds unmatched requests, all "
+           "re-records (default: once, or none when the CI environment variable is set)",
+           RECORD_MODES),
+    Option("matching", "request matching: strict keys frames by pixel digest, lenient only "
+           "warns on differing frames (default: strict)", MATCHING_MODES),
+    Option("results", "run directory to write or resume (default: a fresh directory under "
+           "<rootdir>/.emrd/runs)", metavar="DIR"),
+    Option("thresholds", "release gates file (default: <rootdir>/thresholds.yaml)",
+           metavar="FILE"),
+    Option("models", "user model registry YAML extending/overriding the shipped one",
+           metavar="FILE"),
+    Option("cassettes", "cassette folder (default: <rootdir>/cassettes)", metavar="DIR"),
+    Option("shard", "run the K-th of N deterministic slices of the episodes (gates are then "
+           "evaluated with `emrd gate RUN_DIR...`)", metavar="K/N"),
+)  # fmt: skip
+
+
+@dataclass(frozen=True)
+class RunSettings:
+    """Everything the EMRD plugin was asked to do, after precedence and validation."""
+
+    models: tuple[str, ...]
+    conditions: tuple[str, ...]
+    spawns: tuple[str, ...]
+    episodes: int
+    variant: str
+    backend: str
+    modality: str | None
+    """``None``: each model's registry default."""
+    record_mode: str
+    matching: str
+    results: Path | None
+    """Run directory to resume, or ``None`` for a fresh one."""
+    thresholds: Path
+    models_file: Path | None
+    cassettes: Path
+    shard: tuple[int, int] | None
+    """``(k, n)``: this run covers the k-th of n slices (1-based)."""
+
+
+def parse_shard(text: str) -> tuple[int, int]:
+    """``"2/4"`` -> ``(2, 4)``; :class:`ConfigError` unless ``1 <= K <= N``."""
+    k, sep, n = text.partition("/")
+    if not (sep and k.strip().isdigit() and n.strip().isdigit()):
+        raise ConfigError(f"shard={text!r} must look like K/N, e.g. --emrd-shard=2/4.")
+    pair = int(k), int(n)
+    if not 1 <= pair[0] <= pair[1]:
+        raise ConfigError(f"shard={text!r} needs 1 <= K <= N, e.g. --emrd-shard=1/{pair[1]}.")
+    return pair
+
+
+def _pick(option: Option, cli: Mapping[str, Any], ini: Mapping[str, Any]) -> Any:
+    value = cli.get(option.name)
+    if value is None or value == []:
+        value = ini.get(option.name)
+    if value is None or value in ("", []):
+        return None
+    return value
+
+
+def _listed(option: Option, value: Any, default: Sequence[str]) -> tuple[str, ...]:
+    if value is None:
+        return tuple(default)
+    items = [part.strip() for item in value for part in str(item).split(",") if part.strip()]
+    for item in items:
+        if option.choices is not None:
+            check_choice(option.flag, item, option.choices)
+    return tuple(dict.fromkeys(items))
+
+
+def _path(value: Any, base: Path) -> Path:
+    path = Path(str(value)).expanduser()
+    return path if path.is_absolute() else base / path
+
+
+def resolve_settings(
+    cli: Mapping[str, Any],
+    ini: Mapping[str, Any],
+    *,
+    rootdir: Path,
+    env: Mapping[str, str] | None = None,
+) -> RunSettings:
+    """Apply command line > ini > default, validate, and freeze.
+
+    ``cli`` and ``ini`` map option names (``record_mode``) to raw values (``None``/empty
+    when not given). Relative paths are resolved against ``rootdir``.
+    """
+    env = os.environ if env is None else env
+    by_name = {o.name: o for o in OPTIONS}
+    raw = {name: _pick(option, cli, ini) for name, option in by_name.items()}
+    for name in ("variant", "backend", "modality", "record_mode", "matching"):
+        if raw[name] is not None:
+            check_choice(by_name[name].flag, raw[name], by_name[name].choices or ())
+    episodes = raw["episodes"]
+    if episodes is not None:
+        text = str(episodes).strip()
+        episodes = check_positive_int("--emrd-episodes", int(text) if text.isdigit() else text)
+    default_mode = "none" if env.get("CI") else "once"
+    return RunSettings(
+        models=_listed(by_name["model"], raw["model"], ("scout",)),
+        conditions=_listed(by_name["condition"], raw["condition"], CONDITIONS),
+        spawns=_listed(by_name["spawn"], raw["spawn"], SPAWNS),
+        episodes=episodes or 20,
+        variant=raw["variant"] or "default",
+        backend=raw["backend"] or "builtin",
+        modality=raw["modality"],
+        record_mode=raw["record_mode"] or default_mode,
+        matching=raw["matching"] or "strict",
+        results=_path(raw["results"], rootdir) if raw["results"] else None,
+        thresholds=_path(raw["thresholds"] or "thresholds.yaml", rootdir),
+        models_file=_path(raw["models"], rootdir) if raw["models"] else None,
+        cassettes=_path(raw["cassettes"] or "cassettes", rootdir),
+        shard=parse_shard(str(raw["shard"])) if raw["shard"] else None,
+    )

@@ -1,0 +1,138 @@
+"""The results store: one JSON trajectory per episode under a run directory (file I/O).
+
+Layout of a run directory::
+
+    <run>/episodes/<case_id>.json   one stored episode (trajectory + how it was obtained)
+    <run>/locks/<case_id>.lock      the episode's file lock
+
+Any process (pytest-xdist workers, shards on one machine) may ask for any episode: the
+first takes the episode's lock, computes it and writes it atomically; everyone else waits
+for the lock and reads the file. An episode is reused when its spec and protocol match and
+it finished (an ``errored`` episode is reused only within the session that produced it,
+so rerunning a run directory retries failures).
+"""
+
+from __future__ import annotations
+
+import json
+import secrets
+import time
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING, Any, Final
+
+from filelock import FileLock
+
+from pytest_emrd._atomic import write_bytes_atomic
+from pytest_emrd.errors import ProtocolError
+from pytest_emrd.trajectory import EpisodeSpec, Trajectory
+
+if TYPE_CHECKING:
+    from pytest_emrd.cassette import EpisodeRun
+
+STORE_SCHEMA: Final = 1
+
+
+@dataclass(frozen=True)
+class StoredEpisode:
+    """An episode as the store holds it."""
+
+    trajectory: Trajectory
+    session: str
+    """Id of the pytest session that computed it."""
+    recorded: bool
+    """New model traffic was recorded for it (a live episode)."""
+    frame_drift: int
+    seconds: float
+    computed_now: bool = False
+    """Computed by this call (as opposed to read from the store)."""
+
+    def to_json(self) -> bytes:
+        document = {
+            "store_schema": STORE_SCHEMA,
+            "session": self.session,
+            "recorded": self.recorded,
+            "frame_drift": self.frame_drift,
+            "seconds": round(self.seconds, 3),
+            "trajectory": self.trajectory.to_dict(),
+        }
+        return json.dumps(document, separators=(",", ":")).encode()
+
+    @classmethod
+    def from_json(cls, blob: bytes) -> StoredEpisode:
+        document: dict[str, Any] = json.loads(blob)
+        if document.get("store_schema") != STORE_SCHEMA:
+            raise ProtocolError(f"store_schema={document.get('store_schema')!r} is not 1")
+        return cls(
+            trajectory=Trajectory.from_dict(document["trajectory"]),
+            session=str(document["session"]),
+            recorded=bool(document["recorded"]),
+            frame_drift=int(document["frame_drift"]),
+            seconds=float(document["seconds"]),
+        )
+
+
+def new_run_dir(parent: Path) -> Path:
+    """A fresh, not yet created run directory name under ``parent`` (time + random suffix)."""
+    return parent / f"{time.strftime('%Y%m%d-%H%M%S')}-{secrets.token_hex(3)}"
+
+
+class ResultsStore:
+    """Episodes of one run directory, computed at most once across processes."""
+
+    def __init__(self, run_dir: Path, *, session: str, protocol: str) -> None:
+        self.run_dir = run_dir
+        self.session = session
+        self.protocol = protocol
+
+    def path_for(self, spec: EpisodeSpec) -> Path:
+        return self.run_dir / "episodes" / f"{spec.case_id}.json"
+
+    def _reusable(self, spec: EpisodeSpec) -> StoredEpisode | None:
+        path = self.path_for(spec)
+        try:
+            stored = StoredEpisode.from_json(path.read_bytes())
+        except FileNotFoundError:
+            return None
+        except (ValueError, KeyError, TypeError, ProtocolError):
+            return None  # unreadable leftovers are recomputed and overwritten
+        t = stored.trajectory
+        if t.spec != spec or t.protocol != self.protocol:
+            return None
+        if t.status == "errored" and stored.session != self.session:
+            return None
+        return stored
+
+    def get_or_compute(
+        self, spec: EpisodeSpec, compute: Callable[[EpisodeSpec], EpisodeRun]
+    ) -> StoredEpisode:
+        """The stored episode for ``spec``, computing and storing it if needed."""
+        lock_path = self.run_dir / "locks" / f"{spec.case_id}.lock"
+        lock_path.parent.mkdir(parents=True, exist_ok=True)
+        with FileLock(lock_path):
+            stored = self._reusable(spec)
+            if stored is not None:
+                return stored
+            run = compute(spec)
+            stored = StoredEpisode(
+                trajectory=run.trajectory,
+                session=self.session,
+                recorded=run.recorded,
+                frame_drift=run.frame_drift,
+                seconds=run.seconds,
+            )
+            write_bytes_atomic(self.path_for(spec), stored.to_json())
+        return StoredEpisode(**{**stored.__dict__, "computed_now": True})
+
+
+def iter_run_dir(run_dir: Path) -> Iterator[Trajectory]:
+    """Every readable trajectory of a run directory (sorted by file name)."""
+    for path in sorted((run_dir / "episodes").glob("*.json")):
+        try:
+            yield StoredEpisode.from_json(path.read_bytes()).trajectory
+        except (ValueError, KeyError, TypeError, ProtocolError) as exc:
+            raise ProtocolError(
+                f"episode file={str(path)!r} cannot be read ({exc}); delete it and rerun "
+                "the run directory to recompute it."
+            ) from exc

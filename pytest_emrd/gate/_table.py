@@ -1,0 +1,70 @@
+"""Terminal tables: gate verdicts per model, token usage and cost per model (pure text)."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+from pytest_emrd.gate._verdict import Verdict, format_number
+
+
+@dataclass(frozen=True)
+class UsageRow:
+    """Token usage of one model's episodes in a run."""
+
+    model: str
+    episodes: int
+    prompt_tokens: int
+    completion_tokens: int
+    cost_usd: float | None
+    """Estimated cost from the registry's prices, ``None`` when it has none."""
+
+
+def _render(header: Sequence[str], rows: Sequence[Sequence[str]]) -> list[str]:
+    widths = [max(len(r[i]) for r in [header, *rows]) for i in range(len(header))]
+    line = "  ".join(f"{{:<{w}}}" for w in widths)
+    return [line.format(*header).rstrip(), *(line.format(*r).rstrip() for r in rows)]
+
+
+def gate_tables(verdicts: Sequence[Verdict]) -> list[str]:
+    """One table per model: condition x metric, value, CI, n, bound, PASS/FAIL."""
+    lines: list[str] = []
+    for model in sorted({v.model for v in verdicts}):
+        mine = sorted(
+            (v for v in verdicts if v.model == model),
+            key=lambda v: (v.condition, v.variant, v.metric),
+        )
+        broken = sum(not v.passed for v in mine)
+        lines.append(f"{model}: {len(mine) - broken}/{len(mine)} gates pass")
+        rows = [
+            [
+                v.condition if v.variant == "default" else f"{v.condition}/{v.variant}",
+                v.metric,
+                format_number(v.value),
+                f"[{format_number(v.ci_low)}, {format_number(v.ci_high)}]",
+                str(v.n),
+                v.bound_text,
+                "PASS" if v.passed else "FAIL",
+            ]
+            for v in mine
+        ]
+        header = ["condition", "metric", "value", "95% CI", "n", "bound", "result"]
+        lines += ["  " + r for r in _render(header, rows)]
+        lines += [f"  FAIL {v.gate_id}: {v.reason}" for v in mine if not v.passed]
+    return lines
+
+
+def usage_table(rows: Sequence[UsageRow]) -> list[str]:
+    """Tokens (and estimated cost where known) per model."""
+    body = [
+        [
+            r.model,
+            str(r.episodes),
+            f"{r.prompt_tokens:,}",
+            f"{r.completion_tokens:,}",
+            "n/a" if r.cost_usd is None else f"${r.cost_usd:,.2f}",
+        ]
+        for r in sorted(rows, key=lambda r: r.model)
+    ]
+    header = ["model", "episodes", "prompt tokens", "completion tokens", "est. cost"]
+    return ["  " + r for r in _render(header, body)]

@@ -1,0 +1,161 @@
+"""Gate verdicts: a metric's estimate over a cell's episodes, compared with its bound (pure).
+
+A cell is model x condition (x prompt variant); its episodes are sorted by case id before
+the metric runs, and the bootstrap is seeded (``rng_seed=0``), so the same episodes give the
+same verdict whichever machine, worker or run directory they come from.
+"""
+
+from __future__ import annotations
+
+from collections import defaultdict
+from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any, Protocol
+
+from pytest_emrd._serde import from_dict, to_dict
+from pytest_emrd.gate._thresholds import Bound, Thresholds
+from pytest_emrd.trajectory import Trajectory
+
+
+class EstimateLike(Protocol):
+    value: float | None
+    ci_low: float | None
+    ci_high: float | None
+    n: int
+    reason: str | None
+
+
+class GateMetricLike(Protocol):
+    name: str
+
+    def compute(self, trajectories: Sequence[Trajectory], *, rng_seed: int = 0) -> Any: ...
+
+
+@dataclass(frozen=True)
+class GateCell:
+    """One gate test: a bound applied to the episodes of model x condition x variant."""
+
+    bound: Bound
+    variant: str = "default"
+
+    @property
+    def gate_id(self) -> str:
+        """``scout-baseline-aec`` (variant inserted when not ``default``)."""
+        parts = [self.bound.model, self.bound.condition]
+        if self.variant != "default":
+            parts.append(self.variant)
+        return "-".join([*parts, self.bound.metric])
+
+
+@dataclass(frozen=True)
+class Verdict:
+    """The outcome of one gate."""
+
+    model: str
+    condition: str
+    variant: str
+    metric: str
+    kind: str
+    """``min`` or ``max``."""
+    bound: float
+    ci: str | None
+    """Which end of the CI was compared (``None``: the point value)."""
+    value: float | None
+    ci_low: float | None
+    ci_high: float | None
+    n: int
+    passed: bool
+    reason: str
+    """Why it passed or failed, in one sentence."""
+
+    @property
+    def gate_id(self) -> str:
+        parts = [self.model, self.condition]
+        if self.variant != "default":
+            parts.append(self.variant)
+        return "-".join([*parts, self.metric])
+
+    @property
+    def bound_text(self) -> str:
+        op = ">=" if self.kind == "min" else "<="
+        side = f" (CI {self.ci})" if self.ci else ""
+        return f"{op} {self.bound:g}{side}"
+
+    def explain(self) -> str:
+        """``scout-baseline-aec: value 0.912 [0.88, 0.94] n=80, bound >= 0.8: PASS (...)``."""
+        ci = f"[{format_number(self.ci_low)}, {format_number(self.ci_high)}]"
+        return (
+            f"{self.gate_id}: value {format_number(self.value)} {ci}"
+            f" n={self.n}, bound {self.bound_text}: {'PASS' if self.passed else 'FAIL'}"
+            f" ({self.reason})"
+        )
+
+    def to_dict(self) -> dict[str, Any]:
+        return to_dict(self)
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> Verdict:
+        return from_dict(cls, data)
+
+
+def format_number(x: float | None) -> str:
+    """Four significant digits, ``n/a`` for an undefined value."""
+    return "n/a" if x is None else f"{x:.4g}"
+
+
+def judge(cell: GateCell, estimate: EstimateLike) -> Verdict:
+    """Compare an estimate with the cell's bound."""
+    b = cell.bound
+    compared = {None: estimate.value, "lower": estimate.ci_low, "upper": estimate.ci_high}[b.ci]
+    what = "value" if b.ci is None else f"CI {b.ci} end"
+    if compared is None:
+        passed = False
+        reason = f"{what} undefined: {estimate.reason or 'no estimate'}"
+    else:
+        passed = compared >= b.value if b.kind == "min" else compared <= b.value
+        op = (">=" if passed else "<") if b.kind == "min" else ("<=" if passed else ">")
+        reason = f"{what} {compared:.4g} {op} {b.value:g}"
+    return Verdict(
+        model=b.model,
+        condition=b.condition,
+        variant=cell.variant,
+        metric=b.metric,
+        kind=b.kind,
+        bound=b.value,
+        ci=b.ci,
+        value=estimate.value,
+        ci_low=estimate.ci_low,
+        ci_high=estimate.ci_high,
+        n=estimate.n,
+        passed=passed,
+        reason=reason,
+    )
+
+
+def evaluate_cell(
+    cell: GateCell, trajectories: Iterable[Trajectory], metrics: Mapping[str, GateMetricLike]
+) -> Verdict:
+    """The verdict of one gate over its episodes (any order in, sorted by case id)."""
+    ordered = sorted(trajectories, key=lambda t: t.spec.case_id)
+    estimate = metrics[cell.bound.metric].compute(ordered, rng_seed=0)
+    return judge(cell, estimate)
+
+
+def evaluate_all(
+    trajectories: Iterable[Trajectory],
+    thresholds: Thresholds,
+    metrics: Mapping[str, GateMetricLike],
+) -> list[Verdict]:
+    """Every gate whose cell has episodes, grouped by model x condition x variant.
+
+    Used by ``emrd gate RUN_DIR...``: the same cells and the same verdicts as the gate tests
+    of a single-machine run over the same episodes.
+    """
+    cells: dict[tuple[str, str, str], list[Trajectory]] = defaultdict(list)
+    for t in trajectories:
+        cells[(t.spec.model, t.spec.condition, t.spec.variant)].append(t)
+    verdicts = []
+    for (model, condition, variant), episodes in sorted(cells.items()):
+        for bound in thresholds.for_cell(model, condition):
+            verdicts.append(evaluate_cell(GateCell(bound, variant), episodes, metrics))
+    return verdicts
