@@ -1,0 +1,15 @@
+"""The ``ai2thor`` backend: the shared EMRD layout built as a ProcTHOR house and driven
+through ``ai2thor.controller.Controller`` (extra ``thor``: ``pip install
+'pytest-emrd[thor]'``; needs a THOR build and, for CloudRendering, a GPU with Vulkan).
+
+Importing this package does not import ``ai2thor``; that happens when a
+:class:`ThorSimulator` starts its controller.
+"""
+
+from __future__ import annotations
+
+from pytest_emrd.world.thor._assets import ASSET_IDS, SCHEMA, THOR_ROOM_TYPES
+from pytest_emrd.world.thor._house import build_house
+from pytest_emrd.world.thor._ids import IdTable
+
+__all__ = ["ASSET_IDS", "SCHEMA", "THOR_ROOM_TYPES", "IdTable", "build_house"]
