@@ -1,0 +1,179 @@
+"""Per-episode scores: the inner terms of the paper's equations, one episode at a time.
+
+All functions are pure. "Undefined" is ``None`` together with a reason, never a silent 0.0.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from pytest_emrd.metrics._match import Matching, rigid_fit
+from pytest_emrd.metrics._tracking import Track, exp_ratio, layout_scale
+from pytest_emrd.trajectory import Trajectory
+
+
+def aec_score(matching: Matching, n_objects: int) -> float | None:
+    r"""Absolute Environment Coverage of one terminal map (inner term of Eq. AEC).
+
+    .. math::
+        AEC^{(i)} = \frac{1}{|E|} \sum_{k \in \mathcal{T}} \min(|M_k^{(i)}|, |E_k|)
+
+    ``|M_k|`` counts distinct labels resolved to type ``k``; the ``min`` cap means duplicates
+    and hallucinations never raise the score, and entries of types absent from the ground truth
+    count for nothing. Because :func:`match_map` forms exactly ``min(|M_k|, |E_k|)`` pairs per
+    type, this is ``|K| / |E|``. A fraction in [0, 1]. Empty map: 0.0 (nothing was mapped, a
+    real zero). ``|E| = 0``: None (no ground truth to cover).
+    """
+    if n_objects == 0:
+        return None
+    return len(matching.pairs) / n_objects
+
+
+def te_score(traj: Trajectory) -> int:
+    r"""Temporal Efficiency of one episode (inner term of Eq. TE): ``|tau^{(i)}| <= T_max``.
+
+    The number of actions executed before ``Term`` or until the budget ran out. Invalid and
+    unparseable actions consume a step and count; the ``Term`` action itself does not. A
+    ``Term`` on the first step gives 0; an episode without steps gives 0.
+    """
+    terminal = 1 if traj.status == "terminated" and traj.steps else 0
+    return len(traj.steps) - terminal
+
+
+def positional_accuracy_score(matching: Matching, g_base: int) -> float | None:
+    r"""Positional Accuracy of one terminal map (inner term of Eq. PA).
+
+    .. math::
+        PA^{(i)} = \exp\!\left(-\frac{RMSE^{(i)}}{L_{gt}^{(i)}}\right)
+                   \cdot \frac{\min(|K^{(i)}|, |G_{base}^{(i)}|)}{|G_{base}^{(i)}|}
+
+    ``K`` are the matched pairs; predicted positions are rigidly aligned onto their ground truth
+    (:func:`rigid_fit`: rotation + translation, no scaling, no reflection) and ``RMSE`` is the
+    root-mean-square post-alignment residual. ``L_gt`` is the RMS distance of the *matched*
+    ground-truth points from their centroid (dynamic scale over the mapped sub-graph).
+    ``G_base`` is the set of objects discoverable under the unperturbed baseline, so a condition
+    that hides objects cannot inflate the score. The coverage factor is capped at 1 (objects
+    outside ``G_base`` may still be matched). Result in [0, 1].
+
+    Edge cases: ``|K| = 0`` gives 0.0; ``|K| = 1`` aligns perfectly (``exp(0) = 1``) and gives
+    ``1 / |G_base|``; matched ground truth all at one point gives the coverage factor when the
+    residual is 0 and 0.0 otherwise; ``|G_base| = 0`` gives None.
+    """
+    if g_base == 0:
+        return None
+    if not matching.pairs:
+        return 0.0
+    pred = np.array([(p.pred_x, p.pred_z) for p in matching.pairs], dtype=float)
+    true = np.array([(p.true_x, p.true_z) for p in matching.pairs], dtype=float)
+    rot, shift = rigid_fit(pred, true)
+    residual = pred @ rot.T + shift - true
+    rmse = float(np.sqrt(np.mean(np.sum(residual**2, axis=1))))
+    if rmse < 1e-9 * max(1.0, float(np.abs(true).max())):
+        rmse = 0.0
+    coverage = min(len(matching.pairs), g_base) / g_base
+    return exp_ratio(rmse, layout_scale(true)) * coverage
+
+
+@dataclass(frozen=True)
+class Grounding:
+    """Decide-phase scores of one episode (Appendix B, FPSG)."""
+
+    fpsg_local: float | None
+    fpsg_global: float | None
+    never_visited: bool | None
+    any_bias: bool | None
+    reasons: dict[str, str]
+
+
+def grounding_scores(traj: Trajectory, final: Matching) -> Grounding:
+    r"""Focal-Point Spatial Grounding, Never-Visited and Any-Bias of one episode.
+
+    .. math::
+        FPSG^{(i)} = \frac{|\hat{M}_F \cap \mathcal{O}_F|}{|N_{base}|},\qquad
+        FPSG_{local}^{(i)} = \frac{|\hat{M}_F \cap \mathcal{O}_F|}{|\mathcal{O}_F|}
+
+    ``F`` is the chosen room, ``O_F`` the ground-truth objects of ``F``, ``N_base`` the objects
+    the engine showed the agent at any step (union of ``visible_ids``). The intersection counts
+    objects of ``O_F`` that the final map matches *and* the engine confirmed as seen, so an
+    entry copied from the prompt's inventory for a room never looked at is not evidence.
+    Fractions in [0, 1]; ``FPSG_local >= FPSG`` whenever ``|O_F| <= |N_base|``.
+
+    ``never_visited``: ``F`` is not among the rooms the agent stood in. ``any_bias``: the final
+    map holds no (confirmed) object of ``F``. Edge cases: no chosen room (no ``Term``, or a room
+    name that resolves to none) makes all four None; ``|O_F| = 0`` makes ``fpsg_local`` None;
+    ``|N_base| = 0`` makes ``fpsg_global`` None.
+    """
+    room = traj.chosen_room
+    if room is None:
+        why = "no chosen room (no Term, or a room name that resolves to no room)"
+        keys = ("fpsg_local", "fpsg_global", "never_visited", "any_bias")
+        return Grounding(None, None, None, None, dict.fromkeys(keys, why))
+    in_room = {o.object_id for o in traj.ground_truth.objects if o.room == room}
+    observed = {oid for s in traj.steps for oid in s.visible_ids}
+    grounded = len(final.object_ids & in_room & observed)
+    reasons: dict[str, str] = {}
+    local = grounded / len(in_room) if in_room else None
+    if local is None:
+        reasons["fpsg_local"] = f"chosen room {room!r} holds no ground-truth object"
+    glob = grounded / len(observed) if observed else None
+    if glob is None:
+        reasons["fpsg_global"] = "the engine showed the agent no object (|N_base| = 0)"
+    return Grounding(local, glob, room not in traj.rooms_visited, grounded == 0, reasons)
+
+
+def sir_score(traj: Trajectory, track: Track, aec: float | None) -> tuple[float | None, str]:
+    r"""Coverage-anchored Spatial Identity Resolution of one episode (Appendix B).
+
+    .. math::
+        SIR = AEC \cdot \frac{|M_{first}^{(r)} \cap M_{return}^{(r)}|}{|M_{first}^{(r)}|}
+
+    ``M_first`` are the objects of room ``r`` held at the end of the first visit to ``r``;
+    an object is in ``M_return`` when, at the end of the first re-entry into ``r``, it is still
+    held *by the same label* (recognised, not re-added as a new object). The episode's value
+    averages the ratio over every re-entered room with a non-empty ``M_first`` and multiplies by
+    the episode's AEC. Returns ``(value, "")`` or ``(None, reason)``: no room re-entered,
+    nothing of a re-entered room mapped on the first visit, or AEC undefined.
+    """
+    room_of = {o.object_id: o.room for o in traj.ground_truth.objects}
+    held = track.held
+    ratios: list[float] = []
+    reentered = [v for v in track.visits if v.return_end is not None]
+    for v in reentered:
+        first = {o: lb for o, lb in held[v.first_end].items() if room_of[o] == v.room}
+        if first and v.return_end is not None:
+            back = held[v.return_end]
+            ratios.append(sum(back.get(o) == lb for o, lb in first.items()) / len(first))
+    if not reentered:
+        return None, "no room was re-entered"
+    if not ratios:
+        return None, "no object of a re-entered room was mapped on its first visit"
+    if aec is None:
+        return None, "AEC is undefined (no ground-truth objects)"
+    return aec * float(np.mean(ratios)), ""
+
+
+def serial_position_bins(
+    ttf_by_rank: Sequence[float | None],
+) -> tuple[float | None, float | None, float | None]:
+    r"""Early / Middle / Late mean time-to-forget of one episode (inner term of Eq. SPE).
+
+    .. math::
+        \overline{TTF}_b^{(i)} = \frac{1}{|\mathcal{D}_b^{(i)}|}
+            \sum_{j \in \mathcal{D}_b^{(i)}} TTF_j^{(i)}
+
+    ``ttf_by_rank[j]`` is the TTF of the object of discovery rank ``j + 1`` (None when it never
+    left view while mapped). Ranks are split into three consecutive bins whose sizes differ by
+    at most one, larger bins first (``numpy.array_split``: 30 -> 10/10/10, 10 -> 4/3/3). A bin's
+    mean is over its objects with a TTF; a bin with none, or no bin at all (fewer than three
+    discovered objects leave later bins empty), gives None for that bin.
+    """
+    bins = np.array_split(np.arange(len(ttf_by_rank)), 3)
+    out: list[float | None] = []
+    for b in bins:
+        values = [ttf_by_rank[i] for i in b.tolist() if ttf_by_rank[i] is not None]
+        out.append(math.fsum(v for v in values if v is not None) / len(values) if values else None)
+    return out[0], out[1], out[2]

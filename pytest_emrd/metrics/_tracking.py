@@ -1,0 +1,233 @@
+"""One pass over an episode's steps: what the map holds, when, and for how long.
+
+Every temporal metric (Temporal Belief Stability, forgetting spells and time-to-forget,
+Kaplan-Meier, Ebbinghaus, serial position, Miller's law, Spatial Identity Resolution) reads
+the :class:`Track` built here, so an episode's steps are matched once.
+
+Definitions (step ``t`` is 1-based; see :mod:`pytest_emrd.trajectory` for the timeline):
+
+* ``held(o, t)``: ground-truth object ``o`` is in the map ``M_t``: :func:`match_map` applied
+  step by step (each step carrying the previous step's label identities) assigns one of
+  ``M_t``'s entries to it. The terminal map's matching (used by AEC, PA and FPSG) is the last
+  step's, so a label is judged against the object it stood for when it was written.
+* ``in_view(o, t)``: ``o`` is among ``visible_ids`` of step ``t``.
+* **Spell** (out-of-view interval): starts at step ``s`` when ``o`` was in view and held at
+  ``s-1`` and is out of view at ``s``. At each following out-of-view step the map is checked:
+  the first step ``t`` with ``o`` not held is a *forgetting event* of duration
+  ``t - s + 1`` (dropped at its ``(t-s+1)``-th step out of view; the paper's KM example counts
+  ``tau = 1`` as the first step after leaving view). The spell is *right-censored* at duration
+  ``t - s`` when ``o`` comes back into view at ``t`` still held, and at ``T - s + 1`` when the
+  episode ends at ``T`` still held. An object mapped while out of view opens no spell.
+* **Discovery** of ``o``: the first step it is held; discovery rank orders discovered objects
+  by ``(first step, object id)``.
+* Miller's law and TBS follow the paper in tracking *labels* across steps ("objects are
+  matched across time steps exclusively using the string labels", Appendix B).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from pytest_emrd.metrics._match import EMPTY_MATCHING, Assignment, Matcher, Matching
+from pytest_emrd.trajectory import Trajectory
+
+
+@dataclass(frozen=True)
+class Spell:
+    """One out-of-view interval of a mapped object (see :mod:`._tracking`)."""
+
+    object_id: str
+    category: str
+    """Memory category of the object (``landmark``, ``salient``, ``clutter``)."""
+    start: int
+    """First out-of-view step ``s``."""
+    duration: int
+    """Steps out of view the object was retained: the event time, or the censoring time."""
+    forgotten: bool
+    """True for a forgetting event, False when right-censored."""
+    discovery_rank: int
+    """1-based rank of the object's discovery in its episode."""
+
+
+@dataclass(frozen=True)
+class RoomVisits:
+    """First visit and first re-entry of one room (step indices, inclusive)."""
+
+    room: str
+    first_end: int
+    return_end: int | None
+
+
+@dataclass(frozen=True)
+class Track:
+    """Everything the temporal metrics read from one episode."""
+
+    held: tuple[dict[str, str], ...]
+    """For every step, object id -> label of the entry of ``M_t`` matched to it."""
+    final: Matching
+    """``match_map(M_T)`` of the terminal map (empty when there is no step)."""
+    spells: tuple[Spell, ...]
+    """Every spell of every object, in start order."""
+    discovery: dict[str, int]
+    """Object id -> discovery rank (1-based)."""
+    tbs: tuple[float, ...]
+    """``TBS(t)`` for ``t = 1..T`` (empty when ``|G_base| = 0``)."""
+    miller_loads: tuple[int, ...]
+    """``m = |M_{t-1}|`` (distinct labels) for every step ``t >= 2`` with ``m >= 1``."""
+    miller_forgets: tuple[bool, ...]
+    """Whether ``M_{t-1} \\ M_t`` is non-empty, aligned with ``miller_loads``."""
+    visits: tuple[RoomVisits, ...]
+    """Rooms in order of first visit."""
+
+
+def first_spells(spells: tuple[Spell, ...]) -> tuple[Spell, ...]:
+    """The first spell of each object (its time-to-forget), in discovery order.
+
+    One spell per object: later spells are conditional on re-discovery and would weight
+    frequently re-seen objects (doorways) more than the rest.
+    """
+    first: dict[str, Spell] = {}
+    for s in spells:
+        first.setdefault(s.object_id, s)
+    return tuple(sorted(first.values(), key=lambda s: s.discovery_rank))
+
+
+def layout_scale(xy: np.ndarray) -> float:
+    """RMS distance of points from their centroid (``L_gt``); 0.0 for fewer than 2 points."""
+    if len(xy) < 2:
+        return 0.0
+    return float(np.sqrt(np.mean(np.sum((xy - xy.mean(axis=0)) ** 2, axis=1))))
+
+
+def exp_ratio(error: float, scale: float) -> float:
+    """``exp(-error / scale)`` with ``0/0 := 0`` (perfect) and ``x/0 := inf`` (score 0)."""
+    if error <= 0.0:
+        return 1.0
+    if scale <= 0.0:
+        return 0.0
+    return math.exp(-error / scale)
+
+
+def track_episode(traj: Trajectory) -> Track:
+    """Walk the steps once (see the module docstring for every definition)."""
+    gt = traj.ground_truth
+    matcher = Matcher(gt.objects)
+    category = {o.object_id: o.category for o in gt.objects}
+    scale = layout_scale(np.array([(o.x, o.z) for o in gt.objects], dtype=float).reshape(-1, 2))
+    g_base = len(gt.discoverable_ids)
+    held: list[dict[str, str]] = []
+    tbs: list[float] = []
+    first_pos: dict[str, tuple[float, float]] = {}
+    prev_map: object = None
+    assignment: Assignment | None = None
+    for step in traj.steps:
+        for e in step.cognitive_map:
+            first_pos.setdefault(e.label, (e.x, e.z))
+        if assignment is None or step.cognitive_map is not prev_map:
+            carried = matcher.carry(assignment) if assignment is not None else None
+            assignment = matcher.assign(step.cognitive_map, carried)
+            prev_map = step.cognitive_map
+        held.append(matcher.held(assignment))
+        if g_base:
+            tbs.append(_tbs_value(assignment, first_pos, scale, g_base))
+    discovery = _discovery(held)
+    loads, forgets = _miller(traj)
+    final = matcher.matching(assignment) if assignment is not None else EMPTY_MATCHING
+    return Track(
+        held=tuple(held),
+        final=final,
+        spells=_spells(traj, held, category, discovery),
+        discovery=discovery,
+        tbs=tuple(tbs),
+        miller_loads=loads,
+        miller_forgets=forgets,
+        visits=_visits([s.room for s in traj.steps]),
+    )
+
+
+def _discovery(held: list[dict[str, str]]) -> dict[str, int]:
+    first: dict[str, int] = {}
+    for t, h in enumerate(held):
+        for oid in h:
+            first.setdefault(oid, t)
+    order = sorted(first, key=lambda oid: (first[oid], oid))
+    return {oid: rank for rank, oid in enumerate(order, start=1)}
+
+
+def _spells(
+    traj: Trajectory,
+    held: list[dict[str, str]],
+    category: dict[str, str],
+    discovery: dict[str, int],
+) -> tuple[Spell, ...]:
+    open_at: dict[str, int] = {}
+    done: list[Spell] = []
+
+    def close(oid: str, duration: int, forgotten: bool) -> None:
+        start = open_at.pop(oid)
+        done.append(Spell(oid, category[oid], start, duration, forgotten, discovery[oid]))
+
+    prev_visible: frozenset[str] = frozenset()
+    for i, step in enumerate(traj.steps):
+        t = step.index
+        visible = frozenset(step.visible_ids)
+        if i > 0:
+            for oid in sorted((prev_visible - visible) & held[i - 1].keys()):
+                open_at[oid] = t
+        for oid in sorted(open_at):
+            if oid in visible:
+                close(oid, t - open_at[oid], False)
+            elif oid not in held[i]:
+                close(oid, t - open_at[oid] + 1, True)
+        prev_visible = visible
+    if traj.steps:
+        last = traj.steps[-1].index
+        for oid in sorted(open_at):
+            close(oid, last - open_at[oid] + 1, False)
+    return tuple(sorted(done, key=lambda s: (s.start, s.object_id)))
+
+
+def _tbs_value(
+    a: Assignment, first_pos: dict[str, tuple[float, float]], scale: float, g_base: int
+) -> float:
+    """``TBS(t)`` of one step: 0.0 when nothing is matched (coverage 0)."""
+    rows = [r for r, c in enumerate(a.obj) if c >= 0]
+    if not rows:
+        return 0.0
+    start = np.array([first_pos[a.labels[r]] for r in rows], dtype=float)
+    delta = a.pred[rows] - start
+    drift = float(np.sqrt(np.einsum("ij,ij->i", delta, delta)).sum()) / len(rows)
+    return exp_ratio(drift, scale) * min(len(rows), g_base) / g_base
+
+
+def _miller(traj: Trajectory) -> tuple[tuple[int, ...], tuple[bool, ...]]:
+    loads: list[int] = []
+    forgets: list[bool] = []
+    prev: set[str] | None = None
+    for step in traj.steps:
+        labels = {e.label for e in step.cognitive_map}
+        if prev:
+            loads.append(len(prev))
+            forgets.append(bool(prev - labels))
+        prev = labels
+    return tuple(loads), tuple(forgets)
+
+
+def _visits(rooms: list[str]) -> tuple[RoomVisits, ...]:
+    runs: list[tuple[str, int]] = []  # (room, last step index of the run)
+    for i, room in enumerate(rooms):
+        if runs and runs[-1][0] == room:
+            runs[-1] = (room, i)
+        else:
+            runs.append((room, i))
+    visits: dict[str, RoomVisits] = {}
+    for room, end in runs:
+        known = visits.get(room)
+        if known is None:
+            visits[room] = RoomVisits(room, end, None)
+        elif known.return_end is None:
+            visits[room] = RoomVisits(room, known.first_end, end)
+    return tuple(visits.values())
