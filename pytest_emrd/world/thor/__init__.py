@@ -11,5 +11,14 @@ from __future__ import annotations
 from pytest_emrd.world.thor._assets import ASSET_IDS, SCHEMA, THOR_ROOM_TYPES
 from pytest_emrd.world.thor._house import build_house
 from pytest_emrd.world.thor._ids import IdTable
+from pytest_emrd.world.thor._simulator import DEFAULTS, ThorSimulator
 
-__all__ = ["ASSET_IDS", "SCHEMA", "THOR_ROOM_TYPES", "IdTable", "build_house"]
+__all__ = [
+    "ASSET_IDS",
+    "DEFAULTS",
+    "SCHEMA",
+    "THOR_ROOM_TYPES",
+    "IdTable",
+    "ThorSimulator",
+    "build_house",
+]

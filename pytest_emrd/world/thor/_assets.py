@@ -15,7 +15,6 @@ from typing import Final
 
 from pytest_emrd.errors import ConfigError
 from pytest_emrd.rooms import CONFERENCE, ENTRANCE, KITCHEN, OFFICE
-from pytest_emrd.world._catalog import KINDS
 
 SCHEMA: Final = "1.0.0"
 """ProcTHOR house schema version this package writes."""
@@ -58,9 +57,6 @@ SKYBOX_ID: Final = "Sky1"
 
 WALL_COLOR: Final[tuple[float, float, float]] = (0.93, 0.92, 0.89)
 """Baseline wall albedo (warm white)."""
-
-#: objectType -> height (m) of its base above the floor (a laptop stands on a desk).
-ELEVATION: Final[Mapping[str, float]] = {k.object_type: k.elevation for k in KINDS.values()}
 
 
 def asset_for(object_type: str, table: Mapping[str, str]) -> str:

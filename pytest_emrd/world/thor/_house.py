@@ -28,7 +28,6 @@ from pytest_emrd.world.thor._assets import (
     ASSET_IDS,
     CEILING_MATERIAL,
     DOOR_TYPES,
-    ELEVATION,
     FLOOR_MATERIAL,
     SCHEMA,
     SKYBOX_ID,
@@ -183,7 +182,7 @@ def _object_dict(obj: WorldObject, thor_id: str, assets: Mapping[str, str]) -> d
     return {
         "id": thor_id,
         "assetId": asset_for(obj.object_type, assets),
-        "position": _xyz(obj.x, ELEVATION.get(obj.object_type, 0.0) + obj.height / 2, obj.z),
+        "position": _xyz(obj.x, obj.elevation + obj.height / 2, obj.z),
         "rotation": _xyz(0.0, obj.rotation % 360, 0.0),
         "kinematic": True,
         "layer": "Procedural0",

@@ -66,6 +66,16 @@ def _pick(points: np.ndarray, score: np.ndarray, mask: np.ndarray) -> int | None
     return int(idx[order[0]])
 
 
+def nearest_in_room(
+    points: np.ndarray, x: float, z: float, room: Room
+) -> tuple[float, float] | None:
+    """The reachable position in ``room`` nearest ``(x, z)`` (None if the room has none)."""
+    if points.size == 0:
+        return None
+    best = _pick(points, np.hypot(points[:, 0] - x, points[:, 1] - z), _in_room(points, room))
+    return None if best is None else (float(points[best, 0]), float(points[best, 1]))
+
+
 def viewpoint(points: np.ndarray, x: float, z: float, room: Room) -> WorldPose | None:
     """Reachable spot in ``room`` nearest ``(x, z)`` with a grid heading that faces it.
 

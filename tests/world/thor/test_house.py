@@ -118,9 +118,7 @@ def test_low_light_dims_every_light_by_the_condition_factor(layout: Layout) -> N
     base = build_house(layout, "baseline", 0)["proceduralParameters"]["lights"]
     dark = build_house(layout, "low_light", 0)["proceduralParameters"]["lights"]
     factor = condition_params("low_light").light_factor
-    assert [d["intensity"] for d in dark] == [
-        pytest.approx(b["intensity"] * factor) for b in base
-    ]
+    assert [d["intensity"] for d in dark] == [pytest.approx(b["intensity"] * factor) for b in base]
 
 
 def test_texture_colours_are_seeded(layout: Layout) -> None:

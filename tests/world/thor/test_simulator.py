@@ -1,0 +1,200 @@
+"""ThorSimulator against the fake controller: THOR calls, actions, observations."""
+
+from __future__ import annotations
+
+import hashlib
+import io
+from collections.abc import Iterator
+from typing import Any
+
+import numpy as np
+import pytest
+from PIL import Image
+
+from pytest_emrd.world._conditions import condition_params
+from pytest_emrd.world._model import Layout, Observation
+from pytest_emrd.world.thor import ThorSimulator
+
+
+@pytest.fixture
+def sim(fake_controller: type) -> Iterator[ThorSimulator]:
+    simulator = ThorSimulator(controller_factory=fake_controller)
+    yield simulator
+    simulator.close()
+
+
+def _controller(fake_controller: type) -> Any:
+    return fake_controller.instances[-1]
+
+
+def _actions(fake_controller: type) -> list[str]:
+    return [name for name, _ in _controller(fake_controller).calls]
+
+
+def _face(sim: ThorSimulator, object_id: str) -> Observation:
+    """Turn until ``object_id`` is in view (at most one full turn)."""
+    for _ in range(4):
+        obs = sim.step("Turn(Right)")
+        if object_id in sim.visible_ids():
+            return obs
+    raise AssertionError(f"{object_id} never came into view")
+
+
+@pytest.mark.parametrize("condition", ["baseline", "low_light", "texture"])
+def test_reset_starts_thor_with_the_paper_settings(
+    sim: ThorSimulator, fake_controller: type, layout: Layout, condition: str
+) -> None:
+    sim.reset(layout, condition, "Office", 3)
+    init = _controller(fake_controller).init
+    assert {k: init[k] for k in ("agentMode", "platform", "width", "height", "fieldOfView")} == {
+        "agentMode": "default",
+        "platform": "CloudRendering",
+        "width": 512,
+        "height": 512,
+        "fieldOfView": 90,
+    }
+    assert init["snapToGrid"] is True and init["rotateStepDegrees"] == 90
+    assert init["visibilityDistance"] == condition_params(condition).visibility_distance
+    assert init["scene"] is sim.house and init["scene"]["metadata"]["schema"] == "1.0.0"
+
+
+@pytest.mark.parametrize(
+    ("condition", "expected"),
+    [
+        ("baseline", ["GetReachablePositions", "TeleportFull"]),
+        ("low_light", ["GetReachablePositions", "TeleportFull"]),
+        (
+            "texture",
+            ["GetReachablePositions", "RandomizeMaterials", "RandomizeColors", "TeleportFull"],
+        ),
+    ],
+    ids=["baseline", "low_light", "texture"],
+)
+def test_conditions_issue_the_right_calls_at_reset(
+    sim: ThorSimulator, fake_controller: type, layout: Layout, condition: str, expected: list[str]
+) -> None:
+    sim.reset(layout, condition, "Kitchen", 1)
+    assert _actions(fake_controller) == expected
+
+
+def test_first_observation_is_a_usable_frame_at_the_spawn_origin(
+    sim: ThorSimulator, layout: Layout
+) -> None:
+    obs = sim.reset(layout, "baseline", "Office", 3)
+    assert (obs.step, obs.success, obs.done) == (0, True, False)
+    assert (obs.pose.x, obs.pose.z, obs.pose.heading) == (0.0, 0.0, 0.0)
+    assert obs.frame is not None and obs.frame.shape == (512, 512, 3)
+    assert obs.frame.dtype == np.uint8
+    assert obs.frame_digest == hashlib.sha256(obs.frame.tobytes()).hexdigest()
+    assert Image.open(io.BytesIO(obs.jpeg)).size == (512, 512)
+    assert sim.current_room() == "Office"
+    assert "Office" not in obs.feedback and "Pose:" in obs.feedback
+
+
+@pytest.mark.parametrize(
+    ("action", "calls", "turned"),
+    [
+        ("Turn(Left)", [("RotateLeft", {"degrees": 90})], 270.0),
+        ("Turn(Right)", [("RotateRight", {"degrees": 90})], 90.0),
+        ("turn( around )", [("RotateRight", {"degrees": 90})] * 2, 180.0),
+    ],
+    ids=["left", "right", "around"],
+)
+def test_turns_map_to_thor_rotations(
+    sim: ThorSimulator,
+    fake_controller: type,
+    layout: Layout,
+    action: str,
+    calls: list[tuple[str, dict[str, Any]]],
+    turned: float,
+) -> None:
+    sim.reset(layout, "baseline", "Office", 3)
+    before = len(_controller(fake_controller).calls)
+    obs = sim.step(action)
+    assert _controller(fake_controller).calls[before:] == calls
+    assert obs.success and obs.pose.heading == turned and obs.step == 1
+
+
+def test_goto_an_object_teleports_next_to_it_facing_it(
+    sim: ThorSimulator, fake_controller: type, layout: Layout
+) -> None:
+    sim.reset(layout, "baseline", "Office", 3)
+    _face(sim, "Desk_1")
+    obs = sim.step("Goto(Desk)")
+    name, args = _controller(fake_controller).calls[-1]
+    assert obs.success and name == "TeleportFull"
+    assert args["rotation"]["y"] % 90 == 0 and args["horizon"] == 0
+    assert "Desk_1" in sim.visible_ids()
+    desk = next(v for v in obs.visible if v.object_id == "Desk_1")
+    assert desk.distance < 1.5 and abs(desk.bearing) <= 30
+
+
+def test_goto_a_doorway_enters_the_next_room(sim: ThorSimulator, layout: Layout) -> None:
+    sim.reset(layout, "baseline", "Office", 3)
+    _face(sim, "Doorway_1")
+    obs = sim.step("Goto(Doorway_1)")
+    assert obs.success and sim.current_room() == "Conference Room"
+    assert sim.agent_pose.heading == 90.0  # facing into the Conference Room, away from the gap
+
+
+@pytest.mark.parametrize(
+    ("action", "reason"),
+    [
+        ("Goto(Fridge_1)", "not visible"),
+        ("Goto(Piano)", "not visible"),
+        ("Jump(Desk_1)", "not an action"),
+        ("I will go to the desk", "cannot read"),
+        ("Turn(Up)", "not an action"),
+        ("Term(Garage)", "unknown room"),
+    ],
+    ids=["out-of-view", "unknown-target", "unknown-verb", "prose", "bad-turn", "unknown-room"],
+)
+def test_invalid_actions_fail_the_step_without_moving(
+    sim: ThorSimulator, fake_controller: type, layout: Layout, action: str, reason: str
+) -> None:
+    start = sim.reset(layout, "baseline", "Office", 3)
+    before = len(_controller(fake_controller).calls)
+    obs = sim.step(action)
+    assert not obs.success and reason in obs.feedback and obs.step == 1
+    assert _controller(fake_controller).calls[before:] == []
+    assert obs.pose == start.pose and not obs.done
+
+
+def test_term_ends_the_episode(sim: ThorSimulator, layout: Layout) -> None:
+    sim.reset(layout, "baseline", "Office", 3)
+    obs = sim.step("Term(Kitchen)")
+    assert obs.success and obs.done and obs.terminal_room == "Kitchen"
+    after = sim.step("Turn(Left)")
+    assert not after.success and "ended" in after.feedback
+
+
+def test_low_light_shortens_what_is_reported_visible(fake_controller: type, layout: Layout) -> None:
+    seen = {}
+    for condition in ("baseline", "low_light"):
+        sim = ThorSimulator(controller_factory=fake_controller)
+        sim.reset(layout, condition, "Conference Room", 4)
+        limit = condition_params(condition).visibility_distance
+        far = [v for _ in range(4) for v in sim.step("Turn(Right)").visible]
+        assert all(v.distance <= limit for v in far)
+        seen[condition] = {v.object_id for v in far}
+        sim.close()
+    assert seen["low_light"] <= seen["baseline"]
+
+
+def test_second_reset_reuses_the_controller(
+    sim: ThorSimulator, fake_controller: type, layout: Layout
+) -> None:
+    sim.reset(layout, "baseline", "Office", 3)
+    sim.reset(layout, "low_light", "Entrance", 4)
+    assert len(fake_controller.instances) == 1
+    args = next(a for name, a in _controller(fake_controller).calls if name == "reset")
+    assert args == {"visibilityDistance": condition_params("low_light").visibility_distance}
+    assert sim.current_room() == "Entrance"
+
+
+def test_close_stops_thor(fake_controller: type, layout: Layout) -> None:
+    sim = ThorSimulator(controller_factory=fake_controller)
+    sim.reset(layout, "baseline", "Office", 3)
+    sim.close()
+    sim.close()
+    assert fake_controller.instances[-1].stopped
