@@ -1,1 +1,335 @@
-"""pytest glue for pytest-emrd (being built: see issue 5)."""
+"""pytest glue for pytest-emrd: options, parametrisation, fixtures, summary. Wiring only.
+
+A test that requests ``emrd_spec`` is parametrised over the run's episodes
+(``test_episode[scout-low_light-kitchen-ep07]``), one that requests ``emrd_gate`` over its
+gates (``test_gate[scout-baseline-aec]``). Sessions that collect neither stay untouched:
+nothing is imported, started or written. The controller picks the run directory and the
+session id and hands them to pytest-xdist workers through ``workerinput``.
+"""
+
+from __future__ import annotations
+
+import uuid
+import warnings
+from dataclasses import dataclass
+from functools import cached_property
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from pytest_emrd.errors import EmrdError
+from pytest_emrd.gate import (
+    OPTIONS,
+    GateCell,
+    ResultsStore,
+    RunSettings,
+    StoredEpisode,
+    Verdict,
+    new_run_dir,
+    resolve_settings,
+)
+from pytest_emrd.trajectory import EpisodeSpec, Trajectory
+
+_RUN = pytest.StashKey["_Run"]()
+
+
+def pytest_addoption(parser: pytest.Parser) -> None:
+    group = parser.getgroup("emrd", "pytest-emrd (Explore, Map, Remember, Decide benchmark)")
+    for option in OPTIONS:
+        choices = f" Choices: {', '.join(option.choices)}." if option.choices else ""
+        kwargs: dict[str, Any] = {"dest": option.ini, "default": None, "help": option.help}
+        if option.repeatable:
+            kwargs["action"] = "append"
+        elif option.choices:
+            kwargs["choices"] = option.choices
+        if option.metavar:
+            kwargs["metavar"] = option.metavar
+        group.addoption(option.flag, **{**kwargs, "help": option.help + choices})
+        parser.addini(option.ini, f"{option.help} (ini twin of {option.flag})", option.ini_type)
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    cli = {o.name: config.getoption(o.ini) for o in OPTIONS}
+    ini = {o.name: config.getini(o.ini) for o in OPTIONS}
+    try:
+        settings = resolve_settings(cli, ini, rootdir=config.rootpath)
+    except EmrdError as exc:
+        raise pytest.UsageError(str(exc)) from exc
+    workerinput = getattr(config, "workerinput", None)
+    if workerinput is not None and "emrd_run_dir" in workerinput:
+        run_dir, session = Path(workerinput["emrd_run_dir"]), workerinput["emrd_session"]
+    else:
+        default = new_run_dir(config.rootpath / ".emrd" / "runs")
+        run_dir, session = settings.results or default, uuid.uuid4().hex
+    run = _Run(config, settings, run_dir, session)
+    config.stash[_RUN] = run
+    config.pluginmanager.register(run, "emrd-run")
+
+
+@pytest.hookimpl(optionalhook=True)
+def pytest_configure_node(node: Any) -> None:
+    """pytest-xdist: every worker shares the controller's run directory and session."""
+    run = node.config.stash[_RUN]
+    node.workerinput["emrd_run_dir"] = str(run.run_dir)
+    node.workerinput["emrd_session"] = run.session
+
+
+def pytest_generate_tests(metafunc: pytest.Metafunc) -> None:
+    if "emrd_spec" in metafunc.fixturenames:
+        specs = metafunc.config.stash[_RUN].call(lambda run: run.episode_specs)
+        metafunc.parametrize("emrd_spec", specs, ids=[s.case_id for s in specs])
+    if "emrd_gate" in metafunc.fixturenames:
+        cells = metafunc.config.stash[_RUN].call(lambda run: run.gate_cells)
+        metafunc.parametrize("emrd_gate", cells, ids=[c.gate_id for c in cells])
+
+
+def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
+    """Drop the placeholder items of an empty grid (a shard's gates, a model without gates)."""
+    empty = [item for item in items if _is_empty_emrd_item(item)]
+    if empty:
+        config.hook.pytest_deselected(items=empty)
+        items[:] = [item for item in items if item not in empty]
+
+
+def _is_empty_emrd_item(item: pytest.Item) -> bool:
+    callspec = getattr(item, "callspec", None)
+    names = getattr(item, "fixturenames", ())
+    if "emrd_gate" in names:
+        return not isinstance(getattr(callspec, "params", {}).get("emrd_gate"), GateCell)
+    if "emrd_spec" in names:
+        return not isinstance(getattr(callspec, "params", {}).get("emrd_spec"), EpisodeSpec)
+    return False
+
+
+@dataclass(eq=False)
+class _Run:
+    """Per-process state of the EMRD run; everything heavy is built on first use."""
+
+    config: pytest.Config
+    settings: RunSettings
+    run_dir: Path
+    session: str
+
+    def __post_init__(self) -> None:
+        self.episodes: dict[str, dict[str, Any]] = {}
+        self.verdicts: list[Verdict] = []
+
+    def call(self, fn: Any) -> Any:
+        """``fn(self)``, turning a configuration mistake into a clean collection failure."""
+        try:
+            return fn(self)
+        except EmrdError as exc:
+            pytest.fail(f"pytest-emrd: {exc}", pytrace=False)
+
+    @cached_property
+    def registry(self) -> Any:
+        from pytest_emrd.agent import load_registry
+
+        registry = load_registry(self.settings.models_file)
+        for name in self.settings.models:
+            registry.get(name)
+        return registry
+
+    @cached_property
+    def protocol(self) -> str:
+        from pytest_emrd.episode import protocol_version
+
+        return protocol_version()
+
+    def modality_of(self, model: str) -> str:
+        return str(self.registry.get(model).modality)
+
+    @cached_property
+    def episode_specs(self) -> list[EpisodeSpec]:
+        from pytest_emrd.gate import episode_specs, shard
+
+        specs = episode_specs(self.settings, self.modality_of)
+        return shard(specs, *self.settings.shard) if self.settings.shard else specs
+
+    @cached_property
+    def gate_cells(self) -> list[GateCell]:
+        from pytest_emrd.gate import gate_cells, load_thresholds
+        from pytest_emrd.metrics import GATE_METRICS
+
+        if self.settings.shard:
+            return []
+        thresholds = load_thresholds(
+            self.settings.thresholds,
+            is_model=self._is_model,
+            model_names=self.registry.names(),
+            metrics=GATE_METRICS,
+        )
+        return gate_cells(self.settings, thresholds)
+
+    def _is_model(self, name: str) -> bool:
+        try:
+            self.registry.get(name)
+        except EmrdError:
+            return False
+        return True
+
+    @cached_property
+    def store(self) -> ResultsStore:
+        return ResultsStore(self.run_dir, session=self.session, protocol=self.protocol)
+
+    @cached_property
+    def runner(self) -> Any:
+        from pytest_emrd.cassette import agent_runner
+
+        return agent_runner(self.registry)
+
+    def episode(self, spec: EpisodeSpec) -> StoredEpisode:
+        from pytest_emrd.cassette import FrameDriftWarning, run_with_cassette
+
+        settings = self.settings
+
+        def compute(s: EpisodeSpec) -> Any:
+            return run_with_cassette(
+                s,
+                self.runner,
+                cassettes=settings.cassettes,
+                protocol=self.protocol,
+                record_mode=settings.record_mode,
+                matching=settings.matching,
+            )
+
+        stored = self.store.get_or_compute(spec, compute)
+        if stored.frame_drift and stored.computed_now:
+            warnings.warn(
+                FrameDriftWarning(
+                    f"{spec.case_id}: {stored.frame_drift} request(s) matched on text while "
+                    "their frames differ from the recording (lenient matching)."
+                ),
+                stacklevel=2,
+            )
+        return stored
+
+    def verdict(self, cell: GateCell) -> Verdict:
+        from pytest_emrd.gate import cell_specs, evaluate_cell
+        from pytest_emrd.metrics import GATE_METRICS
+
+        specs = cell_specs(self.settings, cell.bound.model, cell.bound.condition, self.modality_of)
+        trajectories = [self.episode(spec).trajectory for spec in specs]
+        return evaluate_cell(cell, trajectories, GATE_METRICS)
+
+    def episode_summary(self, stored: StoredEpisode) -> dict[str, Any]:
+        t = stored.trajectory
+        config = self.registry.get(t.spec.model)
+        usage = t.usage
+        cost = None
+        if config.price_per_mtok_in is not None and config.price_per_mtok_out is not None:
+            cost = (
+                usage.prompt_tokens * config.price_per_mtok_in
+                + usage.completion_tokens * config.price_per_mtok_out
+            ) / 1e6
+        return {
+            "case": t.spec.case_id,
+            "model": t.spec.model,
+            "status": t.status,
+            "steps": len(t.steps),
+            "chosen_room": t.chosen_room,
+            "prompt_tokens": usage.prompt_tokens,
+            "completion_tokens": usage.completion_tokens,
+            "cost_usd": cost,
+            "recorded": stored.recorded,
+            "seconds": stored.seconds,
+        }
+
+    # -- reporting hooks (run in the controller, or the only process without xdist) --------
+
+    def pytest_runtest_logreport(self, report: pytest.TestReport) -> None:
+        if report.when != "call":
+            return
+        props = dict(report.user_properties)
+        if "emrd_verdict" in props:
+            self.verdicts.append(Verdict.from_dict(props["emrd_verdict"]))
+        info = props.get("emrd_episode")
+        if info is None:
+            return
+        self.episodes[info["case"]] = info
+        if info["recorded"] and not hasattr(self.config, "workerinput"):
+            reporter = self.config.pluginmanager.get_plugin("terminalreporter")
+            if reporter is not None:
+                reporter.ensure_newline()
+                reporter.write_line(_progress_line(info, len(self.episodes)))
+
+    def pytest_terminal_summary(self, terminalreporter: Any) -> None:
+        from pytest_emrd.gate import UsageRow, gate_tables, usage_table
+
+        if not (self.episodes or self.verdicts):
+            return
+        tr = terminalreporter
+        tr.section("EMRD gates" if self.verdicts else "EMRD episodes")
+        for line in gate_tables(self.verdicts):
+            tr.write_line(line, red=line.lstrip().startswith("FAIL"))
+        rows = {}
+        for info in self.episodes.values():
+            row = rows.get(info["model"]) or UsageRow(info["model"], 0, 0, 0, 0.0)
+            known = row.cost_usd is not None and info["cost_usd"] is not None
+            rows[info["model"]] = UsageRow(
+                row.model,
+                row.episodes + 1,
+                row.prompt_tokens + info["prompt_tokens"],
+                row.completion_tokens + info["completion_tokens"],
+                (row.cost_usd or 0.0) + info["cost_usd"] if known else None,
+            )
+        if rows:
+            tr.write_line("tokens per model:")
+            for line in usage_table(list(rows.values())):
+                tr.write_line(line)
+        tr.write_line(
+            f"results: {self.run_dir} (resume: --emrd-results {self.run_dir}; "
+            f"gates over shards: emrd gate {self.run_dir} ...)"
+        )
+
+
+def _progress_line(info: dict[str, Any], done: int) -> str:
+    tokens = info["prompt_tokens"] + info["completion_tokens"]
+    cost = "" if info["cost_usd"] is None else f", ${info['cost_usd']:.3f}"
+    return (
+        f"emrd [{done}] {info['case']}: {info['status']} after {info['steps']} steps, "
+        f"chose {info['chosen_room'] or '-'}, {tokens:,} tokens{cost}, {info['seconds']:.1f} s"
+    )
+
+
+# -- fixtures ------------------------------------------------------------------------------
+
+
+@pytest.fixture(scope="session")
+def emrd_settings(pytestconfig: pytest.Config) -> RunSettings:
+    """The resolved ``--emrd-*`` settings of this run."""
+    return pytestconfig.stash[_RUN].settings
+
+
+@pytest.fixture(scope="session")
+def emrd_store(pytestconfig: pytest.Config) -> ResultsStore:
+    """The results store of this run's directory (shared by all xdist workers)."""
+    return pytestconfig.stash[_RUN].store
+
+
+@pytest.fixture
+def emrd_episode(
+    emrd_spec: EpisodeSpec, pytestconfig: pytest.Config, request: pytest.FixtureRequest
+) -> StoredEpisode:
+    """The stored episode for ``emrd_spec``, computed (recorded or replayed) if needed."""
+    run = pytestconfig.stash[_RUN]
+    stored = run.episode(emrd_spec)
+    request.node.user_properties.append(("emrd_episode", run.episode_summary(stored)))
+    return stored
+
+
+@pytest.fixture
+def emrd_trajectory(emrd_episode: StoredEpisode) -> Trajectory:
+    """The trajectory of ``emrd_spec``."""
+    return emrd_episode.trajectory
+
+
+@pytest.fixture
+def emrd_verdict(
+    emrd_gate: GateCell, pytestconfig: pytest.Config, request: pytest.FixtureRequest
+) -> Verdict:
+    """The verdict of ``emrd_gate`` over its cell's episodes (computed through the store)."""
+    verdict = pytestconfig.stash[_RUN].verdict(emrd_gate)
+    request.node.user_properties.append(("emrd_verdict", verdict.to_dict()))
+    return verdict

@@ -4,7 +4,13 @@
 """
 
 from pytest_emrd.cassette._drift import first_difference
-from pytest_emrd.cassette._episode import EpisodeRun, run_with_cassette
+from pytest_emrd.cassette._episode import (
+    EpisodeRun,
+    EpisodeRunner,
+    FrameDriftWarning,
+    agent_runner,
+    run_with_cassette,
+)
 from pytest_emrd.cassette._format import CassetteData, FormatError, decode, encode
 from pytest_emrd.cassette._network import network_blocked
 from pytest_emrd.cassette._paths import cassette_path, record_command
@@ -30,9 +36,12 @@ __all__ = [
     "EpisodeCassette",
     "EpisodePersister",
     "EpisodeRun",
+    "EpisodeRunner",
     "FormatError",
+    "FrameDriftWarning",
     "MatchKeys",
     "Redacted",
+    "agent_runner",
     "canonical_json",
     "cassette_path",
     "decode",

@@ -7,6 +7,7 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from pytest_emrd.cassette._network import network_blocked
 from pytest_emrd.cassette._paths import cassette_path, record_command
@@ -14,6 +15,9 @@ from pytest_emrd.cassette._use import episode_cassette
 from pytest_emrd.errors import check_choice
 from pytest_emrd.gate._settings import MATCHING_MODES, RECORD_MODES
 from pytest_emrd.trajectory import EpisodeSpec, Trajectory
+
+if TYPE_CHECKING:
+    from pytest_emrd.agent import Registry
 
 
 @dataclass(frozen=True)
@@ -29,20 +33,48 @@ class EpisodeRun:
     """Wall time of the episode."""
 
 
+class FrameDriftWarning(UserWarning):
+    """Lenient matching replayed requests whose frames differ from the recording."""
+
+
 class _Discard(Exception):
     """Raised inside the cassette block so vcrpy does not save a failed episode."""
 
 
+#: Runs one episode; ``live`` says whether the model may really be called (an API key is
+#: needed) or every request will be replayed.
+EpisodeRunner = Callable[..., Trajectory]
+
+
+def agent_runner(registry: Registry) -> EpisodeRunner:
+    """The real runner: :func:`pytest_emrd.episode.run_episode` with the model's client.
+
+    Replays need no API key (recorded requests carry none), so the client is built with
+    ``require_key=live``.
+    """
+    from pytest_emrd.agent import make_client
+    from pytest_emrd.episode import run_episode
+
+    def run(spec: EpisodeSpec, *, live: bool) -> Trajectory:
+        client = make_client(registry.get(spec.model), require_key=live)
+        try:
+            return run_episode(spec, registry=registry, client=client)
+        finally:
+            client.close()
+
+    return run
+
+
 def run_with_cassette(
     spec: EpisodeSpec,
-    run: Callable[[EpisodeSpec], Trajectory],
+    run: EpisodeRunner,
     *,
     cassettes: Path,
     protocol: str,
     record_mode: str = "once",
     matching: str = "strict",
 ) -> EpisodeRun:
-    """Run ``run(spec)`` with the model traffic recorded to / replayed from its cassette.
+    """Run ``run(spec, live=...)`` with the model traffic recorded to / replayed from its cassette.
 
     ``run`` must behave like :func:`pytest_emrd.episode.run_episode`: failures become an
     ``errored`` trajectory, never an exception. An errored episode leaves no cassette behind;
@@ -53,7 +85,9 @@ def run_with_cassette(
     check_choice("record_mode", record_mode, RECORD_MODES)
     check_choice("matching", matching, MATCHING_MODES)
     path = cassette_path(cassettes, spec)
-    missing = record_mode == "none" and not path.is_file()
+    exists = path.is_file()
+    missing = record_mode == "none" and not exists
+    live = record_mode in ("all", "new_episodes") or (record_mode == "once" and not exists)
     start = time.perf_counter()
     try:
         with (
@@ -66,7 +100,7 @@ def run_with_cassette(
                 rerecord_command=record_command(spec, record_mode="all", cassettes=cassettes),
             ) as cassette,
         ):
-            trajectory = run(spec)
+            trajectory = run(spec, live=live)
             recorded, drift = cassette.dirty, cassette.drift
             frame_drift = len(cassette.frame_drift)
             if trajectory.status == "errored":

@@ -1,0 +1,27 @@
+"""The EMRD benchmark suite.
+
+``test_episode[<model>-<condition>-<spawn>-epNN]`` runs (or replays, or reuses from the run
+directory) one episode and fails only when the episode errored: transport exhausted,
+cassette missing or divergent. ``test_gate[<model>-<condition>-<metric>]`` aggregates the
+episodes of one model x condition and checks them against ``thresholds.yaml``. Select with
+``--emrd-model``, ``--emrd-condition``, ``--emrd-spawn``, ``--emrd-episodes`` or ``-k``.
+"""
+
+from __future__ import annotations
+
+import pytest
+
+from pytest_emrd.gate import Verdict
+from pytest_emrd.trajectory import Trajectory
+
+
+def test_episode(emrd_trajectory: Trajectory) -> None:
+    if emrd_trajectory.status == "errored":
+        pytest.fail(
+            f"{emrd_trajectory.spec.case_id} errored: {emrd_trajectory.error}", pytrace=False
+        )
+
+
+def test_gate(emrd_verdict: Verdict) -> None:
+    if not emrd_verdict.passed:
+        pytest.fail(emrd_verdict.explain(), pytrace=False)

@@ -1,0 +1,77 @@
+"""The content-addressed cassette format round-trips exactly and rejects what it is not."""
+
+from __future__ import annotations
+
+import gzip
+import json
+
+import pytest
+from vcr.request import Request
+
+from pytest_emrd.cassette import CassetteData, FormatError, canonical_json, decode, encode
+
+
+def _data(n: int) -> CassetteData:
+    system = {"role": "system", "content": "You are a responder. " * 50}
+    requests, responses = [], []
+    history: list[dict] = []
+    for t in range(n):
+        history.append({"role": "user", "content": f"step {t}"})
+        body = canonical_json({"model": "m", "messages": [system, *history[-6:]]}).encode()
+        requests.append(Request("POST", "http://127.0.0.1:1/v1/chat/completions", body, {}))
+        reply = json.dumps({"choices": [{"message": {"content": f"reply {t}"}}]}).encode()
+        responses.append(
+            {"status": {"code": 200, "message": "OK"}, "headers": {}, "body": {"string": reply}}
+        )
+        history.append({"role": "assistant", "content": f"reply {t}"})
+    return CassetteData("p1", tuple(requests), tuple(responses))
+
+
+def test_round_trip_is_exact_and_deterministic():
+    data = _data(12)
+    blob = encode(data)
+    back = decode(blob)
+    assert back.protocol == "p1"
+    assert [r.body for r in back.requests] == [r.body for r in data.requests]
+    assert [r["body"]["string"] for r in back.responses] == [
+        r["body"]["string"] for r in data.responses
+    ]
+    assert encode(back) == blob
+
+
+def test_each_distinct_message_is_stored_once():
+    text = gzip.decompress(encode(_data(12))).decode()
+    assert text.count("You are a responder.") == 50  # one system prompt, not twelve
+
+
+def test_non_json_bodies_are_kept_verbatim():
+    request = Request("POST", "http://h/x", b"\xff\x00raw", {})
+    response = {
+        "status": {"code": 200, "message": "OK"},
+        "headers": {},
+        "body": {"string": b"\xfe"},
+    }
+    back = decode(encode(CassetteData("p", (request,), (response,))))
+    assert (
+        back.requests[0].body == b"\xff\x00raw" and back.responses[0]["body"]["string"] == b"\xfe"
+    )
+
+
+@pytest.mark.parametrize(
+    ("blob", "message"),
+    [
+        (b"plain text", "not a gzip"),
+        (gzip.compress(b"a: [unclosed"), "not valid YAML"),
+        (gzip.compress(b"format: other/1\n"), "format='other/1'"),
+        (
+            gzip.compress(
+                b"format: emrd-cassette/1\nprotocol: p\nstrings: []\ninteractions: [{}]\n"
+            ),
+            "malformed",
+        ),
+    ],
+    ids=["not-gzip", "bad-yaml", "wrong-format", "missing-fields"],
+)
+def test_bad_files_say_what_is_wrong(blob, message):
+    with pytest.raises(FormatError, match=message):
+        decode(blob)
