@@ -37,16 +37,16 @@ class ChatClient(Protocol):
     def close(self) -> None: ...
 
 
-def _api_key(config: ModelConfig) -> str | None:
+def _api_key(config: ModelConfig, *, required: bool) -> str | None:
     if config.api_key_env is None:
         return None
     key = os.environ.get(config.api_key_env, "").strip()
-    if not key:
+    if not key and required:
         raise ConfigError(
             f"model {config.name!r} needs an API key in the environment variable "
             f"{config.api_key_env}; set it, or replay the recorded cassettes (record mode none)."
         )
-    return key
+    return key or None
 
 
 class _HttpClient:
@@ -59,11 +59,12 @@ class _HttpClient:
         base_url: str,
         policy: RetryPolicy | None = None,
         transport: httpx.BaseTransport | None = None,
+        require_key: bool = True,
     ) -> None:
         self.config = config
         self.base_url = base_url.rstrip("/")
         self.policy = policy or RetryPolicy(max_retries=config.max_retries)
-        self._key = _api_key(config)
+        self._key = _api_key(config, required=require_key)
         self._http = httpx.Client(timeout=httpx.Timeout(config.timeout_s), transport=transport)
 
     def close(self) -> None:
@@ -173,16 +174,21 @@ class AnthropicClient(_HttpClient):
         )
 
 
-def make_client(config: ModelConfig, *, policy: RetryPolicy | None = None) -> ChatClient:
+def make_client(
+    config: ModelConfig, *, policy: RetryPolicy | None = None, require_key: bool = True
+) -> ChatClient:
     """The client for ``config``; reference agents get the built-in server (started on demand).
 
-    Raises :class:`ConfigError` when the model's API-key variable is not set.
+    Raises :class:`ConfigError` when the model's API-key variable is not set, unless
+    ``require_key=False`` (cassette replay: recorded requests carry no key anyway).
     """
     if config.provider == "anthropic":
-        return AnthropicClient(config, base_url=config.base_url or "", policy=policy)
+        return AnthropicClient(
+            config, base_url=config.base_url or "", policy=policy, require_key=require_key
+        )
     base_url = config.base_url
     if base_url is None:
         from pytest_emrd.agent.reference import reference_base_url
 
         base_url = reference_base_url()
-    return OpenAICompatibleClient(config, base_url=base_url, policy=policy)
+    return OpenAICompatibleClient(config, base_url=base_url, policy=policy, require_key=require_key)

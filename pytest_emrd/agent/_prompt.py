@@ -65,16 +65,16 @@ _ACTIONS = """ACTIONS (exactly one per reply)
 - Goto(target): walk to an object you can see now, by type (Goto(Desk)) or instance id \
 (Goto(Desk_2)). Going to a doorway (Goto(Doorway_1)) takes you through it into the next room.
 - Turn(Left) or Turn(Right): rotate 90 degrees in place; Turn(Around): rotate 180 degrees.
-- Term(room): end the run naming the gathering room, e.g. Term({example_room}).
+- Term(room): end the run naming the gathering room, e.g. Term(<room name>).
 Every step you receive the camera frame and the engine feedback: whether your last action \
 succeeded and your pose (x, z, heading). A failed action still uses up a step."""
 
 _FORMAT = """REPLY FORMAT
 Reply with exactly one JSON object and nothing else:
-{{"observation": "what you see now", "dedup_check": "which objects in view are new and \
-which are already mapped", "cognitive_map": {{"Desk_1": {{"type": "Desk", "room": \
-"{example_room}", "x": 1.5, "z": 3.0, "facing": "-z"}}}}, "action": "Turn(Right)", \
-"reasoning": "why this action"}}
+{"observation": "what you see now", "dedup_check": "which objects in view are new and \
+which are already mapped", "cognitive_map": {"Desk_1": {"type": "Desk", "room": \
+"<room name>", "x": 1.5, "z": 3.0, "facing": "-z"}}, "action": "Turn(Right)", \
+"reasoning": "why this action"}
 - "cognitive_map" holds every object discovered so far, not only those in view; keys are \
 the object labels, "facing" is one of "+x", "-x", "+z", "-z".
 - "action" is one action in the grammar above.
@@ -132,14 +132,8 @@ def build_system_prompt(
     excluded); rooms are the canonical names whatever the variant.
     """
     check_choice("variant", variant, VARIANTS)
-    example_room = _room_order(variant)[-1][0]
     return "\n\n".join(
-        (
-            _ROLE.format(max_steps=max_steps),
-            _overview(inventory, variant),
-            _ACTIONS.format(example_room=example_room),
-            _FORMAT.format(example_room=example_room),
-        )
+        (_ROLE.format(max_steps=max_steps), _overview(inventory, variant), _ACTIONS, _FORMAT)
     )
 
 

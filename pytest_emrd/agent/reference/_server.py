@@ -19,6 +19,7 @@ from pytest_emrd.agent.reference._agents import complete, model_list
 from pytest_emrd.errors import ProtocolError
 
 MAX_BODY_BYTES: Final = 64 * 1024 * 1024
+_POLL_S: Final = 0.05
 
 
 class _Handler(BaseHTTPRequestHandler):
@@ -100,7 +101,10 @@ class ReferenceServer:
     def start(self) -> ReferenceServer:
         if self._thread is None:
             self._thread = threading.Thread(
-                target=self._server.serve_forever, name="emrd-reference-server", daemon=True
+                target=self._server.serve_forever,
+                args=(_POLL_S,),
+                name="emrd-reference-server",
+                daemon=True,
             )
             self._thread.start()
         return self

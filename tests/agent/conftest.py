@@ -1,0 +1,98 @@
+"""Fixtures for the agent tests: a fixed inventory and a fault-injecting local HTTP server."""
+
+from __future__ import annotations
+
+import json
+import threading
+import time
+from collections.abc import Iterator
+from dataclasses import dataclass, field
+from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
+from typing import Any
+
+import pytest
+
+#: A small office inventory in the shape of ``Layout.inventory()``.
+INVENTORY: dict[str, dict[str, int]] = {
+    "Office": {"Desk": 2, "Chair": 2, "Laptop": 2, "Shelf": 1, "HousePlant": 1},
+    "Conference Room": {"DiningTable": 1, "Chair": 8, "Television": 1},
+    "Kitchen": {"Fridge": 1, "CounterTop": 2, "Sink": 1, "Microwave": 1, "Stool": 1},
+    "Entrance": {"Desk": 1, "ArmChair": 2, "HousePlant": 1, "ExitDoor": 1},
+}
+
+OK_BODY = {
+    "choices": [{"message": {"role": "assistant", "content": "hello"}}],
+    "usage": {"prompt_tokens": 11, "completion_tokens": 3},
+}
+ANTHROPIC_OK = {
+    "content": [{"type": "text", "text": "hello"}],
+    "usage": {"input_tokens": 11, "output_tokens": 3},
+}
+
+
+@pytest.fixture
+def inventory() -> dict[str, dict[str, int]]:
+    return {room: dict(counts) for room, counts in INVENTORY.items()}
+
+
+@dataclass
+class FaultServer:
+    """A loopback server answering from a script: one entry per request, then OK forever.
+
+    Script entries: ``("status", code, headers)``, ``("garbage", code)``, ``("stall", s)``
+    (sleeps ``s`` seconds before answering OK: a client timeout), ``("ok",)``.
+    """
+
+    script: list[tuple[Any, ...]] = field(default_factory=list)
+    ok_body: dict[str, Any] = field(default_factory=lambda: OK_BODY)
+    bodies: list[bytes] = field(default_factory=list)
+    headers: list[dict[str, str]] = field(default_factory=list)
+    paths: list[str] = field(default_factory=list)
+    base_url: str = ""
+
+
+def _handler(state: FaultServer) -> type[BaseHTTPRequestHandler]:
+    class Handler(BaseHTTPRequestHandler):
+        protocol_version = "HTTP/1.1"
+
+        def log_message(self, format: str, *args: Any) -> None:
+            """Quiet."""
+
+        def _reply(self, code: int, body: bytes, headers: dict[str, str] | None = None) -> None:
+            self.send_response(code)
+            for k, v in (headers or {}).items():
+                self.send_header(k, v)
+            self.send_header("Content-Length", str(len(body)))
+            self.end_headers()
+            self.wfile.write(body)
+
+        def do_POST(self) -> None:
+            body = self.rfile.read(int(self.headers["Content-Length"]))
+            state.bodies.append(body)
+            state.headers.append({k.lower(): v for k, v in self.headers.items()})
+            state.paths.append(self.path)
+            entry = state.script.pop(0) if state.script else ("ok",)
+            if entry[0] == "status":
+                self._reply(entry[1], b'{"error": "injected"}', entry[2])
+            elif entry[0] == "garbage":
+                self._reply(entry[1], b"<html>upstream hiccup</html>")
+            else:
+                if entry[0] == "stall":
+                    time.sleep(entry[1])
+                self._reply(200, json.dumps(state.ok_body).encode())
+
+    return Handler
+
+
+@pytest.fixture
+def fault_server() -> Iterator[FaultServer]:
+    state = FaultServer()
+    server = ThreadingHTTPServer(("127.0.0.1", 0), _handler(state))
+    server.daemon_threads = True
+    thread = threading.Thread(target=server.serve_forever, args=(0.05,), daemon=True)
+    thread.start()
+    state.base_url = f"http://127.0.0.1:{server.server_address[1]}"
+    yield state
+    server.shutdown()
+    server.server_close()
+    thread.join()

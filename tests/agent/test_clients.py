@@ -1,0 +1,199 @@
+"""Clients against a real loopback server that injects 429, 5xx, stalls and garbage."""
+
+from __future__ import annotations
+
+import json
+import random
+
+import pytest
+
+from pytest_emrd.agent import (
+    AnthropicClient,
+    ModelConfig,
+    OpenAICompatibleClient,
+    RetryPolicy,
+    make_client,
+)
+from pytest_emrd.errors import ConfigError, TransportError
+from pytest_emrd.trajectory import Usage
+
+MESSAGES = [
+    {"role": "system", "content": "be brief"},
+    {
+        "role": "user",
+        "content": [
+            {"type": "text", "text": "Step 1 of 50."},
+            {"type": "image_url", "image_url": {"url": "data:image/jpeg;base64,QUJD"}},
+        ],
+    },
+]
+
+
+def _config(**overrides: object) -> ModelConfig:
+    fields = {
+        "name": "local",
+        "provider": "openai",
+        "model_id": "m",
+        "base_url": "http://127.0.0.1:1/v1",
+        "timeout_s": 0.5,
+        "max_retries": 3,
+    }
+    fields.update(overrides)
+    return ModelConfig(**fields)  # type: ignore[arg-type]
+
+
+class Sleeps(list[float]):
+    """Records the waits instead of sleeping, so the tests stay fast."""
+
+    def __call__(self, seconds: float) -> None:
+        self.append(seconds)
+
+
+@pytest.fixture
+def sleeps() -> Sleeps:
+    return Sleeps()
+
+
+def _client(fault_server, sleeps: Sleeps, **overrides: object) -> OpenAICompatibleClient:
+    config = _config(base_url=f"{fault_server.base_url}/v1", **overrides)
+    policy = RetryPolicy(max_retries=config.max_retries, sleep=sleeps, rng=random.Random(7))
+    return OpenAICompatibleClient(config, base_url=config.base_url or "", policy=policy)
+
+
+def test_success_reads_text_and_usage(fault_server, sleeps) -> None:
+    with _client(fault_server, sleeps) as client:
+        response = client.complete(MESSAGES)
+    assert (response.text, response.usage) == ("hello", Usage(11, 3))
+    assert fault_server.paths == ["/v1/chat/completions"]
+    body = json.loads(fault_server.bodies[0])
+    assert body == {"model": "m", "messages": MESSAGES, "temperature": 0.0, "max_tokens": 4096}
+    assert sleeps == []
+
+
+@pytest.mark.parametrize(
+    "fault",
+    [
+        ("status", 429, {}),
+        ("status", 500, {}),
+        ("status", 503, {}),
+        ("garbage", 200),
+        ("garbage", 502),
+        ("stall", 1.0),
+    ],
+    ids=["429", "500", "503", "garbage-200", "garbage-502", "timeout"],
+)
+def test_transient_faults_are_retried_with_identical_bodies(fault_server, sleeps, fault) -> None:
+    fault_server.script = [fault, fault]
+    with _client(fault_server, sleeps) as client:
+        assert client.complete(MESSAGES).text == "hello"
+    assert len(fault_server.bodies) == 3
+    assert len(set(fault_server.bodies)) == 1, "jitter must never change the request body"
+    assert len(sleeps) == 2
+
+
+def test_backoff_grows_exponentially_with_jitter(fault_server, sleeps) -> None:
+    fault_server.script = [("status", 500, {})] * 3
+    with _client(fault_server, sleeps) as client:
+        client.complete(MESSAGES)
+    base = RetryPolicy().base_delay_s
+    for attempt, wait in enumerate(sleeps):
+        assert base * 2**attempt * 0.5 <= wait <= base * 2**attempt
+
+
+@pytest.mark.parametrize(
+    ("header", "expected"),
+    [("7", 7.0), ("0", None), ("Wed, 21 Oct 2015 07:28:00 GMT", None)],
+    ids=["seconds", "zero", "date-in-past"],
+)
+def test_retry_after_is_honoured(fault_server, sleeps, header, expected) -> None:
+    fault_server.script = [("status", 429, {"Retry-After": header})]
+    with _client(fault_server, sleeps) as client:
+        client.complete(MESSAGES)
+    (wait,) = sleeps
+    if expected is None:
+        assert wait <= RetryPolicy().base_delay_s
+    else:
+        assert wait == expected
+
+
+def test_retry_after_is_capped(fault_server, sleeps) -> None:
+    fault_server.script = [("status", 429, {"Retry-After": "3600"})]
+    with _client(fault_server, sleeps) as client:
+        client.complete(MESSAGES)
+    assert sleeps == [RetryPolicy().max_delay_s]
+
+
+def test_exhausted_retries_raise_transport_error_with_cause(fault_server, sleeps) -> None:
+    fault_server.script = [("status", 503, {})] * 10
+    with (
+        _client(fault_server, sleeps, max_retries=2) as client,
+        pytest.raises(TransportError, match=r"after 3 attempt\(s\); last cause: HTTP 503"),
+    ):
+        client.complete(MESSAGES)
+    assert len(fault_server.bodies) == 3
+
+
+def test_client_errors_are_not_retried(fault_server, sleeps) -> None:
+    fault_server.script = [("status", 401, {})]
+    with (
+        _client(fault_server, sleeps) as client,
+        pytest.raises(TransportError, match="HTTP 401 \\(not retried\\)"),
+    ):
+        client.complete(MESSAGES)
+    assert len(fault_server.bodies) == 1 and sleeps == []
+
+
+def test_connection_refused_is_a_transport_error(sleeps) -> None:
+    config = _config(base_url="http://127.0.0.1:9/v1", max_retries=1)
+    policy = RetryPolicy(max_retries=1, sleep=sleeps)
+    client = OpenAICompatibleClient(config, base_url=config.base_url or "", policy=policy)
+    with client, pytest.raises(TransportError, match="ConnectError"):
+        client.complete(MESSAGES)
+    assert len(sleeps) == 1
+
+
+def test_api_key_travels_in_a_header_never_in_the_body(fault_server, sleeps, monkeypatch) -> None:
+    monkeypatch.setenv("EMRD_TEST_KEY", "sk-secret")
+    with _client(fault_server, sleeps, api_key_env="EMRD_TEST_KEY") as client:
+        client.complete(MESSAGES)
+    assert fault_server.headers[0]["authorization"] == "Bearer sk-secret"
+    assert b"sk-secret" not in fault_server.bodies[0]
+
+
+def test_missing_api_key_names_the_variable(monkeypatch) -> None:
+    monkeypatch.delenv("EMRD_TEST_KEY", raising=False)
+    with pytest.raises(ConfigError, match="EMRD_TEST_KEY"):
+        make_client(_config(api_key_env="EMRD_TEST_KEY"))
+    make_client(_config(api_key_env="EMRD_TEST_KEY"), require_key=False).close()
+
+
+def test_max_tokens_param_is_configurable(fault_server, sleeps) -> None:
+    with _client(fault_server, sleeps, max_tokens_param="max_completion_tokens") as client:
+        client.complete(MESSAGES)
+    body = json.loads(fault_server.bodies[0])
+    assert body["max_completion_tokens"] == 4096 and "max_tokens" not in body
+
+
+def test_anthropic_messages_api(fault_server, sleeps, monkeypatch) -> None:
+    monkeypatch.setenv("EMRD_TEST_KEY", "ant-secret")
+    fault_server.ok_body = {
+        "content": [{"type": "text", "text": "hi"}],
+        "usage": {"input_tokens": 5, "output_tokens": 2},
+    }
+    config = _config(
+        provider="anthropic", base_url=fault_server.base_url, api_key_env="EMRD_TEST_KEY"
+    )
+    policy = RetryPolicy(max_retries=1, sleep=sleeps)
+    with AnthropicClient(config, base_url=fault_server.base_url, policy=policy) as client:
+        fault_server.script = [("status", 529, {})]
+        response = client.complete(MESSAGES)
+    assert (response.text, response.usage) == ("hi", Usage(5, 2))
+    assert fault_server.paths[-1] == "/v1/messages"
+    assert fault_server.headers[-1]["x-api-key"] == "ant-secret"
+    body = json.loads(fault_server.bodies[-1])
+    assert body["system"] == "be brief"
+    image = body["messages"][0]["content"][1]
+    assert image == {
+        "type": "image",
+        "source": {"type": "base64", "media_type": "image/jpeg", "data": "QUJD"},
+    }

@@ -1,0 +1,169 @@
+"""Model registry: shipped entries (paper Appendix C), user overrides, parametric names, errors."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from pytest_emrd.agent import ModelConfig, load_registry
+from pytest_emrd.errors import ConfigError
+
+PAPER_MODELS = [
+    "gemini",
+    "gpt",
+    "claude",
+    "qwen3-vl-32b",
+    "ovis2-34b",
+    "pixtral-12b",
+    "internvl3-14b",
+]
+
+
+@pytest.mark.parametrize("name", PAPER_MODELS)
+def test_paper_hyperparameters(name: str) -> None:
+    config = load_registry().get(name)
+    assert config.max_tokens == 4096
+    assert config.modality == "vision"
+    if name == "claude":
+        assert (config.temperature, config.single_image, config.provider) == (
+            1.0,
+            True,
+            "anthropic",
+        )
+    else:
+        assert (config.temperature, config.single_image, config.provider) == (0.0, False, "openai")
+    assert config.base_url and config.base_url.startswith("http")
+
+
+def test_reference_agents_and_parametric_names() -> None:
+    registry = load_registry()
+    assert registry.get("scout").modality == "both"
+    assert registry.get("scout").base_url is None
+    assert registry.get("scout-decay-8").planted == {
+        "policy": "scout",
+        "memory": "decay",
+        "mean_steps": 8.0,
+    }
+    assert registry.get("scout-decay-2.5").planted["mean_steps"] == 2.5
+    assert registry.get("scout-window-7").planted == {"policy": "scout", "memory": "window", "k": 7}
+    assert registry.get("scout-serial").planted["memory"] == "serial"
+    assert registry.get("prior").planted["policy"] == "prior"
+    assert set(PAPER_MODELS) | {"scout", "scout-serial", "prior"} <= set(registry.names())
+
+
+def test_base_url_env_override(monkeypatch) -> None:
+    monkeypatch.setenv("EMRD_QWEN3_VL_32B_BASE_URL", "http://gpu-box:9000/v1")
+    assert load_registry().get("qwen3-vl-32b").base_url == "http://gpu-box:9000/v1"
+    monkeypatch.delenv("EMRD_QWEN3_VL_32B_BASE_URL")
+    assert load_registry().get("qwen3-vl-32b").base_url == "http://localhost:8000/v1"
+
+
+def test_user_file_overrides_fields_and_adds_models(tmp_path: Path) -> None:
+    user = tmp_path / "models.yaml"
+    user.write_text(
+        "models:\n"
+        "  qwen3-vl-32b: {base_url: 'http://10.0.0.5:8000/v1', single_image: true}\n"
+        "  llava: {provider: openai, base_url: 'http://x/v1', model_id: llava-1.6,\n"
+        "          modality: both}\n"
+    )
+    registry = load_registry(user)
+    qwen = registry.get("qwen3-vl-32b")
+    assert (qwen.base_url, qwen.single_image, qwen.model_id) == (
+        "http://10.0.0.5:8000/v1",
+        True,
+        "Qwen/Qwen3-VL-32B-Instruct",
+    )
+    assert registry.get("llava") == ModelConfig(
+        name="llava",
+        provider="openai",
+        base_url="http://x/v1",
+        model_id="llava-1.6",
+        modality="both",
+    )
+
+
+def test_unknown_model_lists_known_names() -> None:
+    with pytest.raises(ConfigError) as info:
+        load_registry().get("gpt-4o")
+    message = str(info.value)
+    assert "model='gpt-4o' is not in the registry" in message
+    for name in PAPER_MODELS:
+        assert name in message
+    assert "scout-decay-<mean steps>" in message
+
+
+@pytest.mark.parametrize(
+    ("yaml_text", "match"),
+    [
+        ("models: [1, 2]", "top-level 'models:' mapping"),
+        ("just text", "top-level 'models:' mapping"),
+        (
+            "models: {a: {provider: openai, model_id: m, base_url: 'http://x', temprature: 0}}",
+            r"unknown field\(s\) \['temprature'\]",
+        ),
+        ("models: {a: {provider: azure, model_id: m, base_url: 'http://x'}}", "provider='azure'"),
+        ("models: {a: {provider: openai, model_id: m}}", "base_url is required"),
+        (
+            "models: {a: {provider: openai, model_id: m, base_url: 'http://x', temperature: 3}}",
+            r"temperature=3 must lie in \[0.0, 2.0\]",
+        ),
+        (
+            "models: {a: {provider: openai, model_id: m, base_url: 'http://x', max_tokens: 0}}",
+            "max_tokens=0 must be a whole number",
+        ),
+        (
+            "models: {a: {provider: openai, model_id: m, base_url: 'http://x', modality: smell}}",
+            "modality='smell'",
+        ),
+        ("models: {a: {provider: openai, base_url: 'http://x'}}", "model_id"),
+        (
+            "models: {a: {provider: openai, model_id: m, base_url: '${EMRD_UNSET_FOR_TEST}'}}",
+            "needs the environment variable EMRD_UNSET_FOR_TEST",
+        ),
+        (
+            "models: {a: {provider: openai, model_id: m, base_url: 'http://x', planted: {k: 1}}}",
+            "planted parameters are only for reference agents",
+        ),
+        (
+            "models: {a: {provider: openai, model_id: m, base_url: 'http://x', max_retries: 1.5}}",
+            "max_retries=1.5 must be a whole number",
+        ),
+        ("models: {a: 7}", "must be a mapping of fields"),
+        ("models: {a: [unclosed", "not valid YAML"),
+    ],
+    ids=[
+        "models-not-mapping",
+        "no-models-key",
+        "typo-field",
+        "bad-provider",
+        "no-base-url",
+        "temperature-range",
+        "max-tokens",
+        "bad-modality",
+        "missing-model-id",
+        "unset-env",
+        "planted-on-vlm",
+        "fractional-retries",
+        "entry-not-mapping",
+        "bad-yaml",
+    ],
+)
+def test_bad_user_registry(tmp_path: Path, yaml_text: str, match: str) -> None:
+    user = tmp_path / "bad.yaml"
+    user.write_text(yaml_text)
+    with pytest.raises(ConfigError, match=match):
+        load_registry(user)
+
+
+def test_missing_user_file(tmp_path: Path) -> None:
+    with pytest.raises(ConfigError, match="cannot be read"):
+        load_registry(tmp_path / "nope.yaml")
+
+
+@pytest.mark.parametrize(
+    "name", ["scout-decay-0", "scout-window-0"], ids=["decay-zero", "window-zero"]
+)
+def test_bad_parametric_names(name: str) -> None:
+    with pytest.raises(ConfigError, match=name):
+        load_registry().get(name)

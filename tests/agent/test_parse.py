@@ -1,0 +1,167 @@
+"""Reply parsing: worked examples of what real models write, and fuzzing (never raises)."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+
+from pytest_emrd.agent import Reply, parse_reply
+from pytest_emrd.trajectory import MapEntry
+
+GOOD = {
+    "observation": "a desk",
+    "dedup_check": "Desk_1 is new",
+    "cognitive_map": {
+        "Desk_1": {"type": "Desk", "room": "Office", "x": 1.5, "z": -2, "facing": "+z"}
+    },
+    "action": "Goto(Desk_1)",
+}
+DESK = MapEntry("Desk_1", "Desk", 1.5, -2.0, "Office", "+z")
+
+
+@pytest.mark.parametrize(
+    "text",
+    [
+        json.dumps(GOOD),
+        f"```json\n{json.dumps(GOOD, indent=2)}\n```",
+        f"Let me think. I see a desk.\n{json.dumps(GOOD)}\nThat is my answer.",
+        "{'observation': 'a desk', 'dedup_check': 'Desk_1 is new', 'cognitive_map': {'Desk_1': "
+        "{'type': 'Desk', 'room': 'Office', 'x': 1.5, 'z': -2, 'facing': '+z'},}, "
+        "'action': 'Goto(Desk_1)',}",
+        json.dumps(GOOD).replace("1.5", '"1.5"').replace("-2", '"-2"'),
+        json.dumps(GOOD).replace("}}", "},}").replace('"Goto(Desk_1)"}', '"Goto(Desk_1)",}'),
+        f'```\n{{"draft": true}}\n```\n```json\n{json.dumps(GOOD)}\n```',
+    ],
+    ids=[
+        "plain",
+        "fenced",
+        "prose-around",
+        "single-quotes",
+        "numbers-as-strings",
+        "trailing-commas",
+        "two-blocks-last-with-action",
+    ],
+)
+def test_tolerated_forms(text: str) -> None:
+    reply = parse_reply(text)
+    assert reply.error is None
+    assert reply.action == "Goto(Desk_1)"
+    assert reply.cognitive_map == (DESK,)
+
+
+def test_missing_optional_keys_and_python_spellings() -> None:
+    reply = parse_reply(
+        "{'action': 'Term(Kitchen)', 'cognitive_map': {'Fridge_1': {'x': 2, 'z': 3, 'room': None}},"
+        " 'reasoning': 'no hazards', 'flag': True}"
+    )
+    assert reply == Reply(
+        cognitive_map=(MapEntry("Fridge_1", "", 2.0, 3.0, None, None),),
+        action="Term(Kitchen)",
+        reasoning="no hazards",
+    )
+
+
+def test_map_as_a_list_of_labelled_objects() -> None:
+    reply = parse_reply(
+        '{"action": "Turn(Left)", "cognitive_map": [{"label": "Desk_1", "type": "Desk", "x": 1.5, '
+        '"z": -2, "room": "Office", "facing": "+z"}, {"id": "Sofa", "x": 0, "z": 0}]}'
+    )
+    assert reply.cognitive_map == (DESK, MapEntry("Sofa", "", 0.0, 0.0))
+
+
+def test_entries_without_numeric_position_are_left_out() -> None:
+    reply = parse_reply(
+        '{"action": "Turn(Left)", "cognitive_map": {"A": {"x": null, "z": 1}, "B": {"x": "far", '
+        '"z": 1}, "C": {"x": true, "z": 1}, "D": {"x": NaN, "z": 1}, "E": {"x": 1, "z": 2}}}'
+    )
+    assert [e.label for e in reply.cognitive_map] == ["E"]
+
+
+@pytest.mark.parametrize(
+    ("text", "reason"),
+    [
+        ("", "empty reply"),
+        ("I will turn left.", "no JSON object"),
+        ('{"observation": "x", "cognitive_map": {}}', "no action"),
+        ('{"action": "Turn(Left)"}', "no cognitive_map"),
+        ('{"action": "Turn(Left)", "cognitive_map": "Desk at 1,2"}', "is str, not an object"),
+        ('{"action": "Turn(Left)", "cognitive_map": [1, 2]}', "items are not objects"),
+        ('{"action": "Turn(Left)", "cognitive_map": [{"x": 1, "z": 2}]}', "without label"),
+        ('{"action": "Turn(Left), "cognitive_map": {}', "no JSON object"),
+        ("x" * 300_000, "exceeds"),
+    ],
+    ids=[
+        "empty",
+        "prose-only",
+        "no-action",
+        "no-map",
+        "map-is-text",
+        "map-list-of-numbers",
+        "map-list-unlabelled",
+        "broken-json",
+        "runaway",
+    ],
+)
+def test_unreadable_replies_say_why(text: str, reason: str) -> None:
+    reply = parse_reply(text)
+    assert reply.error is not None and reason in reply.error
+    assert reply.cognitive_map == ()
+
+
+def test_action_survives_an_unreadable_map() -> None:
+    reply = parse_reply('{"action": "Turn(Left)", "cognitive_map": 7}')
+    assert reply.action == "Turn(Left)" and reply.error is not None
+
+
+json_values = st.recursive(
+    st.none() | st.booleans() | st.floats(allow_nan=True) | st.integers() | st.text(max_size=8),
+    lambda inner: (
+        st.lists(inner, max_size=4) | st.dictionaries(st.text(max_size=6), inner, max_size=4)
+    ),
+    max_leaves=20,
+)
+
+
+@given(st.text(max_size=300))
+def test_never_raises_on_arbitrary_text(text: str) -> None:
+    assert isinstance(parse_reply(text), Reply)
+
+
+@given(
+    st.dictionaries(
+        st.sampled_from(["action", "cognitive_map", "reasoning", "x", "z"]), json_values, max_size=5
+    )
+)
+def test_never_raises_on_arbitrary_json_objects(obj: dict) -> None:
+    reply = parse_reply(json.dumps(obj))
+    assert reply.error is not None or reply.action
+
+
+@given(st.text(alphabet="{}[]'\",:0123456789.-eE tnrufalsTFN\\\n`", max_size=120))
+def test_never_raises_on_json_like_noise(text: str) -> None:
+    assert isinstance(parse_reply(text), Reply)
+
+
+@given(
+    st.dictionaries(
+        st.text(min_size=1, max_size=10).filter(str.strip),
+        st.fixed_dictionaries(
+            {"type": st.text(max_size=8), "x": st.floats(-50, 50), "z": st.floats(-50, 50)}
+        ),
+        max_size=6,
+    ),
+    st.sampled_from(["plain", "fenced", "prose"]),
+)
+def test_well_formed_maps_round_trip(cmap: dict, wrapping: str) -> None:
+    body = json.dumps({"action": "Turn(Right)", "cognitive_map": cmap})
+    text = {"plain": body, "fenced": f"```json\n{body}\n```", "prose": f"Map:\n{body}\nDone."}[
+        wrapping
+    ]
+    reply = parse_reply(text)
+    assert reply.error is None
+    assert [(e.label, e.x, e.z) for e in reply.cognitive_map] == [
+        (k.strip(), v["x"], v["z"]) for k, v in cmap.items()
+    ]

@@ -1,0 +1,143 @@
+"""System prompt per variant (snapshots), the exact differences between variants, aliases."""
+
+from __future__ import annotations
+
+import os
+import re
+from pathlib import Path
+
+import pytest
+
+from pytest_emrd.agent import (
+    NEUTRAL_NAMES,
+    ROOM_SUFFIXES,
+    build_system_prompt,
+    resolve_room,
+    room_aliases,
+    step_text,
+)
+from pytest_emrd.errors import ConfigError
+from pytest_emrd.rooms import ROOM_NAMES
+from pytest_emrd.trajectory import VARIANTS, Pose
+from pytest_emrd.world._model import VisibleObject
+
+SNAPSHOTS = Path(__file__).parent / "snapshots"
+
+
+@pytest.mark.parametrize("variant", VARIANTS)
+def test_system_prompt_matches_snapshot(inventory, variant) -> None:
+    """After an intended change: EMRD_UPDATE_SNAPSHOTS=1, and bump PROMPT_VERSION."""
+    text = build_system_prompt(inventory, variant)
+    path = SNAPSHOTS / f"system_{variant}.txt"
+    if os.environ.get("EMRD_UPDATE_SNAPSHOTS") == "1":
+        path.write_text(text)
+    assert text == path.read_text()
+
+
+def _lines(text: str) -> list[str]:
+    return text.splitlines()
+
+
+@pytest.mark.parametrize("variant", sorted(ROOM_SUFFIXES))
+def test_body_interventions_append_the_same_suffix_to_every_room(inventory, variant) -> None:
+    base = _lines(build_system_prompt(inventory, "default"))
+    changed = _lines(build_system_prompt(inventory, variant))
+    diffs = [(a, b) for a, b in zip(base, changed, strict=True) if a != b]
+    assert [a.split(":")[0] for a, _ in diffs] == [f"- {room}" for room in ROOM_NAMES]
+    for before, after in diffs:
+        assert after == f"{before} {ROOM_SUFFIXES[variant]}"
+
+
+def test_neutral_renames_rooms_and_lists_room_a_first(inventory) -> None:
+    base = build_system_prompt(inventory, "default")
+    neutral = build_system_prompt(inventory, "neutral")
+    assert not any(name in neutral for name in ROOM_NAMES)
+    renamed = base
+    for alias, room in NEUTRAL_NAMES.items():
+        renamed = renamed.replace(room, alias)
+    rooms_line = "The building has four rooms: Room A, Room B, Room C, Room D."
+    assert rooms_line in _lines(neutral)
+    assert sorted(_lines(renamed.replace("Room B, Room A", "Room A, Room B"))) == sorted(
+        _lines(neutral)
+    )
+    assert "- Room A: 8 Chair, 1 DiningTable, 1 Television." in _lines(neutral)
+
+
+def test_no_inventory_keeps_type_names_but_drops_counts_and_mapping(inventory) -> None:
+    text = build_system_prompt(inventory, "no_inventory")
+    assert "Office, Conference Room, Kitchen, Entrance" in text
+    types = {t for counts in inventory.values() for t in counts} | {"Doorway"}
+    goto_line = next(line for line in _lines(text) if line.startswith("Object types"))
+    assert set(goto_line.split(": ", 1)[1].rstrip(".").split(", ")) == types
+    assert not re.search(r"\d+ (Chair|Desk|Fridge)", text)
+    assert not any(line.startswith(f"- {room}:") for line in _lines(text) for room in ROOM_NAMES)
+
+
+def test_prompt_states_goals_budget_actions_and_reply_format(inventory) -> None:
+    text = build_system_prompt(inventory, "default", max_steps=30)
+    for needle in (
+        "emergency responder",
+        "budget of 30 actions",
+        "DEDUPLICATION CHECK",
+        "safest room",
+        "Goto(target)",
+        "Turn(Left)",
+        "Turn(Around)",
+        "Term(room)",
+        '"cognitive_map"',
+        '"dedup_check"',
+        '"reasoning"',
+    ):
+        assert needle in text
+
+
+def test_room_aliases() -> None:
+    assert room_aliases("neutral")["Room A"] == "Conference Room"
+    assert set(room_aliases("neutral").values()) == set(ROOM_NAMES)
+    assert room_aliases("B3") == {name: name for name in ROOM_NAMES}
+
+
+@pytest.mark.parametrize(
+    ("text", "variant", "expected"),
+    [
+        ("Room A", "neutral", "Conference Room"),
+        ("  'room d' ", "neutral", "Entrance"),
+        ("conference   room", "default", "Conference Room"),
+        ("Kitchen", "neutral", "Kitchen"),
+        ("entrance", "B1", "Entrance"),
+        ("Room A", "default", None),
+        ("Lobby", "default", None),
+    ],
+    ids=[
+        "alias",
+        "alias-quoted-case",
+        "spaces",
+        "canonical-under-neutral",
+        "slug",
+        "alias-off",
+        "unknown",
+    ],
+)
+def test_resolve_room(text, variant, expected) -> None:
+    assert resolve_room(text, variant) == expected
+
+
+def test_unknown_variant_is_a_config_error(inventory) -> None:
+    with pytest.raises(ConfigError, match=r"variant='B5' is not one of"):
+        build_system_prompt(inventory, "B5")
+
+
+def test_step_text_carries_counter_feedback_pose_and_symbolic_list() -> None:
+    visible = [VisibleObject("Chair_1", "Chair", -12.04, 2.345)]
+    text = step_text(
+        step=3, max_steps=50, feedback="Turned right.", pose=Pose(1.2, -0.4, 90.0), visible=visible
+    )
+    assert text.splitlines() == [
+        "Step 3 of 50.",
+        "Engine feedback: Turned right.",
+        "Pose: x=1.20 z=-0.40 heading=90",
+        "Visible objects (id | type | bearing deg, negative = left | distance m):",
+        "- Chair_1 | Chair | -12.0 | 2.35",
+    ]
+    vision_only = step_text(step=3, max_steps=50, feedback="ok", pose=Pose(0, 0, 0), visible=None)
+    assert "Visible" not in vision_only
