@@ -1,0 +1,82 @@
+"""Option precedence (command line > ini > default) and validation, resolved in one place."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from pytest_emrd.errors import ConfigError
+from pytest_emrd.gate import resolve_settings
+
+ROOT = Path("/repo")
+
+
+def _resolve(cli=None, ini=None, env=None):
+    return resolve_settings(cli or {}, ini or {}, rootdir=ROOT, env=env or {})
+
+
+def test_defaults_are_the_papers_grid_for_scout():
+    s = _resolve()
+    assert s.models == ("scout",)
+    assert s.conditions == ("baseline", "low_light", "texture")
+    assert s.spawns == ("office", "conference", "kitchen", "entrance")
+    assert (s.episodes, s.variant, s.backend, s.modality) == (20, "default", "builtin", None)
+    assert (s.record_mode, s.matching, s.shard) == ("once", "strict", None)
+    assert s.thresholds == ROOT / "thresholds.yaml" and s.cassettes == ROOT / "cassettes"
+
+
+def test_ci_environment_defaults_to_replay_only():
+    assert _resolve(env={"CI": "true"}).record_mode == "none"
+    assert _resolve(cli={"record_mode": "once"}, env={"CI": "1"}).record_mode == "once"
+
+
+@pytest.mark.parametrize(
+    ("cli", "ini", "expected"),
+    [
+        ({}, {}, 20),
+        ({}, {"episodes": "3"}, 3),
+        ({"episodes": "2"}, {"episodes": "3"}, 2),
+    ],
+    ids=["default", "ini-over-default", "cli-over-ini"],
+)
+def test_precedence(cli, ini, expected):
+    assert _resolve(cli, ini).episodes == expected
+
+
+def test_repeatable_and_comma_separated_models_are_deduplicated_in_order():
+    s = _resolve({"model": ["gemini,gpt", "gemini", "scout"]})
+    assert s.models == ("gemini", "gpt", "scout")
+
+
+def test_paths_resolve_against_the_rootdir():
+    s = _resolve(ini={"results": "runs/a", "cassettes": "/abs/c"})
+    assert s.results == ROOT / "runs/a" and s.cassettes == Path("/abs/c")
+
+
+@pytest.mark.parametrize(
+    ("cli", "message"),
+    [
+        ({"condition": ["fog"]}, "--emrd-condition='fog' is not one of"),
+        ({"spawn": ["attic"]}, "--emrd-spawn='attic'"),
+        ({"episodes": "0"}, "--emrd-episodes=0 must be a whole number >= 1"),
+        ({"episodes": "many"}, "--emrd-episodes='many'"),
+        ({"record_mode": "sometimes"}, "--emrd-record-mode='sometimes'"),
+        ({"matching": "fuzzy"}, "--emrd-matching='fuzzy'"),
+        ({"shard": "3/2"}, "needs 1 <= K <= N"),
+        ({"shard": "half"}, "must look like K/N"),
+    ],
+    ids=[
+        "condition",
+        "spawn",
+        "episodes-zero",
+        "episodes-word",
+        "record-mode",
+        "matching",
+        "shard-order",
+        "shard-shape",
+    ],
+)
+def test_bad_options_name_the_option_and_value(cli, message):
+    with pytest.raises(ConfigError, match=message.replace("[", r"\[")):
+        _resolve(cli)

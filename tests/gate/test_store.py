@@ -1,0 +1,86 @@
+"""The results store: atomic, computed once across concurrent askers, resumable."""
+
+from __future__ import annotations
+
+import threading
+import time
+
+from pytest_emrd.cassette import EpisodeRun
+from pytest_emrd.gate import ResultsStore, iter_run_dir, load_run_dirs
+from pytest_emrd.trajectory import EpisodeSpec
+
+from .conftest import make_trajectory
+
+SPEC = EpisodeSpec("scout", "baseline", "office", 0)
+
+
+class Counter:
+    def __init__(self, status: str = "budget", protocol: str = "p1") -> None:
+        self.calls = 0
+        self.status, self.protocol = status, protocol
+
+    def __call__(self, spec: EpisodeSpec) -> EpisodeRun:
+        self.calls += 1
+        time.sleep(0.05)
+        return EpisodeRun(
+            make_trajectory(spec, status=self.status, protocol=self.protocol), True, 0, 0.05
+        )
+
+
+def test_concurrent_askers_compute_an_episode_once(tmp_path):
+    compute = Counter()
+    results = []
+
+    def ask() -> None:
+        store = ResultsStore(tmp_path, session="s1", protocol="p1")
+        results.append(store.get_or_compute(SPEC, compute))
+
+    threads = [threading.Thread(target=ask) for _ in range(4)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert compute.calls == 1
+    assert sum(r.computed_now for r in results) == 1
+    assert len({r.trajectory for r in results}) == 1
+    assert [p.name for p in (tmp_path / "episodes").iterdir()] == [
+        "scout-baseline-office-ep00.json"
+    ]
+
+
+def test_resume_reuses_finished_episodes_of_the_same_protocol(tmp_path):
+    ResultsStore(tmp_path, session="s1", protocol="p1").get_or_compute(SPEC, Counter())
+    again = Counter()
+    stored = ResultsStore(tmp_path, session="s2", protocol="p1").get_or_compute(SPEC, again)
+    assert again.calls == 0 and stored.session == "s1" and not stored.computed_now
+
+
+def test_resume_recomputes_stale_protocol_and_errored_episodes(tmp_path):
+    ResultsStore(tmp_path, session="s1", protocol="p0").get_or_compute(SPEC, Counter(protocol="p0"))
+    fresh = Counter(status="errored")
+    ResultsStore(tmp_path, session="s2", protocol="p1").get_or_compute(SPEC, fresh)
+    assert fresh.calls == 1
+    same_session = Counter()
+    ResultsStore(tmp_path, session="s2", protocol="p1").get_or_compute(SPEC, same_session)
+    assert same_session.calls == 0  # within the session an errored episode is final
+    next_session = Counter()
+    ResultsStore(tmp_path, session="s3", protocol="p1").get_or_compute(SPEC, next_session)
+    assert next_session.calls == 1  # a rerun retries it
+
+
+def test_unreadable_leftovers_are_recomputed(tmp_path):
+    store = ResultsStore(tmp_path, session="s1", protocol="p1")
+    store.path_for(SPEC).parent.mkdir(parents=True)
+    store.path_for(SPEC).write_text("{half a file")
+    compute = Counter()
+    store.get_or_compute(SPEC, compute)
+    assert compute.calls == 1 and [t.spec for t in iter_run_dir(tmp_path)] == [SPEC]
+
+
+def test_several_run_dirs_merge_by_case(tmp_path):
+    other = EpisodeSpec("scout", "baseline", "kitchen", 1)
+    ResultsStore(tmp_path / "a", session="s", protocol="p1").get_or_compute(SPEC, Counter())
+    ResultsStore(tmp_path / "b", session="s", protocol="p1").get_or_compute(other, Counter())
+    ResultsStore(tmp_path / "b", session="s", protocol="p1").get_or_compute(SPEC, Counter())
+    merged = load_run_dirs([tmp_path / "a", tmp_path / "b"])
+    assert [t.spec for t in merged] == [other, SPEC]
