@@ -14,12 +14,15 @@ recorded in ``calls`` as ``(action, args)``.
 from __future__ import annotations
 
 import math
+import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any, ClassVar
 
 import numpy as np
 import pytest
 
+from pytest_emrd.errors import ConfigError
 from pytest_emrd.rooms import CONFERENCE, ENTRANCE, KITCHEN, OFFICE
 from pytest_emrd.world._model import Doorway, Layout, Room, WorldObject
 
@@ -274,6 +277,20 @@ def small_layout(*, seed: int = 7) -> Layout:
         _obj("HousePlant_1", ENTRANCE, 8.5, 0.5, "clutter", 0.3),
     )
     return Layout(seed=seed, width=9.0, depth=8.0, rooms=rooms, doorways=doorways, objects=objects)
+
+
+@pytest.fixture
+def failed_reset() -> Callable[[Any, Layout, float], Exception]:
+    """``failed_reset(sim, layout, limit)``: reset must raise ConfigError within ``limit`` s."""
+
+    def check(sim: Any, layout: Layout, limit: float) -> Exception:
+        started = time.monotonic()
+        with pytest.raises(ConfigError) as info:
+            sim.reset(layout, "baseline", "Office", 0)
+        assert time.monotonic() - started < limit
+        return info.value
+
+    return check
 
 
 @pytest.fixture

@@ -1,0 +1,101 @@
+"""Against the real ai2thor 5.0.0 package (no build, no network, no download).
+
+The build lookup is monkeypatched or starved (HOME is a fresh tmp dir), so a missing
+build, a missing Vulkan loader or a Unity process that never answers must fail fast with
+a message naming what to install.
+"""
+
+from __future__ import annotations
+
+import ctypes.util
+import os
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from pytest_emrd.errors import ConfigError
+from pytest_emrd.world._model import Layout
+from pytest_emrd.world.thor import ThorSimulator
+from pytest_emrd.world.thor._launch import import_ai2thor, preflight, releases_dir
+
+FailedReset = Callable[[ThorSimulator, Layout, float], ConfigError]
+
+ai2thor = pytest.importorskip("ai2thor.controller")
+thor = import_ai2thor()
+
+
+@pytest.fixture(autouse=True)
+def _isolated_home(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """No real ~/.ai2thor: no cached build, logs land in tmp_path."""
+    monkeypatch.setenv("HOME", str(tmp_path))
+
+
+@pytest.fixture
+def vulkan(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Pretend the Vulkan loader is installed (this machine has none)."""
+    real = ctypes.util.find_library
+    monkeypatch.setattr(
+        ctypes.util, "find_library", lambda n: "libvulkan.so.1" if n == "vulkan" else real(n)
+    )
+
+
+def test_missing_vulkan_names_libvulkan1(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(ctypes.util, "find_library", lambda name: None)
+    with pytest.raises(ConfigError, match="libvulkan1"):
+        preflight(thor, {"platform": thor.platform.CloudRendering}, allow_download=False)
+
+
+@pytest.mark.usefixtures("vulkan")
+def test_missing_build_fails_before_any_network_call(
+    failed_reset: FailedReset, layout: Layout
+) -> None:
+    sim = ThorSimulator()
+    error = failed_reset(sim, layout, 5.0)
+    assert "local_executable_path" in str(error) and releases_dir() in str(error)
+
+
+@pytest.mark.usefixtures("vulkan")
+def test_a_cached_build_passes_the_preflight() -> None:
+    options = {"platform": thor.platform.CloudRendering}
+    build = thor.build.Build(
+        thor.platform.CloudRendering, thor.build.COMMIT_ID, False, releases_dir()
+    )
+    os.makedirs(build.base_dir)
+    preflight(thor, options, allow_download=False)
+
+
+def test_local_executable_path_must_exist(
+    failed_reset: FailedReset, layout: Layout, tmp_path: Path
+) -> None:
+    sim = ThorSimulator(local_executable_path=str(tmp_path / "thor-Linux64-local"))
+    error = failed_reset(sim, layout, 5.0)
+    assert "local_executable_path=" in str(error)
+
+
+@pytest.mark.usefixtures("vulkan")
+def test_ai2thor_finding_no_build_is_translated(
+    failed_reset: FailedReset, layout: Layout, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    def no_build(self: Any, *args: Any) -> None:  # ai2thor 5.0.0's own message
+        raise Exception(
+            "No build exists for arch=Linux platforms=CloudRendering and commits: f0825767"
+        )
+
+    monkeypatch.setattr(ai2thor.Controller, "find_build", no_build)
+    sim = ThorSimulator(allow_download=True)
+    error = failed_reset(sim, layout, 5.0)
+    assert "No build exists" in str(error) and "local_executable_path" in str(error)
+
+
+def test_unity_that_never_answers_is_abandoned(
+    failed_reset: FailedReset, layout: Layout, tmp_path: Path
+) -> None:
+    """A real ai2thor Controller launching a 'Unity' that exits at once: bounded, explained."""
+    unity = tmp_path / "thor-Linux64-broken"
+    unity.write_text("#!/bin/sh\nexit 1\n")
+    unity.chmod(0o755)
+    sim = ThorSimulator(local_executable_path=str(unity), x_display=":0", start_timeout=2.0)
+    error = failed_reset(sim, layout, 10.0)
+    assert "start_timeout=2" in str(error) and "libvulkan1" in str(error)
