@@ -1,0 +1,55 @@
+"""``emrd gate RUN_DIR... [--thresholds FILE] [--models FILE]``: gates over run directories.
+
+Evaluates ``thresholds.yaml`` over the episodes of one or several run directories (for
+example the shards of a CI matrix, each written with ``--emrd-shard=K/N --emrd-results
+DIR``) with the same cells and verdicts as a single-machine ``pytest benchmarks`` run.
+Exit status: 0 when every gate passes, 1 when one is broken, 2 on a usage error.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("gate", help="evaluate thresholds.yaml over one or more run directories")
+    p.add_argument("run_dirs", nargs="+", type=Path, metavar="RUN_DIR", help="run directories")
+    p.add_argument(
+        "--thresholds",
+        type=Path,
+        default=Path("thresholds.yaml"),
+        help="gates file (default: ./thresholds.yaml)",
+    )
+    p.add_argument("--models", type=Path, default=None, help="user model registry YAML")
+    p.add_argument("--json", action="store_true", help="print the verdicts as one JSON list")
+    p.set_defaults(func=_run)
+
+
+def _run(args: argparse.Namespace) -> int:
+    from pytest_emrd.agent import load_registry
+    from pytest_emrd.errors import EmrdError
+    from pytest_emrd.gate import evaluate_all, gate_tables, load_run_dirs, load_thresholds
+    from pytest_emrd.metrics import GATE_METRICS
+
+    registry = load_registry(args.models)
+
+    def is_model(name: str) -> bool:
+        try:
+            registry.get(name)
+        except EmrdError:
+            return False
+        return True
+
+    thresholds = load_thresholds(
+        args.thresholds, is_model=is_model, model_names=registry.names(), metrics=GATE_METRICS
+    )
+    trajectories = load_run_dirs(args.run_dirs)
+    verdicts = evaluate_all(trajectories, thresholds, GATE_METRICS)
+    if args.json:
+        print(json.dumps([v.to_dict() for v in verdicts]))
+    else:
+        print(f"{len(trajectories)} episodes from {len(args.run_dirs)} run director(ies)")
+        print("\n".join(gate_tables(verdicts)) or "no gate applies to these episodes")
+    return 0 if all(v.passed for v in verdicts) else 1
