@@ -155,19 +155,9 @@ class _Run:
         if self.settings.shard:
             return []
         thresholds = load_thresholds(
-            self.settings.thresholds,
-            is_model=self._is_model,
-            model_names=self.registry.names(),
-            metrics=GATE_METRICS,
+            self.settings.thresholds, registry=self.registry, metrics=GATE_METRICS
         )
         return gate_cells(self.settings, thresholds)
-
-    def _is_model(self, name: str) -> bool:
-        try:
-            self.registry.get(name)
-        except EmrdError:
-            return False
-        return True
 
     @cached_property
     def store(self) -> ResultsStore:

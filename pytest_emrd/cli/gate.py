@@ -29,22 +29,11 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def _run(args: argparse.Namespace) -> int:
     from pytest_emrd.agent import load_registry
-    from pytest_emrd.errors import EmrdError
     from pytest_emrd.gate import evaluate_all, gate_tables, load_run_dirs, load_thresholds
     from pytest_emrd.metrics import GATE_METRICS
 
     registry = load_registry(args.models)
-
-    def is_model(name: str) -> bool:
-        try:
-            registry.get(name)
-        except EmrdError:
-            return False
-        return True
-
-    thresholds = load_thresholds(
-        args.thresholds, is_model=is_model, model_names=registry.names(), metrics=GATE_METRICS
-    )
+    thresholds = load_thresholds(args.thresholds, registry=registry, metrics=GATE_METRICS)
     trajectories = load_run_dirs(args.run_dirs)
     verdicts = evaluate_all(trajectories, thresholds, GATE_METRICS)
     if args.json:

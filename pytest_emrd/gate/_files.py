@@ -2,23 +2,36 @@
 
 from __future__ import annotations
 
-from collections.abc import Callable, Collection, Sequence
+from collections.abc import Collection, Sequence
 from pathlib import Path
+from typing import Any, Protocol
 
-from pytest_emrd.errors import ConfigError
+from pytest_emrd.errors import ConfigError, EmrdError
 from pytest_emrd.gate._store import iter_run_dir
 from pytest_emrd.gate._thresholds import Thresholds, parse_thresholds
 from pytest_emrd.trajectory import Trajectory
 
 
-def load_thresholds(
-    path: Path,
-    *,
-    is_model: Callable[[str], bool],
-    model_names: Collection[str],
-    metrics: Collection[str],
-) -> Thresholds:
-    """Read and validate a thresholds file; a missing file is a :class:`ConfigError`."""
+class RegistryLike(Protocol):
+    def get(self, name: str) -> Any: ...
+
+    def names(self) -> tuple[str, ...]: ...
+
+
+def load_thresholds(path: Path, *, registry: RegistryLike, metrics: Collection[str]) -> Thresholds:
+    """Read and validate a thresholds file against a model registry and metric names.
+
+    Model names are checked with ``registry.get`` (so parametric names such as
+    ``scout-decay-8`` are accepted); a missing file is a :class:`ConfigError`.
+    """
+
+    def is_model(name: str) -> bool:
+        try:
+            registry.get(name)
+        except EmrdError:
+            return False
+        return True
+
     try:
         text = path.read_text(encoding="utf-8")
     except FileNotFoundError as exc:
@@ -27,7 +40,7 @@ def load_thresholds(
             "thresholds.yaml (see the one at the repository root)."
         ) from exc
     return parse_thresholds(
-        text, source=str(path), is_model=is_model, model_names=model_names, metrics=metrics
+        text, source=str(path), is_model=is_model, model_names=registry.names(), metrics=metrics
     )
 
 

@@ -97,25 +97,21 @@ def test_bad_thresholds_name_file_line_and_allowed_values(text, message):
     assert message in str(info.value)
 
 
-def test_the_shipped_thresholds_file_names_only_known_models_and_conditions():
-    root = Path(__file__).resolve().parents[2]
+def test_the_shipped_thresholds_file_is_valid():
     from pytest_emrd.agent import load_registry
+    from pytest_emrd.gate import load_thresholds
     from pytest_emrd.metrics import GATE_METRICS
 
-    registry = load_registry()
-
-    def is_model(name: str) -> bool:
-        try:
-            registry.get(name)
-        except ConfigError:
-            return False
-        return True
-
-    thresholds = parse_thresholds(
-        (root / "thresholds.yaml").read_text(),
-        source="thresholds.yaml",
-        is_model=is_model,
-        model_names=registry.names(),
-        metrics=GATE_METRICS,
+    root = Path(__file__).resolve().parents[2]
+    thresholds = load_thresholds(
+        root / "thresholds.yaml", registry=load_registry(), metrics=GATE_METRICS
     )
-    assert {"scout", "gemini", "gpt", "claude"} <= set(thresholds.models())
+    assert {"scout", "gemini", "gpt", "claude", "qwen3-vl-32b"} <= set(thresholds.models())
+
+
+def test_missing_thresholds_file_says_how_to_fix(tmp_path):
+    from pytest_emrd.agent import load_registry
+    from pytest_emrd.gate import load_thresholds
+
+    with pytest.raises(ConfigError, match="--emrd-thresholds"):
+        load_thresholds(tmp_path / "nope.yaml", registry=load_registry(), metrics=())
