@@ -17,7 +17,13 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from pytest_emrd import world
-from pytest_emrd.agent import ChatClient, ChatResponse, Conversation, build_system_prompt, load_registry
+from pytest_emrd.agent import (
+    ChatClient,
+    ChatResponse,
+    Conversation,
+    build_system_prompt,
+    load_registry,
+)
 from pytest_emrd.bench import Figure, median_seconds
 from pytest_emrd.episode import _Run, run_episode
 from pytest_emrd.rooms import SLUG_ROOMS
