@@ -69,6 +69,10 @@ class WorldObject:
     """Yaw in degrees; 0/90/180/270 only, so footprints stay axis-aligned."""
     color: tuple[int, int, int] = (128, 128, 128)
     """Base RGB colour (baseline palette; the texture condition replaces it)."""
+    elevation: float = 0.0
+    """Height of the base above the floor in metres (a laptop on a desk, a microwave on a
+    counter); 0 for everything standing on the floor. The object spans
+    ``[elevation, elevation + height]`` vertically."""
 
 
 @dataclass(frozen=True)

@@ -1,0 +1,245 @@
+"""The furniture catalogue: one row per kind of object the built-in office contains.
+
+Each kind names its AI2-THOR ``objectType`` (what ids, prompts and the ai2thor backend use),
+its memory category, its size, where it stands, and its baseline colours per material
+role (the renderer composes each kind from boxes, one colour role per box).
+
+=================  ===============  ========  =====================  =========  ==========
+kind               objectType       category  size w x d x h (m)     stands on  rooms
+=================  ===============  ========  =====================  =========  ==========
+Doorway            Doorway          landmark  1.0 x 0.1 x 2.1        wall gap   between two
+Door               Door             landmark  1.0 x 0.06 x 2.1       outer wall Entrance
+Desk               Desk             salient   1.4 x 0.7 x 0.76       floor      Office
+ReceptionDesk      Desk             salient   1.8 x 0.8 x 1.05       floor      Entrance
+DiningTable        DiningTable      salient   2.6-3.2 x 1.1 x 0.76   floor      Conference
+ShelvingUnit       ShelvingUnit     salient   1.0 x 0.4 x 1.8        floor      Office
+Television         Television       salient   1.4 x 0.4 x 1.35       floor      Conference
+Fridge             Fridge           salient   0.8 x 0.75 x 1.9       floor      Kitchen
+CounterTop         CounterTop       salient   1.6-2.2 x 0.65 x 0.92  floor      Kitchen
+ArmChair           ArmChair         salient   0.85 x 0.85 x 0.9      floor      Entrance
+Chair              Chair            clutter   0.5 x 0.5 x 0.92       floor      Office, Conf.
+Stool              Stool            clutter   0.4 x 0.4 x 0.7        floor      Kitchen
+HousePlant         HousePlant       clutter   0.45 x 0.45 x 1.05     floor      Office, Entr.
+Laptop             Laptop           clutter   0.34 x 0.24 x 0.24     Desk       Office
+Sink               Sink             clutter   0.6 x 0.45 x 0.25      CounterTop Kitchen
+Microwave          Microwave        clutter   0.5 x 0.36 x 0.3       CounterTop Kitchen
+CoffeeMachine      CoffeeMachine    clutter   0.26 x 0.3 x 0.38      CounterTop Kitchen
+=================  ===============  ========  =====================  =========  ==========
+
+Landmarks are the doorways and the building exit; salient objects are large furniture a
+responder would use to orient; clutter is small or movable. An object's *front* faces the
+heading given by its ``rotation``; ``access`` says which side is kept free so an agent can
+walk up to it (``back`` for chairs, which face a desk or table).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Final
+
+RGB = tuple[int, int, int]
+
+
+@dataclass(frozen=True)
+class Kind:
+    """One row of the catalogue."""
+
+    name: str
+    object_type: str
+    category: str
+    width: float
+    depth: float
+    height: float
+    colors: Mapping[str, RGB]
+    """Material role -> baseline colour; the first role is the object's main colour."""
+    elevation: float = 0.0
+    """Height of the base above the floor (items standing on a desk or counter)."""
+    access: str = "front"
+    """Side kept free for an approaching agent: ``front`` or ``back``."""
+
+    @property
+    def main_color(self) -> RGB:
+        return next(iter(self.colors.values()))
+
+
+DESK_HEIGHT: Final = 0.76
+COUNTER_HEIGHT: Final = 0.92
+DOOR_HEIGHT: Final = 2.1
+WALL_HEIGHT: Final = 2.7
+
+_WOOD: Final[RGB] = (150, 108, 68)
+_DARK_WOOD: Final[RGB] = (92, 60, 40)
+_METAL: Final[RGB] = (88, 90, 96)
+_SCREEN: Final[RGB] = (22, 26, 34)
+
+KINDS: Final[Mapping[str, Kind]] = {
+    k.name: k
+    for k in (
+        Kind("Doorway", "Doorway", "landmark", 1.0, 0.1, DOOR_HEIGHT, {"frame": (122, 86, 52)}),
+        Kind(
+            "Door",
+            "Door",
+            "landmark",
+            1.0,
+            0.06,
+            DOOR_HEIGHT,
+            {
+                "panel": (104, 118, 140),
+                "frame": (70, 70, 76),
+                "bar": (205, 205, 210),
+                "sign": (20, 175, 70),
+                "sign_text": (235, 245, 235),
+            },
+        ),
+        Kind("Desk", "Desk", "salient", 1.4, 0.7, DESK_HEIGHT, {"top": _WOOD, "leg": _METAL}),
+        Kind(
+            "ReceptionDesk",
+            "Desk",
+            "salient",
+            1.8,
+            0.8,
+            1.05,
+            {"front": (210, 200, 185), "top": _DARK_WOOD, "leg": _METAL},
+        ),
+        Kind(
+            "DiningTable",
+            "DiningTable",
+            "salient",
+            3.0,
+            1.1,
+            DESK_HEIGHT,
+            {"top": _DARK_WOOD, "leg": (60, 60, 66)},
+        ),
+        Kind(
+            "ShelvingUnit",
+            "ShelvingUnit",
+            "salient",
+            1.0,
+            0.4,
+            1.8,
+            {
+                "frame": (120, 84, 52),
+                "book_a": (165, 45, 40),
+                "book_b": (40, 90, 155),
+                "book_c": (205, 170, 60),
+            },
+        ),
+        Kind(
+            "Television",
+            "Television",
+            "salient",
+            1.4,
+            0.4,
+            1.35,
+            {"stand": (64, 48, 38), "screen": (18, 18, 22), "display": (34, 52, 86)},
+        ),
+        Kind(
+            "Fridge",
+            "Fridge",
+            "salient",
+            0.8,
+            0.75,
+            1.9,
+            {"body": (228, 230, 232), "handle": (110, 112, 118), "seam": (140, 142, 148)},
+        ),
+        Kind(
+            "CounterTop",
+            "CounterTop",
+            "salient",
+            2.0,
+            0.65,
+            COUNTER_HEIGHT,
+            {"cabinet": (232, 226, 210), "top": (66, 66, 72), "handle": (120, 120, 126)},
+        ),
+        Kind(
+            "ArmChair",
+            "ArmChair",
+            "salient",
+            0.85,
+            0.85,
+            0.9,
+            {"fabric": (150, 62, 50), "leg": (50, 40, 32)},
+            access="front",
+        ),
+        Kind(
+            "Chair",
+            "Chair",
+            "clutter",
+            0.5,
+            0.5,
+            0.92,
+            {"fabric": (44, 72, 128), "leg": (56, 56, 60)},
+            access="back",
+        ),
+        Kind("Stool", "Stool", "clutter", 0.4, 0.4, 0.7, {"seat": (176, 44, 40), "leg": _METAL}),
+        Kind(
+            "HousePlant",
+            "HousePlant",
+            "clutter",
+            0.45,
+            0.45,
+            1.05,
+            {"leaves": (48, 132, 56), "pot": (172, 92, 52), "leaves_dark": (34, 100, 44)},
+        ),
+        Kind(
+            "Laptop",
+            "Laptop",
+            "clutter",
+            0.34,
+            0.24,
+            0.24,
+            {"body": (172, 172, 178), "screen": _SCREEN},
+            elevation=DESK_HEIGHT,
+        ),
+        Kind(
+            "Sink",
+            "Sink",
+            "clutter",
+            0.6,
+            0.45,
+            0.25,
+            {"basin": (178, 184, 190), "tap": (200, 200, 206)},
+            elevation=COUNTER_HEIGHT,
+        ),
+        Kind(
+            "Microwave",
+            "Microwave",
+            "clutter",
+            0.5,
+            0.36,
+            0.3,
+            {"body": (62, 62, 68), "window": (14, 14, 18), "panel": (160, 160, 164)},
+            elevation=COUNTER_HEIGHT,
+        ),
+        Kind(
+            "CoffeeMachine",
+            "CoffeeMachine",
+            "clutter",
+            0.26,
+            0.3,
+            0.38,
+            {"body": (30, 30, 32), "accent": (190, 40, 40)},
+            elevation=COUNTER_HEIGHT,
+        ),
+    )
+}
+
+#: objectType -> category, for every type the built-in office uses.
+CATEGORY_OF: Final[Mapping[str, str]] = {k.object_type: k.category for k in KINDS.values()}
+
+#: Room surface colours: walls and floors per room, ceiling and skirting shared.
+WALL_COLORS: Final[Mapping[str, RGB]] = {
+    "Office": (206, 200, 184),
+    "Conference Room": (186, 198, 212),
+    "Kitchen": (218, 216, 196),
+    "Entrance": (204, 188, 170),
+}
+FLOOR_COLORS: Final[Mapping[str, RGB]] = {
+    "Office": (92, 98, 112),
+    "Conference Room": (132, 100, 78),
+    "Kitchen": (196, 196, 190),
+    "Entrance": (150, 140, 124),
+}
+CEILING_COLOR: Final[RGB] = (236, 236, 232)
+SKIRTING_COLOR: Final[RGB] = (78, 72, 66)

@@ -1,0 +1,187 @@
+"""2-D geometry shared by the layout, visibility, motion and the renderer.
+
+World frame: metres, ``x`` east, ``z`` north, headings in degrees clockwise from north.
+Walls are zero-thickness axis-aligned segments on the room boundaries, with gaps at the
+doorways; visibility and the renderer use the same :class:`Walls`, so what the agent is
+told it sees and what the frame shows cannot disagree about occlusion.
+
+Headings the built-in world produces are multiples of 90 degrees, and :func:`unit` returns
+exact unit vectors for them, so ray directions and hit distances involve only ``+ - * /``
+(IEEE-exact on every machine): the rendered pixels are bit-stable.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from functools import lru_cache
+
+import numpy as np
+
+from pytest_emrd.world._model import Layout, WorldObject, WorldPose
+
+Rect = tuple[float, float, float, float]
+"""Axis-aligned rectangle ``(x0, z0, x1, z1)`` with ``x0 <= x1`` and ``z0 <= z1``."""
+
+_CARDINAL = {0: (0.0, 1.0), 90: (1.0, 0.0), 180: (0.0, -1.0), 270: (-1.0, 0.0)}
+
+
+def unit(heading: float) -> tuple[float, float]:
+    """The unit vector ``(x, z)`` a heading points along (exact for multiples of 90)."""
+    h = heading % 360
+    if h in _CARDINAL:
+        return _CARDINAL[int(h)]
+    rad = math.radians(h)
+    return math.sin(rad), math.cos(rad)
+
+
+def right_of(heading: float) -> tuple[float, float]:
+    """The unit vector pointing to the right of ``heading``."""
+    return unit(heading + 90)
+
+
+def footprint(obj: WorldObject) -> Rect:
+    """The object's axis-aligned floor footprint."""
+    return rect_at(obj.x, obj.z, obj.width, obj.depth, obj.rotation)
+
+
+def rect_at(x: float, z: float, width: float, depth: float, rotation: float) -> Rect:
+    """Footprint of a ``width x depth`` box centred at ``(x, z)`` turned by ``rotation``."""
+    if round(rotation) % 180 == 90:
+        width, depth = depth, width
+    return (x - width / 2, z - depth / 2, x + width / 2, z + depth / 2)
+
+
+def local_to_world(x: float, z: float, rotation: float, u: float, v: float) -> tuple[float, float]:
+    """World point at ``u`` metres right and ``v`` metres forward of a frame at ``(x, z)``."""
+    fx, fz = unit(rotation)
+    rx, rz = right_of(rotation)
+    return x + u * rx + v * fx, z + u * rz + v * fz
+
+
+def to_spawn_frame(spawn_pose: WorldPose, x: float, z: float) -> tuple[float, float]:
+    """World ``(x, z)`` -> spawn frame: origin at the spawn position, ``+z`` along the spawn
+    heading, ``+x`` to the agent's right (a rigid motion, the one place it is defined)."""
+    dx, dz = x - spawn_pose.x, z - spawn_pose.z
+    fx, fz = unit(spawn_pose.heading)
+    rx, rz = right_of(spawn_pose.heading)
+    return dx * rx + dz * rz, dx * fx + dz * fz
+
+
+def heading_in_spawn_frame(spawn_pose: WorldPose, heading: float) -> float:
+    """World heading -> degrees clockwise from the spawn heading, in ``[0, 360)``."""
+    return (heading - spawn_pose.heading) % 360
+
+
+def rects_overlap(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """``(K, M)`` bool: does rect ``a[k]`` overlap rect ``b[m]`` with positive area."""
+    return (
+        (a[:, None, 0] < b[None, :, 2])
+        & (a[:, None, 2] > b[None, :, 0])
+        & (a[:, None, 1] < b[None, :, 3])
+        & (a[:, None, 3] > b[None, :, 1])
+    )
+
+
+def rect_inside(inner: Rect, outer: Rect, margin: float = 0.0) -> bool:
+    """Whether ``inner`` lies within ``outer`` shrunk by ``margin``."""
+    return (
+        inner[0] >= outer[0] + margin
+        and inner[1] >= outer[1] + margin
+        and inner[2] <= outer[2] - margin
+        and inner[3] <= outer[3] - margin
+    )
+
+
+@dataclass(frozen=True, eq=False)
+class Walls:
+    """Wall segments: ``along_x`` rows ``(z, x0, x1)``, ``along_z`` rows ``(x, z0, z1)``."""
+
+    along_x: np.ndarray
+    along_z: np.ndarray
+
+    def first_hit(
+        self, ox: np.ndarray, oz: np.ndarray, dx: np.ndarray, dz: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Ray parameter of the nearest wall hit along ``o + t d`` (``inf`` if none), and
+        whether that wall runs along x. All arguments broadcast to one shape ``S``."""
+        t_x = _hits(oz, ox, dz, dx, self.along_x)
+        t_z = _hits(ox, oz, dx, dz, self.along_z)
+        return np.minimum(t_x, t_z), t_x <= t_z
+
+    def blocks(self, ax: np.ndarray, az: np.ndarray, bx: np.ndarray, bz: np.ndarray) -> np.ndarray:
+        """Whether a wall crosses the open segment from ``a`` to ``b`` (broadcast shapes)."""
+        t, _ = self.first_hit(ax, az, bx - ax, bz - az)
+        return t < 1.0 - 1e-9
+
+
+def _hits(
+    across: np.ndarray,
+    along: np.ndarray,
+    d_across: np.ndarray,
+    d_along: np.ndarray,
+    segs: np.ndarray,
+) -> np.ndarray:
+    """Nearest positive ray parameter hitting segments at ``across == c`` spanning
+    ``[lo, hi]`` of the ``along`` coordinate."""
+    if segs.size == 0:
+        return np.full(np.broadcast(across, d_across).shape, np.inf)
+    c, lo, hi = segs[:, 0], segs[:, 1], segs[:, 2]
+    a = np.asarray(across)[..., None]
+    da = np.asarray(d_across)[..., None]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = (c - a) / da
+    hit = np.asarray(along)[..., None] + t * np.asarray(d_along)[..., None]
+    ok = (t > 1e-9) & (hit >= lo) & (hit <= hi) & np.isfinite(t)
+    return np.where(ok, t, np.inf).min(axis=-1)
+
+
+@lru_cache(maxsize=64)
+def walls_of(layout: Layout) -> Walls:
+    """The layout's walls: every room edge, merged, with the doorway gaps cut out."""
+    lines: dict[tuple[str, float], list[tuple[float, float]]] = {}
+    for r in layout.rooms:
+        lines.setdefault(("x", r.z0), []).append((r.x0, r.x1))
+        lines.setdefault(("x", r.z1), []).append((r.x0, r.x1))
+        lines.setdefault(("z", r.x0), []).append((r.z0, r.z1))
+        lines.setdefault(("z", r.x1), []).append((r.z0, r.z1))
+    gaps: dict[tuple[str, float], list[tuple[float, float]]] = {}
+    for d in layout.doorways:
+        key, centre = ("x", d.z) if d.axis == "x" else ("z", d.x)
+        mid = d.x if d.axis == "x" else d.z
+        gaps.setdefault((key, centre), []).append((mid - d.width / 2, mid + d.width / 2))
+    rows: dict[str, list[tuple[float, float, float]]] = {"x": [], "z": []}
+    for (axis, at), spans in sorted(lines.items()):
+        for lo, hi in _subtract(_merge(spans), gaps.get((axis, at), [])):
+            rows[axis].append((at, lo, hi))
+    return Walls(
+        along_x=np.array(rows["x"], dtype=float).reshape(-1, 3),
+        along_z=np.array(rows["z"], dtype=float).reshape(-1, 3),
+    )
+
+
+def _merge(spans: list[tuple[float, float]]) -> list[tuple[float, float]]:
+    out: list[tuple[float, float]] = []
+    for lo, hi in sorted(spans):
+        if out and lo <= out[-1][1]:
+            out[-1] = (out[-1][0], max(out[-1][1], hi))
+        else:
+            out.append((lo, hi))
+    return out
+
+
+def _subtract(
+    spans: list[tuple[float, float]], holes: list[tuple[float, float]]
+) -> list[tuple[float, float]]:
+    for h_lo, h_hi in holes:
+        cut: list[tuple[float, float]] = []
+        for lo, hi in spans:
+            if h_hi <= lo or h_lo >= hi:
+                cut.append((lo, hi))
+                continue
+            if lo < h_lo:
+                cut.append((lo, h_lo))
+            if h_hi < hi:
+                cut.append((h_hi, hi))
+        spans = cut
+    return spans

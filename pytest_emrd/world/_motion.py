@@ -1,0 +1,106 @@
+"""Semantic motion: where ``Goto`` puts the agent, and where an episode starts.
+
+* ``Goto(object)``: the agent stands 0.7 m (else 0.6 or 0.8 m) in front of a side of the
+  object's footprint (for an item on a desk or counter, of the desk or counter), facing
+  it. Sides facing the agent are tried first; along a side the midpoint first, then
+  points 0.4 and 0.8 m either way. The spot must lie in the object's room with the agent's
+  0.25 m radius clear of walls and floor furniture.
+* ``Goto(Doorway_N)``: the agent passes through to 1 m inside the room on the other side
+  (the room it is not in; seen through another doorway, the room beyond this one),
+  facing away from the doorway.
+* Spawn: a free point within 1.5 m of the spawn room's centre (else anywhere free in the
+  room), chosen by the episode seed on a 0.25 m grid, with a seeded cardinal heading.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from pytest_emrd.world._model import Doorway, Room, WorldPose
+from pytest_emrd.world._rng import StableRng
+from pytest_emrd.world._scene import Scene
+
+AGENT_RADIUS = 0.25
+STAND_OFF = (0.7, 0.6, 0.8)
+SLIDES = (0.0, -0.4, 0.4, -0.8, 0.8)
+THROUGH = 1.0
+SPAWN_RADIUS = 1.5
+SPAWN_STEP = 0.25
+#: Outward normal of a footprint side -> heading that faces the side from outside.
+_SIDES = (((0.0, 1.0), 180.0), ((0.0, -1.0), 0.0), ((1.0, 0.0), 270.0), ((-1.0, 0.0), 90.0))
+
+
+def is_free(scene: Scene, room: Room, x: float, z: float) -> bool:
+    """Whether an agent of radius 0.25 m fits at ``(x, z)`` inside ``room``."""
+    r = AGENT_RADIUS
+    if not (room.x0 + r <= x <= room.x1 - r and room.z0 + r <= z <= room.z1 - r):
+        return False
+    f = scene.rects[scene.floor]
+    return not bool(
+        ((x > f[:, 0] - r) & (x < f[:, 2] + r) & (z > f[:, 1] - r) & (z < f[:, 3] + r)).any()
+    )
+
+
+def approach(scene: Scene, index: int, pose: WorldPose) -> WorldPose | None:
+    """Where ``Goto`` of object ``index`` puts an agent standing at ``pose`` (None: no spot)."""
+    room = scene.layout.room(scene.layout.objects[index].room)
+    x0, z0, x1, z1 = scene.rects[scene.support[index]]
+    cx, cz = (x0 + x1) / 2, (z0 + z1) / 2
+    half = {(0.0, 1.0): (x1 - x0) / 2, (0.0, -1.0): (x1 - x0) / 2}
+    sides = sorted(_SIDES, key=lambda s: -((pose.x - cx) * s[0][0] + (pose.z - cz) * s[0][1]))
+    for (nx, nz), heading in sides:
+        mx = x1 if nx > 0 else x0 if nx < 0 else cx
+        mz = z1 if nz > 0 else z0 if nz < 0 else cz
+        span = half.get((nx, nz), (z1 - z0) / 2) + 0.2
+        for off in STAND_OFF:
+            for slide in SLIDES:
+                if abs(slide) > span:
+                    continue
+                x = round(mx + nx * off + abs(nz) * slide, 2)
+                z = round(mz + nz * off + abs(nx) * slide, 2)
+                if is_free(scene, room, x, z):
+                    return WorldPose(x, z, heading)
+    return None
+
+
+def through(scene: Scene, doorway: Doorway, pose: WorldPose, current: str) -> WorldPose | None:
+    """Where ``Goto(doorway)`` puts an agent at ``pose`` in room ``current`` (None: blocked)."""
+    a, b = scene.layout.room(doorway.room_a), scene.layout.room(doorway.room_b)
+    along_x = doorway.axis == "x"  # the wall runs along x: the rooms lie north and south
+    at = doorway.z if along_x else doorway.x
+    plus = a if (a.z0 if along_x else a.x0) >= at else b
+    minus = b if plus is a else a
+    if current == plus.name:
+        target = minus
+    elif current == minus.name:
+        target = plus
+    else:  # seen through another doorway: go on into the room beyond
+        target = plus if (pose.z if along_x else pose.x) < at else minus
+    sign = 1.0 if target is plus else -1.0
+    if along_x:
+        x, z, heading = doorway.x, round(doorway.z + sign * THROUGH, 2), 90.0 - 90.0 * sign
+    else:
+        x, z, heading = round(doorway.x + sign * THROUGH, 2), doorway.z, 180.0 - 90.0 * sign
+    if not is_free(scene, target, x, z):
+        return None
+    return WorldPose(x, z, heading)
+
+
+def spawn_pose(scene: Scene, room: Room, seed: int) -> WorldPose:
+    """The seeded start pose in ``room`` (always free; falls back to the whole room)."""
+    rng = StableRng(f"emrd-spawn:{seed}:{room.name}")
+    cx, cz = (room.x0 + room.x1) / 2, (room.z0 + room.z1) / 2
+    steps = np.arange(-SPAWN_RADIUS, SPAWN_RADIUS + 1e-9, SPAWN_STEP)
+    near = [
+        (round(cx + a, 2), round(cz + b, 2))
+        for a in steps
+        for b in steps
+        if a * a + b * b <= SPAWN_RADIUS**2
+    ]
+    free = [p for p in near if is_free(scene, room, *p)]
+    if not free:
+        xs = np.arange(room.x0 + AGENT_RADIUS, room.x1 - AGENT_RADIUS, SPAWN_STEP)
+        zs = np.arange(room.z0 + AGENT_RADIUS, room.z1 - AGENT_RADIUS, SPAWN_STEP)
+        free = [(round(x, 2), round(z, 2)) for x in xs for z in zs if is_free(scene, room, x, z)]
+    x, z = rng.choice(free)
+    return WorldPose(float(x), float(z), rng.choice((0.0, 90.0, 180.0, 270.0)))

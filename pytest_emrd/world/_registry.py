@@ -1,0 +1,38 @@
+"""Simulator backends by name, imported lazily."""
+
+from __future__ import annotations
+
+import importlib
+from collections.abc import Callable
+from typing import Any, Final
+
+from pytest_emrd.errors import check_choice, missing_extra
+from pytest_emrd.world._model import Simulator
+
+
+def _builtin(**options: Any) -> Simulator:
+    from pytest_emrd.world._simulator import BuiltinSimulator
+
+    return BuiltinSimulator(**options)
+
+
+def _ai2thor(**options: Any) -> Simulator:
+    try:
+        module = importlib.import_module("pytest_emrd.world.thor")
+    except ImportError as exc:
+        if (exc.name or "").split(".")[0] == "ai2thor":
+            raise missing_extra("ai2thor", "thor") from exc
+        raise
+    simulator: Simulator = module.ThorSimulator(**options)
+    return simulator
+
+
+BACKENDS: Final[dict[str, Callable[..., Simulator]]] = {"builtin": _builtin, "ai2thor": _ai2thor}
+
+
+def make_simulator(backend: str = "builtin", **options: Any) -> Simulator:
+    """A new simulator of ``backend`` (``builtin`` or ``ai2thor``) built with ``options``."""
+    check_choice(
+        "backend", backend, BACKENDS, hint="Use --emrd-backend builtin for the numpy world."
+    )
+    return BACKENDS[backend](**options)

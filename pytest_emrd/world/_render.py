@@ -1,0 +1,217 @@
+"""The first-person frame: a vectorised numpy ray-caster, one ray per image column.
+
+Camera: 512 x 512 pixels, 90 degree field of view horizontally and vertically, eye 1.5 m
+above the floor, looking level; column ``c`` casts the ray ``forward + right * u`` with
+``u = (c + 0.5 - 256) / 256``, so its parameter ``t`` is the depth along the view axis.
+
+Drawing order: ceiling, floor (per-room colour, 0.5 m tiles) and walls (per-room colour,
+skirting board, shaded by orientation) fill the frame; then the boxes of every object
+within the visibility distance are painted back to front (objects by distance, items on
+a desk or counter right after it, boxes bottom-up), each only over the columns it covers
+and only where it is nearer than the wall. A box shows its front face, its top face when
+below the eye, its underside when above. Surfaces are shaded by orientation and the
+condition's light factor, then mixed with fog by depth (see
+:mod:`pytest_emrd.world._conditions`).
+
+Bit stability: headings are multiples of 90 degrees and positions centimetre values, so
+every quantity before the final rounding comes from ``+ - * /`` and ``ceil`` only (exactly
+rounded IEEE operations); the colour stage is integer arithmetic. The same scene therefore
+renders to identical bytes on every machine and numpy version.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from pytest_emrd.world._catalog import WALL_HEIGHT
+from pytest_emrd.world._conditions import ConditionParams
+from pytest_emrd.world._geometry import right_of, unit
+from pytest_emrd.world._model import WorldPose
+from pytest_emrd.world._rng import StableRng
+from pytest_emrd.world._scene import CEILING, FLOOR0, PART0, RASTER, SKIRTING, TILE0, WALL0, Scene
+
+SIZE = 512
+FOCAL = SIZE / 2
+HORIZON = SIZE // 2
+EYE = 1.5
+SKIRTING_HEIGHT = 0.1
+NEAR = 0.05
+TILE_CELLS = 5
+"""Floor tile edge in raster cells (0.5 m)."""
+
+#: Surface orientations and their brightness: faces across x (east/west), across z
+#: (north/south), tops, undersides. A pixel's code is ``label * 4 + face``.
+X_FACE, Z_FACE, TOP_FACE, BOTTOM_FACE = 0, 1, 2, 3
+FACE_LIGHT = np.array([0.74, 0.9, 1.0, 0.5])
+
+_U = (np.arange(SIZE) + 0.5 - FOCAL) / FOCAL
+_ROWS = np.arange(SIZE, dtype=np.int32)
+_ROW_COL = _ROWS[:, None]
+_CEIL_DEPTH = FOCAL * (WALL_HEIGHT - EYE) / (HORIZON - (_ROWS[:HORIZON] + 0.5))
+_FLOOR_DEPTH = FOCAL * EYE / ((_ROWS[HORIZON:] + 0.5) - HORIZON)
+
+
+def palette(scene: Scene, params: ConditionParams, seed: int) -> np.ndarray:
+    """``(L, 3)`` colours: the catalogue's, or under ``texture`` seeded random colours for
+    walls, floors and every object material (ceiling and skirting kept)."""
+    colors = scene.colors.astype(np.int64)
+    if not params.randomize_palette:
+        return colors
+    rng = StableRng(seed * 7919 + 17)
+    for label in range(WALL0, len(colors)):
+        if not TILE0 <= label < PART0:
+            colors[label] = [rng.integer(20, 235) for _ in range(3)]
+    colors[TILE0:PART0] = np.maximum(colors[FLOOR0:TILE0] - 12, 0)
+    return colors
+
+
+def shade_table(colors: np.ndarray, params: ConditionParams) -> np.ndarray:
+    """``(L * 4 * 256, 3)`` uint8 look-up table: final RGB of ``(label, face, fog weight)``.
+
+    ``rgb = rint(colour * face_light * light_factor * (255 - fog) / 255 + fog_rgb * fog / 255)``
+    """
+    fog = np.arange(256, dtype=np.float64)
+    lit = colors[:, None, None, :] * (FACE_LIGHT * params.light_factor)[None, :, None, None]
+    mix = lit * ((255.0 - fog) / 255.0)[None, None, :, None]
+    mix = mix + np.array(params.fog_color, dtype=np.float64) * (fog / 255.0)[:, None]
+    return np.clip(np.rint(mix), 0, 255).astype(np.uint8).reshape(-1, 3)
+
+
+def _fog(depth: np.ndarray, params: ConditionParams) -> np.ndarray:
+    """Fog weight 0..255 of surfaces at ``depth``."""
+    ratio = depth / params.visibility_distance
+    return np.rint(np.minimum(1.0, params.fog * ratio * ratio) * 255.0).astype(np.uint8)
+
+
+def _row(a: np.ndarray) -> np.ndarray:
+    """First image row whose pixel centre lies at or below the continuous row ``a``."""
+    return np.clip(np.ceil(a - 0.5), 0, SIZE).astype(np.int32)
+
+
+def render(scene: Scene, pose: WorldPose, params: ConditionParams, table: np.ndarray) -> np.ndarray:
+    """The ``(512, 512, 3)`` uint8 frame seen from ``pose`` (``table`` from :func:`shade_table`)."""
+    fx, fz = unit(pose.heading)
+    rx, rz = right_of(pose.heading)
+    dx, dz = fx + rx * _U, fz + rz * _U
+    ox, oz = np.float64(pose.x), np.float64(pose.z)
+    t_wall, along_x = scene.walls.first_hit(ox, oz, dx, dz)
+    t_wall = np.minimum(t_wall, 1e3)
+    code = np.empty((SIZE, SIZE), dtype=np.int32)
+    fog = np.empty((SIZE, SIZE), dtype=np.uint8)
+    _background(scene, ox, oz, dx, dz, t_wall, along_x, params, code, fog)
+    _objects(scene, pose, dx, dz, t_wall, params, code, fog)
+    code <<= 8
+    code |= fog
+    return np.take(table, code, axis=0)
+
+
+def _background(scene, ox, oz, dx, dz, t_wall, along_x, params, code, fog) -> None:
+    code[:HORIZON] = CEILING * 4 + Z_FACE
+    fog[:HORIZON] = _fog(_CEIL_DEPTH, params)[:, None]
+    gx = np.floor((ox + _FLOOR_DEPTH[:, None] * dx) * RASTER).astype(np.int32)
+    gz = np.floor((oz + _FLOOR_DEPTH[:, None] * dz) * RASTER).astype(np.int32)
+    rooms = scene.room_raster
+    cell = np.clip(gz, 0, rooms.shape[0] - 1) * rooms.shape[1] + np.clip(gx, 0, rooms.shape[1] - 1)
+    tile = ((gx // TILE_CELLS + gz // TILE_CELLS) & 1) * (TILE0 - FLOOR0)
+    code[HORIZON:] = (FLOOR0 + np.take(rooms, cell) + tile) * 4 + Z_FACE
+    fog[HORIZON:] = _fog(_FLOOR_DEPTH, params)[:, None]
+
+    hx = np.floor((ox + (t_wall - 0.05) * dx) * RASTER).astype(np.int32)
+    hz = np.floor((oz + (t_wall - 0.05) * dz) * RASTER).astype(np.int32)
+    wall_room = rooms[np.clip(hz, 0, rooms.shape[0] - 1), np.clip(hx, 0, rooms.shape[1] - 1)]
+    face = np.where(along_x, Z_FACE, X_FACE)
+    wall_code = ((WALL0 + wall_room) * 4 + face).astype(np.int32)
+    top = _row(HORIZON - FOCAL * (WALL_HEIGHT - EYE) / t_wall)
+    bottom = _row(HORIZON + FOCAL * EYE / t_wall)
+    rows = _ROW_COL
+    on_wall = (rows >= top) & (rows < bottom)
+    np.copyto(code, wall_code, where=on_wall)
+    np.copyto(fog, _fog(t_wall, params), where=on_wall)
+    skirt = _row(HORIZON + FOCAL * (EYE - SKIRTING_HEIGHT) / t_wall)
+    low = _ROW_COL[HORIZON:]
+    np.copyto(
+        code[HORIZON:],
+        (SKIRTING * 4 + face).astype(np.int32),
+        where=(low >= skirt) & (low < bottom),
+    )
+
+
+def _draw_order(scene: Scene, pose: WorldPose, parts: np.ndarray, objs: np.ndarray):
+    """Indices into ``parts`` back to front: by the distance of the object (an item on a
+    desk takes its desk's), then bottom-up, then farther boxes first."""
+
+    def dist(rects: np.ndarray) -> np.ndarray:
+        ddx = np.maximum(np.maximum(rects[:, 0] - pose.x, pose.x - rects[:, 2]), 0.0)
+        ddz = np.maximum(np.maximum(rects[:, 1] - pose.z, pose.z - rects[:, 3]), 0.0)
+        return ddx * ddx + ddz * ddz
+
+    group = dist(scene.rects[scene.support[objs]])
+    return np.lexsort((-dist(parts[:, :4]), parts[:, 4], -group))
+
+
+def _shown_parts(scene: Scene, pose: WorldPose, params: ConditionParams) -> np.ndarray:
+    """Boxes of objects within the visibility distance, minus faces turned away."""
+    r = scene.rects
+    ddx = np.maximum(np.maximum(r[:, 0] - pose.x, pose.x - r[:, 2]), 0.0)
+    ddz = np.maximum(np.maximum(r[:, 1] - pose.z, pose.z - r[:, 3]), 0.0)
+    near = (ddx * ddx + ddz * ddz <= params.visibility_distance**2)[scene.part_object]
+    nf = scene.part_facing
+    cen = scene.centres[scene.part_object]
+    side = (pose.x - cen[:, 0]) * nf[:, 0] + (pose.z - cen[:, 1]) * nf[:, 1]
+    shown = near & (((nf[:, 0] == 0) & (nf[:, 1] == 0)) | (side > nf[:, 2]))
+    return np.flatnonzero(shown & _in_view(scene.parts, pose))
+
+
+def _in_view(parts: np.ndarray, pose: WorldPose) -> np.ndarray:
+    """False for boxes wholly outside one edge of the view wedge (conservative cull)."""
+    fx, fz = unit(pose.heading)
+    rx, rz = right_of(pose.heading)
+    cx = parts[:, [0, 0, 2, 2]] - pose.x
+    cz = parts[:, [1, 3, 1, 3]] - pose.z
+    fwd, lat = cx * fx + cz * fz, cx * rx + cz * rz
+    return ~((fwd <= NEAR).all(axis=1) | (lat > fwd).all(axis=1) | (lat < -fwd).all(axis=1))
+
+
+def _objects(scene, pose, dx, dz, t_wall, params, code, fog) -> None:
+    sel = _shown_parts(scene, pose, params)
+    if sel.size == 0:
+        return
+    p = scene.parts[sel]
+    ax, bx = (p[:, 0:1] - pose.x) / dx, (p[:, 2:3] - pose.x) / dx
+    az, bz = (p[:, 1:2] - pose.z) / dz, (p[:, 3:4] - pose.z) / dz
+    tminx, tminz = np.minimum(ax, bx), np.minimum(az, bz)
+    tn = np.maximum(tminx, tminz)
+    tf = np.minimum(np.maximum(ax, bx), np.maximum(az, bz))
+    hit = (tn < tf) & (tn > NEAR) & (tn < t_wall)
+    keep = np.flatnonzero(hit.any(axis=1))
+    if keep.size == 0:
+        return
+    p, tn, tf, hit, sel = p[keep], tn[keep], tf[keep], hit[keep], sel[keep]
+    front = np.where(tminx[keep] > tminz[keep], X_FACE, Z_FACE).astype(np.int32)
+    tn = np.where(hit, tn, 1.0)
+    tf = np.where(hit, tf, 1.0)
+    y0, y1 = p[:, 4:5] - EYE, p[:, 5:6] - EYE
+    a_n, a_f = HORIZON - FOCAL * y1 / tn, HORIZON - FOCAL * y1 / tf
+    b_n, b_f = HORIZON - FOCAL * y0 / tn, HORIZON - FOCAL * y0 / tf
+    start, top_end = _row(np.minimum(a_n, a_f)), _row(a_n)
+    front_end, end = _row(b_n), _row(np.maximum(b_n, b_f))
+    fog_cols = _fog(tn, params)
+    base = scene.part_label[sel].astype(np.int32) * 4
+    order = _draw_order(scene, pose, p, scene.part_object[sel])
+    for k in order:
+        row_hit = hit[k]
+        c0 = int(np.argmax(row_hit))
+        c1 = SIZE - int(np.argmax(row_hit[::-1]))
+        s, e = start[k, c0:c1], end[k, c0:c1]
+        r0, r1 = int(s.min()), int(e.max())
+        if r1 <= r0:
+            continue
+        rr = _ROW_COL[r0:r1]
+        m = (rr >= s) & (rr < e) & row_hit[c0:c1]
+        pix = np.where(
+            rr < top_end[k, c0:c1],
+            base[k] + TOP_FACE,
+            np.where(rr < front_end[k, c0:c1], base[k] + front[k, c0:c1], base[k] + BOTTOM_FACE),
+        )
+        np.copyto(code[r0:r1, c0:c1], pix, where=m)
+        np.copyto(fog[r0:r1, c0:c1], fog_cols[k, c0:c1], where=m)

@@ -1,0 +1,174 @@
+"""Per-layout arrays shared by visibility, motion and the renderer (computed once per layout).
+
+A :class:`Scene` holds the walls, every object's footprint and visibility sample points,
+the boxes that draw each object converted to world coordinates, and the palette labels:
+``0`` ceiling, ``1`` skirting, then walls, floors and alternate floor tiles per room (in
+:data:`~pytest_emrd.rooms.ROOM_NAMES` order), then one label per ``(object, material)``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import lru_cache
+
+import numpy as np
+
+from pytest_emrd.rooms import ROOM_NAMES
+from pytest_emrd.world._catalog import (
+    CEILING_COLOR,
+    FLOOR_COLORS,
+    KINDS,
+    SKIRTING_COLOR,
+    WALL_COLORS,
+)
+from pytest_emrd.world._geometry import Walls, footprint, local_to_world, unit, walls_of
+from pytest_emrd.world._model import Layout, WorldObject
+from pytest_emrd.world._shapes import boxes_of
+
+SAMPLES = 9
+"""Visibility sample points per object (centre, edge midpoints, corners, inset 10 %)."""
+CEILING, SKIRTING, WALL0 = 0, 1, 2
+FLOOR0 = WALL0 + len(ROOM_NAMES)
+TILE0 = FLOOR0 + len(ROOM_NAMES)
+PART0 = TILE0 + len(ROOM_NAMES)
+RASTER = 10
+"""Cells per metre of :attr:`Scene.room_raster` (room bounds lie on a 10 cm grid)."""
+_TILE_SHIFT = 12
+"""How much darker the alternate floor tiles are (of 255)."""
+
+
+@dataclass(frozen=True, eq=False)
+class Scene:
+    layout: Layout
+    walls: Walls
+    rooms: np.ndarray
+    """``(4, 4)`` room rectangles in ROOM_NAMES order."""
+    rects: np.ndarray
+    """``(N, 4)`` object footprints."""
+    centres: np.ndarray
+    """``(N, 2)``."""
+    samples: np.ndarray
+    """``(N, SAMPLES, 2)`` visibility sample points."""
+    floor: np.ndarray
+    """``(N,)`` bool: stands on the floor (blocks walking); False for doorways, the exit
+    and items on desks or counters."""
+    support: np.ndarray
+    """``(N,)`` index of the object an item stands on (its own index otherwise)."""
+    parts: np.ndarray
+    """``(P, 6)`` world boxes ``x0, z0, x1, z1, y0, y1`` grouped by object."""
+    part_object: np.ndarray
+    part_label: np.ndarray
+    part_facing: np.ndarray
+    """``(P, 3)``: facing normal ``(nx, nz)`` and the box's face offset; normal 0 = always."""
+    colors: np.ndarray
+    """``(L, 3)`` uint8 baseline palette."""
+    index: dict[str, int]
+    """object id -> index."""
+    room_raster: np.ndarray
+    """``(nz, nx)`` room index of each 10 cm cell (0 outside any room), for the renderer."""
+
+    def room_index(self, x: np.ndarray, z: np.ndarray) -> np.ndarray:
+        """Index (ROOM_NAMES order) of the room containing each point; -1 outside."""
+        out = np.full(np.shape(x), -1, dtype=np.int8)
+        for i, (x0, z0, x1, z1) in enumerate(self.rooms):
+            out[(x >= x0) & (x <= x1) & (z >= z0) & (z <= z1) & (out < 0)] = i
+        return out
+
+
+def _samples(obj: WorldObject) -> list[tuple[float, float]]:
+    if obj.object_type == "Doorway":  # points along the gap, on the wall line
+        return [
+            local_to_world(obj.x, obj.z, obj.rotation, f * obj.width, 0.0)
+            for f in (0.0, -0.35, 0.35, -0.2, 0.2, -0.1, 0.1, -0.3, 0.3)
+        ]
+    hu, hv = 0.4 * obj.width, 0.4 * obj.depth
+    return [
+        local_to_world(obj.x, obj.z, obj.rotation, su * hu, sv * hv)
+        for su, sv in ((0, 0), (-1, 0), (1, 0), (0, -1), (0, 1), (-1, -1), (-1, 1), (1, -1), (1, 1))
+    ]
+
+
+def _support(layout: Layout, rects: np.ndarray, floor: np.ndarray) -> np.ndarray:
+    support = np.arange(len(layout.objects))
+    for i, o in enumerate(layout.objects):
+        if o.elevation > 0:
+            inside = (
+                floor
+                & (rects[:, 0] <= o.x)
+                & (rects[:, 2] >= o.x)
+                & (rects[:, 1] <= o.z)
+                & (rects[:, 3] >= o.z)
+            )
+            if inside.any():
+                support[i] = int(np.flatnonzero(inside)[0])
+    return support
+
+
+@lru_cache(maxsize=32)
+def scene_of(layout: Layout) -> Scene:
+    """The scene arrays of ``layout`` (cached)."""
+    objs = layout.objects
+    rects = np.array([footprint(o) for o in objs], dtype=float)
+    floor = np.array([o.elevation == 0 and o.object_type not in ("Doorway", "Door") for o in objs])
+    room_pos = {name: i for i, name in enumerate(ROOM_NAMES)}
+    colors: list[tuple[int, int, int]] = [CEILING_COLOR, SKIRTING_COLOR]
+    colors += [WALL_COLORS[r] for r in ROOM_NAMES] + [FLOOR_COLORS[r] for r in ROOM_NAMES]
+    colors += [tuple(max(0, c - _TILE_SHIFT) for c in FLOOR_COLORS[r]) for r in ROOM_NAMES]
+    labels: dict[tuple[int, str], int] = {}
+    parts, part_obj, part_label, facing = [], [], [], []
+    for i, o in enumerate(objs):
+        kind_colors = next((k.colors for k in KINDS.values() if k.object_type == o.object_type), {})
+        fx, fz = unit(o.rotation)
+        for b in boxes_of(o):
+            (ax, az), (bx, bz) = (
+                local_to_world(o.x, o.z, o.rotation, b.u0, b.v0),
+                local_to_world(o.x, o.z, o.rotation, b.u1, b.v1),
+            )
+            parts.append(
+                (
+                    min(ax, bx),
+                    min(az, bz),
+                    max(ax, bx),
+                    max(az, bz),
+                    o.elevation + b.y0,
+                    o.elevation + b.y1,
+                )
+            )
+            if b.role == "wall":
+                room = layout.room_at((ax + bx) / 2, (az + bz) / 2) or o.room
+                label = WALL0 + room_pos.get(room, 0)
+            else:
+                if (i, b.role) not in labels:
+                    labels[(i, b.role)] = len(colors)
+                    colors.append(tuple(kind_colors.get(b.role, o.color)))
+                label = labels[(i, b.role)]
+            part_obj.append(i)
+            part_label.append(label)
+            face_v = b.v1 if b.facing > 0 else b.v0
+            facing.append((b.facing * fx, b.facing * fz, face_v * b.facing))
+    return Scene(
+        layout=layout,
+        walls=walls_of(layout),
+        rooms=np.array([[r.x0, r.z0, r.x1, r.z1] for r in layout.rooms], dtype=float),
+        rects=rects,
+        centres=np.array([[o.x, o.z] for o in objs], dtype=float),
+        samples=np.array([_samples(o) for o in objs], dtype=float),
+        floor=floor,
+        support=_support(layout, rects, floor),
+        parts=np.array(parts, dtype=float).reshape(-1, 6),
+        part_object=np.array(part_obj, dtype=np.int64),
+        part_label=np.array(part_label, dtype=np.int64),
+        part_facing=np.array(facing, dtype=float).reshape(-1, 3),
+        colors=np.array(colors, dtype=np.uint8),
+        index={o.object_id: i for i, o in enumerate(objs)},
+        room_raster=_raster(layout),
+    )
+
+
+def _raster(layout: Layout) -> np.ndarray:
+    nx, nz = round(layout.width * RASTER) + 1, round(layout.depth * RASTER) + 1
+    gx, gz = np.meshgrid((np.arange(nx) + 0.5) / RASTER, (np.arange(nz) + 0.5) / RASTER)
+    out = np.zeros((nz, nx), dtype=np.int64)
+    for i, r in enumerate(layout.rooms):
+        out[(gx >= r.x0) & (gx < r.x1) & (gz >= r.z0) & (gz < r.z1)] = i
+    return out

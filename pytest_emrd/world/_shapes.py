@@ -1,0 +1,265 @@
+"""Low-poly box compositions: how each kind of object looks to the ray-caster.
+
+Every object is drawn as a few axis-aligned boxes in its own frame (``u`` to the right,
+``v`` forward, ``y`` up from the object's base), each with a material role whose colour the
+palette supplies: a table is a top on legs, a chair a seat with a back, a fridge a tall pale
+body with handles, a laptop or television a thin dark screen, a plant a pot under a green
+crown, a doorway a frame around the gap, the exit a door with a push bar under a green sign.
+Boxes are listed bottom-up; a box marked ``facing`` (a screen, a handle, a sign) is only
+drawn when the viewer is on that side of the object.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+from pytest_emrd.world._catalog import DOOR_HEIGHT, WALL_HEIGHT
+from pytest_emrd.world._model import WorldObject
+
+
+@dataclass(frozen=True)
+class Box:
+    u0: float
+    u1: float
+    v0: float
+    v1: float
+    y0: float
+    y1: float
+    role: str
+    """Material role: a key of the kind's colours, or ``wall`` for the wall colour of the
+    room the box stands in (the two halves of a doorway's lintel differ)."""
+    facing: float = 0.0
+    """+1 drawn only from the front side, -1 only from the back, 0 always."""
+
+
+def _full(o: WorldObject, y0: float, y1: float, role: str) -> Box:
+    return Box(-o.width / 2, o.width / 2, -o.depth / 2, o.depth / 2, y0, y1, role)
+
+
+def _legs(o: WorldObject, top: float, size: float, inset: float, role: str) -> list[Box]:
+    hu, hv = o.width / 2 - inset, o.depth / 2 - inset
+    return [
+        Box(
+            su * hu - (size if su > 0 else 0),
+            su * hu + (0 if su > 0 else size),
+            sv * hv - (size if sv > 0 else 0),
+            sv * hv + (0 if sv > 0 else size),
+            0.0,
+            top,
+            role,
+        )
+        for su in (-1, 1)
+        for sv in (-1, 1)
+    ]
+
+
+def _desk(o: WorldObject) -> list[Box]:
+    hw, hd, h = o.width / 2, o.depth / 2, o.height
+    if h > 0.9:  # reception desk: a tall panel towards the room, a work top behind it
+        return [
+            Box(-hw, -hw + 0.04, -hd, hd - 0.06, 0.0, 0.72, "leg"),
+            Box(hw - 0.04, hw, -hd, hd - 0.06, 0.0, 0.72, "leg"),
+            Box(-hw, hw, -hd, hd - 0.06, 0.72, 0.76, "top"),
+            Box(-hw, hw, hd - 0.06, hd, 0.0, h - 0.03, "front"),
+            Box(-hw, hw, hd - 0.22, hd, h - 0.03, h, "top"),
+        ]
+    return [
+        Box(-hw + 0.03, -hw + 0.07, -hd + 0.03, hd - 0.03, 0.0, h - 0.04, "leg"),
+        Box(hw - 0.07, hw - 0.03, -hd + 0.03, hd - 0.03, 0.0, h - 0.04, "leg"),
+        Box(-hw + 0.07, hw - 0.07, -hd + 0.03, -hd + 0.06, 0.3, h - 0.04, "leg"),
+        _full(o, h - 0.04, h, "top"),
+    ]
+
+
+def _table(o: WorldObject) -> list[Box]:
+    hw, hd, h = o.width / 2, o.depth / 2, o.height
+    legs = [
+        Box(
+            s * (hw - 0.45) - 0.05,
+            s * (hw - 0.45) + 0.05,
+            -hd + 0.2,
+            hd - 0.2,
+            0.0,
+            h - 0.05,
+            "leg",
+        )
+        for s in (-1, 1)
+    ]
+    return [*legs, _full(o, h - 0.05, h, "top")]
+
+
+def _chair(o: WorldObject) -> list[Box]:
+    hw, hd, h = o.width / 2, o.depth / 2, o.height
+    return [
+        *_legs(o, 0.44, 0.04, 0.03, "leg"),
+        Box(-hw, hw, -hd, hd, 0.44, 0.5, "fabric"),
+        Box(-hw + 0.02, hw - 0.02, -hd, -hd + 0.06, 0.5, h, "fabric"),
+    ]
+
+
+def _stool(o: WorldObject) -> list[Box]:
+    return [*_legs(o, 0.64, 0.03, 0.05, "leg"), _full(o, 0.64, o.height, "seat")]
+
+
+def _armchair(o: WorldObject) -> list[Box]:
+    hw, hd, h = o.width / 2, o.depth / 2, o.height
+    return [
+        *_legs(o, 0.1, 0.05, 0.04, "leg"),
+        Box(-hw, hw, -hd, hd, 0.1, 0.45, "fabric"),
+        Box(-hw, hw, -hd, -hd + 0.2, 0.45, h, "fabric"),
+        Box(-hw, -hw + 0.14, -hd + 0.2, hd, 0.45, 0.66, "fabric"),
+        Box(hw - 0.14, hw, -hd + 0.2, hd, 0.45, 0.66, "fabric"),
+    ]
+
+
+_BOOKS = ((0.08, 0.22, "book_a"), (0.26, 0.18, "book_b"), (0.5, 0.26, "book_c"))
+
+
+def _shelf(o: WorldObject) -> list[Box]:
+    hw, hd, h = o.width / 2, o.depth / 2, o.height
+    boards = (0.05, 0.47, 0.9, 1.33, h - 0.03)
+    boxes = [Box(-hw, hw, -hd, -hd + 0.02, 0.0, h, "frame")]
+    for i, y in enumerate(boards):
+        boxes.append(Box(-hw + 0.03, hw - 0.03, -hd, hd, y, y + 0.03, "frame"))
+        if i < len(boards) - 1:
+            for j, (start, span, role) in enumerate(_BOOKS):
+                u0 = -hw + 0.05 + ((start + 0.11 * i) % 0.62)
+                tall = 0.24 + 0.04 * ((i + j) % 3)
+                boxes.append(Box(u0, u0 + span, -hd + 0.03, hd - 0.08, y + 0.03, y + tall, role))
+    boxes += [
+        Box(-hw, -hw + 0.03, -hd, hd, 0.0, h, "frame"),
+        Box(hw - 0.03, hw, -hd, hd, 0.0, h, "frame"),
+    ]
+    return boxes
+
+
+def _television(o: WorldObject) -> list[Box]:
+    hw, hd = o.width / 2, o.depth / 2
+    return [
+        Box(-hw, hw, -hd, hd, 0.0, 0.5, "stand"),
+        Box(-0.06, 0.06, -0.06, 0.02, 0.5, 0.6, "screen"),
+        Box(-hw + 0.08, hw - 0.08, -0.06, 0.0, 0.6, o.height, "screen"),
+        Box(-hw + 0.12, hw - 0.12, 0.0, 0.01, 0.64, o.height - 0.04, "display", 1.0),
+    ]
+
+
+def _fridge(o: WorldObject) -> list[Box]:
+    hw, hd, h = o.width / 2, o.depth / 2, o.height
+    return [
+        _full(o, 0.0, h, "body"),
+        Box(-hw, hw, hd, hd + 0.005, 1.2, 1.23, "seam", 1.0),
+        Box(hw - 0.12, hw - 0.08, hd, hd + 0.05, 0.65, 1.12, "handle", 1.0),
+        Box(hw - 0.12, hw - 0.08, hd, hd + 0.05, 1.3, 1.6, "handle", 1.0),
+    ]
+
+
+def _counter(o: WorldObject) -> list[Box]:
+    hw, hd, h = o.width / 2, o.depth / 2, o.height
+    handles = [
+        Box(u - 0.08, u + 0.08, hd - 0.03, hd - 0.01, h - 0.2, h - 0.17, "handle", 1.0)
+        for u in (-hw + 0.3 + 0.6 * k for k in range(int(o.width / 0.6)))
+    ]
+    return [
+        Box(-hw, hw, -hd, hd - 0.03, 0.0, h - 0.04, "cabinet"),
+        *handles,
+        _full(o, h - 0.04, h, "top"),
+    ]
+
+
+def _sink(o: WorldObject) -> list[Box]:
+    hw, hd = o.width / 2, o.depth / 2
+    return [
+        Box(-hw, hw, -hd, hd, 0.0, 0.012, "basin"),
+        Box(-0.02, 0.02, -hd, -hd + 0.05, 0.0, o.height, "tap"),
+        Box(-0.02, 0.02, -hd, -hd + 0.2, o.height - 0.03, o.height, "tap"),
+    ]
+
+
+def _microwave(o: WorldObject) -> list[Box]:
+    hw, hd, h = o.width / 2, o.depth / 2, o.height
+    return [
+        _full(o, 0.0, h, "body"),
+        Box(-hw + 0.04, hw - 0.15, hd, hd + 0.005, 0.05, h - 0.05, "window", 1.0),
+        Box(hw - 0.13, hw - 0.03, hd, hd + 0.005, 0.05, h - 0.05, "panel", 1.0),
+    ]
+
+
+def _coffee(o: WorldObject) -> list[Box]:
+    hw, hd, h = o.width / 2, o.depth / 2, o.height
+    return [
+        _full(o, 0.0, 0.04, "body"),
+        Box(-hw, hw, -hd, -hd + 0.13, 0.04, h - 0.08, "body"),
+        Box(-0.06, 0.06, -0.02, 0.09, 0.04, 0.17, "accent"),
+        _full(o, h - 0.08, h, "body"),
+    ]
+
+
+def _laptop(o: WorldObject) -> list[Box]:
+    hw, hd = o.width / 2, o.depth / 2
+    return [
+        _full(o, 0.0, 0.02, "body"),
+        Box(-hw, hw, -hd, -hd + 0.015, 0.02, o.height, "screen"),
+        Box(-hw, hw, -hd - 0.004, -hd, 0.02, o.height, "body", -1.0),
+    ]
+
+
+def _plant(o: WorldObject) -> list[Box]:
+    hw, h = o.width / 2, o.height
+    return [
+        Box(-0.15, 0.15, -0.15, 0.15, 0.0, 0.35, "pot"),
+        Box(-hw, hw, -hw, hw, 0.35, 0.8, "leaves"),
+        Box(-0.16, 0.16, -0.16, 0.16, 0.8, h, "leaves_dark"),
+    ]
+
+
+def _doorway(o: WorldObject) -> list[Box]:
+    hw, top = o.width / 2, DOOR_HEIGHT
+    return [
+        Box(-hw - 0.07, -hw, -0.08, 0.08, 0.0, top + 0.07, "frame"),
+        Box(hw, hw + 0.07, -0.08, 0.08, 0.0, top + 0.07, "frame"),
+        Box(-hw, hw, -0.08, 0.08, top, top + 0.07, "frame"),
+        Box(-hw, hw, -0.05, 0.0, top + 0.07, WALL_HEIGHT, "wall"),
+        Box(-hw, hw, 0.0, 0.05, top + 0.07, WALL_HEIGHT, "wall"),
+    ]
+
+
+def _door(o: WorldObject) -> list[Box]:
+    hw, hd, top = o.width / 2, o.depth / 2, o.height
+    return [
+        Box(-hw + 0.06, hw - 0.06, -hd, hd, 0.0, top - 0.06, "panel"),
+        Box(-hw, -hw + 0.06, -hd, hd + 0.03, 0.0, top, "frame"),
+        Box(hw - 0.06, hw, -hd, hd + 0.03, 0.0, top, "frame"),
+        Box(-hw, hw, -hd, hd + 0.03, top - 0.06, top, "frame"),
+        Box(-hw + 0.16, hw - 0.16, hd, hd + 0.05, 0.95, 1.02, "bar", 1.0),
+        Box(-0.25, 0.25, -hd, hd + 0.06, top + 0.15, top + 0.37, "sign"),
+        Box(-0.17, 0.17, hd + 0.06, hd + 0.065, top + 0.21, top + 0.31, "sign_text", 1.0),
+    ]
+
+
+_BUILDERS: dict[str, Callable[[WorldObject], list[Box]]] = {
+    "Desk": _desk,
+    "DiningTable": _table,
+    "Chair": _chair,
+    "Stool": _stool,
+    "ArmChair": _armchair,
+    "ShelvingUnit": _shelf,
+    "Television": _television,
+    "Fridge": _fridge,
+    "CounterTop": _counter,
+    "Sink": _sink,
+    "Microwave": _microwave,
+    "CoffeeMachine": _coffee,
+    "Laptop": _laptop,
+    "HousePlant": _plant,
+    "Doorway": _doorway,
+    "Door": _door,
+}
+
+
+def boxes_of(obj: WorldObject) -> list[Box]:
+    """The boxes that draw ``obj``, in its own frame; a plain box for an unknown type."""
+    builder = _BUILDERS.get(obj.object_type)
+    if builder is None:
+        return [_full(obj, 0.0, obj.height, "main")]
+    return builder(obj)

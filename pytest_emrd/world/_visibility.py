@@ -1,0 +1,130 @@
+"""What the agent sees: field of view, distance limit and wall occlusion.
+
+An object is visible from a pose when at least one of its sample points (centre, edge
+midpoints and corners of its footprint; points along the gap for a doorway) is
+
+* inside the 90 degree field of view (``|lateral| <= forward``),
+* no farther than the condition's visibility distance, and
+* not hidden by a wall: the segment from the agent to the point crosses no wall segment
+  (doorway gaps are open, so rooms are seen through doorways, never through walls).
+
+Furniture does not occlude in this test. A visible object's bearing is that of its centre,
+clipped to the field of view (``[-45, 45]``, negative to the left), and its distance is to
+its centre.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from functools import lru_cache
+
+import numpy as np
+
+from pytest_emrd.world._conditions import condition_params
+from pytest_emrd.world._geometry import right_of, unit
+from pytest_emrd.world._model import Layout, VisibleObject, WorldPose
+from pytest_emrd.world._scene import Scene, scene_of
+
+HALF_FOV = 45.0
+STAND_SPACING = 0.75
+"""Grid spacing of the standing points that define ``G_base``."""
+AGENT_RADIUS = 0.25
+
+
+@dataclass(frozen=True, eq=False)
+class Sight:
+    """Visibility of every object of a scene from one pose."""
+
+    mask: np.ndarray
+    """``(N,)`` bool."""
+    bearing: np.ndarray
+    distance: np.ndarray
+
+    def listing(self, scene: Scene) -> tuple[VisibleObject, ...]:
+        """The visible objects as the symbolic modality reports them, sorted by id."""
+        out = [
+            VisibleObject(
+                object_id=scene.layout.objects[i].object_id,
+                object_type=scene.layout.objects[i].object_type,
+                bearing=round(float(self.bearing[i]), 1),
+                distance=round(float(self.distance[i]), 2),
+            )
+            for i in np.flatnonzero(self.mask)
+        ]
+        return tuple(sorted(out, key=lambda v: v.object_id))
+
+
+def sight(scene: Scene, pose: WorldPose, visibility: float) -> Sight:
+    """Which objects of ``scene`` are visible from ``pose`` within ``visibility`` metres."""
+    fx, fz = unit(pose.heading)
+    rx, rz = right_of(pose.heading)
+    dx = scene.samples[..., 0] - pose.x
+    dz = scene.samples[..., 1] - pose.z
+    fwd = dx * fx + dz * fz
+    lat = dx * rx + dz * rz
+    cand = (fwd > 0) & (np.abs(lat) <= fwd) & (dx * dx + dz * dz <= visibility * visibility)
+    idx = np.nonzero(cand)
+    if idx[0].size:
+        pts = scene.samples[idx]
+        blocked = scene.walls.blocks(np.float64(pose.x), np.float64(pose.z), pts[:, 0], pts[:, 1])
+        cand[idx[0][blocked], idx[1][blocked]] = False
+    mask = cand.any(axis=1)
+    cx = scene.centres[:, 0] - pose.x
+    cz = scene.centres[:, 1] - pose.z
+    bearing = np.degrees(np.arctan2(cx * rx + cz * rz, cx * fx + cz * fz))
+    return Sight(mask, np.clip(bearing, -HALF_FOV, HALF_FOV), np.hypot(cx, cz))
+
+
+def standing_points(scene: Scene) -> np.ndarray:
+    """``(M, 2)`` free points on a grid in every room, plus 1 m either side of each doorway."""
+    pts = []
+    for x0, z0, x1, z1 in scene.rooms:
+        xs = np.arange(x0 + 0.4, x1 - 0.39, STAND_SPACING)
+        zs = np.arange(z0 + 0.4, z1 - 0.39, STAND_SPACING)
+        gx, gz = np.meshgrid(xs, zs)
+        pts.append(np.stack([gx.ravel(), gz.ravel()], axis=1))
+    for d in scene.layout.doorways:
+        nx, nz = (0.0, 1.0) if d.axis == "x" else (1.0, 0.0)
+        pts.append(np.array([[d.x + nx, d.z + nz], [d.x - nx, d.z - nz]]))
+    grid = np.concatenate(pts)
+    r = scene.rects[scene.floor]
+    inside = (
+        (grid[:, None, 0] > r[None, :, 0] - AGENT_RADIUS)
+        & (grid[:, None, 0] < r[None, :, 2] + AGENT_RADIUS)
+        & (grid[:, None, 1] > r[None, :, 1] - AGENT_RADIUS)
+        & (grid[:, None, 1] < r[None, :, 3] + AGENT_RADIUS)
+    ).any(axis=1)
+    return grid[~inside]
+
+
+@lru_cache(maxsize=256)
+def discoverable_ids(layout: Layout) -> tuple[str, ...]:
+    """``G_base``: ids visible under the *baseline* condition from some standing point.
+
+    Standing points are a 0.75 m grid of free points in every room plus the points 1 m
+    either side of each doorway; from each, the four cardinal headings together cover
+    every direction, so an object counts when one of its sample points lies within the
+    baseline visibility distance with no wall in between. Sorted; cached per layout.
+    """
+    scene = scene_of(layout)
+    vis = condition_params("baseline").visibility_distance
+    stand = standing_points(scene)
+    pts = scene.samples.reshape(-1, 2)
+    dx = pts[None, :, 0] - stand[:, None, 0]
+    dz = pts[None, :, 1] - stand[:, None, 1]
+    near = dx * dx + dz * dz <= vis * vis
+    si, pi = np.nonzero(near)
+    clear = ~scene.walls.blocks(stand[si, 0], stand[si, 1], pts[pi, 0], pts[pi, 1])
+    seen = np.zeros(len(pts), dtype=bool)
+    seen[pi[clear]] = True
+    per_object = seen.reshape(scene.samples.shape[:2]).any(axis=1)
+    return tuple(sorted(layout.objects[i].object_id for i in np.flatnonzero(per_object)))
+
+
+def bearing_of(pose: WorldPose, x: float, z: float) -> float:
+    """Bearing in degrees of a world point from ``pose`` (negative = left), unclipped."""
+    fx, fz = unit(pose.heading)
+    rx, rz = right_of(pose.heading)
+    dx, dz = x - pose.x, z - pose.z
+    return math.degrees(math.atan2(dx * rx + dz * rz, dx * fx + dz * fz))
