@@ -28,7 +28,16 @@ from pytest_emrd.world._conditions import ConditionParams
 from pytest_emrd.world._geometry import right_of, unit
 from pytest_emrd.world._model import WorldPose
 from pytest_emrd.world._rng import StableRng
-from pytest_emrd.world._scene import CEILING, FLOOR0, PART0, RASTER, SKIRTING, TILE0, WALL0, Scene
+from pytest_emrd.world._scene import (
+    CEILING,
+    FLOOR0,
+    PART0,
+    RASTER,
+    SKIRTING,
+    TILE0,
+    WALL0,
+    Scene,
+)
 
 SIZE = 512
 FOCAL = SIZE / 2
@@ -36,11 +45,9 @@ HORIZON = SIZE // 2
 EYE = 1.5
 SKIRTING_HEIGHT = 0.1
 NEAR = 0.05
-TILE_CELLS = 5
-"""Floor tile edge in raster cells (0.5 m)."""
 
 #: Surface orientations and their brightness: faces across x (east/west), across z
-#: (north/south), tops, undersides. A pixel's code is ``label * 4 + face``.
+#: (north/south), tops, undersides. A pixel's code is ``(label * 4 + face) << 8 | fog``.
 X_FACE, Z_FACE, TOP_FACE, BOTTOM_FACE = 0, 1, 2, 3
 FACE_LIGHT = np.array([0.74, 0.9, 1.0, 0.5])
 
@@ -100,27 +107,32 @@ def render(scene: Scene, pose: WorldPose, params: ConditionParams, table: np.nda
     fog = np.empty((SIZE, SIZE), dtype=np.uint8)
     _background(scene, ox, oz, dx, dz, t_wall, along_x, params, code, fog)
     _objects(scene, pose, dx, dz, t_wall, params, code, fog)
-    code <<= 8
     code |= fog
     return np.take(table, code, axis=0)
 
 
+def _cells(origin: np.float64, step: np.ndarray, depth: np.ndarray, size: int) -> np.ndarray:
+    """Raster cell of floor points ``origin + depth * step`` along one axis, clipped; one
+    column when ``step`` is the same for every image column (cardinal headings)."""
+    if np.all(step == step[0]):
+        step = step[:1]
+    cells = np.floor((origin + depth[:, None] * step) * RASTER).astype(np.int32)
+    return np.clip(cells, 0, size - 1)
+
+
 def _background(scene, ox, oz, dx, dz, t_wall, along_x, params, code, fog) -> None:
-    code[:HORIZON] = CEILING * 4 + Z_FACE
+    code[:HORIZON] = (CEILING * 4 + Z_FACE) << 8
     fog[:HORIZON] = _fog(_CEIL_DEPTH, params)[:, None]
-    gx = np.floor((ox + _FLOOR_DEPTH[:, None] * dx) * RASTER).astype(np.int32)
-    gz = np.floor((oz + _FLOOR_DEPTH[:, None] * dz) * RASTER).astype(np.int32)
     rooms = scene.room_raster
-    cell = np.clip(gz, 0, rooms.shape[0] - 1) * rooms.shape[1] + np.clip(gx, 0, rooms.shape[1] - 1)
-    tile = ((gx // TILE_CELLS + gz // TILE_CELLS) & 1) * (TILE0 - FLOOR0)
-    code[HORIZON:] = (FLOOR0 + np.take(rooms, cell) + tile) * 4 + Z_FACE
+    nz, nx = rooms.shape
+    cell = _cells(oz, dz, _FLOOR_DEPTH, nz) * nx + _cells(ox, dx, _FLOOR_DEPTH, nx)
+    np.take((scene.floor_raster * 4 + Z_FACE) << 8, cell, out=code[HORIZON:])
     fog[HORIZON:] = _fog(_FLOOR_DEPTH, params)[:, None]
 
-    hx = np.floor((ox + (t_wall - 0.05) * dx) * RASTER).astype(np.int32)
-    hz = np.floor((oz + (t_wall - 0.05) * dz) * RASTER).astype(np.int32)
-    wall_room = rooms[np.clip(hz, 0, rooms.shape[0] - 1), np.clip(hx, 0, rooms.shape[1] - 1)]
+    hx = np.clip(np.floor((ox + (t_wall - 0.05) * dx) * RASTER).astype(np.int32), 0, nx - 1)
+    hz = np.clip(np.floor((oz + (t_wall - 0.05) * dz) * RASTER).astype(np.int32), 0, nz - 1)
     face = np.where(along_x, Z_FACE, X_FACE)
-    wall_code = ((WALL0 + wall_room) * 4 + face).astype(np.int32)
+    wall_code = (((WALL0 + rooms[hz, hx]) * 4 + face) << 8).astype(np.int32)
     top = _row(HORIZON - FOCAL * (WALL_HEIGHT - EYE) / t_wall)
     bottom = _row(HORIZON + FOCAL * EYE / t_wall)
     rows = _ROW_COL
@@ -128,12 +140,9 @@ def _background(scene, ox, oz, dx, dz, t_wall, along_x, params, code, fog) -> No
     np.copyto(code, wall_code, where=on_wall)
     np.copyto(fog, _fog(t_wall, params), where=on_wall)
     skirt = _row(HORIZON + FOCAL * (EYE - SKIRTING_HEIGHT) / t_wall)
-    low = _ROW_COL[HORIZON:]
-    np.copyto(
-        code[HORIZON:],
-        (SKIRTING * 4 + face).astype(np.int32),
-        where=(low >= skirt) & (low < bottom),
-    )
+    low = rows[HORIZON:]
+    skirting = ((SKIRTING * 4 + face) << 8).astype(np.int32)
+    np.copyto(code[HORIZON:], skirting, where=(low >= skirt) & (low < bottom))
 
 
 def _draw_order(scene: Scene, pose: WorldPose, parts: np.ndarray, objs: np.ndarray):
@@ -187,31 +196,37 @@ def _objects(scene, pose, dx, dz, t_wall, params, code, fog) -> None:
     if keep.size == 0:
         return
     p, tn, tf, hit, sel = p[keep], tn[keep], tf[keep], hit[keep], sel[keep]
-    front = np.where(tminx[keep] > tminz[keep], X_FACE, Z_FACE).astype(np.int32)
     tn = np.where(hit, tn, 1.0)
     tf = np.where(hit, tf, 1.0)
     y0, y1 = p[:, 4:5] - EYE, p[:, 5:6] - EYE
     a_n, a_f = HORIZON - FOCAL * y1 / tn, HORIZON - FOCAL * y1 / tf
     b_n, b_f = HORIZON - FOCAL * y0 / tn, HORIZON - FOCAL * y0 / tf
-    start, top_end = _row(np.minimum(a_n, a_f)), _row(a_n)
-    front_end, end = _row(b_n), _row(np.maximum(b_n, b_f))
+    start = np.where(hit, _row(np.minimum(a_n, a_f)), SIZE)
+    end = np.where(hit, _row(np.maximum(b_n, b_f)), 0)
+    top_end, front_end = _row(a_n), _row(b_n)
     fog_cols = _fog(tn, params)
     base = scene.part_label[sel].astype(np.int32) * 4
+    front_code = (base[:, None] + np.where(tminx[keep] > tminz[keep], X_FACE, Z_FACE)) << 8
+    spans = zip(
+        start.min(axis=1).tolist(),
+        end.max(axis=1).tolist(),
+        np.argmax(hit, axis=1).tolist(),
+        (SIZE - np.argmax(hit[:, ::-1], axis=1)).tolist(),
+        strict=True,
+    )
+    has_top, has_bottom = (y1[:, 0] < 0).tolist(), (y0[:, 0] > 0).tolist()
     order = _draw_order(scene, pose, p, scene.part_object[sel])
-    for k in order:
-        row_hit = hit[k]
-        c0 = int(np.argmax(row_hit))
-        c1 = SIZE - int(np.argmax(row_hit[::-1]))
-        s, e = start[k, c0:c1], end[k, c0:c1]
-        r0, r1 = int(s.min()), int(e.max())
+    bounds = list(spans)
+    for k in order.tolist():
+        r0, r1, c0, c1 = bounds[k]
         if r1 <= r0:
             continue
         rr = _ROW_COL[r0:r1]
-        m = (rr >= s) & (rr < e) & row_hit[c0:c1]
-        pix = np.where(
-            rr < top_end[k, c0:c1],
-            base[k] + TOP_FACE,
-            np.where(rr < front_end[k, c0:c1], base[k] + front[k, c0:c1], base[k] + BOTTOM_FACE),
-        )
+        m = (rr >= start[k, c0:c1]) & (rr < end[k, c0:c1])
+        pix = front_code[k, c0:c1]
+        if has_top[k]:
+            pix = np.where(rr < top_end[k, c0:c1], (base[k] + TOP_FACE) << 8, pix)
+        elif has_bottom[k]:
+            pix = np.where(rr < front_end[k, c0:c1], pix, (base[k] + BOTTOM_FACE) << 8)
         np.copyto(code[r0:r1, c0:c1], pix, where=m)
         np.copyto(fog[r0:r1, c0:c1], fog_cols[k, c0:c1], where=m)

@@ -33,6 +33,8 @@ TILE0 = FLOOR0 + len(ROOM_NAMES)
 PART0 = TILE0 + len(ROOM_NAMES)
 RASTER = 10
 """Cells per metre of :attr:`Scene.room_raster` (room bounds lie on a 10 cm grid)."""
+TILE_CELLS = 5
+"""Floor tile edge in raster cells (0.5 m)."""
 _TILE_SHIFT = 12
 """How much darker the alternate floor tiles are (of 255)."""
 
@@ -66,6 +68,8 @@ class Scene:
     """object id -> index."""
     room_raster: np.ndarray
     """``(nz, nx)`` room index of each 10 cm cell (0 outside any room), for the renderer."""
+    floor_raster: np.ndarray
+    """``(nz, nx)`` floor label of each cell: the room's floor, alternate tiles darker."""
 
     def room_index(self, x: np.ndarray, z: np.ndarray) -> np.ndarray:
         """Index (ROOM_NAMES order) of the room containing each point; -1 outside."""
@@ -161,8 +165,15 @@ def scene_of(layout: Layout) -> Scene:
         part_facing=np.array(facing, dtype=float).reshape(-1, 3),
         colors=np.array(colors, dtype=np.uint8),
         index={o.object_id: i for i, o in enumerate(objs)},
-        room_raster=_raster(layout),
+        room_raster=(rooms := _raster(layout)),
+        floor_raster=_floor(rooms),
     )
+
+
+def _floor(rooms: np.ndarray) -> np.ndarray:
+    iz, ix = np.indices(rooms.shape)
+    tile = (ix // TILE_CELLS + iz // TILE_CELLS) & 1
+    return np.where(tile == 1, TILE0, FLOOR0) + rooms
 
 
 def _raster(layout: Layout) -> np.ndarray:
