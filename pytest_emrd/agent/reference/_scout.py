@@ -33,6 +33,10 @@ DOORWAY: Final = "Doorway"
 SWEEP_TURNS: Final = 3
 MAX_FACE_TRIES: Final = 2
 MOVED_M: Final = 0.3
+#: Bearings are clipped to the field of view: a sighting at the edge misplaces the centre.
+EDGE_DEG: Final = 44.9
+#: Lateral half-width (m) of the cone behind a visible doorway treated as the next room.
+GAP_HALF_WIDTH_M: Final = 1.0
 _SEATS: Final = ("Chair", "Sofa", "Stool")
 
 
@@ -48,6 +52,7 @@ def fresh_plan() -> dict[str, Any]:
         "blocked": [],
         "doors": {},
         "order": [],
+        "rough": [],
         "sizes": {},
         "target": "",
         "tries": 0,
@@ -65,6 +70,22 @@ def _place(percept: Percept, seen: Seen) -> tuple[float, float]:
 def _room_guess(plan: Mapping[str, Any]) -> str:
     votes: dict[str, float] = plan["votes"]
     return max(votes, key=lambda r: (votes[r], -list(votes).index(r)), default="")
+
+
+def _inside(visible: tuple[Seen, ...]) -> tuple[Seen, ...]:
+    """Objects in view that are not seen through a doorway (those lie in the next room)."""
+    doors = [s for s in visible if s.object_type == DOORWAY]
+
+    def behind(seen: Seen) -> bool:
+        return any(
+            seen.distance > d.distance
+            and abs(seen.bearing - d.bearing)
+            <= math.degrees(math.atan2(GAP_HALF_WIDTH_M, d.distance))
+            for d in doors
+            if d is not seen
+        )
+
+    return tuple(s for s in visible if not behind(s))
 
 
 def _vote(plan: dict[str, Any], briefing: Briefing, visible: tuple[Seen, ...]) -> None:
@@ -105,7 +126,8 @@ def perceive(
         else:
             plan.update(phase="face", tries=plan["tries"] + 1)
     plan["at"] = [round(pose.x, 2), round(pose.z, 2)]
-    _vote(plan, briefing, percept.visible)
+    inside = {s.object_id for s in _inside(percept.visible)}
+    _vote(plan, briefing, tuple(s for s in percept.visible if s.object_id in inside))
     room = _room_guess(plan)
     view = []
     for seen in sorted(percept.visible, key=lambda s: (-s.distance, s.object_id)):
@@ -114,8 +136,16 @@ def perceive(
             plan["doors"][seen.object_id] = [x, z]
             plan["here"].setdefault(seen.object_id, round(seen.distance, 2))
         entry: dict[str, Any] = {"type": seen.object_type, "x": x, "z": z}
-        old_room = memory.get(seen.object_id, {}).get("room")
-        if old_room or room:
+        old = memory.get(seen.object_id, {})
+        if abs(seen.bearing) >= EDGE_DEG:
+            if seen.object_id not in plan["rough"] and "x" in old:
+                entry.update(x=old["x"], z=old["z"])
+            elif seen.object_id not in plan["rough"]:
+                plan["rough"].append(seen.object_id)
+        elif seen.object_id in plan["rough"]:
+            plan["rough"].remove(seen.object_id)
+        old_room = old.get("room")
+        if old_room or (room and seen.object_id in inside):
             entry["room"] = old_room or room
         view.append((seen.object_id, entry))
     new = [label for label, _ in reversed(view) if label not in plan["order"]]
@@ -183,7 +213,8 @@ def scout_action(plan: dict[str, Any], briefing: Briefing, percept: Percept) -> 
             return "Turn(Right)", f"Sweeping the room ({plan['turns']}/{SWEEP_TURNS})."
         _close_room(plan)
         plan.update(phase="face", tries=0, target=_next_door(plan))
-        if len(plan["visited"]) >= len(briefing.rooms) or not plan["target"]:
+        explored = not set(plan["doors"]) - set(plan["used"])
+        if len(plan["visited"]) >= len(briefing.rooms) or explored or not plan["target"]:
             room, why = term_choice(plan, briefing)
             return f"Term({room})", why
     while plan["target"]:
