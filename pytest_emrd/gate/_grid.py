@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 
-from pytest_emrd.gate._settings import RunSettings
+from pytest_emrd.gate._settings import SPAWNS, RunSettings
 from pytest_emrd.gate._thresholds import Thresholds
 from pytest_emrd.gate._verdict import GateCell
 from pytest_emrd.trajectory import CONDITIONS, EpisodeSpec
@@ -28,7 +28,7 @@ def cell_specs(
             modality=modality,
             backend=settings.backend,
         )
-        for spawn in settings.spawns
+        for spawn in sorted(settings.spawns, key=SPAWNS.index)
         for episode in range(settings.episodes)
     ]
 
