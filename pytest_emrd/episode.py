@@ -78,7 +78,9 @@ def _user_turn(spec: EpisodeSpec, step: int, obs: Observation) -> UserTurn:
     )
     if spec.modality == "text":
         return UserTurn(step, text)
-    return UserTurn.with_frame(step, text, obs.jpeg, obs.frame_digest)
+    turn = UserTurn.with_frame(step, text, obs.jpeg, obs.frame_digest)
+    frames.register(turn.jpeg_b64 or "", obs.frame_digest)  # before any request carries it
+    return turn
 
 
 class _Run:
@@ -96,8 +98,6 @@ class _Run:
         pose, room, visible = obs.pose, self.sim.current_room(), self.sim.visible_ids()
         turn = _user_turn(self.spec, t, obs)
         messages = self.conversation.request(turn)
-        for payload, digest in self.conversation.images(turn):
-            frames.register(payload, digest)
         response = client.complete(messages)
         reply = parse_reply(response.text)
         if reply.error is None:

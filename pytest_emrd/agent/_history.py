@@ -87,11 +87,6 @@ class Conversation:
         messages.append(_user_message(current, image=True))
         return messages
 
-    def images(self, current: UserTurn) -> list[tuple[str, str]]:
-        """(base64 payload, pixel digest) of every frame :meth:`request` sends as an image."""
-        sent = [current] if self.single_image else self.window(current)
-        return [(t.jpeg_b64, t.frame_digest or "") for t in sent if t.jpeg_b64 is not None]
-
     def record(self, current: UserTurn, reply: str) -> None:
         """Append the answered turn; the oldest pair leaves the window first."""
         self._answered.append((current, reply))

@@ -108,7 +108,16 @@ def _load(candidate: str) -> Any:
 
 
 def _find_object(text: str) -> dict[str, Any] | None:
-    """The reply's JSON object: fenced blocks first, the last one that has an action."""
+    """The reply's JSON object: the whole reply if it is one, else fenced blocks and
+    balanced ``{...}`` spans, preferring the last one that has an action."""
+    stripped = text.strip()
+    if stripped.startswith("{") and stripped.endswith("}"):
+        try:
+            whole = json.loads(stripped)
+        except (ValueError, RecursionError):
+            whole = None
+        if isinstance(whole, dict) and "action" in whole:
+            return whole
     candidates = [m.group(1) for m in _FENCE.finditer(text)]
     candidates += [s for block in candidates for s in _balanced_objects(block)]
     candidates += _balanced_objects(text)

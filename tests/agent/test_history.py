@@ -77,7 +77,6 @@ def test_every_windowed_frame_is_an_image_in_multi_image_mode() -> None:
         if p["type"] == "image_url"
     ]
     assert len(images) == 5
-    assert [d for _, d in conversation.images(_turn(5))] == ["px1", "px2", "px3", "px4", "px5"]
 
 
 def test_single_image_sends_only_the_newest_frame() -> None:
@@ -90,7 +89,6 @@ def test_single_image_sends_only_the_newest_frame() -> None:
         == "Step 1 of 50.\n[Camera frame of step 1 not re-sent: single-image mode.]"
     )
     assert [p["type"] for p in users[-1]["content"]] == ["text", "image_url"]
-    assert [d for _, d in conversation.images(_turn(5))] == ["px5"]
 
 
 def test_text_modality_sends_plain_strings() -> None:
@@ -102,4 +100,3 @@ def test_text_modality_sends_plain_strings() -> None:
         {"role": "assistant", "content": "r1"},
         {"role": "user", "content": "Step 2 of 50."},
     ]
-    assert conversation.images(_turn(2, image=False)) == []

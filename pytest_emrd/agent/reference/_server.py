@@ -25,6 +25,7 @@ _POLL_S: Final = 0.05
 class _Handler(BaseHTTPRequestHandler):
     server: _Server
     protocol_version = "HTTP/1.1"
+    disable_nagle_algorithm = True  # headers and body go out at once: no delayed-ACK stall
 
     def log_message(self, format: str, *args: Any) -> None:
         """Silent: the test and benchmark output is not the place for an access log."""
