@@ -1,1 +1,142 @@
-"""metrics stage of pytest-emrd."""
+"""The EMRD metrics: Explore, Map, Remember, Decide, and the paper's statistics.
+
+Pure functions over :class:`~pytest_emrd.trajectory.Trajectory` data: no I/O (except loading
+the optional sentence encoder), no global state, randomness only from explicit seeds.
+Fractions are reported in [0, 1], never percent. Undefined values are None with a reason.
+
+Typical use::
+
+    ems = [episode_metrics(t) for t in trajectories]     # match every episode once
+    GATE_METRICS["aec"].compute(ems)                       # Estimate with bootstrap CI
+    kaplan_meier_anchored(ems), miller_curve(ems), ...     # report aggregates
+
+Every aggregate accepts trajectories or :class:`EpisodeMetrics`; errored episodes are
+excluded and counted. Label-to-ground-truth matching is one procedure, :func:`match_map`.
+"""
+
+from pytest_emrd.metrics._decide import (
+    Consensus,
+    FocalDistribution,
+    FocalRow,
+    FPSGSummary,
+    consensus,
+    focal_distribution,
+    fpsg,
+)
+from pytest_emrd.metrics._episode import EpisodeMetrics, as_episode_metrics, episode_metrics
+from pytest_emrd.metrics._explore_map import TBSCurve, positional_accuracy, tbs_curve
+from pytest_emrd.metrics._gates import GATE_METRICS, GateMetric, evaluate_gates
+from pytest_emrd.metrics._match import (
+    SYNONYMS,
+    MatchedPair,
+    Matching,
+    match_map,
+    rigid_fit,
+    type_key,
+)
+from pytest_emrd.metrics._reasoning import Representative, representative_reasoning
+from pytest_emrd.metrics._remember import (
+    Ebbinghaus,
+    MillerCurve,
+    SerialPosition,
+    SpatialIdentityResolution,
+    TimeToForget,
+    anova_conditions,
+    ebbinghaus,
+    forgetting_spells,
+    kaplan_meier_anchored,
+    miller_curve,
+    serial_position,
+    spatial_identity_resolution,
+    time_to_forget,
+)
+from pytest_emrd.metrics._scores import (
+    Grounding,
+    aec_score,
+    grounding_scores,
+    positional_accuracy_score,
+    serial_position_bins,
+    sir_score,
+    te_score,
+)
+from pytest_emrd.metrics._stats import (
+    Anova,
+    ChiSquare,
+    Estimate,
+    FisherExact,
+    anova_groups,
+    bootstrap_ci,
+    chi_square,
+    cramers_v,
+    fisher_exact_2x2,
+)
+from pytest_emrd.metrics._survival import (
+    AnchoredKM,
+    EbbinghausFit,
+    anchored_km,
+    ebbinghaus_fit,
+    efc,
+)
+from pytest_emrd.metrics._tracking import Spell
+
+__all__ = [
+    "GATE_METRICS",
+    "SYNONYMS",
+    "AnchoredKM",
+    "Anova",
+    "ChiSquare",
+    "Consensus",
+    "Ebbinghaus",
+    "EbbinghausFit",
+    "EpisodeMetrics",
+    "Estimate",
+    "FPSGSummary",
+    "FisherExact",
+    "FocalDistribution",
+    "FocalRow",
+    "GateMetric",
+    "Grounding",
+    "MatchedPair",
+    "Matching",
+    "MillerCurve",
+    "Representative",
+    "SerialPosition",
+    "SpatialIdentityResolution",
+    "Spell",
+    "TBSCurve",
+    "TimeToForget",
+    "aec_score",
+    "anchored_km",
+    "anova_conditions",
+    "anova_groups",
+    "as_episode_metrics",
+    "bootstrap_ci",
+    "chi_square",
+    "consensus",
+    "cramers_v",
+    "ebbinghaus",
+    "ebbinghaus_fit",
+    "efc",
+    "episode_metrics",
+    "evaluate_gates",
+    "fisher_exact_2x2",
+    "focal_distribution",
+    "forgetting_spells",
+    "fpsg",
+    "grounding_scores",
+    "kaplan_meier_anchored",
+    "match_map",
+    "miller_curve",
+    "positional_accuracy",
+    "positional_accuracy_score",
+    "representative_reasoning",
+    "rigid_fit",
+    "serial_position",
+    "serial_position_bins",
+    "sir_score",
+    "spatial_identity_resolution",
+    "tbs_curve",
+    "te_score",
+    "time_to_forget",
+    "type_key",
+]

@@ -11,6 +11,7 @@ import math
 from collections import Counter
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
+from functools import cached_property
 from typing import Any, Final
 
 from pytest_emrd._serde import from_dict, to_dict
@@ -83,7 +84,7 @@ class EpisodeMetrics:
     """Metric name -> why it is None (or, for ``memory_strength``, unbounded)."""
     schema_version: int = SCHEMA_VERSION
 
-    @property
+    @cached_property
     def ttf_spells(self) -> tuple[Spell, ...]:
         """The first spell of each object: its time-to-forget, in discovery order."""
         return first_spells(self.spells)

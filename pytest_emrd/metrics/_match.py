@@ -43,6 +43,7 @@ from __future__ import annotations
 
 import math
 import re
+from collections import Counter
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from functools import lru_cache
@@ -151,6 +152,25 @@ class Matching:
 EMPTY_MATCHING: Final = Matching((), (), (), (), False)
 
 
+def _rigid(
+    pred: Sequence[tuple[float, float]], true: Sequence[tuple[float, float]]
+) -> tuple[float, float, float, float]:
+    """``(cos, sin, tx, tz)`` of the optimal proper rigid motion (see :func:`rigid_fit`)."""
+    n = len(pred)
+    pcx = math.fsum(p[0] for p in pred) / n
+    pcz = math.fsum(p[1] for p in pred) / n
+    qcx = math.fsum(q[0] for q in true) / n
+    qcz = math.fsum(q[1] for q in true) / n
+    dot = cross = 0.0
+    for (px, pz), (qx, qz) in zip(pred, true, strict=True):
+        ax, az, bx, bz = px - pcx, pz - pcz, qx - qcx, qz - qcz
+        dot += ax * bx + az * bz
+        cross += ax * bz - az * bx
+    theta = math.atan2(cross, dot) if (dot or cross) else 0.0
+    c, s = math.cos(theta), math.sin(theta)
+    return c, s, qcx - (c * pcx - s * pcz), qcz - (s * pcx + c * pcz)
+
+
 def rigid_fit(pred: np.ndarray, true: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Optimal proper rigid motion (rotation + translation) taking ``pred`` onto ``true``.
 
@@ -160,26 +180,21 @@ def rigid_fit(pred: np.ndarray, true: np.ndarray) -> tuple[np.ndarray, np.ndarra
     Degenerate input (one point, or all points coincident) gives the identity rotation and
     the translation between centroids.
     """
-    pc = pred.sum(axis=0) / len(pred)
-    qc = true.sum(axis=0) / len(true)
-    h = (pred - pc).T @ (true - qc)
-    dot = float(h[0, 0] + h[1, 1])
-    cross = float(h[0, 1] - h[1, 0])
-    theta = math.atan2(cross, dot) if (dot or cross) else 0.0
-    c, s = math.cos(theta), math.sin(theta)
-    rot = np.array([[c, -s], [s, c]])
-    return rot, qc - pc @ rot.T
+    c, s, tx, tz = _rigid(
+        [(p[0], p[1]) for p in np.asarray(pred, dtype=float).tolist()],
+        [(q[0], q[1]) for q in np.asarray(true, dtype=float).tolist()],
+    )
+    return np.array([[c, -s], [s, c]]), np.array([tx, tz])
 
 
 class Assignment(NamedTuple):
-    """Raw result of :meth:`Matcher.assign`: row ``r`` is ``labels[r]`` at ``pred[r]``."""
+    """Raw result of :meth:`Matcher.assign` (plain dicts: the fast path of episodes)."""
 
-    labels: list[str]
-    """Labels with a recognised type, sorted."""
-    pred: np.ndarray
-    """``(n, 2)`` positions as written."""
-    obj: list[int]
-    """Index of the matched object (sorted by id) per row, -1 when unmatched."""
+    entries: dict[str, MapEntry]
+    """Label -> its first entry."""
+    identity: dict[str, int]
+    """Label -> index (objects sorted by id) of the object matched to it."""
+    unmatched: tuple[str, ...]
     unrecognised: tuple[str, ...]
     duplicates: tuple[str, ...]
     anchored: bool
@@ -199,7 +214,6 @@ class Matcher:
         index = {t: i for i, t in enumerate(self._types)}
         self._obj_type = np.array([index[o.object_type] for o in ordered], dtype=np.int64)
         self._obj_xy = np.array([(o.x, o.z) for o in ordered], dtype=float).reshape(-1, 2)
-        self._type_count = np.bincount(self._obj_type, minlength=len(self._types))
         self._key_to_type: dict[str, int] = {type_key(t): i for t, i in index.items()}
         for key, candidates in SYNONYMS.items():
             if key not in self._key_to_type:
@@ -210,10 +224,11 @@ class Matcher:
         self._ids = [o.object_id for o in ordered]
         self._index = {oid: c for c, oid in enumerate(self._ids)}
         self._obj_type_list = self._obj_type.tolist()
-        self._all_types = set(range(len(self._types)))
-        self._type_count_list = self._type_count.tolist()
-        self._singleton_col = np.zeros(len(self._types), dtype=np.int64)
-        self._singleton_col[self._obj_type[::-1]] = np.arange(len(ordered))[::-1]
+        self._xy = [(o.x, o.z) for o in ordered]
+        self._cols_of_type: list[list[int]] = [[] for _ in self._types]
+        for c, k in enumerate(self._obj_type_list):
+            self._cols_of_type[k].append(c)
+        self._singleton_col = [cols[0] if len(cols) == 1 else -1 for cols in self._cols_of_type]
 
     def resolve(self, object_type: str, label: str) -> int:
         """Ground-truth type index of an entry, or -1 when unrecognised."""
@@ -238,7 +253,7 @@ class Matcher:
     def assign(
         self, entries: Sequence[MapEntry], carried: Mapping[str, int] | None = None
     ) -> Assignment:
-        """Steps 1-4 of the procedure, as arrays (the fast path of the temporal metrics).
+        """Steps 0-4 of the procedure on plain dicts (the fast path of episodes).
 
         ``carried`` maps labels to object indices (sorted-by-id order) they kept from the
         previous step: such a label, present again with a type that still resolves to its
@@ -246,70 +261,92 @@ class Matcher:
         objects not kept.
         """
         seen: dict[str, MapEntry] = {}
-        duplicates: set[str] = set()
-        for e in entries:
-            if e.label in seen:
-                duplicates.add(e.label)
-            else:
-                seen[e.label] = e
-        resolved = self._resolved
-        rows: list[str] = []
-        row_types: list[int] = []
+        identity: dict[str, int] = {}
+        todo: dict[int, list[str]] = {}
+        type_of: dict[str, int] = {}
         unrecognised: list[str] = []
-        for lb in sorted(seen):
-            e = seen[lb]
+        resolved = self._resolved
+        obj_type = self._obj_type_list
+        carried = carried or {}
+        for e in entries:
+            lb = e.label
+            if lb in seen:
+                continue
+            seen[lb] = e
             k = resolved.get((e.object_type, lb))
             if k is None:
                 k = self.resolve(e.object_type, lb)
             if k < 0:
                 unrecognised.append(lb)
+                continue
+            type_of[lb] = k
+            c = carried.get(lb, -1)
+            if c >= 0 and obj_type[c] == k:
+                identity[lb] = c
             else:
-                rows.append(lb)
-                row_types.append(k)
-        pred = np.array([(seen[lb].x, seen[lb].z) for lb in rows], dtype=float).reshape(-1, 2)
-        obj = [-1] * len(rows)
-        kept: set[int] = set()
-        if carried:
-            obj_type = self._obj_type_list
-            for r, lb in enumerate(rows):
-                c = carried.get(lb, -1)
-                if c >= 0 and obj_type[c] == row_types[r]:
-                    obj[r] = c
-                    kept.add(c)
-        free_types = self._free_types(kept)
-        todo = [r for r, c in enumerate(obj) if c < 0 and row_types[r] in free_types]
+                todo.setdefault(k, []).append(lb)
+        duplicates: tuple[str, ...] = ()
+        if len(seen) != len(entries):
+            counts = Counter(e.label for e in entries)
+            duplicates = tuple(sorted(lb for lb, n in counts.items() if n > 1))
+        kept = set(identity.values())
+        hard: list[tuple[list[str], list[int]]] = []
+        for k, labels in todo.items():
+            free = [c for c in self._cols_of_type[k] if c not in kept]
+            if len(free) == 1 and len(labels) == 1:
+                identity[labels[0]] = free[0]
+            elif free:
+                hard.append((labels, free))
         anchored = False
-        if todo:
-            types = np.array(row_types, dtype=np.int64)
-            aligned, anchored = self._align(pred, types)
-            cols = [c for c in range(len(self._ids)) if c not in kept]
-            sub = aligned[todo]
-            diff = sub[:, None, :] - self._obj_xy[cols][None, :, :]
-            cost = np.round(np.sqrt(np.einsum("ijk,ijk->ij", diff, diff)), _ROUND)
-            allowed = types[todo][:, None] == self._obj_type[cols][None, :]
-            big = (float(cost.max()) + 1.0) * (min(cost.shape) + 1)
-            r_idx, c_idx = linear_sum_assignment(np.where(allowed, cost, big))
-            for r, c in zip(r_idx.tolist(), c_idx.tolist(), strict=True):
-                if allowed[r, c]:
-                    obj[todo[r]] = cols[c]
-        return Assignment(rows, pred, obj, tuple(unrecognised), tuple(sorted(duplicates)), anchored)
+        if hard:
+            anchored = self._assign_by_position(seen, type_of, hard, identity)
+        unmatched = tuple(sorted(lb for lb in type_of if lb not in identity))
+        return Assignment(
+            seen, identity, unmatched, tuple(sorted(unrecognised)), duplicates, anchored
+        )
 
-    def _free_types(self, kept: set[int]) -> set[int]:
-        if not kept:
-            return self._all_types
-        used = [0] * len(self._types)
-        for c in kept:
-            used[self._obj_type_list[c]] += 1
-        return {k for k, n in enumerate(self._type_count_list) if n > used[k]}
+    def _assign_by_position(
+        self,
+        seen: dict[str, MapEntry],
+        type_of: dict[str, int],
+        hard: list[tuple[list[str], list[int]]],
+        identity: dict[str, int],
+    ) -> bool:
+        """Steps 3-4 for the types whose assignment is not forced; fills ``identity``.
+
+        Per type: one label takes the nearest free object (ties: lowest object id); several
+        labels go through :func:`linear_sum_assignment` on the (label, object) distances.
+        """
+        motion = self._align(seen, type_of)
+        c, s, tx, tz = motion if motion is not None else (1.0, 0.0, 0.0, 0.0)
+        xy = self._xy
+        for labels, free in hard:
+            points = [
+                (c * seen[lb].x - s * seen[lb].z + tx, s * seen[lb].x + c * seen[lb].z + tz)
+                for lb in sorted(labels)
+            ]
+            if len(points) == 1:
+                px, pz = points[0]
+                best = min(free, key=lambda o: (round(math.hypot(xy[o][0] - px, xy[o][1] - pz),
+                                                      _ROUND), o))  # fmt: skip
+                identity[labels[0]] = best
+                continue
+            cost = np.round(
+                np.hypot(
+                    np.subtract.outer([p[0] for p in points], [xy[o][0] for o in free]),
+                    np.subtract.outer([p[1] for p in points], [xy[o][1] for o in free]),
+                ),
+                _ROUND,
+            )
+            ordered = sorted(labels)
+            for r, col in zip(*linear_sum_assignment(cost), strict=True):
+                identity[ordered[int(r)]] = free[int(col)]
+        return motion is not None
 
     def held(self, assignment: Assignment) -> dict[str, str]:
         """Object id -> label of an assignment (what :attr:`Matching.label_of` gives)."""
         ids = self._ids
-        return {ids[c]: assignment.labels[r] for r, c in enumerate(assignment.obj) if c >= 0}
-
-    def carry(self, assignment: Assignment) -> dict[str, int]:
-        """Label -> object index of the matched rows, to pass as ``carried`` next step."""
-        return {assignment.labels[r]: c for r, c in enumerate(assignment.obj) if c >= 0}
+        return {ids[c]: lb for lb, c in assignment.identity.items()}
 
     def match(
         self, entries: Sequence[MapEntry], carried: Mapping[str, str] | None = None
@@ -324,34 +361,37 @@ class Matcher:
         pairs = sorted(
             (
                 MatchedPair(
-                    label=a.labels[r],
+                    label=lb,
                     object_id=self._objects[c].object_id,
                     object_type=self._objects[c].object_type,
-                    pred_x=float(a.pred[r, 0]),
-                    pred_z=float(a.pred[r, 1]),
-                    true_x=float(self._obj_xy[c, 0]),
-                    true_z=float(self._obj_xy[c, 1]),
+                    pred_x=float(a.entries[lb].x),
+                    pred_z=float(a.entries[lb].z),
+                    true_x=self._xy[c][0],
+                    true_z=self._xy[c][1],
                 )
-                for r, c in enumerate(a.obj)
-                if c >= 0
+                for lb, c in a.identity.items()
             ),
             key=lambda p: p.object_id,
         )
-        unmatched = tuple(lb for lb, c in zip(a.labels, a.obj, strict=True) if c < 0)
-        return Matching(tuple(pairs), unmatched, a.unrecognised, a.duplicates, a.anchored)
+        return Matching(tuple(pairs), a.unmatched, a.unrecognised, a.duplicates, a.anchored)
 
-    def _align(self, pred: np.ndarray, row_types: np.ndarray) -> tuple[np.ndarray, bool]:
-        entry_count = np.bincount(row_types, minlength=len(self._types))
-        anchor_types = np.flatnonzero((entry_count == 1) & (self._type_count == 1))
-        if len(anchor_types) < 2:
-            return pred, False
-        row_of_type = np.empty(len(self._types), dtype=np.int64)
-        row_of_type[row_types] = np.arange(len(row_types))
-        anchor_pred = pred[row_of_type[anchor_types]]
-        if np.ptp(anchor_pred, axis=0).max() <= 1e-9:
-            return pred, False
-        rot, shift = rigid_fit(anchor_pred, self._obj_xy[self._singleton_col[anchor_types]])
-        return pred @ rot.T + shift, True
+    def _align(
+        self, seen: dict[str, MapEntry], type_of: dict[str, int]
+    ) -> tuple[float, float, float, float] | None:
+        """Step 3: the anchor alignment, or None when fewer than two distinct anchors."""
+        counts = Counter(type_of.values())
+        singleton = self._singleton_col
+        anchors = sorted(
+            (lb, singleton[k]) for lb, k in type_of.items() if counts[k] == 1 and singleton[k] >= 0
+        )
+        if len(anchors) < 2:
+            return None
+        pred = [(seen[lb].x, seen[lb].z) for lb, _ in anchors]
+        xs = [p[0] for p in pred]
+        zs = [p[1] for p in pred]
+        if max(max(xs) - min(xs), max(zs) - min(zs)) <= 1e-9:
+            return None
+        return _rigid(pred, [self._xy[c] for _, c in anchors])
 
 
 def match_map(

@@ -127,7 +127,7 @@ def track_episode(traj: Trajectory) -> Track:
         for e in step.cognitive_map:
             first_pos.setdefault(e.label, (e.x, e.z))
         if assignment is None or step.cognitive_map is not prev_map:
-            carried = matcher.carry(assignment) if assignment is not None else None
+            carried = assignment.identity if assignment is not None else None
             assignment = matcher.assign(step.cognitive_map, carried)
             prev_map = step.cognitive_map
         held.append(matcher.held(assignment))
@@ -194,13 +194,15 @@ def _tbs_value(
     a: Assignment, first_pos: dict[str, tuple[float, float]], scale: float, g_base: int
 ) -> float:
     """``TBS(t)`` of one step: 0.0 when nothing is matched (coverage 0)."""
-    rows = [r for r, c in enumerate(a.obj) if c >= 0]
-    if not rows:
+    if not a.identity:
         return 0.0
-    start = np.array([first_pos[a.labels[r]] for r in rows], dtype=float)
-    delta = a.pred[rows] - start
-    drift = float(np.sqrt(np.einsum("ij,ij->i", delta, delta)).sum()) / len(rows)
-    return exp_ratio(drift, scale) * min(len(rows), g_base) / g_base
+    drift = 0.0
+    for lb in a.identity:
+        e = a.entries[lb]
+        x0, z0 = first_pos[lb]
+        drift += math.hypot(e.x - x0, e.z - z0)
+    n = len(a.identity)
+    return exp_ratio(drift / n, scale) * min(n, g_base) / g_base
 
 
 def _miller(traj: Trajectory) -> tuple[tuple[int, ...], tuple[bool, ...]]:

@@ -1,0 +1,235 @@
+"""The gate-metric registry: the names thresholds.yaml may use, each with its estimator.
+
+Every ``compute(items, *, rng_seed=0) -> Estimate`` accepts trajectories or
+:class:`EpisodeMetrics` (pass the latter to evaluate many gates without re-matching), excludes
+errored episodes (counted in ``excluded``) and attaches a seeded percentile bootstrap 95 % CI
+(:func:`bootstrap_ci`; resampling *episodes*, also for pooled ratios). Fractions are in
+[0, 1], never percent.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import Counter
+from collections.abc import Callable, Iterable, Mapping, Sequence
+from dataclasses import dataclass
+from types import MappingProxyType
+from typing import Literal, Protocol
+
+import numpy as np
+
+from pytest_emrd.errors import check_choice
+from pytest_emrd.metrics._episode import EpisodeLike, EpisodeMetrics, as_episode_metrics
+from pytest_emrd.metrics._stats import N_RESAMPLES, Estimate, bootstrap_ci
+from pytest_emrd.metrics._survival import ebbinghaus_fit
+from pytest_emrd.rooms import FOCAL_COLUMNS
+
+
+class Compute(Protocol):
+    def __call__(self, items: Sequence[EpisodeLike], *, rng_seed: int = 0) -> Estimate: ...
+
+
+@dataclass(frozen=True)
+class GateMetric:
+    """A metric thresholds.yaml can gate on."""
+
+    name: str
+    description: str
+    better: Literal["higher", "lower"]
+    unit: str
+    """``fraction`` (in [0, 1]), ``steps`` or ``R^2``."""
+    compute: Compute
+
+
+def _split(items: Iterable[EpisodeLike]) -> tuple[list[EpisodeMetrics], int]:
+    metrics = as_episode_metrics(items)
+    kept = [m for m in metrics if not m.errored]
+    return kept, len(metrics) - len(kept)
+
+
+def _why_none(kept: list[EpisodeMetrics], name: str) -> str:
+    if not kept:
+        return "no non-errored episode"
+    reasons = Counter(m.reasons.get(name, "undefined") for m in kept)
+    return f"undefined in every episode ({reasons.most_common(1)[0][0]})"
+
+
+def _mean_of(name: str, get: Callable[[EpisodeMetrics], float | bool | None]) -> Compute:
+    def compute(items: Sequence[EpisodeLike], *, rng_seed: int = 0) -> Estimate:
+        kept, errored = _split(items)
+        values = [float(v) for m in kept if (v := get(m)) is not None]
+        excluded = errored + len(kept) - len(values)
+        if not values:
+            return Estimate(None, None, None, 0, _why_none(kept, name), excluded)
+        low, high = bootstrap_ci(values, rng_seed=rng_seed)
+        reason = None if low is not None else "one episode: no confidence interval"
+        return Estimate(math.fsum(values) / len(values), low, high, len(values), reason, excluded)
+
+    return compute
+
+
+def _ratio_of(
+    name: str, num: Callable[[EpisodeMetrics], float], den: Callable[[EpisodeMetrics], float]
+) -> Compute:
+    """Pooled ``sum num / sum den`` with an episode-level bootstrap."""
+
+    def compute(items: Sequence[EpisodeLike], *, rng_seed: int = 0) -> Estimate:
+        kept, errored = _split(items)
+        if not kept:
+            return Estimate(None, None, None, 0, _why_none(kept, name), errored)
+        pairs = np.array([(num(m), den(m)) for m in kept], dtype=float)
+        total_num, total_den = pairs.sum(axis=0)
+        if total_den == 0 and total_num == 0:
+            why = kept[0].reasons.get(name) or f"{name} has an empty denominator"
+            return Estimate(None, None, None, len(kept), why, errored)
+
+        def ratio(sample: np.ndarray) -> np.ndarray:
+            s = sample.sum(axis=1)
+            return np.divide(s[:, 0], s[:, 1])
+
+        low, high = bootstrap_ci(pairs, ratio, rng_seed=rng_seed)
+        value = math.inf if total_den == 0 else float(total_num / total_den)
+        reason = None
+        if math.isinf(value):
+            reason = f"{name}: no event in any episode, the estimate is unbounded"
+        return Estimate(value, low, high, len(kept), reason, errored)
+
+    return compute
+
+
+def _consensus(items: Sequence[EpisodeLike], *, rng_seed: int = 0) -> Estimate:
+    kept, errored = _split(items)
+    if not kept:
+        return Estimate(None, None, None, 0, "no non-errored episode", errored)
+    onehot = np.zeros((len(kept), len(FOCAL_COLUMNS)))
+    onehot[np.arange(len(kept)), [FOCAL_COLUMNS.index(m.chosen_letter) for m in kept]] = 1.0
+
+    def share(sample: np.ndarray) -> np.ndarray:
+        return sample.sum(axis=1)[:, :4].max(axis=1) / sample.shape[1]
+
+    low, high = bootstrap_ci(onehot, share, rng_seed=rng_seed)
+    value = float(onehot.sum(axis=0)[:4].max() / len(kept))
+    return Estimate(value, low, high, len(kept), None, errored)
+
+
+def _r2(items: Sequence[EpisodeLike], *, rng_seed: int = 0) -> Estimate:
+    """Pooled R^2 (value from :func:`ebbinghaus_fit`); CI from resampled episode histograms."""
+    kept, errored = _split(items)
+    if not kept:
+        return Estimate(None, None, None, 0, "no non-errored episode", errored)
+    spells = [m.ttf_spells for m in kept]
+    mapped = np.array([sum(m.mapped_by_category.values()) for m in kept], dtype=float)
+    total = np.array([sum(m.objects_by_category.values()) for m in kept], dtype=float)
+    full = ebbinghaus_fit(
+        [s.duration for ss in spells for s in ss],
+        [s.forgotten for ss in spells for s in ss],
+        coverage=float(mapped.sum() / total.sum()) if total.sum() else 0.0,
+    )
+    if full.r2 is None:
+        return Estimate(None, None, None, len(kept), full.reason, errored)
+    if len(kept) < 2:
+        return Estimate(full.r2, None, None, 1, "one episode: no confidence interval", errored)
+    horizon = max(s.duration for ss in spells for s in ss)
+    leave = np.zeros((len(kept), horizon + 1))
+    death = np.zeros((len(kept), horizon + 1))
+    for i, ss in enumerate(spells):
+        for s in ss:
+            leave[i, s.duration] += 1
+            death[i, s.duration] += s.forgotten
+    rng = np.random.default_rng(rng_seed)
+    weights = np.stack(
+        [np.bincount(rng.integers(0, len(kept), len(kept)), minlength=len(kept))
+         for _ in range(N_RESAMPLES)]
+    ).astype(float)  # fmt: skip
+    draws = _r2_of_histograms(weights @ leave, weights @ death, weights @ mapped, weights @ total)
+    draws = draws[np.isfinite(draws)]
+    if not len(draws):
+        return Estimate(full.r2, None, None, len(kept), "R^2 undefined in every resample", errored)
+    low, high = np.quantile(draws, [0.025, 0.975])
+    return Estimate(full.r2, float(low), float(high), len(kept), None, errored)
+
+
+def _r2_of_histograms(
+    leave: np.ndarray, death: np.ndarray, mapped: np.ndarray, total: np.ndarray
+) -> np.ndarray:
+    """:func:`ebbinghaus_fit`'s R^2 for many pooled samples given as duration histograms.
+
+    Row ``r`` holds, per duration ``t``, the spells ending at ``t`` (``leave``) and the events
+    among them (``death``). Same grid (durations present), anchor, MLE and R^2 as the scalar
+    function; NaN where R^2 is undefined.
+    """
+    t = np.arange(leave.shape[1], dtype=float)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        at_risk = leave.sum(axis=1, keepdims=True) - np.cumsum(leave, axis=1) + leave
+        factor = np.where(at_risk > 0, 1.0 - death / at_risk, 1.0)
+        coverage = np.where(total > 0, mapped / total, 0.0)[:, None]
+        s_hat = coverage * np.cumprod(factor, axis=1)
+        strength = (leave * t).sum(axis=1) / death.sum(axis=1)
+        model = coverage * np.exp(-t[None, :] / strength[:, None])
+        present = leave > 0
+        n = present.sum(axis=1)
+        mean = np.where(present, s_hat, 0.0).sum(axis=1) / n
+        ss_tot = np.where(present, (s_hat - mean[:, None]) ** 2, 0.0).sum(axis=1)
+        ss_res = np.where(present, (s_hat - model) ** 2, 0.0).sum(axis=1)
+        r2 = 1.0 - ss_res / ss_tot
+    return np.where(ss_tot > 1e-15, r2, np.nan)
+
+
+def _errored_rate(items: Sequence[EpisodeLike], *, rng_seed: int = 0) -> Estimate:
+    flags = [float(m.errored) for m in as_episode_metrics(items)]
+    if not flags:
+        return Estimate(None, None, None, 0, "no episode")
+    low, high = bootstrap_ci(flags, rng_seed=rng_seed)
+    return Estimate(math.fsum(flags) / len(flags), low, high, len(flags))
+
+
+def _registry(*metrics: GateMetric) -> Mapping[str, GateMetric]:
+    return MappingProxyType({m.name: m for m in metrics})
+
+
+#: Metric name -> gate metric. thresholds.yaml metric names must be keys of this mapping.
+GATE_METRICS: Mapping[str, GateMetric] = _registry(
+    GateMetric("aec", "Absolute Environment Coverage of the terminal map (Eq. AEC)", "higher",
+               "fraction", _mean_of("aec", lambda m: m.aec)),
+    GateMetric("te", "Temporal Efficiency: actions before Term or the budget (Eq. TE)", "lower",
+               "steps", _mean_of("te", lambda m: m.te)),
+    GateMetric("pa", "Positional Accuracy of the terminal map (Eq. PA)", "higher", "fraction",
+               _mean_of("pa", lambda m: m.pa)),
+    GateMetric("fpsg_local", "Focal-Point Spatial Grounding, local to the chosen room",
+               "higher", "fraction", _mean_of("fpsg_local", lambda m: m.fpsg_local)),
+    GateMetric("fpsg_global", "Focal-Point Spatial Grounding against all observed objects",
+               "higher", "fraction", _mean_of("fpsg_global", lambda m: m.fpsg_global)),
+    GateMetric("never_visited", "Share of choices naming a room the agent never entered",
+               "lower", "fraction", _mean_of("never_visited", lambda m: m.never_visited)),
+    GateMetric("any_bias", "Share of choices with no object of the chosen room in the map",
+               "lower", "fraction", _mean_of("any_bias", lambda m: m.any_bias)),
+    GateMetric("sir", "Spatial Identity Resolution on room re-entry (episodes with re-entry)",
+               "higher", "fraction", _mean_of("sir", lambda m: m.sir)),
+    GateMetric("memory_strength", "Ebbinghaus memory strength EFC, pooled over categories",
+               "higher", "steps",
+               _ratio_of("memory_strength", lambda m: m.retained_steps,
+                         lambda m: m.forget_events)),
+    GateMetric("ebbinghaus_r2", "R^2 of the Ebbinghaus curve against the anchored KM (pooled)",
+               "higher", "R^2", _r2),
+    GateMetric("consensus", "Share of episodes choosing the modal room", "higher", "fraction",
+               _consensus),
+    GateMetric("parse_failure_rate", "Share of steps whose reply could not be read", "lower",
+               "fraction",
+               _ratio_of("parse_failure_rate", lambda m: m.parse_failures, lambda m: m.steps)),
+    GateMetric("errored_rate", "Share of episodes that errored", "lower", "fraction",
+               _errored_rate),
+)  # fmt: skip
+
+
+def evaluate_gates(
+    items: Sequence[EpisodeLike], names: Iterable[str] | None = None, *, rng_seed: int = 0
+) -> dict[str, Estimate]:
+    """Compute several gate metrics over the same episodes, matching each episode once.
+
+    ``names`` defaults to every registered metric; an unknown name raises ConfigError.
+    """
+    selected = list(GATE_METRICS) if names is None else list(names)
+    for name in selected:
+        check_choice("metric", name, GATE_METRICS, hint="See pytest_emrd.metrics.GATE_METRICS.")
+    metrics = as_episode_metrics(items)
+    return {name: GATE_METRICS[name].compute(metrics, rng_seed=rng_seed) for name in selected}
