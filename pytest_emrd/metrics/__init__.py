@@ -26,14 +26,7 @@ from pytest_emrd.metrics._decide import (
 from pytest_emrd.metrics._episode import EpisodeMetrics, as_episode_metrics, episode_metrics
 from pytest_emrd.metrics._explore_map import TBSCurve, positional_accuracy, tbs_curve
 from pytest_emrd.metrics._gates import GATE_METRICS, GateMetric, evaluate_gates
-from pytest_emrd.metrics._match import (
-    SYNONYMS,
-    MatchedPair,
-    Matching,
-    match_map,
-    rigid_fit,
-    type_key,
-)
+from pytest_emrd.metrics._match import MatchedPair, Matching, match_map, rigid_fit
 from pytest_emrd.metrics._reasoning import Representative, representative_reasoning
 from pytest_emrd.metrics._remember import (
     Ebbinghaus,
@@ -78,6 +71,7 @@ from pytest_emrd.metrics._survival import (
     efc,
 )
 from pytest_emrd.metrics._tracking import Spell
+from pytest_emrd.metrics._vocab import SYNONYMS, type_key
 
 __all__ = [
     "GATE_METRICS",

@@ -11,7 +11,7 @@ metric that needs to know *which physical object* a map entry stands for calls
 1. **Deduplicate labels.** A label is one recorded instance; a repeated label keeps its first
    entry (the JSON map is keyed by label, so repeats only come from malformed input).
 2. **Resolve a type.** The entry's ``object_type`` is tried first, then its label. The text is
-   normalised (:func:`type_key`: lower case, ``(...)`` asides removed, separators removed,
+   normalised (:func:`~pytest_emrd.metrics._vocab.type_key`: lower case, ``(...)`` asides removed, separators removed,
    trailing instance suffixes such as ``_2``, ``#3``, `` b`` removed) and looked up among the
    ground-truth types of this episode, then in :data:`SYNONYMS` (first candidate present in the
    ground truth wins, so ``table`` is a ``DiningTable`` where the layout has one and a ``Desk``
@@ -28,8 +28,9 @@ metric that needs to know *which physical object* a map entry stands for calls
    (:func:`scipy.optimize.linear_sum_assignment`) between its entries and its ground-truth
    instances minimises the summed Euclidean distance in the aligned frame; exactly
    ``min(|M_k|, |E_k|)`` pairs are formed. Entries beyond the instance count stay *unmatched*.
-   Entries are ordered by label and objects by id, and costs are rounded to 1e-9 m, so ties
-   resolve the same way on every machine.
+   A single entry takes the nearest free instance (ties: lowest object id); entries are
+   ordered by label and objects by id, and costs are rounded to 1e-9 m, so ties resolve the
+   same way on every machine.
 
 **No distance gate.** A type-correct entry is matched however far it lies from its object:
 (a) coordinates are in an untrusted frame, and a gate in that frame would punish exactly the
@@ -42,71 +43,16 @@ Positional Accuracy, not of the matcher.
 from __future__ import annotations
 
 import math
-import re
 from collections import Counter
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from functools import lru_cache
 from typing import Final, NamedTuple
 
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
+from pytest_emrd.metrics._vocab import TypeResolver
 from pytest_emrd.trajectory import GroundTruthObject, MapEntry
-
-#: Normalised text -> ground-truth types it may denote, in order of preference.
-SYNONYMS: Final[dict[str, tuple[str, ...]]] = {
-    "table": ("DiningTable", "CoffeeTable", "SideTable", "Desk"),
-    "conferencetable": ("DiningTable",),
-    "meetingtable": ("DiningTable",),
-    "longtable": ("DiningTable",),
-    "receptiondesk": ("Desk",),
-    "plant": ("HousePlant",),
-    "pottedplant": ("HousePlant",),
-    "tv": ("Television",),
-    "screen": ("Television",),
-    "monitor": ("Television",),
-    "fridge": ("Fridge",),
-    "refrigerator": ("Fridge",),
-    "armchair": ("ArmChair",),
-    "sofa": ("Sofa", "ArmChair"),
-    "couch": ("Sofa", "ArmChair"),
-    "doorway": ("Doorway",),
-    "doorframe": ("Doorway",),
-    "opening": ("Doorway",),
-    "passage": ("Doorway",),
-    "exit": ("Door",),
-    "exitdoor": ("Door",),
-    "frontdoor": ("Door",),
-    "counter": ("CounterTop",),
-    "kitchencounter": ("CounterTop",),
-    "shelf": ("ShelvingUnit", "Shelf"),
-    "shelves": ("ShelvingUnit", "Shelf"),
-    "bookshelf": ("ShelvingUnit", "Shelf"),
-    "coffeemaker": ("CoffeeMachine",),
-    "barstool": ("Stool",),
-    "computer": ("Laptop",),
-    "notebook": ("Laptop",),
-}
-
-_ASIDE = re.compile(r"\(.*?\)|\[.*?\]")
-_TOKENS = re.compile(r"[a-z0-9]+")
-_TRAILING_DIGITS = re.compile(r"\d+$")
-_ROUND: Final = 9
-
-
-@lru_cache(maxsize=4096)
-def type_key(text: str) -> str:
-    """Normalised comparison key of a type or label: ``"Dining table #2"`` -> ``"diningtable"``.
-
-    Lower-cases, drops ``(...)``/``[...]`` asides, splits on anything that is not a letter or
-    digit, drops trailing tokens that are numbers or single letters (instance suffixes), joins
-    the rest and strips trailing digits. Empty or suffix-only text gives ``""``.
-    """
-    tokens = _TOKENS.findall(_ASIDE.sub(" ", text.lower()))
-    while len(tokens) > 1 and (tokens[-1].isdigit() or len(tokens[-1]) == 1):
-        tokens.pop()
-    return _TRAILING_DIGITS.sub("", "".join(tokens))
 
 
 @dataclass(frozen=True)
@@ -148,6 +94,9 @@ class Matching:
         """Object id -> the label matched to it."""
         return {p.object_id: p.label for p in self.pairs}
 
+
+_ROUND: Final = 9
+"""Decimals (metres) costs are rounded to, so ties break the same way on every machine."""
 
 EMPTY_MATCHING: Final = Matching((), (), (), (), False)
 
@@ -203,52 +152,22 @@ class Assignment(NamedTuple):
 class Matcher:
     """:func:`match_map` bound to one episode's ground truth, reusable across its steps.
 
-    Holds only per-episode look-up tables (type resolution of each label seen so far);
-    matching one map never depends on previous calls.
+    Holds only per-episode look-up tables (type resolution of each text seen so far);
+    matching one map never depends on previous calls except through ``carried``.
     """
 
     def __init__(self, objects: Sequence[GroundTruthObject]) -> None:
         ordered = sorted(objects, key=lambda o: o.object_id)
         self._objects = ordered
-        self._types = sorted({o.object_type for o in ordered})
-        index = {t: i for i, t in enumerate(self._types)}
-        self._obj_type = np.array([index[o.object_type] for o in ordered], dtype=np.int64)
-        self._obj_xy = np.array([(o.x, o.z) for o in ordered], dtype=float).reshape(-1, 2)
-        self._key_to_type: dict[str, int] = {type_key(t): i for t, i in index.items()}
-        for key, candidates in SYNONYMS.items():
-            if key not in self._key_to_type:
-                hit = next((index[c] for c in candidates if c in index), None)
-                if hit is not None:
-                    self._key_to_type[key] = hit
-        self._resolved: dict[tuple[str, str], int] = {}
+        self._types = TypeResolver(o.object_type for o in ordered)
         self._ids = [o.object_id for o in ordered]
         self._index = {oid: c for c, oid in enumerate(self._ids)}
-        self._obj_type_list = self._obj_type.tolist()
+        self._obj_type_list = [self._types.index[o.object_type] for o in ordered]
         self._xy = [(o.x, o.z) for o in ordered]
-        self._cols_of_type: list[list[int]] = [[] for _ in self._types]
+        self._cols_of_type: list[list[int]] = [[] for _ in self._types.names]
         for c, k in enumerate(self._obj_type_list):
             self._cols_of_type[k].append(c)
         self._singleton_col = [cols[0] if len(cols) == 1 else -1 for cols in self._cols_of_type]
-
-    def resolve(self, object_type: str, label: str) -> int:
-        """Ground-truth type index of an entry, or -1 when unrecognised."""
-        cache_key = (object_type, label)
-        hit = self._resolved.get(cache_key)
-        if hit is None:
-            hit = self._resolve_text(object_type)
-            if hit < 0:
-                hit = self._resolve_text(label)
-            self._resolved[cache_key] = hit
-        return hit
-
-    def _resolve_text(self, text: str) -> int:
-        key = type_key(text)
-        if not key:
-            return -1
-        for candidate in (key, key[:-1] if key.endswith("s") else "", key[:-2]):
-            if candidate and candidate in self._key_to_type:
-                return self._key_to_type[candidate]
-        return -1
 
     def assign(
         self, entries: Sequence[MapEntry], carried: Mapping[str, int] | None = None
@@ -265,7 +184,7 @@ class Matcher:
         todo: dict[int, list[str]] = {}
         type_of: dict[str, int] = {}
         unrecognised: list[str] = []
-        resolved = self._resolved
+        resolve = self._types.resolve
         obj_type = self._obj_type_list
         carried = carried or {}
         for e in entries:
@@ -273,9 +192,7 @@ class Matcher:
             if lb in seen:
                 continue
             seen[lb] = e
-            k = resolved.get((e.object_type, lb))
-            if k is None:
-                k = self.resolve(e.object_type, lb)
+            k = resolve(e.object_type, lb)
             if k < 0:
                 unrecognised.append(lb)
                 continue
