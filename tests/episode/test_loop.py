@@ -38,6 +38,16 @@ def test_budget_episode_records_every_step(scripted, reply) -> None:
     assert Trajectory.from_dict(json.loads(json.dumps(traj.to_dict()))) == traj
 
 
+def test_on_step_sees_every_step_as_it_completes(scripted, reply) -> None:
+    seen: list[int] = []
+    traj = run_episode(
+        _spec(max_steps=3),
+        client=scripted([reply("Turn(Left)")]),
+        on_step=lambda step: seen.append(step.index),
+    )
+    assert seen == [s.index for s in traj.steps] == [1, 2, 3]
+
+
 def test_parse_failure_keeps_previous_map_and_consumes_the_step(scripted, reply) -> None:
     first = reply("Turn(Left)", {"Sink_1": {"type": "Sink", "x": 0.5, "z": 1.5}})
     client = scripted([first, "I am not sure what to do.", reply("Turn(Left)", {})])
