@@ -1,32 +1,38 @@
 """The cassette file format: content-addressed YAML inside gzip (pure encode/decode).
 
 A model request repeats the whole history window every step (system prompt + the last ten
-turns), so a plain cassette stores every message up to 20 times. Here each distinct string
-is stored once, in a table, and interactions refer to it by index:
+turns), and each reply comes back once as a response and then up to ten times inside later
+requests. So the file holds a table of distinct strings and everything else refers to it:
 
 .. code-block:: yaml
 
     format: emrd-cassette/1
-    protocol: "w3+p2"              # world + prompt protocol the traffic was recorded under
-    strings:                       # every distinct message / body part / response body, once
-      - '{"content":"You are ...","role":"system"}'
+    protocol: "builtin-1+p1"       # world + prompt protocol the traffic was recorded under
+    strings:                       # each distinct string once
+      - '{"content":"\\u00000","role":"system"}'   # a message template; \u0000N = strings[N]
       - ...
     interactions:
       - request:
           method: POST
           uri: http://127.0.0.1:8123/v1/chat/completions
-          headers: {Content-Type: application/json}
-          body: {lists: {messages: [0, 3, 4]}, rest: 2}   # or {raw: 7} when not JSON
+          headers: {content-type: application/json}
+          body:                    # or {raw: 7} when the body is not JSON
+            json: '{"messages":null,"model":"scout","temperature":0.0}'   # the skeleton
+            lists: {messages: [1, 3, 4]}                   # one template per list item
+            mode: canonical        # re-serialisation: canonical | compact | ascii
         response:
           status: {code: 200, message: OK}
           headers: {content-type: [application/json]}
-          body: 5
+          body: {json: '{"choices":[{"message":{"content":"\\u00005"}}]}', mode: compact}
 
-Request bodies are stored already redacted and canonical (see :mod:`._redact`): each
-top-level list of the JSON body (``messages``, ``contents``...) is split into its items, the
-rest of the object is one more string. Loading rebuilds the canonical bytes exactly, because
-canonical JSON is a fixed point of parse + serialise. Gzip runs with ``mtime=0`` so the same
-traffic always gives the same file bytes.
+Request bodies are stored already redacted and canonical (see :mod:`._redact`): each item of
+a top-level list (``messages``, ``contents``...) is one template string, so a message
+repeated across requests is stored once; inside templates every string of 48 characters or
+more is replaced by a reference (NUL + table index), so a reply text is stored once for its
+response and all the requests that carry it back. Loading rebuilds the canonical bytes
+exactly (canonical JSON is a fixed point of parse + serialise); a JSON response is stored as
+a tree only when compact serialisation reproduces its bytes exactly, else verbatim. Gzip
+runs with ``mtime=0`` so the same traffic always gives the same file bytes.
 """
 
 from __future__ import annotations
@@ -46,6 +52,9 @@ from pytest_emrd.cassette._redact import canonical_json
 
 FORMAT: Final = "emrd-cassette/1"
 _B64: Final = "base64:"
+_REF: Final = "\x00"
+#: Strings at least this long are stored once in the table and referenced from the trees.
+_LONG: Final = 48
 
 _Dumper = getattr(yaml, "CSafeDumper", yaml.SafeDumper)
 _Loader = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
@@ -91,30 +100,76 @@ def _bytes(text: str) -> bytes:
     return text.encode()
 
 
+def _compact(tree: Any, ascii_only: bool) -> str:
+    return json.dumps(tree, separators=(",", ":"), ensure_ascii=ascii_only)
+
+
+def _pack(node: Any, table: _Table) -> Any:
+    """Replace every long string (and any string starting with NUL) by a table reference."""
+    if isinstance(node, dict):
+        return {k: _pack(v, table) for k, v in node.items()}
+    if isinstance(node, list):
+        return [_pack(v, table) for v in node]
+    if isinstance(node, str) and (len(node) >= _LONG or node.startswith(_REF)):
+        return f"{_REF}{table.intern(node)}"
+    return node
+
+
+def _unpack(node: Any, strings: Sequence[str]) -> Any:
+    if isinstance(node, dict):
+        return {k: _unpack(v, strings) for k, v in node.items()}
+    if isinstance(node, list):
+        return [_unpack(v, strings) for v in node]
+    if isinstance(node, str) and node.startswith(_REF):
+        return strings[int(node[1:])]
+    return node
+
+
+#: How a JSON body is re-serialised on load: canonical (requests) or compact as received.
+_SERIALISE: Final = {
+    "canonical": canonical_json,
+    "compact": lambda tree: _compact(tree, ascii_only=False),
+    "ascii": lambda tree: _compact(tree, ascii_only=True),
+}
+
+
 def _encode_body(body: bytes | str | None, table: _Table) -> dict[str, Any]:
+    """A JSON body as a packed tree when it re-serialises byte for byte, else verbatim.
+
+    Each item of a top-level list of a JSON object (``messages``, ``contents``...) is
+    interned as one template, so a message repeated across requests is stored once.
+    """
     raw = body.encode() if isinstance(body, str) else (body or b"")
     try:
         tree = json.loads(raw)
     except (ValueError, UnicodeDecodeError):
-        tree = None
-    if not isinstance(tree, dict) or canonical_json(tree).encode() != raw:
         return {"raw": table.intern(_text(raw))}
-    lists = {
-        k: [table.intern(canonical_json(v)) for v in tree[k]]
-        for k in sorted(tree)
-        if isinstance(tree[k], list)
-    }
-    rest = {k: v for k, v in tree.items() if k not in lists}
-    return {"lists": lists, "rest": table.intern(canonical_json(rest))}
+    for mode, serialise in _SERIALISE.items():
+        if serialise(tree).encode() != raw:
+            continue
+        if not isinstance(tree, dict):
+            return {"json": _compact(_pack(tree, table), False), "mode": mode}
+        lists = {
+            k: [table.intern(_compact(_pack(v, table), False)) for v in tree[k]]
+            for k in tree
+            if isinstance(tree[k], list)
+        }
+        rest = {k: (None if k in lists else v) for k, v in tree.items()}
+        return {
+            "json": _compact(_pack(rest, table), False),
+            "lists": lists,
+            "mode": mode,
+        }
+    return {"raw": table.intern(_text(raw))}
 
 
 def _decode_body(body: dict[str, Any], strings: Sequence[str]) -> bytes:
     if "raw" in body:
         return _bytes(strings[body["raw"]])
-    tree = json.loads(strings[body["rest"]])
-    for key, refs in body["lists"].items():
-        tree[key] = [json.loads(strings[i]) for i in refs]
-    return canonical_json(tree).encode()
+    tree = _unpack(json.loads(body["json"]), strings)
+    for key, refs in body.get("lists", {}).items():
+        tree[key] = [_unpack(json.loads(strings[i]), strings) for i in refs]
+    return _SERIALISE[body["mode"]](tree).encode()
 
 
 def encode(data: CassetteData) -> bytes:
@@ -133,7 +188,7 @@ def encode(data: CassetteData) -> bytes:
                 "response": {
                     "status": dict(response["status"]),
                     "headers": {k: list(v) for k, v in response["headers"].items()},
-                    "body": table.intern(_text(response["body"]["string"])),
+                    "body": _encode_body(response["body"]["string"], table),
                 },
             }
         )
@@ -167,14 +222,17 @@ def decode(blob: bytes) -> CassetteData:
             req, resp = item["request"], item["response"]
             requests.append(
                 Request(
-                    req["method"], req["uri"], _decode_body(req["body"], strings), req["headers"]
+                    req["method"],
+                    req["uri"],
+                    _decode_body(req["body"], strings),
+                    req["headers"],
                 )
             )
             responses.append(
                 {
                     "status": resp["status"],
                     "headers": resp["headers"],
-                    "body": {"string": _bytes(strings[resp["body"]])},
+                    "body": {"string": _decode_body(resp["body"], strings)},
                 }
             )
         return CassetteData(str(document["protocol"]), tuple(requests), tuple(responses))
