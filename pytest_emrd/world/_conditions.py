@@ -43,7 +43,7 @@ class ConditionParams:
 
 _TABLE: Final[Mapping[str, ConditionParams]] = {
     "baseline": ConditionParams("baseline", 7.0, 1.0, 0.25, (214, 216, 220), False),
-    "low_light": ConditionParams("low_light", 3.5, 0.5, 0.85, (30, 30, 34), False),
+    "low_light": ConditionParams("low_light", 3.5, 0.5, 0.85, (56, 56, 60), False),
     "texture": ConditionParams("texture", 7.0, 1.0, 0.25, (214, 216, 220), True),
 }
 

@@ -52,6 +52,22 @@ def rect_at(x: float, z: float, width: float, depth: float, rotation: float) -> 
     return (x - width / 2, z - depth / 2, x + width / 2, z + depth / 2)
 
 
+def rects_at(
+    x: np.ndarray, z: np.ndarray, width: float, depth: float, rotation: np.ndarray
+) -> np.ndarray:
+    """``(K, 4)`` footprints of boxes centred at ``(x[k], z[k])`` turned by ``rotation[k]``."""
+    turned = np.round(rotation) % 180 == 90
+    hw = np.where(turned, depth, width) / 2
+    hd = np.where(turned, width, depth) / 2
+    return np.stack([x - hw, z - hd, x + hw, z + hd], axis=1)
+
+
+def headings_to_units(heading: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Exact unit vectors ``(x, z)`` of cardinal headings (multiples of 90 degrees)."""
+    quarter = np.round(heading / 90).astype(np.int64) % 4
+    return np.array([0.0, 1.0, 0.0, -1.0])[quarter], np.array([1.0, 0.0, -1.0, 0.0])[quarter]
+
+
 def local_to_world(x: float, z: float, rotation: float, u: float, v: float) -> tuple[float, float]:
     """World point at ``u`` metres right and ``v`` metres forward of a frame at ``(x, z)``."""
     fx, fz = unit(rotation)

@@ -11,19 +11,29 @@ solid footprint and lies inside the room; candidates are checked all at once wit
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
 
 from pytest_emrd.world._catalog import KINDS
-from pytest_emrd.world._geometry import Rect, local_to_world, rect_at, rects_overlap
+from pytest_emrd.world._geometry import (
+    Rect,
+    headings_to_units,
+    local_to_world,
+    rect_at,
+    rects_at,
+    rects_overlap,
+)
 from pytest_emrd.world._model import Room
 from pytest_emrd.world._rng import StableRng
 
 WALL_GAP = 0.02
 """Distance between a wall and the back of furniture standing against it."""
-CANDIDATES = 48
+CANDIDATES = 96
 """Placements tried per unit before it is given up."""
+BATCH = 8
+"""Candidates drawn and checked together."""
 
 #: Wall side -> rotation that makes a unit standing against it face into the room.
 SIDE_ROTATION = {"N": 180.0, "S": 0.0, "E": 270.0, "W": 90.0}
@@ -80,44 +90,56 @@ class Planner:
 
     def against_wall(self, room: Room, unit: Unit, sides: str = "NESW") -> bool:
         """Place ``unit`` with its back to one of ``sides`` of ``room``; False if no room."""
-        cands = []
-        for _ in range(CANDIDATES):
+        off = WALL_GAP + unit.depth / 2
+        half = unit.width / 2
+
+        def candidate() -> tuple[float, float, float]:
             side = self.rng.choice(sides)
-            rot = SIDE_ROTATION[side]
-            half = unit.width / 2
             if side in "NS":
                 along = self.rng.uniform(room.x0 + half, room.x1 - half)
-                off = WALL_GAP + unit.depth / 2
-                across = room.z1 - off if side == "N" else room.z0 + off
-                cands.append((along, across, rot))
-            else:
-                along = self.rng.uniform(room.z0 + half, room.z1 - half)
-                off = WALL_GAP + unit.depth / 2
-                across = room.x1 - off if side == "E" else room.x0 + off
-                cands.append((across, along, rot))
-        return self._first_fit(room, unit, cands)
+                return along, room.z1 - off if side == "N" else room.z0 + off, SIDE_ROTATION[side]
+            along = self.rng.uniform(room.z0 + half, room.z1 - half)
+            return room.x1 - off if side == "E" else room.x0 + off, along, SIDE_ROTATION[side]
+
+        return self._search(room, unit, candidate)
 
     def free(
         self, room: Room, unit: Unit, rotations: tuple[float, ...], *, spread: float | None = None
     ) -> bool:
         """Place ``unit`` anywhere in ``room`` (or within ``spread`` m of its centre)."""
         cx, cz = (room.x0 + room.x1) / 2, (room.z0 + room.z1) / 2
-        cands = []
-        for _ in range(CANDIDATES):
+
+        def candidate() -> tuple[float, float, float]:
             rot = self.rng.choice(rotations)
             if spread is None:
-                x = self.rng.uniform(room.x0, room.x1)
-                z = self.rng.uniform(room.z0, room.z1)
-            else:
-                x = cx + self.rng.uniform(-spread, spread)
-                z = cz + self.rng.uniform(-spread, spread)
-            cands.append((x, z, rot))
-        return self._first_fit(room, unit, cands)
+                return self.rng.uniform(room.x0, room.x1), self.rng.uniform(room.z0, room.z1), rot
+            return (
+                cx + self.rng.uniform(-spread, spread),
+                cz + self.rng.uniform(-spread, spread),
+                rot,
+            )
 
-    def _first_fit(self, room: Room, unit: Unit, cands: list[tuple[float, float, float]]) -> bool:
-        cands = [(round(x, 2), round(z, 2), r) for x, z, r in cands]
-        body = np.array([rect_at(x, z, unit.width, unit.depth, r) for x, z, r in cands])
-        access = np.array([self._access_rect(unit, x, z, r) for x, z, r in cands])
+        return self._search(room, unit, candidate)
+
+    def _search(
+        self, room: Room, unit: Unit, candidate: Callable[[], tuple[float, float, float]]
+    ) -> bool:
+        """Try candidates in batches (most units fit in the first batch) until one fits."""
+        for _ in range(CANDIDATES // BATCH):
+            if self._first_fit(room, unit, np.array([candidate() for _ in range(BATCH)])):
+                return True
+        return False
+
+    def _first_fit(self, room: Room, unit: Unit, cands: np.ndarray) -> bool:
+        x, z = np.round(cands[:, 0], 2), np.round(cands[:, 1], 2)
+        rot = cands[:, 2]
+        body = rects_at(x, z, unit.width, unit.depth, rot)
+        if unit.around:
+            access = rects_at(x, z, unit.width + 2 * unit.access, unit.depth + 2 * unit.access, rot)
+        else:
+            fx, fz = headings_to_units(rot)
+            reach = (unit.depth + unit.access) / 2
+            access = rects_at(x + fx * reach, z + fz * reach, unit.width, unit.access, rot)
         room_rect = np.array([room.x0, room.z0, room.x1, room.z1])
         ok = _inside(body, room_rect) & _inside(access, room_rect)
         if self.solid:
@@ -129,16 +151,9 @@ class Planner:
         hits = np.flatnonzero(ok)
         if hits.size == 0:
             return False
-        x, z, rot = cands[int(hits[0])]
-        self._commit(room, unit, x, z, rot, tuple(access[int(hits[0])]))
+        k = int(hits[0])
+        self._commit(room, unit, float(x[k]), float(z[k]), float(rot[k]), tuple(access[k]))
         return True
-
-    @staticmethod
-    def _access_rect(unit: Unit, x: float, z: float, rot: float) -> Rect:
-        if unit.around:
-            return rect_at(x, z, unit.width + 2 * unit.access, unit.depth + 2 * unit.access, rot)
-        ax, az = local_to_world(x, z, rot, 0.0, (unit.depth + unit.access) / 2)
-        return rect_at(ax, az, unit.width, unit.access, rot)
 
     def _commit(self, room: Room, unit: Unit, x: float, z: float, rot: float, access: Rect) -> None:
         self.clear.append(access)
