@@ -1,0 +1,249 @@
+"""match_map: type normalisation, synonyms, anchors, per-type assignment, carried identity."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+
+from pytest_emrd.metrics import aec_score, match_map, positional_accuracy_score, type_key
+from pytest_emrd.rooms import CONFERENCE, KITCHEN
+from pytest_emrd.trajectory import GroundTruthObject, MapEntry
+
+MakeObj = Callable[..., GroundTruthObject]
+
+coord = st.floats(-20, 20, allow_nan=False, allow_infinity=False)
+
+
+@pytest.mark.parametrize(
+    ("text", "key"),
+    [
+        ("DiningTable", "diningtable"),
+        ("Dining table #2", "diningtable"),
+        ("dining_table_2", "diningtable"),
+        ("Chair_3", "chair"),
+        ("stool b", "stool"),
+        ("TV (left of the door)", "tv"),
+        ("door-frame", "doorframe"),
+        ("Chair3", "chair"),
+        ("", ""),
+        ("_3", ""),
+    ],
+    ids=lambda v: repr(v),
+)
+def test_type_key(text: str, key: str) -> None:
+    assert type_key(text) == key
+
+
+def test_synonyms_and_label_fallback_resolve_types(make_obj: MakeObj) -> None:
+    truth = [
+        make_obj("DiningTable_1"),
+        make_obj("Television_1", x=1),
+        make_obj("HousePlant_1", x=2),
+        make_obj("Fridge_1", x=3),
+        make_obj("Doorway_1", x=4),
+        make_obj("Door_1", x=5),
+        make_obj("Chair_1", x=6),
+    ]
+    entries = [
+        MapEntry("t", "table", 0, 0),
+        MapEntry("screen", "TV", 1, 0),
+        MapEntry("p", "plant", 2, 0),
+        MapEntry("f", "refrigerator", 3, 0),
+        MapEntry("gap", "door frame", 4, 0),
+        MapEntry("way out", "exit", 5, 0),
+        MapEntry("Chair_7", "", 6, 0),
+        MapEntry("couch", "Sofa", 7, 0),
+    ]
+    m = match_map(entries, truth)
+    assert m.label_of == {
+        "DiningTable_1": "t",
+        "Television_1": "screen",
+        "HousePlant_1": "p",
+        "Fridge_1": "f",
+        "Doorway_1": "gap",
+        "Door_1": "way out",
+        "Chair_1": "Chair_7",
+    }
+    assert m.unrecognised == ("couch",)
+
+
+def test_table_means_the_table_type_the_layout_has(make_obj: MakeObj) -> None:
+    assert match_map([MapEntry("t", "table", 0, 0)], [make_obj("Desk_1")]).label_of == {
+        "Desk_1": "t"
+    }
+
+
+def test_plural_type_names_resolve(make_obj: MakeObj) -> None:
+    assert match_map([MapEntry("x", "chairs", 0, 0)], [make_obj("Chair_1")]).object_ids == {
+        "Chair_1"
+    }
+
+
+def test_per_type_optimal_assignment_in_the_written_frame(make_obj: MakeObj) -> None:
+    truth = [make_obj("Chair_1", x=0), make_obj("Chair_2", x=10)]
+    entries = [MapEntry("a", "Chair", 9, 0), MapEntry("b", "Chair", 1, 0)]
+    m = match_map(entries, truth)
+    assert m.label_of == {"Chair_1": "b", "Chair_2": "a"}
+    assert not m.anchored
+
+
+def test_two_anchors_align_a_rotated_map_before_assigning(make_obj: MakeObj) -> None:
+    truth = [
+        make_obj("Fridge_1", x=0, z=0),
+        make_obj("Television_1", x=10, z=0),
+        make_obj("Chair_1", x=0, z=5),
+        make_obj("Chair_2", x=10, z=5),
+    ]
+    # The model's frame is rotated by 180 degrees and shifted by (100, 100).
+    entries = [
+        MapEntry("fridge", "Fridge", 100, 100),
+        MapEntry("tv", "Television", 90, 100),
+        MapEntry("chair", "Chair", 100, 95),
+    ]
+    m = match_map(entries, truth)
+    assert m.anchored
+    assert m.label_of["Chair_1"] == "chair"
+
+
+def test_entries_beyond_the_instance_count_stay_unmatched(make_obj: MakeObj) -> None:
+    truth = [make_obj("Chair_1", x=0), make_obj("Chair_2", x=5)]
+    entries = [MapEntry(f"c{i}", "Chair", float(i), 0) for i in range(3)]
+    m = match_map(entries, truth)
+    assert len(m.pairs) == 2
+    assert len(m.unmatched) == 1
+
+
+def test_repeated_label_uses_its_first_entry(make_obj: MakeObj) -> None:
+    entries = [MapEntry("x", "Chair", 1, 2), MapEntry("x", "Chair", 9, 9)]
+    m = match_map(entries, [make_obj("Chair_1")])
+    assert m.duplicates == ("x",)
+    assert (m.pairs[0].pred_x, m.pairs[0].pred_z) == (1, 2)
+
+
+def test_no_distance_gate_a_far_entry_of_the_right_type_matches(make_obj: MakeObj) -> None:
+    m = match_map([MapEntry("f", "Fridge", 1000.0, -1000.0)], [make_obj("Fridge_1")])
+    assert m.object_ids == {"Fridge_1"}
+
+
+def test_carried_label_keeps_its_object_even_when_another_is_nearer(make_obj: MakeObj) -> None:
+    truth = [make_obj("Chair_1", x=0), make_obj("Chair_2", x=10)]
+    entries = [MapEntry("a", "Chair", 9.5, 0)]
+    assert match_map(entries, truth).label_of == {"Chair_2": "a"}
+    carried = match_map(entries, truth, carried={"a": "Chair_1"})
+    assert carried.label_of == {"Chair_1": "a"}
+
+
+def test_carried_label_whose_type_changed_is_matched_afresh(make_obj: MakeObj) -> None:
+    truth = [make_obj("Chair_1"), make_obj("Stool_1", x=5)]
+    m = match_map([MapEntry("a", "Stool", 0, 0)], truth, carried={"a": "Chair_1"})
+    assert m.label_of == {"Stool_1": "a"}
+
+
+@pytest.mark.parametrize(
+    ("entries", "truth_ids"),
+    [([], ["Chair_1"]), ([MapEntry("c", "Chair", 0, 0)], []), ([], [])],
+    ids=["empty-map", "empty-ground-truth", "both-empty"],
+)
+def test_empty_inputs_give_no_pairs(
+    make_obj: MakeObj, entries: list[MapEntry], truth_ids: list[str]
+) -> None:
+    assert match_map(entries, [make_obj(i) for i in truth_ids]).pairs == ()
+
+
+TYPES = ["Chair", "Desk", "Laptop", "Sofa"]  # Sofa never appears in the ground truth
+
+
+@st.composite
+def maps_and_truth(draw: st.DrawFn) -> tuple[list[MapEntry], list[GroundTruthObject]]:
+    counts = draw(st.lists(st.integers(0, 3), min_size=3, max_size=3))
+    truth = [
+        GroundTruthObject(f"{t}_{i + 1}", t, "Office", "salient", draw(coord), draw(coord))
+        for t, n in zip(TYPES[:3], counts, strict=True)
+        for i in range(n)
+    ]
+    n_entries = draw(st.integers(0, 8))
+    entries = [
+        MapEntry(f"e{i}", draw(st.sampled_from(TYPES)), draw(coord), draw(coord))
+        for i in range(n_entries)
+    ]
+    return entries, truth
+
+
+@given(maps_and_truth())
+def test_matched_count_is_the_aec_numerator(
+    case: tuple[list[MapEntry], list[GroundTruthObject]],
+) -> None:
+    entries, truth = case
+    m = match_map(entries, truth)
+    expected = sum(
+        min(sum(e.object_type == t for e in entries), sum(o.object_type == t for o in truth))
+        for t in TYPES
+    )
+    assert len(m.pairs) == expected
+    assert len(m.object_ids) == len(m.pairs)
+
+
+@given(maps_and_truth(), st.sampled_from(["duplicate", "absent-type", "type-at-cap"]))
+def test_aec_in_unit_interval_and_never_raised_by_duplicates_or_hallucinations(
+    make_obj: MakeObj, case: tuple[list[MapEntry], list[GroundTruthObject]], kind: str
+) -> None:
+    entries, truth = case
+    before = aec_score(match_map(entries, truth), len(truth))
+    if before is None:
+        assert not truth
+        return
+    assert 0.0 <= before <= 1.0
+    if kind == "duplicate" and entries:
+        extra = entries[0]
+    elif kind == "type-at-cap":
+        full = [
+            t for t in TYPES[:3]
+            if sum(e.object_type == t for e in entries) >= sum(o.object_type == t for o in truth)
+        ]  # fmt: skip
+        extra = MapEntry("extra", full[0], 1.0, 1.0) if full else MapEntry("x", "Sofa", 0, 0)
+    else:
+        extra = MapEntry("ghost", "Sofa", 3.0, 3.0)
+    after = aec_score(match_map([*entries, extra], truth), len(truth))
+    assert after == before
+
+
+@given(
+    st.lists(st.tuples(coord, coord), min_size=0, max_size=4),
+    st.lists(st.tuples(coord, coord), min_size=0, max_size=4),
+    st.floats(0, 2 * math.pi),
+    coord,
+    coord,
+    st.integers(2, 12),
+)
+def test_pa_invariant_under_rigid_motion_and_bounded_by_coverage(
+    make_obj: MakeObj,
+    chairs: list[tuple[float, float]],
+    predicted: list[tuple[float, float]],
+    theta: float,
+    dx: float,
+    dz: float,
+    extra_base: int,
+) -> None:
+    anchors = [make_obj("Fridge_1", KITCHEN, 0, 0), make_obj("Television_1", CONFERENCE, 8, 1)]
+    truth = [*anchors, *(make_obj(f"Chair_{i + 1}", x=x, z=z) for i, (x, z) in enumerate(chairs))]
+    entries = [
+        MapEntry("fridge", "Fridge", 0.3, -0.2),
+        MapEntry("tv", "Television", 7.5, 1.4),
+        *(MapEntry(f"chair{i}", "Chair", x, z) for i, (x, z) in enumerate(predicted)),
+    ]
+    c, s = math.cos(theta), math.sin(theta)
+    moved = [
+        MapEntry(e.label, e.object_type, c * e.x - s * e.z + dx, s * e.x + c * e.z + dz)
+        for e in entries
+    ]
+    g_base = len(truth) + extra_base
+    m = match_map(entries, truth)
+    pa = positional_accuracy_score(m, g_base)
+    pa_moved = positional_accuracy_score(match_map(moved, truth), g_base)
+    assert pa is not None and pa_moved is not None
+    assert pa_moved == pytest.approx(pa, abs=1e-7)
+    assert 0.0 <= pa <= len(m.pairs) / g_base + 1e-12
