@@ -10,10 +10,11 @@ metric that needs to know *which physical object* a map entry stands for calls
    object's type. Steps 3-4 then assign the remaining entries among the remaining objects.
 1. **Deduplicate labels.** A label is one recorded instance; a repeated label keeps its first
    entry (the JSON map is keyed by label, so repeats only come from malformed input).
-2. **Resolve a type.** The entry's ``object_type`` is tried first, then its label. The text is
-   normalised (:func:`~pytest_emrd.metrics._vocab.type_key`: lower case, ``(...)`` asides removed, separators removed,
-   trailing instance suffixes such as ``_2``, ``#3``, `` b`` removed) and looked up among the
-   ground-truth types of this episode, then in :data:`SYNONYMS` (first candidate present in the
+2. **Resolve a type** (:mod:`pytest_emrd.metrics._vocab`). The entry's ``object_type`` is
+   tried first, then its label. The text is normalised (``type_key``: lower case, ``(...)``
+   asides removed, separators removed, trailing instance suffixes such as ``_2``, ``#3``,
+   `` b`` removed) and looked up among the
+   ground-truth types of this episode, then in ``SYNONYMS`` (first candidate present in the
    ground truth wins, so ``table`` is a ``DiningTable`` where the layout has one and a ``Desk``
    where it has no table), then without a plural ``s``. Text that resolves to no ground-truth
    type leaves the entry *unrecognised*.
