@@ -1,1 +1,89 @@
-"""report stage of pytest-emrd."""
+"""Reports: the paper's tables and figures from any run.
+
+Compute (pure): :func:`build_report` turns trajectories (and gate verdicts) into a
+:class:`Report` holding the metrics library's results for every table and figure;
+:func:`compare_runs` compares two runs cell by cell. Render (pure): :func:`render_files`
+(Markdown + PNG, self-contained HTML, JSON), :func:`render_comparison`,
+:func:`step_summary_markdown`. Write (I/O): :func:`write_report`, :func:`write_files`.
+
+Typical use::
+
+    trajectories = pytest_emrd.gate.load_run_dirs([Path("results/run1")])
+    write_report(build_report(trajectories), Path("results/run1/report"))
+"""
+
+from pytest_emrd.report._build import build_report, group_cells
+from pytest_emrd.report._compare import COMPARED, Comparison, Difference, compare_runs
+from pytest_emrd.report._model import (
+    AnovaRow,
+    EbbinghausRow,
+    EpisodeMap,
+    ExplorationRow,
+    FocalTable,
+    FPSGRow,
+    Gates,
+    InterventionTable,
+    KMSeries,
+    MapPoint,
+    MillerSeries,
+    Overview,
+    PASpawn,
+    Reasoning,
+    ReasoningRow,
+    Report,
+    SerialRow,
+    SIRSeries,
+    TBSSeries,
+    VariantTest,
+    row_label,
+)
+from pytest_emrd.report._render import (
+    FORMATS,
+    check_formats,
+    render_comparison,
+    render_files,
+    report_json,
+    step_summary_markdown,
+)
+from pytest_emrd.report._style import CONDITION_COLOURS, FIGURES
+from pytest_emrd.report._write import write_files, write_report
+
+__all__ = [
+    "COMPARED",
+    "CONDITION_COLOURS",
+    "FIGURES",
+    "FORMATS",
+    "AnovaRow",
+    "Comparison",
+    "Difference",
+    "EbbinghausRow",
+    "EpisodeMap",
+    "ExplorationRow",
+    "FPSGRow",
+    "FocalTable",
+    "Gates",
+    "InterventionTable",
+    "KMSeries",
+    "MapPoint",
+    "MillerSeries",
+    "Overview",
+    "PASpawn",
+    "Reasoning",
+    "ReasoningRow",
+    "Report",
+    "SIRSeries",
+    "SerialRow",
+    "TBSSeries",
+    "VariantTest",
+    "build_report",
+    "check_formats",
+    "compare_runs",
+    "group_cells",
+    "render_comparison",
+    "render_files",
+    "report_json",
+    "row_label",
+    "step_summary_markdown",
+    "write_files",
+    "write_report",
+]

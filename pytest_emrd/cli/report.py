@@ -1,0 +1,109 @@
+"""``emrd report RUN_DIR... [--out DIR] [--format md,html,json]`` and
+``emrd report --compare RUN_A RUN_B``: the paper's tables and figures from run directories.
+
+Several run directories (shards) make one report. The gate section uses ``--thresholds``,
+or ``./thresholds.yaml`` when it exists. ``--compare`` writes ``compare.*`` into ``--out``
+(or prints the Markdown when no ``--out`` is given). Exit status 0, or 2 on a usage error.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from pytest_emrd.errors import ConfigError
+
+_DEFAULT_THRESHOLDS = Path("thresholds.yaml")
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("report", help="tables and figures of one or more run directories")
+    p.add_argument("run_dirs", nargs="*", type=Path, metavar="RUN_DIR", help="run directories")
+    p.add_argument(
+        "--compare",
+        nargs=2,
+        type=Path,
+        metavar=("RUN_A", "RUN_B"),
+        help="compare two run directories metric by metric (B - A, bootstrap CI)",
+    )
+    p.add_argument(
+        "--out", type=Path, default=None, help="output folder (default: FIRST_RUN_DIR/report)"
+    )
+    p.add_argument(
+        "--format", default="md,html,json", help="comma-separated: md, html, json (default: all)"
+    )
+    p.add_argument(
+        "--thresholds",
+        type=Path,
+        default=None,
+        help="gates file for the gate section (default: ./thresholds.yaml if it exists)",
+    )
+    p.add_argument("--models", type=Path, default=None, help="user model registry YAML")
+    p.add_argument("--seed", type=int, default=0, help="bootstrap seed of --compare (default 0)")
+    p.set_defaults(func=_run)
+
+
+def _run(args: argparse.Namespace) -> int:
+    from pytest_emrd.report import check_formats
+
+    formats = check_formats(f.strip() for f in args.format.split(",") if f.strip())
+    if bool(args.compare) == bool(args.run_dirs):
+        raise ConfigError(
+            f"run_dirs={[str(p) for p in args.run_dirs]} compare={args.compare}: give either "
+            "RUN_DIR... or --compare RUN_A RUN_B, not both and not neither."
+        )
+    if args.compare:
+        return _compare(args, formats)
+    return _report(args, formats)
+
+
+def _report(args: argparse.Namespace, formats: list[str]) -> int:
+    from pytest_emrd.agent import load_registry
+    from pytest_emrd.gate import evaluate_all, load_run_dirs, load_thresholds
+    from pytest_emrd.metrics import GATE_METRICS
+    from pytest_emrd.report import build_report, write_report
+
+    trajectories = load_run_dirs(args.run_dirs)
+    registry = load_registry(args.models)
+    thresholds_path = args.thresholds
+    if thresholds_path is None and _DEFAULT_THRESHOLDS.is_file():
+        thresholds_path = _DEFAULT_THRESHOLDS
+    verdicts, source = [], None
+    if thresholds_path is not None:
+        thresholds = load_thresholds(thresholds_path, registry=registry, metrics=GATE_METRICS)
+        verdicts = evaluate_all(trajectories, thresholds, GATE_METRICS)
+        source = str(thresholds_path)
+    prices = {}
+    for model in {t.spec.model for t in trajectories}:
+        if model in registry.names():
+            config = registry.get(model)
+            prices[model] = (config.price_per_mtok_in, config.price_per_mtok_out)
+    report = build_report(trajectories, verdicts=verdicts, thresholds_source=source, prices=prices)
+    out = args.out if args.out is not None else args.run_dirs[0] / "report"
+    written = write_report(report, out, formats)
+    print(f"{len(trajectories)} episodes from {len(args.run_dirs)} run director(ies)")
+    for note in report.missing:
+        print(f"note: {note}")
+    for path in written:
+        print(path)
+    return 0
+
+
+def _compare(args: argparse.Namespace, formats: list[str]) -> int:
+    from pytest_emrd.gate import load_run_dirs
+    from pytest_emrd.report import compare_runs, render_comparison, write_files
+
+    run_a, run_b = args.compare
+    comparison = compare_runs(
+        load_run_dirs([run_a]),
+        load_run_dirs([run_b]),
+        names=(str(run_a), str(run_b)),
+        rng_seed=args.seed,
+    )
+    if args.out is None:
+        sys.stdout.write(render_comparison(comparison, ["md"])["compare.md"].decode())
+        return 0
+    for path in write_files(render_comparison(comparison, formats), args.out):
+        print(path)
+    return 0

@@ -1,0 +1,194 @@
+"""Build a :class:`Report` from trajectories: grouping, every table and figure, what is missing.
+
+Pure: trajectories and verdicts in, a report model out. Reading run directories and
+thresholds files, and writing files, is the caller's job (:mod:`._write`, the CLI).
+"""
+
+from __future__ import annotations
+
+from collections import Counter
+from collections.abc import Mapping, Sequence
+
+from pytest_emrd.gate import UsageRow, Verdict
+from pytest_emrd.metrics import EpisodeMetrics, as_episode_metrics
+from pytest_emrd.report._figdata import (
+    episode_map,
+    km_series,
+    miller_series,
+    pa_by_spawn,
+    pick_episode,
+    sir_series,
+    tbs_series,
+)
+from pytest_emrd.report._model import Gates, Overview, Reasoning, Report, row_label
+from pytest_emrd.report._tables import (
+    Cells,
+    Embed,
+    anova_rows,
+    ebbinghaus_rows,
+    exploration_rows,
+    focal_tables,
+    fpsg_rows,
+    intervention_tables,
+    reasoning,
+    serial_rows,
+)
+from pytest_emrd.rooms import ROOM_SLUGS
+from pytest_emrd.trajectory import CONDITIONS, VARIANTS, Trajectory
+
+#: Model name -> USD per million (prompt, completion) tokens, for the usage table.
+Prices = Mapping[str, tuple[float | None, float | None]]
+
+
+def _ordered(values: set[str], order: Sequence[str]) -> tuple[str, ...]:
+    return tuple(sorted(values, key=lambda v: (order.index(v) if v in order else len(order), v)))
+
+
+CellKey = tuple[str, str, str]
+
+
+def group_cells(metrics: Sequence[EpisodeMetrics]) -> dict[CellKey, list[EpisodeMetrics]]:
+    """Episodes by (model, variant, condition): models sorted, variants and conditions in the
+    paper's order, episodes in case-id order within a cell."""
+    cells: dict[tuple[str, str, str], list[EpisodeMetrics]] = {}
+    for m in sorted(metrics, key=lambda m: m.spec.case_id):
+        cells.setdefault((m.spec.model, m.spec.variant, m.spec.condition), []).append(m)
+
+    def key(k: tuple[str, str, str]) -> tuple[str, tuple[int, str], tuple[int, str]]:
+        model, variant, condition = k
+        return (model, _rank(variant, VARIANTS), _rank(condition, CONDITIONS))
+
+    return {k: cells[k] for k in sorted(cells, key=key)}
+
+
+def _rank(value: str, order: Sequence[str]) -> tuple[int, str]:
+    return (order.index(value) if value in order else len(order), value)
+
+
+def _usage(trajectories: Sequence[Trajectory], prices: Prices | None) -> tuple[UsageRow, ...]:
+    rows = []
+    for model in sorted({t.spec.model for t in trajectories}):
+        mine = [t for t in trajectories if t.spec.model == model]
+        prompt = sum(t.usage.prompt_tokens for t in mine)
+        completion = sum(t.usage.completion_tokens for t in mine)
+        price_in, price_out = (prices or {}).get(model, (None, None))
+        cost = None
+        if price_in is not None and price_out is not None:
+            cost = (prompt * price_in + completion * price_out) / 1e6
+        rows.append(UsageRow(model, len(mine), prompt, completion, cost))
+    return tuple(rows)
+
+
+def _overview(trajectories: Sequence[Trajectory], prices: Prices | None) -> Overview:
+    specs = [t.spec for t in trajectories]
+    return Overview(
+        episodes=len(trajectories),
+        by_status=dict(sorted(Counter(t.status for t in trajectories).items())),
+        models=tuple(sorted({s.model for s in specs})),
+        conditions=_ordered({s.condition for s in specs}, CONDITIONS),
+        variants=_ordered({s.variant for s in specs}, VARIANTS),
+        spawns=_ordered({s.spawn for s in specs}, tuple(ROOM_SLUGS.values())),
+        usage=_usage(trajectories, prices),
+    )
+
+
+def _missing(
+    trajectories: Sequence[Trajectory], overview: Overview, gates: Gates, reasons: Reasoning
+) -> tuple[str, ...]:
+    if not trajectories:
+        return (
+            "The run holds no episode, so there is nothing to tabulate or plot: run "
+            "`pytest benchmarks --emrd-results DIR` and pass DIR to `emrd report`.",
+        )
+    notes = []
+    errored = [t for t in trajectories if t.status == "errored"]
+    if errored:
+        causes = Counter((t.error or "no cause recorded").splitlines()[0][:120] for t in errored)
+        top = "; ".join(f"{c} (x{n})" for c, n in causes.most_common(3))
+        if len(errored) == len(trajectories):
+            notes.append(
+                f"All {len(errored)} episodes errored, so every metric is undefined "
+                f"(causes: {top}). Fix the cause and rerun the run directory."
+            )
+        else:
+            notes.append(
+                f"{len(errored)} of {len(trajectories)} episodes errored and are excluded "
+                f"from every table and figure (causes: {top})."
+            )
+    absent = [c for c in CONDITIONS if c not in overview.conditions]
+    if absent:
+        notes.append(
+            f"No episode ran under condition(s) {', '.join(absent)}: their columns are empty "
+            "and the one-way ANOVA needs at least two conditions "
+            "(run with --emrd-conditions baseline,low_light,texture)."
+        )
+    variants = overview.variants
+    if variants == ("default",):
+        notes.append(
+            "Only the default prompt was run: the controlled-intervention tables need prompt "
+            "variants (B1-B4, neutral, no_inventory) of the same model and condition."
+        )
+    elif "default" not in variants:
+        notes.append(
+            f"Prompt variant(s) {', '.join(variants)} ran without the default prompt: the "
+            "intervention tests compare each variant with default episodes of the same cell."
+        )
+    if gates.source is None:
+        notes.append(
+            "No thresholds file was given or found: the gate section is empty "
+            "(pass --thresholds thresholds.yaml)."
+        )
+    elif not gates.verdicts:
+        notes.append(f"No gate of {gates.source} applies to the models and conditions run.")
+    if reasons.unavailable:
+        notes.append(f"Representative reasoning is not computed: {reasons.unavailable}")
+    if pick_episode(trajectories) is None:
+        notes.append("No episode ended with a non-empty cognitive map: no map figure is drawn.")
+    return tuple(notes)
+
+
+def build_report(
+    trajectories: Sequence[Trajectory],
+    *,
+    verdicts: Sequence[Verdict] | None = None,
+    thresholds_source: str | None = None,
+    embed: Embed | None = None,
+    prices: Prices | None = None,
+    with_reasoning: bool = True,
+) -> Report:
+    """Every table and figure of the paper for ``trajectories`` (any models, conditions,
+    variants; errored episodes are excluded and reported).
+
+    ``verdicts`` are the gate verdicts (:func:`pytest_emrd.gate.evaluate_all`) of the file
+    ``thresholds_source``; ``embed`` replaces the ``nlp`` extra's sentence encoder for the
+    representative-reasoning table; ``prices`` adds estimated cost to the usage table;
+    ``with_reasoning=False`` leaves that table empty (no sentence encoder is loaded).
+    """
+    metrics = as_episode_metrics(trajectories)
+    cells: Cells = group_cells(metrics)
+    by_label: dict[str, list[EpisodeMetrics]] = {}
+    for (model, variant, _), ems in cells.items():
+        by_label.setdefault(row_label(model, variant), []).extend(ems)
+    overview = _overview(trajectories, prices)
+    gates = Gates(thresholds_source, tuple(verdicts or ()))
+    reasons = reasoning(by_label, embed) if with_reasoning else Reasoning(())
+    chosen = pick_episode(trajectories)
+    return Report(
+        overview=overview,
+        missing=_missing(trajectories, overview, gates, reasons),
+        exploration=exploration_rows(cells),
+        focal=focal_tables(cells),
+        fpsg=fpsg_rows(cells),
+        ebbinghaus=ebbinghaus_rows(cells),
+        serial_position=serial_rows(cells),
+        anova=anova_rows(cells),
+        interventions=intervention_tables(cells),
+        reasoning=reasons,
+        gates=gates,
+        tbs=tbs_series(cells),
+        pa=pa_by_spawn(cells),
+        miller=miller_series(cells),
+        km=km_series(cells),
+        sir=sir_series(cells),
+        episode_map=episode_map(chosen) if chosen is not None else None,
+    )

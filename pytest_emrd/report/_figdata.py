@@ -1,0 +1,111 @@
+"""The data behind every figure, computed from grouped episode metrics (pure)."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+
+import numpy as np
+
+from pytest_emrd.metrics import (
+    EpisodeMetrics,
+    ebbinghaus,
+    kaplan_meier_anchored,
+    match_map,
+    miller_curve,
+    positional_accuracy,
+    rigid_fit,
+    spatial_identity_resolution,
+    tbs_curve,
+)
+from pytest_emrd.report._model import (
+    EpisodeMap,
+    KMSeries,
+    MapPoint,
+    MillerSeries,
+    PASpawn,
+    SIRSeries,
+    TBSSeries,
+)
+from pytest_emrd.report._tables import Cells
+from pytest_emrd.trajectory import Trajectory
+
+
+def tbs_series(cells: Cells) -> tuple[TBSSeries, ...]:
+    return tuple(TBSSeries(m, v, c, tbs_curve(ems)) for (m, v, c), ems in cells.items())
+
+
+def pa_by_spawn(cells: Cells) -> tuple[PASpawn, ...]:
+    """Per-episode Positional Accuracy grouped by spawn room (``positional_accuracy``)."""
+    out = []
+    for (model, variant, condition), ems in cells.items():
+        by_spawn: dict[str, list[EpisodeMetrics]] = {}
+        for m in ems:
+            by_spawn.setdefault(m.spec.spawn, []).append(m)
+        for spawn, group in by_spawn.items():
+            values = tuple(v for v in positional_accuracy(group) if v is not None)
+            out.append(PASpawn(model, variant, condition, spawn, values))
+    return tuple(out)
+
+
+def miller_series(cells: Cells) -> tuple[MillerSeries, ...]:
+    return tuple(MillerSeries(m, v, c, miller_curve(ems)) for (m, v, c), ems in cells.items())
+
+
+def km_series(cells: Cells) -> tuple[KMSeries, ...]:
+    """Anchored KM per category with the Ebbinghaus fit of the same category."""
+    out = []
+    for (model, variant, condition), ems in cells.items():
+        fits = ebbinghaus(ems).by_category
+        for category, km in kaplan_meier_anchored(ems).items():
+            out.append(KMSeries(model, variant, condition, category, km, fits[category]))
+    return tuple(out)
+
+
+def sir_series(cells: Cells) -> tuple[SIRSeries, ...]:
+    return tuple(
+        SIRSeries(m, v, c, spatial_identity_resolution(ems)) for (m, v, c), ems in cells.items()
+    )
+
+
+def pick_episode(trajectories: Sequence[Trajectory]) -> Trajectory | None:
+    """The episode the map figure shows: the first non-errored one (baseline first, case-id
+    order) whose terminal map holds an entry; None when there is none."""
+    candidates = [t for t in trajectories if t.status != "errored" and t.final_map]
+    if not candidates:
+        return None
+    return min(candidates, key=lambda t: (t.spec.condition != "baseline", t.spec.case_id))
+
+
+def episode_map(traj: Trajectory) -> EpisodeMap:
+    """Ground truth, path and the terminal map aligned by :func:`rigid_fit` on the pairs of
+    :func:`match_map` (the whole map moves with the fit; unmatched entries included)."""
+    truth = traj.ground_truth
+    entries = traj.final_map
+    matching = match_map(entries, truth.objects)
+    matched = {p.label: p for p in matching.pairs}
+    rot, shift = np.eye(2), np.zeros(2)
+    rmse = None
+    if matching.pairs:
+        pred = np.array([(p.pred_x, p.pred_z) for p in matching.pairs])
+        true = np.array([(p.true_x, p.true_z) for p in matching.pairs])
+        rot, shift = rigid_fit(pred, true)
+        rmse = float(np.sqrt(np.mean(np.sum((pred @ rot.T + shift - true) ** 2, axis=1))))
+    seen: set[str] = set()
+    points = []
+    for e in entries:
+        if e.label in seen:
+            continue
+        seen.add(e.label)
+        x, z = np.array([e.x, e.z]) @ rot.T + shift
+        pair = matched.get(e.label)
+        points.append(MapPoint(e.label, float(x), float(z), pair.object_id if pair else None))
+    return EpisodeMap(
+        case_id=traj.spec.case_id,
+        rooms=truth.rooms,
+        objects=truth.objects,
+        path=tuple((s.pose.x, s.pose.z) for s in traj.steps),
+        entries=tuple(points),
+        rotation_deg=math.degrees(math.atan2(rot[1, 0], rot[0, 0])),
+        rmse=rmse,
+    )

@@ -1,0 +1,248 @@
+"""The report's figures as PNG bytes (matplotlib, Agg canvas, no pyplot global state).
+
+One colour per condition as in the paper: baseline blue, low light red, texture green. One
+panel per model row (``model`` or ``model [variant]``). A figure without data is not drawn;
+:func:`render_figures` says why instead.
+"""
+
+from __future__ import annotations
+
+import io
+import math
+from collections.abc import Callable, Sequence
+from typing import Any, Final
+
+import numpy as np
+from matplotlib.axes import Axes
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
+from matplotlib.lines import Line2D
+
+from pytest_emrd.report._model import EpisodeMap, Report, row_label
+from pytest_emrd.report._style import CONDITION_COLOURS, CONDITION_NAMES, FIGURES
+from pytest_emrd.rooms import ROOM_SLUGS, SLUG_ROOMS
+
+_CATEGORY_MARKERS: Final[dict[str, str]] = {"landmark": "^", "salient": "s", "clutter": "o"}
+_DPI: Final = 100
+
+
+def colour(condition: str) -> str:
+    return CONDITION_COLOURS.get(condition, "#7f7f7f")
+
+
+def _panels(labels: Sequence[str], *, ncols: int = 3, size: tuple[float, float] = (5.0, 3.6)
+            ) -> tuple[Figure, dict[str, Axes]]:  # fmt: skip
+    cols = min(ncols, len(labels))
+    rows = math.ceil(len(labels) / cols)
+    fig = Figure(figsize=(size[0] * cols, size[1] * rows + 0.6), layout="constrained")
+    axes = fig.subplots(rows, cols, squeeze=False).ravel()
+    for ax in axes[len(labels) :]:
+        ax.set_axis_off()
+    return fig, dict(zip(labels, axes, strict=False))
+
+
+def _png(fig: Figure) -> bytes:
+    buffer = io.BytesIO()
+    FigureCanvasAgg(fig)
+    fig.savefig(buffer, format="png", dpi=_DPI)
+    return buffer.getvalue()
+
+
+def _legend(fig: Figure, conditions: Sequence[str]) -> None:
+    handles = [Line2D([], [], color=colour(c), lw=2.5, label=CONDITION_NAMES.get(c, c))
+               for c in conditions]  # fmt: skip
+    fig.legend(handles=handles, loc="outside lower center", ncols=len(handles), frameon=False)
+
+
+def _labels(items: Sequence[Any]) -> list[str]:
+    return list(dict.fromkeys(row_label(i.model, i.variant) for i in items))
+
+
+def _tbs(report: Report) -> Figure | None:
+    series = [s for s in report.tbs if s.curve.n]
+    if not series:
+        return None
+    fig, axes = _panels(_labels(series))
+    for s in series:
+        ax = axes[row_label(s.model, s.variant)]
+        t, mean, sd = np.array(s.curve.t), np.array(s.curve.mean), np.array(s.curve.sd)
+        ax.plot(t, mean, color=colour(s.condition), lw=2)
+        ax.fill_between(t, mean - sd, mean + sd, color=colour(s.condition), alpha=0.12, lw=0)
+    for label, ax in axes.items():
+        ax.set(title=label, xlabel="step t", ylabel="TBS(t) (0-1)", ylim=(0, 1.02))
+        ax.grid(alpha=0.3)
+    fig.suptitle("Temporal Belief Stability (mean ± 1 sd)")
+    _legend(fig, list(dict.fromkeys(s.condition for s in series)))
+    return fig
+
+
+def _pa(report: Report) -> Figure | None:
+    groups = [g for g in report.pa if g.values]
+    if not groups:
+        return None
+    fig, axes = _panels(_labels(groups))
+    conditions = list(dict.fromkeys(g.condition for g in groups))
+    spawns = [s for s in ROOM_SLUGS.values() if any(g.spawn == s for g in groups)]
+    width = 0.8 / len(conditions)
+    for g in groups:
+        ax = axes[row_label(g.model, g.variant)]
+        offset = conditions.index(g.condition) - (len(conditions) - 1) / 2
+        x = spawns.index(g.spawn) + offset * width
+        sd = float(np.std(g.values, ddof=1)) if len(g.values) > 1 else 0.0
+        ax.bar(x, float(np.mean(g.values)), width * 0.95, yerr=sd, capsize=3,
+               color=colour(g.condition), alpha=0.85)  # fmt: skip
+    for label, ax in axes.items():
+        ax.set_xticks(range(len(spawns)), [SLUG_ROOMS[s] for s in spawns])
+        ax.set(title=label, xlabel="spawn room", ylabel="Positional Accuracy (0-1)", ylim=(0, 1.05))
+        ax.grid(axis="y", alpha=0.3)
+    fig.suptitle("Positional Accuracy by spawn room and condition (mean ± 1 sd)")
+    _legend(fig, conditions)
+    return fig
+
+
+def _miller(report: Report) -> Figure | None:
+    series = [s for s in report.miller if s.curve.bins]
+    if not series:
+        return None
+    fig, axes = _panels(_labels(series))
+    width = series[0].curve.width
+    for s in series:
+        ax = axes[row_label(s.model, s.variant)]
+        loads = np.array(s.curve.bins) * s.curve.width
+        ax.plot(loads, s.curve.probabilities, marker="o", color=colour(s.condition), lw=2)
+        if s.curve.m_star is not None:
+            ax.axvline(s.curve.m_star, color=colour(s.condition), ls=":", lw=1.2)
+    for label, ax in axes.items():
+        ax.set(title=label, xlabel=f"map size m (objects, bin upper edge, w={width})",
+               ylabel="P(forget >= 1 object)", ylim=(0, 1.02))  # fmt: skip
+        ax.grid(alpha=0.3)
+    fig.suptitle("Miller's law: forgetting probability by cognitive load (dotted: m*)")
+    _legend(fig, list(dict.fromkeys(s.condition for s in series)))
+    return fig
+
+
+def _km(report: Report) -> Figure | None:
+    series = [s for s in report.km if s.km.n]
+    if not series:
+        return None
+    labels = _labels(series)
+    categories = list(dict.fromkeys(s.category for s in series))
+    fig = Figure(figsize=(4.6 * len(categories), 3.4 * len(labels) + 0.6), layout="constrained")
+    grid = fig.subplots(len(labels), len(categories), squeeze=False)
+    for s in series:
+        ax = grid[labels.index(row_label(s.model, s.variant))][categories.index(s.category)]
+        ax.step(s.km.times, s.km.survival, where="post", color=colour(s.condition), lw=2)
+        efc = s.fit.efc
+        if efc is not None and math.isfinite(efc):
+            t = np.linspace(0, max(s.km.times), 100)
+            ax.plot(t, s.km.coverage * np.exp(-t / efc), color=colour(s.condition), ls="--", lw=1)
+    for i, label in enumerate(labels):
+        for j, category in enumerate(categories):
+            ax = grid[i][j]
+            ax.set(title=f"{label}: {category}", xlabel="steps out of view t",
+                   ylabel="S(t) (discovered & held)", ylim=(0, 1.02))  # fmt: skip
+            ax.grid(alpha=0.3)
+    fig.suptitle("Coverage-anchored Kaplan-Meier survival (dashed: Ebbinghaus fit)")
+    _legend(fig, list(dict.fromkeys(s.condition for s in series)))
+    return fig
+
+
+def _sir(report: Report) -> Figure | None:
+    series = [s for s in report.sir if s.sir.values]
+    if not series:
+        return None
+    fig, axes = _panels(_labels(series))
+    conditions = list(dict.fromkeys(s.condition for s in series))
+    for s in series:
+        ax = axes[row_label(s.model, s.variant)]
+        pos = conditions.index(s.condition)
+        values = np.array(s.sir.values)
+        if len(values) > 1 and np.ptp(values) > 0:
+            body = ax.violinplot(values, [pos], showmeans=True, widths=0.8)
+            for part in body["bodies"]:
+                part.set(facecolor=colour(s.condition), edgecolor=colour(s.condition), alpha=0.45)
+            for key in ("cmeans", "cmins", "cmaxes", "cbars"):
+                body[key].set(color=colour(s.condition))
+        jitter = np.linspace(-0.08, 0.08, len(values)) if len(values) > 1 else np.zeros(1)
+        ax.scatter(pos + jitter, values, s=8, color=colour(s.condition), alpha=0.6)
+    for label, ax in axes.items():
+        ax.set_xticks(range(len(conditions)), [CONDITION_NAMES.get(c, c) for c in conditions])
+        ax.set(title=label, xlabel="condition", ylabel="SIR (0-1)", ylim=(-0.02, 1.02))
+        ax.grid(axis="y", alpha=0.3)
+    fig.suptitle("Coverage-anchored Spatial Identity Resolution per episode")
+    _legend(fig, conditions)
+    return fig
+
+
+def _episode_map(report: Report) -> Figure | None:
+    m: EpisodeMap | None = report.episode_map
+    if m is None:
+        return None
+    fig = Figure(figsize=(8.5, 7.5), layout="constrained")
+    ax = fig.subplots()
+    for room in m.rooms:
+        poly = np.array([*room.polygon, room.polygon[0]])
+        ax.fill(poly[:, 0], poly[:, 1], color="#f2f2f2", ec="#555555", lw=1.5, zorder=0)
+        cx, cz = poly[:-1].mean(axis=0)
+        ax.text(cx, cz, room.name, ha="center", va="center", fontsize=13, color="#999999")
+    truth = {o.object_id: o for o in m.objects}
+    for category, marker in _CATEGORY_MARKERS.items():
+        objs = [o for o in m.objects if o.category == category]
+        if objs:
+            ax.scatter([o.x for o in objs], [o.z for o in objs], marker=marker, s=40,
+                       color="#333333", label=f"ground truth: {category}", zorder=3)  # fmt: skip
+    path = np.array(m.path)
+    if len(path):
+        ax.plot(path[:, 0], path[:, 1], color="#1f5fbf", lw=1.5, alpha=0.7, label="agent path")
+        ax.scatter(*path[0], marker="*", s=220, color="#1f5fbf", zorder=4, label="spawn")
+        ax.scatter(*path[-1], marker="X", s=120, color="#1f5fbf", zorder=4, label="last pose")
+    for e in m.entries:
+        if e.object_id in truth:
+            o = truth[e.object_id]
+            ax.plot([e.x, o.x], [e.z, o.z], color="#d62728", lw=0.8, alpha=0.6, zorder=2)
+    matched = [e for e in m.entries if e.object_id is not None]
+    unmatched = [e for e in m.entries if e.object_id is None]
+    ax.scatter([e.x for e in matched], [e.z for e in matched], marker="x", s=45,
+               color="#d62728", label="cognitive map (matched)", zorder=5)  # fmt: skip
+    if unmatched:
+        ax.scatter([e.x for e in unmatched], [e.z for e in unmatched], marker="x", s=45,
+                   color="#ff9900", label="cognitive map (unmatched)", zorder=5)  # fmt: skip
+    rmse = "n/a" if m.rmse is None else f"{m.rmse:.2f} m"
+    ax.set(title=f"{m.case_id}: terminal map aligned (rotation {m.rotation_deg:.1f} deg, "
+           f"RMSE {rmse})", xlabel="x (m, spawn frame)", ylabel="z (m, spawn frame)")  # fmt: skip
+    ax.set_aspect("equal")
+    ax.grid(alpha=0.2)
+    fig.legend(loc="outside lower center", ncols=4, frameon=False, fontsize=8)
+    return fig
+
+
+_DRAW: Final[dict[str, Callable[[Report], Figure | None]]] = {
+    "tbs.png": _tbs,
+    "pa_by_spawn.png": _pa,
+    "miller.png": _miller,
+    "km.png": _km,
+    "sir.png": _sir,
+    "episode_map.png": _episode_map,
+}
+
+_WHY_NOT: Final[dict[str, str]] = {
+    "tbs.png": "no non-errored episode with steps and |G_base| > 0",
+    "pa_by_spawn.png": "Positional Accuracy is undefined in every episode",
+    "miller.png": "no step with a non-empty cognitive map",
+    "km.png": "no object category in the ground truth of a non-errored episode",
+    "sir.png": "no episode re-entered a room with mapped objects",
+    "episode_map.png": "no episode ended with a non-empty cognitive map",
+}
+
+
+def render_figures(report: Report) -> tuple[dict[str, bytes], dict[str, str]]:
+    """PNG bytes per figure file name, and for each figure not drawn, why not."""
+    drawn: dict[str, bytes] = {}
+    skipped: dict[str, str] = {}
+    for spec in FIGURES:
+        fig = _DRAW[spec.name](report)
+        if fig is None:
+            skipped[spec.name] = _WHY_NOT[spec.name]
+        else:
+            drawn[spec.name] = _png(fig)
+    return drawn, skipped

@@ -1,0 +1,98 @@
+"""A report's files as bytes: Markdown + PNG figures, self-contained HTML, JSON (pure)."""
+
+from __future__ import annotations
+
+import json
+import math
+from collections.abc import Iterable, Sequence
+from typing import Any, Final
+
+from pytest_emrd.errors import check_choice
+from pytest_emrd.gate import Verdict
+from pytest_emrd.report._build import build_report
+from pytest_emrd.report._compare import Comparison
+from pytest_emrd.report._compare_doc import compare_document
+from pytest_emrd.report._html import render_html
+from pytest_emrd.report._markdown import render_markdown
+from pytest_emrd.report._model import Report
+from pytest_emrd.report._plots import render_figures
+from pytest_emrd.report._sections import report_document, summary_document
+from pytest_emrd.trajectory import Trajectory
+
+#: Output formats of ``emrd report --format``.
+FORMATS: Final[tuple[str, ...]] = ("md", "html", "json")
+
+
+def _json_safe(data: Any) -> Any:
+    """Strict JSON: ``inf`` (an unbounded memory strength) becomes the string ``"inf"``."""
+    if isinstance(data, float) and not math.isfinite(data):
+        return "nan" if math.isnan(data) else ("inf" if data > 0 else "-inf")
+    if isinstance(data, dict):
+        return {k: _json_safe(v) for k, v in data.items()}
+    if isinstance(data, list):
+        return [_json_safe(v) for v in data]
+    return data
+
+
+def check_formats(formats: Iterable[str]) -> list[str]:
+    """The requested formats, deduplicated; ConfigError naming an unknown one."""
+    wanted = list(dict.fromkeys(formats))
+    for f in wanted:
+        check_choice("format", f, FORMATS, hint="Use a comma-separated list such as md,html.")
+    return wanted
+
+
+def report_json(report: Report) -> str:
+    """Every aggregate of the report as strict JSON (non-finite floats as strings)."""
+    return json.dumps(_json_safe(report.to_dict()), indent=1, allow_nan=False) + "\n"
+
+
+def render_files(report: Report, formats: Iterable[str] = FORMATS) -> dict[str, bytes]:
+    """File name -> content: ``report.md`` with its PNGs, ``report.html``, ``report.json``."""
+    wanted = check_formats(formats)
+    files: dict[str, bytes] = {}
+    if "md" in wanted or "html" in wanted:
+        pngs, skipped = render_figures(report)
+        doc = report_document(report, skipped)
+        if "md" in wanted:
+            files["report.md"] = render_markdown(doc).encode()
+            files.update(pngs)
+        if "html" in wanted:
+            files["report.html"] = render_html(doc, pngs).encode()
+    if "json" in wanted:
+        files["report.json"] = report_json(report).encode()
+    return files
+
+
+def step_summary_markdown(
+    trajectories: Sequence[Trajectory],
+    verdicts: Sequence[Verdict],
+    *,
+    thresholds_source: str | None = None,
+) -> str:
+    """Markdown for a PR comment or ``$GITHUB_STEP_SUMMARY``: run overview, what is missing,
+    the gate table, Exploration Competence and FPSG (no figures, no sentence encoder).
+
+    ``thresholds_source`` names the thresholds file in the gate section (default
+    ``thresholds`` when there are verdicts).
+    """
+    source = thresholds_source or ("thresholds" if verdicts else None)
+    report = build_report(
+        trajectories, verdicts=verdicts, thresholds_source=source, with_reasoning=False
+    )
+    return render_markdown(summary_document(report))
+
+
+def render_comparison(comparison: Comparison, formats: Iterable[str] = FORMATS) -> dict[str, bytes]:
+    """File name -> content of a run comparison: ``compare.md``, ``.html``, ``.json``."""
+    wanted = check_formats(formats)
+    doc = compare_document(comparison)
+    files: dict[str, bytes] = {}
+    if "md" in wanted:
+        files["compare.md"] = render_markdown(doc).encode()
+    if "html" in wanted:
+        files["compare.html"] = render_html(doc, {}).encode()
+    if "json" in wanted:
+        data = _json_safe(comparison.to_dict())
+        files["compare.json"] = (json.dumps(data, indent=1, allow_nan=False) + "\n").encode()
+    return files

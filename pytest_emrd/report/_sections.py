@@ -1,0 +1,289 @@
+"""Lay a :class:`Report` out as the paper's tables: a format-neutral :class:`Document` (pure)."""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from typing import TypeVar
+
+from pytest_emrd.metrics import FocalRow
+from pytest_emrd.report._document import (
+    Block,
+    Bullets,
+    Cell,
+    Document,
+    FigureRef,
+    Paragraph,
+    Section,
+    Table,
+    mean_sd,
+    num,
+    pct,
+    pval,
+)
+from pytest_emrd.report._model import InterventionTable, Report, row_label
+from pytest_emrd.report._style import CONDITION_NAMES, FIGURES
+from pytest_emrd.rooms import FOCAL_COLUMNS, ROOM_LETTERS, SLUG_ROOMS
+
+R = TypeVar("R")
+_LETTER_ROOMS = {letter: room for room, letter in ROOM_LETTERS.items()} | {"X": "Other"}
+
+
+def _cond(condition: str) -> str:
+    return CONDITION_NAMES.get(condition, condition)
+
+
+def _pivot(
+    report: Report, rows: Sequence[R], fmt: Callable[[R], Sequence[str]], width: int
+) -> list[tuple[Cell, ...]]:
+    """One line per model row, ``width`` cells per condition of the run (blank when absent)."""
+    table: dict[str, dict[str, Sequence[str]]] = {}
+    for r in rows:
+        key = row_label(r.model, r.variant)  # type: ignore[attr-defined]
+        table.setdefault(key, {})[r.condition] = fmt(r)  # type: ignore[attr-defined]
+    out = []
+    for label, by_condition in table.items():
+        cells = [Cell(label)]
+        for c in report.overview.conditions:
+            cells += [Cell(t) for t in by_condition.get(c, ["—"] * width)]
+        out.append(tuple(cells))
+    return out
+
+
+def _per_condition(report: Report, *names: str) -> tuple[str, ...]:
+    return tuple(f"{n} {_cond(c)}" for c in report.overview.conditions for n in names)
+
+
+def overview(report: Report) -> Section:
+    o = report.overview
+    status = ", ".join(f"{k} {v}" for k, v in o.by_status.items()) or "none"
+    blocks: list[Block] = [
+        Paragraph(
+            f"{o.episodes} episodes ({status}); models: {', '.join(o.models) or '—'}; "
+            f"conditions: {', '.join(map(_cond, o.conditions)) or '—'}; "
+            f"prompt variants: {', '.join(o.variants) or '—'}; "
+            f"spawn rooms: {', '.join(SLUG_ROOMS.get(s, s) for s in o.spawns) or '—'}"
+        )
+    ]
+    if o.usage:
+        rows = tuple(
+            (Cell(u.model), Cell(str(u.episodes)), Cell(f"{u.prompt_tokens:,}"),
+             Cell(f"{u.completion_tokens:,}"),
+             Cell("n/a" if u.cost_usd is None else f"${u.cost_usd:,.2f}"))
+            for u in o.usage
+        )  # fmt: skip
+        header = ("Model", "Episodes", "Prompt tokens", "Completion tokens", "Est. cost")
+        blocks.append(Table("usage", "Token usage per model", header, rows))
+    if report.missing:
+        blocks.append(Paragraph("**What this run is missing:**"))
+        blocks.append(Bullets(report.missing))
+    return Section("overview", "Run overview", tuple(blocks))
+
+
+def gates(report: Report) -> Section:
+    g = report.gates
+    if not g.verdicts:
+        why = "No thresholds file was given or found." if g.source is None else (
+            f"No gate of {g.source} applies to this run.")  # fmt: skip
+        return Section("gates", "Gates", (Paragraph(why),))
+    passed = sum(v.passed for v in g.verdicts)
+    rows = tuple(
+        (Cell(v.model), Cell(_cond(v.condition)), Cell(v.variant), Cell(v.metric),
+         Cell(num(v.value)), Cell(f"[{num(v.ci_low)}, {num(v.ci_high)}]"), Cell(str(v.n)),
+         Cell(v.bound_text), Cell("PASS" if v.passed else "FAIL", bold=not v.passed),
+         Cell(v.reason))
+        for v in g.verdicts
+    )  # fmt: skip
+    header = ("Model", "Condition", "Prompt", "Metric", "Value", "95% CI", "n", "Bound",
+              "Result", "Why")  # fmt: skip
+    return Section("gates", "Gates", (
+        Paragraph(f"{passed}/{len(g.verdicts)} gates pass ({g.source})."),
+        Table("gates", "Every threshold: value, bootstrap 95% CI, n, bound, verdict", header,
+              rows),
+    ))  # fmt: skip
+
+
+def exploration(report: Report) -> Section:
+    rows = _pivot(report, report.exploration, lambda r: (
+        f"{mean_sd(r.aec.value, r.aec_sd, scale=100)} (n={r.aec.n})",
+        f"{mean_sd(r.te.value, r.te_sd)} (n={r.te.n})"), 2)  # fmt: skip
+    header = ("Model", *_per_condition(report, "AEC (%)", "TE (steps)"))
+    caption = "Exploration Competence: AEC (%) and TE (actions), mean ± sd (Eq. AEC, TE)"
+    return Section("exploration", "Exploration Competence",
+                   (Table("exploration", caption, header, tuple(rows)),))  # fmt: skip
+
+
+def _focal_cells(row: FocalRow) -> tuple[Cell, ...]:
+    return tuple(Cell(pct(row.fractions[c]), shade=row.fractions[c]) for c in FOCAL_COLUMNS)
+
+
+def _spawn_order(item: tuple[str, FocalRow]) -> int:
+    """The paper's row order of start rooms: C, O, K, E."""
+    letter = ROOM_LETTERS.get(SLUG_ROOMS.get(item[0], ""), "X")
+    return FOCAL_COLUMNS.index(letter)
+
+
+def focal(report: Report) -> Section:
+    tables: list[Block] = []
+    labels = list(dict.fromkeys(row_label(t.model, t.variant) for t in report.focal))
+    for label in labels:
+        rows = []
+        for t in (t for t in report.focal if row_label(t.model, t.variant) == label):
+            for spawn, row in sorted(t.distribution.by_spawn.items(), key=_spawn_order):
+                rows.append((Cell(_cond(t.condition)), Cell(SLUG_ROOMS.get(spawn, spawn)),
+                             Cell(str(row.n)), *_focal_cells(row), Cell("")))  # fmt: skip
+            c = t.consensus
+            share = "n/a" if c.share is None else f"{c.letter or '—'} {pct(c.share)}%"
+            rows.append((Cell(_cond(t.condition)), Cell("all spawns", bold=True),
+                         Cell(str(t.distribution.overall.n)),
+                         *_focal_cells(t.distribution.overall), Cell(share)))  # fmt: skip
+        header = ("Condition", "Start", "n", *FOCAL_COLUMNS, "Consensus")
+        caption = (f"{label}: chosen focal point (%) by spawn room — C Conference, O Office, "
+                   "K Kitchen, E Entrance, X other / no choice")  # fmt: skip
+        tables.append(Table(f"focal-{label}", caption, header, tuple(rows)))
+    return Section("focal", "Focal-Point distribution", tuple(tables))
+
+
+def fpsg(report: Report) -> Section:
+    rows = tuple(
+        (Cell(_cond(r.condition)), Cell(row_label(r.model, r.variant)), Cell(str(s.runs)),
+         Cell(pct(s.never_visited)), Cell(pct(s.any_bias)),
+         Cell(mean_sd(s.local_mean, s.local_sd, digits=3)),
+         Cell(mean_sd(s.global_mean, s.global_sd, digits=3)))
+        for r in report.fpsg
+        for s in (r.summary,)
+    )  # fmt: skip
+    header = ("Condition", "Model", "Runs", "Never Visited (%)", "Any Bias (%)",
+              "FPSG local", "FPSG global")  # fmt: skip
+    caption = "Focal-Point Spatial Grounding (Eq. FSPG), mean ± sd"
+    return Section("fpsg", "Focal-Point Spatial Grounding", (Table("fpsg", caption, header, rows),))
+
+
+def ebbinghaus(report: Report) -> Section:
+    conditions = report.overview.conditions
+    table: dict[str, dict[str, tuple[str, str]]] = {}
+    for r in report.ebbinghaus:
+        p = r.fit.pooled
+        table.setdefault(row_label(r.model, r.variant), {})[r.condition] = (
+            num(p.efc, 1),
+            num(p.r2, 2),
+        )
+    rows = tuple(
+        (Cell(label), *(Cell(by.get(c, ("—", "—"))[0]) for c in conditions),
+         *(Cell(by.get(c, ("—", "—"))[1]) for c in conditions))
+        for label, by in table.items()
+    )  # fmt: skip
+    header = ("Model", *(f"EFC {_cond(c)}" for c in conditions),
+              *(f"R² {_cond(c)}" for c in conditions))  # fmt: skip
+    caption = ("Ebbinghaus memory strength EFC (steps; inf: nothing forgotten) and R² of "
+               "C exp(-t/EFC) against the anchored KM")  # fmt: skip
+    blocks: list[Block] = [Table("ebbinghaus", caption, header, rows)]
+    if report.anova:
+        anova_rows = tuple(
+            (Cell(row_label(a.model, a.variant)), Cell(num(a.anova.statistic, 2)),
+             Cell(f"{a.anova.df_between:g}, {a.anova.df_within:g}"), Cell(pval(a.anova.p_value)),
+             Cell(", ".join(f"{_cond(c)} {n}" for c, n in a.anova.groups.items()) or "—"),
+             Cell(a.anova.reason or ""))
+            for a in report.anova
+        )  # fmt: skip
+        header = ("Model", "F", "df", "p", "Episodes used", "Note")
+        caption = "One-way ANOVA of per-episode memory strength across conditions"
+        blocks.append(Table("anova", caption, header, anova_rows))
+    return Section("ebbinghaus", "Ebbinghaus memory strength", tuple(blocks))
+
+
+def serial_position(report: Report) -> Section:
+    rows = _pivot(
+        report,
+        report.serial_position,
+        lambda r: (num(r.spe.early, 1), num(r.spe.middle, 1), num(r.spe.late, 1)),
+        3,
+    )
+    header = ("Model", *_per_condition(report, "E", "M", "L"))
+    caption = "Serial Position Effect: mean TTF (steps) of Early / Middle / Late discoveries"
+    return Section("serial-position", "Serial Position Effect",
+                   (Table("serial-position", caption, header, tuple(rows)),))  # fmt: skip
+
+
+def _intervention(t: InterventionTable) -> list[Block]:
+    def shares(row: FocalRow) -> tuple[Cell, ...]:
+        f = row.fractions
+        other = None if not row.n else 1.0 - f["C"] - f["E"]
+        return (Cell(str(row.n)), Cell(pct(f["C"])), Cell(pct(f["E"])), Cell(pct(other)))
+
+    rows = [(Cell("default"), *shares(t.reference), *(Cell("—"),) * 4)]
+    for v in t.variants:
+        chi = v.chi_square
+        rows.append((Cell(v.variant), *shares(v.choices),
+                     Cell(pval(v.fisher.p_value) if v.fisher else "n/a"),
+                     Cell(f"{num(chi.statistic, 2)} ({chi.dof})"), Cell(pval(chi.p_value)),
+                     Cell(num(v.cramers_v, 2))))  # fmt: skip
+    header = ("Prompt", "n", "Conf. (%)", "Entr. (%)", "Other (%)", "p (Fisher, Conf. vs other)",
+              "χ² (df), C/O/K/E/X", "p (χ²)", "Cramér's V")  # fmt: skip
+    caption = f"{t.model}, {_cond(t.condition)}: prompt variants against the default prompt"
+    blocks: list[Block] = [Table(f"intervention-{t.model}-{t.condition}", caption, header,
+                                 tuple(rows))]  # fmt: skip
+    if t.overall is not None:
+        o = t.overall
+        text = (f"Overall ({', '.join(t.overall_variants)}; Conference vs other): "
+                f"χ² = {num(o.statistic, 2)}, df = {o.dof}, p = {pval(o.p_value)}"
+                + (f" ({o.reason})" if o.reason else ""))  # fmt: skip
+        blocks.append(Paragraph(text))
+    inventory = next((v for v in t.variants if v.variant == "no_inventory"), None)
+    if inventory is not None:
+        with_, without = t.reference, inventory.choices
+        inv_rows = tuple(
+            (Cell(_LETTER_ROOMS[c]), Cell(str(with_.counts[c])), Cell(pct(with_.fractions[c])),
+             Cell(str(without.counts[c])), Cell(pct(without.fractions[c])))
+            for c in ("C", "K", "E", "O", "X")
+        )  # fmt: skip
+        header = ("Chosen room", "n with inventory", "% with", "n without inventory",
+                  "% without")  # fmt: skip
+        caption = f"{t.model}, {_cond(t.condition)}: inventory-free intervention"
+        blocks.append(Table(f"inventory-{t.model}-{t.condition}", caption, header, inv_rows))
+    return blocks
+
+
+def interventions(report: Report) -> Section:
+    if not report.interventions:
+        why = ("No model and condition holds both the default prompt and a prompt variant, so "
+               "there is no intervention to test.")  # fmt: skip
+        return Section("interventions", "Controlled interventions", (Paragraph(why),))
+    blocks = [b for t in report.interventions for b in _intervention(t)]
+    return Section("interventions", "Controlled interventions", tuple(blocks))
+
+
+def reasoning(report: Report) -> Section:
+    r = report.reasoning
+    if r.unavailable:
+        return Section("reasoning", "Representative reasoning", (Paragraph(r.unavailable),))
+    rows = tuple(
+        (Cell(x.model), Cell(num(x.representative.mean_cosine_distance, 2)),
+         Cell(f"{x.representative.n} ({x.representative.skipped} without)"),
+         Cell(x.representative.statement or "no terminal reasoning"))
+        for x in r.rows
+    )  # fmt: skip
+    header = ("Model", "d̄ (cohesion)", "Rationales", "Most representative terminal reasoning")
+    caption = "Statement closest to the semantic centroid (all-MiniLM-L6-v2)"
+    return Section("reasoning", "Representative reasoning",
+                   (Table("reasoning", caption, header, rows),))  # fmt: skip
+
+
+def figures(skipped: dict[str, str]) -> Section:
+    refs = tuple(FigureRef(f.name, f.title, f.caption, skipped.get(f.name)) for f in FIGURES)
+    return Section("figures", "Figures", refs)
+
+
+def report_document(report: Report, skipped: dict[str, str]) -> Document:
+    """The full report: overview, gates, every table, every figure."""
+    return Document("EMRD report", (
+        overview(report), gates(report), exploration(report), focal(report), fpsg(report),
+        ebbinghaus(report), serial_position(report), interventions(report), reasoning(report),
+        figures(skipped),
+    ))  # fmt: skip
+
+
+def summary_document(report: Report) -> Document:
+    """The short form for PR comments and ``$GITHUB_STEP_SUMMARY``: no figures."""
+    return Document("EMRD results", (
+        overview(report), gates(report), exploration(report), fpsg(report),
+    ))  # fmt: skip

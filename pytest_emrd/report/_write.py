@@ -1,0 +1,25 @@
+"""Writing a report's files into a folder (file I/O only)."""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Mapping
+from pathlib import Path
+
+from pytest_emrd._atomic import write_bytes_atomic
+from pytest_emrd.report._model import Report
+from pytest_emrd.report._render import FORMATS, render_files
+
+
+def write_files(files: Mapping[str, bytes], out_dir: Path) -> list[Path]:
+    """Write each ``name -> content`` into ``out_dir`` (created if needed), atomically."""
+    written = []
+    for name, content in files.items():
+        path = out_dir / name
+        write_bytes_atomic(path, content)
+        written.append(path)
+    return written
+
+
+def write_report(report: Report, out_dir: Path, formats: Iterable[str] = FORMATS) -> list[Path]:
+    """Render ``report`` in ``formats`` and write it into ``out_dir``; the paths written."""
+    return write_files(render_files(report, formats), out_dir)
