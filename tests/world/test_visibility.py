@@ -1,0 +1,83 @@
+"""Visibility: field of view, distance, walls occlude, doorways do not; frames agree."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from pytest_emrd.world import Layout, WorldPose, condition_params, discoverable_ids
+from pytest_emrd.world._render import palette, render, shade_table
+from pytest_emrd.world._scene import scene_of
+from pytest_emrd.world._visibility import sight
+
+BASELINE = condition_params("baseline").visibility_distance
+
+
+def _seen(layout: Layout, pose: WorldPose, visibility: float = BASELINE) -> list[str]:
+    scene = scene_of(layout)
+    return [v.object_id for v in sight(scene, pose, visibility).listing(scene)]
+
+
+def test_object_behind_a_wall_is_hidden_one_through_the_doorway_is_seen(
+    two_rooms: Layout,
+) -> None:
+    # facing south from the Office: the fridge is straight through the doorway, the stool
+    # is in the field of view and in range but behind the wall
+    assert _seen(two_rooms, WorldPose(3.0, 6.5, 180.0)) == ["Doorway_1", "Fridge_1"]
+
+
+def test_nothing_behind_the_agent_is_seen(two_rooms: Layout) -> None:
+    assert _seen(two_rooms, WorldPose(3.0, 6.5, 0.0)) == []
+
+
+def test_inside_the_room_the_stool_is_seen_with_its_bearing(two_rooms: Layout) -> None:
+    scene = scene_of(two_rooms)
+    listing = sight(scene, WorldPose(2.5, 2.0, 270.0), BASELINE).listing(scene)
+    stool = next(v for v in listing if v.object_id == "Stool_1")
+    # facing west, south is on the left: negative bearing
+    assert stool.bearing == pytest.approx(-30.5, abs=0.1)
+    assert stool.distance == pytest.approx(np.hypot(1.7, 1.0), abs=0.01)
+    assert all(-45 <= v.bearing <= 45 for v in listing)
+    assert [v.object_id for v in listing] == sorted(v.object_id for v in listing)
+
+
+def test_visibility_distance_limits_what_is_seen(two_rooms: Layout) -> None:
+    far = WorldPose(3.0, 7.6, 180.0)  # fridge centre 6.6 m away
+    assert "Fridge_1" in _seen(two_rooms, far)
+    assert "Fridge_1" not in _seen(
+        two_rooms, far, condition_params("low_light").visibility_distance
+    )
+
+
+def test_discoverable_ids_is_sorted_cached_and_complete_for_open_rooms(two_rooms: Layout) -> None:
+    ids = discoverable_ids(two_rooms)
+    assert ids == ("Doorway_1", "Fridge_1", "Stool_1")
+    assert discoverable_ids(two_rooms) is ids
+
+
+def test_discoverable_ids_of_the_office_are_its_objects(office: Layout) -> None:
+    ids = discoverable_ids(office)
+    assert list(ids) == sorted(ids)
+    assert set(ids) <= {o.object_id for o in office.objects}
+    assert {d.object_id for d in office.doorways} <= set(ids)
+    assert len(ids) >= 0.9 * len(office.objects)
+
+
+def _frame(layout: Layout, pose: WorldPose) -> np.ndarray:
+    scene, params = scene_of(layout), condition_params("baseline")
+    return render(scene, pose, params, shade_table(palette(scene, params, 0), params))
+
+
+def _without(layout: Layout, object_id: str) -> Layout:
+    return dataclasses.replace(
+        layout, objects=tuple(o for o in layout.objects if o.object_id != object_id)
+    )
+
+
+def test_frame_agrees_with_visibility(two_rooms: Layout) -> None:
+    pose = WorldPose(3.0, 6.5, 180.0)
+    frame = _frame(two_rooms, pose)
+    assert np.array_equal(frame, _frame(_without(two_rooms, "Stool_1"), pose))  # behind a wall
+    assert not np.array_equal(frame, _frame(_without(two_rooms, "Fridge_1"), pose))
