@@ -70,8 +70,11 @@ def bootstrap_ci(
     if not len(values):
         return None, None
     alpha = (1.0 - confidence) / 2.0
-    low, high = np.quantile(values, [alpha, 1.0 - alpha])
-    return float(low), float(high)
+    with np.errstate(invalid="ignore"):  # inf - inf while interpolating between inf values
+        low, high = np.quantile(values, [alpha, 1.0 - alpha], method="linear")
+    return float(low) if not np.isnan(low) else math.inf, (
+        float(high) if not np.isnan(high) else math.inf
+    )
 
 
 @dataclass(frozen=True)
