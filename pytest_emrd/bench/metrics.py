@@ -29,10 +29,10 @@ from pytest_emrd.trajectory import Trajectory
 TARGET_GRID_240_S = 2.0
 
 
-def all_metrics(trajectories: list[Trajectory]) -> None:
-    """Every metric the reports and gates ask for, from raw trajectories."""
+def all_metrics(trajectories: list[Trajectory]) -> dict[str, object]:
+    """Every metric the reports and gates ask for, from raw trajectories, by name."""
     ems = as_episode_metrics(trajectories)
-    evaluate_gates(ems)
+    results: dict[str, object] = dict(evaluate_gates(ems))
     for aggregate in (
         positional_accuracy,
         tbs_curve,
@@ -46,7 +46,8 @@ def all_metrics(trajectories: list[Trajectory]) -> None:
         fpsg,
         anova_conditions,
     ):
-        aggregate(ems)
+        results[aggregate.__name__] = aggregate(ems)
+    return results
 
 
 def run(*, repeat: int) -> list[Figure]:
