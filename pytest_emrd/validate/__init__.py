@@ -1,0 +1,58 @@
+"""Metric validity: reference agents with planted cognition in, the same numbers out.
+
+Each check is a row (planted value, recovered value, tolerance, verdict, note) computed by
+pure functions over trajectories with :mod:`pytest_emrd.metrics`; :func:`run_plan` runs and
+caches the episodes; ``emrd validate`` prints and writes the table.
+"""
+
+from pytest_emrd.validate._check import VERDICTS, Check, ValidationReport
+from pytest_emrd.validate._decide import prior_checks, scout_decide_checks
+from pytest_emrd.validate._explore import exploration_checks
+from pytest_emrd.validate._paper import statistics_checks
+from pytest_emrd.validate._plan import (
+    DECAY_MEANS,
+    FULL_EPISODES,
+    GROUPS,
+    WINDOW_SIZES,
+    Group,
+    Plan,
+)
+from pytest_emrd.validate._remember import (
+    decay_checks,
+    episodes_needed,
+    error_curve,
+    miller_checks,
+    serial_checks,
+    window_fit_checks,
+)
+from pytest_emrd.validate._render import markdown, to_json
+from pytest_emrd.validate._run import Progress, run_plan
+from pytest_emrd.validate._suite import episode_checks, validation_report
+
+__all__ = [
+    "DECAY_MEANS",
+    "FULL_EPISODES",
+    "GROUPS",
+    "VERDICTS",
+    "WINDOW_SIZES",
+    "Check",
+    "Group",
+    "Plan",
+    "Progress",
+    "ValidationReport",
+    "decay_checks",
+    "episode_checks",
+    "episodes_needed",
+    "error_curve",
+    "exploration_checks",
+    "markdown",
+    "miller_checks",
+    "prior_checks",
+    "run_plan",
+    "scout_decide_checks",
+    "serial_checks",
+    "statistics_checks",
+    "to_json",
+    "validation_report",
+    "window_fit_checks",
+]

@@ -1,0 +1,96 @@
+"""One row of the validation table: what was planted, what the metric recovered, the verdict."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any, Final
+
+from pytest_emrd._serde import from_dict, to_dict
+from pytest_emrd.errors import ProtocolError, check_choice
+
+SCHEMA_VERSION: Final = 1
+#: ``pass``/``fail``: the metric recovered / did not recover the planted truth.
+#: ``finding``: a value the paper prints is not reproducible from the counts it prints; the
+#: note says which value, what the printed counts give, and what would reproduce it.
+VERDICTS: Final[tuple[str, ...]] = ("pass", "fail", "finding")
+SECTIONS: Final[tuple[str, ...]] = ("Explore", "Remember", "Decide", "Statistics")
+
+Value = float | int | str | None
+
+
+@dataclass(frozen=True)
+class Check:
+    """One validation check, as the table shows it and the JSON stores it."""
+
+    section: str
+    """Paper phase the metric belongs to: ``Explore``, ``Remember``, ``Decide``, ``Statistics``."""
+    name: str
+    """What is checked (``Ebbinghaus EFC, scout-decay-8``)."""
+    planted: str
+    """The known truth (planted parameter, or the value the paper prints)."""
+    recovered: str
+    """What the metric gave."""
+    tolerance: str
+    """The acceptance rule, in words (``within 25 %``, ``printed precision``)."""
+    verdict: str
+    """``pass``, ``fail`` or ``finding`` (see :data:`VERDICTS`)."""
+    note: str = ""
+    """Episodes used, why it failed, what reproduces a printed value."""
+    data: dict[str, Value] = field(default_factory=dict)
+    """The raw numbers behind ``planted`` / ``recovered`` (for JSON consumers)."""
+
+    def __post_init__(self) -> None:
+        check_choice("verdict", self.verdict, VERDICTS)
+        check_choice("section", self.section, SECTIONS)
+
+    @property
+    def failed(self) -> bool:
+        return self.verdict == "fail"
+
+
+@dataclass(frozen=True)
+class ValidationReport:
+    """Every check of one validation run."""
+
+    checks: tuple[Check, ...]
+    episodes: int
+    """Episodes per spawn room and planted agent (0 for statistics-only reports)."""
+    protocol: str
+    """World + prompt protocol the episodes ran under."""
+    schema_version: int = SCHEMA_VERSION
+
+    @property
+    def failed(self) -> tuple[Check, ...]:
+        return tuple(c for c in self.checks if c.failed)
+
+    def to_dict(self) -> dict[str, Any]:
+        return to_dict(self)
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> ValidationReport:
+        if data.get("schema_version") != SCHEMA_VERSION:
+            raise ProtocolError(
+                f"validation report schema_version={data.get('schema_version')!r} is not "
+                f"{SCHEMA_VERSION}; rerun emrd validate with this version of pytest-emrd."
+            )
+        return from_dict(cls, data)
+
+
+def judged(ok: bool) -> str:
+    """``pass`` when ``ok``, else ``fail``."""
+    return "pass" if ok else "fail"
+
+
+def fmt(value: float | None, digits: int = 2) -> str:
+    """A number for the table: fixed ``digits``, ``inf`` and ``n/a`` spelled out."""
+    if value is None or (isinstance(value, float) and math.isnan(value)):
+        return "n/a"
+    if math.isinf(value):
+        return "inf"
+    return f"{value:.{digits}f}"
+
+
+def pct(value: float | None) -> str:
+    """A fraction in [0, 1] as a percentage with one decimal."""
+    return "n/a" if value is None else f"{100.0 * value:.1f} %"

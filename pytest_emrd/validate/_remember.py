@@ -1,0 +1,186 @@
+"""Remember rows: Ebbinghaus memory strength, Miller's law and serial position recover what
+the reference agents plant (:mod:`pytest_emrd.agent.reference._memory`).
+
+Pure functions over trajectories; every number comes from :mod:`pytest_emrd.metrics`.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from typing import Final
+
+from pytest_emrd.metrics import ebbinghaus, miller_curve, serial_position
+from pytest_emrd.rooms import ROOM_SLUGS
+from pytest_emrd.trajectory import Trajectory
+from pytest_emrd.validate._check import Check, fmt, judged
+
+#: Ebbinghaus EFC must recover the planted mean within this relative error.
+EFC_TOLERANCE: Final = 0.25
+#: Minimum R^2 of the exponential fit for a planted exponential memory.
+MIN_R2: Final = 0.8
+#: A hard-capacity memory must fit the exponential at least this much worse (R^2) than a
+#: planted exponential memory of about the same strength.
+R2_GAP: Final = 0.1
+#: Miller's inflection bin must lie within this many bins of the planted capacity's bin.
+MILLER_BINS: Final = 1
+#: Load-bin width ``w`` (the paper's 5).
+MILLER_WIDTH: Final = 5
+
+_SPAWN_ORDER: Final = {slug: i for i, slug in enumerate(ROOM_SLUGS.values())}
+
+
+def interleaved(trajectories: Sequence[Trajectory]) -> list[Trajectory]:
+    """Episodes ordered so that every prefix of 4 covers the four spawn rooms equally."""
+    return sorted(trajectories, key=lambda t: (t.spec.episode, _SPAWN_ORDER[t.spec.spawn]))
+
+
+def error_curve(trajectories: Sequence[Trajectory], planted: float) -> list[tuple[int, float]]:
+    """``(N, |EFC_N - planted| / planted)`` over spawn-balanced prefixes of N episodes.
+
+    N runs over multiples of 4 (one episode per spawn room) up to every episode; a prefix
+    whose EFC is undefined or unbounded has error ``inf``.
+    """
+    ordered = interleaved(trajectories)
+    curve = []
+    for n in range(4, len(ordered) + 1, 4):
+        efc = ebbinghaus(ordered[:n]).pooled.efc
+        curve.append((n, abs(efc - planted) / planted if efc is not None else math.inf))
+    return curve
+
+
+def episodes_needed(curve: Sequence[tuple[int, float]], tolerance: float) -> int | None:
+    """Smallest N from which every larger prefix stays within ``tolerance`` (None: never)."""
+    needed = None
+    for n, error in reversed(curve):
+        if error > tolerance:
+            break
+        needed = n
+    return needed
+
+
+def decay_checks(groups: Mapping[float, Sequence[Trajectory]]) -> list[Check]:
+    """EFC within 25 % of the planted mean and R^2 >= 0.8, per ``scout-decay-<m>`` group."""
+    rows: list[Check] = []
+    for mean, trajs in groups.items():
+        fit = ebbinghaus(trajs).pooled
+        curve = error_curve(trajs, mean)
+        needed = episodes_needed(curve, EFC_TOLERANCE)
+        error = abs(fit.efc - mean) / mean if fit.efc is not None else math.inf
+        shrink = ", ".join(f"N={n}: {100 * e:.0f} %" for n, e in curve[:: max(1, len(curve) // 5)])
+        note = (
+            f"{len(trajs)} episodes, {fit.n_events}/{fit.n_spells} spells forgotten; "
+            f"within 25 % from N = {needed if needed is not None else 'never'} "
+            f"(error {shrink})"
+        )
+        data = {"efc": fit.efc, "r2": fit.r2, "error": error, "episodes_needed": needed}
+        data.update({f"error_n{n}": e for n, e in curve})
+        rows.append(
+            Check("Remember", f"Ebbinghaus EFC, scout-decay-{mean:g}", f"{mean:g} steps",
+                  f"{fmt(fit.efc)} steps ({100 * error:.0f} % off)", "within 25 %",
+                  judged(error <= EFC_TOLERANCE), note, data)
+        )  # fmt: skip
+        rows.append(
+            Check("Remember", f"Ebbinghaus R^2, scout-decay-{mean:g}", "exponential",
+                  f"R^2 = {fmt(fit.r2, 3)}", f">= {MIN_R2}",
+                  judged(fit.r2 is not None and fit.r2 >= MIN_R2),
+                  f"{len(trajs)} episodes; R^2 of C exp(-t/EFC) against the anchored KM",
+                  {"r2": fit.r2})
+        )  # fmt: skip
+    return rows
+
+
+def window_fit_checks(
+    windows: Mapping[int, Sequence[Trajectory]], decays: Mapping[float, Sequence[Trajectory]]
+) -> list[Check]:
+    """Each ``scout-window-<k>`` fits the exponential visibly worse than the ``scout-decay``
+    whose recovered EFC is nearest its own (matched mean)."""
+    decay_fits = {m: ebbinghaus(t).pooled for m, t in decays.items()}
+    rows = []
+    for k, trajs in windows.items():
+        fit = ebbinghaus(trajs).pooled
+        finite = {m: f for m, f in decay_fits.items() if f.efc and math.isfinite(f.efc)}
+        if fit.efc is None or not math.isfinite(fit.efc) or not finite:
+            rows.append(
+                Check("Remember", f"Exponential fit, scout-window-{k} vs scout-decay",
+                      "worse fit", "n/a", f"R^2 gap >= {R2_GAP}", "fail",
+                      f"no finite EFC to match (window EFC {fmt(fit.efc)})")
+            )  # fmt: skip
+            continue
+        efc = fit.efc
+        m = min(finite, key=lambda m: abs(math.log(finite[m].efc or 1.0) - math.log(efc)))
+        match = finite[m]
+        gap = (match.r2 or 0.0) - fit.r2 if fit.r2 is not None else math.inf
+        rows.append(
+            Check("Remember", f"Exponential fit, scout-window-{k} vs scout-decay-{m:g}",
+                  f"R^2 below {fmt(match.r2, 3)}", f"R^2 = {fmt(fit.r2, 3)}",
+                  f"gap >= {R2_GAP}", judged(gap >= R2_GAP),
+                  f"matched mean: window EFC {fmt(efc)} vs decay EFC {fmt(match.efc)} steps; "
+                  f"{len(trajs)} + {len(decays[m])} episodes",
+                  {"r2_window": fit.r2, "r2_decay": match.r2, "efc_window": efc,
+                   "efc_decay": match.efc})
+        )  # fmt: skip
+    return rows
+
+
+def miller_checks(
+    windows: Mapping[int, Sequence[Trajectory]], perfect: Sequence[Trajectory]
+) -> list[Check]:
+    """Inflection ``m*`` within one bin of each planted capacity; perfect memory never
+    forgets at any load."""
+    rows = []
+    for k, trajs in windows.items():
+        curve = miller_curve(trajs, width=MILLER_WIDTH)
+        want = math.ceil(k / MILLER_WIDTH)
+        ok = curve.b_star is not None and abs(curve.b_star - want) <= MILLER_BINS
+        probs = ", ".join(f"{b}: {p:.2f}" for b, p in zip(curve.bins, curve.probabilities,
+                                                           strict=True))  # fmt: skip
+        rows.append(
+            Check("Remember", f"Miller inflection, scout-window-{k}", f"m* = {k} (bin {want})",
+                  f"m* = {curve.m_star if curve.m_star is not None else 'none'}",
+                  f"within {MILLER_BINS} bin (w = {MILLER_WIDTH})", judged(ok),
+                  f"{len(trajs)} episodes; ML(bin) {probs}" + (
+                      f"; {curve.reason}" if curve.reason else ""),
+                  {"m_star": curve.m_star, "b_star": curve.b_star, "planted_bin": want})
+        )  # fmt: skip
+    curve = miller_curve(perfect, width=MILLER_WIDTH)
+    worst = max(curve.probabilities, default=None)
+    rows.append(
+        Check("Remember", "Miller forgetting, scout (perfect memory)", "0 at every load",
+              f"max ML = {fmt(worst)}", "exactly 0", judged(worst == 0.0),
+              f"{len(perfect)} episodes, {sum(curve.steps)} steps over {len(curve.bins)} load bins",
+              {"max_probability": worst, "bins": len(curve.bins)})
+    )  # fmt: skip
+    return rows
+
+
+def _profile(early: float | None, middle: float | None, late: float | None) -> str:
+    return f"E {fmt(early)}, M {fmt(middle)}, L {fmt(late)}"
+
+
+def serial_checks(
+    serial: Sequence[Trajectory], windows: Mapping[int, Sequence[Trajectory]]
+) -> list[Check]:
+    """``scout-serial`` shows the U shape (E, L > M); every ``scout-window`` is monotone."""
+    spe = serial_position(serial)
+    e, m, late = spe.early, spe.middle, spe.late
+    u_shape = None not in (e, m, late) and min(e or 0, late or 0) > (m or 0)
+    rows = [
+        Check("Remember", "Serial position, scout-serial", "U shape (E, L > M)",
+              _profile(e, m, late), "E > M and L > M", judged(u_shape),
+              f"{len(serial)} episodes; mean TTF (steps) by discovery third",
+              {"early": e, "middle": m, "late": late})
+    ]  # fmt: skip
+    for k, trajs in windows.items():
+        spe = serial_position(trajs)
+        values = (spe.early, spe.middle, spe.late)
+        monotone = None not in values and (
+            sorted(values) == list(values) or sorted(values, reverse=True) == list(values)
+        )
+        rows.append(
+            Check("Remember", f"Serial position, scout-window-{k}", "monotone",
+                  _profile(*values), "E <= M <= L or E >= M >= L", judged(monotone),
+                  f"{len(trajs)} episodes; mean TTF (steps) by discovery third",
+                  {"early": values[0], "middle": values[1], "late": values[2]})
+        )  # fmt: skip
+    return rows
