@@ -86,7 +86,8 @@ def to_spawn_frame(spawn_pose: WorldPose, x: float, z: float) -> tuple[float, fl
 
 def heading_in_spawn_frame(spawn_pose: WorldPose, heading: float) -> float:
     """World heading -> degrees clockwise from the spawn heading, in ``[0, 360)``."""
-    return (heading - spawn_pose.heading) % 360
+    relative = (heading - spawn_pose.heading) % 360
+    return 0.0 if relative >= 360 else relative  # -1e-20 % 360 rounds up to 360.0
 
 
 def rects_overlap(a: np.ndarray, b: np.ndarray) -> np.ndarray:

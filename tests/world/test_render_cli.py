@@ -1,0 +1,56 @@
+"""``emrd render`` writes the spawn view, a sweep and a top-down plan."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+from PIL import Image
+
+from pytest_emrd.cli import main
+
+
+def test_render_writes_frames_and_map(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+    out = tmp_path / "views"
+    assert (
+        main(
+            [
+                "render",
+                "--seed",
+                "3",
+                "--condition",
+                "low_light",
+                "--spawn",
+                "kitchen",
+                "--out",
+                str(out),
+            ]
+        )
+        == 0
+    )
+    frames = sorted(out.glob("*.jpg"))
+    assert [f.name for f in frames] == [
+        "00_spawn.jpg",
+        "01_right.jpg",
+        "02_behind.jpg",
+        "03_left.jpg",
+    ]
+    for f in frames:
+        with Image.open(f) as im:
+            assert (im.format, im.size) == ("JPEG", (512, 512))
+    with Image.open(out / "map.png") as plan:
+        assert plan.format == "PNG" and plan.size[0] > 400
+    printed = capsys.readouterr().out
+    assert "seed 3, low_light, spawn in Kitchen" in printed
+    assert "Turn(Right) succeeded" in printed and "Visible:" in printed
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [["--seed", "1", "--spawn", "attic"], ["--seed", "x"], ["--seed", "1", "--condition", "dark"]],
+    ids=["bad-spawn", "bad-seed", "bad-condition"],
+)
+def test_render_rejects_bad_arguments(tmp_path: Path, argv: list[str]) -> None:
+    with pytest.raises(SystemExit) as exc:
+        main(["render", *argv, "--out", str(tmp_path)])
+    assert exc.value.code == 2
