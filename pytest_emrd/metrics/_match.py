@@ -185,6 +185,7 @@ class Matcher:
         todo: dict[int, list[str]] = {}
         type_of: dict[str, int] = {}
         unrecognised: list[str] = []
+        known = self._types.known
         resolve = self._types.resolve
         obj_type = self._obj_type_list
         carried = carried or {}
@@ -193,7 +194,9 @@ class Matcher:
             if lb in seen:
                 continue
             seen[lb] = e
-            k = resolve(e.object_type, lb)
+            k = known.get((e.object_type, lb))
+            if k is None:
+                k = resolve(e.object_type, lb)
             if k < 0:
                 unrecognised.append(lb)
                 continue

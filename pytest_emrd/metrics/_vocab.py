@@ -79,16 +79,17 @@ class TypeResolver:
                 hit = next((self.index[c] for c in candidates if c in self.index), None)
                 if hit is not None:
                     self._key_to_type[key] = hit
-        self._cache: dict[tuple[str, str], int] = {}
+        self.known: dict[tuple[str, str], int] = {}
+        """``(object_type, label)`` -> type index, for every entry resolved so far."""
 
     def resolve(self, object_type: str, label: str) -> int:
         """Type index of an entry (its ``object_type`` first, then its label); -1 if none."""
-        hit = self._cache.get((object_type, label))
+        hit = self.known.get((object_type, label))
         if hit is None:
             hit = self._resolve_text(object_type)
             if hit < 0:
                 hit = self._resolve_text(label)
-            self._cache[(object_type, label)] = hit
+            self.known[(object_type, label)] = hit
         return hit
 
     def _resolve_text(self, text: str) -> int:
