@@ -100,8 +100,9 @@ def _statistic(name: str) -> Callable[..., np.ndarray]:
     if name in _RATIOS:
 
         def ratio(x: np.ndarray) -> np.ndarray:
+            # scipy resamples the last axis: (2, n) -> (2, n_resamples, n); row 0 is num
             with np.errstate(divide="ignore", invalid="ignore"):
-                return x[..., 0, :].sum(axis=-1) / x[..., 1, :].sum(axis=-1)
+                return x[0].sum(axis=-1) / x[1].sum(axis=-1)
 
         return lambda a, b, axis=-1: ratio(b) - ratio(a)
     return lambda a, b, axis=-1: np.mean(b, axis=axis) - np.mean(a, axis=axis)

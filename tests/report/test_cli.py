@@ -1,0 +1,86 @@
+"""``emrd report`` end to end on run directories (black box through the console entry)."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from pytest_emrd.cli import main
+from pytest_emrd.metrics.synthetic import synthetic_grid
+from pytest_emrd.report import FIGURES
+from pytest_emrd.trajectory import Trajectory
+
+THRESHOLDS = """\
+scout:
+  baseline:
+    aec: {min: 0.2}
+    never_visited: {max: 0.0}
+"""
+
+
+@pytest.fixture
+def run_dir(make_run_dir, grid: list[Trajectory]) -> Path:
+    scout = synthetic_grid(model="scout", episodes=1, max_steps=26)
+    return make_run_dir("run", scout)
+
+
+def test_report_writes_every_format(run_dir: Path, tmp_path: Path, capsys) -> None:
+    thresholds = tmp_path / "gates.yaml"
+    thresholds.write_text(THRESHOLDS)
+    out = tmp_path / "out"
+    code = main(["report", str(run_dir), "--out", str(out), "--thresholds", str(thresholds)])
+    assert code == 0
+    names = {p.name for p in out.iterdir()}
+    assert names == {"report.md", "report.html", "report.json", *(f.name for f in FIGURES)}
+    data = json.loads((out / "report.json").read_text())
+    assert [v["metric"] for v in data["gates"]["verdicts"]] == ["aec", "never_visited"]
+    assert data["gates"]["source"] == str(thresholds)
+    printed = capsys.readouterr().out
+    assert printed.startswith("12 episodes from 1 run director(ies)")
+    assert "report.html" in printed
+
+
+def test_default_out_dir_and_format_subset(run_dir: Path, monkeypatch, tmp_path: Path) -> None:
+    monkeypatch.chdir(tmp_path)  # no ./thresholds.yaml here
+    assert main(["report", str(run_dir), "--format", "json"]) == 0
+    assert [p.name for p in (run_dir / "report").iterdir()] == ["report.json"]
+    data = json.loads((run_dir / "report" / "report.json").read_text())
+    assert any("No thresholds file" in n for n in data["missing"])
+
+
+def test_shards_make_one_report(make_run_dir, tmp_path: Path) -> None:
+    scout = synthetic_grid(model="scout", episodes=1, max_steps=26)
+    a, b = make_run_dir("a", scout[::2]), make_run_dir("b", scout[1::2])
+    out = tmp_path / "merged"
+    assert main(["report", str(a), str(b), "--out", str(out), "--format", "json"]) == 0
+    assert json.loads((out / "report.json").read_text())["overview"]["episodes"] == 12
+
+
+def test_compare_prints_markdown_or_writes_files(make_run_dir, tmp_path: Path, capsys) -> None:
+    a = make_run_dir("a", synthetic_grid(model="scout", episodes=2, max_steps=26))
+    b = make_run_dir("b", synthetic_grid(model="scout", episodes=2, max_steps=26,
+                                         mean_memory=3.0))  # fmt: skip
+    assert main(["report", "--compare", str(a), str(b)]) == 0
+    md = capsys.readouterr().out
+    assert md.startswith("# EMRD run comparison") and "| memory_strength |" in md
+    out = tmp_path / "cmp"
+    assert main(["report", "--compare", str(a), str(b), "--out", str(out)]) == 0
+    assert {p.name for p in out.iterdir()} == {"compare.md", "compare.html", "compare.json"}
+
+
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (["report"], "give either RUN_DIR... or --compare RUN_A RUN_B"),
+        (["report", "x", "--compare", "a", "b"], "give either RUN_DIR... or --compare"),
+        (["report", "x", "--format", "md,pdf"], "format='pdf' is not one of"),
+        (["report", "nowhere"], "run_dir='nowhere' holds no episodes/ folder"),
+    ],
+    ids=["neither", "both", "bad-format", "not-a-run-dir"],
+)
+def test_usage_errors_exit_2(argv: list[str], message: str, capsys, tmp_path, monkeypatch) -> None:
+    monkeypatch.chdir(tmp_path)
+    assert main(argv) == 2
+    assert message in capsys.readouterr().err
