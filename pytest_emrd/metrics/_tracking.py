@@ -12,8 +12,8 @@ Definitions (step ``t`` is 1-based; see :mod:`pytest_emrd.trajectory` for the ti
   step's, so a label is judged against the object it stood for when it was written.
 * ``in_view(o, t)``: ``o`` is among ``visible_ids`` of step ``t``.
 * **Spell** (out-of-view interval): starts at step ``s`` when ``o`` was in view and held at
-  ``s-1`` and is out of view at ``s``. At each following out-of-view step the map is checked:
-  the first step ``t`` with ``o`` not held is a *forgetting event* of duration
+  ``s-1`` and is out of view at ``s``. From ``s`` on, the map is checked at every step:
+  the first out-of-view step ``t`` with ``o`` not held is a *forgetting event* of duration
   ``t - s + 1`` (dropped at its ``(t-s+1)``-th step out of view; the paper's KM example counts
   ``tau = 1`` as the first step after leaving view). The spell is *right-censored* at duration
   ``t - s`` when ``o`` comes back into view at ``t`` still held, and at ``T - s + 1`` when the
