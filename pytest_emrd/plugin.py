@@ -184,7 +184,10 @@ class _Run:
                 matching=settings.matching,
             )
 
-        stored = self.store.get_or_compute(spec, compute)
+        try:
+            stored = self.store.get_or_compute(spec, compute)
+        except EmrdError as exc:
+            pytest.fail(f"{spec.case_id}: {exc}", pytrace=False)
         if stored.frame_drift and stored.computed_now:
             warnings.warn(
                 FrameDriftWarning(

@@ -40,3 +40,22 @@ def small() -> Callable[..., list[str]]:
         ]
 
     return args
+
+
+@pytest.fixture(scope="module")
+def recorded(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """Cassettes of scout-baseline-office-ep00/ep01, recorded live from the reference server."""
+    from pytest_emrd.agent import load_registry
+    from pytest_emrd.cassette import agent_runner, run_with_cassette
+    from pytest_emrd.episode import protocol_version
+    from pytest_emrd.trajectory import EpisodeSpec
+
+    root = tmp_path_factory.mktemp("cassettes")
+    runner = agent_runner(load_registry())
+    for episode in (0, 1):
+        spec = EpisodeSpec("scout", "baseline", "office", episode, modality="both")
+        run = run_with_cassette(
+            spec, runner, cassettes=root, protocol=protocol_version(), record_mode="once"
+        )
+        assert run.recorded and run.trajectory.status != "errored", run.trajectory.error
+    return root

@@ -1,0 +1,142 @@
+"""Whole sessions against the real episode loop: replay, xdist, gates, failures, resume."""
+
+from __future__ import annotations
+
+import json
+import shutil
+from pathlib import Path
+
+import pytest
+
+from pytest_emrd.cli import main as emrd
+
+pytestmark = pytest.mark.slow
+
+
+def _gate_section(result: pytest.RunResult) -> list[str]:
+    lines = result.stdout.lines
+    start = next(i for i, line in enumerate(lines) if "EMRD gates" in line)
+    return [line for line in lines[start + 1 :] if line.startswith(("scout", "  "))]
+
+
+def _episodes(run_dir: Path) -> dict[str, dict]:
+    return {
+        p.name: json.loads(p.read_text())["trajectory"]
+        for p in sorted((run_dir / "episodes").glob("*.json"))
+    }
+
+
+def test_replay_is_deterministic_and_xdist_gives_the_same_gates(suite, small, recorded, capsys):
+    runs = {}
+    for name, extra in (("serial", []), ("xdist", ["-n", "2"])):
+        run_dir = suite.path / name
+        result = suite.runpytest_subprocess(
+            *small(
+                f"--emrd-cassettes={recorded}",
+                "--emrd-record-mode=none",
+                f"--emrd-results={run_dir}",
+                *extra,
+            )
+        )
+        result.assert_outcomes(passed=4)
+        runs[name] = (_gate_section(result), _episodes(run_dir))
+    assert runs["serial"] == runs["xdist"]
+    assert "scout: 2/2 gates pass" in runs["serial"][0]
+    capsys.readouterr()
+    assert (
+        emrd(
+            [
+                "gate",
+                str(suite.path / "serial"),
+                "--thresholds",
+                str(suite.path / "thresholds.yaml"),
+                "--json",
+            ]
+        )
+        == 0
+    )
+    serial = capsys.readouterr().out
+    emrd(
+        [
+            "gate",
+            str(suite.path / "xdist"),
+            "--thresholds",
+            str(suite.path / "thresholds.yaml"),
+            "--json",
+        ]
+    )
+    assert capsys.readouterr().out == serial
+
+
+def test_broken_threshold_fails_the_session_with_the_table(suite, small, recorded):
+    suite.makefile(".yaml", thresholds="scout:\n  baseline:\n    aec: {min: 1.01}\n")
+    result = suite.runpytest_subprocess(
+        *small(f"--emrd-cassettes={recorded}", "--emrd-record-mode=none")
+    )
+    result.assert_outcomes(passed=2, failed=1)
+    result.stdout.fnmatch_lines(
+        [
+            "*EMRD gates*",
+            "scout: 0/1 gates pass",
+            "*baseline*aec*>= 1.01*FAIL*",
+            "  FAIL scout-baseline-aec: value * < 1.01",
+            "FAILED test_emrd.py::test_gate[[]scout-baseline-aec[]]*",
+        ]
+    )
+
+
+def test_missing_cassette_names_the_file_and_the_command(suite, small):
+    result = suite.runpytest_subprocess(
+        *small("--emrd-record-mode=none", "--emrd-cassettes=nowhere", "-k", "ep00 and test_episode")
+    )
+    result.assert_outcomes(failed=1, deselected=3)
+    result.stdout.fnmatch_lines(
+        [
+            "*scout-baseline-office-ep00 errored: cassette missing: "
+            "*nowhere/scout/baseline/default/office/ep00.yaml.gz does not exist*"
+            "Record it with: pytest benchmarks --emrd-model=scout*"
+            "--emrd-record-mode=once -k 'test_episode and scout-baseline-office-ep00'",
+        ]
+    )
+
+
+def test_corrupted_cassette_is_a_clear_error_naming_the_file(suite, small, recorded):
+    copy = suite.path / "cassettes"
+    shutil.copytree(recorded, copy)
+    (copy / "scout/baseline/default/office/ep01.yaml.gz").write_bytes(b"garbage")
+    result = suite.runpytest_subprocess(
+        *small(f"--emrd-cassettes={copy}", "--emrd-record-mode=none", "-k", "test_episode")
+    )
+    result.assert_outcomes(passed=1, errors=1, deselected=2)
+    result.stdout.fnmatch_lines(
+        ["*scout-baseline-office-ep01: cassette=*office/ep01.yaml.gz* is corrupted: not a gzip*"]
+    )
+
+
+INTERRUPT_AFTER_FIRST = """
+def pytest_runtest_logreport(report):
+    if report.when == "call" and "ep00" in report.nodeid:
+        raise KeyboardInterrupt
+"""
+
+
+def test_interrupted_run_resumes_reusing_finished_episodes(suite, small, recorded):
+    run_dir = suite.path / "run"
+    args = small(
+        f"--emrd-cassettes={recorded}",
+        "--emrd-record-mode=none",
+        f"--emrd-results={run_dir}",
+        "-k",
+        "test_episode",
+    )
+    suite.makeconftest(INTERRUPT_AFTER_FIRST)
+    first = suite.runpytest_subprocess(*args)
+    assert first.ret == pytest.ExitCode.INTERRUPTED
+    done = run_dir / "episodes" / "scout-baseline-office-ep00.json"
+    assert [p.name for p in (run_dir / "episodes").iterdir()] == [done.name]
+    before = (done.stat().st_mtime_ns, json.loads(done.read_text())["session"])
+    suite.makeconftest("")
+    second = suite.runpytest_subprocess(*args)
+    second.assert_outcomes(passed=2, deselected=2)
+    assert (done.stat().st_mtime_ns, json.loads(done.read_text())["session"]) == before
+    assert len(list((run_dir / "episodes").iterdir())) == 2
