@@ -19,10 +19,11 @@ from typing import Literal, Protocol
 import numpy as np
 
 from pytest_emrd.errors import check_choice
+from pytest_emrd.metrics._decide import consensus
 from pytest_emrd.metrics._episode import EpisodeLike, EpisodeMetrics, as_episode_metrics
 from pytest_emrd.metrics._stats import N_RESAMPLES, Estimate, bootstrap_ci
 from pytest_emrd.metrics._survival import ebbinghaus_fit
-from pytest_emrd.rooms import FOCAL_COLUMNS
+from pytest_emrd.rooms import FOCAL_COLUMNS, OTHER_LETTER
 
 
 class Compute(Protocol):
@@ -98,18 +99,20 @@ def _ratio_of(
 
 
 def _consensus(items: Sequence[EpisodeLike], *, rng_seed: int = 0) -> Estimate:
+    """:func:`consensus` share, bootstrapped over episodes."""
     kept, errored = _split(items)
-    if not kept:
+    result = consensus(kept)
+    if result.share is None:
         return Estimate(None, None, None, 0, "no non-errored episode", errored)
     onehot = np.zeros((len(kept), len(FOCAL_COLUMNS)))
     onehot[np.arange(len(kept)), [FOCAL_COLUMNS.index(m.chosen_letter) for m in kept]] = 1.0
+    rooms = [FOCAL_COLUMNS.index(c) for c in FOCAL_COLUMNS if c != OTHER_LETTER]
 
     def share(sample: np.ndarray) -> np.ndarray:
-        return sample.sum(axis=1)[:, :4].max(axis=1) / sample.shape[1]
+        return sample.sum(axis=1)[:, rooms].max(axis=1) / sample.shape[1]
 
     low, high = bootstrap_ci(onehot, share, rng_seed=rng_seed)
-    value = float(onehot.sum(axis=0)[:4].max() / len(kept))
-    return Estimate(value, low, high, len(kept), None, errored)
+    return Estimate(result.share, low, high, len(kept), None, errored)
 
 
 def _r2(items: Sequence[EpisodeLike], *, rng_seed: int = 0) -> Estimate:

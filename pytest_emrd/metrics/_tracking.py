@@ -175,17 +175,18 @@ def _spells(
         t = step.index
         visible = frozenset(step.visible_ids)
         if i > 0:
-            for oid in sorted((prev_visible - visible) & held[i - 1].keys()):
+            for oid in (prev_visible - visible) & held[i - 1].keys():
                 open_at[oid] = t
-        for oid in sorted(open_at):
+        now = held[i]
+        for oid in [o for o in open_at if o in visible or o not in now]:
             if oid in visible:
                 close(oid, t - open_at[oid], False)
-            elif oid not in held[i]:
+            else:
                 close(oid, t - open_at[oid] + 1, True)
         prev_visible = visible
     if traj.steps:
         last = traj.steps[-1].index
-        for oid in sorted(open_at):
+        for oid in list(open_at):
             close(oid, last - open_at[oid] + 1, False)
     return tuple(sorted(done, key=lambda s: (s.start, s.object_id)))
 

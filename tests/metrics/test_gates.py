@@ -5,10 +5,18 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 
+import numpy as np
 import pytest
 
 from pytest_emrd.errors import ConfigError
-from pytest_emrd.metrics import GATE_METRICS, EpisodeMetrics, Estimate, evaluate_gates
+from pytest_emrd.metrics import (
+    GATE_METRICS,
+    EpisodeMetrics,
+    Estimate,
+    ebbinghaus_fit,
+    evaluate_gates,
+)
+from pytest_emrd.metrics._gates import _r2_of_histograms
 from pytest_emrd.rooms import OFFICE
 from pytest_emrd.trajectory import GroundTruthObject, Trajectory
 
@@ -83,3 +91,22 @@ def test_memory_strength_without_events_is_unbounded(
 def test_evaluate_gates_rejects_unknown_names(small_grid_metrics: list[EpisodeMetrics]) -> None:
     with pytest.raises(ConfigError, match="metric='coverage'"):
         evaluate_gates(small_grid_metrics, ["aec", "coverage"])
+
+
+def test_vectorised_r2_bootstrap_agrees_with_the_scalar_fit(
+    small_grid_metrics: list[EpisodeMetrics],
+) -> None:
+    spells = [s for m in small_grid_metrics for s in m.ttf_spells]
+    mapped = sum(sum(m.mapped_by_category.values()) for m in small_grid_metrics)
+    total = sum(sum(m.objects_by_category.values()) for m in small_grid_metrics)
+    horizon = max(s.duration for s in spells)
+    leave = np.zeros((1, horizon + 1))
+    death = np.zeros((1, horizon + 1))
+    for s in spells:
+        leave[0, s.duration] += 1
+        death[0, s.duration] += s.forgotten
+    (r2,) = _r2_of_histograms(leave, death, np.array([mapped]), np.array([total]))
+    fit = ebbinghaus_fit([s.duration for s in spells], [s.forgotten for s in spells],
+                         coverage=mapped / total)  # fmt: skip
+    assert r2 == pytest.approx(fit.r2, abs=1e-12)
+    assert GATE_METRICS["ebbinghaus_r2"].compute(small_grid_metrics).value == fit.r2
