@@ -100,7 +100,7 @@ KINDS: Final[Mapping[str, Kind]] = {
             1.8,
             0.8,
             1.05,
-            {"front": (210, 200, 185), "top": _DARK_WOOD, "leg": _METAL},
+            {"front": (210, 200, 185), "counter": _DARK_WOOD, "leg": _METAL},
         ),
         Kind(
             "DiningTable",
@@ -227,6 +227,14 @@ KINDS: Final[Mapping[str, Kind]] = {
 
 #: objectType -> category, for every type the built-in office uses.
 CATEGORY_OF: Final[Mapping[str, str]] = {k.object_type: k.category for k in KINDS.values()}
+
+#: objectType -> material role -> baseline colour, merged over the kinds of that type
+#: (the reception desk adds its front panel and counter to the office desk's materials;
+#: kinds of one type never give one role two colours).
+COLORS_OF: Final[Mapping[str, Mapping[str, RGB]]] = {
+    t: {role: c for k in KINDS.values() if k.object_type == t for role, c in k.colors.items()}
+    for t in CATEGORY_OF
+}
 
 #: Room surface colours: walls and floors per room, ceiling and skirting shared.
 WALL_COLORS: Final[Mapping[str, RGB]] = {

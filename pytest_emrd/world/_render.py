@@ -21,6 +21,8 @@ renders to identical bytes on every machine and numpy version.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from pytest_emrd.world._catalog import WALL_HEIGHT
@@ -95,20 +97,45 @@ def _row(a: np.ndarray) -> np.ndarray:
     return np.clip(np.ceil(a - 0.5), 0, SIZE).astype(np.int32)
 
 
+@dataclass(frozen=True, eq=False)
+class _View:
+    """One frame being drawn: the camera rays, their wall hits and the output buffers."""
+
+    pose: WorldPose
+    params: ConditionParams
+    dx: np.ndarray
+    """``(512,)`` ray direction per column (forward component 1, so ``t`` is depth)."""
+    dz: np.ndarray
+    t_wall: np.ndarray
+    """``(512,)`` depth of the nearest wall per column."""
+    along_x: np.ndarray
+    """``(512,)`` whether that wall runs along x."""
+    code: np.ndarray
+    """``(512, 512)`` int32 ``(label * 4 + face) << 8``; the fog weight is or-ed in last."""
+    fog: np.ndarray
+    """``(512, 512)`` uint8 fog weight."""
+
+
 def render(scene: Scene, pose: WorldPose, params: ConditionParams, table: np.ndarray) -> np.ndarray:
     """The ``(512, 512, 3)`` uint8 frame seen from ``pose`` (``table`` from :func:`shade_table`)."""
     fx, fz = unit(pose.heading)
     rx, rz = right_of(pose.heading)
     dx, dz = fx + rx * _U, fz + rz * _U
-    ox, oz = np.float64(pose.x), np.float64(pose.z)
-    t_wall, along_x = scene.walls.first_hit(ox, oz, dx, dz)
-    t_wall = np.minimum(t_wall, 1e3)
-    code = np.empty((SIZE, SIZE), dtype=np.int32)
-    fog = np.empty((SIZE, SIZE), dtype=np.uint8)
-    _background(scene, ox, oz, dx, dz, t_wall, along_x, params, code, fog)
-    _objects(scene, pose, dx, dz, t_wall, params, code, fog)
-    code |= fog
-    return np.take(table, code, axis=0)
+    t_wall, along_x = scene.walls.first_hit(np.float64(pose.x), np.float64(pose.z), dx, dz)
+    view = _View(
+        pose,
+        params,
+        dx,
+        dz,
+        np.minimum(t_wall, 1e3),
+        along_x,
+        code=np.empty((SIZE, SIZE), dtype=np.int32),
+        fog=np.empty((SIZE, SIZE), dtype=np.uint8),
+    )
+    _background(scene, view)
+    _objects(scene, view)
+    np.bitwise_or(view.code, view.fog, out=view.code)
+    return np.take(table, view.code, axis=0)
 
 
 def _cells(origin: np.float64, step: np.ndarray, depth: np.ndarray, size: int) -> np.ndarray:
@@ -120,7 +147,10 @@ def _cells(origin: np.float64, step: np.ndarray, depth: np.ndarray, size: int) -
     return np.clip(cells, 0, size - 1)
 
 
-def _background(scene, ox, oz, dx, dz, t_wall, along_x, params, code, fog) -> None:
+def _background(scene: Scene, view: _View) -> None:
+    """Ceiling, floor (room colour, tiles) and walls (room colour, skirting) everywhere."""
+    ox, oz, dx, dz = np.float64(view.pose.x), np.float64(view.pose.z), view.dx, view.dz
+    t_wall, params, code, fog = view.t_wall, view.params, view.code, view.fog
     code[:HORIZON] = (CEILING * 4 + Z_FACE) << 8
     fog[:HORIZON] = _fog(_CEIL_DEPTH, params)[:, None]
     rooms = scene.room_raster
@@ -131,7 +161,7 @@ def _background(scene, ox, oz, dx, dz, t_wall, along_x, params, code, fog) -> No
 
     hx = np.clip(np.floor((ox + (t_wall - 0.05) * dx) * RASTER).astype(np.int32), 0, nx - 1)
     hz = np.clip(np.floor((oz + (t_wall - 0.05) * dz) * RASTER).astype(np.int32), 0, nz - 1)
-    face = np.where(along_x, Z_FACE, X_FACE)
+    face = np.where(view.along_x, Z_FACE, X_FACE)
     wall_code = (((WALL0 + rooms[hz, hx]) * 4 + face) << 8).astype(np.int32)
     top = _row(HORIZON - FOCAL * (WALL_HEIGHT - EYE) / t_wall)
     bottom = _row(HORIZON + FOCAL * EYE / t_wall)
@@ -145,25 +175,23 @@ def _background(scene, ox, oz, dx, dz, t_wall, along_x, params, code, fog) -> No
     np.copyto(code[HORIZON:], skirting, where=(low >= skirt) & (low < bottom))
 
 
-def _draw_order(scene: Scene, pose: WorldPose, parts: np.ndarray, objs: np.ndarray):
+def _dist2(rects: np.ndarray, pose: WorldPose) -> np.ndarray:
+    """Squared distance from the agent to the nearest point of each rectangle."""
+    ddx = np.maximum(np.maximum(rects[:, 0] - pose.x, pose.x - rects[:, 2]), 0.0)
+    ddz = np.maximum(np.maximum(rects[:, 1] - pose.z, pose.z - rects[:, 3]), 0.0)
+    return ddx * ddx + ddz * ddz
+
+
+def _draw_order(scene: Scene, pose: WorldPose, parts: np.ndarray, objs: np.ndarray) -> np.ndarray:
     """Indices into ``parts`` back to front: by the distance of the object (an item on a
     desk takes its desk's), then bottom-up, then farther boxes first."""
-
-    def dist(rects: np.ndarray) -> np.ndarray:
-        ddx = np.maximum(np.maximum(rects[:, 0] - pose.x, pose.x - rects[:, 2]), 0.0)
-        ddz = np.maximum(np.maximum(rects[:, 1] - pose.z, pose.z - rects[:, 3]), 0.0)
-        return ddx * ddx + ddz * ddz
-
-    group = dist(scene.rects[scene.support[objs]])
-    return np.lexsort((-dist(parts[:, :4]), parts[:, 4], -group))
+    group = _dist2(scene.rects[scene.support[objs]], pose)
+    return np.lexsort((-_dist2(parts[:, :4], pose), parts[:, 4], -group))
 
 
 def _shown_parts(scene: Scene, pose: WorldPose, params: ConditionParams) -> np.ndarray:
     """Boxes of objects within the visibility distance, minus faces turned away."""
-    r = scene.rects
-    ddx = np.maximum(np.maximum(r[:, 0] - pose.x, pose.x - r[:, 2]), 0.0)
-    ddz = np.maximum(np.maximum(r[:, 1] - pose.z, pose.z - r[:, 3]), 0.0)
-    near = (ddx * ddx + ddz * ddz <= params.visibility_distance**2)[scene.part_object]
+    near = (_dist2(scene.rects, pose) <= params.visibility_distance**2)[scene.part_object]
     nf = scene.part_facing
     cen = scene.centres[scene.part_object]
     side = (pose.x - cen[:, 0]) * nf[:, 0] + (pose.z - cen[:, 1]) * nf[:, 1]
@@ -181,7 +209,9 @@ def _in_view(parts: np.ndarray, pose: WorldPose) -> np.ndarray:
     return ~((fwd <= NEAR).all(axis=1) | (lat > fwd).all(axis=1) | (lat < -fwd).all(axis=1))
 
 
-def _objects(scene, pose, dx, dz, t_wall, params, code, fog) -> None:
+def _objects(scene: Scene, view: _View) -> None:
+    """Paint the boxes of nearby objects back to front, over the columns each one covers."""
+    pose, params, dx, dz, code, fog = view.pose, view.params, view.dx, view.dz, view.code, view.fog
     sel = _shown_parts(scene, pose, params)
     if sel.size == 0:
         return
@@ -191,7 +221,7 @@ def _objects(scene, pose, dx, dz, t_wall, params, code, fog) -> None:
     tminx, tminz = np.minimum(ax, bx), np.minimum(az, bz)
     tn = np.maximum(tminx, tminz)
     tf = np.minimum(np.maximum(ax, bx), np.maximum(az, bz))
-    hit = (tn < tf) & (tn > NEAR) & (tn < t_wall)
+    hit = (tn < tf) & (tn > NEAR) & (tn < view.t_wall)
     keep = np.flatnonzero(hit.any(axis=1))
     if keep.size == 0:
         return

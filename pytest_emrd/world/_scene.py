@@ -16,8 +16,8 @@ import numpy as np
 from pytest_emrd.rooms import ROOM_NAMES
 from pytest_emrd.world._catalog import (
     CEILING_COLOR,
+    COLORS_OF,
     FLOOR_COLORS,
-    KINDS,
     SKIRTING_COLOR,
     WALL_COLORS,
 )
@@ -121,7 +121,7 @@ def scene_of(layout: Layout) -> Scene:
     labels: dict[tuple[int, str], int] = {}
     parts, part_obj, part_label, facing = [], [], [], []
     for i, o in enumerate(objs):
-        kind_colors = next((k.colors for k in KINDS.values() if k.object_type == o.object_type), {})
+        kind_colors = COLORS_OF.get(o.object_type, {})
         fx, fz = unit(o.rotation)
         for b in boxes_of(o):
             (ax, az), (bx, bz) = (

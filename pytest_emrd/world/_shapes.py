@@ -60,9 +60,9 @@ def _desk(o: WorldObject) -> list[Box]:
         return [
             Box(-hw, -hw + 0.04, -hd, hd - 0.06, 0.0, 0.72, "leg"),
             Box(hw - 0.04, hw, -hd, hd - 0.06, 0.0, 0.72, "leg"),
-            Box(-hw, hw, -hd, hd - 0.06, 0.72, 0.76, "top"),
+            Box(-hw, hw, -hd, hd - 0.06, 0.72, 0.76, "counter"),
             Box(-hw, hw, hd - 0.06, hd, 0.0, h - 0.03, "front"),
-            Box(-hw, hw, hd - 0.22, hd, h - 0.03, h, "top"),
+            Box(-hw, hw, hd - 0.22, hd, h - 0.03, h, "counter"),
         ]
     return [
         Box(-hw + 0.03, -hw + 0.07, -hd + 0.03, hd - 0.03, 0.0, h - 0.04, "leg"),

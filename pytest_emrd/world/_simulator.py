@@ -177,6 +177,7 @@ class BuiltinSimulator:
     def _render(self) -> tuple[np.ndarray, str, bytes]:
         if self._frame is None or self._frame_key != self._pose:
             frame = render(self._require(), self._pose, self._params, self._table)
+            frame.setflags(write=False)  # shared with the frame cache
             buf = io.BytesIO()
             Image.fromarray(frame).save(buf, format="JPEG", quality=self._quality)
             digest = hashlib.sha256(frame.tobytes()).hexdigest()

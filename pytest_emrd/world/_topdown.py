@@ -10,9 +10,14 @@ from __future__ import annotations
 
 import io
 import math
+from types import ModuleType
+from typing import TYPE_CHECKING
 
 from pytest_emrd.world._geometry import footprint, walls_of
 from pytest_emrd.world._model import Layout, WorldPose
+
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
 
 CATEGORY_COLORS = {"landmark": "#2e9e4f", "salient": "#3b6fb6", "clutter": "#e08a2c"}
 ROOM_FILL = {
@@ -91,7 +96,7 @@ def plan_png(
     return buf.getvalue()
 
 
-def _agent(ax, patches, pose: WorldPose, visibility: float) -> None:
+def _agent(ax: Axes, patches: ModuleType, pose: WorldPose, visibility: float) -> None:
     # matplotlib angles are counter-clockwise from +x; headings clockwise from +z
     theta = 90.0 - pose.heading
     ax.add_patch(
