@@ -50,7 +50,6 @@ from dataclasses import dataclass
 from typing import Final, NamedTuple
 
 import numpy as np
-from scipy.optimize import linear_sum_assignment
 
 from pytest_emrd.metrics._vocab import TypeResolver
 from pytest_emrd.trajectory import GroundTruthObject, MapEntry
@@ -238,6 +237,8 @@ class Matcher:
         Per type: one label takes the nearest free object (ties: lowest object id); several
         labels go through :func:`linear_sum_assignment` on the (label, object) distances.
         """
+        from scipy.optimize import linear_sum_assignment  # heavy: imported on first use
+
         motion = self._align(seen, type_of)
         c, s, tx, tz = motion if motion is not None else (1.0, 0.0, 0.0, 0.0)
         xy = self._xy

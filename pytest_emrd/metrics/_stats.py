@@ -1,6 +1,7 @@
 """Statistics of the paper: bootstrap CIs, Pearson chi-square, Fisher exact, Cramer's V, ANOVA.
 
-scipy and statsmodels are the engines; this module fixes the conventions (no continuity
+scipy and statsmodels are the engines (imported on first use, so importing the metrics
+package stays cheap for the plugin); this module fixes the conventions (no continuity
 correction, two-sided tests, seeded percentile bootstrap) and turns degenerate input into a
 result with a reason instead of a warning or a NaN.
 """
@@ -12,8 +13,6 @@ from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import stats
-from statsmodels.stats.oneway import anova_oneway
 
 from pytest_emrd.errors import ConfigError
 
@@ -123,7 +122,9 @@ def chi_square(table: Sequence[Sequence[float]] | np.ndarray) -> ChiSquare:
     if kept.shape[0] < 2 or kept.shape[1] < 2:
         why = "fewer than two non-empty rows or columns: independence is untestable"
         return ChiSquare(None, 0, None, n, dropped, why)
-    res = stats.chi2_contingency(kept, correction=False)
+    from scipy.stats import chi2_contingency  # heavy: imported on first use
+
+    res = chi2_contingency(kept, correction=False)
     return ChiSquare(float(res.statistic), int(res.dof), float(res.pvalue), n, dropped)
 
 
@@ -147,7 +148,9 @@ def fisher_exact_2x2(table: Sequence[Sequence[float]] | np.ndarray) -> FisherExa
         raise ConfigError(f"table shape={arr.shape} must be 2 x 2 for Fisher's exact test.")
     if np.any(arr != np.round(arr)):
         raise ConfigError(f"table={arr.tolist()} must hold whole counts for Fisher's exact test.")
-    res = stats.fisher_exact(arr.astype(np.int64), alternative="two-sided")
+    from scipy.stats import fisher_exact  # heavy: imported on first use
+
+    res = fisher_exact(arr.astype(np.int64), alternative="two-sided")
     return FisherExact(float(res.statistic), float(res.pvalue))
 
 
@@ -213,6 +216,8 @@ def anova_groups(groups: Mapping[str, Sequence[float]]) -> Anova:
         if np.ptp(pooled) == 0.0:
             why = "all values are identical: F is undefined"
         return Anova(None, None, len(clean) - 1.0, n - len(clean) + 0.0, sizes, why)
+    from statsmodels.stats.oneway import anova_oneway  # heavy: imported on first use
+
     res = anova_oneway(list(clean.values()), use_var="equal")
     return Anova(float(res.statistic), float(res.pvalue), float(res.df_num), float(res.df_denom),
                  sizes)  # fmt: skip
