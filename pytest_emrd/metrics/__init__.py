@@ -4,14 +4,12 @@ Pure functions over :class:`~pytest_emrd.trajectory.Trajectory` data: no I/O (ex
 the optional sentence encoder), no global state, randomness only from explicit seeds.
 Fractions are reported in [0, 1], never percent. Undefined values are None with a reason.
 
-Typical use::
-
-    ems = [episode_metrics(t) for t in trajectories]     # match every episode once
-    GATE_METRICS["aec"].compute(ems)                       # Estimate with bootstrap CI
-    kaplan_meier_anchored(ems), miller_curve(ems), ...     # report aggregates
-
-Every aggregate accepts trajectories or :class:`EpisodeMetrics`; errored episodes are
-excluded and counted. Label-to-ground-truth matching is one procedure, :func:`match_map`.
+Compute :func:`episode_metrics` once per trajectory (it matches every step's map to ground
+truth) and hand the resulting :class:`EpisodeMetrics` to the gate metrics
+(``GATE_METRICS[name].compute``, or :func:`evaluate_gates` for several) and to the report
+aggregates (:func:`kaplan_meier_anchored`, :func:`miller_curve`, ...). Every aggregate also
+accepts trajectories directly; errored episodes are excluded and counted.
+Label-to-ground-truth matching is one procedure, :func:`match_map`.
 """
 
 from pytest_emrd.metrics._decide import (
