@@ -4,12 +4,13 @@ from __future__ import annotations
 
 import hashlib
 import io
+from collections import OrderedDict
 from collections.abc import Mapping
 
 import numpy as np
 from PIL import Image
 
-from pytest_emrd.errors import ConfigError, check_choice
+from pytest_emrd.errors import ConfigError, check_choice, check_range
 from pytest_emrd.rooms import ROOM_NAMES, SLUG_ROOMS
 from pytest_emrd.trajectory import Pose
 from pytest_emrd.world._actions import GRAMMAR, TURNS, Action, normalise, parse_action
@@ -22,6 +23,8 @@ from pytest_emrd.world._scene import Scene, scene_of
 from pytest_emrd.world._visibility import Sight, sight
 
 JPEG_QUALITY = 85
+FRAME_CACHE = 16
+"""Frames kept per episode (least recently used dropped first)."""
 
 
 class _Failed(Exception):
@@ -32,17 +35,27 @@ class BuiltinSimulator:
     """Pure-numpy office simulator: semantic actions, wall-occluded visibility, ray-cast frames.
 
     ``room_aliases`` maps extra names ``Term`` accepts to canonical room names (for prompt
-    variants that rename the rooms, e.g. ``{"Room A": "Office"}``).
+    variants that rename the rooms, e.g. ``{"Room A": "Office"}``). ``frame_cache`` is how
+    many recent frames of an episode are kept for poses the agent returns to (0: none).
     """
 
     def __init__(
-        self, *, room_aliases: Mapping[str, str] | None = None, jpeg_quality: int = JPEG_QUALITY
+        self,
+        *,
+        room_aliases: Mapping[str, str] | None = None,
+        jpeg_quality: int = JPEG_QUALITY,
+        frame_cache: int = FRAME_CACHE,
     ) -> None:
         self._rooms = {normalise(r): r for r in ROOM_NAMES}
         for alias, room in (room_aliases or {}).items():
             check_choice(f"room_aliases[{alias!r}]", room, ROOM_NAMES)
             self._rooms[normalise(alias)] = room
-        self._quality = jpeg_quality
+        self._quality = check_range("jpeg_quality", jpeg_quality, 1, 95)
+        if isinstance(frame_cache, bool) or not isinstance(frame_cache, int) or frame_cache < 0:
+            raise ConfigError(
+                f"frame_cache={frame_cache!r} must be a whole number >= 0 (0 turns the cache off)."
+            )
+        self._cache_size = frame_cache
         self._scene: Scene | None = None
         self._params: ConditionParams = condition_params("baseline")
         self._table = np.zeros((0, 3), dtype=np.uint8)
@@ -51,8 +64,7 @@ class BuiltinSimulator:
         self._steps = 0
         self._terminal: str | None = None
         self._sight: Sight | None = None
-        self._frame_key: WorldPose | None = None
-        self._frame: tuple[np.ndarray, str, bytes] | None = None
+        self._frames: OrderedDict[WorldPose, tuple[np.ndarray, str, bytes]] = OrderedDict()
 
     # -- protocol ---------------------------------------------------------------------
     def reset(self, layout: Layout, condition: str, spawn_room: str, seed: int) -> Observation:
@@ -64,7 +76,8 @@ class BuiltinSimulator:
         self._table = shade_table(palette(self._scene, self._params, seed), self._params)
         self._spawn = self._pose = spawn_pose(self._scene, layout.room(room), seed)
         self._steps, self._terminal = 0, None
-        self._sight = self._frame_key = self._frame = None
+        self._sight = None
+        self._frames.clear()
         return self._observe(True, "Episode started.")
 
     def step(self, action: str) -> Observation:
@@ -109,7 +122,7 @@ class BuiltinSimulator:
 
     def close(self) -> None:
         self._scene = None
-        self._frame = None
+        self._frames.clear()
 
     # -- actions ----------------------------------------------------------------------
     def _goto(self, scene: Scene, action: Action) -> str:
@@ -175,14 +188,21 @@ class BuiltinSimulator:
         return Pose(round(x, 4) + 0.0, round(z, 4) + 0.0, heading)
 
     def _render(self) -> tuple[np.ndarray, str, bytes]:
-        if self._frame is None or self._frame_key != self._pose:
-            frame = render(self._require(), self._pose, self._params, self._table)
-            frame.setflags(write=False)  # shared with the frame cache
-            buf = io.BytesIO()
-            Image.fromarray(frame).save(buf, format="JPEG", quality=self._quality)
-            digest = hashlib.sha256(frame.tobytes()).hexdigest()
-            self._frame, self._frame_key = (frame, digest, buf.getvalue()), self._pose
-        return self._frame
+        """Frame, pixel digest and JPEG of the current pose; agents often come back to a
+        pose (a full sweep ends where it began), so recent frames of the episode are kept."""
+        cached = self._frames.get(self._pose)
+        if cached is not None:
+            self._frames.move_to_end(self._pose)
+            return cached
+        frame = render(self._require(), self._pose, self._params, self._table)
+        frame.setflags(write=False)  # shared with the cache
+        buf = io.BytesIO()
+        Image.fromarray(frame).save(buf, format="JPEG", quality=self._quality)
+        entry = (frame, hashlib.sha256(frame.tobytes()).hexdigest(), buf.getvalue())
+        self._frames[self._pose] = entry
+        while len(self._frames) > self._cache_size:
+            self._frames.popitem(last=False)
+        return entry
 
     def _observe(self, success: bool, message: str) -> Observation:
         scene = self._require()

@@ -105,3 +105,30 @@ def test_reset_rejects_bad_configuration(office: Layout, condition, spawn, probl
 def test_using_the_simulator_before_reset_is_a_config_error() -> None:
     with pytest.raises(ConfigError, match="reset"):
         make_simulator().step("Turn(Left)")
+
+
+@pytest.mark.parametrize(
+    ("options", "problem"),
+    [
+        ({"jpeg_quality": 0}, "jpeg_quality=0 must lie in"),
+        ({"frame_cache": -1}, "frame_cache=-1 must be a whole number >= 0"),
+        ({"frame_cache": 2.5}, "frame_cache=2.5"),
+        ({"room_aliases": {"Room A": "Lobby"}}, "'Lobby' is not one of"),
+    ],
+    ids=["jpeg-quality-zero", "negative-cache", "fractional-cache", "alias-to-unknown-room"],
+)
+def test_bad_simulator_options_are_config_errors(options: dict, problem: str) -> None:
+    with pytest.raises(ConfigError, match=problem):
+        BuiltinSimulator(**options)
+
+
+def test_a_full_sweep_returns_the_same_frame_with_or_without_the_cache(
+    office: Layout, new_sim
+) -> None:
+    for sim in (new_sim(), new_sim(frame_cache=0)):
+        start = sim.reset(office, "baseline", "office", 3)
+        for _ in range(3):
+            sim.step("Turn(Right)")
+        back = sim.step("Turn(Right)")
+        assert back.frame_digest == start.frame_digest and back.jpeg == start.jpeg
+        assert not back.frame.flags.writeable
