@@ -8,6 +8,8 @@ from typing import Any, Final
 
 from pytest_emrd._serde import from_dict, to_dict
 from pytest_emrd.errors import ProtocolError, check_choice
+from pytest_emrd.metrics import EpisodeMetrics
+from pytest_emrd.trajectory import Trajectory
 
 SCHEMA_VERSION: Final = 1
 #: ``pass``/``fail``: the metric recovered / did not recover the planted truth.
@@ -17,6 +19,8 @@ VERDICTS: Final[tuple[str, ...]] = ("pass", "fail", "finding")
 SECTIONS: Final[tuple[str, ...]] = ("Explore", "Remember", "Decide", "Statistics")
 
 Value = float | int | str | None
+#: What the checks read: a trajectory, or its metrics computed once (much faster).
+Episode = Trajectory | EpisodeMetrics
 
 
 @dataclass(frozen=True)

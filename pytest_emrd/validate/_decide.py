@@ -7,14 +7,13 @@ from collections.abc import Sequence
 from typing import Final
 
 from pytest_emrd.metrics import fpsg
-from pytest_emrd.trajectory import Trajectory
-from pytest_emrd.validate._check import Check, fmt, judged, pct
+from pytest_emrd.validate._check import Check, Episode, fmt, judged, pct
 
 #: ``FPSG_local`` of the perfect-memory scout's chosen room must be at least this.
 SCOUT_MIN_LOCAL: Final = 0.9
 
 
-def prior_checks(trajectories: Sequence[Trajectory]) -> list[Check]:
+def prior_checks(trajectories: Sequence[Episode]) -> list[Check]:
     """``prior`` names a room it never entered, from the prompt alone: Never-Visited and
     Any-Bias 100 %, FPSG 0."""
     s = fpsg(trajectories)
@@ -30,7 +29,7 @@ def prior_checks(trajectories: Sequence[Trajectory]) -> list[Check]:
     ]  # fmt: skip
 
 
-def scout_decide_checks(trajectories: Sequence[Trajectory]) -> list[Check]:
+def scout_decide_checks(trajectories: Sequence[Episode]) -> list[Check]:
     """``scout`` chooses a room it swept and remembers: Never-Visited 0 %, FPSG local ~ 1."""
     s = fpsg(trajectories)
     note = f"{s.runs} episodes"

@@ -7,9 +7,8 @@ import math
 from collections.abc import Sequence
 from typing import Final
 
-from pytest_emrd.metrics import GATE_METRICS, Estimate
-from pytest_emrd.trajectory import Trajectory
-from pytest_emrd.validate._check import Check, fmt, judged
+from pytest_emrd.metrics import GATE_METRICS, Estimate, as_episode_metrics
+from pytest_emrd.validate._check import Check, Episode, fmt, judged
 
 #: Baseline AEC of the perfect scout may fall short of ``|G_base| / |E|`` by at most this.
 COVERAGE_GAP: Final = 0.05
@@ -23,17 +22,15 @@ def _ci(estimate: Estimate) -> str:
     return f"95 % CI {fmt(estimate.ci_low, 3)}-{fmt(estimate.ci_high, 3)}"
 
 
-def exploration_checks(
-    baseline: Sequence[Trajectory], low_light: Sequence[Trajectory]
-) -> list[Check]:
+def exploration_checks(baseline: Sequence[Episode], low_light: Sequence[Episode]) -> list[Check]:
     """AEC close to the discoverable fraction; low_light lowers AEC and raises TE."""
     aec, te = GATE_METRICS["aec"], GATE_METRICS["te"]
     base_aec, dark_aec = aec.compute(baseline), aec.compute(low_light)
     base_te, dark_te = te.compute(baseline), te.compute(low_light)
     fractions = [
-        len(t.ground_truth.discoverable_ids) / len(t.ground_truth.objects)
-        for t in baseline
-        if t.ground_truth.objects
+        m.g_base / total
+        for m in as_episode_metrics(baseline)
+        if (total := sum(m.objects_by_category.values()))
     ]
     discoverable = math.fsum(fractions) / len(fractions) if fractions else math.nan
     gap = abs(discoverable - _value(base_aec))

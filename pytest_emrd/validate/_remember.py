@@ -12,8 +12,7 @@ from typing import Final
 
 from pytest_emrd.metrics import ebbinghaus, miller_curve, serial_position
 from pytest_emrd.rooms import ROOM_SLUGS
-from pytest_emrd.trajectory import Trajectory
-from pytest_emrd.validate._check import Check, fmt, judged
+from pytest_emrd.validate._check import Check, Episode, Value, fmt, judged
 
 #: Ebbinghaus EFC must recover the planted mean within this relative error.
 EFC_TOLERANCE: Final = 0.25
@@ -30,12 +29,12 @@ MILLER_WIDTH: Final = 5
 _SPAWN_ORDER: Final = {slug: i for i, slug in enumerate(ROOM_SLUGS.values())}
 
 
-def interleaved(trajectories: Sequence[Trajectory]) -> list[Trajectory]:
+def interleaved(trajectories: Sequence[Episode]) -> list[Episode]:
     """Episodes ordered so that every prefix of 4 covers the four spawn rooms equally."""
     return sorted(trajectories, key=lambda t: (t.spec.episode, _SPAWN_ORDER[t.spec.spawn]))
 
 
-def error_curve(trajectories: Sequence[Trajectory], planted: float) -> list[tuple[int, float]]:
+def error_curve(trajectories: Sequence[Episode], planted: float) -> list[tuple[int, float]]:
     """``(N, |EFC_N - planted| / planted)`` over spawn-balanced prefixes of N episodes.
 
     N runs over multiples of 4 (one episode per spawn room) up to every episode; a prefix
@@ -59,7 +58,7 @@ def episodes_needed(curve: Sequence[tuple[int, float]], tolerance: float) -> int
     return needed
 
 
-def decay_checks(groups: Mapping[float, Sequence[Trajectory]]) -> list[Check]:
+def decay_checks(groups: Mapping[float, Sequence[Episode]]) -> list[Check]:
     """EFC within 25 % of the planted mean and R^2 >= 0.8, per ``scout-decay-<m>`` group."""
     rows: list[Check] = []
     for mean, trajs in groups.items():
@@ -68,12 +67,15 @@ def decay_checks(groups: Mapping[float, Sequence[Trajectory]]) -> list[Check]:
         needed = episodes_needed(curve, EFC_TOLERANCE)
         error = abs(fit.efc - mean) / mean if fit.efc is not None else math.inf
         shrink = ", ".join(f"N={n}: {100 * e:.0f} %" for n, e in curve[:: max(1, len(curve) // 5)])
+        discrete = 1.0 / (1.0 - math.exp(-1.0 / mean))
         note = (
             f"{len(trajs)} episodes, {fit.n_events}/{fit.n_spells} spells forgotten; "
+            f"per-step hazard 1 - exp(-1/{mean:g}) has discrete mean {discrete:.2f}; "
             f"within 25 % from N = {needed if needed is not None else 'never'} "
             f"(error {shrink})"
         )
-        data = {"efc": fit.efc, "r2": fit.r2, "error": error, "episodes_needed": needed}
+        data: dict[str, Value] = {"efc": fit.efc, "r2": fit.r2, "error": error,
+                                  "episodes_needed": needed}  # fmt: skip
         data.update({f"error_n{n}": e for n, e in curve})
         rows.append(
             Check("Remember", f"Ebbinghaus EFC, scout-decay-{mean:g}", f"{mean:g} steps",
@@ -91,7 +93,7 @@ def decay_checks(groups: Mapping[float, Sequence[Trajectory]]) -> list[Check]:
 
 
 def window_fit_checks(
-    windows: Mapping[int, Sequence[Trajectory]], decays: Mapping[float, Sequence[Trajectory]]
+    windows: Mapping[int, Sequence[Episode]], decays: Mapping[float, Sequence[Episode]]
 ) -> list[Check]:
     """Each ``scout-window-<k>`` fits the exponential visibly worse than the ``scout-decay``
     whose recovered EFC is nearest its own (matched mean)."""
@@ -124,7 +126,7 @@ def window_fit_checks(
 
 
 def miller_checks(
-    windows: Mapping[int, Sequence[Trajectory]], perfect: Sequence[Trajectory]
+    windows: Mapping[int, Sequence[Episode]], perfect: Sequence[Episode]
 ) -> list[Check]:
     """Inflection ``m*`` within one bin of each planted capacity; perfect memory never
     forgets at any load."""
@@ -159,7 +161,7 @@ def _profile(early: float | None, middle: float | None, late: float | None) -> s
 
 
 def serial_checks(
-    serial: Sequence[Trajectory], windows: Mapping[int, Sequence[Trajectory]]
+    serial: Sequence[Episode], windows: Mapping[int, Sequence[Episode]]
 ) -> list[Check]:
     """``scout-serial`` shows the U shape (E, L > M); every ``scout-window`` is monotone."""
     spe = serial_position(serial)

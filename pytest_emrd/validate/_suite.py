@@ -5,8 +5,8 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 
 from pytest_emrd.errors import ConfigError
-from pytest_emrd.trajectory import Trajectory
-from pytest_emrd.validate._check import Check, ValidationReport
+from pytest_emrd.metrics import EpisodeMetrics, as_episode_metrics
+from pytest_emrd.validate._check import Check, Episode, ValidationReport
 from pytest_emrd.validate._decide import prior_checks, scout_decide_checks
 from pytest_emrd.validate._explore import exploration_checks
 from pytest_emrd.validate._paper import statistics_checks
@@ -18,17 +18,18 @@ from pytest_emrd.validate._remember import (
     window_fit_checks,
 )
 
-Groups = Mapping[str, Sequence[Trajectory]]
+Groups = Mapping[str, Sequence[Episode]]
 
 
-def _need(groups: Groups, group: Group) -> Sequence[Trajectory]:
+def _need(groups: Groups, group: Group) -> list[EpisodeMetrics]:
+    """The group's episodes as metrics, matched once and shared by every row."""
     trajs = groups.get(group.name)
     if not trajs:
         raise ConfigError(
             f"group={group.name!r} has no trajectories; run every group of the plan "
             f"({', '.join(g.name for g in GROUPS)})."
         )
-    return trajs
+    return as_episode_metrics(trajs)
 
 
 def episode_checks(groups: Groups) -> list[Check]:
