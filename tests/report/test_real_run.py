@@ -1,0 +1,47 @@
+"""A report from real episodes: reference agents on the builtin world over the local server."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from pytest_emrd import metrics
+from pytest_emrd.cli import main
+from pytest_emrd.episode import run_episode
+from pytest_emrd.report import FIGURES
+from pytest_emrd.trajectory import EpisodeSpec, Trajectory
+
+
+@pytest.fixture(scope="module")
+def recorded() -> list[Trajectory]:
+    """scout and scout-decay-4, baseline and low light, two spawn rooms (8 episodes)."""
+    return [
+        run_episode(EpisodeSpec(model, condition, spawn, 0, modality="text"))
+        for model in ("scout", "scout-decay-4")
+        for condition in ("baseline", "low_light")
+        for spawn in ("office", "entrance")
+    ]
+
+
+@pytest.mark.slow
+def test_report_of_a_small_recorded_run(recorded, make_run_dir, tmp_path: Path) -> None:
+    assert all(t.status != "errored" for t in recorded), [t.error for t in recorded]
+    run = make_run_dir("run", recorded)
+    out = tmp_path / "report"
+    assert main(["report", str(run), "--out", str(out), "--thresholds",
+                 str(Path(__file__).parents[2] / "thresholds.yaml")]) == 0  # fmt: skip
+    assert {p.name for p in out.iterdir()} >= {"report.md", "report.html", "report.json",
+                                               *(f.name for f in FIGURES)}  # fmt: skip
+    data = json.loads((out / "report.json").read_text())
+    by_key = {(r["model"], r["condition"]): r for r in data["exploration"]}
+    for model in ("scout", "scout-decay-4"):
+        for condition in ("baseline", "low_light"):
+            cell = sorted((t for t in recorded if (t.spec.model, t.spec.condition)
+                           == (model, condition)), key=lambda t: t.spec.case_id)  # fmt: skip
+            expected = metrics.GATE_METRICS["aec"].compute(cell)
+            assert by_key[(model, condition)]["aec"]["value"] == expected.value
+    assert data["gates"]["verdicts"], "thresholds.yaml gates the scout reference agent"
+    md = (out / "report.md").read_text()
+    assert "## Gates" in md and "| scout |" in md
