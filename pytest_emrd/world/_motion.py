@@ -8,8 +8,9 @@
 * ``Goto(Doorway_N)``: the agent passes through to 1 m inside the room on the other side
   (the room it is not in; seen through another doorway, the room beyond this one),
   facing away from the doorway.
-* Spawn: a free point within 1.5 m of the spawn room's centre (else anywhere free in the
-  room), chosen by the episode seed on a 0.25 m grid, with a seeded cardinal heading.
+* Spawn: a point within 1.5 m of the spawn room's centre with 0.6 m clear around it (else
+  anywhere the agent fits in the room), chosen by the episode seed on a 0.25 m grid, with
+  a seeded cardinal heading.
 """
 
 from __future__ import annotations
@@ -26,13 +27,14 @@ SLIDES = (0.0, -0.4, 0.4, -0.8, 0.8)
 THROUGH = 1.0
 SPAWN_RADIUS = 1.5
 SPAWN_STEP = 0.25
+SPAWN_CLEARANCE = 0.6
+"""Free space around a spawn point near the centre, so the first view is not a table top."""
 #: Outward normal of a footprint side -> heading that faces the side from outside.
 _SIDES = (((0.0, 1.0), 180.0), ((0.0, -1.0), 0.0), ((1.0, 0.0), 270.0), ((-1.0, 0.0), 90.0))
 
 
-def is_free(scene: Scene, room: Room, x: float, z: float) -> bool:
-    """Whether an agent of radius 0.25 m fits at ``(x, z)`` inside ``room``."""
-    r = AGENT_RADIUS
+def is_free(scene: Scene, room: Room, x: float, z: float, r: float = AGENT_RADIUS) -> bool:
+    """Whether a disc of radius ``r`` (the agent) fits at ``(x, z)`` inside ``room``."""
     if not (room.x0 + r <= x <= room.x1 - r and room.z0 + r <= z <= room.z1 - r):
         return False
     f = scene.rects[scene.floor]
@@ -97,7 +99,7 @@ def spawn_pose(scene: Scene, room: Room, seed: int) -> WorldPose:
         for b in steps
         if a * a + b * b <= SPAWN_RADIUS**2
     ]
-    free = [p for p in near if is_free(scene, room, *p)]
+    free = [p for p in near if is_free(scene, room, *p, SPAWN_CLEARANCE)]
     if not free:
         xs = np.arange(room.x0 + AGENT_RADIUS, room.x1 - AGENT_RADIUS, SPAWN_STEP)
         zs = np.arange(room.z0 + AGENT_RADIUS, room.z1 - AGENT_RADIUS, SPAWN_STEP)

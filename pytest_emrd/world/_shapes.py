@@ -219,8 +219,8 @@ def _doorway(o: WorldObject) -> list[Box]:
         Box(-hw - 0.07, -hw, -0.08, 0.08, 0.0, top + 0.07, "frame"),
         Box(hw, hw + 0.07, -0.08, 0.08, 0.0, top + 0.07, "frame"),
         Box(-hw, hw, -0.08, 0.08, top, top + 0.07, "frame"),
-        Box(-hw, hw, -0.05, 0.0, top + 0.07, WALL_HEIGHT, "wall"),
-        Box(-hw, hw, 0.0, 0.05, top + 0.07, WALL_HEIGHT, "wall"),
+        Box(-hw, hw, -0.005, 0.0, top + 0.07, WALL_HEIGHT, "wall"),
+        Box(-hw, hw, 0.0, 0.005, top + 0.07, WALL_HEIGHT, "wall"),
     ]
 
 
