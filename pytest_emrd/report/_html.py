@@ -21,6 +21,7 @@ th, td { border: 1px solid #ccc; padding: .25rem .5rem; text-align: right; }
 th { background: #f0f3f8; }
 td:first-child, th:first-child { text-align: left; }
 td.strong { font-weight: bold; }
+td.text { text-align: left; }
 figure { margin: 1rem 0 2rem; }
 figure img { max-width: 100%; border: 1px solid #eee; }
 figcaption { font-size: .9rem; color: #555; }
@@ -32,15 +33,19 @@ def _inline(text: str) -> str:
     return re.sub(r"\*\*(.+?)\*\*", r"<strong>\1</strong>", html.escape(text))
 
 
+_NUMERIC = re.compile(r"^([-+]?[\d.$\[]|n/a$|—$|-?inf)")
+
+
 def _td(c: Cell) -> str:
+    classes = [] if _NUMERIC.match(c.text) else ["text"]
+    if c.bold:
+        classes.append("strong")
+    attr = f' class="{" ".join(classes)}"' if classes else ""
     style = ""
     if c.shade is not None and c.shade > 0:
         fg = "#fff" if c.shade > 0.5 else "#000"
         style = f' style="background: rgba(31, 95, 191, {c.shade:.2f}); color: {fg}"'
-    text = html.escape(c.text)
-    if c.bold:
-        return f'<td class="strong"{style}>{text}</td>'
-    return f"<td{style}>{text}</td>"
+    return f"<td{attr}{style}>{html.escape(c.text)}</td>"
 
 
 def _table(t: Table) -> str:
