@@ -28,8 +28,7 @@ CoffeeMachine      CoffeeMachine    clutter   0.26 x 0.3 x 0.38      CounterTop 
 
 Landmarks are the doorways and the building exit; salient objects are large furniture a
 responder would use to orient; clutter is small or movable. An object's *front* faces the
-heading given by its ``rotation``; ``access`` says which side is kept free so an agent can
-walk up to it (``back`` for chairs, which face a desk or table).
+heading given by its ``rotation`` (a chair's front faces its desk or table).
 """
 
 from __future__ import annotations
@@ -55,8 +54,6 @@ class Kind:
     """Material role -> baseline colour; the first role is the object's main colour."""
     elevation: float = 0.0
     """Height of the base above the floor (items standing on a desk or counter)."""
-    access: str = "front"
-    """Side kept free for an approaching agent: ``front`` or ``back``."""
 
     @property
     def main_color(self) -> RGB:
@@ -160,7 +157,6 @@ KINDS: Final[Mapping[str, Kind]] = {
             0.85,
             0.9,
             {"fabric": (150, 62, 50), "leg": (50, 40, 32)},
-            access="front",
         ),
         Kind(
             "Chair",
@@ -170,7 +166,6 @@ KINDS: Final[Mapping[str, Kind]] = {
             0.5,
             0.92,
             {"fabric": (44, 72, 128), "leg": (56, 56, 60)},
-            access="back",
         ),
         Kind("Stool", "Stool", "clutter", 0.4, 0.4, 0.7, {"seat": (176, 44, 40), "leg": _METAL}),
         Kind(

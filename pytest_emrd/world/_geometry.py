@@ -100,16 +100,6 @@ def rects_overlap(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     )
 
 
-def rect_inside(inner: Rect, outer: Rect, margin: float = 0.0) -> bool:
-    """Whether ``inner`` lies within ``outer`` shrunk by ``margin``."""
-    return (
-        inner[0] >= outer[0] + margin
-        and inner[1] >= outer[1] + margin
-        and inner[2] <= outer[2] - margin
-        and inner[3] <= outer[3] - margin
-    )
-
-
 @dataclass(frozen=True, eq=False)
 class Walls:
     """Wall segments: ``along_x`` rows ``(z, x0, x1)``, ``along_z`` rows ``(x, z0, z1)``."""

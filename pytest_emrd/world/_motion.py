@@ -19,9 +19,8 @@ import numpy as np
 
 from pytest_emrd.world._model import Doorway, Room, WorldPose
 from pytest_emrd.world._rng import StableRng
-from pytest_emrd.world._scene import Scene
+from pytest_emrd.world._scene import AGENT_RADIUS, Scene
 
-AGENT_RADIUS = 0.25
 STAND_OFF = (0.7, 0.6, 0.8)
 SLIDES = (0.0, -0.4, 0.4, -0.8, 0.8)
 THROUGH = 1.0
@@ -35,12 +34,8 @@ _SIDES = (((0.0, 1.0), 180.0), ((0.0, -1.0), 0.0), ((1.0, 0.0), 270.0), ((-1.0, 
 
 def is_free(scene: Scene, room: Room, x: float, z: float, r: float = AGENT_RADIUS) -> bool:
     """Whether a disc of radius ``r`` (the agent) fits at ``(x, z)`` inside ``room``."""
-    if not (room.x0 + r <= x <= room.x1 - r and room.z0 + r <= z <= room.z1 - r):
-        return False
-    f = scene.rects[scene.floor]
-    return not bool(
-        ((x > f[:, 0] - r) & (x < f[:, 2] + r) & (z > f[:, 1] - r) & (z < f[:, 3] + r)).any()
-    )
+    inside = room.x0 + r <= x <= room.x1 - r and room.z0 + r <= z <= room.z1 - r
+    return inside and not bool(scene.crowded(x, z, r))
 
 
 def approach(scene: Scene, index: int, pose: WorldPose) -> WorldPose | None:

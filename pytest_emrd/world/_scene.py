@@ -31,6 +31,8 @@ CEILING, SKIRTING, WALL0 = 0, 1, 2
 FLOOR0 = WALL0 + len(ROOM_NAMES)
 TILE0 = FLOOR0 + len(ROOM_NAMES)
 PART0 = TILE0 + len(ROOM_NAMES)
+AGENT_RADIUS = 0.25
+"""The agent's footprint radius: standing spots keep this clear of walls and furniture."""
 RASTER = 10
 """Cells per metre of :attr:`Scene.room_raster` (room bounds lie on a 10 cm grid)."""
 TILE_CELLS = 5
@@ -71,12 +73,17 @@ class Scene:
     floor_raster: np.ndarray
     """``(nz, nx)`` floor label of each cell: the room's floor, alternate tiles darker."""
 
-    def room_index(self, x: np.ndarray, z: np.ndarray) -> np.ndarray:
-        """Index (ROOM_NAMES order) of the room containing each point; -1 outside."""
-        out = np.full(np.shape(x), -1, dtype=np.int8)
-        for i, (x0, z0, x1, z1) in enumerate(self.rooms):
-            out[(x >= x0) & (x <= x1) & (z >= z0) & (z <= z1) & (out < 0)] = i
-        return out
+    def crowded(self, x: np.ndarray, z: np.ndarray, radius: float = AGENT_RADIUS) -> np.ndarray:
+        """Whether a disc of ``radius`` at each point would touch floor furniture
+        (footprints grown by the radius: slightly conservative at corners)."""
+        f = self.rects[self.floor]
+        px, pz = np.asarray(x, dtype=float)[..., None], np.asarray(z, dtype=float)[..., None]
+        return (
+            (px > f[:, 0] - radius)
+            & (px < f[:, 2] + radius)
+            & (pz > f[:, 1] - radius)
+            & (pz < f[:, 3] + radius)
+        ).any(axis=-1)
 
 
 def _samples(obj: WorldObject) -> list[tuple[float, float]]:

@@ -15,7 +15,6 @@ its centre.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from functools import lru_cache
 
@@ -29,7 +28,6 @@ from pytest_emrd.world._scene import Scene, scene_of
 HALF_FOV = 45.0
 STAND_SPACING = 0.75
 """Grid spacing of the standing points that define ``G_base``."""
-AGENT_RADIUS = 0.25
 
 
 @dataclass(frozen=True, eq=False)
@@ -88,14 +86,7 @@ def standing_points(scene: Scene) -> np.ndarray:
         nx, nz = (0.0, 1.0) if d.axis == "x" else (1.0, 0.0)
         pts.append(np.array([[d.x + nx, d.z + nz], [d.x - nx, d.z - nz]]))
     grid = np.concatenate(pts)
-    r = scene.rects[scene.floor]
-    inside = (
-        (grid[:, None, 0] > r[None, :, 0] - AGENT_RADIUS)
-        & (grid[:, None, 0] < r[None, :, 2] + AGENT_RADIUS)
-        & (grid[:, None, 1] > r[None, :, 1] - AGENT_RADIUS)
-        & (grid[:, None, 1] < r[None, :, 3] + AGENT_RADIUS)
-    ).any(axis=1)
-    return grid[~inside]
+    return grid[~scene.crowded(grid[:, 0], grid[:, 1])]
 
 
 @lru_cache(maxsize=256)
@@ -120,11 +111,3 @@ def discoverable_ids(layout: Layout) -> tuple[str, ...]:
     seen[pi[clear]] = True
     per_object = seen.reshape(scene.samples.shape[:2]).any(axis=1)
     return tuple(sorted(layout.objects[i].object_id for i in np.flatnonzero(per_object)))
-
-
-def bearing_of(pose: WorldPose, x: float, z: float) -> float:
-    """Bearing in degrees of a world point from ``pose`` (negative = left), unclipped."""
-    fx, fz = unit(pose.heading)
-    rx, rz = right_of(pose.heading)
-    dx, dz = x - pose.x, z - pose.z
-    return math.degrees(math.atan2(dx * rx + dz * rz, dx * fx + dz * fz))
