@@ -16,7 +16,7 @@ import pytest
 from pytest_emrd.world import WORLD_VERSION, Layout, make_simulator
 
 GOLDEN = {
-    "builtin-1": {
+    "builtin-2": {
         "layout": "f7eafb11ad7ad797f8b26098f13d3905ca298ad4bd4cfe0b842c0bdfbacb161f",
         "baseline": (
             "709aab3ea5e35d99a52bc5e6e51d9b4a85e5a2ae21847c4b43a361d979348eeb",
