@@ -1,5 +1,8 @@
 """The cassette file format: content-addressed YAML inside gzip (pure encode/decode).
 
+(The layout below is shown in block style for reading; files are written in YAML's
+JSON-compatible flow style, see :func:`encode`.)
+
 A model request repeats the whole history window every step (system prompt + the last ten
 turns), and each reply comes back once as a response and then up to ten times inside later
 requests. So the file holds a table of distinct strings and everything else refers to it:
@@ -56,7 +59,6 @@ _REF: Final = "\x00"
 #: Strings at least this long are stored once in the table and referenced from the trees.
 _LONG: Final = 48
 
-_Dumper = getattr(yaml, "CSafeDumper", yaml.SafeDumper)
 _Loader = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
 
 
@@ -173,7 +175,12 @@ def _decode_body(body: dict[str, Any], strings: Sequence[str]) -> bytes:
 
 
 def encode(data: CassetteData) -> bytes:
-    """Gzip-compressed YAML bytes of ``data`` (deterministic)."""
+    """Gzip-compressed YAML bytes of ``data`` (deterministic).
+
+    The YAML is written in its JSON-compatible flow style (JSON is a subset of YAML 1.2),
+    which any YAML reader loads and which loads here at JSON speed; a cassette edited by
+    hand into block-style YAML still loads (through PyYAML).
+    """
     table = _Table()
     interactions = []
     for request, response in zip(data.requests, data.responses, strict=True):
@@ -198,7 +205,7 @@ def encode(data: CassetteData) -> bytes:
         "strings": table.strings,
         "interactions": interactions,
     }
-    text = yaml.dump(document, Dumper=_Dumper, sort_keys=False, allow_unicode=True, width=1 << 30)
+    text = json.dumps(document, ensure_ascii=False, indent=1)
     return gzip.compress(text.encode(), compresslevel=9, mtime=0)
 
 
@@ -209,9 +216,12 @@ def decode(blob: bytes) -> CassetteData:
     except (OSError, EOFError, zlib.error, UnicodeDecodeError) as exc:
         raise FormatError(f"not a gzip-compressed text file ({exc})") from exc
     try:
-        document = yaml.load(text, Loader=_Loader)
-    except yaml.YAMLError as exc:
-        raise FormatError(f"not valid YAML ({exc})") from exc
+        document = json.loads(text)
+    except ValueError:
+        try:
+            document = yaml.load(text, Loader=_Loader)
+        except yaml.YAMLError as exc:
+            raise FormatError(f"not valid YAML ({exc})") from exc
     if not isinstance(document, dict) or document.get("format") != FORMAT:
         found = document.get("format") if isinstance(document, dict) else type(document).__name__
         raise FormatError(f"format={found!r} is not {FORMAT!r}")

@@ -27,6 +27,7 @@ import re
 import threading
 from collections import OrderedDict
 from dataclasses import dataclass
+from functools import cached_property
 from typing import Any, Final
 from urllib.parse import parse_qsl, urlencode, urlsplit, urlunsplit
 
@@ -63,10 +64,27 @@ class Redacted:
 
 @dataclass(frozen=True)
 class MatchKeys:
-    """The cached keys a request is matched on (``None``: unparseable, never matches)."""
+    """The keys a request is matched on, each computed once on first use.
 
-    strict: str | None
-    lenient: str | None
+    ``None`` for a body that is not JSON: it never matches.
+    """
+
+    head: str
+    """``METHOD path`` line that starts both keys."""
+    redacted: Redacted
+
+    @cached_property
+    def strict(self) -> str | None:
+        if not self.redacted.parsed:
+            return None
+        return hashlib.sha256(self.head.encode() + self.redacted.body).hexdigest()
+
+    @cached_property
+    def lenient(self) -> str | None:
+        if not self.redacted.parsed:
+            return None
+        text = self.head + canonical_json(_without_images(self.redacted.tree))
+        return hashlib.sha256(text.encode()).hexdigest()
 
 
 def canonical_json(tree: Any) -> str:
@@ -128,15 +146,7 @@ def redact_body(body: bytes | str | None) -> Redacted:
 
 def match_keys(method: str, path: str, redacted: Redacted) -> MatchKeys:
     """The strict and lenient keys of a canonical request."""
-    if not redacted.parsed:
-        return MatchKeys(None, None)
-    head = f"{method.upper()} {path}\n"
-    strict = head + redacted.body.decode()
-    lenient = head + canonical_json(_without_images(redacted.tree))
-    return MatchKeys(
-        strict=hashlib.sha256(strict.encode()).hexdigest(),
-        lenient=hashlib.sha256(lenient.encode()).hexdigest(),
-    )
+    return MatchKeys(f"{method.upper()} {path}\n", redacted)
 
 
 def scrub_uri(uri: str) -> str:

@@ -2,13 +2,15 @@
 
 from __future__ import annotations
 
+import copy
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
 from typing import Any, Final
 
-import vcr
+from vcr import filters
 from vcr.cassette import Cassette
+from vcr.record_mode import RecordMode
 from vcr.request import Request
 
 from pytest_emrd.cassette._drift import drift_message
@@ -105,31 +107,41 @@ class EpisodeCassette(Cassette):
         return playable
 
 
+def _before_record_request(request: Request) -> Request:
+    # A shallow copy suffices: redaction assigns new attributes and never mutates shared
+    # ones (vcrpy's own configuration deep-copies the request, frames included, every call).
+    return redact_request(copy.copy(request))
+
+
+def _before_record_response(response: dict[str, Any]) -> dict[str, Any] | None:
+    # decode_compressed_response: store bodies decoded, whatever the server compressed.
+    return keep_response(filters.decode_response(response))
+
+
 @contextmanager
 def episode_cassette(
     path: Path, *, protocol: str, record_mode: str, matching: str, rerecord_command: str
 ) -> Iterator[EpisodeCassette]:
     """Patch httpx with the episode's cassette for the duration of the block.
 
-    vcrpy settings: ``allow_playback_repeats`` off, ``decode_compressed_response`` on,
+    vcrpy settings: ``allow_playback_repeats`` off, compressed responses stored decoded,
     ``record_on_exception`` off (raise inside the block to discard a failed episode), and
     in ``all`` mode the file is rebuilt from scratch.
     """
     frame_drift: set[tuple[str, str]] = set()
-    recorder = vcr.VCR(decode_compressed_response=True, record_on_exception=False)
-    recorder.register_matcher("emrd", make_matcher(matching, frame_drift))
-    config = recorder.get_merged_config(
+    use = EpisodeCassette.use(
         path=str(path),
         persister=EpisodePersister(
             protocol=protocol, fresh=record_mode == "all", rerecord_command=rerecord_command
         ),
-        record_mode=record_mode,
-        match_on=("emrd",),
-        before_record_request=redact_request,
-        before_record_response=keep_response,
+        record_mode=RecordMode(record_mode),
+        match_on=(make_matcher(matching, frame_drift),),
+        before_record_request=_before_record_request,
+        before_record_response=_before_record_response,
         allow_playback_repeats=False,
         drop_unused_requests=record_mode == "all",
+        record_on_exception=False,
     )
-    with EpisodeCassette.use(**config) as cassette:
+    with use as cassette:
         cassette.frame_drift = frame_drift
         yield cassette

@@ -75,3 +75,12 @@ def test_non_json_bodies_are_kept_verbatim():
 def test_bad_files_say_what_is_wrong(blob, message):
     with pytest.raises(FormatError, match=message):
         decode(blob)
+
+
+def test_the_file_is_yaml_that_any_yaml_reader_loads():
+    import yaml
+
+    text = gzip.decompress(encode(_data(3))).decode()
+    assert yaml.safe_load(text) == json.loads(text)
+    block_style = gzip.compress(yaml.safe_dump(json.loads(text)).encode())
+    assert [r.body for r in decode(block_style).requests] == [r.body for r in _data(3).requests]
