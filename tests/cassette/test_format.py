@@ -6,6 +6,8 @@ import gzip
 import json
 
 import pytest
+from hypothesis import given
+from hypothesis import strategies as st
 from vcr.request import Request
 
 from pytest_emrd.cassette import CassetteData, FormatError, canonical_json, decode, encode
@@ -84,3 +86,31 @@ def test_the_file_is_yaml_that_any_yaml_reader_loads():
     assert yaml.safe_load(text) == json.loads(text)
     block_style = gzip.compress(yaml.safe_dump(json.loads(text)).encode())
     assert [r.body for r in decode(block_style).requests] == [r.body for r in _data(3).requests]
+
+
+_json = st.recursive(
+    st.none() | st.booleans() | st.integers() | st.text(alphabet=st.characters(), max_size=60),
+    lambda inner: (
+        st.lists(inner, max_size=4) | st.dictionaries(st.text(max_size=5), inner, max_size=4)
+    ),
+    max_leaves=25,
+)
+
+
+@given(st.lists(st.dictionaries(st.text(max_size=5), _json, max_size=4), min_size=1, max_size=4))
+def test_any_json_traffic_round_trips_byte_for_byte(bodies):
+    requests = tuple(
+        Request("POST", "http://h/v1", canonical_json({"messages": [b], "n": i}).encode(), {})
+        for i, b in enumerate(bodies)
+    )
+    responses = tuple(
+        {
+            "status": {"code": 200, "message": "OK"},
+            "headers": {},
+            "body": {"string": json.dumps(b).encode()},
+        }
+        for b in bodies
+    )
+    back = decode(encode(CassetteData("p", requests, responses)))
+    assert [r.body for r in back.requests] == [r.body for r in requests]
+    assert [r["body"]["string"] for r in back.responses] == [r["body"]["string"] for r in responses]
