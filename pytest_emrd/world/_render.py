@@ -138,41 +138,53 @@ def render(scene: Scene, pose: WorldPose, params: ConditionParams, table: np.nda
     return np.take(table, view.code, axis=0)
 
 
+def _to_cells(scaled: np.ndarray, size: int) -> np.ndarray:
+    """Raster indices of coordinates already scaled to cells, clipped to ``[0, size)``
+    (clipping first makes the integer cast a floor)."""
+    return np.clip(scaled, 0.0, size - 1.0).astype(np.int32)
+
+
 def _cells(origin: np.float64, step: np.ndarray, depth: np.ndarray, size: int) -> np.ndarray:
-    """Raster cell of floor points ``origin + depth * step`` along one axis, clipped; one
-    column when ``step`` is the same for every image column (cardinal headings)."""
+    """Raster cell of floor points ``origin + depth * step`` along one axis; one column when
+    ``step`` is the same for every image column (one axis of a cardinal heading)."""
     if np.all(step == step[0]):
         step = step[:1]
-    cells = np.floor((origin + depth[:, None] * step) * RASTER).astype(np.int32)
-    return np.clip(cells, 0, size - 1)
+    return _to_cells((origin + depth[:, None] * step) * RASTER, size)
 
 
 def _background(scene: Scene, view: _View) -> None:
-    """Ceiling, floor (room colour, tiles) and walls (room colour, skirting) everywhere."""
+    """Ceiling, floor (room colour, tiles) and walls (room colour, skirting) everywhere.
+
+    Only the rows that can differ are computed: the floor below the lowest wall foot, the
+    wall masks between the highest wall top and the lowest wall foot.
+    """
     ox, oz, dx, dz = np.float64(view.pose.x), np.float64(view.pose.z), view.dx, view.dz
     t_wall, params, code, fog = view.t_wall, view.params, view.code, view.fog
+    top = _row(HORIZON - FOCAL * (WALL_HEIGHT - EYE) / t_wall)
+    bottom = _row(HORIZON + FOCAL * EYE / t_wall)
+    skirt = _row(HORIZON + FOCAL * (EYE - SKIRTING_HEIGHT) / t_wall)
+    r0, r1, first_floor = int(top.min()), int(bottom.max()), max(HORIZON, int(bottom.min()))
     code[:HORIZON] = (CEILING * 4 + Z_FACE) << 8
     fog[:HORIZON] = _fog(_CEIL_DEPTH, params)[:, None]
     rooms = scene.room_raster
     nz, nx = rooms.shape
-    cell = _cells(oz, dz, _FLOOR_DEPTH, nz) * nx + _cells(ox, dx, _FLOOR_DEPTH, nx)
-    np.take((scene.floor_raster * 4 + Z_FACE) << 8, cell, out=code[HORIZON:])
-    fog[HORIZON:] = _fog(_FLOOR_DEPTH, params)[:, None]
+    depth = _FLOOR_DEPTH[first_floor - HORIZON :]
+    cell = _cells(oz, dz, depth, nz) * nx + _cells(ox, dx, depth, nx)
+    np.take((scene.floor_raster * 4 + Z_FACE) << 8, cell, out=code[first_floor:])
+    fog[first_floor:] = _fog(depth, params)[:, None]
 
-    hx = np.clip(np.floor((ox + (t_wall - 0.05) * dx) * RASTER).astype(np.int32), 0, nx - 1)
-    hz = np.clip(np.floor((oz + (t_wall - 0.05) * dz) * RASTER).astype(np.int32), 0, nz - 1)
+    hx = _to_cells((ox + (t_wall - 0.05) * dx) * RASTER, nx)
+    hz = _to_cells((oz + (t_wall - 0.05) * dz) * RASTER, nz)
     face = np.where(view.along_x, Z_FACE, X_FACE)
     wall_code = (((WALL0 + rooms[hz, hx]) * 4 + face) << 8).astype(np.int32)
-    top = _row(HORIZON - FOCAL * (WALL_HEIGHT - EYE) / t_wall)
-    bottom = _row(HORIZON + FOCAL * EYE / t_wall)
-    rows = _ROW_COL
+    rows = _ROW_COL[r0:r1]
     on_wall = (rows >= top) & (rows < bottom)
-    np.copyto(code, wall_code, where=on_wall)
-    np.copyto(fog, _fog(t_wall, params), where=on_wall)
-    skirt = _row(HORIZON + FOCAL * (EYE - SKIRTING_HEIGHT) / t_wall)
-    low = rows[HORIZON:]
+    np.copyto(code[r0:r1], wall_code, where=on_wall)
+    np.copyto(fog[r0:r1], _fog(t_wall, params), where=on_wall)
+    s0 = max(HORIZON, int(skirt.min()))
+    low = _ROW_COL[s0:r1]
     skirting = ((SKIRTING * 4 + face) << 8).astype(np.int32)
-    np.copyto(code[HORIZON:], skirting, where=(low >= skirt) & (low < bottom))
+    np.copyto(code[s0:r1], skirting, where=(low >= skirt) & (low < bottom))
 
 
 def _dist2(rects: np.ndarray, pose: WorldPose) -> np.ndarray:
