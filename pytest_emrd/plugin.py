@@ -21,6 +21,7 @@ import pytest
 from pytest_emrd.errors import EmrdError
 from pytest_emrd.gate import (
     OPTIONS,
+    EpisodeSummary,
     GateCell,
     ResultsStore,
     RunSettings,
@@ -112,7 +113,7 @@ class _Run:
     session: str
 
     def __post_init__(self) -> None:
-        self.episodes: dict[str, dict[str, Any]] = {}
+        self.episodes: dict[str, EpisodeSummary] = {}
         self.verdicts: list[Verdict] = []
 
     def call(self, fn: Any) -> Any:
@@ -206,28 +207,11 @@ class _Run:
         trajectories = [self.episode(spec).trajectory for spec in specs]
         return evaluate_cell(cell, trajectories, GATE_METRICS)
 
-    def episode_summary(self, stored: StoredEpisode) -> dict[str, Any]:
-        t = stored.trajectory
-        config = self.registry.get(t.spec.model)
-        usage = t.usage
-        cost = None
-        if config.price_per_mtok_in is not None and config.price_per_mtok_out is not None:
-            cost = (
-                usage.prompt_tokens * config.price_per_mtok_in
-                + usage.completion_tokens * config.price_per_mtok_out
-            ) / 1e6
-        return {
-            "case": t.spec.case_id,
-            "model": t.spec.model,
-            "status": t.status,
-            "steps": len(t.steps),
-            "chosen_room": t.chosen_room,
-            "prompt_tokens": usage.prompt_tokens,
-            "completion_tokens": usage.completion_tokens,
-            "cost_usd": cost,
-            "recorded": stored.recorded,
-            "seconds": stored.seconds,
-        }
+    def summary(self, stored: StoredEpisode) -> EpisodeSummary:
+        config = self.registry.get(stored.trajectory.spec.model)
+        return EpisodeSummary.of(
+            stored, price_in=config.price_per_mtok_in, price_out=config.price_per_mtok_out
+        )
 
     # -- reporting hooks (run in the controller, or the only process without xdist) --------
 
@@ -237,18 +221,17 @@ class _Run:
         props = dict(report.user_properties)
         if "emrd_verdict" in props:
             self.verdicts.append(Verdict.from_dict(props["emrd_verdict"]))
-        info = props.get("emrd_episode")
-        if info is None:
+        if "emrd_episode" not in props:
             return
-        self.episodes[info["case"]] = info
-        if info["recorded"] and not hasattr(self.config, "workerinput"):
-            reporter = self.config.pluginmanager.get_plugin("terminalreporter")
-            if reporter is not None:
-                reporter.ensure_newline()
-                reporter.write_line(_progress_line(info, len(self.episodes)))
+        summary = EpisodeSummary.from_dict(props["emrd_episode"])
+        self.episodes[summary.case] = summary
+        reporter = self.config.pluginmanager.get_plugin("terminalreporter")
+        if summary.recorded and reporter is not None and not hasattr(self.config, "workerinput"):
+            reporter.ensure_newline()
+            reporter.write_line(summary.progress_line(len(self.episodes)))
 
     def pytest_terminal_summary(self, terminalreporter: Any) -> None:
-        from pytest_emrd.gate import UsageRow, gate_tables, usage_table
+        from pytest_emrd.gate import gate_tables, usage_rows, usage_table
 
         if not (self.episodes or self.verdicts):
             return
@@ -256,34 +239,14 @@ class _Run:
         tr.section("EMRD gates" if self.verdicts else "EMRD episodes")
         for line in gate_tables(self.verdicts):
             tr.write_line(line, red=line.lstrip().startswith("FAIL"))
-        rows = {}
-        for info in self.episodes.values():
-            row = rows.get(info["model"]) or UsageRow(info["model"], 0, 0, 0, 0.0)
-            known = row.cost_usd is not None and info["cost_usd"] is not None
-            rows[info["model"]] = UsageRow(
-                row.model,
-                row.episodes + 1,
-                row.prompt_tokens + info["prompt_tokens"],
-                row.completion_tokens + info["completion_tokens"],
-                (row.cost_usd or 0.0) + info["cost_usd"] if known else None,
-            )
-        if rows:
+        if self.episodes:
             tr.write_line("tokens per model:")
-            for line in usage_table(list(rows.values())):
+            for line in usage_table(usage_rows(self.episodes.values())):
                 tr.write_line(line)
         tr.write_line(
             f"results: {self.run_dir} (resume: --emrd-results {self.run_dir}; "
             f"gates over shards: emrd gate {self.run_dir} ...)"
         )
-
-
-def _progress_line(info: dict[str, Any], done: int) -> str:
-    tokens = info["prompt_tokens"] + info["completion_tokens"]
-    cost = "" if info["cost_usd"] is None else f", ${info['cost_usd']:.3f}"
-    return (
-        f"emrd [{done}] {info['case']}: {info['status']} after {info['steps']} steps, "
-        f"chose {info['chosen_room'] or '-'}, {tokens:,} tokens{cost}, {info['seconds']:.1f} s"
-    )
 
 
 # -- fixtures ------------------------------------------------------------------------------
@@ -308,7 +271,7 @@ def emrd_episode(
     """The stored episode for ``emrd_spec``, computed (recorded or replayed) if needed."""
     run = pytestconfig.stash[_RUN]
     stored = run.episode(emrd_spec)
-    request.node.user_properties.append(("emrd_episode", run.episode_summary(stored)))
+    request.node.user_properties.append(("emrd_episode", run.summary(stored).to_dict()))
     return stored
 
 

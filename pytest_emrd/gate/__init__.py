@@ -14,6 +14,7 @@ from pytest_emrd.gate._settings import (
     resolve_settings,
 )
 from pytest_emrd.gate._store import ResultsStore, StoredEpisode, iter_run_dir, new_run_dir
+from pytest_emrd.gate._summary import EpisodeSummary, usage_rows
 from pytest_emrd.gate._table import UsageRow, gate_tables, usage_table
 from pytest_emrd.gate._thresholds import Bound, Thresholds, parse_thresholds
 from pytest_emrd.gate._verdict import GateCell, Verdict, evaluate_all, evaluate_cell, judge
@@ -25,6 +26,7 @@ __all__ = [
     "RECORD_MODES",
     "SPAWNS",
     "Bound",
+    "EpisodeSummary",
     "GateCell",
     "Option",
     "ResultsStore",
@@ -48,5 +50,6 @@ __all__ = [
     "parse_thresholds",
     "resolve_settings",
     "shard",
+    "usage_rows",
     "usage_table",
 ]
