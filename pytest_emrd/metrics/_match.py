@@ -301,11 +301,10 @@ class Matcher:
         self, seen: dict[str, MapEntry], type_of: dict[str, int]
     ) -> tuple[float, float, float, float] | None:
         """Step 3: the anchor alignment, or None when fewer than two distinct anchors."""
-        counts = Counter(type_of.values())
         singleton = self._singleton_col
-        anchors = sorted(
-            (lb, singleton[k]) for lb, k in type_of.items() if counts[k] == 1 and singleton[k] >= 0
-        )
+        candidates = [(lb, singleton[k]) for lb, k in type_of.items() if singleton[k] >= 0]
+        counts = Counter(c for _, c in candidates)
+        anchors = sorted((lb, c) for lb, c in candidates if counts[c] == 1)
         if len(anchors) < 2:
             return None
         pred = [(seen[lb].x, seen[lb].z) for lb, _ in anchors]
