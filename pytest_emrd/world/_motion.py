@@ -5,18 +5,20 @@
   it. Sides facing the agent are tried first; along a side the midpoint first, then
   points 0.4 and 0.8 m either way. The spot must lie in the object's room with the agent's
   0.25 m radius clear of walls and floor furniture.
-* ``Goto(Doorway_N)``: the agent passes through to 1 m inside the room on the other side
-  (the room it is not in; seen through another doorway, the room beyond this one),
-  facing away from the doorway.
-* Spawn: a point within 1.5 m of the spawn room's centre with 0.6 m clear around it (else
-  anywhere the agent fits in the room), chosen by the episode seed on a 0.25 m grid, with
-  a seeded cardinal heading.
+* ``Goto(Doorway_N)``: from one of its rooms the agent passes through to 1 m inside the
+  other room, facing away from the doorway; a doorway seen through another doorway is
+  walked up to (1 m before it, facing it), so a single action never skips a room.
+* Spawn: a point within 1.5 m of the spawn room's centre with 0.6 m clear around it (when
+  a table fills the centre, one of the 8 free points nearest to it; the clearance drops to
+  the agent's radius only if the room has no such point), chosen by the episode seed on a
+  0.25 m grid, with a seeded cardinal heading.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+from pytest_emrd.errors import ConfigError
 from pytest_emrd.world._model import Doorway, Room, WorldPose
 from pytest_emrd.world._rng import StableRng
 from pytest_emrd.world._scene import AGENT_RADIUS, Scene
@@ -27,7 +29,10 @@ THROUGH = 1.0
 SPAWN_RADIUS = 1.5
 SPAWN_STEP = 0.25
 SPAWN_CLEARANCE = 0.6
-"""Free space around a spawn point near the centre, so the first view is not a table top."""
+"""Free space around a spawn point, so the first view is not a table top."""
+SPAWN_FALLBACK = 8
+"""When nothing within 1.5 m of the centre is free, the seed picks among this many free
+spots nearest the centre."""
 #: Outward normal of a footprint side -> heading that faces the side from outside.
 _SIDES = (((0.0, 1.0), 180.0), ((0.0, -1.0), 0.0), ((1.0, 0.0), 270.0), ((-1.0, 0.0), 90.0))
 
@@ -61,43 +66,51 @@ def approach(scene: Scene, index: int, pose: WorldPose) -> WorldPose | None:
 
 
 def through(scene: Scene, doorway: Doorway, pose: WorldPose, current: str) -> WorldPose | None:
-    """Where ``Goto(doorway)`` puts an agent at ``pose`` in room ``current`` (None: blocked)."""
+    """Where ``Goto(doorway)`` puts an agent at ``pose`` in room ``current`` (None: blocked).
+
+    From one of the doorway's rooms the agent passes through and faces into the other room.
+    A doorway seen from a third room (through another doorway) is walked up to: the agent
+    stops 1 m before it on the near side, facing it, so no room is skipped.
+    """
     a, b = scene.layout.room(doorway.room_a), scene.layout.room(doorway.room_b)
     along_x = doorway.axis == "x"  # the wall runs along x: the rooms lie north and south
     at = doorway.z if along_x else doorway.x
     plus = a if (a.z0 if along_x else a.x0) >= at else b
     minus = b if plus is a else a
-    if current == plus.name:
-        target = minus
-    elif current == minus.name:
-        target = plus
-    else:  # seen through another doorway: go on into the room beyond
-        target = plus if (pose.z if along_x else pose.x) < at else minus
+    near_plus = (pose.z if along_x else pose.x) >= at
+    if current in (a.name, b.name):
+        target, facing_plus = (minus, False) if current == plus.name else (plus, True)
+    else:
+        target, facing_plus = (plus, False) if near_plus else (minus, True)
     sign = 1.0 if target is plus else -1.0
     if along_x:
-        x, z, heading = doorway.x, round(doorway.z + sign * THROUGH, 2), 90.0 - 90.0 * sign
+        x, z = doorway.x, round(doorway.z + sign * THROUGH, 2)
+        heading = 0.0 if facing_plus else 180.0
     else:
-        x, z, heading = round(doorway.x + sign * THROUGH, 2), doorway.z, 180.0 - 90.0 * sign
+        x, z = round(doorway.x + sign * THROUGH, 2), doorway.z
+        heading = 90.0 if facing_plus else 270.0
     if not is_free(scene, target, x, z):
         return None
     return WorldPose(x, z, heading)
 
 
 def spawn_pose(scene: Scene, room: Room, seed: int) -> WorldPose:
-    """The seeded start pose in ``room`` (always free; falls back to the whole room)."""
+    """The seeded start pose in ``room``: a free spot as near its centre as the furniture
+    allows, with a seeded cardinal heading."""
     rng = StableRng(f"emrd-spawn:{seed}:{room.name}")
     cx, cz = (room.x0 + room.x1) / 2, (room.z0 + room.z1) / 2
-    steps = np.arange(-SPAWN_RADIUS, SPAWN_RADIUS + 1e-9, SPAWN_STEP)
-    near = [
-        (round(cx + a, 2), round(cz + b, 2))
-        for a in steps
-        for b in steps
-        if a * a + b * b <= SPAWN_RADIUS**2
-    ]
-    free = [p for p in near if is_free(scene, room, *p, SPAWN_CLEARANCE)]
-    if not free:
-        xs = np.arange(room.x0 + AGENT_RADIUS, room.x1 - AGENT_RADIUS, SPAWN_STEP)
-        zs = np.arange(room.z0 + AGENT_RADIUS, room.z1 - AGENT_RADIUS, SPAWN_STEP)
-        free = [(round(x, 2), round(z, 2)) for x in xs for z in zs if is_free(scene, room, x, z)]
-    x, z = rng.choice(free)
-    return WorldPose(float(x), float(z), rng.choice((0.0, 90.0, 180.0, 270.0)))
+    xs = np.arange(room.x0 + AGENT_RADIUS, room.x1 - AGENT_RADIUS + 1e-9, SPAWN_STEP)
+    zs = np.arange(room.z0 + AGENT_RADIUS, room.z1 - AGENT_RADIUS + 1e-9, SPAWN_STEP)
+    gx, gz = (np.round(g.ravel(), 2) for g in np.meshgrid(xs, zs))
+    d2 = (gx - cx) ** 2 + (gz - cz) ** 2
+    order = np.lexsort((gz, gx, d2))  # nearest the centre first, ties by position
+    for clearance in (SPAWN_CLEARANCE, AGENT_RADIUS):
+        ok = ~scene.crowded(gx, gz, clearance)
+        ok &= (gx >= room.x0 + clearance) & (gx <= room.x1 - clearance)
+        ok &= (gz >= room.z0 + clearance) & (gz <= room.z1 - clearance)
+        free = [int(k) for k in order if ok[k]]
+        if free:
+            near = [k for k in free if d2[k] <= SPAWN_RADIUS**2] or free[:SPAWN_FALLBACK]
+            k = rng.choice(near)
+            return WorldPose(float(gx[k]), float(gz[k]), rng.choice((0.0, 90.0, 180.0, 270.0)))
+    raise ConfigError(f"room={room.name!r} has no free spot for the agent; the layout is full.")

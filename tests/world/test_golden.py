@@ -16,19 +16,19 @@ import pytest
 from pytest_emrd.world import WORLD_VERSION, Layout, make_simulator
 
 GOLDEN = {
-    "builtin-2": {
+    "builtin-3": {
         "layout": "f7eafb11ad7ad797f8b26098f13d3905ca298ad4bd4cfe0b842c0bdfbacb161f",
         "baseline": (
-            "709aab3ea5e35d99a52bc5e6e51d9b4a85e5a2ae21847c4b43a361d979348eeb",
-            "e2e257bb2b074f026efd92913c534322885a2f559d82f366d088b63824ff78ea",
+            "1e580e94506a0c04ba40ad9246954b04504893026e23ed811e305e16ae9e544a",
+            "7c7af2c65229fb5c3c195b2ccb264b30ef111658d9a983df0ac5425c0b09dbee",
         ),
         "low_light": (
-            "f4f26be2e06d06010352c84b2fde42989c5690b23234b6b0763d37162148c24e",
-            "fb2439b4a728a927f1ca05eeea3641a0702c5394adf32cb431d3f837953db3ff",
+            "1ce0f97ffa6a95cb59d9e64e9597a688f6992748a51cdc122228aa6e6ab90703",
+            "8dedcf8f1c46cb309049e840b45b1d6c5f28999b2703ffa47116553c9ba976a0",
         ),
         "texture": (
-            "9b31a5657d1b915e357f5ff14d7b1d5292f985263be0c1a0e7420c9b63194a84",
-            "548d2605d33444f023fd2d29cac7f0bf8dae156f99f97687e36cf5250808b7ad",
+            "6c1a9859c8b79a63080b6818870043b22d73622d7fef92cad141d34a9b75cbc7",
+            "84025d98fa650e5e1c1cab0718fe3d537c2d41bd1d7f095a5b634ac6aa50fed8",
         ),
     }
 }

@@ -94,3 +94,23 @@ def test_goto_doorway_passes_into_the_other_room(office: Layout, new_sim) -> Non
             assert math.hypot(pose.x - doorway.x, pose.z - doorway.z) == pytest.approx(1.0)
             fx, fz = unit(pose.heading)
             assert (doorway.x - pose.x) * fx + (doorway.z - pose.z) * fz < 0  # facing away
+
+
+def test_a_doorway_seen_through_another_is_walked_up_to(office: Layout, new_sim) -> None:
+    sim = new_sim()
+    cases = 0
+    for doorway in office.doorways:
+        for spawn in {r.name for r in office.rooms} - {doorway.room_a, doorway.room_b}:
+            for turn in TURNS:
+                if doorway.object_id in _facing(sim, turn, office, spawn):
+                    break
+            else:
+                continue
+            cases += 1
+            assert sim.step(f"Goto({doorway.object_id})").success
+            pose = sim.agent_pose
+            assert sim.current_room() in (doorway.room_a, doorway.room_b)  # the room between
+            assert math.hypot(pose.x - doorway.x, pose.z - doorway.z) == pytest.approx(1.0)
+            fx, fz = unit(pose.heading)
+            assert (doorway.x - pose.x) * fx + (doorway.z - pose.z) * fz == pytest.approx(1.0)
+    assert cases >= 1
