@@ -46,6 +46,7 @@ def test_variant_and_several_models(suite: pytest.Pytester):
     assert "test_gate[scout-baseline-B3-aec]" in ids
 
 
+@pytest.mark.slow
 def test_shard_takes_a_deterministic_slice_and_leaves_gates_to_emrd_gate(suite: pytest.Pytester):
     full = _ids(
         suite.runpytest_subprocess(
