@@ -14,9 +14,10 @@ condition's light factor, then mixed with fog by depth (see
 :mod:`pytest_emrd.world._conditions`).
 
 Bit stability: headings are multiples of 90 degrees and positions centimetre values, so
-every quantity before the final rounding comes from ``+ - * /`` and ``ceil`` only (exactly
-rounded IEEE operations); the colour stage is integer arithmetic. The same scene therefore
-renders to identical bytes on every machine and numpy version.
+every geometric quantity comes from ``+ - * /``, comparisons, ``ceil`` and integer casts
+only (exactly rounded IEEE operations, no transcendental functions); colours come from a
+look-up table built with explicit rounding (``np.rint``) and indexed by integer codes. The
+same scene therefore renders to identical bytes on every machine and numpy version.
 """
 
 from __future__ import annotations
