@@ -12,10 +12,22 @@ from PIL import Image
 
 from pytest_emrd.errors import ConfigError, check_choice, check_range
 from pytest_emrd.rooms import ROOM_NAMES, SLUG_ROOMS
-from pytest_emrd.trajectory import Pose
-from pytest_emrd.world._actions import GRAMMAR, TURNS, Action, normalise, parse_action
+from pytest_emrd.world._actions import Action
 from pytest_emrd.world._conditions import ConditionParams, condition_params
-from pytest_emrd.world._geometry import heading_in_spawn_frame, to_spawn_frame
+from pytest_emrd.world._feedback import (
+    TERM_NOTE,
+    choose_target,
+    execute,
+    goto_key,
+    goto_note,
+    no_spot,
+    not_visible,
+    observed_pose,
+    room_table,
+    term_room,
+    turn_degrees,
+    with_pose,
+)
 from pytest_emrd.world._model import Layout, Observation, WorldPose
 from pytest_emrd.world._motion import approach, spawn_pose, through
 from pytest_emrd.world._render import palette, render, shade_table
@@ -25,10 +37,6 @@ from pytest_emrd.world._visibility import Sight, sight
 JPEG_QUALITY = 85
 FRAME_CACHE = 16
 """Frames kept per episode (least recently used dropped first)."""
-
-
-class _Failed(Exception):
-    """An action that could not be executed; the message is the reason shown to the agent."""
 
 
 class BuiltinSimulator:
@@ -46,10 +54,7 @@ class BuiltinSimulator:
         jpeg_quality: int = JPEG_QUALITY,
         frame_cache: int = FRAME_CACHE,
     ) -> None:
-        self._rooms = {normalise(r): r for r in ROOM_NAMES}
-        for alias, room in (room_aliases or {}).items():
-            check_choice(f"room_aliases[{alias!r}]", room, ROOM_NAMES)
-            self._rooms[normalise(alias)] = room
+        self._rooms = room_table(room_aliases)
         self._quality = check_range("jpeg_quality", jpeg_quality, 1, 95)
         if isinstance(frame_cache, bool) or not isinstance(frame_cache, int) or frame_cache < 0:
             raise ConfigError(
@@ -82,22 +87,10 @@ class BuiltinSimulator:
 
     def step(self, action: str) -> Observation:
         """Execute one action text; never raises for a bad action (the step is consumed)."""
-        scene = self._require()
+        self._require()
         self._steps += 1
-        parsed = parse_action(action)
-        shown = str(parsed) if parsed else "Action"
-        try:
-            if self._terminal is not None:
-                raise _Failed("the episode is over")
-            if parsed is None:
-                text = " ".join(action.split())[:80]
-                raise _Failed(f"could not read {text!r}; use {GRAMMAR}")
-            note = {"Goto": self._goto, "Turn": self._turn, "Term": self._term}[parsed.verb](
-                scene, parsed
-            )
-        except _Failed as failure:
-            return self._observe(False, f"{shown} failed: {failure}.")
-        return self._observe(True, f"{shown} succeeded{note}.")
+        handlers = {"Goto": self._goto, "Turn": self._turn, "Term": self._term}
+        return self._observe(*execute(action, handlers, over=self._terminal is not None))
 
     @property
     def agent_pose(self) -> WorldPose:
@@ -125,47 +118,40 @@ class BuiltinSimulator:
         self._frames.clear()
 
     # -- actions ----------------------------------------------------------------------
-    def _goto(self, scene: Scene, action: Action) -> str:
-        if not action.arg:
-            raise _Failed("Goto needs a target: an object id such as Desk_2 or a type")
-        key = normalise(action.arg)
+    def _goto(self, action: Action) -> str:
+        scene = self._require()
+        key = goto_key(action)
         seen = self._current_sight()
         visible = [int(i) for i in np.flatnonzero(seen.mask)]
         objs = scene.layout.objects
-        matches = [i for i in visible if normalise(objs[i].object_id) == key]
-        if not matches:
-            typed = [i for i in visible if normalise(objs[i].object_type) == key]
-            matches = sorted(typed, key=lambda i: (seen.distance[i], objs[i].object_id))[:1]
-        if not matches:
-            listed = ", ".join(v.object_id for v in seen.listing(scene)) or "nothing"
-            raise _Failed(f"no visible object matches {action.arg!r}. Visible: {listed}")
-        target = objs[matches[0]]
+        chosen = choose_target(
+            key,
+            [objs[i].object_id for i in visible],
+            [objs[i].object_type for i in visible],
+            [float(seen.distance[i]) for i in visible],
+        )
+        if chosen is None:
+            raise not_visible(action, [v.object_id for v in seen.listing(scene)])
+        index = visible[chosen]
+        target = objs[index]
         if target.object_type == "Doorway":
             doorway = next(d for d in scene.layout.doorways if d.object_id == target.object_id)
             pose = through(scene, doorway, self._pose, self.current_room())
         else:
-            pose = approach(scene, matches[0], self._pose)
+            pose = approach(scene, index, self._pose)
         if pose is None:
-            raise _Failed(f"there is no free spot to stand at {target.object_id}")
+            raise no_spot(target.object_id)
         self._move(pose)
-        return "" if normalise(target.object_id) == key else f": moved to {target.object_id}"
+        return goto_note(key, target.object_id)
 
-    def _turn(self, scene: Scene, action: Action) -> str:
-        delta = TURNS.get(normalise(action.arg))
-        if delta is None:
-            raise _Failed(
-                f"cannot turn {action.arg!r}; use Turn(Left), Turn(Right) or Turn(Around)"
-            )
+    def _turn(self, action: Action) -> str:
+        delta = turn_degrees(action)
         self._move(WorldPose(self._pose.x, self._pose.z, (self._pose.heading + delta) % 360))
         return ""
 
-    def _term(self, scene: Scene, action: Action) -> str:
-        room = self._rooms.get(normalise(action.arg))
-        if room is None:
-            names = ", ".join(ROOM_NAMES)
-            raise _Failed(f"{action.arg!r} is not a room of this building; name one of {names}")
-        self._terminal = room
-        return ": the episode is over"
+    def _term(self, action: Action) -> str:
+        self._terminal = term_room(self._rooms, action)
+        return TERM_NOTE
 
     # -- observation ------------------------------------------------------------------
     def _require(self) -> Scene:
@@ -181,11 +167,6 @@ class BuiltinSimulator:
         if self._sight is None:
             self._sight = sight(self._require(), self._pose, self._params.visibility_distance)
         return self._sight
-
-    def _spawn_frame_pose(self) -> Pose:
-        x, z = to_spawn_frame(self._spawn, self._pose.x, self._pose.z)
-        heading = heading_in_spawn_frame(self._spawn, self._pose.heading)
-        return Pose(round(x, 4) + 0.0, round(z, 4) + 0.0, heading)
 
     def _render(self) -> tuple[np.ndarray, str, bytes]:
         """Frame, pixel digest and JPEG of the current pose; agents often come back to a
@@ -206,14 +187,13 @@ class BuiltinSimulator:
 
     def _observe(self, success: bool, message: str) -> Observation:
         scene = self._require()
-        pose = self._spawn_frame_pose()
+        pose = observed_pose(self._spawn, self._pose)
         frame, digest, jpeg = self._render()
-        feedback = f"{message} Pose: x={_fmt(pose.x)} z={_fmt(pose.z)} heading={pose.heading:.0f}."
         return Observation(
             step=self._steps,
             pose=pose,
             success=success,
-            feedback=feedback,
+            feedback=with_pose(message, pose),
             visible=self._current_sight().listing(scene),
             frame_digest=digest,
             jpeg=jpeg,
@@ -221,8 +201,3 @@ class BuiltinSimulator:
             done=self._terminal is not None,
             terminal_room=self._terminal,
         )
-
-
-def _fmt(value: float) -> str:
-    """Centimetre text of a coordinate, never ``-0.00``."""
-    return f"{round(value, 2) + 0.0:.2f}"

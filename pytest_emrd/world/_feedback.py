@@ -1,0 +1,136 @@
+"""What the agent is told after an action: one wording shared by every backend.
+
+A simulator executes an action text with :func:`execute`, giving one handler per verb
+(``Goto``, ``Turn``, ``Term``). A step after the episode ended, text that does not follow
+the grammar, or a handler raising :class:`ActionFailed` yields ``"<Action> failed:
+<reason>."``; otherwise ``"<Action> succeeded<note>."``, where the handler returns the
+note (``""`` or ``": moved to Desk_2"``). :func:`with_pose` appends the odometry line
+``Pose: x=1.25 z=-0.50 heading=90.`` in the spawn frame (:func:`observed_pose`).
+
+The reasons both backends can give (unreadable text, bad turn, unknown room, no Goto
+target, nothing visible matches, no spot to stand) and the Goto target choice are built
+here too, so the backends cannot drift apart. Recorded cassettes hold this text: any
+change to it must bump ``WORLD_VERSION``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping, Sequence
+
+from pytest_emrd.errors import check_choice
+from pytest_emrd.rooms import ROOM_NAMES
+from pytest_emrd.trajectory import Pose
+from pytest_emrd.world._actions import GRAMMAR, TURNS, Action, normalise, parse_action
+from pytest_emrd.world._geometry import heading_in_spawn_frame, to_spawn_frame
+from pytest_emrd.world._model import WorldPose
+
+Handler = Callable[[Action], str]
+"""Executes one parsed action; returns the success note or raises :class:`ActionFailed`."""
+TERM_NOTE = ": the episode is over"
+
+
+class ActionFailed(Exception):
+    """An action that could not be executed; the message is the reason shown to the agent."""
+
+
+def execute(text: str, handlers: Mapping[str, Handler], *, over: bool) -> tuple[bool, str]:
+    """``(success, message)`` of executing action ``text``; never raises for a bad action.
+
+    ``over`` says the episode has already ended: every action then fails.
+    """
+    parsed = parse_action(text)
+    shown = str(parsed) if parsed else "Action"
+    try:
+        if over:
+            raise ActionFailed("the episode is over")
+        if parsed is None:
+            snippet = " ".join(text.split())[:80]
+            raise ActionFailed(f"could not read {snippet!r}; use {GRAMMAR}")
+        note = handlers[parsed.verb](parsed)
+    except ActionFailed as failure:
+        return False, f"{shown} failed: {failure}."
+    return True, f"{shown} succeeded{note}."
+
+
+def turn_degrees(action: Action) -> float:
+    """Clockwise degrees of ``Turn(Left|Right|Around)``: -90, 90 or 180."""
+    delta = TURNS.get(normalise(action.arg))
+    if delta is None:
+        raise ActionFailed(
+            f"cannot turn {action.arg!r}; use Turn(Left), Turn(Right) or Turn(Around)"
+        )
+    return delta
+
+
+def room_table(aliases: Mapping[str, str] | None = None) -> dict[str, str]:
+    """Matching key -> canonical room for ``Term``: the four rooms plus ``aliases``
+    (extra names for prompt variants that rename the rooms, e.g. ``{"Room A": "Office"}``)."""
+    rooms = {normalise(r): r for r in ROOM_NAMES}
+    for alias, room in (aliases or {}).items():
+        check_choice(f"room_aliases[{alias!r}]", room, ROOM_NAMES)
+        rooms[normalise(alias)] = room
+    return rooms
+
+
+def term_room(rooms: Mapping[str, str], action: Action) -> str:
+    """The canonical room ``Term(room)`` names (``rooms`` from :func:`room_table`)."""
+    room = rooms.get(normalise(action.arg))
+    if room is None:
+        names = ", ".join(ROOM_NAMES)
+        raise ActionFailed(f"{action.arg!r} is not a room of this building; name one of {names}")
+    return room
+
+
+def goto_key(action: Action) -> str:
+    """The matching key of a ``Goto`` target (fails when the target is missing)."""
+    if not action.arg:
+        raise ActionFailed("Goto needs a target: an object id such as Desk_2 or a type")
+    return normalise(action.arg)
+
+
+def choose_target(
+    key: str, ids: Sequence[str], types: Sequence[str], distances: Sequence[float]
+) -> int | None:
+    """Index of the visible object ``Goto`` of ``key`` means, or None when none matches.
+
+    An instance id wins; otherwise the nearest object of that type (ties by id). The three
+    sequences describe the objects in view, one entry per object.
+    """
+    for i, object_id in enumerate(ids):
+        if normalise(object_id) == key:
+            return i
+    typed = [i for i, t in enumerate(types) if normalise(t) == key]
+    return min(typed, key=lambda i: (distances[i], ids[i])) if typed else None
+
+
+def not_visible(action: Action, listed: Sequence[str]) -> ActionFailed:
+    """The failure of a ``Goto`` whose target is not in view (``listed``: ids in view)."""
+    shown = ", ".join(listed) or "nothing"
+    return ActionFailed(f"no visible object matches {action.arg!r}. Visible: {shown}")
+
+
+def no_spot(object_id: str) -> ActionFailed:
+    """The failure of a ``Goto`` that finds no free place to stand at ``object_id``."""
+    return ActionFailed(f"there is no free spot to stand at {object_id}")
+
+
+def goto_note(key: str, object_id: str) -> str:
+    """Success note of a ``Goto``: names the instance when the target was a type."""
+    return "" if normalise(object_id) == key else f": moved to {object_id}"
+
+
+def observed_pose(spawn: WorldPose, pose: WorldPose) -> Pose:
+    """The agent's odometry: ``pose`` in the spawn frame, to 0.1 mm, never ``-0.0``."""
+    x, z = to_spawn_frame(spawn, pose.x, pose.z)
+    heading = heading_in_spawn_frame(spawn, pose.heading)
+    return Pose(round(x, 4) + 0.0, round(z, 4) + 0.0, heading)
+
+
+def with_pose(message: str, pose: Pose) -> str:
+    """Engine feedback: ``message`` followed by the odometry line."""
+    return f"{message} Pose: x={_fmt(pose.x)} z={_fmt(pose.z)} heading={pose.heading:.0f}."
+
+
+def _fmt(value: float) -> str:
+    """Centimetre text of a coordinate, never ``-0.00``."""
+    return f"{round(value, 2) + 0.0:.2f}"
