@@ -26,7 +26,15 @@ def _episodes(run_dir: Path) -> dict[str, dict]:
     }
 
 
-def test_replay_is_deterministic_and_xdist_gives_the_same_gates(suite, small, recorded, capsys):
+def _gate_json(capsys: pytest.CaptureFixture[str], thresholds: Path, *run_dirs: Path) -> str:
+    capsys.readouterr()
+    emrd(["gate", *map(str, run_dirs), "--thresholds", str(thresholds), "--json"])
+    return capsys.readouterr().out
+
+
+def test_replay_is_deterministic_and_xdist_and_shards_give_the_same_gates(
+    suite, small, recorded, capsys
+):
     runs = {}
     for name, extra in (("serial", []), ("xdist", ["-n", "2"])):
         run_dir = suite.path / name
@@ -42,30 +50,21 @@ def test_replay_is_deterministic_and_xdist_gives_the_same_gates(suite, small, re
         runs[name] = (_gate_section(result), _episodes(run_dir))
     assert runs["serial"] == runs["xdist"]
     assert "scout: 2/2 gates pass" in runs["serial"][0]
-    capsys.readouterr()
-    assert (
-        emrd(
-            [
-                "gate",
-                str(suite.path / "serial"),
-                "--thresholds",
-                str(suite.path / "thresholds.yaml"),
-                "--json",
-            ]
+    for k in (1, 2):
+        result = suite.runpytest_subprocess(
+            *small(
+                f"--emrd-cassettes={recorded}",
+                "--emrd-record-mode=none",
+                f"--emrd-results={suite.path / f'shard{k}'}",
+                f"--emrd-shard={k}/2",
+            )
         )
-        == 0
-    )
-    serial = capsys.readouterr().out
-    emrd(
-        [
-            "gate",
-            str(suite.path / "xdist"),
-            "--thresholds",
-            str(suite.path / "thresholds.yaml"),
-            "--json",
-        ]
-    )
-    assert capsys.readouterr().out == serial
+        result.assert_outcomes(passed=1, deselected=1)
+    thresholds = suite.path / "thresholds.yaml"
+    serial = _gate_json(capsys, thresholds, suite.path / "serial")
+    assert '"passed": true' in serial and '"passed": false' not in serial
+    assert _gate_json(capsys, thresholds, suite.path / "xdist") == serial
+    assert _gate_json(capsys, thresholds, suite.path / "shard1", suite.path / "shard2") == serial
 
 
 def test_broken_threshold_fails_the_session_with_the_table(suite, small, recorded):
