@@ -2,6 +2,11 @@
 through ``ai2thor.controller.Controller`` (extra ``thor``: ``pip install
 'pytest-emrd[thor]'``; needs a THOR build and, for CloudRendering, a GPU with Vulkan).
 
+Actions, feedback text and the spawn pose are the builtin world's, so an agent and the
+metrics see the same protocol on both backends. THOR frames are not bit-stable across
+GPUs, drivers and builds: recordings made on this backend replay only with lenient
+matching (``--emrd-matching lenient``).
+
 Importing this package does not import ``ai2thor``; that happens when a
 :class:`ThorSimulator` starts its controller.
 """

@@ -3,12 +3,19 @@
 One ``ai2thor.controller.Controller`` per simulator, started on the first ``reset`` with
 ``scene=<house>`` (agentMode default, CloudRendering, 512x512, fieldOfView 90,
 snapToGrid, rotateStepDegrees 90, the condition's visibilityDistance) and re-used with
-``controller.reset(scene=<house>)`` afterwards. Semantic actions map to THOR actions:
+``controller.reset(scene=<house>)`` afterwards. Action texts are read with the world's
+grammar and answered with the world's feedback wording (:mod:`pytest_emrd.world._feedback`),
+so an agent cannot tell the backends apart by their text. Semantic actions map to THOR:
 
 * ``Goto(object)``  -> ``TeleportFull`` to :func:`~._navigation.viewpoint`;
-* ``Goto(Doorway)`` -> ``TeleportFull`` to :func:`~._navigation.entry` in the other room;
+* ``Goto(Doorway)`` -> ``TeleportFull`` to :func:`~._navigation.entry` in the other room,
+  or, for a doorway seen from a third room, up to it on the near side (no room skipped);
 * ``Turn(Left|Right|Around)`` -> ``RotateLeft`` / ``RotateRight`` / ``RotateRight`` twice;
 * ``Term(room)`` -> no THOR call; ends the episode.
+
+The spawn pose is the builtin world's (:func:`pytest_emrd.world._motion.spawn_pose`: the
+seeded free point and heading), snapped to THOR's nearest reachable position in the
+spawn room, so a spec starts at the same place in both backends.
 
 Every THOR call is bounded by the watchdog (``start_timeout``, ``step_timeout``).
 """
@@ -24,11 +31,27 @@ import numpy as np
 from PIL import Image
 
 from pytest_emrd.errors import ConfigError, TransportError, check_choice
-from pytest_emrd.trajectory import Pose
-from pytest_emrd.world._geometry import heading_in_spawn_frame, to_spawn_frame
+from pytest_emrd.rooms import ROOM_NAMES, SLUG_ROOMS
+from pytest_emrd.world._actions import Action
+from pytest_emrd.world._feedback import (
+    TERM_NOTE,
+    ActionFailed,
+    choose_target,
+    execute,
+    goto_key,
+    goto_note,
+    no_spot,
+    not_visible,
+    observed_pose,
+    room_table,
+    term_room,
+    turn_degrees,
+    with_pose,
+)
 from pytest_emrd.world._model import Doorway, Layout, Observation, VisibleObject, WorldPose
-from pytest_emrd.world._rng import StableRng
-from pytest_emrd.world.thor import _grammar, _launch
+from pytest_emrd.world._motion import spawn_pose
+from pytest_emrd.world._scene import scene_of
+from pytest_emrd.world.thor import _launch
 from pytest_emrd.world.thor._conditions import ThorCondition, thor_condition
 from pytest_emrd.world.thor._house import AGENT_Y, build_house
 from pytest_emrd.world.thor._ids import IdTable
@@ -52,7 +75,12 @@ DEFAULTS: Mapping[str, Any] = {
     "gridSize": 0.25,
     "rotateStepDegrees": 90,
 }
-ROTATIONS = {"Left": ("RotateLeft",), "Right": ("RotateRight",), "Around": ("RotateRight",) * 2}
+ROTATIONS: Mapping[float, tuple[str, ...]] = {
+    -90.0: ("RotateLeft",),
+    90.0: ("RotateRight",),
+    180.0: ("RotateRight", "RotateRight"),
+}
+"""Clockwise degrees of a ``Turn`` -> the THOR rotations (90 degrees each) that make it."""
 
 
 def _positive(name: str, value: float) -> float:
@@ -67,6 +95,15 @@ def _jpeg(frame: np.ndarray) -> bytes:
     return buffer.getvalue()
 
 
+def _refused(event: Any) -> ActionFailed | None:
+    """The failure to report when THOR refused an action, else None."""
+    if event.metadata["lastActionSuccess"]:
+        return None
+    return ActionFailed(
+        f"AI2-THOR refused it ({event.metadata.get('errorMessage') or 'no reason'})"
+    )
+
+
 class ThorSimulator:
     """The ai2thor backend. Construction is cheap; THOR starts on the first ``reset``.
 
@@ -75,7 +112,14 @@ class ThorSimulator:
     ``visibilityDistance`` come from the layout and condition. ``controller_factory``
     replaces ``ai2thor.controller.Controller`` (tests pass a fake). ``allow_download``
     lets ai2thor fetch a missing build (under ``start_timeout``); by default a missing
-    build fails at once.
+    build fails at once. ``room_aliases`` are extra names ``Term`` accepts, as for the
+    builtin simulator (``{"Room A": "Office"}``).
+
+    Frames are not bit-stable: THOR renders on the GPU, and the same pose gives different
+    pixels on another GPU, driver or build. ``frame_digest`` is the SHA-256 of the pixels
+    THOR returned on this machine, good for nothing more than reporting; recordings made
+    on THOR must be replayed with lenient matching (``--emrd-matching lenient``), which
+    reports frames that differ instead of matching on them.
     """
 
     def __init__(
@@ -86,6 +130,7 @@ class ThorSimulator:
         step_timeout: float = 60.0,
         allow_download: bool = False,
         asset_ids: Mapping[str, str] | None = None,
+        room_aliases: Mapping[str, str] | None = None,
         **controller_options: Any,
     ) -> None:
         self._factory = controller_factory
@@ -93,6 +138,7 @@ class ThorSimulator:
         self._step_timeout = _positive("step_timeout", step_timeout)
         self._allow_download = bool(allow_download)
         self._asset_ids = dict(asset_ids or {})
+        self._rooms = room_table(room_aliases)
         self._user_options = dict(controller_options)
         self._controller: Any = None
         self._layout: Layout | None = None
@@ -104,7 +150,7 @@ class ThorSimulator:
         self._spawn = WorldPose(0.0, 0.0, 0.0)
         self._visible: tuple[VisibleObject, ...] = ()
         self._steps = 0
-        self._done = False
+        self._terminal: str | None = None
 
     # -- THOR calls --------------------------------------------------------------------
     def _start(self, house: dict[str, Any]) -> None:
@@ -153,12 +199,13 @@ class ThorSimulator:
 
     # -- Simulator protocol ------------------------------------------------------------
     def reset(self, layout: Layout, condition: str, spawn_room: str, seed: int) -> Observation:
+        """Start an episode in ``spawn_room`` (canonical name or slug) under ``condition``."""
+        name = SLUG_ROOMS.get(spawn_room, spawn_room)
+        check_choice("spawn_room", name, [*ROOM_NAMES, *SLUG_ROOMS])
         self._condition = thor_condition(condition)
-        check_choice("spawn_room", spawn_room, [r.name for r in layout.rooms])
-        room = layout.room(spawn_room)
-        heading = StableRng(seed).choice((0.0, 90.0, 180.0, 270.0))
-        centre = WorldPose((room.x0 + room.x1) / 2, (room.z0 + room.z1) / 2, heading)
-        house = build_house(layout, condition, seed, agent=centre, asset_ids=self._asset_ids)
+        room = layout.room(name)
+        wanted = spawn_pose(scene_of(layout), room, seed)
+        house = build_house(layout, condition, seed, agent=wanted, asset_ids=self._asset_ids)
         if self._controller is None:
             self._start(house)
         else:
@@ -175,77 +222,117 @@ class ThorSimulator:
                 useTestMaterials=True,
             )
             self._act("RandomizeColors")
-        spot = nearest_in_room(self._points, centre.x, centre.z, room)
+        spot = nearest_in_room(self._points, wanted.x, wanted.z, room)
         if spot is None:
             raise ConfigError(
                 f"AI2-THOR reports no reachable position in spawn_room={spawn_room!r}; "
                 "check that the build loaded the house (see ~/.ai2thor/log/unity.log)."
             )
-        event = self._teleport(WorldPose(spot[0], spot[1], heading))
+        event = self._teleport(WorldPose(spot[0], spot[1], wanted.heading))
         if not event.metadata["lastActionSuccess"]:
             raise ConfigError(f"AI2-THOR refused the spawn pose: {event.metadata['errorMessage']}")
         self._spawn = agent_pose(event.metadata)
-        self._steps, self._done = 0, False
+        self._steps, self._terminal = 0, None
         return self._observe(True, "Episode started.")
 
     def step(self, action: str) -> Observation:
-        if self._layout is None:
-            raise ConfigError("ThorSimulator.step() before reset(); call reset(layout, ...) first.")
-        if self._done:
-            return self._observe(False, f"{action.strip()} failed: the episode has ended.")
+        """Execute one action text; never raises for a bad action (the step is consumed)."""
+        self._require()
         self._steps += 1
-        parsed = _grammar.parse(action)
-        if isinstance(parsed, _grammar.Invalid):
-            return self._observe(False, f"Action failed: {parsed.reason}.")
-        if isinstance(parsed, _grammar.Term):
-            return self._term(parsed.room)
-        if isinstance(parsed, _grammar.Turn):
-            for rotate in ROTATIONS[parsed.direction]:
-                self._act(rotate, degrees=90)
-            return self._observe(True, f"Turn({parsed.direction}) succeeded.")
-        return self._goto(parsed.target)
+        handlers = {"Goto": self._goto, "Turn": self._turn, "Term": self._term}
+        return self._observe(*execute(action, handlers, over=self._terminal is not None))
 
-    def _term(self, room: str) -> Observation:
-        assert self._layout is not None
-        names = [r.name for r in self._layout.rooms]
-        if room not in names:
-            return self._observe(False, f"Term({room}) failed: unknown room; name one of {names}.")
-        self._done = True
-        return self._observe(True, f"Term({room}) accepted.", terminal_room=room)
+    @property
+    def agent_pose(self) -> WorldPose:
+        self._require()
+        return agent_pose(self._controller.last_event.metadata)
 
-    def _goto(self, target: str) -> Observation:
-        assert self._layout is not None
-        wanted = target.strip().lower()
-        matches = [
-            v for v in self._visible if wanted in (v.object_id.lower(), v.object_type.lower())
-        ]
-        if not matches:
-            return self._observe(False, f"Goto({target}) failed: {target} is not visible.")
-        chosen = min(matches, key=lambda v: (v.distance, v.object_id))
-        doorway = next((d for d in self._layout.doorways if d.object_id == chosen.object_id), None)
-        pose = self._door_pose(doorway) if doorway else self._object_pose(chosen.object_id)
+    @property
+    def spawn_pose(self) -> WorldPose:
+        self._require()
+        return self._spawn
+
+    @property
+    def house(self) -> Mapping[str, Any]:
+        """The ProcTHOR house of the current episode."""
+        return self._house
+
+    def current_room(self) -> str:
+        layout = self._require()
+        pose = self.agent_pose
+        room = layout.room_at(pose.x, pose.z)
+        if room is None:
+            raise TransportError(f"AI2-THOR put the agent outside every room at {pose}.")
+        return room
+
+    def visible_ids(self) -> tuple[str, ...]:
+        self._require()
+        return tuple(v.object_id for v in self._visible)
+
+    def close(self) -> None:
+        controller, self._controller = self._controller, None
+        self._layout = None
+        if controller is not None:
+            self._call("stop", controller.stop)
+
+    # -- actions -----------------------------------------------------------------------
+    def _goto(self, action: Action) -> str:
+        layout = self._require()
+        key = goto_key(action)
+        seen = self._visible
+        chosen = choose_target(
+            key,
+            [v.object_id for v in seen],
+            [v.object_type for v in seen],
+            [v.distance for v in seen],
+        )
+        if chosen is None:
+            raise not_visible(action, [v.object_id for v in seen])
+        target = seen[chosen].object_id
+        doorway = next((d for d in layout.doorways if d.object_id == target), None)
+        pose = self._door_pose(layout, doorway) if doorway else self._object_pose(layout, target)
         if pose is None:
-            return self._observe(False, f"Goto({target}) failed: no reachable spot near it.")
-        event = self._teleport(pose)
-        if not event.metadata["lastActionSuccess"]:
-            reason = event.metadata.get("errorMessage") or "THOR refused the move"
-            return self._observe(False, f"Goto({target}) failed: {reason}.")
-        return self._observe(True, f"Goto({chosen.object_id}) succeeded.")
+            raise no_spot(target)
+        failure = _refused(self._teleport(pose))
+        if failure is not None:
+            raise failure
+        return goto_note(key, target)
 
-    def _door_pose(self, doorway: Doorway) -> WorldPose | None:
-        assert self._layout is not None
+    def _turn(self, action: Action) -> str:
+        for rotate in ROTATIONS[turn_degrees(action)]:
+            failure = _refused(self._act(rotate, degrees=90))
+            if failure is not None:
+                raise failure
+        return ""
+
+    def _term(self, action: Action) -> str:
+        self._terminal = term_room(self._rooms, action)
+        return TERM_NOTE
+
+    def _door_pose(self, layout: Layout, doorway: Doorway) -> WorldPose | None:
+        """Through the doorway from one of its rooms; up to it from a third room."""
         here = self.current_room()
-        other = doorway.room_b if here == doorway.room_a else doorway.room_a
-        return entry(self._points, doorway, self._layout.room(other))
+        a, b = layout.room(doorway.room_a), layout.room(doorway.room_b)
+        if here in (a.name, b.name):
+            return entry(self._points, doorway, b if here == a.name else a)
+        pose = self.agent_pose
+        if doorway.axis == "x":  # rooms lie north and south of the wall at z = doorway.z
+            near_a = (pose.z >= doorway.z) == ((a.z0 + a.z1) / 2 >= doorway.z)
+        else:
+            near_a = (pose.x >= doorway.x) == ((a.x0 + a.x1) / 2 >= doorway.x)
+        return viewpoint(self._points, doorway.x, doorway.z, a if near_a else b)
 
-    def _object_pose(self, object_id: str) -> WorldPose | None:
-        assert self._layout is not None
-        obj = next(o for o in self._layout.objects if o.object_id == object_id)
-        return viewpoint(self._points, obj.x, obj.z, self._layout.room(obj.room))
+    def _object_pose(self, layout: Layout, object_id: str) -> WorldPose | None:
+        obj = next(o for o in layout.objects if o.object_id == object_id)
+        return viewpoint(self._points, obj.x, obj.z, layout.room(obj.room))
 
-    def _observe(
-        self, success: bool, message: str, *, terminal_room: str | None = None
-    ) -> Observation:
+    # -- observation -------------------------------------------------------------------
+    def _require(self) -> Layout:
+        if self._layout is None:
+            raise ConfigError("ThorSimulator used before reset(); call reset(layout, ...) first.")
+        return self._layout
+
+    def _observe(self, success: bool, message: str) -> Observation:
         event = self._controller.last_event
         world = agent_pose(event.metadata)
         self._visible = visible_objects(
@@ -258,49 +345,16 @@ class ThorSimulator:
         frame = np.ascontiguousarray(event.frame, dtype=np.uint8)
         if frame.ndim != 3 or frame.shape[2] != 3:
             raise TransportError(f"AI2-THOR returned a frame of shape {frame.shape}, not HxWx3.")
-        x, z = to_spawn_frame(self._spawn, world.x, world.z)
-        pose = Pose(round(x, 2), round(z, 2), heading_in_spawn_frame(self._spawn, world.heading))
-        feedback = (
-            f"{message} Pose: x={pose.x:.2f}, z={pose.z:.2f}, heading={pose.heading:.0f} deg."
-        )
+        pose = observed_pose(self._spawn, world)
         return Observation(
             step=self._steps,
             pose=pose,
             success=success,
-            feedback=feedback,
+            feedback=with_pose(message, pose),
             visible=self._visible,
             frame_digest=hashlib.sha256(frame.tobytes()).hexdigest(),
             jpeg=_jpeg(frame),
             frame=frame,
-            done=self._done,
-            terminal_room=terminal_room,
+            done=self._terminal is not None,
+            terminal_room=self._terminal,
         )
-
-    @property
-    def agent_pose(self) -> WorldPose:
-        return agent_pose(self._controller.last_event.metadata)
-
-    @property
-    def spawn_pose(self) -> WorldPose:
-        return self._spawn
-
-    @property
-    def house(self) -> Mapping[str, Any]:
-        """The ProcTHOR house of the current episode."""
-        return self._house
-
-    def current_room(self) -> str:
-        assert self._layout is not None
-        pose = self.agent_pose
-        room = self._layout.room_at(pose.x, pose.z)
-        if room is None:
-            raise TransportError(f"AI2-THOR put the agent outside every room at {pose}.")
-        return room
-
-    def visible_ids(self) -> tuple[str, ...]:
-        return tuple(v.object_id for v in self._visible)
-
-    def close(self) -> None:
-        controller, self._controller = self._controller, None
-        if controller is not None:
-            self._call("stop", controller.stop)

@@ -9,16 +9,27 @@ position/visible/distance``, ``agent.position/rotation``, ``lastActionSuccess``,
 ai2thor does for ``InvalidAction``. Visibility: inside the 90 degree field of view,
 within ``visibilityDistance`` and not behind a wall (doors are holes). Every call is
 recorded in ``calls`` as ``(action, args)``.
+
+``thor_installed`` makes the real ai2thor 5.0.0 start-up path (import, pre-flight, build
+lookup, ``ai2thor.controller.Controller``) succeed on this machine with the fake in place
+of the Controller class: HOME is a fresh tmp dir holding an empty cached build, the Vulkan
+loader is reported present, and ``Controller`` is the fake.
 """
 
 from __future__ import annotations
 
+import ctypes.util
 import math
+import os
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any, ClassVar
 
+import ai2thor.build
+import ai2thor.controller
+import ai2thor.platform
 import numpy as np
 import pytest
 
@@ -302,4 +313,34 @@ def layout() -> Layout:
 def fake_controller() -> type[FakeController]:
     """The fake's class (pass it as ``controller_factory``); instances are recorded."""
     FakeController.instances.clear()
+    return FakeController
+
+
+@pytest.fixture
+def isolated_home(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """No real ~/.ai2thor: no cached build, logs land in tmp_path."""
+    monkeypatch.setenv("HOME", str(tmp_path))
+
+
+@pytest.fixture
+def vulkan(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Pretend the Vulkan loader is installed (this machine has none)."""
+    real = ctypes.util.find_library
+    monkeypatch.setattr(
+        ctypes.util, "find_library", lambda n: "libvulkan.so.1" if n == "vulkan" else real(n)
+    )
+
+
+@pytest.fixture
+def thor_installed(
+    isolated_home: None, vulkan: None, monkeypatch: pytest.MonkeyPatch
+) -> type[FakeController]:
+    """ai2thor's own start-up path with the fake as ``ai2thor.controller.Controller``."""
+    from pytest_emrd.world.thor._launch import releases_dir
+
+    platform = ai2thor.platform.CloudRendering
+    build = ai2thor.build.Build(platform, ai2thor.build.COMMIT_ID, False, releases_dir())
+    os.makedirs(build.base_dir)
+    FakeController.instances.clear()
+    monkeypatch.setattr(ai2thor.controller, "Controller", FakeController)
     return FakeController

@@ -105,12 +105,26 @@ def test_exit_is_a_closed_door_in_an_outside_wall(layout: Layout) -> None:
     assert IdTable.from_house(house).emrd(exit_door["id"]) == "Door_1"
 
 
-def test_objects_stand_on_their_support_and_carry_assets() -> None:
+@pytest.mark.parametrize("seed", [3, 11])
+def test_objects_are_centred_on_their_support_height(seed: int) -> None:
+    """``y = elevation + height / 2``: items on desks and counters sit on their tops."""
+    layout = generate_layout(seed)
+    house = build_house(layout, "baseline", seed)
+    ours = {o.object_id: o for o in layout.objects}
+    ids = IdTable.from_house(house)
+    for placed in house["objects"]:
+        obj = ours[ids.emrd(placed["id"]) or ""]
+        assert placed["position"]["y"] == pytest.approx(obj.elevation + obj.height / 2, abs=1e-4)
+    assert any(o.elevation > 0 for o in layout.objects), "no item on a desk or counter"
+
+
+def test_a_laptop_stands_on_the_desk_top_and_carries_its_asset() -> None:
     layout = generate_layout(3)
     house = build_house(layout, "baseline", 3)
     ids = IdTable.from_house(house)
     laptop = next(o for o in house["objects"] if ids.emrd(o["id"]) == "Laptop_1")
-    assert laptop["position"]["y"] > 0.76  # on the desk top, not the floor
+    obj = next(o for o in layout.objects if o.object_id == "Laptop_1")
+    assert obj.elevation > 0.7 and laptop["position"]["y"] > obj.elevation
     assert laptop["assetId"] == "Laptop_1" and laptop["kinematic"] is True
 
 

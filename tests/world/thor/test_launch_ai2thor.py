@@ -8,11 +8,11 @@ a message naming what to install.
 from __future__ import annotations
 
 import ctypes.util
-import os
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+import ai2thor.controller
 import pytest
 
 from pytest_emrd.errors import ConfigError
@@ -22,23 +22,8 @@ from pytest_emrd.world.thor._launch import import_ai2thor, preflight, releases_d
 
 FailedReset = Callable[[ThorSimulator, Layout, float], ConfigError]
 
-ai2thor = pytest.importorskip("ai2thor.controller")
 thor = import_ai2thor()
-
-
-@pytest.fixture(autouse=True)
-def _isolated_home(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
-    """No real ~/.ai2thor: no cached build, logs land in tmp_path."""
-    monkeypatch.setenv("HOME", str(tmp_path))
-
-
-@pytest.fixture
-def vulkan(monkeypatch: pytest.MonkeyPatch) -> None:
-    """Pretend the Vulkan loader is installed (this machine has none)."""
-    real = ctypes.util.find_library
-    monkeypatch.setattr(
-        ctypes.util, "find_library", lambda n: "libvulkan.so.1" if n == "vulkan" else real(n)
-    )
+pytestmark = pytest.mark.usefixtures("isolated_home")
 
 
 def test_missing_vulkan_names_libvulkan1(monkeypatch: pytest.MonkeyPatch) -> None:
@@ -56,14 +41,9 @@ def test_missing_build_fails_before_any_network_call(
     assert "local_executable_path" in str(error) and releases_dir() in str(error)
 
 
-@pytest.mark.usefixtures("vulkan")
+@pytest.mark.usefixtures("thor_installed")
 def test_a_cached_build_passes_the_preflight() -> None:
-    options = {"platform": thor.platform.CloudRendering}
-    build = thor.build.Build(
-        thor.platform.CloudRendering, thor.build.COMMIT_ID, False, releases_dir()
-    )
-    os.makedirs(build.base_dir)
-    preflight(thor, options, allow_download=False)
+    preflight(thor, {"platform": thor.platform.CloudRendering}, allow_download=False)
 
 
 def test_local_executable_path_must_exist(
@@ -83,7 +63,7 @@ def test_ai2thor_finding_no_build_is_translated(
             "No build exists for arch=Linux platforms=CloudRendering and commits: f0825767"
         )
 
-    monkeypatch.setattr(ai2thor.Controller, "find_build", no_build)
+    monkeypatch.setattr(ai2thor.controller.Controller, "find_build", no_build)
     sim = ThorSimulator(allow_download=True)
     error = failed_reset(sim, layout, 5.0)
     assert "No build exists" in str(error) and "local_executable_path" in str(error)

@@ -123,6 +123,7 @@ def test_goto_an_object_teleports_next_to_it_facing_it(
     obs = sim.step("Goto(Desk)")
     name, args = _controller(fake_controller).calls[-1]
     assert obs.success and name == "TeleportFull"
+    assert obs.feedback.startswith("Goto(Desk) succeeded: moved to Desk_1. Pose: x=")
     assert args["rotation"]["y"] % 90 == 0 and args["horizon"] == 0
     assert "Desk_1" in sim.visible_ids()
     desk = next(v for v in obs.visible if v.object_id == "Desk_1")
@@ -137,17 +138,44 @@ def test_goto_a_doorway_enters_the_next_room(sim: ThorSimulator, layout: Layout)
     assert sim.agent_pose.heading == 90.0  # facing into the Conference Room, away from the gap
 
 
+def test_a_doorway_seen_from_a_third_room_is_walked_up_to(
+    sim: ThorSimulator, fake_controller: type, layout: Layout
+) -> None:
+    """From the Office, Doorway_3 (Kitchen-Entrance) shows through Doorway_2: Goto stops in
+    the Kitchen facing it, never jumping over the Kitchen into the Entrance."""
+    sim.reset(layout, "baseline", "Office", 3)
+    _controller(fake_controller).step(
+        action="TeleportFull",
+        position={"x": 0.75, "y": 0.9, "z": 5.0},
+        rotation={"x": 0.0, "y": 0.0, "z": 0.0},
+    )
+    _face(sim, "Doorway_3")
+    assert sim.current_room() == "Office"
+    obs = sim.step("Goto(Doorway_3)")
+    assert obs.success and sim.current_room() == "Kitchen"
+    assert sim.agent_pose.heading == 90.0 and "Doorway_3" in sim.visible_ids()
+
+
 @pytest.mark.parametrize(
     ("action", "reason"),
     [
-        ("Goto(Fridge_1)", "not visible"),
-        ("Goto(Piano)", "not visible"),
-        ("Jump(Desk_1)", "not an action"),
-        ("I will go to the desk", "cannot read"),
-        ("Turn(Up)", "not an action"),
-        ("Term(Garage)", "unknown room"),
+        ("Goto(Fridge_1)", "no visible object matches 'Fridge_1'. Visible: "),
+        ("Goto(Piano)", "no visible object matches 'Piano'"),
+        ("Goto()", "Goto needs a target"),
+        ("Jump(Desk_1)", "could not read 'Jump(Desk_1)'"),
+        ("I will go to the desk", "could not read"),
+        ("Turn(Up)", "cannot turn 'Up'"),
+        ("Term(Garage)", "'Garage' is not a room of this building"),
     ],
-    ids=["out-of-view", "unknown-target", "unknown-verb", "prose", "bad-turn", "unknown-room"],
+    ids=[
+        "out-of-view",
+        "unknown-target",
+        "no-target",
+        "unknown-verb",
+        "prose",
+        "bad-turn",
+        "unknown-room",
+    ],
 )
 def test_invalid_actions_fail_the_step_without_moving(
     sim: ThorSimulator, fake_controller: type, layout: Layout, action: str, reason: str
@@ -164,8 +192,30 @@ def test_term_ends_the_episode(sim: ThorSimulator, layout: Layout) -> None:
     sim.reset(layout, "baseline", "Office", 3)
     obs = sim.step("Term(Kitchen)")
     assert obs.success and obs.done and obs.terminal_room == "Kitchen"
+    assert obs.feedback.startswith("Term(Kitchen) succeeded: the episode is over. Pose:")
     after = sim.step("Turn(Left)")
-    assert not after.success and "ended" in after.feedback
+    assert not after.success and after.feedback.startswith(
+        "Turn(Left) failed: the episode is over."
+    )
+    assert after.done and after.step == 2
+
+
+def test_term_accepts_slugs_and_room_aliases(fake_controller: type, layout: Layout) -> None:
+    sim = ThorSimulator(controller_factory=fake_controller, room_aliases={"Room A": "Office"})
+    sim.reset(layout, "baseline", "kitchen", 3)
+    assert sim.current_room() == "Kitchen"
+    assert sim.step("Term(room a)").terminal_room == "Office"
+    sim.close()
+
+
+def test_a_move_thor_refuses_fails_the_step(
+    sim: ThorSimulator, fake_controller: type, layout: Layout
+) -> None:
+    sim.reset(layout, "baseline", "Office", 3)
+    _face(sim, "Desk_1")
+    _controller(fake_controller).reachable.clear()  # THOR now refuses every position
+    obs = sim.step("Goto(Desk_1)")
+    assert not obs.success and "AI2-THOR refused it (position" in obs.feedback
 
 
 def test_low_light_shortens_what_is_reported_visible(fake_controller: type, layout: Layout) -> None:
