@@ -1,0 +1,83 @@
+"""The shared feedback wording: execution outcome, reasons, Goto target, odometry line."""
+
+from __future__ import annotations
+
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+
+from pytest_emrd.errors import ConfigError
+from pytest_emrd.trajectory import Pose
+from pytest_emrd.world._actions import Action
+from pytest_emrd.world._feedback import (
+    ActionFailed,
+    choose_target,
+    execute,
+    observed_pose,
+    room_table,
+    term_room,
+    with_pose,
+)
+from pytest_emrd.world._model import WorldPose
+
+
+def _refuse(action: Action) -> str:
+    raise ActionFailed(f"{action.arg} is locked")
+
+
+HANDLERS = {"Goto": lambda a: f": moved to {a.arg}_1", "Turn": lambda a: "", "Term": _refuse}
+
+
+@pytest.mark.parametrize(
+    ("text", "over", "expected"),
+    [
+        ("goto( Desk )", False, (True, "Goto(Desk) succeeded: moved to Desk_1.")),
+        ("Turn(Left).", False, (True, "Turn(Left) succeeded.")),
+        ("Term(Kitchen)", False, (False, "Term(Kitchen) failed: Kitchen is locked.")),
+        ("Turn(Left)", True, (False, "Turn(Left) failed: the episode is over.")),
+        (
+            "walk\n  north",
+            False,
+            (False, "Action failed: could not read 'walk north'; use Goto(target), "
+             "Turn(Left|Right|Around) or Term(room)."),
+        ),
+    ],
+    ids=["goto-note", "turn", "handler-fails", "after-the-end", "unreadable"],
+)  # fmt: skip
+def test_execute_words_every_outcome(text: str, over: bool, expected: tuple[bool, str]) -> None:
+    assert execute(text, HANDLERS, over=over) == expected
+
+
+def test_term_reads_rooms_and_aliases_and_rejects_the_rest() -> None:
+    rooms = room_table({"Room A": "Office"})
+    assert term_room(rooms, Action("Term", "room_a")) == "Office"
+    assert term_room(rooms, Action("Term", "conference room")) == "Conference Room"
+    with pytest.raises(ActionFailed, match="'Lobby' is not a room of this building; name one"):
+        term_room(rooms, Action("Term", "Lobby"))
+
+
+def test_an_alias_for_an_unknown_room_is_a_config_error() -> None:
+    with pytest.raises(ConfigError, match=r"room_aliases\['Room A'\]='Garage'"):
+        room_table({"Room A": "Garage"})
+
+
+def test_goto_prefers_the_instance_then_the_nearest_of_the_type() -> None:
+    ids, types = ["Desk_1", "Desk_2", "Chair_1"], ["Desk", "Desk", "Chair"]
+    assert choose_target("desk2", ids, types, [1.0, 3.0, 2.0]) == 1
+    assert choose_target("desk", ids, types, [3.0, 1.0, 2.0]) == 1
+    assert choose_target("desk", ids, types, [2.0, 2.0, 2.0]) == 0  # tie: by id
+    assert choose_target("fridge", ids, types, [1.0, 1.0, 1.0]) is None
+
+
+@given(
+    x=st.floats(-20, 20),
+    z=st.floats(-20, 20),
+    heading=st.sampled_from([0.0, 90.0, 180.0, 270.0]),
+)
+def test_odometry_line_never_shows_minus_zero(x: float, z: float, heading: float) -> None:
+    spawn = WorldPose(x, z, heading)
+    pose = observed_pose(spawn, WorldPose(x, z, heading))
+    assert pose == Pose(0.0, 0.0, 0.0)
+    assert with_pose("Done.", pose) == "Done. Pose: x=0.00 z=0.00 heading=0."
+    text = with_pose("Done.", Pose(-0.004, 1.005, 90.0))
+    assert text == "Done. Pose: x=0.00 z=1.00 heading=90."
