@@ -7,7 +7,9 @@ shipped fields it names, a new name adds a model.
 
 Reference agents with planted parameters resolve from their name, without a YAML entry
 each: ``scout``, ``scout-decay-<mean steps>``, ``scout-window-<k>``, ``scout-serial``,
-``prior``.
+``prior``. A reference agent's ``model_id`` is its name (or the ``model_id`` of its entry)
+with the behaviour version appended, ``scout@ref-2`` (see
+:mod:`pytest_emrd.agent.reference._version`), so cassettes of older behaviour fail as drift.
 """
 
 from __future__ import annotations
@@ -21,6 +23,7 @@ from typing import Any, Final
 
 import yaml
 
+from pytest_emrd.agent.reference._version import versioned_id
 from pytest_emrd.errors import ConfigError, check_choice, check_positive_int, check_range
 from pytest_emrd.trajectory import MODALITIES
 
@@ -40,7 +43,7 @@ class ModelConfig:
     provider: str
     """``openai`` (any OpenAI-compatible endpoint), ``anthropic`` or ``reference``."""
     model_id: str
-    """The ``model`` field sent to the endpoint."""
+    """The ``model`` field sent to the endpoint (``<name>@<version>`` for reference agents)."""
     base_url: str | None = None
     """Endpoint root (``https://api.openai.com/v1``); None: the built-in reference server."""
     api_key_env: str | None = None
@@ -108,6 +111,8 @@ def _build(name: str, entry: Any, source: str) -> ModelConfig:
         )
     values = {k: _expand_env(v) if isinstance(v, str) else v for k, v in entry.items()}
     values["name"] = name
+    if values.get("provider") == "reference":
+        values["model_id"] = versioned_id(str(values.get("model_id") or name).partition("@")[0])
     try:
         return ModelConfig(**values)
     except TypeError as exc:
@@ -142,7 +147,9 @@ class Registry:
         planted = _parametric(name)
         if planted is not None and "scout" in self.models:
             base = self.models["scout"]
-            return replace(base, name=name, model_id=name, planted={**base.planted, **planted})
+            return replace(
+                base, name=name, model_id=versioned_id(name), planted={**base.planted, **planted}
+            )
         raise ConfigError(
             f"model={name!r} is not in the registry. Known models: {', '.join(self.names())}; "
             "parametric reference agents: scout-decay-<mean steps>, scout-window-<k>. "
@@ -153,8 +160,11 @@ class Registry:
 def _parametric(name: str) -> dict[str, Any] | None:
     if match := _DECAY.match(name):
         mean = float(match["mean"])
-        if mean <= 0:
-            raise ConfigError(f"model={name!r}: the mean retention must be > 0 steps.")
+        if mean < 1:
+            raise ConfigError(
+                f"model={name!r}: the mean retention must be >= 1 step (it is counted in "
+                "whole steps out of view); use scout-decay-1 or more."
+            )
         return {"memory": "decay", "mean_steps": mean}
     if match := _WINDOW.match(name):
         k = int(match["k"])

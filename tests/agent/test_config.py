@@ -7,6 +7,7 @@ from pathlib import Path
 import pytest
 
 from pytest_emrd.agent import ModelConfig, load_registry
+from pytest_emrd.agent.reference import REFERENCE_VERSION
 from pytest_emrd.errors import ConfigError
 
 PAPER_MODELS = [
@@ -50,6 +51,25 @@ def test_reference_agents_and_parametric_names() -> None:
     assert registry.get("scout-serial").planted["memory"] == "serial"
     assert registry.get("prior").planted["policy"] == "prior"
     assert set(PAPER_MODELS) | {"scout", "scout-serial", "prior"} <= set(registry.names())
+
+
+@pytest.mark.parametrize(
+    "name", ["scout", "prior", "scout-serial", "scout-decay-8", "scout-window-5"]
+)
+def test_reference_model_ids_carry_the_behaviour_version(name: str) -> None:
+    assert load_registry().get(name).model_id == f"{name}@{REFERENCE_VERSION}"
+
+
+def test_user_reference_entry_is_versioned_once(tmp_path: Path) -> None:
+    user = tmp_path / "models.yaml"
+    user.write_text(
+        "models:\n"
+        "  mine: {provider: reference, model_id: 'scout@ref-0', planted: {policy: scout}}\n"
+        "  gemini: {model_id: gemini-2.5-pro}\n"
+    )
+    registry = load_registry(user)
+    assert registry.get("mine").model_id == f"scout@{REFERENCE_VERSION}"
+    assert registry.get("gemini").model_id == "gemini-2.5-pro", "VLM ids are sent as written"
 
 
 def test_base_url_env_override(monkeypatch) -> None:
@@ -162,7 +182,9 @@ def test_missing_user_file(tmp_path: Path) -> None:
 
 
 @pytest.mark.parametrize(
-    "name", ["scout-decay-0", "scout-window-0"], ids=["decay-zero", "window-zero"]
+    "name",
+    ["scout-decay-0", "scout-decay-0.5", "scout-window-0"],
+    ids=["decay-zero", "decay-below-one-step", "window-zero"],
 )
 def test_bad_parametric_names(name: str) -> None:
     with pytest.raises(ConfigError, match=name):

@@ -68,8 +68,22 @@ def test_serial_scout_keeps_first_and_last_discoveries() -> None:
 def test_prior_names_a_room_it_never_entered(spawn: str) -> None:
     traj = _run("prior", spawn)
     assert traj.status == "terminated"
-    assert len(traj.steps) <= 4
+    assert len(traj.steps) == 1, "a decision from the prompt alone, at the first step"
+    assert traj.steps[0].cognitive_map == ()
     assert traj.chosen_room not in traj.rooms_visited
+
+
+def test_scout_in_low_light_repositions_and_reaches_every_room() -> None:
+    """Spawned in a dark conference room with no doorway in sight, the scout walks to an
+    object, sweeps again, and still clears the building (where it used to stop at step 4)."""
+    traj = run_episode(EpisodeSpec("scout", "low_light", "conference", 1, modality="both"))
+    actions = [s.action for s in traj.steps]
+    moves = [a for a in actions if a.startswith("Goto(") and not a.startswith("Goto(Doorway")]
+    assert moves, actions
+    first = actions.index(moves[0])
+    assert actions[first + 1 : first + 4] == ["Turn(Right)"] * 3
+    assert traj.rooms_visited == frozenset(ROOM_NAMES)
+    assert traj.status == "terminated" and len(traj.steps) > 4
 
 
 def test_reference_agent_in_vision_modality_errors_with_a_hint() -> None:

@@ -12,10 +12,11 @@ import copy
 import hashlib
 import json
 from collections.abc import Callable
-from typing import Any, Final
+from typing import TYPE_CHECKING, Any, Final
 
-from pytest_emrd.agent._config import Registry
 from pytest_emrd.agent.reference._memory import uniform
+from pytest_emrd.agent.reference._perceive import fresh_plan, perceive
+from pytest_emrd.agent.reference._prior import prior_action
 from pytest_emrd.agent.reference._read import (
     Briefing,
     Percept,
@@ -24,8 +25,12 @@ from pytest_emrd.agent.reference._read import (
     read_briefing,
     read_percept,
 )
-from pytest_emrd.agent.reference._scout import fresh_plan, perceive, prior_action, scout_action
+from pytest_emrd.agent.reference._scout import scout_action
+from pytest_emrd.agent.reference._version import agent_name, versioned_id
 from pytest_emrd.errors import ConfigError, ProtocolError
+
+if TYPE_CHECKING:  # _config imports this package (for the version): no runtime import back
+    from pytest_emrd.agent._config import Registry
 
 Policy = Callable[[dict[str, Any], Briefing, Percept], tuple[str, str]]
 POLICIES: Final[dict[str, Policy]] = {"scout": scout_action, "prior": prior_action}
@@ -61,7 +66,7 @@ def _usage(messages: list[dict[str, Any]], reply: str) -> dict[str, int]:
 
 
 def reply_text(model: str, planted: dict[str, Any], messages: list[dict[str, Any]]) -> str:
-    """The agent's reply (compact JSON) to ``messages``."""
+    """The reply (compact JSON) of reference agent ``model`` (registry name) to ``messages``."""
     system = next((message_text(m) for m in messages if m.get("role") == "system"), None)
     user = next((message_text(m) for m in reversed(messages) if m.get("role") == "user"), None)
     if system is None or user is None:
@@ -92,18 +97,23 @@ def reply_text(model: str, planted: dict[str, Any], messages: list[dict[str, Any
 
 
 def complete(body: Any, registry: Registry) -> dict[str, Any]:
-    """An OpenAI ``chat.completion`` object answering ``body``; RequestError if unusable."""
+    """An OpenAI ``chat.completion`` object answering ``body``; RequestError if unusable.
+
+    ``model`` is ``<name>@<REFERENCE_VERSION>`` (a bare name means the current version); a
+    request for another version is refused with 404, naming both versions.
+    """
     if not isinstance(body, dict) or not isinstance(body.get("messages"), list):
         raise RequestError("body must be a JSON object with a 'messages' list.")
     model = str(body.get("model", ""))
     try:
-        config = registry.get(model)
+        name = agent_name(model)
+        config = registry.get(name)
     except ConfigError as exc:
         raise RequestError(str(exc), status=404) from exc
     if config.provider != "reference":
         raise RequestError(f"model={model!r} is not a reference agent.", status=404)
     messages = body["messages"]
-    text = reply_text(model, config.planted, messages)
+    text = reply_text(name, config.planted, messages)
     digest = hashlib.sha256(text.encode()).hexdigest()[:24]
     return {
         "id": f"chatcmpl-ref-{digest}",
@@ -118,8 +128,8 @@ def complete(body: Any, registry: Registry) -> dict[str, Any]:
 
 
 def model_list(registry: Registry) -> dict[str, Any]:
-    """The ``/v1/models`` listing: every registered reference agent."""
-    names = [n for n in registry.names() if registry.get(n).provider == "reference"]
+    """The ``/v1/models`` listing: every registered reference agent, by versioned id."""
+    names = [versioned_id(n) for n in registry.names() if registry.get(n).provider == "reference"]
     return {
         "object": "list",
         "data": [

@@ -6,13 +6,22 @@ one policy decides what survives; objects in view always survive except under a 
 smaller than the view.
 
 * ``perfect`` — nothing is forgotten.
-* ``decay`` (``mean_steps`` = m) — each out-of-view object is dropped at each step with
-  hazard :math:`h = 1 - e^{-1/m}`, so the time an object survives out of view is
-  geometric with :math:`S(t) = e^{-t/m}` (exponential retention, mean about m steps).
+* ``none`` — nothing is kept: the reported map is always empty (``prior``).
+* ``decay`` (``mean_steps`` = m >= 1) — at every step an out-of-view object is dropped
+  with probability :math:`p = 1/m`, independently of everything else. The number of
+  out-of-view steps up to and including the one where it is dropped is geometric on
+  {1, 2, ...}: :math:`P(T = t) = (1 - p)^{t-1} p`, :math:`S(t) = P(T > t) = (1 - 1/m)^t`,
+  mean exactly m steps. With right-censoring, ``sum t_j / d`` (Eq. SMLE, counting the drop
+  step in ``t_j``) is the maximum-likelihood estimate of that mean, so the Ebbinghaus EFC
+  recovers m without a discretisation bias (a hazard ``1 - exp(-1/m)`` would give a mean
+  of about m + 0.5 steps).
 * ``window`` (``k``) — at most k objects, the least recently seen dropped first.
-* ``serial`` (``mean_steps`` = m) — U-shaped retention: of the n objects discovered so
-  far, the first and last thirds (by discovery rank) are protected; middle-third
-  objects out of view decay with hazard :math:`1 - e^{-1/m}`.
+* ``serial`` (``mean_steps`` = m) — U-shaped retention: objects whose discovery rank falls
+  in the first or last third of the *expected* total are protected; middle-third objects
+  out of view decay as under ``decay``. The expected total is the object count of the
+  prompt's inventory (what the agent reads; doorways are not listed there, so they only
+  lengthen the late third); without an inventory (``no_inventory``) it falls back to the
+  number discovered so far.
 
 Randomness comes from :func:`uniform`, a hash of the request content and the label, so
 the same request always forgets the same objects.
@@ -21,14 +30,13 @@ the same request always forgets the same objects.
 from __future__ import annotations
 
 import hashlib
-import math
 from collections.abc import Callable, Mapping, Sequence
 from typing import Any, Final
 
 from pytest_emrd.errors import ConfigError
 
 Entry = dict[str, Any]
-MEMORIES: Final[tuple[str, ...]] = ("perfect", "decay", "window", "serial")
+MEMORIES: Final[tuple[str, ...]] = ("perfect", "none", "decay", "window", "serial")
 
 
 def uniform(seed: bytes, label: str) -> float:
@@ -45,8 +53,19 @@ def merge_view(memory: Mapping[str, Entry], view: Sequence[tuple[str, Entry]]) -
     return merged
 
 
-def _hazard(mean_steps: float) -> float:
-    return 1.0 - math.exp(-1.0 / mean_steps)
+def drop_probability(mean_steps: float) -> float:
+    """Per-step probability ``1/m`` that an out-of-view object is dropped (mean ``m`` steps)."""
+    if not mean_steps >= 1.0:
+        raise ConfigError(
+            f"planted mean_steps={mean_steps!r} must be >= 1: a retention counted in whole "
+            "steps cannot average less than one step."
+        )
+    return 1.0 / mean_steps
+
+
+def _middle_third(discovery: Sequence[str], expected: int | None) -> set[str]:
+    n = expected if expected else len(discovery)
+    return {label for rank, label in enumerate(discovery) if n / 3 <= rank < 2 * n / 3}
 
 
 def apply_memory(
@@ -56,26 +75,26 @@ def apply_memory(
     planted: Mapping[str, Any],
     discovery: Sequence[str],
     draw: Callable[[str], float],
+    expected: int | None = None,
 ) -> dict[str, Entry]:
     """The entries the planted memory keeps this step (``memory`` already merged).
 
     ``discovery`` lists every label ever discovered, in order of first discovery;
-    ``draw(label)`` is this step's uniform number for ``label``.
+    ``draw(label)`` is this step's uniform number for ``label``; ``expected`` is the
+    object total the prompt's inventory announces (None or 0: unknown).
     """
     kind = planted.get("memory", "perfect")
     if kind == "perfect":
         return memory
+    if kind == "none":
+        return {}
     if kind == "window":
         k = int(planted["k"])
         return dict(list(memory.items())[-k:])
     if kind not in ("decay", "serial"):
         raise ConfigError(f"planted memory={kind!r} is not one of {', '.join(MEMORIES)}.")
-    hazard = _hazard(float(planted["mean_steps"]))
+    p = drop_probability(float(planted["mean_steps"]))
     exposed = set(memory) - in_view
     if kind == "serial":
-        n = len(discovery)
-        middle = {label for rank, label in enumerate(discovery) if n / 3 <= rank < 2 * n / 3}
-        exposed &= middle
-    return {
-        label: e for label, e in memory.items() if label not in exposed or draw(label) >= hazard
-    }
+        exposed &= _middle_third(discovery, expected)
+    return {label: e for label, e in memory.items() if label not in exposed or draw(label) >= p}

@@ -1,169 +1,52 @@
-"""The scripted reference policies: ``scout`` (room clearing) and ``prior`` (textual prior).
+"""The room-clearing ``scout`` policy.
 
-Both run the same perception: every visible object is placed in the spawn frame from the
-pose and its bearing/distance (perfect odometry, so a perfect-memory scout maps exactly),
-the current room is inferred by matching the object types in view against the prompt's
-inventory (types found in fewer rooms weigh more, nearer objects weigh more), and the
-reported map passes through the planted memory (:mod:`._memory`). Navigation uses its
-own perfect record of doorways, kept in the ``plan`` key of the reply, so every scout
-variant walks the same path and only the reported map differs.
+Per room visit, the entry view plus three ``Turn(Right)`` sweep 360 degrees; then the
+scout decides, in this order:
 
-``scout`` protocol, per room: the entry view plus three ``Turn(Right)`` sweep 360 degrees;
-then it turns towards a doorway seen in this room (unused ones first, nearest first; else
-the one used longest ago) and walks through it with ``Goto``. Term rule: once it has
-identified every room of the prompt, or no doorway is left to try, or at the last step,
-it names the room where it discovered the most objects (ties: prompt order; rooms it
-could not identify, as under ``no_inventory``, fall back to the first room listed).
+1. every room of the prompt identified: ``Term``;
+2. an unused doorway seen during this visit (nearest first): face it, ``Goto`` through;
+3. **reposition**, while rooms remain unvisited, fewer than :data:`MAX_MOVES` repositions
+   were made in this visit and the room is not complete (no doorway, or not every object
+   its inventory line lists, seen during this visit; a room it cannot identify is never
+   complete): ``Goto`` an object of this room seen during the last sweep, at least
+   :data:`MIN_MOVE_M` away and not targeted before: the one nearest to an unused doorway
+   known to open from this room (seen on an earlier visit), else the one farthest from
+   every point this visit swept from (towards unexplored space); then sweep again;
+4. every doorway it knows of already used: ``Term`` (nothing left to try);
+5. the doorway of this visit used longest ago: back through it;
+6. otherwise ``Term``.
 
-``prior``: sweeps the spawn room, then terminates naming the room it has not entered
-whose inventory lists the most seats (chairs, sofas, stools) — the furniture prior the
-paper found behind the Conference Room choice.
+A target still out of view after :data:`MAX_FACE_TRIES` turns towards it is given up (a
+doorway is blocked for this visit, an object stays tried) and the decision is taken again.
+Under ``baseline`` a swept room is seen whole, so rule 3 rarely fires; under ``low_light``
+(3.5 m visibility) it is what keeps the scout from stopping after its first rooms, so the
+darkness costs coverage *and* time, as the paper reports for real models.
+
+Term rule: at a ``Term`` decision or the last step of the budget, the room where it
+discovered the most objects (ties: prompt order; rooms it could not identify, as under
+``no_inventory``, fall back to the first room listed).
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Mapping
+from collections import Counter
+from collections.abc import Mapping
 from typing import Any, Final
 
-from pytest_emrd.agent.reference._memory import apply_memory, merge_view
-from pytest_emrd.agent.reference._read import Briefing, Percept, Seen
+from pytest_emrd.agent.reference._perceive import room_guess
+from pytest_emrd.agent.reference._read import Briefing, Percept
 
-DOORWAY: Final = "Doorway"
 SWEEP_TURNS: Final = 3
 MAX_FACE_TRIES: Final = 2
-MOVED_M: Final = 0.3
-#: Bearings are clipped to the field of view: a sighting at the edge misplaces the centre.
-EDGE_DEG: Final = 44.9
-#: Lateral half-width (m) of the cone behind a visible doorway treated as the next room.
-GAP_HALF_WIDTH_M: Final = 1.0
-_SEATS: Final = ("Chair", "Sofa", "Stool")
-
-
-def fresh_plan() -> dict[str, Any]:
-    return {
-        "phase": "sweep",
-        "turns": 0,
-        "votes": {},
-        "here": {},
-        "found": 0,
-        "visited": [],
-        "used": [],
-        "blocked": [],
-        "doors": {},
-        "order": [],
-        "rough": [],
-        "sizes": {},
-        "target": "",
-        "tries": 0,
-        "at": [0.0, 0.0],
-    }
-
-
-def _place(percept: Percept, seen: Seen) -> tuple[float, float]:
-    angle = math.radians(percept.pose.heading + seen.bearing)
-    x = percept.pose.x + seen.distance * math.sin(angle)
-    z = percept.pose.z + seen.distance * math.cos(angle)
-    return round(x, 2), round(z, 2)
-
-
-def _room_guess(plan: Mapping[str, Any]) -> str:
-    votes: dict[str, float] = plan["votes"]
-    return max(votes, key=lambda r: (votes[r], -list(votes).index(r)), default="")
-
-
-def _inside(visible: tuple[Seen, ...]) -> tuple[Seen, ...]:
-    """Objects in view that are not seen through a doorway (those lie in the next room)."""
-    doors = [s for s in visible if s.object_type == DOORWAY]
-
-    def behind(seen: Seen) -> bool:
-        return any(
-            seen.distance > d.distance
-            and abs(seen.bearing - d.bearing)
-            <= math.degrees(math.atan2(GAP_HALF_WIDTH_M, d.distance))
-            for d in doors
-            if d is not seen
-        )
-
-    return tuple(s for s in visible if not behind(s))
-
-
-def _vote(plan: dict[str, Any], briefing: Briefing, visible: tuple[Seen, ...]) -> None:
-    holders: dict[str, list[str]] = {}
-    for room, counts in briefing.inventory.items():
-        for t in counts:
-            holders.setdefault(t, []).append(room)
-    votes = plan["votes"] or {room: 0.0 for room in briefing.inventory}
-    for seen in visible:
-        rooms = holders.get(seen.object_type, [])
-        for room in rooms:
-            votes[room] = round(votes[room] + 1.0 / len(rooms) / (1.0 + seen.distance), 4)
-    plan["votes"] = votes if any(votes.values()) else {}
-
-
-def _enter_room(plan: dict[str, Any]) -> None:
-    """Reset per-room bookkeeping after walking through a doorway."""
-    plan.update(phase="sweep", turns=0, votes={}, here={}, found=0, tries=0)
-    plan["used"] = [d for d in plan["used"] if d != plan["target"]] + [plan["target"]]
-    plan["blocked"], plan["target"] = [], ""
-
-
-def perceive(
-    plan: dict[str, Any],
-    memory: dict[str, dict[str, Any]],
-    briefing: Briefing,
-    percept: Percept,
-    *,
-    planted: Mapping[str, Any],
-    draw: Callable[[str], float],
-) -> tuple[dict[str, dict[str, Any]], list[str]]:
-    """Update the plan with this view; return the remembered map and the new labels."""
-    pose = percept.pose
-    if plan["phase"] == "cross":
-        moved = math.dist(plan["at"], (pose.x, pose.z)) > MOVED_M
-        if moved:
-            _enter_room(plan)
-        else:
-            plan.update(phase="face", tries=plan["tries"] + 1)
-    plan["at"] = [round(pose.x, 2), round(pose.z, 2)]
-    inside = {s.object_id for s in _inside(percept.visible)}
-    _vote(plan, briefing, tuple(s for s in percept.visible if s.object_id in inside))
-    room = _room_guess(plan)
-    view = []
-    for seen in sorted(percept.visible, key=lambda s: (-s.distance, s.object_id)):
-        x, z = _place(percept, seen)
-        if seen.object_type == DOORWAY:
-            plan["doors"][seen.object_id] = [x, z]
-            plan["here"].setdefault(seen.object_id, round(seen.distance, 2))
-        entry: dict[str, Any] = {"type": seen.object_type, "x": x, "z": z}
-        old = memory.get(seen.object_id, {})
-        if abs(seen.bearing) >= EDGE_DEG:
-            if seen.object_id not in plan["rough"] and "x" in old:
-                entry.update(x=old["x"], z=old["z"])
-            elif seen.object_id not in plan["rough"]:
-                plan["rough"].append(seen.object_id)
-        elif seen.object_id in plan["rough"]:
-            plan["rough"].remove(seen.object_id)
-        old_room = old.get("room")
-        if old_room or (room and seen.object_id in inside):
-            entry["room"] = old_room or room
-        view.append((seen.object_id, entry))
-    new = [label for label, _ in reversed(view) if label not in plan["order"]]
-    plan["order"] += new
-    plan["found"] += len(new)
-    merged = merge_view(memory, view)
-    kept = apply_memory(
-        merged,
-        in_view=frozenset(label for label, _ in view),
-        planted=planted,
-        discovery=plan["order"],
-        draw=draw,
-    )
-    return kept, new
+#: Repositions per room visit (each costs about five actions of the 50).
+MAX_MOVES: Final = 3
+#: A reposition target lies at least this far (m) from where the scout stands.
+MIN_MOVE_M: Final = 1.0
 
 
 def _close_room(plan: dict[str, Any]) -> None:
-    room = _room_guess(plan)
+    room = room_guess(plan)
     if room:
         if room not in plan["visited"]:
             plan["visited"].append(room)
@@ -171,18 +54,80 @@ def _close_room(plan: dict[str, Any]) -> None:
     plan["found"] = 0
 
 
-def _next_door(plan: Mapping[str, Any]) -> str:
+def _unused_here(plan: Mapping[str, Any]) -> str:
     here: dict[str, float] = plan["here"]
+    options = [d for d in here if d not in plan["blocked"] and d not in plan["used"]]
+    return min(options, key=lambda d: (here[d], d), default="")
+
+
+def _used_here(plan: Mapping[str, Any]) -> str:
     used: list[str] = plan["used"]
-    options = [d for d in here if d not in plan["blocked"]]
-    unused = sorted((d for d in options if d not in used), key=lambda d: (here[d], d))
-    if unused:
-        return unused[0]
-    return min((d for d in options), key=used.index, default="")
+    options = [d for d in plan["here"] if d not in plan["blocked"] and d in used]
+    return min(options, key=used.index, default="")
 
 
-def _turn_towards(plan: Mapping[str, Any], percept: Percept, door: str) -> str:
-    x, z = plan["doors"][door]
+def _complete(plan: Mapping[str, Any], briefing: Briefing) -> bool:
+    """A doorway and every object of the room's inventory line seen during this visit."""
+    counts = briefing.inventory.get(room_guess(plan))
+    if not counts or not plan["here"]:
+        return False
+    seen = Counter(spot[2] for spot in plan["spots"].values())
+    return all(seen[t] >= n for t, n in counts.items())
+
+
+def _spot(plan: Mapping[str, Any], towards: list[list[float]]) -> str:
+    """An object of the last sweep to reposition at ("" when none): the one nearest to a
+    point of ``towards`` and nearer to it than the scout, or with ``towards`` empty the one
+    farthest from every point this visit swept from."""
+    spots: dict[str, list[Any]] = plan["spots"]
+
+    def xz(label: str) -> tuple[float, float]:
+        return spots[label][0], spots[label][1]
+
+    def gap(point: tuple[float, float]) -> float:
+        return min(math.dist(point, p) for p in towards)
+
+    far = [o for o in plan["near"] if math.dist(xz(o), plan["at"]) >= MIN_MOVE_M]
+    candidates = [o for o in far if o not in plan["tried"]]
+    if towards:
+        here = gap(plan["at"])
+        closer = [o for o in candidates if gap(xz(o)) < here]
+        return min(closer, key=lambda o: (gap(xz(o)), o), default="")
+    return max(candidates, key=lambda o: (min(math.dist(xz(o), p) for p in plan["sweeps"]), o),
+               default="")  # fmt: skip
+
+
+def _reposition(plan: dict[str, Any], towards: list[list[float]]) -> bool:
+    """Target a spot (see :func:`_spot`) if the visit has a reposition left."""
+    spot = _spot(plan, towards) if plan["moves"] < MAX_MOVES else ""
+    if spot:
+        plan["tried"].append(spot)
+        plan.update(target=spot, goal="spot", moves=plan["moves"] + 1, phase="face", tries=0)
+    return bool(spot)
+
+
+def _choose(plan: dict[str, Any], briefing: Briefing) -> None:
+    """Set ``target`` and ``goal`` by rules 2-5; an empty target means ``Term``."""
+    plan.update(phase="face", tries=0)
+    door = _unused_here(plan)
+    if door:
+        plan.update(target=door, goal="door")
+        return
+    room = room_guess(plan)
+    doors = [
+        plan["doors"][d]
+        for d, rooms in plan["door_rooms"].items()
+        if room and room in rooms and d not in plan["used"]
+    ]
+    unvisited = len(plan["visited"]) < len(briefing.rooms)
+    if unvisited and not _complete(plan, briefing) and _reposition(plan, doors):
+        return
+    explored = not set(plan["doors"]) - set(plan["used"])
+    door = "" if explored else _used_here(plan)
+    plan.update(target=door, goal="door" if door else "")
+
+
+def _turn_towards(percept: Percept, x: float, z: float) -> str:
     angle = math.degrees(math.atan2(x - percept.pose.x, z - percept.pose.z))
     rel = (angle - percept.pose.heading + 180.0) % 360.0 - 180.0
     if abs(rel) > 135.0:
@@ -202,50 +147,34 @@ def term_choice(plan: Mapping[str, Any], briefing: Briefing) -> tuple[str, str]:
 
 def scout_action(plan: dict[str, Any], briefing: Briefing, percept: Percept) -> tuple[str, str]:
     """(action, reasoning) of the room-clearing scout."""
-    visible = {s.object_id for s in percept.visible}
     if percept.step >= percept.max_steps:
         _close_room(plan)
         room, why = term_choice(plan, briefing)
         return f"Term({room})", f"Last action of the budget. {why}"
-    if plan["phase"] == "sweep":
-        if plan["turns"] < SWEEP_TURNS:
-            plan["turns"] += 1
-            return "Turn(Right)", f"Sweeping the room ({plan['turns']}/{SWEEP_TURNS})."
+    if plan["phase"] == "sweep" and plan["turns"] < SWEEP_TURNS:
+        plan["turns"] += 1
+        return "Turn(Right)", f"Sweeping the room ({plan['turns']}/{SWEEP_TURNS})."
+    if plan["phase"] in ("sweep", "decide"):
         _close_room(plan)
-        plan.update(phase="face", tries=0, target=_next_door(plan))
-        explored = not set(plan["doors"]) - set(plan["used"])
-        if len(plan["visited"]) >= len(briefing.rooms) or explored or not plan["target"]:
+        if len(plan["visited"]) >= len(briefing.rooms):
             room, why = term_choice(plan, briefing)
             return f"Term({room})", why
+        _choose(plan, briefing)
+    visible = {s.object_id for s in percept.visible}
     while plan["target"]:
-        door = plan["target"]
-        if plan["tries"] <= MAX_FACE_TRIES and door in visible:
-            plan["phase"] = "cross"
-            return f"Goto({door})", f"Advancing through {door}."
+        target, door = plan["target"], plan["goal"] == "door"
+        if plan["tries"] <= MAX_FACE_TRIES and target in visible:
+            plan["phase"] = "cross" if door else "walk"
+            why = f"Advancing through {target}." if door else f"Repositioning at {target}."
+            return f"Goto({target})", why
         if plan["tries"] < MAX_FACE_TRIES:
             plan["tries"] += 1
-            return _turn_towards(plan, percept, door), f"Turning towards {door}."
-        plan["blocked"].append(door)
-        plan.update(tries=0, target=_next_door(plan))
+            x, z = plan["doors"][target] if door else plan["spots"][target][:2]
+            return _turn_towards(percept, x, z), f"Turning towards {target}."
+        if door:
+            plan["blocked"].append(target)
+            if _reposition(plan, [plan["doors"][target]]):
+                continue
+        _choose(plan, briefing)
     room, why = term_choice(plan, briefing)
     return f"Term({room})", f"No doorway left to try. {why}"
-
-
-def _seats(counts: Mapping[str, int]) -> int:
-    return sum(n for t, n in counts.items() if any(s in t for s in _SEATS))
-
-
-def prior_action(plan: dict[str, Any], briefing: Briefing, percept: Percept) -> tuple[str, str]:
-    """(action, reasoning) of the prior agent: sweep the spawn room, then name another."""
-    if plan["turns"] < SWEEP_TURNS and percept.step < percept.max_steps:
-        plan["turns"] += 1
-        return "Turn(Right)", f"Looking around ({plan['turns']}/{SWEEP_TURNS})."
-    _close_room(plan)
-    here = set(plan["visited"])
-    others = [r for r in briefing.rooms if r not in here] or list(briefing.rooms)
-    inventory = briefing.inventory
-    room = max(others, key=lambda r: (_seats(inventory.get(r, {})), -others.index(r)))
-    return (
-        f"Term({room})",
-        f"{room} has the most seating for a gathering ({_seats(inventory.get(room, {}))} seats).",
-    )

@@ -14,7 +14,7 @@ from http import HTTPStatus
 from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 from typing import Any, Final
 
-from pytest_emrd.agent._config import Registry, load_registry
+from pytest_emrd.agent import _config  # the module: _config imports this package's version
 from pytest_emrd.agent.reference._agents import complete, model_list
 from pytest_emrd.errors import ProtocolError
 
@@ -73,7 +73,7 @@ class _Server(ThreadingHTTPServer):
     daemon_threads = True
     allow_reuse_address = True
 
-    def __init__(self, address: tuple[str, int], registry: Registry) -> None:
+    def __init__(self, address: tuple[str, int], registry: _config.Registry) -> None:
         super().__init__(address, _Handler)
         self.registry = registry
 
@@ -85,9 +85,9 @@ class ReferenceServer:
     """
 
     def __init__(
-        self, *, host: str = "127.0.0.1", port: int = 0, registry: Registry | None = None
+        self, *, host: str = "127.0.0.1", port: int = 0, registry: _config.Registry | None = None
     ) -> None:
-        self._server = _Server((host, port), registry or load_registry())
+        self._server = _Server((host, port), registry or _config.load_registry())
         self._thread: threading.Thread | None = None
 
     @property

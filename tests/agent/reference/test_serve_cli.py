@@ -9,6 +9,7 @@ import sys
 import httpx
 import pytest
 
+from pytest_emrd.agent.reference import REFERENCE_VERSION
 from pytest_emrd.cli import main
 
 
@@ -24,7 +25,7 @@ def test_emrd_serve_answers_until_interrupted() -> None:
         match = re.search(r"(http://127\.0\.0\.1:\d+/v1)", line)
         assert match, line
         models = httpx.get(f"{match[1]}/models", timeout=10).json()
-        assert "scout" in {m["id"] for m in models["data"]}
+        assert f"scout@{REFERENCE_VERSION}" in {m["id"] for m in models["data"]}
     finally:
         proc.terminate()
         proc.wait(timeout=10)

@@ -9,7 +9,7 @@ import httpx
 import pytest
 
 from pytest_emrd.agent import build_system_prompt, parse_reply, step_text
-from pytest_emrd.agent.reference import ReferenceServer, reference_base_url
+from pytest_emrd.agent.reference import REFERENCE_VERSION, ReferenceServer, reference_base_url
 from pytest_emrd.trajectory import Pose
 from pytest_emrd.world._model import VisibleObject
 
@@ -52,8 +52,25 @@ def _body(inventory, model: str = "scout", *, symbolic: bool = True) -> dict:
 
 def test_models_route_lists_reference_agents(server) -> None:
     data = httpx.get(f"{server.base_url}/models").json()
-    assert {"scout", "scout-serial", "prior"} <= {m["id"] for m in data["data"]}
-    assert "gemini" not in {m["id"] for m in data["data"]}
+    ids = {m["id"] for m in data["data"]}
+    assert {f"{n}@{REFERENCE_VERSION}" for n in ("scout", "scout-serial", "prior")} <= ids
+    assert not any(i.startswith("gemini") for i in ids)
+
+
+@pytest.mark.parametrize(
+    "model", [f"scout@{REFERENCE_VERSION}", "scout"], ids=["versioned", "bare-name"]
+)
+def test_current_version_and_bare_names_are_served(server, inventory, model) -> None:
+    response = httpx.post(f"{server.base_url}/chat/completions", json=_body(inventory, model))
+    assert response.status_code == 200
+    assert response.json()["model"] == model
+
+
+def test_bare_and_versioned_names_get_the_same_reply(server, inventory) -> None:
+    url = f"{server.base_url}/chat/completions"
+    bare = httpx.post(url, json=_body(inventory, "scout-decay-3")).json()
+    versioned = httpx.post(url, json=_body(inventory, f"scout-decay-3@{REFERENCE_VERSION}")).json()
+    assert bare["choices"] == versioned["choices"]
 
 
 def test_scout_first_reply_is_a_compact_protocol_reply(server, inventory) -> None:
@@ -82,11 +99,19 @@ def test_same_request_same_bytes(server, inventory) -> None:
     [
         ("gpt-9", True, None, 404, "not in the registry"),
         ("gemini", True, None, 404, "not a reference agent"),
+        ("scout@ref-1", True, None, 404, f"this pytest-emrd runs {REFERENCE_VERSION!r}"),
         ("scout", False, None, 400, "modality 'text' or 'both'"),
         ("scout", True, b"{not json", 400, "not JSON"),
         ("scout", True, b'{"model": "scout"}', 400, "'messages' list"),
     ],
-    ids=["unknown-model", "vlm-name", "vision-only", "garbage-body", "no-messages"],
+    ids=[
+        "unknown-model",
+        "vlm-name",
+        "stale-version",
+        "vision-only",
+        "garbage-body",
+        "no-messages",
+    ],
 )
 def test_bad_requests(server, inventory, model, symbolic, raw, status, needle) -> None:
     url = f"{server.base_url}/chat/completions"

@@ -1,0 +1,202 @@
+"""What every scripted agent does with a view: place objects, guess the room, remember.
+
+Every visible object is placed in the spawn frame from the pose and its bearing/distance
+(perfect odometry, so a perfect-memory agent maps exactly). The current room is inferred by
+matching the object types in view against the prompt's inventory (types found in fewer
+rooms weigh more, nearer objects weigh more); objects seen through a doorway lie in the
+next room and neither vote nor get a room. The reported map then passes through the
+planted memory (:mod:`._memory`).
+
+The navigation state lives in the ``plan`` key of the reply (see :func:`fresh_plan`), so
+the agents keep state only in the conversation they are sent. Navigation reads its own
+perfect record there (doorways, objects of the current room), never the reported map, so
+every memory variant of an agent walks the same path.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Mapping
+from typing import Any, Final
+
+from pytest_emrd.agent.reference._memory import apply_memory, merge_view
+from pytest_emrd.agent.reference._read import Briefing, Percept, Seen
+
+DOORWAY: Final = "Doorway"
+#: A pose this far (m) from the previous one means the last Goto moved the agent.
+MOVED_M: Final = 0.3
+#: Bearings are clipped to the field of view: a sighting at the edge misplaces the centre.
+EDGE_DEG: Final = 44.9
+#: Lateral half-width (m) of the cone behind a visible doorway treated as the next room.
+GAP_HALF_WIDTH_M: Final = 1.0
+
+
+def fresh_plan() -> dict[str, Any]:
+    """Navigation state at the first step.
+
+    ``phase``: ``sweep`` (turning in place), ``decide`` (choose where to go next),
+    ``face`` (turning towards ``target``), ``cross`` (just sent ``Goto`` through a
+    doorway), ``walk`` (just sent ``Goto`` to an object of this room).
+
+    Per room visit: ``turns`` of the current sweep, room ``votes``, doorways seen ``here``
+    in this room, not through another doorway (-> distance), objects ``found`` since the
+    last sweep ended, ``spots`` (objects seen inside: id -> [x, z, type]), ``near`` (ids
+    seen since the current sweep began), ``sweeps`` (where sweeps began), ``moves``
+    (repositions), ``tried`` (spots targeted), ``blocked`` (doorways that could not be
+    faced from here).
+
+    Whole episode: ``visited`` rooms, ``used`` doorways (least recent first), ``doors``
+    (id -> [x, z]), ``door_rooms`` (id -> rooms it was seen inside), ``order`` (discovery
+    order), ``rough`` (placed at the edge of view), ``sizes`` (room -> objects discovered),
+    the current ``target`` with its ``goal`` (``door`` or ``spot``) and face ``tries``, and
+    the pose ``at`` the last step.
+    """
+    return {
+        "phase": "sweep",
+        "turns": 0,
+        "votes": {},
+        "here": {},
+        "found": 0,
+        "spots": {},
+        "near": [],
+        "sweeps": [],
+        "moves": 0,
+        "tried": [],
+        "blocked": [],
+        "visited": [],
+        "used": [],
+        "doors": {},
+        "door_rooms": {},
+        "order": [],
+        "rough": [],
+        "sizes": {},
+        "target": "",
+        "goal": "",
+        "tries": 0,
+        "at": [0.0, 0.0],
+    }
+
+
+def _place(percept: Percept, seen: Seen) -> tuple[float, float]:
+    angle = math.radians(percept.pose.heading + seen.bearing)
+    x = percept.pose.x + seen.distance * math.sin(angle)
+    z = percept.pose.z + seen.distance * math.cos(angle)
+    return round(x, 2), round(z, 2)
+
+
+def room_guess(plan: Mapping[str, Any]) -> str:
+    """The room the votes point to ("" before any vote; ties: prompt order)."""
+    votes: dict[str, float] = plan["votes"]
+    return max(votes, key=lambda r: (votes[r], -list(votes).index(r)), default="")
+
+
+def _inside(visible: tuple[Seen, ...]) -> tuple[Seen, ...]:
+    """Objects in view that are not seen through a doorway (those lie in the next room)."""
+    doors = [s for s in visible if s.object_type == DOORWAY]
+
+    def behind(seen: Seen) -> bool:
+        return any(
+            seen.distance > d.distance
+            and abs(seen.bearing - d.bearing)
+            <= math.degrees(math.atan2(GAP_HALF_WIDTH_M, d.distance))
+            for d in doors
+            if d is not seen
+        )
+
+    return tuple(s for s in visible if not behind(s))
+
+
+def _vote(plan: dict[str, Any], briefing: Briefing, visible: tuple[Seen, ...]) -> None:
+    holders: dict[str, list[str]] = {}
+    for room, counts in briefing.inventory.items():
+        for t in counts:
+            holders.setdefault(t, []).append(room)
+    votes = plan["votes"] or {room: 0.0 for room in briefing.inventory}
+    for seen in visible:
+        rooms = holders.get(seen.object_type, [])
+        for room in rooms:
+            votes[room] = round(votes[room] + 1.0 / len(rooms) / (1.0 + seen.distance), 4)
+    plan["votes"] = votes if any(votes.values()) else {}
+
+
+def _enter_room(plan: dict[str, Any]) -> None:
+    """Reset per-visit bookkeeping after walking through a doorway."""
+    plan.update(phase="sweep", turns=0, votes={}, here={}, found=0, tries=0, moves=0)
+    plan.update(spots={}, near=[], sweeps=[], tried=[], blocked=[])
+    plan["used"] = [d for d in plan["used"] if d != plan["target"]] + [plan["target"]]
+    plan.update(target="", goal="")
+
+
+def _after_goto(plan: dict[str, Any], moved: bool) -> None:
+    """Bookkeeping at the step after a ``Goto`` (``phase`` ``cross`` or ``walk``)."""
+    if plan["phase"] == "cross":
+        if moved:
+            _enter_room(plan)
+        else:
+            plan.update(phase="face", tries=plan["tries"] + 1)
+    elif plan["phase"] == "walk":
+        # Arrived: sweep from here. Not moved (no free spot there): decide again at once.
+        plan.update(phase="sweep" if moved else "decide", turns=0, target="", goal="", tries=0)
+        if moved:  # a doorway out of view from the last spot may be in view from this one
+            plan["blocked"] = []
+
+
+def perceive(
+    plan: dict[str, Any],
+    memory: dict[str, dict[str, Any]],
+    briefing: Briefing,
+    percept: Percept,
+    *,
+    planted: Mapping[str, Any],
+    draw: Callable[[str], float],
+) -> tuple[dict[str, dict[str, Any]], list[str]]:
+    """Update the plan with this view; return the remembered map and the new labels."""
+    pose = percept.pose
+    _after_goto(plan, math.dist(plan["at"], (pose.x, pose.z)) > MOVED_M)
+    plan["at"] = [round(pose.x, 2), round(pose.z, 2)]
+    if plan["phase"] == "sweep" and plan["turns"] == 0:  # a sweep begins with this view
+        plan["sweeps"].append(plan["at"])
+        plan["near"] = []
+    inside = {s.object_id for s in _inside(percept.visible)}
+    _vote(plan, briefing, tuple(s for s in percept.visible if s.object_id in inside))
+    room = room_guess(plan)
+    view = []
+    for seen in sorted(percept.visible, key=lambda s: (-s.distance, s.object_id)):
+        x, z = _place(percept, seen)
+        if seen.object_type == DOORWAY:
+            plan["doors"][seen.object_id] = [x, z]
+            rooms = plan["door_rooms"].setdefault(seen.object_id, [])
+            if seen.object_id in inside:  # Goto of a doorway seen through another stops short
+                plan["here"].setdefault(seen.object_id, round(seen.distance, 2))
+                if room and room not in rooms:
+                    rooms.append(room)
+        elif seen.object_id in inside:
+            plan["spots"][seen.object_id] = [x, z, seen.object_type]
+            if seen.object_id not in plan["near"]:
+                plan["near"].append(seen.object_id)
+        entry: dict[str, Any] = {"type": seen.object_type, "x": x, "z": z}
+        old = memory.get(seen.object_id, {})
+        if abs(seen.bearing) >= EDGE_DEG:
+            if seen.object_id not in plan["rough"] and "x" in old:
+                entry.update(x=old["x"], z=old["z"])
+            elif seen.object_id not in plan["rough"]:
+                plan["rough"].append(seen.object_id)
+        elif seen.object_id in plan["rough"]:
+            plan["rough"].remove(seen.object_id)
+        old_room = old.get("room")
+        if old_room or (room and seen.object_id in inside):
+            entry["room"] = old_room or room
+        view.append((seen.object_id, entry))
+    new = [label for label, _ in reversed(view) if label not in plan["order"]]
+    plan["order"] += new
+    plan["found"] += len(new)
+    merged = merge_view(memory, view)
+    kept = apply_memory(
+        merged,
+        in_view=frozenset(label for label, _ in view),
+        planted=planted,
+        discovery=plan["order"],
+        draw=draw,
+        expected=sum(n for counts in briefing.inventory.values() for n in counts.values()),
+    )
+    return kept, new

@@ -1,0 +1,44 @@
+"""Behaviour version of the scripted reference agents, carried in every request they get.
+
+Cassettes store the reference agents' replies, so a change in what a scripted agent does
+would otherwise replay stale behaviour silently. The ``model`` field a client sends to a
+reference agent is therefore ``<name>@<REFERENCE_VERSION>`` (``scout@ref-2``): a cassette
+recorded under an older version no longer matches its requests and fails loudly as drift.
+
+Bump :data:`REFERENCE_VERSION` with every change to what a reference agent replies.
+
+* ``ref-1`` — the first scripted agents (no version in the request).
+* ``ref-2`` — the scout repositions and sweeps again when no unused doorway is in sight;
+  ``prior`` terminates at its first step with an empty map; planted decay hazard ``1/m``;
+  ``scout-serial`` protects thirds of the prompt's inventory total.
+"""
+
+from __future__ import annotations
+
+from typing import Final
+
+from pytest_emrd.errors import ConfigError
+
+REFERENCE_VERSION: Final = "ref-2"
+_SEP: Final = "@"
+
+
+def versioned_id(name: str) -> str:
+    """The ``model`` field for reference agent ``name``: ``name@REFERENCE_VERSION``."""
+    return f"{name}{_SEP}{REFERENCE_VERSION}"
+
+
+def agent_name(model: str) -> str:
+    """The registry name in a requested ``model`` field (``scout@ref-2`` -> ``scout``).
+
+    A bare name (``scout``, as a person types it at ``emrd serve``) is accepted as the
+    current version; any other version raises :class:`ConfigError` naming both versions.
+    """
+    name, sep, version = model.partition(_SEP)
+    if sep and version != REFERENCE_VERSION:
+        raise ConfigError(
+            f"model={model!r} asks for reference agents version {version!r}, but this "
+            f"pytest-emrd runs {REFERENCE_VERSION!r}; re-record the cassette (or request "
+            f"{versioned_id(name)!r})."
+        )
+    return name

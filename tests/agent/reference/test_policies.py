@@ -1,0 +1,63 @@
+"""The scout's and prior's decisions on hand-made views (symbolic list, known poses)."""
+
+from __future__ import annotations
+
+import pytest
+
+from pytest_emrd.trajectory import Pose
+
+#: A dark kitchen: four sweep views from the spawn point, no doorway within sight.
+DARK_KITCHEN = [
+    [("Fridge_1", "Fridge", 0.0, 2.0), ("Sink_1", "Sink", 20.0, 1.5)],
+    [("CounterTop_1", "CounterTop", 0.0, 3.0)],
+    [],
+    [("Stool_1", "Stool", 10.0, 2.5)],
+]
+
+
+def _sweep(driver, views) -> list[dict]:
+    return [driver.see(v, Pose(0.0, 0.0, 90.0 * i)) for i, v in enumerate(views)]
+
+
+def test_scout_repositions_when_no_doorway_is_in_sight(drive) -> None:
+    scout = drive("scout")
+    replies = _sweep(scout, DARK_KITCHEN)
+    assert [r["action"] for r in replies] == ["Turn(Right)"] * 3 + ["Turn(Around)"]
+    assert replies[-1]["reasoning"] == "Turning towards CounterTop_1."  # farthest from (0, 0)
+    goto = scout.see([("CounterTop_1", "CounterTop", 0.0, 3.0)], Pose(0.0, 0.0, 90.0))
+    assert goto["action"] == "Goto(CounterTop_1)"
+    assert goto["reasoning"] == "Repositioning at CounterTop_1."
+    arrived = scout.see([("CounterTop_1", "CounterTop", 0.0, 0.7)], Pose(2.3, 0.0, 90.0))
+    assert arrived["action"] == "Turn(Right)", "a new sweep starts where it arrived"
+    assert arrived["plan"]["sweeps"] == [[0.0, 0.0], [2.3, 0.0]]
+    assert arrived["plan"]["moves"] == 1
+
+
+def test_scout_goes_through_an_unused_doorway_instead(drive) -> None:
+    scout = drive("scout")
+    views = [*DARK_KITCHEN[:3], [*DARK_KITCHEN[3], ("Doorway_2", "Doorway", -5.0, 3.0)]]
+    replies = _sweep(scout, views)
+    assert replies[-1]["action"] == "Goto(Doorway_2)"
+    assert replies[-1]["plan"]["moves"] == 0
+
+
+def test_scout_with_nothing_in_sight_terminates(drive) -> None:
+    replies = _sweep(drive("scout"), [[], [], [], []])
+    assert replies[-1]["action"] == "Term(Office)"
+    assert replies[-1]["reasoning"].startswith("No doorway left to try.")
+
+
+@pytest.mark.parametrize(
+    ("view", "chosen"),
+    [
+        ([("DiningTable_1", "DiningTable", 0.0, 2.0)], "Office"),  # 2 chairs, ties Entrance
+        ([("Fridge_1", "Fridge", 0.0, 2.0)], "Conference Room"),
+        ([], "Conference Room"),
+    ],
+    ids=["in-conference", "in-kitchen", "nothing-in-view"],
+)
+def test_prior_terminates_at_once_with_an_empty_map(drive, view, chosen) -> None:
+    reply = drive("prior").see(view)
+    assert reply["action"] == f"Term({chosen})"
+    assert reply["cognitive_map"] == {}
+    assert "seats by the building overview" in reply["reasoning"]
