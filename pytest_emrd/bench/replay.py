@@ -33,9 +33,11 @@ from pytest_emrd.trajectory import EpisodeSpec
 
 ROOT = Path(__file__).resolve().parents[2]
 CASSETTES = ROOT / "cassettes"
+#: One episode per spawn room under each condition (12 episodes, fixed, not picked by size).
 SIDE_BY_SIDE = tuple(
-    EpisodeSpec("scout", condition, "office", 0, modality="both")
-    for condition in ("baseline", "low_light")
+    EpisodeSpec("scout", condition, spawn, 0, modality="both")
+    for condition in ("baseline", "low_light", "texture")
+    for spawn in ("office", "conference", "kitchen", "entrance")
 )
 
 
@@ -111,7 +113,7 @@ def _step_overhead_ms(repeat: int) -> float:
     from pytest_emrd.agent.reference import reference_base_url
     from pytest_emrd.episode import run_episode
 
-    spec = SIDE_BY_SIDE[0]
+    spec = EpisodeSpec("scout", "baseline", "office", 0, modality="both")
     registry, protocol = load_registry(), _protocol()
     capture = _Capture()
     with tempfile.TemporaryDirectory() as tmp:

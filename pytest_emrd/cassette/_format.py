@@ -10,9 +10,12 @@ requests. So the file holds a table of distinct strings and everything else refe
 .. code-block:: yaml
 
     format: emrd-cassette/1
-    protocol: "builtin-1+p1"       # world + prompt protocol the traffic was recorded under
-    strings:                       # each distinct string once
-      - '{"content":"\\u00000","role":"system"}'   # a message template; \u0000N = strings[N]
+    protocol: "builtin-3+p1"       # world + prompt protocol the traffic was recorded under
+    strings:                       # each distinct long string once (prompt, reply, digest)
+      - "You are an autonomous emergency responder ..."
+      - ...
+    templates:                     # each distinct message once; "\u0000N" = strings[N]
+      - '{"content":"\\u00000","role":"system"}'
       - ...
     interactions:
       - request:
@@ -21,7 +24,7 @@ requests. So the file holds a table of distinct strings and everything else refe
           headers: {content-type: application/json}
           body:                    # or {raw: 7} when the body is not JSON
             json: '{"messages":null,"model":"scout","temperature":0.0}'   # the skeleton
-            lists: {messages: [1, 3, 4]}                   # one template per list item
+            lists: {messages: [[0, 1], [5, 20]]}   # template runs (start, length)
             mode: canonical        # re-serialisation: canonical | compact | ascii
         response:
           status: {code: 200, message: OK}
@@ -29,10 +32,11 @@ requests. So the file holds a table of distinct strings and everything else refe
           body: {json: '{"choices":[{"message":{"content":"\\u00005"}}]}', mode: compact}
 
 Request bodies are stored already redacted and canonical (see :mod:`._redact`): each item of
-a top-level list (``messages``, ``contents``...) is one template string, so a message
-repeated across requests is stored once; inside templates every string of 48 characters or
-more is replaced by a reference (NUL + table index), so a reply text is stored once for its
-response and all the requests that carry it back. Loading rebuilds the canonical bytes
+a top-level list (``messages``, ``contents``...) is one template, so a message repeated
+across requests is stored once, and a history window is a few runs of template indices.
+Inside templates and response bodies every string of 48 characters or more is replaced by
+a reference (NUL + index into ``strings``), so a reply text is stored once for its response
+and for all the requests that carry it back. Loading rebuilds the canonical bytes
 exactly (canonical JSON is a fixed point of parse + serialise); a JSON response is stored as
 a tree only when compact serialisation reproduces its bytes exactly, else verbatim. Gzip
 runs with ``mtime=0`` so the same traffic always gives the same file bytes.
@@ -51,7 +55,7 @@ from typing import Any, Final
 import yaml
 from vcr.request import Request
 
-from pytest_emrd.cassette._redact import canonical_json
+from pytest_emrd.cassette._redact import DIGEST, canonical_json
 
 FORMAT: Final = "emrd-cassette/1"
 _B64: Final = "base64:"
@@ -76,9 +80,9 @@ class CassetteData:
 
 
 class _Table:
-    def __init__(self) -> None:
-        self.strings: list[str] = []
-        self._index: dict[str, int] = {}
+    def __init__(self, seed: Sequence[str] = ()) -> None:
+        self.strings: list[str] = list(seed)
+        self._index: dict[str, int] = {text: i for i, text in enumerate(self.strings)}
 
     def intern(self, text: str) -> int:
         index = self._index.get(text)
@@ -135,11 +139,29 @@ _SERIALISE: Final = {
 }
 
 
-def _encode_body(body: bytes | str | None, table: _Table) -> dict[str, Any]:
+def _runs(indices: Sequence[int]) -> list[list[int]]:
+    """``[0, 5, 6, 7]`` -> ``[[0, 1], [5, 3]]`` (start, length): a history window is a run."""
+    runs: list[list[int]] = []
+    for i in indices:
+        if runs and runs[-1][0] + runs[-1][1] == i:
+            runs[-1][1] += 1
+        else:
+            runs.append([i, 1])
+    return runs
+
+
+def _expand(runs: Sequence[Sequence[int]]) -> list[int]:
+    return [start + k for start, length in runs for k in range(length)]
+
+
+def _encode_body(
+    body: bytes | str | None, table: _Table, templates: _Table | None
+) -> dict[str, Any]:
     """A JSON body as a packed tree when it re-serialises byte for byte, else verbatim.
 
-    Each item of a top-level list of a JSON object (``messages``, ``contents``...) is
-    interned as one template, so a message repeated across requests is stored once.
+    With ``templates`` (request bodies), each item of a top-level list of a JSON object
+    (``messages``, ``contents``...) is interned there as one template, so a message
+    repeated across requests is stored once and a window is a few runs of indices.
     """
     raw = body.encode() if isinstance(body, str) else (body or b"")
     try:
@@ -149,10 +171,10 @@ def _encode_body(body: bytes | str | None, table: _Table) -> dict[str, Any]:
     for mode, serialise in _SERIALISE.items():
         if serialise(tree).encode() != raw:
             continue
-        if not isinstance(tree, dict):
+        if not isinstance(tree, dict) or templates is None:
             return {"json": _compact(_pack(tree, table), False), "mode": mode}
         lists = {
-            k: [table.intern(_compact(_pack(v, table), False)) for v in tree[k]]
+            k: _runs([templates.intern(_compact(_pack(v, table), False)) for v in tree[k]])
             for k in tree
             if isinstance(tree[k], list)
         }
@@ -165,12 +187,12 @@ def _encode_body(body: bytes | str | None, table: _Table) -> dict[str, Any]:
     return {"raw": table.intern(_text(raw))}
 
 
-def _decode_body(body: dict[str, Any], strings: Sequence[str]) -> bytes:
+def _decode_body(body: dict[str, Any], strings: Sequence[str], templates: Sequence[str]) -> bytes:
     if "raw" in body:
         return _bytes(strings[body["raw"]])
     tree = _unpack(json.loads(body["json"]), strings)
     for key, refs in body.get("lists", {}).items():
-        tree[key] = [_unpack(json.loads(strings[i]), strings) for i in refs]
+        tree[key] = [_unpack(json.loads(templates[i]), strings) for i in _expand(refs)]
     return _SERIALISE[body["mode"]](tree).encode()
 
 
@@ -181,7 +203,30 @@ def encode(data: CassetteData) -> bytes:
     which any YAML reader loads and which loads here at JSON speed; a cassette edited by
     hand into block-style YAML still loads (through PyYAML).
     """
-    table = _Table()
+    first = _Table()
+    _interactions(data, first, _Table())
+    # Second pass with the strings grouped by kind (frame digests, JSON texts such as replies,
+    # other text), each group in order of first use: like sits next to like, which is what
+    # gzip's 32 KB window rewards. Same content, different indices.
+    table, templates = _Table(sorted(first.strings, key=_kind)), _Table()
+    document = {
+        "format": FORMAT,
+        "protocol": data.protocol,
+        "strings": table.strings,
+        "templates": templates.strings,
+        "interactions": _interactions(data, table, templates),
+    }
+    text = json.dumps(document, ensure_ascii=False, separators=(",", ":"))
+    return gzip.compress(text.encode(), compresslevel=9, mtime=0)
+
+
+def _kind(text: str) -> int:
+    if DIGEST.match(text):
+        return 0
+    return 1 if text.startswith(("{", "[")) else 2
+
+
+def _interactions(data: CassetteData, table: _Table, templates: _Table) -> list[dict[str, Any]]:
     interactions = []
     for request, response in zip(data.requests, data.responses, strict=True):
         interactions.append(
@@ -190,23 +235,16 @@ def encode(data: CassetteData) -> bytes:
                     "method": request.method,
                     "uri": request.uri,
                     "headers": dict(request.headers),
-                    "body": _encode_body(request.body, table),
+                    "body": _encode_body(request.body, table, templates),
                 },
                 "response": {
                     "status": dict(response["status"]),
                     "headers": {k: list(v) for k, v in response["headers"].items()},
-                    "body": _encode_body(response["body"]["string"], table),
+                    "body": _encode_body(response["body"]["string"], table, None),
                 },
             }
         )
-    document = {
-        "format": FORMAT,
-        "protocol": data.protocol,
-        "strings": table.strings,
-        "interactions": interactions,
-    }
-    text = json.dumps(document, ensure_ascii=False, indent=1)
-    return gzip.compress(text.encode(), compresslevel=9, mtime=0)
+    return interactions
 
 
 def decode(blob: bytes) -> CassetteData:
@@ -226,7 +264,7 @@ def decode(blob: bytes) -> CassetteData:
         found = document.get("format") if isinstance(document, dict) else type(document).__name__
         raise FormatError(f"format={found!r} is not {FORMAT!r}")
     try:
-        strings = document["strings"]
+        strings, templates = document["strings"], document["templates"]
         requests, responses = [], []
         for item in document["interactions"]:
             req, resp = item["request"], item["response"]
@@ -234,7 +272,7 @@ def decode(blob: bytes) -> CassetteData:
                 Request(
                     req["method"],
                     req["uri"],
-                    _decode_body(req["body"], strings),
+                    _decode_body(req["body"], strings, templates),
                     req["headers"],
                 )
             )
@@ -242,7 +280,7 @@ def decode(blob: bytes) -> CassetteData:
                 {
                     "status": resp["status"],
                     "headers": resp["headers"],
-                    "body": {"string": _decode_body(resp["body"], strings)},
+                    "body": {"string": _decode_body(resp["body"], strings, templates)},
                 }
             )
         return CassetteData(str(document["protocol"]), tuple(requests), tuple(responses))

@@ -40,7 +40,8 @@ SECRET_QUERY: Final = frozenset({"key"})
 #: Header names treated as secrets (documented for users; dropped by the allowlist above).
 SECRET_HEADERS: Final = ("authorization", "x-api-key", "api-key", "x-goog-api-key")
 
-_DIGEST = re.compile(r"^(?:pixels|bytes):[0-9a-f]{64}$")
+#: A frame digest as redaction writes it (``pixels:`` or ``bytes:`` + SHA-256 hex).
+DIGEST: Final = re.compile(r"^(?:pixels|bytes):[0-9a-f]{64}$")
 _IMAGE_PLACEHOLDER: Final = "<image>"
 _MIME_KEYS: Final = ("media_type", "mime_type", "mimeType")
 _CACHE_SIZE: Final = 64
@@ -106,7 +107,7 @@ def _redact_tree(node: Any, counter: list[int]) -> Any:
         for key, value in node.items():
             if key == "data" and isinstance(value, str) and mime and mime.startswith("image/"):
                 counter[0] += 1
-                out[key] = value if _DIGEST.match(value) else frames.pixel_digest_for(value)
+                out[key] = value if DIGEST.match(value) else frames.pixel_digest_for(value)
             else:
                 out[key] = _redact_tree(value, counter)
         return out
@@ -117,7 +118,7 @@ def _redact_tree(node: Any, counter: list[int]) -> Any:
         if digest is not None:
             counter[0] += 1
             return digest
-        if _DIGEST.match(node):
+        if DIGEST.match(node):
             counter[0] += 1
     return node
 
@@ -127,7 +128,7 @@ def _without_images(node: Any) -> Any:
         return {k: _without_images(v) for k, v in node.items()}
     if isinstance(node, list):
         return [_without_images(v) for v in node]
-    if isinstance(node, str) and _DIGEST.match(node):
+    if isinstance(node, str) and DIGEST.match(node):
         return _IMAGE_PLACEHOLDER
     return node
 
