@@ -44,6 +44,7 @@ from pytest_emrd.metrics._remember import (
 from pytest_emrd.metrics._scores import (
     Grounding,
     aec_score,
+    discovery_thirds,
     grounding_scores,
     positional_accuracy_score,
     serial_position_bins,
@@ -106,6 +107,7 @@ __all__ = [
     "chi_square",
     "consensus",
     "cramers_v",
+    "discovery_thirds",
     "ebbinghaus",
     "ebbinghaus_fit",
     "efc",

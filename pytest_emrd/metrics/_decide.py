@@ -124,9 +124,11 @@ def fpsg(items: Iterable[EpisodeLike]) -> FPSGSummary:
         \overline{FPSG}_{local} = \frac{1}{N}\sum_i
             \frac{|\hat{M}_F \cap \mathcal{O}_F|}{|\mathcal{O}_F|}
 
-    Means and sample standard deviations over episodes where each is defined (see
-    :func:`grounding_scores`); Never-Visited and Any-Bias are shares of episodes with a chosen
-    room. No such episode: None. One episode: sd None.
+    ``O_F`` excludes doorways (a doorway is no evidence about either room it joins); see
+    :func:`grounding_scores`. Means and sample standard deviations over episodes where each
+    is defined; Never-Visited and Any-Bias are shares of episodes with a chosen room (Any-Bias:
+    the final map holds no non-doorway object of the chosen room). No such episode: None.
+    One episode: sd None.
     """
     kept, excluded = split_errored(items)
     local = [m.fpsg_local for m in kept if m.fpsg_local is not None]

@@ -16,8 +16,15 @@ import numpy as np
 
 from pytest_emrd.errors import check_positive_int
 from pytest_emrd.metrics._episode import EpisodeLike, EpisodeMetrics, categories_of, split_errored
+from pytest_emrd.metrics._scores import discovery_thirds
 from pytest_emrd.metrics._stats import Anova, anova_groups
-from pytest_emrd.metrics._survival import AnchoredKM, EbbinghausFit, anchored_km, ebbinghaus_fit
+from pytest_emrd.metrics._survival import (
+    AnchoredKM,
+    EbbinghausFit,
+    anchored_km,
+    ebbinghaus_fit,
+    efc,
+)
 from pytest_emrd.metrics._tracking import Spell
 
 
@@ -118,27 +125,55 @@ def ebbinghaus(items: Iterable[EpisodeLike]) -> Ebbinghaus:
 
 @dataclass(frozen=True)
 class SerialPosition:
-    """Mean TTF of the Early / Middle / Late discovery thirds (Eq. SPE)."""
+    """Mean TTF of the Early / Middle / Late discovery thirds (Eq. SPE), and our
+    censoring-aware estimate beside it (``mle_*``)."""
 
     early: float | None
+    """The paper's estimator (Eq. SPE), steps; likewise ``middle`` and ``late``."""
     middle: float | None
     late: float | None
     n: tuple[int, int, int]
-    """Episodes contributing to each bin."""
+    """Episodes contributing to each bin of the paper's estimator."""
     excluded: int
+    mle_early: float | None = None
+    """Our addition: exponential MLE of the mean TTF of the Early third pooled over episodes,
+    ``sum t_j / d`` (:func:`efc`), steps; ``inf`` with no forgetting event, None with no
+    spell. Likewise ``mle_middle`` and ``mle_late``."""
+    mle_middle: float | None = None
+    mle_late: float | None = None
+    spells: tuple[int, int, int] = (0, 0, 0)
+    """First spells per third (objects that left view while mapped)."""
+    events: tuple[int, int, int] = (0, 0, 0)
+    """Forgetting events (uncensored spells) per third."""
 
 
 def serial_position(items: Iterable[EpisodeLike]) -> SerialPosition:
-    r"""Serial Position Effect across episodes (Eq. SPE).
+    r"""Serial Position Effect across episodes (Eq. SPE), with a censoring-aware estimate.
 
     .. math::
         \overline{TTF}_b = \frac{1}{N_b} \sum_{i} \frac{1}{|\mathcal{D}_b^{(i)}|}
-            \sum_{j \in \mathcal{D}_b^{(i)}} TTF_j^{(i)}
+            \sum_{j \in \mathcal{D}_b^{(i)}} TTF_j^{(i)},
+        \qquad
+        \widehat{TTF}_b^{MLE} = \frac{\sum_i \sum_{j \in \mathcal{D}_b^{(i)}} t_j}
+            {\sum_i \sum_{j \in \mathcal{D}_b^{(i)}} \delta_j}
 
-    Per-episode bin means come from :func:`serial_position_bins`; an episode whose bin is
-    undefined (no object of the bin left view) is left out of that bin's mean, so ``N_b`` may
-    differ between bins (reported in ``n``). No episode for a bin: None. ``TTF_j`` is the first
-    spell's duration, censored or not, as in the paper.
+    **Paper's estimator** (``early``, ``middle``, ``late``): per-episode bin means come from
+    :func:`serial_position_bins`; an episode whose bin is undefined (no object of the bin
+    left view) is left out of that bin's mean, so ``N_b`` may differ between bins (``n``).
+    ``TTF_j`` is the first spell's duration, censored or not, as in the paper. It is biased
+    low wherever spells are right-censored, and most for the Late third: an object found
+    near the end of the episode can only be retained for the few steps that remain, so even
+    a perfect memory shows ``E > M > L``.
+
+    **Censoring-aware estimate** (``mle_*``, our addition): per third, the first spells of
+    every episode are pooled and the exponential maximum-likelihood mean ``sum t_j / d`` is
+    taken (:func:`efc`; ``delta_j = 1`` for a forgetting event), which counts a censored
+    spell as survival, not as forgetting. It assumes non-informative censoring and a
+    constant hazard within a third. A third without forgetting events is ``inf`` (nothing
+    was forgotten: protected), one without spells None.
+
+    No episode for a bin: None. Thirds are those of :func:`discovery_thirds` over each
+    episode's discovered objects.
     """
     kept, excluded = split_errored(items)
     means: list[float | None] = []
@@ -147,8 +182,21 @@ def serial_position(items: Iterable[EpisodeLike]) -> SerialPosition:
         values = [v for m in kept if (v := m.serial_position[b]) is not None]
         means.append(math.fsum(values) / len(values) if values else None)
         counts.append(len(values))
-    return SerialPosition(means[0], means[1], means[2], (counts[0], counts[1], counts[2]),
-                          excluded)  # fmt: skip
+    durations: list[list[int]] = [[], [], []]
+    forgotten: list[list[bool]] = [[], [], []]
+    for m in kept:
+        third = discovery_thirds(sum(m.mapped_by_category.values()))
+        for s in m.ttf_spells:
+            b = int(third[s.discovery_rank - 1])
+            durations[b].append(s.duration)
+            forgotten[b].append(s.forgotten)
+    mle = [efc(durations[b], forgotten[b]) for b in range(3)]
+    return SerialPosition(
+        means[0], means[1], means[2], (counts[0], counts[1], counts[2]), excluded,
+        mle[0], mle[1], mle[2],
+        (len(durations[0]), len(durations[1]), len(durations[2])),
+        (sum(forgotten[0]), sum(forgotten[1]), sum(forgotten[2])),
+    )  # fmt: skip
 
 
 @dataclass(frozen=True)
@@ -166,7 +214,8 @@ class MillerCurve:
     events: tuple[int, ...]
     """Steps with a forgetting event per bin (the numerator)."""
     b_star: int | None
-    """Inflection bin: the largest rise between consecutive non-empty bins."""
+    """Inflection bin: the largest rise between consecutive eligible bins, the first eligible
+    bin's rise measured from the anchor ``ML(0) = 0``."""
     m_star: int | None
     """Effective capacity ``m* = b* w``."""
     reason: str | None = None
@@ -179,15 +228,25 @@ def miller_curve(
 
     .. math::
         \overline{ML}(b) = \frac{\sum_i \sum_{t: \lceil |M_{t-1}| / w \rceil = b}
-            \mathbb{1}_{forget}(t)}{\sum_i \sum_{t: \lceil |M_{t-1}| / w \rceil = b} 1}
+            \mathbb{1}_{forget}(t)}{\sum_i \sum_{t: \lceil |M_{t-1}| / w \rceil = b} 1},
+        \qquad b^* = \arg\max_b \left(\overline{ML}(b) - \overline{ML}(b')\right)
 
     ``m = |M_{t-1}|`` counts distinct labels; ``1_forget(t)`` is 1 when any label of
-    ``M_{t-1}`` is missing from ``M_t``. Steps with an empty previous map (nothing to forget)
-    are not counted. **Inflection** ``b*``: among bins with at least ``min_steps`` steps, the
-    bin with the largest positive rise ``ML(b) - ML(b')`` over the previous such bin ``b'``
-    (earliest on ties), so the paper's example 0.05, 0.08, 0.65 gives ``b* = 3`` and
-    ``m* = 15``. No rise (flat or decreasing curve) or fewer than two eligible bins: ``b*`` and
-    ``m*`` None with a reason. No step at all: empty curve with a reason.
+    ``M_{t-1}`` is missing from ``M_t``. Steps with an empty previous map are not counted.
+
+    **Inflection** ``b*``: among bins with at least ``min_steps`` steps (*eligible*), the bin
+    with the largest positive rise ``ML(b) - ML(b')`` over the previous eligible bin ``b'``
+    (earliest on ties); ``m* = b* w``. The first eligible bin's rise is measured from the
+    **anchor** ``ML(0) = 0``: by ``b = ceil(m / w)`` bin 0 holds only ``m = 0``, and with an
+    empty map nothing can be forgotten, so ``ML(0) = 0`` by definition rather than by
+    measurement. Without the anchor a capacity at or below ``w`` (every load in bin 1) could
+    never show an inflection, however sharply it forgets; with it a curve already high in
+    its first bin puts ``b*`` there. The paper's example 0.05, 0.08, 0.65 gives rises 0.05,
+    0.03, 0.57, so ``b* = 3`` and ``m* = 15``.
+
+    Edge cases: no positive rise (a curve that is 0 everywhere, or only falls) gives ``b*``
+    and ``m*`` None with a reason; no eligible bin gives None with a reason; no step at all
+    gives an empty curve with a reason.
     """
     check_positive_int("width", width)
     check_positive_int("min_steps", min_steps)
@@ -201,15 +260,16 @@ def miller_curve(
     events = np.bincount(b, weights=forgets.astype(float)).astype(np.int64)
     bins = np.flatnonzero(steps)
     probs = events[bins] / steps[bins]
-    eligible = [i for i in range(len(bins)) if steps[bins[i]] >= min_steps]
-    rises = [(probs[j] - probs[i], bins[j]) for i, j in pairwise(eligible)]
+    eligible = [(0, 0.0)] + [(int(bins[i]), float(probs[i])) for i in range(len(bins))
+                             if steps[bins[i]] >= min_steps]  # fmt: skip
+    rises = [(p - p_prev, b_now) for (_, p_prev), (b_now, p) in pairwise(eligible)]
     best = max(rises, key=lambda r: r[0], default=(0.0, 0))
     b_star = int(best[1]) if best[0] > 0 else None
     reason = None
     if b_star is None:
-        reason = "no rise between consecutive load bins: no inflection"
+        reason = "no rise between consecutive load bins (from ML(0) = 0): no inflection"
         if len(eligible) < 2:
-            reason = f"fewer than two load bins with >= {min_steps} steps: no inflection"
+            reason = f"no load bin with >= {min_steps} steps: no inflection"
     return MillerCurve(
         width,
         tuple(bins.tolist()),

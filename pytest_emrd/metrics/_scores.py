@@ -8,12 +8,16 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Final
 
 import numpy as np
 
 from pytest_emrd.metrics._match import Matching, rigid_fit
 from pytest_emrd.metrics._tracking import Track, exp_ratio, layout_scale
 from pytest_emrd.trajectory import Trajectory
+
+#: Ground-truth type of doorways, which belong to no room as evidence (see FPSG).
+DOORWAY_TYPE: Final = "Doorway"
 
 
 def aec_score(matching: Matching, n_objects: int) -> float | None:
@@ -96,15 +100,20 @@ def grounding_scores(traj: Trajectory, final: Matching) -> Grounding:
         FPSG^{(i)} = \frac{|\hat{M}_F \cap \mathcal{O}_F|}{|N_{base}|},\qquad
         FPSG_{local}^{(i)} = \frac{|\hat{M}_F \cap \mathcal{O}_F|}{|\mathcal{O}_F|}
 
-    ``F`` is the chosen room, ``O_F`` the ground-truth objects of ``F``, ``N_base`` the objects
-    the engine showed the agent at any step (union of ``visible_ids``). The intersection counts
-    objects of ``O_F`` that the final map matches *and* the engine confirmed as seen, so an
-    entry copied from the prompt's inventory for a room never looked at is not evidence.
-    Fractions in [0, 1]; ``FPSG_local >= FPSG`` whenever ``|O_F| <= |N_base|``.
+    ``F`` is the chosen room, ``O_F`` the ground-truth objects of ``F`` other than doorways,
+    ``N_base`` the objects the engine showed the agent at any step (union of ``visible_ids``,
+    doorways included). A doorway joins two rooms (the ground truth files it under one of
+    them) and is seen from either side, so mapping it is no evidence about either room: it
+    is left out of ``O_F`` for FPSG and Any-Bias (AEC still counts doorways as objects).
+    The intersection counts objects of ``O_F`` that the final map matches *and* the engine
+    confirmed as seen, so an entry copied from the prompt's inventory for a room never
+    looked at is not evidence. Fractions in [0, 1]; ``FPSG_local >= FPSG`` whenever
+    ``|O_F| <= |N_base|``.
 
     ``never_visited``: ``F`` is not among the rooms the agent stood in. ``any_bias``: the final
-    map holds no (confirmed) object of ``F``. Edge cases: no chosen room (no ``Term``, or a room
-    name that resolves to none) makes all four None; ``|O_F| = 0`` makes ``fpsg_local`` None;
+    map holds no (confirmed) object of ``O_F`` (a mapped doorway of ``F`` does not count).
+    Edge cases: no chosen room (no ``Term``, or a room name that resolves to none) makes all
+    four None; ``|O_F| = 0`` (also a room holding only doorways) makes ``fpsg_local`` None;
     ``|N_base| = 0`` makes ``fpsg_global`` None.
     """
     room = traj.chosen_room
@@ -112,13 +121,19 @@ def grounding_scores(traj: Trajectory, final: Matching) -> Grounding:
         why = "no chosen room (no Term, or a room name that resolves to no room)"
         keys = ("fpsg_local", "fpsg_global", "never_visited", "any_bias")
         return Grounding(None, None, None, None, dict.fromkeys(keys, why))
-    in_room = {o.object_id for o in traj.ground_truth.objects if o.room == room}
+    in_room = {
+        o.object_id
+        for o in traj.ground_truth.objects
+        if o.room == room and o.object_type != DOORWAY_TYPE
+    }
     observed = {oid for s in traj.steps for oid in s.visible_ids}
     grounded = len(final.object_ids & in_room & observed)
     reasons: dict[str, str] = {}
     local = grounded / len(in_room) if in_room else None
     if local is None:
-        reasons["fpsg_local"] = f"chosen room {room!r} holds no ground-truth object"
+        reasons["fpsg_local"] = (
+            f"chosen room {room!r} holds no ground-truth object other than doorways"
+        )
     glob = grounded / len(observed) if observed else None
     if glob is None:
         reasons["fpsg_global"] = "the engine showed the agent no object (|N_base| = 0)"
@@ -156,6 +171,18 @@ def sir_score(traj: Trajectory, track: Track, aec: float | None) -> tuple[float 
     return aec * float(np.mean(ratios)), ""
 
 
+def discovery_thirds(n: int) -> np.ndarray:
+    """Discovery third (0 Early, 1 Middle, 2 Late) of ranks ``1..n``, at index ``rank - 1``.
+
+    Three consecutive bins whose sizes differ by at most one, larger bins first
+    (``numpy.array_split``: 30 -> 10/10/10, 10 -> 4/3/3, 2 -> 1/1/0).
+    """
+    third = np.empty(n, dtype=np.int64)
+    for b, ranks in enumerate(np.array_split(np.arange(n), 3)):
+        third[ranks] = b
+    return third
+
+
 def serial_position_bins(
     ttf_by_rank: Sequence[float | None],
 ) -> tuple[float | None, float | None, float | None]:
@@ -166,14 +193,13 @@ def serial_position_bins(
             \sum_{j \in \mathcal{D}_b^{(i)}} TTF_j^{(i)}
 
     ``ttf_by_rank[j]`` is the TTF of the object of discovery rank ``j + 1`` (None when it never
-    left view while mapped). Ranks are split into three consecutive bins whose sizes differ by
-    at most one, larger bins first (``numpy.array_split``: 30 -> 10/10/10, 10 -> 4/3/3). A bin's
+    left view while mapped). Ranks are split into thirds by :func:`discovery_thirds`. A bin's
     mean is over its objects with a TTF; a bin with none, or no bin at all (fewer than three
     discovered objects leave later bins empty), gives None for that bin.
     """
-    bins = np.array_split(np.arange(len(ttf_by_rank)), 3)
+    third = discovery_thirds(len(ttf_by_rank))
     out: list[float | None] = []
-    for b in bins:
-        values = [ttf_by_rank[i] for i in b.tolist() if ttf_by_rank[i] is not None]
-        out.append(math.fsum(v for v in values if v is not None) / len(values) if values else None)
+    for b in range(3):
+        values = [v for v, t in zip(ttf_by_rank, third, strict=True) if t == b and v is not None]
+        out.append(math.fsum(values) / len(values) if values else None)
     return out[0], out[1], out[2]

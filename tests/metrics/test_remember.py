@@ -123,21 +123,42 @@ def test_miller_appendix_b_example(make_traj: MakeTraj) -> None:
 
 
 @pytest.mark.parametrize(
-    ("plan", "b_star", "reason_part"),
-    [([(3, 4, 2), (8, 4, 1)], None, "no rise"), ([(3, 4, 1)], None, "fewer than two")],
-    ids=["decreasing", "single-bin"],
+    ("plan", "min_steps", "reason_part"),
+    [
+        ([(3, 4, 0), (8, 4, 0)], 1, "no rise between consecutive load bins (from ML(0) = 0)"),
+        ([(3, 4, 1), (8, 4, 1)], 5, "no load bin with >= 5 steps"),
+    ],
+    ids=["never-forgets", "no-eligible-bin"],
 )
 def test_miller_without_inflection(
-    make_traj: MakeTraj, plan: list[tuple[int, int, int]], b_star: None, reason_part: str
+    make_traj: MakeTraj, plan: list[tuple[int, int, int]], min_steps: int, reason_part: str
+) -> None:
+    curve = miller_curve(_miller_episodes(make_traj, plan), min_steps=min_steps)
+    assert curve.b_star is None and curve.m_star is None
+    assert curve.reason is not None and reason_part in curve.reason
+
+
+@pytest.mark.parametrize(
+    ("plan", "b_star"),
+    [
+        ([(3, 8, 7)], 1),  # capacity <= w: every load in bin 1, rise 0.875 from the anchor
+        ([(3, 4, 2), (8, 4, 1)], 1),  # 0.5 then 0.25: the only rise is the one into bin 1
+        ([(3, 10, 4), (8, 10, 9)], 2),  # 0.4 from the anchor, then 0.5: bin 2
+        ([(13, 5, 5)], 3),  # first populated bin 3: measured from ML(0) = 0
+    ],
+    ids=["single-bin", "falling", "later-rise-wins", "first-bin-three"],
+)
+def test_miller_first_bin_rises_from_the_anchor(
+    make_traj: MakeTraj, plan: list[tuple[int, int, int]], b_star: int
 ) -> None:
     curve = miller_curve(_miller_episodes(make_traj, plan))
-    assert curve.b_star is b_star and curve.reason is not None and reason_part in curve.reason
+    assert (curve.b_star, curve.m_star, curve.reason) == (b_star, 5 * b_star, None)
 
 
 def test_miller_min_steps_keeps_sparse_bins_out_of_the_inflection(make_traj: MakeTraj) -> None:
-    curve = miller_curve(_miller_episodes(make_traj, [(3, 10, 1), (8, 10, 2), (13, 1, 1)]),
-                         min_steps=5)  # fmt: skip
-    assert curve.b_star == 2
+    episodes = _miller_episodes(make_traj, [(3, 10, 1), (8, 10, 5), (13, 1, 1)])
+    assert miller_curve(episodes).b_star == 3
+    assert miller_curve(episodes, min_steps=5).b_star == 2
 
 
 @pytest.mark.parametrize(

@@ -151,6 +151,33 @@ def test_fpsg_unseen_inventory_entry_is_no_evidence(make_obj: MakeObj, make_traj
     assert (g.fpsg_local, g.fpsg_global, g.never_visited, g.any_bias) == (0.0, 0.0, True, True)
 
 
+def test_fpsg_doorways_are_no_evidence_about_a_room(make_obj: MakeObj, make_traj: MakeTraj) -> None:
+    """A doorway filed under the Entrance, seen and mapped from the Office, grounds nothing:
+    not Any-Bias, not FPSG; O_F is the two armchairs alone."""
+    truth = [
+        *_fpsg_world(make_obj),
+        make_obj("Doorway_1", ENTRANCE, x=0.0, z=-5.0, category="landmark"),
+    ]
+    cog = {"Doorway_1": ("Doorway", 0.0, -5.0)}
+    traj = make_traj(truth, [(OFFICE, ["Desk_1", "Doorway_1"], cog)], chosen=ENTRANCE)
+    g = grounding_scores(traj, match_map(traj.final_map, truth))
+    assert (g.fpsg_local, g.fpsg_global, g.never_visited, g.any_bias) == (0.0, 0.0, True, True)
+    armchair = {**cog, "ArmChair_1": ("ArmChair", 0.0, -10.0)}
+    traj = make_traj(truth, [(OFFICE, ["ArmChair_1", "Doorway_1"], armchair)], chosen=ENTRANCE)
+    g = grounding_scores(traj, match_map(traj.final_map, truth))
+    assert (g.fpsg_local, g.fpsg_global, g.any_bias) == (0.5, 0.5, False)
+
+
+def test_fpsg_room_of_doorways_only_has_no_local_value(
+    make_obj: MakeObj, make_traj: MakeTraj
+) -> None:
+    truth = [*_fpsg_world(make_obj), make_obj("Doorway_1", KITCHEN, category="landmark")]
+    traj = make_traj(truth, [(OFFICE, ["Doorway_1"], {})], chosen=KITCHEN)
+    g = grounding_scores(traj, match_map(traj.final_map, truth))
+    assert g.fpsg_local is None and "holds no ground-truth object" in g.reasons["fpsg_local"]
+    assert (g.fpsg_global, g.any_bias) == (0.0, True)
+
+
 @pytest.mark.parametrize(
     ("chosen", "visible", "missing"),
     [(None, ["Desk_1"], {"fpsg_local", "fpsg_global", "never_visited", "any_bias"}),
