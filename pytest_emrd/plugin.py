@@ -115,6 +115,8 @@ class _Run:
     def __post_init__(self) -> None:
         self.episodes: dict[str, EpisodeSummary] = {}
         self.verdicts: list[Verdict] = []
+        self._stored: dict[EpisodeSpec, StoredEpisode] = {}
+        self._metrics: dict[str, Any] = {}
 
     def call(self, fn: Any) -> Any:
         """``fn(self)``, turning a configuration mistake into a clean collection failure."""
@@ -185,10 +187,13 @@ class _Run:
                 matching=settings.matching,
             )
 
+        if spec in self._stored:
+            return self._stored[spec]
         try:
             stored = self.store.get_or_compute(spec, compute)
         except EmrdError as exc:
             pytest.fail(f"{spec.case_id}: {exc}", pytrace=False)
+        self._stored[spec] = stored
         if stored.frame_drift and stored.computed_now:
             warnings.warn(
                 FrameDriftWarning(
@@ -205,7 +210,16 @@ class _Run:
 
         specs = cell_specs(self.settings, cell.bound.model, cell.bound.condition, self.modality_of)
         trajectories = [self.episode(spec).trajectory for spec in specs]
-        return evaluate_cell(cell, trajectories, GATE_METRICS)
+        return evaluate_cell(cell, trajectories, GATE_METRICS, prepare=self.episode_metrics)
+
+    def episode_metrics(self, trajectory: Trajectory) -> Any:
+        """Per-episode metrics, computed once per process (every gate of a cell reuses them)."""
+        from pytest_emrd.metrics import episode_metrics
+
+        key = trajectory.spec.case_id
+        if key not in self._metrics:
+            self._metrics[key] = episode_metrics(trajectory)
+        return self._metrics[key]
 
     def summary(self, stored: StoredEpisode) -> EpisodeSummary:
         config = self.registry.get(stored.trajectory.spec.model)

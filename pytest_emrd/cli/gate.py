@@ -30,12 +30,12 @@ def register(sub: argparse._SubParsersAction) -> None:
 def _run(args: argparse.Namespace) -> int:
     from pytest_emrd.agent import load_registry
     from pytest_emrd.gate import evaluate_all, gate_tables, load_run_dirs, load_thresholds
-    from pytest_emrd.metrics import GATE_METRICS
+    from pytest_emrd.metrics import GATE_METRICS, episode_metrics
 
     registry = load_registry(args.models)
     thresholds = load_thresholds(args.thresholds, registry=registry, metrics=GATE_METRICS)
     trajectories = load_run_dirs(args.run_dirs)
-    verdicts = evaluate_all(trajectories, thresholds, GATE_METRICS)
+    verdicts = evaluate_all(trajectories, thresholds, GATE_METRICS, prepare=episode_metrics)
     if args.json:
         print(json.dumps([v.to_dict() for v in verdicts]))
     else:

@@ -8,7 +8,7 @@ same verdict whichever machine, worker or run directory they come from.
 from __future__ import annotations
 
 from collections import defaultdict
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any, Protocol
 
@@ -133,11 +133,21 @@ def judge(cell: GateCell, estimate: EstimateLike) -> Verdict:
 
 
 def evaluate_cell(
-    cell: GateCell, trajectories: Iterable[Trajectory], metrics: Mapping[str, GateMetricLike]
+    cell: GateCell,
+    trajectories: Iterable[Trajectory],
+    metrics: Mapping[str, GateMetricLike],
+    *,
+    prepare: Callable[[Trajectory], Any] | None = None,
 ) -> Verdict:
-    """The verdict of one gate over its episodes (any order in, sorted by case id)."""
+    """The verdict of one gate over its episodes (any order in, sorted by case id).
+
+    ``prepare`` maps each trajectory to what the metric's ``compute`` accepts, e.g. a
+    cached :func:`pytest_emrd.metrics.episode_metrics`, so several gates over the same
+    episodes match each episode's maps once.
+    """
     ordered = sorted(trajectories, key=lambda t: t.spec.case_id)
-    estimate = metrics[cell.bound.metric].compute(ordered, rng_seed=0)
+    items = [prepare(t) for t in ordered] if prepare else ordered
+    estimate = metrics[cell.bound.metric].compute(items, rng_seed=0)
     return judge(cell, estimate)
 
 
@@ -145,6 +155,8 @@ def evaluate_all(
     trajectories: Iterable[Trajectory],
     thresholds: Thresholds,
     metrics: Mapping[str, GateMetricLike],
+    *,
+    prepare: Callable[[Trajectory], Any] | None = None,
 ) -> list[Verdict]:
     """Every gate whose cell has episodes, grouped by model x condition x variant.
 
@@ -157,5 +169,6 @@ def evaluate_all(
     verdicts = []
     for (model, condition, variant), episodes in sorted(cells.items()):
         for bound in thresholds.for_cell(model, condition):
-            verdicts.append(evaluate_cell(GateCell(bound, variant), episodes, metrics))
+            cell = GateCell(bound, variant)
+            verdicts.append(evaluate_cell(cell, episodes, metrics, prepare=prepare))
     return verdicts
