@@ -22,7 +22,9 @@ from pytest_emrd.validate._remember import (
     episodes_needed,
     error_curve,
     miller_checks,
+    monotone,
     serial_checks,
+    u_depth,
     window_fit_checks,
 )
 from pytest_emrd.validate._render import markdown, to_json
@@ -47,12 +49,14 @@ __all__ = [
     "exploration_checks",
     "markdown",
     "miller_checks",
+    "monotone",
     "prior_checks",
     "run_plan",
     "scout_decide_checks",
     "serial_checks",
     "statistics_checks",
     "to_json",
+    "u_depth",
     "validation_report",
     "window_fit_checks",
 ]

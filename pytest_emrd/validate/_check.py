@@ -13,8 +13,10 @@ from pytest_emrd.trajectory import Trajectory
 
 SCHEMA_VERSION: Final = 1
 #: ``pass``/``fail``: the metric recovered / did not recover the planted truth.
-#: ``finding``: a value the paper prints is not reproducible from the counts it prints; the
-#: note says which value, what the printed counts give, and what would reproduce it.
+#: ``finding``: the paper does not hold up at this point, while our metric does: a value the
+#: paper prints is not reproducible from the counts it prints (the note says which value,
+#: what the printed counts give, and what would reproduce it), or the paper's estimator
+#: misreads a planted truth that our estimator recovers (the note says how).
 VERDICTS: Final[tuple[str, ...]] = ("pass", "fail", "finding")
 SECTIONS: Final[tuple[str, ...]] = ("Explore", "Remember", "Decide", "Statistics")
 

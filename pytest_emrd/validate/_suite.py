@@ -45,7 +45,7 @@ def episode_checks(groups: Groups) -> list[Check]:
         *decay_checks(decays),
         *window_fit_checks(windows, decays),
         *miller_checks(windows, scout),
-        *serial_checks(serial, windows),
+        *serial_checks(serial, windows, scout),
         *scout_decide_checks(scout),
         *prior_checks(prior),
     ]

@@ -68,8 +68,9 @@ def test_serial_scout_keeps_first_and_last_discoveries() -> None:
 def test_prior_names_a_room_it_never_entered(spawn: str) -> None:
     traj = _run("prior", spawn)
     assert traj.status == "terminated"
-    assert len(traj.steps) == 1, "a decision from the prompt alone, at the first step"
-    assert traj.steps[0].cognitive_map == ()
+    assert [s.action[:4] for s in traj.steps] == ["Turn"] * 3 + ["Term"]
+    assert all(s.cognitive_map == () for s in traj.steps), "no spatial evidence is kept"
+    assert traj.rooms_visited == frozenset({SLUG_ROOMS[spawn]})
     assert traj.chosen_room not in traj.rooms_visited
 
 

@@ -14,7 +14,9 @@ from pytest_emrd.validate import (
     episodes_needed,
     error_curve,
     miller_checks,
+    monotone,
     serial_checks,
+    u_depth,
     window_fit_checks,
 )
 
@@ -68,11 +70,12 @@ def test_miller_inflection_recovers_a_hand_built_window(build, window, k: int) -
     assert perfect.verdict == "pass" and perfect.data["max_probability"] == 0.0
 
 
-def test_miller_row_fails_for_a_capacity_inside_the_first_bin(build, window) -> None:
-    # Loads never exceed k = 5 = w, so every step falls in bin 1: no rise, no inflection.
+def test_miller_row_recovers_a_capacity_inside_the_first_bin(build, window) -> None:
+    # Loads never exceed k = 5 = w, so every step falls in bin 1: the rise is the one from
+    # the anchor ML(0) = 0 into bin 1.
     (row, _) = miller_checks({5: [build(window(5))]}, [build(window(100))])
-    assert row.verdict == "fail"
-    assert row.data["m_star"] is None and "fewer than two load bins" in row.note
+    assert row.verdict == "pass", row.note
+    assert (row.data["b_star"], row.data["m_star"]) == (1, 5)
 
 
 def test_miller_row_fails_when_the_capacity_is_elsewhere(build, window) -> None:
@@ -110,10 +113,76 @@ def test_serial_u_shape_passes_and_window_is_monotone(build, window, chairs) -> 
     serial = [build(_serial_frames(chairs, True))]
     u_row, w_row = serial_checks(serial, {5: [build(window(5))]})
     assert u_row.verdict == "pass", u_row.recovered
-    assert u_row.data["middle"] < min(u_row.data["early"], u_row.data["late"])
+    assert (u_row.data["early"], u_row.data["middle"], u_row.data["late"]) == (
+        math.inf, 1.0, math.inf,
+    )  # fmt: skip
+    assert "the paper's Eq. SPE" in u_row.note and u_row.data["paper_middle"] == 1.0
     assert w_row.verdict == "pass", w_row.recovered
+    assert w_row.data["u_depth"] == 0.0 and "monotone within 10%: yes" in w_row.note
+    # Each object goes 5 steps after leaving view, except the last five: nothing new pushes
+    # them out, so they are censored at the end (5 events, 60 steps in the Late third).
+    assert (w_row.data["early"], w_row.data["middle"], w_row.data["late"]) == (5.0, 5.0, 12.0)
 
 
 def test_serial_row_fails_without_a_dip(build, chairs) -> None:
     (u_row,) = serial_checks([build(_serial_frames(chairs, False))], {})
     assert u_row.verdict == "fail"
+
+
+def test_paper_estimator_under_perfect_memory_is_a_finding(build, chairs) -> None:
+    """Nothing forgotten: MLE inf everywhere, but the censored TTF falls E > M > L."""
+    perfect = [build(_serial_frames(chairs, False))]
+    *_, bias = serial_checks(perfect, {}, perfect)
+    assert bias.verdict == "finding", bias.recovered
+    assert bias.data["paper_early"] > bias.data["paper_middle"] > bias.data["paper_late"]
+
+
+def test_perfect_memory_row_fails_when_something_is_forgotten(build, chairs) -> None:
+    forgetful = [build(_serial_frames(chairs, True))]
+    *_, bias = serial_checks(forgetful, {}, forgetful)
+    assert bias.verdict == "fail"
+
+
+INF = math.inf
+
+
+@pytest.mark.parametrize(
+    ("profile", "ok"),
+    [
+        pytest.param((1.0, 2.0, 3.0), True, id="rising"),
+        pytest.param((3.0, 2.0, 1.0), True, id="falling"),
+        pytest.param((2.0, 2.0, 2.0), True, id="flat"),
+        pytest.param((2.0, 2.15, 2.0), True, id="bump-within-10pct"),
+        pytest.param((2.0, 1.85, 2.0), True, id="dip-within-10pct"),
+        pytest.param((2.0, 2.3, 2.0), False, id="inverted-U"),
+        pytest.param((3.0, 1.0, 3.0), False, id="U"),
+        pytest.param((INF, 3.0, INF), False, id="U-protected-ends"),
+        pytest.param((INF, INF, INF), True, id="never-forgets"),
+        pytest.param((2.0, 3.0, INF), True, id="rising-to-inf"),
+        pytest.param((None, 1.0, 1.0), False, id="undefined-third"),
+    ],
+)
+def test_monotone_definition(profile: tuple, ok: bool) -> None:
+    assert monotone(*profile) is ok
+
+
+def test_window_row_fails_on_a_planted_u(build, chairs) -> None:
+    _, w_row = serial_checks([], {5: [build(_serial_frames(chairs, True))]})
+    assert w_row.verdict == "fail" and w_row.data["u_depth"] == 1.0
+    assert "monotone within 10%: no" in w_row.note
+
+
+@pytest.mark.parametrize(
+    ("profile", "depth"),
+    [
+        pytest.param((1.0, 2.0, 3.0), 0.0, id="rising"),
+        pytest.param((2.0, 3.0, 2.0), 0.0, id="inverted-U"),
+        pytest.param((4.0, 3.0, 6.0), 0.25, id="dip-below-the-nearer-end"),
+        pytest.param((INF, 3.0, INF), 1.0, id="protected-ends"),
+        pytest.param((INF, INF, INF), 0.0, id="never-forgets"),
+        pytest.param((INF, 1.0, 4.0), 0.75, id="one-end-protected"),
+        pytest.param((1.0, None, 1.0), None, id="undefined-third"),
+    ],
+)
+def test_u_depth(profile: tuple, depth: float | None) -> None:
+    assert u_depth(*profile) == depth

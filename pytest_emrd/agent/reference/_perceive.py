@@ -23,6 +23,8 @@ from pytest_emrd.agent.reference._memory import apply_memory, merge_view
 from pytest_emrd.agent.reference._read import Briefing, Percept, Seen
 
 DOORWAY: Final = "Doorway"
+#: A sweep: the view on arrival plus this many ``Turn(Right)``, 360 degrees in all.
+SWEEP_TURNS: Final = 3
 #: A pose this far (m) from the previous one means the last Goto moved the agent.
 MOVED_M: Final = 0.3
 #: Bearings are clipped to the field of view: a sighting at the edge misplaces the centre.

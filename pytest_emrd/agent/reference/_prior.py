@@ -1,13 +1,17 @@
 """The ``prior`` policy: a decision from the prompt alone, with zero spatial evidence.
 
-At its first step ``prior`` reads the visible list only to infer the room it stands in
-(the same inventory vote every scripted agent casts), keeps an empty cognitive map
-(planted memory ``none``) and terminates naming the room whose inventory lists the most
-seats (chairs, sofas, stools) other than the room it is in: the furniture prior the paper
-found behind the Conference Room choice. It never moves and maps nothing, so the chosen
-room is never visited and the map holds none of its objects (Never-Visited and Any-Bias
-100 %, FPSG 0). With nothing identifiable in view it cannot exclude its own room and
-chooses among all four.
+``prior`` never moves and maps nothing (planted memory ``none``: every reported map is
+empty). It turns in place through one sweep (the first view plus three ``Turn(Right)``),
+only to infer the room it stands in by the same inventory vote every scripted agent casts,
+then terminates naming the room whose inventory lists the most seats (chairs, sofas,
+stools) other than that room: the furniture prior the paper found behind the Conference
+Room choice. The chosen room is therefore never visited and the map holds none of its
+objects (Never-Visited and Any-Bias 100 %, FPSG 0).
+
+One view is not enough to know the room: spawned facing a wall or a doorway, the first
+view often shows nothing of the spawn room (9 of 80 Conference Room spawns in the
+validation run), and a prior deciding there would name its own room. With nothing
+identifiable after the sweep it chooses among all four rooms.
 """
 
 from __future__ import annotations
@@ -15,7 +19,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Any, Final
 
-from pytest_emrd.agent.reference._perceive import room_guess
+from pytest_emrd.agent.reference._perceive import SWEEP_TURNS, room_guess
 from pytest_emrd.agent.reference._read import Briefing, Percept
 
 SEATS: Final = ("Chair", "Sofa", "Stool")
@@ -27,7 +31,10 @@ def seats(counts: Mapping[str, int]) -> int:
 
 
 def prior_action(plan: dict[str, Any], briefing: Briefing, percept: Percept) -> tuple[str, str]:
-    """(action, reasoning) of the prior agent: ``Term`` at once, naming another room."""
+    """(action, reasoning) of the prior agent: look around in place, then name another room."""
+    if plan["turns"] < SWEEP_TURNS and percept.step < percept.max_steps:
+        plan["turns"] += 1
+        return "Turn(Right)", f"Looking around to tell where I am ({plan['turns']}/{SWEEP_TURNS})."
     here = room_guess(plan)
     others = [r for r in briefing.rooms if r != here]
     inventory = briefing.inventory

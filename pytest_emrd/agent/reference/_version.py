@@ -9,7 +9,7 @@ Bump :data:`REFERENCE_VERSION` with every change to what a reference agent repli
 
 * ``ref-1`` — the first scripted agents (no version in the request).
 * ``ref-2`` — the scout repositions and sweeps again when no unused doorway is in sight;
-  ``prior`` terminates at its first step with an empty map; planted decay hazard ``1/m``;
+  ``prior`` maps nothing (looks around in place, then terminates); planted decay hazard ``1/m``;
   ``scout-serial`` protects thirds of the prompt's inventory total.
 """
 

@@ -48,16 +48,17 @@ def test_scout_with_nothing_in_sight_terminates(drive) -> None:
 
 
 @pytest.mark.parametrize(
-    ("view", "chosen"),
+    ("views", "chosen"),
     [
-        ([("DiningTable_1", "DiningTable", 0.0, 2.0)], "Office"),  # 2 chairs, ties Entrance
-        ([("Fridge_1", "Fridge", 0.0, 2.0)], "Conference Room"),
-        ([], "Conference Room"),
+        ([[("DiningTable_1", "DiningTable", 0.0, 2.0)], [], [], []], "Office"),  # ties Entrance
+        ([[], [], [("Fridge_1", "Fridge", 0.0, 2.0)], []], "Conference Room"),
+        ([[], [], [], []], "Conference Room"),
     ],
-    ids=["in-conference", "in-kitchen", "nothing-in-view"],
+    ids=["in-conference", "kitchen-seen-last", "nothing-in-view"],
 )
-def test_prior_terminates_at_once_with_an_empty_map(drive, view, chosen) -> None:
-    reply = drive("prior").see(view)
-    assert reply["action"] == f"Term({chosen})"
-    assert reply["cognitive_map"] == {}
-    assert "seats by the building overview" in reply["reasoning"]
+def test_prior_looks_around_in_place_then_names_another_room(drive, views, chosen) -> None:
+    """2 chairs in the Office, 8 in the Conference Room, 1 stool, 2 armchairs (Entrance)."""
+    replies = _sweep(drive("prior"), views)
+    assert [r["action"] for r in replies] == ["Turn(Right)"] * 3 + [f"Term({chosen})"]
+    assert all(r["cognitive_map"] == {} for r in replies)
+    assert "seats by the building overview" in replies[-1]["reasoning"]
