@@ -10,14 +10,18 @@ scout decides, in this order:
    its inventory line lists, seen during this visit; a room it cannot identify is never
    complete): ``Goto`` an object of this room seen during the last sweep, at least
    :data:`MIN_MOVE_M` away and not targeted before: the one nearest to an unused doorway
-   known to open from this room (seen on an earlier visit), else the one farthest from
-   every point this visit swept from (towards unexplored space); then sweep again;
+   known to open from this room (seen inside it, on this visit or an earlier one), else
+   the one farthest from every point this visit swept from (towards unexplored space);
+   then sweep again;
 4. every doorway it knows of already used: ``Term`` (nothing left to try);
 5. the doorway of this visit used longest ago: back through it;
 6. otherwise ``Term``.
 
-A target still out of view after :data:`MAX_FACE_TRIES` turns towards it is given up (a
-doorway is blocked for this visit, an object stays tried) and the decision is taken again.
+A target still out of view after :data:`MAX_FACE_TRIES` turns towards it is given up and
+the decision is taken again; a doorway given up this way is first approached, if the visit
+has a reposition left: the scout goes to the object of the last sweep nearest to it (and
+nearer than the scout), where doorways given up before may be faced again.
+
 Under ``baseline`` a swept room is seen whole, so rule 3 rarely fires; under ``low_light``
 (3.5 m visibility) it is what keeps the scout from stopping after its first rooms, so the
 darkness costs coverage *and* time, as the paper reports for real models.
