@@ -11,12 +11,19 @@ map when the reply could not be read), the action and its outcome.
 Nothing is lost: a transport failure or any crash inside the loop ends the episode as
 ``errored`` with the cause, keeping every completed step. Misconfiguration found before
 the first step (unknown model, missing API key, bad spec) raises :class:`ConfigError`.
+
+The world comes from :func:`build_simulator` per episode, or from the caller: a simulator
+passed as ``simulator`` is reset for the episode and left open, so one AI2-THOR (Unity)
+process serves every episode of a worker.
 """
 
 from __future__ import annotations
 
 import re
-from collections.abc import Callable
+import warnings
+from collections.abc import Callable, Mapping
+from types import TracebackType
+from typing import Any, Final
 
 from pytest_emrd import frames, world
 from pytest_emrd.agent import (
@@ -32,7 +39,7 @@ from pytest_emrd.agent import (
     resolve_room,
     step_text,
 )
-from pytest_emrd.errors import check_choice, check_positive_int
+from pytest_emrd.errors import ConfigError, EmrdError, check_choice, check_positive_int
 from pytest_emrd.rooms import SLUG_ROOMS
 from pytest_emrd.trajectory import (
     CONDITIONS,
@@ -48,9 +55,49 @@ from pytest_emrd.world._model import Observation, Simulator
 _TERM = re.compile(r"^\s*term\s*\(\s*(?P<room>.*?)\s*\)\s*\.?\s*$", re.IGNORECASE | re.DOTALL)
 
 
-def protocol_version() -> str:
-    """World + prompt protocol version; cassettes and stored results are keyed by it."""
-    return f"{world.WORLD_VERSION}+{PROMPT_VERSION}"
+REUSED_BACKENDS: Final[frozenset[str]] = frozenset({"ai2thor"})
+"""Backends whose simulator :class:`SimulatorPool` keeps across episodes (a Unity process
+takes seconds to start). ``builtin`` is built per episode: it is cheap, and a fresh
+simulator keeps its recorded traffic exactly as it was."""
+THOR_VERSION: Final = "ai2thor-1"
+"""Version of the ai2thor backend's own part of the world: the ProcTHOR house it builds,
+navigation, visibility filtering and condition calls. Bump it when any of those change."""
+
+
+def world_version(backend: str = "builtin") -> str:
+    """The world version a recording on ``backend`` depends on.
+
+    ``builtin``: :data:`pytest_emrd.world.WORLD_VERSION`. ``ai2thor``: :data:`THOR_VERSION`
+    joined with the builtin version, because THOR episodes are built from the builtin
+    layouts and spawn poses and answer with the builtin feedback wording; a change to
+    either invalidates them.
+    """
+    check_choice("backend", backend, world.BACKENDS)
+    if backend == "builtin":
+        return world.WORLD_VERSION
+    return f"{THOR_VERSION}+{world.WORLD_VERSION}"
+
+
+def protocol_version(backend: str = "builtin") -> str:
+    """World + prompt protocol version of ``backend``; cassettes and stored results are keyed
+    by it (``builtin-3+p1``; ``ai2thor-1+builtin-3+p1``)."""
+    return f"{world_version(backend)}+{PROMPT_VERSION}"
+
+
+def build_simulator(backend: str, options: Mapping[str, Any] | None = None) -> Simulator:
+    """A new simulator of ``backend`` built with ``options`` (``--emrd-backend-option``).
+
+    An option the backend does not take is a :class:`ConfigError` naming it; building an
+    ``ai2thor`` simulator is cheap (THOR starts on its first ``reset``).
+    """
+    options = dict(options or {})
+    try:
+        return world.make_simulator(backend, **options)
+    except TypeError as exc:
+        raise ConfigError(
+            f"backend_options={options!r} do not fit the {backend} simulator ({exc}); "
+            "check the --emrd-backend-option keys against that backend's documentation."
+        ) from exc
 
 
 def _check_spec(spec: EpisodeSpec) -> None:
@@ -131,17 +178,29 @@ def run_episode(
     registry: Registry | None = None,
     client: ChatClient | None = None,
     on_step: Callable[[Step], None] | None = None,
+    simulator: Simulator | None = None,
+    backend_options: Mapping[str, Any] | None = None,
 ) -> Trajectory:
     """Run one episode of ``spec`` against its model and return the full trajectory.
 
     ``client`` overrides the client built from the registry (the caller keeps ownership);
     ``on_step`` is called with every completed step (progress lines, live plots).
+    ``simulator`` is a caller-owned simulator of ``spec.backend``: it is reset for this
+    episode and not closed. Without it one is built with
+    ``build_simulator(spec.backend, backend_options)`` and closed at the end; passing both
+    is a :class:`ConfigError` (the options belong where the simulator is built).
     """
     _check_spec(spec)
+    if simulator is not None and backend_options:
+        raise ConfigError(
+            f"run_episode got simulator= and backend_options={dict(backend_options)!r}; "
+            "build the simulator with those options (world.make_simulator) and pass only it."
+        )
     config = (registry or load_registry()).get(spec.model)
     spawn_room = SLUG_ROOMS[spec.spawn]
     layout = world.generate_layout(spec.seed)
-    sim = world.make_simulator(spec.backend)
+    own_sim = simulator is None
+    sim = build_simulator(spec.backend, backend_options) if own_sim else simulator
     own_client = client is None
     status, error = "budget", None
     try:
@@ -165,10 +224,11 @@ def run_episode(
                 active.close()
         final_room = sim.current_room()
     finally:
-        sim.close()
+        if own_sim:
+            sim.close()
     return Trajectory(
         spec=spec,
-        protocol=protocol_version(),
+        protocol=protocol_version(spec.backend),
         ground_truth=truth,
         steps=tuple(run.steps),
         status=status,
@@ -178,3 +238,62 @@ def run_episode(
         rationale=run.rationale,
         error=error,
     )
+
+
+class SimulatorPool:
+    """Simulators kept across episodes, one per backend of :data:`REUSED_BACKENDS`.
+
+    ``pool.run(spec, ...)`` is :func:`run_episode` on the pooled simulator of
+    ``spec.backend`` (built with ``options`` on first use), or on a fresh simulator for the
+    other backends. A simulator that saw an errored episode or an exception is closed and
+    rebuilt for the next episode, so a hung or dead Unity process costs one episode, not a
+    run. The owner calls :meth:`close` (or uses the pool as a context manager).
+    """
+
+    def __init__(self, options: Mapping[str, Any] | None = None) -> None:
+        self._options = dict(options or {})
+        self._live: dict[str, Simulator] = {}
+
+    def run(self, spec: EpisodeSpec, **kwargs: Any) -> Trajectory:
+        """:func:`run_episode` of ``spec`` with ``kwargs`` (``registry``, ``client``, ...)."""
+        if spec.backend not in REUSED_BACKENDS:
+            return run_episode(spec, backend_options=self._options, **kwargs)
+        sim = self._live.get(spec.backend)
+        if sim is None:
+            sim = self._live[spec.backend] = build_simulator(spec.backend, self._options)
+        try:
+            trajectory = run_episode(spec, simulator=sim, **kwargs)
+        except BaseException:
+            self.discard(spec.backend)
+            raise
+        if trajectory.status == "errored":
+            self.discard(spec.backend)
+        return trajectory
+
+    @property
+    def backends(self) -> tuple[str, ...]:
+        """Backends with a simulator alive now."""
+        return tuple(self._live)
+
+    def discard(self, backend: str) -> None:
+        """Close and forget the simulator of ``backend`` (a failing close only warns)."""
+        sim = self._live.pop(backend, None)
+        if sim is None:
+            return
+        try:
+            sim.close()
+        except EmrdError as exc:
+            warnings.warn(f"closing the {backend} simulator failed: {exc}", stacklevel=2)
+
+    def close(self) -> None:
+        """Close every pooled simulator."""
+        for backend in list(self._live):
+            self.discard(backend)
+
+    def __enter__(self) -> SimulatorPool:
+        return self
+
+    def __exit__(
+        self, kind: type[BaseException] | None, exc: BaseException | None, tb: TracebackType | None
+    ) -> None:
+        self.close()

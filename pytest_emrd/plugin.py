@@ -5,10 +5,16 @@ A test that requests ``emrd_spec`` is parametrised over the run's episodes
 gates (``test_gate[scout-baseline-aec]``). Sessions that collect neither stay untouched:
 nothing is imported, started or written. The controller picks the run directory and the
 session id and hands them to pytest-xdist workers through ``workerinput``.
+
+Each process (the only one, or each xdist worker) keeps one simulator per expensive backend
+(:class:`~pytest_emrd.episode.SimulatorPool`: one AI2-THOR process per worker, not per
+episode), closed at the end of the session. When ``$GITHUB_STEP_SUMMARY`` is set, the
+controller appends the run's Markdown summary to that file once the EMRD cases have run.
 """
 
 from __future__ import annotations
 
+import os
 import uuid
 import warnings
 from dataclasses import dataclass
@@ -53,11 +59,15 @@ def pytest_addoption(parser: pytest.Parser) -> None:
 def pytest_configure(config: pytest.Config) -> None:
     cli = {o.name: config.getoption(o.ini) for o in OPTIONS}
     ini = {o.name: config.getini(o.ini) for o in OPTIONS}
+    workerinput = getattr(config, "workerinput", None)
     try:
-        settings = resolve_settings(cli, ini, rootdir=config.rootpath)
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            settings = resolve_settings(cli, ini, rootdir=config.rootpath)
     except EmrdError as exc:
         raise pytest.UsageError(str(exc)) from exc
-    workerinput = getattr(config, "workerinput", None)
+    for warning in caught if workerinput is None else ():
+        config.issue_config_time_warning(warning.message, stacklevel=2)
     if workerinput is not None and "emrd_run_dir" in workerinput:
         run_dir, session = Path(workerinput["emrd_run_dir"]), workerinput["emrd_session"]
     else:
@@ -138,7 +148,7 @@ class _Run:
     def protocol(self) -> str:
         from pytest_emrd.episode import protocol_version
 
-        return protocol_version()
+        return protocol_version(self.settings.backend)
 
     def modality_of(self, model: str) -> str:
         return str(self.registry.get(model).modality)
@@ -167,10 +177,27 @@ class _Run:
         return ResultsStore(self.run_dir, session=self.session, protocol=self.protocol)
 
     @cached_property
-    def runner(self) -> Any:
-        from pytest_emrd.cassette import agent_runner
+    def simulators(self) -> Any:
+        from pytest_emrd.episode import SimulatorPool
 
-        return agent_runner(self.registry)
+        return SimulatorPool(self.settings.backend_kwargs)
+
+    @cached_property
+    def runner(self) -> Any:
+        """Runs an episode on this process's simulator pool; replays need no API key."""
+        from pytest_emrd.agent import make_client
+
+        def run(spec: EpisodeSpec, *, live: bool) -> Trajectory:
+            client = make_client(self.registry.get(spec.model), require_key=live)
+            try:
+                trajectory: Trajectory = self.simulators.run(
+                    spec, registry=self.registry, client=client
+                )
+            finally:
+                client.close()
+            return trajectory
+
+        return run
 
     def episode(self, spec: EpisodeSpec) -> StoredEpisode:
         from pytest_emrd.cassette import FrameDriftWarning, run_with_cassette
@@ -227,6 +254,10 @@ class _Run:
             stored, price_in=config.price_per_mtok_in, price_out=config.price_per_mtok_out
         )
 
+    def pytest_unconfigure(self) -> None:
+        if "simulators" in self.__dict__:
+            self.simulators.close()
+
     # -- reporting hooks (run in the controller, or the only process without xdist) --------
 
     def pytest_runtest_logreport(self, report: pytest.TestReport) -> None:
@@ -243,6 +274,28 @@ class _Run:
         if summary.recorded and reporter is not None and not hasattr(self.config, "workerinput"):
             reporter.ensure_newline()
             reporter.write_line(summary.progress_line(len(self.episodes)))
+
+    def pytest_sessionfinish(self) -> None:
+        """Append the run's Markdown to ``$GITHUB_STEP_SUMMARY`` (controller only)."""
+        target = os.environ.get("GITHUB_STEP_SUMMARY")
+        if not target or hasattr(self.config, "workerinput"):
+            return
+        if not (self.episodes or self.verdicts) or not (self.run_dir / "episodes").is_dir():
+            return
+        from pytest_emrd.gate import load_run_dirs
+        from pytest_emrd.report import step_summary_markdown
+
+        source = self.settings.thresholds
+        if source.is_relative_to(self.config.rootpath):
+            source = source.relative_to(self.config.rootpath)
+        try:
+            trajectories = load_run_dirs([self.run_dir])
+        except EmrdError as exc:
+            warnings.warn(f"pytest-emrd wrote no step summary: {exc}", stacklevel=1)
+            return
+        text = step_summary_markdown(trajectories, self.verdicts, thresholds_source=str(source))
+        with open(target, "a", encoding="utf-8") as summary:
+            summary.write(text if text.endswith("\n") else text + "\n")
 
     def pytest_terminal_summary(self, terminalreporter: Any) -> None:
         from pytest_emrd.gate import gate_tables, usage_rows, usage_table

@@ -9,9 +9,16 @@ from pytest_emrd.trajectory import EpisodeSpec
 
 
 def cassette_path(root: Path, spec: EpisodeSpec) -> Path:
-    """``<root>/<model>/<condition>/<variant>/<spawn>/ep<NN>.yaml.gz``."""
+    """``<root>/<model>/<condition>/<variant>/<spawn>/ep<NN>.yaml.gz`` on the builtin world,
+    ``<root>/<backend>/<model>/...`` on any other backend (``cassettes/ai2thor/gemini/...``).
+
+    The builtin path carries no backend so the committed cassettes keep their place; the
+    other backends get their own tree, so a THOR recording never answers a builtin run (or
+    the reverse) even when a model happens to be named like a backend.
+    """
+    base = root if spec.backend == "builtin" else root / spec.backend
     return (
-        root
+        base
         / spec.model
         / spec.condition
         / spec.variant

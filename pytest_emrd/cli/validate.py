@@ -58,7 +58,7 @@ def _run(args: argparse.Namespace) -> int:
                   file=sys.stderr, flush=True)  # fmt: skip
 
     groups = run_plan(plan, args.out, jobs=args.jobs, on_episode=progress)
-    report = build(groups, episodes=args.episodes, protocol=protocol_version())
+    report = build(groups, episodes=args.episodes, protocol=protocol_version("builtin"))
     text = markdown(report)
     print(text, end="")
     write_bytes_atomic(args.out / "validation.md", text.encode())

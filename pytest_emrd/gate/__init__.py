@@ -4,12 +4,15 @@ from pytest_emrd.gate._files import load_run_dirs, load_thresholds
 from pytest_emrd.gate._grid import cell_specs, episode_specs, gate_cells, shard
 from pytest_emrd.gate._settings import (
     BACKENDS,
+    LENIENT_BACKENDS,
     MATCHING_MODES,
     OPTIONS,
     RECORD_MODES,
     SPAWNS,
+    MatchingWarning,
     Option,
     RunSettings,
+    parse_backend_option,
     parse_shard,
     resolve_settings,
 )
@@ -21,6 +24,7 @@ from pytest_emrd.gate._verdict import GateCell, Verdict, evaluate_all, evaluate_
 
 __all__ = [
     "BACKENDS",
+    "LENIENT_BACKENDS",
     "MATCHING_MODES",
     "OPTIONS",
     "RECORD_MODES",
@@ -28,6 +32,7 @@ __all__ = [
     "Bound",
     "EpisodeSummary",
     "GateCell",
+    "MatchingWarning",
     "Option",
     "ResultsStore",
     "RunSettings",
@@ -46,6 +51,7 @@ __all__ = [
     "load_run_dirs",
     "load_thresholds",
     "new_run_dir",
+    "parse_backend_option",
     "parse_shard",
     "parse_thresholds",
     "resolve_settings",

@@ -3,11 +3,18 @@
 Precedence is command line > ini file > default, decided in :func:`resolve_settings` and
 nowhere else. The option table :data:`OPTIONS` is what the plugin registers, so ``pytest
 --help``, the ini keys and the resolution cannot drift apart.
+
+Defaults that depend on another setting are resolved here too: ``matching`` is ``lenient``
+on ``ai2thor`` (THOR frames are not bit-stable across GPUs, drivers and builds) and
+``strict`` otherwise; an explicit ``strict`` on ``ai2thor`` is allowed and warns
+(:class:`MatchingWarning`).
 """
 
 from __future__ import annotations
 
+import json
 import os
+import warnings
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -21,6 +28,12 @@ RECORD_MODES: Final[tuple[str, ...]] = ("none", "once", "new_episodes", "all")
 MATCHING_MODES: Final[tuple[str, ...]] = ("strict", "lenient")
 BACKENDS: Final[tuple[str, ...]] = ("builtin", "ai2thor")
 SPAWNS: Final[tuple[str, ...]] = tuple(ROOM_SLUGS.values())
+LENIENT_BACKENDS: Final[frozenset[str]] = frozenset({"ai2thor"})
+"""Backends whose frames are not bit-stable: their cassettes replay with lenient matching."""
+
+
+class MatchingWarning(UserWarning):
+    """Strict matching was asked for on a backend whose frames are not bit-stable."""
 
 
 @dataclass(frozen=True)
@@ -56,6 +69,10 @@ OPTIONS: Final[tuple[Option, ...]] = (
            metavar="N"),
     Option("variant", "prompt variant (default: default)", VARIANTS),
     Option("backend", "world backend (default: builtin)", BACKENDS),
+    Option("backend_option", "simulator option KEY=VALUE for the backend, repeatable (e.g. "
+           "local_executable_path=/path/to/thor, gpu_device=1, start_timeout=300); VALUE is "
+           "read as JSON when it parses (1, 2.5, true) and kept as text otherwise",
+           repeatable=True, metavar="KEY=VALUE"),
     Option("modality", "what the model is shown (default: the model's registry entry)",
            MODALITIES),
     Option("record_mode", "cassette record mode: none replays only with the network blocked, "
@@ -63,7 +80,8 @@ OPTIONS: Final[tuple[Option, ...]] = (
            "re-records (default: once, or none when the CI environment variable is set)",
            RECORD_MODES),
     Option("matching", "request matching: strict keys frames by pixel digest, lenient only "
-           "warns on differing frames (default: strict)", MATCHING_MODES),
+           "warns on differing frames (default: lenient on ai2thor, strict otherwise)",
+           MATCHING_MODES),
     Option("results", "run directory to write or resume (default: a fresh directory under "
            "<rootdir>/.emrd/runs)", metavar="DIR"),
     Option("thresholds", "release gates file (default: <rootdir>/thresholds.yaml)",
@@ -86,10 +104,13 @@ class RunSettings:
     episodes: int
     variant: str
     backend: str
+    backend_options: tuple[tuple[str, Any], ...]
+    """``(key, value)`` pairs handed to the backend's simulator, in the order given."""
     modality: str | None
     """``None``: each model's registry default."""
     record_mode: str
     matching: str
+    """``strict`` or ``lenient``; the default depends on the backend (module docstring)."""
     results: Path | None
     """Run directory to resume, or ``None`` for a fresh one."""
     thresholds: Path
@@ -97,6 +118,11 @@ class RunSettings:
     cassettes: Path
     shard: tuple[int, int] | None
     """``(k, n)``: this run covers the k-th of n slices (1-based)."""
+
+    @property
+    def backend_kwargs(self) -> dict[str, Any]:
+        """:attr:`backend_options` as keyword arguments (a later key overrides an earlier one)."""
+        return dict(self.backend_options)
 
 
 def parse_shard(text: str) -> tuple[int, int]:
@@ -108,6 +134,36 @@ def parse_shard(text: str) -> tuple[int, int]:
     if not 1 <= pair[0] <= pair[1]:
         raise ConfigError(f"shard={text!r} needs 1 <= K <= N, e.g. --emrd-shard=1/{pair[1]}.")
     return pair
+
+
+def parse_backend_option(text: str) -> tuple[str, Any]:
+    """``"gpu_device=1"`` -> ``("gpu_device", 1)``: the value as JSON if it parses, else text."""
+    key, sep, value = text.partition("=")
+    key = key.strip()
+    if not (sep and key.isidentifier()):
+        raise ConfigError(
+            f"--emrd-backend-option={text!r} must look like KEY=VALUE with KEY a Python "
+            "identifier, e.g. --emrd-backend-option=gpu_device=1."
+        )
+    try:
+        return key, json.loads(value)
+    except json.JSONDecodeError:
+        return key, value
+
+
+def _matching(raw: Any, backend: str) -> str:
+    if raw is None:
+        return "lenient" if backend in LENIENT_BACKENDS else "strict"
+    if raw == "strict" and backend in LENIENT_BACKENDS:
+        warnings.warn(
+            MatchingWarning(
+                f"--emrd-matching=strict with --emrd-backend={backend}: {backend} frames are "
+                "not bit-stable across GPUs, drivers and builds, so a replay on another "
+                "machine will fail as drift; drop --emrd-matching to use lenient matching."
+            ),
+            stacklevel=3,
+        )
+    return str(raw)
 
 
 def _pick(option: Option, cli: Mapping[str, Any], ini: Mapping[str, Any]) -> Any:
@@ -144,7 +200,8 @@ def resolve_settings(
     """Apply command line > ini > default, validate, and freeze.
 
     ``cli`` and ``ini`` map option names (``record_mode``) to raw values (``None``/empty
-    when not given). Relative paths are resolved against ``rootdir``.
+    when not given). Relative paths are resolved against ``rootdir``. Warns
+    :class:`MatchingWarning` for an explicit ``strict`` on a backend that is not bit-stable.
     """
     env = os.environ if env is None else env
     by_name = {o.name: o for o in OPTIONS}
@@ -157,16 +214,18 @@ def resolve_settings(
         text = str(episodes).strip()
         episodes = check_positive_int("--emrd-episodes", int(text) if text.isdigit() else text)
     default_mode = "none" if env.get("CI") else "once"
+    backend = raw["backend"] or "builtin"
     return RunSettings(
         models=_listed(by_name["model"], raw["model"], ("scout",)),
         conditions=_listed(by_name["condition"], raw["condition"], CONDITIONS),
         spawns=_listed(by_name["spawn"], raw["spawn"], SPAWNS),
         episodes=episodes or 20,
         variant=raw["variant"] or "default",
-        backend=raw["backend"] or "builtin",
+        backend=backend,
+        backend_options=tuple(parse_backend_option(str(o)) for o in raw["backend_option"] or ()),
         modality=raw["modality"],
         record_mode=raw["record_mode"] or default_mode,
-        matching=raw["matching"] or "strict",
+        matching=_matching(raw["matching"], backend),
         results=_path(raw["results"], rootdir) if raw["results"] else None,
         thresholds=_path(raw["thresholds"] or "thresholds.yaml", rootdir),
         models_file=_path(raw["models"], rootdir) if raw["models"] else None,

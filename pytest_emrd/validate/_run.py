@@ -48,8 +48,9 @@ def _episode(spec: dict[str, Any], run_dir: str, session: str) -> tuple[dict[str
         trajectory = run_episode(s)
         return EpisodeRun(trajectory, False, 0, time.perf_counter() - start)
 
-    store = ResultsStore(Path(run_dir), session=session, protocol=protocol_version())
-    stored = store.get_or_compute(EpisodeSpec(**spec), compute)
+    episode = EpisodeSpec(**spec)
+    store = ResultsStore(Path(run_dir), session=session, protocol=protocol_version(episode.backend))
+    stored = store.get_or_compute(episode, compute)
     return stored.trajectory.to_dict(), stored.computed_now
 
 

@@ -7,7 +7,7 @@ from pathlib import Path
 import pytest
 
 from pytest_emrd.errors import ConfigError
-from pytest_emrd.gate import resolve_settings
+from pytest_emrd.gate import MatchingWarning, resolve_settings
 
 ROOT = Path("/repo")
 
@@ -65,6 +65,9 @@ def test_paths_resolve_against_the_rootdir():
         ({"matching": "fuzzy"}, "--emrd-matching='fuzzy'"),
         ({"shard": "3/2"}, "needs 1 <= K <= N"),
         ({"shard": "half"}, "must look like K/N"),
+        ({"backend_option": ["gpu_device"]}, "--emrd-backend-option='gpu_device' must look like"),
+        ({"backend_option": ["gpu device=1"]}, "KEY a Python identifier"),
+        ({"backend_option": ["=1"]}, "--emrd-backend-option='=1'"),
     ],
     ids=[
         "condition",
@@ -75,8 +78,71 @@ def test_paths_resolve_against_the_rootdir():
         "matching",
         "shard-order",
         "shard-shape",
+        "backend-option-no-value",
+        "backend-option-bad-key",
+        "backend-option-no-key",
     ],
 )
 def test_bad_options_name_the_option_and_value(cli, message):
     with pytest.raises(ConfigError, match=message.replace("[", r"\[")):
         _resolve(cli)
+
+
+@pytest.mark.parametrize(
+    ("cli", "ini", "expected"),
+    [
+        ({}, {}, "strict"),
+        ({"backend": "ai2thor"}, {}, "lenient"),
+        ({}, {"backend": "ai2thor"}, "lenient"),
+        ({"backend": "ai2thor", "matching": "lenient"}, {}, "lenient"),
+        ({"backend": "builtin", "matching": "lenient"}, {}, "lenient"),
+        ({"backend": "builtin"}, {"backend": "ai2thor", "matching": "lenient"}, "lenient"),
+    ],
+    ids=[
+        "builtin-default",
+        "ai2thor-default",
+        "ai2thor-from-ini",
+        "ai2thor-explicit",
+        "builtin-explicit",
+        "ini-matching-cli-backend",
+    ],
+)
+def test_matching_default_follows_the_backend(cli, ini, expected, recwarn):
+    assert _resolve(cli, ini).matching == expected
+    assert not [w for w in recwarn if issubclass(w.category, MatchingWarning)]
+
+
+def test_explicit_strict_on_ai2thor_is_allowed_and_warns():
+    with pytest.warns(MatchingWarning, match="--emrd-matching=strict with --emrd-backend=ai2thor"):
+        s = _resolve({"backend": "ai2thor", "matching": "strict"})
+    assert s.matching == "strict"
+
+
+def test_backend_options_read_json_values_and_keep_text():
+    s = _resolve(
+        {
+            "backend_option": [
+                "local_executable_path=/opt/thor/thor-Linux64",
+                "gpu_device=1",
+                "start_timeout=2.5",
+                "allow_download=true",
+                "note=a=b,c",
+                "gpu_device=2",
+            ]
+        }
+    )
+    assert s.backend_options[0] == ("local_executable_path", "/opt/thor/thor-Linux64")
+    assert s.backend_kwargs == {
+        "local_executable_path": "/opt/thor/thor-Linux64",
+        "gpu_device": 2,
+        "start_timeout": 2.5,
+        "allow_download": True,
+        "note": "a=b,c",
+    }
+
+
+def test_backend_options_from_the_ini_unless_given_on_the_command_line():
+    ini = {"backend_option": ["gpu_device=1", "x_display=:0"]}
+    assert _resolve({}, ini).backend_kwargs == {"gpu_device": 1, "x_display": ":0"}
+    assert _resolve({"backend_option": ["gpu_device=3"]}, ini).backend_kwargs == {"gpu_device": 3}
+    assert _resolve().backend_options == ()
