@@ -55,3 +55,19 @@ def scripted() -> Callable[..., ScriptedClient]:
 @pytest.fixture
 def reply() -> Callable[..., str]:
     return protocol_reply
+
+
+@pytest.fixture(scope="session")
+def fake_thor() -> Any:
+    """The fake THOR controller class of ``tests/world/thor/conftest.py`` (loaded by path)."""
+    import importlib.util
+    import sys
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parents[1] / "world" / "thor" / "conftest.py"
+    spec = importlib.util.spec_from_file_location("emrd_episode_thor_fakes", path)
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = module  # dataclasses resolve annotations through sys.modules
+    spec.loader.exec_module(module)
+    return module.FakeController
