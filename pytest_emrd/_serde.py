@@ -84,3 +84,15 @@ def _build(tp: Any, data: Any, where: str) -> Any:
     if tp is float and isinstance(data, int):
         return float(data)
     return data
+
+
+def from_versioned_dict(cls: type[T], data: Any, *, version: int, what: str, remedy: str) -> T:
+    """:func:`from_dict` after checking ``data["schema_version"] == version``.
+
+    A stored file of another schema is a :class:`ProtocolError` that names ``what`` was read
+    and ``remedy``, what to do instead (recompute, rebuild, re-run).
+    """
+    found = data.get("schema_version") if isinstance(data, dict) else None
+    if found != version:
+        raise ProtocolError(f"{what} schema_version={found!r} is not {version}; {remedy}")
+    return from_dict(cls, data)

@@ -22,8 +22,7 @@ import hashlib
 from dataclasses import dataclass, field
 from typing import Any, Final, Literal
 
-from pytest_emrd._serde import from_dict, to_dict
-from pytest_emrd.errors import ProtocolError
+from pytest_emrd._serde import from_versioned_dict, to_dict
 
 SCHEMA_VERSION: Final = 1
 
@@ -235,10 +234,10 @@ class Trajectory:
 
     @classmethod
     def from_dict(cls, data: dict[str, Any]) -> Trajectory:
-        version = data.get("schema_version")
-        if version != SCHEMA_VERSION:
-            raise ProtocolError(
-                f"trajectory schema_version={version!r} is not {SCHEMA_VERSION}; "
-                "re-run the episode with this version of pytest-emrd."
-            )
-        return from_dict(cls, data)
+        return from_versioned_dict(
+            cls,
+            data,
+            version=SCHEMA_VERSION,
+            what="trajectory",
+            remedy="re-run the episode with this version of pytest-emrd.",
+        )

@@ -14,8 +14,7 @@ from dataclasses import dataclass, field
 from functools import cached_property
 from typing import Any, Final
 
-from pytest_emrd._serde import from_dict, to_dict
-from pytest_emrd.errors import ProtocolError
+from pytest_emrd._serde import from_versioned_dict, to_dict
 from pytest_emrd.metrics._scores import (
     aec_score,
     grounding_scores,
@@ -113,13 +112,13 @@ class EpisodeMetrics:
 
     @classmethod
     def from_dict(cls, data: dict[str, Any]) -> EpisodeMetrics:
-        version = data.get("schema_version")
-        if version != SCHEMA_VERSION:
-            raise ProtocolError(
-                f"episode metrics schema_version={version!r} is not {SCHEMA_VERSION}; "
-                "recompute them from the trajectory with episode_metrics()."
-            )
-        return from_dict(cls, data)
+        return from_versioned_dict(
+            cls,
+            data,
+            version=SCHEMA_VERSION,
+            what="episode metrics",
+            remedy="recompute them from the trajectory with episode_metrics().",
+        )
 
 
 def episode_metrics(traj: Trajectory) -> EpisodeMetrics:

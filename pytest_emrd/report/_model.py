@@ -15,8 +15,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any, Final
 
-from pytest_emrd._serde import from_dict, to_dict
-from pytest_emrd.errors import ProtocolError
+from pytest_emrd._serde import from_versioned_dict, to_dict
 from pytest_emrd.gate import UsageRow, Verdict
 from pytest_emrd.metrics import (
     AnchoredKM,
@@ -278,10 +277,10 @@ class Report:
 
     @classmethod
     def from_dict(cls, data: dict[str, Any]) -> Report:
-        version = data.get("schema_version")
-        if version != SCHEMA_VERSION:
-            raise ProtocolError(
-                f"report schema_version={version!r} is not {SCHEMA_VERSION}; "
-                "rebuild the report from the run directory with `emrd report`."
-            )
-        return from_dict(cls, data)
+        return from_versioned_dict(
+            cls,
+            data,
+            version=SCHEMA_VERSION,
+            what="report",
+            remedy="rebuild the report from the run directory with `emrd report`.",
+        )
