@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import dataclasses
+import threading
 import time
+import weakref
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
@@ -17,7 +19,7 @@ from pytest_emrd.gate._settings import MATCHING_MODES, RECORD_MODES
 from pytest_emrd.trajectory import EpisodeSpec, Trajectory
 
 if TYPE_CHECKING:
-    from pytest_emrd.agent import Registry
+    from pytest_emrd.agent import ChatClient, Registry
 
 
 @dataclass(frozen=True)
@@ -46,23 +48,47 @@ class _Discard(Exception):
 EpisodeRunner = Callable[..., Trajectory]
 
 
+class _AgentRunner:
+    """:func:`pytest_emrd.episode.run_episode` with one client per model and key mode, kept
+    for the runner's lifetime: the connection pool and TLS context (tens of milliseconds
+    to build) serve every episode; the clients close when the runner is collected or at exit.
+    """
+
+    def __init__(self, registry: Registry) -> None:
+        self._registry = registry
+        self._clients: dict[tuple[str, bool], ChatClient] = {}
+        self._lock = threading.Lock()
+        weakref.finalize(self, _close_all, self._clients)
+
+    def __call__(self, spec: EpisodeSpec, *, live: bool) -> Trajectory:
+        from pytest_emrd.episode import run_episode
+
+        return run_episode(spec, registry=self._registry, client=self._client(spec.model, live))
+
+    def _client(self, model: str, live: bool) -> ChatClient:
+        from pytest_emrd.agent import make_client
+
+        with self._lock:
+            client = self._clients.get((model, live))
+            if client is None:
+                config = self._registry.get(model)
+                client = self._clients[(model, live)] = make_client(config, require_key=live)
+        return client
+
+
+def _close_all(clients: dict[tuple[str, bool], ChatClient]) -> None:
+    for client in clients.values():
+        client.close()
+    clients.clear()
+
+
 def agent_runner(registry: Registry) -> EpisodeRunner:
     """The real runner: :func:`pytest_emrd.episode.run_episode` with the model's client.
 
-    Replays need no API key (recorded requests carry none), so the client is built with
-    ``require_key=live``.
+    Replays need no API key (recorded requests carry none), so a replay's client is built
+    with ``require_key=False`` and a live episode's with ``require_key=True``.
     """
-    from pytest_emrd.agent import make_client
-    from pytest_emrd.episode import run_episode
-
-    def run(spec: EpisodeSpec, *, live: bool) -> Trajectory:
-        client = make_client(registry.get(spec.model), require_key=live)
-        try:
-            return run_episode(spec, registry=registry, client=client)
-        finally:
-            client.close()
-
-    return run
+    return _AgentRunner(registry)
 
 
 def run_with_cassette(

@@ -77,6 +77,8 @@ class CassetteData:
     protocol: str
     requests: tuple[Request, ...]
     responses: tuple[dict[str, Any], ...]
+    canonical: tuple[bool, ...] = ()
+    """Per request, read back: its body is canonical JSON (a recorded, redacted request)."""
 
 
 class _Table:
@@ -187,13 +189,42 @@ def _encode_body(
     return {"raw": table.intern(_text(raw))}
 
 
-def _decode_body(body: dict[str, Any], strings: Sequence[str], templates: Sequence[str]) -> bytes:
-    if "raw" in body:
-        return _bytes(strings[body["raw"]])
-    tree = _unpack(json.loads(body["json"]), strings)
-    for key, refs in body.get("lists", {}).items():
-        tree[key] = [_unpack(json.loads(templates[i]), strings) for i in _expand(refs)]
-    return _SERIALISE[body["mode"]](tree).encode()
+class _Decoder:
+    """Rebuilds bodies; each template is serialised once per mode, however many requests
+    carry it (a message travels in up to ten consecutive windows)."""
+
+    def __init__(self, strings: Sequence[str], templates: Sequence[str]) -> None:
+        self.strings, self.templates = strings, templates
+        self._items: dict[tuple[int, str], str] = {}
+
+    def _item(self, index: int, mode: str) -> str:
+        text = self._items.get((index, mode))
+        if text is None:
+            tree = _unpack(json.loads(self.templates[index]), self.strings)
+            text = self._items[(index, mode)] = _SERIALISE[mode](tree)
+        return text
+
+    def body(self, body: dict[str, Any]) -> tuple[bytes, bool]:
+        """(body bytes, whether they are canonical JSON)."""
+        if "raw" in body:
+            return _bytes(self.strings[body["raw"]]), False
+        mode = body["mode"]
+        serialise = _SERIALISE[mode]
+        tree = _unpack(json.loads(body["json"]), self.strings)
+        lists = body.get("lists", {})
+        if not lists:
+            return serialise(tree).encode(), mode == "canonical"
+        # The object serialised member by member, exactly as json.dumps joins it, with each
+        # list spliced in from its items' serialisations.
+        ascii_only = mode == "ascii"
+        members = []
+        for key in sorted(tree) if mode == "canonical" else tree:
+            if key in lists:
+                value = "[" + ",".join(self._item(i, mode) for i in _expand(lists[key])) + "]"
+            else:
+                value = serialise(tree[key])
+            members.append(f"{json.dumps(key, ensure_ascii=ascii_only)}:{value}")
+        return ("{" + ",".join(members) + "}").encode(), mode == "canonical"
 
 
 def encode(data: CassetteData) -> bytes:
@@ -264,25 +295,22 @@ def decode(blob: bytes) -> CassetteData:
         found = document.get("format") if isinstance(document, dict) else type(document).__name__
         raise FormatError(f"format={found!r} is not {FORMAT!r}")
     try:
-        strings, templates = document["strings"], document["templates"]
-        requests, responses = [], []
+        decoder = _Decoder(document["strings"], document["templates"])
+        requests, responses, canonical = [], [], []
         for item in document["interactions"]:
             req, resp = item["request"], item["response"]
-            requests.append(
-                Request(
-                    req["method"],
-                    req["uri"],
-                    _decode_body(req["body"], strings, templates),
-                    req["headers"],
-                )
-            )
+            body, is_canonical = decoder.body(req["body"])
+            requests.append(Request(req["method"], req["uri"], body, req["headers"]))
+            canonical.append(is_canonical)
             responses.append(
                 {
                     "status": resp["status"],
                     "headers": resp["headers"],
-                    "body": {"string": _decode_body(resp["body"], strings, templates)},
+                    "body": {"string": decoder.body(resp["body"])[0]},
                 }
             )
-        return CassetteData(str(document["protocol"]), tuple(requests), tuple(responses))
+        return CassetteData(
+            str(document["protocol"]), tuple(requests), tuple(responses), tuple(canonical)
+        )
     except (KeyError, IndexError, TypeError, ValueError) as exc:
         raise FormatError(f"malformed interaction ({type(exc).__name__}: {exc})") from exc

@@ -9,6 +9,7 @@ from vcr.persisters.filesystem import CassetteNotFoundError
 
 from pytest_emrd._atomic import write_bytes_atomic
 from pytest_emrd.cassette._format import CassetteData, FormatError, decode, encode
+from pytest_emrd.cassette._redact import canonical_keys
 from pytest_emrd.errors import CassetteError
 
 
@@ -43,6 +44,9 @@ class EpisodePersister:
                 f"world and prompt are now at {self.protocol!r}; replaying it would compare "
                 f"stale traffic. Re-record it: {self.rerecord_command}"
             )
+        for request, canonical in zip(data.requests, data.canonical, strict=True):
+            if canonical:  # recorded already redacted: keyed as it is, never parsed again
+                request.emrd_keys = canonical_keys(request.method, request.path, request.body)
         return list(data.requests), list(data.responses)
 
     def save_cassette(

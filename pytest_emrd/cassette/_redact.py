@@ -43,24 +43,34 @@ SECRET_HEADERS: Final = ("authorization", "x-api-key", "api-key", "x-goog-api-ke
 #: A frame digest as redaction writes it (``pixels:`` or ``bytes:`` + SHA-256 hex).
 DIGEST: Final = re.compile(r"^(?:pixels|bytes):[0-9a-f]{64}$")
 _IMAGE_PLACEHOLDER: Final = "<image>"
+_DATA_URL: Final = "data:image/"
 _MIME_KEYS: Final = ("media_type", "mime_type", "mimeType")
 _CACHE_SIZE: Final = 64
 
 
 @dataclass(frozen=True)
 class Redacted:
-    """The canonical form of one request body."""
+    """The canonical form of one request body.
+
+    Only the bytes are kept; the parsed tree and the image count are derived on first use
+    (only lenient keys, drift messages and tools need them), so a body read back from a
+    cassette, already canonical, is never parsed to be matched.
+    """
 
     body: bytes
     """Canonical body bytes (sorted-key compact JSON), or the original bytes if not JSON."""
-    tree: Any
-    """The parsed canonical body (``None`` when the body is not JSON)."""
-    images: int
-    """Number of image payloads in the body."""
+    parsed: bool
+    """The body is JSON (only then does it get match keys)."""
 
-    @property
-    def parsed(self) -> bool:
-        return self.tree is not None
+    @cached_property
+    def tree(self) -> Any:
+        """The parsed canonical body (``None`` when the body is not JSON)."""
+        return json.loads(self.body) if self.parsed else None
+
+    @cached_property
+    def images(self) -> int:
+        """Number of image payloads in the body (each is a frame digest by now)."""
+        return _count_digests(self.tree)
 
 
 @dataclass(frozen=True)
@@ -93,34 +103,45 @@ def canonical_json(tree: Any) -> str:
     return json.dumps(tree, sort_keys=True, separators=(",", ":"), ensure_ascii=False)
 
 
-def _data_url_digest(url: str) -> str | None:
-    head, sep, payload = url.partition(";base64,")
-    if sep and head.startswith("data:image/"):
-        return frames.pixel_digest_for(payload)
-    return None
+def _image_mime(node: dict[str, Any]) -> bool:
+    for key in _MIME_KEYS:
+        mime = node.get(key)
+        if isinstance(mime, str):
+            return mime.startswith("image/")
+    return False
 
 
-def _redact_tree(node: Any, counter: list[int]) -> Any:
-    if isinstance(node, dict):
-        mime = next((node[k] for k in _MIME_KEYS if isinstance(node.get(k), str)), None)
-        out = {}
-        for key, value in node.items():
-            if key == "data" and isinstance(value, str) and mime and mime.startswith("image/"):
-                counter[0] += 1
-                out[key] = value if DIGEST.match(value) else frames.pixel_digest_for(value)
-            else:
-                out[key] = _redact_tree(value, counter)
-        return out
-    if isinstance(node, list):
-        return [_redact_tree(v, counter) for v in node]
+def _redact_tree(node: Any) -> Any:
+    """``node`` with every image payload replaced by its frame digest."""
     if isinstance(node, str):
-        digest = _data_url_digest(node)
-        if digest is not None:
-            counter[0] += 1
-            return digest
-        if DIGEST.match(node):
-            counter[0] += 1
+        if node.startswith(_DATA_URL):
+            _, sep, payload = node.partition(";base64,")
+            if sep:
+                return frames.pixel_digest_for(payload)
+        return node
+    if isinstance(node, list):
+        return [_redact_tree(v) for v in node]
+    if isinstance(node, dict):
+        image = _image_mime(node)
+        return {
+            k: _payload(v) if image and k == "data" else _redact_tree(v) for k, v in node.items()
+        }
     return node
+
+
+def _payload(value: Any) -> Any:
+    """The ``data`` of an image part (Anthropic, Gemini): base64 without a data-URL head."""
+    if not isinstance(value, str):
+        return _redact_tree(value)
+    return value if DIGEST.match(value) else frames.pixel_digest_for(value)
+
+
+def _count_digests(node: Any) -> int:
+    if isinstance(node, dict):
+        return sum(_count_digests(v) for v in node.values())
+    if isinstance(node, list):
+        return sum(_count_digests(v) for v in node)
+    return int(isinstance(node, str) and DIGEST.match(node) is not None)
 
 
 def _without_images(node: Any) -> Any:
@@ -139,15 +160,19 @@ def redact_body(body: bytes | str | None) -> Redacted:
     try:
         tree = json.loads(raw)
     except (ValueError, UnicodeDecodeError):
-        return Redacted(body=raw, tree=None, images=0)
-    counter = [0]
-    clean = _redact_tree(tree, counter)
-    return Redacted(body=canonical_json(clean).encode(), tree=clean, images=counter[0])
+        return Redacted(body=raw, parsed=False)
+    return Redacted(body=canonical_json(_redact_tree(tree)).encode(), parsed=True)
 
 
 def match_keys(method: str, path: str, redacted: Redacted) -> MatchKeys:
     """The strict and lenient keys of a canonical request."""
     return MatchKeys(f"{method.upper()} {path}\n", redacted)
+
+
+def canonical_keys(method: str, path: str, body: bytes) -> MatchKeys:
+    """The keys of a body already in canonical, redacted form (read back from a cassette):
+    nothing is parsed until a lenient key or a drift message needs the tree."""
+    return match_keys(method, path, Redacted(body=body, parsed=True))
 
 
 def scrub_uri(uri: str) -> str:
@@ -172,11 +197,9 @@ class RedactionCache:
     def __init__(self, capacity: int = _CACHE_SIZE) -> None:
         self._capacity = capacity
         self._lock = threading.Lock()
-        self._entries: OrderedDict[tuple[str, str, bytes], tuple[Redacted, MatchKeys]] = (
-            OrderedDict()
-        )
+        self._entries: OrderedDict[tuple[str, str, bytes], MatchKeys] = OrderedDict()
 
-    def get(self, method: str, path: str, body: bytes | str | None) -> tuple[Redacted, MatchKeys]:
+    def get(self, method: str, path: str, body: bytes | str | None) -> MatchKeys:
         raw = body.encode() if isinstance(body, str) else (body or b"")
         key = (method, path, raw)
         with self._lock:
@@ -184,8 +207,7 @@ class RedactionCache:
             if hit is not None:
                 self._entries.move_to_end(key)
                 return hit
-        redacted = redact_body(raw)
-        value = (redacted, match_keys(method, path, redacted))
+        value = match_keys(method, path, redact_body(raw))
         with self._lock:
             self._entries[key] = value
             while len(self._entries) > self._capacity:

@@ -31,11 +31,10 @@ _cache = RedactionCache()
 def redact_request(request: Request) -> Request:
     """vcrpy ``before_record_request``: canonical body, secrets dropped, match keys attached."""
     request.uri = scrub_uri(request.uri)
-    redacted, keys = _cache.get(request.method, request.path, request.body)
-    request.body = redacted.body
+    keys = _cache.get(request.method, request.path, request.body)
+    request.body = keys.redacted.body
     request.headers = scrub_headers(request.headers)
     request.emrd_keys = keys  # type: ignore[attr-defined]
-    request.emrd_tree = redacted.tree  # type: ignore[attr-defined]
     return request
 
 
@@ -52,7 +51,7 @@ def keep_response(response: dict[str, Any]) -> dict[str, Any] | None:
 def _keys(request: Request) -> MatchKeys:
     keys = getattr(request, "emrd_keys", None)
     if keys is None:
-        keys = _cache.get(request.method, request.path, request.body)[1]
+        keys = _cache.get(request.method, request.path, request.body)
         request.emrd_keys = keys  # type: ignore[attr-defined]
     return keys
 
@@ -99,8 +98,8 @@ class EpisodeCassette(Cassette):
             self.drift = drift_message(
                 cassette=str(self._path),
                 request_index=index,
-                new_tree=getattr(new, "emrd_tree", None),
-                recorded_tree=getattr(recorded, "emrd_tree", None) if recorded else None,
+                new_tree=_keys(new).redacted.tree,
+                recorded_tree=_keys(recorded).redacted.tree if recorded else None,
                 recorded=len(self.data),
             )
         self.requests_made += 1
@@ -108,6 +107,8 @@ class EpisodeCassette(Cassette):
 
 
 def _before_record_request(request: Request) -> Request:
+    if getattr(request, "emrd_keys", None) is not None:
+        return request  # read back from the cassette (already canonical) or redacted before
     # A shallow copy suffices: redaction assigns new attributes and never mutates shared
     # ones (vcrpy's own configuration deep-copies the request, frames included, every call).
     return redact_request(copy.copy(request))
