@@ -59,3 +59,59 @@ def recorded(tmp_path_factory: pytest.TempPathFactory) -> Path:
         )
         assert run.recorded and run.trajectory.status != "errored", run.trajectory.error
     return root
+
+
+THOR_CONFTEST = """
+import importlib.util
+import json
+import os
+import sys
+
+import ai2thor.controller
+
+_spec = importlib.util.spec_from_file_location("emrd_thor_fakes", {fakes!r})
+_fakes = importlib.util.module_from_spec(_spec)
+sys.modules[_spec.name] = _fakes
+_spec.loader.exec_module(_fakes)
+
+
+def _log(event, **fields):
+    with open({log!r}, "a", encoding="utf-8") as out:
+        out.write(json.dumps({{"pid": os.getpid(), "event": event, **fields}}) + "\\n")
+
+
+class LoggedController(_fakes.FakeController):
+    def __init__(self, **init):
+        super().__init__(**init)
+        _log("start", gpu_device=init.get("gpu_device"), local=init.get("local_executable_path"))
+
+    def stop(self):
+        super().stop()
+        _log("stop")
+
+
+ai2thor.controller.Controller = LoggedController
+"""
+
+
+@pytest.fixture
+def thor_suite(suite: pytest.Pytester) -> tuple[pytest.Pytester, list[str], Path]:
+    """The suite on ``--emrd-backend=ai2thor`` through ai2thor's own start-up path, with the
+    fake controller of ``tests/world/thor/conftest.py`` as ``ai2thor.controller.Controller``.
+
+    Returns the pytester, the backend arguments (a real executable file as
+    ``local_executable_path``, ``gpu_device=1``) and the JSON-lines log of controller
+    starts and stops (one line per event, with the process id).
+    """
+    log = suite.path / "controllers.jsonl"
+    fakes = ROOT / "tests" / "world" / "thor" / "conftest.py"
+    suite.makeconftest(THOR_CONFTEST.format(fakes=str(fakes), log=str(log)))
+    build = suite.path / "thor-Linux64-local"
+    build.write_text("#!/bin/sh\n")
+    build.chmod(0o755)
+    args = [
+        "--emrd-backend=ai2thor",
+        f"--emrd-backend-option=local_executable_path={build}",
+        "--emrd-backend-option=gpu_device=1",
+    ]
+    return suite, args, log
