@@ -25,6 +25,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from PIL import Image
 
 from pytest_emrd.world._catalog import WALL_HEIGHT
 from pytest_emrd.world._conditions import ConditionParams
@@ -76,7 +77,8 @@ def palette(scene: Scene, params: ConditionParams, seed: int) -> np.ndarray:
 
 
 def shade_table(colors: np.ndarray, params: ConditionParams) -> np.ndarray:
-    """``(L * 4 * 256, 3)`` uint8 look-up table: final RGB of ``(label, face, fog weight)``.
+    """``(L * 4 * 256,)`` look-up table: final RGB of ``(label, face, fog weight)``, each
+    entry the bytes ``R, G, B, 0`` packed in one ``uint32`` (one gather per pixel).
 
     ``rgb = rint(colour * face_light * light_factor * (255 - fog) / 255 + fog_rgb * fog / 255)``
     """
@@ -84,13 +86,15 @@ def shade_table(colors: np.ndarray, params: ConditionParams) -> np.ndarray:
     lit = colors[:, None, None, :] * (FACE_LIGHT * params.light_factor)[None, :, None, None]
     mix = lit * ((255.0 - fog) / 255.0)[None, None, :, None]
     mix = mix + np.array(params.fog_color, dtype=np.float64) * (fog / 255.0)[:, None]
-    return np.clip(np.rint(mix), 0, 255).astype(np.uint8).reshape(-1, 3)
+    rgbx = np.zeros((*mix.shape[:3], 4), dtype=np.uint8)
+    rgbx[..., :3] = np.clip(np.rint(mix), 0, 255)
+    return rgbx.reshape(-1, 4).view(np.uint32)[:, 0]
 
 
 def _fog(depth: np.ndarray, params: ConditionParams) -> np.ndarray:
     """Fog weight 0..255 of surfaces at ``depth``."""
     ratio = depth / params.visibility_distance
-    return np.rint(np.minimum(1.0, params.fog * ratio * ratio) * 255.0).astype(np.uint8)
+    return np.rint(np.minimum(1.0, params.fog * ratio * ratio) * 255.0).astype(np.int32)
 
 
 def _row(a: np.ndarray) -> np.ndarray:
@@ -100,7 +104,7 @@ def _row(a: np.ndarray) -> np.ndarray:
 
 @dataclass(frozen=True, eq=False)
 class _View:
-    """One frame being drawn: the camera rays, their wall hits and the output buffers."""
+    """One frame being drawn: the camera rays, their wall hits and the output buffer."""
 
     pose: WorldPose
     params: ConditionParams
@@ -112,9 +116,7 @@ class _View:
     along_x: np.ndarray
     """``(512,)`` whether that wall runs along x."""
     code: np.ndarray
-    """``(512, 512)`` int32 ``(label * 4 + face) << 8``; the fog weight is or-ed in last."""
-    fog: np.ndarray
-    """``(512, 512)`` uint8 fog weight."""
+    """``(512, 512)`` int32 pixel codes ``(label * 4 + face) << 8 | fog``."""
 
 
 def render(scene: Scene, pose: WorldPose, params: ConditionParams, table: np.ndarray) -> np.ndarray:
@@ -131,12 +133,13 @@ def render(scene: Scene, pose: WorldPose, params: ConditionParams, table: np.nda
         np.minimum(t_wall, 1e3),
         along_x,
         code=np.empty((SIZE, SIZE), dtype=np.int32),
-        fog=np.empty((SIZE, SIZE), dtype=np.uint8),
     )
     _background(scene, view)
     _objects(scene, view)
-    np.bitwise_or(view.code, view.fog, out=view.code)
-    return np.take(table, view.code, axis=0)
+    # R, G, B, 0 per pixel; Pillow's raw unpacker drops the pad byte into packed RGB.
+    rgbx = np.take(table, view.code)
+    rgb = Image.frombytes("RGB", (SIZE, SIZE), rgbx, "raw", "RGBX").tobytes()
+    return np.frombuffer(rgb, dtype=np.uint8).reshape(SIZE, SIZE, 3)
 
 
 def _to_cells(scaled: np.ndarray, size: int) -> np.ndarray:
@@ -160,31 +163,30 @@ def _background(scene: Scene, view: _View) -> None:
     wall masks between the highest wall top and the lowest wall foot.
     """
     ox, oz, dx, dz = np.float64(view.pose.x), np.float64(view.pose.z), view.dx, view.dz
-    t_wall, params, code, fog = view.t_wall, view.params, view.code, view.fog
+    t_wall, params, code = view.t_wall, view.params, view.code
     top = _row(HORIZON - FOCAL * (WALL_HEIGHT - EYE) / t_wall)
     bottom = _row(HORIZON + FOCAL * EYE / t_wall)
     skirt = _row(HORIZON + FOCAL * (EYE - SKIRTING_HEIGHT) / t_wall)
     r0, r1, first_floor = int(top.min()), int(bottom.max()), max(HORIZON, int(bottom.min()))
-    code[:HORIZON] = (CEILING * 4 + Z_FACE) << 8
-    fog[:HORIZON] = _fog(_CEIL_DEPTH, params)[:, None]
+    code[:HORIZON] = (((CEILING * 4 + Z_FACE) << 8) | _fog(_CEIL_DEPTH, params))[:, None]
     rooms = scene.room_raster
     nz, nx = rooms.shape
     depth = _FLOOR_DEPTH[first_floor - HORIZON :]
     cell = _cells(oz, dz, depth, nz) * nx + _cells(ox, dx, depth, nx)
-    np.take((scene.floor_raster * 4 + Z_FACE) << 8, cell, out=code[first_floor:])
-    fog[first_floor:] = _fog(depth, params)[:, None]
+    floor = code[first_floor:]
+    np.take(((scene.floor_raster * 4 + Z_FACE) << 8).astype(np.int32), cell, out=floor)
+    floor |= _fog(depth, params)[:, None]
 
     hx = _to_cells((ox + (t_wall - 0.05) * dx) * RASTER, nx)
     hz = _to_cells((oz + (t_wall - 0.05) * dz) * RASTER, nz)
     face = np.where(view.along_x, Z_FACE, X_FACE)
-    wall_code = (((WALL0 + rooms[hz, hx]) * 4 + face) << 8).astype(np.int32)
+    wall_fog = _fog(t_wall, params)
+    wall = ((((WALL0 + rooms[hz, hx]) * 4 + face) << 8) | wall_fog).astype(np.int32)
     rows = _ROW_COL[r0:r1]
-    on_wall = (rows >= top) & (rows < bottom)
-    np.copyto(code[r0:r1], wall_code, where=on_wall)
-    np.copyto(fog[r0:r1], _fog(t_wall, params), where=on_wall)
+    np.copyto(code[r0:r1], wall, where=(rows >= top) & (rows < bottom))
     s0 = max(HORIZON, int(skirt.min()))
     low = _ROW_COL[s0:r1]
-    skirting = ((SKIRTING * 4 + face) << 8).astype(np.int32)
+    skirting = (((SKIRTING * 4 + face) << 8) | wall_fog).astype(np.int32)
     np.copyto(code[s0:r1], skirting, where=(low >= skirt) & (low < bottom))
 
 
@@ -224,7 +226,7 @@ def _in_view(parts: np.ndarray, pose: WorldPose) -> np.ndarray:
 
 def _objects(scene: Scene, view: _View) -> None:
     """Paint the boxes of nearby objects back to front, over the columns each one covers."""
-    pose, params, dx, dz, code, fog = view.pose, view.params, view.dx, view.dz, view.code, view.fog
+    pose, params, dx, dz, code = view.pose, view.params, view.dx, view.dz, view.code
     sel = _shown_parts(scene, pose, params)
     if sel.size == 0:
         return
@@ -248,8 +250,10 @@ def _objects(scene: Scene, view: _View) -> None:
     end = np.where(hit, _row(np.maximum(b_n, b_f)), 0)
     top_end, front_end = _row(a_n), _row(b_n)
     fog_cols = _fog(tn, params)
-    base = scene.part_label[sel].astype(np.int32) * 4
-    front_code = (base[:, None] + np.where(tminx[keep] > tminz[keep], X_FACE, Z_FACE)) << 8
+    base = scene.part_label[sel].astype(np.int32)[:, None] * 4
+    front_code = ((base + np.where(tminx[keep] > tminz[keep], X_FACE, Z_FACE)) << 8) | fog_cols
+    top_code = ((base + TOP_FACE) << 8) | fog_cols
+    bottom_code = ((base + BOTTOM_FACE) << 8) | fog_cols
     spans = zip(
         start.min(axis=1).tolist(),
         end.max(axis=1).tolist(),
@@ -268,8 +272,7 @@ def _objects(scene: Scene, view: _View) -> None:
         m = (rr >= start[k, c0:c1]) & (rr < end[k, c0:c1])
         pix = front_code[k, c0:c1]
         if has_top[k]:
-            pix = np.where(rr < top_end[k, c0:c1], (base[k] + TOP_FACE) << 8, pix)
+            pix = np.where(rr < top_end[k, c0:c1], top_code[k, c0:c1], pix)
         elif has_bottom[k]:
-            pix = np.where(rr < front_end[k, c0:c1], pix, (base[k] + BOTTOM_FACE) << 8)
+            pix = np.where(rr < front_end[k, c0:c1], pix, bottom_code[k, c0:c1])
         np.copyto(code[r0:r1, c0:c1], pix, where=m)
-        np.copyto(fog[r0:r1, c0:c1], fog_cols[k, c0:c1], where=m)
