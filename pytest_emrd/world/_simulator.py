@@ -179,7 +179,7 @@ class BuiltinSimulator:
         frame.setflags(write=False)  # shared with the cache
         buf = io.BytesIO()
         Image.fromarray(frame).save(buf, format="JPEG", quality=self._quality)
-        entry = (frame, hashlib.sha256(frame.tobytes()).hexdigest(), buf.getvalue())
+        entry = (frame, hashlib.sha256(frame.data).hexdigest(), buf.getvalue())
         self._frames[self._pose] = entry
         while len(self._frames) > self._cache_size:
             self._frames.popitem(last=False)
