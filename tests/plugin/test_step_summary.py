@@ -1,0 +1,35 @@
+"""$GITHUB_STEP_SUMMARY: the controller appends the run's Markdown once, workers never do."""
+
+from __future__ import annotations
+
+import pytest
+
+EARLIER = "## an earlier step\n\nkept as it was\n"
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("xdist", [[], ["-n", "2"]], ids=["serial", "xdist"])
+def test_the_summary_is_appended_once(suite, small, recorded, monkeypatch, xdist):
+    target = suite.path / "step_summary.md"
+    target.write_text(EARLIER, encoding="utf-8")
+    monkeypatch.setenv("GITHUB_STEP_SUMMARY", str(target))
+    result = suite.runpytest_subprocess(
+        *small(f"--emrd-cassettes={recorded}", "--emrd-record-mode=none"), *xdist
+    )
+    result.assert_outcomes(passed=4)
+    text = target.read_text(encoding="utf-8")
+    assert text.startswith(EARLIER) and text.endswith("\n")
+    summary = text[len(EARLIER) :]
+    assert summary.count("# EMRD results") == 1
+    assert "thresholds.yaml" in summary, "the gate section names the thresholds file"
+    for gate in ("errored_rate", "aec"):
+        assert gate in summary
+    assert "scout" in summary and "baseline" in summary
+
+
+def test_no_summary_without_emrd_cases(pytester: pytest.Pytester, monkeypatch):
+    target = pytester.path / "step_summary.md"
+    monkeypatch.setenv("GITHUB_STEP_SUMMARY", str(target))
+    pytester.makepyfile("def test_plain():\n    assert 2 * 2 == 4\n")
+    pytester.runpytest_subprocess("-p", "no:cacheprovider").assert_outcomes(passed=1)
+    assert not target.exists()
