@@ -182,12 +182,10 @@ def _background(scene: Scene, view: _View) -> None:
     face = np.where(view.along_x, Z_FACE, X_FACE)
     wall_fog = _fog(t_wall, params)
     wall = ((((WALL0 + rooms[hz, hx]) * 4 + face) << 8) | wall_fog).astype(np.int32)
-    rows = _ROW_COL[r0:r1]
-    np.copyto(code[r0:r1], wall, where=(rows >= top) & (rows < bottom))
+    np.copyto(code[r0:r1], wall, where=_below(r0, r1, top) < _length(top, bottom))
     s0 = max(HORIZON, int(skirt.min()))
-    low = _ROW_COL[s0:r1]
     skirting = (((SKIRTING * 4 + face) << 8) | wall_fog).astype(np.int32)
-    np.copyto(code[s0:r1], skirting, where=(low >= skirt) & (low < bottom))
+    np.copyto(code[s0:r1], skirting, where=_below(s0, r1, skirt) < _length(skirt, bottom))
 
 
 def _dist2(rects: np.ndarray, pose: WorldPose) -> np.ndarray:
@@ -248,31 +246,46 @@ def _objects(scene: Scene, view: _View) -> None:
     b_n, b_f = HORIZON - FOCAL * y0 / tn, HORIZON - FOCAL * y0 / tf
     start = np.where(hit, _row(np.minimum(a_n, a_f)), SIZE)
     end = np.where(hit, _row(np.maximum(b_n, b_f)), 0)
-    top_end, front_end = _row(a_n), _row(b_n)
     fog_cols = _fog(tn, params)
     base = scene.part_label[sel].astype(np.int32)[:, None] * 4
-    front_code = ((base + np.where(tminx[keep] > tminz[keep], X_FACE, Z_FACE)) << 8) | fog_cols
-    top_code = ((base + TOP_FACE) << 8) | fog_cols
-    bottom_code = ((base + BOTTOM_FACE) << 8) | fog_cols
-    spans = zip(
+    front = ((base + np.where(tminx[keep] > tminz[keep], X_FACE, Z_FACE)) << 8) | fog_cols
+    has_top, has_bottom = y1 < 0, y0 > 0
+    # Each column of a box is painted as rows [start, end) in one code (the underside when
+    # the box is above the eye, else the front face), then its first `over` rows again in a
+    # second code: the top face down to where the front begins, or the front face down to
+    # where the underside begins.
+    first = np.where(has_bottom, ((base + BOTTOM_FACE) << 8) | fog_cols, front)
+    second = np.where(has_top, ((base + TOP_FACE) << 8) | fog_cols, front)
+    over_end = np.where(has_top, _row(a_n), np.where(has_bottom, _row(b_n), start))
+    span = _length(start, end)
+    over = _length(start, np.minimum(over_end, end))
+    bounds = zip(
         start.min(axis=1).tolist(),
         end.max(axis=1).tolist(),
         np.argmax(hit, axis=1).tolist(),
         (SIZE - np.argmax(hit[:, ::-1], axis=1)).tolist(),
+        (has_top | has_bottom)[:, 0].tolist(),
         strict=True,
     )
-    has_top, has_bottom = (y1[:, 0] < 0).tolist(), (y0[:, 0] > 0).tolist()
-    order = _draw_order(scene, pose, p, scene.part_object[sel])
-    bounds = list(spans)
-    for k in order.tolist():
-        r0, r1, c0, c1 = bounds[k]
+    boxes = list(bounds)
+    for k in _draw_order(scene, pose, p, scene.part_object[sel]).tolist():
+        r0, r1, c0, c1, two_faces = boxes[k]
         if r1 <= r0:
             continue
-        rr = _ROW_COL[r0:r1]
-        m = (rr >= start[k, c0:c1]) & (rr < end[k, c0:c1])
-        pix = front_code[k, c0:c1]
-        if has_top[k]:
-            pix = np.where(rr < top_end[k, c0:c1], top_code[k, c0:c1], pix)
-        elif has_bottom[k]:
-            pix = np.where(rr < front_end[k, c0:c1], pix, bottom_code[k, c0:c1])
-        np.copyto(code[r0:r1, c0:c1], pix, where=m)
+        below = _below(r0, r1, start[k, c0:c1])
+        region = code[r0:r1, c0:c1]
+        np.copyto(region, first[k, c0:c1], where=below < span[k, c0:c1])
+        if two_faces:
+            np.copyto(region, second[k, c0:c1], where=below < over[k, c0:c1])
+
+
+def _length(first: np.ndarray, end: np.ndarray) -> np.ndarray:
+    """Rows in ``[first, end)`` per column (0 when empty), as uint32 for :func:`_below`."""
+    return np.maximum(end - first, 0).astype(np.uint32)
+
+
+def _below(r0: int, r1: int, first: np.ndarray) -> np.ndarray:
+    """``(r1 - r0, columns)``: rows ``r0..r1`` counted from ``first`` of each column, as
+    uint32, so rows above ``first`` wrap to huge values and ``_below(...) < _length(first,
+    end)`` is exactly ``first <= row < end`` in one comparison."""
+    return (_ROW_COL[r0:r1] - first).view(np.uint32)
