@@ -149,11 +149,16 @@ def _to_cells(scaled: np.ndarray, size: int) -> np.ndarray:
 
 
 def _cells(origin: np.float64, step: np.ndarray, depth: np.ndarray, size: int) -> np.ndarray:
-    """Raster cell of floor points ``origin + depth * step`` along one axis; one column when
-    ``step`` is the same for every image column (one axis of a cardinal heading)."""
+    """Raster cell of floor points ``(origin + depth * step) * RASTER`` along one axis (in
+    place, one buffer); one column when ``step`` is the same for every image column (one
+    axis of a cardinal heading)."""
     if np.all(step == step[0]):
         step = step[:1]
-    return _to_cells((origin + depth[:, None] * step) * RASTER, size)
+    scaled = np.multiply.outer(depth, step)
+    scaled += origin
+    scaled *= RASTER
+    np.clip(scaled, 0.0, size - 1.0, out=scaled)
+    return scaled.astype(np.int32)
 
 
 def _background(scene: Scene, view: _View) -> None:
