@@ -59,29 +59,12 @@ REUSED_BACKENDS: Final[frozenset[str]] = frozenset({"ai2thor"})
 """Backends whose simulator :class:`SimulatorPool` keeps across episodes (a Unity process
 takes seconds to start). ``builtin`` is built per episode: it is cheap, and a fresh
 simulator keeps its recorded traffic exactly as it was."""
-THOR_VERSION: Final = "ai2thor-1"
-"""Version of the ai2thor backend's own part of the world: the ProcTHOR house it builds,
-navigation, visibility filtering and condition calls. Bump it when any of those change."""
-
-
-def world_version(backend: str = "builtin") -> str:
-    """The world version a recording on ``backend`` depends on.
-
-    ``builtin``: :data:`pytest_emrd.world.WORLD_VERSION`. ``ai2thor``: :data:`THOR_VERSION`
-    joined with the builtin version, because THOR episodes are built from the builtin
-    layouts and spawn poses and answer with the builtin feedback wording; a change to
-    either invalidates them.
-    """
-    check_choice("backend", backend, world.BACKENDS)
-    if backend == "builtin":
-        return world.WORLD_VERSION
-    return f"{THOR_VERSION}+{world.WORLD_VERSION}"
 
 
 def protocol_version(backend: str = "builtin") -> str:
     """World + prompt protocol version of ``backend``; cassettes and stored results are keyed
     by it (``builtin-3+p1``; ``ai2thor-1+builtin-3+p1``)."""
-    return f"{world_version(backend)}+{PROMPT_VERSION}"
+    return f"{world.world_version(backend)}+{PROMPT_VERSION}"
 
 
 def build_simulator(backend: str, options: Mapping[str, Any] | None = None) -> Simulator:

@@ -120,7 +120,7 @@ def _missing(
         notes.append(
             f"No episode ran under condition(s) {', '.join(absent)}: their columns are empty "
             "and the one-way ANOVA needs at least two conditions "
-            "(run with --emrd-conditions baseline,low_light,texture)."
+            "(run with --emrd-condition baseline,low_light,texture)."
         )
     variants = overview.variants
     if variants == ("default",):

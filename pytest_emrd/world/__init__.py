@@ -20,7 +20,7 @@ from pytest_emrd.world._model import (
     WorldObject,
     WorldPose,
 )
-from pytest_emrd.world._registry import BACKENDS, make_simulator
+from pytest_emrd.world._registry import BACKENDS, make_simulator, world_version
 from pytest_emrd.world._simulator import BuiltinSimulator
 from pytest_emrd.world._truth import ground_truth
 from pytest_emrd.world._version import WORLD_VERSION
@@ -50,4 +50,5 @@ __all__ = [
     "heading_in_spawn_frame",
     "make_simulator",
     "to_spawn_frame",
+    "world_version",
 ]

@@ -36,3 +36,21 @@ def make_simulator(backend: str = "builtin", **options: Any) -> Simulator:
         "backend", backend, BACKENDS, hint="Use --emrd-backend builtin for the numpy world."
     )
     return BACKENDS[backend](**options)
+
+
+def world_version(backend: str = "builtin") -> str:
+    """The world version a recording on ``backend`` depends on.
+
+    ``builtin``: :data:`~pytest_emrd.world.WORLD_VERSION`. ``ai2thor``: the thor backend's
+    own version joined with the builtin one, because THOR episodes are built from the builtin
+    layouts and spawn poses and answer with the builtin feedback wording; a change to either
+    invalidates them (``ai2thor-1+builtin-3``).
+    """
+    from pytest_emrd.world._version import WORLD_VERSION
+
+    check_choice("backend", backend, BACKENDS)
+    if backend == "builtin":
+        return WORLD_VERSION
+    from pytest_emrd.world.thor._version import THOR_VERSION
+
+    return f"{THOR_VERSION}+{WORLD_VERSION}"

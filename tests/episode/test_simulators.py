@@ -7,7 +7,6 @@ import pytest
 from pytest_emrd import world
 from pytest_emrd.agent import PROMPT_VERSION
 from pytest_emrd.episode import (
-    THOR_VERSION,
     SimulatorPool,
     build_simulator,
     protocol_version,
@@ -15,6 +14,7 @@ from pytest_emrd.episode import (
 )
 from pytest_emrd.errors import ConfigError
 from pytest_emrd.trajectory import EpisodeSpec
+from pytest_emrd.world.thor import THOR_VERSION
 
 
 def _spec(episode: int = 0, **overrides) -> EpisodeSpec:

@@ -17,12 +17,14 @@ from pytest_emrd.world.thor._assets import ASSET_IDS, SCHEMA, THOR_ROOM_TYPES
 from pytest_emrd.world.thor._house import build_house
 from pytest_emrd.world.thor._ids import IdTable
 from pytest_emrd.world.thor._simulator import DEFAULTS, ThorSimulator
+from pytest_emrd.world.thor._version import THOR_VERSION
 
 __all__ = [
     "ASSET_IDS",
     "DEFAULTS",
     "SCHEMA",
     "THOR_ROOM_TYPES",
+    "THOR_VERSION",
     "IdTable",
     "ThorSimulator",
     "build_house",
