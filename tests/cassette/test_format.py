@@ -117,3 +117,25 @@ def test_any_json_traffic_round_trips_byte_for_byte(bodies):
     back = decode(encode(CassetteData("p", requests, responses)))
     assert [r.body for r in back.requests] == [r.body for r in requests]
     assert [r["body"]["string"] for r in back.responses] == [r["body"]["string"] for r in responses]
+
+
+def _one(body: bytes) -> CassetteData:
+    response = {"status": {"code": 200, "message": "OK"}, "headers": {}, "body": {"string": b"{}"}}
+    return CassetteData("p", (Request("POST", "http://h/v1", body, {}),), (response,))
+
+
+@pytest.mark.parametrize(
+    ("body", "canonical"),
+    [
+        ('{"a":1,"messages":[{"x":"é"},{"y":[1,2]}],"z":[]}', True),
+        ('{"z":0,"messages":[{"y":1,"x":"é"}],"a":[3]}', False),
+        ('{"z":0,"messages":[{"x":"\\u00e9"}],"a":"\\u00e9"}', False),
+        ('{"messages":[]}', True),
+        ("[1,2]", True),
+    ],
+    ids=["canonical", "compact-unsorted", "ascii-escaped", "empty-list", "top-level-list"],
+)
+def test_request_bodies_with_lists_rebuild_exactly_in_every_mode(body, canonical):
+    back = decode(encode(_one(body.encode())))
+    assert back.requests[0].body == body.encode()
+    assert back.canonical == (canonical,)

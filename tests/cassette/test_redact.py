@@ -10,7 +10,7 @@ from hypothesis import strategies as st
 
 from pytest_emrd import frames
 from pytest_emrd.cassette import canonical_json, match_keys, redact_body
-from pytest_emrd.cassette._redact import scrub_headers, scrub_uri
+from pytest_emrd.cassette._redact import canonical_keys, scrub_headers, scrub_uri
 
 PIXELS = "ab" * 32
 
@@ -104,3 +104,13 @@ def test_redaction_is_idempotent_and_canonical(tree):
     twice = redact_body(once.body)
     assert twice.body == once.body
     assert once.body == canonical_json(json.loads(once.body)).encode()
+
+
+@given(st.dictionaries(st.text(max_size=8), st.text(max_size=8) | st.integers(), max_size=5))
+def test_keys_of_a_body_read_back_canonical_equal_the_redacted_keys(tree):
+    body = json.dumps({"messages": [{"content": "data:image/jpeg;base64,QUJD"}], **tree})
+    live = match_keys("POST", "/v1/x", redact_body(body.encode()))
+    recorded = canonical_keys("POST", "/v1/x", live.redacted.body)
+    assert (recorded.strict, recorded.lenient) == (live.strict, live.lenient)
+    assert recorded.redacted.images == live.redacted.images == 1
+    assert recorded.redacted.tree == live.redacted.tree

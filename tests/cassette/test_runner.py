@@ -1,0 +1,47 @@
+"""The real runner keeps one client per model and key mode, and closes them with itself."""
+
+from __future__ import annotations
+
+import gc
+
+import pytest
+
+import pytest_emrd.agent
+from pytest_emrd.agent import load_registry
+from pytest_emrd.cassette import agent_runner
+
+
+class _Client:
+    def __init__(self, name: str, require_key: bool) -> None:
+        self.name, self.require_key, self.closed = name, require_key, False
+
+    def close(self) -> None:
+        self.closed = True
+
+
+@pytest.fixture
+def built(monkeypatch) -> list[_Client]:
+    clients: list[_Client] = []
+
+    def make_client(config, *, require_key=True):
+        clients.append(_Client(config.name, require_key))
+        return clients[-1]
+
+    monkeypatch.setattr(pytest_emrd.agent, "make_client", make_client)
+    return clients
+
+
+def test_one_client_per_model_and_key_mode_serves_every_episode(built):
+    runner = agent_runner(load_registry())
+    for _ in range(3):
+        runner._client("scout", False)
+    runner._client("scout", True)
+    assert [(c.name, c.require_key) for c in built] == [("scout", False), ("scout", True)]
+
+
+def test_clients_close_when_the_runner_is_collected(built):
+    runner = agent_runner(load_registry())
+    runner._client("scout", False)
+    del runner
+    gc.collect()
+    assert [c.closed for c in built] == [True]
