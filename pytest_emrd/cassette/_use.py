@@ -88,6 +88,26 @@ class EpisodeCassette(Cassette):
         self.requests_made = 0
         self.drift: str | None = None
         self.frame_drift: set[tuple[str, str]] = set()
+        self.strict = False
+        """Matching is strict: recorded interactions are looked up by strict key."""
+        self._by_key: dict[str, list[int]] = {}
+        self._indexed = 0
+
+    def _responses(self, request: Request) -> Iterator[tuple[int, dict[str, Any]]]:
+        """vcrpy's lookup (every recorded request tried in turn, for each request made),
+        replaced under strict matching by a strict-key index: the same interactions, in
+        the same order, without a quadratic scan of the episode."""
+        if not self.strict:
+            yield from super()._responses(request)
+            return
+        for index in range(self._indexed, len(self.data)):
+            key = _keys(self.data[index][0]).strict
+            if key is not None:
+                self._by_key.setdefault(key, []).append(index)
+        self._indexed = len(self.data)
+        key = _keys(self._before_record_request(request)).strict
+        for index in self._by_key.get(key, []) if key is not None else []:
+            yield index, self.data[index][1]
 
     def can_play_response_for(self, request: Request) -> bool:
         playable = bool(super().can_play_response_for(request))
@@ -145,4 +165,5 @@ def episode_cassette(
     )
     with use as cassette:
         cassette.frame_drift = frame_drift
+        cassette.strict = matching == "strict"
         yield cassette
