@@ -16,7 +16,9 @@ condition's light factor, then mixed with fog by depth (see
 Bit stability: headings are multiples of 90 degrees and positions centimetre values, so
 every geometric quantity comes from ``+ - * /``, comparisons, ``ceil`` and integer casts
 only (exactly rounded IEEE operations, no transcendental functions); colours come from a
-look-up table built with explicit rounding (``np.rint``) and indexed by integer codes. The
+look-up table built with explicit rounding (``np.rint``) and indexed by integer codes
+(each pixel one ``(label * 4 + face) << 8 | fog`` code, one gather of packed ``R, G, B, 0``
+entries, Pillow's raw unpacker dropping the pad byte: byte copies, no arithmetic). The
 same scene therefore renders to identical bytes on every machine and numpy version.
 """
 
