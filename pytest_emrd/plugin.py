@@ -127,7 +127,6 @@ class _Run:
         self.verdicts: list[Verdict] = []
         self._stored: dict[EpisodeSpec, StoredEpisode] = {}
         self._metrics: dict[str, Any] = {}
-        self._clients: dict[tuple[str, bool], Any] = {}
 
     def call(self, fn: Any) -> Any:
         """``fn(self)``, turning a configuration mistake into a clean collection failure."""
@@ -185,25 +184,10 @@ class _Run:
 
     @cached_property
     def runner(self) -> Any:
-        """Runs an episode on this process's simulator pool and model client."""
+        """Runs an episode on this process's simulator pool, one model client per key mode."""
+        from pytest_emrd.cassette import agent_runner
 
-        def run(spec: EpisodeSpec, *, live: bool) -> Trajectory:
-            client = self.client(spec.model, live=live)
-            trajectory: Trajectory = self.simulators.run(
-                spec, registry=self.registry, client=client
-            )
-            return trajectory
-
-        return run
-
-    def client(self, model: str, *, live: bool) -> Any:
-        """One client per model and key mode for the session (replays need no API key)."""
-        from pytest_emrd.agent import make_client
-
-        key = (model, live)
-        if key not in self._clients:
-            self._clients[key] = make_client(self.registry.get(model), require_key=live)
-        return self._clients[key]
+        return agent_runner(self.registry, run=self.simulators.run)
 
     def episode(self, spec: EpisodeSpec) -> StoredEpisode:
         from pytest_emrd.cassette import FrameDriftWarning, run_with_cassette
@@ -261,8 +245,8 @@ class _Run:
         )
 
     def pytest_unconfigure(self) -> None:
-        for client in self._clients.values():
-            client.close()
+        if "runner" in self.__dict__:
+            self.runner.close()
         if "simulators" in self.__dict__:
             self.simulators.close()
 

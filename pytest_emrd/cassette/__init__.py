@@ -5,6 +5,7 @@
 
 from pytest_emrd.cassette._drift import first_difference
 from pytest_emrd.cassette._episode import (
+    AgentRunner,
     EpisodeRun,
     EpisodeRunner,
     FrameDriftWarning,
@@ -32,6 +33,7 @@ from pytest_emrd.cassette._use import (
 
 __all__ = [
     "SECRET_HEADERS",
+    "AgentRunner",
     "CassetteData",
     "EpisodeCassette",
     "EpisodePersister",

@@ -48,22 +48,28 @@ class _Discard(Exception):
 EpisodeRunner = Callable[..., Trajectory]
 
 
-class _AgentRunner:
+class AgentRunner:
     """:func:`pytest_emrd.episode.run_episode` with one client per model and key mode, kept
     for the runner's lifetime: the connection pool and TLS context (tens of milliseconds
     to build) serve every episode; the clients close when the runner is collected or at exit.
     """
 
-    def __init__(self, registry: Registry) -> None:
+    def __init__(self, registry: Registry, run: Callable[..., Trajectory] | None) -> None:
         self._registry = registry
+        self._run = run
         self._clients: dict[tuple[str, bool], ChatClient] = {}
         self._lock = threading.Lock()
-        weakref.finalize(self, _close_all, self._clients)
+        self._finalizer = weakref.finalize(self, _close_all, self._clients)
 
     def __call__(self, spec: EpisodeSpec, *, live: bool) -> Trajectory:
         from pytest_emrd.episode import run_episode
 
-        return run_episode(spec, registry=self._registry, client=self._client(spec.model, live))
+        run = self._run or run_episode
+        return run(spec, registry=self._registry, client=self._client(spec.model, live))
+
+    def close(self) -> None:
+        """Close every client now (they are also closed when the runner is collected)."""
+        self._finalizer()
 
     def _client(self, model: str, live: bool) -> ChatClient:
         from pytest_emrd.agent import make_client
@@ -82,13 +88,17 @@ def _close_all(clients: dict[tuple[str, bool], ChatClient]) -> None:
     clients.clear()
 
 
-def agent_runner(registry: Registry) -> EpisodeRunner:
+def agent_runner(
+    registry: Registry, *, run: Callable[..., Trajectory] | None = None
+) -> AgentRunner:
     """The real runner: :func:`pytest_emrd.episode.run_episode` with the model's client.
 
-    Replays need no API key (recorded requests carry none), so a replay's client is built
-    with ``require_key=False`` and a live episode's with ``require_key=True``.
+    ``run`` replaces ``run_episode`` (same keywords ``registry`` and ``client``), e.g. a
+    :class:`~pytest_emrd.episode.SimulatorPool`'s ``run`` that keeps one AI2-THOR process per
+    worker. Replays need no API key (recorded requests carry none), so a replay's client is
+    built with ``require_key=False`` and a live episode's with ``require_key=True``.
     """
-    return _AgentRunner(registry)
+    return AgentRunner(registry, run)
 
 
 def run_with_cassette(
