@@ -17,12 +17,14 @@ protocol: cassettes recorded under another version are stale.
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from typing import Final
+from typing import TYPE_CHECKING, Final
 
 from pytest_emrd import rooms
 from pytest_emrd.errors import check_choice
 from pytest_emrd.trajectory import MAX_STEPS, VARIANTS, Pose
-from pytest_emrd.world._model import VisibleObject
+
+if TYPE_CHECKING:
+    from pytest_emrd.world._model import VisibleObject
 
 PROMPT_VERSION: Final = "p1"
 
