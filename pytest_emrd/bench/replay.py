@@ -4,8 +4,11 @@
   over the full reference grid (scout x 3 conditions x 4 spawns x 20 episodes, committed
   cassettes, gates included), in a fresh run directory. Target 60 s.
 * ``replay.cassette_kb_per_episode`` — mean size of the committed scout cassettes; and
-  ``replay.cassette_kb_per_50_steps`` — the same scaled to a full 50-step episode (size /
-  requests x 50). Target 15 KB.
+  ``replay.cassette_kb_per_50_steps`` — the size of a full 50-step episode, predicted by a
+  least-squares line of cassette size on request count over the committed grid (episodes run
+  8 to 50 steps). Scaling each file by ``50 / requests`` would count the per-episode fixed part
+  (system prompt, first frame) once per step; the line separates the fixed part from the
+  per-step part. Target 15 KB.
 * ``replay.size_ratio_vs_plain_vcrpy`` — the same episodes recorded side by side with plain
   vcrpy (YAML, base64 frames kept, no redaction) and with EMRD cassettes; total plain bytes
   over total EMRD bytes. Target 500.
@@ -25,6 +28,7 @@ from pathlib import Path
 from typing import Any
 
 import httpx
+import numpy as np
 import vcr
 
 from pytest_emrd.bench import Figure, median_seconds
@@ -86,11 +90,9 @@ def _committed_sizes() -> tuple[float, float, int]:
     if not paths:
         raise RuntimeError(f"no scout cassettes under {CASSETTES}; record them first")
     sizes = [p.stat().st_size / 1024 for p in paths]
-    per_50 = [
-        size / len(decode(p.read_bytes()).requests) * 50
-        for size, p in zip(sizes, paths, strict=True)
-    ]
-    return statistics.fmean(sizes), statistics.fmean(per_50), len(paths)
+    requests = [len(decode(p.read_bytes()).requests) for p in paths]
+    slope, intercept = np.polyfit(requests, sizes, 1)
+    return statistics.fmean(sizes), float(intercept + 50 * slope), len(paths)
 
 
 def _side_by_side_ratio() -> float:
