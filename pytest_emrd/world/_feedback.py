@@ -22,7 +22,7 @@ from pytest_emrd.rooms import ROOM_NAMES
 from pytest_emrd.trajectory import Pose
 from pytest_emrd.world._actions import GRAMMAR, TURNS, Action, normalise, parse_action
 from pytest_emrd.world._geometry import heading_in_spawn_frame, to_spawn_frame
-from pytest_emrd.world._model import WorldPose
+from pytest_emrd.world._model import Observation, WorldPose
 
 Handler = Callable[[Action], str]
 """Executes one parsed action; returns the success note or raises :class:`ActionFailed`."""
@@ -50,6 +50,30 @@ def execute(text: str, handlers: Mapping[str, Handler], *, over: bool) -> tuple[
     except ActionFailed as failure:
         return False, f"{shown} failed: {failure}."
     return True, f"{shown} succeeded{note}."
+
+
+class SemanticStep:
+    """The ``step`` of both backends: one action text -> the backend's ``_goto``, ``_turn``
+    or ``_term`` handler (via :func:`execute`) -> the backend's ``_observe``.
+
+    A subclass provides those handlers, ``_observe(success, message)``, ``_require()``
+    (raises before ``reset``), and the counters ``_steps`` and ``_terminal``.
+    """
+
+    _steps: int
+    _terminal: str | None
+    _goto: Handler
+    _turn: Handler
+    _term: Handler
+    _observe: Callable[[bool, str], Observation]
+    _require: Callable[[], object]
+
+    def step(self, action: str) -> Observation:
+        """Execute one action text; never raises for a bad action (the step is consumed)."""
+        self._require()
+        self._steps += 1
+        handlers = {"Goto": self._goto, "Turn": self._turn, "Term": self._term}
+        return self._observe(*execute(action, handlers, over=self._terminal is not None))
 
 
 def turn_degrees(action: Action) -> float:

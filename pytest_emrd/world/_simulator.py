@@ -16,8 +16,8 @@ from pytest_emrd.world._actions import Action
 from pytest_emrd.world._conditions import ConditionParams, condition_params
 from pytest_emrd.world._feedback import (
     TERM_NOTE,
+    SemanticStep,
     choose_target,
-    execute,
     goto_key,
     goto_note,
     no_spot,
@@ -39,7 +39,7 @@ FRAME_CACHE = 16
 """Frames kept per episode (least recently used dropped first)."""
 
 
-class BuiltinSimulator:
+class BuiltinSimulator(SemanticStep):
     """Pure-numpy office simulator: semantic actions, wall-occluded visibility, ray-cast frames.
 
     ``room_aliases`` maps extra names ``Term`` accepts to canonical room names (for prompt
@@ -84,13 +84,6 @@ class BuiltinSimulator:
         self._sight = None
         self._frames.clear()
         return self._observe(True, "Episode started.")
-
-    def step(self, action: str) -> Observation:
-        """Execute one action text; never raises for a bad action (the step is consumed)."""
-        self._require()
-        self._steps += 1
-        handlers = {"Goto": self._goto, "Turn": self._turn, "Term": self._term}
-        return self._observe(*execute(action, handlers, over=self._terminal is not None))
 
     @property
     def agent_pose(self) -> WorldPose:

@@ -36,8 +36,8 @@ from pytest_emrd.world._actions import Action
 from pytest_emrd.world._feedback import (
     TERM_NOTE,
     ActionFailed,
+    SemanticStep,
     choose_target,
-    execute,
     goto_key,
     goto_note,
     no_spot,
@@ -104,7 +104,7 @@ def _refused(event: Any) -> ActionFailed | None:
     )
 
 
-class ThorSimulator:
+class ThorSimulator(SemanticStep):
     """The ai2thor backend. Construction is cheap; THOR starts on the first ``reset``.
 
     ``controller_options`` go to ``Controller(...)`` over :data:`DEFAULTS` (for example
@@ -234,13 +234,6 @@ class ThorSimulator:
         self._spawn = agent_pose(event.metadata)
         self._steps, self._terminal = 0, None
         return self._observe(True, "Episode started.")
-
-    def step(self, action: str) -> Observation:
-        """Execute one action text; never raises for a bad action (the step is consumed)."""
-        self._require()
-        self._steps += 1
-        handlers = {"Goto": self._goto, "Turn": self._turn, "Term": self._term}
-        return self._observe(*execute(action, handlers, over=self._terminal is not None))
 
     @property
     def agent_pose(self) -> WorldPose:
