@@ -101,7 +101,8 @@ def world_action(action: str, variant: str) -> tuple[str, str | None]:
     return (f"Term({canonical})" if canonical else action), raw
 
 
-def _user_turn(spec: EpisodeSpec, step: int, obs: Observation) -> UserTurn:
+def user_turn(spec: EpisodeSpec, step: int, obs: Observation) -> UserTurn:
+    """The user turn of step ``step`` showing ``obs`` as ``spec``'s modality asks."""
     symbolic = obs.visible if spec.modality in ("text", "both") else None
     text = step_text(
         step=step, max_steps=spec.max_steps, feedback=obs.feedback, pose=obs.pose, visible=symbolic
@@ -126,7 +127,7 @@ class _Run:
 
     def step(self, t: int, obs: Observation, client: ChatClient) -> tuple[Step, Observation]:
         pose, room, visible = obs.pose, self.sim.current_room(), self.sim.visible_ids()
-        turn = _user_turn(self.spec, t, obs)
+        turn = user_turn(self.spec, t, obs)
         messages = self.conversation.request(turn)
         response = client.complete(messages)
         reply = parse_reply(response.text)

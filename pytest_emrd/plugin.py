@@ -165,7 +165,7 @@ class _Run:
         from pytest_emrd.gate import gate_cells, load_thresholds
         from pytest_emrd.metrics import GATE_METRICS
 
-        if self.settings.shard:
+        if self.settings.shard or self.settings.thresholds is None:
             return []
         thresholds = load_thresholds(
             self.settings.thresholds, registry=self.registry, metrics=GATE_METRICS
@@ -278,14 +278,16 @@ class _Run:
         from pytest_emrd.report import step_summary_markdown
 
         source = self.settings.thresholds
-        if source.is_relative_to(self.config.rootpath):
+        if source is not None and source.is_relative_to(self.config.rootpath):
             source = source.relative_to(self.config.rootpath)
         try:
             trajectories = load_run_dirs([self.run_dir])
         except EmrdError as exc:
             warnings.warn(f"pytest-emrd wrote no step summary: {exc}", stacklevel=1)
             return
-        text = step_summary_markdown(trajectories, self.verdicts, thresholds_source=str(source))
+        text = step_summary_markdown(
+            trajectories, self.verdicts, thresholds_source=source and str(source)
+        )
         with open(target, "a", encoding="utf-8") as summary:
             summary.write(text if text.endswith("\n") else text + "\n")
 

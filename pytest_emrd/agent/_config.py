@@ -61,6 +61,9 @@ class ModelConfig:
     price_per_mtok_in: float | None = None
     """USD per million prompt tokens, for cost estimates; None if unknown."""
     price_per_mtok_out: float | None = None
+    image_tokens: int = 255
+    """Prompt tokens one 512x512 frame costs at this provider, for estimates before a probe
+    measures it (255: one OpenAI high-detail tile)."""
     max_tokens_param: str = "max_tokens"
     """Body key carrying ``max_tokens`` (``max_completion_tokens`` for newer OpenAI models)."""
     planted: dict[str, Any] = field(default_factory=dict)
@@ -72,6 +75,7 @@ class ModelConfig:
         check_choice(f"{where}: modality", self.modality, MODALITIES)
         check_range(f"{where}: temperature", self.temperature, 0.0, 2.0)
         check_positive_int(f"{where}: max_tokens", self.max_tokens)
+        check_positive_int(f"{where}: image_tokens", self.image_tokens)
         check_range(f"{where}: timeout_s", self.timeout_s, 0.001, 3600.0)
         if isinstance(self.max_retries, bool) or not isinstance(self.max_retries, int):
             raise ConfigError(f"{where}: max_retries={self.max_retries!r} must be a whole number.")

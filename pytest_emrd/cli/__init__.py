@@ -13,13 +13,46 @@ import sys
 from pytest_emrd.errors import EmrdError
 
 #: Subcommand modules, in the order ``emrd --help`` lists them.
-COMMANDS: tuple[str, ...] = ("render", "serve", "gate", "report", "validate", "bench")
+COMMANDS: tuple[str, ...] = (
+    "models",
+    "check",
+    "render",
+    "serve",
+    "gate",
+    "report",
+    "validate",
+    "bench",
+)
+
+
+def version_text() -> str:
+    """``emrd 0.1.0 (protocol builtin-3+p1, reference agents ref-2)``: what cassettes apply."""
+    from pytest_emrd import __version__
+    from pytest_emrd.agent.reference import REFERENCE_VERSION
+    from pytest_emrd.episode import protocol_version
+
+    return (
+        f"emrd {__version__} (protocol {protocol_version()}, "
+        f"reference agents {REFERENCE_VERSION})"
+    )
+
+
+class _Version(argparse.Action):
+    """``--version``: computed only when asked (it imports the world and the prompt)."""
+
+    def __init__(self, option_strings: list[str], dest: str, **kwargs: object) -> None:
+        super().__init__(option_strings, dest, nargs=0, help="print the version and exit")
+
+    def __call__(self, parser: argparse.ArgumentParser, *args: object) -> None:
+        print(version_text())
+        parser.exit()
 
 
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="emrd", description="pytest-emrd: Explore, Map, Remember, Decide benchmark tools."
     )
+    parser.add_argument("--version", action=_Version)
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     for name in COMMANDS:
         try:

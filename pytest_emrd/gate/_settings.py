@@ -84,7 +84,8 @@ OPTIONS: Final[tuple[Option, ...]] = (
            MATCHING_MODES),
     Option("results", "run directory to write or resume (default: a fresh directory under "
            "<rootdir>/.emrd/runs)", metavar="DIR"),
-    Option("thresholds", "release gates file (default: <rootdir>/thresholds.yaml)",
+    Option("thresholds", "release gates file (default: <rootdir>/thresholds.yaml if it exists; "
+           "without one the run has episodes and no gates)",
            metavar="FILE"),
     Option("models", "user model registry YAML extending/overriding the shipped one",
            metavar="FILE"),
@@ -113,7 +114,9 @@ class RunSettings:
     """``strict`` or ``lenient``; the default depends on the backend (module docstring)."""
     results: Path | None
     """Run directory to resume, or ``None`` for a fresh one."""
-    thresholds: Path
+    thresholds: Path | None
+    """Release gates file; ``None`` when none was given and ``<rootdir>/thresholds.yaml`` does
+    not exist (a run without gates: episodes only)."""
     models_file: Path | None
     cassettes: Path
     shard: tuple[int, int] | None
@@ -190,6 +193,14 @@ def _path(value: Any, base: Path) -> Path:
     return path if path.is_absolute() else base / path
 
 
+def _thresholds(value: Any, rootdir: Path) -> Path | None:
+    """The given file (it must exist, checked on load), else ``thresholds.yaml`` if present."""
+    if value is not None:
+        return _path(value, rootdir)
+    default = rootdir / "thresholds.yaml"
+    return default if default.is_file() else None
+
+
 def resolve_settings(
     cli: Mapping[str, Any],
     ini: Mapping[str, Any],
@@ -227,7 +238,7 @@ def resolve_settings(
         record_mode=raw["record_mode"] or default_mode,
         matching=_matching(raw["matching"], backend),
         results=_path(raw["results"], rootdir) if raw["results"] else None,
-        thresholds=_path(raw["thresholds"] or "thresholds.yaml", rootdir),
+        thresholds=_thresholds(raw["thresholds"], rootdir),
         models_file=_path(raw["models"], rootdir) if raw["models"] else None,
         cassettes=_path(raw["cassettes"] or "cassettes", rootdir),
         shard=parse_shard(str(raw["shard"])) if raw["shard"] else None,

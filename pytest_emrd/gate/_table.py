@@ -20,7 +20,8 @@ class UsageRow:
     """Estimated cost from the registry's prices, ``None`` when it has none."""
 
 
-def _render(header: Sequence[str], rows: Sequence[Sequence[str]]) -> list[str]:
+def render_table(header: Sequence[str], rows: Sequence[Sequence[str]]) -> list[str]:
+    """Left-aligned columns two spaces apart, header first (trailing spaces stripped)."""
     widths = [max(len(r[i]) for r in [header, *rows]) for i in range(len(header))]
     line = "  ".join(f"{{:<{w}}}" for w in widths)
     return [line.format(*header).rstrip(), *(line.format(*r).rstrip() for r in rows)]
@@ -49,7 +50,7 @@ def gate_tables(verdicts: Sequence[Verdict]) -> list[str]:
             for v in mine
         ]
         header = ["condition", "metric", "value", "95% CI", "n", "bound", "result"]
-        lines += ["  " + r for r in _render(header, rows)]
+        lines += ["  " + r for r in render_table(header, rows)]
         lines += [f"  FAIL {v.gate_id}: {v.reason}" for v in mine if not v.passed]
     return lines
 
@@ -67,4 +68,4 @@ def usage_table(rows: Sequence[UsageRow]) -> list[str]:
         for r in sorted(rows, key=lambda r: r.model)
     ]
     header = ["model", "episodes", "prompt tokens", "completion tokens", "est. cost"]
-    return ["  " + r for r in _render(header, body)]
+    return ["  " + r for r in render_table(header, body)]

@@ -23,7 +23,18 @@ def test_defaults_are_the_papers_grid_for_scout():
     assert s.spawns == ("office", "conference", "kitchen", "entrance")
     assert (s.episodes, s.variant, s.backend, s.modality) == (20, "default", "builtin", None)
     assert (s.record_mode, s.matching, s.shard) == ("once", "strict", None)
-    assert s.thresholds == ROOT / "thresholds.yaml" and s.cassettes == ROOT / "cassettes"
+    assert s.thresholds is None, "/repo/thresholds.yaml does not exist: no gates"
+    assert s.cassettes == ROOT / "cassettes"
+
+
+def test_thresholds_default_to_the_rootdir_file_only_when_it_exists(tmp_path: Path):
+    assert resolve_settings({}, {}, rootdir=tmp_path, env={}).thresholds is None
+    (tmp_path / "thresholds.yaml").write_text("", encoding="utf-8")
+    assert resolve_settings({}, {}, rootdir=tmp_path, env={}).thresholds == (
+        tmp_path / "thresholds.yaml"
+    )
+    given = resolve_settings({"thresholds": "gates/x.yaml"}, {}, rootdir=tmp_path, env={})
+    assert given.thresholds == tmp_path / "gates" / "x.yaml", "a given file is kept (and checked)"
 
 
 def test_ci_environment_defaults_to_replay_only():

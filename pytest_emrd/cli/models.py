@@ -1,0 +1,83 @@
+"""``emrd models [--models FILE] [--json]``: the model registry, and which keys are set.
+
+One row per registered model: provider, default modality, model id, endpoint, the API-key
+variable and whether it is set in this environment (its value is never read out), and the
+registry's prices per million tokens. Parametric reference agents (``scout-decay-<m>``,
+``scout-window-<k>``) resolve from their name and are listed once as patterns.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+from pathlib import Path
+from typing import Any
+
+PARAMETRIC = ("scout-decay-<mean steps>", "scout-window-<k>")
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("models", help="list the model registry and whether each key is set")
+    p.add_argument("--models", type=Path, default=None, help="user model registry YAML")
+    p.add_argument("--json", action="store_true", help="print one JSON list of models")
+    p.set_defaults(func=_run)
+
+
+def key_state(env_var: str | None) -> str:
+    """``set`` / ``missing`` for a key variable, ``-`` when the model needs no key."""
+    if env_var is None:
+        return "-"
+    return "set" if os.environ.get(env_var, "").strip() else "missing"
+
+
+def _price(value: float | None) -> str:
+    return "-" if value is None else f"${value:g}"
+
+
+def model_rows(registry: Any) -> list[dict[str, Any]]:
+    """One plain dict per registered model (no secret: only whether the key is set)."""
+    rows = []
+    for name in registry.names():
+        config = registry.get(name)
+        rows.append(
+            {
+                "name": name,
+                "provider": config.provider,
+                "modality": config.modality,
+                "model_id": config.model_id,
+                "base_url": config.base_url or "built-in reference server",
+                "api_key_env": config.api_key_env,
+                "key": key_state(config.api_key_env),
+                "price_per_mtok_in": config.price_per_mtok_in,
+                "price_per_mtok_out": config.price_per_mtok_out,
+            }
+        )
+    return rows
+
+
+def _run(args: argparse.Namespace) -> int:
+    from pytest_emrd.agent import load_registry
+    from pytest_emrd.gate._table import render_table
+
+    rows = model_rows(load_registry(args.models))
+    if args.json:
+        print(json.dumps(rows))
+        return 0
+    header = ["model", "provider", "modality", "key", "in $/M", "out $/M", "model id", "endpoint"]
+    body = [
+        [
+            r["name"],
+            r["provider"],
+            r["modality"],
+            f"{r['api_key_env']} {r['key']}" if r["api_key_env"] else "-",
+            _price(r["price_per_mtok_in"]),
+            _price(r["price_per_mtok_out"]),
+            r["model_id"],
+            r["base_url"],
+        ]
+        for r in rows
+    ]
+    print("\n".join(render_table(header, body)))
+    print(f"parametric reference agents: {', '.join(PARAMETRIC)}")
+    return 0
