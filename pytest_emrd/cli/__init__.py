@@ -32,8 +32,7 @@ def version_text() -> str:
     from pytest_emrd.episode import protocol_version
 
     return (
-        f"emrd {__version__} (protocol {protocol_version()}, "
-        f"reference agents {REFERENCE_VERSION})"
+        f"emrd {__version__} (protocol {protocol_version()}, reference agents {REFERENCE_VERSION})"
     )
 
 
