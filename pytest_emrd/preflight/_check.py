@@ -1,0 +1,285 @@
+"""Preflight of one model: key, endpoint, one real probe call, context, images, cost.
+
+Checks, in order (each ``pass``, ``fail``, ``skip`` or ``info``):
+
+* ``key`` -- the registry's API-key variable is set (its value is never shown);
+* ``url`` -- the endpoint answers ``GET /models`` and, when it lists models, lists ours;
+* ``probe`` -- one real request of the episode loop (:mod:`._requests`: a full history
+  window, real 512x512 frames) is answered and the reply reads in our JSON protocol;
+* ``images`` -- the endpoint took as many frames in one request as the window sends;
+* ``context`` -- the context length the server reports holds the largest request plus
+  ``max_tokens`` (vLLM reports it; hosted APIs do not);
+* ``estimate`` -- tokens and cost of the requested live episodes (:mod:`._estimate`).
+
+A refusal vLLM explains (too many images, context too short) fails ``images`` or
+``context`` with the ``vllm serve`` flag that fixes it.
+"""
+
+from __future__ import annotations
+
+import os
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any, Final
+
+import httpx
+
+from pytest_emrd._serde import to_dict
+from pytest_emrd.agent import HISTORY_TURNS, ChatClient, ModelConfig, make_client, parse_reply
+from pytest_emrd.errors import EmrdError
+from pytest_emrd.preflight._estimate import CostEstimate, Measured, estimate_cost
+from pytest_emrd.preflight._refusals import vllm_refusal
+from pytest_emrd.preflight._requests import (
+    Sweep,
+    count_images,
+    request_tokens,
+    sample_reply,
+    sweep,
+)
+from pytest_emrd.preflight._server import models_url, server_info
+from pytest_emrd.trajectory import EpisodeSpec
+
+STATUSES: Final = ("pass", "fail", "skip", "info")
+_EXCERPT: Final = 160
+
+
+@dataclass(frozen=True)
+class Check:
+    """One preflight check and what it found."""
+
+    name: str
+    status: str
+    """``pass``, ``fail``, ``skip`` (a prerequisite failed) or ``info``."""
+    detail: str
+    fix: str = ""
+    """What to do when it failed."""
+
+
+@dataclass(frozen=True)
+class PreflightReport:
+    """Every check of one model, and the cost estimate of its live episodes."""
+
+    model: str
+    checks: tuple[Check, ...]
+    estimate: CostEstimate | None = None
+
+    @property
+    def failed(self) -> Check | None:
+        """The first failing check, or ``None``."""
+        return next((c for c in self.checks if c.status == "fail"), None)
+
+    def lines(self) -> list[str]:
+        """The report as terminal lines: one per check, the fix under a failure."""
+        width = max(len(c.name) for c in self.checks)
+        out = [f"emrd preflight {self.model}:"]
+        for c in self.checks:
+            out.append(f"  {c.status.upper():<4}  {c.name:<{width}}  {c.detail}")
+            if c.status == "fail" and c.fix:
+                out.append(f"        {'':<{width}}  fix: {c.fix}")
+        return out
+
+    def message(self) -> str:
+        """One sentence for a blocked run: the model, the failing check and the fix."""
+        failed = self.failed
+        if failed is None:
+            return f"preflight of model {self.model!r} passed."
+        return (
+            f"preflight of model {self.model!r} failed at '{failed.name}': {failed.detail}. "
+            f"Fix: {failed.fix}. Check again with: emrd check --emrd-model={self.model}"
+        )
+
+    def to_dict(self) -> dict[str, Any]:
+        return to_dict(self)
+
+
+def _key(config: ModelConfig) -> Check:
+    if config.api_key_env is None:
+        return Check("key", "pass", "no API key needed")
+    if os.environ.get(config.api_key_env, "").strip():
+        return Check("key", "pass", f"{config.api_key_env} is set")
+    return Check(
+        "key",
+        "fail",
+        f"{config.api_key_env} is not set",
+        f"export {config.api_key_env}=<your key> (or replay the committed cassettes with "
+        "--emrd-record-mode=none)",
+    )
+
+
+def _base_url(config: ModelConfig) -> str:
+    if config.base_url is not None:
+        return config.base_url
+    from pytest_emrd.agent.reference import reference_base_url
+
+    return reference_base_url()
+
+
+def _excerpt(text: str) -> str:
+    text = " ".join(text.split())
+    return text[:_EXCERPT] + ("..." if len(text) > _EXCERPT else "")
+
+
+@dataclass
+class _Probe:
+    """Inputs and outcome of the probe call."""
+
+    config: ModelConfig
+    messages: list[dict[str, Any]]
+    images: int
+    estimated: int
+    measured: Measured | None = None
+
+
+def _send(probe: _Probe, client: ChatClient) -> list[Check]:
+    images = probe.images
+    start = time.perf_counter()
+    try:
+        response = client.complete(probe.messages)
+    except EmrdError as exc:
+        return _refused(probe, str(exc))
+    finally:
+        client.close()
+    seconds = time.perf_counter() - start
+    usage = response.usage
+    probe.measured = Measured(
+        prompt_tokens=usage.prompt_tokens or probe.estimated,
+        estimated_prompt_tokens=probe.estimated,
+        completion_tokens=usage.completion_tokens,
+        reply=response.text,
+        seconds=seconds,
+    )
+    reply = parse_reply(response.text)
+    if reply.error is not None:
+        probe_check = Check(
+            "probe",
+            "fail",
+            f"the reply is not in the EMRD JSON protocol ({reply.error}): "
+            f"{_excerpt(response.text)!r}",
+            "check the model and its chat template follow the system prompt's REPLY FORMAT "
+            "(one JSON object with cognitive_map and action)",
+        )
+    else:
+        probe_check = Check(
+            "probe",
+            "pass",
+            f"answered in {seconds:.1f} s: action {reply.action}, {len(reply.cognitive_map)} map "
+            f"entries, {usage.prompt_tokens:,} prompt + {usage.completion_tokens:,} completion "
+            "tokens",
+        )
+    if images == 0:
+        return [probe_check, Check("images", "info", "text modality: no frames are sent")]
+    return [probe_check, Check("images", "pass", f"took {images} frames in one request")]
+
+
+def _refused(probe: _Probe, message: str) -> list[Check]:
+    config = probe.config
+    refusal = vllm_refusal(
+        message,
+        images=probe.images,
+        max_tokens=config.max_tokens,
+        prompt_tokens=probe.estimated,
+    )
+    said = _excerpt(message)
+    if refusal is not None:
+        return [
+            Check("probe", "fail", f"the server refused the request: {refusal.said}", refusal.fix),
+            Check(refusal.check, "fail", refusal.said, refusal.fix),
+        ]
+    if "HTTP 401" in message or "HTTP 403" in message:
+        fix = (
+            f"check the key in {config.api_key_env}"
+            if config.api_key_env
+            else "the server wants a key (vLLM started with --api-key?): set api_key_env for "
+            f"{config.name!r} in a user registry (--emrd-models FILE)"
+        )
+        return [Check("probe", "fail", f"credentials rejected: {said}", fix)]
+    if "HTTP 404" in message:
+        fix = f"check base_url and model_id={config.model_id!r} (a user registry overrides them)"
+        return [Check("probe", "fail", f"not found: {said}", fix)]
+    return [Check("probe", "fail", said, "see the server's message above")]
+
+
+def _context(probe: _Probe, max_model_len: int | None, done: list[Check]) -> Check | None:
+    if any(c.name == "context" for c in done):
+        return None
+    if max_model_len is None:
+        return Check("context", "info", "context length not reported by the server")
+    prompt = probe.measured.prompt_tokens if probe.measured else probe.estimated
+    needed = prompt + probe.config.max_tokens
+    detail = (
+        f"server context {max_model_len:,} tokens; a full window needs ~{prompt:,} + "
+        f"max_tokens {probe.config.max_tokens:,}"
+    )
+    if needed <= max_model_len:
+        return Check("context", "pass", detail)
+    refusal = vllm_refusal(
+        f"maximum context length is {max_model_len} tokens",
+        images=probe.images,
+        max_tokens=probe.config.max_tokens,
+        prompt_tokens=prompt,
+    )
+    return Check("context", "fail", detail, refusal.fix if refusal else "")
+
+
+def _url(config: ModelConfig, base_url: str) -> tuple[Check, int | None]:
+    info = server_info(models_url(config.provider, base_url), config.model_id)
+    if not info.reachable:
+        local = httpx.URL(base_url).host in ("localhost", "127.0.0.1", "::1")
+        fix = (
+            "start the server (README: the vllm serve command of each open model) or point the "
+            "model's base_url at it (its EMRD_*_BASE_URL variable, or a user registry)"
+            if local
+            else "check this machine's network access to it, or the model's base_url"
+        )
+        return Check("url", "fail", f"cannot reach {base_url} ({info.error})", fix), None
+    if info.serves(config.model_id) is False:
+        served = ", ".join(info.served[:5])
+        return (
+            Check(
+                "url",
+                "fail",
+                f"{base_url} serves {served}, not {config.model_id}",
+                f"start vLLM with --served-model-name {config.model_id}, or set model_id in a "
+                "user registry",
+            ),
+            None,
+        )
+    return Check("url", "pass", f"{info.url} answered HTTP {info.status}"), info.max_model_len
+
+
+def preflight(
+    config: ModelConfig,
+    spec: EpisodeSpec,
+    *,
+    episodes: int,
+    probe: bool = True,
+    client_factory: Callable[[ModelConfig], ChatClient] = make_client,
+) -> PreflightReport:
+    """Check that ``config`` can run ``episodes`` live episodes like ``spec`` (its modality,
+    variant and budget); ``probe=False`` checks the key and estimates without any network."""
+    window: Sweep = sweep(spec, single_image=config.single_image)
+    messages = window.request(HISTORY_TURNS, sample_reply())
+    state = _Probe(
+        config,
+        messages,
+        count_images(messages),
+        request_tokens(messages, image_tokens=config.image_tokens),
+    )
+    checks = [_key(config)]
+    if probe:
+        base_url = _base_url(config)
+        url, max_model_len = _url(config, base_url)
+        checks.append(url)
+        if checks[0].status == "fail" or url.status == "fail":
+            checks.append(Check("probe", "skip", "needs the key and a reachable endpoint"))
+        else:
+            checks += _send(state, client_factory(config))
+            context = _context(state, max_model_len, checks)
+            if context is not None:
+                checks.append(context)
+    estimate = estimate_cost(
+        config, window, episodes=episodes, max_steps=spec.max_steps, measured=state.measured
+    )
+    checks.append(Check("estimate", "info", estimate.line()))
+    return PreflightReport(config.name, tuple(checks), estimate)
