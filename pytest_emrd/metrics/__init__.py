@@ -9,7 +9,8 @@ truth) and hand the resulting :class:`EpisodeMetrics` to the gate metrics
 (``GATE_METRICS[name].compute``, or :func:`evaluate_gates` for several) and to the report
 aggregates (:func:`kaplan_meier_anchored`, :func:`miller_curve`, ...). Every aggregate also
 accepts trajectories directly; errored episodes are excluded and counted.
-Label-to-ground-truth matching is one procedure, :func:`match_map`.
+Label-to-ground-truth matching is one procedure, :func:`match_map`; what a model's label
+denotes is :func:`canonical_type` (the vocabulary of free-form labels).
 """
 
 from pytest_emrd.metrics._decide import (
@@ -70,9 +71,10 @@ from pytest_emrd.metrics._survival import (
     efc,
 )
 from pytest_emrd.metrics._tracking import Spell
-from pytest_emrd.metrics._vocab import SYNONYMS, type_key
+from pytest_emrd.metrics._vocab import ENGINE_TYPES, SYNONYMS, candidate_types, canonical_type
 
 __all__ = [
+    "ENGINE_TYPES",
     "GATE_METRICS",
     "SYNONYMS",
     "AnchoredKM",
@@ -104,6 +106,8 @@ __all__ = [
     "anova_groups",
     "as_episode_metrics",
     "bootstrap_ci",
+    "candidate_types",
+    "canonical_type",
     "chi_square",
     "consensus",
     "cramers_v",
@@ -132,5 +136,4 @@ __all__ = [
     "tbs_curve",
     "te_score",
     "time_to_forget",
-    "type_key",
 ]

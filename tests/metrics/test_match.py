@@ -9,33 +9,13 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from pytest_emrd.metrics import aec_score, match_map, positional_accuracy_score, type_key
+from pytest_emrd.metrics import aec_score, match_map, positional_accuracy_score
 from pytest_emrd.rooms import CONFERENCE, KITCHEN
 from pytest_emrd.trajectory import GroundTruthObject, MapEntry
 
 MakeObj = Callable[..., GroundTruthObject]
 
 coord = st.floats(-20, 20, allow_nan=False, allow_infinity=False)
-
-
-@pytest.mark.parametrize(
-    ("text", "key"),
-    [
-        ("DiningTable", "diningtable"),
-        ("Dining table #2", "diningtable"),
-        ("dining_table_2", "diningtable"),
-        ("Chair_3", "chair"),
-        ("stool b", "stool"),
-        ("TV (left of the door)", "tv"),
-        ("door-frame", "doorframe"),
-        ("Chair3", "chair"),
-        ("", ""),
-        ("_3", ""),
-    ],
-    ids=lambda v: repr(v),
-)
-def test_type_key(text: str, key: str) -> None:
-    assert type_key(text) == key
 
 
 def test_synonyms_and_label_fallback_resolve_types(make_obj: MakeObj) -> None:
