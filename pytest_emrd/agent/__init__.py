@@ -8,9 +8,17 @@ from pytest_emrd.agent._clients import (
     ChatClient,
     ChatResponse,
     OpenAICompatibleClient,
+    ProviderRequest,
+    build_request,
     make_client,
 )
-from pytest_emrd.agent._config import PROVIDERS, ModelConfig, Registry, load_registry
+from pytest_emrd.agent._config import (
+    ANTHROPIC_VERSION,
+    PROVIDERS,
+    ModelConfig,
+    Registry,
+    load_registry,
+)
 from pytest_emrd.agent._history import HISTORY_TURNS, Conversation, UserTurn
 from pytest_emrd.agent._parse import Reply, parse_reply
 from pytest_emrd.agent._prompt import (
@@ -25,6 +33,7 @@ from pytest_emrd.agent._prompt import (
 from pytest_emrd.agent._retry import RetryPolicy
 
 __all__ = [
+    "ANTHROPIC_VERSION",
     "HISTORY_TURNS",
     "NEUTRAL_NAMES",
     "PROMPT_VERSION",
@@ -36,10 +45,12 @@ __all__ = [
     "Conversation",
     "ModelConfig",
     "OpenAICompatibleClient",
+    "ProviderRequest",
     "Registry",
     "Reply",
     "RetryPolicy",
     "UserTurn",
+    "build_request",
     "build_system_prompt",
     "load_registry",
     "make_client",

@@ -1,7 +1,14 @@
 """Model clients on httpx (which vcrpy patches): OpenAI-compatible and Anthropic Messages.
 
 Request bodies depend only on the configuration and the messages: no timestamps, no
-request ids, no secrets (keys travel in headers, which cassettes strip).
+request ids, no secrets (keys travel in headers, which cassettes strip). What is sent is
+:func:`build_request`: a pure function the conformance tests validate against each
+provider's published request schema. Sampling fields set to None are left out (the
+provider's default); ``extra_body`` and ``extra_headers`` are passed through as written.
+
+Why not the official SDKs: ``anthropic`` 2.x runs on ``httpx2``, which vcrpy does not
+record, and both SDKs add per-request headers (retry counts, platform) that would have to
+be kept out of cassettes; the bodies are plain JSON we can build and validate ourselves.
 """
 
 from __future__ import annotations
@@ -12,13 +19,22 @@ from typing import Any, Final, Protocol
 
 import httpx
 
-from pytest_emrd.agent._config import ModelConfig
+from pytest_emrd.agent._config import ANTHROPIC_VERSION, SAMPLING_FIELDS, ModelConfig
 from pytest_emrd.agent._retry import RetryPolicy, post_json
 from pytest_emrd.errors import ConfigError
 from pytest_emrd.trajectory import Usage
 
-ANTHROPIC_VERSION: Final = "2023-06-01"
 _DATA_URL_PREFIX: Final = "data:image/jpeg;base64,"
+
+
+@dataclass(frozen=True)
+class ProviderRequest:
+    """One request as it goes on the wire, less the API key (added by the client)."""
+
+    path: str
+    """Appended to ``base_url``: ``/chat/completions`` or ``/v1/messages``."""
+    headers: dict[str, str]
+    body: dict[str, Any]
 
 
 @dataclass(frozen=True)
@@ -41,7 +57,7 @@ def _api_key(config: ModelConfig, *, required: bool) -> str | None:
     if config.api_key_env is None:
         return None
     key = os.environ.get(config.api_key_env, "").strip()
-    if not key and required:
+    if not key and required and config.api_key_required:
         raise ConfigError(
             f"model {config.name!r} needs an API key in the environment variable "
             f"{config.api_key_env}; set it, or replay the recorded cassettes (record mode none)."
@@ -66,6 +82,30 @@ class _HttpClient:
         self.policy = policy or RetryPolicy(max_retries=config.max_retries)
         self._key = _api_key(config, required=require_key)
         self._http = httpx.Client(timeout=httpx.Timeout(config.timeout_s), transport=transport)
+
+    @staticmethod
+    def _auth(key: str) -> dict[str, str]:
+        """The header carrying ``key`` (provider-specific)."""
+        raise NotImplementedError
+
+    @staticmethod
+    def _read(data: Any) -> ChatResponse:
+        """The reply text and usage from the decoded response (provider-specific)."""
+        raise NotImplementedError
+
+    def complete(self, messages: list[dict[str, Any]]) -> ChatResponse:
+        """Send :func:`build_request` for ``messages`` (plus the key) and read the reply."""
+        request = build_request(self.config, messages)
+        headers = request.headers | self._auth(self._key) if self._key else request.headers
+        return post_json(
+            self._http,
+            f"{self.base_url}{request.path}",
+            body=request.body,
+            headers=headers,
+            policy=self.policy,
+            read=self._read,
+            secrets=(self._key,),
+        )
 
     def close(self) -> None:
         self._http.close()
@@ -94,22 +134,11 @@ def _read_openai(data: Any) -> ChatResponse:
 class OpenAICompatibleClient(_HttpClient):
     """``POST {base_url}/chat/completions``: vLLM, OpenAI, Gemini, the reference server."""
 
-    def complete(self, messages: list[dict[str, Any]]) -> ChatResponse:
-        body: dict[str, Any] = {
-            "model": self.config.model_id,
-            "messages": messages,
-            "temperature": self.config.temperature,
-            self.config.max_tokens_param: self.config.max_tokens,
-        }
-        headers = {"Authorization": f"Bearer {self._key}"} if self._key else {}
-        return post_json(
-            self._http,
-            f"{self.base_url}/chat/completions",
-            body=body,
-            headers=headers,
-            policy=self.policy,
-            read=_read_openai,
-        )
+    _read = staticmethod(_read_openai)
+
+    @staticmethod
+    def _auth(key: str) -> dict[str, str]:
+        return {"Authorization": f"Bearer {key}"}
 
 
 def _anthropic_part(part: dict[str, Any]) -> dict[str, Any]:
@@ -152,26 +181,36 @@ def _read_anthropic(data: Any) -> ChatResponse:
 class AnthropicClient(_HttpClient):
     """``POST {base_url}/v1/messages`` (Anthropic Messages API)."""
 
-    def complete(self, messages: list[dict[str, Any]]) -> ChatResponse:
+    _read = staticmethod(_read_anthropic)
+
+    @staticmethod
+    def _auth(key: str) -> dict[str, str]:
+        return {"x-api-key": key}
+
+
+def _sampling(config: ModelConfig) -> dict[str, Any]:
+    return {k: getattr(config, k) for k in SAMPLING_FIELDS if getattr(config, k) is not None}
+
+
+def build_request(config: ModelConfig, messages: list[dict[str, Any]]) -> ProviderRequest:
+    """The path, headers (no key) and JSON body ``config``'s provider is sent for ``messages``.
+
+    OpenAI-compatible: ``model, messages, [temperature], [top_p], <max_tokens_param>``, then
+    ``extra_body``. Anthropic: ``model, system, messages, [sampling], max_tokens``, then
+    ``extra_body``, with ``anthropic-version`` (:data:`ANTHROPIC_VERSION` unless
+    ``extra_headers`` pins another). Key order is fixed: cassettes match on the body.
+    """
+    if config.provider == "anthropic":
         system, converted = to_anthropic(messages)
-        body = {
-            "model": self.config.model_id,
-            "system": system,
-            "messages": converted,
-            "temperature": self.config.temperature,
-            "max_tokens": self.config.max_tokens,
-        }
-        headers = {"anthropic-version": ANTHROPIC_VERSION}
-        if self._key:
-            headers["x-api-key"] = self._key
-        return post_json(
-            self._http,
-            f"{self.base_url}/v1/messages",
-            body=body,
-            headers=headers,
-            policy=self.policy,
-            read=_read_anthropic,
-        )
+        body = {"model": config.model_id, "system": system, "messages": converted}
+        body |= _sampling(config) | {"max_tokens": config.max_tokens} | config.extra_body
+        pinned = {name.lower() for name in config.extra_headers}
+        headers = {} if "anthropic-version" in pinned else {"anthropic-version": ANTHROPIC_VERSION}
+        headers |= config.extra_headers
+        return ProviderRequest("/v1/messages", headers, body)
+    body = {"model": config.model_id, "messages": messages, **_sampling(config)}
+    body |= {config.max_tokens_param: config.max_tokens} | config.extra_body
+    return ProviderRequest("/chat/completions", dict(config.extra_headers), body)
 
 
 def make_client(

@@ -29,6 +29,33 @@ from pytest_emrd.trajectory import MODALITIES
 
 PROVIDERS: Final[tuple[str, ...]] = ("openai", "anthropic", "reference")
 
+ANTHROPIC_VERSION: Final = "2026-10-21"
+"""``anthropic-version`` sent to the Messages API: the current version (released 2026-10-21
+with the official SDKs' new majors, e.g. ``anthropic`` 2.0.0; 2.10.0 still sends it). It
+answers HTTP 400 to ``temperature``, ``top_p`` and ``top_k``, even at their defaults."""
+LEGACY_ANTHROPIC_VERSION: Final = "2023-06-01"
+"""The previous version, which still accepts sampling parameters (``temperature`` in [0, 1])."""
+SAMPLING_FIELDS: Final[tuple[str, ...]] = ("temperature", "top_p")
+"""Registry fields that are sent only when set; ``null`` means "provider default"."""
+REASONING_EFFORTS: Final[tuple[str, ...]] = (
+    "none",
+    "minimal",
+    "low",
+    "medium",
+    "high",
+    "xhigh",
+    "max",
+)
+"""``reasoning_effort`` values of ``CreateChatCompletionRequest`` (OpenAI OpenAPI spec,
+github:openai/openai-openapi commit f85dbe2, 2026-08-21); not every model takes every value."""
+VERBOSITIES: Final[tuple[str, ...]] = ("low", "medium", "high")
+"""``verbosity`` values of ``CreateChatCompletionRequest`` (same source)."""
+MAX_TOKENS_PARAMS: Final[tuple[str, ...]] = ("max_tokens", "max_completion_tokens")
+_CLIENT_BODY_KEYS: Final = frozenset(
+    {"model", "messages", "system", "max_tokens", "max_completion_tokens", "stream", "top_k"}
+)
+_CREDENTIAL_HEADERS: Final = frozenset({"authorization", "x-api-key", "api-key", "x-goog-api-key"})
+
 _ENV_REF = re.compile(r"\$\{(?P<var>[A-Z_][A-Z0-9_]*)(?::-(?P<default>[^}]*))?\}")
 _DECAY = re.compile(r"^scout-decay-(?P<mean>\d+(?:\.\d+)?)$")
 _WINDOW = re.compile(r"^scout-window-(?P<k>\d+)$")
@@ -48,7 +75,13 @@ class ModelConfig:
     """Endpoint root (``https://api.openai.com/v1``); None: the built-in reference server."""
     api_key_env: str | None = None
     """Environment variable holding the API key; None sends no key."""
-    temperature: float = 0.0
+    api_key_required: bool = True
+    """False: send the key when its variable is set, else none (a vLLM server may or may
+    not have been started with ``--api-key``)."""
+    temperature: float | None = 0.0
+    """Sampling temperature; None sends none (the provider's default)."""
+    top_p: float | None = None
+    """Nucleus sampling mass; None (the default) sends none."""
     max_tokens: int = 4096
     single_image: bool = False
     """Send only the newest frame as an image; earlier frames travel as text."""
@@ -66,6 +99,10 @@ class ModelConfig:
     measures it (255: one OpenAI high-detail tile)."""
     max_tokens_param: str = "max_tokens"
     """Body key carrying ``max_tokens`` (``max_completion_tokens`` for newer OpenAI models)."""
+    extra_body: dict[str, Any] = field(default_factory=dict)
+    """Provider-specific body fields sent as written (``{"reasoning_effort": "none"}``)."""
+    extra_headers: dict[str, str] = field(default_factory=dict)
+    """Extra request headers (``{"anthropic-version": "2023-06-01"}``); never credentials."""
     planted: dict[str, Any] = field(default_factory=dict)
     """Planted cognition of a reference agent (``{"memory": "decay", "mean_steps": 8.0}``)."""
 
@@ -73,9 +110,15 @@ class ModelConfig:
         where = f"model {self.name!r}"
         check_choice(f"{where}: provider", self.provider, PROVIDERS)
         check_choice(f"{where}: modality", self.modality, MODALITIES)
-        check_range(f"{where}: temperature", self.temperature, 0.0, 2.0)
+        _check_extras(self, where)
+        _check_sampling(self, where)
         check_positive_int(f"{where}: max_tokens", self.max_tokens)
         check_positive_int(f"{where}: image_tokens", self.image_tokens)
+        check_choice(f"{where}: max_tokens_param", self.max_tokens_param, MAX_TOKENS_PARAMS)
+        if not isinstance(self.api_key_required, bool):
+            raise ConfigError(
+                f"{where}: api_key_required={self.api_key_required!r} must be true or false."
+            )
         check_range(f"{where}: timeout_s", self.timeout_s, 0.001, 3600.0)
         if isinstance(self.max_retries, bool) or not isinstance(self.max_retries, int):
             raise ConfigError(f"{where}: max_retries={self.max_retries!r} must be a whole number.")
@@ -84,6 +127,60 @@ class ModelConfig:
             raise ConfigError(f"{where}: base_url is required for provider={self.provider!r}.")
         if self.planted and self.provider != "reference":
             raise ConfigError(f"{where}: planted parameters are only for reference agents.")
+
+
+def _check_number(name: str, value: Any, low: float, high: float) -> None:
+    if value is None:
+        return
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        raise ConfigError(f"{name}={value!r} must be a number in [{low}, {high}] or null.")
+    check_range(name, value, low, high)
+
+
+def _check_sampling(config: ModelConfig, where: str) -> None:
+    anthropic_version = {k.lower(): v for k, v in config.extra_headers.items()}.get(
+        "anthropic-version", ANTHROPIC_VERSION
+    )
+    if config.provider == "anthropic" and anthropic_version != LEGACY_ANTHROPIC_VERSION:
+        sent = [k for k in SAMPLING_FIELDS if getattr(config, k) is not None]
+        if sent:
+            raise ConfigError(
+                f"{where}: {sent[0]}={getattr(config, sent[0])!r} is rejected by the Anthropic "
+                f"Messages API version {anthropic_version}; allowed: null (provider default), "
+                f"or pin extra_headers: {{anthropic-version: '{LEGACY_ANTHROPIC_VERSION}'}}."
+            )
+    high = 1.0 if config.provider == "anthropic" else 2.0
+    _check_number(f"{where}: temperature", config.temperature, 0.0, high)
+    _check_number(f"{where}: top_p", config.top_p, 0.0, 1.0)
+
+
+def _check_extras(config: ModelConfig, where: str) -> None:
+    for name, value in (("extra_body", config.extra_body), ("extra_headers", config.extra_headers)):
+        if not isinstance(value, dict) or not all(isinstance(k, str) for k in value):
+            raise ConfigError(f"{where}: {name}={value!r} must be a mapping of name -> value.")
+    owned = sorted(set(config.extra_body) & (_CLIENT_BODY_KEYS | set(SAMPLING_FIELDS)))
+    if owned:
+        raise ConfigError(
+            f"{where}: extra_body may not set {owned[0]!r}: the client writes it "
+            f"(use the registry field of that name where there is one; allowed extra_body "
+            f"keys are any others, e.g. reasoning_effort)."
+        )
+    if config.provider == "openai":
+        body = config.extra_body
+        if "reasoning_effort" in body:
+            check_choice(
+                f"{where}: extra_body.reasoning_effort", body["reasoning_effort"], REASONING_EFFORTS
+            )
+        if "verbosity" in body:
+            check_choice(f"{where}: extra_body.verbosity", body["verbosity"], VERBOSITIES)
+    for header, value in config.extra_headers.items():
+        if header.lower() in _CREDENTIAL_HEADERS:
+            raise ConfigError(
+                f"{where}: extra_headers may not carry {header!r}: keys come only from the "
+                "environment variable named by api_key_env."
+            )
+        if not isinstance(value, str):
+            raise ConfigError(f"{where}: extra_headers.{header}={value!r} must be a string.")
 
 
 _FIELDS: Final = {f.name for f in fields(ModelConfig)}
@@ -115,12 +212,16 @@ def _build(name: str, entry: Any, source: str) -> ModelConfig:
         )
     values = {k: _expand_env(v) if isinstance(v, str) else v for k, v in entry.items()}
     values["name"] = name
+    if values.get("provider") == "anthropic":
+        values.setdefault("temperature", None)  # Appendix C: Claude at the provider default
     if values.get("provider") == "reference":
         values["model_id"] = versioned_id(str(values.get("model_id") or name).partition("@")[0])
     try:
         return ModelConfig(**values)
     except TypeError as exc:
         raise ConfigError(f"{source}: model {name!r}: {exc}") from exc
+    except ConfigError as exc:
+        raise ConfigError(f"{source}: {exc}") from None
 
 
 def _read_yaml(text: str, source: str) -> dict[str, dict[str, Any]]:

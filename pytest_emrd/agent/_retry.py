@@ -1,30 +1,45 @@
-"""Bounded retries with exponential backoff and jitter, honouring ``Retry-After``.
+"""Bounded retries with exponential backoff and jitter, honouring ``Retry-After`` (tenacity).
 
-Retried: HTTP 429, any 5xx, transport errors (connection refused or reset, timeouts) and
-2xx bodies that are not the JSON the provider promised. Not retried: other 4xx (a bad
-key or a bad request does not heal). Jitter only changes how long we sleep; the request
-sent again is the same object, byte for byte.
+Retried: HTTP 429, any 5xx in :data:`RETRY_STATUSES`, transport errors (connection refused
+or reset, timeouts) and 2xx bodies that are not the JSON the provider promised. Not
+retried: other 4xx (a bad key or a bad request does not heal). Jitter only changes how long
+we sleep; the request sent again is the same object, byte for byte.
+
+The loop is :class:`tenacity.Retrying` (bounded by ``stop_after_attempt``); the wait is
+ours, because it must read ``Retry-After`` from the failed response and draw its jitter
+from a seedable generator. Each retry is logged on ``pytest_emrd.agent.retry`` at WARNING
+with the attempt, the wait and the cause; URLs are logged without userinfo or query and
+the API key's literal value is masked wherever it would appear.
 """
 
 from __future__ import annotations
 
 import email.utils
+import logging
 import random
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from typing import Any, Final
 
 import httpx
+import tenacity
 
 from pytest_emrd.errors import TransportError
 
 RETRY_STATUSES: Final = frozenset({429, 500, 502, 503, 504, 520, 522, 524, 529})
 _BODY_EXCERPT: Final = 300
+_MASK: Final = "***"
+
+logger = logging.getLogger("pytest_emrd.agent.retry")
 
 
-class _Malformed(Exception):
-    """A 2xx response whose body is not what the provider promised (retried)."""
+class _Retryable(Exception):
+    """One failed attempt that may heal: its cause and the server's ``Retry-After``."""
+
+    def __init__(self, cause: str, retry_after: float | None = None) -> None:
+        super().__init__(cause)
+        self.retry_after = retry_after
 
 
 @dataclass(frozen=True)
@@ -63,9 +78,49 @@ def retry_after_seconds(value: str | None) -> float | None:
     return max(0.0, when.timestamp() - time.time())
 
 
+def _masker(secrets: Iterable[str | None]) -> Callable[[str], str]:
+    values = [s for s in secrets if s]
+
+    def mask(text: str) -> str:
+        for value in values:
+            text = text.replace(value, _MASK)
+        return text
+
+    return mask
+
+
 def _excerpt(response: httpx.Response) -> str:
     text = response.text
     return text[:_BODY_EXCERPT] + ("..." if len(text) > _BODY_EXCERPT else "")
+
+
+def _public_url(url: str) -> str:
+    """``url`` without userinfo or query string (either may carry a credential)."""
+    parsed = httpx.URL(url)
+    return str(parsed.copy_with(userinfo=b"", query=None, fragment=None))
+
+
+def _attempt(http: httpx.Client, request: httpx.Request, url: str, read: Callable[[Any], Any]):
+    """One POST: the read result, :class:`_Retryable`, or a non-retried TransportError."""
+    try:
+        response = http.send(request)
+    except httpx.TransportError as exc:
+        raise _Retryable(f"{type(exc).__name__}: {exc}") from exc
+    if response.status_code in RETRY_STATUSES:
+        retry_after = retry_after_seconds(response.headers.get("retry-after"))
+        raise _Retryable(f"HTTP {response.status_code}: {_excerpt(response)}", retry_after)
+    if response.is_error:
+        raise TransportError(
+            f"POST {url} failed with HTTP {response.status_code} (not retried): "
+            f"{_excerpt(response)}"
+        )
+    try:
+        return read(response.json())
+    except (ValueError, KeyError, TypeError, IndexError) as exc:
+        raise _Retryable(
+            f"HTTP {response.status_code} with an unreadable body "
+            f"({type(exc).__name__}: {exc}): {_excerpt(response)}"
+        ) from exc
 
 
 def post_json(
@@ -76,42 +131,50 @@ def post_json(
     headers: dict[str, str],
     policy: RetryPolicy,
     read: Callable[[Any], Any],
+    secrets: Iterable[str | None] = (),
 ) -> Any:
     """POST ``body`` and return ``read(json)``, retrying per ``policy``.
 
     ``read`` turns the decoded JSON into the caller's result and raises ``KeyError``,
     ``TypeError`` or ``ValueError`` when the shape is wrong (treated as a garbage body).
     Exhausted retries or a non-retryable status raise :class:`TransportError` naming the
-    URL, the attempts and the last cause.
+    URL, the attempts and the last cause. ``secrets`` (the API key) are masked in every
+    log line and error message.
     """
     request = http.build_request("POST", url, json=body, headers=headers)
-    cause = ""
-    for attempt in range(policy.max_retries + 1):
-        retry_after = None
-        try:
-            response = http.send(request)
-            if response.status_code in RETRY_STATUSES:
-                retry_after = retry_after_seconds(response.headers.get("retry-after"))
-                cause = f"HTTP {response.status_code}: {_excerpt(response)}"
-            elif response.is_error:
-                raise TransportError(
-                    f"POST {url} failed with HTTP {response.status_code} (not retried): "
-                    f"{_excerpt(response)}"
-                )
-            else:
-                try:
-                    return read(response.json())
-                except (ValueError, KeyError, TypeError, IndexError) as exc:
-                    raise _Malformed(
-                        f"HTTP {response.status_code} with an unreadable body "
-                        f"({type(exc).__name__}: {exc}): {_excerpt(response)}"
-                    ) from exc
-        except httpx.TransportError as exc:
-            cause = f"{type(exc).__name__}: {exc}"
-        except _Malformed as exc:
-            cause = str(exc)
-        if attempt < policy.max_retries:
-            policy.sleep(policy.backoff(attempt, retry_after))
-    raise TransportError(
-        f"POST {url} failed after {policy.max_retries + 1} attempt(s); last cause: {cause}"
+    mask = _masker(secrets)
+    shown = _public_url(url)
+    attempts = policy.max_retries + 1
+
+    def wait(state: tenacity.RetryCallState) -> float:
+        failure = state.outcome.exception() if state.outcome else None
+        retry_after = failure.retry_after if isinstance(failure, _Retryable) else None
+        return policy.backoff(state.attempt_number - 1, retry_after)
+
+    def log_retry(state: tenacity.RetryCallState) -> None:
+        failure = state.outcome.exception() if state.outcome else None
+        logger.warning(
+            "POST %s attempt %d/%d failed; retrying in %.2f s. Cause: %s",
+            shown,
+            state.attempt_number,
+            attempts,
+            state.upcoming_sleep,
+            mask(str(failure)),
+        )
+
+    retrying = tenacity.Retrying(
+        stop=tenacity.stop_after_attempt(attempts),
+        wait=wait,
+        retry=tenacity.retry_if_exception_type(_Retryable),
+        before_sleep=log_retry,
+        sleep=policy.sleep,
     )
+    try:
+        return retrying(_attempt, http, request, shown, read)
+    except tenacity.RetryError as exc:
+        cause = mask(str(exc.last_attempt.exception()))
+        raise TransportError(
+            f"POST {shown} failed after {attempts} attempt(s); last cause: {cause}"
+        ) from None
+    except TransportError as exc:
+        raise TransportError(mask(str(exc))) from None

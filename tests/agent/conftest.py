@@ -39,8 +39,9 @@ def inventory() -> dict[str, dict[str, int]]:
 class FaultServer:
     """A loopback server answering from a script: one entry per request, then OK forever.
 
-    Script entries: ``("status", code, headers)``, ``("garbage", code)``, ``("stall", s)``
-    (sleeps ``s`` seconds before answering OK: a client timeout), ``("ok",)``.
+    Script entries: ``("status", code, headers)`` (optionally a 4th item: the body),
+    ``("garbage", code)``, ``("stall", s)`` (sleeps ``s`` seconds before answering OK: a
+    client timeout), ``("ok",)``.
     """
 
     script: list[tuple[Any, ...]] = field(default_factory=list)
@@ -73,7 +74,8 @@ def _handler(state: FaultServer) -> type[BaseHTTPRequestHandler]:
             state.paths.append(self.path)
             entry = state.script.pop(0) if state.script else ("ok",)
             if entry[0] == "status":
-                self._reply(entry[1], b'{"error": "injected"}', entry[2])
+                body = entry[3] if len(entry) > 3 else b'{"error": "injected"}'
+                self._reply(entry[1], body, entry[2])
             elif entry[0] == "garbage":
                 self._reply(entry[1], b"<html>upstream hiccup</html>")
             else:

@@ -3,11 +3,13 @@
 from __future__ import annotations
 
 import json
+import logging
 import random
 
 import pytest
 
 from pytest_emrd.agent import (
+    ANTHROPIC_VERSION,
     AnthropicClient,
     ModelConfig,
     OpenAICompatibleClient,
@@ -181,7 +183,10 @@ def test_anthropic_messages_api(fault_server, sleeps, monkeypatch) -> None:
         "usage": {"input_tokens": 5, "output_tokens": 2},
     }
     config = _config(
-        provider="anthropic", base_url=fault_server.base_url, api_key_env="EMRD_TEST_KEY"
+        provider="anthropic",
+        base_url=fault_server.base_url,
+        api_key_env="EMRD_TEST_KEY",
+        temperature=None,
     )
     policy = RetryPolicy(max_retries=1, sleep=sleeps)
     with AnthropicClient(config, base_url=fault_server.base_url, policy=policy) as client:
@@ -190,10 +195,110 @@ def test_anthropic_messages_api(fault_server, sleeps, monkeypatch) -> None:
     assert (response.text, response.usage) == ("hi", Usage(5, 2))
     assert fault_server.paths[-1] == "/v1/messages"
     assert fault_server.headers[-1]["x-api-key"] == "ant-secret"
+    assert fault_server.headers[-1]["anthropic-version"] == ANTHROPIC_VERSION == "2026-10-21"
     body = json.loads(fault_server.bodies[-1])
+    assert list(body) == ["model", "system", "messages", "max_tokens"], "no sampling parameter"
     assert body["system"] == "be brief"
     image = body["messages"][0]["content"][1]
     assert image == {
         "type": "image",
         "source": {"type": "base64", "media_type": "image/jpeg", "data": "QUJD"},
     }
+
+
+def _sent(fault_server, sleeps, **overrides: object) -> tuple[dict, dict[str, str]]:
+    with _client(fault_server, sleeps, **overrides) as client:
+        client.complete(MESSAGES)
+    return json.loads(fault_server.bodies[-1]), fault_server.headers[-1]
+
+
+def test_null_temperature_is_not_sent(fault_server, sleeps) -> None:
+    body, _ = _sent(fault_server, sleeps, temperature=None)
+    assert body == {"model": "m", "messages": MESSAGES, "max_tokens": 4096}
+
+
+def test_sampling_and_extras_pass_through_in_a_fixed_order(fault_server, sleeps) -> None:
+    body, headers = _sent(
+        fault_server,
+        sleeps,
+        top_p=0.9,
+        max_tokens_param="max_completion_tokens",
+        extra_body={"reasoning_effort": "none", "seed": 7},
+        extra_headers={"X-Trace": "abc"},
+    )
+    assert list(body) == [
+        "model",
+        "messages",
+        "temperature",
+        "top_p",
+        "max_completion_tokens",
+        "reasoning_effort",
+        "seed",
+    ]
+    assert (body["top_p"], body["reasoning_effort"], headers["x-trace"]) == (0.9, "none", "abc")
+
+
+def test_anthropic_legacy_version_pin_sends_its_header_and_temperature(
+    fault_server, sleeps
+) -> None:
+    fault_server.ok_body = {"content": [{"type": "text", "text": "hi"}], "usage": {}}
+    config = _config(
+        provider="anthropic",
+        base_url=fault_server.base_url,
+        temperature=0.5,
+        extra_headers={"Anthropic-Version": "2023-06-01"},
+    )
+    with AnthropicClient(config, base_url=fault_server.base_url) as client:
+        client.complete(MESSAGES)
+    assert fault_server.headers[-1]["anthropic-version"] == "2023-06-01"
+    assert json.loads(fault_server.bodies[-1])["temperature"] == 0.5
+
+
+@pytest.mark.parametrize("key", ["vllm-secret", None], ids=["key-set", "key-unset"])
+def test_optional_key_is_sent_only_when_set(fault_server, sleeps, monkeypatch, key) -> None:
+    """A vLLM server started with --api-key needs ``Authorization: Bearer``; one without, none."""
+    monkeypatch.delenv("EMRD_TEST_KEY", raising=False)
+    if key:
+        monkeypatch.setenv("EMRD_TEST_KEY", key)
+    _, headers = _sent(fault_server, sleeps, api_key_env="EMRD_TEST_KEY", api_key_required=False)
+    assert headers.get("authorization") == (f"Bearer {key}" if key else None)
+
+
+def test_each_retry_is_logged_with_attempt_wait_and_cause(fault_server, sleeps, caplog) -> None:
+    fault_server.script = [("status", 503, {}), ("garbage", 200)]
+    with (
+        caplog.at_level(logging.WARNING, logger="pytest_emrd.agent.retry"),
+        _client(fault_server, sleeps) as client,
+    ):
+        client.complete(MESSAGES)
+    records = [r for r in caplog.records if r.name == "pytest_emrd.agent.retry"]
+    assert [r.levelname for r in records] == ["WARNING", "WARNING"]
+    first, second = (r.getMessage() for r in records)
+    assert first.startswith(f"POST {fault_server.base_url}/v1/chat/completions attempt 1/4 ")
+    assert f"retrying in {sleeps[0]:.2f} s. Cause: HTTP 503:" in first
+    assert "attempt 2/4" in second and "unreadable body" in second
+
+
+def test_the_key_never_reaches_logs_or_errors(fault_server, sleeps, monkeypatch, caplog) -> None:
+    monkeypatch.setenv("EMRD_TEST_KEY", "sk-planted-4242")
+    echo = b'{"error": "bad upstream for key sk-planted-4242"}'
+    fault_server.script = [("status", 502, {}, echo)] * 2 + [("status", 400, {}, echo)]
+    with (
+        caplog.at_level(logging.DEBUG),
+        _client(fault_server, sleeps, api_key_env="EMRD_TEST_KEY") as client,
+        pytest.raises(TransportError) as info,
+    ):
+        client.complete(MESSAGES)
+    assert "sk-planted-4242" not in str(info.value) and "***" in str(info.value)
+    assert "sk-planted-4242" not in caplog.text and caplog.text.count("***") == 2
+
+
+def test_credentials_in_the_url_are_not_logged(sleeps, caplog) -> None:
+    config = _config(base_url="http://user:pw-zq81@127.0.0.1:9/v1", max_retries=1)
+    client = OpenAICompatibleClient(
+        config, base_url=config.base_url or "", policy=RetryPolicy(max_retries=1, sleep=sleeps)
+    )
+    with caplog.at_level(logging.WARNING), client, pytest.raises(TransportError) as info:
+        client.complete(MESSAGES)
+    for text in (caplog.text, str(info.value)):
+        assert "pw-zq81" not in text and "http://127.0.0.1:9/v1/chat/completions" in text

@@ -26,9 +26,9 @@ def test_paper_hyperparameters(name: str) -> None:
     config = load_registry().get(name)
     assert config.max_tokens == 4096
     assert config.modality == "vision"
-    if name == "claude":
+    if name == "claude":  # "Default (1.0)": the provider default, so nothing is sent
         assert (config.temperature, config.single_image, config.provider) == (
-            1.0,
+            None,
             True,
             "anthropic",
         )
@@ -189,3 +189,100 @@ def test_missing_user_file(tmp_path: Path) -> None:
 def test_bad_parametric_names(name: str) -> None:
     with pytest.raises(ConfigError, match=name):
         load_registry().get(name)
+
+
+_OPENAI = "provider: openai, model_id: m, base_url: 'http://x'"
+_ANTHROPIC = "provider: anthropic, model_id: m, base_url: 'http://x'"
+
+
+@pytest.mark.parametrize(
+    ("fields", "match"),
+    [
+        (f"{_OPENAI}, temperature: hot", r"temperature='hot' must be a number in \[0.0, 2.0\]"),
+        (f"{_OPENAI}, top_p: 1.5", r"top_p=1.5 must lie in \[0.0, 1.0\]"),
+        (f"{_OPENAI}, max_tokens_param: max_output_tokens", "'max_tokens', 'max_completion"),
+        (f"{_OPENAI}, api_key_required: maybe", "api_key_required='maybe' must be true or false"),
+        (f"{_OPENAI}, extra_body: [1]", r"extra_body=\[1\] must be a mapping"),
+        (f"{_OPENAI}, extra_body: {{temperature: 0}}", "extra_body may not set 'temperature'"),
+        (f"{_OPENAI}, extra_body: {{messages: []}}", "extra_body may not set 'messages'"),
+        (
+            f"{_OPENAI}, extra_body: {{reasoning_effort: extreme}}",
+            "reasoning_effort='extreme' is not one of 'none', 'minimal', 'low'",
+        ),
+        (f"{_OPENAI}, extra_body: {{verbosity: loud}}", "verbosity='loud' is not one of 'low'"),
+        (
+            f"{_OPENAI}, extra_headers: {{Authorization: 'Bearer sk-x'}}",
+            "extra_headers may not carry 'Authorization'.*api_key_env",
+        ),
+        (f"{_OPENAI}, extra_headers: {{X-Trace: 7}}", "extra_headers.X-Trace=7 must be a string"),
+        (
+            f"{_ANTHROPIC}, temperature: 1.0",
+            r"temperature=1.0 is rejected by the Anthropic Messages API version 2026-10-21; "
+            r"allowed: null \(provider default\), or pin extra_headers",
+        ),
+        (f"{_ANTHROPIC}, top_p: 0.9", "top_p=0.9 is rejected by the Anthropic Messages API"),
+        (
+            f"{_ANTHROPIC}, temperature: 1.5, extra_headers: {{anthropic-version: '2023-06-01'}}",
+            r"temperature=1.5 must lie in \[0.0, 1.0\]",
+        ),
+    ],
+    ids=[
+        "temperature-not-number",
+        "top-p-range",
+        "max-tokens-param",
+        "key-required-not-bool",
+        "extra-body-not-mapping",
+        "extra-body-owns-temperature",
+        "extra-body-owns-messages",
+        "reasoning-effort",
+        "verbosity",
+        "credential-header",
+        "header-not-string",
+        "anthropic-temperature",
+        "anthropic-top-p",
+        "anthropic-legacy-range",
+    ],
+)
+def test_bad_provider_fields_name_file_field_and_allowed_values(
+    tmp_path: Path, fields: str, match: str
+) -> None:
+    user = tmp_path / "bad.yaml"
+    user.write_text(f"models: {{a: {{{fields}}}}}")
+    with pytest.raises(ConfigError, match=match) as info:
+        load_registry(user)
+    message = str(info.value)
+    assert message.startswith(f"{user}: model 'a': ") and "\n" not in message
+
+
+def test_optional_fields_load(tmp_path: Path) -> None:
+    user = tmp_path / "models.yaml"
+    user.write_text(
+        "models:\n"
+        "  mine: {provider: openai, model_id: m, base_url: 'http://x', temperature: null,\n"
+        "         top_p: 0.9, extra_body: {reasoning_effort: low, seed: 7},\n"
+        "         extra_headers: {X-Trace: abc}}\n"
+        "  legacy: {provider: anthropic, model_id: c, base_url: 'http://x', temperature: 0.5,\n"
+        "           extra_headers: {anthropic-version: '2023-06-01'}}\n"
+        "  claude: {model_id: claude-next}\n"
+    )
+    registry = load_registry(user)
+    mine = registry.get("mine")
+    assert (mine.temperature, mine.top_p) == (None, 0.9)
+    assert mine.extra_body == {"reasoning_effort": "low", "seed": 7}
+    assert mine.extra_headers == {"X-Trace": "abc"}
+    assert registry.get("legacy").temperature == 0.5
+    assert registry.get("claude").temperature is None, "a user override keeps the shipped null"
+
+
+def test_new_anthropic_entry_defaults_to_the_provider_temperature(tmp_path: Path) -> None:
+    user = tmp_path / "models.yaml"
+    user.write_text("models: {sonnet: {provider: anthropic, model_id: s, base_url: 'http://x'}}")
+    assert load_registry(user).get("sonnet").temperature is None
+
+
+def test_shipped_api_models_carry_their_provider_requirements() -> None:
+    registry = load_registry()
+    assert registry.get("gpt").extra_body == {"reasoning_effort": "none"}
+    for name in ("qwen3-vl-32b", "ovis2-34b", "pixtral-12b", "internvl3-14b"):
+        config = registry.get(name)
+        assert (config.api_key_env, config.api_key_required) == ("VLLM_API_KEY", False)
