@@ -31,6 +31,7 @@ from pytest_emrd.agent._prompt import (
     step_text,
 )
 from pytest_emrd.agent._retry import RetryPolicy
+from pytest_emrd.agent._vllm import VllmFix, serve_command, vllm_fix
 
 __all__ = [
     "ANTHROPIC_VERSION",
@@ -50,6 +51,7 @@ __all__ = [
     "Reply",
     "RetryPolicy",
     "UserTurn",
+    "VllmFix",
     "build_request",
     "build_system_prompt",
     "load_registry",
@@ -57,5 +59,7 @@ __all__ = [
     "parse_reply",
     "resolve_room",
     "room_aliases",
+    "serve_command",
     "step_text",
+    "vllm_fix",
 ]
