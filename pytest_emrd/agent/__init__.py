@@ -31,7 +31,7 @@ from pytest_emrd.agent._prompt import (
     step_text,
 )
 from pytest_emrd.agent._retry import RetryPolicy
-from pytest_emrd.agent._vllm import VllmFix, serve_command, vllm_fix
+from pytest_emrd.agent._vllm import serve_command
 
 __all__ = [
     "ANTHROPIC_VERSION",
@@ -51,7 +51,6 @@ __all__ = [
     "Reply",
     "RetryPolicy",
     "UserTurn",
-    "VllmFix",
     "build_request",
     "build_system_prompt",
     "load_registry",
@@ -61,5 +60,4 @@ __all__ = [
     "room_aliases",
     "serve_command",
     "step_text",
-    "vllm_fix",
 ]

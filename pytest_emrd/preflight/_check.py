@@ -98,6 +98,8 @@ def _key(config: ModelConfig) -> Check:
         return Check("key", "pass", "no API key needed")
     if os.environ.get(config.api_key_env, "").strip():
         return Check("key", "pass", f"{config.api_key_env} is set")
+    if not config.api_key_required:
+        return Check("key", "pass", f"{config.api_key_env} is not set: no key is sent")
     return Check(
         "key",
         "fail",

@@ -107,10 +107,22 @@ def test_a_down_server_fails_fast_without_a_probe(registry_for, unused_port):
 
 def test_a_missing_key_is_named_and_nothing_is_sent(fake_vllm, registry_for, monkeypatch):
     monkeypatch.delenv("EMRD_TEST_VLM_KEY", raising=False)
-    path = registry_for(fake_vllm.base_url, api_key_env="EMRD_TEST_VLM_KEY")
+    path = registry_for(fake_vllm.base_url, api_key_env="EMRD_TEST_VLM_KEY", api_key_required=True)
     report = preflight(load_registry(path).get("qwen3-vl-32b"), _spec("qwen3-vl-32b"), episodes=1)
     assert report.failed.name == "key" and "EMRD_TEST_VLM_KEY is not set" in report.message()
     assert fake_vllm.requests == []
+
+
+def test_an_optional_key_may_be_unset(fake_vllm, registry_for, monkeypatch):
+    """The open models send VLLM_API_KEY only when it is set (a server without --api-key)."""
+    monkeypatch.delenv("VLLM_API_KEY", raising=False)
+    report = preflight(
+        load_registry(registry_for(fake_vllm.base_url)).get("qwen3-vl-32b"),
+        _spec("qwen3-vl-32b"),
+        episodes=1,
+    )
+    key = next(check for check in report.checks if check.name == "key")
+    assert (key.status, key.detail) == ("pass", "VLLM_API_KEY is not set: no key is sent")
 
 
 def test_single_image_and_text_modality_send_one_and_no_frame(fake_vllm, registry_for):
