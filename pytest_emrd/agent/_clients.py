@@ -6,9 +6,12 @@ request ids, no secrets (keys travel in headers, which cassettes strip). What is
 provider's published request schema. Sampling fields set to None are left out (the
 provider's default); ``extra_body`` and ``extra_headers`` are passed through as written.
 
-Why not the official SDKs: ``anthropic`` 2.x runs on ``httpx2``, which vcrpy does not
-record, and both SDKs add per-request headers (retry counts, platform) that would have to
-be kept out of cassettes; the bodies are plain JSON we can build and validate ourselves.
+Why not the official SDKs (``anthropic`` 2.10, ``openai`` 3.51, both on ``httpx2``, which
+vcrpy 9.4 also records): their retry loop obeys ``Retry-After`` without a cap (anthropic
+2.10 ``_calculate_retry_timeout``: up to 2**32 ms), draws jitter from the global ``random``
+and logs nothing on our logger; they would bring two request paths and pydantic, anyio and
+opentelemetry for bodies that are plain JSON. The conformance tests validate our bodies
+against the SDK's own request type instead: the guarantee stays, the runtime does not.
 """
 
 from __future__ import annotations
