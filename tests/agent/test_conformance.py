@@ -20,6 +20,8 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from jsonschema import Draft202012Validator
 
 from pytest_emrd.agent import (
@@ -31,6 +33,7 @@ from pytest_emrd.agent import (
     build_request,
     load_registry,
 )
+from pytest_emrd.agent._config import MAX_TOKENS_PARAMS, REASONING_EFFORTS
 from pytest_emrd.cassette import agent_runner, cassette_path, run_with_cassette
 from pytest_emrd.episode import protocol_version, run_episode
 from pytest_emrd.trajectory import MODALITIES, EpisodeSpec, Usage
@@ -156,6 +159,42 @@ def test_the_schemas_reject_what_the_providers_reject(name, change, expected) ->
     config = load_registry().get(name)
     body = build_request(config, list(_history("vision", True)[-1])).body | change
     assert any(expected in problem for problem in _violations(config.provider, body))
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    temperature=st.none() | st.floats(0.0, 2.0),
+    top_p=st.none() | st.floats(0.0, 1.0),
+    effort=st.none() | st.sampled_from(REASONING_EFFORTS),
+    param=st.sampled_from(MAX_TOKENS_PARAMS),
+)
+def test_any_valid_openai_entry_sends_a_conforming_body(temperature, top_p, effort, param) -> None:
+    """Property: whatever the optional fields, the body conforms and None is never sent."""
+    config = ModelConfig(
+        "x",
+        "openai",
+        "m",
+        base_url="http://x/v1",
+        temperature=temperature,
+        top_p=top_p,
+        max_tokens_param=param,
+        extra_body={"reasoning_effort": effort} if effort else {},
+    )
+    body = build_request(config, list(_history("both", False)[-1])).body
+    assert _violations("openai", body) == []
+    assert None not in body.values()
+    assert list(body)[:2] == ["model", "messages"] and body[param] == config.max_tokens
+
+
+@settings(max_examples=30, deadline=None)
+@given(max_tokens=st.integers(1, 64_000), single_image=st.booleans())
+def test_any_current_anthropic_entry_sends_a_conforming_body(max_tokens, single_image) -> None:
+    """Property: a claude entry under the current API version never carries sampling fields."""
+    config = replace(load_registry().get("claude"), max_tokens=max_tokens)
+    request = build_request(config, list(_history("vision", single_image)[-1]))
+    assert _violations("anthropic", request.body) == []
+    assert list(request.body) == ["model", "system", "messages", "max_tokens"]
+    assert request.headers == {"anthropic-version": ANTHROPIC_VERSION}
 
 
 def _local(name: str, base_url: str, registry: Registry | None = None) -> Registry:
