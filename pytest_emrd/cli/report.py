@@ -1,8 +1,10 @@
-"""``emrd report RUN_DIR... [--out DIR] [--format md,html,json]`` and
-``emrd report --compare RUN_A RUN_B``: the paper's tables and figures from run directories.
+"""``emrd report RUN_DIR... [--out DIR] [--format md,html,json]``,
+``emrd report --compare RUN_A RUN_B [--compare-models A B]`` and
+``emrd report RUN_DIR... --compare-models A B``: the paper's tables and figures from run
+directories, or a paired comparison of two runs or two models.
 
 Several run directories (shards) make one report. The gate section uses ``--thresholds``,
-or ``./thresholds.yaml`` when it exists. ``--compare`` writes ``compare.*`` into ``--out``
+or ``./thresholds.yaml`` when it exists. A comparison writes ``compare.*`` into ``--out``
 (or prints the Markdown when no ``--out`` is given). Exit status 0, or 2 on a usage error.
 """
 
@@ -12,7 +14,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from pytest_emrd.errors import ConfigError
+from pytest_emrd.errors import ConfigError, check_choice
 
 _DEFAULT_THRESHOLDS = Path("thresholds.yaml")
 
@@ -25,7 +27,15 @@ def register(sub: argparse._SubParsersAction) -> None:
         nargs=2,
         type=Path,
         metavar=("RUN_A", "RUN_B"),
-        help="compare two run directories metric by metric (B - A, bootstrap CI)",
+        help="compare two run directories metric by metric (paired by episode, B - A, "
+        "bootstrap CI, Holm-corrected verdict)",
+    )
+    p.add_argument(
+        "--compare-models",
+        nargs=2,
+        metavar=("MODEL_A", "MODEL_B"),
+        help="compare two model names: within RUN_DIR..., or model A of RUN_A with model B "
+        "of RUN_B together with --compare",
     )
     p.add_argument(
         "--out", type=Path, default=None, help="output folder (default: FIRST_RUN_DIR/report)"
@@ -53,7 +63,7 @@ def _run(args: argparse.Namespace) -> int:
             f"run_dirs={[str(p) for p in args.run_dirs]} compare={args.compare}: give either "
             "RUN_DIR... or --compare RUN_A RUN_B, not both and not neither."
         )
-    if args.compare:
+    if args.compare or args.compare_models:
         return _compare(args, formats)
     return _report(args, formats)
 
@@ -94,12 +104,19 @@ def _compare(args: argparse.Namespace, formats: list[str]) -> int:
     from pytest_emrd.gate import load_run_dirs
     from pytest_emrd.report import compare_runs, render_comparison, write_files
 
-    run_a, run_b = args.compare
+    if args.compare:
+        run_a, run_b = args.compare
+        trajectories_a, trajectories_b = load_run_dirs([run_a]), load_run_dirs([run_b])
+        names = (str(run_a), str(run_b))
+    else:
+        trajectories_a = trajectories_b = load_run_dirs(args.run_dirs)
+        names = (" ".join(map(str, args.run_dirs)),) * 2
+    models = tuple(args.compare_models) if args.compare_models else None
+    for name, trajectories in zip(models or (), (trajectories_a, trajectories_b), strict=False):
+        held = sorted({t.spec.model for t in trajectories})
+        check_choice("compare-models", name, held, hint="Name a model the run holds.")
     comparison = compare_runs(
-        load_run_dirs([run_a]),
-        load_run_dirs([run_b]),
-        names=(str(run_a), str(run_b)),
-        rng_seed=args.seed,
+        trajectories_a, trajectories_b, names=names, models=models, rng_seed=args.seed
     )
     if args.out is None:
         sys.stdout.write(render_comparison(comparison, ["md"])["compare.md"].decode())

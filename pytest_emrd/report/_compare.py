@@ -1,22 +1,44 @@
-"""``emrd report --compare RUN_A RUN_B``: what a release changed, per metric and cell (pure).
+"""``emrd report --compare``: what a release changed, per metric and cell, paired (pure).
 
-For every model x variant x condition present in both runs and every compared gate metric:
-the value in each run (``GATE_METRICS[name].compute``), the difference ``B - A``, and a seeded
-two-sample percentile bootstrap 95 % CI of the difference (:func:`scipy.stats.bootstrap`,
-episodes of A and B resampled independently). A difference is significant when its CI
-excludes 0.
+Two sides are compared: two runs (same model names), or two model names (``--compare-models``,
+within one run or across two). Within a cell (model x variant x condition) an episode of side
+A is paired with the episode of side B that has the same spec up to the model: the same
+condition, spawn room and episode index, hence the same world seed. Episodes without a
+partner are counted (``unpaired``) and left out.
+
+For every compared gate metric (:data:`COMPARED`) and cell:
+
+* the value on each side over the pairs both sides define (``GATE_METRICS[name].compute``),
+  and the difference ``B - A``;
+* a seeded **paired bootstrap** over pairs (the same resampled pair indices on both sides):
+  the percentile 95 % CI of ``B - A`` and a two-sided p-value for "no difference", from the
+  bootstrap distribution shifted to the null (Hall & Wilson 1991):
+  ``p = (1 + #{|d* - d| >= |d|}) / (R + 1)``. The smallest p is ``1 / (R + 1)``, so ``R``
+  grows with the number of tests ``m``: ``R = max(N_RESAMPLES, ceil(10 m / ALPHA))`` keeps
+  the smallest Holm-adjusted p at ``ALPHA / 10`` or below (2,000 resamples would make any
+  difference unreachable past 100 tests);
+* the p-values of the whole comparison corrected together for multiple testing with Holm's
+  step-down method (:func:`statsmodels.stats.multitest.multipletests`, ``method="holm"``,
+  family-wise error ``ALPHA``);
+* a verdict: ``better`` / ``worse`` when the Holm-adjusted p is below ``ALPHA`` (the direction
+  from ``GATE_METRICS[name].better``: ``higher`` or ``lower`` is better), ``no change``
+  otherwise, ``n/a`` when there is no test (undefined or unbounded value, fewer than two
+  pairs, unbounded bootstrap distribution).
+
+Pairing removes the between-world variance (spawn pose, layout) that an unpaired comparison
+counts as noise, and a pair whose episodes are identical contributes exactly 0: the same
+deterministic agent against itself gives ``B - A = 0``, p = 1 and ``no change`` everywhere.
 """
 
 from __future__ import annotations
 
 import math
-import warnings
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any, Final
 
 import numpy as np
-from scipy import stats
+from statsmodels.stats.multitest import multipletests
 
 from pytest_emrd._serde import from_dict, to_dict
 from pytest_emrd.metrics import GATE_METRICS, EpisodeMetrics, Estimate, as_episode_metrics
@@ -24,9 +46,12 @@ from pytest_emrd.metrics._stats import N_RESAMPLES
 from pytest_emrd.report._build import group_cells
 from pytest_emrd.trajectory import Trajectory
 
+#: Family-wise error rate of the Holm correction.
+ALPHA: Final = 0.05
+
 Value = Callable[[EpisodeMetrics], float | bool | None]
 
-#: Metrics averaged over episodes: name -> per-episode value (None: undefined, left out).
+#: Metrics averaged over episodes: name -> per-episode value (None: undefined, pair left out).
 _MEANS: Final[dict[str, Value]] = {
     "aec": lambda m: m.aec,
     "te": lambda m: m.te,
@@ -44,38 +69,62 @@ _RATIOS: Final[dict[str, tuple[Callable[[EpisodeMetrics], float], ...]]] = {
 }
 #: Compared metrics, in report order (every one a key of GATE_METRICS).
 COMPARED: Final[tuple[str, ...]] = (*_MEANS, *_RATIOS, "errored_rate")
+#: Verdicts, in the order the document explains them.
+VERDICTS: Final[tuple[str, ...]] = ("better", "worse", "no change", "n/a")
+
+Pair = tuple[EpisodeMetrics, EpisodeMetrics]
 
 
 @dataclass(frozen=True)
 class Difference:
-    """One metric of one cell in run A and run B."""
+    """One metric of one cell on side A and side B, over paired episodes."""
 
     model: str
+    """Model of side A (``model_b`` is side B's; equal when two runs are compared)."""
     variant: str
     condition: str
     metric: str
     a: Estimate
+    """Side A over the pairs used (``n`` = pairs)."""
     b: Estimate
     diff: float | None
     """``b.value - a.value``; None when either is undefined or unbounded."""
     ci_low: float | None
+    """Paired percentile bootstrap 95 % CI of ``diff``."""
     ci_high: float | None
-    significant: bool | None
-    """The CI excludes 0; None without a CI."""
+    p_value: float | None
+    """Two-sided paired bootstrap p-value of ``diff = 0`` (None without a test)."""
+    p_holm: float | None
+    """``p_value`` after Holm's correction across every test of the comparison."""
+    verdict: str
+    """``better``, ``worse``, ``no change`` or ``n/a`` (see the module docstring)."""
+    model_b: str
+    unpaired: int = 0
+    """Episodes of the cell on either side without a partner (left out)."""
     reason: str | None = None
-    """Why ``diff`` or its CI is missing."""
+    """Why there is no test (``verdict == 'n/a'``)."""
+
+    @property
+    def significant(self) -> bool | None:
+        """The Holm-adjusted test rejects ``diff = 0`` (None without a test)."""
+        return None if self.p_holm is None else self.p_holm < ALPHA
 
 
 @dataclass(frozen=True)
 class Comparison:
+    """Every :class:`Difference` of a comparison and what could not be compared."""
+
     run_a: str
     run_b: str
     differences: tuple[Difference, ...]
     only_a: tuple[str, ...]
-    """Cells (``model/variant/condition``) only run A holds: not compared."""
+    """Cells (``model/variant/condition``) only side A holds: not compared."""
     only_b: tuple[str, ...]
     rng_seed: int = 0
     n_resamples: int = N_RESAMPLES
+    models: tuple[str, str] | None = None
+    """``(model A, model B)`` when two model names are compared, else None."""
+    alpha: float = ALPHA
 
     def to_dict(self) -> dict[str, Any]:
         return to_dict(self)
@@ -85,60 +134,94 @@ class Comparison:
         return from_dict(cls, data)
 
 
-def _samples(name: str, ems: Sequence[EpisodeMetrics]) -> np.ndarray:
-    """Bootstrap rows of one run's cell: per-episode values, or ``(2, n)`` num/den rows."""
-    kept = [m for m in ems if not m.errored]
+def _pairs(a: Sequence[EpisodeMetrics], b: Sequence[EpisodeMetrics]) -> tuple[list[Pair], int]:
+    """Episodes of a cell paired by (spawn, episode); the count of those left without one."""
+    by_key = {(m.spec.spawn, m.spec.episode): m for m in b}
+    pairs = [(m, by_key[k]) for m in a if (k := (m.spec.spawn, m.spec.episode)) in by_key]
+    return pairs, len(a) + len(b) - 2 * len(pairs)
+
+
+def _used(name: str, pairs: list[Pair]) -> list[Pair]:
+    """The pairs a metric is compared on: both episodes define it."""
+    if name == "errored_rate":
+        return pairs
+    kept = [(x, y) for x, y in pairs if not x.errored and not y.errored]
     if name in _MEANS:
-        return np.array([float(v) for m in kept if (v := _MEANS[name](m)) is not None])
-    if name in _RATIOS:
-        num, den = _RATIOS[name]
-        return np.array([[num(m) for m in kept], [den(m) for m in kept]], dtype=float)
-    return np.array([float(m.errored) for m in ems])
+        get = _MEANS[name]
+        return [(x, y) for x, y in kept if get(x) is not None and get(y) is not None]
+    return kept
 
 
-def _statistic(name: str) -> Callable[..., np.ndarray]:
-    if name in _RATIOS:
+def _resampled(name: str, pairs: list[Pair], idx: np.ndarray) -> np.ndarray:
+    """``B - A`` of the metric on every resample of pair indices (``idx``: resamples x n)."""
 
-        def ratio(x: np.ndarray) -> np.ndarray:
-            # scipy resamples the last axis: (2, n) -> (2, n_resamples, n); row 0 is num
+    def side(k: int) -> np.ndarray:
+        if name in _RATIOS:
+            num, den = _RATIOS[name]
+            n = np.array([num(p[k]) for p in pairs], dtype=float)[idx].sum(axis=1)
+            d = np.array([den(p[k]) for p in pairs], dtype=float)[idx].sum(axis=1)
             with np.errstate(divide="ignore", invalid="ignore"):
-                return x[0].sum(axis=-1) / x[1].sum(axis=-1)
+                return n / d
+        get = _MEANS.get(name, lambda m: m.errored)
+        return np.array([float(get(p[k])) for p in pairs])[idx].mean(axis=1)  # type: ignore[arg-type]
 
-        return lambda a, b, axis=-1: ratio(b) - ratio(a)
-    return lambda a, b, axis=-1: np.mean(b, axis=axis) - np.mean(a, axis=axis)
+    return side(1) - side(0)
 
 
 def _difference(
-    key: tuple[str, str, str], name: str, a: Sequence[EpisodeMetrics],
-    b: Sequence[EpisodeMetrics], rng_seed: int,
+    key: tuple[str, str, str], model_b: str, name: str, a: Sequence[EpisodeMetrics],
+    b: Sequence[EpisodeMetrics], rng_seed: int, resamples: int,
 ) -> Difference:  # fmt: skip
-    ea = GATE_METRICS[name].compute(a, rng_seed=rng_seed)
-    eb = GATE_METRICS[name].compute(b, rng_seed=rng_seed)
+    pairs, unpaired = _pairs(a, b)
+    used = _used(name, pairs)
+    ea = GATE_METRICS[name].compute([x for x, _ in used], rng_seed=rng_seed)
+    eb = GATE_METRICS[name].compute([y for _, y in used], rng_seed=rng_seed)
 
     def result(diff: float | None, low: float | None = None, high: float | None = None,
-               why: str | None = None) -> Difference:  # fmt: skip
-        significant = None if low is None or high is None else bool(low > 0 or high < 0)
-        return Difference(*key, name, ea, eb, diff, low, high, significant, why)
+               p: float | None = None, why: str | None = None) -> Difference:  # fmt: skip
+        return Difference(*key, name, ea, eb, diff, low, high, p, None, "n/a", model_b,
+                          unpaired, why)  # fmt: skip
 
+    if not pairs:
+        return result(None, why="no paired episodes (same condition, spawn room and episode)")
     if ea.value is None or eb.value is None:
-        return result(None, why=f"undefined in run {'A' if ea.value is None else 'B'}: "
-                      f"{(ea if ea.value is None else eb).reason}")  # fmt: skip
+        undefined = ea if ea.value is None else eb
+        return result(None, why=f"undefined in every pair ({undefined.reason})")
     if math.isinf(ea.value) or math.isinf(eb.value):
-        return result(None, why="unbounded in one run (no forgetting event)")
+        return result(None, why="unbounded on one side (no forgetting event)")
     diff = eb.value - ea.value
-    sa, sb = _samples(name, a), _samples(name, b)
-    if sa.shape[-1] < 2 or sb.shape[-1] < 2:
-        return result(diff, why="fewer than two episodes in a run: no confidence interval")
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", RuntimeWarning)
-        res = stats.bootstrap((sa, sb), _statistic(name), n_resamples=N_RESAMPLES,
-                              vectorized=True, axis=-1, method="percentile",
-                              rng=np.random.default_rng(rng_seed))  # fmt: skip
-    low, high = float(res.confidence_interval.low), float(res.confidence_interval.high)
-    if not (math.isfinite(low) and math.isfinite(high)):
+    if len(used) < 2:
+        return result(diff, why="fewer than two pairs: no test")
+    rng = np.random.default_rng(rng_seed)
+    boot = _resampled(name, used, rng.integers(0, len(used), size=(resamples, len(used))))
+    if not np.all(np.isfinite(boot)):
         return result(diff, why="the bootstrap distribution is unbounded (resamples without "
-                      "any event): no confidence interval")  # fmt: skip
-    return result(diff, low, high)
+                      "any event): no test")  # fmt: skip
+    low, high = (float(q) for q in np.percentile(boot, [2.5, 97.5]))
+    # Shift to the null; the tolerance keeps identical pairs (boot == diff == 0) at p = 1.
+    extreme = np.abs(boot - diff) >= abs(diff) - 1e-12
+    p = float((1 + np.count_nonzero(extreme)) / (resamples + 1))
+    return result(diff, low, high, p)
+
+
+def _verdict(d: Difference, p_holm: float) -> Difference:
+    better = GATE_METRICS[d.metric].better
+    verdict = "no change"
+    if p_holm < ALPHA and d.diff:
+        verdict = "better" if (d.diff > 0) == (better == "higher") else "worse"
+    return replace(d, p_holm=p_holm, verdict=verdict)
+
+
+def holm(differences: Sequence[Difference]) -> tuple[Difference, ...]:
+    """Holm-adjust every p-value of ``differences`` together and set the verdicts."""
+    tested = [i for i, d in enumerate(differences) if d.p_value is not None]
+    out = list(differences)
+    if tested:
+        adjusted = multipletests([differences[i].p_value for i in tested], alpha=ALPHA,
+                                 method="holm")[1]  # fmt: skip
+        for i, p in zip(tested, adjusted, strict=True):
+            out[i] = _verdict(differences[i], float(p))
+    return tuple(out)
 
 
 def compare_runs(
@@ -146,18 +229,35 @@ def compare_runs(
     run_b: Sequence[Trajectory],
     *,
     names: tuple[str, str] = ("A", "B"),
+    models: tuple[str, str] | None = None,
     rng_seed: int = 0,
 ) -> Comparison:
-    """Every compared metric of every cell the two runs share (see the module docstring)."""
+    """Paired comparison of ``run_b`` against ``run_a`` (see the module docstring).
+
+    ``models=(A, B)`` compares model ``A`` of ``run_a`` with model ``B`` of ``run_b`` (pass
+    the same trajectories twice to compare two models of one run); without it, cells are
+    matched by model name.
+    """
     cells_a = group_cells(as_episode_metrics(run_a))
     cells_b = group_cells(as_episode_metrics(run_b))
+    if models is not None:
+        cells_a = {(models[0], *k[1:]): v for k, v in cells_a.items() if k[0] == models[0]}
+        cells_b = {(models[0], *k[1:]): v for k, v in cells_b.items() if k[0] == models[1]}
+    model_b = (lambda k: models[1]) if models is not None else (lambda k: k[0])
     shared = [k for k in cells_a if k in cells_b]
+    resamples = max(N_RESAMPLES, math.ceil(10 * len(shared) * len(COMPARED) / ALPHA))
     diffs = tuple(
-        _difference(k, name, cells_a[k], cells_b[k], rng_seed) for k in shared for name in COMPARED
+        _difference(k, model_b(k), name, cells_a[k], cells_b[k], rng_seed, resamples)
+        for k in shared
+        for name in COMPARED
     )
+
+    def cell(k: tuple[str, str, str], side: int) -> str:
+        return "/".join((models[side] if models else k[0], *k[1:]))
+
     return Comparison(
-        names[0], names[1], diffs,
-        tuple("/".join(k) for k in cells_a if k not in cells_b),
-        tuple("/".join(k) for k in cells_b if k not in cells_a),
-        rng_seed,
+        names[0], names[1], holm(diffs),
+        tuple(cell(k, 0) for k in cells_a if k not in cells_b),
+        tuple(cell(k, 1) for k in cells_b if k not in cells_a),
+        rng_seed, resamples, models,
     )  # fmt: skip

@@ -2,7 +2,8 @@
 
 from __future__ import annotations
 
-from pytest_emrd.report._compare import Comparison
+from pytest_emrd.metrics import GATE_METRICS
+from pytest_emrd.report._compare import Comparison, Difference
 from pytest_emrd.report._document import (
     Block,
     Bullets,
@@ -12,18 +13,44 @@ from pytest_emrd.report._document import (
     Section,
     Table,
     num,
+    pval,
 )
 from pytest_emrd.report._model import row_label
 from pytest_emrd.report._style import CONDITION_NAMES
 
+_HEADER = ("Metric", "Better", "A", "B", "B - A", "95% CI", "p (Holm)", "Verdict", "Note")
+
+
+def _row(d: Difference) -> tuple[Cell, ...]:
+    note = d.reason or ""
+    if d.unpaired:
+        note = f"{d.unpaired} unpaired episode(s) left out. {note}".strip()
+    return (
+        Cell(d.metric),
+        Cell(GATE_METRICS[d.metric].better),
+        Cell(f"{num(d.a.value)} (n={d.a.n})"),
+        Cell(f"{num(d.b.value)} (n={d.b.n})"),
+        Cell(num(d.diff)),
+        Cell("n/a" if d.ci_low is None else f"[{num(d.ci_low)}, {num(d.ci_high)}]"),
+        Cell(pval(d.p_holm)),
+        Cell(d.verdict, bold=d.verdict in ("better", "worse")),
+        Cell(note),
+    )
+
 
 def compare_document(c: Comparison) -> Document:
-    """Per cell: metric, value in A and B (n), B - A, its 95 % CI and significance."""
+    """Per cell: metric, direction, value on each side, B - A, CI, Holm p and verdict."""
+    sides = f"A = {c.run_a}, B = {c.run_b}"
+    if c.models is not None:
+        sides = f"A = model {c.models[0]} of {c.run_a}, B = model {c.models[1]} of {c.run_b}"
     blocks: list[Block] = [
         Paragraph(
-            f"A = {c.run_a}, B = {c.run_b}. Differences are B - A with a seeded (rng_seed="
-            f"{c.rng_seed}) two-sample percentile bootstrap 95% CI over episodes "
-            f"({c.n_resamples} resamples); **yes** marks a CI that excludes 0."
+            f"{sides}. Episodes are paired by condition, spawn room and episode index (same "
+            f"world). B - A over the pairs with a seeded (rng_seed={c.rng_seed}) paired "
+            f"bootstrap ({c.n_resamples} resamples): percentile 95% CI and a two-sided p-value, "
+            f"Holm-corrected across all {sum(d.p_value is not None for d in c.differences)} "
+            f"tests. Verdict **better** / **worse** when the Holm p < {c.alpha} (direction: "
+            "the Better column), else no change; n/a without a test."
         )
     ]
     if c.only_a or c.only_b:
@@ -31,20 +58,16 @@ def compare_document(c: Comparison) -> Document:
         notes += [f"only in B (not compared): {k}" for k in c.only_b]
         blocks.append(Bullets(tuple(notes)))
     if not c.differences:
-        blocks.append(Paragraph("The two runs share no model x prompt x condition cell."))
-    cells = list(dict.fromkeys((d.model, d.variant, d.condition) for d in c.differences))
-    for model, variant, condition in cells:
+        blocks.append(Paragraph("The two sides share no model x prompt x condition cell."))
+    cells = list(dict.fromkeys((d.model, d.model_b, d.variant, d.condition)
+                               for d in c.differences))  # fmt: skip
+    for model, model_b, variant, condition in cells:
         rows = tuple(
-            (Cell(d.metric), Cell(f"{num(d.a.value)} (n={d.a.n})"),
-             Cell(f"{num(d.b.value)} (n={d.b.n})"), Cell(num(d.diff)),
-             Cell("n/a" if d.ci_low is None else f"[{num(d.ci_low)}, {num(d.ci_high)}]"),
-             Cell({None: "n/a", True: "yes", False: "no"}[d.significant],
-                  bold=bool(d.significant)),
-             Cell(d.reason or ""))
-            for d in c.differences
-            if (d.model, d.variant, d.condition) == (model, variant, condition)
+            _row(d) for d in c.differences if (d.model, d.model_b, d.variant, d.condition)
+            == (model, model_b, variant, condition)
         )  # fmt: skip
-        label = f"{row_label(model, variant)}, {CONDITION_NAMES.get(condition, condition)}"
-        header = ("Metric", "A", "B", "B - A", "95% CI", "Significant", "Note")
-        blocks.append(Table(f"compare-{model}-{variant}-{condition}", label, header, rows))
-    return Document("EMRD run comparison", (Section("compare", "Differences", tuple(blocks)),))
+        who = model if model == model_b else f"{model} vs {model_b}"
+        label = f"{row_label(who, variant)}, {CONDITION_NAMES.get(condition, condition)}"
+        blocks.append(Table(f"compare-{model}-{model_b}-{variant}-{condition}", label, _HEADER,
+                            rows))  # fmt: skip
+    return Document("EMRD comparison", (Section("compare", "Differences", tuple(blocks)),))

@@ -63,12 +63,14 @@ class Document:
 
 
 def num(x: float | None, digits: int = 3) -> str:
-    """Fixed decimals; ``n/a`` for None, ``inf`` for an unbounded value."""
+    """Fixed decimals; ``n/a`` for None, ``inf`` for an unbounded value; never ``-0.000`` (a
+    negative value that rounds to zero is printed unsigned)."""
     if x is None:
         return "n/a"
     if math.isinf(x):
         return "inf" if x > 0 else "-inf"
-    return f"{x:.{digits}f}"
+    text = f"{x:.{digits}f}"
+    return text[1:] if text.startswith("-") and not text.strip("-0.") else text
 
 
 def pct(x: float | None) -> str:

@@ -64,10 +64,24 @@ def test_compare_prints_markdown_or_writes_files(make_run_dir, tmp_path: Path, c
                                          mean_memory=3.0))  # fmt: skip
     assert main(["report", "--compare", str(a), str(b)]) == 0
     md = capsys.readouterr().out
-    assert md.startswith("# EMRD run comparison") and "| memory_strength |" in md
+    assert md.startswith("# EMRD comparison") and "| memory_strength | higher |" in md
     out = tmp_path / "cmp"
     assert main(["report", "--compare", str(a), str(b), "--out", str(out)]) == 0
     assert {p.name for p in out.iterdir()} == {"compare.md", "compare.html", "compare.json"}
+
+
+def test_compare_models_within_one_run(make_run_dir, capsys) -> None:
+    run = make_run_dir(
+        "run",
+        synthetic_grid(model="scout", episodes=2, max_steps=26)
+        + synthetic_grid(model="cand", episodes=2, max_steps=26, mean_memory=3.0),
+    )
+    assert main(["report", str(run), "--compare-models", "scout", "cand"]) == 0
+    md = capsys.readouterr().out
+    assert "*scout vs cand, Baseline*" in md and "| memory_strength | higher |" in md
+    assert "**worse**" in md
+    assert main(["report", str(run), "--compare-models", "scout", "gpt"]) == 2
+    assert "compare-models='gpt' is not one of 'cand', 'scout'" in capsys.readouterr().err
 
 
 @pytest.mark.parametrize(

@@ -1,12 +1,16 @@
-"""``compare_runs``: per cell and metric, B - A with a seeded two-sample bootstrap CI."""
+"""``compare_runs``: paired by spec, paired bootstrap, Holm across metrics, a verdict column."""
 
 from __future__ import annotations
 
+import dataclasses
+
 import pytest
+from statsmodels.stats.multitest import multipletests
 
 from pytest_emrd.metrics import GATE_METRICS
 from pytest_emrd.metrics.synthetic import synthetic_grid
 from pytest_emrd.report import COMPARED, Comparison, compare_runs, render_comparison
+from pytest_emrd.report._document import num
 from pytest_emrd.trajectory import Trajectory
 
 
@@ -14,6 +18,20 @@ from pytest_emrd.trajectory import Trajectory
 def forgetful() -> list[Trajectory]:
     """Same episodes as ``grid`` but a planted mean memory of 3 steps instead of 10."""
     return synthetic_grid(model="syn", episodes=2, max_steps=30, mean_memory=3.0)
+
+
+@pytest.fixture(scope="module")
+def other_seeds() -> tuple[list[Trajectory], list[Trajectory]]:
+    """The same agent (planted memory 10 steps) run twice with different agent seeds."""
+    return (
+        synthetic_grid(model="syn", episodes=4, max_steps=30, seed=0),
+        synthetic_grid(model="syn", episodes=4, max_steps=30, seed=1),
+    )
+
+
+def renamed(trajectories: list[Trajectory], model: str) -> list[Trajectory]:
+    return [dataclasses.replace(t, spec=dataclasses.replace(t.spec, model=model))
+            for t in trajectories]  # fmt: skip
 
 
 def test_every_compared_metric_is_a_gate_metric() -> None:
@@ -26,36 +44,89 @@ def test_a_run_against_itself_changes_nothing(grid: list[Trajectory]) -> None:
     for d in c.differences:
         if d.diff is not None:
             assert d.diff == 0.0
-        if d.significant is not None:
-            assert d.significant is False and d.ci_low <= 0.0 <= d.ci_high
+        if d.p_value is not None:
+            assert d.p_value == 1.0 and d.p_holm == 1.0 and d.ci_low == d.ci_high == 0.0
+            assert d.verdict == "no change" and d.significant is False
 
 
-def test_values_are_the_gate_metrics_and_diff_is_b_minus_a(grid, forgetful) -> None:
-    c = compare_runs(grid, forgetful)
-    for d in c.differences:
-        cell_a = sorted((t for t in grid if t.spec.condition == d.condition),
-                        key=lambda t: t.spec.case_id)  # fmt: skip
-        assert d.a == GATE_METRICS[d.metric].compute(cell_a)
-        if d.diff is not None:
-            assert d.diff == pytest.approx(d.b.value - d.a.value)
+def test_the_same_agent_on_other_seeds_is_not_significant(other_seeds) -> None:
+    """Same planted cognition, different realisations: the null is true in every test."""
+    a, b = other_seeds
+    c = compare_runs(a, b)
+    tested = [d for d in c.differences if d.p_value is not None]
+    assert len(tested) >= 30
+    assert all(d.verdict == "no change" for d in tested), [
+        (d.condition, d.metric, d.p_value, d.p_holm) for d in tested if d.verdict != "no change"
+    ]
+    # Holm is what protects the family: uncorrected, some test of 33 falls below 0.05 here
+    assert min(d.p_value for d in tested) < 0.05
 
 
-def test_planted_forgetting_is_a_significant_drop_in_memory_strength(grid, forgetful) -> None:
+def test_holm_is_statsmodels_over_every_test_of_the_comparison(other_seeds) -> None:
+    c = compare_runs(*other_seeds)
+    tested = [d for d in c.differences if d.p_value is not None]
+    expected = multipletests([d.p_value for d in tested], method="holm")[1]
+    assert [d.p_holm for d in tested] == pytest.approx(list(expected))
+    assert all(d.p_holm >= d.p_value for d in tested)
+
+
+def test_planted_forgetting_is_worse_memory_strength(grid, forgetful) -> None:
     c = compare_runs(grid, forgetful)
     strength = [d for d in c.differences if d.metric == "memory_strength"]
     assert len(strength) == 3
     for d in strength:
-        assert d.diff is not None and d.diff < 0
-        assert d.significant is True and d.ci_high < 0
+        assert d.diff is not None and d.diff < 0 and d.ci_high < 0
+        assert d.verdict == "worse" and d.significant is True
     for d in c.differences:
         if d.ci_low is not None:
             assert d.ci_low <= d.diff <= d.ci_high, d
 
 
+def test_swapping_sides_swaps_better_and_worse(grid, forgetful) -> None:
+    forward = compare_runs(grid, forgetful)
+    backward = compare_runs(forgetful, grid)
+    flip = {"better": "worse", "worse": "better", "no change": "no change", "n/a": "n/a"}
+    assert [flip[d.verdict] for d in forward.differences] == [
+        d.verdict for d in backward.differences
+    ]
+    assert {d.verdict for d in backward.differences if d.metric == "memory_strength"} == {"better"}
+
+
+@pytest.mark.parametrize("metric", ["te", "never_visited", "any_bias", "parse_failure_rate"])
+def test_lower_is_better_metrics_read_a_drop_as_better(metric: str) -> None:
+    assert GATE_METRICS[metric].better == "lower"
+
+
+def test_values_are_the_gate_metrics_over_the_pairs(grid, forgetful) -> None:
+    c = compare_runs(grid, forgetful)
+    for d in c.differences:
+        if d.metric in ("aec", "te", "pa", "memory_strength", "errored_rate"):  # defined in all
+            cell_a = [t for t in grid if t.spec.condition == d.condition]
+            expected = GATE_METRICS[d.metric].compute(cell_a)
+            assert (d.a.value, d.a.n) == (pytest.approx(expected.value), expected.n)
+        if d.diff is not None:
+            assert d.diff == pytest.approx(d.b.value - d.a.value)
+
+
+def test_episodes_pair_by_spawn_and_episode_only(grid: list[Trajectory]) -> None:
+    b = [t for t in grid if not (t.spec.spawn == "office" and t.spec.episode == 1)]
+    c = compare_runs(grid, b)
+    aec = [d for d in c.differences if d.metric == "aec"]
+    assert {d.unpaired for d in aec} == {1} and {d.a.n for d in aec} == {7}
+    shifted = [dataclasses.replace(t, spec=dataclasses.replace(t.spec, episode=9)) for t in grid]
+    none = compare_runs(grid, shifted)
+    assert {d.verdict for d in none.differences} == {"n/a"}
+    assert none.differences[0].reason.startswith("no paired episodes")
+
+
 def test_seeded_and_reproducible(grid, forgetful) -> None:
     assert compare_runs(grid, forgetful) == compare_runs(grid, forgetful)
-    other = compare_runs(grid, forgetful, rng_seed=1)
-    assert other.rng_seed == 1
+    assert compare_runs(grid, forgetful, rng_seed=1).rng_seed == 1
+
+
+def test_resamples_grow_with_the_number_of_tests(grid) -> None:
+    c = compare_runs(grid, grid)
+    assert c.n_resamples >= 10 * len(c.differences) / c.alpha
 
 
 def test_cells_in_one_run_only_are_listed(grid: list[Trajectory]) -> None:
@@ -65,11 +136,28 @@ def test_cells_in_one_run_only_are_listed(grid: list[Trajectory]) -> None:
     assert {d.condition for d in c.differences} == {"baseline"}
 
 
-def test_one_episode_gives_a_diff_without_ci(grid: list[Trajectory]) -> None:
+def test_one_pair_gives_a_diff_without_a_test(grid: list[Trajectory]) -> None:
     one = grid[:1]
     aec = next(d for d in compare_runs(one, one).differences if d.metric == "aec")
-    assert aec.diff == 0.0 and aec.ci_low is None and aec.significant is None
-    assert aec.reason == "fewer than two episodes in a run: no confidence interval"
+    assert aec.diff == 0.0 and aec.ci_low is None and aec.verdict == "n/a"
+    assert aec.reason == "fewer than two pairs: no test"
+
+
+def test_two_models_of_one_run(grid, forgetful) -> None:
+    run = grid + renamed(forgetful, "syn-candidate")
+    c = compare_runs(run, run, models=("syn", "syn-candidate"))
+    assert {(d.model, d.model_b) for d in c.differences} == {("syn", "syn-candidate")}
+    assert {d.verdict for d in c.differences if d.metric == "memory_strength"} == {"worse"}
+    same = compare_runs(run, grid + renamed(grid, "syn-copy"), models=("syn", "syn"))
+    assert {d.verdict for d in same.differences} <= {"no change", "n/a"}
+    md = render_comparison(c, ["md"])["compare.md"].decode()
+    assert "A = model syn of A, B = model syn-candidate of B" in md
+    assert "*syn vs syn-candidate, Baseline*" in md
+
+
+def test_never_minus_zero() -> None:
+    assert num(-1e-9) == "0.000" and num(-0.0) == "0.000" and num(-0.0004) == "0.000"
+    assert num(-0.0006) == "-0.001" and num(0.0) == "0.000"
 
 
 def test_comparison_renders_and_round_trips(grid, forgetful) -> None:
@@ -77,5 +165,7 @@ def test_comparison_renders_and_round_trips(grid, forgetful) -> None:
     assert Comparison.from_dict(c.to_dict()) == c
     files = render_comparison(c)
     md = files["compare.md"].decode()
-    assert "A = v1, B = v2" in md and "| memory_strength |" in md and "**yes**" in md
+    assert "A = v1, B = v2" in md and "| memory_strength | higher |" in md
+    assert "**worse**" in md and "-0.000" not in md
+    assert "Holm-corrected across all" in md
     assert set(files) == {"compare.md", "compare.html", "compare.json"}
