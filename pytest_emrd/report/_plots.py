@@ -1,7 +1,10 @@
 """The report's figures as PNG bytes (matplotlib, Agg canvas, no pyplot global state).
 
-One colour per condition as in the paper: baseline blue, low light red, texture green. One
-panel per model row (``model`` or ``model [variant]``). A figure without data is not drawn;
+One colour per condition as in the paper (baseline blue, low light red, texture green) and,
+so that coinciding series stay visible, one line style, marker and hatch per condition
+(:data:`CONDITION_LINES`): markers are staggered along each line and the baseline is drawn
+on top. One panel per model row (``model`` or ``model [variant]``). Titles are wrapped to
+the width they have, so no text leaves the canvas. A figure without data is not drawn;
 :func:`render_figures` says why instead.
 """
 
@@ -9,25 +12,72 @@ from __future__ import annotations
 
 import io
 import math
+import textwrap
 from collections.abc import Callable, Sequence
 from typing import Any, Final
 
 import numpy as np
+from matplotlib.artist import Artist
 from matplotlib.axes import Axes
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
+from matplotlib.patches import Patch
 
 from pytest_emrd.report._model import EpisodeMap, Report, row_label
-from pytest_emrd.report._style import CONDITION_COLOURS, CONDITION_NAMES, FIGURES
+from pytest_emrd.report._style import (
+    CONDITION_COLOURS,
+    CONDITION_LINES,
+    CONDITION_NAMES,
+    FIGURES,
+)
 from pytest_emrd.rooms import ROOM_SLUGS, SLUG_ROOMS
+from pytest_emrd.trajectory import CONDITIONS
 
 _CATEGORY_MARKERS: Final[dict[str, str]] = {"landmark": "^", "salient": "s", "clutter": "o"}
 _DPI: Final = 100
+_OTHER_LINE: Final = (":", "D", "xx")
+#: Average glyph width of the default font, in units of its size (for wrapping titles).
+_GLYPH: Final = 0.62
 
 
 def colour(condition: str) -> str:
     return CONDITION_COLOURS.get(condition, "#7f7f7f")
+
+
+def _rank(condition: str) -> int:
+    return CONDITIONS.index(condition) if condition in CONDITIONS else len(CONDITIONS)
+
+
+def line_style(condition: str, n_points: int = 0) -> dict[str, Any]:
+    """Colour, line style and marker of ``condition``'s series; with ``n_points``, markers
+    every ~n/8 points, staggered per condition so coinciding lines all show theirs. The
+    baseline is drawn above the others with the smallest, filled markers."""
+    ls, marker, _ = CONDITION_LINES.get(condition, _OTHER_LINE)
+    rank = _rank(condition)
+    # the baseline's small filled markers sit inside the larger hollow ones of the others
+    style: dict[str, Any] = {
+        "color": colour(condition), "ls": ls, "marker": marker, "ms": 4.5 + 2.5 * rank,
+        "mfc": colour(condition) if rank == 0 else "none", "mew": 1.5, "zorder": 3 - 0.1 * rank,
+    }  # fmt: skip
+    if n_points:
+        every = max(1, n_points // 8)
+        style["markevery"] = ((rank * max(1, every // 3)) % every, every)
+    return style
+
+
+def _wrap(text: str, width_in: float, size_pt: float) -> str:
+    """``text`` broken into lines that fit ``width_in`` inches at ``size_pt`` points."""
+    return textwrap.fill(text, max(12, int(width_in * 72 / (_GLYPH * size_pt))))
+
+
+def _title(fig: Figure, text: str) -> None:
+    fig.suptitle(_wrap(text, fig.get_figwidth() - 0.2, 12.0), fontsize=12)
+
+
+def _axes_title(ax: Axes, text: str) -> None:
+    width = ax.get_position().width * ax.get_figure().get_figwidth()
+    ax.set_title(_wrap(text, width, 10.0), fontsize=10)
 
 
 def _panels(labels: Sequence[str], *, ncols: int = 3, size: tuple[float, float] = (5.0, 3.6)
@@ -48,9 +98,13 @@ def _png(fig: Figure) -> bytes:
     return buffer.getvalue()
 
 
-def _legend(fig: Figure, conditions: Sequence[str]) -> None:
-    handles = [Line2D([], [], color=colour(c), lw=2.5, label=CONDITION_NAMES.get(c, c))
-               for c in conditions]  # fmt: skip
+def _legend(fig: Figure, conditions: Sequence[str], *, bars: bool = False) -> None:
+    handles: list[Artist] = [
+        Patch(facecolor=colour(c), hatch=CONDITION_LINES.get(c, _OTHER_LINE)[2],
+              edgecolor="white", label=CONDITION_NAMES.get(c, c))
+        if bars else Line2D([], [], lw=2, label=CONDITION_NAMES.get(c, c), **line_style(c))
+        for c in conditions
+    ]  # fmt: skip
     fig.legend(handles=handles, loc="outside lower center", ncols=len(handles), frameon=False)
 
 
@@ -66,12 +120,13 @@ def _tbs(report: Report) -> Figure | None:
     for s in series:
         ax = axes[row_label(s.model, s.variant)]
         t, mean, sd = np.array(s.curve.t), np.array(s.curve.mean), np.array(s.curve.sd)
-        ax.plot(t, mean, color=colour(s.condition), lw=2)
+        ax.plot(t, mean, lw=2, **line_style(s.condition, len(t)))
         ax.fill_between(t, mean - sd, mean + sd, color=colour(s.condition), alpha=0.12, lw=0)
     for label, ax in axes.items():
-        ax.set(title=label, xlabel="step t", ylabel="TBS(t) (0-1)", ylim=(0, 1.02))
+        _axes_title(ax, label)
+        ax.set(xlabel="step t", ylabel="TBS(t) (0-1)", ylim=(0, 1.02))
         ax.grid(alpha=0.3)
-    fig.suptitle("Temporal Belief Stability (mean ± 1 sd)")
+    _title(fig, "Temporal Belief Stability (mean ± 1 sd)")
     _legend(fig, list(dict.fromkeys(s.condition for s in series)))
     return fig
 
@@ -89,14 +144,16 @@ def _pa(report: Report) -> Figure | None:
         offset = conditions.index(g.condition) - (len(conditions) - 1) / 2
         x = spawns.index(g.spawn) + offset * width
         sd = float(np.std(g.values, ddof=1)) if len(g.values) > 1 else 0.0
+        hatch = CONDITION_LINES.get(g.condition, _OTHER_LINE)[2]
         ax.bar(x, float(np.mean(g.values)), width * 0.95, yerr=sd, capsize=3,
-               color=colour(g.condition), alpha=0.85)  # fmt: skip
+               color=colour(g.condition), alpha=0.85, hatch=hatch, edgecolor="white")  # fmt: skip
     for label, ax in axes.items():
         ax.set_xticks(range(len(spawns)), [SLUG_ROOMS[s] for s in spawns])
-        ax.set(title=label, xlabel="spawn room", ylabel="Positional Accuracy (0-1)", ylim=(0, 1.05))
+        _axes_title(ax, label)
+        ax.set(xlabel="spawn room", ylabel="Positional Accuracy (0-1)", ylim=(0, 1.05))
         ax.grid(axis="y", alpha=0.3)
-    fig.suptitle("Positional Accuracy by spawn room and condition (mean ± 1 sd)")
-    _legend(fig, conditions)
+    _title(fig, "Positional Accuracy by spawn room and condition (mean ± 1 sd)")
+    _legend(fig, conditions, bars=True)
     return fig
 
 
@@ -109,14 +166,15 @@ def _miller(report: Report) -> Figure | None:
     for s in series:
         ax = axes[row_label(s.model, s.variant)]
         loads = np.array(s.curve.bins) * s.curve.width
-        ax.plot(loads, s.curve.probabilities, marker="o", color=colour(s.condition), lw=2)
+        ax.plot(loads, s.curve.probabilities, lw=2, **line_style(s.condition, len(loads)))
         if s.curve.m_star is not None:
             ax.axvline(s.curve.m_star, color=colour(s.condition), ls=":", lw=1.2)
     for label, ax in axes.items():
-        ax.set(title=label, xlabel=f"map size m (objects, bin upper edge, w={width})",
-               ylabel="P(forget >= 1 object)", ylim=(0, 1.02))  # fmt: skip
+        _axes_title(ax, label)
+        ax.set(xlabel=f"map size m (objects, bin upper edge, w={width})",
+               ylabel="P(forget >= 1 object)", ylim=(-0.02, 1.02))  # fmt: skip
         ax.grid(alpha=0.3)
-    fig.suptitle("Miller's law: forgetting probability by cognitive load (dotted: m*)")
+    _title(fig, "Miller's law: forgetting probability by cognitive load (dotted: m*)")
     _legend(fig, list(dict.fromkeys(s.condition for s in series)))
     return fig
 
@@ -131,18 +189,21 @@ def _km(report: Report) -> Figure | None:
     grid = fig.subplots(len(labels), len(categories), squeeze=False)
     for s in series:
         ax = grid[labels.index(row_label(s.model, s.variant))][categories.index(s.category)]
-        ax.step(s.km.times, s.km.survival, where="post", color=colour(s.condition), lw=2)
+        ax.step(s.km.times, s.km.survival, where="post", lw=2,
+                **line_style(s.condition, len(s.km.times)))  # fmt: skip
         efc = s.fit.efc
         if efc is not None and math.isfinite(efc):
             t = np.linspace(0, max(s.km.times), 100)
-            ax.plot(t, s.km.coverage * np.exp(-t / efc), color=colour(s.condition), ls="--", lw=1)
+            ax.plot(t, s.km.coverage * np.exp(-t / efc), color=colour(s.condition), ls=(0, (2, 2)),
+                    lw=1)  # fmt: skip
     for i, label in enumerate(labels):
         for j, category in enumerate(categories):
             ax = grid[i][j]
-            ax.set(title=f"{label}: {category}", xlabel="steps out of view t",
-                   ylabel="S(t) (discovered & held)", ylim=(0, 1.02))  # fmt: skip
+            _axes_title(ax, f"{label}: {category}")
+            ax.set(xlabel="steps out of view t", ylabel="S(t) (discovered & held)",
+                   ylim=(0, 1.02))  # fmt: skip
             ax.grid(alpha=0.3)
-    fig.suptitle("Coverage-anchored Kaplan-Meier survival (dashed: Ebbinghaus fit)")
+    _title(fig, "Coverage-anchored Kaplan-Meier survival (thin dashed: Ebbinghaus fit)")
     _legend(fig, list(dict.fromkeys(s.condition for s in series)))
     return fig
 
@@ -164,12 +225,15 @@ def _sir(report: Report) -> Figure | None:
             for key in ("cmeans", "cmins", "cmaxes", "cbars"):
                 body[key].set(color=colour(s.condition))
         jitter = np.linspace(-0.08, 0.08, len(values)) if len(values) > 1 else np.zeros(1)
-        ax.scatter(pos + jitter, values, s=8, color=colour(s.condition), alpha=0.6)
+        marker = CONDITION_LINES.get(s.condition, _OTHER_LINE)[1]
+        ax.scatter(pos + jitter, values, s=14, marker=marker, color=colour(s.condition),
+                   alpha=0.6)  # fmt: skip
     for label, ax in axes.items():
         ax.set_xticks(range(len(conditions)), [CONDITION_NAMES.get(c, c) for c in conditions])
-        ax.set(title=label, xlabel="condition", ylabel="SIR (0-1)", ylim=(-0.02, 1.02))
+        _axes_title(ax, label)
+        ax.set(xlabel="condition", ylabel="SIR (0-1)", ylim=(-0.02, 1.02))
         ax.grid(axis="y", alpha=0.3)
-    fig.suptitle("Coverage-anchored Spatial Identity Resolution per episode")
+    _title(fig, "Coverage-anchored Spatial Identity Resolution per episode")
     _legend(fig, conditions)
     return fig
 
@@ -208,8 +272,9 @@ def _episode_map(report: Report) -> Figure | None:
         ax.scatter([e.x for e in unmatched], [e.z for e in unmatched], marker="x", s=45,
                    color="#ff9900", label="cognitive map (unmatched)", zorder=5)  # fmt: skip
     rmse = "n/a" if m.rmse is None else f"{m.rmse:.2f} m"
-    ax.set(title=f"{m.case_id}: terminal map aligned (rotation {m.rotation_deg:.1f} deg, "
-           f"RMSE {rmse})", xlabel="x (m, spawn frame)", ylabel="z (m, spawn frame)")  # fmt: skip
+    _axes_title(ax, f"{m.case_id}: terminal map aligned (rotation {m.rotation_deg:.1f} deg, "
+                f"RMSE {rmse})")  # fmt: skip
+    ax.set(xlabel="x (m, spawn frame)", ylabel="z (m, spawn frame)")
     ax.set_aspect("equal")
     ax.grid(alpha=0.2)
     fig.legend(loc="outside lower center", ncols=4, frameon=False, fontsize=8)
@@ -235,14 +300,20 @@ _WHY_NOT: Final[dict[str, str]] = {
 }
 
 
-def render_figures(report: Report) -> tuple[dict[str, bytes], dict[str, str]]:
-    """PNG bytes per figure file name, and for each figure not drawn, why not."""
-    drawn: dict[str, bytes] = {}
+def draw_figures(report: Report) -> tuple[dict[str, Figure], dict[str, str]]:
+    """Every figure of the report by file name, and for each figure not drawn, why not."""
+    drawn: dict[str, Figure] = {}
     skipped: dict[str, str] = {}
     for spec in FIGURES:
         fig = _DRAW[spec.name](report)
         if fig is None:
             skipped[spec.name] = _WHY_NOT[spec.name]
         else:
-            drawn[spec.name] = _png(fig)
+            drawn[spec.name] = fig
     return drawn, skipped
+
+
+def render_figures(report: Report) -> tuple[dict[str, bytes], dict[str, str]]:
+    """PNG bytes per figure file name, and for each figure not drawn, why not."""
+    drawn, skipped = draw_figures(report)
+    return {name: _png(fig) for name, fig in drawn.items()}, skipped

@@ -10,6 +10,14 @@ CONDITION_COLOURS: Final[dict[str, str]] = {
     "low_light": "#d62728",
     "texture": "#2ca02c",
 }
+#: Line style, marker and hatch per condition, so coinciding series stay distinguishable
+#: (and the figures read in grey scale): baseline solid with circles, low light dashed with
+#: squares, texture dash-dot with triangles.
+CONDITION_LINES: Final[dict[str, tuple[str, str, str]]] = {
+    "baseline": ("-", "o", ""),
+    "low_light": ("--", "s", "//"),
+    "texture": ("-.", "^", ".."),
+}
 CONDITION_NAMES: Final[dict[str, str]] = {
     "baseline": "Baseline",
     "low_light": "Light & Vis.",

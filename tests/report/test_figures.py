@@ -1,0 +1,87 @@
+"""Every report figure: no text outside the canvas, coinciding series still distinguishable."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import pytest
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
+from matplotlib.lines import Line2D
+from matplotlib.text import Text
+
+from pytest_emrd.report import FIGURES, build_report
+from pytest_emrd.report._plots import draw_figures
+from pytest_emrd.trajectory import Trajectory
+
+
+def _rename(ts: list[Trajectory], model: str, variant: str = "default") -> list[Trajectory]:
+    return [dataclasses.replace(t, spec=dataclasses.replace(t.spec, model=model, variant=variant))
+            for t in ts]  # fmt: skip
+
+
+@pytest.fixture(scope="module")
+def figures(variant_grid: list[Trajectory]) -> dict[str, Figure]:
+    """One panel and many panels with long labels: every figure of both reports."""
+    one = build_report(_rename(variant_grid[:24], "scout"), with_reasoning=False)
+    many = build_report(
+        variant_grid + _rename(variant_grid[:24], "scout-decay-8-with-a-long-name", "no_inventory"),
+        with_reasoning=False,
+    )
+    drawn = {f"one/{k}": v for k, v in draw_figures(one)[0].items()}
+    drawn.update({f"many/{k}": v for k, v in draw_figures(many)[0].items()})
+    return drawn
+
+
+def test_every_figure_is_drawn(figures: dict[str, Figure]) -> None:
+    assert set(figures) == {f"{r}/{f.name}" for r in ("one", "many") for f in FIGURES}
+
+
+def _undrawn_tick_labels(fig: Figure) -> set[int]:
+    """Tick labels matplotlib keeps but does not draw (ticks outside the view limits)."""
+    hidden: set[int] = set()
+    for ax in fig.axes:
+        for axis in (ax.xaxis, ax.yaxis):
+            low, high = sorted(axis.get_view_interval())
+            for tick in axis.get_major_ticks() + axis.get_minor_ticks():
+                if not low - 1e-9 <= tick.get_loc() <= high + 1e-9:
+                    hidden |= {id(tick.label1), id(tick.label2)}
+    return hidden
+
+
+def test_no_text_leaves_the_canvas(figures: dict[str, Figure]) -> None:
+    outside = []
+    for name, fig in figures.items():
+        FigureCanvasAgg(fig)
+        renderer = fig.canvas.get_renderer()
+        fig.draw(renderer)
+        width, height = fig.bbox.width, fig.bbox.height
+        hidden = _undrawn_tick_labels(fig)
+        texts = [t for t in fig.findobj(Text)
+                 if t.get_visible() and t.get_text().strip() and id(t) not in hidden]  # fmt: skip
+        assert texts, name
+        for t in texts:
+            box = t.get_window_extent(renderer)
+            if box.x0 < -0.5 or box.y0 < -0.5 or box.x1 > width + 0.5 or box.y1 > height + 0.5:
+                outside.append((name, t.get_text(), tuple(round(v) for v in box.extents)))
+    assert not outside, outside
+
+
+@pytest.mark.parametrize("name", ["tbs.png", "miller.png", "km.png"])
+def test_condition_lines_differ_in_style_and_marker(figures, name: str) -> None:
+    """Baseline, low light and texture lines never share colour, line style and marker, and
+    the baseline is drawn on top (the texture line cannot hide it)."""
+    ax = figures[f"one/{name}"].axes[0]
+    lines = [ln for ln in ax.get_lines() if ln.get_marker() not in ("None", None, "")]
+    by_colour: dict[str, Line2D] = {ln.get_color(): ln for ln in lines}
+    assert len(by_colour) == 3
+    styles = {(ln.get_linestyle(), ln.get_marker()) for ln in by_colour.values()}
+    assert len(styles) == 3
+    base = by_colour["#1f5fbf"]
+    assert base.get_zorder() > max(ln.get_zorder() for ln in lines if ln is not base)
+
+
+def test_pa_bars_carry_a_hatch_per_condition(figures) -> None:
+    ax = figures["one/pa_by_spawn.png"].axes[0]
+    hatches = {(p.get_facecolor()[:3], p.get_hatch()) for p in ax.patches}
+    assert len({h for _, h in hatches}) == 3
