@@ -11,19 +11,24 @@ For every compared gate metric (:data:`COMPARED`) and cell:
 * the value on each side over the pairs both sides define (``GATE_METRICS[name].compute``),
   and the difference ``B - A``;
 * a seeded **paired bootstrap** over pairs (the same resampled pair indices on both sides):
-  the percentile 95 % CI of ``B - A`` and a two-sided p-value for "no difference", from the
-  bootstrap distribution shifted to the null (Hall & Wilson 1991):
-  ``p = (1 + #{|d* - d| >= |d|}) / (R + 1)``. The smallest p is ``1 / (R + 1)``, so ``R``
-  grows with the number of tests ``m``: ``R = max(N_RESAMPLES, ceil(10 m / ALPHA))`` keeps
-  the smallest Holm-adjusted p at ``ALPHA / 10`` or below (2,000 resamples would make any
-  difference unreachable past 100 tests);
+  the percentile 95 % CI of ``B - A``;
+* a two-sided p-value for "no difference" from the **paired sign-flip (randomisation)
+  test**: under the null the two episodes of a pair are exchangeable, so each pair's sides
+  are swapped at random and the metric's ``B - A`` recomputed;
+  ``p = #{|d_swap| >= |d|} / 2^n`` over all ``2^n`` patterns when ``2^n <= R`` (exact),
+  else ``(1 + #) / (R + 1)`` over ``R`` seeded random patterns. Unlike a bootstrap p-value
+  it is valid for a handful of pairs (two pairs can never give p below 0.5, where a
+  bootstrap says 0.004) and it is exactly 1 for identical pairs.
+  ``R = max(N_RESAMPLES, ceil(10 m / ALPHA))`` for ``m`` tests, so the smallest
+  Holm-adjusted p stays at or below ``ALPHA / 10`` however many cells are compared;
 * the p-values of the whole comparison corrected together for multiple testing with Holm's
   step-down method (:func:`statsmodels.stats.multitest.multipletests`, ``method="holm"``,
   family-wise error ``ALPHA``);
 * a verdict: ``better`` / ``worse`` when the Holm-adjusted p is below ``ALPHA`` (the direction
   from ``GATE_METRICS[name].better``: ``higher`` or ``lower`` is better), ``no change``
   otherwise, ``n/a`` when there is no test (undefined or unbounded value, fewer than two
-  pairs, unbounded bootstrap distribution).
+  pairs, unbounded bootstrap distribution). The CI and the test can disagree for a few pairs;
+  the verdict follows the test.
 
 Pairing removes the between-world variance (spawn pose, layout) that an unpaired comparison
 counts as noise, and a pair whose episodes are identical contributes exactly 0: the same
@@ -93,7 +98,7 @@ class Difference:
     """Paired percentile bootstrap 95 % CI of ``diff``."""
     ci_high: float | None
     p_value: float | None
-    """Two-sided paired bootstrap p-value of ``diff = 0`` (None without a test)."""
+    """Two-sided paired sign-flip p-value of ``diff = 0`` (None without a test)."""
     p_holm: float | None
     """``p_value`` after Holm's correction across every test of the comparison."""
     verdict: str
@@ -152,20 +157,52 @@ def _used(name: str, pairs: list[Pair]) -> list[Pair]:
     return kept
 
 
-def _resampled(name: str, pairs: list[Pair], idx: np.ndarray) -> np.ndarray:
-    """``B - A`` of the metric on every resample of pair indices (``idx``: resamples x n)."""
+def _columns(name: str, pairs: list[Pair]) -> tuple[np.ndarray, np.ndarray]:
+    """Side A and side B as ``(2, n)`` rows over the pairs: numerator and denominator of the
+    metric (a mean is a ratio with denominator 1)."""
 
     def side(k: int) -> np.ndarray:
         if name in _RATIOS:
             num, den = _RATIOS[name]
-            n = np.array([num(p[k]) for p in pairs], dtype=float)[idx].sum(axis=1)
-            d = np.array([den(p[k]) for p in pairs], dtype=float)[idx].sum(axis=1)
-            with np.errstate(divide="ignore", invalid="ignore"):
-                return n / d
+            return np.array([[num(p[k]) for p in pairs], [den(p[k]) for p in pairs]], float)
         get = _MEANS.get(name, lambda m: m.errored)
-        return np.array([float(get(p[k])) for p in pairs])[idx].mean(axis=1)  # type: ignore[arg-type]
+        values = [float(get(p[k])) for p in pairs]  # type: ignore[arg-type]
+        return np.array([values, [1.0] * len(pairs)])
 
-    return side(1) - side(0)
+    return side(0), side(1)
+
+
+def _ratio(x: np.ndarray) -> np.ndarray:
+    """``sum num / sum den`` over the last axis of ``(2, ..., n)`` rows."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return x[0].sum(axis=-1) / x[1].sum(axis=-1)
+
+
+def _sign_flips(n: int, resamples: int, rng: np.random.Generator) -> tuple[np.ndarray, bool]:
+    """Which pairs swap sides, and whether that is every pattern: all ``2**n`` patterns when
+    there are at most ``resamples`` (an exact test), else ``resamples`` random ones."""
+    if 2**n <= resamples:
+        return (np.arange(2**n)[:, None] >> np.arange(n)) & 1 == 1, True
+    return rng.random((resamples, n)) < 0.5, False
+
+
+def _test(a: np.ndarray, b: np.ndarray, diff: float, rng_seed: int, resamples: int
+          ) -> tuple[float, float, float] | str:  # fmt: skip
+    """Paired bootstrap CI and sign-flip p of ``diff`` (module docstring), or why none."""
+    rng = np.random.default_rng(rng_seed)
+    n = a.shape[1]
+    idx = rng.integers(0, n, size=(resamples, n))
+    boot = _ratio(b[:, idx]) - _ratio(a[:, idx])
+    if not np.all(np.isfinite(boot)):
+        return "the bootstrap distribution is unbounded (resamples without any event): no test"
+    low, high = (float(q) for q in np.percentile(boot, [2.5, 97.5]))
+    swap, exact = _sign_flips(n, resamples, rng)
+    flipped = _ratio(np.where(swap, a[:, None], b[:, None])) - _ratio(
+        np.where(swap, b[:, None], a[:, None]))  # fmt: skip
+    # identical pairs give flipped == diff == 0: every pattern is as extreme, p = 1
+    extreme = np.count_nonzero(np.abs(flipped) >= abs(diff) - 1e-12)
+    p = extreme / len(swap) if exact else (1 + extreme) / (len(swap) + 1)
+    return low, high, float(p)
 
 
 def _difference(
@@ -192,16 +229,10 @@ def _difference(
     diff = eb.value - ea.value
     if len(used) < 2:
         return result(diff, why="fewer than two pairs: no test")
-    rng = np.random.default_rng(rng_seed)
-    boot = _resampled(name, used, rng.integers(0, len(used), size=(resamples, len(used))))
-    if not np.all(np.isfinite(boot)):
-        return result(diff, why="the bootstrap distribution is unbounded (resamples without "
-                      "any event): no test")  # fmt: skip
-    low, high = (float(q) for q in np.percentile(boot, [2.5, 97.5]))
-    # Shift to the null; the tolerance keeps identical pairs (boot == diff == 0) at p = 1.
-    extreme = np.abs(boot - diff) >= abs(diff) - 1e-12
-    p = float((1 + np.count_nonzero(extreme)) / (resamples + 1))
-    return result(diff, low, high, p)
+    tested = _test(*_columns(name, used), diff, rng_seed, resamples)
+    if isinstance(tested, str):
+        return result(diff, why=tested)
+    return result(diff, *tested)
 
 
 def _verdict(d: Difference, p_holm: float) -> Difference:

@@ -46,11 +46,12 @@ def compare_document(c: Comparison) -> Document:
     blocks: list[Block] = [
         Paragraph(
             f"{sides}. Episodes are paired by condition, spawn room and episode index (same "
-            f"world). B - A over the pairs with a seeded (rng_seed={c.rng_seed}) paired "
-            f"bootstrap ({c.n_resamples} resamples): percentile 95% CI and a two-sided p-value, "
-            f"Holm-corrected across all {sum(d.p_value is not None for d in c.differences)} "
-            f"tests. Verdict **better** / **worse** when the Holm p < {c.alpha} (direction: "
-            "the Better column), else no change; n/a without a test."
+            f"world). B - A over the pairs; 95% CI from a seeded (rng_seed={c.rng_seed}) paired "
+            f"bootstrap ({c.n_resamples} resamples); two-sided p from a paired sign-flip test "
+            f"(exact up to {c.n_resamples} patterns), Holm-corrected across all "
+            f"{sum(d.p_value is not None for d in c.differences)} tests. Verdict **better** / "
+            f"**worse** when the Holm p < {c.alpha} (direction: the Better column), else no "
+            "change; n/a without a test."
         )
     ]
     if c.only_a or c.only_b:
