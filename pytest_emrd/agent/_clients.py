@@ -18,10 +18,12 @@ from __future__ import annotations
 
 import os
 from dataclasses import dataclass
+from functools import partial
 from typing import Any, Final, Protocol
 
 import httpx
 
+from pytest_emrd._wire import memo
 from pytest_emrd.agent._config import ANTHROPIC_VERSION, SAMPLING_FIELDS, ModelConfig
 from pytest_emrd.agent._retry import RetryPolicy, post_json
 from pytest_emrd.errors import ConfigError
@@ -157,16 +159,21 @@ def _anthropic_part(part: dict[str, Any]) -> dict[str, Any]:
     return {"type": "text", "text": part["text"]}
 
 
+def _anthropic_message(message: dict[str, Any]) -> dict[str, Any]:
+    content = message["content"]
+    parts = [_anthropic_part(p) for p in content] if isinstance(content, list) else content
+    return {"role": message["role"], "content": parts}
+
+
 def to_anthropic(messages: list[dict[str, Any]]) -> tuple[str, list[dict[str, Any]]]:
-    """(system prompt, Messages-API messages) from OpenAI-format messages."""
+    """(system prompt, Messages-API messages) from OpenAI-format messages; each message is
+    converted once while it travels in the window (the same dict out for the same dict in)."""
     system = "\n\n".join(m["content"] for m in messages if m["role"] == "system")
-    converted = []
-    for m in messages:
-        if m["role"] == "system":
-            continue
-        content = m["content"]
-        parts = [_anthropic_part(p) for p in content] if isinstance(content, list) else content
-        converted.append({"role": m["role"], "content": parts})
+    converted = [
+        memo(m, "anthropic", partial(_anthropic_message, m))
+        for m in messages
+        if m["role"] != "system"
+    ]
     return system, converted
 
 

@@ -65,28 +65,41 @@ class Conversation:
     """The episode's dialogue, rendered through the sliding window.
 
     ``request(current)`` gives the messages to send for the current step;
-    ``record(current, reply)`` appends the answered turn once the model replied.
+    ``record(current, reply)`` appends the answered turn once the model replied. Each
+    message is built once and the same dict is sent again while it stays in the window
+    (messages are never changed once built: clients encode and redact each one once).
     """
 
     def __init__(self, system: str, *, single_image: bool, turns: int = HISTORY_TURNS) -> None:
         check_positive_int("turns", turns)
         self.system = system
         self.single_image = single_image
-        self._answered: deque[tuple[UserTurn, str]] = deque(maxlen=turns - 1)
+        self._system = {"role": "system", "content": system}
+        self._answered: deque[tuple[UserTurn, dict[str, Any], dict[str, Any]]] = deque(
+            maxlen=turns - 1
+        )
+        self._pending: tuple[UserTurn, dict[str, Any]] | None = None
 
     def window(self, current: UserTurn) -> list[UserTurn]:
         """The user turns inside the window, oldest first, the current one last."""
-        return [user for user, _ in self._answered] + [current]
+        return [user for user, _, _ in self._answered] + [current]
 
     def request(self, current: UserTurn) -> list[dict[str, Any]]:
         """System prompt, the answered turns still in the window, then ``current``."""
-        messages: list[dict[str, Any]] = [{"role": "system", "content": self.system}]
-        for user, reply in self._answered:
-            messages.append(_user_message(user, image=not self.single_image))
-            messages.append({"role": "assistant", "content": reply})
-        messages.append(_user_message(current, image=True))
+        messages: list[dict[str, Any]] = [self._system]
+        for _, user, reply in self._answered:
+            messages += (user, reply)
+        if self._pending is None or self._pending[0] is not current:
+            self._pending = (current, _user_message(current, image=True))
+        messages.append(self._pending[1])
         return messages
 
     def record(self, current: UserTurn, reply: str) -> None:
         """Append the answered turn; the oldest pair leaves the window first."""
-        self._answered.append((current, reply))
+        pending = self._pending if self._pending and self._pending[0] is current else None
+        if pending is not None and not self.single_image:
+            user = pending[1]
+        else:
+            user = _user_message(current, image=not self.single_image)
+        self._pending = None
+        self._answered.append((current, user, {"role": "assistant", "content": reply}))

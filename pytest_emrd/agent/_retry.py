@@ -25,6 +25,7 @@ from typing import Any, Final
 import httpx
 import tenacity
 
+from pytest_emrd._wire import encode_body
 from pytest_emrd.errors import TransportError
 
 RETRY_STATUSES: Final = frozenset({429, 500, 502, 503, 504, 520, 522, 524, 529})
@@ -141,7 +142,9 @@ def post_json(
     URL, the attempts and the last cause. ``secrets`` (the API key) are masked in every
     log line and error message.
     """
-    request = http.build_request("POST", url, json=body, headers=headers)
+    content = encode_body(body)  # what json=body sends, each message encoded once per episode
+    request = http.build_request("POST", url, content=content, headers=headers)
+    request.headers.setdefault("Content-Type", "application/json")  # as json= does
     mask = _masker(secrets)
     shown = _public_url(url)
     attempts = policy.max_retries + 1

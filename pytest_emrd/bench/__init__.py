@@ -39,6 +39,8 @@ class Figure:
     """The issue's target for this figure, or None."""
     n: int
     """Repetitions behind the median (1 for sizes)."""
+    higher_is_better: bool = False
+    """The target is a floor (e.g. a size ratio), not a ceiling."""
 
     def to_dict(self) -> dict[str, object]:
         return asdict(self)
@@ -47,7 +49,7 @@ class Figure:
     def meets_target(self) -> bool | None:
         if self.target is None:
             return None
-        if self.unit == "ratio":
+        if self.higher_is_better:
             return self.value >= self.target
         return self.value <= self.target
 
@@ -62,6 +64,30 @@ def median_seconds(fn: Callable[[], object], *, repeat: int, warmup: int = 1) ->
         fn()
         samples.append(time.perf_counter() - start)
     return statistics.median(samples)
+
+
+def paired_ratio(
+    numerator: Callable[[], object],
+    denominator: Callable[[], object],
+    *,
+    repeat: int,
+    warmup: int = 1,
+) -> float:
+    """Median over ``repeat`` pairs of ``cpu(numerator) / cpu(denominator)``, the two run
+    back to back in each pair (after ``warmup`` runs of each). Both sides are CPU-bound and
+    single-threaded, so their cost is measured as this process's CPU time: other load on
+    the machine (which stretches wall time unevenly) does not enter the ratio."""
+    for _ in range(warmup):
+        numerator()
+        denominator()
+    ratios = []
+    for _ in range(repeat):
+        start = time.process_time()
+        numerator()
+        middle = time.process_time()
+        denominator()
+        ratios.append((middle - start) / (time.process_time() - middle))
+    return statistics.median(ratios)
 
 
 def run_stages(names: list[str], *, repeat: int) -> list[Figure]:

@@ -12,11 +12,11 @@
 
 from __future__ import annotations
 
-import json
 from dataclasses import dataclass, field
 from typing import Any
 
 from pytest_emrd import world
+from pytest_emrd._wire import encode_body
 from pytest_emrd.agent import (
     ChatClient,
     ChatResponse,
@@ -39,9 +39,12 @@ class _Recorder:
 
     client: ChatClient
     replies: list[ChatResponse] = field(default_factory=list)
+    sent: list[list[dict[str, Any]]] = field(default_factory=list)
+    """The messages of every request (the loop's own dicts, shared across windows)."""
 
     def complete(self, messages: list[dict[str, Any]]) -> ChatResponse:
         response = self.client.complete(messages)
+        self.sent.append(messages)
         self.replies.append(response)
         return response
 
@@ -60,7 +63,7 @@ class _Replay:
     i: int = 0
 
     def complete(self, messages: list[dict[str, Any]]) -> ChatResponse:
-        json.dumps({"model": "bench", "messages": messages})  # the client's body encoding
+        encode_body({"model": "bench", "messages": messages})  # the client's body encoding
         return self.replies[self.i % len(self.replies)]
 
     def step(self, action: str) -> Observation:

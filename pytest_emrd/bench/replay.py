@@ -2,24 +2,37 @@
 
 * ``replay.grid_240_s`` — wall time of ``pytest benchmarks -n 2 --emrd-record-mode=none``
   over the full reference grid (scout x 3 conditions x 4 spawns x 20 episodes, committed
-  cassettes, gates included), in a fresh run directory. Target 60 s.
+  cassettes, gates included), in a fresh run directory. Target 20 s.
+* ``replay.vs_world_ratio`` — replaying :data:`SAMPLE` (12 committed episodes, one per
+  condition and spawn) through their cassettes, as the plugin does (cassette load, the whole
+  episode loop, redaction, matching), over the world alone doing the same work: layout,
+  reset, ground truth and the same actions, with the same per-step reads. Both run warm
+  (one warm-up each), so the world's own caches answer alike on both sides and only the
+  replay's cost remains above 1. Target 1.2.
 * ``replay.cassette_kb_per_episode`` — mean size of the committed scout cassettes; and
   ``replay.cassette_kb_per_50_steps`` — the size of a full 50-step episode, predicted by a
   least-squares line of cassette size on request count over the committed grid (episodes run
   8 to 50 steps). Scaling each file by ``50 / requests`` would count the per-episode fixed part
   (system prompt, first frame) once per step; the line separates the fixed part from the
   per-step part. Target 15 KB.
-* ``replay.size_ratio_vs_plain_vcrpy`` — the same episodes recorded side by side with plain
-  vcrpy (YAML, base64 frames kept, no redaction) and with EMRD cassettes; total plain bytes
-  over total EMRD bytes. Target 500.
-* ``replay.step_overhead_ms`` — per request of a replayed episode: redaction of the live
-  body (frames in it), vcrpy matching, response rebuild and JSON parse in httpx; no world,
-  no rendering, no agent. The live request bodies are captured once from a real episode.
-  Target 5 ms.
+* ``replay.size_ratio_vs_plain_vcrpy`` — the committed cassettes of :data:`SIZE_SAMPLE` (24
+  episodes) against what plain vcrpy stores for the same traffic (YAML, base64 frames kept,
+  no redaction): each episode is replayed from its cassette while the HTTP requests the agent
+  really sends and the responses it gets are captured, then written with vcrpy's own YAML
+  serialiser. Total plain bytes over total committed bytes (plain vcrpy would also keep the
+  server's volatile response headers, which replay does not reproduce: the ratio is, if
+  anything, low). Target 500.
+* ``replay.step_overhead_ms`` — per request of a replayed episode, through the real client:
+  frame registration, body encoding, redaction, vcrpy matching, response rebuild and JSON
+  parse; no world, no agent logic. The messages are captured once from a real episode (each
+  message the same object while it stays in the window, as the loop sends them); every
+  repetition starts with the redaction and encoding caches empty, so each frame is
+  encoded, hashed and redacted as often as in a real run. Target 5 ms.
 """
 
 from __future__ import annotations
 
+import functools
 import statistics
 import subprocess
 import sys
@@ -29,46 +42,92 @@ from typing import Any
 
 import httpx
 import numpy as np
-import vcr
 
-from pytest_emrd.bench import Figure, median_seconds
-from pytest_emrd.cassette import cassette_path, episode_cassette, run_with_cassette
-from pytest_emrd.trajectory import EpisodeSpec
+from pytest_emrd import frames
+from pytest_emrd.bench import Figure, median_seconds, paired_ratio
+from pytest_emrd.cassette import (
+    cassette_path,
+    clear_caches,
+    decode,
+    episode_cassette,
+    run_with_cassette,
+)
+from pytest_emrd.trajectory import CONDITIONS, EpisodeSpec, Trajectory
 
 ROOT = Path(__file__).resolve().parents[2]
 CASSETTES = ROOT / "cassettes"
-#: One episode per spawn room under each condition (12 episodes, fixed, not picked by size).
-SIDE_BY_SIDE = tuple(
-    EpisodeSpec("scout", condition, spawn, 0, modality="both")
-    for condition in ("baseline", "low_light", "texture")
-    for spawn in ("office", "conference", "kitchen", "entrance")
-)
+_SPAWNS = ("office", "conference", "kitchen", "entrance")
+
+
+def _sample(episodes: tuple[int, ...]) -> tuple[EpisodeSpec, ...]:
+    return tuple(
+        EpisodeSpec("scout", condition, spawn, episode, modality="both")
+        for episode in episodes
+        for condition in CONDITIONS
+        for spawn in _SPAWNS
+    )
+
+
+#: One committed episode per condition and spawn room (fixed, not picked by size).
+SAMPLE = _sample((0,))
+#: Two committed episodes per condition and spawn room.
+SIZE_SAMPLE = _sample((0, 1))
 
 
 class _Capture(httpx.BaseTransport):
-    """A real HTTP transport that keeps every request it sends."""
+    """A real HTTP transport (vcrpy patches it during a replay) keeping every exchange."""
 
     def __init__(self) -> None:
         self.inner = httpx.HTTPTransport()
-        self.requests: list[httpx.Request] = []
+        self.exchanges: list[tuple[httpx.Request, httpx.Response]] = []
 
     def handle_request(self, request: httpx.Request) -> httpx.Response:
         request.read()
-        self.requests.append(request)
-        return self.inner.handle_request(request)
+        response = self.inner.handle_request(request)
+        self.exchanges.append((request, response))
+        return response
 
-
-def _runner() -> Any:
-    from pytest_emrd.agent import load_registry
-    from pytest_emrd.cassette import agent_runner
-
-    return agent_runner(load_registry())
+    def close(self) -> None:
+        self.inner.close()
 
 
 def _protocol() -> str:
     from pytest_emrd.episode import protocol_version
 
     return protocol_version()
+
+
+@functools.cache
+def _registry() -> Any:
+    from pytest_emrd.agent import load_registry
+
+    return load_registry()
+
+
+def _scout_client(transport: httpx.BaseTransport | None = None) -> Any:
+    """The scout model's client as a replay builds it (no key), optionally on ``transport``."""
+    from pytest_emrd.agent import OpenAICompatibleClient
+    from pytest_emrd.agent.reference import reference_base_url
+
+    config = _registry().get("scout")
+    return OpenAICompatibleClient(
+        config, base_url=reference_base_url(), transport=transport, require_key=False
+    )
+
+
+def _replay(spec: EpisodeSpec, client: Any) -> Trajectory:
+    """``spec`` replayed from its committed cassette with ``client``; errors are raised."""
+    from pytest_emrd.episode import run_episode
+
+    def run(s: EpisodeSpec, *, live: bool) -> Trajectory:
+        return run_episode(s, registry=_registry(), client=client)
+
+    done = run_with_cassette(
+        spec, run, cassettes=CASSETTES, protocol=_protocol(), record_mode="none"
+    )
+    if done.trajectory.status == "errored":
+        raise RuntimeError(f"replay of {spec.case_id} failed: {done.trajectory.error}")
+    return done.trajectory
 
 
 def _grid_seconds(repeat: int) -> float:
@@ -84,8 +143,6 @@ def _grid_seconds(repeat: int) -> float:
 
 
 def _committed_sizes() -> tuple[float, float, int]:
-    from pytest_emrd.cassette import decode
-
     paths = sorted((CASSETTES / "scout").rglob("*.yaml.gz"))
     if not paths:
         raise RuntimeError(f"no scout cassettes under {CASSETTES}; record them first")
@@ -95,72 +152,125 @@ def _committed_sizes() -> tuple[float, float, int]:
     return statistics.fmean(sizes), float(intercept + 50 * slope), len(paths)
 
 
-def _side_by_side_ratio() -> float:
-    runner, protocol = _runner(), _protocol()
+def plain_vcrpy_yaml(exchanges: list[tuple[httpx.Request, httpx.Response]]) -> str:
+    """What plain vcrpy writes for these exchanges: its YAML serialiser, bodies as sent."""
+    from vcr.request import Request
+    from vcr.serialize import serialize
+    from vcr.serializers import yamlserializer
+
+    requests = [Request(r.method, str(r.url), r.content, dict(r.headers)) for r, _ in exchanges]
+    responses = [
+        {
+            "status": {"code": response.status_code, "message": response.reason_phrase},
+            "headers": {k: response.headers.get_list(k) for k in response.headers},
+            "body": {"string": response.content},
+        }
+        for _, response in exchanges
+    ]
+    return str(serialize({"requests": requests, "responses": responses}, yamlserializer))
+
+
+def _size_ratio(specs: tuple[EpisodeSpec, ...]) -> float:
     plain = ours = 0
-    with tempfile.TemporaryDirectory() as tmp:
-        root = Path(tmp)
-        for spec in SIDE_BY_SIDE:
-            path = root / "plain" / f"{spec.case_id}.yaml"
-            with vcr.VCR(record_mode="all").use_cassette(str(path)):
-                runner(spec, live=True)
-            plain += path.stat().st_size
-            run_with_cassette(spec, runner, cassettes=root, protocol=protocol, record_mode="all")
-            ours += cassette_path(root, spec).stat().st_size
+    for spec in specs:
+        capture = _Capture()
+        client = _scout_client(capture)
+        try:
+            _replay(spec, client)
+        finally:
+            client.close()
+        plain += len(plain_vcrpy_yaml(capture.exchanges).encode())
+        ours += cassette_path(CASSETTES, spec).stat().st_size
     return plain / ours
 
 
+def world_alone(trajectory: Trajectory) -> None:
+    """What the episode loop asks of the world for ``trajectory``, and nothing else."""
+    from pytest_emrd import world
+    from pytest_emrd.episode import build_simulator, world_action
+    from pytest_emrd.rooms import SLUG_ROOMS
+
+    spec = trajectory.spec
+    layout = world.generate_layout(spec.seed)
+    sim = build_simulator(spec.backend)
+    room = SLUG_ROOMS[spec.spawn]
+    sim.reset(layout, spec.condition, room, spec.seed)
+    world.ground_truth(layout, sim.spawn_pose, room)
+    for step in trajectory.steps:
+        sim.current_room()
+        sim.visible_ids()
+        sim.step(world_action(step.action, spec.variant)[0])
+    sim.current_room()
+    sim.close()
+
+
+def _vs_world_ratio(specs: tuple[EpisodeSpec, ...], repeat: int) -> float:
+    client = _scout_client()
+    trajectories: list[Trajectory] = []
+
+    def replay() -> None:
+        clear_caches()
+        trajectories[:] = [_replay(spec, client) for spec in specs]
+
+    def alone() -> None:
+        for trajectory in trajectories:
+            world_alone(trajectory)
+
+    try:
+        return paired_ratio(replay, alone, repeat=repeat)
+    finally:
+        client.close()
+
+
 def _step_overhead_ms(repeat: int) -> float:
-    from pytest_emrd.agent import OpenAICompatibleClient, load_registry
-    from pytest_emrd.agent.reference import reference_base_url
-    from pytest_emrd.episode import run_episode
+    from pytest_emrd.bench.loop import _Recorder
 
-    spec = EpisodeSpec("scout", "baseline", "office", 0, modality="both")
-    registry, protocol = load_registry(), _protocol()
-    capture = _Capture()
-    with tempfile.TemporaryDirectory() as tmp:
-        root = Path(tmp)
+    spec = SAMPLE[0]
+    client = _scout_client()
+    recorder = _Recorder(client)
+    _replay(spec, recorder)
+    sent = recorder.sent
+    payloads = [m[-1]["content"][1]["image_url"]["url"].partition(",")[2] for m in sent]
+    digests = [frames.pixel_digest_for(p).removeprefix("pixels:") for p in payloads]
 
-        def record(s: EpisodeSpec, *, live: bool) -> Any:
-            config = registry.get(s.model)
-            client = OpenAICompatibleClient(
-                config, base_url=reference_base_url(), transport=capture
-            )
-            try:
-                return run_episode(s, registry=registry, client=client)
-            finally:
-                client.close()
+    def replay() -> None:
+        clear_caches()  # as at the start of a run: nothing encoded or redacted yet
+        with episode_cassette(
+            cassette_path(CASSETTES, spec),
+            protocol=_protocol(),
+            record_mode="none",
+            matching="strict",
+            rerecord_command="(bench)",
+        ):
+            for messages, payload, digest in zip(sent, payloads, digests, strict=True):
+                frames.register(payload, digest)  # the loop registers each new frame once
+                client.complete(messages)
 
-        run_with_cassette(spec, record, cassettes=root, protocol=protocol, record_mode="all")
-        live = [(r.method, str(r.url), dict(r.headers), r.content) for r in capture.requests]
-
-        http = httpx.Client()  # created once: client start-up is the agent's cost, not replay's
-
-        def replay() -> None:
-            with episode_cassette(
-                cassette_path(root, spec),
-                protocol=protocol,
-                record_mode="none",
-                matching="strict",
-                rerecord_command="(bench)",
-            ):
-                for method, url, headers, body in live:
-                    http.request(method, url, headers=headers, content=body).json()
-
+    try:
         seconds = median_seconds(replay, repeat=repeat)
-        http.close()
-    return seconds / len(live) * 1000
+    finally:
+        client.close()
+    return seconds / len(sent) * 1000
 
 
 def run(*, repeat: int) -> list[Figure]:
     overhead = _step_overhead_ms(repeat)
-    ratio = _side_by_side_ratio()
+    vs_world = _vs_world_ratio(SAMPLE, repeat)
+    ratio = _size_ratio(SIZE_SAMPLE)
     kb, kb_50, count = _committed_sizes()
     grid = _grid_seconds(repeat)
     return [
-        Figure("replay.grid_240_s", grid, "s", 60.0, repeat),
+        Figure("replay.grid_240_s", grid, "s", 20.0, repeat),
+        Figure("replay.vs_world_ratio", vs_world, "ratio", 1.2, repeat),
         Figure("replay.cassette_kb_per_episode", kb, "KB", 15.0, count),
         Figure("replay.cassette_kb_per_50_steps", kb_50, "KB", 15.0, count),
-        Figure("replay.size_ratio_vs_plain_vcrpy", ratio, "ratio", 500.0, len(SIDE_BY_SIDE)),
+        Figure(
+            "replay.size_ratio_vs_plain_vcrpy",
+            ratio,
+            "ratio",
+            500.0,
+            len(SIZE_SAMPLE),
+            higher_is_better=True,
+        ),
         Figure("replay.step_overhead_ms", overhead, "ms", 5.0, repeat),
     ]

@@ -26,6 +26,7 @@ from pytest_emrd.cassette._redact import (
 )
 from pytest_emrd.cassette._use import (
     EpisodeCassette,
+    clear_caches,
     episode_cassette,
     keep_response,
     redact_request,
@@ -46,6 +47,7 @@ __all__ = [
     "agent_runner",
     "canonical_json",
     "cassette_path",
+    "clear_caches",
     "decode",
     "encode",
     "episode_cassette",

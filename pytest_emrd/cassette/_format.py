@@ -55,6 +55,7 @@ from typing import Any, Final
 import yaml
 from vcr.request import Request
 
+from pytest_emrd._wire import splice
 from pytest_emrd.cassette._redact import DIGEST, canonical_json
 
 FORMAT: Final = "emrd-cassette/1"
@@ -214,17 +215,15 @@ class _Decoder:
         lists = body.get("lists", {})
         if not lists:
             return serialise(tree).encode(), mode == "canonical"
-        # The object serialised member by member, exactly as json.dumps joins it, with each
-        # list spliced in from its items' serialisations.
-        ascii_only = mode == "ascii"
-        members = []
-        for key in sorted(tree) if mode == "canonical" else tree:
-            if key in lists:
-                value = "[" + ",".join(self._item(i, mode) for i in _expand(lists[key])) + "]"
-            else:
-                value = serialise(tree[key])
-            members.append(f"{json.dumps(key, ensure_ascii=ascii_only)}:{value}")
-        return ("{" + ",".join(members) + "}").encode(), mode == "canonical"
+        # Each list spliced in from its items' serialisations (each template done once).
+        text = splice(
+            {**tree, **{key: _expand(runs) for key, runs in lists.items()}},
+            value=serialise,
+            item=lambda index: self._item(index, mode),
+            sort_keys=mode == "canonical",
+            ensure_ascii=mode == "ascii",
+        )
+        return text.encode(), mode == "canonical"
 
 
 def encode(data: CassetteData) -> bytes:

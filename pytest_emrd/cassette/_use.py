@@ -13,6 +13,7 @@ from vcr.cassette import Cassette
 from vcr.record_mode import RecordMode
 from vcr.request import Request
 
+from pytest_emrd import _wire
 from pytest_emrd.cassette._drift import drift_message
 from pytest_emrd.cassette._persister import EpisodePersister
 from pytest_emrd.cassette._redact import (
@@ -26,6 +27,13 @@ from pytest_emrd.cassette._redact import (
 KEPT_RESPONSE_HEADERS: Final = frozenset({"content-type"})
 
 _cache = RedactionCache()
+
+
+def clear_caches() -> None:
+    """Forget every cached redaction and message encoding, as at the start of a run
+    (cold benchmarks, tests)."""
+    _cache.clear()
+    _wire.clear()
 
 
 def redact_request(request: Request) -> Request:
