@@ -10,6 +10,7 @@ from __future__ import annotations
 import dataclasses
 import types
 import typing
+from collections.abc import Collection
 from functools import cache
 from typing import Any, TypeVar
 
@@ -86,13 +87,23 @@ def _build(tp: Any, data: Any, where: str) -> Any:
     return data
 
 
-def from_versioned_dict(cls: type[T], data: Any, *, version: int, what: str, remedy: str) -> T:
-    """:func:`from_dict` after checking ``data["schema_version"] == version``.
+def from_versioned_dict(
+    cls: type[T],
+    data: Any,
+    *,
+    version: int,
+    what: str,
+    remedy: str,
+    older: Collection[int] = (),
+) -> T:
+    """:func:`from_dict` after checking ``data["schema_version"]`` is ``version``.
 
-    A stored file of another schema is a :class:`ProtocolError` that names ``what`` was read
-    and ``remedy``, what to do instead (recompute, rebuild, re-run).
+    ``older`` lists earlier schema versions that are still readable: every field they lack has
+    a default in ``cls``, and the object read is upgraded to ``version``. A stored file of any
+    other schema is a :class:`ProtocolError` that names ``what`` was read and ``remedy``, what
+    to do instead (recompute, rebuild, re-run).
     """
     found = data.get("schema_version") if isinstance(data, dict) else None
-    if found != version:
+    if found != version and (found not in older or isinstance(found, bool)):
         raise ProtocolError(f"{what} schema_version={found!r} is not {version}; {remedy}")
-    return from_dict(cls, data)
+    return from_dict(cls, {**data, "schema_version": version})

@@ -151,6 +151,7 @@ class _Run:
             parse_error=reply.error,
             raw_reply=response.text,
             usage=response.usage,
+            repairs=reply.repairs,
         )
         self.steps.append(step)
         return step, after

@@ -24,7 +24,9 @@ from typing import Any, Final, Literal
 
 from pytest_emrd._serde import from_versioned_dict, to_dict
 
-SCHEMA_VERSION: Final = 1
+SCHEMA_VERSION: Final = 2
+#: Schema versions still read (their missing fields take the defaults): 1 lacks ``Step.repairs``.
+OLDER_SCHEMAS: Final[tuple[int, ...]] = (1,)
 
 Condition = Literal["baseline", "low_light", "texture"]
 CONDITIONS: Final[tuple[str, ...]] = ("baseline", "low_light", "texture")
@@ -186,6 +188,10 @@ class Step:
     raw_reply: str = ""
     """The model's reply text, verbatim."""
     usage: Usage = field(default_factory=Usage)
+    repairs: tuple[str, ...] | None = None
+    """Repairs the parser applied to read the reply (``fence``, ``prose``, ``comment``,
+    ``trailing_comma``, ``python_literal``; see :func:`pytest_emrd.agent.parse_reply`); ``()``
+    for a reply read as written; None when not recorded (schema 1 files, hand-built steps)."""
 
 
 @dataclass(frozen=True)
@@ -240,4 +246,5 @@ class Trajectory:
             version=SCHEMA_VERSION,
             what="trajectory",
             remedy="re-run the episode with this version of pytest-emrd.",
+            older=OLDER_SCHEMAS,
         )

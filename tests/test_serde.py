@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
 
 import pytest
@@ -9,6 +10,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from pytest_emrd._serde import from_dict, from_versioned_dict, to_dict
+from pytest_emrd.agent import REPAIRS
 from pytest_emrd.errors import ProtocolError
 from pytest_emrd.trajectory import (
     EpisodeSpec,
@@ -47,6 +49,7 @@ def trajectories(draw: st.DrawFn) -> Trajectory:
             feedback="ok",
             parse_error=draw(st.none() | st.text(max_size=10)),
             usage=Usage(draw(st.integers(0, 10**6)), draw(st.integers(0, 10**6))),
+            repairs=draw(st.none() | st.lists(st.sampled_from(REPAIRS), unique=True).map(tuple)),
         )
         for i in range(draw(st.integers(0, 3)))
     )
@@ -83,6 +86,34 @@ def test_integers_become_floats_where_the_field_is_a_float() -> None:
 def test_other_schema_versions_are_refused_with_the_remedy(data: object) -> None:
     with pytest.raises(ProtocolError, match=r"schema_version=.* is not 1; re-run it"):
         from_versioned_dict(Pose, data, version=1, what="pose", remedy="re-run it")
+
+
+@pytest.mark.parametrize("found", [1, 2])
+def test_an_older_readable_schema_is_upgraded(found: int) -> None:
+    data = {"x": 1.0, "z": 2.0, "heading": 0.0, "schema_version": found}
+
+    @dataclasses.dataclass(frozen=True)
+    class Versioned:
+        x: float
+        z: float
+        heading: float
+        schema_version: int = 2
+
+    read = from_versioned_dict(Versioned, data, version=2, what="pose", remedy="-", older=(1,))
+    assert read.schema_version == 2
+    with pytest.raises(ProtocolError, match="schema_version=1 is not 2"):
+        from_versioned_dict(Versioned, data | {"schema_version": 1}, version=2, what="pose",
+                            remedy="-")  # fmt: skip
+
+
+def test_a_schema_1_trajectory_reads_with_repairs_not_recorded() -> None:
+    step = to_dict(Step(1, Pose(0.0, 0.0, 0.0), "Office", (), (), "Turn(Left)", True, "ok"))
+    del step["repairs"]
+    truth = GroundTruth((), (RoomOutline("Office", ((0.0, 0.0), (1.0, 1.0))),), (), "Office")
+    data = Trajectory(EpisodeSpec("scout", "baseline", "office", 0), "p", truth, (), "budget",
+                      "Office").to_dict() | {"schema_version": 1, "steps": [step]}  # fmt: skip
+    read = Trajectory.from_dict(data)
+    assert read.schema_version == 2 and read.steps[0].repairs is None
 
 
 def test_episode_spec_seed_ignores_model_condition_and_variant() -> None:

@@ -20,7 +20,7 @@ from pytest_emrd.agent._config import (
     load_registry,
 )
 from pytest_emrd.agent._history import HISTORY_TURNS, Conversation, UserTurn
-from pytest_emrd.agent._parse import Reply, parse_reply
+from pytest_emrd.agent._parse import REPAIRS, Reply, parse_reply
 from pytest_emrd.agent._prompt import (
     NEUTRAL_NAMES,
     PROMPT_VERSION,
@@ -39,6 +39,7 @@ __all__ = [
     "NEUTRAL_NAMES",
     "PROMPT_VERSION",
     "PROVIDERS",
+    "REPAIRS",
     "ROOM_SUFFIXES",
     "AnthropicClient",
     "ChatClient",

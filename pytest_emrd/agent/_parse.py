@@ -1,14 +1,28 @@
 """Reading a model's reply: tolerant of what real models write, strict about what matters.
 
-Tolerated: Markdown code fences, prose before or after the JSON, single quotes, trailing
-commas, Python spellings (``True``/``None``), numbers written as strings, a cognitive map
-given as a list of objects with a ``label``/``id``/``name`` key, missing optional keys
-(``observation``, ``dedup_check``, ``reasoning``), map entries without ``room``/``facing``.
+**Repaired** (the reply is read, and :attr:`Reply.repairs` names every repair, so a run can
+count them; see :data:`REPAIRS`):
 
-Strict: the reply must hold one JSON object with an ``action`` string and a
-``cognitive_map``; otherwise :attr:`Reply.error` says why, and the episode loop keeps the
-previous map as the model's belief. Map entries without finite numeric ``x`` and ``z`` are
-not positions and are left out. :func:`parse_reply` never raises.
+* ``fence`` — the JSON sits in a Markdown code fence (```` ```json ... ``` ````);
+* ``prose`` — text before or after the JSON object (or its fence);
+* ``comment`` — ``// ...`` line comments or ``/* ... */`` block comments outside strings;
+* ``trailing_comma`` — a comma right before ``}`` or ``]``;
+* ``python_literal`` — single-quoted strings or Python spellings (``True``/``None``).
+
+Each is a *syntax-only* edit whose reading is unambiguous: removing it cannot change what any
+value of the object means. Also tolerated, as schema leniency rather than repairs: numbers
+written as strings (``"1.5"``, ``"2 m"``), a cognitive map given as a list of objects with a
+``label``/``id``/``name`` key, missing optional keys (``observation``, ``dedup_check``,
+``reasoning``), map entries without ``room``/``facing``.
+
+**Parse failures** (:attr:`Reply.error` says why; the episode loop keeps the previous map as the
+model's belief): no complete JSON object (prose only; a reply cut off mid-object, as at the
+token limit), an object no repair above makes valid (a missing comma between two values,
+unquoted keys, a ``...`` placeholder standing for elided entries), or an object without an
+``action`` string or a ``cognitive_map``. Those are not repaired because any repair would guess
+content: where a comma was missing, what ``...`` stood for, what a cut-off map still held. Map
+entries without finite numeric ``x`` and ``z`` are not positions and are left out.
+:func:`parse_reply` never raises.
 """
 
 from __future__ import annotations
@@ -24,8 +38,9 @@ from pytest_emrd.trajectory import MapEntry
 
 #: Replies longer than this are not searched for JSON (a runaway generation, not a reply).
 MAX_REPLY_CHARS: Final = 200_000
+#: Every repair :func:`parse_reply` may apply, in the order :attr:`Reply.repairs` lists them.
+REPAIRS: Final[tuple[str, ...]] = ("fence", "prose", "comment", "trailing_comma", "python_literal")
 _FENCE = re.compile(r"```[A-Za-z0-9_-]*[ \t]*\n?(.*?)```", re.DOTALL)
-_TRAILING_COMMA = re.compile(r",(\s*[}\]])")
 _LITERAL_NAMES: Final[dict[str, Any]] = {
     "true": True,
     "false": False,
@@ -48,13 +63,29 @@ class Reply:
     reasoning: str | None = None
     error: str | None = None
     """Why the reply could not be read (the map is then not the model's); None if fine."""
+    repairs: tuple[str, ...] = ()
+    """Repairs applied to read the object (names from :data:`REPAIRS`, in that order)."""
 
 
-def _balanced_objects(text: str) -> list[str]:
-    """Every top-level ``{...}`` span of ``text``, string-aware for both quote kinds."""
-    spans: list[str] = []
-    depth, start, quote, escaped = 0, -1, "", False
-    for i, ch in enumerate(text):
+def _comment_end(text: str, i: int) -> int:
+    """End of the comment starting at ``text[i]`` (``//`` or ``/*``), or ``i`` if none."""
+    pair = text[i : i + 2]
+    if pair == "//":
+        stop = text.find("\n", i)
+        return len(text) if stop < 0 else stop
+    if pair == "/*":
+        stop = text.find("*/", i + 2)
+        return len(text) if stop < 0 else stop + 2
+    return i
+
+
+def _balanced_objects(text: str) -> list[tuple[int, int]]:
+    """``(start, end)`` of every top-level ``{...}`` span of ``text``; string-aware for both
+    quote kinds and comment-aware inside an object (an apostrophe in a comment is no quote)."""
+    spans: list[tuple[int, int]] = []
+    depth, start, quote, escaped, i = 0, -1, "", False, 0
+    while i < len(text):
+        ch = text[i]
         if quote:
             if escaped:
                 escaped = False
@@ -62,6 +93,9 @@ def _balanced_objects(text: str) -> list[str]:
                 escaped = True
             elif ch == quote:
                 quote = ""
+        elif depth > 0 and (end := _comment_end(text, i)) > i:
+            i = end
+            continue
         elif ch in "\"'" and depth > 0:
             quote = ch
         elif ch == "{":
@@ -71,8 +105,45 @@ def _balanced_objects(text: str) -> list[str]:
         elif ch == "}" and depth > 0:
             depth -= 1
             if depth == 0:
-                spans.append(text[start : i + 1])
+                spans.append((start, i + 1))
+        i += 1
     return spans
+
+
+def _strip_comments_and_commas(text: str) -> tuple[str, tuple[str, ...]]:
+    """``text`` without comments and trailing commas outside strings, and which were found."""
+    out: list[str] = []
+    found: set[str] = set()
+    quote, escaped, i = "", False, 0
+    while i < len(text):
+        ch = text[i]
+        if quote:
+            out.append(ch)
+            if escaped:
+                escaped = False
+            elif ch == "\\":
+                escaped = True
+            elif ch == quote:
+                quote = ""
+        elif (end := _comment_end(text, i)) > i:
+            found.add("comment")
+            out.append(" ")
+            i = end
+            continue
+        elif ch in "\"'":
+            quote = ch
+            out.append(ch)
+        elif ch in "}]":
+            while out and out[-1].isspace():
+                out.pop()
+            if out and out[-1] == ",":
+                found.add("trailing_comma")
+                out.pop()
+            out.append(ch)
+        else:
+            out.append(ch)
+        i += 1
+    return "".join(out), tuple(r for r in REPAIRS if r in found)
 
 
 def _literal(node: ast.AST) -> Any:
@@ -94,38 +165,54 @@ def _literal(node: ast.AST) -> Any:
     raise ValueError(f"not a JSON value: {type(node).__name__}")
 
 
-def _load(candidate: str) -> Any:
-    """JSON, else JSON without trailing commas, else a JSON-like Python literal; or None."""
-    for text in (candidate, _TRAILING_COMMA.sub(r"\1", candidate)):
+def _load(candidate: str) -> tuple[Any, tuple[str, ...]]:
+    """(value, repairs): JSON as written, else JSON without comments and trailing commas,
+    else a JSON-like Python literal; ``(None, ())`` when none of them reads."""
+    try:
+        return json.loads(candidate), ()
+    except (ValueError, RecursionError):
+        pass
+    cleaned, repairs = _strip_comments_and_commas(candidate)
+    if repairs:
         try:
-            return json.loads(text)
+            return json.loads(cleaned), repairs
         except (ValueError, RecursionError):
             pass
     try:
-        return _literal(ast.parse(candidate.strip(), mode="eval").body)
+        value = _literal(ast.parse(cleaned.strip(), mode="eval").body)
     except (SyntaxError, ValueError, TypeError, RecursionError, MemoryError):
-        return None
+        return None, ()
+    return value, (*repairs, "python_literal")
 
 
-def _find_object(text: str) -> dict[str, Any] | None:
-    """The reply's JSON object: the whole reply if it is one, else fenced blocks and
-    balanced ``{...}`` spans, preferring the last one that has an action."""
-    stripped = text.strip()
-    if stripped.startswith("{") and stripped.endswith("}"):
-        try:
-            whole = json.loads(stripped)
-        except (ValueError, RecursionError):
-            whole = None
-        if isinstance(whole, dict) and "action" in whole:
-            return whole
-    candidates = [m.group(1) for m in _FENCE.finditer(text)]
-    candidates += [s for block in candidates for s in _balanced_objects(block)]
-    candidates += _balanced_objects(text)
-    found = [obj for c in candidates if isinstance(obj := _load(c), dict)]
-    with_action = [obj for obj in found if "action" in obj]
-    if with_action:
-        return with_action[-1]
-    return found[-1] if found else None
+def _wrapping(text: str, start: int, end: int) -> tuple[str, ...]:
+    """``fence`` and/or ``prose`` around the object at ``text[start:end]``."""
+    for block in _FENCE.finditer(text):
+        if block.start(1) <= start and end <= block.end(1):
+            rest = text[: block.start()] + text[block.start(1) : start]
+            rest += text[end : block.end(1)] + text[block.end() :]
+            return ("fence", "prose") if rest.strip() else ("fence",)
+    return ("prose",) if (text[:start] + text[end:]).strip() else ()
+
+
+def _find_object(text: str) -> tuple[dict[str, Any] | None, tuple[str, ...]]:
+    """(object, repairs): among every balanced ``{...}`` span (of the whole reply and of each
+    fenced block) that reads as an object, the last one with an ``action``, else the last."""
+    spans = set(_balanced_objects(text))
+    for block in _FENCE.finditer(text):
+        offset = block.start(1)
+        spans.update((offset + s, offset + e) for s, e in _balanced_objects(block.group(1)))
+    found = []
+    for start, end in sorted(spans):
+        value, repairs = _load(text[start:end])
+        if isinstance(value, dict):
+            found.append((value, start, end, repairs))
+    if not found:
+        return None, ()
+    with_action = [f for f in found if "action" in f[0]]
+    obj, start, end, repairs = (with_action or found)[-1]
+    applied = {*_wrapping(text, start, end), *repairs}
+    return obj, tuple(r for r in REPAIRS if r in applied)
 
 
 def _number(value: Any) -> float | None:
@@ -188,7 +275,7 @@ def parse_reply(text: str) -> Reply:
         return Reply(error="empty reply")
     if len(text) > MAX_REPLY_CHARS:
         return Reply(error=f"reply of {len(text)} characters exceeds {MAX_REPLY_CHARS}")
-    obj = _find_object(text)
+    obj, repairs = _find_object(text)
     if obj is None:
         return Reply(error="no JSON object found in the reply")
     action = _text(obj.get("action")).strip()
@@ -198,6 +285,7 @@ def parse_reply(text: str) -> Reply:
         "dedup_check": _text(obj.get("dedup_check")),
         "action": action,
         "reasoning": reasoning,
+        "repairs": repairs,
     }
     if not action:
         return Reply(**common, error="reply has no action")

@@ -8,7 +8,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from pytest_emrd.agent import Reply, parse_reply
+from pytest_emrd.agent import REPAIRS, Reply, parse_reply
 from pytest_emrd.trajectory import MapEntry
 
 GOOD = {
@@ -22,34 +22,43 @@ GOOD = {
 DESK = MapEntry("Desk_1", "Desk", 1.5, -2.0, "Office", "+z")
 
 
+BODY = json.dumps(GOOD, indent=2)
+
+
 @pytest.mark.parametrize(
-    "text",
+    ("text", "repairs"),
     [
-        json.dumps(GOOD),
-        f"```json\n{json.dumps(GOOD, indent=2)}\n```",
-        f"Let me think. I see a desk.\n{json.dumps(GOOD)}\nThat is my answer.",
-        "{'observation': 'a desk', 'dedup_check': 'Desk_1 is new', 'cognitive_map': {'Desk_1': "
-        "{'type': 'Desk', 'room': 'Office', 'x': 1.5, 'z': -2, 'facing': '+z'},}, "
-        "'action': 'Goto(Desk_1)',}",
-        json.dumps(GOOD).replace("1.5", '"1.5"').replace("-2", '"-2"'),
-        json.dumps(GOOD).replace("}}", "},}").replace('"Goto(Desk_1)"}', '"Goto(Desk_1)",}'),
-        f'```\n{{"draft": true}}\n```\n```json\n{json.dumps(GOOD)}\n```',
+        pytest.param(json.dumps(GOOD), (), id="plain"),
+        pytest.param(f"```json\n{BODY}\n```", ("fence",), id="fenced"),
+        pytest.param(f"Let me think. I see a desk.\n{json.dumps(GOOD)}\nThat is my answer.",
+                     ("prose",), id="prose-around"),
+        pytest.param(f"Here is my update:\n```json\n{BODY}\n```\nNext I go to the desk.",
+                     ("fence", "prose"), id="prose-around-a-fence"),
+        pytest.param("{'observation': 'a desk', 'dedup_check': 'Desk_1 is new', 'cognitive_map': "
+                     "{'Desk_1': {'type': 'Desk', 'room': 'Office', 'x': 1.5, 'z': -2, 'facing': "
+                     "'+z'},}, 'action': 'Goto(Desk_1)',}",
+                     ("trailing_comma", "python_literal"), id="single-quotes"),
+        pytest.param(json.dumps(GOOD).replace("1.5", '"1.5"').replace("-2", '"-2"'), (),
+                     id="numbers-as-strings"),
+        pytest.param(json.dumps(GOOD).replace("}}", "},}").replace('"Goto(Desk_1)"}',
+                     '"Goto(Desk_1)",}'), ("trailing_comma",), id="trailing-commas"),
+        pytest.param(BODY.replace('"x": 1.5,', '"x": 1.5,  // metres, my estimate\n')
+                     .replace('"+z"\n', '"+z"  /* it\'s facing the window */\n'),
+                     ("comment",), id="comments-with-an-apostrophe"),
+        pytest.param("```json\n" + BODY.replace('"+z"', '"+z", // see http://x') + "\n```",
+                     ("fence", "comment", "trailing_comma"), id="fenced-comment-and-comma"),
+        pytest.param(json.dumps(GOOD).replace("is new", "is new // not a comment"), (),
+                     id="slashes-inside-a-string"),
+        pytest.param(f'```\n{{"draft": true}}\n```\n```json\n{json.dumps(GOOD)}\n```',
+                     ("fence", "prose"), id="two-blocks-last-with-action"),
     ],
-    ids=[
-        "plain",
-        "fenced",
-        "prose-around",
-        "single-quotes",
-        "numbers-as-strings",
-        "trailing-commas",
-        "two-blocks-last-with-action",
-    ],
-)
-def test_tolerated_forms(text: str) -> None:
+)  # fmt: skip
+def test_tolerated_forms_are_read_and_their_repairs_named(text: str, repairs: tuple) -> None:
     reply = parse_reply(text)
     assert reply.error is None
     assert reply.action == "Goto(Desk_1)"
     assert reply.cognitive_map == (DESK,)
+    assert reply.repairs == repairs
 
 
 def test_missing_optional_keys_and_python_spellings() -> None:
@@ -61,6 +70,7 @@ def test_missing_optional_keys_and_python_spellings() -> None:
         cognitive_map=(MapEntry("Fridge_1", "", 2.0, 3.0, None, None),),
         action="Term(Kitchen)",
         reasoning="no hazards",
+        repairs=("python_literal",),
     )
 
 
@@ -92,6 +102,13 @@ def test_entries_without_numeric_position_are_left_out() -> None:
         ('{"action": "Turn(Left)", "cognitive_map": [{"x": 1, "z": 2}]}', "without label"),
         ('{"action": "Turn(Left), "cognitive_map": {}', "no JSON object"),
         ("x" * 300_000, "exceeds"),
+        (BODY[: BODY.index('"room"')], "no JSON object"),
+        (BODY.replace('"Office",', '"Office"'), "no JSON object"),
+        (
+            BODY.replace('"action"', "action").replace('"observation"', "observation"),
+            "no JSON object",
+        ),
+        (BODY.replace('"+z"\n    }', '"+z"\n    },\n    ...'), "no JSON object"),
     ],
     ids=[
         "empty",
@@ -103,6 +120,10 @@ def test_entries_without_numeric_position_are_left_out() -> None:
         "map-list-unlabelled",
         "broken-json",
         "runaway",
+        "truncated-at-the-token-limit",
+        "missing-comma",
+        "unquoted-keys",
+        "ellipsis-for-elided-entries",
     ],
 )
 def test_unreadable_replies_say_why(text: str, reason: str) -> None:
@@ -127,7 +148,8 @@ json_values = st.recursive(
 
 @given(st.text(max_size=300))
 def test_never_raises_on_arbitrary_text(text: str) -> None:
-    assert isinstance(parse_reply(text), Reply)
+    reply = parse_reply(text)
+    assert isinstance(reply, Reply) and set(reply.repairs) <= set(REPAIRS)
 
 
 @given(
