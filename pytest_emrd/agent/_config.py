@@ -7,8 +7,9 @@ shipped fields it names, a new name adds a model.
 
 Reference agents with planted parameters resolve from their name, without a YAML entry
 each: ``scout``, ``scout-decay-<mean steps>``, ``scout-window-<k>``, ``scout-serial``,
-``prior``. A reference agent's ``model_id`` is its name (or the ``model_id`` of its entry)
-with the behaviour version appended, ``scout@ref-2`` (see
+``prior``, ``mimic``, ``mimic-<knobs>`` (:mod:`pytest_emrd.agent.reference._knobs`). A
+reference agent's ``model_id`` is its name (or the ``model_id`` of its entry) with the
+behaviour version appended, ``scout@ref-2`` (see
 :mod:`pytest_emrd.agent.reference._version`), so cassettes of older behaviour fail as drift.
 """
 
@@ -23,6 +24,7 @@ from typing import Any, Final
 
 import yaml
 
+from pytest_emrd.agent.reference._knobs import FAMILY, check_knobs, mimic_knobs
 from pytest_emrd.agent.reference._version import versioned_id
 from pytest_emrd.errors import ConfigError, check_choice, check_positive_int, check_range
 from pytest_emrd.trajectory import MODALITIES
@@ -127,6 +129,7 @@ class ModelConfig:
             raise ConfigError(f"{where}: base_url is required for provider={self.provider!r}.")
         if self.planted and self.provider != "reference":
             raise ConfigError(f"{where}: planted parameters are only for reference agents.")
+        check_knobs(where, self.planted)
 
 
 def _check_number(name: str, value: Any, low: float, high: float) -> None:
@@ -249,20 +252,26 @@ class Registry:
         """The configuration of ``name``; unknown names raise ConfigError listing the known."""
         if name in self.models:
             return self.models[name]
-        planted = _parametric(name)
-        if planted is not None and "scout" in self.models:
-            base = self.models["scout"]
+        parametric = _parametric(name)
+        if parametric is not None and parametric[0] in self.models:
+            base, planted = self.models[parametric[0]], parametric[1]
             return replace(
                 base, name=name, model_id=versioned_id(name), planted={**base.planted, **planted}
             )
         raise ConfigError(
             f"model={name!r} is not in the registry. Known models: {', '.join(self.names())}; "
-            "parametric reference agents: scout-decay-<mean steps>, scout-window-<k>. "
+            "parametric reference agents: scout-decay-<mean steps>, scout-window-<k>, "
+            "mimic-<knobs> (s<sigma>, p<dup>, h<halluc>, q<fail>, r<repair>, a<invalid>, "
+            "spawn; e.g. mimic-s0.3-p0.5). "
             "Add other models in a user registry file (models: {name: {...}})."
         )
 
 
-def _parametric(name: str) -> dict[str, Any] | None:
+def _parametric(name: str) -> tuple[str, dict[str, Any]] | None:
+    """(base entry, planted overrides) of a parametric reference name, or None."""
+    knobs = mimic_knobs(name)
+    if knobs is not None:
+        return FAMILY, knobs
     if match := _DECAY.match(name):
         mean = float(match["mean"])
         if mean < 1:
@@ -270,11 +279,11 @@ def _parametric(name: str) -> dict[str, Any] | None:
                 f"model={name!r}: the mean retention must be >= 1 step (it is counted in "
                 "whole steps out of view); use scout-decay-1 or more."
             )
-        return {"memory": "decay", "mean_steps": mean}
+        return "scout", {"memory": "decay", "mean_steps": mean}
     if match := _WINDOW.match(name):
         k = int(match["k"])
         check_positive_int(f"model={name!r}: window k", k)
-        return {"memory": "window", "k": k}
+        return "scout", {"memory": "window", "k": k}
     return None
 
 

@@ -31,6 +31,7 @@ import ast
 import json
 import math
 import re
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any, Final
 
@@ -67,83 +68,51 @@ class Reply:
     """Repairs applied to read the object (names from :data:`REPAIRS`, in that order)."""
 
 
-def _comment_end(text: str, i: int) -> int:
-    """End of the comment starting at ``text[i]`` (``//`` or ``/*``), or ``i`` if none."""
-    pair = text[i : i + 2]
-    if pair == "//":
-        stop = text.find("\n", i)
-        return len(text) if stop < 0 else stop
-    if pair == "/*":
-        stop = text.find("*/", i + 2)
-        return len(text) if stop < 0 else stop + 2
-    return i
+_STRING = r"\"(?:[^\"\\]|\\.)*\"|'(?:[^'\\]|\\.)*'"
+_COMMENT = r"//[^\n]*|/\*.*?(?:\*/|\Z)"
+#: Inside an object: a string (skipped whole), a comment (skipped) or a brace.
+_INSIDE = re.compile(rf"{_STRING}|{_COMMENT}|[{{}}]", re.DOTALL)
+_COMMENTS = re.compile(rf"({_STRING})|{_COMMENT}", re.DOTALL)
+_TRAILING_COMMAS = re.compile(rf"({_STRING})|,(?=\s*[}}\]])", re.DOTALL)
 
 
 def _balanced_objects(text: str) -> list[tuple[int, int]]:
-    """``(start, end)`` of every top-level ``{...}`` span of ``text``; string-aware for both
-    quote kinds and comment-aware inside an object (an apostrophe in a comment is no quote)."""
+    """``(start, end)`` of every top-level ``{...}`` span of ``text``. Inside an object, strings
+    (both quote kinds) and comments are skipped whole, so a brace or an apostrophe in them
+    does not count; outside, only braces matter (prose may hold any quote)."""
     spans: list[tuple[int, int]] = []
-    depth, start, quote, escaped, i = 0, -1, "", False, 0
-    while i < len(text):
-        ch = text[i]
-        if quote:
-            if escaped:
-                escaped = False
-            elif ch == "\\":
-                escaped = True
-            elif ch == quote:
-                quote = ""
-        elif depth > 0 and (end := _comment_end(text, i)) > i:
-            i = end
-            continue
-        elif ch in "\"'" and depth > 0:
-            quote = ch
-        elif ch == "{":
-            if depth == 0:
-                start = i
-            depth += 1
-        elif ch == "}" and depth > 0:
-            depth -= 1
-            if depth == 0:
-                spans.append((start, i + 1))
-        i += 1
+    start = text.find("{")
+    while start >= 0:
+        depth, at = 1, start + 1
+        while depth and (token := _INSIDE.search(text, at)) is not None:
+            at = token.end()
+            if token.group() == "{":
+                depth += 1
+            elif token.group() == "}":
+                depth -= 1
+        if depth:
+            return spans
+        spans.append((start, at))
+        start = text.find("{", at)
     return spans
 
 
 def _strip_comments_and_commas(text: str) -> tuple[str, tuple[str, ...]]:
     """``text`` without comments and trailing commas outside strings, and which were found."""
-    out: list[str] = []
-    found: set[str] = set()
-    quote, escaped, i = "", False, 0
-    while i < len(text):
-        ch = text[i]
-        if quote:
-            out.append(ch)
-            if escaped:
-                escaped = False
-            elif ch == "\\":
-                escaped = True
-            elif ch == quote:
-                quote = ""
-        elif (end := _comment_end(text, i)) > i:
-            found.add("comment")
-            out.append(" ")
-            i = end
-            continue
-        elif ch in "\"'":
-            quote = ch
-            out.append(ch)
-        elif ch in "}]":
-            while out and out[-1].isspace():
-                out.pop()
-            if out and out[-1] == ",":
-                found.add("trailing_comma")
-                out.pop()
-            out.append(ch)
-        else:
-            out.append(ch)
-        i += 1
-    return "".join(out), tuple(r for r in REPAIRS if r in found)
+    found: list[str] = []
+
+    def drop(kind: str, replacement: str) -> Callable[[re.Match[str]], str]:
+        def sub(match: re.Match[str]) -> str:
+            if match.group(1) is not None:
+                return match.group(1)
+            found.append(kind)
+            return replacement
+
+        return sub
+
+    text = _COMMENTS.sub(drop("comment", " "), text)
+    text = _TRAILING_COMMAS.sub(drop("trailing_comma", ""), text)
+    return text, tuple(r for r in REPAIRS if r in found)
 
 
 def _literal(node: ast.AST) -> Any:
@@ -198,6 +167,14 @@ def _wrapping(text: str, start: int, end: int) -> tuple[str, ...]:
 def _find_object(text: str) -> tuple[dict[str, Any] | None, tuple[str, ...]]:
     """(object, repairs): among every balanced ``{...}`` span (of the whole reply and of each
     fenced block) that reads as an object, the last one with an ``action``, else the last."""
+    stripped = text.strip()
+    if stripped.startswith("{") and stripped.endswith("}"):
+        try:
+            whole = json.loads(stripped)
+        except (ValueError, RecursionError):
+            whole = None
+        if isinstance(whole, dict) and "action" in whole:
+            return whole, ()
     spans = set(_balanced_objects(text))
     for block in _FENCE.finditer(text):
         offset = block.start(1)

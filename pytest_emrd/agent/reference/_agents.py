@@ -2,8 +2,9 @@
 
 Pure function of the request: the agent's state is its own previous reply (the last
 assistant message), its randomness is seeded by a hash of the request content, so the
-same request gets the same reply byte for byte. Replies are compact JSON in the same
-protocol a VLM is asked for, plus a ``plan`` key holding the navigation state.
+same request gets the same reply byte for byte. Scout-family replies are compact JSON in the
+same protocol a VLM is asked for, plus a ``plan`` key holding the navigation state; agents
+planted with ``writer: vlm`` (the ``mimic`` family, :mod:`._mimic`) write like a VLM.
 """
 
 from __future__ import annotations
@@ -15,11 +16,13 @@ from collections.abc import Callable
 from typing import TYPE_CHECKING, Any, Final
 
 from pytest_emrd.agent.reference._memory import uniform
+from pytest_emrd.agent.reference._mimic import mimic_reply, request_seed
 from pytest_emrd.agent.reference._perceive import fresh_plan, perceive
 from pytest_emrd.agent.reference._prior import prior_action
 from pytest_emrd.agent.reference._read import (
     Briefing,
     Percept,
+    last_reply_text,
     message_text,
     previous_reply,
     read_briefing,
@@ -72,6 +75,14 @@ def reply_text(model: str, planted: dict[str, Any], messages: list[dict[str, Any
     if system is None or user is None:
         raise RequestError("request needs a system message and a user message.")
     briefing, percept = read_briefing(system), read_percept(user)
+    if planted.get("writer") == "vlm":
+        return mimic_reply(
+            planted,
+            briefing,
+            percept,
+            request=request_seed(system, user),
+            previous=last_reply_text(messages),
+        )
     previous = previous_reply(messages) or {}
     plan = copy.deepcopy(previous.get("plan")) or fresh_plan()
     memory = dict(previous.get("cognitive_map") or {})

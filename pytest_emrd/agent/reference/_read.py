@@ -116,13 +116,21 @@ def message_text(message: dict[str, Any]) -> str:
     raise ProtocolError(f"message content is {type(content).__name__}, not text or parts.")
 
 
-def previous_reply(messages: list[dict[str, Any]]) -> dict[str, Any] | None:
-    """The agent's own last reply (decoded JSON), or None at the first step."""
+def last_reply_text(messages: list[dict[str, Any]]) -> str | None:
+    """The text of the agent's own last reply, or None at the first step."""
     for message in reversed(messages):
         if message.get("role") == "assistant":
-            try:
-                data = json.loads(message_text(message))
-            except ValueError as exc:
-                raise ProtocolError(f"previous assistant message is not JSON: {exc}") from exc
-            return data if isinstance(data, dict) else None
+            return message_text(message)
     return None
+
+
+def previous_reply(messages: list[dict[str, Any]]) -> dict[str, Any] | None:
+    """The agent's own last reply (decoded JSON), or None at the first step."""
+    text = last_reply_text(messages)
+    if text is None:
+        return None
+    try:
+        data = json.loads(text)
+    except ValueError as exc:
+        raise ProtocolError(f"previous assistant message is not JSON: {exc}") from exc
+    return data if isinstance(data, dict) else None

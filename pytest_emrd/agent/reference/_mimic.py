@@ -1,0 +1,261 @@
+"""The ``mimic`` family: the scout's exploration, a cognitive map written the way VLMs write it.
+
+A mimic walks exactly like ``scout`` (same perception, same room-clearing policy, perfect
+memory) and keeps the scout's record in its own state, but reports a map the way a real VLM
+does, with every departure planted and known (knobs: :mod:`._knobs`):
+
+* **its own frame** — coordinates are ``R(theta) p + t`` of the spawn-frame position ``p``,
+  with ``theta`` uniform in [0, 360) degrees and ``t`` uniform in [-10, 10]^2 m, drawn once per
+  episode from its first request (``frame: spawn`` writes ``p``); rounded to 0.01 m;
+* **free-form labels** — ``"office chair (2)"``, ``"TV"``, ``"plant near the window"``
+  (:mod:`._phrasing`), one numbering style per episode, a ``type`` field with a generic noun;
+* **position noise** ``sigma`` — fresh N(0, sigma^2) per coordinate at every sighting, keyed
+  by object and step; an object out of view keeps the position of its last sighting;
+* **duplicates on re-entry** ``dup`` — see :mod:`._knobs`; the new entry follows the object
+  from then on, the old one stays where it was last written;
+* **hallucinations** ``halluc`` — an object of :data:`~._phrasing.HALLUCINATIONS` 1-4 m ahead;
+* **malformed replies** ``fail`` / ``repair`` (:mod:`._malform`) and **invalid actions**
+  ``invalid`` (:data:`~._phrasing.INVALID_ACTIONS`).
+
+A step whose reply is damaged or whose action is invalid changes nothing in the world, so
+the mimic's navigation state rolls back to what it was before that step and it decides again
+from the same view; its written map (labels, duplicates, hallucinations) moves on.
+
+Determinism and pairing: the state travels in the reply (``state`` key, :func:`read_state`).
+Draws that concern one object (label, noise, duplicate) are keyed by the episode key (a hash
+of the first request) and the object, draws that concern one step (hallucination, damage,
+slip, invalid action) by a hash of the system prompt and the step's user message. Neither
+depends on the knobs, so two mimics that differ only in knobs draw the same numbers and,
+without damage or invalid actions, walk the same path: raising ``dup`` adds duplicates on
+top of those of a lower ``dup``, and the planted effect of each knob can be measured on
+paired episodes.
+"""
+
+from __future__ import annotations
+
+import copy
+import hashlib
+import json
+import math
+from collections.abc import Callable, Mapping
+from typing import Any, Final
+
+from pytest_emrd.agent.reference._malform import FAILING, REPAIRABLE, malform, read_state, render
+from pytest_emrd.agent.reference._memory import uniform
+from pytest_emrd.agent.reference._perceive import fresh_plan, perceive, room_guess
+from pytest_emrd.agent.reference._phrasing import (
+    HALLUCINATIONS,
+    INVALID_ACTIONS,
+    NUMBERING,
+    label_for,
+    pick,
+    type_word,
+)
+from pytest_emrd.agent.reference._read import Briefing, Percept
+from pytest_emrd.agent.reference._scout import scout_action
+
+#: Half-width (m) of the square the frame's translation is drawn from.
+FRAME_SHIFT_M: Final = 10.0
+#: Hallucinated objects appear this far ahead (m), within +-45 degrees of the heading.
+PHANTOM_RANGE_M: Final = (1.0, 4.0)
+
+Draw = Callable[[str], float]
+
+
+def _normal(draw: Draw, name: str) -> tuple[float, float]:
+    """Two independent standard normals (Box-Muller) from two uniforms named after ``name``."""
+    radius = math.sqrt(-2.0 * math.log(1.0 - draw(f"{name}:r")))
+    angle = 2.0 * math.pi * draw(f"{name}:a")
+    return radius * math.cos(angle), radius * math.sin(angle)
+
+
+def fresh_state(key: str, planted: Mapping[str, Any]) -> dict[str, Any]:
+    """The state before the first step of the episode keyed ``key`` (hex).
+
+    ``frame`` is ``[theta_deg, tx, tz]``; ``nav`` the scout's ``plan``, its ``memory`` and the
+    room ``visit`` counter (doorways crossed); ``map`` the written entries by label (``id``,
+    and the ``visit`` in which the object was first placed in a room, or in which the
+    duplicate was written; frozen entries carry their written ``x``/``z``, hallucinations a
+    ``type``); ``seen`` the step of each object's last sighting.
+    """
+    draw = _episode_draw(key)
+    own = planted.get("frame", "own") == "own"
+    frame = (
+        [round(360.0 * draw("theta"), 4)]
+        + [round(FRAME_SHIFT_M * (2.0 * draw(axis) - 1.0), 4) for axis in ("tx", "tz")]
+        if own
+        else [0.0, 0.0, 0.0]
+    )
+    return {
+        "key": key,
+        "frame": frame,
+        "style": pick(NUMBERING, draw("style")),
+        "nav": {"plan": fresh_plan(), "memory": {}, "visit": 0},
+        "map": {},
+        "seen": {},
+    }
+
+
+def _episode_draw(key: str) -> Draw:
+    seed = bytes.fromhex(key)
+    return lambda name: uniform(seed, name)
+
+
+def _to_frame(frame: list[float], x: float, z: float) -> tuple[float, float]:
+    theta = math.radians(frame[0])
+    c, s = math.cos(theta), math.sin(theta)
+    return c * x - s * z + frame[1], s * x + c * z + frame[2]
+
+
+class _Writer:
+    """Writes the reported map from the state (one step)."""
+
+    def __init__(self, state: dict[str, Any], planted: Mapping[str, Any]) -> None:
+        self.state, self.planted = state, planted
+        self.draw = _episode_draw(state["key"])
+        self.map: dict[str, dict[str, Any]] = state["map"]
+
+    def live_label(self, object_id: str) -> str | None:
+        labels = [lb for lb, rec in self.map.items() if rec.get("id") == object_id]
+        live = [lb for lb in labels if "x" not in self.map[lb]]
+        return live[-1] if live else None
+
+    def _new_label(self, object_type: str, name: str) -> str:
+        return label_for(object_type, self.map, style=self.state["style"],
+                         u_phrase=self.draw(f"{name}:phrase"),
+                         u_qualifier=self.draw(f"{name}:qualifier"))  # fmt: skip
+
+    def position(self, object_id: str, entry: Mapping[str, Any]) -> tuple[float, float]:
+        """Written position of a remembered object: frame, then noise of its last sighting."""
+        x, z = _to_frame(self.state["frame"], entry["x"], entry["z"])
+        sigma = float(self.planted.get("sigma", 0.0))
+        if sigma:
+            nx, nz = _normal(self.draw, f"noise:{object_id}:{self.state['seen'][object_id]}")
+            x, z = x + sigma * nx, z + sigma * nz
+        return round(x, 2), round(z, 2)
+
+    def label_new(self, memory: Mapping[str, Mapping[str, Any]], visit: int) -> None:
+        """Label what is new; note the visit in which an object was first placed in a room."""
+        for object_id, entry in memory.items():
+            label = self.live_label(object_id)
+            if label is None:
+                label = self._new_label(entry["type"], object_id)
+                self.map[label] = {"id": object_id}
+            if entry.get("room") and "visit" not in self.map[label]:
+                self.map[label]["visit"] = visit
+
+    def duplicate(self, object_id: str, entry: Mapping[str, Any], room: str, visit: int) -> None:
+        """On re-entry into ``room``: maybe write ``object_id`` again under a new label."""
+        label = self.live_label(object_id)
+        if label is None or not room or entry.get("room") != room:
+            return
+        if self.map[label].get("visit", visit) >= visit:
+            return
+        if self.draw(f"dup:{object_id}:{visit}") >= float(self.planted.get("dup", 0.0)):
+            return
+        x, z = self.position(object_id, entry)
+        self.map[label].update(x=x, z=z, type=type_word(entry["type"]), room=room)
+        self.map[self._new_label(entry["type"], f"{object_id}:{visit}")] = {
+            "id": object_id,
+            "visit": visit,
+        }
+
+    def hallucinate(self, percept: Percept, room: str, step: Draw) -> None:
+        if step("halluc") >= float(self.planted.get("halluc", 0.0)):
+            return
+        phrase = pick(HALLUCINATIONS, step("halluc:what"))
+        label = label_for(phrase, self.map, style=self.state["style"], u_phrase=0.0,
+                          u_qualifier=1.0)  # fmt: skip
+        low, high = PHANTOM_RANGE_M
+        distance = low + (high - low) * step("halluc:distance")
+        bearing = math.radians(percept.pose.heading + 90.0 * step("halluc:bearing") - 45.0)
+        x, z = _to_frame(
+            self.state["frame"],
+            percept.pose.x + distance * math.sin(bearing),
+            percept.pose.z + distance * math.cos(bearing),
+        )
+        self.map[label] = {"type": phrase, "x": round(x, 2), "z": round(z, 2), "room": room}
+
+    def written(self, memory: Mapping[str, Mapping[str, Any]]) -> dict[str, dict[str, Any]]:
+        """The cognitive map as reported: ``{label: {type, room, x, z}}``."""
+        out: dict[str, dict[str, Any]] = {}
+        for label, rec in self.map.items():
+            object_id = rec.get("id")
+            if "x" in rec:
+                fields = {k: rec[k] for k in ("type", "room", "x", "z")}
+            elif object_id in memory:
+                entry = memory[object_id]
+                x, z = self.position(object_id, entry)
+                fields = {"type": type_word(entry["type"]), "room": entry.get("room"), "x": x,
+                          "z": z}  # fmt: skip
+            else:
+                continue
+            out[label] = {k: v for k, v in fields.items() if v is not None}
+        return out
+
+
+def _invalid_action(writer: _Writer, percept: Percept, u: float) -> str:
+    labels = [lb for s in percept.visible if (lb := writer.live_label(s.object_id))]
+    return pick(INVALID_ACTIONS, u).format(labels[0] if labels else "exit")
+
+
+def mimic_reply(
+    planted: Mapping[str, Any],
+    briefing: Briefing,
+    percept: Percept,
+    *,
+    request: bytes,
+    previous: str | None,
+) -> str:
+    """The reply of a mimic with ``planted`` knobs.
+
+    ``request`` is the step's seed material (system prompt and user text), ``previous`` the
+    text of the mimic's last reply (None at the first step).
+    """
+    seed = hashlib.sha256(request).digest()
+    step: Draw = lambda name: uniform(seed, name)  # noqa: E731
+    state = read_state(previous) if previous else fresh_state(seed[:8].hex(), planted)
+    before = copy.deepcopy(state["nav"])
+    nav = state["nav"]
+    plan = nav["plan"]
+    crossing = plan["phase"] == "cross"
+    memory, new = perceive(plan, nav["memory"], briefing, percept, planted={}, draw=step)
+    nav["memory"] = memory
+    if crossing and plan["phase"] == "sweep":
+        nav["visit"] += 1
+    action, reasoning = scout_action(plan, briefing, percept)
+
+    writer = _Writer(state, planted)
+    room, visit = room_guess(plan), nav["visit"]
+    writer.label_new(memory, visit)
+    for seen in percept.visible:
+        state["seen"][seen.object_id] = percept.step
+    for seen in percept.visible:
+        writer.duplicate(seen.object_id, memory[seen.object_id], room, visit)
+    writer.hallucinate(percept, room, step)
+
+    damaged = step("fail") < float(planted.get("fail", 0.0))
+    invalid = not damaged and step("invalid") < float(planted.get("invalid", 0.0))
+    if invalid:
+        action = _invalid_action(writer, percept, step("invalid:which"))
+    if damaged or invalid:  # the world will not move: decide again from the same view
+        state["nav"] = before
+    in_view = [lb for s in percept.visible if (lb := writer.live_label(s.object_id))]
+    body = {
+        "observation": f"I can see: {', '.join(in_view)}." if in_view else "Nothing new in view.",
+        "dedup_check": f"{len(new)} new, {len(in_view) - len(new)} already in my map.",
+        "cognitive_map": writer.written(memory),
+        "action": action,
+        "reasoning": reasoning,
+    }
+    text = render(state, body)
+    if damaged:
+        return malform(text, pick(FAILING, step("fail:kind")), step("fail:where"))
+    if step("repair") < float(planted.get("repair", 0.0)):
+        return malform(text, pick(REPAIRABLE, step("repair:kind")), step("repair:wording"))
+    return text
+
+
+def request_seed(system: str, user: str) -> bytes:
+    """Seed material of one step: the system prompt and the step's user message."""
+    return json.dumps([system, user]).encode()
