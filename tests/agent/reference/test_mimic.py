@@ -11,10 +11,16 @@ import pytest
 
 from pytest_emrd.agent import load_registry, parse_reply
 from pytest_emrd.agent.reference._malform import FAILING, REPAIRABLE, malform, read_state, render
-from pytest_emrd.agent.reference._phrasing import NUMBERING, PHRASES, label_for
+from pytest_emrd.agent.reference._phrasing import (
+    HALLUCINATIONS,
+    NUMBERING,
+    PHRASES,
+    TYPE_WORDS,
+    label_for,
+)
 from pytest_emrd.episode import run_episode
 from pytest_emrd.errors import ConfigError, ProtocolError
-from pytest_emrd.metrics import rigid_fit
+from pytest_emrd.metrics import canonical_type, rigid_fit
 from pytest_emrd.trajectory import EpisodeSpec, Trajectory
 
 CLEAN = "mimic-spawn-s0-p0-h0-q0-r0-a0"
@@ -101,8 +107,25 @@ def test_labels_are_numbered_in_the_episode_style(style: str) -> None:
     )
 
 
-def test_every_type_has_phrases() -> None:
-    assert all(PHRASES.values())
+@pytest.mark.parametrize("object_type", sorted(PHRASES))
+def test_every_phrase_names_its_type_in_the_metrics_vocabulary(object_type: str) -> None:
+    present = set(PHRASES)
+    labels = [
+        label_for(object_type, taken, style=style, u_phrase=u, u_qualifier=q)
+        for style in NUMBERING
+        for taken in ((), PHRASES[object_type])
+        for u in np.linspace(0, 0.99, 8)
+        for q in np.linspace(0, 0.99, 12)
+    ]
+    assert {canonical_type(label, present=present) for label in labels} == {object_type}
+    assert canonical_type(TYPE_WORDS[object_type], present=present) == object_type
+
+
+@pytest.mark.parametrize("phrase", HALLUCINATIONS)
+def test_hallucinations_name_no_type_of_the_office(phrase: str) -> None:
+    for label in (phrase, label_for(phrase, {phrase}, style="{0} ({1})", u_phrase=0.0,
+                                    u_qualifier=1.0)):  # fmt: skip
+        assert canonical_type(label, present=set(PHRASES)) is None
 
 
 def _episode(model: str, spawn: str = "office", k: int = 0) -> Trajectory:
