@@ -157,6 +157,16 @@ class _Run:
         return step, after
 
 
+def start_world(spec: EpisodeSpec, sim: Simulator) -> tuple[world.Layout, Observation]:
+    """The world of ``spec`` on ``sim``: its layout and the first observation ``o_0``.
+
+    The one place an episode's world is built from its spec; the episode loop and the
+    episode viewer (which re-renders the frames a model saw) both start here.
+    """
+    layout = world.generate_layout(spec.seed)
+    return layout, sim.reset(layout, spec.condition, SLUG_ROOMS[spec.spawn], spec.seed)
+
+
 def run_episode(
     spec: EpisodeSpec,
     *,
@@ -183,13 +193,12 @@ def run_episode(
         )
     config = (registry or load_registry()).get(spec.model)
     spawn_room = SLUG_ROOMS[spec.spawn]
-    layout = world.generate_layout(spec.seed)
     own_sim = simulator is None
     sim = build_simulator(spec.backend, backend_options) if own_sim else simulator
     own_client = client is None
     status, error = "budget", None
     try:
-        obs = sim.reset(layout, spec.condition, spawn_room, spec.seed)
+        layout, obs = start_world(spec, sim)
         truth = world.ground_truth(layout, sim.spawn_pose, spawn_room)
         system = build_system_prompt(layout.inventory(), spec.variant, max_steps=spec.max_steps)
         run = _Run(spec, sim, Conversation(system, single_image=config.single_image))

@@ -20,6 +20,7 @@ COMMANDS: tuple[str, ...] = (
     "serve",
     "gate",
     "report",
+    "view",
     "validate",
     "bench",
 )

@@ -9,6 +9,7 @@ import numpy as np
 
 from pytest_emrd.metrics import (
     EpisodeMetrics,
+    Matching,
     ebbinghaus,
     kaplan_meier_anchored,
     match_map,
@@ -28,7 +29,7 @@ from pytest_emrd.report._model import (
     TBSSeries,
 )
 from pytest_emrd.report._tables import Cells
-from pytest_emrd.trajectory import Trajectory
+from pytest_emrd.trajectory import MapEntry, Trajectory
 
 
 def tbs_series(cells: Cells) -> tuple[TBSSeries, ...]:
@@ -77,12 +78,12 @@ def pick_episode(trajectories: Sequence[Trajectory]) -> Trajectory | None:
     return min(candidates, key=lambda t: (t.spec.condition != "baseline", t.spec.case_id))
 
 
-def episode_map(traj: Trajectory) -> EpisodeMap:
-    """Ground truth, path and the terminal map aligned by :func:`rigid_fit` on the pairs of
-    :func:`match_map` (the whole map moves with the fit; unmatched entries included)."""
-    truth = traj.ground_truth
-    entries = traj.final_map
-    matching = match_map(entries, truth.objects)
+def align_map(
+    entries: Sequence[MapEntry], matching: Matching
+) -> tuple[tuple[MapPoint, ...], float, float | None]:
+    """A cognitive map moved by :func:`rigid_fit` of its matched pairs onto the ground truth
+    (unmatched entries move with it; a repeated label is shown once): the points, the fit's
+    rotation in degrees and the RMS residual of the pairs (None without pairs)."""
     matched = {p.label: p for p in matching.pairs}
     rot, shift = np.eye(2), np.zeros(2)
     rmse = None
@@ -100,12 +101,20 @@ def episode_map(traj: Trajectory) -> EpisodeMap:
         x, z = np.array([e.x, e.z]) @ rot.T + shift
         pair = matched.get(e.label)
         points.append(MapPoint(e.label, float(x), float(z), pair.object_id if pair else None))
+    return tuple(points), math.degrees(math.atan2(rot[1, 0], rot[0, 0])), rmse
+
+
+def episode_map(traj: Trajectory) -> EpisodeMap:
+    """Ground truth, path and the terminal map aligned by :func:`align_map` on the pairs of
+    :func:`match_map`."""
+    truth = traj.ground_truth
+    points, rotation, rmse = align_map(traj.final_map, match_map(traj.final_map, truth.objects))
     return EpisodeMap(
         case_id=traj.spec.case_id,
         rooms=truth.rooms,
         objects=truth.objects,
         path=tuple((s.pose.x, s.pose.z) for s in traj.steps),
-        entries=tuple(points),
-        rotation_deg=math.degrees(math.atan2(rot[1, 0], rot[0, 0])),
+        entries=points,
+        rotation_deg=rotation,
         rmse=rmse,
     )

@@ -1,0 +1,102 @@
+"""The data of one episode page: per step what the model saw, said and did, its map aligned
+onto the ground truth, and the metrics at that step (pure).
+
+Per step ``t`` the map ``M_t`` is matched with :func:`pytest_emrd.metrics.match_map`, carrying
+the previous step's label identities (as every episode metric does), aligned with the report's
+:func:`~pytest_emrd.report._figdata.align_map` (Procrustes on the matched pairs), and scored
+with the metrics' own per-episode terms: coverage ``|K| / |E|`` (:func:`aec_score`),
+Positional Accuracy (:func:`positional_accuracy_score`) and ``TBS(t)`` (:func:`episode_metrics`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+from pytest_emrd.agent import parse_reply
+from pytest_emrd.metrics import (
+    aec_score,
+    episode_metrics,
+    match_map,
+    positional_accuracy_score,
+)
+from pytest_emrd.report._figdata import align_map
+from pytest_emrd.trajectory import Trajectory
+from pytest_emrd.view._replay import Frame, Recorded
+
+
+@dataclass(frozen=True)
+class FrameCheck:
+    """How the re-rendered frames compare with the cassette's digests."""
+
+    checked: int
+    mismatched: tuple[int, ...]
+    """Steps whose re-rendered frame differs from the recorded one."""
+    note: str | None
+    """Why some or all steps are not checked."""
+
+
+def check_frames(
+    frames: Sequence[Frame], recorded: Recorded
+) -> tuple[list[bool | None], FrameCheck]:
+    """Per step: True (digest equal), False (mismatch) or None (not checked)."""
+    status: list[bool | None] = []
+    for i, frame in enumerate(frames):
+        digest = recorded.digests[i] if i < len(recorded.digests) else None
+        status.append(None if digest is None else digest == frame.digest)
+    bad = tuple(i + 1 for i, s in enumerate(status) if s is False)
+    return status, FrameCheck(sum(s is not None for s in status), bad, recorded.note)
+
+
+def _round(x: float | None, digits: int = 3) -> float | None:
+    return None if x is None else round(x, digits)
+
+
+def episode_data(
+    traj: Trajectory, frames: Sequence[Frame], recorded: Recorded, note: str | None = None
+) -> tuple[dict[str, Any], FrameCheck]:
+    """The JSON the page script reads (frames by index into ``frames``) and the frame check."""
+    truth = traj.ground_truth
+    g_base = len(truth.discoverable_ids)
+    tbs = episode_metrics(traj).tbs
+    status, check = check_frames(frames, recorded)
+    steps = []
+    carried: dict[str, str] | None = None
+    for i, s in enumerate(traj.steps):
+        matching = match_map(s.cognitive_map, truth.objects, carried=carried)
+        carried = {p.label: p.object_id for p in matching.pairs}
+        points, rotation, rmse = align_map(s.cognitive_map, matching)
+        reply = parse_reply(s.raw_reply)
+        steps.append({
+            "t": s.index, "action": s.action, "success": s.success, "feedback": s.feedback,
+            "parse_error": s.parse_error, "observation": reply.observation,
+            "dedup": reply.dedup_check, "reasoning": reply.reasoning, "raw": s.raw_reply,
+            "pose": [round(s.pose.x, 3), round(s.pose.z, 3), round(s.pose.heading, 1)],
+            "room": s.room, "visible": list(s.visible_ids),
+            "map": [[p.label, round(p.x, 3), round(p.z, 3), p.object_id] for p in points],
+            "rotation": round(rotation, 1), "rmse": _round(rmse),
+            "coverage": _round(aec_score(matching, len(truth.objects))),
+            "pa": _round(positional_accuracy_score(matching, g_base)),
+            "tbs": _round(tbs[i]) if i < len(tbs) else None,
+            "frame": i if i < len(frames) else None,
+            "frame_ok": status[i] if i < len(status) else None,
+        })  # fmt: skip
+    notes = [n for n in (note, check.note) if n]
+    if check.mismatched:
+        notes.insert(0, f"{len(check.mismatched)} re-rendered frame(s) differ from the recorded "
+                     f"digest (steps {', '.join(map(str, check.mismatched))}): the world changed "
+                     "since recording; those frames are not what the model saw")  # fmt: skip
+    data = {
+        "case_id": traj.spec.case_id, "model": traj.spec.model,
+        "condition": traj.spec.condition, "variant": traj.spec.variant,
+        "spawn": traj.spec.spawn, "episode": traj.spec.episode, "status": traj.status,
+        "protocol": traj.protocol, "chosen_room": traj.chosen_room,
+        "chosen_raw": traj.chosen_room_raw, "rationale": traj.rationale, "error": traj.error,
+        "final_room": traj.final_room, "notes": notes,
+        "rooms": [{"name": r.name, "polygon": [list(p) for p in r.polygon]} for r in truth.rooms],
+        "objects": [[o.object_id, o.object_type, o.category, round(o.x, 3), round(o.z, 3)]
+                    for o in truth.objects],
+        "steps": steps,
+    }  # fmt: skip
+    return data, check

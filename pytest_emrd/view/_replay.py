@@ -1,0 +1,106 @@
+"""What the model saw, again: frames re-rendered from the spec and the actions (world I/O).
+
+Cassettes keep a frame's pixel digest, never its image, and a trajectory keeps neither. The
+viewer rebuilds the world of the spec through :func:`pytest_emrd.episode.start_world` (the
+episode loop's own entry point), replays the recorded actions exactly as the loop executed
+them (:func:`pytest_emrd.episode.world_action`), and compares the digest of each re-rendered
+frame with the digest the cassette recorded for that step.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Iterator
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from pytest_emrd.cassette import FormatError, cassette_path, decode
+from pytest_emrd.cassette._redact import DIGEST
+from pytest_emrd.episode import build_simulator, start_world, world_action
+from pytest_emrd.errors import EmrdError
+from pytest_emrd.trajectory import Trajectory
+
+
+@dataclass(frozen=True)
+class Frame:
+    """One re-rendered observation ``o_{t-1}``, the frame shown at step ``t``."""
+
+    jpeg: bytes
+    digest: str
+    """Pixel digest the world computed (``pixels:`` + SHA-256), as a cassette records it."""
+
+
+def replay_frames(traj: Trajectory) -> tuple[Frame, ...]:
+    """The frame shown at each step of ``traj`` (``len(traj.steps)`` frames).
+
+    Raises :class:`EmrdError` when the spec's backend cannot be built here (AI2-THOR without
+    its extra or a GPU).
+    """
+    sim = build_simulator(traj.spec.backend)
+    try:
+        _, obs = start_world(traj.spec, sim)
+        frames = []
+        for step in traj.steps:
+            frames.append(Frame(obs.jpeg, f"pixels:{obs.frame_digest}"))
+            obs = sim.step(world_action(step.action, traj.spec.variant)[0])
+        return tuple(frames)
+    finally:
+        sim.close()
+
+
+def _digests(node: Any) -> Iterator[str]:
+    if isinstance(node, dict):
+        for value in node.values():
+            yield from _digests(value)
+    elif isinstance(node, list):
+        for value in node:
+            yield from _digests(value)
+    elif isinstance(node, str) and DIGEST.match(node):
+        yield node
+
+
+@dataclass(frozen=True)
+class Recorded:
+    """The frame digests a cassette holds for one episode, or why there are none."""
+
+    digests: tuple[str | None, ...]
+    """Per request (= per step), the digest of the newest image it carries (None: none)."""
+    note: str | None = None
+
+
+def recorded_digests(traj: Trajectory, cassettes: Path | None) -> Recorded:
+    """Frame digests of ``traj``'s cassette under ``cassettes``: the newest image of each
+    request is the frame of that step (a history window carries older ones before it)."""
+    if cassettes is None:
+        return Recorded((), "no cassette folder given (--cassettes): frames not checked")
+    path = cassette_path(cassettes, traj.spec)
+    try:
+        data = decode(path.read_bytes())
+    except FileNotFoundError:
+        return Recorded((), f"no cassette at {path}: frames not checked")
+    except FormatError as exc:
+        return Recorded((), f"{path} is not a readable cassette ({exc}): frames not checked")
+    if data.protocol != traj.protocol:
+        return Recorded((), f"{path} was recorded under protocol {data.protocol}, the episode "
+                        f"ran under {traj.protocol}: frames not checked")  # fmt: skip
+    digests = []
+    for request in data.requests:
+        try:
+            found = list(_digests(json.loads(request.body or b"null")))
+        except ValueError:
+            found = []
+        digests.append(found[-1] if found else None)
+    note = None
+    if len(digests) != len(traj.steps):
+        note = (f"{path} holds {len(digests)} requests for {len(traj.steps)} steps: steps "
+                "are checked in order up to the shorter")  # fmt: skip
+    return Recorded(tuple(digests), note)
+
+
+def frames_or_note(traj: Trajectory) -> tuple[tuple[Frame, ...], str | None]:
+    """:func:`replay_frames`, or no frames and why (a backend this machine cannot run)."""
+    try:
+        return replay_frames(traj), None
+    except EmrdError as exc:
+        return (), f"frames not re-rendered: {exc}"

@@ -1,0 +1,101 @@
+"""``emrd view``: frames re-rendered and checked, per-step map and metrics, pages and GIF."""
+
+from __future__ import annotations
+
+import dataclasses
+import io
+import re
+from pathlib import Path
+
+import pytest
+from PIL import Image
+
+from pytest_emrd.cli import main
+from pytest_emrd.gate import StoredEpisode
+from pytest_emrd.metrics import episode_metrics
+from pytest_emrd.trajectory import Trajectory
+from pytest_emrd.view import (
+    Recorded,
+    episode_data,
+    episode_page,
+    recorded_digests,
+    render_episode,
+    replay_frames,
+)
+
+
+def test_re_rendered_frames_match_the_committed_cassette(episode, cassettes: Path) -> None:
+    frames = replay_frames(episode)
+    recorded = recorded_digests(episode, cassettes)
+    assert recorded.note is None and len(frames) == len(episode.steps) == len(recorded.digests)
+    assert [f.digest for f in frames] == list(recorded.digests)
+
+
+def test_a_frame_that_differs_is_flagged_on_its_step(episode: Trajectory, cassettes) -> None:
+    frames = replay_frames(episode)
+    digests = list(recorded_digests(episode, cassettes).digests)
+    digests[2] = "pixels:" + "0" * 64
+    data, check = episode_data(episode, frames, Recorded(tuple(digests)))
+    assert check.mismatched == (3,) and check.checked == len(frames)
+    assert [s["frame_ok"] for s in data["steps"][:4]] == [True, True, False, True]
+    assert "differ from the recorded digest (steps 3)" in data["notes"][0]
+
+
+def test_without_a_cassette_frames_are_shown_unchecked(episode, tmp_path: Path) -> None:
+    recorded = recorded_digests(episode, tmp_path)
+    assert recorded.digests == () and "frames not checked" in recorded.note
+    data, check = episode_data(episode, replay_frames(episode), recorded)
+    assert check.checked == 0 and {s["frame_ok"] for s in data["steps"]} == {None}
+    assert any("no cassette at" in n for n in data["notes"])
+
+
+def test_last_step_metrics_are_the_episode_metrics(episode: Trajectory) -> None:
+    data, _ = episode_data(episode, (), Recorded(()))
+    m = episode_metrics(episode)
+    last = data["steps"][-1]
+    assert last["coverage"] == pytest.approx(m.aec, abs=1e-3)
+    assert last["pa"] == pytest.approx(m.pa, abs=1e-3)
+    assert [s["tbs"] for s in data["steps"]] == pytest.approx(list(m.tbs), abs=1e-3)
+    # scout maps in the spawn frame exactly: aligned entries sit on their objects
+    truth = {o.object_id: (o.x, o.z) for o in episode.ground_truth.objects}
+    for label, x, z, oid in last["map"]:
+        assert oid is not None and (x, z) == pytest.approx(truth[oid], abs=0.05), label
+
+
+def test_page_is_self_contained_and_small(episode: Trajectory, cassettes) -> None:
+    view = render_episode(episode, cassettes=cassettes, gif=True)
+    html = view.html
+    assert not re.search(r"""(src|href)=["']?(https?:|//)""", html)
+    assert html.count("<script>") == 1 and "</script>" not in html.split("<script>")[1][:-30]
+    per_step = len(html.encode()) / len(episode.steps)
+    assert per_step < 60_000, per_step  # < 3 MB for a 50-step episode
+    gif = Image.open(io.BytesIO(view.gif or b""))
+    assert gif.format == "GIF" and gif.n_frames == len(episode.steps)
+    assert view.row.check.checked == len(episode.steps) and not view.row.check.mismatched
+
+
+def test_script_text_cannot_close_the_script(episode: Trajectory) -> None:
+    last = episode.steps[-1]
+    evil = dataclasses.replace(last, raw_reply="</script><script>alert(1)</script>")
+    traj = dataclasses.replace(episode, steps=(*episode.steps[:-1], evil))
+    data, _ = episode_data(traj, (), Recorded(()))
+    assert "</script><script>" not in episode_page(data, ())
+
+
+def test_cli_writes_pages_index_and_gif(episode, cassettes, tmp_path: Path, capsys) -> None:
+    run = tmp_path / "run"
+    (run / "episodes").mkdir(parents=True)
+    stored = StoredEpisode(episode, session="t", recorded=False, frame_drift=0, seconds=0.1)
+    (run / "episodes" / f"{episode.spec.case_id}.json").write_bytes(stored.to_json())
+    out = tmp_path / "view"
+    argv = ["view", str(run), "*-office-ep00", "--out", str(out), "--gif",
+            "--cassettes", str(cassettes)]  # fmt: skip
+    assert main(argv) == 0
+    assert {p.name for p in out.iterdir()} == {
+        "index.html",
+        f"{episode.spec.case_id}.html",
+        f"{episode.spec.case_id}.gif",
+    }
+    assert f"{len(episode.steps)} frames match the cassette" in capsys.readouterr().out
+    assert main(["view", str(run), "*-kitchen-*"]) == 2
+    assert "match no episode" in capsys.readouterr().err
