@@ -14,6 +14,7 @@ Typical use::
 
 from pytest_emrd.report._build import build_report, group_cells
 from pytest_emrd.report._compare import COMPARED, Comparison, Difference, compare_runs
+from pytest_emrd.report._figdata import align_map
 from pytest_emrd.report._model import (
     AnovaRow,
     EbbinghausRow,
@@ -75,6 +76,7 @@ __all__ = [
     "SerialRow",
     "TBSSeries",
     "VariantTest",
+    "align_map",
     "build_report",
     "check_formats",
     "compare_runs",

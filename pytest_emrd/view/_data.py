@@ -3,7 +3,7 @@ onto the ground truth, and the metrics at that step (pure).
 
 Per step ``t`` the map ``M_t`` is matched with :func:`pytest_emrd.metrics.match_map`, carrying
 the previous step's label identities (as every episode metric does), aligned with the report's
-:func:`~pytest_emrd.report._figdata.align_map` (Procrustes on the matched pairs), and scored
+:func:`~pytest_emrd.report.align_map` (Procrustes on the matched pairs), and scored
 with the metrics' own per-episode terms: coverage ``|K| / |E|`` (:func:`aec_score`),
 Positional Accuracy (:func:`positional_accuracy_score`) and ``TBS(t)`` (:func:`episode_metrics`).
 """
@@ -21,7 +21,7 @@ from pytest_emrd.metrics import (
     match_map,
     positional_accuracy_score,
 )
-from pytest_emrd.report._figdata import align_map
+from pytest_emrd.report import align_map
 from pytest_emrd.trajectory import Trajectory
 from pytest_emrd.view._replay import Frame, Recorded
 
