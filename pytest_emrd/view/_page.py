@@ -15,7 +15,7 @@ from dataclasses import dataclass
 from importlib import resources
 from typing import Any
 
-from PIL import Image, ImageDraw
+from PIL import Image, ImageDraw, ImageFont
 
 from pytest_emrd.view._data import FrameCheck
 from pytest_emrd.view._replay import Frame
@@ -127,15 +127,16 @@ def index_page(rows: Sequence[IndexRow]) -> str:
 def episode_gif(data: dict[str, Any], frames: Sequence[Frame], *, ms: int = 700) -> bytes:
     """An animated GIF of the frames with the step and action written under each."""
     images = []
+    font = ImageFont.load_default(size=15)
     for st in data["steps"]:
         if st["frame"] is None:
             continue
         frame = Image.open(io.BytesIO(frames[st["frame"]].jpeg)).convert("RGB")
-        canvas = Image.new("RGB", (frame.width, frame.height + 28), "white")
+        canvas = Image.new("RGB", (frame.width, frame.height + 30), "white")
         canvas.paste(frame, (0, 0))
         mark = "" if st["frame_ok"] is not False else "  [frame differs from recording]"
         text = f"step {st['t']}: {st['action'] or '(none)'}{mark}"
-        ImageDraw.Draw(canvas).text((8, frame.height + 8), text, fill="black")
+        ImageDraw.Draw(canvas).text((8, frame.height + 6), text, fill="black", font=font)
         images.append(canvas.quantize(colors=128))
     buffer = io.BytesIO()
     if images:

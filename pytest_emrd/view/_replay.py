@@ -72,6 +72,9 @@ class Recorded:
 def recorded_digests(traj: Trajectory, cassettes: Path | None) -> Recorded:
     """Frame digests of ``traj``'s cassette under ``cassettes``: the newest image of each
     request is the frame of that step (a history window carries older ones before it)."""
+    if traj.spec.modality == "text":
+        return Recorded((), "text modality: the model was shown no frame; the frames are what "
+                        "its camera would have shown")  # fmt: skip
     if cassettes is None:
         return Recorded((), "no cassette folder given (--cassettes): frames not checked")
     path = cassette_path(cassettes, traj.spec)

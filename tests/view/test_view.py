@@ -49,6 +49,11 @@ def test_without_a_cassette_frames_are_shown_unchecked(episode, tmp_path: Path) 
     assert any("no cassette at" in n for n in data["notes"])
 
 
+def test_text_modality_says_the_model_saw_no_frame(episode, cassettes) -> None:
+    text = dataclasses.replace(episode, spec=dataclasses.replace(episode.spec, modality="text"))
+    assert "the model was shown no frame" in (recorded_digests(text, cassettes).note or "")
+
+
 def test_last_step_metrics_are_the_episode_metrics(episode: Trajectory) -> None:
     data, _ = episode_data(episode, (), Recorded(()))
     m = episode_metrics(episode)
