@@ -10,7 +10,7 @@ from __future__ import annotations
 import dataclasses
 import types
 import typing
-from collections.abc import Collection
+from collections.abc import Callable, Collection
 from functools import cache
 from typing import Any, TypeVar
 
@@ -32,59 +32,133 @@ def to_dict(obj: Any) -> Any:
     return obj
 
 
-@cache
-def _hints(cls: type) -> dict[str, Any]:
-    return typing.get_type_hints(cls)
-
-
 def from_dict(cls: type[T], data: Any) -> T:
     """Rebuild ``cls`` from :func:`to_dict` output, validating keys on the way."""
-    return _build(cls, data, cls.__name__)
+    try:
+        return _builder(cls)(data)  # type: ignore[no-any-return]
+    except _Invalid as exc:
+        raise ProtocolError(f"{cls.__name__}{exc.path}: {exc.message}") from exc.__cause__
 
 
-def _build(tp: Any, data: Any, where: str) -> Any:
-    origin = typing.get_origin(tp)
+class _Invalid(Exception):
+    """A value that does not fit its type; ``path`` grows as the error climbs the tree."""
+
+    def __init__(self, message: str, path: str = "") -> None:
+        super().__init__(message)
+        self.message, self.path = message, path
+
+    def under(self, step: str) -> _Invalid:
+        self.path = step + self.path
+        return self
+
+
+_Build = Callable[[Any], Any]
+
+
+def _same(data: Any) -> Any:
+    return data
+
+
+def _as_float(data: Any) -> Any:
+    return float(data) if isinstance(data, int) else data
+
+
+@cache
+def _builder(tp: Any) -> _Build:
+    """The function rebuilding values of type ``tp``, compiled once per type: the type
+    hints are read here, not for every value of every stored file."""
     if dataclasses.is_dataclass(tp):
+        return _dataclass_builder(tp)
+    origin, args = typing.get_origin(tp), typing.get_args(tp)
+    if origin in (typing.Union, types.UnionType):
+        non_none = [a for a in args if a is not type(None)]
+        if len(non_none) != 1:
+            return _same
+        inner = _builder(non_none[0])
+        if type(None) not in args or inner in (_same, _as_float):  # both pass None through
+            return inner
+        return lambda data: None if data is None else inner(data)
+    if origin is tuple:
+        return _tuple_builder(args)
+    if origin is frozenset:
+        item = _builder(args[0])
+        return lambda data: frozenset(map(item, data))
+    if origin is dict:
+        value = _builder(args[1])
+
+        def build_dict(data: Any) -> Any:
+            out = {}
+            for k, v in data.items():
+                try:
+                    out[k] = value(v)
+                except _Invalid as exc:
+                    raise exc.under(f"[{k!r}]") from exc.__cause__
+            return out
+
+        return build_dict
+    return _as_float if tp is float else _same
+
+
+def _dataclass_builder(tp: Any) -> _Build:
+    hints = typing.get_type_hints(tp)
+    names = frozenset(f.name for f in dataclasses.fields(tp))
+    fields = {name: _builder(hints[name]) for name in names}
+
+    def build(data: Any) -> Any:
         if not isinstance(data, dict):
-            raise ProtocolError(f"{where}: expected an object, got {type(data).__name__}")
-        names = {f.name for f in dataclasses.fields(tp)}
-        unknown = set(data) - names
-        if unknown:
-            raise ProtocolError(f"{where}: unknown field(s) {sorted(unknown)}")
-        hints = _hints(tp)
-        kwargs = {
-            name: _build(hints[name], value, f"{where}.{name}") for name, value in data.items()
-        }
+            raise _Invalid(f"expected an object, got {type(data).__name__}")
+        if not names.issuperset(data):
+            raise _Invalid(f"unknown field(s) {sorted(set(data) - names)}")
+        kwargs = {}
+        for name, value in data.items():
+            build_field = fields[name]
+            if build_field is _same:
+                kwargs[name] = value
+                continue
+            try:
+                kwargs[name] = build_field(value)
+            except _Invalid as exc:
+                raise exc.under(f".{name}") from exc.__cause__
         try:
             return tp(**kwargs)
         except TypeError as exc:
-            raise ProtocolError(f"{where}: {exc}") from exc
-    if origin in (typing.Union, types.UnionType):
-        args = typing.get_args(tp)
-        if data is None and type(None) in args:
-            return None
-        non_none = [a for a in args if a is not type(None)]
-        if len(non_none) == 1:
-            return _build(non_none[0], data, where)
-        return data
-    if origin is tuple:
-        args = typing.get_args(tp)
-        if not isinstance(data, list | tuple):
-            raise ProtocolError(f"{where}: expected a list, got {type(data).__name__}")
-        if len(args) == 2 and args[1] is Ellipsis:
-            return tuple(_build(args[0], v, f"{where}[{i}]") for i, v in enumerate(data))
-        return tuple(
-            _build(a, v, f"{where}[{i}]") for i, (a, v) in enumerate(zip(args, data, strict=True))
-        )
-    if origin is frozenset:
-        (arg,) = typing.get_args(tp)
-        return frozenset(_build(arg, v, where) for v in data)
-    if origin is dict:
-        _, value_tp = typing.get_args(tp)
-        return {k: _build(value_tp, v, f"{where}[{k!r}]") for k, v in data.items()}
-    if tp is float and isinstance(data, int):
-        return float(data)
-    return data
+            raise _Invalid(str(exc)) from exc
+
+    return build
+
+
+def _tuple_builder(args: tuple[Any, ...]) -> _Build:
+    if len(args) == 2 and args[1] is Ellipsis:
+        item = _builder(args[0])
+        return lambda data: _items(data, [item] * len(data) if _is_list(data) else [])
+    items = [_builder(a) for a in args]
+
+    def build_fixed(data: Any) -> tuple[Any, ...]:
+        if _is_list(data) and len(data) != len(items):
+            side = "shorter" if len(data) < len(items) else "longer"
+            raise _Invalid(f"zip() argument 2 is {side} than argument 1")
+        return _items(data, items)
+
+    return build_fixed
+
+
+def _is_list(data: Any) -> bool:
+    return isinstance(data, list | tuple)
+
+
+def _items(data: Any, builders: list[_Build]) -> tuple[Any, ...]:
+    if not _is_list(data):
+        raise _Invalid(f"expected a list, got {type(data).__name__}")
+    out = []
+    for i, (build, v) in enumerate(zip(builders, data, strict=False)):
+        if build is _same:
+            out.append(v)
+            continue
+        try:
+            out.append(build(v))
+        except _Invalid as exc:
+            raise exc.under(f"[{i}]") from exc.__cause__
+    return tuple(out)
 
 
 def from_versioned_dict(

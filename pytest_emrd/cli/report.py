@@ -71,10 +71,12 @@ def _run(args: argparse.Namespace) -> int:
 def _report(args: argparse.Namespace, formats: list[str]) -> int:
     from pytest_emrd.agent import load_registry
     from pytest_emrd.gate import evaluate_all, load_run_dirs, load_thresholds
-    from pytest_emrd.metrics import GATE_METRICS
+    from pytest_emrd.metrics import GATE_METRICS, as_episode_metrics
     from pytest_emrd.report import build_report, write_report
 
     trajectories = load_run_dirs(args.run_dirs)
+    metrics = as_episode_metrics(trajectories)  # once per episode, for the gates and the report
+    by_trajectory = {id(t): m for t, m in zip(trajectories, metrics, strict=True)}
     registry = load_registry(args.models)
     thresholds_path = args.thresholds
     if thresholds_path is None and _DEFAULT_THRESHOLDS.is_file():
@@ -82,14 +84,22 @@ def _report(args: argparse.Namespace, formats: list[str]) -> int:
     verdicts, source = [], None
     if thresholds_path is not None:
         thresholds = load_thresholds(thresholds_path, registry=registry, metrics=GATE_METRICS)
-        verdicts = evaluate_all(trajectories, thresholds, GATE_METRICS)
+        verdicts = evaluate_all(
+            trajectories, thresholds, GATE_METRICS, prepare=lambda t: by_trajectory[id(t)]
+        )
         source = str(thresholds_path)
     prices = {}
     for model in {t.spec.model for t in trajectories}:
         if model in registry.names():
             config = registry.get(model)
             prices[model] = (config.price_per_mtok_in, config.price_per_mtok_out)
-    report = build_report(trajectories, verdicts=verdicts, thresholds_source=source, prices=prices)
+    report = build_report(
+        trajectories,
+        verdicts=verdicts,
+        thresholds_source=source,
+        prices=prices,
+        episode_metrics=metrics,
+    )
     out = args.out if args.out is not None else args.run_dirs[0] / "report"
     written = write_report(report, out, formats)
     print(f"{len(trajectories)} episodes from {len(args.run_dirs)} run director(ies)")

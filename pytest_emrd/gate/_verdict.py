@@ -168,7 +168,11 @@ def evaluate_all(
         cells[(t.spec.model, t.spec.condition, t.spec.variant)].append(t)
     verdicts = []
     for (model, condition, variant), episodes in sorted(cells.items()):
+        # Each episode prepared once for all the gates of its cell (the 23 gates of a cell
+        # would otherwise match every episode's maps 23 times).
+        ordered = sorted(episodes, key=lambda t: t.spec.case_id)
+        items = [prepare(t) for t in ordered] if prepare else ordered
         for bound in thresholds.for_cell(model, condition):
-            cell = GateCell(bound, variant)
-            verdicts.append(evaluate_cell(cell, episodes, metrics, prepare=prepare))
+            estimate = metrics[bound.metric].compute(items, rng_seed=0)
+            verdicts.append(judge(GateCell(bound, variant), estimate))
     return verdicts

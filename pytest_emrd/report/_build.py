@@ -155,6 +155,7 @@ def build_report(
     embed: Embed | None = None,
     prices: Prices | None = None,
     with_reasoning: bool = True,
+    episode_metrics: Sequence[EpisodeMetrics] | None = None,
 ) -> Report:
     """Every table and figure of the paper for ``trajectories`` (any models, conditions,
     variants; errored episodes are excluded and reported).
@@ -162,9 +163,10 @@ def build_report(
     ``verdicts`` are the gate verdicts (:func:`pytest_emrd.gate.evaluate_all`) of the file
     ``thresholds_source``; ``embed`` replaces the ``nlp`` extra's sentence encoder for the
     representative-reasoning table; ``prices`` adds estimated cost to the usage table;
-    ``with_reasoning=False`` leaves that table empty (no sentence encoder is loaded).
+    ``with_reasoning=False`` leaves that table empty (no sentence encoder is loaded);
+    ``episode_metrics`` are the trajectories' metrics when the caller computed them already.
     """
-    metrics = as_episode_metrics(trajectories)
+    metrics = as_episode_metrics(trajectories if episode_metrics is None else episode_metrics)
     cells: Cells = group_cells(metrics)
     by_label: dict[str, list[EpisodeMetrics]] = {}
     for (model, variant, _), ems in cells.items():
