@@ -22,8 +22,7 @@ from importlib import resources
 from pathlib import Path
 from typing import Any, Final
 
-import yaml
-
+from pytest_emrd import _yaml
 from pytest_emrd.agent.reference._knobs import FAMILY, check_knobs, mimic_knobs
 from pytest_emrd.agent.reference._version import versioned_id
 from pytest_emrd.errors import ConfigError, check_choice, check_positive_int, check_range
@@ -222,16 +221,13 @@ def _build(name: str, entry: Any, source: str) -> ModelConfig:
     try:
         return ModelConfig(**values)
     except TypeError as exc:
-        raise ConfigError(f"{source}: model {name!r}: {exc}") from exc
+        raise ConfigError(f"{source}: model {name!r}: {exc}") from None
     except ConfigError as exc:
         raise ConfigError(f"{source}: {exc}") from None
 
 
 def _read_yaml(text: str, source: str) -> dict[str, dict[str, Any]]:
-    try:
-        data = yaml.safe_load(text)
-    except yaml.YAMLError as exc:
-        raise ConfigError(f"{source} is not valid YAML: {exc}") from exc
+    data = _yaml.load(text, source)
     models = (data or {}).get("models") if isinstance(data, dict | None) else None
     if not isinstance(models, dict):
         raise ConfigError(f"{source} must hold a top-level 'models:' mapping of name -> fields.")
@@ -263,7 +259,8 @@ class Registry:
             "parametric reference agents: scout-decay-<mean steps>, scout-window-<k>, "
             "mimic-<knobs> (s<sigma>, p<dup>, h<halluc>, q<fail>, r<repair>, a<invalid>, "
             "spawn; e.g. mimic-s0.3-p0.5). "
-            "Add other models in a user registry file (models: {name: {...}})."
+            "Add other models in a user registry file (models: {name: {...}}) and pass it "
+            "with --emrd-models FILE (ini: emrd_models = FILE; emrd gate --models FILE)."
         )
 
 
@@ -295,10 +292,9 @@ def load_registry(user_file: Path | None = None) -> Registry:
     source = "pytest_emrd/agent/models.yaml"
     if user_file is not None:
         source = str(user_file)
-        try:
-            user_text = Path(user_file).read_text()
-        except OSError as exc:
-            raise ConfigError(f"model registry file {user_file} cannot be read: {exc}") from exc
+        user_text = _yaml.read_text(
+            Path(user_file), what="model registry file", flag="--emrd-models (emrd gate --models)"
+        )
         for name, entry in _read_yaml(user_text, source).items():
             if not isinstance(entry, dict):
                 raise ConfigError(f"{source}: model {name!r} must be a mapping of fields.")

@@ -3,6 +3,7 @@
 ``run_with_cassette`` is the entry point; the rest is exported for tools and tests.
 """
 
+from pytest_emrd._scrub import SECRET_HEADERS
 from pytest_emrd.cassette._drift import first_difference
 from pytest_emrd.cassette._episode import (
     AgentRunner,
@@ -17,7 +18,6 @@ from pytest_emrd.cassette._network import network_blocked
 from pytest_emrd.cassette._paths import cassette_path, record_command
 from pytest_emrd.cassette._persister import EpisodePersister
 from pytest_emrd.cassette._redact import (
-    SECRET_HEADERS,
     MatchKeys,
     Redacted,
     canonical_json,

@@ -9,8 +9,9 @@ Redaction turns a model request into its *canonical* form:
 * the body is re-serialised as sorted-key compact JSON (a body that is not JSON is kept as
   it is and gets no key: it never matches);
 * headers are reduced to ``Content-Type`` (so ``Authorization``, ``x-api-key``, ``api-key``,
-  ``x-goog-api-key`` and anything else a provider may carry never reach a file), and the
-  ``key=`` query parameter is dropped.
+  ``x-goog-api-key`` and anything else a provider may carry never reach a file); URL userinfo
+  and credential-like query parameters are dropped and configured key values removed from
+  the URI and the body (:mod:`pytest_emrd._scrub`).
 
 vcrpy runs ``before_record_request`` several times for every request, so the work is cached
 by body bytes (a small LRU: a live body is looked up a few times in a row, then never again).
@@ -29,16 +30,12 @@ from collections import OrderedDict
 from dataclasses import dataclass
 from functools import cached_property, partial
 from typing import Any, Final
-from urllib.parse import parse_qsl, urlencode, urlsplit, urlunsplit
 
 from pytest_emrd import _wire, frames
+from pytest_emrd._scrub import scrub_bytes
 
 #: Request headers kept in a cassette; everything else (credentials included) is dropped.
 KEPT_HEADERS: Final = frozenset({"content-type"})
-#: Query parameters removed from the URI (Gemini's native API takes its key as ``key=``).
-SECRET_QUERY: Final = frozenset({"key"})
-#: Header names treated as secrets (documented for users; dropped by the allowlist above).
-SECRET_HEADERS: Final = ("authorization", "x-api-key", "api-key", "x-goog-api-key")
 
 #: A frame digest as redaction writes it (``pixels:`` or ``bytes:`` + SHA-256 hex).
 DIGEST: Final = re.compile(r"^(?:pixels|bytes):[0-9a-f]{64}$")
@@ -176,12 +173,14 @@ def redact_body(body: bytes | str | None) -> Redacted:
     raw = body.encode() if isinstance(body, str) else (body or b"")
     sent = _wire.sent_tree(raw)
     if sent is not None:
-        return Redacted(body=_canonical_sent(sent).encode(), parsed=True)
+        canonical = _canonical_sent(sent).encode()
+        return Redacted(body=scrub_bytes(canonical, literal_only=True), parsed=True)
     try:
         tree = json.loads(raw)
     except (ValueError, UnicodeDecodeError):
-        return Redacted(body=raw, parsed=False)
-    return Redacted(body=canonical_json(_redact_tree(tree)).encode(), parsed=True)
+        return Redacted(body=scrub_bytes(raw, literal_only=True), parsed=False)
+    canonical = canonical_json(_redact_tree(tree)).encode()
+    return Redacted(body=scrub_bytes(canonical, literal_only=True), parsed=True)
 
 
 def match_keys(method: str, path: str, redacted: Redacted) -> MatchKeys:
@@ -193,17 +192,6 @@ def canonical_keys(method: str, path: str, body: bytes) -> MatchKeys:
     """The keys of a body already in canonical, redacted form (read back from a cassette):
     nothing is parsed until a lenient key or a drift message needs the tree."""
     return match_keys(method, path, Redacted(body=body, parsed=True))
-
-
-def scrub_uri(uri: str) -> str:
-    """The URI without secret query parameters (``key=``)."""
-    parts = urlsplit(uri)
-    if not parts.query:
-        return uri
-    query = [
-        (k, v) for k, v in parse_qsl(parts.query, keep_blank_values=True) if k not in SECRET_QUERY
-    ]
-    return urlunsplit(parts._replace(query=urlencode(query)))
 
 
 def scrub_headers(headers: Any) -> dict[str, str]:

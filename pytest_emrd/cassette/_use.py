@@ -14,14 +14,10 @@ from vcr.record_mode import RecordMode
 from vcr.request import Request
 
 from pytest_emrd import _wire
+from pytest_emrd._scrub import scrub_bytes, scrub_uri
 from pytest_emrd.cassette._drift import drift_message
 from pytest_emrd.cassette._persister import EpisodePersister
-from pytest_emrd.cassette._redact import (
-    MatchKeys,
-    RedactionCache,
-    scrub_headers,
-    scrub_uri,
-)
+from pytest_emrd.cassette._redact import MatchKeys, RedactionCache, scrub_headers
 
 #: Response headers kept in a cassette (the body is stored decoded, so no Content-Encoding).
 KEPT_RESPONSE_HEADERS: Final = frozenset({"content-type"})
@@ -47,12 +43,19 @@ def redact_request(request: Request) -> Request:
 
 
 def keep_response(response: dict[str, Any]) -> dict[str, Any] | None:
-    """vcrpy ``before_record_response``: drop non-2xx responses and volatile headers."""
+    """vcrpy ``before_record_response``: drop non-2xx responses and volatile headers, and
+    remove configured key values from the body."""
     if not 200 <= int(response["status"]["code"]) < 300:
         return None
     response["headers"] = {
         k: v for k, v in response["headers"].items() if k.lower() in KEPT_RESPONSE_HEADERS
     }
+    body = response.get("body", {}).get("string")
+    if isinstance(body, bytes | str):
+        raw = body.encode() if isinstance(body, str) else body
+        clean = scrub_bytes(raw, literal_only=True)
+        if clean != raw:
+            response["body"]["string"] = clean
     return response
 
 

@@ -4,12 +4,20 @@ from __future__ import annotations
 
 from collections.abc import Collection, Sequence
 from pathlib import Path
-from typing import Any, Protocol
+from typing import Any, Final, Protocol
 
+from pytest_emrd._yaml import read_text
 from pytest_emrd.errors import ConfigError, EmrdError
 from pytest_emrd.gate._store import iter_run_dir
 from pytest_emrd.gate._thresholds import Thresholds, parse_thresholds
 from pytest_emrd.trajectory import Trajectory
+
+#: How to make a model of one's own registry known to every run (ends unknown-model errors).
+REGISTER_MODEL_HINT: Final = (
+    " A model of your own registry must be registered for every run that reads this file:"
+    " set `emrd_models = FILE` in the pytest ini (or pass --emrd-models FILE), and"
+    " `emrd gate --models FILE`."
+)
 
 
 class RegistryLike(Protocol):
@@ -32,15 +40,16 @@ def load_thresholds(path: Path, *, registry: RegistryLike, metrics: Collection[s
             return False
         return True
 
-    try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError as exc:
-        raise ConfigError(
-            f"thresholds={str(path)!r} does not exist; point --emrd-thresholds at a "
-            "thresholds.yaml (see the one at the repository root)."
-        ) from exc
+    text = read_text(
+        path, what="thresholds file", flag="--emrd-thresholds (emrd gate --thresholds)"
+    )
     return parse_thresholds(
-        text, source=str(path), is_model=is_model, model_names=registry.names(), metrics=metrics
+        text,
+        source=str(path),
+        is_model=is_model,
+        model_names=registry.names(),
+        metrics=metrics,
+        unknown_model_hint=REGISTER_MODEL_HINT,
     )
 
 

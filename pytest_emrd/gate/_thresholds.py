@@ -8,23 +8,55 @@ Schema::
           min: 0.8           # or max: 0.1 (exactly one of the two)
           ci: lower          # optional: compare the bootstrap CI's lower/upper end, not the mean
 
-Every mistake is a :class:`~pytest_emrd.errors.ConfigError` naming the file, the line and
-the allowed values.
+Every mistake is a :class:`~pytest_emrd.errors.ConfigError` of one line naming the file,
+the line, the field and the allowed values. A bound must lie in its metric's domain
+(:func:`domain`: fractions in [0, 1], ``te`` in [0, max_steps], R² at most 1, never NaN or
+infinite); numbers follow YAML 1.2, so ``1e9`` is a number (:mod:`pytest_emrd._yaml`).
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Collection, Iterator
+import math
+from collections.abc import Callable, Collection, Iterator, Mapping
 from dataclasses import dataclass
 from typing import Any, Final
 
 import yaml
 
+from pytest_emrd import _yaml
 from pytest_emrd.errors import ConfigError
-from pytest_emrd.trajectory import CONDITIONS
+from pytest_emrd.trajectory import CONDITIONS, MAX_STEPS
 
 BOUND_KINDS: Final = ("min", "max")
 CI_SIDES: Final = ("lower", "upper")
+#: Metrics counted in actions of one episode: bounded by the action budget.
+BUDGET_METRICS: Final = frozenset({"te"})
+
+
+@dataclass(frozen=True)
+class Domain:
+    """The values a metric can take; a bound outside it can never (or always) pass."""
+
+    low: float
+    high: float
+    text: str
+    """How the domain reads in a message (``a fraction in [0, 1]``)."""
+
+    def __contains__(self, value: float) -> bool:
+        return self.low <= value <= self.high
+
+
+def domain(metric: str, unit: str | None, *, max_steps: int = MAX_STEPS) -> Domain:
+    """The domain of ``metric`` from its unit (``fraction``, ``steps``, ``R^2``)."""
+    if unit == "fraction":
+        return Domain(0.0, 1.0, "a fraction in [0, 1]")
+    if unit == "steps" and metric in BUDGET_METRICS:
+        return Domain(0.0, float(max_steps), f"steps in [0, {max_steps}] (the action budget)")
+    if unit == "steps":
+        return Domain(0.0, math.inf, "steps >= 0")
+    if unit == "R^2":
+        return Domain(-math.inf, 1.0, "an R^2 <= 1")
+    return Domain(-math.inf, math.inf, "a finite number")
 
 
 @dataclass(frozen=True)
@@ -67,7 +99,9 @@ class _Reader:
 
     def mapping(self, node: yaml.Node, what: str) -> Iterator[tuple[str, yaml.Node, yaml.Node]]:
         if not isinstance(node, yaml.MappingNode):
-            raise self.fail(node, f"{what} must be a mapping of name: value.")
+            raise self.fail(
+                node, f"{what} must be a mapping of name: value, got {_yaml.describe(node)}."
+            )
         seen: set[str] = set()
         for key, value in node.value:
             if not isinstance(key, yaml.ScalarNode):
@@ -77,19 +111,31 @@ class _Reader:
             seen.add(key.value)
             yield key.value, key, value
 
-    def number(self, node: yaml.Node, what: str) -> float:
-        data = yaml.safe_load(yaml.serialize(node)) if isinstance(node, yaml.ScalarNode) else None
+    def number(self, node: yaml.Node, what: str, allowed: Domain) -> float:
+        data = _yaml.scalar(node) if isinstance(node, yaml.ScalarNode) else None
         if isinstance(data, bool) or not isinstance(data, int | float):
-            raise self.fail(node, f"{what} must be a number, got {getattr(node, 'value', node)!r}.")
-        return float(data)
+            raise self.fail(
+                node, f"{what} must be a number ({allowed.text}), got {_yaml.describe(node)}."
+            )
+        value = float(data)
+        if not math.isfinite(value) or value not in allowed:
+            raise self.fail(
+                node, f"{what}={node.value} is outside the metric's domain; write {allowed.text}."
+            )
+        return value
 
 
 def _choice(
-    reader: _Reader, node: yaml.Node, what: str, value: str, allowed: Collection[str]
+    reader: _Reader,
+    node: yaml.Node,
+    what: str,
+    value: str,
+    allowed: Collection[str],
+    hint: str = "",
 ) -> None:
     if value not in allowed:
         listed = ", ".join(sorted(allowed))
-        raise reader.fail(node, f"unknown {what} {value!r}; allowed: {listed}.")
+        raise reader.fail(node, f"unknown {what} {value!r}; allowed: {listed}.{hint}")
 
 
 def parse_thresholds(
@@ -99,32 +145,44 @@ def parse_thresholds(
     is_model: Callable[[str], bool],
     model_names: Collection[str],
     metrics: Collection[str],
+    unknown_model_hint: str = "",
 ) -> Thresholds:
-    """Parse and validate thresholds YAML text (``source`` names the file in messages)."""
+    """Parse and validate thresholds YAML text (``source`` names the file in messages).
+
+    ``metrics`` names the gate metrics; when it maps names to objects with a ``unit``
+    (:data:`~pytest_emrd.metrics.GATE_METRICS`), each bound is checked against the metric's
+    :func:`domain`. ``unknown_model_hint`` ends the message of an unknown model (how to
+    register one).
+    """
     reader = _Reader(source)
-    try:
-        root = yaml.compose(text)
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        where = f", line {mark.line + 1}" if mark is not None else ""
-        problem = getattr(exc, "problem", None) or str(exc)
-        raise ConfigError(f"{source}{where}: malformed YAML ({problem}).") from exc
+    root = _yaml.compose(text, source)
     if root is None:
         return Thresholds(source, ())
     bounds: list[Bound] = []
     for model, model_key, conditions in reader.mapping(root, "the top level (models)"):
         if not is_model(model):
-            _choice(reader, model_key, "model", model, model_names)
+            _choice(reader, model_key, "model", model, model_names, unknown_model_hint)
         for condition, cond_key, metric_map in reader.mapping(conditions, f"model {model!r}"):
             _choice(reader, cond_key, "condition", condition, CONDITIONS)
             for metric, metric_key, spec in reader.mapping(metric_map, f"{model}.{condition}"):
                 _choice(reader, metric_key, "metric", metric, metrics)
-                bounds.append(_bound(reader, model, condition, metric, metric_key, spec))
+                allowed = domain(metric, _unit(metrics, metric))
+                bounds.append(_bound(reader, model, condition, metric, metric_key, spec, allowed))
     return Thresholds(source, tuple(bounds))
 
 
+def _unit(metrics: Collection[str], name: str) -> str | None:
+    return getattr(metrics.get(name), "unit", None) if isinstance(metrics, Mapping) else None
+
+
 def _bound(
-    reader: _Reader, model: str, condition: str, metric: str, key: yaml.Node, spec: Any
+    reader: _Reader,
+    model: str,
+    condition: str,
+    metric: str,
+    key: yaml.Node,
+    spec: Any,
+    allowed: Domain,
 ) -> Bound:
     where = f"{model}.{condition}.{metric}"
     fields = {name: (k, v) for name, k, v in reader.mapping(spec, where)}
@@ -134,10 +192,12 @@ def _bound(
     if len(kinds) != 1:
         raise reader.fail(key, f"{where} needs exactly one of min or max, got {kinds or 'none'}.")
     kind = kinds[0]
-    value = reader.number(fields[kind][1], f"{where}.{kind}")
+    value = reader.number(fields[kind][1], f"{where}.{kind}", allowed)
     ci = None
     if "ci" in fields:
         ci_node = fields["ci"][1]
-        ci = str(getattr(ci_node, "value", ""))
+        if not isinstance(ci_node, yaml.ScalarNode):
+            raise reader.fail(ci_node, f"{where}.ci must be one of lower, upper.")
+        ci = str(ci_node.value)
         _choice(reader, ci_node, f"ci side in {where}", ci, CI_SIDES)
     return Bound(model, condition, metric, kind, value, ci, key.start_mark.line + 1)

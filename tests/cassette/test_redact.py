@@ -9,8 +9,9 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from pytest_emrd import frames
+from pytest_emrd._scrub import scrub_uri
 from pytest_emrd.cassette import canonical_json, match_keys, redact_body
-from pytest_emrd.cassette._redact import canonical_keys, scrub_headers, scrub_uri
+from pytest_emrd.cassette._redact import canonical_keys, scrub_headers
 
 PIXELS = "ab" * 32
 

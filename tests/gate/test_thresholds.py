@@ -46,7 +46,7 @@ def test_empty_file_has_no_gates():
 @pytest.mark.parametrize(
     ("text", "message"),
     [
-        ("scout: [1, 2", "line 1: malformed YAML"),
+        ("scout: [1, 2", "line 1, column 13: malformed YAML"),
         ("claude3:\n  baseline: {}\n", "line 1: unknown model 'claude3'; allowed: gemini, scout"),
         (
             "scout:\n  fog: {}\n",

@@ -1,0 +1,101 @@
+"""Reading the user's YAML files (thresholds, model registry): one-line errors, YAML 1.2 floats.
+
+Every failure is a :class:`~pytest_emrd.errors.ConfigError` of one line naming the file,
+the line where there is one, and what to do: a missing file, a directory passed as a file,
+an unreadable file, bytes that are not UTF-8, malformed YAML. ``pytest`` and ``emrd gate``
+print the same text.
+
+PyYAML resolves scalars by YAML 1.1, where ``1e9`` and ``5e-3`` are strings (1.1 floats
+need a dot and a signed exponent). :class:`Loader` adds the YAML 1.2 core-schema float, so
+every number a person writes reads as a number.
+"""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+from pytest_emrd.errors import ConfigError
+
+_FLOAT_12 = re.compile(
+    r"""^(?:[-+]?(?:\.[0-9]+|[0-9]+(?:\.[0-9]*)?)(?:[eE][-+]?[0-9]+)?
+    |[-+]?\.(?:inf|Inf|INF)
+    |\.(?:nan|NaN|NAN))$""",
+    re.VERBOSE,
+)
+
+
+class Loader(yaml.SafeLoader):
+    """PyYAML's safe loader with YAML 1.2 floats (``1e9``, ``5E-3``) resolved as floats."""
+
+
+Loader.add_implicit_resolver(
+    "tag:yaml.org,2002:float", _FLOAT_12, list("-+0123456789.")
+)  # checked after the 1.1 resolvers: ints stay ints
+
+
+def read_text(path: Path, *, what: str, flag: str) -> str:
+    """The UTF-8 text of ``path`` (``what`` = "thresholds file"; ``flag`` = the option that
+    names it), or a one-line :class:`ConfigError` saying what is wrong and what to pass."""
+    try:
+        data = Path(path).read_bytes()
+    except FileNotFoundError:
+        raise ConfigError(
+            f"{what} {path} does not exist; pass an existing file with {flag}."
+        ) from None
+    except IsADirectoryError:
+        raise ConfigError(
+            f"{what} {path} is a directory, not a file; pass the YAML file itself with {flag}."
+        ) from None
+    except OSError as exc:
+        raise ConfigError(f"{what} {path} cannot be read ({exc.strerror}); check {flag}.") from None
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        line = data.count(b"\n", 0, exc.start) + 1
+        raise ConfigError(
+            f"{what} {path}, line {line}: byte 0x{data[exc.start]:02x} at offset {exc.start} is "
+            f"not UTF-8; save the file as UTF-8 text (a YAML file, not a binary), or pass "
+            f"another one with {flag}."
+        ) from None
+
+
+def yaml_error(exc: yaml.YAMLError, source: str) -> ConfigError:
+    """The one-line error for malformed YAML: file, line and column, and PyYAML's problem."""
+    mark = getattr(exc, "problem_mark", None) or getattr(exc, "context_mark", None)
+    where = f", line {mark.line + 1}, column {mark.column + 1}" if mark is not None else ""
+    problem = getattr(exc, "problem", None) or type(exc).__name__
+    context = getattr(exc, "context", None)
+    detail = f"{context}: {problem}" if context else problem
+    return ConfigError(f"{source}{where}: malformed YAML ({' '.join(str(detail).split())}).")
+
+
+def compose(text: str, source: str) -> yaml.Node | None:
+    """The YAML node tree of ``text`` (with line marks), or a one-line :class:`ConfigError`."""
+    try:
+        return yaml.compose(text, Loader=Loader)
+    except yaml.YAMLError as exc:
+        raise yaml_error(exc, source) from None
+
+
+def load(text: str, source: str) -> Any:
+    """``text`` as Python data (YAML 1.2 floats), or a one-line :class:`ConfigError`."""
+    try:
+        return yaml.load(text, Loader=Loader)
+    except yaml.YAMLError as exc:
+        raise yaml_error(exc, source) from None
+
+
+def scalar(node: yaml.Node) -> Any:
+    """The Python value of a scalar node, resolved like :func:`load` would."""
+    return Loader("").construct_object(node, deep=True)
+
+
+def describe(node: yaml.Node) -> str:
+    """How a node reads in a message: the scalar as written, else its kind (never a repr)."""
+    if isinstance(node, yaml.ScalarNode):
+        return repr(node.value)
+    return "a mapping" if isinstance(node, yaml.MappingNode) else "a list"
