@@ -15,7 +15,13 @@ from pytest_emrd.cassette._episode import (
 )
 from pytest_emrd.cassette._format import CassetteData, FormatError, decode, encode
 from pytest_emrd.cassette._network import network_blocked
-from pytest_emrd.cassette._paths import cassette_path, record_command
+from pytest_emrd.cassette._paths import (
+    Invocation,
+    cassette_path,
+    missing_cassettes,
+    missing_summary,
+    record_command,
+)
 from pytest_emrd.cassette._persister import EpisodePersister
 from pytest_emrd.cassette._redact import (
     MatchKeys,
@@ -42,6 +48,7 @@ __all__ = [
     "EpisodeRunner",
     "FormatError",
     "FrameDriftWarning",
+    "Invocation",
     "MatchKeys",
     "Redacted",
     "agent_runner",
@@ -54,6 +61,8 @@ __all__ = [
     "first_difference",
     "keep_response",
     "match_keys",
+    "missing_cassettes",
+    "missing_summary",
     "network_blocked",
     "record_command",
     "redact_body",

@@ -1,10 +1,28 @@
-"""Explaining a replay that diverged: the first field where two canonical bodies differ."""
+"""Explaining a replay that failed, keeping the cause: drift, modality, unreadable recording.
+
+Three causes, three messages, each ending with the command that fixes it:
+
+* **drift** — the episode now sends a request the cassette does not hold (the world, the
+  prompt or the agent changed): the first differing field, with a context window around
+  the first differing character of a text, and the re-record command;
+* **modality mismatch** — the run shows the model another modality (frames, symbolic list)
+  than the recording did: the two modalities and how to run with the recorded one;
+* **unreadable recorded response** — a recorded response was played and the client asked
+  for the same request again (a retry), so the recorded body is not a reply the client can
+  read: the response's position, status and the start of its body.
+"""
 
 from __future__ import annotations
 
 from typing import Any, Final
 
+from pytest_emrd._scrub import scrub
+from pytest_emrd.agent._prompt import VISIBLE_HEADING
+from pytest_emrd.cassette._redact import Redacted
+
 _PREVIEW: Final = 80
+_CONTEXT: Final = 40
+_BODY_EXCERPT: Final = 160
 _MISSING: Final = "<absent>"
 
 
@@ -42,26 +60,91 @@ def first_difference(new: Any, recorded: Any, where: str = "body") -> tuple[str,
     return None
 
 
+def text_context(now: str, then: str, width: int = _CONTEXT) -> str:
+    """Where two texts first differ, with ``width`` characters of context on each side."""
+    pairs = enumerate(zip(now, then, strict=False))
+    at = next((i for i, (a, b) in pairs if a != b), min(len(now), len(then)))
+    start = max(0, at - width)
+    lead = "..." if start else ""
+
+    def window(text: str) -> str:
+        tail = "..." if len(text) > at + width else ""
+        return repr(text[start : at + width]) + tail
+
+    return (
+        f"at character {at} (of {len(now)} now, {len(then)} recorded): "
+        f"now {lead}{window(now)}, recorded {lead}{window(then)}"
+    )
+
+
+def request_modality(redacted: Redacted) -> str | None:
+    """The modality a recorded request was made in: frames and a symbolic list (``both``),
+    frames only (``vision``), the list only (``text``); ``None`` when the body is not JSON."""
+    if not redacted.parsed:
+        return None
+    listed = VISIBLE_HEADING in redacted.body.decode(errors="replace")
+    if redacted.images:
+        return "both" if listed else "vision"
+    return "text"
+
+
 def drift_message(
-    *, cassette: str, request_index: int, new_tree: Any, recorded_tree: Any | None, recorded: int
+    *,
+    cassette: str,
+    request_index: int,
+    new_tree: Any,
+    recorded_tree: Any | None,
+    recorded: int,
+    command: str = "",
 ) -> str:
     """The failure text of a request that matches nothing in the cassette."""
     head = (
         f"environment or prompt drift: request {request_index + 1} of the episode matches "
         f"nothing in cassette={cassette!r}"
     )
+    fix = f" If the change is intended, re-record it: {command}" if command else ""
     if new_tree is None:
         return f"{head}; its body is not JSON, and a body that cannot be parsed never matches."
     if recorded_tree is None:
         return (
             f"{head}; the cassette holds only {recorded} request(s), so the episode now makes "
-            "more requests than when it was recorded (the world or the agent behaves differently)."
+            f"more requests than when it was recorded (the world or the agent behaves "
+            f"differently).{fix}"
         )
     found = first_difference(new_tree, recorded_tree)
     if found is None:
         return (
             f"{head}; the body equals recorded request {request_index + 1}, "
-            "which was already played."
+            f"which was already played.{fix}"
         )
     where, now, then = found
-    return f"{head}; first differing field {where}: now {_preview(now)}, recorded {_preview(then)}."
+    if isinstance(now, str) and isinstance(then, str):
+        detail = text_context(now, then)
+    else:
+        detail = f"now {_preview(now)}, recorded {_preview(then)}"
+    return f"{head}; first differing field {where} {detail}.{fix}"
+
+
+def modality_message(*, cassette: str, recorded: str, asked: str, command: str) -> str:
+    """The failure text of a replay in another modality than the recording."""
+    return (
+        f"modality mismatch: cassette={cassette!r} was recorded in modality {recorded!r} and "
+        f"this run shows the model {asked!r}. Replay it with --emrd-modality={recorded}, or "
+        f"record the {asked!r} episode: {command}"
+    )
+
+
+def unreadable_message(
+    *, cassette: str, response_index: int, response: dict[str, Any], command: str
+) -> str:
+    """The failure text of a recorded response the client could not read."""
+    status = response.get("status", {}).get("code", "?")
+    body = response.get("body", {}).get("string", b"")
+    text = body.decode(errors="replace") if isinstance(body, bytes) else str(body)
+    excerpt = " ".join(text.split())[:_BODY_EXCERPT]
+    return (
+        f"unreadable recorded response: response {response_index + 1} of cassette="
+        f"{cassette!r} (HTTP {status}) was replayed and the client could not read it as a "
+        f"reply (it asked for the same request again); the body starts {scrub(excerpt)!r}. "
+        f"The file is damaged or was recorded from another endpoint; re-record it: {command}"
+    )

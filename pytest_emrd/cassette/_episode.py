@@ -11,8 +11,10 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from pytest_emrd._scrub import scrub
+from pytest_emrd.cassette._drift import modality_message
 from pytest_emrd.cassette._network import network_blocked
-from pytest_emrd.cassette._paths import cassette_path, record_command
+from pytest_emrd.cassette._paths import Invocation, cassette_path, record_command
 from pytest_emrd.cassette._use import episode_cassette
 from pytest_emrd.errors import check_choice
 from pytest_emrd.gate._settings import MATCHING_MODES, RECORD_MODES
@@ -109,14 +111,17 @@ def run_with_cassette(
     protocol: str,
     record_mode: str = "once",
     matching: str = "strict",
+    invocation: Invocation | None = None,
 ) -> EpisodeRun:
     """Run ``run(spec, live=...)`` with the model traffic recorded to / replayed from its cassette.
 
     ``run`` must behave like :func:`pytest_emrd.episode.run_episode`: failures become an
     ``errored`` trajectory, never an exception. An errored episode leaves no cassette behind;
     its ``error`` is replaced by a precise cause when the cassette explains it (missing file
-    in ``none`` mode, with the command that records it; drift, naming the first differing
-    field). A corrupted or stale cassette raises :class:`~pytest_emrd.errors.CassetteError`.
+    in ``none`` mode, drift, a modality other than the recorded one, a recorded response the
+    client could not read), each with the command that fixes it, built for ``invocation``
+    (the test paths and user registry of the run). The error text is scrubbed of secrets. A
+    corrupted or stale cassette raises :class:`~pytest_emrd.errors.CassetteError`.
     """
     check_choice("record_mode", record_mode, RECORD_MODES)
     check_choice("matching", matching, MATCHING_MODES)
@@ -124,6 +129,7 @@ def run_with_cassette(
     exists = path.is_file()
     missing = record_mode == "none" and not exists
     live = record_mode in ("all", "new_episodes") or (record_mode == "once" and not exists)
+    rerecord = record_command(spec, record_mode="all", cassettes=cassettes, invocation=invocation)
     start = time.perf_counter()
     try:
         with (
@@ -133,7 +139,7 @@ def run_with_cassette(
                 protocol=protocol,
                 record_mode=record_mode,
                 matching=matching,
-                rerecord_command=record_command(spec, record_mode="all", cassettes=cassettes),
+                rerecord_command=rerecord,
             ) as cassette,
         ):
             trajectory = run(spec, live=live)
@@ -143,13 +149,21 @@ def run_with_cassette(
                 raise _Discard
     except _Discard:
         recorded = False
-        cause = trajectory.error
+        cause = trajectory.error or ""
         if missing:
+            command = record_command(
+                spec, record_mode="once", cassettes=cassettes, invocation=invocation
+            )
             cause = (
                 f"cassette missing: {path} does not exist and record mode 'none' replays only. "
-                f"Record it with: {record_command(spec, record_mode='once', cassettes=cassettes)}"
+                f"Record it with: {command}"
             )
         elif drift is not None:
             cause = drift
-        trajectory = dataclasses.replace(trajectory, error=cause)
+            modality = cassette.recorded_modality
+            if not cassette.unreadable and modality not in (None, spec.modality):
+                cause = modality_message(
+                    cassette=str(path), recorded=modality, asked=spec.modality, command=rerecord
+                )
+        trajectory = dataclasses.replace(trajectory, error=scrub(cause))
     return EpisodeRun(trajectory, recorded, frame_drift, time.perf_counter() - start)

@@ -1,11 +1,15 @@
-"""Where an episode's cassette lives, and the command that (re-)records it."""
+"""Where an episode's cassette lives, and the commands that (re-)record episodes."""
 
 from __future__ import annotations
 
 import shlex
+from collections import Counter
+from collections.abc import Sequence
+from dataclasses import dataclass
 from pathlib import Path
 
-from pytest_emrd.trajectory import EpisodeSpec
+from pytest_emrd.rooms import SLUG_ROOMS
+from pytest_emrd.trajectory import CONDITIONS, EpisodeSpec
 
 
 def cassette_path(root: Path, spec: EpisodeSpec) -> Path:
@@ -27,21 +31,79 @@ def cassette_path(root: Path, spec: EpisodeSpec) -> Path:
     )
 
 
-def record_command(spec: EpisodeSpec, *, record_mode: str, cassettes: Path | None = None) -> str:
-    """The exact ``pytest`` command that records (``once``) or re-records (``all``) one episode."""
-    args = [
-        "pytest",
-        "benchmarks",
-        f"--emrd-model={spec.model}",
-        f"--emrd-condition={spec.condition}",
-        f"--emrd-spawn={spec.spawn}",
-        f"--emrd-episodes={spec.episode + 1}",
-    ]
-    if spec.variant != "default":
-        args.append(f"--emrd-variant={spec.variant}")
-    if spec.backend != "builtin":
-        args.append(f"--emrd-backend={spec.backend}")
-    if cassettes is not None:
-        args.append(f"--emrd-cassettes={cassettes}")
-    args += [f"--emrd-record-mode={record_mode}", "-k", f"test_episode and {spec.case_id}"]
+@dataclass(frozen=True)
+class Invocation:
+    """What a printed ``pytest`` command must carry to work verbatim for this run."""
+
+    paths: tuple[str, ...] = ("benchmarks",)
+    """The test paths the user ran (``pytest benchmarks``, ``pytest suite/test_x.py``)."""
+    models_file: Path | None = None
+    """The user model registry (``--emrd-models``), needed to find a user model."""
+    cassettes: Path | None = None
+    """The cassette folder (``--emrd-cassettes``); ``None``: the default."""
+    backend_options: tuple[str, ...] = ()
+    """``--emrd-backend-option`` values as given (a THOR build path, a GPU)."""
+
+
+def record_command(
+    specs: EpisodeSpec | Sequence[EpisodeSpec],
+    *,
+    record_mode: str,
+    cassettes: Path | None = None,
+    invocation: Invocation | None = None,
+) -> str:
+    """The exact ``pytest`` command that records (``once``) or re-records (``all``) one
+    episode, or every episode of ``specs`` in one run (``once`` records only what is missing).
+
+    It carries the test paths, ``--emrd-models`` and ``--emrd-modality`` of the run, so it
+    works verbatim for a model of a user registry; ``cassettes`` overrides the invocation's.
+    """
+    one = isinstance(specs, EpisodeSpec)
+    group = [specs] if isinstance(specs, EpisodeSpec) else list(specs)
+    how = invocation or Invocation()
+    first = group[0]
+    args = ["pytest", *how.paths]
+    args += [f"--emrd-model={m}" for m in sorted({s.model for s in group})]
+    args += [f"--emrd-condition={c}" for c in _ordered(group, "condition", CONDITIONS)]
+    args += [f"--emrd-spawn={r}" for r in _ordered(group, "spawn", tuple(SLUG_ROOMS))]
+    args.append(f"--emrd-episodes={max(s.episode for s in group) + 1}")
+    if first.variant != "default":
+        args.append(f"--emrd-variant={first.variant}")
+    if first.backend != "builtin":
+        args.append(f"--emrd-backend={first.backend}")
+    args += [f"--emrd-backend-option={o}" for o in how.backend_options]
+    modalities = {s.modality for s in group}
+    if len(modalities) == 1:
+        args.append(f"--emrd-modality={first.modality}")
+    if how.models_file is not None:
+        args.append(f"--emrd-models={how.models_file}")
+    folder = cassettes if cassettes is not None else how.cassettes
+    if folder is not None:
+        args.append(f"--emrd-cassettes={folder}")
+    selection = f"test_episode and {first.case_id}" if one else "test_episode"
+    args += [f"--emrd-record-mode={record_mode}", "-k", selection]
     return shlex.join(args)
+
+
+def _ordered(group: Sequence[EpisodeSpec], field: str, order: Sequence[str]) -> list[str]:
+    present = {getattr(s, field) for s in group}
+    return [x for x in order if x in present] + sorted(present - set(order))
+
+
+def missing_cassettes(specs: Sequence[EpisodeSpec], root: Path) -> list[EpisodeSpec]:
+    """The episodes of ``specs`` whose cassette file does not exist under ``root``."""
+    return [spec for spec in specs if not cassette_path(root, spec).is_file()]
+
+
+def missing_summary(
+    missing: Sequence[EpisodeSpec], *, total: int, root: Path, invocation: Invocation
+) -> str:
+    """The one message for a replay-only run with missing cassettes: how many, for which
+    models, and one command that records them all."""
+    per_model = Counter(spec.model for spec in missing)
+    models = ", ".join(f"{m} ({n})" for m, n in sorted(per_model.items()))
+    command = record_command(missing, record_mode="once", cassettes=root, invocation=invocation)
+    return (
+        f"{len(missing)} of {total} episode(s) have no cassette under {root} and record mode "
+        f"'none' replays only; missing for: {models}. Record them all with: {command}"
+    )

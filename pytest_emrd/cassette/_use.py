@@ -15,7 +15,11 @@ from vcr.request import Request
 
 from pytest_emrd import _wire
 from pytest_emrd._scrub import scrub_bytes, scrub_uri
-from pytest_emrd.cassette._drift import drift_message
+from pytest_emrd.cassette._drift import (
+    drift_message,
+    request_modality,
+    unreadable_message,
+)
 from pytest_emrd.cassette._persister import EpisodePersister
 from pytest_emrd.cassette._redact import MatchKeys, RedactionCache, scrub_headers
 
@@ -87,11 +91,12 @@ def make_matcher(matching: str, frame_drift: set[tuple[str, str]]) -> Callable[.
 
 
 class EpisodeCassette(Cassette):
-    """A vcrpy cassette that remembers why a replay diverged.
+    """A vcrpy cassette that remembers why a replay failed (see :mod:`._drift`).
 
     Requests are counted in the order they are made; the first one that cannot be played
-    while the cassette is write-protected is explained against the recorded request at the
-    same position (:func:`~pytest_emrd.cassette._drift.drift_message`).
+    while the cassette is write-protected is explained: as an unreadable recorded response
+    when it repeats a request whose response was already played (the client retried it),
+    otherwise as drift against the recorded request at the same position.
     """
 
     def __init__(self, *args: Any, **kwargs: Any) -> None:
@@ -101,6 +106,9 @@ class EpisodeCassette(Cassette):
         self.frame_drift: set[tuple[str, str]] = set()
         self.strict = False
         """Matching is strict: recorded interactions are looked up by strict key."""
+        self.rerecord_command = ""
+        self.unreadable = False
+        """The failure is a recorded response the client could not read (not drift)."""
         self._by_key: dict[str, list[int]] = {}
         self._indexed = 0
 
@@ -123,18 +131,46 @@ class EpisodeCassette(Cassette):
     def can_play_response_for(self, request: Request) -> bool:
         playable = bool(super().can_play_response_for(request))
         if not playable and self.write_protected and self.drift is None:
-            new = self._before_record_request(request)
-            index = self.requests_made
-            recorded = self.data[index][0] if index < len(self.data) else None
-            self.drift = drift_message(
-                cassette=str(self._path),
-                request_index=index,
-                new_tree=_keys(new).redacted.tree,
-                recorded_tree=_keys(recorded).redacted.tree if recorded else None,
-                recorded=len(self.data),
-            )
+            self.drift = self._explain(_keys(self._before_record_request(request)))
         self.requests_made += 1
         return playable
+
+    def _explain(self, new: MatchKeys) -> str:
+        played = self._played(new)
+        if played is not None:
+            self.unreadable = True
+            return unreadable_message(
+                cassette=str(self._path),
+                response_index=played,
+                response=self.data[played][1],
+                command=self.rerecord_command,
+            )
+        index = self.requests_made
+        recorded = self.data[index][0] if index < len(self.data) else None
+        return drift_message(
+            cassette=str(self._path),
+            request_index=index,
+            new_tree=new.redacted.tree,
+            recorded_tree=_keys(recorded).redacted.tree if recorded else None,
+            recorded=len(self.data),
+            command=self.rerecord_command,
+        )
+
+    def _played(self, new: MatchKeys) -> int | None:
+        """The index of an already played interaction whose request equals ``new``."""
+        key = new.strict if self.strict else new.lenient
+        if key is None:
+            return None
+        for index, count in self.play_counts.items():
+            old = _keys(self.data[index][0])
+            if count and (old.strict if self.strict else old.lenient) == key:
+                return index
+        return None
+
+    @property
+    def recorded_modality(self) -> str | None:
+        """The modality of the recording (from its first request), ``None`` if empty."""
+        return request_modality(_keys(self.data[0][0]).redacted) if self.data else None
 
 
 def _before_record_request(request: Request) -> Request:
@@ -177,4 +213,5 @@ def episode_cassette(
     with use as cassette:
         cassette.frame_drift = frame_drift
         cassette.strict = matching == "strict"
+        cassette.rerecord_command = rerecord_command
         yield cassette

@@ -3,13 +3,16 @@
 Evaluates ``thresholds.yaml`` over the episodes of one or several run directories (for
 example the shards of a CI matrix, each written with ``--emrd-shard=K/N --emrd-results
 DIR``) with the same cells and verdicts as a single-machine ``pytest benchmarks`` run.
-Exit status: 0 when every gate passes, 1 when one is broken, 2 on a usage error.
+Shards must form complete sets (each ``K/N`` once, as recorded in each run directory's
+``run.json``) unless ``--allow-partial`` is given. Exit status: 0 when every gate passes,
+1 when one is broken, 2 on a usage error.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import sys
 from pathlib import Path
 
 
@@ -24,14 +27,27 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument("--models", type=Path, default=None, help="user model registry YAML")
     p.add_argument("--json", action="store_true", help="print the verdicts as one JSON list")
+    p.add_argument(
+        "--allow-partial",
+        action="store_true",
+        help="gate an incomplete or duplicated set of shards (the problems go to stderr)",
+    )
     p.set_defaults(func=_run)
 
 
 def _run(args: argparse.Namespace) -> int:
     from pytest_emrd.agent import load_registry
-    from pytest_emrd.gate import evaluate_all, gate_tables, load_run_dirs, load_thresholds
+    from pytest_emrd.gate import (
+        check_shard_set,
+        evaluate_all,
+        gate_tables,
+        load_run_dirs,
+        load_thresholds,
+    )
     from pytest_emrd.metrics import GATE_METRICS, episode_metrics
 
+    for problem in check_shard_set(args.run_dirs, allow_partial=args.allow_partial):
+        print(f"emrd gate: warning: partial shard set: {problem}", file=sys.stderr)
     registry = load_registry(args.models)
     thresholds = load_thresholds(args.thresholds, registry=registry, metrics=GATE_METRICS)
     trajectories = load_run_dirs(args.run_dirs)

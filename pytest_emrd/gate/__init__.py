@@ -2,6 +2,13 @@
 
 from pytest_emrd.gate._files import load_run_dirs, load_thresholds
 from pytest_emrd.gate._grid import cell_specs, episode_specs, gate_cells, shard
+from pytest_emrd.gate._identity import (
+    RunIdentity,
+    check_resume,
+    check_shard_set,
+    read_identity,
+    write_identity,
+)
 from pytest_emrd.gate._settings import (
     BACKENDS,
     LENIENT_BACKENDS,
@@ -35,12 +42,15 @@ __all__ = [
     "MatchingWarning",
     "Option",
     "ResultsStore",
+    "RunIdentity",
     "RunSettings",
     "StoredEpisode",
     "Thresholds",
     "UsageRow",
     "Verdict",
     "cell_specs",
+    "check_resume",
+    "check_shard_set",
     "episode_specs",
     "evaluate_all",
     "evaluate_cell",
@@ -54,8 +64,10 @@ __all__ = [
     "parse_backend_option",
     "parse_shard",
     "parse_thresholds",
+    "read_identity",
     "resolve_settings",
     "shard",
     "usage_rows",
     "usage_table",
+    "write_identity",
 ]

@@ -28,6 +28,9 @@ RECORD_MODES: Final[tuple[str, ...]] = ("none", "once", "new_episodes", "all")
 MATCHING_MODES: Final[tuple[str, ...]] = ("strict", "lenient")
 BACKENDS: Final[tuple[str, ...]] = ("builtin", "ai2thor")
 SPAWNS: Final[tuple[str, ...]] = tuple(ROOM_SLUGS.values())
+MAX_EPISODES: Final = 1000
+"""Cap on ``--emrd-episodes`` (episodes per spawn room; the paper's setting is 20)."""
+_NOT_CI: Final = frozenset({"", "0", "false", "no", "off"})
 LENIENT_BACKENDS: Final[frozenset[str]] = frozenset({"ai2thor"})
 """Backends whose frames are not bit-stable: their cassettes replay with lenient matching."""
 
@@ -154,6 +157,25 @@ def parse_backend_option(text: str) -> tuple[str, Any]:
         return key, value
 
 
+def in_ci(env: Mapping[str, str]) -> bool:
+    """``CI`` is set to something that means yes (``false``, ``0``, ``no``, empty mean no)."""
+    return env.get("CI", "").strip().lower() not in _NOT_CI
+
+
+def _episodes(raw: Any) -> int | None:
+    if raw is None:
+        return None
+    text = str(raw).strip()
+    episodes = check_positive_int("--emrd-episodes", int(text) if text.isdigit() else text)
+    if episodes > MAX_EPISODES:
+        raise ConfigError(
+            f"--emrd-episodes={episodes} is more than {MAX_EPISODES} episodes per spawn room "
+            f"(the paper runs 20); pass at most {MAX_EPISODES}, or split a larger study over "
+            "several run directories."
+        )
+    return episodes
+
+
 def _matching(raw: Any, backend: str) -> str:
     if raw is None:
         return "lenient" if backend in LENIENT_BACKENDS else "strict"
@@ -220,12 +242,15 @@ def resolve_settings(
     for name in ("variant", "backend", "modality", "record_mode", "matching"):
         if raw[name] is not None:
             check_choice(by_name[name].flag, raw[name], by_name[name].choices or ())
-    episodes = raw["episodes"]
-    if episodes is not None:
-        text = str(episodes).strip()
-        episodes = check_positive_int("--emrd-episodes", int(text) if text.isdigit() else text)
-    default_mode = "none" if env.get("CI") else "once"
+    episodes = _episodes(raw["episodes"])
+    default_mode = "none" if in_ci(env) else "once"
     backend = raw["backend"] or "builtin"
+    results = _path(raw["results"], rootdir) if raw["results"] else None
+    if results is not None and results.exists() and not results.is_dir():
+        raise ConfigError(
+            f"--emrd-results={results} is a file; pass a directory (a new one, or a run "
+            "directory to resume)."
+        )
     return RunSettings(
         models=_listed(by_name["model"], raw["model"], ("scout",)),
         conditions=_listed(by_name["condition"], raw["condition"], CONDITIONS),
@@ -237,7 +262,7 @@ def resolve_settings(
         modality=raw["modality"],
         record_mode=raw["record_mode"] or default_mode,
         matching=_matching(raw["matching"], backend),
-        results=_path(raw["results"], rootdir) if raw["results"] else None,
+        results=results,
         thresholds=_thresholds(raw["thresholds"], rootdir),
         models_file=_path(raw["models"], rootdir) if raw["models"] else None,
         cassettes=_path(raw["cassettes"] or "cassettes", rootdir),

@@ -1,0 +1,179 @@
+"""Which run a run directory belongs to: its grid and shard (``<run>/run.json``).
+
+Every run directory records the episode grid it was asked for (models, conditions, spawns,
+episodes, variant, backend, modality, protocol), a short id of that grid, and its shard
+``K/N`` (or none). ``emrd gate`` reads them to refuse a verdict over an incomplete or
+duplicated set of shards: gates over 2 of 4 shards would be gates over half the episodes,
+without a word. Run directories written before this file existed have no identity and are
+taken as they are.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+from collections import defaultdict
+from collections.abc import Sequence
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import Any, Final
+
+from pytest_emrd._atomic import write_bytes_atomic
+from pytest_emrd.errors import ConfigError
+from pytest_emrd.gate._settings import RunSettings
+
+RUN_FILE: Final = "run.json"
+IDENTITY_SCHEMA: Final = 1
+
+
+@dataclass(frozen=True)
+class RunIdentity:
+    """What one run directory holds (the file format of ``run.json``)."""
+
+    grid: dict[str, Any]
+    """The episode grid asked for: models, conditions, spawns, episodes, variant, backend,
+    modality (``None``: each model's registry default) and protocol."""
+    shard: tuple[int, int] | None
+    """``(K, N)``: the K-th of N slices of the grid; ``None`` for the whole grid."""
+    schema_version: int = IDENTITY_SCHEMA
+
+    @property
+    def grid_id(self) -> str:
+        """12 hex digits identifying the grid: shards of one CI matrix share it."""
+        text = json.dumps(self.grid, sort_keys=True, separators=(",", ":"))
+        return hashlib.sha256(text.encode()).hexdigest()[:12]
+
+    @property
+    def shard_text(self) -> str:
+        return f"{self.shard[0]}/{self.shard[1]}" if self.shard else "whole grid"
+
+    def describe(self) -> str:
+        """The grid in words for messages (``models gpt, 3 conditions, 4 spawns x 20``)."""
+        g = self.grid
+        return (
+            f"grid {self.grid_id}: models {', '.join(g['models'])}; "
+            f"{len(g['conditions'])} condition(s) x {len(g['spawns'])} spawn(s) x "
+            f"{g['episodes']} episode(s)"
+        )
+
+    def to_dict(self) -> dict[str, Any]:
+        return {**asdict(self), "grid_id": self.grid_id, "shard": self.shard and list(self.shard)}
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> RunIdentity:
+        shard = data.get("shard")
+        return cls(
+            grid=dict(data["grid"]),
+            shard=(int(shard[0]), int(shard[1])) if shard else None,
+            schema_version=int(data.get("schema_version", IDENTITY_SCHEMA)),
+        )
+
+    @classmethod
+    def of(cls, settings: RunSettings, protocol: str) -> RunIdentity:
+        grid = {
+            "models": sorted(settings.models),
+            "conditions": sorted(settings.conditions),
+            "spawns": sorted(settings.spawns),
+            "episodes": settings.episodes,
+            "variant": settings.variant,
+            "backend": settings.backend,
+            "modality": settings.modality,
+            "protocol": protocol,
+        }
+        return cls(grid=grid, shard=settings.shard)
+
+
+def read_identity(run_dir: Path) -> RunIdentity | None:
+    """The identity recorded in ``run_dir``, or ``None`` when it has none."""
+    path = run_dir / RUN_FILE
+    try:
+        return RunIdentity.from_dict(json.loads(path.read_bytes()))
+    except FileNotFoundError:
+        return None
+    except (OSError, ValueError, KeyError, TypeError, IndexError) as exc:
+        raise ConfigError(
+            f"{path} cannot be read ({type(exc).__name__}); it records the run's shard. "
+            "Delete it only if you know which shard the directory holds."
+        ) from None
+
+
+def check_resume(run_dir: Path, shard: tuple[int, int] | None) -> None:
+    """Refuse to write shard ``shard`` into a run directory that holds another shard."""
+    found = read_identity(run_dir)
+    if found is not None and found.shard != shard:
+        wanted = f"{shard[0]}/{shard[1]}" if shard else "the whole grid"
+        raise ConfigError(
+            f"--emrd-results={run_dir} holds shard {found.shard_text} of {found.describe()}; "
+            f"this run is {wanted}. Give each shard its own run directory."
+        )
+
+
+def write_identity(run_dir: Path, identity: RunIdentity) -> None:
+    """Record ``identity`` in ``run_dir`` (atomic; rewritten only when it changes)."""
+    path = run_dir / RUN_FILE
+    blob = json.dumps(identity.to_dict(), sort_keys=True, indent=1).encode()
+    try:
+        if path.read_bytes() == blob:
+            return
+    except FileNotFoundError:
+        pass
+    write_bytes_atomic(path, blob)
+
+
+def check_shard_set(run_dirs: Sequence[Path], *, allow_partial: bool = False) -> list[str]:
+    """Check that ``run_dirs`` hold complete shard sets, each shard once.
+
+    Returns the problems as lines (empty when the set is complete). Unless
+    ``allow_partial``, a problem is a :class:`ConfigError` naming the missing or repeated
+    shards and their directories.
+    """
+    problems: list[str] = []
+    seen: dict[Path, Path] = {}
+    groups: dict[str, list[tuple[Path, RunIdentity]]] = defaultdict(list)
+    for run_dir in run_dirs:
+        real = run_dir.resolve()
+        if real in seen:
+            problems.append(f"{run_dir} is given twice (also as {seen[real]})")
+            continue
+        seen[real] = run_dir
+        identity = read_identity(run_dir)
+        if identity is not None:
+            groups[identity.grid_id].append((run_dir, identity))
+    for members in groups.values():
+        problems += _group_problems(members)
+    if problems and not allow_partial:
+        raise ConfigError(
+            "the run directories are not one complete set of shards: "
+            + "; ".join(problems)
+            + ". Pass every shard's run directory once, or --allow-partial to gate on what "
+            "is there."
+        )
+    return problems
+
+
+def _group_problems(members: list[tuple[Path, RunIdentity]]) -> list[str]:
+    described = members[0][1].describe()
+    by_shard: dict[tuple[int, int] | None, list[Path]] = defaultdict(list)
+    for run_dir, identity in members:
+        by_shard[identity.shard].append(run_dir)
+    problems = [
+        f"{'the whole grid' if shard is None else f'shard {shard[0]}/{shard[1]}'} of "
+        f"{described} is in {len(dirs)} directories ({', '.join(map(str, dirs))})"
+        for shard, dirs in by_shard.items()
+        if len(dirs) > 1
+    ]
+    sizes = sorted({shard[1] for shard in by_shard if shard is not None})
+    if None in by_shard and sizes:
+        problems.append(f"{described} is given whole and as shards")
+    if len(sizes) > 1:
+        problems.append(f"{described} mixes shard counts {sizes}")
+    for n in sizes:
+        present = {shard[0] for shard in by_shard if shard is not None and shard[1] == n}
+        missing = [f"{k}/{n}" for k in range(1, n + 1) if k not in present]
+        if missing:
+            have = ", ".join(f"{k}/{n} ({by_shard[(k, n)][0]})" for k in sorted(present))
+            problems.append(
+                f"{described} has {len(present)} of {n} shards ({have}); missing "
+                f"{', '.join(missing)}"
+            )
+    return problems
