@@ -39,6 +39,7 @@ from pytest_emrd.agent import (
     resolve_room,
     step_text,
 )
+from pytest_emrd.agent._parse import MAX_REPLY_CHARS
 from pytest_emrd.errors import ConfigError, EmrdError, check_choice, check_positive_int
 from pytest_emrd.rooms import SLUG_ROOMS
 from pytest_emrd.trajectory import (
@@ -101,6 +102,16 @@ def world_action(action: str, variant: str) -> tuple[str, str | None]:
     return (f"Term({canonical})" if canonical else action), raw
 
 
+def capped_reply(text: str) -> str:
+    """The reply as kept in the trajectory and the history: whole up to
+    :data:`~pytest_emrd.agent._parse.MAX_REPLY_CHARS` (longer replies are parse failures), else its
+    first characters and a note of the full length, so a runaway generation costs bounded
+    memory and disk."""
+    if len(text) <= MAX_REPLY_CHARS:
+        return text
+    return text[:MAX_REPLY_CHARS] + f"\n[... truncated: the reply had {len(text)} characters]"
+
+
 def user_turn(spec: EpisodeSpec, step: int, obs: Observation) -> UserTurn:
     """The user turn of step ``step`` showing ``obs`` as ``spec``'s modality asks."""
     symbolic = obs.visible if spec.modality in ("text", "both") else None
@@ -131,11 +142,12 @@ class _Run:
         messages = self.conversation.request(turn)
         response = client.complete(messages)
         reply = parse_reply(response.text)
+        raw = capped_reply(response.text)
         if reply.error is None:
             self.belief = reply.cognitive_map
         action, term_raw = world_action(reply.action, self.spec.variant)
         after = self.sim.step(action)
-        self.conversation.record(turn, response.text)
+        self.conversation.record(turn, raw)
         if term_raw is not None:
             self.chosen_raw, self.rationale = term_raw, reply.reasoning
             self.chosen_room = after.terminal_room if after.done else None
@@ -149,7 +161,7 @@ class _Run:
             success=after.success,
             feedback=after.feedback,
             parse_error=reply.error,
-            raw_reply=response.text,
+            raw_reply=raw,
             usage=response.usage,
             repairs=reply.repairs,
         )

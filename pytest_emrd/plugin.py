@@ -24,15 +24,18 @@ from typing import Any
 
 import pytest
 
+from pytest_emrd._scrub import scrub, scrub_report, watch_env
 from pytest_emrd.errors import EmrdError
 from pytest_emrd.gate import (
     OPTIONS,
     EpisodeSummary,
     GateCell,
     ResultsStore,
+    RunIdentity,
     RunSettings,
     StoredEpisode,
     Verdict,
+    check_resume,
     new_run_dir,
     resolve_settings,
 )
@@ -64,8 +67,10 @@ def pytest_configure(config: pytest.Config) -> None:
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
             settings = resolve_settings(cli, ini, rootdir=config.rootpath)
+        if settings.results is not None and workerinput is None:
+            check_resume(settings.results, settings.shard)
     except EmrdError as exc:
-        raise pytest.UsageError(str(exc)) from exc
+        raise pytest.UsageError(scrub(str(exc))) from None
     for warning in caught if workerinput is None else ():
         config.issue_config_time_warning(warning.message, stacklevel=2)
     if workerinput is not None and "emrd_run_dir" in workerinput:
@@ -95,12 +100,35 @@ def pytest_generate_tests(metafunc: pytest.Metafunc) -> None:
         metafunc.parametrize("emrd_gate", cells, ids=[c.gate_id for c in cells])
 
 
-def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
-    """Drop the placeholder items of an empty grid (a shard's gates, a model without gates)."""
+@pytest.hookimpl(trylast=True)
+def pytest_collection_modifyitems(
+    session: pytest.Session, config: pytest.Config, items: list[pytest.Item]
+) -> None:
+    """Drop the placeholder items of an empty grid (a shard's gates, a model without gates);
+    stop a replay-only run with missing cassettes with one summary (after ``-k``)."""
     empty = [item for item in items if _is_empty_emrd_item(item)]
     if empty:
         config.hook.pytest_deselected(items=empty)
         items[:] = [item for item in items if item not in empty]
+    run = config.stash.get(_RUN, None)
+    summary = run.call(lambda r: r.missing_summary(items)) if run and items else None
+    if summary is None:
+        return
+    if hasattr(config, "workerinput"):  # xdist: the controller prints it once, as the stop reason
+        session.shouldfail = summary
+        config.hook.pytest_deselected(items=list(items))
+        items[:] = []
+        return
+    raise pytest.UsageError(summary)
+
+
+@pytest.hookimpl(wrapper=True)
+def pytest_runtest_makereport(item: pytest.Item, call: pytest.CallInfo[None]) -> Any:
+    """No secret in what the terminal and ``--junitxml`` print for an EMRD test."""
+    report = yield
+    if any(name.startswith("emrd_") for name in getattr(item, "fixturenames", ())):
+        scrub_report(report)
+    return report
 
 
 def _is_empty_emrd_item(item: pytest.Item) -> bool:
@@ -128,18 +156,21 @@ class _Run:
         self._stored: dict[EpisodeSpec, StoredEpisode] = {}
         self._metrics: dict[str, Any] = {}
 
-    def call(self, fn: Any) -> Any:
-        """``fn(self)``, turning a configuration mistake into a clean collection failure."""
+    def call(self, fn: Any, what: str = "pytest-emrd") -> Any:
+        """``fn(self)``, turning an :class:`EmrdError` into one clean failure line (scrubbed,
+        raised outside the ``except``: no "During handling" chain)."""
         try:
             return fn(self)
         except EmrdError as exc:
-            pytest.fail(f"pytest-emrd: {exc}", pytrace=False)
+            message = f"{what}: {scrub(str(exc))}"
+        pytest.fail(message, pytrace=False)
 
     @cached_property
     def registry(self) -> Any:
         from pytest_emrd.agent import load_registry
 
         registry = load_registry(self.settings.models_file)
+        watch_env(config.api_key_env for config in registry.models.values())
         for name in self.settings.models:
             registry.get(name)
         return registry
@@ -174,7 +205,42 @@ class _Run:
 
     @cached_property
     def store(self) -> ResultsStore:
-        return ResultsStore(self.run_dir, session=self.session, protocol=self.protocol)
+        identity = RunIdentity.of(self.settings, self.protocol)
+        return ResultsStore(
+            self.run_dir, session=self.session, protocol=self.protocol, identity=identity
+        )
+
+    @cached_property
+    def invocation(self) -> Any:
+        """What printed ``pytest`` commands carry: this run's test paths, registry, options."""
+        from pytest_emrd.cassette import Invocation
+
+        return Invocation.of(self.settings, paths=tuple(self.config.args))
+
+    def missing_summary(self, items: list[pytest.Item]) -> str | None:
+        """In record mode ``none``: one message for the episodes the selected items need
+        that have neither a cassette nor a stored result, or ``None``."""
+        from pytest_emrd.cassette import missing_cassettes, missing_summary
+
+        if self.settings.record_mode != "none":
+            return None
+        needed: dict[EpisodeSpec, None] = {}
+        for item in items:
+            params = getattr(getattr(item, "callspec", None), "params", {})
+            if isinstance(spec := params.get("emrd_spec"), EpisodeSpec):
+                needed[spec] = None
+            elif isinstance(cell := params.get("emrd_gate"), GateCell):
+                needed.update(dict.fromkeys(self.cell_specs(cell)))
+        missing = [
+            spec
+            for spec in missing_cassettes(list(needed), self.settings.cassettes)
+            if not self.store.path_for(spec).is_file()
+        ]
+        if not missing:
+            return None
+        return missing_summary(
+            missing, total=len(needed), root=self.settings.cassettes, invocation=self.invocation
+        )
 
     @cached_property
     def simulators(self) -> Any:
@@ -202,14 +268,12 @@ class _Run:
                 protocol=self.protocol,
                 record_mode=settings.record_mode,
                 matching=settings.matching,
+                invocation=self.invocation,
             )
 
         if spec in self._stored:
             return self._stored[spec]
-        try:
-            stored = self.store.get_or_compute(spec, compute)
-        except EmrdError as exc:
-            pytest.fail(f"{spec.case_id}: {exc}", pytrace=False)
+        stored = self.call(lambda run: run.store.get_or_compute(spec, compute), spec.case_id)
         self._stored[spec] = stored
         if stored.frame_drift and stored.computed_now:
             warnings.warn(
@@ -221,12 +285,16 @@ class _Run:
             )
         return stored
 
+    def cell_specs(self, cell: GateCell) -> list[EpisodeSpec]:
+        from pytest_emrd.gate import cell_specs
+
+        return cell_specs(self.settings, cell.bound.model, cell.bound.condition, self.modality_of)
+
     def verdict(self, cell: GateCell) -> Verdict:
-        from pytest_emrd.gate import cell_specs, evaluate_cell
+        from pytest_emrd.gate import evaluate_cell
         from pytest_emrd.metrics import GATE_METRICS
 
-        specs = cell_specs(self.settings, cell.bound.model, cell.bound.condition, self.modality_of)
-        trajectories = [self.episode(spec).trajectory for spec in specs]
+        trajectories = [self.episode(spec).trajectory for spec in self.cell_specs(cell)]
         return evaluate_cell(cell, trajectories, GATE_METRICS, prepare=self.episode_metrics)
 
     def episode_metrics(self, trajectory: Trajectory) -> Any:
@@ -285,8 +353,10 @@ class _Run:
         except EmrdError as exc:
             warnings.warn(f"pytest-emrd wrote no step summary: {exc}", stacklevel=1)
             return
-        text = step_summary_markdown(
-            trajectories, self.verdicts, thresholds_source=source and str(source)
+        text = scrub(
+            step_summary_markdown(
+                trajectories, self.verdicts, thresholds_source=source and str(source)
+            )
         )
         with open(target, "a", encoding="utf-8") as summary:
             summary.write(text if text.endswith("\n") else text + "\n")

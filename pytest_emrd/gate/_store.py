@@ -2,6 +2,7 @@
 
 Layout of a run directory::
 
+    <run>/run.json                  the grid and shard this directory holds (_identity)
     <run>/episodes/<case_id>.json   one stored episode (trajectory + how it was obtained)
     <run>/locks/<case_id>.lock      the episode's file lock
 
@@ -9,7 +10,8 @@ Any process (pytest-xdist workers, shards on one machine) may ask for any episod
 first takes the episode's lock, computes it and writes it atomically; everyone else waits
 for the lock and reads the file. An episode is reused when its spec and protocol match and
 it finished (an ``errored`` episode is reused only within the session that produced it,
-so rerunning a run directory retries failures).
+so rerunning a run directory retries failures). Stored files are scrubbed of secrets
+(:mod:`pytest_emrd._scrub`): an errored episode's error text may quote a URL or a body.
 """
 
 from __future__ import annotations
@@ -25,7 +27,9 @@ from typing import TYPE_CHECKING, Any, Final
 from filelock import FileLock
 
 from pytest_emrd._atomic import write_bytes_atomic
+from pytest_emrd._scrub import scrub, scrub_bytes
 from pytest_emrd.errors import ProtocolError
+from pytest_emrd.gate._identity import RunIdentity, write_identity
 from pytest_emrd.trajectory import EpisodeSpec, Trajectory
 
 if TYPE_CHECKING:
@@ -49,15 +53,21 @@ class StoredEpisode:
     """Computed by this call (as opposed to read from the store)."""
 
     def to_json(self) -> bytes:
+        """The stored file: configured key values removed everywhere, and URL credentials,
+        secret parameters and headers removed from the error text (the only place our own
+        messages, which quote URLs and response bodies, enter a trajectory)."""
+        trajectory = self.trajectory.to_dict()
+        if trajectory.get("error"):
+            trajectory["error"] = scrub(trajectory["error"])
         document = {
             "store_schema": STORE_SCHEMA,
             "session": self.session,
             "recorded": self.recorded,
             "frame_drift": self.frame_drift,
             "seconds": round(self.seconds, 3),
-            "trajectory": self.trajectory.to_dict(),
+            "trajectory": trajectory,
         }
-        return json.dumps(document, separators=(",", ":")).encode()
+        return scrub_bytes(json.dumps(document, separators=(",", ":")).encode(), literal_only=True)
 
     @classmethod
     def from_json(cls, blob: bytes) -> StoredEpisode:
@@ -81,10 +91,19 @@ def new_run_dir(parent: Path) -> Path:
 class ResultsStore:
     """Episodes of one run directory, computed at most once across processes."""
 
-    def __init__(self, run_dir: Path, *, session: str, protocol: str) -> None:
+    def __init__(
+        self,
+        run_dir: Path,
+        *,
+        session: str,
+        protocol: str,
+        identity: RunIdentity | None = None,
+    ) -> None:
         self.run_dir = run_dir
         self.session = session
         self.protocol = protocol
+        self.identity = identity
+        """Recorded in ``run.json`` before the first episode is computed."""
 
     def path_for(self, spec: EpisodeSpec) -> Path:
         return self.run_dir / "episodes" / f"{spec.case_id}.json"
@@ -114,6 +133,8 @@ class ResultsStore:
             stored = self._reusable(spec)
             if stored is not None:
                 return stored
+            if self.identity is not None:
+                write_identity(self.run_dir, self.identity)
             run = compute(spec)
             stored = StoredEpisode(
                 trajectory=run.trajectory,

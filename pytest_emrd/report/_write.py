@@ -4,18 +4,25 @@ from __future__ import annotations
 
 from collections.abc import Iterable, Mapping
 from pathlib import Path
+from typing import Final
 
 from pytest_emrd._atomic import write_bytes_atomic
+from pytest_emrd._scrub import scrub_bytes
 from pytest_emrd.report._model import Report
 from pytest_emrd.report._render import FORMATS, render_files
 
+#: Files scrubbed before they are written (figures are pixels).
+TEXT_SUFFIXES: Final = frozenset({".md", ".html", ".json", ".txt", ".csv"})
+
 
 def write_files(files: Mapping[str, bytes], out_dir: Path) -> list[Path]:
-    """Write each ``name -> content`` into ``out_dir`` (created if needed), atomically."""
+    """Write each ``name -> content`` into ``out_dir`` (created if needed), atomically; text
+    files are scrubbed of secrets first (a report quotes errored episodes' causes)."""
     written = []
     for name, content in files.items():
         path = out_dir / name
-        write_bytes_atomic(path, content)
+        text = path.suffix in TEXT_SUFFIXES
+        write_bytes_atomic(path, scrub_bytes(content) if text else content)
         written.append(path)
     return written
 
