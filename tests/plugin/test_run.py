@@ -68,7 +68,7 @@ def test_replay_is_deterministic_and_xdist_and_shards_give_the_same_gates(
 
 
 def test_broken_threshold_fails_the_session_with_the_table(suite, small, recorded):
-    suite.makefile(".yaml", thresholds="scout:\n  baseline:\n    aec: {min: 1.01}\n")
+    suite.makefile(".yaml", thresholds="scout:\n  baseline:\n    te: {max: 1}\n")
     result = suite.runpytest_subprocess(
         *small(f"--emrd-cassettes={recorded}", "--emrd-record-mode=none")
     )
@@ -77,26 +77,26 @@ def test_broken_threshold_fails_the_session_with_the_table(suite, small, recorde
         [
             "*EMRD gates*",
             "scout: 0/1 gates pass",
-            "*baseline*aec*>= 1.01*FAIL*",
-            "  FAIL scout-baseline-aec: value * < 1.01",
-            "FAILED test_emrd.py::test_gate[[]scout-baseline-aec[]]*",
+            "*baseline*te*<= 1*FAIL*",
+            "  FAIL scout-baseline-te: value * > 1",
+            "FAILED test_emrd.py::test_gate[[]scout-baseline-te[]]*",
         ]
     )
 
 
-def test_missing_cassette_names_the_file_and_the_command(suite, small):
+@pytest.mark.parametrize("workers", [[], ["-n", "2"]], ids=["serial", "xdist"])
+def test_missing_cassettes_stop_the_run_with_one_summary(suite, small, workers):
     result = suite.runpytest_subprocess(
-        *small("--emrd-record-mode=none", "--emrd-cassettes=nowhere", "-k", "ep00 and test_episode")
+        *small("--emrd-record-mode=none", "--emrd-cassettes=nowhere", *workers)
     )
-    result.assert_outcomes(failed=1, deselected=3)
-    result.stdout.fnmatch_lines(
-        [
-            "*scout-baseline-office-ep00 errored: cassette missing: "
-            "*nowhere/scout/baseline/default/office/ep00.yaml.gz does not exist*"
-            "Record it with: pytest benchmarks --emrd-model=scout*"
-            "--emrd-record-mode=once -k 'test_episode and scout-baseline-office-ep00'",
-        ]
-    )
+    assert result.ret != 0
+    text = result.stdout.str() + result.stderr.str()
+    assert text.count("have no cassette") == 1, text
+    (line,) = [line for line in text.splitlines() if "have no cassette" in line]
+    assert "2 of 2 episode(s) have no cassette under " in line
+    assert "missing for: scout (2). Record them all with: pytest " in line
+    assert "--emrd-episodes=2 --emrd-modality=both" in line
+    assert "--emrd-record-mode=once -k test_episode" in line
 
 
 def test_corrupted_cassette_is_a_clear_error_naming_the_file(suite, small, recorded):
