@@ -177,7 +177,7 @@ def test_bad_user_registry(tmp_path: Path, yaml_text: str, match: str) -> None:
 
 
 def test_missing_user_file(tmp_path: Path) -> None:
-    with pytest.raises(ConfigError, match="nope.yaml does not exist; pass an existing file"):
+    with pytest.raises(ConfigError, match=r"nope\.yaml does not exist; pass an existing file"):
         load_registry(tmp_path / "nope.yaml")
 
 
