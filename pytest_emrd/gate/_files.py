@@ -16,7 +16,7 @@ from pytest_emrd.trajectory import Trajectory
 REGISTER_MODEL_HINT: Final = (
     " A model of your own registry must be registered for every run that reads this file:"
     " set `emrd_models = FILE` in the pytest ini (or pass --emrd-models FILE), and"
-    " `emrd gate --models FILE`."
+    " --models FILE to `emrd gate` and `emrd report`."
 )
 
 

@@ -1,0 +1,132 @@
+"""A hostile local provider on 127.0.0.1, fake keys planted everywhere, and a grep for them.
+
+The provider is a real HTTP server. Under ``/ok/`` it forwards to the built-in reference
+server (so a whole episode can be recorded through it), under ``/deny/`` it answers 401
+with a body that echoes the key and the URL (as some providers do), under ``/huge/`` it
+answers a 200 whose reply is 20 MB. The user registry written by :func:`leaky_registry`
+points its models at it with a password in the URL userinfo, a key in the query and an API
+key in an environment variable (sent as ``Authorization: Bearer``).
+"""
+
+from __future__ import annotations
+
+import gzip
+import json
+import threading
+from collections.abc import Iterator
+from dataclasses import dataclass, field
+from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
+from pathlib import Path
+from typing import Any
+
+import httpx
+import pytest
+
+from pytest_emrd.agent.reference import reference_base_url
+from pytest_emrd.agent.reference._version import versioned_id
+
+#: Planted credentials: none of them may reach a file or the terminal.
+PLANTED_KEY = "sk-planted-apikey-5f3c9a7e"  # the API key, in the env var of api_key_env
+PLANTED_PASSWORD = "planted-password-81d2"  # URL userinfo
+PLANTED_QUERY = "planted-querykey-44ab"  # ?key=
+PLANTED = (PLANTED_KEY, PLANTED_PASSWORD, PLANTED_QUERY)
+KEY_ENV = "EMRD_HARDENING_CRED"  # no credential-like suffix: found only through api_key_env
+HUGE_CHARS = 20 * 1024 * 1024
+
+
+@dataclass
+class Provider:
+    port: int
+    seen: list[str] = field(default_factory=list)
+    """Authorization header and path of every request (the planted values did travel)."""
+
+    def base_url(self, route: str, *, userinfo: bool = True) -> str:
+        """A base URL with planted credentials: a password in the userinfo (httpx then sends
+        Basic auth instead of the Bearer key) and a key in the query."""
+        user = f"planted-user:{PLANTED_PASSWORD}@" if userinfo else ""
+        return f"http://{user}127.0.0.1:{self.port}/{route}/v1?key={PLANTED_QUERY}&to="
+
+
+@pytest.fixture(scope="session")
+def provider() -> Iterator[Provider]:
+    upstream = reference_base_url()
+    seen: list[str] = []
+
+    class Handler(BaseHTTPRequestHandler):
+        def log_message(self, *args: Any) -> None:
+            pass
+
+        def _send(self, status: int, payload: bytes) -> None:
+            self.send_response(status)
+            self.send_header("Content-Type", "application/json")
+            self.send_header("Content-Length", str(len(payload)))
+            self.end_headers()
+            self.wfile.write(payload)
+
+        def do_POST(self) -> None:
+            body = self.rfile.read(int(self.headers["Content-Length"]))
+            seen.append(f"{self.headers['Authorization']} {self.path}")
+            if self.path.startswith("/ok/"):
+                answer = httpx.post(f"{upstream}/chat/completions", content=body, timeout=30)
+                self._send(answer.status_code, answer.content)
+            elif self.path.startswith("/deny/"):
+                echo = {
+                    "error": {
+                        "message": f"Incorrect API key provided: {self.headers['Authorization']}"
+                        f" for {self.path}",
+                        "type": "invalid_request_error",
+                    }
+                }
+                self._send(401, json.dumps(echo).encode())
+            else:
+                reply = {"choices": [{"message": {"content": "x" * HUGE_CHARS}}], "usage": {}}
+                self._send(200, json.dumps(reply).encode())
+
+    httpd = ThreadingHTTPServer(("127.0.0.1", 0), Handler)
+    thread = threading.Thread(target=httpd.serve_forever, daemon=True)
+    thread.start()
+    yield Provider(httpd.server_address[1], seen)
+    httpd.shutdown()
+    httpd.server_close()
+
+
+@pytest.fixture
+def planted_env(monkeypatch: pytest.MonkeyPatch) -> str:
+    """The planted API key in the environment variable the user registry names."""
+    monkeypatch.setenv(KEY_ENV, PLANTED_KEY)
+    return KEY_ENV
+
+
+def leaky_registry(path: Path, provider: Provider, **routes: str) -> Path:
+    """A user registry: ``name=route`` models of the reference agent behind ``provider``
+    (``route`` ``deny-key`` is ``deny`` without userinfo: the Bearer key is sent)."""
+    models = {
+        name: {
+            "provider": "openai",
+            "model_id": versioned_id("scout"),
+            "base_url": provider.base_url(route.split("-")[0], userinfo=route != "deny-key"),
+            "api_key_env": KEY_ENV,
+            "modality": "text",
+            "max_retries": 0,
+            "timeout_s": 60,
+        }
+        for name, route in routes.items()
+    }
+    path.write_text(json.dumps({"models": models}))
+    return path
+
+
+def leaks(root: Path, *, skip: tuple[Path, ...] = ()) -> list[str]:
+    """Every file under ``root`` (gzip files decompressed) holding a planted credential."""
+    found = []
+    for path in sorted(p for p in root.rglob("*") if p.is_file() and p not in skip):
+        data = path.read_bytes()
+        if path.suffix == ".gz":
+            data = gzip.decompress(data)
+        found += [f"{path}: {s}" for s in PLANTED if s.encode() in data]
+    return found
+
+
+def text_leaks(text: str) -> list[str]:
+    """The planted credentials present in ``text``."""
+    return [s for s in PLANTED if s in text]
