@@ -37,6 +37,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def _run(args: argparse.Namespace) -> int:
     from pytest_emrd._atomic import write_bytes_atomic
+    from pytest_emrd._scrub import scrub_bytes
     from pytest_emrd.gate import load_run_dirs
     from pytest_emrd.view import index_page, render_episode
 
@@ -63,7 +64,7 @@ def _run(args: argparse.Namespace) -> int:
     for t in trajectories:
         view = render_episode(t, cassettes=cassettes, gif=args.gif)
         page = out / f"{t.spec.case_id}.html"
-        write_bytes_atomic(page, view.html.encode())
+        write_bytes_atomic(page, scrub_bytes(view.html.encode()))
         if view.gif:
             write_bytes_atomic(out / f"{t.spec.case_id}.gif", view.gif)
         check = view.row.check
@@ -73,6 +74,6 @@ def _run(args: argparse.Namespace) -> int:
         print(f"{page} ({page.stat().st_size / 1e6:.2f} MB): {status}")
         rows.append(view.row)
     index = out / "index.html"
-    write_bytes_atomic(index, index_page(rows).encode())
+    write_bytes_atomic(index, scrub_bytes(index_page(rows).encode()))
     print(index)
     return 0

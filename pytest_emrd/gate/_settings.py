@@ -68,7 +68,8 @@ OPTIONS: Final[tuple[Option, ...]] = (
     Option("condition", "environmental condition, repeatable (default: all three)",
            CONDITIONS, repeatable=True),
     Option("spawn", "spawn room, repeatable (default: all four)", SPAWNS, repeatable=True),
-    Option("episodes", "episodes per spawn room (default: 20, the paper's setting)",
+    Option("episodes", "episodes per spawn room (default: 20, the paper's setting; at most "
+           "1000)",
            metavar="N"),
     Option("variant", "prompt variant (default: default)", VARIANTS),
     Option("backend", "world backend (default: builtin)", BACKENDS),

@@ -36,7 +36,9 @@ def _outputs(*results: pytest.RunResult) -> str:
 
 
 @pytest.mark.slow
-def test_a_recorded_run_leaks_no_planted_credential(pytester, provider, planted_env, capsys):
+def test_a_recorded_run_leaks_no_planted_credential(
+    pytester, provider, planted_env, capsys, monkeypatch
+):
     pytester.makepyfile(test_emrd=(ROOT / "benchmarks" / "test_emrd.py").read_text())
     pytester.makefile(".yaml", thresholds="leaky:\n  baseline:\n    errored_rate: {max: 0.0}\n")
     registry = pytester.path / "user-models.yaml"
@@ -60,6 +62,8 @@ def test_a_recorded_run_leaks_no_planted_credential(pytester, provider, planted_
     assert cassette.is_file()
 
     # Replay the recording, and a model whose endpoint answers 401 echoing the key.
+    summary = pytester.path / "step-summary.md"
+    monkeypatch.setenv("GITHUB_STEP_SUMMARY", str(summary))
     run = pytester.runpytest_subprocess(
         *GRID,
         models,
@@ -91,6 +95,7 @@ def test_a_recorded_run_leaks_no_planted_credential(pytester, provider, planted_
     printed = capsys.readouterr()
 
     assert (pytester.path / "report").is_dir() and (pytester.path / "junit.xml").is_file()
+    assert "denied" in summary.read_text()
     assert leaks(pytester.path, skip=(registry,)) == []
     assert text_leaks(_outputs(missing, recorded, run) + printed.out + printed.err) == []
 
