@@ -70,5 +70,7 @@ def main(argv: list[str] | None = None) -> int:
     try:
         return int(args.func(args) or 0)
     except EmrdError as exc:
-        print(f"emrd {args.command}: error: {exc}", file=sys.stderr)
+        from pytest_emrd._scrub import scrub
+
+        print(f"emrd {args.command}: error: {scrub(str(exc))}", file=sys.stderr)
         return 2
