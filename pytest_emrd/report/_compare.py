@@ -225,7 +225,8 @@ def _difference(
         undefined = ea if ea.value is None else eb
         return result(None, why=f"undefined in every pair ({undefined.reason})")
     if math.isinf(ea.value) or math.isinf(eb.value):
-        return result(None, why="unbounded on one side (no forgetting event)")
+        side = "both sides" if math.isinf(ea.value) and math.isinf(eb.value) else "one side"
+        return result(None, why=f"unbounded on {side} (no forgetting event)")
     diff = eb.value - ea.value
     if len(used) < 2:
         return result(diff, why="fewer than two pairs: no test")
