@@ -38,6 +38,7 @@ from pytest_emrd.gate import (
     check_resume,
     new_run_dir,
     resolve_settings,
+    start_prefetch,
 )
 from pytest_emrd.trajectory import EpisodeSpec, Trajectory
 
@@ -155,6 +156,7 @@ class _Run:
         self.verdicts: list[Verdict] = []
         self._stored: dict[EpisodeSpec, StoredEpisode] = {}
         self._metrics: dict[str, Any] = {}
+        self._prefetch_started, self._prefetcher = False, None
 
     def call(self, fn: Any, what: str = "pytest-emrd") -> Any:
         """``fn(self)``, turning an :class:`EmrdError` into one clean failure line (scrubbed,
@@ -273,6 +275,9 @@ class _Run:
 
         if spec in self._stored:
             return self._stored[spec]
+        if not self._prefetch_started:  # --emrd-concurrency: live episodes ahead, in threads
+            self._prefetch_started = True
+            self._prefetcher = start_prefetch(settings, self.store, compute, self.episode_specs)
         stored = self.call(lambda run: run.store.get_or_compute(spec, compute), spec.case_id)
         self._stored[spec] = stored
         if stored.frame_drift and stored.computed_now:
@@ -313,6 +318,8 @@ class _Run:
         )
 
     def pytest_unconfigure(self) -> None:
+        if self._prefetcher is not None:
+            self._prefetcher.close()
         if "runner" in self.__dict__:
             self.runner.close()
         if "simulators" in self.__dict__:

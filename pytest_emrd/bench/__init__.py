@@ -1,7 +1,7 @@
 """``emrd bench``: the product's own speed and size, measured on this machine.
 
-Each stage module (``world``, ``loop``, ``metrics``, ``replay``, ``report``, ``plugin``)
-exposes ``run(*, repeat: int) -> list[Figure]``. Timings are medians over ``repeat``
+Each stage module (``world``, ``loop``, ``metrics``, ``replay``, ``live``, ``report``,
+``plugin``) exposes ``run(*, repeat: int) -> list[Figure]``. Timings are medians over ``repeat``
 repetitions after one warm-up; ``--json`` prints the figures as one JSON list.
 """
 
@@ -21,6 +21,7 @@ STAGES: dict[str, str] = {
     "loop": "pytest_emrd.bench.loop",
     "metrics": "pytest_emrd.bench.metrics",
     "replay": "pytest_emrd.bench.replay",
+    "live": "pytest_emrd.bench.live",
     "plugin": "pytest_emrd.bench.plugin",
     "report": "pytest_emrd.bench.report",
 }

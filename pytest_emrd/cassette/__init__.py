@@ -11,6 +11,7 @@ from pytest_emrd.cassette._episode import (
     EpisodeRunner,
     FrameDriftWarning,
     agent_runner,
+    is_live,
     run_with_cassette,
 )
 from pytest_emrd.cassette._format import CassetteData, FormatError, decode, encode
@@ -30,6 +31,7 @@ from pytest_emrd.cassette._redact import (
     match_keys,
     redact_body,
 )
+from pytest_emrd.cassette._routing import routing
 from pytest_emrd.cassette._use import (
     EpisodeCassette,
     clear_caches,
@@ -59,6 +61,7 @@ __all__ = [
     "encode",
     "episode_cassette",
     "first_difference",
+    "is_live",
     "keep_response",
     "match_keys",
     "missing_cassettes",
@@ -67,5 +70,6 @@ __all__ = [
     "record_command",
     "redact_body",
     "redact_request",
+    "routing",
     "run_with_cassette",
 ]

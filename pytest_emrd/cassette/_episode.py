@@ -103,6 +103,13 @@ def agent_runner(
     return AgentRunner(registry, run)
 
 
+def is_live(spec: EpisodeSpec, *, cassettes: Path, record_mode: str) -> bool:
+    """Whether running ``spec`` calls the model (records), rather than replaying only."""
+    if record_mode in ("all", "new_episodes"):
+        return True
+    return record_mode == "once" and not cassette_path(cassettes, spec).is_file()
+
+
 def run_with_cassette(
     spec: EpisodeSpec,
     run: EpisodeRunner,
@@ -126,9 +133,8 @@ def run_with_cassette(
     check_choice("record_mode", record_mode, RECORD_MODES)
     check_choice("matching", matching, MATCHING_MODES)
     path = cassette_path(cassettes, spec)
-    exists = path.is_file()
-    missing = record_mode == "none" and not exists
-    live = record_mode in ("all", "new_episodes") or (record_mode == "once" and not exists)
+    missing = record_mode == "none" and not path.is_file()
+    live = is_live(spec, cassettes=cassettes, record_mode=record_mode)
     rerecord = record_command(spec, record_mode="all", cassettes=cassettes, invocation=invocation)
     start = time.perf_counter()
     try:

@@ -15,6 +15,7 @@ from vcr.request import Request
 
 from pytest_emrd import _wire
 from pytest_emrd._scrub import scrub_bytes, scrub_uri
+from pytest_emrd.cassette import _routing
 from pytest_emrd.cassette._drift import (
     drift_message,
     request_modality,
@@ -194,10 +195,11 @@ def episode_cassette(
 
     vcrpy settings: ``allow_playback_repeats`` off, compressed responses stored decoded,
     ``record_on_exception`` off (raise inside the block to discard a failed episode), and
-    in ``all`` mode the file is rebuilt from scratch.
+    in ``all`` mode the file is rebuilt from scratch. Inside :func:`~._routing.routing`
+    (concurrent episodes) the cassette is bound to this thread instead of patching httpx.
     """
     frame_drift: set[tuple[str, str]] = set()
-    use = EpisodeCassette.use(
+    settings: dict[str, Any] = dict(
         path=str(path),
         persister=EpisodePersister(
             protocol=protocol, fresh=record_mode == "all", rerecord_command=rerecord_command
@@ -208,9 +210,12 @@ def episode_cassette(
         before_record_response=_before_record_response,
         allow_playback_repeats=False,
         drop_unused_requests=record_mode == "all",
-        record_on_exception=False,
     )
-    with use as cassette:
+    if _routing.active():  # episodes run concurrently: one patch routes to each thread's
+        opened = _routing.bound(EpisodeCassette.load(**settings))
+    else:
+        opened = EpisodeCassette.use(**settings, record_on_exception=False)
+    with opened as cassette:
         cassette.frame_drift = frame_drift
         cassette.strict = matching == "strict"
         cassette.rerecord_command = rerecord_command

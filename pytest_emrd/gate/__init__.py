@@ -9,6 +9,7 @@ from pytest_emrd.gate._identity import (
     read_identity,
     write_identity,
 )
+from pytest_emrd.gate._prefetch import Prefetcher, start_prefetch
 from pytest_emrd.gate._settings import (
     BACKENDS,
     LENIENT_BACKENDS,
@@ -41,6 +42,7 @@ __all__ = [
     "GateCell",
     "MatchingWarning",
     "Option",
+    "Prefetcher",
     "ResultsStore",
     "RunIdentity",
     "RunSettings",
@@ -67,6 +69,7 @@ __all__ = [
     "read_identity",
     "resolve_settings",
     "shard",
+    "start_prefetch",
     "usage_rows",
     "usage_table",
     "write_identity",

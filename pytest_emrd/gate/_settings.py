@@ -96,6 +96,8 @@ OPTIONS: Final[tuple[Option, ...]] = (
     Option("cassettes", "cassette folder (default: <rootdir>/cassettes)", metavar="DIR"),
     Option("shard", "run the K-th of N deterministic slices of the episodes (gates are then "
            "evaluated with `emrd gate RUN_DIR...`)", metavar="K/N"),
+    Option("concurrency", "live episodes each process records at once, in threads, against "
+           "a remote model (default: 1); replays are not affected", metavar="N"),
 )  # fmt: skip
 
 
@@ -125,6 +127,8 @@ class RunSettings:
     cassettes: Path
     shard: tuple[int, int] | None
     """``(k, n)``: this run covers the k-th of n slices (1-based)."""
+    concurrency: int = 1
+    """Live episodes one process records at once (threads; replays run one at a time)."""
 
     @property
     def backend_kwargs(self) -> dict[str, Any]:
@@ -252,6 +256,12 @@ def resolve_settings(
             f"--emrd-results={results} is a file; pass a directory (a new one, or a run "
             "directory to resume)."
         )
+    concurrency = _count("--emrd-concurrency", raw["concurrency"])
+    if (concurrency or 1) > 1 and backend != "builtin":
+        raise ConfigError(
+            f"--emrd-concurrency={concurrency} runs episodes in threads, which the {backend} "
+            "backend (one simulator process per worker) does not support; use -n N instead."
+        )
     return RunSettings(
         models=_listed(by_name["model"], raw["model"], ("scout",)),
         conditions=_listed(by_name["condition"], raw["condition"], CONDITIONS),
@@ -268,4 +278,13 @@ def resolve_settings(
         models_file=_path(raw["models"], rootdir) if raw["models"] else None,
         cassettes=_path(raw["cassettes"] or "cassettes", rootdir),
         shard=parse_shard(str(raw["shard"])) if raw["shard"] else None,
+        concurrency=concurrency or 1,
     )
+
+
+def _count(flag: str, value: Any) -> int | None:
+    """A whole number >= 1 given as text or int, or None when not given."""
+    if value is None:
+        return None
+    text = str(value).strip()
+    return check_positive_int(flag, int(text) if text.isdigit() else text)

@@ -24,7 +24,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Final
 
-from filelock import FileLock
+from filelock import FileLock, Timeout
 
 from pytest_emrd._atomic import write_bytes_atomic
 from pytest_emrd._scrub import scrub, scrub_bytes
@@ -123,28 +123,49 @@ class ResultsStore:
             return None
         return stored
 
+    def _lock(self, spec: EpisodeSpec, *, timeout: float = -1) -> FileLock:
+        lock_path = self.run_dir / "locks" / f"{spec.case_id}.lock"
+        lock_path.parent.mkdir(parents=True, exist_ok=True)
+        return FileLock(lock_path, timeout=timeout)
+
+    def _compute(
+        self, spec: EpisodeSpec, compute: Callable[[EpisodeSpec], EpisodeRun]
+    ) -> StoredEpisode:
+        """Compute and store ``spec`` (the caller holds its lock)."""
+        if self.identity is not None:
+            write_identity(self.run_dir, self.identity)
+        run = compute(spec)
+        stored = StoredEpisode(
+            trajectory=run.trajectory,
+            session=self.session,
+            recorded=run.recorded,
+            frame_drift=run.frame_drift,
+            seconds=run.seconds,
+        )
+        write_bytes_atomic(self.path_for(spec), stored.to_json())
+        return StoredEpisode(**{**stored.__dict__, "computed_now": True})
+
     def get_or_compute(
         self, spec: EpisodeSpec, compute: Callable[[EpisodeSpec], EpisodeRun]
     ) -> StoredEpisode:
-        """The stored episode for ``spec``, computing and storing it if needed."""
-        lock_path = self.run_dir / "locks" / f"{spec.case_id}.lock"
-        lock_path.parent.mkdir(parents=True, exist_ok=True)
-        with FileLock(lock_path):
-            stored = self._reusable(spec)
-            if stored is not None:
-                return stored
-            if self.identity is not None:
-                write_identity(self.run_dir, self.identity)
-            run = compute(spec)
-            stored = StoredEpisode(
-                trajectory=run.trajectory,
-                session=self.session,
-                recorded=run.recorded,
-                frame_drift=run.frame_drift,
-                seconds=run.seconds,
-            )
-            write_bytes_atomic(self.path_for(spec), stored.to_json())
-        return StoredEpisode(**{**stored.__dict__, "computed_now": True})
+        """The stored episode for ``spec``, computing and storing it if needed (waiting for
+        whoever computes it now)."""
+        with self._lock(spec):
+            return self._reusable(spec) or self._compute(spec, compute)
+
+    def compute_if_free(
+        self, spec: EpisodeSpec, compute: Callable[[EpisodeSpec], EpisodeRun]
+    ) -> bool:
+        """Compute and store ``spec`` unless it is stored or being computed by another thread
+        or process (never waits); whether this call computed it."""
+        try:
+            with self._lock(spec, timeout=0):
+                if self._reusable(spec) is not None:
+                    return False
+                self._compute(spec, compute)
+                return True
+        except Timeout:
+            return False
 
 
 def iter_run_dir(run_dir: Path) -> Iterator[Trajectory]:

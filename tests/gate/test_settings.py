@@ -55,6 +55,12 @@ def test_precedence(cli, ini, expected):
     assert _resolve(cli, ini).episodes == expected
 
 
+def test_concurrency_defaults_to_one_episode_at_a_time():
+    assert _resolve().concurrency == 1
+    assert _resolve({"concurrency": "16"}, {"concurrency": "4"}).concurrency == 16
+    assert _resolve({}, {"concurrency": "4"}).concurrency == 4
+
+
 def test_repeatable_and_comma_separated_models_are_deduplicated_in_order():
     s = _resolve({"model": ["gemini,gpt", "gemini", "scout"]})
     assert s.models == ("gemini", "gpt", "scout")
@@ -79,6 +85,8 @@ def test_paths_resolve_against_the_rootdir():
         ({"backend_option": ["gpu_device"]}, "--emrd-backend-option='gpu_device' must look like"),
         ({"backend_option": ["gpu device=1"]}, "KEY a Python identifier"),
         ({"backend_option": ["=1"]}, "--emrd-backend-option='=1'"),
+        ({"concurrency": "0"}, "--emrd-concurrency=0 must be a whole number >= 1"),
+        ({"concurrency": "4", "backend": "ai2thor"}, "does not support; use -n N instead"),
     ],
     ids=[
         "condition",
@@ -92,6 +100,8 @@ def test_paths_resolve_against_the_rootdir():
         "backend-option-no-value",
         "backend-option-bad-key",
         "backend-option-no-key",
+        "concurrency-zero",
+        "concurrency-thor",
     ],
 )
 def test_bad_options_name_the_option_and_value(cli, message):

@@ -10,13 +10,14 @@ from __future__ import annotations
 
 import json
 import threading
+import time
 from http import HTTPStatus
 from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 from typing import Any, Final
 
 from pytest_emrd.agent import _config  # the module: _config imports this package's version
 from pytest_emrd.agent.reference._agents import complete, model_list
-from pytest_emrd.errors import ProtocolError
+from pytest_emrd.errors import ProtocolError, check_range
 
 MAX_BODY_BYTES: Final = 64 * 1024 * 1024
 _POLL_S: Final = 0.05
@@ -66,6 +67,7 @@ class _Handler(BaseHTTPRequestHandler):
         except ProtocolError as exc:
             self._error(getattr(exc, "status", HTTPStatus.BAD_REQUEST), str(exc))
             return
+        time.sleep(self.server.latency_s)
         self._send(HTTPStatus.OK, payload)
 
 
@@ -73,21 +75,32 @@ class _Server(ThreadingHTTPServer):
     daemon_threads = True
     allow_reuse_address = True
 
-    def __init__(self, address: tuple[str, int], registry: _config.Registry) -> None:
+    def __init__(
+        self, address: tuple[str, int], registry: _config.Registry, latency_s: float
+    ) -> None:
         super().__init__(address, _Handler)
         self.registry = registry
+        self.latency_s = latency_s
 
 
 class ReferenceServer:
     """The reference endpoint on a background thread; use as a context manager.
 
     ``port=0`` binds an ephemeral port; :attr:`base_url` is ``http://127.0.0.1:<port>/v1``.
+    ``latency_s`` is added to every completion, like a remote model's (requests are served
+    concurrently, so concurrent clients wait it out together).
     """
 
     def __init__(
-        self, *, host: str = "127.0.0.1", port: int = 0, registry: _config.Registry | None = None
+        self,
+        *,
+        host: str = "127.0.0.1",
+        port: int = 0,
+        registry: _config.Registry | None = None,
+        latency_s: float = 0.0,
     ) -> None:
-        self._server = _Server((host, port), registry or _config.load_registry())
+        registry = registry or _config.load_registry()
+        self._server = _Server((host, port), registry, check_range("latency_s", latency_s, 0, 60))
         self._thread: threading.Thread | None = None
 
     @property
