@@ -107,7 +107,13 @@ def test_redaction_is_idempotent_and_canonical(tree):
     assert once.body == canonical_json(json.loads(once.body)).encode()
 
 
-@given(st.dictionaries(st.text(max_size=8), st.text(max_size=8) | st.integers(), max_size=5))
+@given(
+    st.dictionaries(
+        st.text(max_size=8).filter(lambda k: k != "messages"),  # keep the image message
+        st.text(max_size=8) | st.integers(),
+        max_size=5,
+    )
+)
 def test_keys_of_a_body_read_back_canonical_equal_the_redacted_keys(tree):
     body = json.dumps({"messages": [{"content": "data:image/jpeg;base64,QUJD"}], **tree})
     live = match_keys("POST", "/v1/x", redact_body(body.encode()))
