@@ -2,7 +2,9 @@
 
 * ``replay.grid_240_s`` — wall time of ``pytest benchmarks -n 2 --emrd-record-mode=none``
   over the full reference grid (scout x 3 conditions x 4 spawns x 20 episodes, committed
-  cassettes, gates included), in a fresh run directory. Target 20 s.
+  cassettes, gates included), in a fresh run directory. Target 20 s. And
+  ``replay.resume_240_s``: the same command again on that finished run directory (every
+  episode read back from the results store, gates evaluated again). Target 3 s.
 * ``replay.vs_world_ratio`` — replaying :data:`SAMPLE` (12 committed episodes, one per
   condition and spawn) through their cassettes, as the plugin does (cassette load, the whole
   episode loop, redaction, matching), over the world alone doing the same work: layout,
@@ -37,6 +39,7 @@ import statistics
 import subprocess
 import sys
 import tempfile
+import time
 from pathlib import Path
 from typing import Any
 
@@ -130,16 +133,21 @@ def _replay(spec: EpisodeSpec, client: Any) -> Trajectory:
     return done.trajectory
 
 
-def _grid_seconds(repeat: int) -> float:
-    def replay() -> None:
+def _grid_seconds(repeat: int) -> tuple[float, float]:
+    """Median wall times of the grid replayed into a fresh run directory, and of the same
+    command run again on that finished directory (every episode read back from the store)."""
+    fresh, again = [], []
+    for _ in range(repeat):
         with tempfile.TemporaryDirectory() as tmp:
             cmd = [sys.executable, "-m", "pytest", "benchmarks", "-n", "2", "-q"]
             cmd += ["-p", "no:cacheprovider", "--emrd-record-mode=none", f"--emrd-results={tmp}"]
-            done = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True, check=False)
-            if done.returncode != 0:
-                raise RuntimeError(f"replay of the reference grid failed:\n{done.stdout[-3000:]}")
-
-    return median_seconds(replay, repeat=repeat, warmup=0)
+            for samples in (fresh, again):
+                start = time.perf_counter()
+                done = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True, check=False)
+                samples.append(time.perf_counter() - start)
+                if done.returncode != 0:
+                    raise RuntimeError(f"replay of the grid failed:\n{done.stdout[-3000:]}")
+    return statistics.median(fresh), statistics.median(again)
 
 
 def _committed_sizes() -> tuple[float, float, int]:
@@ -258,9 +266,10 @@ def run(*, repeat: int) -> list[Figure]:
     vs_world = _vs_world_ratio(SAMPLE, repeat)
     ratio = _size_ratio(SIZE_SAMPLE)
     kb, kb_50, count = _committed_sizes()
-    grid = _grid_seconds(repeat)
+    grid, resume = _grid_seconds(repeat)
     return [
         Figure("replay.grid_240_s", grid, "s", 20.0, repeat),
+        Figure("replay.resume_240_s", resume, "s", 3.0, repeat),
         Figure("replay.vs_world_ratio", vs_world, "ratio", 1.2, repeat),
         Figure("replay.cassette_kb_per_episode", kb, "KB", 15.0, count),
         Figure("replay.cassette_kb_per_50_steps", kb_50, "KB", 15.0, count),
