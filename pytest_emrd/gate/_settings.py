@@ -168,11 +168,8 @@ def in_ci(env: Mapping[str, str]) -> bool:
 
 
 def _episodes(raw: Any) -> int | None:
-    if raw is None:
-        return None
-    text = str(raw).strip()
-    episodes = check_positive_int("--emrd-episodes", int(text) if text.isdigit() else text)
-    if episodes > MAX_EPISODES:
+    episodes = _count("--emrd-episodes", raw)
+    if episodes is not None and episodes > MAX_EPISODES:
         raise ConfigError(
             f"--emrd-episodes={episodes} is more than {MAX_EPISODES} episodes per spawn room "
             f"(the paper runs 20); pass at most {MAX_EPISODES}, or split a larger study over "
