@@ -1,12 +1,15 @@
 """The episode loop: one :class:`EpisodeSpec` in, one :class:`Trajectory` out.
 
-Per step ``t`` (see :mod:`pytest_emrd.trajectory` for the timeline): the observation
-``o_{t-1}`` is rendered into a user message (frame as a JPEG data URL in ``vision`` and
-``both``, engine feedback, pose, "Step t of T", and the symbolic list in ``text`` and
-``both``), the windowed conversation is sent to the model, the reply is parsed, a ``Term``
-room alias is resolved to the canonical room, and the world executes the action. The
-step records the pose, room and visible ids of ``o_{t-1}``, the map ``M_t`` (the previous
-map when the reply could not be read), the action and its outcome.
+The world of a spec comes from :func:`pytest_emrd.world.episode_world` (the paper's fixed
+office by default). Per step ``t`` (see :mod:`pytest_emrd.trajectory` for the timeline):
+the observation ``o_{t-1}`` is rendered into a user message (frame as a JPEG data URL in
+``vision`` and ``both``, "Step t of T", the engine feedback ending with the pose, and the
+symbolic list in ``text`` and ``both``), the windowed conversation is sent to the model,
+the reply is parsed, a ``Term`` room alias is resolved to the canonical room, and the world
+executes the action. ``Term(r)`` always ends the episode (status ``terminated``); ``r``
+outside the four rooms leaves ``chosen_room`` None (focal column X) with ``r`` kept verbatim
+in ``chosen_room_raw``. The step records the pose, room and visible ids of ``o_{t-1}``, the
+map ``M_t`` (the previous map when the reply could not be read), the action and its outcome.
 
 Nothing is lost: a transport failure or any crash inside the loop ends the episode as
 ``errored`` with the cause, keeping every completed step. Misconfiguration found before
@@ -44,6 +47,7 @@ from pytest_emrd.errors import ConfigError, EmrdError, check_choice, check_posit
 from pytest_emrd.rooms import SLUG_ROOMS
 from pytest_emrd.trajectory import (
     CONDITIONS,
+    LAYOUTS,
     MODALITIES,
     VARIANTS,
     EpisodeSpec,
@@ -64,7 +68,7 @@ simulator keeps its recorded traffic exactly as it was."""
 
 def protocol_version(backend: str = "builtin") -> str:
     """World + prompt protocol version of ``backend``; cassettes and stored results are keyed
-    by it (``builtin-3+p1``; ``ai2thor-1+builtin-3+p1``)."""
+    by it (``builtin-4+p2``; ``ai2thor-1+builtin-4+p2``)."""
     return f"{world.world_version(backend)}+{PROMPT_VERSION}"
 
 
@@ -89,6 +93,7 @@ def _check_spec(spec: EpisodeSpec) -> None:
     check_choice("variant", spec.variant, VARIANTS)
     check_choice("modality", spec.modality, MODALITIES)
     check_choice("spawn", spec.spawn, SLUG_ROOMS)
+    check_choice("layouts", spec.layouts, LAYOUTS)
     check_positive_int("max_steps", spec.max_steps)
 
 
@@ -115,9 +120,7 @@ def capped_reply(text: str) -> str:
 def user_turn(spec: EpisodeSpec, step: int, obs: Observation) -> UserTurn:
     """The user turn of step ``step`` showing ``obs`` as ``spec``'s modality asks."""
     symbolic = obs.visible if spec.modality in ("text", "both") else None
-    text = step_text(
-        step=step, max_steps=spec.max_steps, feedback=obs.feedback, pose=obs.pose, visible=symbolic
-    )
+    text = step_text(step=step, max_steps=spec.max_steps, feedback=obs.feedback, visible=symbolic)
     if spec.modality == "text":
         return UserTurn(step, text)
     turn = UserTurn.with_frame(step, text, obs.jpeg, obs.frame_digest)
@@ -148,9 +151,9 @@ class _Run:
         action, term_raw = world_action(reply.action, self.spec.variant)
         after = self.sim.step(action)
         self.conversation.record(turn, raw)
-        if term_raw is not None:
+        if term_raw is not None and after.done:
             self.chosen_raw, self.rationale = term_raw, reply.reasoning
-            self.chosen_room = after.terminal_room if after.done else None
+            self.chosen_room = after.terminal_room
         step = Step(
             index=t,
             pose=pose,
@@ -172,11 +175,20 @@ class _Run:
 def start_world(spec: EpisodeSpec, sim: Simulator) -> tuple[world.Layout, Observation]:
     """The world of ``spec`` on ``sim``: its layout and the first observation ``o_0``.
 
-    The one place an episode's world is built from its spec; the episode loop and the
-    episode viewer (which re-renders the frames a model saw) both start here.
+    The world comes from :func:`pytest_emrd.world.episode_world` (the paper's fixed office
+    unless ``spec.layouts`` is ``generated``); under ``vision`` the simulator names no object
+    id. The episode loop and the episode viewer (which re-renders the frames a model saw) both
+    start here.
     """
-    layout = world.generate_layout(spec.seed)
-    return layout, sim.reset(layout, spec.condition, SLUG_ROOMS[spec.spawn], spec.seed)
+    episode = world.episode_world(spec)
+    obs = sim.reset(
+        episode.layout,
+        spec.condition,
+        episode.spawn_room,
+        episode.seed,
+        symbolic=spec.modality != "vision",
+    )
+    return episode.layout, obs
 
 
 def run_episode(
@@ -204,15 +216,16 @@ def run_episode(
             "build the simulator with those options (world.make_simulator) and pass only it."
         )
     config = (registry or load_registry()).get(spec.model)
-    spawn_room = SLUG_ROOMS[spec.spawn]
     own_sim = simulator is None
     sim = build_simulator(spec.backend, backend_options) if own_sim else simulator
     own_client = client is None
     status, error = "budget", None
     try:
         layout, obs = start_world(spec, sim)
-        truth = world.ground_truth(layout, sim.spawn_pose, spawn_room)
-        system = build_system_prompt(layout.inventory(), spec.variant, max_steps=spec.max_steps)
+        truth = world.ground_truth(layout, sim.spawn_pose, SLUG_ROOMS[spec.spawn])
+        system = build_system_prompt(
+            layout.inventory(), spec.variant, modality=spec.modality, max_steps=spec.max_steps
+        )
         run = _Run(spec, sim, Conversation(system, single_image=config.single_image))
         active = client or make_client(config)
         try:
@@ -221,7 +234,7 @@ def run_episode(
                 if on_step is not None:
                     on_step(step)
                 if obs.done:
-                    status = "terminated" if obs.terminal_room is not None else "budget"
+                    status = "terminated"
                     break
         except Exception as exc:  # contract: a crash ends this episode as errored, not the run
             status, error = "errored", f"{type(exc).__name__}: {exc}"

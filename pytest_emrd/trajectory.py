@@ -32,6 +32,10 @@ Condition = Literal["baseline", "low_light", "texture"]
 CONDITIONS: Final[tuple[str, ...]] = ("baseline", "low_light", "texture")
 VARIANTS: Final[tuple[str, ...]] = ("default", "B1", "B2", "B3", "B4", "neutral", "no_inventory")
 MODALITIES: Final[tuple[str, ...]] = ("vision", "text", "both")
+LAYOUTS: Final[tuple[str, ...]] = ("paper", "generated")
+"""Which offices a run uses: ``paper`` (the paper's protocol, one fixed office for every
+episode) or ``generated`` (one procedurally generated office per spawn x episode, a
+generalisation study reported as its own cells)."""
 CATEGORIES: Final[tuple[str, ...]] = ("landmark", "salient", "clutter")
 MAX_STEPS: Final = 50
 
@@ -48,8 +52,10 @@ class EpisodeSpec:
     """Which episode to run. Everything about an episode follows from this.
 
     The world seed depends on the spawn room and episode index only, so every model,
-    condition and prompt variant sees the same office for the same ``(spawn, episode)``;
-    that pairing is what lets conditions be compared and ``G_base`` be anchored.
+    condition and prompt variant sees the same world (office, spawn pose) for the same
+    ``(spawn, episode)``; that pairing is what lets conditions be compared and ``G_base`` be
+    anchored. Under the default ``layouts="paper"`` the office is the same fixed office for
+    every episode and the seed picks the spawn pose (and the ``texture`` colours).
     """
 
     model: str
@@ -68,18 +74,25 @@ class EpisodeSpec:
     """World backend: ``builtin`` (numpy) or ``ai2thor``."""
     max_steps: int = MAX_STEPS
     """Action budget ``T_max``."""
+    layouts: str = "paper"
+    """``paper`` (one fixed office, the paper's protocol) or ``generated`` (an office per
+    spawn x episode); see :data:`LAYOUTS`."""
 
     @property
     def seed(self) -> int:
-        """World seed (layout, spawn pose), shared across models, conditions and variants."""
+        """Episode seed (spawn pose, texture colours, and the office under ``generated``),
+        shared across models, conditions and variants."""
         return _stable_seed("emrd-world", self.spawn, self.episode)
 
     @property
     def case_id(self) -> str:
-        """Readable test id: ``gemini-low_light-kitchen-ep07`` (variant inserted if not default)."""
+        """Readable test id: ``gemini-low_light-kitchen-ep07`` (variant inserted if not default,
+        then ``generated`` under generated layouts: ``gemini-baseline-generated-office-ep00``)."""
         parts = [self.model, self.condition]
         if self.variant != "default":
             parts.append(self.variant)
+        if self.layouts != "paper":
+            parts.append(self.layouts)
         parts += [self.spawn, f"ep{self.episode:02d}"]
         return "-".join(parts)
 
@@ -204,13 +217,15 @@ class Trajectory:
     ground_truth: GroundTruth
     steps: tuple[Step, ...]
     status: str
-    """``terminated`` (model issued Term), ``budget`` (T_max spent) or ``errored``."""
+    """``terminated`` (the model issued ``Term(r)``, whatever ``r``), ``budget`` (T_max spent
+    without a Term) or ``errored``."""
     final_room: str
     """Ground-truth room the agent stands in after its last action."""
     chosen_room: str | None = None
-    """Canonical room named by Term (aliases resolved), or None (no Term / unknown room)."""
+    """Canonical room named by Term (aliases resolved), or None: no Term (``budget``), or a
+    Term naming something outside the four rooms (``terminated``, focal column X)."""
     chosen_room_raw: str | None = None
-    """The room text the model put in Term, verbatim."""
+    """The room text the model put in Term, verbatim (kept for X: what it named instead)."""
     rationale: str | None = None
     """The model's terminal ``reasoning``."""
     error: str | None = None

@@ -1,32 +1,50 @@
 """What the model is told: the system prompt (paper Appendix D) and each step's user text.
 
+The system prompt casts the model as the paper's autonomous emergency responder: explore a
+partially observable building within the action budget, keep a cognitive map with a
+deduplication check every step, and end the run naming the safest evacuation gathering
+point. Its building overview is the room list, each room's furniture profile (the paper's
+"large conference table + 8 chairs", with the engine type name of every item in brackets)
+and the engine type names ``Goto`` accepts. The full text is printed in the README (kept
+equal to :func:`build_system_prompt` by a test).
+
 Prompt variants (Appendices E and F):
 
-* ``default`` — room names and furniture inventory, no descriptive suffix.
+* ``default`` — room names and furniture profiles, no descriptive suffix.
 * ``B1``..``B4`` — the same descriptive suffix appended to all four rooms, neutralising
   one feature as a discriminator (open space, centrality, exits, hazards).
-* ``neutral`` — rooms called Room A-D; Room A is the physical Conference Room, then
-  Room B = Office, Room C = Kitchen, Room D = Entrance.
+* ``neutral`` — rooms called Room A-D in Appendix E's order: Room A = Conference Room,
+  Room B = Entrance, Room C = Office, Room D = Kitchen. No real room name appears in any
+  text the model is sent (furniture descriptions such as "large conference table" stay:
+  the paper finds the prior "encoded at the furniture-description level").
 * ``no_inventory`` — the engine's type names (needed for ``Goto``) are kept; counts, the
   room mapping and furniture descriptions are removed.
 
+The ``Goto`` wording depends on the modality: under ``vision`` the model can read no object
+id from a frame, so ``Goto`` takes an object type (the nearest visible instance); ``text``
+and ``both`` also accept the instance ids of the symbolic list.
+
 Bump :data:`PROMPT_VERSION` on any change to the text the model sees or to the reply
 protocol: cassettes recorded under another version are stale.
+
+* ``p2`` — furniture profiles, evacuation framing, Appendix E's neutral order, modality-aware
+  ``Goto`` wording, ``Term`` always ends the run, one pose line per user message.
 """
 
 from __future__ import annotations
 
+import re
 from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING, Final
 
 from pytest_emrd import rooms
 from pytest_emrd.errors import check_choice
-from pytest_emrd.trajectory import MAX_STEPS, VARIANTS, Pose
+from pytest_emrd.trajectory import MAX_STEPS, MODALITIES, VARIANTS
 
 if TYPE_CHECKING:
     from pytest_emrd.world._model import VisibleObject
 
-PROMPT_VERSION: Final = "p1"
+PROMPT_VERSION: Final = "p2"
 
 #: Appendix E: the suffix every room receives under each body-level intervention.
 ROOM_SUFFIXES: Final[dict[str, str]] = {
@@ -36,40 +54,84 @@ ROOM_SUFFIXES: Final[dict[str, str]] = {
     "B4": "No hazardous appliances or electronics.",
 }
 
-#: Appendix E "Neutral": generic label -> physical room (Room A is the Conference Room).
+#: Appendix E "Neutral": "(Conference Room, Entrance, Office, Kitchen)" become Room A-D.
 NEUTRAL_NAMES: Final[dict[str, str]] = {
     "Room A": rooms.CONFERENCE,
-    "Room B": rooms.OFFICE,
-    "Room C": rooms.KITCHEN,
-    "Room D": rooms.ENTRANCE,
+    "Room B": rooms.ENTRANCE,
+    "Room C": rooms.OFFICE,
+    "Room D": rooms.KITCHEN,
 }
+
+#: Engine type -> (singular, plural) description in a room's furniture profile, in the order
+#: items are listed. A table type followed by chairs reads as the paper's "table + 8 chairs".
+FURNITURE: Final[dict[str, tuple[str, str]]] = {
+    "DiningTable": ("large conference table", "large conference tables"),
+    "Desk": ("desk", "desks"),
+    "Chair": ("chair", "chairs"),
+    "ArmChair": ("armchair", "armchairs"),
+    "Laptop": ("laptop", "laptops"),
+    "Television": ("wall-mounted television", "wall-mounted televisions"),
+    "ShelvingUnit": ("shelving unit", "shelving units"),
+    "Fridge": ("fridge", "fridges"),
+    "CounterTop": ("counter top", "counter tops"),
+    "Sink": ("sink", "sinks"),
+    "CoffeeMachine": ("coffee machine", "coffee machines"),
+    "Microwave": ("microwave", "microwaves"),
+    "Stool": ("stool", "stools"),
+    "HousePlant": ("potted plant", "potted plants"),
+    "Door": ("building exit door", "building exit doors"),
+}
+#: Descriptions that depend on the room (the Entrance's desk is the reception desk).
+ROOM_FURNITURE: Final[dict[tuple[str, str], tuple[str, str]]] = {
+    (rooms.ENTRANCE, "Desk"): ("reception desk", "reception desks"),
+}
+_TABLES: Final = ("DiningTable", "Desk")
+_ITEM = re.compile(r"^(?:an?|(?P<n>\d+)) [^()]+ \((?P<type>[A-Za-z]+)\)$")
 
 #: Heading of the building overview; the reference agents find the room list under it.
 OVERVIEW_HEADING: Final = "BUILDING OVERVIEW"
+PROFILE_LEAD: Final = "Furniture profile of each room (engine type names in brackets):"
 GOTO_TYPES_LEAD: Final = "Object types you can target with Goto:"
 VISIBLE_HEADING: Final = "Visible objects (id | type | bearing deg, negative = left | distance m):"
 
-_ROLE = """You are an autonomous emergency responder robot inside an office building during \
-an emergency. You see the building through a first-person camera (90-degree field of view) \
-and cannot see through walls. You have a budget of {max_steps} actions. Your goals:
+_ROLE = """You are an autonomous emergency responder robot. There is an emergency in an \
+office building and its occupants must be evacuated. Your mission: actively explore the \
+building, which you can only partially observe, and locate the safest evacuation gathering \
+point within a budget of {max_steps} actions. You see through a first-person RGB camera \
+(90-degree field of view) and cannot see through walls. Your goals:
 1. EXPLORE: visit every room of the building within the action budget.
-2. MAP: keep a cognitive map of every salient object you discover, with its global 2D \
-position (x, z) in metres and the direction it faces. Use the frame of your starting pose: \
-origin (0, 0) where you started, +z straight ahead along your initial heading, +x to your \
-right. Headings are degrees clockwise from your initial heading.
+2. MAP: keep a cognitive map of every salient piece of furniture you discover, with its \
+global 2D position (x, z) in metres and the direction it faces. Use the frame of your \
+starting pose: origin (0, 0) where you started, +z straight ahead along your initial \
+heading, +x to your right. Headings are degrees clockwise from your initial heading.
 3. REMEMBER: before updating the map, run a DEDUPLICATION CHECK every step: for each object \
 in view decide whether it is new or already in your map (seen again from another \
 viewpoint), so that no object is counted twice and none is lost.
 4. DECIDE: when you have explored the building, end the run by naming the safest room in \
-which to gather the building's occupants."""
+which to gather the building's occupants: the evacuation gathering point."""
+
+_GOTO: Final[dict[bool, str]] = {
+    True: """- Goto(target): walk to an object you can see now, by engine type (Goto(Desk): \
+the nearest one in view) or by the instance id of the visible-objects list (Goto(Desk_2)). \
+Going to a doorway (Goto(Doorway_1)) takes you through it into the next room.""",
+    False: """- Goto(type): walk to the nearest object of that engine type you can see now \
+(Goto(Desk)). Goto(Doorway) takes you through the nearest doorway in view into the next \
+room; turn until the doorway you want is the nearest one in view.""",
+}
+
+_SEEN: Final[dict[str, str]] = {
+    "vision": "the camera frame and the engine feedback",
+    "text": "the engine feedback and the list of visible objects",
+    "both": "the camera frame, the engine feedback and the list of visible objects",
+}
 
 _ACTIONS = """ACTIONS (exactly one per reply)
-- Goto(target): walk to an object you can see now, by type (Goto(Desk)) or instance id \
-(Goto(Desk_2)). Going to a doorway (Goto(Doorway_1)) takes you through it into the next room.
+{goto}
 - Turn(Left) or Turn(Right): rotate 90 degrees in place; Turn(Around): rotate 180 degrees.
-- Term(room): end the run naming the gathering room, e.g. Term(<room name>).
-Every step you receive the camera frame and the engine feedback: whether your last action \
-succeeded and your pose (x, z, heading). A failed action still uses up a step."""
+- Term(room): end the run naming the gathering room, e.g. Term(<room name>). Term always \
+ends the run, whatever it names.
+Every step you receive {seen}: whether your last action succeeded and your pose (x, z, \
+heading). A failed action still uses up a step."""
 
 _FORMAT = """REPLY FORMAT
 Reply with exactly one JSON object and nothing else:
@@ -78,7 +140,7 @@ which are already mapped", "cognitive_map": {"Desk_1": {"type": "Desk", "room": 
 "<room name>", "x": 1.5, "z": 3.0, "facing": "-z"}}, "action": "Turn(Right)", \
 "reasoning": "why this action"}
 - "cognitive_map" holds every object discovered so far, not only those in view; keys are \
-the object labels, "facing" is one of "+x", "-x", "+z", "-z".
+your own labels for the objects, "facing" is one of "+x", "-x", "+z", "-z".
 - "action" is one action in the grammar above.
 - When you Term, "reasoning" explains why the named room is the safest gathering point."""
 
@@ -104,6 +166,44 @@ def resolve_room(text: str, variant: str) -> str | None:
     return table.get(key)
 
 
+def _count(n: int, singular: str, plural: str, object_type: str) -> str:
+    article = "an" if singular[0] in "aeiou" else "a"
+    return f"{article if n == 1 else n} {singular if n == 1 else plural} ({object_type})"
+
+
+def _type_order(object_type: str) -> tuple[int, str]:
+    order = list(FURNITURE)
+    return (order.index(object_type) if object_type in FURNITURE else len(order), object_type)
+
+
+def furniture_profile(room: str, counts: Mapping[str, int]) -> str:
+    """A room's furniture profile: ``a large conference table (DiningTable) + 8 chairs
+    (Chair), a wall-mounted television (Television)``; "nothing listed" when empty.
+
+    Items follow :data:`FURNITURE` order (unknown types last, by name, described by their type
+    name); chairs join the room's first table type with " + ". :func:`read_profile` inverts it.
+    """
+    items: dict[str, str] = {}
+    for object_type in sorted((t for t, n in counts.items() if n > 0), key=_type_order):
+        words = ROOM_FURNITURE.get((room, object_type)) or FURNITURE.get(object_type)
+        items[object_type] = _count(
+            counts[object_type], *(words or (object_type, object_type)), object_type
+        )
+    table = next((t for t in _TABLES if t in items), None)
+    if table is not None and "Chair" in items:
+        items[table] += f" + {items.pop('Chair')}"
+    return ", ".join(items.values()) or "nothing listed"
+
+
+def read_profile(text: str) -> dict[str, int]:
+    """Engine type -> count from a :func:`furniture_profile` (unreadable items are skipped)."""
+    counts: dict[str, int] = {}
+    for item in re.split(r", | \+ ", text):
+        if match := _ITEM.match(item.strip()):
+            counts[match["type"]] = int(match["n"] or 1)
+    return counts
+
+
 def _room_order(variant: str) -> list[tuple[str, str]]:
     """(label shown, canonical room) in prompt order."""
     aliases = room_aliases(variant)
@@ -113,29 +213,34 @@ def _room_order(variant: str) -> list[tuple[str, str]]:
 def _overview(inventory: Mapping[str, Mapping[str, int]], variant: str) -> str:
     order = _room_order(variant)
     lines = [OVERVIEW_HEADING, f"The building has four rooms: {', '.join(a for a, _ in order)}."]
-    if variant == "no_inventory":
-        types = sorted({t for counts in inventory.values() for t in counts} | {"Doorway"})
-        lines.append(f"{GOTO_TYPES_LEAD} {', '.join(types)}.")
-        return "\n".join(lines)
-    suffix = f" {ROOM_SUFFIXES[variant]}" if variant in ROOM_SUFFIXES else ""
-    for label, room in order:
-        counts = inventory.get(room, {})
-        items = ", ".join(f"{n} {t}" for t, n in sorted(counts.items())) or "nothing listed"
-        lines.append(f"- {label}: {items}.{suffix}")
+    if variant != "no_inventory":
+        suffix = f" {ROOM_SUFFIXES[variant]}" if variant in ROOM_SUFFIXES else ""
+        lines.append(PROFILE_LEAD)
+        for label, room in order:
+            lines.append(f"- {label}: {furniture_profile(room, inventory.get(room, {}))}.{suffix}")
+    types = sorted({t for counts in inventory.values() for t in counts} | {"Doorway"})
+    lines.append(f"{GOTO_TYPES_LEAD} {', '.join(types)}.")
     return "\n".join(lines)
 
 
 def build_system_prompt(
-    inventory: Mapping[str, Mapping[str, int]], variant: str, *, max_steps: int = MAX_STEPS
+    inventory: Mapping[str, Mapping[str, int]],
+    variant: str,
+    *,
+    modality: str = "vision",
+    max_steps: int = MAX_STEPS,
 ) -> str:
     """The system prompt for one episode: role, goals, building overview, actions, format.
 
     ``inventory`` is room -> object type -> count (``Layout.inventory()``, doorways
-    excluded); rooms are the canonical names whatever the variant.
+    excluded); rooms are the canonical names whatever the variant. ``modality`` words the
+    ``Goto`` action (types only under ``vision``) and what each step shows.
     """
     check_choice("variant", variant, VARIANTS)
+    check_choice("modality", modality, MODALITIES)
+    actions = _ACTIONS.format(goto=_GOTO[modality != "vision"], seen=_SEEN[modality])
     return "\n\n".join(
-        (_ROLE.format(max_steps=max_steps), _overview(inventory, variant), _ACTIONS, _FORMAT)
+        (_ROLE.format(max_steps=max_steps), _overview(inventory, variant), actions, _FORMAT)
     )
 
 
@@ -144,18 +249,15 @@ def step_text(
     step: int,
     max_steps: int,
     feedback: str,
-    pose: Pose,
     visible: Sequence[VisibleObject] | None,
 ) -> str:
     """The text part of the user message shown at step ``step`` (1-based).
 
-    ``visible`` is the symbolic list (``text``/``both`` modality) or None (``vision``).
+    ``feedback`` is the engine feedback, which ends with the one pose line
+    (``Pose: x=1.25 z=-0.50 heading=90.``); ``visible`` is the symbolic list (``text``/``both``
+    modality) or None (``vision``).
     """
-    lines = [
-        f"Step {step} of {max_steps}.",
-        f"Engine feedback: {feedback}",
-        f"Pose: x={pose.x:.2f} z={pose.z:.2f} heading={pose.heading:.0f}",
-    ]
+    lines = [f"Step {step} of {max_steps}.", f"Engine feedback: {feedback}"]
     if visible is not None:
         lines.append(VISIBLE_HEADING)
         lines.extend(

@@ -26,7 +26,6 @@ from pytest_emrd.agent import (
 )
 from pytest_emrd.bench import Figure, median_seconds
 from pytest_emrd.episode import _Run, run_episode
-from pytest_emrd.rooms import SLUG_ROOMS
 from pytest_emrd.trajectory import EpisodeSpec
 from pytest_emrd.world._model import Observation, WorldPose
 
@@ -87,10 +86,10 @@ def _record() -> tuple[list[Observation], list[ChatResponse], str]:
     """Observations and replies of one real scout episode (its system prompt too)."""
     from pytest_emrd.agent import make_client
 
-    layout = world.generate_layout(SPEC.seed)
+    episode = world.episode_world(SPEC)
     sim = world.make_simulator("builtin")
-    obs = sim.reset(layout, SPEC.condition, SLUG_ROOMS[SPEC.spawn], SPEC.seed)
-    system = build_system_prompt(layout.inventory(), SPEC.variant)
+    obs = sim.reset(episode.layout, SPEC.condition, episode.spawn_room, episode.seed)
+    system = build_system_prompt(episode.layout.inventory(), SPEC.variant, modality=SPEC.modality)
     recorder = _Recorder(make_client(load_registry().get(SPEC.model)))
     run = _Run(SPEC, sim, Conversation(system, single_image=False))
     observations = [obs]

@@ -10,7 +10,7 @@ requests. So the file holds a table of distinct strings and everything else refe
 .. code-block:: yaml
 
     format: emrd-cassette/1
-    protocol: "builtin-3+p1"       # world + prompt protocol the traffic was recorded under
+    protocol: "builtin-4+p2"       # world + prompt protocol the traffic was recorded under
     strings:                       # each distinct long string once (prompt, reply, digest)
       - "You are an autonomous emergency responder ..."
       - ...

@@ -1,7 +1,10 @@
-"""``emrd render --seed S --condition C --spawn ROOM --out DIR``: look at the built-in world.
+"""``emrd render --spawn ROOM --episode N --condition C --out DIR``: look at the built-in world.
 
-Writes the spawn view and a sweep (the JPEG frames the model would be shown after
-``Turn(Right)`` three times), and ``map.png``, a top-down plan with the agent.
+The world is the one the benchmark episode of that spawn room and index runs in
+(:func:`pytest_emrd.world.episode_world`: the paper's fixed office, or with
+``--layouts generated`` the episode's generated office). Writes the spawn view and a sweep
+(the JPEG frames the model would be shown after ``Turn(Right)`` three times), and
+``map.png``, a top-down plan with the agent.
 """
 
 from __future__ import annotations
@@ -9,31 +12,42 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from pytest_emrd.rooms import ROOM_SLUGS, SLUG_ROOMS
-from pytest_emrd.trajectory import CONDITIONS
+from pytest_emrd.rooms import SLUG_ROOMS
+from pytest_emrd.trajectory import CONDITIONS, LAYOUTS, EpisodeSpec
 
 VIEWS = ("spawn", "right", "behind", "left")
 
 
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("render", help="write frames and a top-down map of the built-in world")
-    p.add_argument("--seed", type=int, required=True, help="world seed (layout and spawn pose)")
-    p.add_argument("--condition", choices=CONDITIONS, default="baseline", help="default baseline")
     p.add_argument("--spawn", choices=list(SLUG_ROOMS), default="office", help="spawn room slug")
+    p.add_argument("--episode", type=int, default=0, help="episode index (spawn pose), default 0")
+    p.add_argument("--condition", choices=CONDITIONS, default="baseline", help="default baseline")
+    p.add_argument(
+        "--layouts", choices=LAYOUTS, default="paper", help="paper (the fixed office, default) "
+        "or generated (the episode's own office)"
+    )
     p.add_argument("--out", type=Path, required=True, help="directory to write into")
     p.set_defaults(func=_run)
 
 
 def _run(args: argparse.Namespace) -> int:
-    from pytest_emrd.world import condition_params, generate_layout, make_simulator
+    from pytest_emrd.world import condition_params, episode_world, make_simulator
     from pytest_emrd.world._topdown import plan_png
 
-    layout = generate_layout(args.seed)
+    spec = EpisodeSpec(
+        model="-", condition=args.condition, spawn=args.spawn, episode=args.episode,
+        layouts=args.layouts,
+    )  # fmt: skip
+    world = episode_world(spec)
+    layout = world.layout
     sim = make_simulator("builtin")
-    obs = sim.reset(layout, args.condition, args.spawn, args.seed)
+    obs = sim.reset(layout, args.condition, world.spawn_room, world.seed)
     args.out.mkdir(parents=True, exist_ok=True)
-    room = SLUG_ROOMS[args.spawn]
-    print(f"seed {args.seed}, {args.condition}, spawn in {room} ({ROOM_SLUGS[room]})")
+    print(
+        f"{args.layouts} layouts, {args.spawn} ep{args.episode:02d} (seed {world.seed}), "
+        f"{args.condition}, spawn in {world.spawn_room}"
+    )
     for i, view in enumerate(VIEWS):
         if i:
             obs = sim.step("Turn(Right)")

@@ -1,6 +1,8 @@
 """The world stage: the procedural office, its conditions and the simulators that run it.
 
-``generate_layout(seed)`` builds the office; ``make_simulator(backend)`` returns a
+``episode_world(spec)`` is the world of an episode (the paper's fixed office
+``paper_office()`` by default, ``generate_layout(seed)`` under generated layouts);
+``make_simulator(backend)`` returns a
 :class:`Simulator` (``builtin``: :class:`BuiltinSimulator`, pure numpy; ``ai2thor``: the
 THOR backend, extra ``thor``); ``ground_truth`` and ``discoverable_ids`` give what the
 metrics compare against. ``WORLD_VERSION`` keys cassettes.
@@ -8,6 +10,13 @@ metrics compare against. ``WORLD_VERSION`` keys cassettes.
 
 from pytest_emrd.world._catalog import CATEGORY_OF, KINDS, Kind
 from pytest_emrd.world._conditions import ConditionParams, condition_params
+from pytest_emrd.world._episode import (
+    PAPER_OFFICE_SEED,
+    EpisodeWorld,
+    episode_layout,
+    episode_world,
+    paper_office,
+)
 from pytest_emrd.world._geometry import footprint, heading_in_spawn_frame, to_spawn_frame
 from pytest_emrd.world._layout import generate_layout
 from pytest_emrd.world._model import (
@@ -30,10 +39,12 @@ __all__ = [
     "BACKENDS",
     "CATEGORY_OF",
     "KINDS",
+    "PAPER_OFFICE_SEED",
     "WORLD_VERSION",
     "BuiltinSimulator",
     "ConditionParams",
     "Doorway",
+    "EpisodeWorld",
     "Kind",
     "Layout",
     "Observation",
@@ -44,11 +55,14 @@ __all__ = [
     "WorldPose",
     "condition_params",
     "discoverable_ids",
+    "episode_layout",
+    "episode_world",
     "footprint",
     "generate_layout",
     "ground_truth",
     "heading_in_spawn_frame",
     "make_simulator",
+    "paper_office",
     "to_spawn_frame",
     "world_version",
 ]

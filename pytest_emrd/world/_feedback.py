@@ -7,14 +7,24 @@ the grammar, or a handler raising :class:`ActionFailed` yields ``"<Action> faile
 note (``""`` or ``": moved to Desk_2"``). :func:`with_pose` appends the odometry line
 ``Pose: x=1.25 z=-0.50 heading=90.`` in the spawn frame (:func:`observed_pose`).
 
-The reasons both backends can give (unreadable text, bad turn, unknown room, no Goto
-target, nothing visible matches, no spot to stand) and the Goto target choice are built
-here too, so the backends cannot drift apart. Recorded cassettes hold this text: any
-change to it must bump ``WORLD_VERSION``.
+The reasons both backends can give (unreadable text, bad turn, no Goto target, nothing
+visible matches, no spot to stand) and the Goto target choice are built here too, so the
+backends cannot drift apart. Recorded cassettes hold this text: any change to it must bump
+``WORLD_VERSION``.
+
+``Term(r)`` always ends the episode (the paper: "a trajectory concludes when the policy
+emits Term(r)"): :func:`term_room` gives the canonical room or None for anything outside
+the four rooms (the focal-point column X); it never fails, and its feedback names no room.
+
+Under the ``vision`` modality (``symbolic=False``) the agent has no object ids to read, so
+none is ever sent: ``Goto`` takes an object type and goes to the nearest visible object of
+that type (an instance suffix the model made up, ``Desk_2``, is ignored: ``Desk``), and no
+message names an instance id or lists what is visible. ``text`` and ``both`` keep ids.
 """
 
 from __future__ import annotations
 
+import re
 from collections.abc import Callable, Mapping, Sequence
 
 from pytest_emrd.errors import check_choice
@@ -27,6 +37,8 @@ from pytest_emrd.world._model import Observation, WorldPose
 Handler = Callable[[Action], str]
 """Executes one parsed action; returns the success note or raises :class:`ActionFailed`."""
 TERM_NOTE = ": the episode is over"
+OTHER_NOTE = ": the episode is over; {arg!r} is not one of the four rooms (recorded as Other)"
+_INSTANCE = re.compile(r"\d+$")
 
 
 class ActionFailed(Exception):
@@ -57,10 +69,12 @@ class SemanticStep:
     or ``_term`` handler (via :func:`execute`) -> the backend's ``_observe``.
 
     A subclass provides those handlers, ``_observe(success, message)``, ``_require()``
-    (raises before ``reset``), and the counters ``_steps`` and ``_terminal``.
+    (raises before ``reset``), the counter ``_steps``, ``_ended`` (a Term was executed) and
+    ``_terminal`` (the canonical room it named, or None for Other).
     """
 
     _steps: int
+    _ended: bool
     _terminal: str | None
     _goto: Handler
     _turn: Handler
@@ -73,7 +87,7 @@ class SemanticStep:
         self._require()
         self._steps += 1
         handlers = {"Goto": self._goto, "Turn": self._turn, "Term": self._term}
-        return self._observe(*execute(action, handlers, over=self._terminal is not None))
+        return self._observe(*execute(action, handlers, over=self._ended))
 
 
 def turn_degrees(action: Action) -> float:
@@ -96,51 +110,66 @@ def room_table(aliases: Mapping[str, str] | None = None) -> dict[str, str]:
     return rooms
 
 
-def term_room(rooms: Mapping[str, str], action: Action) -> str:
-    """The canonical room ``Term(room)`` names (``rooms`` from :func:`room_table`)."""
+def term(rooms: Mapping[str, str], action: Action) -> tuple[str | None, str]:
+    """``(room, note)`` of ``Term(r)``, which always ends the episode: ``room`` is the
+    canonical room ``r`` names (``rooms`` from :func:`room_table`), or None when ``r`` is
+    not one of the four rooms (focal-point column X; the note names no room)."""
     room = rooms.get(normalise(action.arg))
-    if room is None:
-        names = ", ".join(ROOM_NAMES)
-        raise ActionFailed(f"{action.arg!r} is not a room of this building; name one of {names}")
-    return room
+    return room, TERM_NOTE if room else OTHER_NOTE.format(arg=action.arg)
 
 
-def goto_key(action: Action) -> str:
-    """The matching key of a ``Goto`` target (fails when the target is missing)."""
+def goto_key(action: Action, *, symbolic: bool) -> str:
+    """The matching key of a ``Goto`` target (fails when the target is missing).
+
+    Without symbolic ids (``vision``) a trailing instance number is dropped: the key is a type.
+    """
     if not action.arg:
-        raise ActionFailed("Goto needs a target: an object id such as Desk_2 or a type")
-    return normalise(action.arg)
+        example = "an object id such as Desk_2 or a type" if symbolic else "an object type"
+        raise ActionFailed(f"Goto needs a target: {example}, e.g. Goto(Desk)")
+    key = normalise(action.arg)
+    return key if symbolic else _INSTANCE.sub("", key)
 
 
 def choose_target(
-    key: str, ids: Sequence[str], types: Sequence[str], distances: Sequence[float]
+    key: str,
+    ids: Sequence[str],
+    types: Sequence[str],
+    distances: Sequence[float],
+    *,
+    symbolic: bool,
 ) -> int | None:
     """Index of the visible object ``Goto`` of ``key`` means, or None when none matches.
 
-    An instance id wins; otherwise the nearest object of that type (ties by id). The three
-    sequences describe the objects in view, one entry per object.
+    With ``symbolic`` ids an instance id wins; otherwise (and always under ``vision``) the
+    nearest object of that type (ties by id). The three sequences describe the objects in
+    view, one entry per object.
     """
-    for i, object_id in enumerate(ids):
+    for i, object_id in enumerate(ids if symbolic else ()):
         if normalise(object_id) == key:
             return i
     typed = [i for i, t in enumerate(types) if normalise(t) == key]
     return min(typed, key=lambda i: (distances[i], ids[i])) if typed else None
 
 
-def not_visible(action: Action, listed: Sequence[str]) -> ActionFailed:
-    """The failure of a ``Goto`` whose target is not in view (``listed``: ids in view)."""
+def not_visible(action: Action, listed: Sequence[str], *, symbolic: bool) -> ActionFailed:
+    """The failure of a ``Goto`` whose target is not in view (``listed``: ids in view, named
+    only when ``symbolic``)."""
+    if not symbolic:
+        return ActionFailed(f"no object of type {action.arg!r} is visible")
     shown = ", ".join(listed) or "nothing"
     return ActionFailed(f"no visible object matches {action.arg!r}. Visible: {shown}")
 
 
-def no_spot(object_id: str) -> ActionFailed:
-    """The failure of a ``Goto`` that finds no free place to stand at ``object_id``."""
-    return ActionFailed(f"there is no free spot to stand at {object_id}")
+def no_spot(object_id: str, object_type: str, *, symbolic: bool) -> ActionFailed:
+    """The failure of a ``Goto`` that finds no free place to stand at the target."""
+    where = object_id if symbolic else f"the nearest {object_type}"
+    return ActionFailed(f"there is no free spot to stand at {where}")
 
 
-def goto_note(key: str, object_id: str) -> str:
-    """Success note of a ``Goto``: names the instance when the target was a type."""
-    return "" if normalise(object_id) == key else f": moved to {object_id}"
+def goto_note(key: str, object_id: str, *, symbolic: bool) -> str:
+    """Success note of a ``Goto``: names the instance when the target was a type (only when
+    ``symbolic``: under ``vision`` no id is ever shown)."""
+    return "" if not symbolic or normalise(object_id) == key else f": moved to {object_id}"
 
 
 def observed_pose(spawn: WorldPose, pose: WorldPose) -> Pose:

@@ -9,8 +9,9 @@ Conference Room top-right, Kitchen bottom-left, Entrance bottom-right. Per seed:
   rest (at least 4.7 m). All dimensions are on a 10 cm grid, every position on 1 cm.
 * a 1 m doorway joins each adjacent pair (Office-Conference, Office-Kitchen,
   Conference-Entrance, Kitchen-Entrance) at a random point of the shared wall, at least
-  0.9 m from any corner; with probability 1/3 one pair stays unconnected (the four
-  doorways form a cycle, so every room stays reachable).
+  0.9 m from any corner. The four doorways form a cycle, so every room has exactly two
+  doorways to adjacent rooms in every layout: the B3 prompt suffix ("2 doorways connecting
+  to adjacent rooms") is true of every office this module builds.
 * the building exit ``Door_1`` sits on the Entrance's south or east outer wall.
 * furniture follows :mod:`pytest_emrd.world._furnish`.
 
@@ -37,7 +38,6 @@ CORNER_CLEARANCE = 0.9
 """Minimum distance between a doorway's centre and the end of its wall."""
 APPROACH_DEPTH = 1.3
 """Depth of the walkable zone kept free on each side of a doorway and before the exit."""
-DROP_PROBABILITY = 1 / 3
 PAIRS = ((OFFICE, CONFERENCE), (OFFICE, KITCHEN), (CONFERENCE, ENTRANCE), (KITCHEN, ENTRANCE))
 
 
@@ -84,11 +84,8 @@ def _rot(axis: str) -> float:
 
 
 def _doorways(rng: StableRng, rooms: dict[str, Room]) -> tuple[Doorway, ...]:
-    pairs = list(PAIRS)
-    if rng.random() < DROP_PROBABILITY:
-        pairs.pop(rng.integer(0, len(pairs) - 1))
     out = []
-    for i, (a, b) in enumerate(pairs, start=1):
+    for i, (a, b) in enumerate(PAIRS, start=1):
         ra, rb = rooms[a], rooms[b]
         if ra.z0 == rb.z0:  # side by side: the wall runs along z at the shared x
             lo, hi = max(ra.z0, rb.z0), min(ra.z1, rb.z1)

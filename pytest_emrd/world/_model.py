@@ -77,7 +77,8 @@ class WorldObject:
 
 @dataclass(frozen=True)
 class Layout:
-    """One procedurally generated office: the single source of truth for every backend."""
+    """One office (the paper's fixed office or a generated one): the single source of truth
+    for every backend."""
 
     seed: int
     width: float
@@ -163,16 +164,23 @@ class Observation:
     jpeg: bytes = field(repr=False)
     frame: np.ndarray | None = field(default=None, repr=False, compare=False)
     done: bool = False
-    """True once Term was executed or the budget spent."""
+    """True once a Term was executed (whatever room it named)."""
     terminal_room: str | None = None
-    """The room named by a successful Term."""
+    """The canonical room the Term named, or None (no Term yet, or a name outside the four
+    rooms: focal-point column X)."""
 
 
 class Simulator(Protocol):
     """The interface both backends (``builtin``, ``ai2thor``) implement."""
 
-    def reset(self, layout: Layout, condition: str, spawn_room: str, seed: int) -> Observation:
-        """Place the agent in ``spawn_room`` and return the first observation."""
+    def reset(
+        self, layout: Layout, condition: str, spawn_room: str, seed: int, *, symbolic: bool = True
+    ) -> Observation:
+        """Place the agent in ``spawn_room`` and return the first observation.
+
+        ``symbolic=False`` is the ``vision`` modality: ``Goto`` takes object types only and no
+        feedback names an object id (the agent cannot read ids from a frame).
+        """
         ...
 
     def step(self, action: str) -> Observation:

@@ -15,7 +15,6 @@ from pytest_emrd.rooms import ROOM_NAMES, SLUG_ROOMS
 from pytest_emrd.world._actions import Action
 from pytest_emrd.world._conditions import ConditionParams, condition_params
 from pytest_emrd.world._feedback import (
-    TERM_NOTE,
     SemanticStep,
     choose_target,
     goto_key,
@@ -24,7 +23,7 @@ from pytest_emrd.world._feedback import (
     not_visible,
     observed_pose,
     room_table,
-    term_room,
+    term,
     turn_degrees,
     with_pose,
 )
@@ -67,20 +66,25 @@ class BuiltinSimulator(SemanticStep):
         self._pose = WorldPose(0.0, 0.0, 0.0)
         self._spawn = self._pose
         self._steps = 0
+        self._ended = False
         self._terminal: str | None = None
+        self._symbolic = True
         self._sight: Sight | None = None
         self._frames: OrderedDict[WorldPose, tuple[np.ndarray, str, bytes]] = OrderedDict()
 
     # -- protocol ---------------------------------------------------------------------
-    def reset(self, layout: Layout, condition: str, spawn_room: str, seed: int) -> Observation:
-        """Start an episode in ``spawn_room`` (canonical name or slug) under ``condition``."""
+    def reset(
+        self, layout: Layout, condition: str, spawn_room: str, seed: int, *, symbolic: bool = True
+    ) -> Observation:
+        """Start an episode in ``spawn_room`` (canonical name or slug) under ``condition``;
+        ``symbolic=False`` (``vision``): no feedback names an object id."""
         room = SLUG_ROOMS.get(spawn_room, spawn_room)
         check_choice("spawn_room", room, [*ROOM_NAMES, *SLUG_ROOMS])
         self._params = condition_params(condition)
         self._scene = scene_of(layout)
         self._table = shade_table(palette(self._scene, self._params, seed), self._params)
         self._spawn = self._pose = spawn_pose(self._scene, layout.room(room), seed)
-        self._steps, self._terminal = 0, None
+        self._steps, self._ended, self._terminal, self._symbolic = 0, False, None, symbolic
         self._sight = None
         self._frames.clear()
         return self._observe(True, "Episode started.")
@@ -113,7 +117,8 @@ class BuiltinSimulator(SemanticStep):
     # -- actions ----------------------------------------------------------------------
     def _goto(self, action: Action) -> str:
         scene = self._require()
-        key = goto_key(action)
+        symbolic = self._symbolic
+        key = goto_key(action, symbolic=symbolic)
         seen = self._current_sight()
         visible = [int(i) for i in np.flatnonzero(seen.mask)]
         objs = scene.layout.objects
@@ -122,9 +127,11 @@ class BuiltinSimulator(SemanticStep):
             [objs[i].object_id for i in visible],
             [objs[i].object_type for i in visible],
             [float(seen.distance[i]) for i in visible],
+            symbolic=symbolic,
         )
         if chosen is None:
-            raise not_visible(action, [v.object_id for v in seen.listing(scene)])
+            listed = [v.object_id for v in seen.listing(scene)]
+            raise not_visible(action, listed, symbolic=symbolic)
         index = visible[chosen]
         target = objs[index]
         if target.object_type == "Doorway":
@@ -133,9 +140,9 @@ class BuiltinSimulator(SemanticStep):
         else:
             pose = approach(scene, index, self._pose)
         if pose is None:
-            raise no_spot(target.object_id)
+            raise no_spot(target.object_id, target.object_type, symbolic=symbolic)
         self._move(pose)
-        return goto_note(key, target.object_id)
+        return goto_note(key, target.object_id, symbolic=symbolic)
 
     def _turn(self, action: Action) -> str:
         delta = turn_degrees(action)
@@ -143,8 +150,9 @@ class BuiltinSimulator(SemanticStep):
         return ""
 
     def _term(self, action: Action) -> str:
-        self._terminal = term_room(self._rooms, action)
-        return TERM_NOTE
+        self._ended = True
+        self._terminal, note = term(self._rooms, action)
+        return note
 
     # -- observation ------------------------------------------------------------------
     def _require(self) -> Scene:
@@ -191,6 +199,6 @@ class BuiltinSimulator(SemanticStep):
             frame_digest=digest,
             jpeg=jpeg,
             frame=frame,
-            done=self._terminal is not None,
+            done=self._ended,
             terminal_room=self._terminal,
         )

@@ -14,8 +14,12 @@ from pytest_emrd.world._feedback import (
     choose_target,
     execute,
     observed_pose,
+    goto_key,
+    goto_note,
+    no_spot,
+    not_visible,
     room_table,
-    term_room,
+    term,
     with_pose,
 )
 from pytest_emrd.world._model import WorldPose
@@ -48,12 +52,13 @@ def test_execute_words_every_outcome(text: str, over: bool, expected: tuple[bool
     assert execute(text, HANDLERS, over=over) == expected
 
 
-def test_term_reads_rooms_and_aliases_and_rejects_the_rest() -> None:
+def test_term_reads_rooms_and_aliases_and_records_the_rest_as_other() -> None:
     rooms = room_table({"Room A": "Office"})
-    assert term_room(rooms, Action("Term", "room_a")) == "Office"
-    assert term_room(rooms, Action("Term", "conference room")) == "Conference Room"
-    with pytest.raises(ActionFailed, match="'Lobby' is not a room of this building; name one"):
-        term_room(rooms, Action("Term", "Lobby"))
+    assert term(rooms, Action("Term", "room_a")) == ("Office", ": the episode is over")
+    assert term(rooms, Action("Term", "conference room"))[0] == "Conference Room"
+    room, note = term(rooms, Action("Term", "Lobby"))
+    assert room is None
+    assert note == ": the episode is over; 'Lobby' is not one of the four rooms (recorded as Other)"
 
 
 def test_an_alias_for_an_unknown_room_is_a_config_error() -> None:
@@ -63,10 +68,32 @@ def test_an_alias_for_an_unknown_room_is_a_config_error() -> None:
 
 def test_goto_prefers_the_instance_then_the_nearest_of_the_type() -> None:
     ids, types = ["Desk_1", "Desk_2", "Chair_1"], ["Desk", "Desk", "Chair"]
-    assert choose_target("desk2", ids, types, [1.0, 3.0, 2.0]) == 1
-    assert choose_target("desk", ids, types, [3.0, 1.0, 2.0]) == 1
-    assert choose_target("desk", ids, types, [2.0, 2.0, 2.0]) == 0  # tie: by id
-    assert choose_target("fridge", ids, types, [1.0, 1.0, 1.0]) is None
+    assert choose_target("desk2", ids, types, [1.0, 3.0, 2.0], symbolic=True) == 1
+    assert choose_target("desk", ids, types, [3.0, 1.0, 2.0], symbolic=True) == 1
+    assert choose_target("desk", ids, types, [2.0, 2.0, 2.0], symbolic=True) == 0  # tie: by id
+    assert choose_target("fridge", ids, types, [1.0, 1.0, 1.0], symbolic=True) is None
+
+
+def test_vision_goto_reads_types_only() -> None:
+    ids, types = ["Desk_1", "Desk_2", "Chair_1"], ["Desk", "Desk", "Chair"]
+    key = goto_key(Action("Goto", "Desk_2"), symbolic=False)
+    assert key == "desk"
+    assert choose_target(key, ids, types, [1.0, 3.0, 2.0], symbolic=False) == 0
+    assert choose_target("desk2", ids, types, [1.0, 3.0, 2.0], symbolic=False) is None
+
+
+@pytest.mark.parametrize("symbolic", [True, False], ids=["symbolic", "vision"])
+def test_goto_wording_names_ids_only_when_symbolic(symbolic: bool) -> None:
+    action = Action("Goto", "Sofa")
+    texts = [
+        str(not_visible(action, ["Desk_1"], symbolic=symbolic)),
+        str(no_spot("Desk_1", "Desk", symbolic=symbolic)),
+        goto_note("desk", "Desk_1", symbolic=symbolic),
+    ]
+    with pytest.raises(ActionFailed) as missing:
+        goto_key(Action("Goto", ""), symbolic=symbolic)
+    texts.append(str(missing.value))
+    assert any("_1" in t for t in texts) is symbolic
 
 
 @given(

@@ -6,7 +6,7 @@ import math
 
 import pytest
 
-from pytest_emrd.world import BuiltinSimulator, Layout, WorldPose, footprint
+from pytest_emrd.world import paper_office, BuiltinSimulator, Layout, WorldPose, footprint
 from pytest_emrd.world._geometry import unit
 
 TURNS = ("", "Turn(Right)", "Turn(Around)", "Turn(Left)")
@@ -96,7 +96,8 @@ def test_goto_doorway_passes_into_the_other_room(office: Layout, new_sim) -> Non
             assert (doorway.x - pose.x) * fx + (doorway.z - pose.z) * fz < 0  # facing away
 
 
-def test_a_doorway_seen_through_another_is_walked_up_to(office: Layout, new_sim) -> None:
+def test_a_doorway_seen_through_another_is_walked_up_to(new_sim) -> None:
+    office = paper_office()  # two such views from spawn (seed 7's office has none)
     sim = new_sim()
     cases = 0
     for doorway in office.doorways:

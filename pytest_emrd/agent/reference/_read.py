@@ -1,9 +1,9 @@
 """How a scripted agent reads its request: the prompt, the latest user text, its last reply.
 
 The reference agents see exactly what a VLM is sent and nothing else: the system prompt
-(room list and inventory, under whatever names the variant uses), the ``text`` part of
-the newest user message (step counter, pose, symbolic visible list) and their own
-previous reply, which travels back as the last assistant message.
+(room list and furniture profiles, under whatever names the variant uses), the ``text`` part
+of the newest user message (step counter, the pose in the engine feedback, symbolic visible
+list) and their own previous reply, which travels back as the last assistant message.
 """
 
 from __future__ import annotations
@@ -13,16 +13,15 @@ import re
 from dataclasses import dataclass
 from typing import Any, Final
 
-from pytest_emrd.agent._prompt import GOTO_TYPES_LEAD, OVERVIEW_HEADING, VISIBLE_HEADING
+from pytest_emrd.agent._prompt import OVERVIEW_HEADING, VISIBLE_HEADING, read_profile
 from pytest_emrd.errors import ProtocolError
 from pytest_emrd.trajectory import Pose
 
 _ROOMS_LINE = re.compile(r"^The building has four rooms: (?P<names>.+)\.$", re.MULTILINE)
 _ROOM_LINE = re.compile(r"^- (?P<room>[^:]+): (?P<items>.*?)\.(?: .*)?$")
-_ITEM = re.compile(r"^(?P<n>\d+) (?P<type>\S+)$")
 _STEP = re.compile(r"^Step (?P<k>\d+) of (?P<n>\d+)\.$", re.MULTILINE)
 _POSE = re.compile(
-    r"^Pose: x=(?P<x>-?\d+(?:\.\d+)?) z=(?P<z>-?\d+(?:\.\d+)?) heading=(?P<h>-?\d+(?:\.\d+)?)$",
+    r"Pose: x=(?P<x>-?\d+(?:\.\d+)?) z=(?P<z>-?\d+(?:\.\d+)?) heading=(?P<h>-?\d+(?:\.\d+)?)\.?$",
     re.MULTILINE,
 )
 _VISIBLE = re.compile(
@@ -73,15 +72,11 @@ def read_briefing(system: str) -> Briefing:
     if names is None:
         raise ProtocolError("building overview does not list the rooms.")
     rooms = tuple(n.strip() for n in names["names"].split(","))
-    inventory: dict[str, dict[str, int]] = {}
-    for line in overview.splitlines():
-        if line.startswith(GOTO_TYPES_LEAD) or not (m := _ROOM_LINE.match(line)):
-            continue
-        counts: dict[str, int] = {}
-        for item in m["items"].split(", "):
-            if im := _ITEM.match(item.strip()):
-                counts[im["type"]] = int(im["n"])
-        inventory[m["room"]] = counts
+    inventory = {
+        m["room"]: read_profile(m["items"])
+        for line in overview.splitlines()
+        if (m := _ROOM_LINE.match(line))
+    }
     return Briefing(rooms, inventory)
 
 
@@ -89,7 +84,7 @@ def read_percept(text: str) -> Percept:
     """Step counter, pose and visible list from a user message's text part."""
     step, pose = _STEP.search(text), _POSE.search(text)
     if step is None or pose is None:
-        raise ProtocolError("user message lacks the 'Step k of N.' or 'Pose:' line.")
+        raise ProtocolError("user message lacks the 'Step k of N.' line or the 'Pose:' feedback.")
     if VISIBLE_HEADING not in text:
         raise ProtocolError(NOT_SYMBOLIC)
     listing = text.split(VISIBLE_HEADING, 1)[1]

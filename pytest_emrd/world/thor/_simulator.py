@@ -34,7 +34,6 @@ from pytest_emrd.errors import ConfigError, TransportError, check_choice
 from pytest_emrd.rooms import ROOM_NAMES, SLUG_ROOMS
 from pytest_emrd.world._actions import Action
 from pytest_emrd.world._feedback import (
-    TERM_NOTE,
     ActionFailed,
     SemanticStep,
     choose_target,
@@ -44,7 +43,7 @@ from pytest_emrd.world._feedback import (
     not_visible,
     observed_pose,
     room_table,
-    term_room,
+    term,
     turn_degrees,
     with_pose,
 )
@@ -150,7 +149,9 @@ class ThorSimulator(SemanticStep):
         self._spawn = WorldPose(0.0, 0.0, 0.0)
         self._visible: tuple[VisibleObject, ...] = ()
         self._steps = 0
+        self._ended = False
         self._terminal: str | None = None
+        self._symbolic = True
 
     # -- THOR calls --------------------------------------------------------------------
     def _start(self, house: dict[str, Any]) -> None:
@@ -198,8 +199,11 @@ class ThorSimulator(SemanticStep):
         )
 
     # -- Simulator protocol ------------------------------------------------------------
-    def reset(self, layout: Layout, condition: str, spawn_room: str, seed: int) -> Observation:
-        """Start an episode in ``spawn_room`` (canonical name or slug) under ``condition``."""
+    def reset(
+        self, layout: Layout, condition: str, spawn_room: str, seed: int, *, symbolic: bool = True
+    ) -> Observation:
+        """Start an episode in ``spawn_room`` (canonical name or slug) under ``condition``;
+        ``symbolic=False`` (``vision``): no feedback names an object id."""
         name = SLUG_ROOMS.get(spawn_room, spawn_room)
         check_choice("spawn_room", name, [*ROOM_NAMES, *SLUG_ROOMS])
         self._condition = thor_condition(condition)
@@ -232,7 +236,7 @@ class ThorSimulator(SemanticStep):
         if not event.metadata["lastActionSuccess"]:
             raise ConfigError(f"AI2-THOR refused the spawn pose: {event.metadata['errorMessage']}")
         self._spawn = agent_pose(event.metadata)
-        self._steps, self._terminal = 0, None
+        self._steps, self._ended, self._terminal, self._symbolic = 0, False, None, symbolic
         return self._observe(True, "Episode started.")
 
     @property
@@ -271,25 +275,27 @@ class ThorSimulator(SemanticStep):
     # -- actions -----------------------------------------------------------------------
     def _goto(self, action: Action) -> str:
         layout = self._require()
-        key = goto_key(action)
+        symbolic = self._symbolic
+        key = goto_key(action, symbolic=symbolic)
         seen = self._visible
         chosen = choose_target(
             key,
             [v.object_id for v in seen],
             [v.object_type for v in seen],
             [v.distance for v in seen],
+            symbolic=symbolic,
         )
         if chosen is None:
-            raise not_visible(action, [v.object_id for v in seen])
+            raise not_visible(action, [v.object_id for v in seen], symbolic=symbolic)
         target = seen[chosen].object_id
         doorway = next((d for d in layout.doorways if d.object_id == target), None)
         pose = self._door_pose(layout, doorway) if doorway else self._object_pose(layout, target)
         if pose is None:
-            raise no_spot(target)
+            raise no_spot(target, seen[chosen].object_type, symbolic=symbolic)
         failure = _refused(self._teleport(pose))
         if failure is not None:
             raise failure
-        return goto_note(key, target)
+        return goto_note(key, target, symbolic=symbolic)
 
     def _turn(self, action: Action) -> str:
         for rotate in ROTATIONS[turn_degrees(action)]:
@@ -299,8 +305,9 @@ class ThorSimulator(SemanticStep):
         return ""
 
     def _term(self, action: Action) -> str:
-        self._terminal = term_room(self._rooms, action)
-        return TERM_NOTE
+        self._ended = True
+        self._terminal, note = term(self._rooms, action)
+        return note
 
     def _door_pose(self, layout: Layout, doorway: Doorway) -> WorldPose | None:
         """Through the doorway from one of its rooms; up to it from a third room."""
@@ -348,6 +355,6 @@ class ThorSimulator(SemanticStep):
             frame_digest=hashlib.sha256(frame.tobytes()).hexdigest(),
             jpeg=_jpeg(frame),
             frame=frame,
-            done=self._terminal is not None,
+            done=self._ended,
             terminal_room=self._terminal,
         )

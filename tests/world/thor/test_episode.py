@@ -18,7 +18,7 @@ from pytest_emrd.errors import ConfigError
 from pytest_emrd.metrics import episode_metrics
 from pytest_emrd.rooms import ROOM_NAMES
 from pytest_emrd.trajectory import EpisodeSpec, Trajectory
-from pytest_emrd.world import discoverable_ids, generate_layout, make_simulator
+from pytest_emrd.world import discoverable_ids, episode_world, generate_layout, make_simulator
 from pytest_emrd.world.thor import ThorSimulator
 
 
@@ -47,7 +47,7 @@ def test_scout_episode_on_thor_yields_a_trajectory_the_metrics_accept(
     assert traj.chosen_room in ROOM_NAMES and traj.rationale
     assert all(s.success and s.parse_error is None for s in traj.steps)
     assert len(traj.rooms_visited) >= 3
-    assert traj.ground_truth.discoverable_ids == discoverable_ids(generate_layout(spec.seed))
+    assert traj.ground_truth.discoverable_ids == discoverable_ids(episode_world(spec).layout)
     assert traj.steps[0].pose.x == traj.steps[0].pose.z == 0.0  # the spawn frame's origin
     again = Trajectory.from_dict(json.loads(json.dumps(traj.to_dict())))
     assert again == traj

@@ -165,7 +165,6 @@ def test_a_doorway_seen_from_a_third_room_is_walked_up_to(
         ("Jump(Desk_1)", "could not read 'Jump(Desk_1)'"),
         ("I will go to the desk", "could not read"),
         ("Turn(Up)", "cannot turn 'Up'"),
-        ("Term(Garage)", "'Garage' is not a room of this building"),
     ],
     ids=[
         "out-of-view",
@@ -174,7 +173,6 @@ def test_a_doorway_seen_from_a_third_room_is_walked_up_to(
         "unknown-verb",
         "prose",
         "bad-turn",
-        "unknown-room",
     ],
 )
 def test_invalid_actions_fail_the_step_without_moving(
@@ -198,6 +196,22 @@ def test_term_ends_the_episode(sim: ThorSimulator, layout: Layout) -> None:
         "Turn(Left) failed: the episode is over."
     )
     assert after.done and after.step == 2
+
+
+def test_term_outside_the_four_rooms_ends_the_episode_as_other(
+    sim: ThorSimulator, layout: Layout
+) -> None:
+    sim.reset(layout, "baseline", "Office", 3)
+    obs = sim.step("Term(Garage)")
+    assert obs.success and obs.done and obs.terminal_room is None
+    assert "'Garage' is not one of the four rooms" in obs.feedback
+
+
+def test_vision_feedback_on_thor_names_no_object_id(sim: ThorSimulator, layout: Layout) -> None:
+    start = sim.reset(layout, "baseline", "Office", 3, symbolic=False)
+    ids = [o.object_id for o in layout.objects]
+    feedback = sim.step("Goto(Piano)").feedback
+    assert start.visible and not [i for i in ids if i in feedback], feedback
 
 
 def test_term_accepts_slugs_and_room_aliases(fake_controller: type, layout: Layout) -> None:
