@@ -167,7 +167,7 @@ def resolve_room(text: str, variant: str) -> str | None:
 
 
 def _count(n: int, singular: str, plural: str, object_type: str) -> str:
-    article = "an" if singular[0] in "aeiou" else "a"
+    article = "an" if singular[0].lower() in "aeiou" else "a"
     return f"{article if n == 1 else n} {singular if n == 1 else plural} ({object_type})"
 
 

@@ -7,6 +7,8 @@ import re
 from pathlib import Path
 
 import pytest
+from hypothesis import given
+from hypothesis import strategies as st
 
 from pytest_emrd.agent import (
     NEUTRAL_NAMES,
@@ -18,7 +20,9 @@ from pytest_emrd.agent import (
 )
 from pytest_emrd.errors import ConfigError
 from pytest_emrd.rooms import ROOM_NAMES
+from pytest_emrd.agent._prompt import FURNITURE, furniture_profile, read_profile
 from pytest_emrd.trajectory import VARIANTS, Pose
+from pytest_emrd.world._feedback import with_pose
 from pytest_emrd.world._model import VisibleObject
 
 SNAPSHOTS = Path(__file__).parent / "snapshots"
@@ -48,19 +52,29 @@ def test_body_interventions_append_the_same_suffix_to_every_room(inventory, vari
         assert after == f"{before} {ROOM_SUFFIXES[variant]}"
 
 
-def test_neutral_renames_rooms_and_lists_room_a_first(inventory) -> None:
+def test_neutral_follows_appendix_e_order_and_names_no_room(inventory) -> None:
+    """Appendix E: (Conference Room, Entrance, Office, Kitchen) become Room A-D."""
+    assert list(NEUTRAL_NAMES.items()) == [
+        ("Room A", "Conference Room"),
+        ("Room B", "Entrance"),
+        ("Room C", "Office"),
+        ("Room D", "Kitchen"),
+    ]
     base = build_system_prompt(inventory, "default")
     neutral = build_system_prompt(inventory, "neutral")
-    assert not any(name in neutral for name in ROOM_NAMES)
+    assert not [name for name in ROOM_NAMES if re.search(rf"\b{name}\b", neutral)]
+    assert "The building has four rooms: Room A, Room B, Room C, Room D." in _lines(neutral)
     renamed = base
     for alias, room in NEUTRAL_NAMES.items():
-        renamed = renamed.replace(room, alias)
-    rooms_line = "The building has four rooms: Room A, Room B, Room C, Room D."
-    assert rooms_line in _lines(neutral)
-    assert sorted(_lines(renamed.replace("Room B, Room A", "Room A, Room B"))) == sorted(
-        _lines(neutral)
+        renamed = renamed.replace(f"- {room}:", f"- {alias}:")
+    rooms_line = "The building has four rooms: Office, Conference Room, Kitchen, Entrance."
+    assert sorted(_lines(renamed.replace(rooms_line, ""))) == sorted(
+        _lines(neutral.replace("The building has four rooms: Room A, Room B, Room C, Room D.", ""))
     )
-    assert "- Room A: 8 Chair, 1 DiningTable, 1 Television." in _lines(neutral)
+    assert (
+        "- Room A: a large conference table (DiningTable) + 8 chairs (Chair), "
+        "a wall-mounted television (Television)." in _lines(neutral)
+    )
 
 
 def test_no_inventory_keeps_type_names_but_drops_counts_and_mapping(inventory) -> None:
@@ -69,26 +83,37 @@ def test_no_inventory_keeps_type_names_but_drops_counts_and_mapping(inventory) -
     types = {t for counts in inventory.values() for t in counts} | {"Doorway"}
     goto_line = next(line for line in _lines(text) if line.startswith("Object types"))
     assert set(goto_line.split(": ", 1)[1].rstrip(".").split(", ")) == types
-    assert not re.search(r"\d+ (Chair|Desk|Fridge)", text)
+    assert "Furniture profile" not in text and "(Chair)" not in text
+    assert not re.search(r"\d+ (chairs|desks)", text)
     assert not any(line.startswith(f"- {room}:") for line in _lines(text) for room in ROOM_NAMES)
 
 
-def test_prompt_states_goals_budget_actions_and_reply_format(inventory) -> None:
-    text = build_system_prompt(inventory, "default", max_steps=30)
+@pytest.mark.parametrize(
+    ("modality", "goto"),
+    [("vision", "Goto(type)"), ("text", "Goto(target)"), ("both", "Goto(target)")],
+)
+def test_prompt_states_goals_budget_actions_and_reply_format(inventory, modality, goto) -> None:
+    text = build_system_prompt(inventory, "default", modality=modality, max_steps=30)
     for needle in (
-        "emergency responder",
+        "autonomous emergency responder",
+        "evacuated",
+        "safest evacuation gathering point",
         "budget of 30 actions",
         "DEDUPLICATION CHECK",
         "safest room",
-        "Goto(target)",
+        "a large conference table (DiningTable) + 8 chairs (Chair)",
+        goto,
         "Turn(Left)",
         "Turn(Around)",
         "Term(room)",
+        "Term always ends the run",
         '"cognitive_map"',
         '"dedup_check"',
         '"reasoning"',
     ):
         assert needle in text
+    assert ("Goto(Desk_2)" in text) is (modality != "vision")
+    assert ("camera frame" in text) is (modality != "text")
 
 
 def test_room_aliases() -> None:
@@ -101,7 +126,7 @@ def test_room_aliases() -> None:
     ("text", "variant", "expected"),
     [
         ("Room A", "neutral", "Conference Room"),
-        ("  'room d' ", "neutral", "Entrance"),
+        ("  'room d' ", "neutral", "Kitchen"),
         ("conference   room", "default", "Conference Room"),
         ("Kitchen", "neutral", "Kitchen"),
         ("entrance", "B1", "Entrance"),
@@ -127,17 +152,37 @@ def test_unknown_variant_is_a_config_error(inventory) -> None:
         build_system_prompt(inventory, "B5")
 
 
-def test_step_text_carries_counter_feedback_pose_and_symbolic_list() -> None:
+def test_step_text_carries_counter_feedback_with_one_pose_line_and_symbolic_list() -> None:
     visible = [VisibleObject("Chair_1", "Chair", -12.04, 2.345)]
-    text = step_text(
-        step=3, max_steps=50, feedback="Turned right.", pose=Pose(1.2, -0.4, 90.0), visible=visible
-    )
+    feedback = with_pose("Turn(Right) succeeded.", Pose(1.2, -0.4, 90.0))
+    text = step_text(step=3, max_steps=50, feedback=feedback, visible=visible)
     assert text.splitlines() == [
         "Step 3 of 50.",
-        "Engine feedback: Turned right.",
-        "Pose: x=1.20 z=-0.40 heading=90",
+        "Engine feedback: Turn(Right) succeeded. Pose: x=1.20 z=-0.40 heading=90.",
         "Visible objects (id | type | bearing deg, negative = left | distance m):",
         "- Chair_1 | Chair | -12.0 | 2.35",
     ]
-    vision_only = step_text(step=3, max_steps=50, feedback="ok", pose=Pose(0, 0, 0), visible=None)
+    assert text.count("Pose:") == 1
+    vision_only = step_text(step=3, max_steps=50, feedback=feedback, visible=None)
     assert "Visible" not in vision_only
+
+
+@given(
+    counts=st.dictionaries(
+        st.sampled_from([*FURNITURE, "Shelf", "ExitDoor"]), st.integers(1, 12), max_size=8
+    ),
+    room=st.sampled_from(ROOM_NAMES),
+)
+def test_furniture_profile_reads_back_to_the_counts(counts: dict[str, int], room: str) -> None:
+    text = furniture_profile(room, counts)
+    assert read_profile(text) == counts
+    assert (text == "nothing listed") is (not counts)
+
+
+def test_furniture_profile_worked_example() -> None:
+    assert furniture_profile("Conference Room", {"Chair": 8, "DiningTable": 1}) == (
+        "a large conference table (DiningTable) + 8 chairs (Chair)"
+    )
+    assert furniture_profile("Entrance", {"Desk": 1, "ArmChair": 2}) == (
+        "a reception desk (Desk), 2 armchairs (ArmChair)"
+    )

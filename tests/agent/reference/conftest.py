@@ -12,6 +12,7 @@ import pytest
 from pytest_emrd.agent import build_system_prompt, load_registry, step_text
 from pytest_emrd.agent.reference import reply_text
 from pytest_emrd.trajectory import Pose
+from pytest_emrd.world._feedback import with_pose
 from pytest_emrd.world._model import VisibleObject
 
 #: (id, type, bearing, distance) as the symbolic list gives them.
@@ -34,8 +35,7 @@ class Driver:
         text = step_text(
             step=self.step,
             max_steps=50,
-            feedback="ok",
-            pose=pose,
+            feedback=with_pose("ok", pose),
             visible=[VisibleObject(*v) for v in view],
         )
         messages = [{"role": "system", "content": self.system}]

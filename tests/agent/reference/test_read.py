@@ -13,6 +13,7 @@ from pytest_emrd.agent.reference._read import (
 from pytest_emrd.errors import ProtocolError
 from pytest_emrd.rooms import ROOM_NAMES
 from pytest_emrd.trajectory import VARIANTS, Pose
+from pytest_emrd.world._feedback import with_pose
 from pytest_emrd.world._model import VisibleObject
 
 
@@ -39,9 +40,8 @@ def test_percept_round_trips_the_step_text() -> None:
         VisibleObject("Chair_1", "Chair", -12.0, 2.35),
         VisibleObject("Doorway_2", "Doorway", 40.5, 4.0),
     ]
-    text = step_text(
-        step=7, max_steps=50, feedback="Moved.", pose=Pose(-1.5, 2.25, 270.0), visible=visible
-    )
+    feedback = with_pose("Goto(Chair) succeeded.", Pose(-1.5, 2.25, 270.0))
+    text = step_text(step=7, max_steps=50, feedback=feedback, visible=visible)
     percept = read_percept(text)
     assert (percept.step, percept.max_steps, percept.pose) == (7, 50, Pose(-1.5, 2.25, 270.0))
     assert [(s.object_id, s.object_type, s.bearing, s.distance) for s in percept.visible] == [
@@ -51,7 +51,8 @@ def test_percept_round_trips_the_step_text() -> None:
 
 
 def test_percept_without_symbolic_list_asks_for_text_modality() -> None:
-    text = step_text(step=1, max_steps=50, feedback="Start.", pose=Pose(0, 0, 0), visible=None)
+    feedback = with_pose("Start.", Pose(0, 0, 0))
+    text = step_text(step=1, max_steps=50, feedback=feedback, visible=None)
     with pytest.raises(ProtocolError, match="modality 'text' or 'both'"):
         read_percept(text)
 

@@ -11,6 +11,7 @@ import pytest
 from pytest_emrd.agent import build_system_prompt, parse_reply, step_text
 from pytest_emrd.agent.reference import REFERENCE_VERSION, ReferenceServer, reference_base_url
 from pytest_emrd.trajectory import Pose
+from pytest_emrd.world._feedback import with_pose
 from pytest_emrd.world._model import VisibleObject
 
 
@@ -29,8 +30,7 @@ def _body(inventory, model: str = "scout", *, symbolic: bool = True) -> dict:
     text = step_text(
         step=1,
         max_steps=50,
-        feedback="Episode started.",
-        pose=Pose(0.0, 0.0, 0.0),
+        feedback=with_pose("Episode started.", Pose(0.0, 0.0, 0.0)),
         visible=visible if symbolic else None,
     )
     return {
