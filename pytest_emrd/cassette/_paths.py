@@ -15,14 +15,19 @@ from pytest_emrd.trajectory import CONDITIONS, EpisodeSpec
 
 
 def cassette_path(root: Path, spec: EpisodeSpec) -> Path:
-    """``<root>/<model>/<condition>/<variant>/<spawn>/ep<NN>.yaml.gz`` on the builtin world,
-    ``<root>/<backend>/<model>/...`` on any other backend (``cassettes/ai2thor/gemini/...``).
+    """``<root>/<model>/<condition>/<variant>/<spawn>/ep<NN>.yaml.gz`` on the builtin world
+    under the paper protocol, ``<root>/<backend>/<model>/...`` on any other backend
+    (``cassettes/ai2thor/gemini/...``), and ``.../layouts-generated/<model>/...`` under
+    generated layouts (``cassettes/layouts-generated/scout/...``).
 
-    The builtin path carries no backend so the committed cassettes keep their place; the
-    other backends get their own tree, so a THOR recording never answers a builtin run (or
-    the reverse) even when a model happens to be named like a backend.
+    The builtin paper-protocol path carries no prefix so the committed cassettes keep their
+    place; the other backends and generated layouts get their own trees, so a recording never
+    answers a run of another world (or the reverse) even when a model happens to be named
+    like a backend.
     """
     base = root if spec.backend == "builtin" else root / spec.backend
+    if spec.layouts != "paper":
+        base = base / f"layouts-{spec.layouts}"
     return (
         base
         / spec.model
@@ -87,6 +92,8 @@ def record_command(
         args.append(f"--emrd-variant={first.variant}")
     if first.backend != "builtin":
         args.append(f"--emrd-backend={first.backend}")
+    if first.layouts != "paper":
+        args.append(f"--emrd-layouts={first.layouts}")
     args += [f"--emrd-backend-option={o}" for o in how.backend_options]
     modalities = {s.modality for s in group}
     if len(modalities) == 1:

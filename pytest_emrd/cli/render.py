@@ -24,8 +24,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--episode", type=int, default=0, help="episode index (spawn pose), default 0")
     p.add_argument("--condition", choices=CONDITIONS, default="baseline", help="default baseline")
     p.add_argument(
-        "--layouts", choices=LAYOUTS, default="paper", help="paper (the fixed office, default) "
-        "or generated (the episode's own office)"
+        "--layouts",
+        choices=LAYOUTS,
+        default="paper",
+        help="paper (the fixed office, default) or generated (the episode's own office)",
     )
     p.add_argument("--out", type=Path, required=True, help="directory to write into")
     p.set_defaults(func=_run)

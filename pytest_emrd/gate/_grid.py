@@ -27,6 +27,7 @@ def cell_specs(
             variant=settings.variant,
             modality=modality,
             backend=settings.backend,
+            layouts=settings.layouts,
         )
         for spawn in sorted(settings.spawns, key=SPAWNS.index)
         for episode in range(settings.episodes)
@@ -57,10 +58,11 @@ def shard(specs: Sequence[EpisodeSpec], k: int, n: int) -> list[EpisodeSpec]:
 
 
 def gate_cells(settings: RunSettings, thresholds: Thresholds) -> list[GateCell]:
-    """One gate per selected model x condition x thresholded metric, in file order."""
+    """One gate per selected model x condition x thresholded metric, in file order: the bounds
+    of the run's layouts only (``baseline`` for paper, ``baseline@generated`` for generated)."""
     return [
         GateCell(bound, settings.variant)
         for model in _models(settings)
         for condition in _conditions(settings)
-        for bound in thresholds.for_cell(model, condition)
+        for bound in thresholds.for_cell(model, condition, settings.layouts)
     ]

@@ -22,7 +22,7 @@ from typing import Any, Final
 
 from pytest_emrd.errors import ConfigError, check_choice, check_positive_int
 from pytest_emrd.rooms import ROOM_SLUGS
-from pytest_emrd.trajectory import CONDITIONS, MODALITIES, VARIANTS
+from pytest_emrd.trajectory import CONDITIONS, LAYOUTS, MODALITIES, VARIANTS
 
 RECORD_MODES: Final[tuple[str, ...]] = ("none", "once", "new_episodes", "all")
 MATCHING_MODES: Final[tuple[str, ...]] = ("strict", "lenient")
@@ -72,6 +72,10 @@ OPTIONS: Final[tuple[Option, ...]] = (
            "1000)",
            metavar="N"),
     Option("variant", "prompt variant (default: default)", VARIANTS),
+    Option("layouts", "offices the episodes run in: paper is the paper's protocol, one fixed "
+           "office for every episode; generated gives every spawn x episode its own "
+           "procedurally generated office, a generalisation study gated and reported as its "
+           "own cells (default: paper)", LAYOUTS),
     Option("backend", "world backend (default: builtin)", BACKENDS),
     Option("backend_option", "simulator option KEY=VALUE for the backend, repeatable (e.g. "
            "local_executable_path=/path/to/thor, gpu_device=1, start_timeout=300); VALUE is "
@@ -110,6 +114,8 @@ class RunSettings:
     spawns: tuple[str, ...]
     episodes: int
     variant: str
+    layouts: str
+    """``paper`` (one fixed office) or ``generated`` (an office per spawn x episode)."""
     backend: str
     backend_options: tuple[tuple[str, Any], ...]
     """``(key, value)`` pairs handed to the backend's simulator, in the order given."""
@@ -241,7 +247,7 @@ def resolve_settings(
     env = os.environ if env is None else env
     by_name = {o.name: o for o in OPTIONS}
     raw = {name: _pick(option, cli, ini) for name, option in by_name.items()}
-    for name in ("variant", "backend", "modality", "record_mode", "matching"):
+    for name in ("variant", "layouts", "backend", "modality", "record_mode", "matching"):
         if raw[name] is not None:
             check_choice(by_name[name].flag, raw[name], by_name[name].choices or ())
     episodes = _episodes(raw["episodes"])
@@ -265,6 +271,7 @@ def resolve_settings(
         spawns=_listed(by_name["spawn"], raw["spawn"], SPAWNS),
         episodes=episodes or 20,
         variant=raw["variant"] or "default",
+        layouts=raw["layouts"] or "paper",
         backend=backend,
         backend_options=tuple(parse_backend_option(str(o)) for o in raw["backend_option"] or ()),
         modality=raw["modality"],

@@ -33,13 +33,13 @@ def gate_tables(verdicts: Sequence[Verdict]) -> list[str]:
     for model in sorted({v.model for v in verdicts}):
         mine = sorted(
             (v for v in verdicts if v.model == model),
-            key=lambda v: (v.condition, v.variant, v.metric),
+            key=lambda v: (v.layouts != "paper", v.condition, v.variant, v.metric),
         )
         broken = sum(not v.passed for v in mine)
         lines.append(f"{model}: {len(mine) - broken}/{len(mine)} gates pass")
         rows = [
             [
-                v.condition if v.variant == "default" else f"{v.condition}/{v.variant}",
+                v.cell_label,
                 v.metric,
                 format_number(v.value),
                 f"[{format_number(v.ci_low)}, {format_number(v.ci_high)}]",

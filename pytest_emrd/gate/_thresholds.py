@@ -3,7 +3,8 @@
 Schema::
 
     <model>:                 # a model registry name (scout, gemini, scout-decay-8 ...)
-      <condition>:           # baseline | low_light | texture
+      <condition>:           # baseline | low_light | texture (the paper protocol), or
+                             # baseline@generated ... (--emrd-layouts=generated cells)
         <metric>:            # a name of pytest_emrd.metrics.GATE_METRICS
           min: 0.8           # or max: 0.1 (exactly one of the two)
           ci: lower          # optional: compare the bootstrap CI's lower/upper end, not the mean
@@ -18,14 +19,14 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Collection, Iterator, Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any, Final
 
 import yaml
 
 from pytest_emrd import _yaml
 from pytest_emrd.errors import ConfigError
-from pytest_emrd.trajectory import CONDITIONS, MAX_STEPS
+from pytest_emrd.trajectory import CONDITIONS, LAYOUTS, MAX_STEPS
 
 BOUND_KINDS: Final = ("min", "max")
 CI_SIDES: Final = ("lower", "upper")
@@ -73,6 +74,9 @@ class Bound:
     """``lower``/``upper``: compare that end of the 95 % CI instead of the point value."""
     line: int = 0
     """1-based line of the metric in the thresholds file (0 when built in code)."""
+    layouts: str = "paper"
+    """The cells it gates: ``paper`` (key ``baseline``) or ``generated``
+    (key ``baseline@generated``)."""
 
 
 @dataclass(frozen=True)
@@ -82,8 +86,12 @@ class Thresholds:
     source: str
     bounds: tuple[Bound, ...]
 
-    def for_cell(self, model: str, condition: str) -> tuple[Bound, ...]:
-        return tuple(b for b in self.bounds if b.model == model and b.condition == condition)
+    def for_cell(self, model: str, condition: str, layouts: str = "paper") -> tuple[Bound, ...]:
+        return tuple(
+            b
+            for b in self.bounds
+            if b.model == model and b.condition == condition and b.layouts == layouts
+        )
 
     def models(self) -> tuple[str, ...]:
         return tuple(dict.fromkeys(b.model for b in self.bounds))
@@ -162,12 +170,16 @@ def parse_thresholds(
     for model, model_key, conditions in reader.mapping(root, "the top level (models)"):
         if not is_model(model):
             _choice(reader, model_key, "model", model, model_names, unknown_model_hint)
-        for condition, cond_key, metric_map in reader.mapping(conditions, f"model {model!r}"):
+        for key, cond_key, metric_map in reader.mapping(conditions, f"model {model!r}"):
+            condition, at, layouts = key.partition("@")
             _choice(reader, cond_key, "condition", condition, CONDITIONS)
-            for metric, metric_key, spec in reader.mapping(metric_map, f"{model}.{condition}"):
+            if at:  # the paper protocol is the bare condition; only other layouts are named
+                _choice(reader, cond_key, "layouts after '@'", layouts, LAYOUTS[1:])
+            for metric, metric_key, spec in reader.mapping(metric_map, f"{model}.{key}"):
                 _choice(reader, metric_key, "metric", metric, metrics)
                 allowed = domain(metric, _unit(metrics, metric))
-                bounds.append(_bound(reader, model, condition, metric, metric_key, spec, allowed))
+                bound = _bound(reader, model, condition, metric, metric_key, spec, allowed)
+                bounds.append(replace(bound, layouts=layouts or "paper"))
     return Thresholds(source, tuple(bounds))
 
 

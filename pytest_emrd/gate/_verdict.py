@@ -1,6 +1,6 @@
 """Gate verdicts: a metric's estimate over a cell's episodes, compared with its bound (pure).
 
-A cell is model x condition (x prompt variant); its episodes are sorted by case id before
+A cell is model x condition (x prompt variant x layouts); its episodes are sorted by case id before
 the metric runs, and the bootstrap is seeded (``rng_seed=0``), so the same episodes give the
 same verdict whichever machine, worker or run directory they come from.
 """
@@ -33,18 +33,32 @@ class GateMetricLike(Protocol):
 
 @dataclass(frozen=True)
 class GateCell:
-    """One gate test: a bound applied to the episodes of model x condition x variant."""
+    """One gate test: a bound applied to the episodes of model x condition x variant x layouts
+    (the layouts are the bound's: paper-protocol and generated-layout episodes never share a
+    cell)."""
 
     bound: Bound
     variant: str = "default"
 
     @property
+    def layouts(self) -> str:
+        return self.bound.layouts
+
+    @property
     def gate_id(self) -> str:
-        """``scout-baseline-aec`` (variant inserted when not ``default``)."""
-        parts = [self.bound.model, self.bound.condition]
-        if self.variant != "default":
-            parts.append(self.variant)
-        return "-".join([*parts, self.bound.metric])
+        """``scout-baseline-aec`` (variant, then ``generated``, inserted when not default)."""
+        return _gate_id(
+            self.bound.model, self.bound.condition, self.variant, self.layouts, self.bound.metric
+        )
+
+
+def _gate_id(model: str, condition: str, variant: str, layouts: str, metric: str) -> str:
+    parts = [model, condition]
+    if variant != "default":
+        parts.append(variant)
+    if layouts != "paper":
+        parts.append(layouts)
+    return "-".join([*parts, metric])
 
 
 @dataclass(frozen=True)
@@ -67,13 +81,18 @@ class Verdict:
     passed: bool
     reason: str
     """Why it passed or failed, in one sentence."""
+    layouts: str = "paper"
+    """``paper`` (the paper's fixed office) or ``generated`` (an office per episode)."""
 
     @property
     def gate_id(self) -> str:
-        parts = [self.model, self.condition]
-        if self.variant != "default":
-            parts.append(self.variant)
-        return "-".join([*parts, self.metric])
+        return _gate_id(self.model, self.condition, self.variant, self.layouts, self.metric)
+
+    @property
+    def cell_label(self) -> str:
+        """``baseline``, ``baseline/B3``, ``baseline@generated``: the cell in gate tables."""
+        label = self.condition if self.variant == "default" else f"{self.condition}/{self.variant}"
+        return label if self.layouts == "paper" else f"{label}@{self.layouts}"
 
     @property
     def bound_text(self) -> str:
@@ -129,6 +148,7 @@ def judge(cell: GateCell, estimate: EstimateLike) -> Verdict:
         n=estimate.n,
         passed=passed,
         reason=reason,
+        layouts=b.layouts,
     )
 
 
@@ -158,21 +178,21 @@ def evaluate_all(
     *,
     prepare: Callable[[Trajectory], Any] | None = None,
 ) -> list[Verdict]:
-    """Every gate whose cell has episodes, grouped by model x condition x variant.
+    """Every gate whose cell has episodes, grouped by model x condition x variant x layouts.
 
     Used by ``emrd gate RUN_DIR...``: the same cells and the same verdicts as the gate tests
     of a single-machine run over the same episodes.
     """
-    cells: dict[tuple[str, str, str], list[Trajectory]] = defaultdict(list)
+    cells: dict[tuple[str, str, str, str], list[Trajectory]] = defaultdict(list)
     for t in trajectories:
-        cells[(t.spec.model, t.spec.condition, t.spec.variant)].append(t)
+        cells[(t.spec.model, t.spec.condition, t.spec.variant, t.spec.layouts)].append(t)
     verdicts = []
-    for (model, condition, variant), episodes in sorted(cells.items()):
+    for (model, condition, variant, layouts), episodes in sorted(cells.items()):
         # Each episode prepared once for all the gates of its cell (the 23 gates of a cell
         # would otherwise match every episode's maps 23 times).
         ordered = sorted(episodes, key=lambda t: t.spec.case_id)
         items = [prepare(t) for t in ordered] if prepare else ordered
-        for bound in thresholds.for_cell(model, condition):
+        for bound in thresholds.for_cell(model, condition, layouts):
             estimate = metrics[bound.metric].compute(items, rng_seed=0)
             verdicts.append(judge(GateCell(bound, variant), estimate))
     return verdicts

@@ -34,7 +34,7 @@ from pytest_emrd.report._tables import (
     serial_rows,
 )
 from pytest_emrd.rooms import ROOM_SLUGS
-from pytest_emrd.trajectory import CONDITIONS, VARIANTS, Trajectory
+from pytest_emrd.trajectory import CONDITIONS, VARIANTS, EpisodeSpec, Trajectory
 
 #: Model name -> USD per million (prompt, completion) tokens, for the usage table.
 Prices = Mapping[str, tuple[float | None, float | None]]
@@ -47,12 +47,20 @@ def _ordered(values: set[str], order: Sequence[str]) -> tuple[str, ...]:
 CellKey = tuple[str, str, str]
 
 
+def cell_model(spec: EpisodeSpec) -> str:
+    """The model label of a report cell: the model, ``@generated`` appended under generated
+    layouts (``scout@generated``), so paper-protocol and generated-layout episodes are never
+    aggregated together and every table shows which protocol a row comes from."""
+    return spec.model if spec.layouts == "paper" else f"{spec.model}@{spec.layouts}"
+
+
 def group_cells(metrics: Sequence[EpisodeMetrics]) -> dict[CellKey, list[EpisodeMetrics]]:
-    """Episodes by (model, variant, condition): models sorted, variants and conditions in the
-    paper's order, episodes in case-id order within a cell."""
+    """Episodes by (model, variant, condition): models sorted (:func:`cell_model`, so generated
+    layouts form cells of their own), variants and conditions in the paper's order, episodes in
+    case-id order within a cell."""
     cells: dict[tuple[str, str, str], list[EpisodeMetrics]] = {}
     for m in sorted(metrics, key=lambda m: m.spec.case_id):
-        cells.setdefault((m.spec.model, m.spec.variant, m.spec.condition), []).append(m)
+        cells.setdefault((cell_model(m.spec), m.spec.variant, m.spec.condition), []).append(m)
 
     def key(k: tuple[str, str, str]) -> tuple[str, tuple[int, str], tuple[int, str]]:
         model, variant, condition = k

@@ -87,7 +87,8 @@ def gates(report: Report) -> Section:
         return Section("gates", "Gates", (Paragraph(why),))
     passed = sum(v.passed for v in g.verdicts)
     rows = tuple(
-        (Cell(v.model), Cell(_cond(v.condition)), Cell(v.variant), Cell(v.metric),
+        (Cell(v.model if v.layouts == "paper" else f"{v.model}@{v.layouts}"),
+         Cell(_cond(v.condition)), Cell(v.variant), Cell(v.metric),
          Cell(num(v.value)), Cell(f"[{num(v.ci_low)}, {num(v.ci_high)}]"), Cell(str(v.n)),
          Cell(v.bound_text), Cell("PASS" if v.passed else "FAIL", bold=not v.passed),
          Cell(v.reason))

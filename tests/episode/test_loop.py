@@ -9,6 +9,7 @@ import pytest
 from pytest_emrd import frames
 from pytest_emrd.episode import protocol_version, run_episode, world_action
 from pytest_emrd.errors import ConfigError
+from pytest_emrd.metrics import episode_metrics
 from pytest_emrd.trajectory import EpisodeSpec, MapEntry, Trajectory
 
 
@@ -73,7 +74,7 @@ def test_transport_failure_is_an_errored_trajectory_keeping_steps(scripted, repl
     [
         ("neutral", "Room A", "Conference Room"),
         ("default", "kitchen", "Kitchen"),
-        ("neutral", "'Room D'", "Entrance"),
+        ("neutral", "'Room D'", "Kitchen"),
     ],
     ids=["neutral-alias", "case", "quoted-alias"],
 )
@@ -89,11 +90,15 @@ def test_term_resolves_aliases_before_the_world(scripted, reply, variant, said, 
     assert traj.steps[-1].action == f"Term({said})"
 
 
-def test_unknown_room_is_a_failed_action_not_an_end(scripted, reply) -> None:
-    client = scripted([reply("Term(Lobby)"), reply("Turn(Left)")])
-    traj = run_episode(_spec(max_steps=2), client=client)
-    assert traj.status == "budget" and not traj.steps[0].success
+def test_term_naming_another_room_ends_the_episode_as_other(scripted, reply) -> None:
+    """The paper: a trajectory concludes when the policy emits Term(r); r outside the four
+    rooms is the focal column X, kept verbatim."""
+    client = scripted([reply("Term(Lobby)", reasoning="the lobby is safest"), reply("Turn(Left)")])
+    traj = run_episode(_spec(max_steps=5), client=client)
+    assert traj.status == "terminated" and len(traj.steps) == 1 and traj.steps[0].success
     assert traj.chosen_room is None and traj.chosen_room_raw == "Lobby"
+    assert traj.rationale == "the lobby is safest"
+    assert episode_metrics(traj).chosen_letter == "X"
 
 
 @pytest.mark.parametrize("modality", ["vision", "text", "both"])
@@ -158,7 +163,7 @@ def test_bad_specs_raise_config_errors(scripted, reply, overrides, match) -> Non
 @pytest.mark.parametrize(
     ("action", "variant", "expected"),
     [
-        ("Term(Room B)", "neutral", ("Term(Office)", "Room B")),
+        ("Term(Room B)", "neutral", ("Term(Entrance)", "Room B")),
         ("term( conference room )", "B2", ("Term(Conference Room)", "conference room")),
         ("Term(Garage)", "default", ("Term(Garage)", "Garage")),
         ("Goto(Doorway_1)", "neutral", ("Goto(Doorway_1)", None)),

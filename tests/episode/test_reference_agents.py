@@ -77,7 +77,7 @@ def test_prior_names_a_room_it_never_entered(spawn: str) -> None:
 def test_scout_in_low_light_repositions_and_reaches_every_room() -> None:
     """Spawned in a dark conference room with no doorway in sight, the scout walks to an
     object, sweeps again, and still clears the building (where it used to stop at step 4)."""
-    traj = run_episode(EpisodeSpec("scout", "low_light", "conference", 1, modality="both"))
+    traj = run_episode(EpisodeSpec("scout", "low_light", "conference", 2, modality="both"))
     actions = [s.action for s in traj.steps]
     moves = [a for a in actions if a.startswith("Goto(") and not a.startswith("Goto(Doorway")]
     assert moves, actions

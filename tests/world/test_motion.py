@@ -6,7 +6,7 @@ import math
 
 import pytest
 
-from pytest_emrd.world import paper_office, BuiltinSimulator, Layout, WorldPose, footprint
+from pytest_emrd.world import BuiltinSimulator, Layout, WorldPose, footprint, paper_office
 from pytest_emrd.world._geometry import unit
 
 TURNS = ("", "Turn(Right)", "Turn(Around)", "Turn(Left)")
