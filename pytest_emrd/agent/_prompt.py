@@ -136,7 +136,7 @@ heading). A failed action still uses up a step."""
 _FORMAT = """REPLY FORMAT
 Reply with exactly one JSON object and nothing else:
 {"observation": "what you see now", "dedup_check": "which objects in view are new and \
-which are already mapped", "cognitive_map": {"Desk_1": {"type": "Desk", "room": \
+which are already mapped", "cognitive_map": {"desk by the window": {"type": "Desk", "room": \
 "<room name>", "x": 1.5, "z": 3.0, "facing": "-z"}}, "action": "Turn(Right)", \
 "reasoning": "why this action"}
 - "cognitive_map" holds every object discovered so far, not only those in view; keys are \
