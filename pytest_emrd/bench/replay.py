@@ -195,15 +195,12 @@ def _size_ratio(specs: tuple[EpisodeSpec, ...]) -> float:
 def world_alone(trajectory: Trajectory) -> None:
     """What the episode loop asks of the world for ``trajectory``, and nothing else."""
     from pytest_emrd import world
-    from pytest_emrd.episode import build_simulator, world_action
-    from pytest_emrd.rooms import SLUG_ROOMS
+    from pytest_emrd.episode import build_simulator, start_world, world_action
 
     spec = trajectory.spec
-    layout = world.generate_layout(spec.seed)
     sim = build_simulator(spec.backend)
-    room = SLUG_ROOMS[spec.spawn]
-    sim.reset(layout, spec.condition, room, spec.seed)
-    world.ground_truth(layout, sim.spawn_pose, room)
+    layout, _ = start_world(spec, sim)
+    world.ground_truth(layout, sim.spawn_pose, spec.spawn)
     for step in trajectory.steps:
         sim.current_room()
         sim.visible_ids()

@@ -14,10 +14,8 @@ import math
 from dataclasses import dataclass, replace
 from typing import Any, Final
 
-from pytest_emrd import world
 from pytest_emrd.agent import HISTORY_TURNS, Conversation, UserTurn, build_system_prompt
-from pytest_emrd.episode import build_simulator, user_turn
-from pytest_emrd.rooms import SLUG_ROOMS
+from pytest_emrd.episode import build_simulator, start_world, user_turn
 from pytest_emrd.trajectory import EpisodeSpec
 
 SWEEP_ACTION: Final = "Turn(Right)"
@@ -66,17 +64,18 @@ class Sweep:
 
 def sweep(spec: EpisodeSpec, *, single_image: bool, steps: int = HISTORY_TURNS) -> Sweep:
     """The first ``steps`` user turns of ``spec`` on the built-in world, turning right."""
-    layout = world.generate_layout(spec.seed)
     sim = build_simulator("builtin")
     try:
-        obs = sim.reset(layout, spec.condition, SLUG_ROOMS[spec.spawn], spec.seed)
+        layout, obs = start_world(spec, sim)
         turns = []
         for t in range(1, steps + 1):
             turns.append(user_turn(spec, t, obs))
             obs = sim.step(SWEEP_ACTION)
     finally:
         sim.close()
-    system = build_system_prompt(layout.inventory(), spec.variant, max_steps=spec.max_steps)
+    system = build_system_prompt(
+        layout.inventory(), spec.variant, modality=spec.modality, max_steps=spec.max_steps
+    )
     return Sweep(system, tuple(turns), single_image)
 
 

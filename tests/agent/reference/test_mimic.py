@@ -128,8 +128,8 @@ def test_hallucinations_name_no_type_of_the_office(phrase: str) -> None:
         assert canonical_type(label, present=set(PHRASES)) is None
 
 
-def _episode(model: str, spawn: str = "office", k: int = 0) -> Trajectory:
-    return run_episode(EpisodeSpec(model, "baseline", spawn, k, modality="both"))
+def _episode(model: str, spawn: str = "office", k: int = 0, layouts: str = "paper") -> Trajectory:
+    return run_episode(EpisodeSpec(model, "baseline", spawn, k, modality="both", layouts=layouts))
 
 
 @pytest.fixture(scope="module")
@@ -177,7 +177,8 @@ def test_wasted_steps_do_not_change_its_decisions(clean: Trajectory) -> None:
 
 def test_duplicates_come_on_re_entry_and_grow_with_p() -> None:
     def dups(model: str) -> set[tuple[str, int]]:
-        state = read_state(_episode(model).steps[-1].raw_reply)
+        # the scout never re-enters a room of the paper's office; this generated one it does
+        state = read_state(_episode(model, "entrance", 2, "generated").steps[-1].raw_reply)
         ids = [r["id"] for r in state["map"].values() if "id" in r]
         return {(r["id"], r["visit"]) for r in state["map"].values()
                 if "id" in r and ids.count(r["id"]) > 1 and "x" not in r}  # fmt: skip
