@@ -52,3 +52,21 @@ def test_gate_cells_follow_selected_models_and_conditions():
     )
     cells = gate_cells(_settings(condition=["baseline"]), Thresholds("t", bounds))
     assert [c.gate_id for c in cells] == ["scout-baseline-aec"]
+
+
+def test_generated_layouts_form_their_own_episodes_and_gate_cells():
+    bounds = (
+        Bound("scout", "baseline", "aec", "min", 0.9),
+        Bound("scout", "baseline", "aec", "min", 0.7, layouts="generated"),
+    )
+    thresholds = Thresholds("t.yaml", bounds)
+    paper = _settings(episodes="1", condition=["baseline"])
+    generated = _settings(episodes="1", condition=["baseline"], layouts="generated")
+    spec = episode_specs(generated, lambda m: "both")[0]
+    assert spec.layouts == "generated"
+    assert spec.case_id == "scout-baseline-generated-office-ep00"
+    assert episode_specs(paper, lambda m: "both")[0].case_id == "scout-baseline-office-ep00"
+    assert [c.gate_id for c in gate_cells(paper, thresholds)] == ["scout-baseline-aec"]
+    assert [c.gate_id for c in gate_cells(generated, thresholds)] == [
+        "scout-baseline-generated-aec"
+    ]

@@ -115,3 +115,19 @@ def test_missing_thresholds_file_says_how_to_fix(tmp_path):
 
     with pytest.raises(ConfigError, match="--emrd-thresholds"):
         load_thresholds(tmp_path / "nope.yaml", registry=load_registry(), metrics=())
+
+
+def test_generated_layout_bounds_are_their_own_cells():
+    t = _parse(
+        "scout:\n  baseline:\n    aec: {min: 0.9}\n  baseline@generated:\n    aec: {min: 0.7}\n"
+    )
+    paper, generated = t.bounds
+    assert (paper.layouts, generated.layouts) == ("paper", "generated")
+    assert t.for_cell("scout", "baseline") == (paper,)
+    assert t.for_cell("scout", "baseline", "generated") == (generated,)
+
+
+@pytest.mark.parametrize("key", ["baseline@many", "baseline@paper", "baseline@"])
+def test_unknown_layouts_qualifier_names_the_allowed_one(key):
+    with pytest.raises(ConfigError, match=r"line 2: unknown layouts after '@'.*allowed: generated"):
+        _parse(f"scout:\n  {key}:\n    aec: {{min: 0.9}}\n")

@@ -16,12 +16,19 @@ from pytest_emrd.trajectory import EpisodeSpec, Trajectory
 
 @pytest.fixture(scope="module")
 def recorded() -> list[Trajectory]:
-    """scout and scout-decay-4, baseline and low light, two spawn rooms (8 episodes)."""
+    """scout and scout-decay-4, baseline and low light, two spawn rooms (8 episodes), and one
+    scout episode on a generated office where it re-enters a room (SIR; the scout never
+    re-enters a room of the paper's office): its own report row, ``scout@generated``."""
     return [
-        run_episode(EpisodeSpec(model, condition, spawn, 0, modality="text"))
-        for model in ("scout", "scout-decay-4")
-        for condition in ("baseline", "low_light")
-        for spawn in ("office", "entrance")
+        *(
+            run_episode(EpisodeSpec(model, condition, spawn, 0, modality="text"))
+            for model in ("scout", "scout-decay-4")
+            for condition in ("baseline", "low_light")
+            for spawn in ("office", "entrance")
+        ),
+        run_episode(
+            EpisodeSpec("scout", "low_light", "office", 0, modality="text", layouts="generated")
+        ),
     ]
 
 
@@ -38,10 +45,13 @@ def test_report_of_a_small_recorded_run(recorded, make_run_dir, tmp_path: Path) 
     by_key = {(r["model"], r["condition"]): r for r in data["exploration"]}
     for model in ("scout", "scout-decay-4"):
         for condition in ("baseline", "low_light"):
-            cell = sorted((t for t in recorded if (t.spec.model, t.spec.condition)
-                           == (model, condition)), key=lambda t: t.spec.case_id)  # fmt: skip
+            key = (model, condition, "paper")
+            cell = sorted((t for t in recorded
+                           if (t.spec.model, t.spec.condition, t.spec.layouts) == key),
+                          key=lambda t: t.spec.case_id)  # fmt: skip
             expected = metrics.GATE_METRICS["aec"].compute(cell)
             assert by_key[(model, condition)]["aec"]["value"] == expected.value
     assert data["gates"]["verdicts"], "thresholds.yaml gates the scout reference agent"
     md = (out / "report.md").read_text()
     assert "## Gates" in md and "| scout |" in md
+    assert ("scout@generated", "low_light") in by_key, "generated layouts are their own row"
