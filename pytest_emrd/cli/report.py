@@ -50,6 +50,13 @@ def register(sub: argparse._SubParsersAction) -> None:
         help="gates file for the gate section (default: ./thresholds.yaml if it exists)",
     )
     p.add_argument("--models", type=Path, default=None, help="user model registry YAML")
+    p.add_argument(
+        "--episode",
+        default=None,
+        metavar="CASE_ID",
+        help="episode the map figure shows, e.g. scout-low_light-kitchen-ep07 (default: the "
+        "first baseline episode with a non-empty map)",
+    )
     p.add_argument("--seed", type=int, default=0, help="bootstrap seed of --compare (default 0)")
     p.set_defaults(func=_run)
 
@@ -99,6 +106,7 @@ def _report(args: argparse.Namespace, formats: list[str]) -> int:
         thresholds_source=source,
         prices=prices,
         episode_metrics=metrics,
+        episode=args.episode,
     )
     out = args.out if args.out is not None else args.run_dirs[0] / "report"
     written = write_report(report, out, formats)

@@ -7,8 +7,8 @@ from collections import Counter
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 
-from pytest_emrd.metrics._episode import EpisodeLike, split_errored
-from pytest_emrd.rooms import FOCAL_COLUMNS, OTHER_LETTER
+from pytest_emrd.metrics._episode import EpisodeLike, EpisodeMetrics, split_errored
+from pytest_emrd.rooms import FOCAL_COLUMNS, OTHER_LETTER, ROOM_LETTERS, SLUG_ROOMS
 
 
 @dataclass(frozen=True)
@@ -20,16 +20,36 @@ class FocalRow:
     """Letter (``C``, ``O``, ``K``, ``E``, ``X``) -> episodes."""
     fractions: dict[str, float]
     """Letter -> share of ``n`` in [0, 1] (all 0.0 when ``n = 0``)."""
+    named_other: int = 0
+    """Episodes of ``X`` that ended with ``Term(r)``, ``r`` outside the four rooms."""
+    no_term: int = 0
+    """Episodes of ``X`` that never terminated (the action budget ran out)."""
+    chose_spawn: int = 0
+    """Episodes that chose the room they spawned in (Appendix F's recency/proximity bias)."""
+
+    @property
+    def spawn_share(self) -> float | None:
+        """``chose_spawn / n`` in [0, 1] (Appendix F: 50.6 %, chance 25 %); None when n = 0."""
+        return self.chose_spawn / self.n if self.n else None
 
 
-def _row(letters: Sequence[str]) -> FocalRow:
+def _row(items: Sequence[EpisodeMetrics]) -> FocalRow:
+    letters = [m.chosen_letter for m in items]
     counts = Counter(letters)
     n = len(letters)
+    other = [m for m in items if m.chosen_letter == OTHER_LETTER]
     return FocalRow(
         n,
         {c: counts.get(c, 0) for c in FOCAL_COLUMNS},
         {c: (counts.get(c, 0) / n if n else 0.0) for c in FOCAL_COLUMNS},
+        named_other=sum(m.status == "terminated" for m in other),
+        no_term=sum(m.status != "terminated" for m in other),
+        chose_spawn=sum(m.chosen_letter == _spawn_letter(m.spec.spawn) for m in items),
     )
+
+
+def _spawn_letter(spawn: str) -> str:
+    return ROOM_LETTERS.get(SLUG_ROOMS.get(spawn, spawn), OTHER_LETTER)
 
 
 @dataclass(frozen=True)
@@ -46,16 +66,18 @@ class FocalDistribution:
 def focal_distribution(items: Iterable[EpisodeLike]) -> FocalDistribution:
     """Chosen-room distribution (C/O/K/E/X) by spawn room, as fractions in [0, 1].
 
-    ``X`` is anything but the four rooms, including no ``Term`` and unknown room names.
+    ``X`` is anything but the four rooms; each row also counts its two kinds apart
+    (``named_other``: a ``Term`` naming another room; ``no_term``: the budget ran out) and the
+    episodes that chose their spawn room (Appendix F's share; an ``X`` never counts).
     Errored episodes are excluded and counted. No episodes: empty ``by_spawn``, ``n = 0``.
     """
     kept, excluded = split_errored(items)
-    by_spawn: dict[str, list[str]] = {}
+    by_spawn: dict[str, list[EpisodeMetrics]] = {}
     for m in kept:
-        by_spawn.setdefault(m.spec.spawn, []).append(m.chosen_letter)
+        by_spawn.setdefault(m.spec.spawn, []).append(m)
     return FocalDistribution(
-        {spawn: _row(letters) for spawn, letters in by_spawn.items()},
-        _row([m.chosen_letter for m in kept]),
+        {spawn: _row(group) for spawn, group in by_spawn.items()},
+        _row(kept),
         excluded,
     )
 

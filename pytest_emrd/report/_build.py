@@ -164,6 +164,7 @@ def build_report(
     prices: Prices | None = None,
     with_reasoning: bool = True,
     episode_metrics: Sequence[EpisodeMetrics] | None = None,
+    episode: str | None = None,
 ) -> Report:
     """Every table and figure of the paper for ``trajectories`` (any models, conditions,
     variants; errored episodes are excluded and reported).
@@ -172,7 +173,9 @@ def build_report(
     ``thresholds_source``; ``embed`` replaces the ``nlp`` extra's sentence encoder for the
     representative-reasoning table; ``prices`` adds estimated cost to the usage table;
     ``with_reasoning=False`` leaves that table empty (no sentence encoder is loaded);
-    ``episode_metrics`` are the trajectories' metrics when the caller computed them already.
+    ``episode_metrics`` are the trajectories' metrics when the caller computed them already;
+    ``episode`` is the case id of the episode the map figure shows (default: the first
+    baseline episode with a non-empty map).
     """
     metrics = as_episode_metrics(trajectories if episode_metrics is None else episode_metrics)
     cells: Cells = group_cells(metrics)
@@ -182,7 +185,7 @@ def build_report(
     overview = _overview(trajectories, prices)
     gates = Gates(thresholds_source, tuple(verdicts or ()))
     reasons = reasoning(by_label, embed) if with_reasoning else Reasoning(())
-    chosen = pick_episode(trajectories)
+    chosen = pick_episode(trajectories, episode)
     return Report(
         overview=overview,
         missing=_missing(trajectories, overview, gates, reasons),

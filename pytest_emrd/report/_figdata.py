@@ -7,6 +7,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from pytest_emrd.errors import ConfigError
 from pytest_emrd.metrics import (
     EpisodeMetrics,
     Matching,
@@ -69,9 +70,23 @@ def sir_series(cells: Cells) -> tuple[SIRSeries, ...]:
     )
 
 
-def pick_episode(trajectories: Sequence[Trajectory]) -> Trajectory | None:
-    """The episode the map figure shows: the first non-errored one (baseline first, case-id
-    order) whose terminal map holds an entry; None when there is none."""
+def pick_episode(
+    trajectories: Sequence[Trajectory], case_id: str | None = None
+) -> Trajectory | None:
+    """The episode the map figure shows: ``case_id`` when given (a :class:`ConfigError` naming
+    a few of the run's case ids when the run has no such episode), else the first non-errored
+    one (baseline first, case-id order) whose terminal map holds an entry; None when there is
+    none."""
+    if case_id is not None:
+        found = [t for t in trajectories if t.spec.case_id == case_id]
+        if not found:
+            held = sorted(t.spec.case_id for t in trajectories)
+            shown = ", ".join(held[:3]) + (", ..." if len(held) > 3 else "")
+            raise ConfigError(
+                f"episode={case_id!r} is not in the run ({len(held)} episodes: {shown}); "
+                "pass a case id as the test ids show it, e.g. scout-baseline-office-ep00."
+            )
+        return found[0]
     candidates = [t for t in trajectories if t.status != "errored" and t.final_map]
     if not candidates:
         return None

@@ -21,7 +21,7 @@ from pytest_emrd.report._document import (
     pval,
 )
 from pytest_emrd.report._model import InterventionTable, Report, row_label
-from pytest_emrd.report._style import CONDITION_NAMES, FIGURES
+from pytest_emrd.report._style import CONDITION_NAMES, FIGURES, FigureSpec
 from pytest_emrd.rooms import FOCAL_COLUMNS, ROOM_LETTERS, SLUG_ROOMS
 
 R = TypeVar("R")
@@ -117,6 +117,12 @@ def _focal_cells(row: FocalRow) -> tuple[Cell, ...]:
     return tuple(Cell(pct(row.fractions[c]), shade=row.fractions[c]) for c in FOCAL_COLUMNS)
 
 
+def _x_split(row: FocalRow) -> tuple[Cell, Cell, Cell]:
+    share = row.spawn_share
+    return (Cell(str(row.named_other)), Cell(str(row.no_term)),
+            Cell("n/a" if share is None else pct(share)))  # fmt: skip
+
+
 def _spawn_order(item: tuple[str, FocalRow]) -> int:
     """The paper's row order of start rooms: C, O, K, E."""
     letter = ROOM_LETTERS.get(SLUG_ROOMS.get(item[0], ""), "X")
@@ -131,15 +137,20 @@ def focal(report: Report) -> Section:
         for t in (t for t in report.focal if row_label(t.model, t.variant) == label):
             for spawn, row in sorted(t.distribution.by_spawn.items(), key=_spawn_order):
                 rows.append((Cell(_cond(t.condition)), Cell(SLUG_ROOMS.get(spawn, spawn)),
-                             Cell(str(row.n)), *_focal_cells(row), Cell("")))  # fmt: skip
+                             Cell(str(row.n)), *_focal_cells(row), *_x_split(row),
+                             Cell("")))  # fmt: skip
             c = t.consensus
             share = "n/a" if c.share is None else f"{c.letter or '—'} {pct(c.share)}%"
+            overall = t.distribution.overall
             rows.append((Cell(_cond(t.condition)), Cell("all spawns", bold=True),
-                         Cell(str(t.distribution.overall.n)),
-                         *_focal_cells(t.distribution.overall), Cell(share)))  # fmt: skip
-        header = ("Condition", "Start", "n", *FOCAL_COLUMNS, "Consensus")
+                         Cell(str(overall.n)), *_focal_cells(overall), *_x_split(overall),
+                         Cell(share)))  # fmt: skip
+        header = ("Condition", "Start", "n", *FOCAL_COLUMNS, "X: other room", "X: no Term",
+                  "Spawn room (%)", "Consensus")  # fmt: skip
         caption = (f"{label}: chosen focal point (%) by spawn room — C Conference, O Office, "
-                   "K Kitchen, E Entrance, X other / no choice")  # fmt: skip
+                   "K Kitchen, E Entrance, X other: counted apart as a Term naming another "
+                   "room and no Term (budget spent); Spawn room: the share that chose the room "
+                   "they started in (Appendix F: 50.6 %, chance 25 %)")  # fmt: skip
         tables.append(Table(f"focal-{label}", caption, header, tuple(rows)))
     return Section("focal", "Focal-Point distribution", tuple(tables))
 
@@ -193,16 +204,29 @@ def ebbinghaus(report: Report) -> Section:
 
 
 def serial_position(report: Report) -> Section:
-    rows = _pivot(
+    """Both estimators: the paper's Eq. SPE and the censoring-aware MLE per third."""
+    paper = _pivot(
         report,
         report.serial_position,
         lambda r: (num(r.spe.early, 1), num(r.spe.middle, 1), num(r.spe.late, 1)),
         3,
     )
+    mle = _pivot(
+        report,
+        report.serial_position,
+        lambda r: (num(r.spe.mle_early, 1), num(r.spe.mle_middle, 1), num(r.spe.mle_late, 1)),
+        3,
+    )
     header = ("Model", *_per_condition(report, "E", "M", "L"))
-    caption = "Serial Position Effect: mean TTF (steps) of Early / Middle / Late discoveries"
-    return Section("serial-position", "Serial Position Effect",
-                   (Table("serial-position", caption, header, tuple(rows)),))  # fmt: skip
+    caption = ("Serial Position Effect (paper's Eq. SPE): mean observed TTF (steps) of Early / "
+               "Middle / Late discoveries, episode-end censoring ignored")  # fmt: skip
+    caption_mle = ("Serial Position Effect, censoring-aware: Σ durations / forgetting events "
+                   "(steps) per third, the MLE of Eq. SMLE; inf: nothing of that third was "
+                   "forgotten")  # fmt: skip
+    return Section("serial-position", "Serial Position Effect", (
+        Table("serial-position", caption, header, tuple(paper)),
+        Table("serial-position-mle", caption_mle, header, tuple(mle)),
+    ))  # fmt: skip
 
 
 def _intervention(t: InterventionTable) -> list[Block]:
@@ -269,8 +293,16 @@ def reasoning(report: Report) -> Section:
                    (Table("reasoning", caption, header, rows),))  # fmt: skip
 
 
-def figures(skipped: dict[str, str]) -> Section:
-    refs = tuple(FigureRef(f.name, f.title, f.caption, skipped.get(f.name)) for f in FIGURES)
+def figures(report: Report, skipped: dict[str, str]) -> Section:
+    """Every figure; the episode map's caption names its episode (``emrd report --episode``)."""
+    shown = report.episode_map.case_id if report.episode_map is not None else None
+
+    def caption(f: FigureSpec) -> str:
+        if f.name != "episode_map.png" or shown is None:
+            return f.caption
+        return f"{f.caption} Episode {shown} (choose another with --episode CASE_ID)."
+
+    refs = tuple(FigureRef(f.name, f.title, caption(f), skipped.get(f.name)) for f in FIGURES)
     return Section("figures", "Figures", refs)
 
 
@@ -279,7 +311,7 @@ def report_document(report: Report, skipped: dict[str, str]) -> Document:
     return Document("EMRD report", (
         overview(report), gates(report), exploration(report), focal(report), fpsg(report),
         ebbinghaus(report), serial_position(report), interventions(report), reasoning(report),
-        figures(skipped),
+        figures(report, skipped),
     ))  # fmt: skip
 
 

@@ -70,3 +70,29 @@ def test_fpsg_summary_row(small_grid_metrics: list[EpisodeMetrics]) -> None:
 def test_fpsg_summary_without_choices(make_traj: MakeTraj) -> None:
     row = fpsg(_choices(make_traj, OFFICE, [None]))
     assert (row.never_visited, row.any_bias, row.local_mean, row.local_sd) == (None,) * 4
+
+
+def test_other_is_split_into_another_room_and_no_term(make_traj: MakeTraj) -> None:
+    """X = a Term naming something outside the four rooms, or no Term at all (budget)."""
+    named = make_traj([], [(OFFICE, [], {})], chosen=None, spawn=OFFICE)  # Term(Lobby)
+    budget = make_traj([], [(OFFICE, [], {})], chosen=None, spawn=OFFICE, status="budget")
+    kept = make_traj([], [(OFFICE, [], {})], chosen=OFFICE, spawn=OFFICE, episode=2)
+    row = focal_distribution([named, budget, kept]).overall
+    assert row.counts["X"] == 2 and (row.named_other, row.no_term) == (1, 1)
+    assert (row.chose_spawn, row.spawn_share) == (1, pytest.approx(1 / 3))
+
+
+def test_spawn_room_share_worked_example_appendix_f(make_traj: MakeTraj) -> None:
+    """Appendix F's per-spawn table: 16 + 1 + 11 + 13 = 41 of 81 chose their spawn room."""
+    rows = {
+        CONFERENCE: [CONFERENCE] * 16 + [KITCHEN] + [ENTRANCE] * 4,
+        OFFICE: [CONFERENCE] * 2 + [KITCHEN] * 13 + [ENTRANCE] * 4 + [OFFICE],
+        KITCHEN: [CONFERENCE] * 4 + [KITCHEN] * 11 + [ENTRANCE] + [OFFICE] * 4,
+        ENTRANCE: [KITCHEN] * 6 + [ENTRANCE] * 13 + [OFFICE],
+    }
+    trajs = [t for spawn, chosen in rows.items() for t in _choices(make_traj, spawn, chosen)]
+    dist = focal_distribution(trajs)
+    assert (dist.overall.chose_spawn, dist.overall.n) == (41, 81)
+    assert round(100 * dist.overall.spawn_share, 1) == 50.6
+    assert dist.by_spawn["conference"].spawn_share == pytest.approx(16 / 21)
+    assert focal_distribution([]).overall.spawn_share is None

@@ -98,3 +98,39 @@ def test_usage_errors_exit_2(argv: list[str], message: str, capsys, tmp_path, mo
     monkeypatch.chdir(tmp_path)
     assert main(argv) == 2
     assert message in capsys.readouterr().err
+
+
+def test_episode_option_picks_the_map_figure_episode(run_dir: Path, tmp_path: Path) -> None:
+    out = tmp_path / "out"
+    chosen = "scout-low_light-kitchen-ep00"
+    assert main(["report", str(run_dir), "--out", str(out), "--episode", chosen]) == 0
+    data = json.loads((out / "report.json").read_text())
+    assert data["episode_map"]["case_id"] == chosen
+    assert chosen in (out / "report.md").read_text()
+
+
+def test_unknown_episode_names_the_run_s_case_ids(run_dir: Path, tmp_path: Path, capsys) -> None:
+    code = main(["report", str(run_dir), "--out", str(tmp_path), "--episode", "scout-nope-ep99"])
+    assert code == 2
+    err = capsys.readouterr().err
+    assert "episode='scout-nope-ep99' is not in the run (12 episodes: scout-baseline-" in err
+
+
+def test_markdown_and_html_carry_both_serial_position_estimators(
+    run_dir: Path, tmp_path: Path
+) -> None:
+    out = tmp_path / "out"
+    assert main(["report", str(run_dir), "--out", str(out), "--format", "md,html"]) == 0
+    for name in ("report.md", "report.html"):
+        text = (out / name).read_text()
+        assert "Eq. SPE" in text and "censoring-aware" in text and "Eq. SMLE" in text
+
+
+def test_focal_table_counts_other_apart_and_the_spawn_room_share(
+    run_dir: Path, tmp_path: Path
+) -> None:
+    out = tmp_path / "out"
+    assert main(["report", str(run_dir), "--out", str(out), "--format", "md,html"]) == 0
+    for name in ("report.md", "report.html"):
+        text = (out / name).read_text()
+        assert "X: other room" in text and "X: no Term" in text and "Spawn room (%)" in text
