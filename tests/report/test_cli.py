@@ -116,21 +116,19 @@ def test_unknown_episode_names_the_run_s_case_ids(run_dir: Path, tmp_path: Path,
     assert "episode='scout-nope-ep99' is not in the run (12 episodes: scout-baseline-" in err
 
 
-def test_markdown_and_html_carry_both_serial_position_estimators(
-    run_dir: Path, tmp_path: Path
+@pytest.mark.parametrize(
+    "needles",
+    [
+        ("Eq. SPE", "censoring-aware", "Eq. SMLE"),
+        ("X: other room", "X: no Term", "Spawn room (%)"),
+    ],
+    ids=["both-serial-position-estimators", "other-split-and-spawn-room-share"],
+)
+def test_markdown_and_html_carry_the_protocol_tables(
+    run_dir: Path, tmp_path: Path, needles: tuple[str, ...]
 ) -> None:
     out = tmp_path / "out"
     assert main(["report", str(run_dir), "--out", str(out), "--format", "md,html"]) == 0
     for name in ("report.md", "report.html"):
         text = (out / name).read_text()
-        assert "Eq. SPE" in text and "censoring-aware" in text and "Eq. SMLE" in text
-
-
-def test_focal_table_counts_other_apart_and_the_spawn_room_share(
-    run_dir: Path, tmp_path: Path
-) -> None:
-    out = tmp_path / "out"
-    assert main(["report", str(run_dir), "--out", str(out), "--format", "md,html"]) == 0
-    for name in ("report.md", "report.html"):
-        text = (out / name).read_text()
-        assert "X: other room" in text and "X: no Term" in text and "Spawn room (%)" in text
+        assert all(n in text for n in needles), (name, needles)
