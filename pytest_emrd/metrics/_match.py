@@ -1,56 +1,80 @@
 """Label-to-ground-truth matching: the one procedure every metric uses.
 
 A model writes its cognitive map as ``{label: {type, x, z, room}}`` with labels and types of
-its own choosing and coordinates in a frame it was told about but may not honour. Every
-metric that needs to know *which physical object* a map entry stands for calls
-:func:`match_map`, which runs these steps, in this order, deterministically:
+its own choosing and coordinates in a frame of its own: the paper's "arbitrary egocentric
+origins", which it resolves "using an optimal rigid-body Procrustes alignment". Every metric
+that needs to know *which physical object* a map entry stands for calls :func:`match_map`
+(episodes: :class:`Matcher`, once per step), which decides, for the map ``M_t`` of one step
+and from that map alone:
 
-0. **Carry identities** (episodes only; see :func:`match_map`'s ``carried``). A label that
-   kept an object at the previous step keeps it while its type still resolves to that
-   object's type. Steps 3-4 then assign the remaining entries among the remaining objects.
-1. **Deduplicate labels.** A label is one recorded instance; a repeated label keeps its first
-   entry (the JSON map is keyed by label, so repeats only come from malformed input).
-2. **Resolve a type** (:mod:`pytest_emrd.metrics._vocab`). The entry's ``object_type`` is
-   tried first, then its label. The text is normalised (``type_key``: lower case, ``(...)``
-   asides removed, separators removed, trailing instance suffixes such as ``_2``, ``#3``,
-   `` b`` removed) and looked up among the
-   ground-truth types of this episode, then in ``SYNONYMS`` (first candidate present in the
-   ground truth wins, so ``table`` is a ``DiningTable`` where the layout has one and a ``Desk``
-   where it has no table), then without a plural ``s``. Text that resolves to no ground-truth
-   type leaves the entry *unrecognised*.
-3. **Align on anchors.** Types with exactly one ground-truth instance and exactly one entry are
-   unambiguous anchors. With two or more anchors at distinct predicted positions, the map is
-   rigidly aligned (rotation + translation, :func:`rigid_fit`) onto the anchors' ground truth
-   before step 4; otherwise the model's coordinates are used as written (nominally the spawn
-   frame). The assignment is therefore invariant under any rigid motion of the predicted map
-   whenever two anchors exist (every EMRD layout has singleton types: Fridge, Television,
-   Door, ...), which is what lets Positional Accuracy forgive an arbitrary model frame.
-4. **Assign per type.** For each type, the optimal one-to-one assignment
-   (:func:`scipy.optimize.linear_sum_assignment`) between its entries and its ground-truth
-   instances minimises the summed Euclidean distance in the aligned frame; exactly
-   ``min(|M_k|, |E_k|)`` pairs are formed. Entries beyond the instance count stay *unmatched*.
-   A single entry takes the nearest free instance (ties: lowest object id); entries are
-   ordered by label and objects by id, and costs are rounded to 1e-9 m, so ties resolve the
-   same way on every machine.
+1. **Labels.** A label is one recorded instance; a repeated label keeps its first entry (the
+   JSON map is keyed by label, so repeats only come from malformed input).
+2. **Types** (:mod:`pytest_emrd.metrics._vocab`). The entry's ``object_type`` is read first,
+   then its label, by :func:`~pytest_emrd.metrics.canonical_type` restricted to the types the
+   layout holds. An entry that denotes no type of the layout is *unrecognised* (a
+   hallucination): it is matched to nothing.
+3. **Correspondence and alignment, jointly.** Among the assignments that pair, per type
+   ``k``, exactly ``min(|M_k|, |E_k|)`` entries with distinct objects of type ``k`` (the
+   paper's AEC cap), the one chosen is the one whose optimal proper rigid motion
+   (Procrustes, :func:`rigid_fit`) leaves the smallest sum of squared residuals: the
+   correspondence under which the map is most accurate, i.e. the RMSE of Eq. PA minimised
+   over the correspondences the labels' types allow as well as over the motion. It is found
+   by alternating per-type optimal assignment (:func:`scipy.optimize.linear_sum_assignment`)
+   and Procrustes refit from *frame-free seeds*:
+
+   * **Determined frame.** When the map holds two or more *anchors* at distinct written
+     positions (an anchor is an entry whose type has one entry in the map and one instance
+     in the layout, so its object is fixed by its type alone: ``Fridge``, ``Television``,
+     ``Door`` in every EMRD layout), the seed is the Procrustes fit of the anchors.
+   * **Undetermined frame** (fewer than two anchors). The seeds are the motions that carry
+     two base entries onto every pair of candidate objects (see
+     :func:`pytest_emrd.metrics._align.hypotheses`); the lowest residual wins.
+
+   Every seed is computed from distances and residuals only, so the result is the same in
+   every frame: the matching, and every metric built on it, is **invariant under any proper
+   rigid motion** (rotation + translation) of the map, exactly, not approximately (residuals
+   and distances are compared at 1e-9 relative precision so ties break alike in every frame;
+   remaining exact ties go to the lowest object id). It is also invariant under the order of
+   the entries, and under any consistent renaming of the labels except where two
+   correspondences fit exactly equally well.
+
+**Reflections are not forgiven.** The paper's alignment is rigid-body: rotation and
+translation, ``det R = +1``. A mirrored map (left and right swapped) cannot be rotated onto
+the layout; it keeps its residual and Positional Accuracy falls (except for a collinear map,
+which a half-turn maps onto its own mirror image). Swapping left and right is a spatial
+error a responder must not make, so we do not forgive it by allowing improper alignments.
+
+**Identity over time.** Identities are decided per step, from that step's map only: no
+identity decided at one step is carried to the next, so a choice made while the frame was
+undetermined (one chair in the map: which chair?) is revised as soon as the map holds more.
+Objects are followed across steps by label (Appendix B: "matched across time steps
+exclusively using the string labels"): a label is the object its entry is matched to at
+that step, and Spatial Identity Resolution asks whether it still is on re-entry.
 
 **No distance gate.** A type-correct entry is matched however far it lies from its object:
-(a) coordinates are in an untrusted frame, and a gate in that frame would punish exactly the
-frame offsets Procrustes is meant to forgive; (b) the paper's coverage (Eq. AEC) counts
-instances per type with a ``min`` cap and no position test, and matching must agree with it:
-``|K| = sum_k min(|M_k|, |E_k|)`` so that AEC is ``|K| / |E|``. Geometric error is the job of
-Positional Accuracy, not of the matcher.
+(a) a gate would have to be set in the model's untrusted frame; (b) the paper's coverage
+(Eq. AEC) counts instances per type with a ``min`` cap and no position test, and matching
+must agree with it: ``|K| = sum_k min(|M_k|, |E_k|)`` so that AEC is ``|K| / |E|``.
+Geometric error is the job of Positional Accuracy, not of the matcher.
 """
 
 from __future__ import annotations
 
 import math
 from collections import Counter
-from collections.abc import Mapping, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Final, NamedTuple
 
 import numpy as np
 
+from pytest_emrd.metrics._align import (
+    COINCIDENT_M,
+    Problem,
+    assign,
+    procrustes,
+    undetermined_fit,
+)
 from pytest_emrd.metrics._vocab import TypeResolver
 from pytest_emrd.trajectory import GroundTruthObject, MapEntry
 
@@ -82,8 +106,9 @@ class Matching:
     """Labels whose type resolves to no ground-truth type (sorted)."""
     duplicates: tuple[str, ...]
     """Labels that appeared more than once; only their first entry was used."""
-    anchored: bool
-    """Whether the anchor alignment of step 3 was applied before assigning."""
+    determined: bool
+    """Whether two or more anchors determined the frame (step 3); else correspondence
+    hypotheses did."""
 
     @property
     def object_ids(self) -> frozenset[str]:
@@ -95,29 +120,10 @@ class Matching:
         return {p.object_id: p.label for p in self.pairs}
 
 
-_ROUND: Final = 9
-"""Decimals (metres) costs are rounded to, so ties break the same way on every machine."""
-
 EMPTY_MATCHING: Final = Matching((), (), (), (), False)
 
-
-def _rigid(
-    pred: Sequence[tuple[float, float]], true: Sequence[tuple[float, float]]
-) -> tuple[float, float, float, float]:
-    """``(cos, sin, tx, tz)`` of the optimal proper rigid motion (see :func:`rigid_fit`)."""
-    n = len(pred)
-    pcx = math.fsum(p[0] for p in pred) / n
-    pcz = math.fsum(p[1] for p in pred) / n
-    qcx = math.fsum(q[0] for q in true) / n
-    qcz = math.fsum(q[1] for q in true) / n
-    dot = cross = 0.0
-    for (px, pz), (qx, qz) in zip(pred, true, strict=True):
-        ax, az, bx, bz = px - pcx, pz - pcz, qx - qcx, qz - qcz
-        dot += ax * bx + az * bz
-        cross += ax * bz - az * bx
-    theta = math.atan2(cross, dot) if (dot or cross) else 0.0
-    c, s = math.cos(theta), math.sin(theta)
-    return c, s, qcx - (c * pcx - s * pcz), qcz - (s * pcx + c * pcz)
+Key = tuple[tuple[str, int, float, float], ...]
+"""A map's recognised entries as ``(label, type index, x, z)``, sorted by label."""
 
 
 def rigid_fit(pred: np.ndarray, true: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -129,11 +135,10 @@ def rigid_fit(pred: np.ndarray, true: np.ndarray) -> tuple[np.ndarray, np.ndarra
     Degenerate input (one point, or all points coincident) gives the identity rotation and
     the translation between centroids.
     """
-    c, s, tx, tz = _rigid(
-        [(p[0], p[1]) for p in np.asarray(pred, dtype=float).tolist()],
-        [(q[0], q[1]) for q in np.asarray(true, dtype=float).tolist()],
+    m = procrustes(
+        np.asarray(pred, dtype=float).reshape(-1, 2), np.asarray(true, dtype=float).reshape(-1, 2)
     )
-    return np.array([[c, -s], [s, c]]), np.array([tx, tz])
+    return np.array([[m.c, -m.s], [m.s, m.c]]), np.array([m.tx, m.tz])
 
 
 class Assignment(NamedTuple):
@@ -146,14 +151,16 @@ class Assignment(NamedTuple):
     unmatched: tuple[str, ...]
     unrecognised: tuple[str, ...]
     duplicates: tuple[str, ...]
-    anchored: bool
+    determined: bool
+    anchors: frozenset[str]
+    """Labels of the anchors that determined the frame (empty when undetermined)."""
 
 
 class Matcher:
     """:func:`match_map` bound to one episode's ground truth, reusable across its steps.
 
-    Holds only per-episode look-up tables (type resolution of each text seen so far);
-    matching one map never depends on previous calls except through ``carried``.
+    Holds per-episode look-up tables (the type of each text seen so far) and the result of
+    every distinct map already matched afresh.
     """
 
     def __init__(self, objects: Sequence[GroundTruthObject]) -> None:
@@ -161,122 +168,108 @@ class Matcher:
         self._objects = ordered
         self._types = TypeResolver(o.object_type for o in ordered)
         self._ids = [o.object_id for o in ordered]
-        self._index = {oid: c for c, oid in enumerate(self._ids)}
-        self._obj_type_list = [self._types.index[o.object_type] for o in ordered]
-        self._xy = [(o.x, o.z) for o in ordered]
-        self._cols_of_type: list[list[int]] = [[] for _ in self._types.names]
-        for c, k in enumerate(self._obj_type_list):
-            self._cols_of_type[k].append(c)
-        self._singleton_col = [cols[0] if len(cols) == 1 else -1 for cols in self._cols_of_type]
+        self._true = np.array([(o.x, o.z) for o in ordered], dtype=float).reshape(-1, 2)
+        self._true_kinds = np.array([self._types.index[o.object_type] for o in ordered], dtype=int)
+        self._kind_of = self._true_kinds.tolist()
+        self._count = np.bincount(self._true_kinds, minlength=len(self._types.names)).tolist()
+        self._first = [self._kind_of.index(k) if n else -1 for k, n in enumerate(self._count)]
+        self._true_extent = _extent(self._true)
+        self._points = tuple((float(o.x), float(o.z)) for o in ordered)
+        self._cols_of: dict[int, tuple[int, ...]] = {}
+        for c, k in enumerate(self._kind_of):
+            self._cols_of[k] = (*self._cols_of.get(k, ()), c)
+        self._done: dict[Key, tuple[dict[str, int], bool]] = {}
 
-    def assign(
-        self, entries: Sequence[MapEntry], carried: Mapping[str, int] | None = None
-    ) -> Assignment:
-        """Steps 0-4 of the procedure on plain dicts (the fast path of episodes).
+    def assign(self, entries: Sequence[MapEntry], previous: Assignment | None = None) -> Assignment:
+        """Steps 1-4 of the procedure on plain dicts (the fast path of episodes).
 
-        ``carried`` maps labels to object indices (sorted-by-id order) they kept from the
-        previous step: such a label, present again with a type that still resolves to its
-        object's type, keeps its object; the other recognised entries are assigned among the
-        objects not kept.
+        ``previous`` is the assignment of the step before (episodes only): when both steps
+        are determined by the same anchors, its identities are carried (step 4).
         """
         seen: dict[str, MapEntry] = {}
-        identity: dict[str, int] = {}
-        todo: dict[int, list[str]] = {}
         type_of: dict[str, int] = {}
         unrecognised: list[str] = []
-        known = self._types.known
         resolve = self._types.resolve
-        obj_type = self._obj_type_list
-        carried = carried or {}
         for e in entries:
-            lb = e.label
-            if lb in seen:
+            if e.label in seen:
                 continue
-            seen[lb] = e
-            k = known.get((e.object_type, lb))
-            if k is None:
-                k = resolve(e.object_type, lb)
+            seen[e.label] = e
+            k = resolve(e.object_type, e.label)
             if k < 0:
-                unrecognised.append(lb)
-                continue
-            type_of[lb] = k
-            c = carried.get(lb, -1)
-            if c >= 0 and obj_type[c] == k:
-                identity[lb] = c
+                unrecognised.append(e.label)
             else:
-                todo.setdefault(k, []).append(lb)
+                type_of[e.label] = k
         duplicates: tuple[str, ...] = ()
         if len(seen) != len(entries):
             counts = Counter(e.label for e in entries)
             duplicates = tuple(sorted(lb for lb, n in counts.items() if n > 1))
-        kept = set(identity.values())
-        hard: list[tuple[list[str], list[int]]] = []
-        for k, labels in todo.items():
-            free = [c for c in self._cols_of_type[k] if c not in kept]
-            if len(free) == 1 and len(labels) == 1:
-                identity[labels[0]] = free[0]
-            elif free:
-                hard.append((labels, free))
-        anchored = False
-        if hard:
-            anchored = self._assign_by_position(seen, type_of, hard, identity)
-        unmatched = tuple(sorted(lb for lb in type_of if lb not in identity))
+        labels = sorted(type_of)
+        key = tuple((lb, type_of[lb], float(seen[lb].x), float(seen[lb].z)) for lb in labels)
+        in_map = Counter(type_of.values())
+        count = self._count
+        rows = [r for r, (_, k, _, _) in enumerate(key) if in_map[k] == 1 and count[k] == 1]
+        determined = len(rows) >= 2 and _spread([key[r][2:] for r in rows]) > COINCIDENT_M
+        anchors = frozenset(key[r][0] for r in rows) if determined else frozenset()
+        if determined and previous is not None and previous.anchors == anchors:
+            kind_of = self._kind_of
+            identity = {
+                lb: c for lb, c in previous.identity.items()
+                if type_of.get(lb, -1) == kind_of[c]
+            }  # fmt: skip
+            if len(identity) < len(key):
+                identity.update(self._in_frame(key, rows, identity))
+        else:
+            done = self._done.get(key)  # a map seen before (parse failures repeat the last)
+            if done is None:
+                done = self._afresh(key, rows if determined else None)
+                self._done[key] = done
+            identity = done[0]
+        unmatched = tuple(lb for lb in labels if lb not in identity)
         return Assignment(
-            seen, identity, unmatched, tuple(sorted(unrecognised)), duplicates, anchored
-        )
+            seen, identity, unmatched, tuple(sorted(unrecognised)), duplicates, determined,
+            anchors,
+        )  # fmt: skip
 
-    def _assign_by_position(
-        self,
-        seen: dict[str, MapEntry],
-        type_of: dict[str, int],
-        hard: list[tuple[list[str], list[int]]],
-        identity: dict[str, int],
-    ) -> bool:
-        """Steps 3-4 for the types whose assignment is not forced; fills ``identity``.
+    def _afresh(self, key: Key, anchor_rows: list[int] | None) -> tuple[dict[str, int], bool]:
+        """Step 3: every identity of a map decided from the map alone."""
+        if not key:
+            return {}, False
+        if anchor_rows is not None:
+            return self._in_frame(key, anchor_rows, {}), True
+        pred = np.array([(x, z) for _, _, x, z in key], dtype=float)
+        kinds = np.array([k for _, k, _, _ in key], dtype=int)
+        problem = Problem(
+            pred, kinds, self._true, self._true_kinds, self._true_extent, self._points,
+            self._cols_of,
+        )  # fmt: skip
+        pairs = undetermined_fit(problem)
+        return {key[r][0]: c for r, c in pairs}, False
 
-        Per type: one label takes the nearest free object (ties: lowest object id); several
-        labels go through :func:`linear_sum_assignment` on the (label, object) distances.
-        """
-        from scipy.optimize import linear_sum_assignment  # heavy: imported on first use
-
-        motion = self._align(seen, type_of)
-        c, s, tx, tz = motion if motion is not None else (1.0, 0.0, 0.0, 0.0)
-        xy = self._xy
-        for labels, free in hard:
-            points = [
-                (c * seen[lb].x - s * seen[lb].z + tx, s * seen[lb].x + c * seen[lb].z + tz)
-                for lb in sorted(labels)
-            ]
-            if len(points) == 1:
-                px, pz = points[0]
-                best = min(free, key=lambda o: (round(math.hypot(xy[o][0] - px, xy[o][1] - pz),
-                                                      _ROUND), o))  # fmt: skip
-                identity[labels[0]] = best
-                continue
-            cost = np.round(
-                np.hypot(
-                    np.subtract.outer([p[0] for p in points], [xy[o][0] for o in free]),
-                    np.subtract.outer([p[1] for p in points], [xy[o][1] for o in free]),
-                ),
-                _ROUND,
-            )
-            ordered = sorted(labels)
-            for r, col in zip(*linear_sum_assignment(cost), strict=True):
-                identity[ordered[int(r)]] = free[int(col)]
-        return motion is not None
+    def _in_frame(self, key: Key, anchor_rows: list[int], kept: dict[str, int]) -> dict[str, int]:
+        """The labels of ``key`` not in ``kept``, assigned among the objects not kept, in the
+        frame the anchors fix (:func:`procrustes` of the anchors onto their objects)."""
+        first = self._first
+        a_pred = np.array([key[r][2:] for r in anchor_rows], dtype=float)
+        a_true = self._true[[first[key[r][1]] for r in anchor_rows]]
+        todo = [r for r, entry in enumerate(key) if entry[0] not in kept]
+        pred = np.array([key[r][2:] for r in todo], dtype=float)
+        kinds = np.array([key[r][1] for r in todo], dtype=int)
+        true_kinds = self._true_kinds
+        if kept:
+            true_kinds = true_kinds.copy()
+            true_kinds[list(kept.values())] = -1
+        problem = Problem(pred, kinds, self._true, true_kinds, self._true_extent)
+        pairs = assign(problem, procrustes(a_pred, a_true))
+        return {key[todo[r]][0]: c for r, c in pairs}
 
     def held(self, assignment: Assignment) -> dict[str, str]:
         """Object id -> label of an assignment (what :attr:`Matching.label_of` gives)."""
         ids = self._ids
         return {ids[c]: lb for lb, c in assignment.identity.items()}
 
-    def match(
-        self, entries: Sequence[MapEntry], carried: Mapping[str, str] | None = None
-    ) -> Matching:
-        """Match one cognitive map (see the module docstring)."""
-        index = self._index
-        kept = {lb: index[oid] for lb, oid in (carried or {}).items() if oid in index}
-        return self.matching(self.assign(entries, kept))
+    def match(self, entries: Sequence[MapEntry]) -> Matching:
+        """Match one cognitive map afresh (see the module docstring)."""
+        return self.matching(self.assign(entries))
 
     def matching(self, a: Assignment) -> Matching:
         """The :class:`Matching` of an assignment."""
@@ -288,50 +281,37 @@ class Matcher:
                     object_type=self._objects[c].object_type,
                     pred_x=float(a.entries[lb].x),
                     pred_z=float(a.entries[lb].z),
-                    true_x=self._xy[c][0],
-                    true_z=self._xy[c][1],
+                    true_x=float(self._true[c, 0]),
+                    true_z=float(self._true[c, 1]),
                 )
                 for lb, c in a.identity.items()
             ),
             key=lambda p: p.object_id,
         )
-        return Matching(tuple(pairs), a.unmatched, a.unrecognised, a.duplicates, a.anchored)
-
-    def _align(
-        self, seen: dict[str, MapEntry], type_of: dict[str, int]
-    ) -> tuple[float, float, float, float] | None:
-        """Step 3: the anchor alignment, or None when fewer than two distinct anchors."""
-        singleton = self._singleton_col
-        candidates = [(lb, singleton[k]) for lb, k in type_of.items() if singleton[k] >= 0]
-        counts = Counter(c for _, c in candidates)
-        anchors = sorted((lb, c) for lb, c in candidates if counts[c] == 1)
-        if len(anchors) < 2:
-            return None
-        pred = [(seen[lb].x, seen[lb].z) for lb, _ in anchors]
-        xs = [p[0] for p in pred]
-        zs = [p[1] for p in pred]
-        if max(max(xs) - min(xs), max(zs) - min(zs)) <= 1e-9:
-            return None
-        return _rigid(pred, [self._xy[c] for _, c in anchors])
+        return Matching(tuple(pairs), a.unmatched, a.unrecognised, a.duplicates, a.determined)
 
 
-def match_map(
-    entries: Sequence[MapEntry],
-    objects: Sequence[GroundTruthObject],
-    *,
-    carried: Mapping[str, str] | None = None,
-) -> Matching:
+def _extent(xy: np.ndarray) -> float:
+    """Largest distance of a point from the centroid (0.0 for no point)."""
+    if not len(xy):
+        return 0.0
+    return float(np.max(np.hypot(*(xy - xy.mean(axis=0)).T)))
+
+
+def _spread(points: Sequence[tuple[float, float]]) -> float:
+    """Largest distance of a point from the first: 0.0 when all coincide (rigid-invariant)."""
+    return max(math.dist(points[0], p) for p in points)
+
+
+def match_map(entries: Sequence[MapEntry], objects: Sequence[GroundTruthObject]) -> Matching:
     """Match a cognitive map to ground truth: THE procedure of every EMRD metric.
 
-    See the module docstring of :mod:`pytest_emrd.metrics._match` for the steps and why no
-    distance gate applies. ``carried`` (label -> object id) is the identity each label held at
-    the previous step: a label still present with a type of its object's type keeps it (step
-    0), and only the other entries are assigned, among the objects not kept. Episodes apply
-    the procedure step by step this way, so a label is one object for as long as it stays in
-    the map (the paper tracks objects across steps by label, Appendix B).
+    See the module docstring of :mod:`pytest_emrd.metrics._match` for the steps, why the
+    result does not depend on the model's frame, and why no distance gate applies.
 
     Edge cases: an empty map or an empty ground truth gives no pairs; entries whose type is
-    unknown are listed in ``unrecognised``; a single entry and a single object of the same type
-    always match; a carried id absent from ``objects`` is ignored.
+    unknown are listed in ``unrecognised``; a single entry and a single object of the same
+    type always match; a single entry of a type with several instances takes the first of
+    them by id (with one point nothing in the map can tell them apart).
     """
-    return Matcher(objects).match(entries, carried)
+    return Matcher(objects).match(entries)

@@ -6,10 +6,10 @@ the :class:`Track` built here, so an episode's steps are matched once.
 
 Definitions (step ``t`` is 1-based; see :mod:`pytest_emrd.trajectory` for the timeline):
 
-* ``held(o, t)``: ground-truth object ``o`` is in the map ``M_t``: :func:`match_map` applied
-  step by step (each step carrying the previous step's label identities) assigns one of
-  ``M_t``'s entries to it. The terminal map's matching (used by AEC, PA and FPSG) is the last
-  step's, so a label is judged against the object it stood for when it was written.
+* ``held(o, t)``: ground-truth object ``o`` is in the map ``M_t``: the matching of ``M_t``
+  (:mod:`._match`: decided afresh, or carried from ``M_{t-1}`` only while the same anchors
+  determine both frames) assigns one of its entries to it. The terminal map's matching (used
+  by AEC, PA and FPSG) is the last step's.
 * ``in_view(o, t)``: ``o`` is among ``visible_ids`` of step ``t``.
 * **Spell** (out-of-view interval): starts at step ``s`` when ``o`` was in view and held at
   ``s-1`` and is out of view at ``s``. From ``s`` on, the map is checked at every step:
@@ -19,7 +19,9 @@ Definitions (step ``t`` is 1-based; see :mod:`pytest_emrd.trajectory` for the ti
   ``t - s`` when ``o`` comes back into view at ``t`` still held, and at ``T - s + 1`` when the
   episode ends at ``T`` still held. An object mapped while out of view opens no spell.
 * **Discovery** of ``o``: the first step it is held; discovery rank orders discovered objects
-  by ``(first step, object id)``.
+  by first step, and objects first held at the same step in the order the model wrote their
+  entries in that step's map (the model's own order of discovery; never by id string, which
+  would put ``Chair_10`` before ``Chair_2``).
 * Miller's law and TBS follow the paper in tracking *labels* across steps ("objects are
   matched across time steps exclusively using the string labels", Appendix B).
 """
@@ -121,19 +123,19 @@ def track_episode(traj: Trajectory) -> Track:
     held: list[dict[str, str]] = []
     tbs: list[float] = []
     first_pos: dict[str, tuple[float, float]] = {}
-    prev_map: object = None
+    written: list[dict[str, int]] = []
     assignment: Assignment | None = None
     for step in traj.steps:
+        order: dict[str, int] = {}
         for e in step.cognitive_map:
             first_pos.setdefault(e.label, (e.x, e.z))
-        if assignment is None or step.cognitive_map is not prev_map:
-            carried = assignment.identity if assignment is not None else None
-            assignment = matcher.assign(step.cognitive_map, carried)
-            prev_map = step.cognitive_map
+            order.setdefault(e.label, len(order))
+        written.append(order)
+        assignment = matcher.assign(step.cognitive_map, assignment)
         held.append(matcher.held(assignment))
         if g_base:
             tbs.append(_tbs_value(assignment, first_pos, scale, g_base))
-    discovery = _discovery(held)
+    discovery = _discovery(held, written)
     loads, forgets = _miller(traj)
     final = matcher.matching(assignment) if assignment is not None else EMPTY_MATCHING
     return Track(
@@ -148,12 +150,14 @@ def track_episode(traj: Trajectory) -> Track:
     )
 
 
-def _discovery(held: list[dict[str, str]]) -> dict[str, int]:
-    first: dict[str, int] = {}
+def _discovery(held: list[dict[str, str]], written: list[dict[str, int]]) -> dict[str, int]:
+    """Object id -> discovery rank: by first step held, then by entry order in that map."""
+    first: dict[str, tuple[int, int]] = {}
     for t, h in enumerate(held):
-        for oid in h:
-            first.setdefault(oid, t)
-    order = sorted(first, key=lambda oid: (first[oid], oid))
+        for oid, label in h.items():
+            if oid not in first:
+                first[oid] = (t, written[t][label])
+    order = sorted(first, key=first.__getitem__)
     return {oid: rank for rank, oid in enumerate(order, start=1)}
 
 
