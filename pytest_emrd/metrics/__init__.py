@@ -24,6 +24,7 @@ from pytest_emrd.metrics._decide import (
 )
 from pytest_emrd.metrics._episode import EpisodeMetrics, as_episode_metrics, episode_metrics
 from pytest_emrd.metrics._explore_map import TBSCurve, positional_accuracy, tbs_curve
+from pytest_emrd.metrics._frame import random_reframe, reframe
 from pytest_emrd.metrics._gates import GATE_METRICS, GateMetric, evaluate_gates
 from pytest_emrd.metrics._match import MatchedPair, Matching, match_map, rigid_fit
 from pytest_emrd.metrics._reasoning import Representative, representative_reasoning
@@ -127,6 +128,8 @@ __all__ = [
     "miller_curve",
     "positional_accuracy",
     "positional_accuracy_score",
+    "random_reframe",
+    "reframe",
     "representative_reasoning",
     "rigid_fit",
     "serial_position",

@@ -179,8 +179,8 @@ def hypotheses(problem: Problem) -> list[Motion]:
     coincident with ``a`` (ties: farthest from ``a``). Every pair of distinct candidates
     ``(o_a, o_b)`` gives the motion fitting ``a -> o_a, b -> o_b``; the
     :data:`MAX_HYPOTHESES` whose ground-truth distance best matches the written one are kept
-    (ties: object order). When every entry coincides with ``a`` no rotation can be read:
-    translations ``a -> o_a`` only.
+    (ties: object order). When no entry can serve as ``b`` (every entry coincides with ``a``,
+    or all share ``a``'s single object) no rotation can be read: translations ``a -> o_a``.
     """
     pred: list[Point] = [(x, z) for x, z in problem.pred.tolist()]
     true = problem.true_points
@@ -191,7 +191,8 @@ def hypotheses(problem: Problem) -> list[Motion]:
     order = range(len(pred))
     a = min(order, key=lambda i: (len(cand[i]), -round(math.dist(pred[i], (cx, cz)), d1)))
     gap = [round(math.dist(pred[i], pred[a]), d1) for i in order]
-    others = [i for i in order if gap[i] > COINCIDENT_M]
+    # b needs a direction (not coincident with a) and an object other than a's
+    others = [i for i in order if gap[i] > COINCIDENT_M and len({*cand[a], *cand[i]}) > 1]
     if not others:
         return [Motion(1.0, 0.0, true[o][0] - pred[a][0], true[o][1] - pred[a][1]) for o in cand[a]]
     b = min(others, key=lambda i: (len(cand[i]), -gap[i]))
