@@ -207,14 +207,16 @@ def hypotheses(problem: Problem) -> list[Motion]:
     ]
 
 
-def undetermined_fit(problem: Problem) -> Pairs:
+def undetermined_fit(problem: Problem, named: Motion | None = None) -> Pairs:
     """Correspondence of a map whose frame no anchors determine: a joint estimate.
 
-    Every seed of :func:`hypotheses` is scored at once by the summed squared distance of each
-    entry to its nearest object of its type after the seed's motion; the best seed (ties: the
-    first) is refined by :func:`refine`.
+    The seeds are ``named`` (the fit of the entries whose labels name an object id, when the
+    caller has one) followed by those of :func:`hypotheses`. Every seed is scored at once by
+    the summed squared distance of each entry to its nearest object of its type after the
+    seed's motion; the best seed (ties: the first, so labels naming ids decide between fits
+    the geometry cannot tell apart) is refined by :func:`refine`.
     """
-    seeds = hypotheses(problem)
+    seeds = ([named] if named is not None else []) + hypotheses(problem)
     if not seeds:
         return ()
     if len(seeds) > 1:

@@ -125,6 +125,10 @@ class FPSGSummary:
     global_mean: float | None
     global_sd: float | None
     excluded: int
+    local_mean_ex_doorways: float | None = None
+    """``local_mean`` with doorways left out of ``O_F`` (our variant)."""
+    global_mean_ex_doorways: float | None = None
+    """``global_mean`` with doorways left out of ``O_F``."""
 
 
 def _mean_sd(values: Sequence[float]) -> tuple[float | None, float | None]:
@@ -146,11 +150,11 @@ def fpsg(items: Iterable[EpisodeLike]) -> FPSGSummary:
         \overline{FPSG}_{local} = \frac{1}{N}\sum_i
             \frac{|\hat{M}_F \cap \mathcal{O}_F|}{|\mathcal{O}_F|}
 
-    ``O_F`` excludes doorways (a doorway is no evidence about either room it joins); see
-    :func:`grounding_scores`. Means and sample standard deviations over episodes where each
-    is defined; Never-Visited and Any-Bias are shares of episodes with a chosen room (Any-Bias:
-    the final map holds no non-doorway object of the chosen room). No such episode: None.
-    One episode: sd None.
+    ``O_F`` holds every object of the chosen room, doorways included (the paper's definition);
+    ``*_ex_doorways`` are the means of our doorway-free variant (see :func:`grounding_scores`).
+    Means and sample standard deviations over episodes where each is defined; Never-Visited
+    and Any-Bias are shares of episodes with a chosen room (Any-Bias: the final map holds no
+    object of the chosen room). No such episode: None. One episode: sd None.
     """
     kept, excluded = split_errored(items)
     local = [m.fpsg_local for m in kept if m.fpsg_local is not None]
@@ -159,6 +163,8 @@ def fpsg(items: Iterable[EpisodeLike]) -> FPSGSummary:
     bias = [m.any_bias for m in kept if m.any_bias is not None]
     lm, ls = _mean_sd(local)
     gm, gs = _mean_sd(glob)
+    lx, _ = _mean_sd([v for m in kept if (v := m.fpsg_local_ex_doorways) is not None])
+    gx, _ = _mean_sd([v for m in kept if (v := m.fpsg_global_ex_doorways) is not None])
     return FPSGSummary(
         len(kept),
         sum(never) / len(never) if never else None,
@@ -168,4 +174,6 @@ def fpsg(items: Iterable[EpisodeLike]) -> FPSGSummary:
         gm,
         gs,
         excluded,
+        lx,
+        gx,
     )

@@ -81,6 +81,10 @@ class EpisodeMetrics:
     """The terminal reasoning, for representative-reasoning analysis."""
     reasons: dict[str, str] = field(default_factory=dict)
     """Metric name -> why it is None (or, for ``memory_strength``, unbounded)."""
+    fpsg_local_ex_doorways: float | None = None
+    """``fpsg_local`` with doorways left out of ``O_F`` (our variant, reported beside)."""
+    fpsg_global_ex_doorways: float | None = None
+    """``fpsg_global`` with doorways left out of ``O_F``."""
     schema_version: int = SCHEMA_VERSION
 
     @cached_property
@@ -176,6 +180,8 @@ def episode_metrics(traj: Trajectory) -> EpisodeMetrics:
         miller_forgets=track.miller_forgets,
         rationale=traj.rationale,
         reasons=reasons,
+        fpsg_local_ex_doorways=grounding.fpsg_local_ex_doorways,
+        fpsg_global_ex_doorways=grounding.fpsg_global_ex_doorways,
     )
 
 

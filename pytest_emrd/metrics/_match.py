@@ -28,7 +28,10 @@ and from that map alone:
      ``Door`` in every EMRD layout), the seed is the Procrustes fit of the anchors.
    * **Undetermined frame** (fewer than two anchors). The seeds are the motions that carry
      two base entries onto every pair of candidate objects (see
-     :func:`pytest_emrd.metrics._align.hypotheses`); the lowest residual wins.
+     :func:`pytest_emrd.metrics._align.hypotheses`), preceded by the fit of the entries whose
+     labels are object ids of the layout (``Chair_3``), if two or more are; the lowest
+     residual wins, and between fits the geometry cannot tell apart (a map of three chairs
+     of a symmetric row) the labels decide.
 
    Every seed is computed from distances and residuals only, so the result is the same in
    every frame: the matching, and every metric built on it, is **invariant under any proper
@@ -168,6 +171,7 @@ class Matcher:
         self._objects = ordered
         self._types = TypeResolver(o.object_type for o in ordered)
         self._ids = [o.object_id for o in ordered]
+        self._index = {oid: c for c, oid in enumerate(self._ids)}
         self._true = np.array([(o.x, o.z) for o in ordered], dtype=float).reshape(-1, 2)
         self._true_kinds = np.array([self._types.index[o.object_type] for o in ordered], dtype=int)
         self._kind_of = self._true_kinds.tolist()
@@ -242,7 +246,13 @@ class Matcher:
             pred, kinds, self._true, self._true_kinds, self._true_extent, self._points,
             self._cols_of,
         )  # fmt: skip
-        pairs = undetermined_fit(problem)
+        index, kind_of = self._index, self._kind_of
+        named = [(r, index[lb]) for r, (lb, k, _, _) in enumerate(key)
+                 if lb in index and kind_of[index[lb]] == k]  # fmt: skip
+        seed = None
+        if len(named) >= 2 and _spread([key[r][2:] for r, _ in named]) > COINCIDENT_M:
+            seed = procrustes(pred[[r for r, _ in named]], self._true[[c for _, c in named]])
+        pairs = undetermined_fit(problem, seed)
         return {key[r][0]: c for r, c in pairs}, False
 
     def _in_frame(self, key: Key, anchor_rows: list[int], kept: dict[str, int]) -> dict[str, int]:

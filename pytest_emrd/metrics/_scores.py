@@ -16,7 +16,7 @@ from pytest_emrd.metrics._match import Matching, rigid_fit
 from pytest_emrd.metrics._tracking import Track, exp_ratio, layout_scale
 from pytest_emrd.trajectory import Trajectory
 
-#: Ground-truth type of doorways, which belong to no room as evidence (see FPSG).
+#: Ground-truth type of doorways (left out of ``O_F`` by FPSG's doorway-free variant).
 DOORWAY_TYPE: Final = "Doorway"
 
 
@@ -91,6 +91,10 @@ class Grounding:
     never_visited: bool | None
     any_bias: bool | None
     reasons: dict[str, str]
+    fpsg_local_ex_doorways: float | None = None
+    """``fpsg_local`` with doorways left out of ``O_F`` (our variant, reported beside)."""
+    fpsg_global_ex_doorways: float | None = None
+    """``fpsg_global`` with doorways left out of ``O_F``."""
 
 
 def grounding_scores(traj: Trajectory, final: Matching) -> Grounding:
@@ -100,44 +104,47 @@ def grounding_scores(traj: Trajectory, final: Matching) -> Grounding:
         FPSG^{(i)} = \frac{|\hat{M}_F \cap \mathcal{O}_F|}{|N_{base}|},\qquad
         FPSG_{local}^{(i)} = \frac{|\hat{M}_F \cap \mathcal{O}_F|}{|\mathcal{O}_F|}
 
-    ``F`` is the chosen room, ``O_F`` the ground-truth objects of ``F`` other than doorways,
-    ``N_base`` the objects the engine showed the agent at any step (union of ``visible_ids``,
-    doorways included). A doorway joins two rooms (the ground truth files it under one of
-    them) and is seen from either side, so mapping it is no evidence about either room: it
-    is left out of ``O_F`` for FPSG and Any-Bias (AEC still counts doorways as objects).
-    The intersection counts objects of ``O_F`` that the final map matches *and* the engine
-    confirmed as seen, so an entry copied from the prompt's inventory for a room never
-    looked at is not evidence. Fractions in [0, 1]; ``FPSG_local >= FPSG`` whenever
-    ``|O_F| <= |N_base|``.
+    ``F`` is the chosen room, ``O_F`` the ground-truth objects of ``F`` (the paper's
+    definition: every object the ground truth files under ``F``, doorways included; a doorway
+    is filed under the first of the two rooms it joins), ``N_base`` the objects the engine
+    showed the agent at any step (union of ``visible_ids``). The intersection counts objects
+    of ``O_F`` that the final map matches *and* the engine confirmed as seen, so an entry
+    copied from the prompt's inventory for a room never looked at is not evidence. Fractions
+    in [0, 1]. **Doorway-free variant** (``*_ex_doorways``, ours, reported beside): a doorway
+    is seen from either side and is no evidence about the room it is filed under, so the
+    variant leaves doorways out of ``O_F`` (README, "Where we interpret or depart from the
+    paper", gives the measured difference).
 
     ``never_visited``: ``F`` is not among the rooms the agent stood in. ``any_bias``: the final
-    map holds no (confirmed) object of ``O_F`` (a mapped doorway of ``F`` does not count).
-    Edge cases: no chosen room (no ``Term``, or a room name that resolves to none) makes all
-    four None; ``|O_F| = 0`` (also a room holding only doorways) makes ``fpsg_local`` None;
-    ``|N_base| = 0`` makes ``fpsg_global`` None.
+    map holds no (confirmed) object of ``O_F``. Edge cases: no chosen room (no ``Term``, or a
+    room name that resolves to none) makes all of them None; ``|O_F| = 0`` makes the local
+    scores None; ``|N_base| = 0`` makes the global scores None.
     """
     room = traj.chosen_room
     if room is None:
         why = "no chosen room (no Term, or a room name that resolves to no room)"
         keys = ("fpsg_local", "fpsg_global", "never_visited", "any_bias")
         return Grounding(None, None, None, None, dict.fromkeys(keys, why))
-    in_room = {
-        o.object_id
-        for o in traj.ground_truth.objects
-        if o.room == room and o.object_type != DOORWAY_TYPE
-    }
+    in_room = {o.object_id for o in traj.ground_truth.objects if o.room == room}
+    doorways = {o.object_id for o in traj.ground_truth.objects if o.object_type == DOORWAY_TYPE}
     observed = {oid for s in traj.steps for oid in s.visible_ids}
-    grounded = len(final.object_ids & in_room & observed)
+    confirmed = final.object_ids & observed
     reasons: dict[str, str] = {}
-    local = grounded / len(in_room) if in_room else None
+
+    def scores(objects: set[str]) -> tuple[float | None, float | None, int]:
+        grounded = len(confirmed & objects)
+        local = grounded / len(objects) if objects else None
+        return local, (grounded / len(observed) if observed else None), grounded
+
+    local, glob, grounded = scores(in_room)
+    local_ex, glob_ex, _ = scores(in_room - doorways)
     if local is None:
-        reasons["fpsg_local"] = (
-            f"chosen room {room!r} holds no ground-truth object other than doorways"
-        )
-    glob = grounded / len(observed) if observed else None
+        reasons["fpsg_local"] = f"chosen room {room!r} holds no ground-truth object"
     if glob is None:
         reasons["fpsg_global"] = "the engine showed the agent no object (|N_base| = 0)"
-    return Grounding(local, glob, room not in traj.rooms_visited, grounded == 0, reasons)
+    return Grounding(
+        local, glob, room not in traj.rooms_visited, grounded == 0, reasons, local_ex, glob_ex
+    )
 
 
 def sir_score(traj: Trajectory, track: Track, aec: float | None) -> tuple[float | None, str]:

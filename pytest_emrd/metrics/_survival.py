@@ -10,10 +10,11 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Final
 
 import numpy as np
 
-from pytest_emrd.errors import ConfigError, check_range
+from pytest_emrd.errors import ConfigError, check_choice, check_range
 
 
 def _spell_arrays(
@@ -67,10 +68,20 @@ class AnchoredKM:
     """``n_tau``: spells with duration ``>= tau`` (``at_risk[0]`` is every spell)."""
     events: tuple[int, ...]
     """``d_tau``: forgetting events at ``tau`` (``events[0] == 0``)."""
+    ci_low: tuple[float, ...] = ()
+    """Lower bound of the pointwise 95 % band at each time (Greenwood variance, lifelines'
+    log(-log) interval, times ``C``); ``ci_high`` the upper. Equal to ``survival`` where
+    the band is degenerate (before any event, and after the curve reaches 0)."""
+    ci_high: tuple[float, ...] = ()
 
     @property
     def n(self) -> int:
         return self.at_risk[0]
+
+    @property
+    def event_times(self) -> tuple[float, ...]:
+        """``0`` then every time with at least one forgetting event (where the curve steps)."""
+        return tuple(t for t, d in zip(self.times, self.events, strict=True) if d or t == 0.0)
 
     def at(self, t: float) -> float:
         """Anchored survival at time ``t`` (right-continuous step function, ``S(t<0) = C``)."""
@@ -84,36 +95,46 @@ def anchored_km(
     *,
     coverage: float,
 ) -> AnchoredKM:
-    r"""Coverage-anchored Kaplan-Meier estimate (Appendix B).
+    r"""Coverage-anchored Kaplan-Meier estimate (Appendix B), fitted by lifelines.
 
     .. math::
         \hat{S}_{\mathcal{X}}(t) = C_{\mathcal{X}} \prod_{\tau \le t}
             \left(1 - \frac{d_\tau}{n_\tau}\right)
 
     The absolute probability that an object of the set is both discovered and still held
-    ``t`` steps after leaving view. ``n_tau`` counts spells still at risk at ``tau``
-    (duration ``>= tau``: a spell censored at ``tau`` is at risk at ``tau``, the convention
-    of lifelines); ``d_tau`` the events at ``tau``. Starts at ``C`` and never increases.
-    Edge cases: no spells gives the single point ``(0, C)``; no events gives a flat curve at
-    ``C``; ties are counted together. ``coverage`` must lie in [0, 1]; durations must be
-    finite and > 0.
+    ``t`` steps after leaving view. The product-limit factor and its Greenwood band come from
+    :class:`lifelines.KaplanMeierFitter` (``n_tau`` counts spells still at risk at ``tau``:
+    a spell censored at ``tau`` is at risk at ``tau``); both are then multiplied by the
+    anchor ``C`` (a fixed scale: the band is the KM factor's band, not ``C``'s uncertainty).
+    Starts at ``C`` and never increases. Edge cases: no spells gives the single point
+    ``(0, C)``; no events gives a flat curve at ``C``; ties are counted together.
+    ``coverage`` must lie in [0, 1]; durations must be finite and > 0.
     """
     check_range("coverage", coverage, 0.0, 1.0)
     t, e = _spell_arrays(durations, observed)
-    times, inverse = np.unique(t, return_inverse=True)
-    deaths = np.bincount(inverse, weights=e.astype(float), minlength=len(times))
-    leaving = np.bincount(inverse, minlength=len(times))
-    at_risk = len(t) - np.concatenate(([0], np.cumsum(leaving)[:-1]))
-    with np.errstate(divide="ignore", invalid="ignore"):
-        factors = np.where(at_risk > 0, 1.0 - deaths / at_risk, 1.0)
-    survival = coverage * np.cumprod(factors)
+    if t.size == 0:
+        c = float(coverage)
+        return AnchoredKM(c, (0.0,), (c,), (0,), (0,), (c,), (c,))
+    from lifelines import KaplanMeierFitter  # heavy: imported on first use
+
+    fitter = KaplanMeierFitter().fit(t, event_observed=e)
+    table = fitter.event_table
+    factor = fitter.survival_function_.to_numpy()[:, 0]
+    band = fitter.confidence_interval_survival_function_.to_numpy()
+    band = np.where(np.isfinite(band), band, factor[:, None])
     return AnchoredKM(
         coverage=float(coverage),
-        times=(0.0, *times.tolist()),
-        survival=(float(coverage), *survival.tolist()),
-        at_risk=(len(t), *at_risk.astype(int).tolist()),
-        events=(0, *deaths.astype(int).tolist()),
+        times=tuple(table.index.to_numpy(dtype=float).tolist()),
+        survival=tuple((coverage * factor).tolist()),
+        at_risk=tuple(table["at_risk"].to_numpy(dtype=int).tolist()),
+        events=tuple(table["observed"].to_numpy(dtype=int).tolist()),
+        ci_low=tuple((coverage * band[:, 0]).tolist()),
+        ci_high=tuple((coverage * band[:, 1]).tolist()),
     )
+
+
+#: Where R^2 compares the Ebbinghaus curve with the Kaplan-Meier curve (see ebbinghaus_fit).
+R2_POINTS: Final[tuple[str, ...]] = ("steps", "events", "durations")
 
 
 @dataclass(frozen=True)
@@ -129,6 +150,17 @@ class EbbinghausFit:
     n_spells: int
     n_events: int
     reason: str | None = None
+    points: str = "steps"
+    """Evaluation points of ``r2`` (one of :data:`R2_POINTS`)."""
+
+
+def r2_grid(km: AnchoredKM, points: str) -> np.ndarray:
+    """The times at which :func:`ebbinghaus_fit` compares the two curves (see there)."""
+    if points == "events":
+        return np.asarray(km.event_times)
+    if points == "durations":
+        return np.asarray(km.times[1:])
+    return np.arange(0.0, math.floor(km.times[-1]) + 1.0)
 
 
 def ebbinghaus_fit(
@@ -136,6 +168,7 @@ def ebbinghaus_fit(
     observed: Sequence[bool] | np.ndarray,
     *,
     coverage: float,
+    points: str = "steps",
 ) -> EbbinghausFit:
     r"""Memory strength (Eq. SMLE) and goodness of fit of Eq. EbbinghausFC against KM.
 
@@ -144,26 +177,36 @@ def ebbinghaus_fit(
         \qquad
         R^2 = 1 - \frac{\sum_t (\hat{S}(t) - R(t))^2}{\sum_t (\hat{S}(t) - \bar{S})^2}
 
-    ``t`` runs over the KM's time points after 0 (every distinct spell duration). ``EFC`` is
-    the MLE, not a least-squares fit, so ``R^2`` is a diagnostic: negative when a flat mean
-    predicts the KM curve better than the exponential (abrupt, non-exponential forgetting).
-    Edge cases: no spells -> efc and r2 None; no events -> efc ``inf`` (reason given) and the
-    curve is flat at ``C``; a KM curve with no variation (one time point, or flat) -> r2 None
-    with a reason.
+    **Evaluation points** ``t`` (the paper names none): ``points="steps"`` (default) takes
+    every step ``t = 0, 1, ..., max duration``: the two curves compared as functions of
+    retention time, each step weighted alike, from the anchor ``t = 0`` (where both equal
+    ``C``) to the longest spell, wherever the events and the censoring fall. ``"events"``
+    takes ``t = 0`` and the KM event times only (where the step function drops): a plateau
+    followed by a cliff, the signature of a hard context window, is then two points and fits
+    an exponential well. ``"durations"`` takes every distinct spell duration without
+    ``t = 0``: censoring times add points, so the flat tail weighs by how many distinct
+    censoring times it holds. See the README ("Where we interpret or depart from the paper")
+    for their effect on each finding. ``EFC`` is the MLE, not a least-squares
+    fit, so ``R^2`` is a diagnostic: negative when a flat mean predicts the KM curve better
+    than the exponential (abrupt, non-exponential forgetting). Edge cases: no spells -> efc
+    and r2 None; no events -> efc ``inf`` (reason given) and the curve is flat at ``C``; a KM
+    curve with no variation at the evaluation points -> r2 None with a reason.
     """
+    check_choice("points", points, R2_POINTS)
     t, e = _spell_arrays(durations, observed)
     strength = efc(t, e)
     n_events = int(e.sum())
     if strength is None:
-        return EbbinghausFit(coverage, None, None, 0, 0, "no spells: nothing left view mapped")
+        why = "no spells: nothing left view mapped"
+        return EbbinghausFit(coverage, None, None, 0, 0, why, points)
     km = anchored_km(t, e, coverage=coverage)
-    grid = np.asarray(km.times[1:])
-    s_hat = np.asarray(km.survival[1:])
+    grid = r2_grid(km, points)
+    s_hat = np.array([km.at(x) for x in grid])
     reason = None if n_events else "no forgetting event: memory strength is unbounded"
     ss_tot = float(np.sum((s_hat - s_hat.mean()) ** 2)) if len(s_hat) else 0.0
     if ss_tot <= 1e-15:
         why = "the Kaplan-Meier curve does not vary: R^2 is undefined"
-        return EbbinghausFit(coverage, strength, None, len(t), n_events, reason or why)
+        return EbbinghausFit(coverage, strength, None, len(t), n_events, reason or why, points)
     model = coverage * np.exp(-grid / strength)
     r2 = 1.0 - float(np.sum((s_hat - model) ** 2)) / ss_tot
-    return EbbinghausFit(coverage, strength, r2, len(t), n_events, reason)
+    return EbbinghausFit(coverage, strength, r2, len(t), n_events, reason, points)

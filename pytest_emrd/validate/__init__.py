@@ -8,6 +8,7 @@ caches the episodes; ``emrd validate`` prints and writes the table.
 from pytest_emrd.validate._check import VERDICTS, Check, ValidationReport
 from pytest_emrd.validate._decide import prior_checks, scout_decide_checks
 from pytest_emrd.validate._explore import exploration_checks
+from pytest_emrd.validate._frame import FRAME_SEED, FRAME_TOLERANCE, frame_checks
 from pytest_emrd.validate._paper import statistics_checks
 from pytest_emrd.validate._plan import (
     DECAY_MEANS,
@@ -33,6 +34,8 @@ from pytest_emrd.validate._suite import episode_checks, validation_report
 
 __all__ = [
     "DECAY_MEANS",
+    "FRAME_SEED",
+    "FRAME_TOLERANCE",
     "FULL_EPISODES",
     "GROUPS",
     "VERDICTS",
@@ -47,6 +50,7 @@ __all__ = [
     "episodes_needed",
     "error_curve",
     "exploration_checks",
+    "frame_checks",
     "markdown",
     "miller_checks",
     "monotone",

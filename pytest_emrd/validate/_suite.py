@@ -9,6 +9,7 @@ from pytest_emrd.metrics import EpisodeMetrics, as_episode_metrics
 from pytest_emrd.validate._check import Check, Episode, ValidationReport
 from pytest_emrd.validate._decide import prior_checks, scout_decide_checks
 from pytest_emrd.validate._explore import exploration_checks
+from pytest_emrd.validate._frame import frame_checks
 from pytest_emrd.validate._paper import statistics_checks
 from pytest_emrd.validate._plan import DECAY_MEANS, GROUPS, WINDOW_SIZES, Group
 from pytest_emrd.validate._remember import (
@@ -42,6 +43,7 @@ def episode_checks(groups: Groups) -> list[Check]:
     prior = _need(groups, Group("prior", "baseline"))
     return [
         *exploration_checks(scout, dark),
+        *frame_checks(groups),
         *decay_checks(decays),
         *window_fit_checks(windows, decays),
         *miller_checks(windows, scout),

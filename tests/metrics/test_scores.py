@@ -151,9 +151,11 @@ def test_fpsg_unseen_inventory_entry_is_no_evidence(make_obj: MakeObj, make_traj
     assert (g.fpsg_local, g.fpsg_global, g.never_visited, g.any_bias) == (0.0, 0.0, True, True)
 
 
-def test_fpsg_doorways_are_no_evidence_about_a_room(make_obj: MakeObj, make_traj: MakeTraj) -> None:
-    """A doorway filed under the Entrance, seen and mapped from the Office, grounds nothing:
-    not Any-Bias, not FPSG; O_F is the two armchairs alone."""
+def test_fpsg_counts_doorways_as_the_paper_does_and_reports_the_variant_without(
+    make_obj: MakeObj, make_traj: MakeTraj
+) -> None:
+    """A doorway filed under the Entrance, seen and mapped from the Office: in O_F by the
+    paper's definition; left out by the doorway-free variant (O_F = the two armchairs)."""
     truth = [
         *_fpsg_world(make_obj),
         make_obj("Doorway_1", ENTRANCE, x=0.0, z=-5.0, category="landmark"),
@@ -161,21 +163,23 @@ def test_fpsg_doorways_are_no_evidence_about_a_room(make_obj: MakeObj, make_traj
     cog = {"Doorway_1": ("Doorway", 0.0, -5.0)}
     traj = make_traj(truth, [(OFFICE, ["Desk_1", "Doorway_1"], cog)], chosen=ENTRANCE)
     g = grounding_scores(traj, match_map(traj.final_map, truth))
-    assert (g.fpsg_local, g.fpsg_global, g.never_visited, g.any_bias) == (0.0, 0.0, True, True)
+    assert (g.fpsg_local, g.fpsg_global, g.never_visited, g.any_bias) == (1 / 3, 0.5, True, False)
+    assert (g.fpsg_local_ex_doorways, g.fpsg_global_ex_doorways) == (0.0, 0.0)
     armchair = {**cog, "ArmChair_1": ("ArmChair", 0.0, -10.0)}
     traj = make_traj(truth, [(OFFICE, ["ArmChair_1", "Doorway_1"], armchair)], chosen=ENTRANCE)
     g = grounding_scores(traj, match_map(traj.final_map, truth))
-    assert (g.fpsg_local, g.fpsg_global, g.any_bias) == (0.5, 0.5, False)
+    assert (g.fpsg_local, g.fpsg_global, g.any_bias) == (2 / 3, 1.0, False)
+    assert (g.fpsg_local_ex_doorways, g.fpsg_global_ex_doorways) == (0.5, 0.5)
 
 
-def test_fpsg_room_of_doorways_only_has_no_local_value(
+def test_fpsg_room_of_doorways_only_has_no_local_value_without_doorways(
     make_obj: MakeObj, make_traj: MakeTraj
 ) -> None:
     truth = [*_fpsg_world(make_obj), make_obj("Doorway_1", KITCHEN, category="landmark")]
     traj = make_traj(truth, [(OFFICE, ["Doorway_1"], {})], chosen=KITCHEN)
     g = grounding_scores(traj, match_map(traj.final_map, truth))
-    assert g.fpsg_local is None and "holds no ground-truth object" in g.reasons["fpsg_local"]
-    assert (g.fpsg_global, g.any_bias) == (0.0, True)
+    assert (g.fpsg_local, g.fpsg_global, g.any_bias) == (0.0, 0.0, True)
+    assert g.fpsg_local_ex_doorways is None
 
 
 @pytest.mark.parametrize(

@@ -125,7 +125,39 @@ def test_ebbinghaus_r2_is_negative_for_abrupt_truncation() -> None:
 def test_ebbinghaus_edge_cases(
     durations: list[int], observed: list[bool], efc_value: float | None, reason_part: str
 ) -> None:
-    fit = ebbinghaus_fit(durations, observed, coverage=0.5)
+    # one duration: a single point on the "durations" grid (the other grids add t = 0)
+    fit = ebbinghaus_fit(durations, observed, coverage=0.5, points="durations")
     assert fit.efc == efc_value
     assert fit.r2 is None
     assert fit.reason is not None and reason_part in fit.reason
+
+
+@pytest.mark.parametrize(
+    ("points", "r2"),
+    [("steps", -0.5685), ("events", 0.2829), ("durations", -0.5724)],
+)
+def test_r2_of_a_hard_window_on_each_grid_of_evaluation_points(points: str, r2: float) -> None:
+    # a plateau then a cliff at 20: two event-time points fit an exponential fairly well
+    durations = [20] * 50 + list(range(1, 20)) * 5
+    observed = [True] * 50 + [False] * 95
+    fit = ebbinghaus_fit(durations, observed, coverage=0.9, points=points)
+    assert fit.points == points
+    assert fit.r2 == pytest.approx(r2, abs=1e-4)
+
+
+def test_unknown_r2_points_is_a_clear_error() -> None:
+    with pytest.raises(ConfigError, match="points='knots' is not one of"):
+        ebbinghaus_fit([1, 2], [True, False], coverage=0.5, points="knots")
+
+
+@given(spells, st.floats(0.0, 1.0))
+def test_greenwood_band_holds_the_curve_and_matches_lifelines(
+    data: list[tuple[int, bool]], coverage: float
+) -> None:
+    durations, observed = [d for d, _ in data], [e for _, e in data]
+    km = anchored_km(durations, observed, coverage=coverage)
+    assert all(lo - 1e-12 <= s <= hi + 1e-12
+               for lo, s, hi in zip(km.ci_low, km.survival, km.ci_high, strict=True))  # fmt: skip
+    band = KaplanMeierFitter().fit(durations, observed).confidence_interval_.to_numpy()
+    finite = np.isfinite(band[:, 0])
+    assert np.allclose(np.asarray(km.ci_low)[finite], coverage * band[finite, 0], atol=1e-12)

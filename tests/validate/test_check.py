@@ -44,7 +44,7 @@ def test_markdown_groups_by_section_and_escapes_pipes() -> None:
     ("kwargs", "message"),
     [
         pytest.param({"verdict": "ok"}, "verdict='ok' is not one of", id="bad-verdict"),
-        pytest.param({"section": "Map"}, "section='Map' is not one of", id="bad-section"),
+        pytest.param({"section": "Maps"}, "section='Maps' is not one of", id="bad-section"),
     ],
 )
 def test_bad_check(kwargs: dict, message: str) -> None:
