@@ -11,6 +11,7 @@ points, squared residuals after a fit).
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from typing import Final, NamedTuple
 
 import numpy as np
@@ -207,16 +208,15 @@ def hypotheses(problem: Problem) -> list[Motion]:
     ]
 
 
-def undetermined_fit(problem: Problem, named: Motion | None = None) -> Pairs:
+def undetermined_fit(problem: Problem, first: Sequence[Motion] = ()) -> Pairs:
     """Correspondence of a map whose frame no anchors determine: a joint estimate.
 
-    The seeds are ``named`` (the fit of the entries whose labels name an object id, when the
-    caller has one) followed by those of :func:`hypotheses`. Every seed is scored at once by
-    the summed squared distance of each entry to its nearest object of its type after the
-    seed's motion; the best seed (ties: the first, so labels naming ids decide between fits
-    the geometry cannot tell apart) is refined by :func:`refine`.
+    The seeds are ``first`` (the caller's tie-breakers, in order) followed by those of
+    :func:`hypotheses`. Every seed is scored at once by the summed squared distance of each
+    entry to its nearest object of its type after the seed's motion; the best seed (ties: the
+    first) is refined by :func:`refine`.
     """
-    seeds = ([named] if named is not None else []) + hypotheses(problem)
+    seeds = [*first, *hypotheses(problem)]
     if not seeds:
         return ()
     if len(seeds) > 1:

@@ -28,10 +28,11 @@ and from that map alone:
      ``Door`` in every EMRD layout), the seed is the Procrustes fit of the anchors.
    * **Undetermined frame** (fewer than two anchors). The seeds are the motions that carry
      two base entries onto every pair of candidate objects (see
-     :func:`pytest_emrd.metrics._align.hypotheses`), preceded by the fit of the entries whose
-     labels are object ids of the layout (``Chair_3``), if two or more are; the lowest
-     residual wins, and between fits the geometry cannot tell apart (a map of three chairs
-     of a symmetric row) the labels decide.
+     :func:`pytest_emrd.metrics._align.hypotheses`), preceded by the fit of the previous
+     step's identities of the labels still present, then by the fit of the labels that are
+     object ids of the layout (``Chair_3``). The lowest residual wins; between fits the
+     geometry cannot tell apart (one chair left in the map; three chairs of an evenly
+     spaced row) the previous identities decide, then the labels.
 
    Every seed is computed from distances and residuals only, so the result is the same in
    every frame: the matching, and every metric built on it, is **invariant under any proper
@@ -47,12 +48,18 @@ the layout; it keeps its residual and Positional Accuracy falls (except for a co
 which a half-turn maps onto its own mirror image). Swapping left and right is a spatial
 error a responder must not make, so we do not forgive it by allowing improper alignments.
 
-**Identity over time.** Identities are decided per step, from that step's map only: no
-identity decided at one step is carried to the next, so a choice made while the frame was
-undetermined (one chair in the map: which chair?) is revised as soon as the map holds more.
-Objects are followed across steps by label (Appendix B: "matched across time steps
-exclusively using the string labels"): a label is the object its entry is matched to at
-that step, and Spatial Identity Resolution asks whether it still is on re-entry.
+4. **Identity over time** (episodes: :meth:`Matcher.assign` with the previous step's
+   assignment). Objects are followed across steps by label (Appendix B: "matched across time
+   steps exclusively using the string labels"). A label keeps the object it held at step
+   ``t-1`` only when the identity was decided in a *determined* frame and step ``t`` is
+   determined too, by no anchor that ``t-1`` lacked; its type must still resolve to that
+   object's type. The other labels are assigned among the remaining objects in step ``t``'s
+   anchor frame. Identities are **revised** (decided afresh by step 3) whenever a new anchor
+   appears (the frame is better determined than when they were decided) and at every
+   undetermined step: an identity decided while the frame was undetermined never persists
+   by itself; at an undetermined step the previous identities only break ties the map's
+   geometry cannot break (one chair left in the map: still the chair it was). Every rule
+   reads labels, types and equivariant fits, so carrying keeps the invariance.
 
 **No distance gate.** A type-correct entry is matched however far it lies from its object:
 (a) a gate would have to be set in the model's untrusted frame; (b) the paper's coverage
@@ -73,6 +80,7 @@ import numpy as np
 
 from pytest_emrd.metrics._align import (
     COINCIDENT_M,
+    Motion,
     Problem,
     assign,
     procrustes,
@@ -214,7 +222,12 @@ class Matcher:
         rows = [r for r, (_, k, _, _) in enumerate(key) if in_map[k] == 1 and count[k] == 1]
         determined = len(rows) >= 2 and _spread([key[r][2:] for r in rows]) > COINCIDENT_M
         anchors = frozenset(key[r][0] for r in rows) if determined else frozenset()
-        if determined and previous is not None and previous.anchors == anchors:
+        if (
+            determined
+            and previous is not None
+            and previous.determined
+            and anchors <= previous.anchors
+        ):
             kind_of = self._kind_of
             identity = {
                 lb: c for lb, c in previous.identity.items()
@@ -223,10 +236,14 @@ class Matcher:
             if len(identity) < len(key):
                 identity.update(self._in_frame(key, rows, identity))
         else:
-            done = self._done.get(key)  # a map seen before (parse failures repeat the last)
+            kind_of = self._kind_of
+            before = () if determined or previous is None else tuple(sorted(
+                (lb, c) for lb, c in previous.identity.items() if type_of.get(lb, -1) == kind_of[c]
+            ))  # fmt: skip
+            done = self._done.get((key, before))  # seen before (parse failures repeat a map)
             if done is None:
-                done = self._afresh(key, rows if determined else None)
-                self._done[key] = done
+                done = self._afresh(key, rows if determined else None, dict(before))
+                self._done[(key, before)] = done
             identity = done[0]
         unmatched = tuple(lb for lb in labels if lb not in identity)
         return Assignment(
@@ -234,8 +251,11 @@ class Matcher:
             anchors,
         )  # fmt: skip
 
-    def _afresh(self, key: Key, anchor_rows: list[int] | None) -> tuple[dict[str, int], bool]:
-        """Step 3: every identity of a map decided from the map alone."""
+    def _afresh(
+        self, key: Key, anchor_rows: list[int] | None, before: dict[str, int]
+    ) -> tuple[dict[str, int], bool]:
+        """Step 3: every identity of a map decided from the map (``before``: the identities of
+        the previous step, which break ties the map's geometry cannot break)."""
         if not key:
             return {}, False
         if anchor_rows is not None:
@@ -249,11 +269,21 @@ class Matcher:
         index, kind_of = self._index, self._kind_of
         named = [(r, index[lb]) for r, (lb, k, _, _) in enumerate(key)
                  if lb in index and kind_of[index[lb]] == k]  # fmt: skip
-        seed = None
-        if len(named) >= 2 and _spread([key[r][2:] for r, _ in named]) > COINCIDENT_M:
-            seed = procrustes(pred[[r for r, _ in named]], self._true[[c for _, c in named]])
-        pairs = undetermined_fit(problem, seed)
+        kept = [(r, before[lb]) for r, (lb, _, _, _) in enumerate(key) if lb in before]
+        seeds = [self._seed(pred, pairs) for pairs in (kept, named) if pairs]
+        pairs = undetermined_fit(problem, [m for m in seeds if m is not None])
         return {key[r][0]: c for r, c in pairs}, False
+
+    def _seed(self, pred: np.ndarray, pairs: list[tuple[int, int]]) -> Motion | None:
+        """The fit of known ``(entry row, object)`` pairs: Procrustes of two or more distinct
+        points, the translation of one; None when the points coincide (no direction)."""
+        points = [tuple(pred[r]) for r, _ in pairs]
+        if len(pairs) == 1 or _spread(points) <= COINCIDENT_M:
+            if len({c for _, c in pairs}) != 1:
+                return None
+            (r, c), *_ = pairs
+            return Motion(1.0, 0.0, *(self._true[c] - pred[r]).tolist())
+        return procrustes(pred[[r for r, _ in pairs]], self._true[[c for _, c in pairs]])
 
     def _in_frame(self, key: Key, anchor_rows: list[int], kept: dict[str, int]) -> dict[str, int]:
         """The labels of ``key`` not in ``kept``, assigned among the objects not kept, in the

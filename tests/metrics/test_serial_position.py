@@ -16,11 +16,12 @@ MakeTraj = Callable[..., Trajectory]
 
 
 def _three(make_obj: MakeObj) -> list[GroundTruthObject]:
-    return [make_obj(f"Chair_{i}", x=float(i)) for i in (1, 2, 3)]
+    # spacings 3 and 5: two chairs of the map fix which two they are
+    return [make_obj(f"Chair_{i}", x=float(i * i)) for i in (1, 2, 3)]
 
 
 def _held(*labels: int) -> dict[str, tuple[str, float, float]]:
-    return {f"c{i}": ("Chair", float(i), 0.0) for i in labels}
+    return {f"c{i}": ("Chair", float(i * i), 0.0) for i in labels}
 
 
 def test_worked_example_events_and_a_censored_middle(
