@@ -65,6 +65,7 @@ from pytest_emrd.metrics._stats import (
     fisher_exact_2x2,
 )
 from pytest_emrd.metrics._survival import (
+    R2_POINTS,
     AnchoredKM,
     EbbinghausFit,
     anchored_km,
@@ -77,6 +78,7 @@ from pytest_emrd.metrics._vocab import ENGINE_TYPES, SYNONYMS, candidate_types, 
 __all__ = [
     "ENGINE_TYPES",
     "GATE_METRICS",
+    "R2_POINTS",
     "SYNONYMS",
     "AnchoredKM",
     "Anova",

@@ -104,21 +104,22 @@ class Ebbinghaus:
     excluded: int
 
 
-def ebbinghaus(items: Iterable[EpisodeLike]) -> Ebbinghaus:
+def ebbinghaus(items: Iterable[EpisodeLike], *, points: str = "steps") -> Ebbinghaus:
     r"""Memory strength ``EFC = sum t_j / d`` (Eq. SMLE) and ``R^2`` against the anchored KM.
 
     Per category and pooled (``C`` of the pooled curve is mapped / total over all categories).
     No events in a category: EFC ``inf`` with a reason, never a crash; no spells: None. See
-    :func:`ebbinghaus_fit` for the R^2 definition (negative values are expected for abrupt,
-    non-exponential forgetting).
+    :func:`ebbinghaus_fit` for the R^2 definition and its evaluation ``points`` (negative
+    values are expected for abrupt, non-exponential forgetting).
     """
     kept, excluded = split_errored(items)
 
     def fit(category: str | None) -> EbbinghausFit:
         spells, coverage = _pooled(kept, category)
         return ebbinghaus_fit(
-            [s.duration for s in spells], [s.forgotten for s in spells], coverage=coverage
-        )
+            [s.duration for s in spells], [s.forgotten for s in spells], coverage=coverage,
+            points=points,
+        )  # fmt: skip
 
     return Ebbinghaus({c: fit(c) for c in categories_of(kept)}, fit(None), excluded)
 

@@ -18,6 +18,7 @@ from pytest_emrd.validate._plan import (
     Group,
     Plan,
 )
+from pytest_emrd.validate._points import r2_points_checks
 from pytest_emrd.validate._remember import (
     decay_checks,
     episodes_needed,
@@ -55,6 +56,7 @@ __all__ = [
     "miller_checks",
     "monotone",
     "prior_checks",
+    "r2_points_checks",
     "run_plan",
     "scout_decide_checks",
     "serial_checks",

@@ -12,6 +12,7 @@ from pytest_emrd.validate._explore import exploration_checks
 from pytest_emrd.validate._frame import frame_checks
 from pytest_emrd.validate._paper import statistics_checks
 from pytest_emrd.validate._plan import DECAY_MEANS, GROUPS, WINDOW_SIZES, Group
+from pytest_emrd.validate._points import r2_points_checks
 from pytest_emrd.validate._remember import (
     decay_checks,
     miller_checks,
@@ -46,6 +47,7 @@ def episode_checks(groups: Groups) -> list[Check]:
         *frame_checks(groups),
         *decay_checks(decays),
         *window_fit_checks(windows, decays),
+        *r2_points_checks(decays, windows, serial),
         *miller_checks(windows, scout),
         *serial_checks(serial, windows, scout),
         *scout_decide_checks(scout),
