@@ -16,6 +16,7 @@ from collections.abc import Mapping, Sequence
 
 from pytest_emrd.metrics import R2_POINTS, ebbinghaus
 from pytest_emrd.validate._check import Check, Episode, fmt
+from pytest_emrd.validate._remember import nearest_decay
 
 #: Planted exponential decay must fit at least this well (as in the decay rows).
 MIN_R2 = 0.8
@@ -36,16 +37,12 @@ def r2_points_checks(
         r2_serial = ebbinghaus(serial, points=points).pooled.r2
         exponential = all(f.r2 is not None and f.r2 >= MIN_R2 for f in decay.values())
         gaps = []
+        finite = {m: f for m, f in decay.items() if f.efc and math.isfinite(f.efc)}
         for fit in window.values():
-            finite = {m: f for m, f in decay.items() if f.efc and math.isfinite(f.efc)}
             if fit.efc is None or not math.isfinite(fit.efc) or not finite or fit.r2 is None:
                 gaps.append(-math.inf)
                 continue
-            near = min(
-                finite.values(),
-                key=lambda f: abs(math.log(f.efc or 1.0) - math.log(fit.efc or 1.0)),
-            )
-            gaps.append((near.r2 or 0.0) - fit.r2)
+            gaps.append((finite[nearest_decay(fit.efc, finite)].r2 or 0.0) - fit.r2)
         survives = exponential and min(gaps, default=-math.inf) >= R2_GAP
         default = points == R2_POINTS[0]
         verdict = "pass" if survives else ("fail" if default else "finding")

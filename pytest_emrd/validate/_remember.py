@@ -10,7 +10,13 @@ import math
 from collections.abc import Mapping, Sequence
 from typing import Final
 
-from pytest_emrd.metrics import SerialPosition, ebbinghaus, miller_curve, serial_position
+from pytest_emrd.metrics import (
+    EbbinghausFit,
+    SerialPosition,
+    ebbinghaus,
+    miller_curve,
+    serial_position,
+)
 from pytest_emrd.rooms import ROOM_SLUGS
 from pytest_emrd.validate._check import Check, Episode, Value, fmt, judged
 
@@ -97,6 +103,11 @@ def decay_checks(groups: Mapping[float, Sequence[Episode]]) -> list[Check]:
     return rows
 
 
+def nearest_decay(efc: float, fits: Mapping[float, EbbinghausFit]) -> float:
+    """The planted mean whose decay fit has the EFC nearest ``efc`` (on a log scale)."""
+    return min(fits, key=lambda m: abs(math.log(fits[m].efc or 1.0) - math.log(efc)))
+
+
 def window_fit_checks(
     windows: Mapping[int, Sequence[Episode]], decays: Mapping[float, Sequence[Episode]]
 ) -> list[Check]:
@@ -115,7 +126,7 @@ def window_fit_checks(
             )  # fmt: skip
             continue
         efc = fit.efc
-        m = min(finite, key=lambda m: abs(math.log(finite[m].efc or 1.0) - math.log(efc)))
+        m = nearest_decay(efc, finite)
         match = finite[m]
         gap = (match.r2 or 0.0) - fit.r2 if fit.r2 is not None else math.inf
         rows.append(
