@@ -191,6 +191,9 @@ def _km(report: Report) -> Figure | None:
         ax = grid[labels.index(row_label(s.model, s.variant))][categories.index(s.category)]
         ax.step(s.km.times, s.km.survival, where="post", lw=2,
                 **line_style(s.condition, len(s.km.times)))  # fmt: skip
+        if s.km.ci_low:  # Greenwood 95 % band (lifelines), anchored like the curve
+            ax.fill_between(s.km.times, s.km.ci_low, s.km.ci_high, step="post", lw=0,
+                            color=colour(s.condition), alpha=0.15)  # fmt: skip
         efc = s.fit.efc
         if efc is not None and math.isfinite(efc):
             t = np.linspace(0, max(s.km.times), 100)
@@ -203,7 +206,7 @@ def _km(report: Report) -> Figure | None:
             ax.set(xlabel="steps out of view t", ylabel="S(t) (discovered & held)",
                    ylim=(0, 1.02))  # fmt: skip
             ax.grid(alpha=0.3)
-    _title(fig, "Coverage-anchored Kaplan-Meier survival (thin dashed: Ebbinghaus fit)")
+    _title(fig, "Coverage-anchored Kaplan-Meier survival, 95 % band (thin dashed: Ebbinghaus fit)")
     _legend(fig, list(dict.fromkeys(s.condition for s in series)))
     return fig
 
