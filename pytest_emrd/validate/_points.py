@@ -43,7 +43,7 @@ def r2_points_checks(
                 gaps.append(-math.inf)
                 continue
             gaps.append((finite[nearest_decay(fit.efc, finite)].r2 or 0.0) - fit.r2)
-        survives = exponential and min(gaps, default=-math.inf) >= R2_GAP
+        survives = exponential and all(g >= R2_GAP for g in gaps)
         default = points == R2_POINTS[0]
         verdict = "pass" if survives else ("fail" if default else "finding")
         recovered = (
