@@ -26,7 +26,13 @@ from pytest_emrd.metrics._episode import EpisodeMetrics, as_episode_metrics, epi
 from pytest_emrd.metrics._explore_map import TBSCurve, positional_accuracy, tbs_curve
 from pytest_emrd.metrics._frame import random_reframe, reframe
 from pytest_emrd.metrics._gates import GATE_METRICS, GateMetric, evaluate_gates
-from pytest_emrd.metrics._match import MatchedPair, Matching, match_map, rigid_fit
+from pytest_emrd.metrics._match import (
+    MatchedPair,
+    Matching,
+    match_map,
+    rigid_fit,
+    step_matchings,
+)
 from pytest_emrd.metrics._reasoning import Representative, representative_reasoning
 from pytest_emrd.metrics._remember import (
     Ebbinghaus,
@@ -138,6 +144,7 @@ __all__ = [
     "serial_position_bins",
     "sir_score",
     "spatial_identity_resolution",
+    "step_matchings",
     "tbs_curve",
     "te_score",
     "time_to_forget",

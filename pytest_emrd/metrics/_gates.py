@@ -158,9 +158,8 @@ def _r2_of_histograms(
     """:func:`ebbinghaus_fit`'s R^2 for many pooled samples given as duration histograms.
 
     Row ``r`` holds, per duration ``t``, the spells ending at ``t`` (``leave``) and the events
-    among them (``death``). Same evaluation points (the default ``"steps"``: every step from 0
-    to the row's longest spell), anchor, MLE and R^2 as the scalar function; NaN where R^2 is
-    undefined.
+    among them (``death``). Same evaluation points (the default ``"durations"``: every
+    duration present), anchor, MLE and R^2 as the scalar function; NaN where R^2 is undefined.
     """
     t = np.arange(leave.shape[1], dtype=float)
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -170,8 +169,7 @@ def _r2_of_histograms(
         s_hat = coverage * np.cumprod(factor, axis=1)
         strength = (leave * t).sum(axis=1) / death.sum(axis=1)
         model = coverage * np.exp(-t[None, :] / strength[:, None])
-        longest = leave.shape[1] - 1 - np.argmax(leave[:, ::-1] > 0, axis=1)
-        present = t[None, :] <= longest[:, None]
+        present = leave > 0
         n = present.sum(axis=1)
         mean = np.where(present, s_hat, 0.0).sum(axis=1) / n
         ss_tot = np.where(present, (s_hat - mean[:, None]) ** 2, 0.0).sum(axis=1)

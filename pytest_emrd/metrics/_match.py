@@ -343,6 +343,20 @@ def _spread(points: Sequence[tuple[float, float]]) -> float:
     return max(math.dist(points[0], p) for p in points)
 
 
+def step_matchings(
+    steps: Sequence[Sequence[MapEntry]], objects: Sequence[GroundTruthObject]
+) -> tuple[Matching, ...]:
+    """The matching of every step's map of an episode, as the episode metrics see them
+    (identities carried and revised by step 4 of the procedure)."""
+    matcher = Matcher(objects)
+    out: list[Matching] = []
+    previous: Assignment | None = None
+    for entries in steps:
+        previous = matcher.assign(entries, previous)
+        out.append(matcher.matching(previous))
+    return tuple(out)
+
+
 def match_map(entries: Sequence[MapEntry], objects: Sequence[GroundTruthObject]) -> Matching:
     """Match a cognitive map to ground truth: THE procedure of every EMRD metric.
 

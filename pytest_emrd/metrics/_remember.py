@@ -104,7 +104,7 @@ class Ebbinghaus:
     excluded: int
 
 
-def ebbinghaus(items: Iterable[EpisodeLike], *, points: str = "steps") -> Ebbinghaus:
+def ebbinghaus(items: Iterable[EpisodeLike], *, points: str = "durations") -> Ebbinghaus:
     r"""Memory strength ``EFC = sum t_j / d`` (Eq. SMLE) and ``R^2`` against the anchored KM.
 
     Per category and pooled (``C`` of the pooled curve is mapped / total over all categories).

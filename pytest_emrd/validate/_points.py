@@ -1,8 +1,9 @@
 """Remember rows: do the R^2 findings survive the choice of evaluation points?
 
 The paper compares the Ebbinghaus curve with the Kaplan-Meier curve by R^2 without saying
-at which times. Our default compares them at every step from 0 to the longest spell
-(:func:`pytest_emrd.metrics.ebbinghaus_fit`, ``points="steps"``); these rows recompute the
+at which times. Our default compares them on the KM curve's timeline (every distinct spell
+duration; :func:`pytest_emrd.metrics.ebbinghaus_fit`, ``points="durations"``); these rows
+recompute the
 two R^2 findings of the validation table (planted exponential decay fits, R^2 >= 0.8; a hard
 window fits worse than the decay of matched mean, gap >= 0.1) on the other two grids, and
 list ``scout-serial``'s pooled R^2 on each. A finding that holds on every grid gets ``pass``

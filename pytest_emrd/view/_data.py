@@ -1,8 +1,8 @@
 """The data of one episode page: per step what the model saw, said and did, its map aligned
 onto the ground truth, and the metrics at that step (pure).
 
-Per step ``t`` the map ``M_t`` is matched with :func:`pytest_emrd.metrics.match_map`, carrying
-the previous step's label identities (as every episode metric does), aligned with the report's
+Per step ``t`` the map ``M_t`` is matched by :func:`pytest_emrd.metrics.step_matchings`
+(identities carried and revised exactly as every episode metric does), aligned with the report's
 :func:`~pytest_emrd.report.align_map` (Procrustes on the matched pairs), and scored
 with the metrics' own per-episode terms: coverage ``|K| / |E|`` (:func:`aec_score`),
 Positional Accuracy (:func:`positional_accuracy_score`) and ``TBS(t)`` (:func:`episode_metrics`).
@@ -18,8 +18,8 @@ from pytest_emrd.agent import parse_reply
 from pytest_emrd.metrics import (
     aec_score,
     episode_metrics,
-    match_map,
     positional_accuracy_score,
+    step_matchings,
 )
 from pytest_emrd.report import align_map
 from pytest_emrd.trajectory import Trajectory
@@ -62,10 +62,8 @@ def episode_data(
     tbs = episode_metrics(traj).tbs
     status, check = check_frames(frames, recorded)
     steps = []
-    carried: dict[str, str] | None = None
-    for i, s in enumerate(traj.steps):
-        matching = match_map(s.cognitive_map, truth.objects, carried=carried)
-        carried = {p.label: p.object_id for p in matching.pairs}
+    matchings = step_matchings([s.cognitive_map for s in traj.steps], truth.objects)
+    for i, (s, matching) in enumerate(zip(traj.steps, matchings, strict=True)):
         points, rotation, rmse = align_map(s.cognitive_map, matching)
         reply = parse_reply(s.raw_reply)
         steps.append({
