@@ -14,6 +14,7 @@ controller appends the run's Markdown summary to that file once the EMRD cases h
 
 from __future__ import annotations
 
+import contextlib
 import os
 import uuid
 import warnings
@@ -157,6 +158,7 @@ class _Run:
         self._stored: dict[EpisodeSpec, StoredEpisode] = {}
         self._metrics: dict[str, Any] = {}
         self._prefetch_started, self._prefetcher = False, None
+        self._ticker: Any = None
 
     def call(self, fn: Any, what: str = "pytest-emrd") -> Any:
         """``fn(self)``, turning an :class:`EmrdError` into one clean failure line (scrubbed,
@@ -257,15 +259,24 @@ class _Run:
 
         return agent_runner(self.registry, run=self.simulators.run)
 
+    @cached_property
+    def status_file(self) -> Any:
+        """This process's live status (``<run>/live/<worker>.json``) for the live line."""
+        from pytest_emrd.progress import StatusFile
+
+        return StatusFile(self.run_dir)
+
     def episode(self, spec: EpisodeSpec) -> StoredEpisode:
-        from pytest_emrd.cassette import FrameDriftWarning, run_with_cassette
+        from pytest_emrd.cassette import FrameDriftWarning
+        from pytest_emrd.progress import run_watched
 
         settings = self.settings
 
         def compute(s: EpisodeSpec) -> Any:
-            return run_with_cassette(
+            return run_watched(
                 s,
                 self.runner,
+                status=self.status_file,
                 cassettes=settings.cassettes,
                 protocol=self.protocol,
                 record_mode=settings.record_mode,
@@ -317,6 +328,69 @@ class _Run:
             stored, price_in=config.price_per_mtok_in, price_out=config.price_per_mtok_out
         )
 
+    # -- preflight and the live line (controller only: the only process, or xdist's) -------
+
+    def pytest_collection_finish(self, session: pytest.Session) -> None:
+        if hasattr(self.config, "workerinput") or self.config.option.collectonly:
+            return
+        names = ("emrd_spec", "emrd_gate")
+        params = [getattr(i, "callspec", None) for i in session.items]
+        self.preflight([c.params[n] for c in params if c for n in names if n in c.params])
+
+    @pytest.hookimpl(optionalhook=True)
+    def pytest_xdist_node_collection_finished(self, node: Any, ids: list[str]) -> None:
+        from pytest_emrd.preflight import params_of_node_ids
+
+        if self.config.option.collectonly:
+            return
+
+        def by_id() -> dict[str, Any]:
+            cells = {c.gate_id: c for c in self.call(lambda run: run.gate_cells)}
+            return {**cells, **{s.case_id: s for s in self.call(lambda r: r.episode_specs)}}
+
+        self.preflight(params_of_node_ids(ids, by_id))
+
+    @cached_property
+    def preflights(self) -> Any:
+        from pytest_emrd.preflight import SessionPreflight
+
+        settings = self.settings
+        return SessionPreflight(
+            self.registry,
+            cassettes=settings.cassettes,
+            record_mode=settings.record_mode,
+            holds=self.store.holds,
+        )
+
+    def preflight(self, params: list[Any]) -> None:
+        """Preflight each model the selected tests will call live; a failure ends the session
+        before any episode runs. Then start the live line."""
+        from pytest_emrd.progress import LiveBoard, Ticker
+
+        cells = (self.cell_specs(p) if isinstance(p, GateCell) else [p] for p in params)
+        specs = [spec for group in cells for spec in group]
+        reports, live = self.call(lambda run: run.preflights.run(specs))
+        for line in (line for report in reports for line in report.lines()):
+            self._write_line(line)
+        failed = next((r for r in reports if r.failed), None)
+        if failed is not None:
+            pytest.exit(f"pytest-emrd: {failed.message()}", returncode=pytest.ExitCode.USAGE_ERROR)
+        if live and self._ticker is None:
+            board = LiveBoard(self.run_dir, total=live)
+            self._ticker = Ticker(board, self._write_line).start()
+
+    def _write_line(self, line: str) -> None:
+        """A line on the terminal, also from the live line's thread while a test runs (with
+        capture suspended, as pytest's own live logging does)."""
+        reporter = self.config.pluginmanager.get_plugin("terminalreporter")
+        capture = self.config.pluginmanager.get_plugin("capturemanager")
+        if reporter is None:
+            return
+        with capture.global_and_fixture_disabled() if capture else contextlib.nullcontext():
+            if getattr(getattr(reporter, "_tw", None), "width_of_current_line", 0):
+                reporter.write("\n")  # after a row of progress dots
+            reporter.write_line(line)
+
     def pytest_unconfigure(self) -> None:
         if self._prefetcher is not None:
             self._prefetcher.close()
@@ -343,7 +417,11 @@ class _Run:
             reporter.write_line(summary.progress_line(len(self.episodes)))
 
     def pytest_sessionfinish(self) -> None:
-        """Append the run's Markdown to ``$GITHUB_STEP_SUMMARY`` (controller only)."""
+        """Stop the live line; append the run's Markdown to ``$GITHUB_STEP_SUMMARY``
+        (controller only)."""
+        if self._ticker is not None:
+            self._ticker.stop()
+            self._ticker = None
         target = os.environ.get("GITHUB_STEP_SUMMARY")
         if not target or hasattr(self.config, "workerinput"):
             return

@@ -9,7 +9,8 @@ The loop is :class:`tenacity.Retrying` (bounded by ``stop_after_attempt``); the 
 ours, because it must read ``Retry-After`` from the failed response and draw its jitter
 from a seedable generator. Each retry is logged on ``pytest_emrd.agent.retry`` at WARNING
 with the attempt, the wait and the cause; URLs are logged without userinfo or query and
-the API key's literal value is masked wherever it would appear.
+the API key's literal value is masked wherever it would appear. The record carries the
+attribute :data:`pytest_emrd._logging.RETRY_ATTR` (live progress counts retries by it).
 """
 
 from __future__ import annotations
@@ -25,6 +26,7 @@ from typing import Any, Final
 import httpx
 import tenacity
 
+from pytest_emrd._logging import RETRY_ATTR
 from pytest_emrd._wire import encode_body
 from pytest_emrd.errors import TransportError
 
@@ -163,6 +165,7 @@ def post_json(
             attempts,
             state.upcoming_sleep,
             mask(str(failure)),
+            extra={RETRY_ATTR: state.attempt_number},
         )
 
     retrying = tenacity.Retrying(

@@ -18,7 +18,7 @@ from pytest_emrd.cassette._paths import Invocation, cassette_path, record_comman
 from pytest_emrd.cassette._use import episode_cassette
 from pytest_emrd.errors import check_choice
 from pytest_emrd.gate._settings import MATCHING_MODES, RECORD_MODES
-from pytest_emrd.trajectory import EpisodeSpec, Trajectory
+from pytest_emrd.trajectory import EpisodeSpec, Step, Trajectory
 
 if TYPE_CHECKING:
     from pytest_emrd.agent import ChatClient, Registry
@@ -35,6 +35,8 @@ class EpisodeRun:
     """Requests matched leniently whose frames differ from the recording."""
     seconds: float
     """Wall time of the episode."""
+    retries: int = 0
+    """Model requests retried while it ran (set by whoever watched it)."""
 
 
 class FrameDriftWarning(UserWarning):
@@ -63,11 +65,14 @@ class AgentRunner:
         self._lock = threading.Lock()
         self._finalizer = weakref.finalize(self, _close_all, self._clients)
 
-    def __call__(self, spec: EpisodeSpec, *, live: bool) -> Trajectory:
+    def __call__(
+        self, spec: EpisodeSpec, *, live: bool, on_step: Callable[[Step], None] | None = None
+    ) -> Trajectory:
         from pytest_emrd.episode import run_episode
 
         run = self._run or run_episode
-        return run(spec, registry=self._registry, client=self._client(spec.model, live))
+        client = self._client(spec.model, live)
+        return run(spec, registry=self._registry, client=client, on_step=on_step)
 
     def close(self) -> None:
         """Close every client now (they are also closed when the runner is collected)."""

@@ -49,6 +49,8 @@ class StoredEpisode:
     """New model traffic was recorded for it (a live episode)."""
     frame_drift: int
     seconds: float
+    retries: int = 0
+    """Model requests retried while it was computed."""
     computed_now: bool = False
     """Computed by this call (as opposed to read from the store)."""
 
@@ -65,6 +67,7 @@ class StoredEpisode:
             "recorded": self.recorded,
             "frame_drift": self.frame_drift,
             "seconds": round(self.seconds, 3),
+            "retries": self.retries,
             "trajectory": trajectory,
         }
         return scrub_bytes(json.dumps(document, separators=(",", ":")).encode(), literal_only=True)
@@ -80,6 +83,7 @@ class StoredEpisode:
             recorded=bool(document["recorded"]),
             frame_drift=int(document["frame_drift"]),
             seconds=float(document["seconds"]),
+            retries=int(document.get("retries", 0)),
         )
 
 
@@ -123,6 +127,10 @@ class ResultsStore:
             return None
         return stored
 
+    def holds(self, spec: EpisodeSpec) -> bool:
+        """Whether the store already has a reusable episode for ``spec`` (no compute needed)."""
+        return self._reusable(spec) is not None
+
     def _lock(self, spec: EpisodeSpec, *, timeout: float = -1) -> FileLock:
         lock_path = self.run_dir / "locks" / f"{spec.case_id}.lock"
         lock_path.parent.mkdir(parents=True, exist_ok=True)
@@ -141,6 +149,7 @@ class ResultsStore:
             recorded=run.recorded,
             frame_drift=run.frame_drift,
             seconds=run.seconds,
+            retries=run.retries,
         )
         write_bytes_atomic(self.path_for(spec), stored.to_json())
         return StoredEpisode(**{**stored.__dict__, "computed_now": True})

@@ -26,6 +26,8 @@ class EpisodeSummary:
     """Estimated from the registry's prices per million tokens; ``None`` without prices."""
     recorded: bool
     seconds: float
+    retries: int = 0
+    """Model requests retried while the episode was computed."""
 
     @classmethod
     def of(
@@ -46,15 +48,17 @@ class EpisodeSummary:
             cost_usd=cost,
             recorded=stored.recorded,
             seconds=stored.seconds,
+            retries=stored.retries,
         )
 
     def progress_line(self, done: int) -> str:
         """``emrd [12] scout-baseline-office-ep03: terminated after 23 steps, ...``."""
         tokens = self.prompt_tokens + self.completion_tokens
         cost = "" if self.cost_usd is None else f", ${self.cost_usd:.3f}"
+        retries = f", {self.retries} retr{'y' if self.retries == 1 else 'ies'}" * (self.retries > 0)
         return (
             f"emrd [{done}] {self.case}: {self.status} after {self.steps} steps, chose "
-            f"{self.chosen_room or '-'}, {tokens:,} tokens{cost}, {self.seconds:.1f} s"
+            f"{self.chosen_room or '-'}, {tokens:,} tokens{cost}{retries}, {self.seconds:.1f} s"
         )
 
     def to_dict(self) -> dict[str, Any]:
@@ -66,7 +70,8 @@ class EpisodeSummary:
 
 
 def usage_rows(summaries: Iterable[EpisodeSummary]) -> list[UsageRow]:
-    """Tokens and cost per model (cost ``None`` as soon as one episode has no price)."""
+    """Tokens, cost, retries and errored episodes per model (cost ``None`` as soon as one
+    episode has no price)."""
     rows: dict[str, UsageRow] = {}
     for s in summaries:
         row = rows.get(s.model) or UsageRow(s.model, 0, 0, 0, 0.0)
@@ -77,5 +82,7 @@ def usage_rows(summaries: Iterable[EpisodeSummary]) -> list[UsageRow]:
             row.prompt_tokens + s.prompt_tokens,
             row.completion_tokens + s.completion_tokens,
             (row.cost_usd or 0.0) + (s.cost_usd or 0.0) if known else None,
+            retries=row.retries + s.retries,
+            errors=row.errors + (s.status == "errored"),
         )
     return [rows[m] for m in sorted(rows)]

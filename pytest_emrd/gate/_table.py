@@ -18,6 +18,10 @@ class UsageRow:
     completion_tokens: int
     cost_usd: float | None
     """Estimated cost from the registry's prices, ``None`` when it has none."""
+    retries: int = 0
+    """Model requests retried over these episodes."""
+    errors: int = 0
+    """Episodes that ended ``errored``."""
 
 
 def render_table(header: Sequence[str], rows: Sequence[Sequence[str]]) -> list[str]:
@@ -56,7 +60,7 @@ def gate_tables(verdicts: Sequence[Verdict]) -> list[str]:
 
 
 def usage_table(rows: Sequence[UsageRow]) -> list[str]:
-    """Tokens (and estimated cost where known) per model."""
+    """Tokens, estimated cost where known, retries and errored episodes per model."""
     body = [
         [
             r.model,
@@ -64,8 +68,18 @@ def usage_table(rows: Sequence[UsageRow]) -> list[str]:
             f"{r.prompt_tokens:,}",
             f"{r.completion_tokens:,}",
             "n/a" if r.cost_usd is None else f"${r.cost_usd:,.2f}",
+            str(r.retries),
+            str(r.errors),
         ]
         for r in sorted(rows, key=lambda r: r.model)
     ]
-    header = ["model", "episodes", "prompt tokens", "completion tokens", "est. cost"]
+    header = [
+        "model",
+        "episodes",
+        "prompt tokens",
+        "completion tokens",
+        "est. cost",
+        "retries",
+        "errored",
+    ]
     return ["  " + r for r in render_table(header, body)]

@@ -17,6 +17,12 @@ from pytest_emrd.preflight._requests import (
     sweep,
 )
 from pytest_emrd.preflight._server import ServerInfo, models_url, server_info
+from pytest_emrd.preflight._session import (
+    SessionPreflight,
+    live_grid,
+    params_of_node_ids,
+    preflight_live,
+)
 
 __all__ = [
     "DEFAULT_COMPLETION_TOKENS",
@@ -26,10 +32,14 @@ __all__ = [
     "PreflightReport",
     "Refusal",
     "ServerInfo",
+    "SessionPreflight",
     "Sweep",
     "count_images",
+    "live_grid",
     "models_url",
+    "params_of_node_ids",
     "preflight",
+    "preflight_live",
     "request_tokens",
     "sample_reply",
     "server_info",

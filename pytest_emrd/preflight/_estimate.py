@@ -61,16 +61,23 @@ class CostEstimate:
     def line(self) -> str:
         """``240 episodes x <= 50 steps: <= 38.1 M prompt + 6.0 M completion tokens, ...``."""
         cost = "no price in the registry" if self.cost_usd is None else f"<= ${self.cost_usd:,.2f}"
-        hours = "" if self.model_hours is None else f", <= {self.model_hours:,.1f} h of calls"
+        hours = "" if self.model_hours is None else f", <= {_duration(self.model_hours)} of calls"
         return (
-            f"{self.episodes} episodes x <= {self.steps} steps: "
-            f"<= {self.prompt_tokens / 1e6:,.1f} M prompt + "
-            f"{self.completion_tokens / 1e6:,.1f} M completion tokens, {cost}{hours} "
+            f"{self.episodes} episodes x <= {self.steps} steps: <= {_tokens(self.prompt_tokens)} "
+            f"prompt + {_tokens(self.completion_tokens)} completion tokens, {cost}{hours} "
             f"({self.basis} estimate; largest request ~{self.peak_request_tokens:,} tokens)"
         )
 
     def to_dict(self) -> dict[str, Any]:
         return to_dict(self)
+
+
+def _tokens(n: int) -> str:
+    return f"{n / 1e6:,.1f} M" if n >= 1_000_000 else f"{n:,}"
+
+
+def _duration(hours: float) -> str:
+    return f"{hours:,.1f} h" if hours >= 1 else f"{max(hours * 60, 1):.0f} min"
 
 
 def estimate_cost(

@@ -1,0 +1,94 @@
+"""Which episodes of a session will call a model for real, and their preflight.
+
+The pytest plugin runs this once per model on the controller (the only process, or the
+pytest-xdist controller) after collection, before any episode is computed. Episodes that
+replay a cassette, or that the run directory already holds, call nobody and are left out.
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Callable, Iterable, Mapping, Sequence
+from pathlib import Path
+from typing import Any, Final
+
+from pytest_emrd.cassette import is_live
+from pytest_emrd.preflight._check import PreflightReport, preflight
+from pytest_emrd.trajectory import CONDITIONS, EpisodeSpec
+
+
+def live_grid(
+    specs: Iterable[EpisodeSpec],
+    *,
+    cassettes: Path,
+    record_mode: str,
+    holds: Callable[[EpisodeSpec], bool],
+) -> dict[str, list[EpisodeSpec]]:
+    """Model -> its episodes that will be recorded live (in order, without duplicates)."""
+    grid: dict[str, list[EpisodeSpec]] = {}
+    for spec in dict.fromkeys(specs):
+        if is_live(spec, cassettes=cassettes, record_mode=record_mode) and not holds(spec):
+            grid.setdefault(spec.model, []).append(spec)
+    return grid
+
+
+def preflight_live(
+    grid: Mapping[str, Sequence[EpisodeSpec]], registry: Any
+) -> list[PreflightReport]:
+    """One preflight per model of ``grid``, estimating exactly its live episodes."""
+    return [
+        preflight(registry.get(model), specs[0], episodes=len(specs))
+        for model, specs in grid.items()
+    ]
+
+
+class SessionPreflight:
+    """A session's preflights: each model at most once, only for episodes recorded live."""
+
+    def __init__(
+        self,
+        registry: Any,
+        *,
+        cassettes: Path,
+        record_mode: str,
+        holds: Callable[[EpisodeSpec], bool],
+    ) -> None:
+        self.registry = registry
+        self.cassettes = cassettes
+        self.record_mode = record_mode
+        self.holds = holds
+        self.checked: set[str] = set()
+
+    def run(self, specs: Iterable[EpisodeSpec]) -> tuple[list[PreflightReport], int]:
+        """Reports for the models not checked yet, and how many live episodes they have."""
+        grid = live_grid(
+            specs, cassettes=self.cassettes, record_mode=self.record_mode, holds=self.holds
+        )
+        grid = {model: mine for model, mine in grid.items() if model not in self.checked}
+        self.checked.update(grid)
+        return preflight_live(grid, self.registry), sum(len(mine) for mine in grid.values())
+
+
+#: The shape of an EMRD case or gate id inside a node id: ``[<model>-<condition>-...]``.
+_EMRD_ID: Final = re.compile(r"\[(?P<id>[^\]]*-(?:" + "|".join(CONDITIONS) + r")-[^\]]*)\]$")
+
+
+def params_of_node_ids(ids: Iterable[str], by_id: Callable[[], Mapping[str, Any]]) -> list[Any]:
+    """The EMRD parameters (specs, gate cells) behind pytest node ids.
+
+    For the pytest-xdist controller, which sees node ids, not items. ``by_id`` (called only
+    when some id has an EMRD shape, so other sessions stay untouched) maps each case and
+    gate id to its parameter; an id that combines it with other parameters
+    (``[scout-baseline-office-ep00-fast]``) is matched on ``-`` boundaries.
+    """
+    found = [m["id"] for i in ids if (m := _EMRD_ID.search(i))]
+    if not found:
+        return []
+    table = by_id()
+    params = []
+    for key in found:
+        if key in table:
+            params.append(table[key])
+            continue
+        params += [p for k, p in table.items() if f"-{key}-".find(f"-{k}-") >= 0]
+    return params
