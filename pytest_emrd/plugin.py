@@ -18,6 +18,7 @@ import contextlib
 import os
 import uuid
 import warnings
+from collections.abc import Callable
 from dataclasses import dataclass
 from functools import cached_property
 from pathlib import Path
@@ -302,9 +303,16 @@ class _Run:
         return stored
 
     def cell_specs(self, cell: GateCell) -> list[EpisodeSpec]:
-        from pytest_emrd.gate import cell_specs
+        return self.cell_specs_of(cell.bound.model, cell.bound.condition)
 
-        return cell_specs(self.settings, cell.bound.model, cell.bound.condition, self.modality_of)
+    def cell_specs_of(self, model: str, condition: str) -> list[EpisodeSpec]:
+        from pytest_emrd.errors import check_choice
+        from pytest_emrd.gate import cell_specs
+        from pytest_emrd.trajectory import CONDITIONS
+
+        self.registry.get(model)
+        check_choice("condition", condition, CONDITIONS)
+        return cell_specs(self.settings, model, condition, self.modality_of)
 
     def verdict(self, cell: GateCell) -> Verdict:
         from pytest_emrd.gate import evaluate_cell
@@ -374,7 +382,8 @@ class _Run:
             self._write_line(line)
         failed = next((r for r in reports if r.failed), None)
         if failed is not None:
-            pytest.exit(f"pytest-emrd: {failed.message()}", returncode=pytest.ExitCode.USAGE_ERROR)
+            message = scrub(f"pytest-emrd: {failed.message()}")
+            pytest.exit(message, returncode=pytest.ExitCode.USAGE_ERROR)
         if live and self._ticker is None:
             board = LiveBoard(self.run_dir, total=live)
             self._ticker = Ticker(board, self._write_line).start()
@@ -389,7 +398,7 @@ class _Run:
         with capture.global_and_fixture_disabled() if capture else contextlib.nullcontext():
             if getattr(getattr(reporter, "_tw", None), "width_of_current_line", 0):
                 reporter.write("\n")  # after a row of progress dots
-            reporter.write_line(line)
+            reporter.write_line(scrub(line))
 
     def pytest_unconfigure(self) -> None:
         if self._prefetcher is not None:
@@ -422,13 +431,12 @@ class _Run:
         if self._ticker is not None:
             self._ticker.stop()
             self._ticker = None
-        target = os.environ.get("GITHUB_STEP_SUMMARY")
-        if not target or hasattr(self.config, "workerinput"):
+        if not os.environ.get("GITHUB_STEP_SUMMARY") or hasattr(self.config, "workerinput"):
             return
         if not (self.episodes or self.verdicts) or not (self.run_dir / "episodes").is_dir():
             return
         from pytest_emrd.gate import load_run_dirs
-        from pytest_emrd.report import step_summary_markdown
+        from pytest_emrd.report import append_step_summary, step_summary_markdown
 
         source = self.settings.thresholds
         if source is not None and source.is_relative_to(self.config.rootpath):
@@ -438,13 +446,11 @@ class _Run:
         except EmrdError as exc:
             warnings.warn(f"pytest-emrd wrote no step summary: {exc}", stacklevel=1)
             return
-        text = scrub(
+        append_step_summary(
             step_summary_markdown(
                 trajectories, self.verdicts, thresholds_source=source and str(source)
             )
         )
-        with open(target, "a", encoding="utf-8") as summary:
-            summary.write(text if text.endswith("\n") else text + "\n")
 
     def pytest_terminal_summary(self, terminalreporter: Any) -> None:
         from pytest_emrd.gate import gate_tables, usage_rows, usage_table
@@ -495,6 +501,19 @@ def emrd_episode(
 def emrd_trajectory(emrd_episode: StoredEpisode) -> Trajectory:
     """The trajectory of ``emrd_spec``."""
     return emrd_episode.trajectory
+
+
+@pytest.fixture(scope="session")
+def emrd_trajectories(pytestconfig: pytest.Config) -> Callable[[str, str], list[Trajectory]]:
+    """``emrd_trajectories(model, condition)``: the trajectories of that cell of the run's grid
+    (for custom gates), each computed through the results store if needed."""
+    run = pytestconfig.stash[_RUN]
+
+    def cell(model: str, condition: str) -> list[Trajectory]:
+        cell_specs = run.call(lambda r: r.cell_specs_of(model, condition))
+        return [run.episode(spec).trajectory for spec in cell_specs]
+
+    return cell
 
 
 @pytest.fixture

@@ -44,6 +44,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def _run(args: argparse.Namespace) -> int:
+    from pytest_emrd._scrub import scrub
     from pytest_emrd.agent import load_registry
     from pytest_emrd.gate import episode_specs, resolve_settings
     from pytest_emrd.preflight import preflight
@@ -60,7 +61,7 @@ def _run(args: argparse.Namespace) -> int:
         )
         reports.append(report)
         if not args.json:
-            print("\n".join(report.lines()))
+            print(scrub("\n".join(report.lines())))
     if args.json:
-        print(json.dumps([r.to_dict() for r in reports]))
+        print(scrub(json.dumps([r.to_dict() for r in reports])))
     return 1 if any(r.failed for r in reports) else 0

@@ -4,14 +4,16 @@ Evaluates ``thresholds.yaml`` over the episodes of one or several run directorie
 example the shards of a CI matrix, each written with ``--emrd-shard=K/N --emrd-results
 DIR``) with the same cells and verdicts as a single-machine ``pytest benchmarks`` run.
 Shards must form complete sets (each ``K/N`` once, as recorded in each run directory's
-``run.json``) unless ``--allow-partial`` is given. Exit status: 0 when every gate passes,
-1 when one is broken, 2 on a usage error.
+``run.json``) unless ``--allow-partial`` is given. When ``$GITHUB_STEP_SUMMARY`` is set (a
+GitHub Actions step), the run's Markdown summary with the gate table is appended to it. Exit
+status: 0 when every gate passes, 1 when one is broken, 2 on a usage error.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 from pathlib import Path
 
@@ -52,6 +54,11 @@ def _run(args: argparse.Namespace) -> int:
     thresholds = load_thresholds(args.thresholds, registry=registry, metrics=GATE_METRICS)
     trajectories = load_run_dirs(args.run_dirs)
     verdicts = evaluate_all(trajectories, thresholds, GATE_METRICS, prepare=episode_metrics)
+    if os.environ.get("GITHUB_STEP_SUMMARY"):
+        from pytest_emrd.report import append_step_summary, step_summary_markdown
+
+        source = str(args.thresholds)
+        append_step_summary(step_summary_markdown(trajectories, verdicts, thresholds_source=source))
     if args.json:
         print(json.dumps([v.to_dict() for v in verdicts]))
     else:

@@ -85,8 +85,9 @@ class PreflightReport:
         if failed is None:
             return f"preflight of model {self.model!r} passed."
         return (
-            f"preflight of model {self.model!r} failed at '{failed.name}': {failed.detail}. "
-            f"Fix: {failed.fix}. Check again with: emrd check --emrd-model={self.model}"
+            f"preflight of model {self.model!r} failed at '{failed.name}': "
+            f"{failed.detail.rstrip('.')}. Fix: {failed.fix.rstrip('.')}. "
+            f"Check again with: emrd check --emrd-model={self.model}"
         )
 
     def to_dict(self) -> dict[str, Any]:

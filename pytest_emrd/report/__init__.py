@@ -47,7 +47,7 @@ from pytest_emrd.report._render import (
     step_summary_markdown,
 )
 from pytest_emrd.report._style import CONDITION_COLOURS, FIGURES
-from pytest_emrd.report._write import write_files, write_report
+from pytest_emrd.report._write import append_step_summary, write_files, write_report
 
 __all__ = [
     "COMPARED",
@@ -77,6 +77,7 @@ __all__ = [
     "TBSSeries",
     "VariantTest",
     "align_map",
+    "append_step_summary",
     "build_report",
     "check_formats",
     "compare_runs",

@@ -1,0 +1,44 @@
+"""examples/own_repo: the fixtures in a user's own repository, run as a black box."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+EXAMPLE = ROOT / "examples" / "own_repo" / "test_my_agent.py"
+
+
+def _run(pytester: pytest.Pytester, source: str) -> pytest.RunResult:
+    pytester.makepyfile(test_my_agent=source)
+    assert not (pytester.path / "thresholds.yaml").exists(), "a user repo without gates"
+    return pytester.runpytest_subprocess(
+        "-p", "no:cacheprovider", f"--emrd-cassettes={ROOT / 'cassettes'}",
+        "--emrd-record-mode=none", "--emrd-condition=baseline", "--emrd-spawn=office",
+        "--emrd-episodes=3", "-v",
+    )  # fmt: skip
+
+
+@pytest.mark.slow
+def test_the_example_runs_in_a_repo_without_thresholds(pytester: pytest.Pytester):
+    result = _run(pytester, EXAMPLE.read_text(encoding="utf-8"))
+    result.assert_outcomes(passed=4)
+    result.stdout.fnmatch_lines(
+        [
+            "*test_the_gathering_room_was_entered[[]scout-baseline-office-ep00[]] PASSED*",
+            "*test_action_success_gate[[]baseline[]] PASSED*",
+        ]
+    )
+
+
+@pytest.mark.slow
+def test_the_custom_gate_fails_with_its_numbers(pytester: pytest.Pytester):
+    source = EXAMPLE.read_text(encoding="utf-8").replace(
+        "MIN_ACTION_SUCCESS = 0.6", "MIN_ACTION_SUCCESS = 1.01"
+    )
+    result = _run(pytester, source)
+    result.assert_outcomes(passed=3, failed=1)
+    result.stdout.fnmatch_lines(
+        ["*scout/baseline: action success *, 95% CI [[]*[]], n=3; the gate needs*>= 1.01"]
+    )
