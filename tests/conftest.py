@@ -1,4 +1,4 @@
-"""Shared test configuration: hypothesis profiles.
+"""Shared test configuration: hypothesis profiles, a loopback JSON server.
 
 ``ci`` (the default here) is derandomized with no deadline so CI results are
 reproducible and immune to a slow shared machine; ``dev`` explores more.
@@ -6,9 +6,18 @@ reproducible and immune to a slow shared machine; ``dev`` explores more.
 
 from __future__ import annotations
 
+import json
 import os
+import threading
+from collections.abc import Callable, Iterator
+from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
+from typing import Any
 
+import pytest
 from hypothesis import HealthCheck, settings
+
+#: ``answer(method, path, json_body_or_None) -> (status, payload)`` of :func:`json_server`.
+Answer = Callable[[str, str, Any], tuple[int, Any]]
 
 settings.register_profile(
     "ci",
@@ -22,3 +31,50 @@ settings.register_profile("dev", deadline=None, max_examples=500)
 settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "ci"))
 
 pytest_plugins = ["pytester"]
+
+
+@pytest.fixture
+def json_server() -> Iterator[Callable[[Answer], str]]:
+    """``json_server(answer)`` starts a loopback HTTP server and returns its ``/v1`` base URL.
+
+    ``answer(method, path, body)`` gives ``(status, payload)`` for each GET or POST (``body``
+    is the decoded JSON or None); every server stops when the test ends.
+    """
+    running: list[tuple[ThreadingHTTPServer, threading.Thread]] = []
+
+    def start(answer: Answer) -> str:
+        class Handler(BaseHTTPRequestHandler):
+            protocol_version = "HTTP/1.1"
+
+            def log_message(self, format: str, *args: Any) -> None:
+                """Silent."""
+
+            def _reply(self, method: str) -> None:
+                length = int(self.headers.get("Content-Length") or 0)
+                body = json.loads(self.rfile.read(length)) if length else None
+                status, payload = answer(method, self.path, body)
+                data = json.dumps(payload).encode()
+                self.send_response(status)
+                self.send_header("Content-Type", "application/json")
+                self.send_header("Content-Length", str(len(data)))
+                self.end_headers()
+                self.wfile.write(data)
+
+            def do_GET(self) -> None:
+                self._reply("GET")
+
+            def do_POST(self) -> None:
+                self._reply("POST")
+
+        server = ThreadingHTTPServer(("127.0.0.1", 0), Handler)
+        server.daemon_threads = True
+        thread = threading.Thread(target=server.serve_forever, args=(0.05,), daemon=True)
+        thread.start()
+        running.append((server, thread))
+        return f"http://127.0.0.1:{server.server_address[1]}/v1"
+
+    yield start
+    for server, thread in running:
+        server.shutdown()
+        server.server_close()
+        thread.join()

@@ -1,7 +1,8 @@
 """``emrd models [--models FILE] [--json]``: the model registry, and which keys are set.
 
 One row per registered model: provider, default modality, model id, endpoint, the API-key
-variable and whether it is set in this environment (its value is never read out), and the
+variable and whether it is set in this environment (``set``, ``missing`` when the model
+needs it, ``unset`` when it is optional; its value is never read out), and the
 registry's prices per million tokens. Parametric reference agents (``scout-decay-<m>``,
 ``scout-window-<k>``) resolve from their name and are listed once as patterns.
 """
@@ -24,11 +25,13 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=_run)
 
 
-def key_state(env_var: str | None) -> str:
-    """``set`` / ``missing`` for a key variable, ``-`` when the model needs no key."""
-    if env_var is None:
+def key_state(config: Any) -> str:
+    """``set``, ``missing`` (required), ``unset`` (optional: no key is sent) or ``-`` (none)."""
+    if config.api_key_env is None:
         return "-"
-    return "set" if os.environ.get(env_var, "").strip() else "missing"
+    if os.environ.get(config.api_key_env, "").strip():
+        return "set"
+    return "missing" if config.api_key_required else "unset"
 
 
 def _price(value: float | None) -> str:
@@ -48,7 +51,7 @@ def model_rows(registry: Any) -> list[dict[str, Any]]:
                 "model_id": config.model_id,
                 "base_url": config.base_url or "built-in reference server",
                 "api_key_env": config.api_key_env,
-                "key": key_state(config.api_key_env),
+                "key": key_state(config),
                 "price_per_mtok_in": config.price_per_mtok_in,
                 "price_per_mtok_out": config.price_per_mtok_out,
             }

@@ -1,7 +1,7 @@
 """The live line: one concise terminal line about the live episodes of a run.
 
 ``emrd live 3/96 recorded, 2 retries | gw0 gemini-baseline-office-ep03 step 12/50 |
-gw1 gemini-baseline-office-ep04 step 9/50, retry 2: POST ...: retry 2/4 in 1.6 s after HTTP 429``
+gw1 gemini-baseline-office-ep04 step 9/50, retry 2: HTTP 429: {"error": ...``
 
 :class:`LiveBoard` turns the workers' status files into that line and decides when it is
 worth printing: at once when a retry or an error appeared since the last line, otherwise

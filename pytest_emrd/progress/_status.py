@@ -34,7 +34,7 @@ class WorkerStatus:
     retries: int
     """Retries of the running episode so far."""
     last_retry: str | None
-    """The last retry's log message (status, wait), if any."""
+    """The last retry's cause (``HTTP 429: ...``), if any."""
     finished: int
     """Live episodes this process finished (errored ones included)."""
     errored: int

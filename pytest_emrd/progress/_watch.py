@@ -78,7 +78,8 @@ class EpisodeWatch(logging.Handler):
         if getattr(record, RETRY_ATTR, None) is None or record.thread != self._thread:
             return  # not a retry, or another episode's (episodes computed ahead in threads)
         self.retries += 1
-        self._publish(retries=self.retries, last_retry=record.getMessage())
+        cause = record.getMessage().rpartition("Cause: ")[2]  # the status and body, not the URL
+        self._publish(retries=self.retries, last_retry=cause)
 
     def finish(self, trajectory: Trajectory) -> None:
         """Log the outcome and add the episode to this process's live totals."""

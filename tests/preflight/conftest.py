@@ -11,10 +11,7 @@ reply in the EMRD protocol.
 from __future__ import annotations
 
 import json
-import threading
-from collections.abc import Iterator
 from dataclasses import dataclass, field
-from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 from typing import Any
 
 import pytest
@@ -53,8 +50,37 @@ class FakeVLLM:
     max_model_len: int = 40960
     context_message: str = "serving"
     requests: list[dict[str, Any]] = field(default_factory=list)
-    headers: list[dict[str, str]] = field(default_factory=list)
     base_url: str = ""
+
+    def answer(self, method: str, path: str, body: Any) -> tuple[int, dict[str, Any]]:
+        """vLLM's answer to ``GET /v1/models`` and ``POST /v1/chat/completions``."""
+        if method == "GET":
+            card = {
+                "id": self.model_id,
+                "object": "model",
+                "created": 0,
+                "owned_by": "vllm",
+                "root": self.model_id,
+                "parent": None,
+                "max_model_len": self.max_model_len,
+                "permission": [],
+            }
+            return 200, {"object": "list", "data": [card]}
+        self.requests.append(body)
+        if body.get("model") != self.model_id:
+            error = {"message": f"The model `{body.get('model')}` does not exist."}
+            return 404, {"error": {**error, "type": "NotFoundError", "code": 404}}
+        said = self.refusal(body)
+        if said is not None:
+            error = {"message": said, "type": "BadRequestError", "param": None, "code": 400}
+            return 400, {"error": error}
+        text = sample_reply()
+        usage = {
+            "prompt_tokens": request_tokens(body["messages"], image_tokens=IMAGE_TOKENS),
+            "completion_tokens": len(text) // 4,
+        }
+        choice = {"index": 0, "message": {"role": "assistant", "content": text}}
+        return 200, {"object": "chat.completion", "choices": [choice], "usage": usage}
 
     def refusal(self, body: dict[str, Any]) -> str | None:
         messages = body["messages"]
@@ -74,73 +100,12 @@ class FakeVLLM:
         return None
 
 
-def _handler(fake: FakeVLLM) -> type[BaseHTTPRequestHandler]:
-    class Handler(BaseHTTPRequestHandler):
-        protocol_version = "HTTP/1.1"
-
-        def log_message(self, format: str, *args: Any) -> None:
-            """Silent."""
-
-        def _send(self, status: int, payload: dict[str, Any]) -> None:
-            data = json.dumps(payload).encode()
-            self.send_response(status)
-            self.send_header("Content-Type", "application/json")
-            self.send_header("Content-Length", str(len(data)))
-            self.end_headers()
-            self.wfile.write(data)
-
-        def do_GET(self) -> None:
-            card = {
-                "id": fake.model_id,
-                "object": "model",
-                "created": 0,
-                "owned_by": "vllm",
-                "root": fake.model_id,
-                "parent": None,
-                "max_model_len": fake.max_model_len,
-                "permission": [],
-            }
-            self._send(200, {"object": "list", "data": [card]})
-
-        def do_POST(self) -> None:
-            body = json.loads(self.rfile.read(int(self.headers["Content-Length"])))
-            fake.requests.append(body)
-            fake.headers.append(dict(self.headers))
-            if body.get("model") != fake.model_id:
-                error = {"message": f"The model `{body.get('model')}` does not exist."}
-                self._send(404, {"error": {**error, "type": "NotFoundError", "code": 404}})
-                return
-            said = fake.refusal(body)
-            if said is not None:
-                error = {"message": said, "type": "BadRequestError", "param": None, "code": 400}
-                self._send(400, {"error": error})
-                return
-            text = sample_reply()
-            usage = {
-                "prompt_tokens": request_tokens(body["messages"], image_tokens=IMAGE_TOKENS),
-                "completion_tokens": len(text) // 4,
-            }
-            choice = {"index": 0, "message": {"role": "assistant", "content": text}}
-            self._send(200, {"object": "chat.completion", "choices": [choice], "usage": usage})
-
-    return Handler
-
-
 @pytest.fixture
-def fake_vllm() -> Iterator[FakeVLLM]:
+def fake_vllm(json_server) -> FakeVLLM:
     """A running fake vLLM server (settings changeable while it runs)."""
     fake = FakeVLLM()
-    server = ThreadingHTTPServer(("127.0.0.1", 0), _handler(fake))
-    server.daemon_threads = True
-    thread = threading.Thread(target=server.serve_forever, args=(0.05,), daemon=True)
-    thread.start()
-    fake.base_url = f"http://127.0.0.1:{server.server_address[1]}/v1"
-    try:
-        yield fake
-    finally:
-        server.shutdown()
-        server.server_close()
-        thread.join()
+    fake.base_url = json_server(fake.answer)
+    return fake
 
 
 @pytest.fixture

@@ -8,10 +8,7 @@ against it records normally with a known number of retries.
 from __future__ import annotations
 
 import json
-import threading
-from collections.abc import Iterator
 from dataclasses import dataclass
-from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 from pathlib import Path
 from typing import Any
 
@@ -42,43 +39,17 @@ class Flaky:
 
 
 @pytest.fixture
-def flaky() -> Iterator[Flaky]:
+def flaky(json_server) -> Flaky:
     state = Flaky()
     registry = load_registry()
 
-    class Handler(BaseHTTPRequestHandler):
-        protocol_version = "HTTP/1.1"
+    def answer(method: str, path: str, body: Any) -> tuple[int, dict[str, Any]]:
+        if method == "GET":
+            return 200, {"object": "list", "data": [{"id": "scout", "object": "model"}]}
+        state.seen += 1
+        if state.seen in state.fail_on:
+            return 503, {"error": {"message": "overloaded, try again"}}
+        return 200, complete(body, registry)
 
-        def log_message(self, format: str, *args: Any) -> None:
-            """Silent."""
-
-        def _send(self, status: int, payload: dict[str, Any]) -> None:
-            data = json.dumps(payload).encode()
-            self.send_response(status)
-            self.send_header("Content-Type", "application/json")
-            self.send_header("Content-Length", str(len(data)))
-            self.end_headers()
-            self.wfile.write(data)
-
-        def do_GET(self) -> None:
-            self._send(200, {"object": "list", "data": [{"id": "scout", "object": "model"}]})
-
-        def do_POST(self) -> None:
-            body = json.loads(self.rfile.read(int(self.headers["Content-Length"])))
-            state.seen += 1
-            if state.seen in state.fail_on:
-                self._send(503, {"error": {"message": "overloaded, try again"}})
-                return
-            self._send(200, complete(body, registry))
-
-    server = ThreadingHTTPServer(("127.0.0.1", 0), Handler)
-    server.daemon_threads = True
-    thread = threading.Thread(target=server.serve_forever, args=(0.05,), daemon=True)
-    thread.start()
-    state.base_url = f"http://127.0.0.1:{server.server_address[1]}/v1"
-    try:
-        yield state
-    finally:
-        server.shutdown()
-        server.server_close()
-        thread.join()
+    state.base_url = json_server(answer)
+    return state

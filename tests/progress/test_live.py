@@ -41,8 +41,9 @@ def test_a_watched_live_episode_logs_steps_counts_retries_and_publishes(flaky, t
     assert "flaky-baseline-office-ep00 step 1/50: " in "\n".join(messages)
     assert any(m.startswith(f"flaky-baseline-office-ep00 step {steps}/50: Term(") for m in messages)
     retries = [r for r in caplog.records if r.levelno == logging.WARNING]
-    assert [r.getMessage().split(": retry ")[1][:3] for r in retries] == ["1/3", "2/3"]
-    assert "after HTTP 503" in retries[0].getMessage()
+    said = [r.getMessage() for r in retries]
+    assert [m.split(" attempt ")[1][:3] for m in said] == ["1/4", "2/4"], said
+    assert "retrying in" in said[0] and "Cause: HTTP 503" in said[0]
     (published,) = read_statuses(tmp_path / "run")
     assert (published.worker, published.case, published.finished) == ("gw7", None, 1)
     assert (published.retries_total, published.errored) == (2, 0)
@@ -96,7 +97,7 @@ def test_the_live_line_is_concise():
                 step=9,
                 retries=2,
                 finished=1,
-                last_retry="POST https://x/chat/completions: retry 2/4 in 1.6 s after HTTP 429",
+                last_retry='HTTP 429: {"error": {"message": "Resource exhausted"}}',
                 retries_total=1,
             ),
         ],
@@ -105,7 +106,7 @@ def test_the_live_line_is_concise():
     assert line == (
         "emrd live 3/96 recorded, 3 retries | gw0 gemini-baseline-office-ep03 step 12/50 | "
         "gw1 gemini-baseline-office-ep04 step 9/50, retry 2: "
-        "POST https://x/chat/completions: retry 2/4 in 1.6 s after HTTP 429"
+        'HTTP 429: {"error": {"message": "Resource exhausted"}}'
     )
 
 
@@ -152,8 +153,8 @@ def test_a_live_session_shows_steps_retries_and_the_table(pytester, flaky, xdist
     assert table[1].split()[0] == "flaky" and table[1].split()[-2:] == ["2", "0"]
     live = [line for line in result.stdout.lines if line.startswith("emrd live 0/1 recorded")]
     assert live[-1].startswith("emrd live 0/1 recorded, 2 retries | ")
-    assert "flaky-baseline-office-ep00 step 0/50, retry 2: POST http://127.0.0.1:" in live[-1]
+    assert "flaky-baseline-office-ep00 step 0/50, retry 2: HTTP 503: " in live[-1]
     assert "vcr.cassette" not in out, "vcrpy's request bodies stay out of the live log"
     if xdist[0] == "-p":  # pytest shows live logs of its own process only
         assert "flaky-baseline-office-ep00 step 1/50: " in out
-        assert "retry 1/3 in" in out and "after HTTP 503" in out
+        assert "attempt 1/4 failed; retrying in" in out and "Cause: HTTP 503" in out
