@@ -368,6 +368,7 @@ class _Run:
             cassettes=settings.cassettes,
             record_mode=settings.record_mode,
             holds=self.store.holds,
+            enabled=settings.preflight,
         )
 
     def preflight(self, params: list[Any]) -> None:
@@ -375,6 +376,8 @@ class _Run:
         before any episode runs. Then start the live line."""
         from pytest_emrd.progress import LiveBoard, Ticker
 
+        if not params:
+            return
         cells = (self.cell_specs(p) if isinstance(p, GateCell) else [p] for p in params)
         specs = [spec for group in cells for spec in group]
         reports, live = self.call(lambda run: run.preflights.run(specs))

@@ -102,6 +102,8 @@ OPTIONS: Final[tuple[Option, ...]] = (
            "evaluated with `emrd gate RUN_DIR...`)", metavar="K/N"),
     Option("concurrency", "live episodes each process records at once, in threads, against "
            "a remote model (default: 1); replays are not affected", metavar="N"),
+    Option("preflight", "check each model once before its first live recording: key, "
+           "endpoint, one probe request, context, cost (default: on)", ("on", "off")),
 )  # fmt: skip
 
 
@@ -135,6 +137,8 @@ class RunSettings:
     """``(k, n)``: this run covers the k-th of n slices (1-based)."""
     concurrency: int = 1
     """Live episodes one process records at once (threads; replays run one at a time)."""
+    preflight: bool = True
+    """Preflight each model before its first live recording (``--emrd-preflight=off``: no)."""
 
     @property
     def backend_kwargs(self) -> dict[str, Any]:
@@ -247,7 +251,15 @@ def resolve_settings(
     env = os.environ if env is None else env
     by_name = {o.name: o for o in OPTIONS}
     raw = {name: _pick(option, cli, ini) for name, option in by_name.items()}
-    for name in ("variant", "layouts", "backend", "modality", "record_mode", "matching"):
+    for name in (
+        "variant",
+        "layouts",
+        "backend",
+        "modality",
+        "record_mode",
+        "matching",
+        "preflight",
+    ):
         if raw[name] is not None:
             check_choice(by_name[name].flag, raw[name], by_name[name].choices or ())
     episodes = _episodes(raw["episodes"])
@@ -283,6 +295,7 @@ def resolve_settings(
         cassettes=_path(raw["cassettes"] or "cassettes", rootdir),
         shard=parse_shard(str(raw["shard"])) if raw["shard"] else None,
         concurrency=concurrency or 1,
+        preflight=raw["preflight"] != "off",
     )
 
 

@@ -71,6 +71,7 @@ def test_a_recorded_run_leaks_no_planted_credential(
         "--emrd-model=denied",
         "--emrd-model=rejected",
         "--emrd-episodes=1",
+        "--emrd-preflight=off",  # here: what an episode that meets a 401 writes
         f"--emrd-results={pytester.path / 'run'}",
         f"--junitxml={pytester.path / 'junit.xml'}",
     )

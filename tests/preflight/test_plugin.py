@@ -66,3 +66,16 @@ def test_collect_only_preflights_nothing(bench, fake_vllm, registry_for):
         *_args("--emrd-model=qwen3-vl-32b", f"--emrd-models={models}", "--collect-only")
     )
     assert result.ret == 0 and fake_vllm.requests == []
+
+
+@pytest.mark.slow
+def test_preflight_off_lets_the_episode_meet_the_refusal(bench, fake_vllm, registry_for):
+    fake_vllm.image_limit = 1
+    models = registry_for(fake_vllm.base_url)
+    result = bench.runpytest_subprocess(
+        *_args("--emrd-model=qwen3-vl-32b", f"--emrd-models={models}", "-k", "ep00"),
+        "--emrd-preflight=off",
+    )
+    result.assert_outcomes(failed=1)
+    assert "emrd preflight" not in result.stdout.str()
+    result.stdout.fnmatch_lines(["*errored*At most 1 image(s) may be provided in one prompt*"])
