@@ -149,7 +149,7 @@ def test_shards_then_gate_replay_and_gate_like_one_machine(workflow, checkout, t
     assert "aec" in gate_summary and "# EMRD results" in shards_summary
 
     (runner.repo / "thresholds.yaml").write_text(
-        "scout:\n  baseline:\n    aec: {min: 1.01}\n", encoding="utf-8"
+        "scout:\n  baseline:\n    aec: {max: 0.5}\n", encoding="utf-8"
     )
     assert runner.job(workflow["jobs"]["gate"], {"env": env}) == 1, "a broken bound fails"
     assert "FAIL scout-baseline-aec" in runner.last.stdout
