@@ -404,12 +404,14 @@ class _Run:
             reporter.write_line(scrub(line))
 
     def pytest_unconfigure(self) -> None:
+        # Simulators first: an ai2thor one owns a Unity process, which must not outlive a
+        # worker that xdist kills when its teardown runs past the exit timeout.
+        if "simulators" in self.__dict__:
+            self.simulators.close()
         if self._prefetcher is not None:
             self._prefetcher.close()
         if "runner" in self.__dict__:
             self.runner.close()
-        if "simulators" in self.__dict__:
-            self.simulators.close()
 
     # -- reporting hooks (run in the controller, or the only process without xdist) --------
 
