@@ -1,8 +1,11 @@
-"""``emrd validate [--episodes N] [--out DIR] [--jobs J]``: do the metrics recover the truth?
+"""``emrd validate [--episodes N] [--out DIR] [--jobs J] [--family F]``: do the metrics recover
+the truth?
 
 Runs the built-in reference agents with planted cognition (``scout``, ``scout-decay-<m>``,
-``scout-window-<k>``, ``scout-serial``, ``prior``) on the built-in world, checks that every
-metric recovers what was planted and that the statistics reproduce the paper's tables,
+``scout-window-<k>``, ``scout-serial``, ``prior``, and ``mimic`` groups that each move one
+map-writing knob: frame, noise, duplicates, hallucinations, malformed replies) on the built-in
+world, checks that every metric recovers what was planted and that the statistics reproduce
+the paper's tables,
 prints the table and writes ``validation.md`` and ``validation.json`` under ``--out``.
 Episodes are cached under ``--out`` (a rerun only recomputes the checks).
 Exit status: 0 when no check fails (``finding`` rows do not fail), 1 when one fails,
@@ -19,7 +22,7 @@ from pytest_emrd.errors import check_positive_int
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    from pytest_emrd.validate._plan import FULL_EPISODES
+    from pytest_emrd.validate._plan import FAMILIES, FULL_EPISODES
 
     p = sub.add_parser(
         "validate", help="check that the metrics recover the reference agents' planted cognition"
@@ -39,6 +42,13 @@ def register(sub: argparse._SubParsersAction) -> None:
         help="episode cache and output folder (default: ./emrd-validation)",
     )
     p.add_argument("--jobs", type=int, default=2, metavar="J", help="worker processes (default: 2)")
+    p.add_argument(
+        "--family",
+        action="append",
+        choices=sorted(FAMILIES),
+        help="agent family to validate, repeatable (default: all): scout (memory, exploration "
+        "and decision metrics, with prior) or mimic (VLM-like map writing)",
+    )
     p.set_defaults(func=_run)
 
 
@@ -47,10 +57,12 @@ def _run(args: argparse.Namespace) -> int:
     from pytest_emrd.episode import protocol_version
     from pytest_emrd.validate import Plan, Progress, markdown, run_plan, to_json
     from pytest_emrd.validate import validation_report as build
+    from pytest_emrd.validate._plan import FAMILIES
 
     check_positive_int("--episodes", args.episodes)
     check_positive_int("--jobs", args.jobs)
-    plan = Plan(args.episodes)
+    families = args.family or sorted(FAMILIES)
+    plan = Plan(args.episodes, tuple(g for f in families for g in FAMILIES[f]))
 
     def progress(p: Progress) -> None:
         if p.done % 20 == 0 or p.done == p.total:

@@ -34,20 +34,16 @@ def cell_specs(
     ]
 
 
-def _models(settings: RunSettings) -> list[str]:
-    return sorted(settings.models)
-
-
-def _conditions(settings: RunSettings) -> list[str]:
-    return sorted(settings.conditions, key=CONDITIONS.index)
+def _cells(settings: RunSettings) -> list[tuple[str, str]]:
+    """The run's ``(model, condition)`` cells, sorted by model, then condition."""
+    return sorted(settings.cells, key=lambda mc: (mc[0], CONDITIONS.index(mc[1])))
 
 
 def episode_specs(settings: RunSettings, modality_of: ModalityOf) -> list[EpisodeSpec]:
     """Every episode of the run (all shards), sorted: model, condition, spawn, episode."""
     return [
         spec
-        for model in _models(settings)
-        for condition in _conditions(settings)
+        for model, condition in _cells(settings)
         for spec in cell_specs(settings, model, condition, modality_of)
     ]
 
@@ -62,7 +58,6 @@ def gate_cells(settings: RunSettings, thresholds: Thresholds) -> list[GateCell]:
     of the run's layouts only (``baseline`` for paper, ``baseline@generated`` for generated)."""
     return [
         GateCell(bound, settings.variant)
-        for model in _models(settings)
-        for condition in _conditions(settings)
+        for model, condition in _cells(settings)
         for bound in thresholds.for_cell(model, condition, settings.layouts)
     ]

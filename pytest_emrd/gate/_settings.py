@@ -31,6 +31,13 @@ SPAWNS: Final[tuple[str, ...]] = tuple(ROOM_SLUGS.values())
 MAX_EPISODES: Final = 1000
 """Cap on ``--emrd-episodes`` (episodes per spawn room; the paper's setting is 20)."""
 _NOT_CI: Final = frozenset({"", "0", "false", "no", "off"})
+#: What ``pytest benchmarks`` covers with neither ``--emrd-model`` nor ``--emrd-condition``:
+#: the reference agents whose cassettes are committed, each under the conditions recorded
+#: and gated for it (``mimic``: the baseline grid only, to keep CI replay short).
+DEFAULT_CELLS: Final[tuple[tuple[str, tuple[str, ...]], ...]] = (
+    ("scout", CONDITIONS),
+    ("mimic", ("baseline",)),
+)
 LENIENT_BACKENDS: Final[frozenset[str]] = frozenset({"ai2thor"})
 """Backends whose frames are not bit-stable: their cassettes replay with lenient matching."""
 
@@ -63,8 +70,9 @@ class Option:
 
 
 OPTIONS: Final[tuple[Option, ...]] = (
-    Option("model", "model to benchmark, repeatable (default: scout, the built-in reference "
-           "agent); any name of the model registry", repeatable=True, metavar="NAME"),
+    Option("model", "model to benchmark, repeatable (default: the built-in reference agents "
+           "scout, under every condition, and mimic, under baseline); any name of the model "
+           "registry", repeatable=True, metavar="NAME"),
     Option("condition", "environmental condition, repeatable (default: all three)",
            CONDITIONS, repeatable=True),
     Option("spawn", "spawn room, repeatable (default: all four)", SPAWNS, repeatable=True),
@@ -113,6 +121,10 @@ class RunSettings:
 
     models: tuple[str, ...]
     conditions: tuple[str, ...]
+    cells: tuple[tuple[str, str], ...]
+    """``(model, condition)`` pairs the run covers: every selected model under every selected
+    condition, or :data:`DEFAULT_CELLS` (filtered by any ``--emrd-condition``) when no model
+    was selected."""
     spawns: tuple[str, ...]
     episodes: int
     variant: str
@@ -277,9 +289,17 @@ def resolve_settings(
             f"--emrd-concurrency={concurrency} runs episodes in threads, which the {backend} "
             "backend (one simulator process per worker) does not support; use -n N instead."
         )
+    conditions = _listed(by_name["condition"], raw["condition"], CONDITIONS)
+    if raw["model"] is None:
+        cells = tuple((m, c) for m, cs in DEFAULT_CELLS for c in cs if c in conditions)
+        models = tuple(dict.fromkeys(m for m, _ in cells))
+    else:
+        models = _listed(by_name["model"], raw["model"], ())
+        cells = tuple((m, c) for m in models for c in conditions)
     return RunSettings(
-        models=_listed(by_name["model"], raw["model"], ("scout",)),
-        conditions=_listed(by_name["condition"], raw["condition"], CONDITIONS),
+        models=models,
+        conditions=conditions,
+        cells=cells,
         spawns=_listed(by_name["spawn"], raw["spawn"], SPAWNS),
         episodes=episodes or 20,
         variant=raw["variant"] or "default",

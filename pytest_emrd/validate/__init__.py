@@ -12,8 +12,10 @@ from pytest_emrd.validate._frame import FRAME_SEED, FRAME_TOLERANCE, frame_check
 from pytest_emrd.validate._paper import statistics_checks
 from pytest_emrd.validate._plan import (
     DECAY_MEANS,
+    FAMILIES,
     FULL_EPISODES,
     GROUPS,
+    MIMIC_MODELS,
     WINDOW_SIZES,
     Group,
     Plan,
@@ -35,10 +37,12 @@ from pytest_emrd.validate._suite import episode_checks, validation_report
 
 __all__ = [
     "DECAY_MEANS",
+    "FAMILIES",
     "FRAME_SEED",
     "FRAME_TOLERANCE",
     "FULL_EPISODES",
     "GROUPS",
+    "MIMIC_MODELS",
     "VERDICTS",
     "WINDOW_SIZES",
     "Check",

@@ -18,7 +18,7 @@ SCHEMA_VERSION: Final = 1
 #: what the printed counts give, and what would reproduce it), or the paper's estimator
 #: misreads a planted truth that our estimator recovers (the note says how).
 VERDICTS: Final[tuple[str, ...]] = ("pass", "fail", "finding")
-SECTIONS: Final[tuple[str, ...]] = ("Explore", "Map", "Remember", "Decide", "Statistics")
+SECTIONS: Final[tuple[str, ...]] = ("Explore", "Map", "Remember", "Decide", "Replies", "Statistics")
 
 Value = float | int | str | None
 #: What the checks read: a trajectory, or its metrics computed once (much faster).
@@ -30,7 +30,7 @@ class Check:
     """One validation check, as the table shows it and the JSON stores it."""
 
     section: str
-    """Paper phase: ``Explore``, ``Map``, ``Remember``, ``Decide``, ``Statistics``."""
+    """Paper phase the metric belongs to (:data:`SECTIONS`); ``Replies``: reading the replies."""
     name: str
     """What is checked (``Ebbinghaus EFC, scout-decay-8``)."""
     planted: str

@@ -18,6 +18,20 @@ from pytest_emrd.trajectory import EpisodeSpec
 DECAY_MEANS: Final[tuple[int, ...]] = (3, 8, 20)
 #: Planted working-memory capacities whose recovery the Miller rows check.
 WINDOW_SIZES: Final[tuple[int, ...]] = (5, 10, 20)
+#: Knobs of the mimic groups: each moves one planted behaviour away from the clean mimic.
+MIMIC_SIGMA: Final = 0.3
+MIMIC_DUP: Final = 0.5
+MIMIC_HALLUC: Final = 0.1
+#: The mimic group of each role: the clean mimic in the spawn frame and in its own frame
+#: (free-form labels only), one knob moved at a time, and the shipped defaults.
+MIMIC_MODELS: Final[dict[str, str]] = {
+    "spawn": "mimic-spawn-s0-p0-h0-q0-r0-a0",
+    "own": "mimic-s0-p0-h0-q0-r0-a0",
+    "sigma": f"mimic-s{MIMIC_SIGMA:g}-p0-h0-q0-r0-a0",
+    "dup": f"mimic-s0-p{MIMIC_DUP:g}-h0-q0-r0-a0",
+    "halluc": f"mimic-s0-p0-h{MIMIC_HALLUC:g}-q0-r0-a0",
+    "default": "mimic",
+}
 #: Reference agents run in the symbolic modality they are registered with.
 MODALITY: Final = "both"
 #: Episodes per spawn room of the full run (the paper's 20 per spawn, 80 per model).
@@ -31,22 +45,28 @@ class Group:
     model: str
     """Registry name of the reference agent (``scout-decay-8``)."""
     condition: str
+    layouts: str = "paper"
+    """``paper`` (the fixed office) or ``generated`` (an office per spawn x episode)."""
 
     @property
     def name(self) -> str:
-        """``scout-decay-8`` under baseline, ``scout@low_light`` otherwise."""
-        return self.model if self.condition == "baseline" else f"{self.model}@{self.condition}"
+        """``scout-decay-8`` under baseline, ``scout@low_light`` otherwise; ``@generated``
+        appended on generated layouts."""
+        name = self.model if self.condition == "baseline" else f"{self.model}@{self.condition}"
+        return name if self.layouts == "paper" else f"{name}@{self.layouts}"
 
     def specs(self, episodes: int) -> tuple[EpisodeSpec, ...]:
         """``episodes`` episodes per spawn room, spawn-major."""
         return tuple(
-            EpisodeSpec(self.model, self.condition, spawn, k, modality=MODALITY)
+            EpisodeSpec(
+                self.model, self.condition, spawn, k, modality=MODALITY, layouts=self.layouts
+            )
             for spawn in ROOM_SLUGS.values()
             for k in range(episodes)
         )
 
 
-GROUPS: Final[tuple[Group, ...]] = (
+SCOUT_GROUPS: Final[tuple[Group, ...]] = (
     Group("scout", "baseline"),
     Group("scout", "low_light"),
     *(Group(f"scout-decay-{m}", "baseline") for m in DECAY_MEANS),
@@ -54,6 +74,17 @@ GROUPS: Final[tuple[Group, ...]] = (
     Group("scout-serial", "baseline"),
     Group("prior", "baseline"),
 )
+#: The knob groups run on generated offices (the scout re-enters rooms there, never in the
+#: paper's office, so duplicates on re-entry need them; many layouts also test the frame rows
+#: harder than one); the default mimic runs the benchmark's own office.
+MIMIC_GROUPS: Final[tuple[Group, ...]] = tuple(
+    Group(m, "baseline", "paper" if role == "default" else "generated")
+    for role, m in MIMIC_MODELS.items()
+)
+#: Agent families ``emrd validate --family`` selects: the scout family (with ``prior``), whose
+#: rows check the memory, exploration and decision metrics, and the mimic family (map writing).
+FAMILIES: Final[dict[str, tuple[Group, ...]]] = {"scout": SCOUT_GROUPS, "mimic": MIMIC_GROUPS}
+GROUPS: Final[tuple[Group, ...]] = SCOUT_GROUPS + MIMIC_GROUPS
 
 
 @dataclass(frozen=True)

@@ -31,9 +31,17 @@ def test_registry_modality_applies_unless_overridden():
     )
 
 
+def test_default_grid_is_scout_everywhere_and_mimic_under_baseline():
+    specs = episode_specs(_settings(episodes="1"), lambda m: "both")
+    cells = sorted({(s.model, s.condition) for s in specs})
+    assert cells == [("mimic", "baseline"), ("scout", "baseline"), ("scout", "low_light"),
+                     ("scout", "texture")]  # fmt: skip
+    assert specs[0].case_id == "mimic-baseline-office-ep00" and len(specs) == 4 * 4
+
+
 def test_variant_enters_the_ids():
-    spec = episode_specs(_settings(episodes="1", variant="B3"), lambda m: "both")[0]
-    assert spec.case_id == "scout-baseline-B3-office-ep00"
+    spec = episode_specs(_settings(episodes="1", variant="B3", model=["scout"]), lambda m: "both")
+    assert spec[0].case_id == "scout-baseline-B3-office-ep00"
 
 
 @given(st.integers(1, 30), st.integers(1, 7))
@@ -60,8 +68,10 @@ def test_generated_layouts_form_their_own_episodes_and_gate_cells():
         Bound("scout", "baseline", "aec", "min", 0.7, layouts="generated"),
     )
     thresholds = Thresholds("t.yaml", bounds)
-    paper = _settings(episodes="1", condition=["baseline"])
-    generated = _settings(episodes="1", condition=["baseline"], layouts="generated")
+    paper = _settings(episodes="1", condition=["baseline"], model=["scout"])
+    generated = _settings(
+        episodes="1", condition=["baseline"], layouts="generated", model=["scout"]
+    )
     spec = episode_specs(generated, lambda m: "both")[0]
     assert spec.layouts == "generated"
     assert spec.case_id == "scout-baseline-generated-office-ep00"

@@ -16,10 +16,16 @@ def _resolve(cli=None, ini=None, env=None):
     return resolve_settings(cli or {}, ini or {}, rootdir=ROOT, env=env or {})
 
 
-def test_defaults_are_the_papers_grid_for_scout():
+def test_defaults_are_the_papers_grid_for_the_reference_agents():
     s = _resolve()
-    assert s.models == ("scout",)
+    assert s.models == ("scout", "mimic")
     assert s.conditions == ("baseline", "low_light", "texture")
+    assert s.cells == (
+        ("scout", "baseline"),
+        ("scout", "low_light"),
+        ("scout", "texture"),
+        ("mimic", "baseline"),
+    )
     assert s.spawns == ("office", "conference", "kitchen", "entrance")
     assert (s.episodes, s.variant, s.backend, s.modality) == (20, "default", "builtin", None)
     assert (s.record_mode, s.matching, s.shard) == ("once", "strict", None)
@@ -35,6 +41,22 @@ def test_thresholds_default_to_the_rootdir_file_only_when_it_exists(tmp_path: Pa
     )
     given = resolve_settings({"thresholds": "gates/x.yaml"}, {}, rootdir=tmp_path, env={})
     assert given.thresholds == tmp_path / "gates" / "x.yaml", "a given file is kept (and checked)"
+
+
+@pytest.mark.parametrize(
+    ("cli", "cells"),
+    [
+        pytest.param({"condition": ["low_light"]}, (("scout", "low_light"),), id="default-models"),
+        pytest.param({"condition": ["baseline"]}, (("scout", "baseline"), ("mimic", "baseline")),
+                     id="default-models-baseline"),
+        pytest.param({"model": ["mimic"]}, (("mimic", "baseline"), ("mimic", "low_light"),
+                                            ("mimic", "texture")), id="a-model-every-condition"),
+        pytest.param({"model": ["gpt"], "condition": ["texture"]}, (("gpt", "texture"),),
+                     id="explicit"),
+    ],
+)  # fmt: skip
+def test_cells_are_the_product_of_what_was_selected(cli, cells):
+    assert _resolve(cli).cells == cells
 
 
 def test_ci_environment_defaults_to_replay_only():

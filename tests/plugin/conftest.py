@@ -33,6 +33,7 @@ def small() -> Callable[..., list[str]]:
         return [
             "-p",
             "no:cacheprovider",
+            "--emrd-model=scout",
             "--emrd-condition=baseline",
             "--emrd-spawn=office",
             f"--emrd-episodes={episodes}",

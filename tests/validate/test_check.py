@@ -8,7 +8,17 @@ import math
 import pytest
 
 from pytest_emrd.errors import ConfigError, ProtocolError
-from pytest_emrd.validate import Check, Plan, ValidationReport, markdown, to_json
+from pytest_emrd.validate import (
+    FAMILIES,
+    GROUPS,
+    MIMIC_MODELS,
+    Check,
+    Plan,
+    ValidationReport,
+    episode_checks,
+    markdown,
+    to_json,
+)
 
 
 def _report() -> ValidationReport:
@@ -73,3 +83,13 @@ def test_plan_pairs_groups_over_the_same_offices() -> None:
     seeds = {g.name: [s.seed for s in g.specs(2)] for g in plan.groups}
     assert len({tuple(v) for v in seeds.values()}) == 1
     assert {s.modality for s in specs} == {"both"}
+
+
+def test_families_partition_the_groups() -> None:
+    scout, mimic = set(FAMILIES["scout"]), set(FAMILIES["mimic"])
+    assert scout | mimic == set(GROUPS) and not scout & mimic
+    assert {g.model for g in mimic} == set(MIMIC_MODELS.values())
+
+
+def test_rows_come_only_for_the_families_run() -> None:
+    assert episode_checks({}) == []

@@ -1,5 +1,6 @@
-"""A reduced real validation run: every planted agent, 1 episode per spawn room (4 each),
-on the built-in world through the reference server, via ``emrd validate``.
+"""A reduced real validation run: every planted agent of both families (scout, mimic), 1
+episode per spawn room (4 each), on the built-in world through the reference server, via
+``emrd validate``.
 
 Tolerances of the reduced run (4 episodes per agent instead of the full run's 80) are
 stated per row below; the episodes are deterministic, so so are the verdicts. One row is
@@ -25,7 +26,8 @@ EFC_TOLERANCE = 0.4
 @pytest.fixture(scope="module")
 def rows(tmp_path_factory: pytest.TempPathFactory) -> dict[str, dict]:
     out: Path = tmp_path_factory.mktemp("validation")
-    code = main(["validate", "--episodes", "1", "--out", str(out), "--jobs", "2"])
+    code = main(["validate", "--episodes", "1", "--out", str(out), "--jobs", "2",
+                 "--family", "scout", "--family", "mimic"])  # fmt: skip
     report = json.loads((out / "validation.json").read_text())
     assert (out / "validation.md").read_text().startswith(f"{len(report['checks'])} checks")
     assert code == (1 if any(c["verdict"] == "fail" for c in report["checks"]) else 0)
@@ -61,6 +63,13 @@ def test_ebbinghaus_recovers_the_planted_mean(rows, mean: int) -> None:
         "FPSG global, prior",
         "Inventory-Free chi-square",
         "Inventory-Free Cramer's V",
+        "AEC and SIR, mimic: own frame vs spawn frame",
+        "AEC, PA, SIR with hallucinations, mimic-h0.1",
+        "Hallucinated entries per step, mimic-h0.1",
+        "AEC with duplicates, mimic-p0.5: Eq. AEC",
+        "Parse failures, mimic",
+        "Replies read with a repair, mimic",
+        "Invalid actions, mimic",
     ],
 )
 def test_row_passes(rows, name: str) -> None:

@@ -10,7 +10,8 @@ Bump :data:`REFERENCE_VERSION` with every change to what a reference agent repli
 * ``ref-1`` — the first scripted agents (no version in the request).
 * ``ref-2`` — the scout repositions and sweeps again when no unused doorway is in sight;
   ``prior`` maps nothing (looks around in place, then terminates); planted decay hazard ``1/m``;
-  ``scout-serial`` protects thirds of the prompt's inventory total.
+  ``scout-serial`` protects thirds of the prompt's inventory total. The ``mimic`` family was
+  added under ``ref-2`` (no reply of an existing agent changed).
 """
 
 from __future__ import annotations

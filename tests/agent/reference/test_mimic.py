@@ -8,6 +8,8 @@ import re
 
 import numpy as np
 import pytest
+from hypothesis import given
+from hypothesis import strategies as st
 
 from pytest_emrd.agent import load_registry, parse_reply
 from pytest_emrd.agent.reference._malform import FAILING, REPAIRABLE, malform, read_state, render
@@ -22,6 +24,7 @@ from pytest_emrd.episode import run_episode
 from pytest_emrd.errors import ConfigError, ProtocolError
 from pytest_emrd.metrics import canonical_type, rigid_fit
 from pytest_emrd.trajectory import EpisodeSpec, Trajectory
+from pytest_emrd.world._catalog import KINDS
 
 CLEAN = "mimic-spawn-s0-p0-h0-q0-r0-a0"
 PLANTED_INVALID = re.compile(r"^(MoveAhead|Turn\(Back\)|Goto\(the .*\)|Goto\(nearest exit\))$")
@@ -89,6 +92,30 @@ def test_damage_is_a_parse_failure_the_agent_still_reads(kind: str, u: float, cm
     assert read_state(text) == STATE
 
 
+texts = st.text(st.characters(codec="utf-8", exclude_categories=("Cs",)), max_size=12)
+entries = st.fixed_dictionaries({"type": texts, "x": st.floats(-50, 50), "z": st.floats(-50, 50)})
+
+
+@given(
+    state=st.dictionaries(texts, st.none() | st.booleans() | texts | st.integers(), max_size=4),
+    cmap=st.dictionaries(texts, entries, max_size=4),
+    notes=st.tuples(texts, texts, texts),
+    kind=st.sampled_from(REPAIRABLE + FAILING),
+    u=st.floats(0, 0.999),
+)
+def test_every_malformation_is_read_as_planted(state, cmap, notes, kind, u) -> None:
+    body = {"observation": notes[0], "dedup_check": notes[1], "cognitive_map": cmap,
+            "action": "Turn(Right)", "reasoning": notes[2]}  # fmt: skip
+    text = malform(render(state, body), kind, u)
+    reply = parse_reply(text)
+    if kind in FAILING:
+        assert reply.error is not None
+    else:
+        assert reply.error is None and reply.repairs == (kind,)
+        assert [e.label for e in reply.cognitive_map] == [k.strip() for k in cmap]
+    assert read_state(text) == state
+
+
 def test_a_reply_without_state_is_a_protocol_error() -> None:
     with pytest.raises(ProtocolError, match="no mimic state"):
         read_state('{"action": "Turn(Left)"}')
@@ -121,11 +148,18 @@ def test_every_phrase_names_its_type_in_the_metrics_vocabulary(object_type: str)
     assert canonical_type(TYPE_WORDS[object_type], present=present) == object_type
 
 
+WORLD_TYPES = {kind.object_type for kind in KINDS.values()}
+
+
+def test_every_type_the_world_holds_has_phrases() -> None:
+    assert set(PHRASES) == WORLD_TYPES
+
+
 @pytest.mark.parametrize("phrase", HALLUCINATIONS)
-def test_hallucinations_name_no_type_of_the_office(phrase: str) -> None:
+def test_hallucinations_name_no_type_the_world_holds(phrase: str) -> None:
     for label in (phrase, label_for(phrase, {phrase}, style="{0} ({1})", u_phrase=0.0,
                                     u_qualifier=1.0)):  # fmt: skip
-        assert canonical_type(label, present=set(PHRASES)) is None
+        assert canonical_type(label, present=WORLD_TYPES) is None
 
 
 def _episode(model: str, spawn: str = "office", k: int = 0, layouts: str = "paper") -> Trajectory:

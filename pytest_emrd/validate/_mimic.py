@@ -1,0 +1,291 @@
+"""Map, Explore, Remember and reply rows for the ``mimic`` family: the metrics recover what a
+VLM-like writer plants (:mod:`pytest_emrd.agent.reference._mimic`).
+
+Every group walks the same paths (the knobs do not touch navigation, and damaged replies and
+invalid actions are off except in the default group), so groups are compared episode by
+episode. The planted truth of an episode is read from the agent's own state, which travels in
+its replies: which object got a duplicate when.
+
+* **Frame.** PA of the mimic in its own frame equals PA of the same mimic in the spawn frame.
+  Both write coordinates to 0.01 m, so the own-frame map is a rigid image of the spawn-frame
+  map up to ``delta <= sqrt(2) * 0.01`` m per point (rounding in each frame). The optimal
+  Procrustes residual is 1-Lipschitz in the points (RMS norm), so ``|RMSE_own - RMSE_spawn|
+  <= delta`` and ``|PA_own - PA_spawn| <= delta / L_gt`` (coverage unchanged); that is the
+  bound per episode. AEC and SIR are counts of labels and identities: equal exactly.
+* **Noise.** With ``n`` matched pairs, i.i.d. N(0, sigma^2) noise per coordinate and a proper
+  rigid fit (3 parameters), ``E[SSR] = SSR_0 + sigma^2 (2n - 3)``, where ``SSR = n RMSE^2``
+  and ``SSR_0`` is the residual of the paired noise-free episode (the scout's own placement
+  error). PA gives ``RMSE = -L_gt ln(PA / c)`` (``c`` its coverage factor), so
+  ``sigma_hat^2 = sum_i (SSR_i - SSR_0,i) / sum_i (2 n_i - 3)``, with a bootstrap CI over
+  episodes.
+* **Hallucinations** name no type of the layout: Eq. AEC's ``min`` cap and the matcher leave
+  them unmatched, so AEC, PA and SIR equal the clean episode's exactly, and the count of
+  unrecognised entries in the terminal map is Binomial(T, h): ``h_hat = sum unrecognised /
+  sum T`` with a Clopper-Pearson interval.
+* **Duplicates.** Eq. AEC per episode: ``AEC_p = sum_k min(|M_k| + D_k, |E_k|) / |E|`` with
+  ``|M_k|`` the clean map's entries of type ``k`` and ``D_k`` the planted duplicates: AEC can
+  only rise, and only where type ``k`` still has unmapped instances. SIR (Appendix B: objects
+  of ``M_first`` "recognised and successfully deduplicated" on re-entry): an object that got
+  a duplicate during the re-entry was not deduplicated, so the per-room ratio falls to the
+  share of ``M_first`` without a duplicate at the re-entry's end.
+* **Replies.** Parse failures over all steps recover ``fail``; replies read with a repair
+  over readable replies recover ``repair``; refused actions over readable replies, net of
+  the clean mimic's own refusal rate ``f_0``, recover ``invalid`` (``(f - f_0) / (1 - f_0)``).
+"""
+
+from __future__ import annotations
+
+import math
+from collections import Counter
+from collections.abc import Mapping, Sequence
+from typing import Final
+
+import numpy as np
+from statsmodels.stats.proportion import proportion_confint
+
+from pytest_emrd.agent.reference._malform import read_state
+from pytest_emrd.metrics import EpisodeMetrics, bootstrap_ci, episode_metrics, match_map
+from pytest_emrd.metrics._tracking import layout_scale, track_episode
+from pytest_emrd.trajectory import Trajectory
+from pytest_emrd.validate._check import Check, fmt, judged, pct
+
+#: Coordinates are written to this many metres in every frame.
+WRITTEN_M: Final = 0.01
+#: Relative error allowed on the recovered sigma.
+SIGMA_TOLERANCE: Final = 0.1
+#: Absolute error allowed on the mean SIR ratio under duplicates.
+SIR_TOLERANCE: Final = 0.05
+#: Exact equalities are checked to this (floating-point summation only).
+EXACT: Final = 1e-12
+
+Paired = Sequence[tuple[Trajectory, EpisodeMetrics]]
+
+
+def paired(trajectories: Sequence[Trajectory]) -> list[tuple[Trajectory, EpisodeMetrics]]:
+    """Each trajectory with its metrics (computed once)."""
+    return [(t, episode_metrics(t)) for t in trajectories]
+
+
+def _final_ids(traj: Trajectory) -> dict[str, list[str]]:
+    """Object id -> its labels (oldest first) in the agent's state after the last step."""
+    ids: dict[str, list[str]] = {}
+    for label, rec in read_state(traj.steps[-1].raw_reply)["map"].items():
+        if "id" in rec:
+            ids.setdefault(rec["id"], []).append(label)
+    return ids
+
+
+def _max_gap(a: Sequence[float | None], b: Sequence[float | None]) -> float:
+    gaps = [abs(x - y) for x, y in zip(a, b, strict=True) if x is not None and y is not None]
+    undefined = sum((x is None) != (y is None) for x, y in zip(a, b, strict=True))
+    return math.inf if undefined else max(gaps, default=0.0)
+
+
+def rmse_from_pa(pa: float | None, matched: int, g_base: int, truth: np.ndarray) -> float:
+    r"""The RMSE inside Eq. PA, read back from the score.
+
+    .. math::
+        PA = \exp(-RMSE / L_{gt}) \cdot c,\quad c = \min(|K|, |G_{base}|) / |G_{base}|
+        \;\Rightarrow\; RMSE = -L_{gt} \ln(PA / c)
+
+    ``truth`` are the matched ground-truth points (``L_gt`` is their RMS spread). NaN when it
+    cannot be read back: PA undefined or 0, ``|G_base| = 0``, or fewer than two points
+    (``L_gt = 0``).
+    """
+    scale = layout_scale(np.asarray(truth, dtype=float).reshape(-1, 2))
+    if pa is None or pa <= 0.0 or g_base == 0 or scale == 0.0:
+        return math.nan
+    coverage = min(matched, g_base) / g_base
+    return -scale * math.log(min(1.0, pa / coverage))
+
+
+def sigma_estimate(rows: np.ndarray) -> float:
+    r"""Pooled noise sigma from paired residuals: rows ``(SSR_i - SSR_0,i, 2 n_i - 3)``.
+
+    .. math::
+        \hat\sigma^2 = \frac{\sum_i (SSR_i - SSR_{0,i})}{\sum_i (2 n_i - 3)}
+
+    (``E[SSR] = SSR_0 + sigma^2 (2n - 3)`` for i.i.d. N(0, sigma^2) noise per coordinate after a
+    fitted rotation + translation). A negative pooled excess gives 0; no rows give NaN.
+    """
+    rows = np.asarray(rows, dtype=float).reshape(-1, 2)
+    if not len(rows) or rows[:, 1].sum() <= 0:
+        return math.nan
+    return math.sqrt(max(0.0, rows[:, 0].sum() / rows[:, 1].sum()))
+
+
+def _rmse(traj: Trajectory, m: EpisodeMetrics) -> tuple[int, float, float]:
+    """``(n, RMSE, L_gt)`` of the terminal map, RMSE read back from PA."""
+    truth = np.array(
+        [(p.true_x, p.true_z) for p in match_map(traj.final_map, traj.ground_truth.objects).pairs]
+    ).reshape(-1, 2)
+    return m.matched, rmse_from_pa(m.pa, m.matched, m.g_base, truth), layout_scale(truth)
+
+
+def own_frame_checks(spawn: Paired, own: Paired) -> list[Check]:
+    """PA within the rounding bound, AEC and SIR exactly, own frame vs spawn frame."""
+    excess = []
+    for (traj, s), (_, o) in zip(spawn, own, strict=True):
+        _, _, scale = _rmse(traj, s)
+        bound = math.sqrt(2.0) * WRITTEN_M / scale if scale else 0.0
+        excess.append(abs((o.pa or 0.0) - (s.pa or 0.0)) - bound)
+    pa_gap = _max_gap([m.pa for _, m in own], [m.pa for _, m in spawn])
+    aec_gap = _max_gap([m.aec for _, m in own], [m.aec for _, m in spawn])
+    sir_gap = _max_gap([m.sir for _, m in own], [m.sir for _, m in spawn])
+    same = all(o.matched == s.matched for (_, o), (_, s) in zip(own, spawn, strict=True))
+    note = f"{len(own)} paired episodes; the own frame is a seeded rotation + translation"
+    return [
+        Check("Map", "PA, mimic: own frame vs spawn frame", "equal",
+              f"max |diff| {fmt(pa_gap, 4)}", "rounding: sqrt(2) * 0.01 m / L_gt per episode",
+              judged(same and max(excess, default=0.0) <= EXACT),
+              f"{note}; same |K| in every episode: {same}",
+              {"max_pa_gap": pa_gap, "max_excess_over_bound": max(excess, default=0.0)}),
+        Check("Map", "AEC and SIR, mimic: own frame vs spawn frame", "equal",
+              f"max |diff| {fmt(aec_gap, 4)} / {fmt(sir_gap, 4)}", "exactly",
+              judged(aec_gap <= EXACT and sir_gap <= EXACT), note,
+              {"max_aec_gap": aec_gap, "max_sir_gap": sir_gap}),
+    ]  # fmt: skip
+
+
+def sigma_check(noisy: Paired, clean: Paired, sigma: float) -> Check:
+    """sigma recovered from PA's RMSE against the paired noise-free episodes."""
+    rows = []
+    for (tn, mn), (tc, mc) in zip(noisy, clean, strict=True):
+        n, rmse, _ = _rmse(tn, mn)
+        n0, rmse0, _ = _rmse(tc, mc)
+        if n == n0 and n >= 3 and math.isfinite(rmse) and math.isfinite(rmse0):
+            rows.append((n * rmse**2 - n0 * rmse0**2, 2.0 * n - 3.0))
+    data = np.array(rows).reshape(-1, 2)
+    estimate = sigma_estimate(data)
+    low, high = bootstrap_ci(
+        data, lambda a: np.sqrt(np.clip(a[..., 0].sum(axis=1) / a[..., 1].sum(axis=1), 0, None))
+    )
+    error = abs(estimate - sigma) / sigma
+    return Check("Map", f"Position noise sigma from PA's RMSE, mimic-s{sigma:g}", f"{sigma:g} m",
+                 f"{fmt(estimate, 3)} m", f"within {SIGMA_TOLERANCE:.0%}",
+                 judged(error <= SIGMA_TOLERANCE),
+                 f"{len(data)} paired episodes; sigma_hat^2 = sum(SSR - SSR_0) / sum(2n - 3), "
+                 "RMSE = -L_gt ln(PA / coverage); bootstrap 95 % CI "
+                 f"{fmt(low, 3)}-{fmt(high, 3)}",
+                 {"sigma": sigma, "sigma_hat": estimate, "ci_low": low,
+                  "ci_high": high})  # fmt: skip
+
+
+def rate_check(section: str, name: str, planted: float, count: int, total: int,
+                note: str) -> Check:  # fmt: skip
+    low, high = proportion_confint(count, total, alpha=0.05, method="beta") if total else (0, 1)
+    return Check(section, name, pct(planted), pct(count / total if total else None),
+                 "planted value inside the 95 % Clopper-Pearson interval",
+                 judged(low <= planted <= high),
+                 f"{count} of {total}; CI {pct(low)}-{pct(high)}; {note}",
+                 {"planted": planted, "count": count, "total": total, "ci_low": low,
+                  "ci_high": high})  # fmt: skip
+
+
+def halluc_checks(halluc: Paired, clean: Paired, h: float) -> list[Check]:
+    """Hallucinations change no score and are counted as unrecognised, Binomial(T, h)."""
+    gaps = {
+        name: _max_gap([getattr(m, name) for _, m in halluc], [getattr(m, name) for _, m in clean])
+        for name in ("aec", "pa", "sir")
+    }
+
+    def unrecognised(t: Trajectory) -> int:
+        return len(match_map(t.final_map, t.ground_truth.objects).unrecognised)
+
+    pairs = zip(halluc, clean, strict=True)
+    count = sum(unrecognised(th) - unrecognised(tc) for (th, _), (tc, _) in pairs)
+    total = sum(len(t.steps) for t, _ in halluc)
+    return [
+        Check("Explore", f"AEC, PA, SIR with hallucinations, mimic-h{h:g}", "unchanged",
+              " / ".join(f"{fmt(v, 4)}" for v in gaps.values()) + " max |diff|", "exactly",
+              judged(all(v <= EXACT for v in gaps.values())),
+              f"{len(halluc)} paired episodes; Eq. AEC's min cap: unrecognised entries count "
+              "for nothing", {f"max_{k}_gap": v for k, v in gaps.items()}),
+        rate_check("Explore", f"Hallucinated entries per step, mimic-h{h:g}", h, count, total,
+                    "unrecognised entries of the terminal map over steps"),
+    ]  # fmt: skip
+
+
+def _duplicated(traj: Trajectory, end: int) -> set[str]:
+    """Objects with two or more labels in the agent's state after step index ``end``."""
+    ids = Counter(
+        rec["id"] for rec in read_state(traj.steps[end].raw_reply)["map"].values() if "id" in rec
+    )
+    return {o for o, n in ids.items() if n > 1}
+
+
+def _sir_ratio_planted(traj: Trajectory) -> float | None:
+    """Mean over re-entered rooms of the share of ``M_first`` without a duplicate (paper)."""
+    track = track_episode(traj)
+    room_of = {o.object_id: o.room for o in traj.ground_truth.objects}
+    ratios = []
+    for v in track.visits:
+        if v.return_end is None:
+            continue
+        first = {o for o in track.held[v.first_end] if room_of[o] == v.room}
+        if first:
+            dup = _duplicated(traj, v.return_end) - _duplicated(traj, v.first_end)
+            ratios.append(len(first - dup) / len(first))
+    return float(np.mean(ratios)) if ratios else None
+
+
+def dup_checks(dup: Paired, clean: Paired, p: float) -> list[Check]:
+    """Eq. AEC with the planted duplicates; SIR's ratio against the planted duplicates."""
+    predicted, recovered, rises = [], [], []
+    for (td, md), (tc, mc) in zip(dup, clean, strict=True):
+        types = {o.object_id: o.object_type for o in td.ground_truth.objects}
+        capacity = Counter(types.values())
+        mapped = Counter(types[o] for o in _final_ids(tc))
+        extra = Counter(types[o] for o, labels in _final_ids(td).items()
+                        for _ in labels[1:])  # fmt: skip
+        total = sum(capacity.values())
+        predicted.append(sum(min(mapped[k] + extra[k], capacity[k]) for k in capacity) / total)
+        recovered.append(md.aec)
+        rises.append((md.aec or 0.0) - (mc.aec or 0.0))
+    gap = _max_gap(predicted, recovered)
+    planted, measured = [], []
+    for td, md in dup:
+        ratio = _sir_ratio_planted(td)
+        if ratio is not None and md.sir is not None and md.aec:
+            planted.append(ratio)
+            measured.append(md.sir / md.aec)
+    want = float(np.mean(planted)) if planted else math.nan
+    got = float(np.mean(measured)) if measured else math.nan
+    return [
+        Check("Explore", f"AEC with duplicates, mimic-p{p:g}: Eq. AEC", "sum_k min(|M_k| + D_k, "
+              "|E_k|) / |E|", f"max |diff| {fmt(gap, 4)}; mean rise {fmt(np.mean(rises), 4)}",
+              "exactly; never lower than clean", judged(gap <= EXACT and min(rises) >= -EXACT),
+              f"{len(dup)} paired episodes; D_k from the agent's state; a duplicate counts only "
+              "where type k has an unmapped instance", {"max_gap": gap,
+              "mean_rise": float(np.mean(rises))}),
+        Check("Remember", f"SIR / AEC with duplicates, mimic-p{p:g}", fmt(want, 3), fmt(got, 3),
+              f"within {SIR_TOLERANCE}", judged(abs(want - got) <= SIR_TOLERANCE),
+              f"{len(planted)} episodes with a re-entry; planted: share of M_first without a "
+              "duplicate at the re-entry's end (Appendix B: 'successfully deduplicated')",
+              {"planted_ratio": want, "recovered_ratio": got}),
+    ]  # fmt: skip
+
+
+def reply_checks(default: Sequence[Trajectory], clean: Sequence[Trajectory],
+                 planted: Mapping[str, float]) -> list[Check]:  # fmt: skip
+    """Parse failures, repaired replies and refused actions recover ``fail``, ``repair``,
+    ``invalid`` of the default mimic."""
+    steps = [s for t in default for s in t.steps]
+    readable = [s for s in steps if s.parse_error is None]
+    repaired = sum(bool(s.repairs) for s in readable)
+    refused = sum(not s.success for s in readable)
+    base = [s for t in clean for s in t.steps]
+    f0 = sum(not s.success for s in base) / len(base)
+    net = round((refused - f0 * len(readable)) / (1.0 - f0))
+    kinds = Counter(r for s in readable for r in s.repairs or ())
+    return [
+        rate_check("Replies", "Parse failures, mimic", planted["fail"],
+                    sum(s.parse_error is not None for s in steps), len(steps),
+                    "over all steps"),
+        rate_check("Replies", "Replies read with a repair, mimic", planted["repair"], repaired,
+                    len(readable), "over readable replies; "
+                    + ", ".join(f"{k} {n}" for k, n in sorted(kinds.items()))),
+        rate_check("Replies", "Invalid actions, mimic", planted["invalid"], max(net, 0),
+                    len(readable), f"refused {refused}, net of the clean mimic's own refusal "
+                    f"rate {pct(f0)}"),
+    ]  # fmt: skip
