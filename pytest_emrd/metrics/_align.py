@@ -124,19 +124,23 @@ def assign(problem: Problem, motion: Motion) -> Pairs:
     q = problem.true
     d = (p[:, None, 0] - q[None, :, 0]) ** 2 + (p[:, None, 1] - q[None, :, 1]) ** 2
     d = np.where(problem.allowed, np.round(d, digits(problem.scale, 2)), np.inf)
-    nearest = d.argmin(axis=1).tolist()
-    if len(set(nearest)) == len(nearest):
-        return tuple(enumerate(nearest))
+    # An entry with no object of its type left (every one held by a carried identity) has an
+    # all-inf row, whose argmin would name object 0 of another type: it stays unmatched.
+    open_rows = np.isfinite(d).any(axis=1).tolist()
+    nearest = [j if ok else -1 for j, ok in zip(d.argmin(axis=1).tolist(), open_rows, strict=True)]
+    taken = [j for j in nearest if j >= 0]
+    if len(set(taken)) == len(taken):
+        return tuple((i, j) for i, j in enumerate(nearest) if j >= 0)
     from scipy.optimize import linear_sum_assignment  # heavy: imported on first use
 
     kinds = problem.kinds.tolist()
     seen: dict[int, int] = {}
     clash: set[int] = set()
     for i, j in enumerate(nearest):
-        if j in seen:
+        if j >= 0 and j in seen:
             clash.add(kinds[i])
         seen[j] = i
-    pairs = [(i, j) for i, j in enumerate(nearest) if kinds[i] not in clash]
+    pairs = [(i, j) for i, j in enumerate(nearest) if j >= 0 and kinds[i] not in clash]
     for k in sorted(clash):
         rows = np.flatnonzero(problem.kinds == k)
         cols = np.flatnonzero(problem.true_kinds == k)

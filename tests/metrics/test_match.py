@@ -9,7 +9,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from pytest_emrd.metrics import aec_score, match_map, positional_accuracy_score
+from pytest_emrd.metrics import aec_score, match_map, positional_accuracy_score, step_matchings
 from pytest_emrd.rooms import CONFERENCE, KITCHEN
 from pytest_emrd.trajectory import GroundTruthObject, MapEntry
 
@@ -107,6 +107,26 @@ def test_entries_beyond_the_instance_count_stay_unmatched(make_obj: MakeObj) -> 
     m = match_map(entries, truth)
     assert len(m.pairs) == 2
     assert len(m.unmatched) == 1
+
+
+def test_an_entry_whose_type_is_all_held_by_carried_labels_matches_nothing(
+    make_obj: MakeObj,
+) -> None:
+    # Found on the mimic cassettes: a duplicate doorway written after the only doorway's
+    # label was carried got the all-inf row's argmin, object 0 of another type (ArmChair_1).
+    truth = [
+        make_obj("ArmChair_1", x=5, z=5),
+        make_obj("Doorway_1", x=3, z=0),
+        make_obj("Fridge_1", x=0, z=0),
+        make_obj("Television_1", x=10, z=0),
+    ]
+    anchors = [MapEntry("fridge", "Fridge", 0, 0), MapEntry("tv", "Television", 10, 0)]
+    first = [*anchors, MapEntry("door", "Doorway", 3, 0), MapEntry("armchair", "ArmChair", 5, 5)]
+    second = [*first, MapEntry("passage 2", "Doorway", 3.2, 0)]
+    before, after = step_matchings([first, second], truth)
+    assert after.determined and after.label_of == before.label_of
+    assert after.unmatched == ("passage 2",)
+    assert len(after.object_ids) == len(after.pairs) == 4
 
 
 def test_repeated_label_uses_its_first_entry(make_obj: MakeObj) -> None:
