@@ -10,8 +10,10 @@ points, squared residuals after a fit).
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Sequence
+from dataclasses import dataclass, field
 from typing import Final, NamedTuple
 
 import numpy as np
@@ -56,8 +58,8 @@ def procrustes(pred: np.ndarray, true: np.ndarray) -> Motion:
     qc = true.sum(axis=0) / n
     a = pred - pc
     b = true - qc
-    dot = float(np.sum(a * b))
-    cross = float(np.sum(a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]))
+    dot = float((a * b).sum())
+    cross = float((a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]).sum())
     theta = math.atan2(cross, dot) if (dot or cross) else 0.0
     c, s = math.cos(theta), math.sin(theta)
     return Motion(
@@ -76,12 +78,14 @@ def two_point(pa: Point, pb: Point, qa: Point, qb: Point) -> Motion:
     return Motion(c, s, nx - (c * mx - s * mz), nz - (s * mx + c * mz))
 
 
+@functools.cache
 def digits(scale: float, power: int) -> int:
     """Decimals comparing a quantity in metres**power at :data:`TIE_DECIMALS` relative."""
     return TIE_DECIMALS - power * math.ceil(math.log10(max(scale, 1.0)))
 
 
-class Problem(NamedTuple):
+@dataclass(frozen=True)
+class Problem:
     """One map's recognised entries against the ground truth."""
 
     pred: np.ndarray
@@ -96,10 +100,10 @@ class Problem(NamedTuple):
     """Extent of the layout (metres), for relative tie tolerances."""
     true_points: tuple[Point, ...] = ()
     """``true`` as tuples (for :func:`hypotheses`)."""
-    cols_of: dict[int, tuple[int, ...]] = {}  # noqa: RUF012 - a NamedTuple default, never mutated
+    cols_of: dict[int, tuple[int, ...]] = field(default_factory=dict)
     """Type index -> its object indices (for :func:`hypotheses`)."""
 
-    @property
+    @functools.cached_property
     def allowed(self) -> np.ndarray:
         """(n x m) True where entry ``i`` and object ``j`` have the same type."""
         return self.kinds[:, None] == self.true_kinds[None, :]
@@ -153,7 +157,7 @@ def _sse(problem: Problem, pairs: Pairs) -> tuple[float, Motion]:
     p = problem.pred[[r for r, _ in pairs]]
     q = problem.true[[c for _, c in pairs]]
     motion = procrustes(p, q)
-    return round(float(np.sum((moved(p, motion) - q) ** 2)), digits(problem.scale, 2)), motion
+    return round(float(((moved(p, motion) - q) ** 2).sum()), digits(problem.scale, 2)), motion
 
 
 def refine(problem: Problem, seed: Motion) -> Pairs:

@@ -201,12 +201,14 @@ class Matcher:
         seen: dict[str, MapEntry] = {}
         type_of: dict[str, int] = {}
         unrecognised: list[str] = []
-        resolve = self._types.resolve
+        resolve, known = self._types.resolve, self._types.known
         for e in entries:
             if e.label in seen:
                 continue
             seen[e.label] = e
-            k = resolve(e.object_type, e.label)
+            k = known.get((e.object_type, e.label))
+            if k is None:
+                k = resolve(e.object_type, e.label)
             if k < 0:
                 unrecognised.append(e.label)
             else:
@@ -260,7 +262,8 @@ class Matcher:
             return {}, False
         if anchor_rows is not None:
             return self._in_frame(key, anchor_rows, {}), True
-        pred = np.array([(x, z) for _, _, x, z in key], dtype=float)
+        written = [(x, z) for _, _, x, z in key]
+        pred = np.array(written, dtype=float)
         kinds = np.array([k for _, k, _, _ in key], dtype=int)
         problem = Problem(
             pred, kinds, self._true, self._true_kinds, self._true_extent, self._points,
@@ -270,15 +273,16 @@ class Matcher:
         named = [(r, index[lb]) for r, (lb, k, _, _) in enumerate(key)
                  if lb in index and kind_of[index[lb]] == k]  # fmt: skip
         kept = [(r, before[lb]) for r, (lb, _, _, _) in enumerate(key) if lb in before]
-        seeds = [self._seed(pred, pairs) for pairs in (kept, named) if pairs]
+        seeds = [self._seed(pred, written, pairs) for pairs in (kept, named) if pairs]
         pairs = undetermined_fit(problem, [m for m in seeds if m is not None])
         return {key[r][0]: c for r, c in pairs}, False
 
-    def _seed(self, pred: np.ndarray, pairs: list[tuple[int, int]]) -> Motion | None:
+    def _seed(
+        self, pred: np.ndarray, written: list[tuple[float, float]], pairs: list[tuple[int, int]]
+    ) -> Motion | None:
         """The fit of known ``(entry row, object)`` pairs: Procrustes of two or more distinct
         points, the translation of one; None when the points coincide (no direction)."""
-        points = [tuple(pred[r]) for r, _ in pairs]
-        if len(pairs) == 1 or _spread(points) <= COINCIDENT_M:
+        if len(pairs) == 1 or _spread([written[r] for r, _ in pairs]) <= COINCIDENT_M:
             if len({c for _, c in pairs}) != 1:
                 return None
             (r, c), *_ = pairs
