@@ -33,6 +33,15 @@ settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "ci"))
 pytest_plugins = ["pytester"]
 
 
+@pytest.fixture(autouse=True)
+def _outside_ci(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Tests start from a developer's environment even when CI runs them (``CI=true`` would
+    make every recording run of a pytester suite replay-only); a test that is about CI sets
+    the variables itself."""
+    for name in ("CI", "GITHUB_STEP_SUMMARY", "GITHUB_ACTIONS"):
+        monkeypatch.delenv(name, raising=False)
+
+
 @pytest.fixture
 def json_server() -> Iterator[Callable[[Answer], str]]:
     """``json_server(answer)`` starts a loopback HTTP server and returns its ``/v1`` base URL.

@@ -69,7 +69,15 @@ class SessionPreflight:
         )
         grid = {model: mine for model, mine in grid.items() if model not in self.checked}
         self.checked.update(grid)
-        reports = preflight_live(grid, self.registry) if self.enabled else []
+        # Reference agents run on the built-in server in this process: no key, URL or limit
+        # to get wrong, and a probe's made-up history is no conversation their scripted
+        # state accepts (mimic answers it 400).
+        remote = {
+            model: mine
+            for model, mine in grid.items()
+            if self.registry.get(model).provider != "reference"
+        }
+        reports = preflight_live(remote, self.registry) if self.enabled else []
         return reports, sum(len(mine) for mine in grid.values())
 
 

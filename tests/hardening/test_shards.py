@@ -99,6 +99,7 @@ def test_pytest_records_the_shard_in_the_run_directory(pytester):
     result = pytester.runpytest_subprocess(
         "-p",
         "no:cacheprovider",
+        "--emrd-model=scout",
         "--emrd-condition=baseline",
         "--emrd-spawn=office",
         "--emrd-episodes=2",
