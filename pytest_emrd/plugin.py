@@ -51,13 +51,7 @@ def pytest_addoption(parser: pytest.Parser) -> None:
     group = parser.getgroup("emrd", "pytest-emrd (Explore, Map, Remember, Decide benchmark)")
     for option in OPTIONS:
         choices = f" Choices: {', '.join(option.choices)}." if option.choices else ""
-        kwargs: dict[str, Any] = {"dest": option.ini, "default": None, "help": option.help}
-        if option.repeatable:
-            kwargs["action"] = "append"
-        elif option.choices:
-            kwargs["choices"] = option.choices
-        if option.metavar:
-            kwargs["metavar"] = option.metavar
+        kwargs = option.argparse_kwargs(option.ini)
         group.addoption(option.flag, **{**kwargs, "help": option.help + choices})
         parser.addini(option.ini, f"{option.help} (ini twin of {option.flag})", option.ini_type)
 

@@ -30,14 +30,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     for option in OPTIONS:
         if option.name not in GRID_OPTIONS:
             continue
-        kwargs: dict[str, object] = {"dest": option.name, "default": None, "help": option.help}
-        if option.repeatable:
-            kwargs["action"] = "append"
-        elif option.choices:
-            kwargs["choices"] = option.choices
-        if option.metavar:
-            kwargs["metavar"] = option.metavar
-        p.add_argument(option.flag, **kwargs)
+        p.add_argument(option.flag, **option.argparse_kwargs(option.name))
     p.add_argument("--no-probe", action="store_true", help="no network: key and estimate only")
     p.add_argument("--json", action="store_true", help="print the reports as one JSON list")
     p.set_defaults(func=_run)

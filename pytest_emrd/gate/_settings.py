@@ -68,6 +68,17 @@ class Option:
     def ini_type(self) -> str:
         return "args" if self.repeatable else "string"
 
+    def argparse_kwargs(self, dest: str) -> dict[str, Any]:
+        """``add_argument``/``addoption`` keyword arguments (pytest's parser and ``emrd``)."""
+        kwargs: dict[str, Any] = {"dest": dest, "default": None, "help": self.help}
+        if self.repeatable:
+            kwargs["action"] = "append"
+        elif self.choices:
+            kwargs["choices"] = self.choices
+        if self.metavar:
+            kwargs["metavar"] = self.metavar
+        return kwargs
+
 
 OPTIONS: Final[tuple[Option, ...]] = (
     Option("model", "model to benchmark, repeatable (default: the built-in reference agents "
