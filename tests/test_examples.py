@@ -15,7 +15,8 @@ def _run(pytester: pytest.Pytester, source: str) -> pytest.RunResult:
     assert not (pytester.path / "thresholds.yaml").exists(), "a user repo without gates"
     return pytester.runpytest_subprocess(
         "-p", "no:cacheprovider", f"--emrd-cassettes={ROOT / 'cassettes'}",
-        "--emrd-record-mode=none", "--emrd-condition=baseline", "--emrd-spawn=office",
+        "--emrd-record-mode=none", "--emrd-model=scout", "--emrd-condition=baseline",
+        "--emrd-spawn=office",
         "--emrd-episodes=3", "-v",
     )  # fmt: skip
 
