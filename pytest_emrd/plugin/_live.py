@@ -1,0 +1,101 @@
+"""Preflight and the live progress line (controller only: the only process, or xdist's).
+
+Once the controller knows which tests will run (its own collection, or each xdist node's),
+each model those tests will call live is preflighted once; a failure ends the session before
+any episode runs. Then a ticker prints the live line from the workers' status files.
+"""
+
+from __future__ import annotations
+
+import contextlib
+from functools import cached_property
+from typing import Any
+
+import pytest
+
+from pytest_emrd._scrub import scrub
+from pytest_emrd.gate import GateCell
+from pytest_emrd.plugin._run import Run
+
+
+class LiveLine:
+    """The controller's preflight and live line for one :class:`Run`."""
+
+    def __init__(self, run: Run) -> None:
+        self.run = run
+        self.config = run.config
+        self._ticker: Any = None
+
+    def pytest_collection_finish(self, session: pytest.Session) -> None:
+        if hasattr(self.config, "workerinput") or self.config.option.collectonly:
+            return
+        names = ("emrd_spec", "emrd_gate")
+        params = [getattr(i, "callspec", None) for i in session.items]
+        self.preflight([c.params[n] for c in params if c for n in names if n in c.params])
+
+    @pytest.hookimpl(optionalhook=True)
+    def pytest_xdist_node_collection_finished(self, node: Any, ids: list[str]) -> None:
+        from pytest_emrd.preflight import params_of_node_ids
+
+        if self.config.option.collectonly:
+            return
+        run = self.run
+
+        def by_id() -> dict[str, Any]:
+            cells = {c.gate_id: c for c in run.call(lambda r: r.gate_cells)}
+            return {**cells, **{s.case_id: s for s in run.call(lambda r: r.episode_specs)}}
+
+        self.preflight(params_of_node_ids(ids, by_id))
+
+    @cached_property
+    def preflights(self) -> Any:
+        from pytest_emrd.preflight import SessionPreflight
+
+        run = self.run
+        settings = run.settings
+        return SessionPreflight(
+            run.registry,
+            cassettes=settings.cassettes,
+            record_mode=settings.record_mode,
+            holds=run.store.holds,
+            enabled=settings.preflight,
+        )
+
+    def preflight(self, params: list[Any]) -> None:
+        """Preflight each model the selected tests will call live; a failure ends the session
+        before any episode runs. Then start the live line."""
+        from pytest_emrd.progress import LiveBoard, Ticker
+
+        if not params:
+            return
+        run = self.run
+        cells = (run.cell_specs(p) if isinstance(p, GateCell) else [p] for p in params)
+        specs = [spec for group in cells for spec in group]
+        reports, live = run.call(lambda _: self.preflights.run(specs))
+        for line in (line for report in reports for line in report.lines()):
+            self.write_line(line)
+        failed = next((r for r in reports if r.failed), None)
+        if failed is not None:
+            message = scrub(f"pytest-emrd: {failed.message()}")
+            pytest.exit(message, returncode=pytest.ExitCode.USAGE_ERROR)
+        if live and self._ticker is None:
+            board = LiveBoard(run.run_dir, total=live)
+            self._ticker = Ticker(board, self.write_line).start()
+
+    def write_line(self, line: str) -> None:
+        """A line on the terminal, also from the live line's thread while a test runs (with
+        capture suspended, as pytest's own live logging does)."""
+        reporter = self.config.pluginmanager.get_plugin("terminalreporter")
+        capture = self.config.pluginmanager.get_plugin("capturemanager")
+        if reporter is None:
+            return
+        with capture.global_and_fixture_disabled() if capture else contextlib.nullcontext():
+            if getattr(getattr(reporter, "_tw", None), "width_of_current_line", 0):
+                reporter.write("\n")  # after a row of progress dots
+            reporter.write_line(scrub(line))
+
+    def pytest_sessionfinish(self) -> None:
+        """Stop the live line."""
+        if self._ticker is not None:
+            self._ticker.stop()
+            self._ticker = None

@@ -1,0 +1,232 @@
+"""The per-process state of an EMRD run: registry, grid, results store, episodes, verdicts.
+
+One :class:`Run` per process (the only one, or each xdist worker), kept in
+``config.stash[RUN]``; everything heavy is built on first use, so a session that collects
+no EMRD test imports, starts and writes nothing.
+"""
+
+from __future__ import annotations
+
+import warnings
+from dataclasses import dataclass
+from functools import cached_property
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from pytest_emrd._scrub import scrub, watch_env
+from pytest_emrd.errors import EmrdError
+from pytest_emrd.gate import (
+    EpisodeSummary,
+    GateCell,
+    ResultsStore,
+    RunIdentity,
+    RunSettings,
+    StoredEpisode,
+    Verdict,
+    start_prefetch,
+)
+from pytest_emrd.trajectory import EpisodeSpec, Trajectory
+
+RUN = pytest.StashKey["Run"]()
+
+
+@dataclass(eq=False)
+class Run:
+    """Per-process state of the EMRD run; everything heavy is built on first use."""
+
+    config: pytest.Config
+    settings: RunSettings
+    run_dir: Path
+    session: str
+
+    def __post_init__(self) -> None:
+        self._stored: dict[EpisodeSpec, StoredEpisode] = {}
+        self._metrics: dict[str, Any] = {}
+        self._prefetch_started, self._prefetcher = False, None
+
+    def call(self, fn: Any, what: str = "pytest-emrd") -> Any:
+        """``fn(self)``, turning an :class:`EmrdError` into one clean failure line (scrubbed,
+        raised outside the ``except``: no "During handling" chain)."""
+        try:
+            return fn(self)
+        except EmrdError as exc:
+            message = f"{what}: {scrub(str(exc))}"
+        pytest.fail(message, pytrace=False)
+
+    @cached_property
+    def registry(self) -> Any:
+        from pytest_emrd.agent import load_registry
+
+        registry = load_registry(self.settings.models_file)
+        watch_env(config.api_key_env for config in registry.models.values())
+        for name in self.settings.models:
+            registry.get(name)
+        return registry
+
+    @cached_property
+    def protocol(self) -> str:
+        from pytest_emrd.episode import protocol_version
+
+        return protocol_version(self.settings.backend)
+
+    def modality_of(self, model: str) -> str:
+        return str(self.registry.get(model).modality)
+
+    @cached_property
+    def episode_specs(self) -> list[EpisodeSpec]:
+        from pytest_emrd.gate import episode_specs, shard
+
+        specs = episode_specs(self.settings, self.modality_of)
+        return shard(specs, *self.settings.shard) if self.settings.shard else specs
+
+    @cached_property
+    def gate_cells(self) -> list[GateCell]:
+        from pytest_emrd.gate import gate_cells, load_thresholds
+        from pytest_emrd.metrics import GATE_METRICS
+
+        if self.settings.shard or self.settings.thresholds is None:
+            return []
+        thresholds = load_thresholds(
+            self.settings.thresholds, registry=self.registry, metrics=GATE_METRICS
+        )
+        return gate_cells(self.settings, thresholds)
+
+    @cached_property
+    def store(self) -> ResultsStore:
+        identity = RunIdentity.of(self.settings, self.protocol)
+        return ResultsStore(
+            self.run_dir, session=self.session, protocol=self.protocol, identity=identity
+        )
+
+    @cached_property
+    def invocation(self) -> Any:
+        """What printed ``pytest`` commands carry: this run's test paths, registry, options."""
+        from pytest_emrd.cassette import Invocation
+
+        return Invocation.of(self.settings, paths=tuple(self.config.args))
+
+    def missing_summary(self, items: list[pytest.Item]) -> str | None:
+        """In record mode ``none``: one message for the episodes the selected items need
+        that have neither a cassette nor a stored result, or ``None``."""
+        from pytest_emrd.cassette import missing_cassettes, missing_summary
+
+        if self.settings.record_mode != "none":
+            return None
+        needed: dict[EpisodeSpec, None] = {}
+        for item in items:
+            params = getattr(getattr(item, "callspec", None), "params", {})
+            if isinstance(spec := params.get("emrd_spec"), EpisodeSpec):
+                needed[spec] = None
+            elif isinstance(cell := params.get("emrd_gate"), GateCell):
+                needed.update(dict.fromkeys(self.cell_specs(cell)))
+        missing = [
+            spec
+            for spec in missing_cassettes(list(needed), self.settings.cassettes)
+            if not self.store.path_for(spec).is_file()
+        ]
+        if not missing:
+            return None
+        return missing_summary(
+            missing, total=len(needed), root=self.settings.cassettes, invocation=self.invocation
+        )
+
+    @cached_property
+    def simulators(self) -> Any:
+        from pytest_emrd.episode import SimulatorPool
+
+        return SimulatorPool(self.settings.backend_kwargs)
+
+    @cached_property
+    def runner(self) -> Any:
+        """Runs an episode on this process's simulator pool, one model client per key mode."""
+        from pytest_emrd.cassette import agent_runner
+
+        return agent_runner(self.registry, run=self.simulators.run)
+
+    @cached_property
+    def status_file(self) -> Any:
+        """This process's live status (``<run>/live/<worker>.json``) for the live line."""
+        from pytest_emrd.progress import StatusFile
+
+        return StatusFile(self.run_dir)
+
+    def episode(self, spec: EpisodeSpec) -> StoredEpisode:
+        from pytest_emrd.cassette import FrameDriftWarning
+        from pytest_emrd.progress import run_watched
+
+        settings = self.settings
+
+        def compute(s: EpisodeSpec) -> Any:
+            return run_watched(
+                s,
+                self.runner,
+                status=self.status_file,
+                cassettes=settings.cassettes,
+                protocol=self.protocol,
+                record_mode=settings.record_mode,
+                matching=settings.matching,
+                invocation=self.invocation,
+            )
+
+        if spec in self._stored:
+            return self._stored[spec]
+        if not self._prefetch_started:  # --emrd-concurrency: live episodes ahead, in threads
+            self._prefetch_started = True
+            self._prefetcher = start_prefetch(settings, self.store, compute, self.episode_specs)
+        stored = self.call(lambda run: run.store.get_or_compute(spec, compute), spec.case_id)
+        self._stored[spec] = stored
+        if stored.frame_drift and stored.computed_now:
+            warnings.warn(
+                FrameDriftWarning(
+                    f"{spec.case_id}: {stored.frame_drift} request(s) matched on text while "
+                    "their frames differ from the recording (lenient matching)."
+                ),
+                stacklevel=2,
+            )
+        return stored
+
+    def cell_specs(self, cell: GateCell) -> list[EpisodeSpec]:
+        return self.cell_specs_of(cell.bound.model, cell.bound.condition)
+
+    def cell_specs_of(self, model: str, condition: str) -> list[EpisodeSpec]:
+        from pytest_emrd.errors import check_choice
+        from pytest_emrd.gate import cell_specs
+        from pytest_emrd.trajectory import CONDITIONS
+
+        self.registry.get(model)
+        check_choice("condition", condition, CONDITIONS)
+        return cell_specs(self.settings, model, condition, self.modality_of)
+
+    def verdict(self, cell: GateCell) -> Verdict:
+        from pytest_emrd.gate import evaluate_cell
+        from pytest_emrd.metrics import GATE_METRICS
+
+        trajectories = [self.episode(spec).trajectory for spec in self.cell_specs(cell)]
+        return evaluate_cell(cell, trajectories, GATE_METRICS, prepare=self.episode_metrics)
+
+    def episode_metrics(self, trajectory: Trajectory) -> Any:
+        """Per-episode metrics, computed once per process (every gate of a cell reuses them)."""
+        from pytest_emrd.metrics import episode_metrics
+
+        key = trajectory.spec.case_id
+        if key not in self._metrics:
+            self._metrics[key] = episode_metrics(trajectory)
+        return self._metrics[key]
+
+    def summary(self, stored: StoredEpisode) -> EpisodeSummary:
+        config = self.registry.get(stored.trajectory.spec.model)
+        return EpisodeSummary.of(
+            stored, price_in=config.price_per_mtok_in, price_out=config.price_per_mtok_out
+        )
+
+    def pytest_unconfigure(self) -> None:
+        # Simulators first: an ai2thor one owns a Unity process, which must not outlive a
+        # worker that xdist kills when its teardown runs past the exit timeout.
+        if "simulators" in self.__dict__:
+            self.simulators.close()
+        if self._prefetcher is not None:
+            self._prefetcher.close()
+        if "runner" in self.__dict__:
+            self.runner.close()
