@@ -257,7 +257,7 @@ class Registry:
         raise ConfigError(
             f"model={name!r} is not in the registry. Known models: {', '.join(self.names())}; "
             "parametric reference agents: scout-decay-<mean steps>, scout-window-<k>, "
-            "mimic-<knobs> (s<sigma>, p<dup>, h<halluc>, q<fail>, r<repair>, a<invalid>, "
+            "mimic-<knobs> (s<sigma>, p<dup>, h<halluc>, q<fail>, r<repair>, a<invalid>, b<back>, "
             "spawn; e.g. mimic-s0.3-p0.5). "
             "Add other models in a user registry file (models: {name: {...}}) and pass it "
             "with --emrd-models FILE (ini: emrd_models = FILE; emrd gate --models FILE)."

@@ -12,8 +12,10 @@ from typing import Final
 
 import numpy as np
 
+from pytest_emrd.metrics._align import COINCIDENT_M, digits
 from pytest_emrd.metrics._match import Matching, rigid_fit
 from pytest_emrd.metrics._tracking import Track, exp_ratio, layout_scale
+from pytest_emrd.metrics._vocab import TypeResolver
 from pytest_emrd.trajectory import Trajectory
 
 #: Ground-truth type of doorways (left out of ``O_F`` by FPSG's doorway-free variant).
@@ -153,12 +155,19 @@ def sir_score(traj: Trajectory, track: Track, aec: float | None) -> tuple[float 
     .. math::
         SIR = AEC \cdot \frac{|M_{first}^{(r)} \cap M_{return}^{(r)}|}{|M_{first}^{(r)}|}
 
-    ``M_first`` are the objects of room ``r`` held at the end of the first visit to ``r``;
-    an object is in ``M_return`` when, at the end of the first re-entry into ``r``, it is still
-    held *by the same label* (recognised, not re-added as a new object). The episode's value
-    averages the ratio over every re-entered room with a non-empty ``M_first`` and multiplies by
-    the episode's AEC. Returns ``(value, "")`` or ``(None, reason)``: no room re-entered,
-    nothing of a re-entered room mapped on the first visit, or AEC undefined.
+    ``M_first`` are the objects of room ``r`` held at the end of the first visit to ``r``.
+    An object of ``M_first`` is in ``M_return`` ("actively recognised and successfully
+    deduplicated upon re-entering room r") when, at the end of the first re-entry into ``r``,
+
+    * it is still held *by the same label* (recognised, not re-added under a new name), and
+    * no entry written during the re-entry is a copy of it (deduplicated): see
+      :func:`reentry_copies`.
+
+    The episode's value averages the ratio over every re-entered room with a non-empty
+    ``M_first`` and multiplies by the episode's AEC. Returns ``(value, "")`` or
+    ``(None, reason)``: no room re-entered, nothing of a re-entered room mapped on the first
+    visit, or AEC undefined. Invariant under rigid motions of the map (labels, types and an
+    equivariant fit decide everything).
     """
     room_of = {o.object_id: o.room for o in traj.ground_truth.objects}
     held = track.held
@@ -166,9 +175,11 @@ def sir_score(traj: Trajectory, track: Track, aec: float | None) -> tuple[float 
     reentered = [v for v in track.visits if v.return_end is not None]
     for v in reentered:
         first = {o: lb for o, lb in held[v.first_end].items() if room_of[o] == v.room}
-        if first and v.return_end is not None:
+        if first and v.return_end is not None and v.return_start is not None:
             back = held[v.return_end]
-            ratios.append(sum(back.get(o) == lb for o, lb in first.items()) / len(first))
+            copies = reentry_copies(traj, held, v.return_start, v.return_end)
+            kept = sum(back.get(o) == lb and o not in copies for o, lb in first.items())
+            ratios.append(kept / len(first))
     if not reentered:
         return None, "no room was re-entered"
     if not ratios:
@@ -176,6 +187,54 @@ def sir_score(traj: Trajectory, track: Track, aec: float | None) -> tuple[float 
     if aec is None:
         return None, "AEC is undefined (no ground-truth objects)"
     return aec * float(np.mean(ratios)), ""
+
+
+def reentry_copies(
+    traj: Trajectory, held: Sequence[dict[str, str]], start: int, end: int
+) -> frozenset[str]:
+    """Objects that an entry written during a re-entry (steps ``start..end``) copies.
+
+    A *new* entry is one whose label is in ``M_end`` but was not in the map of the step before
+    ``start``. It copies object ``o`` when, in the alignment of ``M_end`` (the proper rigid
+    motion fitting every matched entry onto its object, :func:`rigid_fit`), the ground-truth
+    object of its type nearest to it is ``o`` and ``o`` is held by *another* label: the model
+    re-mapped an object it already had instead of recognising it. A new entry nearest to an
+    object no other label holds is a newly mapped object, not a copy. Type resolution is the
+    matcher's (:class:`~pytest_emrd.metrics._vocab.TypeResolver`); unrecognised entries copy
+    nothing. Edge case: fewer than two matched entries at distinct positions leave the
+    rotation undetermined; then no copy is found (the frame cannot say which object is meant).
+    """
+    entries = {e.label: e for e in reversed(traj.steps[end].cognitive_map)}
+    before = {e.label for e in traj.steps[start - 1].cognitive_map} if start > 0 else set()
+    new = [lb for lb in entries if lb not in before]
+    label_of = held[end]
+    if not new or len(label_of) < 2:
+        return frozenset()
+    objects = {o.object_id: o for o in traj.ground_truth.objects}
+    pairs = sorted(label_of.items())
+    pred = np.array([(entries[lb].x, entries[lb].z) for _, lb in pairs], dtype=float)
+    true = np.array([(objects[o].x, objects[o].z) for o, _ in pairs], dtype=float)
+    if float(np.max(np.hypot(*(pred - pred[0]).T))) <= COINCIDENT_M:
+        return frozenset()
+    rotation, shift = rigid_fit(pred, true)
+    decimals = digits(layout_scale(true), 1)
+    types = TypeResolver(o.object_type for o in objects.values())
+    copies: set[str] = set()
+    for lb in new:
+        e = entries[lb]
+        k = types.resolve(e.object_type, e.label)
+        if k < 0:
+            continue
+        x, z = np.array([e.x, e.z], dtype=float) @ rotation.T + shift
+        # rounded at the matcher's precision, so ties go to the same object in every frame
+        nearest = min(
+            (round(math.hypot(g.x - x, g.z - z), decimals), o)
+            for o, g in objects.items()
+            if g.object_type == types.names[k]
+        )[1]
+        if nearest in label_of and label_of[nearest] != lb:
+            copies.add(nearest)
+    return frozenset(copies)
 
 
 def discovery_thirds(n: int) -> np.ndarray:

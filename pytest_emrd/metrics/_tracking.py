@@ -61,6 +61,8 @@ class RoomVisits:
     room: str
     first_end: int
     return_end: int | None
+    return_start: int | None = None
+    """First step of the re-entry (None without one)."""
 
 
 @dataclass(frozen=True)
@@ -224,17 +226,17 @@ def _miller(traj: Trajectory) -> tuple[tuple[int, ...], tuple[bool, ...]]:
 
 
 def _visits(rooms: list[str]) -> tuple[RoomVisits, ...]:
-    runs: list[tuple[str, int]] = []  # (room, last step index of the run)
+    runs: list[tuple[str, int, int]] = []  # (room, first, last step index of the run)
     for i, room in enumerate(rooms):
         if runs and runs[-1][0] == room:
-            runs[-1] = (room, i)
+            runs[-1] = (room, runs[-1][1], i)
         else:
-            runs.append((room, i))
+            runs.append((room, i, i))
     visits: dict[str, RoomVisits] = {}
-    for room, end in runs:
+    for room, start, end in runs:
         known = visits.get(room)
         if known is None:
             visits[room] = RoomVisits(room, end, None)
         elif known.return_end is None:
-            visits[room] = RoomVisits(room, known.first_end, end)
+            visits[room] = RoomVisits(room, known.first_end, end, start)
     return tuple(visits.values())

@@ -23,13 +23,15 @@ MIMIC_SIGMA: Final = 0.3
 MIMIC_DUP: Final = 0.5
 MIMIC_HALLUC: Final = 0.1
 #: The mimic group of each role: the clean mimic in the spawn frame and in its own frame
-#: (free-form labels only), one knob moved at a time, and the shipped defaults.
+#: (free-form labels only), one knob moved at a time, and the shipped defaults. The knob
+#: groups walk back into the room they name (``b1``), so every episode re-enters a room:
+#: duplicates on re-entry happen and SIR is defined (the scout clears an office in one loop).
 MIMIC_MODELS: Final[dict[str, str]] = {
-    "spawn": "mimic-spawn-s0-p0-h0-q0-r0-a0",
-    "own": "mimic-s0-p0-h0-q0-r0-a0",
-    "sigma": f"mimic-s{MIMIC_SIGMA:g}-p0-h0-q0-r0-a0",
-    "dup": f"mimic-s0-p{MIMIC_DUP:g}-h0-q0-r0-a0",
-    "halluc": f"mimic-s0-p0-h{MIMIC_HALLUC:g}-q0-r0-a0",
+    "spawn": "mimic-spawn-s0-p0-h0-q0-r0-a0-b1",
+    "own": "mimic-s0-p0-h0-q0-r0-a0-b1",
+    "sigma": f"mimic-s{MIMIC_SIGMA:g}-p0-h0-q0-r0-a0-b1",
+    "dup": f"mimic-s0-p{MIMIC_DUP:g}-h0-q0-r0-a0-b1",
+    "halluc": f"mimic-s0-p0-h{MIMIC_HALLUC:g}-q0-r0-a0-b1",
     "default": "mimic",
 }
 #: Reference agents run in the symbolic modality they are registered with.
@@ -74,9 +76,8 @@ SCOUT_GROUPS: Final[tuple[Group, ...]] = (
     Group("scout-serial", "baseline"),
     Group("prior", "baseline"),
 )
-#: The knob groups run on generated offices (the scout re-enters rooms there, never in the
-#: paper's office, so duplicates on re-entry need them; many layouts also test the frame rows
-#: harder than one); the default mimic runs the benchmark's own office.
+#: The knob groups run on generated offices (many layouts test the frame, noise and
+#: duplicate rows harder than one); the default mimic runs the benchmark's own office.
 MIMIC_GROUPS: Final[tuple[Group, ...]] = tuple(
     Group(m, "baseline", "paper" if role == "default" else "generated")
     for role, m in MIMIC_MODELS.items()

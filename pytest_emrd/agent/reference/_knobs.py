@@ -21,6 +21,10 @@ r      ``repair``    each reply that is not damaged, with probability r, has    
                      comma)
 a      ``invalid``   each reply that is not damaged, with probability a,        [0, 1]
                      names an action the world refuses
+b      ``back``      with probability b per episode, once every room is         [0, 1]
+                     identified, walks back into the room it will name before
+                     ``Term`` (the scout's homing): room re-entries, so
+                     duplicates on re-entry and SIR can be measured
 spawn  ``frame``     write the map in the spawn frame (default ``own``: a       —
                      seeded rotation + translation per episode)
 =====  ============  =========================================================  ========
@@ -46,6 +50,7 @@ KNOBS: Final[dict[str, tuple[str, float]]] = {
     "q": ("fail", 1.0),
     "r": ("repair", 1.0),
     "a": ("invalid", 1.0),
+    "b": ("back", 1.0),
 }
 FRAMES: Final[tuple[str, ...]] = ("own", "spawn")
 _NAME = re.compile(rf"^{FAMILY}((?:-(?:spawn|[{''.join(KNOBS)}]\d+(?:\.\d+)?))+)$")

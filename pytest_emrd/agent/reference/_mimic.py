@@ -15,7 +15,9 @@ does, with every departure planted and known (knobs: :mod:`._knobs`):
   from then on, the old one stays where it was last written;
 * **hallucinations** ``halluc`` — an object of :data:`~._phrasing.HALLUCINATIONS` 1-4 m ahead;
 * **malformed replies** ``fail`` / ``repair`` (:mod:`._malform`) and **invalid actions**
-  ``invalid`` (:data:`~._phrasing.INVALID_ACTIONS`).
+  ``invalid`` (:data:`~._phrasing.INVALID_ACTIONS`);
+* **walking back** ``back`` — the scout's homing (:mod:`._scout`): the episodes it draws
+  re-enter the room they name, so duplicates on re-entry happen and SIR is defined.
 
 A step whose reply is damaged or whose action is invalid changes nothing in the world, so
 the mimic's navigation state rolls back to what it was before that step and it decides again
@@ -223,7 +225,8 @@ def mimic_reply(
     nav["memory"] = memory
     if crossing and plan["phase"] == "sweep":
         nav["visit"] += 1
-    action, reasoning = scout_action(plan, briefing, percept)
+    homing = _episode_draw(state["key"])("back") < float(planted.get("back", 0.0))
+    action, reasoning = scout_action(plan, briefing, percept, homing=homing)
 
     writer = _Writer(state, planted)
     room, visit = room_guess(plan), nav["visit"]

@@ -29,6 +29,16 @@ darkness costs coverage *and* time, as the paper reports for real models.
 Term rule: at a ``Term`` decision or the last step of the budget, the room where it
 discovered the most objects (ties: prompt order; rooms it could not identify, as under
 ``no_inventory``, fall back to the first room listed).
+
+**Homing** (``homing=True``; the ``mimic`` family's ``b`` knob): at rule 1, a homing scout
+that is not in the room the Term rule names walks back into it before ``Term``, as a
+responder leads people to the gathering room: through a known doorway of this room that
+was seen inside that room (nearest first), else through one that leads to a room from which
+such a doorway opens (the scout's own record of which doorway it saw inside which room),
+sweeping each room it enters. The room is fixed when homing begins (``home``); it names
+that room in ``Term`` on arrival, when no known doorway leads on, or at the budget's end.
+This gives room re-entries, which Spatial Identity Resolution needs and the plain scout,
+which clears an office in one loop, never makes.
 """
 
 from __future__ import annotations
@@ -148,11 +158,46 @@ def term_choice(plan: Mapping[str, Any], briefing: Briefing) -> tuple[str, str]:
     return room, f"Term rule: the room where I mapped the most objects ({room}: {sizes[room]})."
 
 
-def scout_action(plan: dict[str, Any], briefing: Briefing, percept: Percept) -> tuple[str, str]:
-    """(action, reasoning) of the room-clearing scout."""
+def _home_term(plan: Mapping[str, Any], briefing: Briefing) -> tuple[str, str]:
+    """The Term rule, or the room homing set out for (named whatever happens on the way)."""
+    home = plan.get("home", "")
+    if home:
+        return home, f"Back in the gathering room I chose: {home}."
+    return term_choice(plan, briefing)
+
+
+def _door_home(plan: Mapping[str, Any], home: str) -> str:
+    """A known doorway of this room on the way to ``home`` ("" when none is known): one
+    seen inside ``home`` first, then one into a room with a doorway seen inside ``home``."""
+    here, rooms_of = room_guess(plan), plan["door_rooms"]
+    mine = [d for d, rooms in rooms_of.items() if here in rooms and d not in plan["blocked"]]
+    near = [r for rooms in rooms_of.values() if home in rooms for r in rooms if r != home]
+    for ok in (lambda rooms: home in rooms, lambda rooms: any(r in near for r in rooms)):
+        options = [d for d in mine if ok([r for r in rooms_of[d] if r != here])]
+        if options:
+            return min(options, key=lambda d: (plan["here"].get(d, math.inf), d))
+    return ""
+
+
+def _homing(plan: dict[str, Any], briefing: Briefing) -> bool:
+    """Rule 1 of a homing scout: set a doorway towards ``home`` as the target (True), or
+    False when it is home or knows no way there."""
+    if "home" not in plan:
+        plan["home"] = term_choice(plan, briefing)[0]
+    if room_guess(plan) == plan["home"]:
+        return False
+    door = _door_home(plan, plan["home"])
+    plan.update(target=door, goal="door" if door else "", phase="face", tries=0)
+    return bool(door)
+
+
+def scout_action(
+    plan: dict[str, Any], briefing: Briefing, percept: Percept, *, homing: bool = False
+) -> tuple[str, str]:
+    """(action, reasoning) of the room-clearing scout (``homing``: see the module docstring)."""
     if percept.step >= percept.max_steps:
         _close_room(plan)
-        room, why = term_choice(plan, briefing)
+        room, why = _home_term(plan, briefing)
         return f"Term({room})", f"Last action of the budget. {why}"
     if plan["phase"] == "sweep" and plan["turns"] < SWEEP_TURNS:
         plan["turns"] += 1
@@ -160,9 +205,11 @@ def scout_action(plan: dict[str, Any], briefing: Briefing, percept: Percept) -> 
     if plan["phase"] in ("sweep", "decide"):
         _close_room(plan)
         if len(plan["visited"]) >= len(briefing.rooms):
-            room, why = term_choice(plan, briefing)
-            return f"Term({room})", why
-        _choose(plan, briefing)
+            if not (homing and _homing(plan, briefing)):
+                room, why = _home_term(plan, briefing)
+                return f"Term({room})", why
+        else:
+            _choose(plan, briefing)
     visible = {s.object_id for s in percept.visible}
     while plan["target"]:
         target, door = plan["target"], plan["goal"] == "door"
@@ -176,8 +223,11 @@ def scout_action(plan: dict[str, Any], briefing: Briefing, percept: Percept) -> 
             return _turn_towards(percept, x, z), f"Turning towards {target}."
         if door:
             plan["blocked"].append(target)
-            if _reposition(plan, [plan["doors"][target]]):
+            if "home" not in plan and _reposition(plan, [plan["doors"][target]]):
                 continue
-        _choose(plan, briefing)
-    room, why = term_choice(plan, briefing)
+        if "home" in plan:
+            _homing(plan, briefing)
+        else:
+            _choose(plan, briefing)
+    room, why = _home_term(plan, briefing)
     return f"Term({room})", f"No doorway left to try. {why}"

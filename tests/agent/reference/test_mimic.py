@@ -221,6 +221,20 @@ def test_duplicates_come_on_re_entry_and_grow_with_p() -> None:
     assert low < high and all(visit >= 2 for _, visit in high)
 
 
+@pytest.mark.parametrize("spawn", ["office", "kitchen", "entrance"])
+def test_walking_back_re_enters_the_room_it_names(spawn: str) -> None:
+    home, plain = _episode(f"{CLEAN}-b1", spawn), _episode(CLEAN, spawn)
+    rooms = [s.room for s in home.steps]
+    runs = [r for i, r in enumerate(rooms) if i == 0 or rooms[i - 1] != r]
+    assert home.chosen_room == plain.chosen_room == rooms[-1]
+    if plain.final_room == plain.chosen_room:  # already there: nothing to walk back to
+        assert [s.action for s in home.steps] == [s.action for s in plain.steps]
+    else:  # until every room is identified it walks like the mimic without the knob
+        assert runs.count(rooms[-1]) == 2
+        walk = [s.action for s in plain.steps][:-1]
+        assert [s.action for s in home.steps][: len(walk)] == walk
+
+
 def test_the_same_request_gets_the_same_reply() -> None:
     first, second = _episode("mimic", "kitchen", 1), _episode("mimic", "kitchen", 1)
     assert [s.raw_reply for s in first.steps] == [s.raw_reply for s in second.steps]
