@@ -159,7 +159,11 @@ def sir_score(traj: Trajectory, track: Track, aec: float | None) -> tuple[float 
     An object of ``M_first`` is in ``M_return`` ("actively recognised and successfully
     deduplicated upon re-entering room r") when, at the end of the first re-entry into ``r``,
 
-    * it is still held *by the same label* (recognised, not re-added under a new name), and
+    * the label it had at the end of the first visit is still in the map, held by an object of
+      room ``r`` (recognised, not dropped or re-added under a new name; *which* object of
+      ``r`` the label is matched to may differ, since identities are revised when the frame
+      becomes better determined (:mod:`._match`, step 4): a revision is the metric's, not
+      the model's), and
     * no entry written during the re-entry is a copy of it (deduplicated): see
       :func:`reentry_copies`.
 
@@ -176,9 +180,10 @@ def sir_score(traj: Trajectory, track: Track, aec: float | None) -> tuple[float 
     for v in reentered:
         first = {o: lb for o, lb in held[v.first_end].items() if room_of[o] == v.room}
         if first and v.return_end is not None and v.return_start is not None:
-            back = held[v.return_end]
+            room_by_label = {lb: room_of[o] for o, lb in held[v.return_end].items()}
             copies = reentry_copies(traj, held, v.return_start, v.return_end)
-            kept = sum(back.get(o) == lb and o not in copies for o, lb in first.items())
+            kept = sum(room_by_label.get(lb) == v.room and o not in copies
+                       for o, lb in first.items())  # fmt: skip
             ratios.append(kept / len(first))
     if not reentered:
         return None, "no room was re-entered"

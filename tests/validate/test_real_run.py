@@ -67,6 +67,7 @@ def test_ebbinghaus_recovers_the_planted_mean(rows, mean: int) -> None:
         "AEC, PA, SIR with hallucinations, mimic-h0.1",
         "Hallucinated entries per step, mimic-h0.1",
         "AEC with duplicates, mimic-p0.5: Eq. AEC",
+        "SIR / AEC with duplicates, mimic-p0.5",
         "Parse failures, mimic",
         "Replies read with a repair, mimic",
         "Invalid actions, mimic",

@@ -11,7 +11,8 @@ Bump :data:`REFERENCE_VERSION` with every change to what a reference agent repli
 * ``ref-2`` — the scout repositions and sweeps again when no unused doorway is in sight;
   ``prior`` maps nothing (looks around in place, then terminates); planted decay hazard ``1/m``;
   ``scout-serial`` protects thirds of the prompt's inventory total. The ``mimic`` family was
-  added under ``ref-2`` (no reply of an existing agent changed).
+  added under ``ref-2`` (no reply of an existing agent changed), and later its ``b`` knob
+  (walking back into the named room; names without ``b`` reply exactly as before).
 """
 
 from __future__ import annotations
