@@ -261,36 +261,47 @@ def test_sir_without_re_entry_is_none_with_reason(make_obj: MakeObj, make_traj: 
     assert m.reasons["sir"] == "no room was re-entered"
 
 
-def _reentry_with_copy(make_obj: MakeObj, make_traj: MakeTraj, motion=None) -> Trajectory:
-    """Office with three desks; on re-entry the model keeps d1 and d2 and writes Desk_2 again
-    (``desk again``) and Desk_3 for the first time (``third desk``)."""
+def _reentry(make_obj: MakeObj, make_traj: MakeTraj, written: dict, motion=None) -> Trajectory:
+    """Office with three desks: d1, d2 mapped on the first visit, the kitchen's fridge, then
+    on re-entry d1 and d2 kept, Desk_3 mapped for the first time (``third desk``) and the
+    entries ``written`` added (spawn-frame positions; ``motion`` moves every position)."""
     truth = [make_obj("Desk_1", OFFICE, 0, 0), make_obj("Desk_2", OFFICE, 3, 0),
              make_obj("Desk_3", OFFICE, 6, 2), make_obj("Fridge_1", KITCHEN, 0, -6)]  # fmt: skip
 
-    def at(x: float, z: float) -> tuple[float, float]:
-        return (x, z) if motion is None else motion(x, z)
+    def place(entries: dict) -> dict:
+        if motion is None:
+            return entries
+        return {lb: (tp, *motion(x, z)) for lb, (tp, x, z) in entries.items()}
 
-    first = {"d1": ("Desk", *at(0.0, 0.0)), "d2": ("Desk", *at(3.0, 0.0))}
-    fridge = {"f": ("Fridge", *at(0.0, -6.0))}
-    back = {**first, **fridge, "desk again": ("Desk", *at(3.1, 0.2)),
-            "third desk": ("Desk", *at(6.0, 2.1))}  # fmt: skip
+    first = {"d1": ("Desk", 0.0, 0.0), "d2": ("Desk", 3.0, 0.0)}
+    seen = {**first, "f": ("Fridge", 0.0, -6.0)}
+    back = {**seen, "third desk": ("Desk", 6.0, 2.1), **written}
     steps = [
-        (OFFICE, ["Desk_1", "Desk_2"], first),
-        (KITCHEN, ["Fridge_1"], {**first, **fridge}),
-        (OFFICE, ["Desk_1", "Desk_2", "Desk_3"], back),
+        (OFFICE, ["Desk_1", "Desk_2"], place(first)),
+        (KITCHEN, ["Fridge_1"], place(seen)),
+        (OFFICE, ["Desk_1", "Desk_2", "Desk_3"], place(back)),
     ]
     return make_traj(truth, steps)
 
 
-def test_sir_leaves_out_an_object_written_again_on_re_entry(
-    make_obj: MakeObj, make_traj: MakeTraj
+#: Desk_2 written again on re-entry, 0.22 m from where d2 (still held) puts it.
+COPY = {"desk again": ("Desk", 3.1, 0.2)}
+
+
+@pytest.mark.parametrize(
+    ("written", "expected"),
+    [(COPY, 0.5), ({"lamp": ("Lamp", 3.0, 0.0)}, 1.0), ({}, 1.0)],
+    ids=["copy-of-a-held-object", "hallucination-copies-nothing", "no-copy"],
+)
+def test_sir_leaves_out_objects_written_again_on_re_entry(
+    make_obj: MakeObj, make_traj: MakeTraj, written: dict, expected: float
 ) -> None:
-    # M_first = {Desk_1, Desk_2}; both keep their labels, but "desk again" lies nearest Desk_2
-    # (held by d2): a copy, not deduplicated. "third desk" lies nearest Desk_3, which no other
-    # label holds: a newly mapped object. Ratio 1/2; AEC = 4/4 (three desks, one fridge).
-    m = episode_metrics(_reentry_with_copy(make_obj, make_traj))
+    # M_first = {Desk_1, Desk_2}, both keep their labels. "desk again" lies nearest Desk_2,
+    # which d2 holds: a copy, so Desk_2 was not deduplicated (1/2). "third desk" lies nearest
+    # Desk_3, which no other label holds: newly mapped, not a copy. "lamp" has no layout type.
+    m = episode_metrics(_reentry(make_obj, make_traj, written))
     assert m.aec == 1.0
-    assert m.sir == pytest.approx(0.5, abs=1e-15)
+    assert m.sir == pytest.approx(expected, abs=1e-15)
 
 
 @given(
@@ -302,19 +313,9 @@ def test_sir_copies_do_not_depend_on_the_models_frame(
     make_obj: MakeObj, make_traj: MakeTraj, theta: float, tx: float, tz: float
 ) -> None:
     c, s = math.cos(theta), math.sin(theta)
-    moved = _reentry_with_copy(make_obj, make_traj, lambda x, z: (c * x - s * z + tx,
-                                                                   s * x + c * z + tz))
+
+    def motion(x: float, z: float) -> tuple[float, float]:
+        return c * x - s * z + tx, s * x + c * z + tz
+
+    moved = _reentry(make_obj, make_traj, COPY, motion)
     assert episode_metrics(moved).sir == pytest.approx(0.5, abs=1e-9)
-
-
-def test_sir_counts_a_re_entry_without_copies_as_fully_resolved(
-    make_obj: MakeObj, make_traj: MakeTraj
-) -> None:
-    truth = [make_obj("Desk_1", OFFICE, 0, 0), make_obj("Desk_2", OFFICE, 3, 0),
-             make_obj("Fridge_1", KITCHEN, 0, -6)]  # fmt: skip
-    first = {"d1": ("Desk", 0.0, 0.0), "d2": ("Desk", 3.0, 0.0)}
-    full = {**first, "f": ("Fridge", 0.0, -6.0)}
-    steps = [(OFFICE, ["Desk_1"], first), (KITCHEN, ["Fridge_1"], full),
-             (OFFICE, ["Desk_1", "Desk_2"], {**full, "lamp": ("Lamp", 3.0, 0.0)})]  # fmt: skip
-    # "lamp" is of no layout type (a hallucination): it copies nothing.
-    assert episode_metrics(make_traj(truth, steps)).sir == 1.0
