@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import json
+
 import httpx
 import pytest
 from hypothesis import given
@@ -79,3 +81,28 @@ def test_a_body_that_is_not_an_object_is_encoded_whole():
     assert _wire.encode_body([1, "a"]) == b'[1,"a"]'
     with pytest.raises(ValueError, match="Out of range float"):
         _wire.encode_body({"t": float("nan")})
+
+
+_long_text = st.text(min_size=1000, max_size=1100) | st.text(
+    'ABCabc+/=\x00"\\\n\u00e9', min_size=1024, max_size=1100
+)
+
+
+@given(
+    st.recursive(
+        _scalars | _long_text,
+        lambda inner: st.lists(inner, max_size=3) | st.dictionaries(st.text(), inner, max_size=3),
+        max_leaves=8,
+    ),
+    st.booleans(),
+    st.booleans(),
+)
+def test_dumps_is_json_dumps_with_long_strings_copied_whole(tree, sort_keys, ensure_ascii):
+    options = {"sort_keys": sort_keys, "ensure_ascii": ensure_ascii}
+    assert _wire.dumps(tree, **options) == json.dumps(tree, separators=(",", ":"), **options)
+
+
+def test_a_string_spelling_the_mark_falls_back_to_json_dumps():
+    frame = "QUJD" * 300
+    tree = {"a": frame, "b": "\x00emrd-verbatim-0", "c": ("x", frame)}
+    assert _wire.dumps(tree) == json.dumps(tree, separators=(",", ":"))

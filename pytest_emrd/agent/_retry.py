@@ -16,6 +16,7 @@ attribute :data:`pytest_emrd._logging.RETRY_ATTR` (live progress counts retries 
 from __future__ import annotations
 
 import email.utils
+import functools
 import logging
 import random
 import time
@@ -97,10 +98,16 @@ def _excerpt(response: httpx.Response) -> str:
     return text[:_BODY_EXCERPT] + ("..." if len(text) > _BODY_EXCERPT else "")
 
 
+@functools.lru_cache(maxsize=64)
+def _parsed_url(url: str) -> httpx.URL:
+    """``url`` parsed once (a client posts to one or two URLs; ``httpx.URL`` is immutable)."""
+    return httpx.URL(url)
+
+
+@functools.lru_cache(maxsize=64)
 def _public_url(url: str) -> str:
     """``url`` without userinfo or query string (either may carry a credential)."""
-    parsed = httpx.URL(url)
-    return str(parsed.copy_with(userinfo=b"", query=None, fragment=None))
+    return str(_parsed_url(url).copy_with(userinfo=b"", query=None, fragment=None))
 
 
 def _attempt(http: httpx.Client, request: httpx.Request, url: str, read: Callable[[Any], Any]):
@@ -145,7 +152,7 @@ def post_json(
     log line and error message.
     """
     content = encode_body(body)  # what json=body sends, each message encoded once per episode
-    request = http.build_request("POST", url, content=content, headers=headers)
+    request = http.build_request("POST", _parsed_url(url), content=content, headers=headers)
     request.headers.setdefault("Content-Type", "application/json")  # as json= does
     mask = _masker(secrets)
     shown = _public_url(url)

@@ -55,7 +55,7 @@ from typing import Any, Final
 import yaml
 from vcr.request import Request
 
-from pytest_emrd._wire import splice
+from pytest_emrd._wire import dumps, splice
 from pytest_emrd.cassette._redact import DIGEST, canonical_json
 
 FORMAT: Final = "emrd-cassette/1"
@@ -110,7 +110,7 @@ def _bytes(text: str) -> bytes:
 
 
 def _compact(tree: Any, ascii_only: bool) -> str:
-    return json.dumps(tree, separators=(",", ":"), ensure_ascii=ascii_only)
+    return dumps(tree, ensure_ascii=ascii_only)
 
 
 def _pack(node: Any, table: _Table) -> Any:

@@ -13,9 +13,9 @@ Redaction turns a model request into its *canonical* form:
   and credential-like query parameters are dropped and configured key values removed from
   the URI and the body (:mod:`pytest_emrd._scrub`).
 
-vcrpy runs ``before_record_request`` several times for every request, so the work is cached
-by body bytes (a small LRU: a live body is looked up a few times in a row, then never again).
-The two match keys are computed once here: ``strict`` (method, path, canonical body) and
+vcrpy runs ``before_record_request`` several times for every request; the cassette keeps the
+redacted copy on the request, so each request is redacted once (see ``cassette._use``). The
+two match keys are computed once here: ``strict`` (method, path, canonical body) and
 ``lenient`` (the same with every frame digest replaced by a placeholder, so only text, step
 index and image count are compared).
 """
@@ -25,8 +25,6 @@ from __future__ import annotations
 import hashlib
 import json
 import re
-import threading
-from collections import OrderedDict
 from dataclasses import dataclass
 from functools import cached_property, partial
 from typing import Any, Final
@@ -42,7 +40,6 @@ DIGEST: Final = re.compile(r"^(?:pixels|bytes):[0-9a-f]{64}$")
 _IMAGE_PLACEHOLDER: Final = "<image>"
 _DATA_URL: Final = "data:image/"
 _MIME_KEYS: Final = ("media_type", "mime_type", "mimeType")
-_CACHE_SIZE: Final = 64
 
 
 @dataclass(frozen=True)
@@ -97,7 +94,7 @@ class MatchKeys:
 
 def canonical_json(tree: Any) -> str:
     """Sorted-key compact JSON, the one serialisation every key and cassette body uses."""
-    return json.dumps(tree, sort_keys=True, separators=(",", ":"), ensure_ascii=False)
+    return _wire.dumps(tree, sort_keys=True, ensure_ascii=False)
 
 
 def _image_mime(node: dict[str, Any]) -> bool:
@@ -197,32 +194,3 @@ def canonical_keys(method: str, path: str, body: bytes) -> MatchKeys:
 def scrub_headers(headers: Any) -> dict[str, str]:
     """Only the headers a cassette keeps (see :data:`KEPT_HEADERS`)."""
     return {k: v for k, v in dict(headers).items() if k.lower() in KEPT_HEADERS}
-
-
-class RedactionCache:
-    """Thread-safe LRU of :func:`redact_body` + :func:`match_keys` results by body bytes."""
-
-    def __init__(self, capacity: int = _CACHE_SIZE) -> None:
-        self._capacity = capacity
-        self._lock = threading.Lock()
-        self._entries: OrderedDict[tuple[str, str, bytes], MatchKeys] = OrderedDict()
-
-    def clear(self) -> None:
-        """Forget every entry (cold benchmarks, tests)."""
-        with self._lock:
-            self._entries.clear()
-
-    def get(self, method: str, path: str, body: bytes | str | None) -> MatchKeys:
-        raw = body.encode() if isinstance(body, str) else (body or b"")
-        key = (method, path, raw)
-        with self._lock:
-            hit = self._entries.get(key)
-            if hit is not None:
-                self._entries.move_to_end(key)
-                return hit
-        value = match_keys(method, path, redact_body(raw))
-        with self._lock:
-            self._entries[key] = value
-            while len(self._entries) > self._capacity:
-                self._entries.popitem(last=False)
-        return value

@@ -12,15 +12,30 @@ cassette written by concurrent episodes is byte for byte the one a lone episode 
 from __future__ import annotations
 
 import contextlib
+import importlib.util
 import threading
 from collections.abc import Iterator
 from contextvars import ContextVar
-from typing import Any
+from typing import Any, Final
 
 from vcr.cassette import Cassette
 from vcr.patch import CassettePatcherBuilder
 
 from pytest_emrd.errors import CassetteError
+
+#: vcrpy's patcher groups whose library is not installed. vcrpy tries (and fails) to import
+#: each one again for every cassette it opens; skipping them patches exactly what it would.
+ABSENT_PATCHERS: Final = tuple(
+    group
+    for group, module in (
+        ("boto3", "botocore"),
+        ("httplib2", "httplib2"),
+        ("tornado", "tornado"),
+        ("aiohttp", "aiohttp"),
+        ("httpx2", "httpx2"),
+    )
+    if importlib.util.find_spec(module) is None
+)
 
 _current: ContextVar[Cassette | None] = ContextVar("emrd_cassette", default=None)
 _lock = threading.Lock()
@@ -31,7 +46,7 @@ class _Router:
     """Stands in for a cassette in vcrpy's patches; forwards to the thread's cassette."""
 
     custom_patches = ()
-    skip_patchers = ()
+    skip_patchers = ABSENT_PATCHERS
     _path = "<emrd: the cassette of the calling thread>"
 
     def __getattr__(self, name: str) -> Any:

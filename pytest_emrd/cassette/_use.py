@@ -22,25 +22,26 @@ from pytest_emrd.cassette._drift import (
     unreadable_message,
 )
 from pytest_emrd.cassette._persister import EpisodePersister
-from pytest_emrd.cassette._redact import MatchKeys, RedactionCache, scrub_headers
+from pytest_emrd.cassette._redact import MatchKeys, match_keys, redact_body, scrub_headers
 
 #: Response headers kept in a cassette (the body is stored decoded, so no Content-Encoding).
 KEPT_RESPONSE_HEADERS: Final = frozenset({"content-type"})
 
-_cache = RedactionCache()
-
 
 def clear_caches() -> None:
-    """Forget every cached redaction and message encoding, as at the start of a run
+    """Forget every cached message encoding and redaction, as at the start of a run
     (cold benchmarks, tests)."""
-    _cache.clear()
     _wire.clear()
+
+
+def _match_keys(request: Request) -> MatchKeys:
+    return match_keys(request.method, request.path, redact_body(request.body))
 
 
 def redact_request(request: Request) -> Request:
     """vcrpy ``before_record_request``: canonical body, secrets dropped, match keys attached."""
     request.uri = scrub_uri(request.uri)
-    keys = _cache.get(request.method, request.path, request.body)
+    keys = _match_keys(request)
     request.body = keys.redacted.body
     request.headers = scrub_headers(request.headers)
     request.emrd_keys = keys  # type: ignore[attr-defined]
@@ -67,8 +68,7 @@ def keep_response(response: dict[str, Any]) -> dict[str, Any] | None:
 def _keys(request: Request) -> MatchKeys:
     keys = getattr(request, "emrd_keys", None)
     if keys is None:
-        keys = _cache.get(request.method, request.path, request.body)
-        request.emrd_keys = keys  # type: ignore[attr-defined]
+        keys = request.emrd_keys = _match_keys(request)  # type: ignore[attr-defined]
     return keys
 
 
@@ -112,6 +112,26 @@ class EpisodeCassette(Cassette):
         """The failure is a recorded response the client could not read (not drift)."""
         self._by_key: dict[str, list[int]] = {}
         self._indexed = 0
+        self._loading = False
+
+    def _load(self) -> None:
+        self._loading = True
+        try:
+            super()._load()
+        finally:
+            self._loading = False
+
+    def append(self, request: Request, response: dict[str, Any]) -> None:
+        """vcrpy's ``append``; an interaction read back from our own file is not deep-copied
+        first (vcrpy protects a live response that way; the decoder built this one for this
+        cassette alone)."""
+        if not self._loading:
+            super().append(request, response)
+            return
+        kept = self._before_record_request(request), self._before_record_response(response)
+        if kept[0] and kept[1] is not None:
+            self.data.append(kept)
+            self.dirty = True
 
     def _responses(self, request: Request) -> Iterator[tuple[int, dict[str, Any]]]:
         """vcrpy's lookup (every recorded request tried in turn, for each request made),
@@ -177,14 +197,22 @@ class EpisodeCassette(Cassette):
 def _before_record_request(request: Request) -> Request:
     if getattr(request, "emrd_keys", None) is not None:
         return request  # read back from the cassette (already canonical) or redacted before
-    # A shallow copy suffices: redaction assigns new attributes and never mutates shared
-    # ones (vcrpy's own configuration deep-copies the request, frames included, every call).
-    return redact_request(copy.copy(request))
+    # vcrpy asks three or four times per request (can it play, is it in, play, record):
+    # the redacted copy is kept on the request, so each request is redacted once.
+    redacted: Request | None = request.__dict__.get("emrd_redacted")
+    if redacted is None:
+        # A shallow copy suffices: redaction assigns new attributes and never mutates shared
+        # ones (vcrpy's own configuration deep-copies the request, frames included, every call).
+        redacted = request.emrd_redacted = redact_request(copy.copy(request))  # type: ignore[attr-defined]
+    return redacted
 
 
 def _before_record_response(response: dict[str, Any]) -> dict[str, Any] | None:
-    # decode_compressed_response: store bodies decoded, whatever the server compressed.
-    return keep_response(filters.decode_response(response))
+    # decode_compressed_response: store bodies decoded, whatever the server compressed
+    # (vcrpy's decoder deep-copies the response first: only worth it when there is work).
+    if any(name.lower() == "content-encoding" for name in response["headers"]):
+        response = filters.decode_response(response)
+    return keep_response(response)
 
 
 @contextmanager
@@ -210,6 +238,7 @@ def episode_cassette(
         before_record_response=_before_record_response,
         allow_playback_repeats=False,
         drop_unused_requests=record_mode == "all",
+        skip_patchers=_routing.ABSENT_PATCHERS,
     )
     if _routing.active():  # episodes run concurrently: one patch routes to each thread's
         opened = _routing.bound(EpisodeCassette.load(**settings))
