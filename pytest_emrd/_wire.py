@@ -131,14 +131,13 @@ def _remember(table: OrderedDict[Any, Any], key: Any, value: Any, capacity: int)
             table.popitem(last=False)
 
 
-def memo(item: Any, kind: Hashable, compute: Callable[[], Any]) -> Any:
-    """``compute()`` for ``item``, computed once per ``(item, kind)`` while remembered."""
+def memo(item: Any, kind: Hashable, compute: Callable[[Any], Any]) -> Any:
+    """``compute(item)``, computed once per ``(item, kind)`` while remembered."""
     key = (id(item), kind)
-    with _lock:
-        hit = _items.get(key)
+    hit = _items.get(key)  # one read is atomic; changes to the table take the lock
     if hit is not None and hit[0] is item:
         return hit[1]
-    value = compute()
+    value = compute(item)
     _remember(_items, key, (item, value), _ITEMS)
     return value
 
@@ -179,7 +178,7 @@ def splice(
 
 
 def _wire_item(item: Any) -> str:
-    return memo(item, "wire", partial(wire_json, item))  # type: ignore[no-any-return]
+    return memo(item, "wire", wire_json)  # type: ignore[no-any-return]
 
 
 def encode_body(body: Any) -> bytes:
@@ -196,8 +195,7 @@ def encode_body(body: Any) -> bytes:
 
 def sent_tree(raw: bytes) -> Any | None:
     """The tree :func:`encode_body` encoded into exactly this ``raw`` object, else None."""
-    with _lock:
-        hit = _bodies.get(id(raw))
+    hit = _bodies.get(id(raw))
     return hit[1] if hit is not None and hit[0] is raw else None
 
 

@@ -18,7 +18,6 @@ from __future__ import annotations
 
 import os
 from dataclasses import dataclass
-from functools import partial
 from typing import Any, Final, Protocol
 
 import httpx
@@ -170,9 +169,7 @@ def to_anthropic(messages: list[dict[str, Any]]) -> tuple[str, list[dict[str, An
     converted once while it travels in the window (the same dict out for the same dict in)."""
     system = "\n\n".join(m["content"] for m in messages if m["role"] == "system")
     converted = [
-        memo(m, "anthropic", partial(_anthropic_message, m))
-        for m in messages
-        if m["role"] != "system"
+        memo(m, "anthropic", _anthropic_message) for m in messages if m["role"] != "system"
     ]
     return system, converted
 

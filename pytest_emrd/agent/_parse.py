@@ -193,6 +193,8 @@ def _find_object(text: str) -> tuple[dict[str, Any] | None, tuple[str, ...]]:
 
 
 def _number(value: Any) -> float | None:
+    if type(value) is float:  # the common case first: a map holds dozens of coordinates
+        return value if math.isfinite(value) else None
     if isinstance(value, bool):
         return None
     if isinstance(value, str):
@@ -217,13 +219,14 @@ def _entry(label: str, fields: Any) -> MapEntry | None:
     x, z = _number(fields.get("x")), _number(fields.get("z"))
     if x is None or z is None:
         return None
+    get = fields.get
     return MapEntry(
-        label=label,
-        object_type=_text(fields.get("type")).strip(),
-        x=x,
-        z=z,
-        room=_text(fields.get("room")).strip() or None,
-        facing=_text(fields.get("facing")).strip() or None,
+        label,
+        _text(get("type")).strip(),
+        x,
+        z,
+        _text(get("room")).strip() or None,
+        _text(get("facing")).strip() or None,
     )
 
 

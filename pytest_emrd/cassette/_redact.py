@@ -26,7 +26,7 @@ import hashlib
 import json
 import re
 from dataclasses import dataclass
-from functools import cached_property, partial
+from functools import cached_property
 from typing import Any, Final
 
 from pytest_emrd import _wire, frames
@@ -79,10 +79,13 @@ class MatchKeys:
     redacted: Redacted
 
     @cached_property
-    def strict(self) -> str | None:
+    def strict(self) -> tuple[str, bytes] | None:
+        """``(head, canonical body)``, compared as it is: a body is tens of KB, and hashing it
+        cost more than the rest of matching it (equal lengths are rare, and ``==`` on bytes
+        of different lengths is immediate)."""
         if not self.redacted.parsed:
             return None
-        return hashlib.sha256(self.head.encode() + self.redacted.body).hexdigest()
+        return self.head, self.redacted.body
 
     @cached_property
     def lenient(self) -> str | None:
@@ -153,7 +156,7 @@ def _canonical_item(item: Any) -> str:
 
 
 def _memo_canonical_item(item: Any) -> str:
-    return _wire.memo(item, "canonical", partial(_canonical_item, item))  # type: ignore[no-any-return]
+    return _wire.memo(item, "canonical", _canonical_item)  # type: ignore[no-any-return]
 
 
 def _canonical_sent(tree: Any) -> str:

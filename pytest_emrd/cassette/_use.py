@@ -72,7 +72,7 @@ def _keys(request: Request) -> MatchKeys:
     return keys
 
 
-def make_matcher(matching: str, frame_drift: set[tuple[str, str]]) -> Callable[..., bool]:
+def make_matcher(matching: str, frame_drift: set[tuple[Any, Any]]) -> Callable[..., bool]:
     """The one vcrpy matcher: strict or lenient key equality (unparseable never matches).
 
     In lenient mode a match whose frames differ adds the pair of strict keys to
@@ -85,10 +85,14 @@ def make_matcher(matching: str, frame_drift: set[tuple[str, str]]) -> Callable[.
             return a.strict is not None and a.strict == b.strict
         same = a.lenient is not None and a.lenient == b.lenient
         if same and a.strict != b.strict:
-            frame_drift.add((str(a.strict), str(b.strict)))
+            frame_drift.add((a.strict, b.strict))
         return same
 
     return emrd_body
+
+
+def _size(strict: tuple[str, bytes]) -> tuple[str, int]:
+    return strict[0], len(strict[1])
 
 
 class EpisodeCassette(Cassette):
@@ -104,13 +108,13 @@ class EpisodeCassette(Cassette):
         super().__init__(*args, **kwargs)
         self.requests_made = 0
         self.drift: str | None = None
-        self.frame_drift: set[tuple[str, str]] = set()
+        self.frame_drift: set[tuple[Any, Any]] = set()
         self.strict = False
         """Matching is strict: recorded interactions are looked up by strict key."""
         self.rerecord_command = ""
         self.unreadable = False
         """The failure is a recorded response the client could not read (not drift)."""
-        self._by_key: dict[str, list[int]] = {}
+        self._by_size: dict[tuple[str, int], list[int]] = {}
         self._indexed = 0
         self._loading = False
 
@@ -135,19 +139,23 @@ class EpisodeCassette(Cassette):
 
     def _responses(self, request: Request) -> Iterator[tuple[int, dict[str, Any]]]:
         """vcrpy's lookup (every recorded request tried in turn, for each request made),
-        replaced under strict matching by a strict-key index: the same interactions, in
-        the same order, without a quadratic scan of the episode."""
+        replaced under strict matching by an index on method, path and body length, whose
+        few candidates are compared whole: the same interactions, in the same order,
+        without a quadratic scan of the episode or a hash of every body."""
         if not self.strict:
             yield from super()._responses(request)
             return
         for index in range(self._indexed, len(self.data)):
             key = _keys(self.data[index][0]).strict
             if key is not None:
-                self._by_key.setdefault(key, []).append(index)
+                self._by_size.setdefault(_size(key), []).append(index)
         self._indexed = len(self.data)
         key = _keys(self._before_record_request(request)).strict
-        for index in self._by_key.get(key, []) if key is not None else []:
-            yield index, self.data[index][1]
+        if key is None:
+            return
+        for index in self._by_size.get(_size(key), []):
+            if _keys(self.data[index][0]).strict == key:
+                yield index, self.data[index][1]
 
     def can_play_response_for(self, request: Request) -> bool:
         playable = bool(super().can_play_response_for(request))
@@ -226,7 +234,7 @@ def episode_cassette(
     in ``all`` mode the file is rebuilt from scratch. Inside :func:`~._routing.routing`
     (concurrent episodes) the cassette is bound to this thread instead of patching httpx.
     """
-    frame_drift: set[tuple[str, str]] = set()
+    frame_drift: set[tuple[Any, Any]] = set()
     settings: dict[str, Any] = dict(
         path=str(path),
         persister=EpisodePersister(
