@@ -47,8 +47,9 @@ _MARK: Final = "\x00emrd-verbatim-"
 
 
 @functools.cache
-def _encoder(sort_keys: bool, ensure_ascii: bool, allow_nan: bool) -> Callable[[Any], str]:
-    """The ``encode`` of the encoder ``json.dumps`` builds for these options, built once."""
+def encoder(sort_keys: bool, ensure_ascii: bool, allow_nan: bool = True) -> Callable[[Any], str]:
+    """``json.dumps(..., separators=(",", ":"))`` with these options: the ``encode`` of the
+    encoder ``json.dumps`` would build for them on every call, built once."""
     return json.JSONEncoder(
         separators=(",", ":"), sort_keys=sort_keys, ensure_ascii=ensure_ascii, allow_nan=allow_nan
     ).encode
@@ -80,7 +81,7 @@ def dumps(
 ) -> str:
     """``json.dumps(tree, separators=(",", ":"), ...)``, byte for byte, with every long string
     that needs no escaping swapped for a short mark while encoding and put back after."""
-    encode = _encoder(sort_keys, ensure_ascii, allow_nan)
+    encode = encoder(sort_keys, ensure_ascii, allow_nan)
     try:
         if not _long(tree, ensure_ascii):
             return encode(tree)

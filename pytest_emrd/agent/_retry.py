@@ -5,7 +5,8 @@ or reset, timeouts) and 2xx bodies that are not the JSON the provider promised. 
 retried: other 4xx (a bad key or a bad request does not heal). Jitter only changes how long
 we sleep; the request sent again is the same object, byte for byte.
 
-The loop is :class:`tenacity.Retrying` (bounded by ``stop_after_attempt``); the wait is
+The loop is :class:`tenacity.Retrying` (bounded by ``stop_after_attempt``), entered once a
+first attempt has failed (a request that succeeds at once pays nothing for it); the wait is
 ours, because it must read ``Retry-After`` from the failed response and draw its jitter
 from a seedable generator. Each retry is logged on ``pytest_emrd.agent.retry`` at WARNING
 with the attempt, the wait and the cause; URLs are logged without userinfo or query and
@@ -133,6 +134,19 @@ def _attempt(http: httpx.Client, request: httpx.Request, url: str, read: Callabl
         ) from exc
 
 
+def _made(failure: _Retryable, attempt: Callable[..., Any]) -> Callable[..., Any]:
+    """``attempt`` whose first call raises ``failure``, the outcome of an attempt already
+    made: tenacity counts, logs and waits for it as if it had made it."""
+    pending = [failure]
+
+    def call(*args: Any) -> Any:
+        if pending:
+            raise pending.pop()
+        return attempt(*args)
+
+    return call
+
+
 def post_json(
     http: httpx.Client,
     url: str,
@@ -175,15 +189,19 @@ def post_json(
             extra={RETRY_ATTR: state.attempt_number},
         )
 
-    retrying = tenacity.Retrying(
-        stop=tenacity.stop_after_attempt(attempts),
-        wait=wait,
-        retry=tenacity.retry_if_exception_type(_Retryable),
-        before_sleep=log_retry,
-        sleep=policy.sleep,
-    )
     try:
-        return retrying(_attempt, http, request, shown, read)
+        try:  # most requests succeed at once: no retry machinery for them
+            return _attempt(http, request, shown, read)
+        except _Retryable as failure:
+            first = failure
+        retrying = tenacity.Retrying(
+            stop=tenacity.stop_after_attempt(attempts),
+            wait=wait,
+            retry=tenacity.retry_if_exception_type(_Retryable),
+            before_sleep=log_retry,
+            sleep=policy.sleep,
+        )
+        return retrying(_made(first, _attempt), http, request, shown, read)
     except tenacity.RetryError as exc:
         cause = mask(str(exc.last_attempt.exception()))
         raise TransportError(

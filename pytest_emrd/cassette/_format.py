@@ -55,7 +55,7 @@ from typing import Any, Final
 import yaml
 from vcr.request import Request
 
-from pytest_emrd._wire import dumps, splice
+from pytest_emrd._wire import encoder, splice
 from pytest_emrd.cassette._redact import DIGEST, canonical_json
 
 FORMAT: Final = "emrd-cassette/1"
@@ -110,7 +110,7 @@ def _bytes(text: str) -> bytes:
 
 
 def _compact(tree: Any, ascii_only: bool) -> str:
-    return dumps(tree, ensure_ascii=ascii_only)
+    return _SERIALISE["ascii" if ascii_only else "compact"](tree)
 
 
 def _pack(node: Any, table: _Table) -> Any:
@@ -125,20 +125,21 @@ def _pack(node: Any, table: _Table) -> Any:
 
 
 def _unpack(node: Any, strings: Sequence[str]) -> Any:
-    if isinstance(node, dict):
+    kind = type(node)  # exactly what json.loads builds
+    if kind is str:
+        return strings[int(node[1:])] if node.startswith(_REF) else node
+    if kind is dict:
         return {k: _unpack(v, strings) for k, v in node.items()}
-    if isinstance(node, list):
+    if kind is list:
         return [_unpack(v, strings) for v in node]
-    if isinstance(node, str) and node.startswith(_REF):
-        return strings[int(node[1:])]
     return node
 
 
 #: How a JSON body is re-serialised on load: canonical (requests) or compact as received.
 _SERIALISE: Final = {
     "canonical": canonical_json,
-    "compact": lambda tree: _compact(tree, ascii_only=False),
-    "ascii": lambda tree: _compact(tree, ascii_only=True),
+    "compact": encoder(sort_keys=False, ensure_ascii=False),
+    "ascii": encoder(sort_keys=False, ensure_ascii=True),
 }
 
 

@@ -95,9 +95,8 @@ class MatchKeys:
         return hashlib.sha256(text.encode()).hexdigest()
 
 
-def canonical_json(tree: Any) -> str:
-    """Sorted-key compact JSON, the one serialisation every key and cassette body uses."""
-    return _wire.dumps(tree, sort_keys=True, ensure_ascii=False)
+#: Sorted-key compact JSON, the one serialisation every key and cassette body uses.
+canonical_json: Final = _wire.encoder(sort_keys=True, ensure_ascii=False)
 
 
 def _image_mime(node: dict[str, Any]) -> bool:
