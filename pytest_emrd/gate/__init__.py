@@ -9,6 +9,12 @@ from pytest_emrd.gate._identity import (
     read_identity,
     write_identity,
 )
+from pytest_emrd.gate._measured import (
+    EPISODE_METRICS_CODE,
+    EPISODE_METRICS_LIBRARIES,
+    MeasuredStore,
+    code_fingerprint,
+)
 from pytest_emrd.gate._prefetch import Prefetcher, start_prefetch
 from pytest_emrd.gate._settings import (
     BACKENDS,
@@ -24,7 +30,13 @@ from pytest_emrd.gate._settings import (
     parse_shard,
     resolve_settings,
 )
-from pytest_emrd.gate._store import ResultsStore, StoredEpisode, iter_run_dir, new_run_dir
+from pytest_emrd.gate._store import (
+    ResultsStore,
+    StoredEpisode,
+    episode_path,
+    iter_run_dir,
+    new_run_dir,
+)
 from pytest_emrd.gate._summary import EpisodeSummary, usage_rows
 from pytest_emrd.gate._table import UsageRow, gate_tables, usage_table
 from pytest_emrd.gate._thresholds import Bound, Thresholds, parse_thresholds
@@ -32,6 +44,8 @@ from pytest_emrd.gate._verdict import GateCell, Verdict, evaluate_all, evaluate_
 
 __all__ = [
     "BACKENDS",
+    "EPISODE_METRICS_CODE",
+    "EPISODE_METRICS_LIBRARIES",
     "LENIENT_BACKENDS",
     "MATCHING_MODES",
     "OPTIONS",
@@ -41,6 +55,7 @@ __all__ = [
     "EpisodeSummary",
     "GateCell",
     "MatchingWarning",
+    "MeasuredStore",
     "Option",
     "Prefetcher",
     "ResultsStore",
@@ -53,6 +68,8 @@ __all__ = [
     "cell_specs",
     "check_resume",
     "check_shard_set",
+    "code_fingerprint",
+    "episode_path",
     "episode_specs",
     "evaluate_all",
     "evaluate_cell",

@@ -164,6 +164,12 @@ class RunSettings:
     """Preflight each model before its first live recording (``--emrd-preflight=off``: no)."""
 
     @property
+    def replays_only(self) -> bool:
+        """Record mode ``none``: no episode calls a model (nothing to preflight; an episode
+        without a cassette or a stored result is an error)."""
+        return self.record_mode == "none"
+
+    @property
     def backend_kwargs(self) -> dict[str, Any]:
         """:attr:`backend_options` as keyword arguments (a later key overrides an earlier one)."""
         return dict(self.backend_options)

@@ -87,6 +87,11 @@ class StoredEpisode:
         )
 
 
+def episode_path(run_dir: Path, spec: EpisodeSpec) -> Path:
+    """Where a run directory stores ``spec``'s episode."""
+    return run_dir / "episodes" / f"{spec.case_id}.json"
+
+
 def new_run_dir(parent: Path) -> Path:
     """A fresh, not yet created run directory name under ``parent`` (time + random suffix)."""
     return parent / f"{time.strftime('%Y%m%d-%H%M%S')}-{secrets.token_hex(3)}"
@@ -110,7 +115,7 @@ class ResultsStore:
         """Recorded in ``run.json`` before the first episode is computed."""
 
     def path_for(self, spec: EpisodeSpec) -> Path:
-        return self.run_dir / "episodes" / f"{spec.case_id}.json"
+        return episode_path(self.run_dir, spec)
 
     def _reusable(self, spec: EpisodeSpec) -> StoredEpisode | None:
         path = self.path_for(spec)

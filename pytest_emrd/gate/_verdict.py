@@ -154,16 +154,18 @@ def judge(cell: GateCell, estimate: EstimateLike) -> Verdict:
 
 def evaluate_cell(
     cell: GateCell,
-    trajectories: Iterable[Trajectory],
+    trajectories: Iterable[Any],
     metrics: Mapping[str, GateMetricLike],
     *,
-    prepare: Callable[[Trajectory], Any] | None = None,
+    prepare: Callable[[Any], Any] | None = None,
 ) -> Verdict:
     """The verdict of one gate over its episodes (any order in, sorted by case id).
 
-    ``prepare`` maps each trajectory to what the metric's ``compute`` accepts, e.g. a
-    cached :func:`pytest_emrd.metrics.episode_metrics`, so several gates over the same
-    episodes match each episode's maps once.
+    ``trajectories`` are trajectories or anything else with a ``spec`` that the metric's
+    ``compute`` accepts, e.g. :class:`~pytest_emrd.metrics.EpisodeMetrics` saved beside the
+    results store. ``prepare`` maps each one to what ``compute`` accepts, e.g. a cached
+    :func:`pytest_emrd.metrics.episode_metrics`, so several gates over the same episodes
+    match each episode's maps once.
     """
     ordered = sorted(trajectories, key=lambda t: t.spec.case_id)
     items = [prepare(t) for t in ordered] if prepare else ordered

@@ -35,10 +35,10 @@ class LiveLine:
 
     @pytest.hookimpl(optionalhook=True)
     def pytest_xdist_node_collection_finished(self, node: Any, ids: list[str]) -> None:
+        if self.config.option.collectonly or self.run.settings.replays_only:
+            return
         from pytest_emrd.preflight import params_of_node_ids
 
-        if self.config.option.collectonly:
-            return
         run = self.run
 
         def by_id() -> dict[str, Any]:
@@ -64,11 +64,11 @@ class LiveLine:
     def preflight(self, params: list[Any]) -> None:
         """Preflight each model the selected tests will call live; a failure ends the session
         before any episode runs. Then start the live line."""
+        run = self.run
+        if not params or run.settings.replays_only:  # nobody called: nothing to check or show
+            return
         from pytest_emrd.progress import LiveBoard, Ticker
 
-        if not params:
-            return
-        run = self.run
         cells = (run.cell_specs(p) if isinstance(p, GateCell) else [p] for p in params)
         specs = [spec for group in cells for spec in group]
         reports, live = run.call(lambda _: self.preflights.run(specs))

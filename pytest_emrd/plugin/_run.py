@@ -27,7 +27,7 @@ from pytest_emrd.gate import (
     Verdict,
     start_prefetch,
 )
-from pytest_emrd.trajectory import EpisodeSpec, Trajectory
+from pytest_emrd.trajectory import EpisodeSpec
 
 RUN = pytest.StashKey["Run"]()
 
@@ -43,7 +43,7 @@ class Run:
 
     def __post_init__(self) -> None:
         self._stored: dict[EpisodeSpec, StoredEpisode] = {}
-        self._metrics: dict[str, Any] = {}
+        self._metrics: dict[EpisodeSpec, Any] = {}
         self._prefetch_started, self._prefetcher = False, None
 
     def call(self, fn: Any, what: str = "pytest-emrd") -> Any:
@@ -109,10 +109,10 @@ class Run:
 
     def missing_summary(self, items: list[pytest.Item]) -> str | None:
         """In record mode ``none``: one message for the episodes the selected items need
-        that have neither a cassette nor a stored result, or ``None``."""
-        from pytest_emrd.cassette import missing_cassettes, missing_summary
+        that have neither a stored result nor a cassette, or ``None``."""
+        from pytest_emrd.gate import episode_path
 
-        if self.settings.record_mode != "none":
+        if not self.settings.replays_only:
             return None
         needed: dict[EpisodeSpec, None] = {}
         for item in items:
@@ -121,11 +121,12 @@ class Run:
                 needed[spec] = None
             elif isinstance(cell := params.get("emrd_gate"), GateCell):
                 needed.update(dict.fromkeys(self.cell_specs(cell)))
-        missing = [
-            spec
-            for spec in missing_cassettes(list(needed), self.settings.cassettes)
-            if not self.store.path_for(spec).is_file()
-        ]
+        unstored = [spec for spec in needed if not episode_path(self.run_dir, spec).is_file()]
+        if not unstored:  # a resumed run: the cassette stage is not even imported
+            return None
+        from pytest_emrd.cassette import missing_cassettes, missing_summary
+
+        missing = missing_cassettes(unstored, self.settings.cassettes)
         if not missing:
             return None
         return missing_summary(
@@ -153,12 +154,11 @@ class Run:
         return StatusFile(self.run_dir)
 
     def episode(self, spec: EpisodeSpec) -> StoredEpisode:
-        from pytest_emrd.cassette import FrameDriftWarning
-        from pytest_emrd.progress import run_watched
-
         settings = self.settings
 
         def compute(s: EpisodeSpec) -> Any:
+            from pytest_emrd.progress import run_watched
+
             return run_watched(
                 s,
                 self.runner,
@@ -178,6 +178,8 @@ class Run:
         stored = self.call(lambda run: run.store.get_or_compute(spec, compute), spec.case_id)
         self._stored[spec] = stored
         if stored.frame_drift and stored.computed_now:
+            from pytest_emrd.cassette import FrameDriftWarning
+
             warnings.warn(
                 FrameDriftWarning(
                     f"{spec.case_id}: {stored.frame_drift} request(s) matched on text while "
@@ -199,21 +201,36 @@ class Run:
         check_choice("condition", condition, CONDITIONS)
         return cell_specs(self.settings, model, condition, self.modality_of)
 
+    @cached_property
+    def measured(self) -> Any:
+        """Per-episode metrics saved beside this run's episodes (shared by every worker and
+        every resumed run)."""
+        from pytest_emrd.gate import (
+            EPISODE_METRICS_CODE,
+            EPISODE_METRICS_LIBRARIES,
+            MeasuredStore,
+            code_fingerprint,
+        )
+        from pytest_emrd.metrics import EpisodeMetrics, episode_metrics
+
+        code = code_fingerprint(EPISODE_METRICS_CODE, EPISODE_METRICS_LIBRARIES)
+        return MeasuredStore(
+            self.store, measure=episode_metrics, load=EpisodeMetrics.from_dict, code=code
+        )
+
     def verdict(self, cell: GateCell) -> Verdict:
         from pytest_emrd.gate import evaluate_cell
         from pytest_emrd.metrics import GATE_METRICS
 
-        trajectories = [self.episode(spec).trajectory for spec in self.cell_specs(cell)]
-        return evaluate_cell(cell, trajectories, GATE_METRICS, prepare=self.episode_metrics)
+        episodes = [self.episode_metrics(spec) for spec in self.cell_specs(cell)]
+        return evaluate_cell(cell, episodes, GATE_METRICS)
 
-    def episode_metrics(self, trajectory: Trajectory) -> Any:
-        """Per-episode metrics, computed once per process (every gate of a cell reuses them)."""
-        from pytest_emrd.metrics import episode_metrics
-
-        key = trajectory.spec.case_id
-        if key not in self._metrics:
-            self._metrics[key] = episode_metrics(trajectory)
-        return self._metrics[key]
+    def episode_metrics(self, spec: EpisodeSpec) -> Any:
+        """Per-episode metrics of ``spec``, measured once per run directory: every gate of
+        a cell, every worker and every resumed run reads them back."""
+        if spec not in self._metrics:
+            self._metrics[spec] = self.measured.get(spec, self.episode)
+        return self._metrics[spec]
 
     def summary(self, stored: StoredEpisode) -> EpisodeSummary:
         config = self.registry.get(stored.trajectory.spec.model)

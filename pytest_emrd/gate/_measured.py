@@ -1,0 +1,130 @@
+"""Per-episode metrics saved beside the results store's episodes (file I/O).
+
+Layout, next to :mod:`pytest_emrd.gate._store`'s::
+
+    <run>/metrics/<case_id>.json    {"key": ..., "protocol": ..., "metrics": {...}}
+
+A gate needs the per-episode metrics of every episode of its cell, and the gates of one cell
+run in several xdist workers and again in every resumed run. Each episode's metrics are
+computed once, by whichever process first needs them, and read back by everyone else: a
+resumed run evaluates its gates without rebuilding a single trajectory.
+
+A saved file is used only while it still describes the stored episode: its ``key`` is the
+SHA-256 of the episode file's bytes together with a fingerprint of the code that computes the
+metrics (:func:`code_fingerprint`), so a recomputed episode or changed metric code is
+measured again. Errored episodes are never saved (the store retries them in a new session).
+Saved files are scrubbed like the episodes (an episode's rationale is model text).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import importlib.metadata
+import importlib.util
+import json
+from collections.abc import Callable, Iterable
+from pathlib import Path
+from typing import Any, Final, Generic, Protocol, TypeVar
+
+from pytest_emrd._atomic import write_bytes_atomic
+from pytest_emrd._scrub import scrub_bytes
+from pytest_emrd.gate._store import ResultsStore, StoredEpisode
+from pytest_emrd.trajectory import EpisodeSpec, Trajectory
+
+
+class Measured(Protocol):
+    """What a per-episode measure returns, e.g. :class:`~pytest_emrd.metrics.EpisodeMetrics`."""
+
+    @property
+    def spec(self) -> EpisodeSpec: ...
+
+    @property
+    def errored(self) -> bool: ...
+
+    def to_dict(self) -> dict[str, Any]: ...
+
+
+M = TypeVar("M", bound=Measured)
+
+#: The code behind :func:`pytest_emrd.metrics.episode_metrics` (fingerprinted, not imported).
+EPISODE_METRICS_CODE: Final = (
+    "pytest_emrd.metrics",
+    "pytest_emrd.trajectory",
+    "pytest_emrd.rooms",
+    "pytest_emrd._serde",
+)
+#: The numeric libraries it computes with (their versions enter the fingerprint).
+EPISODE_METRICS_LIBRARIES: Final = ("numpy", "scipy")
+
+
+def code_fingerprint(modules: Iterable[str], distributions: Iterable[str] = ()) -> str:
+    """SHA-256 over the source of ``modules`` (every ``.py`` file of a package) and the
+    installed versions of ``distributions``: changes whenever that code may compute
+    differently."""
+    digest = hashlib.sha256()
+    for name in modules:
+        spec = importlib.util.find_spec(name)
+        if spec is None or spec.origin is None:
+            raise ModuleNotFoundError(f"module={name!r} cannot be found to fingerprint")
+        roots = spec.submodule_search_locations
+        files = sorted(p for r in roots for p in Path(r).rglob("*.py")) if roots else []
+        for path in files or [Path(spec.origin)]:
+            digest.update(f"{name}:{path.name}\0".encode())
+            digest.update(path.read_bytes())
+    for dist in distributions:
+        digest.update(f"{dist}=={importlib.metadata.version(dist)}\0".encode())
+    return digest.hexdigest()
+
+
+class MeasuredStore(Generic[M]):
+    """Per-episode metrics of one results store, measured at most once per stored episode."""
+
+    def __init__(
+        self,
+        store: ResultsStore,
+        *,
+        measure: Callable[[Trajectory], M],
+        load: Callable[[dict[str, Any]], M],
+        code: str,
+    ) -> None:
+        self.store = store
+        self.measure, self.load, self.code = measure, load, code
+        """``code``: the :func:`code_fingerprint` of ``measure``."""
+
+    def path_for(self, spec: EpisodeSpec) -> Path:
+        return self.store.run_dir / "metrics" / f"{spec.case_id}.json"
+
+    def _key(self, episode_file: bytes) -> str:
+        return hashlib.sha256(episode_file + self.code.encode()).hexdigest()
+
+    def _saved(self, spec: EpisodeSpec) -> M | None:
+        try:
+            episode_file = self.store.path_for(spec).read_bytes()
+            document = json.loads(self.path_for(spec).read_bytes())
+            if document["key"] != self._key(episode_file):
+                return None
+            if document["protocol"] != self.store.protocol:
+                return None
+            measured = self.load(document["metrics"])
+        except (OSError, ValueError, KeyError, TypeError):
+            return None  # missing, stale or unreadable: measured again and overwritten
+        return measured if measured.spec == spec and not measured.errored else None
+
+    def get(self, spec: EpisodeSpec, episode: Callable[[EpisodeSpec], StoredEpisode]) -> M:
+        """The metrics of ``spec``'s stored episode: read back when saved for the very
+        episode file now stored, else measured on ``episode(spec)`` (which computes or
+        reads the episode through the store) and saved."""
+        saved = self._saved(spec)
+        if saved is not None:
+            return saved
+        trajectory = episode(spec).trajectory
+        measured = self.measure(trajectory)
+        if not measured.errored:
+            document = {
+                "key": self._key(self.store.path_for(spec).read_bytes()),
+                "protocol": trajectory.protocol,
+                "metrics": measured.to_dict(),
+            }
+            blob = json.dumps(document, separators=(",", ":")).encode()
+            write_bytes_atomic(self.path_for(spec), scrub_bytes(blob, literal_only=True))
+        return measured
