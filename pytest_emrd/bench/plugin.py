@@ -1,17 +1,26 @@
 """``emrd bench plugin``: the plugin's own cost in a pytest session.
 
-* ``plugin.collect_7x240_s`` — collection of the benchmark suite for the seven paper models
-  x 240 cases (3 conditions x 4 spawns x 20 episodes, plus their gate items), as pytest
-  reports it ("collected in X s": the collection phase, excluding interpreter start-up and
-  plugin import). Target 2 s.
+* ``plugin.collect_7x240_s`` — the whole process of ``pytest benchmarks --collect-only -q``
+  for the seven paper models x 240 cases (3 conditions x 4 spawns x 20 episodes, plus their
+  gate items): interpreter start-up, pytest and every installed plugin, collection and the
+  end of the session, wall time. Target 1.5 s. ``plugin.collect_7x240_cpu_s``: that
+  process's CPU time (user + system), which other load on the machine stretches less.
+* ``plugin.empty_session_s`` — the floor under it: the same command on one empty test file
+  with pytest-emrd switched off (``-p no:emrd``), i.e. the interpreter, pytest and the other
+  installed plugins (hypothesis, anyio, xdist) alone; ``plugin.empty_session_cpu_s`` its CPU
+  time. With ``PYTHONDONTWRITEBYTECODE=1`` pytest re-rewrites every plugin package's modules
+  on every run (no cached pyc), so this floor is higher there than on a default install.
 """
 
 from __future__ import annotations
 
 import re
+import resource
 import statistics
 import subprocess
 import sys
+import tempfile
+import time
 from pathlib import Path
 
 from pytest_emrd.bench import Figure
@@ -27,24 +36,54 @@ PAPER_MODELS = (
     "internvl3-14b",
 )
 _COLLECTED = re.compile(r"(\d+) tests? collected in ([0-9.]+)s")
+_PYTEST = (sys.executable, "-m", "pytest", "--collect-only", "-q", "-p", "no:cacheprovider")
 
 
-def _collect_once() -> tuple[int, float]:
-    cmd = [sys.executable, "-m", "pytest", "benchmarks", "--collect-only", "-q"]
-    cmd += ["-p", "no:cacheprovider", *(f"--emrd-model={m}" for m in PAPER_MODELS)]
-    done = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True, check=False)
+def timed(cmd: list[str], *, cwd: Path) -> tuple[subprocess.CompletedProcess[str], float, float]:
+    """Run ``cmd``; its result, wall seconds and CPU seconds (user + system, with every
+    process it waited for, e.g. pytest-xdist workers)."""
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    start = time.perf_counter()
+    done = subprocess.run(cmd, cwd=cwd, capture_output=True, text=True, check=False)
+    wall = time.perf_counter() - start
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+    return done, wall, cpu
+
+
+def _collect_once() -> tuple[int, float, float]:
+    cmd = [*_PYTEST, "benchmarks", *(f"--emrd-model={m}" for m in PAPER_MODELS)]
+    done, wall, cpu = timed(cmd, cwd=ROOT)
     match = _COLLECTED.search(done.stdout)
     if done.returncode != 0 or match is None:
         raise RuntimeError(f"collection failed:\n{done.stdout[-3000:]}{done.stderr[-2000:]}")
-    return int(match[1]), float(match[2])
+    return int(match[1]), wall, cpu
+
+
+def _empty_once(folder: Path) -> tuple[float, float]:
+    done, wall, cpu = timed([*_PYTEST, "-p", "no:emrd", "test_empty.py"], cwd=folder)
+    if done.returncode != 0:
+        raise RuntimeError(f"empty session failed:\n{done.stdout[-3000:]}{done.stderr[-2000:]}")
+    return wall, cpu
 
 
 def run(*, repeat: int) -> list[Figure]:
-    _collect_once()
-    samples = [_collect_once() for _ in range(repeat)]
+    with tempfile.TemporaryDirectory() as tmp:
+        folder = Path(tmp)
+        (folder / "test_empty.py").write_text("def test_nothing():\n    pass\n")
+        _collect_once()
+        _empty_once(folder)
+        samples, floor = [], []
+        for _ in range(repeat):  # alternated, so both see the same load
+            samples.append(_collect_once())
+            floor.append(_empty_once(folder))
     count = samples[0][0]
     if count < len(PAPER_MODELS) * 240:
         raise RuntimeError(f"collected {count} items, expected >= {len(PAPER_MODELS) * 240}")
+    median = statistics.median
     return [
-        Figure("plugin.collect_7x240_s", statistics.median(s for _, s in samples), "s", 2.0, repeat)
+        Figure("plugin.collect_7x240_s", median(s[1] for s in samples), "s", 1.5, repeat),
+        Figure("plugin.collect_7x240_cpu_s", median(s[2] for s in samples), "s", None, repeat),
+        Figure("plugin.empty_session_s", median(w for w, _ in floor), "s", None, repeat),
+        Figure("plugin.empty_session_cpu_s", median(c for _, c in floor), "s", None, repeat),
     ]

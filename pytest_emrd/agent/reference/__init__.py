@@ -3,18 +3,18 @@
 Profiles (planted cognition, so metrics can be checked against known truth): ``scout``,
 ``scout-decay-<mean steps>``, ``scout-window-<k>``, ``scout-serial``, ``prior``. Requests
 name them by versioned id, ``<name>@<REFERENCE_VERSION>`` (see :mod:`._version`).
+
+Names are imported on first use (:mod:`pytest_emrd._lazy`): the registry reads the agents'
+knobs and versions without loading the agents or their server.
 """
 
-from pytest_emrd.agent.reference._agents import complete, reply_text
-from pytest_emrd.agent.reference._server import ReferenceServer, reference_base_url
-from pytest_emrd.agent.reference._version import REFERENCE_VERSION, agent_name, versioned_id
+from pytest_emrd._lazy import lazy_exports
 
-__all__ = [
-    "REFERENCE_VERSION",
-    "ReferenceServer",
-    "agent_name",
-    "complete",
-    "reference_base_url",
-    "reply_text",
-    "versioned_id",
-]
+__getattr__, __dir__, __all__ = lazy_exports(
+    __name__,
+    {
+        "_agents": ("complete", "reply_text"),
+        "_server": ("ReferenceServer", "reference_base_url"),
+        "_version": ("REFERENCE_VERSION", "agent_name", "versioned_id"),
+    },
+)
