@@ -8,10 +8,13 @@ repetitions after one warm-up; ``--json`` prints the figures as one JSON list.
 from __future__ import annotations
 
 import importlib
+import resource
 import statistics
+import subprocess
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass
+from pathlib import Path
 
 from pytest_emrd.errors import check_choice
 
@@ -89,6 +92,20 @@ def paired_ratio(
         denominator()
         ratios.append((middle - start) / (time.process_time() - middle))
     return statistics.median(ratios)
+
+
+def run_timed(
+    cmd: Sequence[str], *, cwd: Path
+) -> tuple[subprocess.CompletedProcess[str], float, float]:
+    """Run ``cmd`` (output captured); its result, wall seconds and CPU seconds (user +
+    system of every process it waited for, e.g. pytest-xdist workers)."""
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    start = time.perf_counter()
+    done = subprocess.run(cmd, cwd=cwd, capture_output=True, text=True, check=False)
+    wall = time.perf_counter() - start
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+    return done, wall, cpu
 
 
 def run_stages(names: list[str], *, repeat: int) -> list[Figure]:

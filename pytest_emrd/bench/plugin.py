@@ -15,15 +15,12 @@
 from __future__ import annotations
 
 import re
-import resource
 import statistics
-import subprocess
 import sys
 import tempfile
-import time
 from pathlib import Path
 
-from pytest_emrd.bench import Figure
+from pytest_emrd.bench import Figure, run_timed
 
 ROOT = Path(__file__).resolve().parents[2]
 PAPER_MODELS = (
@@ -39,21 +36,9 @@ _COLLECTED = re.compile(r"(\d+) tests? collected in ([0-9.]+)s")
 _PYTEST = (sys.executable, "-m", "pytest", "--collect-only", "-q", "-p", "no:cacheprovider")
 
 
-def timed(cmd: list[str], *, cwd: Path) -> tuple[subprocess.CompletedProcess[str], float, float]:
-    """Run ``cmd``; its result, wall seconds and CPU seconds (user + system, with every
-    process it waited for, e.g. pytest-xdist workers)."""
-    before = resource.getrusage(resource.RUSAGE_CHILDREN)
-    start = time.perf_counter()
-    done = subprocess.run(cmd, cwd=cwd, capture_output=True, text=True, check=False)
-    wall = time.perf_counter() - start
-    after = resource.getrusage(resource.RUSAGE_CHILDREN)
-    cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
-    return done, wall, cpu
-
-
 def _collect_once() -> tuple[int, float, float]:
     cmd = [*_PYTEST, "benchmarks", *(f"--emrd-model={m}" for m in PAPER_MODELS)]
-    done, wall, cpu = timed(cmd, cwd=ROOT)
+    done, wall, cpu = run_timed(cmd, cwd=ROOT)
     match = _COLLECTED.search(done.stdout)
     if done.returncode != 0 or match is None:
         raise RuntimeError(f"collection failed:\n{done.stdout[-3000:]}{done.stderr[-2000:]}")
@@ -61,7 +46,7 @@ def _collect_once() -> tuple[int, float, float]:
 
 
 def _empty_once(folder: Path) -> tuple[float, float]:
-    done, wall, cpu = timed([*_PYTEST, "-p", "no:emrd", "test_empty.py"], cwd=folder)
+    done, wall, cpu = run_timed([*_PYTEST, "-p", "no:emrd", "test_empty.py"], cwd=folder)
     if done.returncode != 0:
         raise RuntimeError(f"empty session failed:\n{done.stdout[-3000:]}{done.stderr[-2000:]}")
     return wall, cpu
