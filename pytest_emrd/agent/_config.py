@@ -9,7 +9,7 @@ Reference agents with planted parameters resolve from their name, without a YAML
 each: ``scout``, ``scout-decay-<mean steps>``, ``scout-window-<k>``, ``scout-serial``,
 ``prior``, ``mimic``, ``mimic-<knobs>`` (:mod:`pytest_emrd.agent.reference._knobs`). A
 reference agent's ``model_id`` is its name (or the ``model_id`` of its entry) with the
-behaviour version appended, ``scout@ref-2`` (see
+behaviour version appended, ``scout@ref-3`` (see
 :mod:`pytest_emrd.agent.reference._version`), so cassettes of older behaviour fail as drift.
 """
 

@@ -11,6 +11,7 @@ from dataclasses import dataclass
 from typing import Final
 
 import numpy as np
+from scipy.optimize import linear_sum_assignment
 
 from pytest_emrd.metrics._align import COINCIDENT_M, digits
 from pytest_emrd.metrics._match import Matching, rigid_fit
@@ -200,11 +201,15 @@ def reentry_copies(
     """Objects that an entry written during a re-entry (steps ``start..end``) copies.
 
     A *new* entry is one whose label is in ``M_end`` but was not in the map of the step before
-    ``start``. It copies object ``o`` when, in the alignment of ``M_end`` (the proper rigid
-    motion fitting every matched entry onto its object, :func:`rigid_fit`), the ground-truth
-    object of its type nearest to it is ``o`` and ``o`` is held by *another* label: the model
-    re-mapped an object it already had instead of recognising it. A new entry nearest to an
-    object no other label holds is a newly mapped object, not a copy. Type resolution is the
+    ``start``. In the alignment of ``M_end`` (the proper rigid motion fitting every matched
+    entry onto its object, :func:`rigid_fit`) the new entries of each type are paired one to
+    one with the ground-truth objects of that type at the least total squared distance
+    (:func:`scipy.optimize.linear_sum_assignment`; entries beyond the type's instance count
+    take their nearest object): the object each new entry *means*. A new entry copies ``o``
+    when it means ``o`` and ``o`` is held by *another* label: the model re-mapped an object it
+    already had instead of recognising it. A new entry meaning an object no other label holds
+    is a newly mapped object, not a copy. Pairing one to one keeps two copies of neighbouring
+    chairs, written with noise, from both landing on the same chair. Type resolution is the
     matcher's (:class:`~pytest_emrd.metrics._vocab.TypeResolver`); unrecognised entries copy
     nothing. Edge case: fewer than two matched entries at distinct positions leave the
     rotation undetermined; then no copy is found (the frame cannot say which object is meant).
@@ -224,21 +229,24 @@ def reentry_copies(
     rotation, shift = rigid_fit(pred, true)
     decimals = digits(layout_scale(true), 1)
     types = TypeResolver(o.object_type for o in objects.values())
+    by_type: dict[int, list[str]] = {}
+    for lb in sorted(new):
+        k = types.resolve(entries[lb].object_type, lb)
+        if k >= 0:
+            by_type.setdefault(k, []).append(lb)
     copies: set[str] = set()
-    for lb in new:
-        e = entries[lb]
-        k = types.resolve(e.object_type, e.label)
-        if k < 0:
-            continue
-        x, z = np.array([e.x, e.z], dtype=float) @ rotation.T + shift
-        # rounded at the matcher's precision, so ties go to the same object in every frame
-        nearest = min(
-            (round(math.hypot(g.x - x, g.z - z), decimals), o)
-            for o, g in objects.items()
-            if g.object_type == types.names[k]
-        )[1]
-        if nearest in label_of and label_of[nearest] != lb:
-            copies.add(nearest)
+    for k, labels in by_type.items():
+        ids = sorted(o for o, g in objects.items() if g.object_type == types.names[k])
+        where = np.array([(entries[lb].x, entries[lb].z) for lb in labels]) @ rotation.T + shift
+        spot = np.array([(objects[o].x, objects[o].z) for o in ids], dtype=float)
+        # rounded at the matcher's precision, so ties go the same way in every frame
+        cost = np.round(((where[:, None, :] - spot[None, :, :]) ** 2).sum(axis=2), decimals)
+        rows, cols = linear_sum_assignment(cost)
+        meant = dict(zip(rows.tolist(), cols.tolist(), strict=True))
+        for r, lb in enumerate(labels):  # entries beyond the type's count: their nearest
+            o = ids[meant[r] if r in meant else int(np.argmin(cost[r]))]
+            if o in label_of and label_of[o] != lb:
+                copies.add(o)
     return frozenset(copies)
 
 

@@ -2,7 +2,7 @@
 
 Cassettes store the reference agents' replies, so a change in what a scripted agent does
 would otherwise replay stale behaviour silently. The ``model`` field a client sends to a
-reference agent is therefore ``<name>@<REFERENCE_VERSION>`` (``scout@ref-2``): a cassette
+reference agent is therefore ``<name>@<REFERENCE_VERSION>`` (``scout@ref-3``): a cassette
 recorded under an older version no longer matches its requests and fails loudly as drift.
 
 Bump :data:`REFERENCE_VERSION` with every change to what a reference agent replies.
@@ -13,6 +13,8 @@ Bump :data:`REFERENCE_VERSION` with every change to what a reference agent repli
   ``scout-serial`` protects thirds of the prompt's inventory total. The ``mimic`` family was
   added under ``ref-2`` (no reply of an existing agent changed), and later its ``b`` knob
   (walking back into the named room; names without ``b`` reply exactly as before).
+* ``ref-3`` — the shipped ``mimic`` walks back into the room it names (``back: 1.0``), so
+  the committed mimic grid re-enters rooms: duplicates on re-entry and SIR are exercised.
 """
 
 from __future__ import annotations
@@ -21,7 +23,7 @@ from typing import Final
 
 from pytest_emrd.errors import ConfigError
 
-REFERENCE_VERSION: Final = "ref-2"
+REFERENCE_VERSION: Final = "ref-3"
 _SEP: Final = "@"
 
 
@@ -31,7 +33,7 @@ def versioned_id(name: str) -> str:
 
 
 def agent_name(model: str) -> str:
-    """The registry name in a requested ``model`` field (``scout@ref-2`` -> ``scout``).
+    """The registry name in a requested ``model`` field (``scout@ref-3`` -> ``scout``).
 
     A bare name (``scout``, as a person types it at ``emrd serve``) is accepted as the
     current version; any other version raises :class:`ConfigError` naming both versions.
