@@ -26,7 +26,7 @@ from pytest_emrd.metrics import canonical_type, rigid_fit
 from pytest_emrd.trajectory import EpisodeSpec, Trajectory
 from pytest_emrd.world._catalog import KINDS
 
-CLEAN = "mimic-spawn-s0-p0-h0-q0-r0-a0"
+CLEAN = "mimic-spawn-s0-p0-h0-q0-r0-a0-b0"
 PLANTED_INVALID = re.compile(r"^(MoveAhead|Turn\(Back\)|Goto\(the .*\)|Goto\(nearest exit\))$")
 
 
@@ -199,7 +199,7 @@ def test_its_own_frame_is_one_rigid_motion_of_the_spawn_frame(clean: Trajectory)
 
 
 def test_wasted_steps_do_not_change_its_decisions(clean: Trajectory) -> None:
-    noisy = _episode("mimic-spawn-s0-p0-h0-q0.3-r0-a0.2")
+    noisy = _episode("mimic-spawn-s0-p0-h0-q0.3-r0-a0.2-b0")
     kept = [
         s.action
         for s in noisy.steps
@@ -223,7 +223,7 @@ def test_duplicates_come_on_re_entry_and_grow_with_p() -> None:
 
 @pytest.mark.parametrize("spawn", ["office", "kitchen", "entrance"])
 def test_walking_back_re_enters_the_room_it_names(spawn: str) -> None:
-    home, plain = _episode(f"{CLEAN}-b1", spawn), _episode(CLEAN, spawn)
+    home, plain = _episode(CLEAN.replace("-b0", "-b1"), spawn), _episode(CLEAN, spawn)
     rooms = [s.room for s in home.steps]
     runs = [r for i, r in enumerate(rooms) if i == 0 or rooms[i - 1] != r]
     assert home.chosen_room == plain.chosen_room == rooms[-1]
