@@ -29,8 +29,8 @@ spawn  ``frame``     write the map in the spawn frame (default ``own``: a       
                      seeded rotation + translation per episode)
 =====  ============  =========================================================  ========
 
-``mimic-spawn-s0-p0-h0-q0-r0-a0-b0`` is the clean reference: free-form labels only. This module has no
-imports from the agents so the registry can use it without import cycles.
+``mimic-spawn-s0-p0-h0-q0-r0-a0-b0`` is the clean reference: free-form labels only. This
+module has no imports from the agents so the registry can use it without import cycles.
 """
 
 from __future__ import annotations
