@@ -22,6 +22,8 @@ from importlib import resources
 from pathlib import Path
 from typing import Any, Final
 
+import yaml
+
 from pytest_emrd import _yaml
 from pytest_emrd.agent.reference._knobs import FAMILY, check_knobs, mimic_knobs
 from pytest_emrd.agent.reference._version import versioned_id
@@ -203,14 +205,29 @@ def _expand_env(value: str) -> str:
     return _ENV_REF.sub(sub, value)
 
 
-def _build(name: str, entry: Any, source: str) -> ModelConfig:
+Lines = dict[tuple[str, str | None], int]
+"""``(model, field)`` -> 1-based line of that key in a registry file (``field`` None: the
+model's own key)."""
+#: The field a ModelConfig error names: ``model 'x': <field>...``.
+_FIELD_IN_ERROR: Final = re.compile(r"^model '[^']*': ([a-z_]+)")
+
+
+def _at(source: str, lines: Lines, name: str, field_name: str | None = None) -> str:
+    """``source, line N`` for the key of ``field_name`` of model ``name`` (else the model's)."""
+    line = lines.get((name, field_name)) or lines.get((name, None))
+    return f"{source}, line {line}" if line else source
+
+
+def _build(name: str, entry: Any, source: str, lines: Lines) -> ModelConfig:
     if not isinstance(entry, dict):
-        raise ConfigError(f"{source}: model {name!r} must be a mapping of fields.")
+        raise ConfigError(
+            f"{_at(source, lines, name)}: model {name!r} must be a mapping of fields."
+        )
     unknown = sorted(set(entry) - _FIELDS)
     if unknown:
         raise ConfigError(
-            f"{source}: model {name!r} has unknown field(s) {unknown}; "
-            f"known fields: {', '.join(sorted(_FIELDS - {'name'}))}."
+            f"{_at(source, lines, name, unknown[0])}: model {name!r} has unknown field(s) "
+            f"{unknown}; known fields: {', '.join(sorted(_FIELDS - {'name'}))}."
         )
     values = {k: _expand_env(v) if isinstance(v, str) else v for k, v in entry.items()}
     values["name"] = name
@@ -221,17 +238,29 @@ def _build(name: str, entry: Any, source: str) -> ModelConfig:
     try:
         return ModelConfig(**values)
     except TypeError as exc:
-        raise ConfigError(f"{source}: model {name!r}: {exc}") from None
+        raise ConfigError(f"{_at(source, lines, name)}: model {name!r}: {exc}") from None
     except ConfigError as exc:
-        raise ConfigError(f"{source}: {exc}") from None
+        named = _FIELD_IN_ERROR.match(str(exc))
+        where = _at(source, lines, name, named.group(1) if named else None)
+        raise ConfigError(f"{where}: {exc}") from None
 
 
-def _read_yaml(text: str, source: str) -> dict[str, dict[str, Any]]:
-    data = _yaml.load(text, source)
+def _read_yaml(text: str, source: str) -> tuple[dict[str, dict[str, Any]], Lines]:
+    """The ``models:`` mapping of a registry file, and where each model and field is written."""
+    root = _yaml.compose(text, source)
+    data = _yaml.scalar(root) if root is not None else None
     models = (data or {}).get("models") if isinstance(data, dict | None) else None
     if not isinstance(models, dict):
         raise ConfigError(f"{source} must hold a top-level 'models:' mapping of name -> fields.")
-    return models
+    lines: Lines = {}
+    for key, value in root.value if root is not None else ():
+        if key.value != "models" or not isinstance(value, yaml.MappingNode):
+            continue
+        for model_key, model in value.value:
+            lines[(str(model_key.value), None)] = model_key.start_mark.line + 1
+            for field_key, _ in model.value if isinstance(model, yaml.MappingNode) else ():
+                lines[(str(model_key.value), str(field_key.value))] = field_key.start_mark.line + 1
+    return models, lines
 
 
 @dataclass(frozen=True)
@@ -287,7 +316,7 @@ def _parametric(name: str) -> tuple[str, dict[str, Any]] | None:
 def load_registry(user_file: Path | None = None) -> Registry:
     """The shipped registry, updated by ``user_file`` (entries merged field by field)."""
     shipped_text = resources.files("pytest_emrd.agent").joinpath("models.yaml").read_text()
-    entries = _read_yaml(shipped_text, "pytest_emrd/agent/models.yaml")
+    entries, lines = _read_yaml(shipped_text, "pytest_emrd/agent/models.yaml")
     merged: dict[str, dict[str, Any]] = {k: dict(v) for k, v in entries.items()}
     source = "pytest_emrd/agent/models.yaml"
     if user_file is not None:
@@ -295,8 +324,11 @@ def load_registry(user_file: Path | None = None) -> Registry:
         user_text = _yaml.read_text(
             Path(user_file), what="model registry file", flag="--emrd-models (emrd gate --models)"
         )
-        for name, entry in _read_yaml(user_text, source).items():
+        user, lines = _read_yaml(user_text, source)
+        for name, entry in user.items():
             if not isinstance(entry, dict):
-                raise ConfigError(f"{source}: model {name!r} must be a mapping of fields.")
+                raise ConfigError(
+                    f"{_at(source, lines, str(name))}: model {name!r} must be a mapping of fields."
+                )
             merged[str(name)] = {**merged.get(str(name), {}), **entry}
-    return Registry({str(n): _build(str(n), e, source) for n, e in merged.items()})
+    return Registry({str(n): _build(str(n), e, source, lines) for n, e in merged.items()})

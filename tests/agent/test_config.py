@@ -251,7 +251,31 @@ def test_bad_provider_fields_name_file_field_and_allowed_values(
     with pytest.raises(ConfigError, match=match) as info:
         load_registry(user)
     message = str(info.value)
-    assert message.startswith(f"{user}: model 'a': ") and "\n" not in message
+    assert message.startswith(f"{user}, line 1: model 'a': ") and "\n" not in message
+
+
+@pytest.mark.parametrize(
+    ("entry", "line", "match"),
+    [
+        ("    temperature: 3\n", 6, r"temperature=3 must lie in \[0.0, 2.0\]"),
+        ("    extra_headers: {x-trace: 7}\n", 6, "extra_headers.x-trace=7 must be a string"),
+        ("    temprature: 0.2\n", 6, "unknown field"),
+        ("    max_retries: 1\n", 3, "base_url is required"),
+    ],
+    ids=["field-range", "header-value", "typo-field", "missing-field-names-the-model"],
+)
+def test_registry_errors_name_the_line_of_the_field(
+    tmp_path: Path, entry: str, line: int, match: str
+) -> None:
+    user = tmp_path / "models.yaml"
+    user.write_text(
+        "# my models\nmodels:\n  mine:\n    provider: openai\n    model_id: m\n"
+        + entry
+        + ("    base_url: 'http://x'\n" if "base_url" not in match else "")
+    )
+    with pytest.raises(ConfigError, match=match) as info:
+        load_registry(user)
+    assert str(info.value).startswith(f"{user}, line {line}: ")
 
 
 def test_optional_fields_load(tmp_path: Path) -> None:

@@ -176,7 +176,7 @@ REGISTRY_FLAG = "--emrd-models (emrd gate --models)"
         (
             b"models:\n  m: {provider: openai, model_id: x, base_url: 'http://h', "
             b"timeout_s: 1e9}\n",
-            "{path}: model 'm': timeout_s=1000000000.0 must lie in [0.001, 3600.0].",
+            "{path}, line 2: model 'm': timeout_s=1000000000.0 must lie in [0.001, 3600.0].",
         ),
     ],
     ids=["not-utf8", "directory", "malformed", "yaml12-float-out-of-range"],
