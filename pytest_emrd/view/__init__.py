@@ -17,6 +17,7 @@ from pytest_emrd.view._page import IndexRow, episode_gif, episode_page, index_pa
 from pytest_emrd.view._replay import (
     Frame,
     Recorded,
+    Replay,
     frames_or_note,
     recorded_digests,
     replay_frames,
@@ -28,6 +29,7 @@ __all__ = [
     "FrameCheck",
     "IndexRow",
     "Recorded",
+    "Replay",
     "check_frames",
     "episode_data",
     "episode_gif",
@@ -50,8 +52,10 @@ class EpisodeView:
 
 def render_episode(traj: Trajectory, *, cassettes: Path | None, gif: bool = False) -> EpisodeView:
     """Re-render, check and lay out one episode (see the module docstring)."""
-    frames, note = frames_or_note(traj)
-    data, check = episode_data(traj, frames, recorded_digests(traj, cassettes), note)
+    replay, note = frames_or_note(traj)
+    frames = replay.frames if replay else ()
+    spawn = replay.spawn if replay else None
+    data, check = episode_data(traj, frames, recorded_digests(traj, cassettes), note, spawn)
     last = data["steps"][-1] if data["steps"] else {"coverage": None, "pa": None}
     chosen = traj.chosen_room or (traj.chosen_room_raw and f"{traj.chosen_room_raw!r}") or "-"
     row = IndexRow(traj.spec.case_id, traj.status, len(traj.steps), chosen,

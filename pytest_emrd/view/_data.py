@@ -10,7 +10,7 @@ Positional Accuracy (:func:`positional_accuracy_score`) and ``TBS(t)`` (:func:`e
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -24,6 +24,7 @@ from pytest_emrd.metrics import (
 from pytest_emrd.report import align_map
 from pytest_emrd.trajectory import Trajectory
 from pytest_emrd.view._replay import Frame, Recorded
+from pytest_emrd.world import WorldPose, local_to_world
 
 
 @dataclass(frozen=True)
@@ -53,10 +54,33 @@ def _round(x: float | None, digits: int = 3) -> float | None:
     return None if x is None else round(x, digits)
 
 
+def _office(spawn: WorldPose | None) -> Callable[[float, float], tuple[float, float]]:
+    """Spawn frame -> the office's own frame (north up, the same for every spawn), rounded to
+    the millimetre; the identity when the spawn pose is unknown (frames not re-rendered)."""
+    if spawn is None:
+        return lambda x, z: (round(x, 3), round(z, 3))
+
+    def place(x: float, z: float) -> tuple[float, float]:
+        wx, wz = local_to_world(spawn.x, spawn.z, spawn.heading, x, z)
+        return round(wx, 3), round(wz, 3)
+
+    return place
+
+
 def episode_data(
-    traj: Trajectory, frames: Sequence[Frame], recorded: Recorded, note: str | None = None
+    traj: Trajectory,
+    frames: Sequence[Frame],
+    recorded: Recorded,
+    note: str | None = None,
+    spawn: WorldPose | None = None,
 ) -> tuple[dict[str, Any], FrameCheck]:
-    """The JSON the page script reads (frames by index into ``frames``) and the frame check."""
+    """The JSON the page script reads (frames by index into ``frames``) and the frame check.
+
+    The plan (rooms, objects, the aligned map, the agent) is drawn in the office's own frame
+    when ``spawn`` (the spawn pose in it) is known, so every episode of an office reads north
+    up; the pose line keeps the spawn-frame odometry the model was shown.
+    """
+    place, turn = _office(spawn), spawn.heading if spawn else 0.0
     truth = traj.ground_truth
     g_base = len(truth.discoverable_ids)
     tbs = episode_metrics(traj).tbs
@@ -71,8 +95,9 @@ def episode_data(
             "parse_error": s.parse_error, "observation": reply.observation,
             "dedup": reply.dedup_check, "reasoning": reply.reasoning, "raw": s.raw_reply,
             "pose": [round(s.pose.x, 3), round(s.pose.z, 3), round(s.pose.heading, 1)],
+            "at": [*place(s.pose.x, s.pose.z), round((s.pose.heading + turn) % 360.0, 1)],
             "room": s.room, "visible": list(s.visible_ids),
-            "map": [[p.label, round(p.x, 3), round(p.z, 3), p.object_id] for p in points],
+            "map": [[p.label, *place(p.x, p.z), p.object_id] for p in points],
             "rotation": round(rotation, 1), "rmse": _round(rmse),
             "coverage": _round(aec_score(matching, len(truth.objects))),
             "pa": _round(positional_accuracy_score(matching, g_base)),
@@ -92,8 +117,10 @@ def episode_data(
         "protocol": traj.protocol, "chosen_room": traj.chosen_room,
         "chosen_raw": traj.chosen_room_raw, "rationale": traj.rationale, "error": traj.error,
         "final_room": traj.final_room, "notes": notes,
-        "rooms": [{"name": r.name, "polygon": [list(p) for p in r.polygon]} for r in truth.rooms],
-        "objects": [[o.object_id, o.object_type, o.category, round(o.x, 3), round(o.z, 3)]
+        "plan_frame": "the office's frame, north up" if spawn else "the spawn frame",
+        "rooms": [{"name": r.name, "polygon": [list(place(*p)) for p in r.polygon]}
+                  for r in truth.rooms],
+        "objects": [[o.object_id, o.object_type, o.category, *place(o.x, o.z)]
                     for o in truth.objects],
         "steps": steps,
     }  # fmt: skip

@@ -61,7 +61,8 @@ spawn {e(data["spawn"])} · episode {data["episode"]} · protocol {e(data["proto
 <div class="grid">
  <div class="panel"><h2>What the model saw (re-rendered)</h2><img id="frame" alt="frame">
   <div id="frameflag"></div></div>
- <div class="panel"><h2>Cognitive map, aligned onto the ground truth (top down)</h2>
+ <div class="panel"><h2>Cognitive map, aligned onto the ground truth (top down, in
+  {e(data["plan_frame"])})</h2>
   <svg id="plan" role="img" aria-label="plan" style="aspect-ratio: 1 / 1"></svg>
   <div class="legend"><span style="color:#888">● object</span><span style="color:#f0a800">◯
   in view now</span><span style="color:#1f5fbf">● agent, field of view, path</span>

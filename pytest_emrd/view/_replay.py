@@ -20,6 +20,17 @@ from pytest_emrd.cassette._redact import DIGEST
 from pytest_emrd.episode import build_simulator, start_world, world_action
 from pytest_emrd.errors import EmrdError
 from pytest_emrd.trajectory import Trajectory
+from pytest_emrd.world import WorldPose
+
+
+@dataclass(frozen=True)
+class Replay:
+    """The frames of an episode re-rendered, and where it started in the office."""
+
+    frames: tuple[Frame, ...]
+    """The frame shown at each step."""
+    spawn: WorldPose
+    """The spawn pose in the office's own frame (the page draws the plan in it, north up)."""
 
 
 @dataclass(frozen=True)
@@ -31,8 +42,8 @@ class Frame:
     """Pixel digest the world computed (``pixels:`` + SHA-256), as a cassette records it."""
 
 
-def replay_frames(traj: Trajectory) -> tuple[Frame, ...]:
-    """The frame shown at each step of ``traj`` (``len(traj.steps)`` frames).
+def replay_frames(traj: Trajectory) -> Replay:
+    """The frame shown at each step of ``traj`` (``len(traj.steps)`` frames) and the spawn pose.
 
     Raises :class:`EmrdError` when the spec's backend cannot be built here (AI2-THOR without
     its extra or a GPU).
@@ -40,11 +51,12 @@ def replay_frames(traj: Trajectory) -> tuple[Frame, ...]:
     sim = build_simulator(traj.spec.backend)
     try:
         _, obs = start_world(traj.spec, sim)
+        spawn = sim.spawn_pose
         frames = []
         for step in traj.steps:
             frames.append(Frame(obs.jpeg, f"pixels:{obs.frame_digest}"))
             obs = sim.step(world_action(step.action, traj.spec.variant)[0])
-        return tuple(frames)
+        return Replay(tuple(frames), spawn)
     finally:
         sim.close()
 
@@ -101,9 +113,9 @@ def recorded_digests(traj: Trajectory, cassettes: Path | None) -> Recorded:
     return Recorded(tuple(digests), note)
 
 
-def frames_or_note(traj: Trajectory) -> tuple[tuple[Frame, ...], str | None]:
-    """:func:`replay_frames`, or no frames and why (a backend this machine cannot run)."""
+def frames_or_note(traj: Trajectory) -> tuple[Replay | None, str | None]:
+    """:func:`replay_frames`, or None and why (a backend this machine cannot run)."""
     try:
         return replay_frames(traj), None
     except EmrdError as exc:
-        return (), f"frames not re-rendered: {exc}"
+        return None, f"frames not re-rendered: {exc}"

@@ -15,7 +15,7 @@
     return node;
   }
 
-  // plan: spawn frame, x to the right, z up (SVG y = -z)
+  // plan: DATA.plan_frame (the office's, north up, when known), z up (SVG y = -z)
   const xs = [], zs = [];
   DATA.rooms.forEach((r) => r.polygon.forEach(([x, z]) => { xs.push(x); zs.push(z); }));
   DATA.objects.forEach((o) => { xs.push(o[3]); zs.push(o[4]); });
@@ -98,7 +98,7 @@
     $("scores").textContent = `coverage ${fmt(st.coverage)} · PA ${fmt(st.pa)} · TBS ${fmt(st.tbs)} · ` +
       `${st.map.length} entries, aligned by ${st.rotation}° (RMSE ${st.rmse === null ? "n/a" : st.rmse + " m"})`;
     // plan
-    path.setAttribute("points", steps.slice(0, i + 1).map((p) => `${p.pose[0]},${-p.pose[1]}`).join(" "));
+    path.setAttribute("points", steps.slice(0, i + 1).map((p) => `${p.at[0]},${-p.at[1]}`).join(" "));
     links.replaceChildren(); marks.replaceChildren(); agent.replaceChildren();
     st.visible.forEach((id) => {
       const o = truth[id];
@@ -116,7 +116,7 @@
       el("line", { x1: x - d, y1: -z + d, x2: x + d, y2: -z - d }, g);
       el("title", {}, g, `${label} → ${id || "unmatched"}`);
     });
-    const [ax, az, h] = st.pose, rad = (h * Math.PI) / 180, r = s * 7;
+    const [ax, az, h] = st.at, rad = (h * Math.PI) / 180, r = s * 7;
     const left = rad - Math.PI / 4, right = rad + Math.PI / 4;
     el("path", { d: `M${ax},${-az} L${ax + r * Math.sin(left)},${-(az + r * Math.cos(left))} ` +
       `L${ax + r * Math.sin(right)},${-(az + r * Math.cos(right))} Z`, fill: "#1f5fbf",

@@ -17,7 +17,12 @@ from pytest_emrd.world._episode import (
     episode_world,
     paper_office,
 )
-from pytest_emrd.world._geometry import footprint, heading_in_spawn_frame, to_spawn_frame
+from pytest_emrd.world._geometry import (
+    footprint,
+    heading_in_spawn_frame,
+    local_to_world,
+    to_spawn_frame,
+)
 from pytest_emrd.world._layout import generate_layout
 from pytest_emrd.world._model import (
     Doorway,
@@ -61,6 +66,7 @@ __all__ = [
     "generate_layout",
     "ground_truth",
     "heading_in_spawn_frame",
+    "local_to_world",
     "make_simulator",
     "paper_office",
     "to_spawn_frame",

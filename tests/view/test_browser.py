@@ -59,7 +59,7 @@ def browse(chromium: str, page: Path, step: int, *extra: str) -> subprocess.Comp
 def pages(episode: Trajectory, cassettes: Path, tmp_path_factory) -> tuple[Path, Path]:
     """The real page, and one whose step-4 digest was altered (as after a world change)."""
     out = tmp_path_factory.mktemp("view")
-    frames = replay_frames(episode)
+    frames = replay_frames(episode).frames
     recorded = recorded_digests(episode, cassettes)
     good = out / "good.html"
     good.write_text(episode_page(episode_data(episode, frames, recorded)[0], frames))

@@ -25,14 +25,14 @@ from pytest_emrd.view import (
 
 
 def test_re_rendered_frames_match_the_committed_cassette(episode, cassettes: Path) -> None:
-    frames = replay_frames(episode)
+    frames = replay_frames(episode).frames
     recorded = recorded_digests(episode, cassettes)
     assert recorded.note is None and len(frames) == len(episode.steps) == len(recorded.digests)
     assert [f.digest for f in frames] == list(recorded.digests)
 
 
 def test_a_frame_that_differs_is_flagged_on_its_step(episode: Trajectory, cassettes) -> None:
-    frames = replay_frames(episode)
+    frames = replay_frames(episode).frames
     digests = list(recorded_digests(episode, cassettes).digests)
     digests[2] = "pixels:" + "0" * 64
     data, check = episode_data(episode, frames, Recorded(tuple(digests)))
@@ -44,7 +44,7 @@ def test_a_frame_that_differs_is_flagged_on_its_step(episode: Trajectory, casset
 def test_without_a_cassette_frames_are_shown_unchecked(episode, tmp_path: Path) -> None:
     recorded = recorded_digests(episode, tmp_path)
     assert recorded.digests == () and "frames not checked" in recorded.note
-    data, check = episode_data(episode, replay_frames(episode), recorded)
+    data, check = episode_data(episode, replay_frames(episode).frames, recorded)
     assert check.checked == 0 and {s["frame_ok"] for s in data["steps"]} == {None}
     assert any("no cassette at" in n for n in data["notes"])
 
@@ -65,6 +65,29 @@ def test_last_step_metrics_are_the_episode_metrics(episode: Trajectory) -> None:
     truth = {o.object_id: (o.x, o.z) for o in episode.ground_truth.objects}
     for label, x, z, oid in last["map"]:
         assert oid is not None and (x, z) == pytest.approx(truth[oid], abs=0.05), label
+
+
+def test_the_plan_is_the_offices_north_up_whatever_the_spawn(episode: Trajectory) -> None:
+    from pytest_emrd.episode import run_episode
+    from pytest_emrd.trajectory import EpisodeSpec
+    from pytest_emrd.world import paper_office
+
+    other = run_episode(EpisodeSpec("scout", "baseline", "kitchen", 0, modality="both"))
+    plans = []
+    for traj in (episode, other):
+        replay = replay_frames(traj)
+        data, _ = episode_data(traj, replay.frames, Recorded(()), spawn=replay.spawn)
+        assert data["plan_frame"] == "the office's frame, north up"
+        office = {o[0]: (o[3], o[4]) for o in data["objects"]}
+        plans.append(office)
+        for label, x, z, oid in data["steps"][-1]["map"]:  # aligned entries sit on their objects
+            assert oid is not None and (x, z) == pytest.approx(office[oid], abs=0.05), label
+        first = data["steps"][0]
+        assert first["at"][:2] == pytest.approx((replay.spawn.x, replay.spawn.z), abs=1e-3)
+        assert first["at"][2] == replay.spawn.heading % 360.0 and first["pose"][2] == 0.0
+    assert plans[0] == plans[1]  # two spawns, one office: the same plan
+    world = {o.object_id: (o.x, o.z) for o in paper_office().objects}
+    assert all(plans[0][k] == pytest.approx(world[k], abs=1e-3) for k in plans[0])
 
 
 def test_page_is_self_contained_and_small(episode: Trajectory, cassettes) -> None:
