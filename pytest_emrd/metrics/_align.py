@@ -13,7 +13,6 @@ from __future__ import annotations
 import functools
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass, field
 from typing import Final, NamedTuple
 
 import numpy as np
@@ -45,26 +44,70 @@ class Motion(NamedTuple):
         return self.c * x - self.s * z + self.tx, self.s * x + self.c * z + self.tz
 
 
-def procrustes(pred: np.ndarray, true: np.ndarray) -> Motion:
-    """Optimal proper rigid motion taking ``pred`` onto ``true`` (n x 2 each, n >= 1).
+def procrustes(pred: Sequence[Point], true: Sequence[Point]) -> Motion:
+    """Optimal proper rigid motion taking ``pred`` onto ``true`` (n points each, n >= 1).
 
     2-D orthogonal Procrustes without scaling or reflection (Kabsch with ``det R = +1``):
     for centred points the angle maximising ``sum_j q_j . R p_j`` is
     ``atan2(sum p x q, sum p . q)``. One point, or coincident points: the identity rotation
     and the translation between centroids.
+
+    Computed on floats exactly as numpy computes it from ``(n x 2)`` arrays (centroids by
+    ``sum(axis=0)``, the products' sums by :func:`numpy_sum`): the same bits, without the cost
+    of a dozen numpy calls on a few points (oracle: ``tests/metrics/test_align.py``).
     """
     n = len(pred)
-    pc = pred.sum(axis=0) / n
-    qc = true.sum(axis=0) / n
-    a = pred - pc
-    b = true - qc
-    dot = float((a * b).sum())
-    cross = float((a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]).sum())
+    px = pz = qx = qz = 0.0
+    for (x, z), (u, v) in zip(pred, true, strict=True):
+        px += x
+        pz += z
+        qx += u
+        qz += v
+    px, pz, qx, qz = px / n, pz / n, qx / n, qz / n
+    dots: list[float] = []
+    crosses: list[float] = []
+    for (x, z), (u, v) in zip(pred, true, strict=True):
+        ax, az, bx, bz = x - px, z - pz, u - qx, v - qz
+        dots += (ax * bx, az * bz)
+        crosses.append(ax * bz - az * bx)
+    dot, cross = numpy_sum(dots), numpy_sum(crosses)
     theta = math.atan2(cross, dot) if (dot or cross) else 0.0
     c, s = math.cos(theta), math.sin(theta)
-    return Motion(
-        c, s, float(qc[0] - (c * pc[0] - s * pc[1])), float(qc[1] - (s * pc[0] + c * pc[1]))
-    )
+    return Motion(c, s, qx - (c * px - s * pz), qz - (s * px + c * pz))
+
+
+def numpy_sum(values: Sequence[float]) -> float:
+    """``np.add.reduce`` of a contiguous float64 vector, bitwise: numpy adds fewer than 8
+    values in order, and longer runs pairwise with 8 accumulators (``pairwise_sum`` in
+    numpy's ``loops_utils.h``), onto the identity 0.0."""
+    return 0.0 + _pairwise(values, 0, len(values))
+
+
+def _pairwise(xs: Sequence[float], lo: int, n: int) -> float:
+    if n < 8:
+        total = 0.0
+        for i in range(lo, lo + n):
+            total += xs[i]
+        return total
+    if n <= 128:
+        r0, r1, r2, r3, r4, r5, r6, r7 = xs[lo : lo + 8]
+        end = lo + n - n % 8
+        for i in range(lo + 8, end, 8):
+            r0 += xs[i]
+            r1 += xs[i + 1]
+            r2 += xs[i + 2]
+            r3 += xs[i + 3]
+            r4 += xs[i + 4]
+            r5 += xs[i + 5]
+            r6 += xs[i + 6]
+            r7 += xs[i + 7]
+        total = ((r0 + r1) + (r2 + r3)) + ((r4 + r5) + (r6 + r7))
+        for i in range(end, lo + n):
+            total += xs[i]
+        return total
+    half = n // 2
+    half -= half % 8
+    return _pairwise(xs, lo, half) + _pairwise(xs, lo + half, n - half)
 
 
 def two_point(pa: Point, pb: Point, qa: Point, qb: Point) -> Motion:
@@ -84,35 +127,67 @@ def digits(scale: float, power: int) -> int:
     return TIE_DECIMALS - power * math.ceil(math.log10(max(scale, 1.0)))
 
 
-@dataclass(frozen=True)
-class Problem:
-    """One map's recognised entries against the ground truth."""
+class Layout(NamedTuple):
+    """The ground truth every map of an episode is aligned onto (objects sorted by id)."""
 
-    pred: np.ndarray
-    """Written positions of the recognised entries (n x 2), in entry order."""
-    kinds: np.ndarray
-    """Type index of each entry (n)."""
     true: np.ndarray
-    """Ground-truth positions of every object (m x 2), objects sorted by id."""
-    true_kinds: np.ndarray
+    """Object positions (m x 2)."""
+    points: tuple[Point, ...]
+    """``true`` as tuples."""
+    kinds: np.ndarray
     """Type index of each object (m)."""
+    cols_of: dict[int, tuple[int, ...]]
+    """Type index -> its object indices, ascending."""
     scale: float
     """Extent of the layout (metres), for relative tie tolerances."""
-    true_points: tuple[Point, ...] = ()
-    """``true`` as tuples (for :func:`hypotheses`)."""
-    cols_of: dict[int, tuple[int, ...]] = field(default_factory=dict)
-    """Type index -> its object indices (for :func:`hypotheses`)."""
 
-    @functools.cached_property
-    def allowed(self) -> np.ndarray:
-        """(n x m) True where entry ``i`` and object ``j`` have the same type."""
-        return self.kinds[:, None] == self.true_kinds[None, :]
+
+class Problem:
+    """One map's recognised entries against the objects still open to them."""
+
+    __slots__ = ("_blocked", "cols_of", "kinds", "layout", "points", "pred", "true_kinds")
+
+    def __init__(
+        self,
+        points: list[Point],
+        kinds: list[int],
+        layout: Layout,
+        held: Sequence[int] = (),
+    ) -> None:
+        self.points = points
+        """Written positions of the recognised entries, in entry order."""
+        self.pred = np.array(points, dtype=float).reshape(-1, 2)
+        """``points`` as an (n x 2) array."""
+        self.kinds = kinds
+        """Type index of each entry."""
+        self.layout = layout
+        self.true_kinds = layout.kinds
+        """Type index of each object, -1 for the ``held`` ones (open to no entry)."""
+        self.cols_of = layout.cols_of
+        """Type index -> the objects of that type open to the entries."""
+        if held:
+            self.true_kinds = layout.kinds.copy()
+            self.true_kinds[list(held)] = -1
+            gone = set(held)
+            self.cols_of = {
+                k: tuple(c for c in cols if c not in gone) for k, cols in layout.cols_of.items()
+            }
+        self._blocked: np.ndarray | None = None
+
+    @property
+    def blocked(self) -> np.ndarray:
+        """(n x m) True where object ``j`` is not open to entry ``i`` (another type, held)."""
+        if self._blocked is None:
+            self._blocked = np.array(self.kinds, dtype=int)[:, None] != self.true_kinds
+        return self._blocked
 
 
 def moved(points: np.ndarray, motion: Motion) -> np.ndarray:
     """``points`` (n x 2) after ``motion``."""
     c, s, tx, tz = motion
-    return points @ np.array([[c, s], [-s, c]]) + np.array([tx, tz])
+    out = points @ np.array(((c, s), (-s, c)))
+    out += (tx, tz)
+    return out
 
 
 def assign(problem: Problem, motion: Motion) -> Pairs:
@@ -125,19 +200,25 @@ def assign(problem: Problem, motion: Motion) -> Pairs:
     :data:`TIE_DECIMALS` relative digits; ties go to the lowest object index (id order).
     """
     p = moved(problem.pred, motion)
-    q = problem.true
-    d = (p[:, None, 0] - q[None, :, 0]) ** 2 + (p[:, None, 1] - q[None, :, 1]) ** 2
-    d = np.where(problem.allowed, np.round(d, digits(problem.scale, 2)), np.inf)
-    # An entry with no object of its type left (every one held by a carried identity) has an
-    # all-inf row, whose argmin would name object 0 of another type: it stays unmatched.
-    open_rows = np.isfinite(d).any(axis=1).tolist()
-    nearest = [j if ok else -1 for j, ok in zip(d.argmin(axis=1).tolist(), open_rows, strict=True)]
+    dec = digits(problem.layout.scale, 2)
+    cands = [problem.cols_of.get(k, ()) for k in problem.kinds]
+    d = None
+    nearest = _nearest(p.tolist(), cands, problem.layout.points, dec)
+    if nearest is None:
+        d = _distance_matrix(problem, p, dec)
+        # An entry with no object of its type left (every one held by a carried identity) has
+        # an all-inf row, whose argmin would name object 0 of another type: it stays unmatched.
+        open_rows = np.isfinite(d).any(axis=1).tolist()
+        best = d.argmin(axis=1).tolist()
+        nearest = [j if ok else -1 for j, ok in zip(best, open_rows, strict=True)]
     taken = [j for j in nearest if j >= 0]
     if len(set(taken)) == len(taken):
         return tuple((i, j) for i, j in enumerate(nearest) if j >= 0)
     from scipy.optimize import linear_sum_assignment  # heavy: imported on first use
 
-    kinds = problem.kinds.tolist()
+    if d is None:
+        d = _distance_matrix(problem, p, dec)
+    kinds = problem.kinds
     seen: dict[int, int] = {}
     clash: set[int] = set()
     for i, j in enumerate(nearest):
@@ -146,18 +227,84 @@ def assign(problem: Problem, motion: Motion) -> Pairs:
         seen[j] = i
     pairs = [(i, j) for i, j in enumerate(nearest) if j >= 0 and kinds[i] not in clash]
     for k in sorted(clash):
-        rows = np.flatnonzero(problem.kinds == k)
-        cols = np.flatnonzero(problem.true_kinds == k)
+        rows = [i for i, kind in enumerate(kinds) if kind == k]
+        cols = list(problem.cols_of[k])
         r, c = linear_sum_assignment(d[rows][:, cols])
-        pairs += zip(rows[r].tolist(), cols[c].tolist(), strict=True)
+        pairs += ((rows[i], cols[j]) for i, j in zip(r.tolist(), c.tolist(), strict=True))
     return tuple(sorted(pairs))
 
 
+#: Most (entry, open object) pairs :func:`assign` compares on floats rather than as a matrix.
+_FEW_PAIRS: Final = 24
+
+
+def _nearest(
+    moved_points: list[list[float]],
+    cands: list[tuple[int, ...]],
+    true: tuple[Point, ...],
+    dec: int,
+) -> list[int] | None:
+    """Each entry's nearest open object (-1: none), on floats, as :func:`_distance_matrix`
+    and ``argmin`` give it (every operation the one numpy performs; the first of equal
+    distances wins); None when there are many pairs or a distance is not finite (numpy's
+    matrix path handles both)."""
+    if sum(map(len, cands)) > _FEW_PAIRS:
+        return None
+    out: list[int] = []
+    for (x, z), cols in zip(moved_points, cands, strict=True):
+        best, low = -1, math.inf
+        for j in cols:
+            qx, qz = true[j]
+            dx, dz = x - qx, z - qz
+            v = round_like_numpy(dx * dx + dz * dz, dec)
+            if not math.isfinite(v):
+                return None
+            if v < low:
+                best, low = j, v
+        out.append(best)
+    return out
+
+
+def round_like_numpy(x: float, decimals: int) -> float:
+    """``np.round(x, decimals)`` of a finite float, bitwise: numpy scales by ``10**decimals``
+    (multiplying, or dividing for negative decimals), rounds half to even, and scales back."""
+    if decimals >= 0:
+        f = _POW10[decimals]
+        return float(round(x * f)) / f
+    f = _POW10[-decimals]
+    return float(round(x / f)) * f
+
+
+#: ``10**k`` as numpy's ``power_of_ten`` computes it (exact up to ``k = 22``).
+_POW10: Final = tuple(10.0**k for k in range(23))
+
+
+def _distance_matrix(problem: Problem, p: np.ndarray, dec: int) -> np.ndarray:
+    """(n x m) rounded squared distances of the moved entries ``p`` to every object, inf
+    where the object is not open to the entry."""
+    d = _squared_distances(p, problem.layout.true)
+    d = d.round(dec, out=d)
+    np.copyto(d, np.inf, where=problem.blocked)
+    return d
+
+
+def _squared_distances(p: np.ndarray, q: np.ndarray) -> np.ndarray:
+    """``(..., n, m)`` squared distances ``dx**2 + dz**2`` of points ``p`` (..., n x 2) to
+    ``q`` (m x 2)."""
+    diff = p[..., :, None, :] - q
+    diff *= diff
+    return diff[..., 0] + diff[..., 1]
+
+
 def _sse(problem: Problem, pairs: Pairs) -> tuple[float, Motion]:
-    p = problem.pred[[r for r, _ in pairs]]
-    q = problem.true[[c for _, c in pairs]]
+    p = [problem.points[r] for r, _ in pairs]
+    q = [problem.layout.points[c] for _, c in pairs]
     motion = procrustes(p, q)
-    return round(float(((moved(p, motion) - q) ** 2).sum()), digits(problem.scale, 2)), motion
+    squares: list[float] = []
+    p_moved = moved(problem.pred[[r for r, _ in pairs]], motion).tolist()
+    for (x, z), (u, v) in zip(p_moved, q, strict=True):
+        squares += ((x - u) * (x - u), (z - v) * (z - v))
+    return round(numpy_sum(squares), digits(problem.layout.scale, 2)), motion
 
 
 def refine(problem: Problem, seed: Motion) -> Pairs:
@@ -191,22 +338,30 @@ def hypotheses(problem: Problem) -> list[Motion]:
     (ties: object order). When no entry can serve as ``b`` (every entry coincides with ``a``,
     or all share ``a``'s single object) no rotation can be read: translations ``a -> o_a``.
     """
-    pred: list[Point] = [(x, z) for x, z in problem.pred.tolist()]
-    true = problem.true_points
-    cand = [problem.cols_of[k] for k in problem.kinds.tolist()]
-    d1 = digits(problem.scale, 1)
-    cx = math.fsum(p[0] for p in pred) / len(pred)
-    cz = math.fsum(p[1] for p in pred) / len(pred)
-    order = range(len(pred))
-    a = min(order, key=lambda i: (len(cand[i]), -round(math.dist(pred[i], (cx, cz)), d1)))
-    gap = [round(math.dist(pred[i], pred[a]), d1) for i in order]
+    pred = problem.points
+    true = problem.layout.points
+    cand = [problem.cols_of[k] for k in problem.kinds]
+    d1 = digits(problem.layout.scale, 1)
+    n = len(pred)
+    cx = math.fsum(p[0] for p in pred) / n
+    cz = math.fsum(p[1] for p in pred) / n
+    fewest = min(map(len, cand))
+    a = min(
+        (i for i in range(n) if len(cand[i]) == fewest),
+        key=lambda i: -round(math.dist(pred[i], (cx, cz)), d1),
+    )
     # b needs a direction (not coincident with a) and an object other than a's
-    others = [i for i in order if gap[i] > COINCIDENT_M and len({*cand[a], *cand[i]}) > 1]
-    if not others:
+    b, best, gap = -1, (math.inf, 0.0), 0.0
+    for i, cols in enumerate(cand):
+        if len(cols) > best[0] or (len(cols) == 1 and cols == cand[a]):
+            continue
+        g = round(math.dist(pred[i], pred[a]), d1)
+        if g > COINCIDENT_M and (len(cols), -g) < best:
+            b, best, gap = i, (len(cols), -g), g
+    if b < 0:
         return [Motion(1.0, 0.0, true[o][0] - pred[a][0], true[o][1] - pred[a][1]) for o in cand[a]]
-    b = min(others, key=lambda i: (len(cand[i]), -gap[i]))
     options = sorted(
-        (round(abs(math.dist(true[oa], true[ob]) - gap[b]), d1), oa, ob)
+        (round(abs(math.dist(true[oa], true[ob]) - gap), d1), oa, ob)
         for oa in cand[a]
         for ob in cand[b]
         if oa != ob
@@ -229,12 +384,11 @@ def undetermined_fit(problem: Problem, first: Sequence[Motion] = ()) -> Pairs:
         return ()
     if len(seeds) > 1:
         m = np.array(seeds)
-        p, q = problem.pred, problem.true
-        mx = m[:, :1] * p[:, 0] - m[:, 1:2] * p[:, 1] + m[:, 2:3]
-        mz = m[:, 1:2] * p[:, 0] + m[:, :1] * p[:, 1] + m[:, 3:4]
-        d = (mx[:, :, None] - q[None, None, :, 0]) ** 2 + (
-            mz[:, :, None] - q[None, None, :, 1]
-        ) ** 2
-        score = np.where(problem.allowed[None], d, np.inf).min(axis=2).sum(axis=1)
-        seeds = [seeds[int(np.round(score, digits(problem.scale, 2)).argmin())]]
+        c, s, t = m[:, 0, None, None], m[:, 1, None, None], m[:, None, 2:]
+        p = problem.pred
+        turned = p[:, ::-1] * (-1.0, 1.0)  # (-z, x): R p = c p + s turned
+        d = _squared_distances(c * p + s * turned + t, problem.layout.true)
+        np.copyto(d, np.inf, where=problem.blocked)
+        score = d.min(axis=2).sum(axis=1)
+        seeds = [seeds[int(np.round(score, digits(problem.layout.scale, 2)).argmin())]]
     return refine(problem, seeds[0])

@@ -80,6 +80,7 @@ import numpy as np
 
 from pytest_emrd.metrics._align import (
     COINCIDENT_M,
+    Layout,
     Motion,
     Problem,
     assign,
@@ -147,7 +148,8 @@ def rigid_fit(pred: np.ndarray, true: np.ndarray) -> tuple[np.ndarray, np.ndarra
     the translation between centroids.
     """
     m = procrustes(
-        np.asarray(pred, dtype=float).reshape(-1, 2), np.asarray(true, dtype=float).reshape(-1, 2)
+        np.asarray(pred, dtype=float).reshape(-1, 2).tolist(),
+        np.asarray(true, dtype=float).reshape(-1, 2).tolist(),
     )
     return np.array([[m.c, -m.s], [m.s, m.c]]), np.array([m.tx, m.tz])
 
@@ -185,12 +187,18 @@ class Matcher:
         self._kind_of = self._true_kinds.tolist()
         self._count = np.bincount(self._true_kinds, minlength=len(self._types.names)).tolist()
         self._first = [self._kind_of.index(k) if n else -1 for k, n in enumerate(self._count)]
-        self._true_extent = _extent(self._true)
-        self._points = tuple((float(o.x), float(o.z)) for o in ordered)
-        self._cols_of: dict[int, tuple[int, ...]] = {}
+        cols_of: dict[int, tuple[int, ...]] = {}
         for c, k in enumerate(self._kind_of):
-            self._cols_of[k] = (*self._cols_of.get(k, ()), c)
+            cols_of[k] = (*cols_of.get(k, ()), c)
+        self._layout = Layout(
+            self._true,
+            tuple((float(o.x), float(o.z)) for o in ordered),
+            self._true_kinds,
+            cols_of,
+            _extent(self._true),
+        )
         self._done: dict[Key, tuple[dict[str, int], bool]] = {}
+        self._anchor_fits: dict[tuple[tuple[int, float, float], ...], Motion] = {}
 
     def assign(self, entries: Sequence[MapEntry], previous: Assignment | None = None) -> Assignment:
         """Steps 1-4 of the procedure on plain dicts (the fast path of episodes).
@@ -203,25 +211,28 @@ class Matcher:
         unrecognised: list[str] = []
         resolve, known = self._types.resolve, self._types.known
         for e in entries:
-            if e.label in seen:
+            label = e.label
+            if label in seen:
                 continue
-            seen[e.label] = e
-            k = known.get((e.object_type, e.label))
+            seen[label] = e
+            k = known.get((e.object_type, label))
             if k is None:
-                k = resolve(e.object_type, e.label)
+                k = resolve(e.object_type, label)
             if k < 0:
-                unrecognised.append(e.label)
+                unrecognised.append(label)
             else:
-                type_of[e.label] = k
+                type_of[label] = k
         duplicates: tuple[str, ...] = ()
         if len(seen) != len(entries):
             counts = Counter(e.label for e in entries)
             duplicates = tuple(sorted(lb for lb, n in counts.items() if n > 1))
-        labels = sorted(type_of)
-        key = tuple((lb, type_of[lb], float(seen[lb].x), float(seen[lb].z)) for lb in labels)
-        in_map = Counter(type_of.values())
+        key = tuple([(lb, k, float(e.x), float(e.z))
+                     for lb, k in sorted(type_of.items()) for e in (seen[lb],)])  # fmt: skip
         count = self._count
-        rows = [r for r, (_, k, _, _) in enumerate(key) if in_map[k] == 1 and count[k] == 1]
+        # anchors: the only entry of a type the layout holds once
+        singles = [r for r, entry in enumerate(key) if count[entry[1]] == 1]
+        kinds = [key[r][1] for r in singles]
+        rows = [r for r, k in zip(singles, kinds, strict=True) if kinds.count(k) == 1]
         determined = len(rows) >= 2 and _spread([key[r][2:] for r in rows]) > COINCIDENT_M
         anchors = frozenset(key[r][0] for r in rows) if determined else frozenset()
         if (
@@ -247,7 +258,7 @@ class Matcher:
                 done = self._afresh(key, rows if determined else None, dict(before))
                 self._done[(key, before)] = done
             identity = done[0]
-        unmatched = tuple(lb for lb in labels if lb not in identity)
+        unmatched = tuple([entry[0] for entry in key if entry[0] not in identity])
         return Assignment(
             seen, identity, unmatched, tuple(sorted(unrecognised)), duplicates, determined,
             anchors,
@@ -263,48 +274,43 @@ class Matcher:
         if anchor_rows is not None:
             return self._in_frame(key, anchor_rows, {}), True
         written = [(x, z) for _, _, x, z in key]
-        pred = np.array(written, dtype=float)
-        kinds = np.array([k for _, k, _, _ in key], dtype=int)
-        problem = Problem(
-            pred, kinds, self._true, self._true_kinds, self._true_extent, self._points,
-            self._cols_of,
-        )  # fmt: skip
+        problem = Problem(written, [k for _, k, _, _ in key], self._layout)
         index, kind_of = self._index, self._kind_of
         named = [(r, index[lb]) for r, (lb, k, _, _) in enumerate(key)
                  if lb in index and kind_of[index[lb]] == k]  # fmt: skip
         kept = [(r, before[lb]) for r, (lb, _, _, _) in enumerate(key) if lb in before]
-        seeds = [self._seed(pred, written, pairs) for pairs in (kept, named) if pairs]
+        seeds = [self._seed(problem, pairs) for pairs in (kept, named) if pairs]
         pairs = undetermined_fit(problem, [m for m in seeds if m is not None])
         return {key[r][0]: c for r, c in pairs}, False
 
-    def _seed(
-        self, pred: np.ndarray, written: list[tuple[float, float]], pairs: list[tuple[int, int]]
-    ) -> Motion | None:
+    def _seed(self, problem: Problem, pairs: list[tuple[int, int]]) -> Motion | None:
         """The fit of known ``(entry row, object)`` pairs: Procrustes of two or more distinct
         points, the translation of one; None when the points coincide (no direction)."""
+        written = problem.points
         if len(pairs) == 1 or _spread([written[r] for r, _ in pairs]) <= COINCIDENT_M:
             if len({c for _, c in pairs}) != 1:
                 return None
             (r, c), *_ = pairs
-            return Motion(1.0, 0.0, *(self._true[c] - pred[r]).tolist())
-        return procrustes(pred[[r for r, _ in pairs]], self._true[[c for _, c in pairs]])
+            return Motion(1.0, 0.0, *(self._true[c] - problem.pred[r]).tolist())
+        true = self._layout.points
+        return procrustes([written[r] for r, _ in pairs], [true[c] for _, c in pairs])
 
     def _in_frame(self, key: Key, anchor_rows: list[int], kept: dict[str, int]) -> dict[str, int]:
         """The labels of ``key`` not in ``kept``, assigned among the objects not kept, in the
         frame the anchors fix (:func:`procrustes` of the anchors onto their objects)."""
-        first = self._first
-        a_pred = np.array([key[r][2:] for r in anchor_rows], dtype=float)
-        a_true = self._true[[first[key[r][1]] for r in anchor_rows]]
-        todo = [r for r, entry in enumerate(key) if entry[0] not in kept]
-        pred = np.array([key[r][2:] for r in todo], dtype=float)
-        kinds = np.array([key[r][1] for r in todo], dtype=int)
-        true_kinds = self._true_kinds
-        if kept:
-            true_kinds = true_kinds.copy()
-            true_kinds[list(kept.values())] = -1
-        problem = Problem(pred, kinds, self._true, true_kinds, self._true_extent)
-        pairs = assign(problem, procrustes(a_pred, a_true))
-        return {key[todo[r]][0]: c for r, c in pairs}
+        anchors = tuple(key[r][1:] for r in anchor_rows)  # (type, x, z): the fit's input
+        motion = self._anchor_fits.get(anchors)
+        if motion is None:
+            first = self._first
+            true = self._layout.points
+            motion = procrustes([a[1:] for a in anchors], [true[first[a[0]]] for a in anchors])
+            self._anchor_fits[anchors] = motion
+        todo = [entry for entry in key if entry[0] not in kept]
+        problem = Problem(
+            [(x, z) for _, _, x, z in todo], [k for _, k, _, _ in todo], self._layout,
+            tuple(kept.values()),
+        )  # fmt: skip
+        return {todo[r][0]: c for r, c in assign(problem, motion)}
 
     def held(self, assignment: Assignment) -> dict[str, str]:
         """Object id -> label of an assignment (what :attr:`Matching.label_of` gives)."""
