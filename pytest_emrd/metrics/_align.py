@@ -145,7 +145,10 @@ class Layout(NamedTuple):
 class Problem:
     """One map's recognised entries against the objects still open to them."""
 
-    __slots__ = ("_blocked", "cols_of", "kinds", "layout", "points", "pred", "true_kinds")
+    __slots__ = (
+        "_blocked", "_pairs", "candidates", "cols_of", "kinds", "layout", "points", "pred",
+        "true_kinds",
+    )  # fmt: skip
 
     def __init__(
         self,
@@ -172,7 +175,10 @@ class Problem:
             self.cols_of = {
                 k: tuple(c for c in cols if c not in gone) for k, cols in layout.cols_of.items()
             }
+        self.candidates = [self.cols_of.get(k, ()) for k in kinds]
+        """The objects open to each entry, ascending."""
         self._blocked: np.ndarray | None = None
+        self._pairs: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
 
     @property
     def blocked(self) -> np.ndarray:
@@ -180,6 +186,17 @@ class Problem:
         if self._blocked is None:
             self._blocked = np.array(self.kinds, dtype=int)[:, None] != self.true_kinds
         return self._blocked
+
+    @property
+    def pairs(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Every (entry, open object) pair, entry by entry: the entry's index, the object's
+        position (pairs x 2), and where each entry's run of pairs starts."""
+        if self._pairs is None:
+            rows = [i for i, cols in enumerate(self.candidates) for _ in cols]
+            cols = [c for cols in self.candidates for c in cols]
+            starts = np.cumsum([0, *map(len, self.candidates[:-1])])
+            self._pairs = np.array(rows, dtype=np.intp), self.layout.true[cols], starts
+        return self._pairs
 
 
 def moved(points: np.ndarray, motion: Motion) -> np.ndarray:
@@ -201,10 +218,9 @@ def assign(problem: Problem, motion: Motion) -> Pairs:
     """
     p = moved(problem.pred, motion)
     dec = digits(problem.layout.scale, 2)
-    cands = [problem.cols_of.get(k, ()) for k in problem.kinds]
     d = None
-    nearest = _nearest(p.tolist(), cands, problem.layout.points, dec)
-    if nearest is None:
+    nearest = _nearest(_pair_distances(problem, p, dec), problem.candidates)
+    if nearest is None:  # a distance that is not finite: numpy's matrix and argmin decide
         d = _distance_matrix(problem, p, dec)
         # An entry with no object of its type left (every one held by a carried identity) has
         # an all-inf row, whose argmin would name object 0 of another type: it stays unmatched.
@@ -234,33 +250,40 @@ def assign(problem: Problem, motion: Motion) -> Pairs:
     return tuple(sorted(pairs))
 
 
-#: Most (entry, open object) pairs :func:`assign` compares on floats rather than as a matrix.
+#: Most (entry, open object) pairs whose distances :func:`assign` computes on floats.
 _FEW_PAIRS: Final = 24
 
 
-def _nearest(
-    moved_points: list[list[float]],
-    cands: list[tuple[int, ...]],
-    true: tuple[Point, ...],
-    dec: int,
-) -> list[int] | None:
-    """Each entry's nearest open object (-1: none), on floats, as :func:`_distance_matrix`
-    and ``argmin`` give it (every operation the one numpy performs; the first of equal
-    distances wins); None when there are many pairs or a distance is not finite (numpy's
-    matrix path handles both)."""
-    if sum(map(len, cands)) > _FEW_PAIRS:
-        return None
+def _pair_distances(problem: Problem, p: np.ndarray, dec: int) -> list[float]:
+    """Rounded squared distance of each moved entry ``p`` to each object open to it (in the
+    order of :attr:`Problem.pairs`): each value the one :func:`_distance_matrix` holds."""
+    rows, true, _ = problem.pairs
+    if len(rows) <= _FEW_PAIRS:
+        out: list[float] = []
+        for (x, z), (u, v) in zip(p[rows].tolist(), true.tolist(), strict=True):
+            sq = (x - u) * (x - u) + (z - v) * (z - v)
+            out.append(round_like_numpy(sq, dec) if math.isfinite(sq) else sq)
+        return out
+    diff = p[rows] - true
+    diff *= diff
+    sq = diff[:, 0] + diff[:, 1]
+    return sq.round(dec, out=sq).tolist()
+
+
+def _nearest(distances: list[float], candidates: list[tuple[int, ...]]) -> list[int] | None:
+    """Each entry's nearest open object (-1: none; the first of equal distances), as
+    ``argmin`` picks it in :func:`_distance_matrix`; None when a distance is not finite."""
     out: list[int] = []
-    for (x, z), cols in zip(moved_points, cands, strict=True):
+    at = 0
+    for cols in candidates:
         best, low = -1, math.inf
         for j in cols:
-            qx, qz = true[j]
-            dx, dz = x - qx, z - qz
-            v = round_like_numpy(dx * dx + dz * dz, dec)
-            if not math.isfinite(v):
-                return None
+            v = distances[at]
+            at += 1
             if v < low:
                 best, low = j, v
+            elif not v < math.inf:
+                return None
         out.append(best)
     return out
 
@@ -280,20 +303,14 @@ _POW10: Final = tuple(10.0**k for k in range(23))
 
 
 def _distance_matrix(problem: Problem, p: np.ndarray, dec: int) -> np.ndarray:
-    """(n x m) rounded squared distances of the moved entries ``p`` to every object, inf
-    where the object is not open to the entry."""
-    d = _squared_distances(p, problem.layout.true)
+    """(n x m) rounded squared distances ``dx**2 + dz**2`` of the moved entries ``p`` to every
+    object, inf where the object is not open to the entry."""
+    diff = p[:, None, :] - problem.layout.true
+    diff *= diff
+    d = diff[..., 0] + diff[..., 1]
     d = d.round(dec, out=d)
     np.copyto(d, np.inf, where=problem.blocked)
     return d
-
-
-def _squared_distances(p: np.ndarray, q: np.ndarray) -> np.ndarray:
-    """``(..., n, m)`` squared distances ``dx**2 + dz**2`` of points ``p`` (..., n x 2) to
-    ``q`` (m x 2)."""
-    diff = p[..., :, None, :] - q
-    diff *= diff
-    return diff[..., 0] + diff[..., 1]
 
 
 def _sse(problem: Problem, pairs: Pairs) -> tuple[float, Motion]:
@@ -375,20 +392,30 @@ def undetermined_fit(problem: Problem, first: Sequence[Motion] = ()) -> Pairs:
     """Correspondence of a map whose frame no anchors determine: a joint estimate.
 
     The seeds are ``first`` (the caller's tie-breakers, in order) followed by those of
-    :func:`hypotheses`. Every seed is scored at once by the summed squared distance of each
-    entry to its nearest object of its type after the seed's motion; the best seed (ties: the
-    first) is refined by :func:`refine`.
+    :func:`hypotheses`; the :func:`best_seed` is refined by :func:`refine`.
     """
     seeds = [*first, *hypotheses(problem)]
     if not seeds:
         return ()
-    if len(seeds) > 1:
-        m = np.array(seeds)
-        c, s, t = m[:, 0, None, None], m[:, 1, None, None], m[:, None, 2:]
-        p = problem.pred
-        turned = p[:, ::-1] * (-1.0, 1.0)  # (-z, x): R p = c p + s turned
-        d = _squared_distances(c * p + s * turned + t, problem.layout.true)
-        np.copyto(d, np.inf, where=problem.blocked)
-        score = d.min(axis=2).sum(axis=1)
-        seeds = [seeds[int(np.round(score, digits(problem.layout.scale, 2)).argmin())]]
-    return refine(problem, seeds[0])
+    return refine(problem, best_seed(problem, seeds))
+
+
+def best_seed(problem: Problem, seeds: Sequence[Motion]) -> Motion:
+    """The seed whose motion leaves the smallest summed squared distance of each entry to its
+    nearest object of its type (rounded to :data:`TIE_DECIMALS` relative digits; ties: the
+    first). Every seed is scored at once, over the (entry, object of its type) pairs only.
+    An entry no object can take makes every score infinite: the first seed.
+    """
+    if len(seeds) == 1 or not all(problem.candidates):
+        return seeds[0]
+    rows, true, starts = problem.pairs
+    m = np.array(seeds)
+    c, s, t = m[:, 0, None, None], m[:, 1, None, None], m[:, None, 2:]
+    p = problem.pred[rows]
+    turned = p[:, ::-1] * (-1.0, 1.0)  # (-z, x): R p = c p + s turned
+    diff = c * p + s * turned + t  # (seeds x pairs x 2)
+    diff -= true
+    diff *= diff
+    d = diff[..., 0] + diff[..., 1]
+    score = np.minimum.reduceat(d, starts, axis=1).sum(axis=1)
+    return seeds[int(np.round(score, digits(problem.layout.scale, 2)).argmin())]
