@@ -186,13 +186,14 @@ def build_report(
     gates = Gates(thresholds_source, tuple(verdicts or ()))
     reasons = reasoning(by_label, embed) if with_reasoning else Reasoning(())
     chosen = pick_episode(trajectories, episode)
+    ebbinghaus = ebbinghaus_rows(cells)
     return Report(
         overview=overview,
         missing=_missing(trajectories, overview, gates, reasons),
         exploration=exploration_rows(cells),
         focal=focal_tables(cells),
         fpsg=fpsg_rows(cells),
-        ebbinghaus=ebbinghaus_rows(cells),
+        ebbinghaus=ebbinghaus,
         serial_position=serial_rows(cells),
         anova=anova_rows(cells),
         interventions=intervention_tables(cells),
@@ -201,7 +202,7 @@ def build_report(
         tbs=tbs_series(cells),
         pa=pa_by_spawn(cells),
         miller=miller_series(cells),
-        km=km_series(cells),
+        km=km_series(cells, {(r.model, r.variant, r.condition): r.fit for r in ebbinghaus}),
         sir=sir_series(cells),
         episode_map=episode_map(chosen) if chosen is not None else None,
     )

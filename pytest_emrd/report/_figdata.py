@@ -3,15 +3,15 @@
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 
 import numpy as np
 
 from pytest_emrd.errors import ConfigError
 from pytest_emrd.metrics import (
+    Ebbinghaus,
     EpisodeMetrics,
     Matching,
-    ebbinghaus,
     kaplan_meier_anchored,
     match_map,
     miller_curve,
@@ -54,13 +54,17 @@ def miller_series(cells: Cells) -> tuple[MillerSeries, ...]:
     return tuple(MillerSeries(m, v, c, miller_curve(ems)) for (m, v, c), ems in cells.items())
 
 
-def km_series(cells: Cells) -> tuple[KMSeries, ...]:
-    """Anchored KM per category with the Ebbinghaus fit of the same category."""
+def km_series(
+    cells: Cells, fits: Mapping[tuple[str, str, str], Ebbinghaus]
+) -> tuple[KMSeries, ...]:
+    """Anchored KM per category with the Ebbinghaus fit of the same category (``fits``: the
+    cells' :func:`~pytest_emrd.metrics.ebbinghaus`, computed once for their table)."""
     out = []
-    for (model, variant, condition), ems in cells.items():
-        fits = ebbinghaus(ems).by_category
+    for key, ems in cells.items():
+        model, variant, condition = key
+        by_category = fits[key].by_category
         for category, km in kaplan_meier_anchored(ems).items():
-            out.append(KMSeries(model, variant, condition, category, km, fits[category]))
+            out.append(KMSeries(model, variant, condition, category, km, by_category[category]))
     return tuple(out)
 
 

@@ -21,6 +21,7 @@ from matplotlib.artist import Artist
 from matplotlib.axes import Axes
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
+from matplotlib.image import imsave
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
@@ -92,9 +93,14 @@ def _panels(labels: Sequence[str], *, ncols: int = 3, size: tuple[float, float] 
 
 
 def _png(fig: Figure) -> bytes:
+    """The PNG ``fig.savefig(format="png", dpi=_DPI)`` writes, byte for byte, drawn once:
+    ``savefig`` first draws the whole figure without rendering to run the layout engine,
+    then draws it again (layout included) to render it."""
+    fig.set_dpi(_DPI)
+    canvas = FigureCanvasAgg(fig)
+    canvas.draw()
     buffer = io.BytesIO()
-    FigureCanvasAgg(fig)
-    fig.savefig(buffer, format="png", dpi=_DPI)
+    imsave(buffer, canvas.buffer_rgba(), format="png", origin="upper", dpi=_DPI)
     return buffer.getvalue()
 
 
