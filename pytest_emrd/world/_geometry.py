@@ -130,17 +130,17 @@ def _hits(
     segs: np.ndarray,
 ) -> np.ndarray:
     """Nearest positive ray parameter hitting segments at ``across == c`` spanning
-    ``[lo, hi]`` of the ``along`` coordinate."""
+    ``[lo, hi]`` of the ``along`` coordinate. Segments run along a new leading axis, so the
+    nearest hit is an element-wise minimum over a few whole arrays."""
     if segs.size == 0:
         return np.full(np.broadcast(across, d_across).shape, np.inf)
-    c, lo, hi = segs[:, 0], segs[:, 1], segs[:, 2]
-    a = np.asarray(across)[..., None]
-    da = np.asarray(d_across)[..., None]
+    lead = (-1,) + (1,) * np.broadcast(across, along, d_across, d_along).ndim
+    c, lo, hi = (segs[:, i].reshape(lead) for i in range(3))
     with np.errstate(divide="ignore", invalid="ignore"):
-        t = (c - a) / da
-    hit = np.asarray(along)[..., None] + t * np.asarray(d_along)[..., None]
+        t = (c - across) / d_across
+    hit = along + t * d_along
     ok = (t > 1e-9) & (hit >= lo) & (hit <= hi) & np.isfinite(t)
-    return np.where(ok, t, np.inf).min(axis=-1)
+    return np.where(ok, t, np.inf).min(axis=0)
 
 
 @lru_cache(maxsize=64)

@@ -24,7 +24,7 @@ same scene therefore renders to identical bytes on every machine and numpy versi
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 from PIL import Image
@@ -33,6 +33,21 @@ from pytest_emrd.world._catalog import WALL_HEIGHT
 from pytest_emrd.world._conditions import ConditionParams
 from pytest_emrd.world._geometry import right_of, unit
 from pytest_emrd.world._model import WorldPose
+from pytest_emrd.world._paint import (
+    EYE,
+    FOCAL,
+    HORIZON,
+    SIZE,
+    X_FACE,
+    Z_FACE,
+    Workspace,
+    fill_spans,
+    first_row,
+    fog,
+    length,
+    paint_objects,
+    workspace,
+)
 from pytest_emrd.world._rng import StableRng
 from pytest_emrd.world._scene import (
     CEILING,
@@ -45,23 +60,21 @@ from pytest_emrd.world._scene import (
     Scene,
 )
 
-SIZE = 512
-FOCAL = SIZE / 2
-HORIZON = SIZE // 2
-EYE = 1.5
 SKIRTING_HEIGHT = 0.1
-NEAR = 0.05
-
-#: Surface orientations and their brightness: faces across x (east/west), across z
-#: (north/south), tops, undersides. A pixel's code is ``(label * 4 + face) << 8 | fog``.
-X_FACE, Z_FACE, TOP_FACE, BOTTOM_FACE = 0, 1, 2, 3
+WALL_BAND = 128
+"""Image columns per band of the wall pass."""
 FACE_LIGHT = np.array([0.74, 0.9, 1.0, 0.5])
+"""Brightness of faces across x, across z, tops and undersides (``_paint.X_FACE`` ...)."""
 
 _U = (np.arange(SIZE) + 0.5 - FOCAL) / FOCAL
+_NEG_U = -_U
 _ROWS = np.arange(SIZE, dtype=np.int32)
-_ROW_COL = _ROWS[:, None]
 _CEIL_DEPTH = FOCAL * (WALL_HEIGHT - EYE) / (HORIZON - (_ROWS[:HORIZON] + 0.5))
 _FLOOR_DEPTH = FOCAL * EYE / ((_ROWS[HORIZON:] + 0.5) - HORIZON)
+_FLOOR_U = np.multiply.outer(_FLOOR_DEPTH, _U)
+"""``depth * u`` of every floor pixel: under a cardinal heading the floor point's offset along
+the axis that varies across the image is ``+-`` this, computed once (``x * -u == -(x * u)``
+and ``o + -y == o - y`` exactly in IEEE arithmetic)."""
 
 
 def palette(scene: Scene, params: ConditionParams, seed: int) -> np.ndarray:
@@ -84,41 +97,13 @@ def shade_table(colors: np.ndarray, params: ConditionParams) -> np.ndarray:
 
     ``rgb = rint(colour * face_light * light_factor * (255 - fog) / 255 + fog_rgb * fog / 255)``
     """
-    fog = np.arange(256, dtype=np.float64)
+    weight = np.arange(256, dtype=np.float64)
     lit = colors[:, None, None, :] * (FACE_LIGHT * params.light_factor)[None, :, None, None]
-    mix = lit * ((255.0 - fog) / 255.0)[None, None, :, None]
-    mix = mix + np.array(params.fog_color, dtype=np.float64) * (fog / 255.0)[:, None]
+    mix = lit * ((255.0 - weight) / 255.0)[None, None, :, None]
+    mix = mix + np.array(params.fog_color, dtype=np.float64) * (weight / 255.0)[:, None]
     rgbx = np.zeros((*mix.shape[:3], 4), dtype=np.uint8)
     rgbx[..., :3] = np.clip(np.rint(mix), 0, 255)
     return rgbx.reshape(-1, 4).view(np.uint32)[:, 0]
-
-
-def _fog(depth: np.ndarray, params: ConditionParams) -> np.ndarray:
-    """Fog weight 0..255 of surfaces at ``depth``."""
-    ratio = depth / params.visibility_distance
-    return np.rint(np.minimum(1.0, params.fog * ratio * ratio) * 255.0).astype(np.int32)
-
-
-def _row(a: np.ndarray) -> np.ndarray:
-    """First image row whose pixel centre lies at or below the continuous row ``a``."""
-    return np.clip(np.ceil(a - 0.5), 0, SIZE).astype(np.int32)
-
-
-@dataclass(frozen=True, eq=False)
-class _View:
-    """One frame being drawn: the camera rays, their wall hits and the output buffer."""
-
-    pose: WorldPose
-    params: ConditionParams
-    dx: np.ndarray
-    """``(512,)`` ray direction per column (forward component 1, so ``t`` is depth)."""
-    dz: np.ndarray
-    t_wall: np.ndarray
-    """``(512,)`` depth of the nearest wall per column."""
-    along_x: np.ndarray
-    """``(512,)`` whether that wall runs along x."""
-    code: np.ndarray
-    """``(512, 512)`` int32 pixel codes ``(label * 4 + face) << 8 | fog``."""
 
 
 def render(scene: Scene, pose: WorldPose, params: ConditionParams, table: np.ndarray) -> np.ndarray:
@@ -127,21 +112,28 @@ def render(scene: Scene, pose: WorldPose, params: ConditionParams, table: np.nda
     rx, rz = right_of(pose.heading)
     dx, dz = fx + rx * _U, fz + rz * _U
     t_wall, along_x = scene.walls.first_hit(np.float64(pose.x), np.float64(pose.z), dx, dz)
-    view = _View(
-        pose,
-        params,
-        dx,
-        dz,
-        np.minimum(t_wall, 1e3),
-        along_x,
-        code=np.empty((SIZE, SIZE), dtype=np.int32),
-    )
-    _background(scene, view)
-    _objects(scene, view)
-    # R, G, B, 0 per pixel; Pillow's raw unpacker drops the pad byte into packed RGB.
-    rgbx = np.take(table, view.code)
-    rgb = Image.frombytes("RGB", (SIZE, SIZE), rgbx, "raw", "RGBX").tobytes()
+    rays = (dx, dz, np.minimum(t_wall, 1e3))
+    ws = workspace()
+    _background(scene, pose, params, rays, along_x, table, ws)
+    paint_objects(scene, pose, params, rays, table, ws)
+    # R, G, B, 0 per pixel; Pillow reads the buffer in place and packs R, G, B.
+    rgbx = Image.frombuffer("RGBX", (SIZE, SIZE), ws.rgbx, "raw", "RGBX", 0, 1)
+    rgb = rgbx.tobytes("raw", "RGB")
     return np.frombuffer(rgb, dtype=np.uint8).reshape(SIZE, SIZE, 3)
+
+
+@lru_cache(maxsize=8)
+def _fog_rows(params: ConditionParams) -> tuple[np.ndarray, np.ndarray]:
+    """``(HORIZON, 1)`` ceiling codes and ``(SIZE - HORIZON, 1)`` fog weights of the floor
+    rows (each row of the ceiling and of the floor lies at one depth)."""
+    ceiling = ((CEILING * 4 + Z_FACE) << 8) | fog(_CEIL_DEPTH, params)
+    return ceiling[:, None], fog(_FLOOR_DEPTH, params)[:, None]
+
+
+@lru_cache(maxsize=32)
+def _floor_codes(scene: Scene) -> np.ndarray:
+    """``(nz, nx)`` int32 code (fog 0) of each floor cell of ``scene``."""
+    return ((scene.floor_raster * 4 + Z_FACE) << 8).astype(np.int32)
 
 
 def _to_cells(scaled: np.ndarray, size: int) -> np.ndarray:
@@ -150,149 +142,82 @@ def _to_cells(scaled: np.ndarray, size: int) -> np.ndarray:
     return np.clip(scaled, 0.0, size - 1.0).astype(np.int32)
 
 
-def _cells(origin: np.float64, step: np.ndarray, depth: np.ndarray, size: int) -> np.ndarray:
-    """Raster cell of floor points ``(origin + depth * step) * RASTER`` along one axis (in
-    place, one buffer); one column when ``step`` is the same for every image column (one
-    axis of a cardinal heading)."""
+def _cells(
+    origin: np.float64, step: np.ndarray, rows: slice, size: int, ws: Workspace, out: np.ndarray
+) -> np.ndarray:
+    """Raster cell of the floor points ``(origin + depth * step) * RASTER`` of floor rows
+    ``rows`` along one axis: one column when ``step`` is the same for every image column
+    (one axis of a cardinal heading), else in ``out`` (a workspace buffer)."""
     if np.all(step == step[0]):
-        step = step[:1]
-    scaled = np.multiply.outer(depth, step)
-    scaled += origin
+        return _to_cells((np.multiply.outer(_FLOOR_DEPTH[rows], step[:1]) + origin) * RASTER, size)
+    scaled = ws.scaled[rows]
+    if np.array_equal(step, _U):
+        np.add(_FLOOR_U[rows], origin, out=scaled)
+    elif np.array_equal(step, _NEG_U):
+        np.subtract(origin, _FLOOR_U[rows], out=scaled)
+    else:
+        np.multiply.outer(_FLOOR_DEPTH[rows], step, out=scaled)
+        scaled += origin
     scaled *= RASTER
     np.clip(scaled, 0.0, size - 1.0, out=scaled)
-    return scaled.astype(np.int32)
+    cells = out[rows]
+    np.copyto(cells, scaled, casting="unsafe")  # the integer cast of astype
+    return cells
 
 
-def _background(scene: Scene, view: _View) -> None:
+def _background(
+    scene: Scene,
+    pose: WorldPose,
+    params: ConditionParams,
+    rays: tuple[np.ndarray, np.ndarray, np.ndarray],
+    along_x: np.ndarray,
+    table: np.ndarray,
+    ws: Workspace,
+) -> None:
     """Ceiling, floor (room colour, tiles) and walls (room colour, skirting) everywhere.
 
     Only the rows that can differ are computed: the floor below the lowest wall foot, the
-    wall masks between the highest wall top and the lowest wall foot.
+    wall masks, per band of columns, between the band's highest wall top and lowest foot.
     """
-    ox, oz, dx, dz = np.float64(view.pose.x), np.float64(view.pose.z), view.dx, view.dz
-    t_wall, params, code = view.t_wall, view.params, view.code
-    top = _row(HORIZON - FOCAL * (WALL_HEIGHT - EYE) / t_wall)
-    bottom = _row(HORIZON + FOCAL * EYE / t_wall)
-    skirt = _row(HORIZON + FOCAL * (EYE - SKIRTING_HEIGHT) / t_wall)
-    r0, r1, first_floor = int(top.min()), int(bottom.max()), max(HORIZON, int(bottom.min()))
-    code[:HORIZON] = (((CEILING * 4 + Z_FACE) << 8) | _fog(_CEIL_DEPTH, params))[:, None]
-    rooms = scene.room_raster
-    nz, nx = rooms.shape
-    depth = _FLOOR_DEPTH[first_floor - HORIZON :]
-    cell = _cells(oz, dz, depth, nz) * nx + _cells(ox, dx, depth, nx)
-    floor = code[first_floor:]
-    np.take(((scene.floor_raster * 4 + Z_FACE) << 8).astype(np.int32), cell, out=floor)
-    floor |= _fog(depth, params)[:, None]
+    ox, oz = np.float64(pose.x), np.float64(pose.z)
+    dx, dz, t_wall = rays
+    top = first_row(HORIZON - FOCAL * (WALL_HEIGHT - EYE) / t_wall)
+    bottom = first_row(HORIZON + FOCAL * EYE / t_wall)
+    skirt = first_row(HORIZON + FOCAL * (EYE - SKIRTING_HEIGHT) / t_wall)
+    first_floor = max(HORIZON, int(bottom.min()))
+    ceiling, floor_fog = _fog_rows(params)
+    ws.rgbx[:HORIZON] = table[ceiling]
+    rows = slice(first_floor - HORIZON, None)
+    codes = _floor_codes(scene)
+    nz, nx = codes.shape
+    cz, cx = _cells(oz, dz, rows, nz, ws, ws.cells[0]), _cells(ox, dx, rows, nx, ws, ws.cells[1])
+    fog_rows = floor_fog[rows]
+    if min(cz.shape[1], cx.shape[1]) == 1:
+        # One axis is fixed along each image row (a cardinal heading): look up the colours
+        # of the raster line each row lies on, then gather pixels from those lines.
+        fixed, vary, grid = (cz, cx, codes) if cz.shape[1] == 1 else (cx, cz, codes.T)
+        lines = table[grid[fixed[:, 0]] | fog_rows]
+        vary += np.arange(len(lines))[:, None] * grid.shape[1]
+        np.take(lines, vary, out=ws.rgbx[first_floor:], mode="clip")  # indices lie in range
+    else:
+        cz *= nx
+        cz += cx
+        np.take(table, codes.ravel()[cz] | fog_rows, out=ws.rgbx[first_floor:], mode="clip")
 
     hx = _to_cells((ox + (t_wall - 0.05) * dx) * RASTER, nx)
     hz = _to_cells((oz + (t_wall - 0.05) * dz) * RASTER, nz)
-    face = np.where(view.along_x, Z_FACE, X_FACE)
-    wall_fog = _fog(t_wall, params)
-    wall = ((((WALL0 + rooms[hz, hx]) * 4 + face) << 8) | wall_fog).astype(np.int32)
-    np.copyto(code[r0:r1], wall, where=_below(r0, r1, top) < _length(top, bottom))
-    s0 = max(HORIZON, int(skirt.min()))
+    face = np.where(along_x, Z_FACE, X_FACE)
+    wall_fog = fog(t_wall, params)
+    wall = ((((WALL0 + scene.room_raster[hz, hx]) * 4 + face) << 8) | wall_fog).astype(np.int32)
     skirting = (((SKIRTING * 4 + face) << 8) | wall_fog).astype(np.int32)
-    np.copyto(code[s0:r1], skirting, where=_below(s0, r1, skirt) < _length(skirt, bottom))
-
-
-def _dist2(rects: np.ndarray, pose: WorldPose) -> np.ndarray:
-    """Squared distance from the agent to the nearest point of each rectangle."""
-    ddx = np.maximum(np.maximum(rects[:, 0] - pose.x, pose.x - rects[:, 2]), 0.0)
-    ddz = np.maximum(np.maximum(rects[:, 1] - pose.z, pose.z - rects[:, 3]), 0.0)
-    return ddx * ddx + ddz * ddz
-
-
-def _draw_order(scene: Scene, pose: WorldPose, parts: np.ndarray, objs: np.ndarray) -> np.ndarray:
-    """Indices into ``parts`` back to front: by the distance of the object (an item on a
-    desk takes its desk's), then bottom-up, then farther boxes first."""
-    group = _dist2(scene.rects[scene.support[objs]], pose)
-    return np.lexsort((-_dist2(parts[:, :4], pose), parts[:, 4], -group))
-
-
-def _shown_parts(scene: Scene, pose: WorldPose, params: ConditionParams) -> np.ndarray:
-    """Boxes of objects within the visibility distance, minus faces turned away."""
-    near = (_dist2(scene.rects, pose) <= params.visibility_distance**2)[scene.part_object]
-    nf = scene.part_facing
-    cen = scene.centres[scene.part_object]
-    side = (pose.x - cen[:, 0]) * nf[:, 0] + (pose.z - cen[:, 1]) * nf[:, 1]
-    shown = near & (((nf[:, 0] == 0) & (nf[:, 1] == 0)) | (side > nf[:, 2]))
-    return np.flatnonzero(shown & _in_view(scene.parts, pose))
-
-
-def _in_view(parts: np.ndarray, pose: WorldPose) -> np.ndarray:
-    """False for boxes wholly outside one edge of the view wedge (conservative cull)."""
-    fx, fz = unit(pose.heading)
-    rx, rz = right_of(pose.heading)
-    cx = parts[:, [0, 0, 2, 2]] - pose.x
-    cz = parts[:, [1, 3, 1, 3]] - pose.z
-    fwd, lat = cx * fx + cz * fz, cx * rx + cz * rz
-    return ~((fwd <= NEAR).all(axis=1) | (lat > fwd).all(axis=1) | (lat < -fwd).all(axis=1))
-
-
-def _objects(scene: Scene, view: _View) -> None:
-    """Paint the boxes of nearby objects back to front, over the columns each one covers."""
-    pose, params, dx, dz, code = view.pose, view.params, view.dx, view.dz, view.code
-    sel = _shown_parts(scene, pose, params)
-    if sel.size == 0:
-        return
-    p = scene.parts[sel]
-    ax, bx = (p[:, 0:1] - pose.x) / dx, (p[:, 2:3] - pose.x) / dx
-    az, bz = (p[:, 1:2] - pose.z) / dz, (p[:, 3:4] - pose.z) / dz
-    tminx, tminz = np.minimum(ax, bx), np.minimum(az, bz)
-    tn = np.maximum(tminx, tminz)
-    tf = np.minimum(np.maximum(ax, bx), np.maximum(az, bz))
-    hit = (tn < tf) & (tn > NEAR) & (tn < view.t_wall)
-    keep = np.flatnonzero(hit.any(axis=1))
-    if keep.size == 0:
-        return
-    p, tn, tf, hit, sel = p[keep], tn[keep], tf[keep], hit[keep], sel[keep]
-    tn = np.where(hit, tn, 1.0)
-    tf = np.where(hit, tf, 1.0)
-    y0, y1 = p[:, 4:5] - EYE, p[:, 5:6] - EYE
-    a_n, a_f = HORIZON - FOCAL * y1 / tn, HORIZON - FOCAL * y1 / tf
-    b_n, b_f = HORIZON - FOCAL * y0 / tn, HORIZON - FOCAL * y0 / tf
-    start = np.where(hit, _row(np.minimum(a_n, a_f)), SIZE)
-    end = np.where(hit, _row(np.maximum(b_n, b_f)), 0)
-    fog_cols = _fog(tn, params)
-    base = scene.part_label[sel].astype(np.int32)[:, None] * 4
-    front = ((base + np.where(tminx[keep] > tminz[keep], X_FACE, Z_FACE)) << 8) | fog_cols
-    has_top, has_bottom = y1 < 0, y0 > 0
-    # Each column of a box is painted as rows [start, end) in one code (the underside when
-    # the box is above the eye, else the front face), then its first `over` rows again in a
-    # second code: the top face down to where the front begins, or the front face down to
-    # where the underside begins.
-    first = np.where(has_bottom, ((base + BOTTOM_FACE) << 8) | fog_cols, front)
-    second = np.where(has_top, ((base + TOP_FACE) << 8) | fog_cols, front)
-    over_end = np.where(has_top, _row(a_n), np.where(has_bottom, _row(b_n), start))
-    span = _length(start, end)
-    over = _length(start, np.minimum(over_end, end))
-    bounds = zip(
-        start.min(axis=1).tolist(),
-        end.max(axis=1).tolist(),
-        np.argmax(hit, axis=1).tolist(),
-        (SIZE - np.argmax(hit[:, ::-1], axis=1)).tolist(),
-        (has_top | has_bottom)[:, 0].tolist(),
-        strict=True,
-    )
-    boxes = list(bounds)
-    for k in _draw_order(scene, pose, p, scene.part_object[sel]).tolist():
-        r0, r1, c0, c1, two_faces = boxes[k]
-        if r1 <= r0:
-            continue
-        below = _below(r0, r1, start[k, c0:c1])
-        region = code[r0:r1, c0:c1]
-        np.copyto(region, first[k, c0:c1], where=below < span[k, c0:c1])
-        if two_faces:
-            np.copyto(region, second[k, c0:c1], where=below < over[k, c0:c1])
-
-
-def _length(first: np.ndarray, end: np.ndarray) -> np.ndarray:
-    """Rows in ``[first, end)`` per column (0 when empty), as uint32 for :func:`_below`."""
-    return np.maximum(end - first, 0).astype(np.uint32)
-
-
-def _below(r0: int, r1: int, first: np.ndarray) -> np.ndarray:
-    """``(r1 - r0, columns)``: rows ``r0..r1`` counted from ``first`` of each column, as
-    uint32, so rows above ``first`` wrap to huge values and ``_below(...) < _length(first,
-    end)`` is exactly ``first <= row < end`` in one comparison."""
-    return (_ROW_COL[r0:r1] - first).view(np.uint32)
+    # Rows [top, bottom) skirting, then [top, skirt) wall again: the wall down to the
+    # skirting board. Column bands get their own row bounds (a near wall at the side of the
+    # view spans every row, the far wall ahead a few).
+    spans = ((table[skirting], length(top, bottom)), (table[wall], length(top, skirt)))
+    band_top = top.reshape(-1, WALL_BAND).min(axis=1).tolist()
+    band_bottom = bottom.reshape(-1, WALL_BAND).max(axis=1).tolist()
+    for c0, r0, r1 in zip(range(0, SIZE, WALL_BAND), band_top, band_bottom, strict=True):
+        cut = slice(c0, c0 + WALL_BAND)
+        fill_spans(
+            ws, (r0, r1), (c0, c0 + WALL_BAND), top[cut], [(v[cut], n[cut]) for v, n in spans]
+        )
