@@ -1,17 +1,33 @@
-"""``emrd bench world``: layout generation, one simulator step, one 50-step episode.
+"""``emrd bench world``: layout generation, rendering, one simulator step, one 50-step episode.
 
 The step and episode figures drive the built-in simulator with a fixed explorer that turns
 and walks up to what it sees. ``world.step_ms`` runs with the frame cache off, so every
 step renders, hashes and encodes a frame: it is the cost of a step at a new pose.
+``world.render_ms`` is the renderer alone (the 512 x 512 frame, no digest, no JPEG), per
+frame over the poses of a 20-step walk through the paper office under each condition.
 ``world.episode_s`` is what the episode loop pays per episode in the world, as users run
 it (frame cache on): layout, reset, ground truth (with ``G_base``) and 50 steps.
 """
 
 from __future__ import annotations
 
+import numpy as np
+
 from pytest_emrd.bench import Figure, median_seconds
-from pytest_emrd.trajectory import MAX_STEPS
-from pytest_emrd.world import Layout, Simulator, generate_layout, ground_truth, make_simulator
+from pytest_emrd.trajectory import CONDITIONS, MAX_STEPS
+from pytest_emrd.world import (
+    ConditionParams,
+    Layout,
+    Simulator,
+    WorldPose,
+    condition_params,
+    generate_layout,
+    ground_truth,
+    make_simulator,
+    paper_office,
+)
+from pytest_emrd.world._render import palette, render, shade_table
+from pytest_emrd.world._scene import Scene, scene_of
 
 LAYOUTS_PER_REPEAT = 10
 STEPS_PER_REPEAT = 20
@@ -21,9 +37,9 @@ SEED = 20240611
 class _Explorer:
     """Deterministic walker: two right turns, then a Goto to the next object in view."""
 
-    def __init__(self, sim: Simulator, layout: Layout) -> None:
+    def __init__(self, sim: Simulator, layout: Layout, condition: str = "baseline") -> None:
         self.sim = sim
-        self.obs = sim.reset(layout, "baseline", "office", layout.seed)
+        self.obs = sim.reset(layout, condition, "office", layout.seed)
         self.count = 0
 
     def walk(self, steps: int) -> None:
@@ -46,6 +62,32 @@ def _episode(seed: int) -> None:
     sim.close()
 
 
+Frame = tuple[Scene, WorldPose, ConditionParams, np.ndarray]
+
+
+def _frames() -> list[Frame]:
+    """What renders each pose of a walk through the paper office under every condition: the
+    scene, the pose, the condition and the episode's shade table (as the simulator holds
+    them)."""
+    layout = paper_office()
+    scene = scene_of(layout)
+    frames: list[Frame] = []
+    for condition in CONDITIONS:
+        params = condition_params(condition)
+        table = shade_table(palette(scene, params, layout.seed), params)
+        walker = _Explorer(make_simulator("builtin", frame_cache=0), layout, condition)
+        for _ in range(STEPS_PER_REPEAT):
+            frames.append((scene, walker.sim.agent_pose, params, table))
+            walker.walk(1)
+        walker.sim.close()
+    return frames
+
+
+def _render_all(frames: list[Frame]) -> None:
+    for frame in frames:
+        render(*frame)
+
+
 def run(*, repeat: int) -> list[Figure]:
     seeds = iter(range(SEED, SEED + 100_000))
 
@@ -56,9 +98,12 @@ def run(*, repeat: int) -> list[Figure]:
     layout_s = median_seconds(layouts, repeat=repeat) / LAYOUTS_PER_REPEAT
     walker = _Explorer(make_simulator("builtin", frame_cache=0), generate_layout(SEED))
     step_s = median_seconds(lambda: walker.walk(STEPS_PER_REPEAT), repeat=repeat)
+    frames = _frames()
+    render_s = median_seconds(lambda: _render_all(frames), repeat=repeat) / len(frames)
     episode_s = median_seconds(lambda: _episode(next(seeds)), repeat=repeat)
     return [
         Figure("world.step_ms", step_s / STEPS_PER_REPEAT * 1e3, "ms", 15.0, repeat),
+        Figure("world.render_ms", render_s * 1e3, "ms", 2.0, repeat),
         Figure("world.episode_s", episode_s, "s", 1.0, repeat),
         Figure("world.layout_ms", layout_s * 1e3, "ms", 20.0, repeat),
     ]
