@@ -6,8 +6,10 @@ reproducible and immune to a slow shared machine; ``dev`` explores more.
 
 from __future__ import annotations
 
+import importlib
 import json
 import os
+import pkgutil
 import threading
 from collections.abc import Callable, Iterator
 from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
@@ -31,6 +33,27 @@ settings.register_profile("dev", deadline=None, max_examples=500)
 settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "ci"))
 
 pytest_plugins = ["pytester"]
+
+
+def _import_the_whole_product() -> None:
+    """Import every module of pytest_emrd (and so numpy, scipy, PIL, libyaml, matplotlib) now.
+
+    The ``pytester`` fixture restores ``sys.modules`` when its test ends, dropping whatever was
+    first imported during that test. The product imports lazily, so without this a module
+    could first load inside a pytester test: a compiled extension dropped that way cannot be
+    loaded again in the process ("cannot load module more than once per process"), and a
+    dropped module of ours would come back with new classes that ``isinstance`` and
+    ``pytest.raises`` no longer recognise. Which test first imports what depends on how xdist
+    spreads the tests, so the failures would come and go.
+    """
+    import pytest_emrd
+
+    for info in pkgutil.walk_packages(pytest_emrd.__path__, "pytest_emrd."):
+        if not info.name.endswith("__main__"):
+            importlib.import_module(info.name)
+
+
+_import_the_whole_product()
 
 
 @pytest.fixture(autouse=True)
