@@ -238,11 +238,17 @@ class Run:
             stored, price_in=config.price_per_mtok_in, price_out=config.price_per_mtok_out
         )
 
-    def pytest_unconfigure(self) -> None:
-        # Simulators first: an ai2thor one owns a Unity process, which must not outlive a
-        # worker that xdist kills when its teardown runs past the exit timeout.
+    @pytest.hookimpl(trylast=True)
+    def pytest_sessionfinish(self) -> None:
+        # An ai2thor simulator owns a Unity process. Closed here, a worker stops it before it
+        # tells the controller it has finished (xdist sends that after this hook): at
+        # unconfigure, the controller's exit timeout may already kill the worker mid-stop.
         if "simulators" in self.__dict__:
             self.simulators.close()
+
+    def pytest_unconfigure(self) -> None:
+        if "simulators" in self.__dict__:
+            self.simulators.close()  # sessionfinish never ran (an interrupted start-up)
         if self._prefetcher is not None:
             self._prefetcher.close()
         if "runner" in self.__dict__:
