@@ -14,7 +14,7 @@ from pytest_emrd.metrics.synthetic import synthetic_grid
 from pytest_emrd.report import build_report, render_files
 from pytest_emrd.trajectory import Trajectory
 
-TARGET_GRID_240_S = 15.0
+TARGET_GRID_240_S = 3.0
 
 
 def full_report(trajectories: list[Trajectory]) -> dict[str, bytes]:
