@@ -210,14 +210,24 @@ def _background(
     wall_fog = fog(t_wall, params)
     wall = ((((WALL0 + scene.room_raster[hz, hx]) * 4 + face) << 8) | wall_fog).astype(np.int32)
     skirting = (((SKIRTING * 4 + face) << 8) | wall_fog).astype(np.int32)
-    # Rows [top, bottom) skirting, then [top, skirt) wall again: the wall down to the
-    # skirting board. Column bands get their own row bounds (a near wall at the side of the
-    # view spans every row, the far wall ahead a few).
-    spans = ((table[skirting], length(top, bottom)), (table[wall], length(top, skirt)))
-    band_top = top.reshape(-1, WALL_BAND).min(axis=1).tolist()
-    band_bottom = bottom.reshape(-1, WALL_BAND).max(axis=1).tolist()
-    for c0, r0, r1 in zip(range(0, SIZE, WALL_BAND), band_top, band_bottom, strict=True):
-        cut = slice(c0, c0 + WALL_BAND)
-        fill_spans(
-            ws, (r0, r1), (c0, c0 + WALL_BAND), top[cut], [(v[cut], n[cut]) for v, n in spans]
-        )
+    # Per band of columns: rows [top, skirt) wall, [skirt, bottom) skirting. Rows that are
+    # wall in every column of the band are copied whole; only the ragged rows near the top
+    # and the foot go through masks: there, rows [top, bottom) skirting, then [top, skirt)
+    # wall again (top <= 256 <= skirt in every column).
+    wall_rgb = table[wall]
+    spans = ((table[skirting], length(top, bottom)), (wall_rgb, length(top, skirt)))
+    bands = [a.reshape(-1, WALL_BAND) for a in (top, skirt, bottom)]
+    bounds = zip(
+        range(0, SIZE, WALL_BAND),
+        bands[0].min(axis=1).tolist(),
+        bands[0].max(axis=1).tolist(),
+        bands[1].min(axis=1).tolist(),
+        bands[2].max(axis=1).tolist(),
+        strict=True,
+    )
+    for c0, top0, top1, skirt0, bottom1 in bounds:
+        cols, cut = (c0, c0 + WALL_BAND), slice(c0, c0 + WALL_BAND)
+        band = [(value[cut], count[cut]) for value, count in spans]
+        fill_spans(ws, (top0, top1), cols, top[cut], band[1:])
+        ws.rgbx[top1:skirt0, cut] = wall_rgb[cut]
+        fill_spans(ws, (skirt0, bottom1), cols, top[cut], band)
