@@ -77,12 +77,24 @@ def _run(args: argparse.Namespace) -> int:
 
 def _report(args: argparse.Namespace, formats: list[str]) -> int:
     from pytest_emrd.agent import load_registry
-    from pytest_emrd.gate import evaluate_all, load_run_dirs, load_thresholds
-    from pytest_emrd.metrics import GATE_METRICS, as_episode_metrics
+    from pytest_emrd.gate import (
+        EPISODE_METRICS_CODE,
+        EPISODE_METRICS_LIBRARIES,
+        code_fingerprint,
+        evaluate_all,
+        load_run_dirs,
+        load_thresholds,
+        measured_episodes,
+    )
+    from pytest_emrd.metrics import GATE_METRICS, EpisodeMetrics, episode_metrics
     from pytest_emrd.report import build_report, write_report
 
     trajectories = load_run_dirs(args.run_dirs)
-    metrics = as_episode_metrics(trajectories)  # once per episode, for the gates and the report
+    # once per episode, for the gates and the report; read back where the run saved them
+    metrics = measured_episodes(
+        args.run_dirs, trajectories, measure=episode_metrics, load=EpisodeMetrics.from_dict,
+        code=code_fingerprint(EPISODE_METRICS_CODE, EPISODE_METRICS_LIBRARIES),
+    )  # fmt: skip
     by_trajectory = {id(t): m for t, m in zip(trajectories, metrics, strict=True)}
     registry = load_registry(args.models)
     thresholds_path = args.thresholds

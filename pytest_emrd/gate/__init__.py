@@ -14,6 +14,7 @@ from pytest_emrd.gate._measured import (
     EPISODE_METRICS_LIBRARIES,
     MeasuredStore,
     code_fingerprint,
+    measured_episodes,
 )
 from pytest_emrd.gate._prefetch import Prefetcher, start_prefetch
 from pytest_emrd.gate._settings import (
@@ -79,6 +80,7 @@ __all__ = [
     "judge",
     "load_run_dirs",
     "load_thresholds",
+    "measured_episodes",
     "new_run_dir",
     "parse_backend_option",
     "parse_shard",

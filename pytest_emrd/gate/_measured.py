@@ -22,13 +22,13 @@ import hashlib
 import importlib.metadata
 import importlib.util
 import json
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Sequence
 from pathlib import Path
 from typing import Any, Final, Generic, Protocol, TypeVar
 
 from pytest_emrd._atomic import write_bytes_atomic
 from pytest_emrd._scrub import scrub_bytes
-from pytest_emrd.gate._store import ResultsStore, StoredEpisode
+from pytest_emrd.gate._store import ResultsStore, StoredEpisode, episode_path
 from pytest_emrd.trajectory import EpisodeSpec, Trajectory
 
 
@@ -76,6 +76,64 @@ def code_fingerprint(modules: Iterable[str], distributions: Iterable[str] = ()) 
     return digest.hexdigest()
 
 
+def metrics_path(run_dir: Path, spec: EpisodeSpec) -> Path:
+    """Where a run directory keeps ``spec``'s per-episode metrics."""
+    return run_dir / "metrics" / f"{spec.case_id}.json"
+
+
+def metrics_key(episode_file: bytes, code: str) -> str:
+    """The key a saved measure is valid for: the episode file's bytes and the code's
+    fingerprint."""
+    return hashlib.sha256(episode_file + code.encode()).hexdigest()
+
+
+def read_saved(
+    run_dir: Path,
+    spec: EpisodeSpec,
+    *,
+    code: str,
+    protocol: str,
+    load: Callable[[dict[str, Any]], M],
+) -> M | None:
+    """The measure saved in ``run_dir`` for the very episode file stored there now, under
+    ``protocol`` and by the code fingerprinted as ``code``; None when missing, stale or
+    unreadable (the caller measures again)."""
+    try:
+        episode_file = episode_path(run_dir, spec).read_bytes()
+        document = json.loads(metrics_path(run_dir, spec).read_bytes())
+        if document["key"] != metrics_key(episode_file, code):
+            return None
+        if document["protocol"] != protocol:
+            return None
+        measured = load(document["metrics"])
+    except (OSError, ValueError, KeyError, TypeError):
+        return None
+    return measured if measured.spec == spec and not measured.errored else None
+
+
+def measured_episodes(
+    run_dirs: Sequence[Path],
+    trajectories: Iterable[Trajectory],
+    *,
+    measure: Callable[[Trajectory], M],
+    load: Callable[[dict[str, Any]], M],
+    code: str,
+) -> list[M]:
+    """The measure of each trajectory read from ``run_dirs`` (the first directory holding its
+    episode, as :func:`~pytest_emrd.gate.load_run_dirs` reads them): read back where the run
+    saved it for that very episode file, measured otherwise. Nothing is written: reading a
+    run never changes it."""
+    out = []
+    for trajectory in trajectories:
+        spec = trajectory.spec
+        home = next((d for d in run_dirs if episode_path(d, spec).is_file()), None)
+        saved = None if home is None else read_saved(
+            home, spec, code=code, protocol=trajectory.protocol, load=load
+        )  # fmt: skip
+        out.append(saved if saved is not None else measure(trajectory))
+    return out
+
+
 class MeasuredStore(Generic[M]):
     """Per-episode metrics of one results store, measured at most once per stored episode."""
 
@@ -92,23 +150,15 @@ class MeasuredStore(Generic[M]):
         """``code``: the :func:`code_fingerprint` of ``measure``."""
 
     def path_for(self, spec: EpisodeSpec) -> Path:
-        return self.store.run_dir / "metrics" / f"{spec.case_id}.json"
+        return metrics_path(self.store.run_dir, spec)
 
     def _key(self, episode_file: bytes) -> str:
-        return hashlib.sha256(episode_file + self.code.encode()).hexdigest()
+        return metrics_key(episode_file, self.code)
 
     def _saved(self, spec: EpisodeSpec) -> M | None:
-        try:
-            episode_file = self.store.path_for(spec).read_bytes()
-            document = json.loads(self.path_for(spec).read_bytes())
-            if document["key"] != self._key(episode_file):
-                return None
-            if document["protocol"] != self.store.protocol:
-                return None
-            measured = self.load(document["metrics"])
-        except (OSError, ValueError, KeyError, TypeError):
-            return None  # missing, stale or unreadable: measured again and overwritten
-        return measured if measured.spec == spec and not measured.errored else None
+        return read_saved(
+            self.store.run_dir, spec, code=self.code, protocol=self.store.protocol, load=self.load
+        )
 
     def get(self, spec: EpisodeSpec, episode: Callable[[EpisodeSpec], StoredEpisode]) -> M:
         """The metrics of ``spec``'s stored episode: read back when saved for the very

@@ -15,6 +15,7 @@ from pytest_emrd.gate import (
     ResultsStore,
     StoredEpisode,
     code_fingerprint,
+    measured_episodes,
 )
 from pytest_emrd.metrics import EpisodeMetrics, episode_metrics
 from pytest_emrd.trajectory import EpisodeSpec, Trajectory
@@ -134,3 +135,22 @@ def test_code_fingerprint_follows_the_source_and_library_versions(tmp_path, monk
     assert code_fingerprint(["emrd_fp_probe"], ["numpy"]) != code_fingerprint(["emrd_fp_probe"])
     with pytest.raises(ModuleNotFoundError, match="emrd_fp_missing"):
         code_fingerprint(["emrd_fp_missing"])
+
+
+def test_reading_runs_uses_what_each_run_saved_and_measures_the_rest(tmp_path):
+    first, second, measure = tmp_path / "a", tmp_path / "b", Measure()
+    store_a, store_b = _store(first), _store(second)
+    _measured(store_a, measure).get(SPEC, _episode(store_a))  # run a saved its metrics
+    other = EpisodeSpec("scout", "baseline", "kitchen", 0)
+    _episode(store_b)(other)  # run b stored an episode but saved no metrics
+    trajectories = [store_a.get_or_compute(SPEC, _no_episode).trajectory,
+                    store_b.get_or_compute(other, _no_episode).trajectory]  # fmt: skip
+    again = Measure()
+    got = measured_episodes([first, second], trajectories, measure=again, load=Steps.from_dict,
+                            code="c1")  # fmt: skip
+    assert got == [Steps(SPEC, False, 0), Steps(other, False, 0)]
+    assert again.calls == 1  # only the episode without saved metrics
+    assert not (second / "metrics").exists()  # reading a run never writes to it
+    stale = measured_episodes([first], trajectories[:1], measure=again, load=Steps.from_dict,
+                              code="c2")  # fmt: skip
+    assert stale == [Steps(SPEC, False, 0)] and again.calls == 2  # other code: measured again
