@@ -11,6 +11,7 @@ points, squared residuals after a fit).
 from __future__ import annotations
 
 import functools
+import itertools
 import math
 from collections.abc import Sequence
 from typing import Final, NamedTuple
@@ -145,10 +146,7 @@ class Layout(NamedTuple):
 class Problem:
     """One map's recognised entries against the objects still open to them."""
 
-    __slots__ = (
-        "_blocked", "_pairs", "candidates", "cols_of", "kinds", "layout", "points", "pred",
-        "true_kinds",
-    )  # fmt: skip
+    __slots__ = ("_blocked", "_pairs", "candidates", "held", "kinds", "layout", "points", "pred")
 
     def __init__(
         self,
@@ -164,38 +162,38 @@ class Problem:
         self.kinds = kinds
         """Type index of each entry."""
         self.layout = layout
-        self.true_kinds = layout.kinds
-        """Type index of each object, -1 for the ``held`` ones (open to no entry)."""
-        self.cols_of = layout.cols_of
-        """Type index -> the objects of that type open to the entries."""
+        self.held = held
+        """Objects open to no entry (held by carried identities)."""
+        cols_of = layout.cols_of
         if held:
-            self.true_kinds = layout.kinds.copy()
-            self.true_kinds[list(held)] = -1
             gone = set(held)
-            self.cols_of = {
-                k: tuple(c for c in cols if c not in gone) for k, cols in layout.cols_of.items()
-            }
-        self.candidates = [self.cols_of.get(k, ()) for k in kinds]
+            cols_of = {k: tuple(c for c in cols_of.get(k, ()) if c not in gone) for k in kinds}
+        self.candidates = [cols_of.get(k, ()) for k in kinds]
         """The objects open to each entry, ascending."""
         self._blocked: np.ndarray | None = None
-        self._pairs: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
+        self._pairs: tuple[np.ndarray, np.ndarray, list[int]] | None = None
 
     @property
     def blocked(self) -> np.ndarray:
         """(n x m) True where object ``j`` is not open to entry ``i`` (another type, held)."""
         if self._blocked is None:
-            self._blocked = np.array(self.kinds, dtype=int)[:, None] != self.true_kinds
+            true_kinds = self.layout.kinds
+            if self.held:
+                true_kinds = true_kinds.copy()
+                true_kinds[list(self.held)] = -1
+            self._blocked = np.array(self.kinds, dtype=int)[:, None] != true_kinds
         return self._blocked
 
     @property
-    def pairs(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def pairs(self) -> tuple[np.ndarray, np.ndarray, list[int]]:
         """Every (entry, open object) pair, entry by entry: the entry's index, the object's
         position (pairs x 2), and where each entry's run of pairs starts."""
         if self._pairs is None:
-            rows = [i for i, cols in enumerate(self.candidates) for _ in cols]
-            cols = [c for cols in self.candidates for c in cols]
-            starts = np.cumsum([0, *map(len, self.candidates[:-1])])
-            self._pairs = np.array(rows, dtype=np.intp), self.layout.true[cols], starts
+            cands = self.candidates
+            rows = [i for i, cols in enumerate(cands) for _ in cols]
+            true = self.layout.true[[c for cols in cands for c in cols]]
+            starts = [0, *itertools.accumulate(map(len, cands[:-1]))]
+            self._pairs = np.array(rows, dtype=np.intp), true, starts
         return self._pairs
 
 
@@ -219,7 +217,8 @@ def assign(problem: Problem, motion: Motion) -> Pairs:
     p = moved(problem.pred, motion)
     dec = digits(problem.layout.scale, 2)
     d = None
-    nearest = _nearest(_pair_distances(problem, p, dec), problem.candidates)
+    distances = _pair_distances(problem, p, dec)
+    nearest = _nearest(distances, problem.candidates)
     if nearest is None:  # a distance that is not finite: numpy's matrix and argmin decide
         d = _distance_matrix(problem, p, dec)
         # An entry with no object of its type left (every one held by a carried identity) has
@@ -232,8 +231,6 @@ def assign(problem: Problem, motion: Motion) -> Pairs:
         return tuple((i, j) for i, j in enumerate(nearest) if j >= 0)
     from scipy.optimize import linear_sum_assignment  # heavy: imported on first use
 
-    if d is None:
-        d = _distance_matrix(problem, p, dec)
     kinds = problem.kinds
     seen: dict[int, int] = {}
     clash: set[int] = set()
@@ -242,10 +239,15 @@ def assign(problem: Problem, motion: Motion) -> Pairs:
             clash.add(kinds[i])
         seen[j] = i
     pairs = [(i, j) for i, j in enumerate(nearest) if j >= 0 and kinds[i] not in clash]
+    start = [0, *itertools.accumulate(map(len, problem.candidates))]
     for k in sorted(clash):
         rows = [i for i, kind in enumerate(kinds) if kind == k]
-        cols = list(problem.cols_of[k])
-        r, c = linear_sum_assignment(d[rows][:, cols])
+        cols = list(problem.candidates[rows[0]])
+        if d is None:  # the type's block of the matrix, from the pairs' distances
+            block = np.array([distances[start[i] : start[i + 1]] for i in rows])
+        else:
+            block = d[rows][:, cols]
+        r, c = linear_sum_assignment(block)
         pairs += ((rows[i], cols[j]) for i, j in zip(r.tolist(), c.tolist(), strict=True))
     return tuple(sorted(pairs))
 
@@ -257,13 +259,16 @@ _FEW_PAIRS: Final = 24
 def _pair_distances(problem: Problem, p: np.ndarray, dec: int) -> list[float]:
     """Rounded squared distance of each moved entry ``p`` to each object open to it (in the
     order of :attr:`Problem.pairs`): each value the one :func:`_distance_matrix` holds."""
-    rows, true, _ = problem.pairs
-    if len(rows) <= _FEW_PAIRS:
+    if sum(map(len, problem.candidates)) <= _FEW_PAIRS:
+        true = problem.layout.points
         out: list[float] = []
-        for (x, z), (u, v) in zip(p[rows].tolist(), true.tolist(), strict=True):
-            sq = (x - u) * (x - u) + (z - v) * (z - v)
-            out.append(round_like_numpy(sq, dec) if math.isfinite(sq) else sq)
+        for (x, z), cols in zip(p.tolist(), problem.candidates, strict=True):
+            for j in cols:
+                u, v = true[j]
+                sq = (x - u) * (x - u) + (z - v) * (z - v)
+                out.append(round_like_numpy(sq, dec) if math.isfinite(sq) else sq)
         return out
+    rows, true, _ = problem.pairs
     diff = p[rows] - true
     diff *= diff
     sq = diff[:, 0] + diff[:, 1]
@@ -357,7 +362,7 @@ def hypotheses(problem: Problem) -> list[Motion]:
     """
     pred = problem.points
     true = problem.layout.points
-    cand = [problem.cols_of[k] for k in problem.kinds]
+    cand = problem.candidates
     d1 = digits(problem.layout.scale, 1)
     n = len(pred)
     cx = math.fsum(p[0] for p in pred) / n
