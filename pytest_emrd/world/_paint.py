@@ -213,13 +213,14 @@ def paint_objects(
     cols = np.arange(int(offset[-1] + width[-1])) + np.repeat(lo - offset, width)
     p = scene.parts[sel]
     # Where each column's ray crosses the planes x0, z0, x1, z1 of the box (slab test).
-    slab = (p[:, :4] - (pose.x, pose.z, pose.x, pose.z))[k] / np.stack((dx, dz, dx, dz), 1)[cols]
+    rel = np.take(p[:, :4] - (pose.x, pose.z, pose.x, pose.z), k, axis=0)
+    slab = rel / np.take(np.stack((dx, dz, dx, dz), 1), cols, axis=0)
     near, far = np.minimum(slab[:, :2], slab[:, 2:]), np.maximum(slab[:, :2], slab[:, 2:])
     tn, tf = np.maximum(near[:, 0], near[:, 1]), np.minimum(far[:, 0], far[:, 1])
-    hit = (tn < tf) & (tn > NEAR) & (tn < t_wall[cols])
+    hit = (tn < tf) & (tn > NEAR) & (tn < np.take(t_wall, cols))
     tn, tf = np.where(hit, tn, 1.0), np.where(hit, tf, 1.0)
     # Rows of the bottom (y0) and top (y1) edges at the near and the far hit.
-    y = (FOCAL * (p[:, 4:6] - EYE))[k]
+    y = np.take(FOCAL * (p[:, 4:6] - EYE), k, axis=0)
     at_near, at_far = HORIZON - y / tn[:, None], HORIZON - y / tf[:, None]
     edges = np.empty((k.size, 4))
     np.minimum(at_near[:, 1], at_far[:, 1], out=edges[:, 0])
@@ -229,14 +230,15 @@ def paint_objects(
     start = np.where(hit, rows[:, 0], np.int16(SIZE))
     end = np.where(hit, rows[:, 1], np.int16(0))
     has_top, has_bottom = p[:, 5] < EYE, p[:, 4] > EYE
-    over_end = np.where(has_top[k], rows[:, 3], np.where(has_bottom[k], rows[:, 2], start))
+    top_k, bottom_k = np.take(has_top, k), np.take(has_bottom, k)
+    over_end = np.where(top_k, rows[:, 3], np.where(bottom_k, rows[:, 2], start))
     span = length(start, end)
     over = length(start, np.minimum(over_end, end))
     # ((label * 4 + face) << 8) | fog, as (label * 4 << 8 | fog) + (face << 8).
-    lit = (_boxes(scene).base[sel] << 8)[k] | fog(tn, params)
+    lit = np.take(_boxes(scene).base[sel] << 8, k) | fog(tn, params)
     front = lit + np.where(near[:, 0] > near[:, 1], np.int32(X_FACE << 8), np.int32(Z_FACE << 8))
-    first = table[np.where(has_bottom[k], lit + (BOTTOM_FACE << 8), front)]
-    second = table[np.where(has_top[k], lit + (TOP_FACE << 8), front)]
+    first = np.take(table, np.where(bottom_k, lit + (BOTTOM_FACE << 8), front))
+    second = np.take(table, np.where(top_k, lit + (TOP_FACE << 8), front))
     c0 = np.minimum.reduceat(np.where(hit, cols, SIZE), offset)
     c1 = np.maximum.reduceat(np.where(hit, cols, -1), offset) + 1
     boxes = list(

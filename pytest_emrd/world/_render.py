@@ -186,7 +186,7 @@ def _background(
     skirt = first_row(HORIZON + FOCAL * (EYE - SKIRTING_HEIGHT) / t_wall)
     first_floor = max(HORIZON, int(bottom.min()))
     ceiling, floor_fog = _fog_rows(params)
-    ws.rgbx[:HORIZON] = table[ceiling]
+    ws.rgbx[:HORIZON] = np.take(table, ceiling)
     rows = slice(first_floor - HORIZON, None)
     codes = _floor_codes(scene)
     nz, nx = codes.shape
@@ -196,7 +196,7 @@ def _background(
         # One axis is fixed along each image row (a cardinal heading): look up the colours
         # of the raster line each row lies on, then gather pixels from those lines.
         fixed, vary, grid = (cz, cx, codes) if cz.shape[1] == 1 else (cx, cz, codes.T)
-        lines = table[grid[fixed[:, 0]] | fog_rows]
+        lines = np.take(table, np.take(grid, fixed[:, 0], axis=0) | fog_rows)
         vary += np.arange(len(lines))[:, None] * grid.shape[1]
         np.take(lines, vary, out=ws.rgbx[first_floor:], mode="clip")  # indices lie in range
     else:
@@ -214,8 +214,8 @@ def _background(
     # wall in every column of the band are copied whole; only the ragged rows near the top
     # and the foot go through masks: there, rows [top, bottom) skirting, then [top, skirt)
     # wall again (top <= 256 <= skirt in every column).
-    wall_rgb = table[wall]
-    spans = ((table[skirting], length(top, bottom)), (wall_rgb, length(top, skirt)))
+    wall_rgb = np.take(table, wall)
+    spans = ((np.take(table, skirting), length(top, bottom)), (wall_rgb, length(top, skirt)))
     bands = [a.reshape(-1, WALL_BAND) for a in (top, skirt, bottom)]
     bounds = zip(
         range(0, SIZE, WALL_BAND),
