@@ -17,7 +17,7 @@ from pytest_emrd.metrics._align import COINCIDENT_M, digits
 from pytest_emrd.metrics._match import Matching, rigid_fit
 from pytest_emrd.metrics._tracking import Track, exp_ratio, layout_scale
 from pytest_emrd.metrics._vocab import TypeResolver
-from pytest_emrd.trajectory import Trajectory
+from pytest_emrd.trajectory import GroundTruthObject, Trajectory
 
 #: Ground-truth type of doorways (left out of ``O_F`` by FPSG's doorway-free variant).
 DOORWAY_TYPE: Final = "Doorway"
@@ -178,11 +178,12 @@ def sir_score(traj: Trajectory, track: Track, aec: float | None) -> tuple[float 
     held = track.held
     ratios: list[float] = []
     reentered = [v for v in track.visits if v.return_end is not None]
+    office = Office.of(traj) if reentered else None
     for v in reentered:
         first = {o: lb for o, lb in held[v.first_end].items() if room_of[o] == v.room}
-        if first and v.return_end is not None and v.return_start is not None:
+        if first and office and v.return_end is not None and v.return_start is not None:
             room_by_label = {lb: room_of[o] for o, lb in held[v.return_end].items()}
-            copies = reentry_copies(traj, held, v.return_start, v.return_end)
+            copies = reentry_copies(traj, office, held, v.return_start, v.return_end)
             kept = sum(room_by_label.get(lb) == v.room and o not in copies
                        for o, lb in first.items())  # fmt: skip
             ratios.append(kept / len(first))
@@ -195,8 +196,31 @@ def sir_score(traj: Trajectory, track: Track, aec: float | None) -> tuple[float 
     return aec * float(np.mean(ratios)), ""
 
 
+@dataclass(frozen=True)
+class Office:
+    """What :func:`reentry_copies` reads from an episode's ground truth, built once."""
+
+    objects: dict[str, GroundTruthObject]
+    types: TypeResolver
+    ids_of: dict[int, list[str]]
+    """Type index -> the ids of its objects, sorted."""
+    decimals: int
+    """Squared distances are compared at :data:`~._align.TIE_DECIMALS` relative to the
+    office's size, so ties go the same way in every frame."""
+
+    @classmethod
+    def of(cls, traj: Trajectory) -> Office:
+        objects = {o.object_id: o for o in traj.ground_truth.objects}
+        types = TypeResolver(o.object_type for o in objects.values())
+        ids_of: dict[int, list[str]] = {}
+        for oid in sorted(objects):
+            ids_of.setdefault(types.index[objects[oid].object_type], []).append(oid)
+        xy = np.array([(o.x, o.z) for o in objects.values()], dtype=float).reshape(-1, 2)
+        return cls(objects, types, ids_of, digits(layout_scale(xy), 2))
+
+
 def reentry_copies(
-    traj: Trajectory, held: Sequence[dict[str, str]], start: int, end: int
+    traj: Trajectory, office: Office, held: Sequence[dict[str, str]], start: int, end: int
 ) -> frozenset[str]:
     """Objects that an entry written during a re-entry (steps ``start..end``) copies.
 
@@ -220,15 +244,13 @@ def reentry_copies(
     label_of = held[end]
     if not new or len(label_of) < 2:
         return frozenset()
-    objects = {o.object_id: o for o in traj.ground_truth.objects}
+    objects, types = office.objects, office.types
     pairs = sorted(label_of.items())
     pred = np.array([(entries[lb].x, entries[lb].z) for _, lb in pairs], dtype=float)
     true = np.array([(objects[o].x, objects[o].z) for o, _ in pairs], dtype=float)
     if float(np.max(np.hypot(*(pred - pred[0]).T))) <= COINCIDENT_M:
         return frozenset()
     rotation, shift = rigid_fit(pred, true)
-    decimals = digits(layout_scale(true), 1)
-    types = TypeResolver(o.object_type for o in objects.values())
     by_type: dict[int, list[str]] = {}
     for lb in sorted(new):
         k = types.resolve(entries[lb].object_type, lb)
@@ -236,11 +258,10 @@ def reentry_copies(
             by_type.setdefault(k, []).append(lb)
     copies: set[str] = set()
     for k, labels in by_type.items():
-        ids = sorted(o for o, g in objects.items() if g.object_type == types.names[k])
+        ids = office.ids_of[k]
         where = np.array([(entries[lb].x, entries[lb].z) for lb in labels]) @ rotation.T + shift
         spot = np.array([(objects[o].x, objects[o].z) for o in ids], dtype=float)
-        # rounded at the matcher's precision, so ties go the same way in every frame
-        cost = np.round(((where[:, None, :] - spot[None, :, :]) ** 2).sum(axis=2), decimals)
+        cost = np.round(((where[:, None, :] - spot[None, :, :]) ** 2).sum(axis=2), office.decimals)
         rows, cols = linear_sum_assignment(cost)
         meant = dict(zip(rows.tolist(), cols.tolist(), strict=True))
         for r, lb in enumerate(labels):  # entries beyond the type's count: their nearest
