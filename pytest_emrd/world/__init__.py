@@ -2,9 +2,9 @@
 
 ``episode_world(spec)`` is the world of an episode (the paper's fixed office
 ``paper_office()`` by default, ``generate_layout(seed)`` under generated layouts);
-``make_simulator(backend)`` returns a
-:class:`Simulator` (``builtin``: :class:`BuiltinSimulator`, pure numpy; ``ai2thor``: the
-THOR backend, extra ``thor``); ``ground_truth`` and ``discoverable_ids`` give what the
+``make_simulator(backend)`` returns a :class:`Simulator` (``builtin``:
+:class:`BuiltinSimulator`, numpy with a numba pixel kernel; ``ai2thor``: the THOR backend,
+extra ``thor``); ``ground_truth`` and ``discoverable_ids`` give what the
 metrics compare against. ``WORLD_VERSION`` keys cassettes.
 """
 

@@ -8,16 +8,12 @@ quantity is the same element-wise IEEE expression as over the full width, so the
 identical; columns outside a box's range cannot hit it (its rays pass more than a column's
 angle, ``1 / 256``, away from the box). Each box then paints, over the bounding rectangle of
 the columns it hits, its rows ``[start, end)`` in one colour and its first ``over`` rows
-again in a second colour (see :func:`paint_objects`).
-
-Painting is done in colours, not codes: each per-column code is looked up in the shade table
-before it is painted (a few thousand look-ups instead of one per pixel), so the last colour
-written to a pixel is the colour of the last code written to it.
+again in a second colour (see :func:`object_spans`); the painting itself is
+:func:`pytest_emrd.world._kernel.compose`.
 """
 
 from __future__ import annotations
 
-import threading
 from dataclasses import dataclass
 from functools import lru_cache
 
@@ -39,45 +35,6 @@ NEAR = 0.05
 #: ``table[code]`` (:func:`pytest_emrd.world._render.shade_table`).
 X_FACE, Z_FACE, TOP_FACE, BOTTOM_FACE = 0, 1, 2, 3
 
-_ROW_COL = np.arange(SIZE, dtype=np.int16)[:, None]
-
-
-@dataclass(frozen=True, eq=False)
-class Workspace:
-    """Buffers one thread reuses from frame to frame (fresh megabyte arrays cost page
-    faults on every frame); nothing in them outlives a call to ``render``."""
-
-    rgbx: np.ndarray
-    """``(512, 512)`` uint32 the frame being painted, one shade-table entry per pixel (bytes
-    ``R, G, B, 0``)."""
-    rows: np.ndarray
-    """``(512, 512)`` int16 scratch: rows counted from a span's first row."""
-    mask: np.ndarray
-    """``(512, 512)`` bool scratch."""
-    scaled: np.ndarray
-    """``(256, 512)`` float64 scratch: floor coordinates."""
-    cells: tuple[np.ndarray, np.ndarray]
-    """``(256, 512)`` intp: floor raster cells along z and along x (gather indices)."""
-
-
-_LOCAL = threading.local()
-
-
-def workspace() -> Workspace:
-    """This thread's :class:`Workspace` (made on first use)."""
-    ws: Workspace | None = getattr(_LOCAL, "workspace", None)
-    if ws is None:
-        half = (SIZE - HORIZON, SIZE)
-        ws = Workspace(
-            rgbx=np.empty((SIZE, SIZE), dtype=np.uint32),
-            rows=np.empty((SIZE, SIZE), dtype=np.int16),
-            mask=np.empty((SIZE, SIZE), dtype=bool),
-            scaled=np.empty(half, dtype=np.float64),
-            cells=(np.empty(half, dtype=np.intp), np.empty(half, dtype=np.intp)),
-        )
-        _LOCAL.workspace = ws
-    return ws
-
 
 def fog(depth: np.ndarray, params: ConditionParams) -> np.ndarray:
     """Fog weight 0..255 of surfaces at ``depth``."""
@@ -94,33 +51,8 @@ def first_row(a: np.ndarray) -> np.ndarray:
 
 
 def length(first: np.ndarray, end: np.ndarray) -> np.ndarray:
-    """Rows in ``[first, end)`` per column (0 when empty), as uint16 for :func:`fill_spans`."""
+    """Rows in ``[first, end)`` per column (0 when empty), as uint16."""
     return np.maximum(end - first, 0).astype(np.uint16)
-
-
-def fill_spans(
-    ws: Workspace,
-    rows: tuple[int, int],
-    cols: tuple[int, int],
-    first: np.ndarray,
-    spans: list[tuple[np.ndarray, np.ndarray]],
-) -> None:
-    """Over ``ws.rgbx[r0:r1, c0:c1]``, for each ``(value, count)`` in turn, set rows
-    ``[first, first + count)`` of each column to ``value`` (per-column arrays, ``first``
-    from :func:`first_row`).
-
-    Rows are counted from ``first`` in 16 bits (rows and first rows lie in ``[0, 512]``)
-    and read as unsigned, so rows above ``first`` wrap to huge values and ``row - first <
-    count`` is exactly ``first <= row < first + count`` in one comparison (``count`` from
-    :func:`length`)."""
-    (r0, r1), (c0, c1) = rows, cols
-    counted = ws.rows[: r1 - r0, : c1 - c0]
-    np.subtract(_ROW_COL[r0:r1], first, out=counted)
-    counted = counted.view(np.uint16)
-    mask, region = ws.mask[: r1 - r0, : c1 - c0], ws.rgbx[r0:r1, c0:c1]
-    for value, count in spans:
-        np.less(counted, count, out=mask)
-        np.copyto(region, value, where=mask)
 
 
 @dataclass(frozen=True, eq=False)
@@ -186,26 +118,38 @@ def _shown(scene: Scene, pose: WorldPose, params: ConditionParams) -> tuple[np.n
     return sel[wide], lo[wide], hi[wide]
 
 
-def paint_objects(
+Columns = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]
+"""Per (box, column) pair: ``start`` row (int16), ``span`` and ``over`` row counts (uint16),
+``first`` and ``second`` codes (int32)."""
+_NOTHING = (
+    np.zeros((0, 6), dtype=np.int64),
+    tuple(np.zeros(0, dtype=t) for t in (np.int16, np.uint16, np.uint16, np.int32, np.int32)),
+)
+
+
+def object_spans(
     scene: Scene,
     pose: WorldPose,
     params: ConditionParams,
     rays: tuple[np.ndarray, np.ndarray, np.ndarray],
-    table: np.ndarray,
-    ws: Workspace,
-) -> None:
-    """Paint the boxes of nearby objects into ``ws.rgbx`` back to front: by the distance of
-    the object (an item on a desk takes its desk's), then bottom-up, then farther boxes first.
+) -> tuple[np.ndarray, Columns]:
+    """What the boxes of nearby objects paint, back to front: by the distance of the object
+    (an item on a desk takes its desk's), then bottom-up, then farther boxes first (nothing
+    when no box is in view).
 
     ``rays`` is ``(dx, dz, t_wall)`` per column. A box shows its front face, its top face
     when below the eye, its underside when above; each column it hits is painted as rows
-    ``[start, end)`` in one colour (the underside when the box is above the eye, else the
-    front face), then its first ``over`` rows again in a second colour: the top face down to
-    where the front begins, or the front face down to where the underside begins.
+    ``[start, start + span)`` in code ``first`` (the underside when the box is above the
+    eye, else the front face), then its first ``over`` rows again in code ``second``: the
+    top face down to where the front begins, or the front face down to where the underside
+    begins. Returned as ``(rects, columns)`` for :func:`pytest_emrd.world._kernel.compose`:
+    ``rects`` rows ``r0, r1, c0, c1, at, two`` (int64) in drawing order, the rows and
+    columns a box can touch, where its entries start in ``columns`` and whether it has a
+    second face.
     """
     sel, lo, hi = _shown(scene, pose, params)
     if sel.size == 0:
-        return
+        return _NOTHING
     dx, dz, t_wall = rays
     width = hi - lo
     offset = np.cumsum(width) - width
@@ -237,31 +181,24 @@ def paint_objects(
     # ((label * 4 + face) << 8) | fog, as (label * 4 << 8 | fog) + (face << 8).
     lit = np.take(_boxes(scene).base[sel] << 8, k) | fog(tn, params)
     front = lit + np.where(near[:, 0] > near[:, 1], np.int32(X_FACE << 8), np.int32(Z_FACE << 8))
-    first = np.take(table, np.where(bottom_k, lit + (BOTTOM_FACE << 8), front))
-    second = np.take(table, np.where(top_k, lit + (TOP_FACE << 8), front))
+    first = np.where(bottom_k, lit + (BOTTOM_FACE << 8), front)
+    second = np.where(top_k, lit + (TOP_FACE << 8), front)
     c0 = np.minimum.reduceat(np.where(hit, cols, SIZE), offset)
     c1 = np.maximum.reduceat(np.where(hit, cols, -1), offset) + 1
-    boxes = list(
-        zip(
-            np.minimum.reduceat(start, offset).tolist(),
-            np.maximum.reduceat(end, offset).tolist(),
-            c0.tolist(),
-            c1.tolist(),
-            (offset + c0 - lo).tolist(),
-            (has_top | has_bottom).tolist(),
-            strict=True,
-        )
-    )
+    rects = np.stack(
+        (
+            np.minimum.reduceat(start, offset),
+            np.maximum.reduceat(end, offset),
+            c0,
+            c1,
+            offset + c0 - lo,
+            has_top | has_bottom,
+        ),
+        axis=1,
+    ).astype(np.int64)
     drawn = np.flatnonzero(c1 > c0)
-    for i in drawn[_draw_order(scene, pose, sel[drawn])].tolist():
-        r0, r1, c0_, c1_, at, two_faces = boxes[i]
-        if r1 <= r0:
-            continue
-        cut = slice(at, at + c1_ - c0_)
-        spans = [(first[cut], span[cut])]
-        if two_faces:
-            spans.append((second[cut], over[cut]))
-        fill_spans(ws, (r0, r1), (c0_, c1_), start[cut], spans)
+    order = drawn[_draw_order(scene, pose, sel[drawn])]
+    return rects[order], (start, span, over, first, second)
 
 
 def _draw_order(scene: Scene, pose: WorldPose, sel: np.ndarray) -> np.ndarray:

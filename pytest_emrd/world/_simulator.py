@@ -39,7 +39,7 @@ FRAME_CACHE = 16
 
 
 class BuiltinSimulator(SemanticStep):
-    """Pure-numpy office simulator: semantic actions, wall-occluded visibility, ray-cast frames.
+    """Built-in office simulator: semantic actions, wall-occluded visibility, ray-cast frames.
 
     ``room_aliases`` maps extra names ``Term`` accepts to canonical room names (for prompt
     variants that rename the rooms, e.g. ``{"Room A": "Office"}``). ``frame_cache`` is how
