@@ -47,6 +47,7 @@ from __future__ import annotations
 import base64
 import gzip
 import json
+import re
 import zlib
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -55,7 +56,7 @@ from typing import Any, Final
 import yaml
 from vcr.request import Request
 
-from pytest_emrd._wire import encoder, splice
+from pytest_emrd._wire import encoder, key_json, splice
 from pytest_emrd.cassette._redact import DIGEST, canonical_json
 
 FORMAT: Final = "emrd-cassette/1"
@@ -191,19 +192,46 @@ def _encode_body(
     return {"raw": table.intern(_text(raw))}
 
 
+#: A table reference in a tree as :func:`encode` writes it (compact, ``ensure_ascii=False``): a
+#: string *value* that is NUL and an index. A quote after a backslash is inside a string, and a
+#: key is followed by ``:``; every other string starting with NUL is a reference (see _pack).
+_REF_TEXT: Final = re.compile(r'(?<!\\)"\\u0000(\d+)"(?!:)')
+
+
 class _Decoder:
     """Rebuilds bodies; each template is serialised once per mode, however many requests
-    carry it (a message travels in up to ten consecutive windows)."""
+    carry it (a message travels in up to ten consecutive windows).
 
-    def __init__(self, strings: Sequence[str], templates: Sequence[str]) -> None:
-        self.strings, self.templates = strings, templates
+    With ``verbatim`` (a file read as :func:`encode` wrote it), a tree to be written back
+    compact or canonical is not parsed: its stored text is already that serialisation (the
+    keys of a canonical body were sorted when it was stored), so each reference is replaced
+    in the text by its string's JSON. Otherwise (a file edited into block-style YAML, or an
+    ``ascii`` body) the tree is parsed, unpacked and serialised again.
+    """
+
+    def __init__(self, strings: Sequence[str], templates: Sequence[str], *, verbatim: bool) -> None:
+        self.strings, self.templates, self.verbatim = strings, templates, verbatim
         self._items: dict[tuple[int, str], str] = {}
+        self._refs: dict[str, str] = {}
+
+    def _ref(self, ref: re.Match[str]) -> str:
+        """The JSON of the string ``ref`` points to (a reply is referenced by its response
+        and by the request that carries it back: escaped once)."""
+        text = self._refs.get(ref[1])
+        if text is None:
+            text = self._refs[ref[1]] = key_json(self.strings[int(ref[1])], ensure_ascii=False)
+        return text
+
+    def _tree_text(self, text: str, mode: str) -> str:
+        """``_SERIALISE[mode]`` of the stored tree ``text`` with its references resolved."""
+        if self.verbatim and mode != "ascii":
+            return _REF_TEXT.sub(self._ref, text)
+        return _SERIALISE[mode](_unpack(json.loads(text), self.strings))
 
     def _item(self, index: int, mode: str) -> str:
         text = self._items.get((index, mode))
         if text is None:
-            tree = _unpack(json.loads(self.templates[index]), self.strings)
-            text = self._items[(index, mode)] = _SERIALISE[mode](tree)
+            text = self._items[(index, mode)] = self._tree_text(self.templates[index], mode)
         return text
 
     def body(self, body: dict[str, Any]) -> tuple[bytes, bool]:
@@ -211,15 +239,14 @@ class _Decoder:
         if "raw" in body:
             return _bytes(self.strings[body["raw"]]), False
         mode = body["mode"]
-        serialise = _SERIALISE[mode]
-        tree = _unpack(json.loads(body["json"]), self.strings)
         lists = body.get("lists", {})
         if not lists:
-            return serialise(tree).encode(), mode == "canonical"
+            return self._tree_text(body["json"], mode).encode(), mode == "canonical"
         # Each list spliced in from its items' serialisations (each template done once).
+        tree = _unpack(json.loads(body["json"]), self.strings)
         text = splice(
             {**tree, **{key: _expand(runs) for key, runs in lists.items()}},
-            value=serialise,
+            value=_SERIALISE[mode],
             item=lambda index: self._item(index, mode),
             sort_keys=mode == "canonical",
             ensure_ascii=mode == "ascii",
@@ -284,9 +311,11 @@ def decode(blob: bytes) -> CassetteData:
         text = gzip.decompress(blob).decode()
     except (OSError, EOFError, zlib.error, UnicodeDecodeError) as exc:
         raise FormatError(f"not a gzip-compressed text file ({exc})") from exc
+    verbatim = True
     try:
         document = json.loads(text)
     except ValueError:
+        verbatim = False
         try:
             document = yaml.load(text, Loader=_Loader)
         except yaml.YAMLError as exc:
@@ -295,7 +324,7 @@ def decode(blob: bytes) -> CassetteData:
         found = document.get("format") if isinstance(document, dict) else type(document).__name__
         raise FormatError(f"format={found!r} is not {FORMAT!r}")
     try:
-        decoder = _Decoder(document["strings"], document["templates"])
+        decoder = _Decoder(document["strings"], document["templates"], verbatim=verbatim)
         requests, responses, canonical = [], [], []
         for item in document["interactions"]:
             req, resp = item["request"], item["response"]

@@ -132,8 +132,19 @@ def _one(body: bytes) -> CassetteData:
         ('{"z":0,"messages":[{"x":"\\u00e9"}],"a":"\\u00e9"}', False),
         ('{"messages":[]}', True),
         ("[1,2]", True),
+        (
+            '{"\\u00001":"\\u00002","messages":[{"a":"x\\"\\u00003","b":"\\u00004"}]}',
+            True,
+        ),
     ],
-    ids=["canonical", "compact-unsorted", "ascii-escaped", "empty-list", "top-level-list"],
+    ids=[
+        "canonical",
+        "compact-unsorted",
+        "ascii-escaped",
+        "empty-list",
+        "top-level-list",
+        "strings-like-references",
+    ],
 )
 def test_request_bodies_with_lists_rebuild_exactly_in_every_mode(body, canonical):
     back = decode(encode(_one(body.encode())))
