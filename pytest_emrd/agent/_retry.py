@@ -28,6 +28,7 @@ from typing import Any, Final
 import httpx
 import tenacity
 
+from pytest_emrd import __version__
 from pytest_emrd._logging import RETRY_ATTR
 from pytest_emrd._wire import encode_body
 from pytest_emrd.errors import TransportError
@@ -35,6 +36,17 @@ from pytest_emrd.errors import TransportError
 RETRY_STATUSES: Final = frozenset({429, 500, 502, 503, 504, 520, 522, 524, 529})
 _BODY_EXCERPT: Final = 300
 _MASK: Final = "***"
+#: Headers of every request besides the provider's (Host and Content-Length come from httpx).
+#: The request is built here rather than by ``httpx.Client.build_request``, which would add
+#: its own defaults (``Accept: */*``, ``Accept-Encoding``, ``Connection``, its user agent)
+#: and the cookies the server set: a model API needs none of them, a cookie would carry state
+#: from one request to the next, and every header is copied and scanned several times per
+#: request on its way through vcrpy and the redactor.
+_DEFAULT_HEADERS: Final = {
+    "Accept": "application/json",
+    "Content-Type": "application/json",
+    "User-Agent": f"pytest-emrd/{__version__}",
+}
 
 logger = logging.getLogger("pytest_emrd.agent.retry")
 
@@ -111,6 +123,12 @@ def _public_url(url: str) -> str:
     return str(_parsed_url(url).copy_with(userinfo=b"", query=None, fragment=None))
 
 
+def _request_headers(headers: dict[str, str]) -> dict[str, str]:
+    """``headers`` over :data:`_DEFAULT_HEADERS` (names compared case-insensitively)."""
+    given = {name.lower() for name in headers}
+    return {k: v for k, v in _DEFAULT_HEADERS.items() if k.lower() not in given} | headers
+
+
 def _attempt(http: httpx.Client, request: httpx.Request, url: str, read: Callable[[Any], Any]):
     """One POST: the read result, :class:`_Retryable`, or a non-retried TransportError."""
     try:
@@ -166,8 +184,13 @@ def post_json(
     log line and error message.
     """
     content = encode_body(body)  # what json=body sends, each message encoded once per episode
-    request = http.build_request("POST", _parsed_url(url), content=content, headers=headers)
-    request.headers.setdefault("Content-Type", "application/json")  # as json= does
+    request = httpx.Request(
+        "POST",
+        _parsed_url(url),
+        content=content,
+        headers=_request_headers(headers),
+        extensions={"timeout": http.timeout.as_dict()},
+    )
     mask = _masker(secrets)
     shown = _public_url(url)
     attempts = policy.max_retries + 1

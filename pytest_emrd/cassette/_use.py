@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import copy
+import functools
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
@@ -14,7 +15,7 @@ from vcr.record_mode import RecordMode
 from vcr.request import Request
 
 from pytest_emrd import _wire
-from pytest_emrd._scrub import scrub_bytes, scrub_uri
+from pytest_emrd._scrub import scrub_bytes, scrub_uri, secret_values
 from pytest_emrd.cassette import _routing
 from pytest_emrd.cassette._drift import (
     drift_message,
@@ -38,9 +39,18 @@ def _match_keys(request: Request) -> MatchKeys:
     return match_keys(request.method, request.path, redact_body(request.body))
 
 
+@functools.lru_cache(maxsize=64)
+def _scrubbed_uri(uri: str, secrets: tuple[str, ...]) -> str:
+    """:func:`scrub_uri` of ``uri``, once per URI and set of configured keys (``secrets`` is
+    the cache key: an episode posts every request to one URI)."""
+    return scrub_uri(uri)
+
+
 def redact_request(request: Request) -> Request:
     """vcrpy ``before_record_request``: canonical body, secrets dropped, match keys attached."""
-    request.uri = scrub_uri(request.uri)
+    uri = _scrubbed_uri(request.uri, secret_values())
+    if uri != request.uri:  # vcrpy parses the URI again on every assignment
+        request.uri = uri
     keys = _match_keys(request)
     request.body = keys.redacted.body
     request.headers = scrub_headers(request.headers)
