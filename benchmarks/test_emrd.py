@@ -11,15 +11,13 @@ from __future__ import annotations
 
 import pytest
 
-from pytest_emrd.gate import Verdict
-from pytest_emrd.trajectory import Trajectory
+from pytest_emrd.gate import StoredEpisode, Verdict
 
 
-def test_episode(emrd_trajectory: Trajectory) -> None:
-    if emrd_trajectory.status == "errored":
-        pytest.fail(
-            f"{emrd_trajectory.spec.case_id} errored: {emrd_trajectory.error}", pytrace=False
-        )
+def test_episode(emrd_episode: StoredEpisode) -> None:
+    head = emrd_episode.head  # a finished episode's trajectory is not decoded to check this
+    if head.status == "errored":
+        pytest.fail(f"{head.spec.case_id} errored: {head.error}", pytrace=False)
 
 
 def test_gate(emrd_verdict: Verdict) -> None:

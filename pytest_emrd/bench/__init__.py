@@ -3,16 +3,25 @@
 Each stage module (``world``, ``loop``, ``metrics``, ``replay``, ``live``, ``report``,
 ``plugin``) exposes ``run(*, repeat: int) -> list[Figure]``. Timings are medians over ``repeat``
 repetitions after one warm-up; ``--json`` prints the figures as one JSON list.
+
+Whole-process figures (a pytest session, ``emrd report``) depend on whether Python may cache
+bytecode. Their targets are measured under Python's default policy, as on a user's machine from
+the second run on (:func:`python_env` with ``bytecode=True``: ``.pyc`` written and read, under a
+cache of the bench's own, warmed up before timing); the same commands with
+``PYTHONDONTWRITEBYTECODE=1`` are reported beside them as separate ``*_nobytecode_*`` figures,
+without a target.
 """
 
 from __future__ import annotations
 
 import importlib
+import os
 import resource
 import statistics
 import subprocess
+import tempfile
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
@@ -94,14 +103,39 @@ def paired_ratio(
     return statistics.median(ratios)
 
 
+#: The bytecode cache of the processes the bench times under Python's default policy
+#: (``PYTHONPYCACHEPREFIX``): kept between bench runs like a user's ``__pycache__`` folders, and
+#: apart from them, so the bench neither reads nor fills the machine's own caches (with
+#: ``PYTHONDONTWRITEBYTECODE=1`` set, what sits in ``__pycache__`` next to the sources would
+#: otherwise decide how cold the no-bytecode figures are).
+BYTECODE_CACHE = Path(tempfile.gettempdir()) / "emrd-bench-pycache"
+
+
+def python_env(*, bytecode: bool) -> dict[str, str]:
+    """This process's environment for a timed child process. ``bytecode=True``: Python's
+    default policy, ``.pyc`` (and pytest's rewritten ``.pyc``) written and read under
+    :data:`BYTECODE_CACHE`; ``False``: ``PYTHONDONTWRITEBYTECODE=1``, every module without a
+    ``.pyc`` next to its source (our editable package, the plugin packages pytest rewrites) is
+    compiled again in every process."""
+    env = dict(os.environ)
+    env.pop("PYTHONPYCACHEPREFIX", None)
+    env.pop("PYTHONDONTWRITEBYTECODE", None)
+    if bytecode:
+        env["PYTHONPYCACHEPREFIX"] = str(BYTECODE_CACHE)
+    else:
+        env["PYTHONDONTWRITEBYTECODE"] = "1"
+    return env
+
+
 def run_timed(
-    cmd: Sequence[str], *, cwd: Path
+    cmd: Sequence[str], *, cwd: Path, env: Mapping[str, str] | None = None
 ) -> tuple[subprocess.CompletedProcess[str], float, float]:
-    """Run ``cmd`` (output captured); its result, wall seconds and CPU seconds (user +
-    system of every process it waited for, e.g. pytest-xdist workers)."""
+    """Run ``cmd`` (output captured, in ``env`` or this process's environment); its result,
+    wall seconds and CPU seconds (user + system of every process it waited for, e.g.
+    pytest-xdist workers)."""
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     start = time.perf_counter()
-    done = subprocess.run(cmd, cwd=cwd, capture_output=True, text=True, check=False)
+    done = subprocess.run(cmd, cwd=cwd, env=env, capture_output=True, text=True, check=False)
     wall = time.perf_counter() - start
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
     cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)

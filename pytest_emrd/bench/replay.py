@@ -4,10 +4,14 @@
   over the full reference grid (scout x 3 conditions x 4 spawns x 20 episodes, committed
   cassettes, gates included), in a fresh run directory. Target 20 s. And
   ``replay.resume_240_s``: the same command again on that finished run directory (every
-  episode read back from the results store, every gate evaluated again from the per-episode
+  episode checked against the results store, every gate evaluated again from the per-episode
   metrics saved beside it). Target 3 s. ``replay.grid_240_cpu_s`` and
   ``replay.resume_240_cpu_s``: the CPU time of those commands (controller and workers),
-  which other load on the machine stretches less than wall time.
+  which other load on the machine stretches less than wall time. All under Python's default
+  bytecode policy (:func:`~pytest_emrd.bench.python_env`; one untimed round first warms the
+  cache up, as on a user's machine from the second run on); ``replay.resume_240_nobytecode_s``,
+  no target, is the resume again with ``PYTHONDONTWRITEBYTECODE=1``, where every one of the
+  three pytest processes compiles our package and rewrites the plugin packages again.
 * ``replay.vs_world_ratio`` — replaying :data:`SAMPLE` (12 committed episodes, one per
   condition and spawn) through their cassettes, as the plugin does (cassette load, the whole
   episode loop, redaction, matching), over the world alone doing the same work: layout,
@@ -48,7 +52,7 @@ import httpx
 import numpy as np
 
 from pytest_emrd import frames
-from pytest_emrd.bench import Figure, median_seconds, paired_ratio, run_timed
+from pytest_emrd.bench import Figure, median_seconds, paired_ratio, python_env, run_timed
 from pytest_emrd.cassette import (
     cassette_path,
     clear_caches,
@@ -134,27 +138,32 @@ def _replay(spec: EpisodeSpec, client: Any) -> Trajectory:
     return done.trajectory
 
 
-def _grid_seconds(repeat: int) -> tuple[float, float, float, float]:
+def _grid_seconds(repeat: int) -> tuple[float, float, float, float, float]:
     """Median wall and CPU times of the grid replayed into a fresh run directory, and of the
     same command run again on that finished directory (every episode read back from the
-    store): ``(fresh, fresh_cpu, again, again_cpu)``."""
-    fresh: list[tuple[float, float]] = []
-    again: list[tuple[float, float]] = []
-    for _ in range(repeat):
+    store), bytecode cached; and of that second command with ``PYTHONDONTWRITEBYTECODE=1``:
+    ``(fresh, fresh_cpu, again, again_cpu, again_nobytecode)``."""
+    cached, uncached = python_env(bytecode=True), python_env(bytecode=False)
+    runs: dict[str, list[tuple[float, float]]] = {"fresh": [], "again": [], "nobytecode": []}
+    cmd = [sys.executable, "-m", "pytest", "benchmarks", "-n", "2", "-q", "-p", "no:cacheprovider"]
+    cmd += ["--emrd-record-mode=none"]
+    warmup = ["--emrd-episodes=1"]  # every module of a replay and of a resume, untimed
+    for i in range(repeat + 1):
         with tempfile.TemporaryDirectory() as tmp:
-            cmd = [sys.executable, "-m", "pytest", "benchmarks", "-n", "2", "-q"]
-            cmd += ["-p", "no:cacheprovider", "--emrd-record-mode=none", f"--emrd-results={tmp}"]
-            for samples in (fresh, again):
-                done, wall, cpu = run_timed(cmd, cwd=ROOT)
-                samples.append((wall, cpu))
+            for name, env in (("fresh", cached), ("again", cached), ("nobytecode", uncached)):
+                args = [*cmd, f"--emrd-results={tmp}", *(warmup if i == 0 else ())]
+                done, wall, cpu = run_timed(args, cwd=ROOT, env=env)
                 if done.returncode != 0:
                     raise RuntimeError(f"replay of the grid failed:\n{done.stdout[-3000:]}")
+                if i:
+                    runs[name].append((wall, cpu))
     median = statistics.median
     return (
-        median(w for w, _ in fresh),
-        median(c for _, c in fresh),
-        median(w for w, _ in again),
-        median(c for _, c in again),
+        median(w for w, _ in runs["fresh"]),
+        median(c for _, c in runs["fresh"]),
+        median(w for w, _ in runs["again"]),
+        median(c for _, c in runs["again"]),
+        median(w for w, _ in runs["nobytecode"]),
     )
 
 
@@ -271,12 +280,13 @@ def run(*, repeat: int) -> list[Figure]:
     vs_world = _vs_world_ratio(SAMPLE, repeat)
     ratio = _size_ratio(SIZE_SAMPLE)
     kb, kb_50, count = _committed_sizes()
-    grid, grid_cpu, resume, resume_cpu = _grid_seconds(repeat)
+    grid, grid_cpu, resume, resume_cpu, resume_nobytecode = _grid_seconds(repeat)
     return [
         Figure("replay.grid_240_s", grid, "s", 20.0, repeat),
         Figure("replay.grid_240_cpu_s", grid_cpu, "s", None, repeat),
         Figure("replay.resume_240_s", resume, "s", 3.0, repeat),
         Figure("replay.resume_240_cpu_s", resume_cpu, "s", None, repeat),
+        Figure("replay.resume_240_nobytecode_s", resume_nobytecode, "s", None, repeat),
         Figure("replay.vs_world_ratio", vs_world, "ratio", 1.2, repeat),
         Figure("replay.cassette_kb_per_episode", kb, "KB", 15.0, count),
         Figure("replay.cassette_kb_per_50_steps", kb_50, "KB", 15.0, count),

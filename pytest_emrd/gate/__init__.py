@@ -1,7 +1,9 @@
 """Gates: run settings, the episode grid, the results store, thresholds and verdicts."""
 
 from pytest_emrd.gate._files import load_run_dirs, load_thresholds
+from pytest_emrd.gate._fingerprint import code_fingerprint
 from pytest_emrd.gate._grid import cell_specs, episode_specs, gate_cells, shard
+from pytest_emrd.gate._head import EpisodeHead
 from pytest_emrd.gate._identity import (
     RunIdentity,
     check_resume,
@@ -13,7 +15,6 @@ from pytest_emrd.gate._measured import (
     EPISODE_METRICS_CODE,
     EPISODE_METRICS_LIBRARIES,
     MeasuredStore,
-    code_fingerprint,
     measured_episodes,
 )
 from pytest_emrd.gate._prefetch import Prefetcher, start_prefetch
@@ -53,6 +54,7 @@ __all__ = [
     "RECORD_MODES",
     "SPAWNS",
     "Bound",
+    "EpisodeHead",
     "EpisodeSummary",
     "GateCell",
     "MatchingWarning",

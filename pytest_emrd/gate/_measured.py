@@ -11,16 +11,14 @@ resumed run evaluates its gates without rebuilding a single trajectory.
 
 A saved file is used only while it still describes the stored episode: its ``key`` is the
 SHA-256 of the episode file's bytes together with a fingerprint of the code that computes the
-metrics (:func:`code_fingerprint`), so a recomputed episode or changed metric code is
-measured again. Errored episodes are never saved (the store retries them in a new session).
+metrics (:func:`~pytest_emrd.gate.code_fingerprint`), so a recomputed episode or changed metric
+code is measured again. Errored episodes are never saved (the store retries them in a new session).
 Saved files are scrubbed like the episodes (an episode's rationale is model text).
 """
 
 from __future__ import annotations
 
 import hashlib
-import importlib.metadata
-import importlib.util
 import json
 from collections.abc import Callable, Iterable, Sequence
 from pathlib import Path
@@ -55,25 +53,6 @@ EPISODE_METRICS_CODE: Final = (
 )
 #: The numeric libraries it computes with (their versions enter the fingerprint).
 EPISODE_METRICS_LIBRARIES: Final = ("numpy", "scipy")
-
-
-def code_fingerprint(modules: Iterable[str], distributions: Iterable[str] = ()) -> str:
-    """SHA-256 over the source of ``modules`` (every ``.py`` file of a package) and the
-    installed versions of ``distributions``: changes whenever that code may compute
-    differently."""
-    digest = hashlib.sha256()
-    for name in modules:
-        spec = importlib.util.find_spec(name)
-        if spec is None or spec.origin is None:
-            raise ModuleNotFoundError(f"module={name!r} cannot be found to fingerprint")
-        roots = spec.submodule_search_locations
-        files = sorted(p for r in roots for p in Path(r).rglob("*.py")) if roots else []
-        for path in files or [Path(spec.origin)]:
-            digest.update(f"{name}:{path.name}\0".encode())
-            digest.update(path.read_bytes())
-    for dist in distributions:
-        digest.update(f"{dist}=={importlib.metadata.version(dist)}\0".encode())
-    return digest.hexdigest()
 
 
 def metrics_path(run_dir: Path, spec: EpisodeSpec) -> Path:

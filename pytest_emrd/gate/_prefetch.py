@@ -69,11 +69,12 @@ def start_prefetch(
     specs: Iterable[EpisodeSpec],
 ) -> Prefetcher | None:
     """A :class:`Prefetcher` of the live episodes among ``specs`` (those whose cassette will
-    be recorded), or None when ``--emrd-concurrency`` is 1 or every episode replays."""
+    be recorded), or None when ``--emrd-concurrency`` is 1 or every episode replays (then the
+    cassette stage is not even imported: a resumed run reads everything from the store)."""
+    if settings.concurrency <= 1 or settings.replays_only:
+        return None
     from pytest_emrd.cassette import is_live
 
-    if settings.concurrency <= 1:
-        return None
     live = [
         s
         for s in specs

@@ -4,6 +4,7 @@ Layout of a run directory::
 
     <run>/run.json                  the grid and shard this directory holds (_identity)
     <run>/episodes/<case_id>.json   one stored episode (trajectory + how it was obtained)
+    <run>/heads/<case_id>.json      its head: what reusing it needs, without decoding (_head)
     <run>/locks/<case_id>.lock      the episode's file lock
 
 Any process (pytest-xdist workers, shards on one machine) may ask for any episode: the
@@ -20,7 +21,8 @@ import json
 import secrets
 import time
 from collections.abc import Callable, Iterator
-from dataclasses import dataclass
+from dataclasses import dataclass, field, replace
+from functools import cached_property
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Final
 
@@ -29,6 +31,8 @@ from filelock import FileLock, Timeout
 from pytest_emrd._atomic import write_bytes_atomic
 from pytest_emrd._scrub import scrub, scrub_bytes
 from pytest_emrd.errors import ProtocolError
+from pytest_emrd.gate._fingerprint import code_fingerprint
+from pytest_emrd.gate._head import HEAD_CODE, EpisodeHead, file_digest, read_head, write_head
 from pytest_emrd.gate._identity import RunIdentity, write_identity
 from pytest_emrd.trajectory import EpisodeSpec, Trajectory
 
@@ -40,19 +44,73 @@ STORE_SCHEMA: Final = 1
 
 @dataclass(frozen=True)
 class StoredEpisode:
-    """An episode as the store holds it."""
+    """An episode as the store holds it: its :class:`EpisodeHead` and its trajectory, which
+    an episode read back from the store decodes from the file on first use."""
 
-    trajectory: Trajectory
-    session: str
-    """Id of the pytest session that computed it."""
-    recorded: bool
-    """New model traffic was recorded for it (a live episode)."""
-    frame_drift: int
-    seconds: float
-    retries: int = 0
-    """Model requests retried while it was computed."""
+    head: EpisodeHead
+    source: Trajectory | tuple[Path, str] = field(repr=False, compare=False)
+    """The trajectory itself, or where the store holds it: the episode file and the SHA-256
+    its head was read for."""
     computed_now: bool = False
     """Computed by this call (as opposed to read from the store)."""
+
+    @classmethod
+    def of(
+        cls,
+        trajectory: Trajectory,
+        *,
+        session: str,
+        recorded: bool,
+        frame_drift: int,
+        seconds: float,
+        retries: int = 0,
+        computed_now: bool = False,
+    ) -> StoredEpisode:
+        """``trajectory`` as computed by session ``session``."""
+        head = EpisodeHead.of(
+            trajectory,
+            session=session,
+            recorded=recorded,
+            frame_drift=frame_drift,
+            seconds=seconds,
+            retries=retries,
+        )
+        return cls(head, trajectory, computed_now)
+
+    @cached_property
+    def trajectory(self) -> Trajectory:
+        """The trajectory (decoded and validated from the store's file on first use; a file
+        changed since its head was read is a :class:`ProtocolError`)."""
+        if isinstance(self.source, Trajectory):
+            return self.source
+        path, digest = self.source
+        blob = path.read_bytes()
+        if file_digest(blob) != digest:
+            raise ProtocolError(
+                f"episode file={str(path)!r} changed while this run was reading it; rerun "
+                "the run directory."
+            )
+        return StoredEpisode.from_json(blob).trajectory
+
+    @property
+    def session(self) -> str:
+        return self.head.session
+
+    @property
+    def recorded(self) -> bool:
+        return self.head.recorded
+
+    @property
+    def frame_drift(self) -> int:
+        return self.head.frame_drift
+
+    @property
+    def seconds(self) -> float:
+        return self.head.seconds
+
+    @property
+    def retries(self) -> int:
+        return self.head.retries
 
     def to_json(self) -> bytes:
         """The stored file: configured key values removed everywhere, and URL credentials,
@@ -66,7 +124,7 @@ class StoredEpisode:
             "session": self.session,
             "recorded": self.recorded,
             "frame_drift": self.frame_drift,
-            "seconds": round(self.seconds, 3),
+            "seconds": self.seconds,
             "retries": self.retries,
             "trajectory": trajectory,
         }
@@ -74,11 +132,12 @@ class StoredEpisode:
 
     @classmethod
     def from_json(cls, blob: bytes) -> StoredEpisode:
+        """A stored file, decoded and validated in full."""
         document: dict[str, Any] = json.loads(blob)
         if document.get("store_schema") != STORE_SCHEMA:
             raise ProtocolError(f"store_schema={document.get('store_schema')!r} is not 1")
-        return cls(
-            trajectory=Trajectory.from_dict(document["trajectory"]),
+        return cls.of(
+            Trajectory.from_dict(document["trajectory"]),
             session=str(document["session"]),
             recorded=bool(document["recorded"]),
             frame_drift=int(document["frame_drift"]),
@@ -117,18 +176,34 @@ class ResultsStore:
     def path_for(self, spec: EpisodeSpec) -> Path:
         return episode_path(self.run_dir, spec)
 
-    def _reusable(self, spec: EpisodeSpec) -> StoredEpisode | None:
+    @cached_property
+    def _head_code(self) -> str:
+        return code_fingerprint(HEAD_CODE)
+
+    def _read(self, spec: EpisodeSpec) -> StoredEpisode:
+        """``spec``'s stored episode: through its head when the head describes the episode
+        file stored now, else decoded from the file in full (and its head written)."""
         path = self.path_for(spec)
+        blob = path.read_bytes()
+        digest = file_digest(blob)
+        head = read_head(self.run_dir, spec, digest=digest, code=self._head_code)
+        if head is not None:
+            return StoredEpisode(head, (path, digest))
+        stored = StoredEpisode.from_json(blob)
+        write_head(self.run_dir, stored.head, digest=digest, code=self._head_code)
+        return stored
+
+    def _reusable(self, spec: EpisodeSpec) -> StoredEpisode | None:
         try:
-            stored = StoredEpisode.from_json(path.read_bytes())
+            stored = self._read(spec)
         except FileNotFoundError:
             return None
         except (ValueError, KeyError, TypeError, ProtocolError):
             return None  # unreadable leftovers are recomputed and overwritten
-        t = stored.trajectory
-        if t.spec != spec or t.protocol != self.protocol:
+        head = stored.head
+        if head.spec != spec or head.protocol != self.protocol:
             return None
-        if t.status == "errored" and stored.session != self.session:
+        if head.status == "errored" and head.session != self.session:
             return None
         return stored
 
@@ -148,16 +223,18 @@ class ResultsStore:
         if self.identity is not None:
             write_identity(self.run_dir, self.identity)
         run = compute(spec)
-        stored = StoredEpisode(
-            trajectory=run.trajectory,
+        stored = StoredEpisode.of(
+            run.trajectory,
             session=self.session,
             recorded=run.recorded,
             frame_drift=run.frame_drift,
             seconds=run.seconds,
             retries=run.retries,
         )
-        write_bytes_atomic(self.path_for(spec), stored.to_json())
-        return StoredEpisode(**{**stored.__dict__, "computed_now": True})
+        blob = stored.to_json()
+        write_bytes_atomic(self.path_for(spec), blob)
+        write_head(self.run_dir, stored.head, digest=file_digest(blob), code=self._head_code)
+        return replace(stored, computed_now=True)
 
     def get_or_compute(
         self, spec: EpisodeSpec, compute: Callable[[EpisodeSpec], EpisodeRun]

@@ -33,16 +33,16 @@ class EpisodeSummary:
     def of(
         cls, stored: StoredEpisode, *, price_in: float | None, price_out: float | None
     ) -> EpisodeSummary:
-        t, usage = stored.trajectory, stored.trajectory.usage
+        head, usage = stored.head, stored.head.usage
         cost = None
         if price_in is not None and price_out is not None:
             cost = (usage.prompt_tokens * price_in + usage.completion_tokens * price_out) / 1e6
         return cls(
-            case=t.spec.case_id,
-            model=t.spec.model,
-            status=t.status,
-            steps=len(t.steps),
-            chosen_room=t.chosen_room,
+            case=head.spec.case_id,
+            model=head.spec.model,
+            status=head.status,
+            steps=head.steps,
+            chosen_room=head.chosen_room,
             prompt_tokens=usage.prompt_tokens,
             completion_tokens=usage.completion_tokens,
             cost_usd=cost,

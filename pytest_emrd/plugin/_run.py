@@ -233,7 +233,7 @@ class Run:
         return self._metrics[spec]
 
     def summary(self, stored: StoredEpisode) -> EpisodeSummary:
-        config = self.registry.get(stored.trajectory.spec.model)
+        config = self.registry.get(stored.head.spec.model)
         return EpisodeSummary.of(
             stored, price_in=config.price_per_mtok_in, price_out=config.price_per_mtok_out
         )

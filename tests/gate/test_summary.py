@@ -9,8 +9,12 @@ from .conftest import make_trajectory
 
 
 def _summary(model: str, price: float | None) -> EpisodeSummary:
-    stored = StoredEpisode(
-        make_trajectory(EpisodeSpec(model, "baseline", "office", 0)), "s", True, 0, 1.25
+    stored = StoredEpisode.of(
+        make_trajectory(EpisodeSpec(model, "baseline", "office", 0)),
+        session="s",
+        recorded=True,
+        frame_drift=0,
+        seconds=1.25,
     )
     return EpisodeSummary.of(stored, price_in=price, price_out=price)
 

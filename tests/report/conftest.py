@@ -68,7 +68,7 @@ def make_run_dir(tmp_path: Path) -> Callable[[str, Sequence[Trajectory]], Path]:
         run = tmp_path / name
         (run / "episodes").mkdir(parents=True)
         for t in trajectories:
-            stored = StoredEpisode(t, session="test", recorded=False, frame_drift=0, seconds=0.1)
+            stored = StoredEpisode.of(t, session="test", recorded=False, frame_drift=0, seconds=0.1)
             (run / "episodes" / f"{t.spec.case_id}.json").write_bytes(stored.to_json())
         return run
 

@@ -113,7 +113,7 @@ def test_script_text_cannot_close_the_script(episode: Trajectory) -> None:
 def test_cli_writes_pages_index_and_gif(episode, cassettes, tmp_path: Path, capsys) -> None:
     run = tmp_path / "run"
     (run / "episodes").mkdir(parents=True)
-    stored = StoredEpisode(episode, session="t", recorded=False, frame_drift=0, seconds=0.1)
+    stored = StoredEpisode.of(episode, session="t", recorded=False, frame_drift=0, seconds=0.1)
     (run / "episodes" / f"{episode.spec.case_id}.json").write_bytes(stored.to_json())
     out = tmp_path / "view"
     argv = ["view", str(run), "*-office-ep00", "--out", str(out), "--gif",
