@@ -81,7 +81,7 @@ class EpisodeHead:
         recorded: bool,
         frame_drift: int,
         seconds: float,
-        retries: int,
+        retries: int = 0,
     ) -> EpisodeHead:
         return cls(
             spec=trajectory.spec,

@@ -42,6 +42,10 @@ if TYPE_CHECKING:
 STORE_SCHEMA: Final = 1
 
 
+def _from_head(name: str) -> Any:
+    return property(lambda self: getattr(self.head, name), doc=f"``head.{name}``.")
+
+
 @dataclass(frozen=True)
 class StoredEpisode:
     """An episode as the store holds it: its :class:`EpisodeHead` and its trajectory, which
@@ -55,27 +59,10 @@ class StoredEpisode:
     """Computed by this call (as opposed to read from the store)."""
 
     @classmethod
-    def of(
-        cls,
-        trajectory: Trajectory,
-        *,
-        session: str,
-        recorded: bool,
-        frame_drift: int,
-        seconds: float,
-        retries: int = 0,
-        computed_now: bool = False,
-    ) -> StoredEpisode:
-        """``trajectory`` as computed by session ``session``."""
-        head = EpisodeHead.of(
-            trajectory,
-            session=session,
-            recorded=recorded,
-            frame_drift=frame_drift,
-            seconds=seconds,
-            retries=retries,
-        )
-        return cls(head, trajectory, computed_now)
+    def of(cls, trajectory: Trajectory, **facts: Any) -> StoredEpisode:
+        """``trajectory`` with the store's ``facts`` about it (``session``, ``recorded``,
+        ``frame_drift``, ``seconds``, ``retries``; see :class:`EpisodeHead`)."""
+        return cls(EpisodeHead.of(trajectory, **facts), trajectory)
 
     @cached_property
     def trajectory(self) -> Trajectory:
@@ -92,25 +79,11 @@ class StoredEpisode:
             )
         return StoredEpisode.from_json(blob).trajectory
 
-    @property
-    def session(self) -> str:
-        return self.head.session
-
-    @property
-    def recorded(self) -> bool:
-        return self.head.recorded
-
-    @property
-    def frame_drift(self) -> int:
-        return self.head.frame_drift
-
-    @property
-    def seconds(self) -> float:
-        return self.head.seconds
-
-    @property
-    def retries(self) -> int:
-        return self.head.retries
+    session = _from_head("session")
+    recorded = _from_head("recorded")
+    frame_drift = _from_head("frame_drift")
+    seconds = _from_head("seconds")
+    retries = _from_head("retries")
 
     def to_json(self) -> bytes:
         """The stored file: configured key values removed everywhere, and URL credentials,
