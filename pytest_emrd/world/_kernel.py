@@ -1,17 +1,25 @@
-"""The renderer's per-pixel stage, compiled with numba: background, box spans, RGB packing.
+"""The renderer's per-column and per-pixel stages, compiled with numba.
 
-Everything here is integer work on values numpy computed (rows, codes, fog weights), plus
-the floor's raster lookup, whose floating-point operations per pixel are the same exactly
-rounded IEEE operations, in the same order, as the numpy expression they replace (numba
-without ``fastmath`` neither reorders them nor contracts them into FMAs). Pixels are painted
-as shade-table entries (``R | G << 8 | B << 16``) into a ``uint32`` buffer, which is then
-unpacked into the ``R, G, B`` bytes of the frame: no arithmetic touches a colour.
+:mod:`pytest_emrd.world._render` hands over each column's ray and wall hit and the boxes in
+view, back to front (numpy); this kernel works out, per column, the rows where the wall,
+the skirting and each box begin and end and the shade-table code each shows, fills a
+``uint32`` buffer (ceiling, walls, skirting, the floor's raster look-up, then the boxes)
+and unpacks it into the frame's ``R, G, B`` bytes.
 
-This module imports numba: :mod:`pytest_emrd.world._render` imports it on the first frame
-only, so importing the package or collecting tests never loads numba. Compiled code is
-cached on disk (``cache=True``: in ``__pycache__`` next to this file, else in the user's
-cache directory); processes compiling at once each write their own file and rename it into
-place, so concurrent xdist workers are safe.
+Bit identity with the numpy renderer the frame digests were recorded from: every
+floating-point value is computed with the same exactly rounded IEEE operations (``+ - * /``,
+comparisons, ``ceil``, ``rint``, truncating casts), on the same operands, in the same
+order. numba without ``fastmath`` neither reorders them nor contracts a multiply and an add
+into an FMA; ``error_model="numpy"`` makes a division by zero give ``inf`` as numpy does.
+No transcendental function is used; no arithmetic touches a colour. A surface's code is
+``(label * 4 + face) << 8 | fog`` (:func:`pytest_emrd.world._render.shade_table`).
+
+numba is imported with this module, on the first frame (:func:`pytest_emrd.world._render.render`
+imports it lazily), so importing the package, loading the plugin or collecting tests never
+loads it. Compiled code is cached on disk (``cache=True``: ``__pycache__`` next to this
+file, else the user's cache directory); processes compiling at once each write under a
+unique name and rename into place. The cache notices changes to this file only, so every
+constant comes in as an argument.
 """
 
 from __future__ import annotations
@@ -19,107 +27,183 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-Walls = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]
-Floor = tuple[np.ndarray, np.ndarray, np.ndarray]
-Rays = tuple[np.ndarray, np.ndarray, float, float, float]
-Columns = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]
+View = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, float, float]
+"""Per column the ray ``dx, dz``, the wall hit ``t_wall`` and whether that wall runs along
+x; the eye ``ox, oz``."""
+Rooms = tuple[np.ndarray, np.ndarray, float]
+"""``(nz, nx)`` raster of floor labels (alternate tiles darker) and of room indices, and its
+cells per metre."""
+Boxes = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]
+"""Back to front: ``(n, 4)`` box planes ``x0, z0, x1, z1`` relative to the eye, ``(n, 2)``
+``focal * (y - eye)`` of the bottom and top, the first and one past the last column the box
+can cover, its label, and which extra face shows (1 top, 2 underside, 0 none)."""
+Camera = tuple[np.ndarray, np.ndarray, float, float, float, float, float]
+"""Depth of each ceiling row and of each floor row; ``focal * (wall height - eye)``,
+``focal * (eye - skirting height)``, ``focal * eye``; the near plane; how far before the wall
+its room is looked up."""
+Labels = tuple[int, int, int, int, int, int, int]
+"""Labels of the ceiling, the skirting and the first room's wall; the faces across x, across
+z, tops and undersides (:data:`pytest_emrd.world._paint.X_FACE` ...)."""
+Fog = tuple[float, float]
+"""The condition's visibility distance and fog at that distance."""
+
+_JIT = {"cache": True, "nogil": True, "error_model": "numpy"}
 
 
-@njit(cache=True, nogil=True)
+@njit(**_JIT)
+def fog_weight(depth: float, fog: Fog) -> int:
+    """Fog weight 0..255 of a surface at ``depth``: ``rint(min(1, f * (d / v)^2) * 255)``."""
+    ratio = depth / fog[0]
+    return np.int64(np.rint(min(1.0, fog[1] * ratio * ratio) * 255.0))
+
+
+@njit(**_JIT)
+def first_row(a: float, size: int) -> int:
+    """First image row whose pixel centre lies at or below the continuous row ``a``, in
+    ``[0, size]``."""
+    return np.int64(min(max(np.ceil(a - 0.5), 0.0), float(size)))
+
+
+@njit(**_JIT)
+def _cell(a: float, size: int) -> int:
+    """Raster index of a coordinate already scaled to cells, clipped to ``[0, size)``
+    (clipping first makes the truncation a floor)."""
+    return np.int64(min(max(a, 0.0), size - 1.0))
+
+
+@njit(**_JIT)
 def compose(
     frame: np.ndarray,
     buf: np.ndarray,
     table: np.ndarray,
-    ceiling: np.ndarray,
-    walls: Walls,
-    floor: Floor,
-    rays: Rays,
-    rects: np.ndarray,
-    columns: Columns,
+    view: View,
+    rooms: Rooms,
+    boxes: Boxes,
+    camera: Camera,
+    labels: Labels,
+    fog: Fog,
 ) -> None:
-    """Paint the background, then the boxes, into ``buf`` and unpack it into ``frame``
-    (``(S, S, 3)`` uint8). ``buf`` is uint32 scratch of ``S`` rows of at least ``S`` entries:
-    rows padded by a cache line keep the column-wise box spans from evicting each other
-    from the L1 cache (a 2 KiB row stride maps a whole column onto two cache sets).
-    ``table`` maps codes to entries; see :func:`_background` and :func:`_boxes` for the other
-    arguments."""
-    _background(buf, table, ceiling, walls, floor, rays)
-    _boxes(buf, table, rects, columns)
-    size = frame.shape[1]
+    """Draw into ``frame`` (``(S, S, 3)`` uint8) through ``buf``, uint32 scratch of ``S``
+    rows of at least ``S`` entries (rows padded by a cache line keep the column-wise box
+    spans from evicting each other from the L1 cache: a 2 KiB stride maps a whole column
+    onto two cache sets). ``table``: entries ``R | G << 8 | B << 16`` by code."""
+    _background(buf, table, view, rooms, camera, labels, fog)
+    _boxes(buf, table, view, boxes, camera, labels, fog)
     for r in range(frame.shape[0]):
         row, out = buf[r], frame[r].reshape(-1)
-        for c in range(size):
+        for c in range(frame.shape[1]):
             entry = row[c]
             out[3 * c] = entry & 0xFF
             out[3 * c + 1] = (entry >> 8) & 0xFF
             out[3 * c + 2] = (entry >> 16) & 0xFF
 
 
-@njit(cache=True, nogil=True)
+@njit(**_JIT)
 def _background(
     buf: np.ndarray,
     table: np.ndarray,
-    ceiling: np.ndarray,
-    walls: Walls,
-    floor: Floor,
-    rays: Rays,
+    view: View,
+    rooms: Rooms,
+    camera: Camera,
+    labels: Labels,
+    fog: Fog,
 ) -> None:
-    """Ceiling, walls, skirting and floor everywhere.
+    """Ceiling, walls (their room's colour, shaded by orientation), skirting and floor.
 
-    ``ceiling``: code of each of the upper ``H = len(ceiling)`` rows. ``walls``: per column
-    the rows ``top <= H <= skirt <= bottom`` and the wall and skirting codes: rows
-    ``[0, top)`` are ceiling, ``[top, skirt)`` wall, ``[skirt, bottom)`` skirting and
-    ``[bottom, S)`` floor. ``floor``: ``(nz, nx)`` cell codes, the fog weight and the depth
-    of each lower row. ``rays``: per column ``dx, dz``, the eye ``ox, oz`` and the raster's
-    cells per metre: a floor pixel shows the cell of ``(o + depth * d) * scale``, clipped to
-    the raster and truncated. (Constants come in as arguments: the on-disk cache would not
-    notice a change to another module.)
+    Per column, rows ``[0, top)`` are ceiling, ``[top, skirt)`` wall, ``[skirt, bottom)``
+    skirting and the rest floor: every wall hit lies ahead (``0 < t_wall <= 1000``), the
+    wall's top above the eye and the skirting's below, so ``top <= horizon <= skirt <=
+    bottom``. Each ceiling and floor row lies at one depth; a floor pixel shows the raster
+    cell under ``o + depth * d``.
     """
-    top, skirt, bottom, wall, skirting = walls
-    codes, fog, depth = floor
-    dx, dz, ox, oz, scale = rays
-    horizon = ceiling.shape[0]
-    size, width = buf.shape[0], top.shape[0]
-    nz, nx = codes.shape
-    last_x, last_z = nx - 1.0, nz - 1.0
+    dx, dz, t_wall, along_x, ox, oz = view
+    floor, room, scale = rooms
+    ceiling_depth, floor_depth, k_top, k_skirt, k_bottom, _, back = camera
+    ceiling, skirting, wall0, x_face, z_face = labels[:5]
+    horizon, width = ceiling_depth.size, t_wall.size
+    size = buf.shape[0]
+    nz, nx = room.shape
+    top = np.empty(width, np.int64)
+    skirt, bottom = np.empty_like(top), np.empty_like(top)
+    wall = np.empty(width, np.uint32)
+    foot = np.empty_like(wall)
+    for c in range(width):
+        t = t_wall[c]
+        top[c] = first_row(horizon - k_top / t, size)
+        bottom[c] = first_row(horizon + k_bottom / t, size)
+        skirt[c] = first_row(horizon + k_skirt / t, size)
+        hx = _cell((ox + (t - back) * dx[c]) * scale, nx)
+        hz = _cell((oz + (t - back) * dz[c]) * scale, nz)
+        face = z_face if along_x[c] else x_face
+        weight = fog_weight(t, fog)
+        wall[c] = table[(((wall0 + room[hz, hx]) * 4 + face) << 8) | weight]
+        foot[c] = table[((skirting * 4 + face) << 8) | weight]
     for r in range(horizon):
-        sky = table[ceiling[r]]
+        sky = table[((ceiling * 4 + z_face) << 8) | fog_weight(ceiling_depth[r], fog)]
         for c in range(width):
-            buf[r, c] = sky if r < top[c] else table[wall[c]]
+            buf[r, c] = sky if r < top[c] else wall[c]
     for r in range(horizon, size):
-        d, f = depth[r - horizon], fog[r - horizon]
+        d, weight = floor_depth[r - horizon], fog_weight(floor_depth[r - horizon], fog)
         for c in range(width):
             if r < skirt[c]:
-                buf[r, c] = table[wall[c]]
+                buf[r, c] = wall[c]
             elif r < bottom[c]:
-                buf[r, c] = table[skirting[c]]
+                buf[r, c] = foot[c]
             else:
-                x = (d * dx[c] + ox) * scale
-                z = (d * dz[c] + oz) * scale
-                x = min(max(x, 0.0), last_x)
-                z = min(max(z, 0.0), last_z)
-                buf[r, c] = table[codes[int(z), int(x)] | f]
+                x = _cell((d * dx[c] + ox) * scale, nx)
+                z = _cell((d * dz[c] + oz) * scale, nz)
+                buf[r, c] = table[((floor[z, x] * 4 + z_face) << 8) | weight]
 
 
-@njit(cache=True, nogil=True)
-def _boxes(buf: np.ndarray, table: np.ndarray, rects: np.ndarray, columns: Columns) -> None:
-    """Paint boxes in the order of ``rects``.
+@njit(**_JIT)
+def _boxes(
+    buf: np.ndarray,
+    table: np.ndarray,
+    view: View,
+    boxes: Boxes,
+    camera: Camera,
+    labels: Labels,
+    fog: Fog,
+) -> None:
+    """Paint the boxes back to front, each over the columns it can cover.
 
-    ``rects`` rows ``r0, r1, c0, c1, at, two``: the box covers rows ``[r0, r1)`` of columns
-    ``[c0, c1)``, its per-column entries start at ``at`` in ``columns`` = ``start, span,
-    over, first, second``: rows ``[start, start + span)`` take code ``first``, then, when
-    ``two``, rows ``[start, start + over)`` take code ``second`` (all within ``[r0, r1)``).
+    A column's ray hits a box where it is inside both slabs (``x0..x1`` and ``z0..z1``),
+    between the near plane and the wall: from ``tn`` to ``tf``. The box shows its front
+    face, facing the slab it entered last, down to the rows of its bottom edge; its top face
+    when it is below the eye (from the top edge's row at the far hit), its underside when
+    above. Rows ``[start, end)`` take the underside's code when the box is above the eye,
+    else the front's; then its first rows, down to where the front begins (top face) or
+    where the underside begins (front face), take the second code.
     """
-    start, span, over, first, second = columns
-    for b in range(rects.shape[0]):
-        r0, r1, c0, c1, at, two = rects[b]
-        for c in range(c0, c1):
-            j = at + c - c0
-            lo = max(np.int64(start[j]), r0)
-            entry = table[first[j]]
-            for r in range(lo, min(start[j] + np.int64(span[j]), r1)):
+    dx, dz, t_wall = view[0], view[1], view[2]
+    rel, y, lo, hi, label, extra = boxes
+    x_face, z_face, top_face, bottom_face = labels[3:]
+    near_plane = camera[5]
+    horizon, size = float(camera[0].size), buf.shape[0]
+    for b in range(lo.size):
+        for c in range(lo[b], hi[b]):
+            x0, x1 = rel[b, 0] / dx[c], rel[b, 2] / dx[c]
+            z0, z1 = rel[b, 1] / dz[c], rel[b, 3] / dz[c]
+            near_x, near_z = np.minimum(x0, x1), np.minimum(z0, z1)
+            tn = np.maximum(near_x, near_z)
+            tf = np.minimum(np.maximum(x0, x1), np.maximum(z0, z1))
+            if not (tn < tf and tn > near_plane and tn < t_wall[c]):
+                continue
+            start = first_row(np.minimum(horizon - y[b, 1] / tn, horizon - y[b, 1] / tf), size)
+            end = first_row(np.maximum(horizon - y[b, 0] / tn, horizon - y[b, 0] / tf), size)
+            lit = (label[b] * 4) << 8 | fog_weight(tn, fog)
+            front = lit + ((x_face if near_x > near_z else z_face) << 8)
+            if extra[b] == 1:
+                first, second = front, lit + (top_face << 8)
+                over = first_row(horizon - y[b, 1] / tn, size)
+            elif extra[b] == 2:
+                first, second = lit + (bottom_face << 8), front
+                over = first_row(horizon - y[b, 0] / tn, size)
+            else:
+                first, second, over = front, front, start
+            entry = table[first]
+            for r in range(start, end):
                 buf[r, c] = entry
-            if two:
-                entry = table[second[j]]
-                for r in range(lo, min(start[j] + np.int64(over[j]), r1)):
-                    buf[r, c] = entry
+            entry = table[second]
+            for r in range(start, min(over, end)):
+                buf[r, c] = entry

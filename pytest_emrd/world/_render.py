@@ -21,15 +21,15 @@ look-up table built with explicit rounding (``np.rint``) and indexed by integer 
 from the table: no arithmetic on colours). The same scene therefore renders to identical
 bytes on every machine and numpy version.
 
-Division of labour: numpy computes everything per image column (wall hits, the rows where
-walls and boxes begin and end, their codes); the compiled :mod:`pytest_emrd.world._kernel`
-fills the pixels (ceiling, floor tiles, walls, then the boxes back to front).
+Division of labour: numpy casts the rays to the walls (:class:`~pytest_emrd.world._geometry.Walls`,
+shared with visibility) and picks and orders the boxes in view (:mod:`pytest_emrd.world._paint`);
+the compiled :mod:`pytest_emrd.world._kernel` does the rest per column and per pixel: where
+walls and boxes begin and end, their codes, and the pixels.
 """
 
 from __future__ import annotations
 
 import threading
-from functools import lru_cache
 
 import numpy as np
 
@@ -38,15 +38,16 @@ from pytest_emrd.world._conditions import ConditionParams
 from pytest_emrd.world._geometry import right_of, unit
 from pytest_emrd.world._model import WorldPose
 from pytest_emrd.world._paint import (
+    BOTTOM_FACE,
     EYE,
     FOCAL,
     HORIZON,
+    NEAR,
     SIZE,
+    TOP_FACE,
     X_FACE,
     Z_FACE,
-    first_row,
-    fog,
-    object_spans,
+    object_boxes,
 )
 from pytest_emrd.world._rng import StableRng
 from pytest_emrd.world._scene import (
@@ -61,13 +62,26 @@ from pytest_emrd.world._scene import (
 )
 
 SKIRTING_HEIGHT = 0.1
+WALL_BACK = 0.05
+"""Metres before a wall hit where the wall's room is looked up (the side the eye is on)."""
 FACE_LIGHT = np.array([0.74, 0.9, 1.0, 0.5])
 """Brightness of faces across x, across z, tops and undersides (``_paint.X_FACE`` ...)."""
 
 _U = (np.arange(SIZE) + 0.5 - FOCAL) / FOCAL
 _ROWS = np.arange(SIZE, dtype=np.int32)
-_CEIL_DEPTH = FOCAL * (WALL_HEIGHT - EYE) / (HORIZON - (_ROWS[:HORIZON] + 0.5))
-_FLOOR_DEPTH = FOCAL * EYE / ((_ROWS[HORIZON:] + 0.5) - HORIZON)
+_CAMERA = (
+    FOCAL * (WALL_HEIGHT - EYE) / (HORIZON - (_ROWS[:HORIZON] + 0.5)),
+    FOCAL * EYE / ((_ROWS[HORIZON:] + 0.5) - HORIZON),
+    FOCAL * (WALL_HEIGHT - EYE),
+    FOCAL * (EYE - SKIRTING_HEIGHT),
+    FOCAL * EYE,
+    NEAR,
+    WALL_BACK,
+)
+""":data:`pytest_emrd.world._kernel.Camera`: the depth of each ceiling and floor row, the
+wall's top, the skirting's top and the wall's foot as ``focal * height above or below the
+eye``, the near plane, how far before a wall its room is looked up."""
+_LABELS = (CEILING, SKIRTING, WALL0, X_FACE, Z_FACE, TOP_FACE, BOTTOM_FACE)
 
 
 def palette(scene: Scene, params: ConditionParams, seed: int) -> np.ndarray:
@@ -107,14 +121,12 @@ def render(scene: Scene, pose: WorldPose, params: ConditionParams, table: np.nda
     dx, dz = fx + rx * _U, fz + rz * _U
     ox, oz = np.float64(pose.x), np.float64(pose.z)
     t_wall, along_x = scene.walls.first_hit(ox, oz, dx, dz)
-    t_wall = np.minimum(t_wall, 1e3)
-    ceiling, floor_fog = _fog_rows(params)
-    walls = _walls(scene, ox, oz, (dx, dz, t_wall), along_x, params)
-    rects, columns = object_spans(scene, pose, params, (dx, dz, t_wall))
-    floor = (_floor_codes(scene), floor_fog, _FLOOR_DEPTH)
-    eye = (dx, dz, ox, oz, float(RASTER))
+    view = (dx, dz, np.minimum(t_wall, 1e3), along_x, ox, oz)
+    rooms = (scene.floor_raster, scene.room_raster, float(RASTER))
+    boxes = object_boxes(scene, pose, params)
+    fog = (params.visibility_distance, params.fog)
     frame = np.empty((SIZE, SIZE, 3), dtype=np.uint8)
-    compose(frame, _buffer(), table, ceiling, walls, floor, eye, rects, columns)
+    compose(frame, _buffer(), table, view, rooms, boxes, _CAMERA, _LABELS, fog)
     return frame
 
 
@@ -128,50 +140,3 @@ def _buffer() -> np.ndarray:
     if buf is None:
         buf = _LOCAL.buffer = np.empty((SIZE, SIZE + 16), dtype=np.uint32)
     return buf
-
-
-@lru_cache(maxsize=8)
-def _fog_rows(params: ConditionParams) -> tuple[np.ndarray, np.ndarray]:
-    """Codes of the ceiling rows and fog weights of the floor rows (each row of the ceiling
-    and of the floor lies at one depth)."""
-    ceiling = ((CEILING * 4 + Z_FACE) << 8) | fog(_CEIL_DEPTH, params)
-    return ceiling, fog(_FLOOR_DEPTH, params)
-
-
-@lru_cache(maxsize=32)
-def _floor_codes(scene: Scene) -> np.ndarray:
-    """``(nz, nx)`` int32 code (fog 0) of each floor cell of ``scene``."""
-    return ((scene.floor_raster * 4 + Z_FACE) << 8).astype(np.int32)
-
-
-def _to_cells(scaled: np.ndarray, size: int) -> np.ndarray:
-    """Raster indices of coordinates already scaled to cells, clipped to ``[0, size)``
-    (clipping first makes the integer cast a floor)."""
-    return np.clip(scaled, 0.0, size - 1.0).astype(np.int32)
-
-
-def _walls(
-    scene: Scene,
-    ox: np.float64,
-    oz: np.float64,
-    rays: tuple[np.ndarray, np.ndarray, np.ndarray],
-    along_x: np.ndarray,
-    params: ConditionParams,
-) -> tuple[np.ndarray, ...]:
-    """Per column the wall's ``top``, skirting's ``skirt`` and the wall foot's ``bottom``
-    rows, and the codes of the wall (its room's colour, shaded by orientation) and of the
-    skirting board: rows ``[top, skirt)`` are wall, ``[skirt, bottom)`` skirting. Every hit
-    lies ahead (``0 < t_wall <= 1000``) and the wall's top is above the eye, the skirting's
-    top below it, so ``top <= HORIZON <= skirt <= bottom`` in every column."""
-    dx, dz, t_wall = rays
-    top = first_row(HORIZON - FOCAL * (WALL_HEIGHT - EYE) / t_wall)
-    bottom = first_row(HORIZON + FOCAL * EYE / t_wall)
-    skirt = first_row(HORIZON + FOCAL * (EYE - SKIRTING_HEIGHT) / t_wall)
-    nz, nx = scene.room_raster.shape
-    hx = _to_cells((ox + (t_wall - 0.05) * dx) * RASTER, nx)
-    hz = _to_cells((oz + (t_wall - 0.05) * dz) * RASTER, nz)
-    face = np.where(along_x, Z_FACE, X_FACE)
-    wall_fog = fog(t_wall, params)
-    wall = ((((WALL0 + scene.room_raster[hz, hx]) * 4 + face) << 8) | wall_fog).astype(np.int32)
-    skirting = (((SKIRTING * 4 + face) << 8) | wall_fog).astype(np.int32)
-    return top, skirt, bottom, wall, skirting
