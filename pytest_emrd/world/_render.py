@@ -29,9 +29,11 @@ walls and boxes begin and end, their codes, and the pixels.
 
 from __future__ import annotations
 
+import io
 import threading
 
 import numpy as np
+from PIL import Image
 
 from pytest_emrd.world._catalog import WALL_HEIGHT
 from pytest_emrd.world._conditions import ConditionParams
@@ -128,6 +130,25 @@ def render(scene: Scene, pose: WorldPose, params: ConditionParams, table: np.nda
     frame = np.empty((SIZE, SIZE, 3), dtype=np.uint8)
     compose(frame, _buffer(), table, view, rooms, boxes, _CAMERA, _LABELS, fog)
     return frame
+
+
+def render_jpeg(
+    scene: Scene, pose: WorldPose, params: ConditionParams, table: np.ndarray, quality: int
+) -> tuple[np.ndarray, bytes]:
+    """The frame of :func:`render` and its JPEG at ``quality``.
+
+    The JPEG is encoded from the kernel's scratch buffer, which still holds the frame as
+    ``R, G, B, 0`` bytes per pixel (table entries ``R | G << 8 | B << 16`` on the
+    little-endian machines numba runs on): Pillow maps it as an ``RGBX`` image without
+    copying, where ``Image.fromarray(frame)`` would unpack the frame into a new image first.
+    The encoder is handed the same RGB rows either way, so the bytes are the same.
+    """
+    frame = render(scene, pose, params, table)
+    buf = _buffer()
+    image = Image.frombuffer("RGBX", (SIZE, SIZE), buf, "raw", "RGBX", buf.strides[0], 1)
+    out = io.BytesIO()
+    image.save(out, format="JPEG", quality=quality)
+    return frame, out.getvalue()
 
 
 _LOCAL = threading.local()

@@ -3,12 +3,10 @@
 from __future__ import annotations
 
 import hashlib
-import io
 from collections import OrderedDict
 from collections.abc import Mapping
 
 import numpy as np
-from PIL import Image
 
 from pytest_emrd.errors import ConfigError, check_choice, check_range
 from pytest_emrd.rooms import ROOM_NAMES, SLUG_ROOMS
@@ -29,7 +27,7 @@ from pytest_emrd.world._feedback import (
 )
 from pytest_emrd.world._model import Layout, Observation, WorldPose
 from pytest_emrd.world._motion import approach, spawn_pose, through
-from pytest_emrd.world._render import palette, render, shade_table
+from pytest_emrd.world._render import palette, render_jpeg, shade_table
 from pytest_emrd.world._scene import Scene, scene_of
 from pytest_emrd.world._visibility import Sight, sight
 
@@ -176,11 +174,10 @@ class BuiltinSimulator(SemanticStep):
         if cached is not None:
             self._frames.move_to_end(self._pose)
             return cached
-        frame = render(self._require(), self._pose, self._params, self._table)
+        scene, pose, params = self._require(), self._pose, self._params
+        frame, jpeg = render_jpeg(scene, pose, params, self._table, self._quality)
         frame.setflags(write=False)  # shared with the cache
-        buf = io.BytesIO()
-        Image.fromarray(frame).save(buf, format="JPEG", quality=self._quality)
-        entry = (frame, hashlib.sha256(frame.data).hexdigest(), buf.getvalue())
+        entry = (frame, hashlib.sha256(frame.data).hexdigest(), jpeg)
         self._frames[self._pose] = entry
         while len(self._frames) > self._cache_size:
             self._frames.popitem(last=False)
