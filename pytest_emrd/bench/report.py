@@ -30,14 +30,14 @@ TARGET_GRID_240_S = 3.0
 
 
 def write_run_dir(run_dir: Path, trajectories: list[Trajectory]) -> None:
-    """``trajectories`` stored in ``run_dir`` as a finished pytest run leaves them: the
-    episodes and their saved per-episode metrics."""
+    """``trajectories`` stored in ``run_dir`` by the results store, as a finished pytest run
+    leaves them: the episodes, their heads and their saved per-episode metrics."""
+    from pytest_emrd.cassette import EpisodeRun
     from pytest_emrd.gate import (
         EPISODE_METRICS_CODE,
         EPISODE_METRICS_LIBRARIES,
         MeasuredStore,
         ResultsStore,
-        StoredEpisode,
         code_fingerprint,
     )
     from pytest_emrd.metrics import EpisodeMetrics, episode_metrics
@@ -49,11 +49,9 @@ def write_run_dir(run_dir: Path, trajectories: list[Trajectory]) -> None:
         load=EpisodeMetrics.from_dict,
         code=code_fingerprint(EPISODE_METRICS_CODE, EPISODE_METRICS_LIBRARIES),
     )
-    for t in trajectories:
-        stored = StoredEpisode.of(t, session="bench", recorded=False, frame_drift=0, seconds=0.0)
-        store.path_for(t.spec).parent.mkdir(parents=True, exist_ok=True)
-        store.path_for(t.spec).write_bytes(stored.to_json())
-        measured.get(t.spec, lambda _spec, stored=stored: stored)
+    by_spec = {t.spec: EpisodeRun(t, False, 0, 0.0) for t in trajectories}
+    for spec in by_spec:
+        measured.get(spec, lambda s: store.get_or_compute(s, by_spec.__getitem__))
 
 
 def run(*, repeat: int) -> list[Figure]:

@@ -82,20 +82,20 @@ def _report(args: argparse.Namespace, formats: list[str]) -> int:
         EPISODE_METRICS_LIBRARIES,
         code_fingerprint,
         evaluate_all,
-        load_run_dirs,
+        load_run_episodes,
         load_thresholds,
         measured_episodes,
     )
     from pytest_emrd.metrics import GATE_METRICS, EpisodeMetrics, episode_metrics
     from pytest_emrd.report import build_report, write_report
 
-    trajectories = load_run_dirs(args.run_dirs)
+    # read through their heads: a trajectory is decoded only where something needs it
+    episodes = load_run_episodes(args.run_dirs)
     # once per episode, for the gates and the report; read back where the run saved them
     metrics = measured_episodes(
-        args.run_dirs, trajectories, measure=episode_metrics, load=EpisodeMetrics.from_dict,
+        args.run_dirs, episodes, measure=episode_metrics, load=EpisodeMetrics.from_dict,
         code=code_fingerprint(EPISODE_METRICS_CODE, EPISODE_METRICS_LIBRARIES),
     )  # fmt: skip
-    by_trajectory = {id(t): m for t, m in zip(trajectories, metrics, strict=True)}
     registry = load_registry(args.models)
     thresholds_path = args.thresholds
     if thresholds_path is None and _DEFAULT_THRESHOLDS.is_file():
@@ -103,17 +103,15 @@ def _report(args: argparse.Namespace, formats: list[str]) -> int:
     verdicts, source = [], None
     if thresholds_path is not None:
         thresholds = load_thresholds(thresholds_path, registry=registry, metrics=GATE_METRICS)
-        verdicts = evaluate_all(
-            trajectories, thresholds, GATE_METRICS, prepare=lambda t: by_trajectory[id(t)]
-        )
+        verdicts = evaluate_all(metrics, thresholds, GATE_METRICS)  # cells by each one's spec
         source = str(thresholds_path)
     prices = {}
-    for model in {t.spec.model for t in trajectories}:
+    for model in {e.head.spec.model for e in episodes}:
         if model in registry.names():
             config = registry.get(model)
             prices[model] = (config.price_per_mtok_in, config.price_per_mtok_out)
     report = build_report(
-        trajectories,
+        episodes,
         verdicts=verdicts,
         thresholds_source=source,
         prices=prices,
@@ -122,7 +120,7 @@ def _report(args: argparse.Namespace, formats: list[str]) -> int:
     )
     out = args.out if args.out is not None else args.run_dirs[0] / "report"
     written = write_report(report, out, formats)
-    print(f"{len(trajectories)} episodes from {len(args.run_dirs)} run director(ies)")
+    print(f"{len(episodes)} episodes from {len(args.run_dirs)} run director(ies)")
     for note in report.missing:
         print(f"note: {note}")
     for path in written:

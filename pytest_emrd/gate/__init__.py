@@ -1,6 +1,6 @@
 """Gates: run settings, the episode grid, the results store, thresholds and verdicts."""
 
-from pytest_emrd.gate._files import load_run_dirs, load_thresholds
+from pytest_emrd.gate._files import load_run_dirs, load_run_episodes, load_thresholds
 from pytest_emrd.gate._fingerprint import code_fingerprint
 from pytest_emrd.gate._grid import cell_specs, episode_specs, gate_cells, shard
 from pytest_emrd.gate._head import EpisodeHead
@@ -37,7 +37,9 @@ from pytest_emrd.gate._store import (
     StoredEpisode,
     episode_path,
     iter_run_dir,
+    iter_run_episodes,
     new_run_dir,
+    read_episode,
 )
 from pytest_emrd.gate._summary import EpisodeSummary, usage_rows
 from pytest_emrd.gate._table import UsageRow, gate_tables, usage_table
@@ -79,14 +81,17 @@ __all__ = [
     "gate_cells",
     "gate_tables",
     "iter_run_dir",
+    "iter_run_episodes",
     "judge",
     "load_run_dirs",
+    "load_run_episodes",
     "load_thresholds",
     "measured_episodes",
     "new_run_dir",
     "parse_backend_option",
     "parse_shard",
     "parse_thresholds",
+    "read_episode",
     "read_identity",
     "resolve_settings",
     "shard",

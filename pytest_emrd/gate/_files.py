@@ -8,7 +8,7 @@ from typing import Any, Final, Protocol
 
 from pytest_emrd._yaml import read_text
 from pytest_emrd.errors import ConfigError, EmrdError
-from pytest_emrd.gate._store import iter_run_dir
+from pytest_emrd.gate._store import StoredEpisode, iter_run_episodes
 from pytest_emrd.gate._thresholds import Thresholds, parse_thresholds
 from pytest_emrd.trajectory import Trajectory
 
@@ -53,15 +53,22 @@ def load_thresholds(path: Path, *, registry: RegistryLike, metrics: Collection[s
     )
 
 
-def load_run_dirs(run_dirs: Sequence[Path]) -> list[Trajectory]:
-    """Trajectories of several run directories (shards); the first copy of a case wins."""
-    seen: dict[str, Trajectory] = {}
+def load_run_episodes(run_dirs: Sequence[Path]) -> list[StoredEpisode]:
+    """The episodes of several run directories (shards), sorted by case id; the first copy of
+    a case wins. Each is read through its head when it has one (trajectories decoded on first
+    use, :func:`~pytest_emrd.gate.read_episode`)."""
+    seen: dict[str, StoredEpisode] = {}
     for run_dir in run_dirs:
         if not (run_dir / "episodes").is_dir():
             raise ConfigError(
                 f"run_dir={str(run_dir)!r} holds no episodes/ folder; pass the directories "
                 "that `pytest benchmarks --emrd-results DIR` wrote."
             )
-        for trajectory in iter_run_dir(run_dir):
-            seen.setdefault(trajectory.spec.case_id, trajectory)
+        for stored in iter_run_episodes(run_dir):
+            seen.setdefault(stored.head.spec.case_id, stored)
     return [seen[key] for key in sorted(seen)]
+
+
+def load_run_dirs(run_dirs: Sequence[Path]) -> list[Trajectory]:
+    """Trajectories of several run directories (shards); the first copy of a case wins."""
+    return [stored.trajectory for stored in load_run_episodes(run_dirs)]

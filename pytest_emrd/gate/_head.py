@@ -22,6 +22,7 @@ written. Head files are scrubbed like the episodes (an errored episode's error t
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import json
 from dataclasses import dataclass
@@ -32,6 +33,7 @@ from pytest_emrd._atomic import write_bytes_atomic
 from pytest_emrd._scrub import scrub, scrub_bytes
 from pytest_emrd._serde import from_versioned_dict, to_dict
 from pytest_emrd.errors import ProtocolError
+from pytest_emrd.gate._fingerprint import code_fingerprint
 from pytest_emrd.trajectory import EpisodeSpec, Trajectory, Usage
 
 HEAD_SCHEMA: Final = 1
@@ -58,6 +60,8 @@ class EpisodeHead:
     steps: int
     """Decision cycles recorded."""
     chosen_room: str | None
+    final_map_entries: int
+    """Entries of the terminal cognitive map (0: the map figure cannot show this episode)."""
     usage: Usage
     """Token usage summed over the steps."""
     error: str | None
@@ -89,6 +93,7 @@ class EpisodeHead:
             status=trajectory.status,
             steps=len(trajectory.steps),
             chosen_room=trajectory.chosen_room,
+            final_map_entries=len(trajectory.final_map),
             usage=trajectory.usage,
             error=scrub(trajectory.error) if trajectory.error else trajectory.error,
             session=session,
@@ -118,22 +123,30 @@ def file_digest(episode_file: bytes) -> str:
     return hashlib.sha256(episode_file).hexdigest()
 
 
-def read_head(run_dir: Path, spec: EpisodeSpec, *, digest: str, code: str) -> EpisodeHead | None:
-    """The head saved for the episode file whose SHA-256 is ``digest``, as read by the code
-    fingerprinted as ``code``; None when missing, stale or unreadable (the caller reads the
-    episode file itself)."""
+@functools.cache
+def reader_code() -> str:
+    """The fingerprint of :data:`HEAD_CODE` in this process."""
+    return code_fingerprint(HEAD_CODE)
+
+
+def read_head(episode_file: Path, *, digest: str) -> EpisodeHead | None:
+    """The head saved beside ``episode_file`` (``<run>/episodes/<case_id>.json``) for the bytes
+    whose SHA-256 is ``digest``, as this code reads them; None when missing, stale or
+    unreadable (the caller reads the episode file itself)."""
     try:
-        document = json.loads(head_path(run_dir, spec).read_bytes())
-        if document["episode_sha256"] != digest or document["code"] != code:
+        document = json.loads(
+            (episode_file.parent.parent / "heads" / episode_file.name).read_bytes()
+        )
+        if document["episode_sha256"] != digest or document["code"] != reader_code():
             return None
         head = EpisodeHead.from_dict(document["head"])
     except (OSError, ValueError, KeyError, TypeError, ProtocolError):
         return None
-    return head if head.spec == spec else None
+    return head if head.spec.case_id == episode_file.stem else None
 
 
-def write_head(run_dir: Path, head: EpisodeHead, *, digest: str, code: str) -> None:
+def write_head(run_dir: Path, head: EpisodeHead, *, digest: str) -> None:
     """Save ``head`` as the head of the episode file whose SHA-256 is ``digest``."""
-    document = {"episode_sha256": digest, "code": code, "head": head.to_dict()}
+    document = {"episode_sha256": digest, "code": reader_code(), "head": head.to_dict()}
     blob = json.dumps(document, separators=(",", ":")).encode()
     write_bytes_atomic(head_path(run_dir, head.spec), scrub_bytes(blob, literal_only=True))

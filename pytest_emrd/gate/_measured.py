@@ -92,24 +92,28 @@ def read_saved(
 
 def measured_episodes(
     run_dirs: Sequence[Path],
-    trajectories: Iterable[Trajectory],
+    episodes: Iterable[Trajectory | StoredEpisode],
     *,
     measure: Callable[[Trajectory], M],
     load: Callable[[dict[str, Any]], M],
     code: str,
 ) -> list[M]:
-    """The measure of each trajectory read from ``run_dirs`` (the first directory holding its
-    episode, as :func:`~pytest_emrd.gate.load_run_dirs` reads them): read back where the run
-    saved it for that very episode file, measured otherwise. Nothing is written: reading a
-    run never changes it."""
+    """The measure of each episode read from ``run_dirs`` (the first directory holding it,
+    as :func:`~pytest_emrd.gate.load_run_episodes` reads them): read back where the run saved
+    it for that very episode file, measured otherwise (a stored episode's trajectory is
+    decoded only then). Nothing is written: reading a run never changes it."""
     out = []
-    for trajectory in trajectories:
-        spec = trajectory.spec
+    for episode in episodes:
+        facts = episode.head if isinstance(episode, StoredEpisode) else episode
+        spec = facts.spec
         home = next((d for d in run_dirs if episode_path(d, spec).is_file()), None)
         saved = None if home is None else read_saved(
-            home, spec, code=code, protocol=trajectory.protocol, load=load
+            home, spec, code=code, protocol=facts.protocol, load=load
         )  # fmt: skip
-        out.append(saved if saved is not None else measure(trajectory))
+        if saved is None:
+            trajectory = episode.trajectory if isinstance(episode, StoredEpisode) else episode
+            saved = measure(trajectory)
+        out.append(saved)
     return out
 
 

@@ -31,8 +31,7 @@ from filelock import FileLock, Timeout
 from pytest_emrd._atomic import write_bytes_atomic
 from pytest_emrd._scrub import scrub, scrub_bytes
 from pytest_emrd.errors import ProtocolError
-from pytest_emrd.gate._fingerprint import code_fingerprint
-from pytest_emrd.gate._head import HEAD_CODE, EpisodeHead, file_digest, read_head, write_head
+from pytest_emrd.gate._head import EpisodeHead, file_digest, read_head, write_head
 from pytest_emrd.gate._identity import RunIdentity, write_identity
 from pytest_emrd.trajectory import EpisodeSpec, Trajectory
 
@@ -149,21 +148,12 @@ class ResultsStore:
     def path_for(self, spec: EpisodeSpec) -> Path:
         return episode_path(self.run_dir, spec)
 
-    @cached_property
-    def _head_code(self) -> str:
-        return code_fingerprint(HEAD_CODE)
-
     def _read(self, spec: EpisodeSpec) -> StoredEpisode:
-        """``spec``'s stored episode: through its head when the head describes the episode
-        file stored now, else decoded from the file in full (and its head written)."""
-        path = self.path_for(spec)
-        blob = path.read_bytes()
-        digest = file_digest(blob)
-        head = read_head(self.run_dir, spec, digest=digest, code=self._head_code)
-        if head is not None:
-            return StoredEpisode(head, (path, digest))
-        stored = StoredEpisode.from_json(blob)
-        write_head(self.run_dir, stored.head, digest=digest, code=self._head_code)
+        """``spec``'s stored episode (:func:`read_episode`); an episode decoded in full gets
+        its head written, so the next run reads the head."""
+        stored, digest = _read_file(self.path_for(spec))
+        if isinstance(stored.source, Trajectory):
+            write_head(self.run_dir, stored.head, digest=digest)
         return stored
 
     def _reusable(self, spec: EpisodeSpec) -> StoredEpisode | None:
@@ -206,7 +196,7 @@ class ResultsStore:
         )
         blob = stored.to_json()
         write_bytes_atomic(self.path_for(spec), blob)
-        write_head(self.run_dir, stored.head, digest=file_digest(blob), code=self._head_code)
+        write_head(self.run_dir, stored.head, digest=file_digest(blob))
         return replace(stored, computed_now=True)
 
     def get_or_compute(
@@ -232,13 +222,36 @@ class ResultsStore:
             return False
 
 
-def iter_run_dir(run_dir: Path) -> Iterator[Trajectory]:
-    """Every readable trajectory of a run directory (sorted by file name)."""
+def read_episode(path: Path) -> StoredEpisode:
+    """The episode stored in file ``path``: through its head when the head describes the
+    bytes stored now (the trajectory decoded on first use), else decoded and validated in
+    full. Writes nothing."""
+    return _read_file(path)[0]
+
+
+def _read_file(path: Path) -> tuple[StoredEpisode, str]:
+    blob = path.read_bytes()
+    digest = file_digest(blob)
+    head = read_head(path, digest=digest)
+    if head is not None:
+        return StoredEpisode(head, (path, digest)), digest
+    return StoredEpisode.from_json(blob), digest
+
+
+def iter_run_episodes(run_dir: Path) -> Iterator[StoredEpisode]:
+    """Every readable episode of a run directory (sorted by file name), read as
+    :func:`read_episode` reads them."""
     for path in sorted((run_dir / "episodes").glob("*.json")):
         try:
-            yield StoredEpisode.from_json(path.read_bytes()).trajectory
+            yield read_episode(path)
         except (ValueError, KeyError, TypeError, ProtocolError) as exc:
             raise ProtocolError(
                 f"episode file={str(path)!r} cannot be read ({exc}); delete it and rerun "
                 "the run directory to recompute it."
             ) from exc
+
+
+def iter_run_dir(run_dir: Path) -> Iterator[Trajectory]:
+    """Every readable trajectory of a run directory (sorted by file name)."""
+    for stored in iter_run_episodes(run_dir):
+        yield stored.trajectory

@@ -10,11 +10,11 @@ from __future__ import annotations
 from collections import defaultdict
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any, Protocol
+from typing import Any, Protocol, TypeVar
 
 from pytest_emrd._serde import from_dict, to_dict
 from pytest_emrd.gate._thresholds import Bound, Thresholds
-from pytest_emrd.trajectory import Trajectory
+from pytest_emrd.trajectory import EpisodeSpec, Trajectory
 
 
 class EstimateLike(Protocol):
@@ -173,19 +173,29 @@ def evaluate_cell(
     return judge(cell, estimate)
 
 
+class _Episode(Protocol):
+    @property
+    def spec(self) -> EpisodeSpec: ...
+
+
+E = TypeVar("E", bound=_Episode)
+
+
 def evaluate_all(
-    trajectories: Iterable[Trajectory],
+    trajectories: Iterable[E],
     thresholds: Thresholds,
     metrics: Mapping[str, GateMetricLike],
     *,
-    prepare: Callable[[Trajectory], Any] | None = None,
+    prepare: Callable[[E], Any] | None = None,
 ) -> list[Verdict]:
     """Every gate whose cell has episodes, grouped by model x condition x variant x layouts.
 
     Used by ``emrd gate RUN_DIR...``: the same cells and the same verdicts as the gate tests
-    of a single-machine run over the same episodes.
+    of a single-machine run over the same episodes. ``trajectories`` may as well be each
+    episode's :class:`~pytest_emrd.metrics.EpisodeMetrics` (anything with a ``spec`` the
+    gate metrics accept).
     """
-    cells: dict[tuple[str, str, str, str], list[Trajectory]] = defaultdict(list)
+    cells: dict[tuple[str, str, str, str], list[E]] = defaultdict(list)
     for t in trajectories:
         cells[(t.spec.model, t.spec.condition, t.spec.variant, t.spec.layouts)].append(t)
     verdicts = []

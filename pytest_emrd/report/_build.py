@@ -1,6 +1,7 @@
 """Build a :class:`Report` from trajectories: grouping, every table and figure, what is missing.
 
-Pure: trajectories and verdicts in, a report model out. Reading run directories and
+Pure: episodes (trajectories, or stored episodes read through their heads) and verdicts in, a
+report model out. Reading run directories and
 thresholds files, and writing files, is the caller's job (:mod:`._write`, the CLI).
 """
 
@@ -9,7 +10,7 @@ from __future__ import annotations
 from collections import Counter
 from collections.abc import Mapping, Sequence
 
-from pytest_emrd.gate import UsageRow, Verdict
+from pytest_emrd.gate import EpisodeHead, StoredEpisode, UsageRow, Verdict
 from pytest_emrd.metrics import EpisodeMetrics, as_episode_metrics
 from pytest_emrd.report._figdata import (
     episode_map,
@@ -73,12 +74,12 @@ def _rank(value: str, order: Sequence[str]) -> tuple[int, str]:
     return (order.index(value) if value in order else len(order), value)
 
 
-def _usage(trajectories: Sequence[Trajectory], prices: Prices | None) -> tuple[UsageRow, ...]:
+def _usage(heads: Sequence[EpisodeHead], prices: Prices | None) -> tuple[UsageRow, ...]:
     rows = []
-    for model in sorted({t.spec.model for t in trajectories}):
-        mine = [t for t in trajectories if t.spec.model == model]
-        prompt = sum(t.usage.prompt_tokens for t in mine)
-        completion = sum(t.usage.completion_tokens for t in mine)
+    for model in sorted({h.spec.model for h in heads}):
+        mine = [h for h in heads if h.spec.model == model]
+        prompt = sum(h.usage.prompt_tokens for h in mine)
+        completion = sum(h.usage.completion_tokens for h in mine)
         price_in, price_out = (prices or {}).get(model, (None, None))
         cost = None
         if price_in is not None and price_out is not None:
@@ -87,40 +88,44 @@ def _usage(trajectories: Sequence[Trajectory], prices: Prices | None) -> tuple[U
     return tuple(rows)
 
 
-def _overview(trajectories: Sequence[Trajectory], prices: Prices | None) -> Overview:
-    specs = [t.spec for t in trajectories]
+def _overview(heads: Sequence[EpisodeHead], prices: Prices | None) -> Overview:
+    specs = [h.spec for h in heads]
     return Overview(
-        episodes=len(trajectories),
-        by_status=dict(sorted(Counter(t.status for t in trajectories).items())),
+        episodes=len(heads),
+        by_status=dict(sorted(Counter(h.status for h in heads).items())),
         models=tuple(sorted({s.model for s in specs})),
         conditions=_ordered({s.condition for s in specs}, CONDITIONS),
         variants=_ordered({s.variant for s in specs}, VARIANTS),
         spawns=_ordered({s.spawn for s in specs}, tuple(ROOM_SLUGS.values())),
-        usage=_usage(trajectories, prices),
+        usage=_usage(heads, prices),
     )
 
 
 def _missing(
-    trajectories: Sequence[Trajectory], overview: Overview, gates: Gates, reasons: Reasoning
+    heads: Sequence[EpisodeHead],
+    overview: Overview,
+    gates: Gates,
+    reasons: Reasoning,
+    stored: Sequence[StoredEpisode],
 ) -> tuple[str, ...]:
-    if not trajectories:
+    if not heads:
         return (
             "The run holds no episode, so there is nothing to tabulate or plot: run "
             "`pytest benchmarks --emrd-results DIR` and pass DIR to `emrd report`.",
         )
     notes = []
-    errored = [t for t in trajectories if t.status == "errored"]
+    errored = [h for h in heads if h.status == "errored"]
     if errored:
-        causes = Counter((t.error or "no cause recorded").splitlines()[0][:120] for t in errored)
+        causes = Counter((h.error or "no cause recorded").splitlines()[0][:120] for h in errored)
         top = "; ".join(f"{c} (x{n})" for c, n in causes.most_common(3))
-        if len(errored) == len(trajectories):
+        if len(errored) == len(heads):
             notes.append(
                 f"All {len(errored)} episodes errored, so every metric is undefined "
                 f"(causes: {top}). Fix the cause and rerun the run directory."
             )
         else:
             notes.append(
-                f"{len(errored)} of {len(trajectories)} episodes errored and are excluded "
+                f"{len(errored)} of {len(heads)} episodes errored and are excluded "
                 f"from every table and figure (causes: {top})."
             )
     absent = [c for c in CONDITIONS if c not in overview.conditions]
@@ -150,13 +155,13 @@ def _missing(
         notes.append(f"No gate of {gates.source} applies to the models and conditions run.")
     if reasons.unavailable:
         notes.append(f"Representative reasoning is not computed: {reasons.unavailable}")
-    if pick_episode(trajectories) is None:
+    if pick_episode(stored) is None:
         notes.append("No episode ended with a non-empty cognitive map: no map figure is drawn.")
     return tuple(notes)
 
 
 def build_report(
-    trajectories: Sequence[Trajectory],
+    episodes: Sequence[Trajectory | StoredEpisode],
     *,
     verdicts: Sequence[Verdict] | None = None,
     thresholds_source: str | None = None,
@@ -166,8 +171,9 @@ def build_report(
     episode_metrics: Sequence[EpisodeMetrics] | None = None,
     episode: str | None = None,
 ) -> Report:
-    """Every table and figure of the paper for ``trajectories`` (any models, conditions,
-    variants; errored episodes are excluded and reported).
+    """Every table and figure of the paper for ``episodes`` (any models, conditions,
+    variants; errored episodes are excluded and reported). Stored episodes are read through
+    their heads: with ``episode_metrics`` given, only the map figure's episode is decoded.
 
     ``verdicts`` are the gate verdicts (:func:`pytest_emrd.gate.evaluate_all`) of the file
     ``thresholds_source``; ``embed`` replaces the ``nlp`` extra's sentence encoder for the
@@ -177,19 +183,23 @@ def build_report(
     ``episode`` is the case id of the episode the map figure shows (default: the first
     baseline episode with a non-empty map).
     """
-    metrics = as_episode_metrics(trajectories if episode_metrics is None else episode_metrics)
+    stored = [e if isinstance(e, StoredEpisode) else _wrap(e) for e in episodes]
+    heads = [e.head for e in stored]
+    metrics = as_episode_metrics(
+        [e.trajectory for e in stored] if episode_metrics is None else episode_metrics
+    )
     cells: Cells = group_cells(metrics)
     by_label: dict[str, list[EpisodeMetrics]] = {}
     for (model, variant, _), ems in cells.items():
         by_label.setdefault(row_label(model, variant), []).extend(ems)
-    overview = _overview(trajectories, prices)
+    overview = _overview(heads, prices)
     gates = Gates(thresholds_source, tuple(verdicts or ()))
     reasons = reasoning(by_label, embed) if with_reasoning else Reasoning(())
-    chosen = pick_episode(trajectories, episode)
+    chosen = pick_episode(stored, episode)
     ebbinghaus = ebbinghaus_rows(cells)
     return Report(
         overview=overview,
-        missing=_missing(trajectories, overview, gates, reasons),
+        missing=_missing(heads, overview, gates, reasons, stored),
         exploration=exploration_rows(cells),
         focal=focal_tables(cells),
         fpsg=fpsg_rows(cells),
@@ -204,5 +214,10 @@ def build_report(
         miller=miller_series(cells),
         km=km_series(cells, {(r.model, r.variant, r.condition): r.fit for r in ebbinghaus}),
         sir=sir_series(cells),
-        episode_map=episode_map(chosen) if chosen is not None else None,
+        episode_map=episode_map(chosen.trajectory) if chosen is not None else None,
     )
+
+
+def _wrap(trajectory: Trajectory) -> StoredEpisode:
+    """A trajectory handed in directly, as a stored episode (its head computed from it)."""
+    return StoredEpisode.of(trajectory, session="", recorded=False, frame_drift=0, seconds=0.0)

@@ -8,6 +8,7 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 
 from pytest_emrd.errors import ConfigError
+from pytest_emrd.gate import StoredEpisode
 from pytest_emrd.metrics import (
     Ebbinghaus,
     EpisodeMetrics,
@@ -75,26 +76,29 @@ def sir_series(cells: Cells) -> tuple[SIRSeries, ...]:
 
 
 def pick_episode(
-    trajectories: Sequence[Trajectory], case_id: str | None = None
-) -> Trajectory | None:
+    episodes: Sequence[StoredEpisode], case_id: str | None = None
+) -> StoredEpisode | None:
     """The episode the map figure shows: ``case_id`` when given (a :class:`ConfigError` naming
     a few of the run's case ids when the run has no such episode), else the first non-errored
     one (baseline first, case-id order) whose terminal map holds an entry; None when there is
-    none."""
+    none. Chosen from the episodes' heads: no trajectory is decoded."""
+    heads = [e.head for e in episodes]
     if case_id is not None:
-        found = [t for t in trajectories if t.spec.case_id == case_id]
+        found = [e for e, h in zip(episodes, heads, strict=True) if h.spec.case_id == case_id]
         if not found:
-            held = sorted(t.spec.case_id for t in trajectories)
+            held = sorted(h.spec.case_id for h in heads)
             shown = ", ".join(held[:3]) + (", ..." if len(held) > 3 else "")
             raise ConfigError(
                 f"episode={case_id!r} is not in the run ({len(held)} episodes: {shown}); "
                 "pass a case id as the test ids show it, e.g. scout-baseline-office-ep00."
             )
         return found[0]
-    candidates = [t for t in trajectories if t.status != "errored" and t.final_map]
-    if not candidates:
-        return None
-    return min(candidates, key=lambda t: (t.spec.condition != "baseline", t.spec.case_id))
+    candidates = [
+        (h.spec.condition != "baseline", h.spec.case_id, i)
+        for i, h in enumerate(heads)
+        if h.status != "errored" and h.final_map_entries
+    ]
+    return episodes[min(candidates)[2]] if candidates else None
 
 
 def align_map(

@@ -49,6 +49,7 @@ def test_a_computed_episode_writes_its_head_and_a_resume_reads_the_trajectory_la
         status="budget",
         steps=0,
         chosen_room=None,
+        final_map_entries=0,
         usage=Usage(),
         error=None,
         session="s1",

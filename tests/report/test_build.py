@@ -135,3 +135,20 @@ def test_group_cells_and_row_labels(variant_grid: list[Trajectory]) -> None:
     )
     assert row_label("gemini", "default") == "gemini"
     assert row_label("gemini", "B3") == "gemini [B3]"
+
+
+def test_a_stored_run_is_reported_from_its_heads_decoding_only_the_map_episode(
+    tmp_path, grid: list[Trajectory]
+) -> None:
+    from pytest_emrd.cassette import EpisodeRun
+    from pytest_emrd.gate import ResultsStore, load_run_episodes
+
+    store = ResultsStore(tmp_path, session="s", protocol=grid[0].protocol)
+    for t in grid:
+        store.get_or_compute(t.spec, lambda spec, t=t: EpisodeRun(t, False, 0, 0.0))
+    episodes = load_run_episodes([tmp_path])
+    measured = metrics.as_episode_metrics(grid)
+    from_heads = build_report(episodes, episode_metrics=measured, with_reasoning=False)
+    decoded = [e.head.spec.case_id for e in episodes if "trajectory" in e.__dict__]
+    assert from_heads.episode_map is not None and decoded == [from_heads.episode_map.case_id]
+    assert from_heads == build_report(grid, episode_metrics=measured, with_reasoning=False)
