@@ -6,6 +6,10 @@ point by one proper rigid motion ``S`` moves every motion estimated here by ``S^
 leaves every correspondence unchanged, because each choice only compares quantities that a
 rigid motion preserves (distances between written points, distances between ground-truth
 points, squared residuals after a fit).
+
+The two loops every step runs (each entry's nearest open object after a motion, the seeds'
+scores) are compiled (:mod:`._kernels`, numba, loaded on the first match) and give the bits
+of the numpy expressions they replace (oracles: ``tests/metrics/test_align.py``).
 """
 
 from __future__ import annotations
@@ -14,6 +18,7 @@ import functools
 import itertools
 import math
 from collections.abc import Sequence
+from types import ModuleType
 from typing import Final, NamedTuple
 
 import numpy as np
@@ -27,6 +32,12 @@ COINCIDENT_M: Final = 1e-6
 MAX_HYPOTHESES: Final = 8
 #: Most alternations of assignment and refit (each lowers the residual).
 MAX_ROUNDS: Final = 8
+
+Objects = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]
+"""The objects open to a map's entries: the type index of each entry (n), the layout's
+object indices by type (``starts``, ``cols``: type ``k``'s objects are
+``cols[starts[k]:starts[k + 1]]``, ascending), its positions (m x 2), which objects are held
+(m booleans). See :attr:`Problem.open`."""
 
 Point = tuple[float, float]
 Pairs = tuple[tuple[int, int], ...]
@@ -123,6 +134,14 @@ def two_point(pa: Point, pb: Point, qa: Point, qb: Point) -> Motion:
 
 
 @functools.cache
+def compiled() -> ModuleType:
+    """:mod:`._kernels`, imported (with numba) on first use."""
+    from pytest_emrd.metrics import _kernels
+
+    return _kernels
+
+
+@functools.cache
 def digits(scale: float, power: int) -> int:
     """Decimals comparing a quantity in metres**power at :data:`TIE_DECIMALS` relative."""
     return TIE_DECIMALS - power * math.ceil(math.log10(max(scale, 1.0)))
@@ -141,12 +160,37 @@ class Layout(NamedTuple):
     """Type index -> its object indices, ascending."""
     scale: float
     """Extent of the layout (metres), for relative tie tolerances."""
+    starts: np.ndarray
+    """``cols_of`` for the kernels: type ``k``'s objects are ``cols[starts[k]:starts[k+1]]``."""
+    cols: np.ndarray
+    """Object indices grouped by type, ascending within each type."""
+    free: np.ndarray
+    """m False: no object held."""
+
+
+def layout_of(points: Sequence[Point], kinds: Sequence[int], scale: float) -> Layout:
+    """The :class:`Layout` of objects at ``points`` (m) of type indices ``kinds`` (m)."""
+    cols_of: dict[int, tuple[int, ...]] = {}
+    for c, k in enumerate(kinds):
+        cols_of[k] = (*cols_of.get(k, ()), c)
+    top = max(kinds, default=-1) + 1
+    counts = [len(cols_of.get(k, ())) for k in range(top)]
+    return Layout(
+        np.array(points, dtype=float).reshape(-1, 2),
+        tuple((float(x), float(z)) for x, z in points),
+        np.array(kinds, dtype=np.intp),
+        cols_of,
+        scale,
+        np.array([0, *itertools.accumulate(counts)], dtype=np.intp),
+        np.array([c for k in range(top) for c in cols_of.get(k, ())], dtype=np.intp),
+        np.zeros(len(points), dtype=bool),
+    )
 
 
 class Problem:
     """One map's recognised entries against the objects still open to them."""
 
-    __slots__ = ("_blocked", "_pairs", "candidates", "held", "kinds", "layout", "points", "pred")
+    __slots__ = ("_blocked", "_open", "candidates", "held", "kinds", "layout", "points", "pred")
 
     def __init__(
         self,
@@ -171,7 +215,7 @@ class Problem:
         self.candidates = [cols_of.get(k, ()) for k in kinds]
         """The objects open to each entry, ascending."""
         self._blocked: np.ndarray | None = None
-        self._pairs: tuple[np.ndarray, np.ndarray, list[int]] | None = None
+        self._open: Objects | None = None
 
     @property
     def blocked(self) -> np.ndarray:
@@ -185,16 +229,17 @@ class Problem:
         return self._blocked
 
     @property
-    def pairs(self) -> tuple[np.ndarray, np.ndarray, list[int]]:
-        """Every (entry, open object) pair, entry by entry: the entry's index, the object's
-        position (pairs x 2), and where each entry's run of pairs starts."""
-        if self._pairs is None:
-            cands = self.candidates
-            rows = [i for i, cols in enumerate(cands) for _ in cols]
-            true = self.layout.true[[c for cols in cands for c in cols]]
-            starts = [0, *itertools.accumulate(map(len, cands[:-1]))]
-            self._pairs = np.array(rows, dtype=np.intp), true, starts
-        return self._pairs
+    def open(self) -> Objects:
+        """``candidates`` as the kernels read them (:data:`Objects`)."""
+        if self._open is None:
+            layout = self.layout
+            held = layout.free
+            if self.held:
+                held = held.copy()
+                held[list(self.held)] = True
+            kinds = np.array(self.kinds, dtype=np.intp)
+            self._open = kinds, layout.starts, layout.cols, layout.true, held
+        return self._open
 
 
 def moved(points: np.ndarray, motion: Motion) -> np.ndarray:
@@ -213,14 +258,15 @@ def assign(problem: Problem, motion: Motion) -> Pairs:
     minimum); types where two entries want the same object go through
     :func:`scipy.optimize.linear_sum_assignment`. Squared distances are rounded to
     :data:`TIE_DECIMALS` relative digits; ties go to the lowest object index (id order).
+    Nearest objects and distances: :func:`._kernels.nearest_open`.
     """
-    p = moved(problem.pred, motion)
     dec = digits(problem.layout.scale, 2)
+    finite, found, distances = compiled().nearest_open(problem.pred, *motion, problem.open, dec)
     d = None
-    distances = _pair_distances(problem, p, dec)
-    nearest = _nearest(distances, problem.candidates)
-    if nearest is None:  # a distance that is not finite: numpy's matrix and argmin decide
-        d = _distance_matrix(problem, p, dec)
+    if finite:
+        nearest = found.tolist()
+    else:  # a distance that is not finite: numpy's matrix and argmin decide
+        d = _distance_matrix(problem, moved(problem.pred, motion), dec)
         # An entry with no object of its type left (every one held by a carried identity) has
         # an all-inf row, whose argmin would name object 0 of another type: it stays unmatched.
         open_rows = np.isfinite(d).any(axis=1).tolist()
@@ -250,61 +296,6 @@ def assign(problem: Problem, motion: Motion) -> Pairs:
         r, c = linear_sum_assignment(block)
         pairs += ((rows[i], cols[j]) for i, j in zip(r.tolist(), c.tolist(), strict=True))
     return tuple(sorted(pairs))
-
-
-#: Most (entry, open object) pairs whose distances :func:`assign` computes on floats.
-_FEW_PAIRS: Final = 24
-
-
-def _pair_distances(problem: Problem, p: np.ndarray, dec: int) -> list[float]:
-    """Rounded squared distance of each moved entry ``p`` to each object open to it (in the
-    order of :attr:`Problem.pairs`): each value the one :func:`_distance_matrix` holds."""
-    if sum(map(len, problem.candidates)) <= _FEW_PAIRS:
-        true = problem.layout.points
-        out: list[float] = []
-        for (x, z), cols in zip(p.tolist(), problem.candidates, strict=True):
-            for j in cols:
-                u, v = true[j]
-                sq = (x - u) * (x - u) + (z - v) * (z - v)
-                out.append(round_like_numpy(sq, dec) if math.isfinite(sq) else sq)
-        return out
-    rows, true, _ = problem.pairs
-    diff = p[rows] - true
-    diff *= diff
-    sq = diff[:, 0] + diff[:, 1]
-    return sq.round(dec, out=sq).tolist()
-
-
-def _nearest(distances: list[float], candidates: list[tuple[int, ...]]) -> list[int] | None:
-    """Each entry's nearest open object (-1: none; the first of equal distances), as
-    ``argmin`` picks it in :func:`_distance_matrix`; None when a distance is not finite."""
-    out: list[int] = []
-    at = 0
-    for cols in candidates:
-        best, low = -1, math.inf
-        for j in cols:
-            v = distances[at]
-            at += 1
-            if v < low:
-                best, low = j, v
-            elif not v < math.inf:
-                return None
-        out.append(best)
-    return out
-
-
-def round_like_numpy(x: float, decimals: int) -> float:
-    """``np.round(x, decimals)`` of a finite float, bitwise: numpy scales by ``10**decimals``
-    (multiplying, or dividing for negative decimals), rounds half to even, and scales back."""
-    if decimals >= 0:
-        f = _POW10[decimals]
-        return float(round(x * f)) / f
-    f = _POW10[-decimals]
-    return float(round(x / f)) * f
-
-
-#: ``10**k`` as numpy's ``power_of_ten`` computes it (exact up to ``k = 22``).
-_POW10: Final = tuple(10.0**k for k in range(23))
 
 
 def _distance_matrix(problem: Problem, p: np.ndarray, dec: int) -> np.ndarray:
@@ -408,19 +399,12 @@ def undetermined_fit(problem: Problem, first: Sequence[Motion] = ()) -> Pairs:
 def best_seed(problem: Problem, seeds: Sequence[Motion]) -> Motion:
     """The seed whose motion leaves the smallest summed squared distance of each entry to its
     nearest object of its type (rounded to :data:`TIE_DECIMALS` relative digits; ties: the
-    first). Every seed is scored at once, over the (entry, object of its type) pairs only.
-    An entry no object can take makes every score infinite: the first seed.
+    first), computed by :func:`._kernels.best_seed_index`. An entry no object can take makes
+    every score infinite: the first seed.
     """
     if len(seeds) == 1 or not all(problem.candidates):
         return seeds[0]
-    rows, true, starts = problem.pairs
-    m = np.array(seeds)
-    c, s, t = m[:, 0, None, None], m[:, 1, None, None], m[:, None, 2:]
-    p = problem.pred[rows]
-    turned = p[:, ::-1] * (-1.0, 1.0)  # (-z, x): R p = c p + s turned
-    diff = c * p + s * turned + t  # (seeds x pairs x 2)
-    diff -= true
-    diff *= diff
-    d = diff[..., 0] + diff[..., 1]
-    score = np.minimum.reduceat(d, starts, axis=1).sum(axis=1)
-    return seeds[int(np.round(score, digits(problem.layout.scale, 2)).argmin())]
+    best = compiled().best_seed_index(
+        np.array(seeds), problem.pred, problem.open, digits(problem.layout.scale, 2)
+    )
+    return seeds[best]

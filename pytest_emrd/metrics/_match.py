@@ -80,10 +80,10 @@ import numpy as np
 
 from pytest_emrd.metrics._align import (
     COINCIDENT_M,
-    Layout,
     Motion,
     Problem,
     assign,
+    layout_of,
     procrustes,
     undetermined_fit,
 )
@@ -187,16 +187,7 @@ class Matcher:
         self._kind_of = self._true_kinds.tolist()
         self._count = np.bincount(self._true_kinds, minlength=len(self._types.names)).tolist()
         self._first = [self._kind_of.index(k) if n else -1 for k, n in enumerate(self._count)]
-        cols_of: dict[int, tuple[int, ...]] = {}
-        for c, k in enumerate(self._kind_of):
-            cols_of[k] = (*cols_of.get(k, ()), c)
-        self._layout = Layout(
-            self._true,
-            tuple((float(o.x), float(o.z)) for o in ordered),
-            self._true_kinds,
-            cols_of,
-            _extent(self._true),
-        )
+        self._layout = layout_of([(o.x, o.z) for o in ordered], self._kind_of, _extent(self._true))
         self._done: dict[Key, tuple[dict[str, int], bool]] = {}
         self._anchor_fits: dict[tuple[tuple[int, float, float], ...], Motion] = {}
 

@@ -5,24 +5,24 @@ before it moves any metric."""
 from __future__ import annotations
 
 import math
+import subprocess
+import sys
 
 import numpy as np
 from hypothesis import given
 from hypothesis import strategies as st
 
+from pytest_emrd.metrics import _kernels
 from pytest_emrd.metrics._align import (
-    Layout,
     Motion,
     Problem,
     _distance_matrix,
-    _nearest,
-    _pair_distances,
     assign,
     best_seed,
+    layout_of,
     moved,
     numpy_sum,
     procrustes,
-    round_like_numpy,
 )
 
 finite = st.floats(-1e6, 1e6, allow_nan=False, allow_infinity=False)
@@ -46,7 +46,17 @@ def _procrustes_numpy(pred: np.ndarray, true: np.ndarray) -> Motion:
 
 @given(st.lists(finite, max_size=400))
 def test_numpy_sum_is_numpys_pairwise_sum(values: list[float]) -> None:
-    assert numpy_sum(values) == float(np.add.reduce(np.array(values, dtype=float)))
+    want = float(np.add.reduce(np.array(values, dtype=float)))
+    assert numpy_sum(values) == want
+    assert 0.0 + _kernels._pairwise(np.array(values, dtype=float)) == want
+
+
+def test_compiled_pairwise_sum_splits_long_runs_as_numpy_does() -> None:
+    # past 128 values numpy splits in halves at a multiple of 8: sizes around each split
+    rng = np.random.default_rng(7)
+    for n in (127, 128, 129, 136, 255, 256, 257, 1000, 4099):
+        values = rng.normal(size=n) * 10.0 ** rng.uniform(-6, 6, size=n)
+        assert _kernels._pairwise(values) == float(np.add.reduce(values)) == numpy_sum(values)
 
 
 def test_numpy_sum_of_nothing_and_of_negative_zero_is_zero() -> None:
@@ -66,14 +76,24 @@ def test_procrustes_on_floats_is_the_numpy_fit_bitwise(
 
 
 @given(st.floats(0, 1e12, allow_nan=False), st.integers(-4, 12))
-def test_round_like_numpy_is_np_round(x: float, decimals: int) -> None:
-    assert round_like_numpy(x, decimals) == float(np.round(np.float64(x), decimals))
+def test_compiled_round_is_np_round(x: float, decimals: int) -> None:
+    assert _kernels._round(x, decimals) == float(np.round(np.float64(x), decimals))
 
 
-def test_round_like_numpy_worked_example() -> None:
+def test_compiled_round_worked_example() -> None:
     # half to even after scaling, as numpy does (Python's round(x, 1) gives 0.3 here)
-    assert round_like_numpy(0.25, 1) == float(np.round(0.25, 1)) == 0.2
-    assert round_like_numpy(1250.0, -2) == 1200.0
+    assert _kernels._round(0.25, 1) == float(np.round(0.25, 1)) == 0.2
+    assert _kernels._round(1250.0, -2) == 1200.0
+
+
+@given(st.lists(st.tuples(finite, finite), min_size=1, max_size=6), st.floats(0, 2 * math.pi))
+def test_compiled_turn_is_numpys_matmul(rows: list[tuple[float, float]], theta: float) -> None:
+    # OpenBLAS's dgemm fuses the multiply-add of two or more rows; one row is numpy's own loop
+    c, s = math.cos(theta), math.sin(theta)
+    points = np.array(rows)
+    want = (points @ np.array(((c, s), (-s, c)))).tolist()
+    fused = len(rows) >= 2
+    assert [list(_kernels._turn(x, z, c, s, fused)) for x, z in rows] == want
 
 
 @st.composite
@@ -82,14 +102,10 @@ def problems(draw: st.DrawFn) -> tuple[Problem, Motion]:
     m = draw(st.integers(1, 12))
     true = [draw(point) for _ in range(m)]
     kinds = [draw(st.integers(0, 3)) for _ in range(m)]
-    cols_of: dict[int, tuple[int, ...]] = {}
-    for c, k in enumerate(kinds):
-        cols_of[k] = (*cols_of.get(k, ()), c)
-    arr = np.array(true, dtype=float)
-    layout = Layout(arr, tuple(true), np.array(kinds), cols_of, 10.0)
+    layout = layout_of(true, kinds, 10.0)
     n = draw(st.integers(1, 14))
     entries = [draw(point) for _ in range(n)]
-    entry_kinds = [draw(st.sampled_from(sorted(cols_of))) for _ in range(n)]
+    entry_kinds = [draw(st.sampled_from(sorted(set(kinds)))) for _ in range(n)]
     held = draw(st.lists(st.integers(0, m - 1), unique=True, max_size=m // 2))
     theta = draw(st.floats(0, 2 * math.pi))
     motion = Motion(math.cos(theta), math.sin(theta), draw(metres), draw(metres))
@@ -131,8 +147,29 @@ def test_assign_on_pairs_is_the_matrix_assignment(case: tuple[Problem, Motion]) 
     want = [
         j if ok else -1 for j, ok in zip(d.argmin(axis=1), np.isfinite(d).any(axis=1), strict=True)
     ]
-    assert _nearest(_pair_distances(problem, p, 7), problem.candidates) == want
+    finite, nearest, distances = _kernels.nearest_open(problem.pred, *motion, problem.open, 7)
+    assert finite
+    assert nearest.tolist() == want
+    pairs = [(i, j) for i, cols in enumerate(problem.candidates) for j in cols]
+    assert distances.tolist() == [d[i, j] for i, j in pairs]
     assert assign(problem, motion) == _assign_dense(problem, motion)
+
+
+@given(problems(), st.sampled_from([math.inf, -math.inf, math.nan]))
+def test_a_point_not_finite_is_assigned_by_the_matrix(
+    case: tuple[Problem, Motion], bad: float
+) -> None:
+    # (the parser drops such entries; a non-finite distance leaves the kernel for numpy)
+    problem, motion = case
+    problem = Problem([(bad, 0.0)], problem.kinds[:1], problem.layout, problem.held)
+    with np.errstate(invalid="ignore"):
+        assert assign(problem, motion) == _assign_dense(problem, motion) == ()
+
+
+def test_importing_the_metrics_does_not_import_numba() -> None:
+    # the kernels (and numba) load on the first match: collection does not pay for them
+    code = "import sys, pytest_emrd.metrics; assert 'numba' not in sys.modules"
+    subprocess.run([sys.executable, "-c", code], check=True)
 
 
 @given(problems(), st.lists(st.tuples(metres, metres, metres), min_size=2, max_size=6))

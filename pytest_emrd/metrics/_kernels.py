@@ -1,0 +1,199 @@
+"""Compiled loops of the matcher (:mod:`._align`), bitwise equal to the numpy they replace.
+
+Imported on first use only (numba's import and its cached machine code cost a few hundred
+milliseconds that ``import pytest_emrd.metrics`` must not pay). Each kernel does, on the few
+entries and objects of one map, exactly the float operations numpy did on arrays, in
+numpy's order, so every result has the same bits (oracles: ``tests/metrics/test_align.py``):
+
+* no reassociation and no fused multiply-add where numpy has none (numba compiles without
+  fast-math, so LLVM contracts nothing), and an explicit fused multiply-add where numpy has
+  one: ``points @ R`` of two or more rows runs OpenBLAS's ``dgemm``, whose kernel computes
+  ``x * R[0, j]`` and adds ``z * R[1, j]`` to it in one rounding (:func:`_turn`); a single
+  row goes through numpy's own loop, without it;
+* sums of many terms in numpy's pairwise order (:func:`_pairwise`, as
+  :func:`._align.numpy_sum`);
+* rounding as ``np.round``: scale by ``10**decimals``, round half to even, scale back.
+"""
+
+from __future__ import annotations
+
+import numba
+import numpy as np
+from numba.core import types
+from numba.extending import intrinsic
+
+from pytest_emrd.metrics._align import Objects
+
+# Numba compiles these on first use and keeps the machine code beside this file
+# (``cache=True``): later processes load it instead of compiling.
+_jit = numba.njit(cache=True, nogil=True)
+
+
+@intrinsic
+def _fma(typingctx, a, b, c):
+    """``a * b + c`` rounded once (LLVM's ``llvm.fma.f64``: the hardware instruction)."""
+    signature = types.float64(types.float64, types.float64, types.float64)
+
+    def codegen(context, builder, sig, args):
+        return builder.fma(*args)
+
+    return signature, codegen
+
+
+@_jit
+def _turn(x: float, z: float, c: float, s: float, fused: bool) -> tuple[float, float]:
+    """Row ``(x, z)`` of ``points @ ((c, s), (-s, c))``: fused as OpenBLAS's ``dgemm``
+    computes it when ``points`` has two or more rows, plain for numpy's single-row loop."""
+    if fused:
+        return _fma(z, -s, x * c), _fma(z, c, x * s)
+    return x * c + z * -s, x * s + z * c
+
+
+#: ``10**k`` as numpy's ``power_of_ten`` has it (exact up to ``k = 22``).
+_POW10 = np.array([10.0**k for k in range(23)])
+
+
+@_jit
+def _round(x: float, decimals: int) -> float:
+    """``np.round(x, decimals)`` (see :func:`._align.round_like_numpy`)."""
+    if decimals >= 0:
+        f = _POW10[decimals]
+        return np.rint(x * f) / f
+    f = _POW10[-decimals]
+    return np.rint(x / f) * f
+
+
+@_jit
+def _pairwise(xs: np.ndarray) -> float:
+    """numpy's ``pairwise_sum`` of ``xs`` (see :func:`._align.numpy_sum`): runs of up to 128
+    summed by :func:`_run`, longer ones split in two at a multiple of 8 and the halves' sums
+    added. Without recursion (numba's cache cannot reload a recursive function): a
+    post-order walk of the halves with explicit stacks."""
+    if xs.shape[0] <= 128:
+        return _run(xs, 0, xs.shape[0])
+    todo = [(0, xs.shape[0], False)]  # (start, length, halves already summed)
+    sums = [0.0]
+    sums.pop()
+    while todo:
+        lo, n, halves_done = todo.pop()
+        if n <= 128:
+            sums.append(_run(xs, lo, n))
+        elif halves_done:
+            right = sums.pop()
+            sums.append(sums.pop() + right)
+        else:
+            half = n // 2
+            half -= half % 8
+            todo.append((lo, n, True))
+            todo.append((lo + half, n - half, False))
+            todo.append((lo, half, False))
+    return sums[0]
+
+
+@_jit
+def _run(xs: np.ndarray, lo: int, n: int) -> float:
+    """``pairwise_sum`` of ``xs[lo:lo + n]``, ``n <= 128``: in order below 8 values, else
+    with 8 accumulators (``loops_utils.h``)."""
+    if n < 8:
+        total = 0.0
+        for i in range(lo, lo + n):
+            total += xs[i]
+        return total
+    r = xs[lo : lo + 8].copy()
+    end = lo + n - n % 8
+    for i in range(lo + 8, end, 8):
+        for k in range(8):
+            r[k] += xs[i + k]
+    total = ((r[0] + r[1]) + (r[2] + r[3])) + ((r[4] + r[5]) + (r[6] + r[7]))
+    for i in range(end, lo + n):
+        total += xs[i]
+    return total
+
+
+@_jit
+def _square(x: float, z: float, true: np.ndarray, j: int) -> float:
+    """``dx**2 + dz**2`` from ``(x, z)`` to object ``j``, as numpy's ``diff *= diff`` and sum."""
+    dx = x - true[j, 0]
+    dz = z - true[j, 1]
+    return dx * dx + dz * dz
+
+
+@_jit
+def nearest_open(
+    pred: np.ndarray,
+    c: float,
+    s: float,
+    tx: float,
+    tz: float,
+    objects: Objects,
+    decimals: int,
+) -> tuple[bool, np.ndarray, np.ndarray]:
+    """Each entry's nearest open object after the motion ``(c, s, tx, tz)``, as
+    :func:`._align.assign` reads it.
+
+    ``pred`` (n x 2) written points; ``objects`` the objects open to each (:data:`._align.Objects`).
+    Returns ``(finite, nearest, distances)``: ``nearest[i]`` the first object at the least
+    rounded squared distance (-1: none open), ``distances`` every (entry, open object)
+    distance entry by entry. ``finite`` is False (and the rest unfinished) as soon as a
+    distance is not finite: numpy's matrix then decides (:func:`._align.assign`).
+    """
+    kinds, starts, cols, true, held = objects
+    fused = pred.shape[0] >= 2
+    nearest = np.full(pred.shape[0], -1, dtype=np.intp)
+    distances = np.empty(pred.shape[0] * true.shape[0])
+    at = 0
+    for i in range(pred.shape[0]):
+        x, z = _turn(pred[i, 0], pred[i, 1], c, s, fused)
+        x += tx
+        z += tz
+        k = kinds[i]
+        low = np.inf
+        for j in cols[starts[k] : starts[k + 1]]:
+            if held[j]:
+                continue
+            v = _round(_square(x, z, true, j), decimals)
+            if not v < np.inf:
+                return False, nearest, distances
+            distances[at] = v
+            at += 1
+            if v < low:
+                nearest[i] = j
+                low = v
+    return True, nearest, distances[:at]
+
+
+@_jit
+def best_seed_index(seeds: np.ndarray, pred: np.ndarray, objects: Objects, decimals: int) -> int:
+    """Index of :func:`._align.best_seed`'s choice among ``seeds`` (k x 4 motions); every
+    entry has an open object (arguments as :func:`nearest_open`).
+
+    Per seed: each entry moved as ``c p + s (-z, x) + t``, its least squared distance to an
+    object of its type (``np.minimum``, NaN first), summed over entries pairwise, rounded;
+    the first least score wins (a NaN score first of all, as ``argmin`` has it).
+    """
+    kinds, starts, cols, true, held = objects
+    n = pred.shape[0]
+    least = np.empty(n)
+    best, low = 0, np.inf
+    for q in range(seeds.shape[0]):
+        c, s, tx, tz = seeds[q, 0], seeds[q, 1], seeds[q, 2], seeds[q, 3]
+        for i in range(n):
+            x, z = pred[i, 0], pred[i, 1]
+            mx = c * x + s * -z + tx
+            mz = c * z + s * x + tz
+            m = np.nan
+            first = True
+            for j in cols[starts[kinds[i]] : starts[kinds[i] + 1]]:
+                if held[j]:
+                    continue
+                v = _square(mx, mz, true, j)
+                if first or (not np.isnan(m) and (np.isnan(v) or v < m)):  # np.minimum
+                    m = v
+                first = False
+            least[i] = m
+        score = _round(0.0 + _pairwise(least), decimals)
+        if np.isnan(score):
+            return q
+        if score < low:
+            best, low = q, score
+    return best
