@@ -56,70 +56,25 @@ class Motion(NamedTuple):
         return self.c * x - self.s * z + self.tx, self.s * x + self.c * z + self.tz
 
 
-def procrustes(pred: Sequence[Point], true: Sequence[Point]) -> Motion:
-    """Optimal proper rigid motion taking ``pred`` onto ``true`` (n points each, n >= 1).
+def procrustes(pred: np.ndarray, true: np.ndarray, pairs: Sequence[tuple[int, int]]) -> Motion:
+    """Optimal proper rigid motion taking ``pred[r]`` onto ``true[c]`` for the ``(r, c)`` in
+    ``pairs`` (one or more; ``pred``, ``true``: (n x 2) arrays).
 
     2-D orthogonal Procrustes without scaling or reflection (Kabsch with ``det R = +1``):
     for centred points the angle maximising ``sum_j q_j . R p_j`` is
     ``atan2(sum p x q, sum p . q)``. One point, or coincident points: the identity rotation
-    and the translation between centroids.
-
-    Computed on floats exactly as numpy computes it from ``(n x 2)`` arrays (centroids by
-    ``sum(axis=0)``, the products' sums by :func:`numpy_sum`): the same bits, without the cost
-    of a dozen numpy calls on a few points (oracle: ``tests/metrics/test_align.py``).
+    and the translation between centroids. Computed by :func:`._kernels.fit`, bitwise the
+    numpy expression on the gathered points (oracle: ``tests/metrics/test_align.py``).
     """
-    n = len(pred)
-    px = pz = qx = qz = 0.0
-    for (x, z), (u, v) in zip(pred, true, strict=True):
-        px += x
-        pz += z
-        qx += u
-        qz += v
-    px, pz, qx, qz = px / n, pz / n, qx / n, qz / n
-    dots: list[float] = []
-    crosses: list[float] = []
-    for (x, z), (u, v) in zip(pred, true, strict=True):
-        ax, az, bx, bz = x - px, z - pz, u - qx, v - qz
-        dots += (ax * bx, az * bz)
-        crosses.append(ax * bz - az * bx)
-    dot, cross = numpy_sum(dots), numpy_sum(crosses)
-    theta = math.atan2(cross, dot) if (dot or cross) else 0.0
-    c, s = math.cos(theta), math.sin(theta)
-    return Motion(c, s, qx - (c * px - s * pz), qz - (s * px + c * pz))
+    return Motion(*fit(pred, true, pairs)[:4])
 
 
-def numpy_sum(values: Sequence[float]) -> float:
-    """``np.add.reduce`` of a contiguous float64 vector, bitwise: numpy adds fewer than 8
-    values in order, and longer runs pairwise with 8 accumulators (``pairwise_sum`` in
-    numpy's ``loops_utils.h``), onto the identity 0.0."""
-    return 0.0 + _pairwise(values, 0, len(values))
-
-
-def _pairwise(xs: Sequence[float], lo: int, n: int) -> float:
-    if n < 8:
-        total = 0.0
-        for i in range(lo, lo + n):
-            total += xs[i]
-        return total
-    if n <= 128:
-        r0, r1, r2, r3, r4, r5, r6, r7 = xs[lo : lo + 8]
-        end = lo + n - n % 8
-        for i in range(lo + 8, end, 8):
-            r0 += xs[i]
-            r1 += xs[i + 1]
-            r2 += xs[i + 2]
-            r3 += xs[i + 3]
-            r4 += xs[i + 4]
-            r5 += xs[i + 5]
-            r6 += xs[i + 6]
-            r7 += xs[i + 7]
-        total = ((r0 + r1) + (r2 + r3)) + ((r4 + r5) + (r6 + r7))
-        for i in range(end, lo + n):
-            total += xs[i]
-        return total
-    half = n // 2
-    half -= half % 8
-    return _pairwise(xs, lo, half) + _pairwise(xs, lo + half, n - half)
+def fit(
+    pred: np.ndarray, true: np.ndarray, pairs: Sequence[tuple[int, int]]
+) -> tuple[float, float, float, float, float]:
+    """:func:`procrustes` as ``(c, s, tx, tz)`` and the sum of squared residuals it leaves
+    (:func:`._kernels.fit`)."""
+    return compiled().fit(pred, true, np.array(pairs, dtype=np.intp).reshape(-1, 2))
 
 
 def two_point(pa: Point, pb: Point, qa: Point, qb: Point) -> Motion:
@@ -310,14 +265,8 @@ def _distance_matrix(problem: Problem, p: np.ndarray, dec: int) -> np.ndarray:
 
 
 def _sse(problem: Problem, pairs: Pairs) -> tuple[float, Motion]:
-    p = [problem.points[r] for r, _ in pairs]
-    q = [problem.layout.points[c] for _, c in pairs]
-    motion = procrustes(p, q)
-    squares: list[float] = []
-    p_moved = moved(problem.pred[[r for r, _ in pairs]], motion).tolist()
-    for (x, z), (u, v) in zip(p_moved, q, strict=True):
-        squares += ((x - u) * (x - u), (z - v) * (z - v))
-    return round(numpy_sum(squares), digits(problem.layout.scale, 2)), motion
+    c, s, tx, tz, sse = fit(problem.pred, problem.layout.true, pairs)
+    return round(sse, digits(problem.layout.scale, 2)), Motion(c, s, tx, tz)
 
 
 def refine(problem: Problem, seed: Motion) -> Pairs:

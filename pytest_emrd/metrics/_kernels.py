@@ -17,6 +17,8 @@ numpy's order, so every result has the same bits (oracles: ``tests/metrics/test_
 
 from __future__ import annotations
 
+import math
+
 import numba
 import numpy as np
 from numba.core import types
@@ -116,6 +118,49 @@ def _square(x: float, z: float, true: np.ndarray, j: int) -> float:
     dx = x - true[j, 0]
     dz = z - true[j, 1]
     return dx * dx + dz * dz
+
+
+@_jit
+def fit(
+    pred: np.ndarray, true: np.ndarray, pairs: np.ndarray
+) -> tuple[float, float, float, float, float]:
+    """:func:`._align.procrustes` of ``pred[r] -> true[c]`` for ``(r, c)`` in ``pairs``
+    (k x 2, k >= 1), and the sum of squared residuals it leaves.
+
+    As numpy computes them from the gathered ``(k x 2)`` arrays: centroids by
+    ``sum(axis=0)`` (row after row), ``sum(a * b)`` and ``sum(a x b)`` pairwise, the angle by
+    ``atan2`` (libm's, as Python's ``math``); residuals of the points moved as ``@ R`` (fused
+    for two or more rows), squared per coordinate and summed pairwise. Returns
+    ``(c, s, tx, tz, residual)``.
+    """
+    k = pairs.shape[0]
+    px = pz = qx = qz = 0.0
+    for i in range(k):
+        px += pred[pairs[i, 0], 0]
+        pz += pred[pairs[i, 0], 1]
+        qx += true[pairs[i, 1], 0]
+        qz += true[pairs[i, 1], 1]
+    px, pz, qx, qz = px / k, pz / k, qx / k, qz / k
+    dots = np.empty(2 * k)
+    crosses = np.empty(k)
+    for i in range(k):
+        ax, az = pred[pairs[i, 0], 0] - px, pred[pairs[i, 0], 1] - pz
+        bx, bz = true[pairs[i, 1], 0] - qx, true[pairs[i, 1], 1] - qz
+        dots[2 * i] = ax * bx
+        dots[2 * i + 1] = az * bz
+        crosses[i] = ax * bz - az * bx
+    dot, cross = 0.0 + _pairwise(dots), 0.0 + _pairwise(crosses)
+    theta = math.atan2(cross, dot) if (dot != 0.0 or cross != 0.0) else 0.0
+    c, s = math.cos(theta), math.sin(theta)
+    tx, tz = qx - (c * px - s * pz), qz - (s * px + c * pz)
+    squares = dots  # reused: 2k values
+    for i in range(k):
+        x, z = _turn(pred[pairs[i, 0], 0], pred[pairs[i, 0], 1], c, s, k >= 2)
+        dx = (x + tx) - true[pairs[i, 1], 0]
+        dz = (z + tz) - true[pairs[i, 1], 1]
+        squares[2 * i] = dx * dx
+        squares[2 * i + 1] = dz * dz
+    return c, s, tx, tz, 0.0 + _pairwise(squares)
 
 
 @_jit

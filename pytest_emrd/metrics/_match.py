@@ -147,10 +147,9 @@ def rigid_fit(pred: np.ndarray, true: np.ndarray) -> tuple[np.ndarray, np.ndarra
     Degenerate input (one point, or all points coincident) gives the identity rotation and
     the translation between centroids.
     """
-    m = procrustes(
-        np.asarray(pred, dtype=float).reshape(-1, 2).tolist(),
-        np.asarray(true, dtype=float).reshape(-1, 2).tolist(),
-    )
+    pred = np.ascontiguousarray(pred, dtype=float).reshape(-1, 2)
+    true = np.ascontiguousarray(true, dtype=float).reshape(-1, 2)
+    m = procrustes(pred, true, [(i, i) for i in range(len(pred))])
     return np.array([[m.c, -m.s], [m.s, m.c]]), np.array([m.tx, m.tz])
 
 
@@ -283,8 +282,7 @@ class Matcher:
                 return None
             (r, c), *_ = pairs
             return Motion(1.0, 0.0, *(self._true[c] - problem.pred[r]).tolist())
-        true = self._layout.points
-        return procrustes([written[r] for r, _ in pairs], [true[c] for _, c in pairs])
+        return procrustes(problem.pred, self._true, pairs)
 
     def _in_frame(self, key: Key, anchor_rows: list[int], kept: dict[str, int]) -> dict[str, int]:
         """The labels of ``key`` not in ``kept``, assigned among the objects not kept, in the
@@ -293,8 +291,10 @@ class Matcher:
         motion = self._anchor_fits.get(anchors)
         if motion is None:
             first = self._first
-            true = self._layout.points
-            motion = procrustes([a[1:] for a in anchors], [true[first[a[0]]] for a in anchors])
+            written = np.array([a[1:] for a in anchors], dtype=float)
+            motion = procrustes(
+                written, self._true, [(i, first[a[0]]) for i, a in enumerate(anchors)]
+            )
             self._anchor_fits[anchors] = motion
         todo = [entry for entry in key if entry[0] not in kept]
         problem = Problem(

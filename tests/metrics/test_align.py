@@ -7,6 +7,7 @@ from __future__ import annotations
 import math
 import subprocess
 import sys
+from random import Random
 
 import numpy as np
 from hypothesis import given
@@ -19,9 +20,9 @@ from pytest_emrd.metrics._align import (
     _distance_matrix,
     assign,
     best_seed,
+    fit,
     layout_of,
     moved,
-    numpy_sum,
     procrustes,
 )
 
@@ -45,34 +46,44 @@ def _procrustes_numpy(pred: np.ndarray, true: np.ndarray) -> Motion:
 
 
 @given(st.lists(finite, max_size=400))
-def test_numpy_sum_is_numpys_pairwise_sum(values: list[float]) -> None:
-    want = float(np.add.reduce(np.array(values, dtype=float)))
-    assert numpy_sum(values) == want
-    assert 0.0 + _kernels._pairwise(np.array(values, dtype=float)) == want
+def test_compiled_sum_is_numpys_pairwise_sum(values: list[float]) -> None:
+    array = np.array(values, dtype=float)
+    assert 0.0 + _kernels._pairwise(array) == float(np.add.reduce(array))
 
 
-def test_compiled_pairwise_sum_splits_long_runs_as_numpy_does() -> None:
+def test_compiled_sum_splits_long_runs_as_numpy_does() -> None:
     # past 128 values numpy splits in halves at a multiple of 8: sizes around each split
     rng = np.random.default_rng(7)
     for n in (127, 128, 129, 136, 255, 256, 257, 1000, 4099):
         values = rng.normal(size=n) * 10.0 ** rng.uniform(-6, 6, size=n)
-        assert _kernels._pairwise(values) == float(np.add.reduce(values)) == numpy_sum(values)
+        assert _kernels._pairwise(values) == float(np.add.reduce(values))
 
 
-def test_numpy_sum_of_nothing_and_of_negative_zero_is_zero() -> None:
-    assert math.copysign(1.0, numpy_sum([])) == 1.0
-    assert math.copysign(1.0, numpy_sum([-0.0])) == math.copysign(1.0, float(np.sum([-0.0])))
+def test_compiled_sum_of_nothing_and_of_negative_zero_is_zero() -> None:
+    assert math.copysign(1.0, 0.0 + _kernels._pairwise(np.array([]))) == 1.0
+    negative_zero = 0.0 + _kernels._pairwise(np.array([-0.0]))
+    assert math.copysign(1.0, negative_zero) == math.copysign(1.0, float(np.sum([-0.0])))
 
 
-@given(st.lists(st.tuples(point, point), min_size=1, max_size=45), st.booleans())
-def test_procrustes_on_floats_is_the_numpy_fit_bitwise(
-    pairs: list[tuple[tuple[float, float], tuple[float, float]]], coincide: bool
+@given(st.lists(st.tuples(point, point), min_size=1, max_size=45), st.booleans(), st.randoms())
+def test_procrustes_and_its_residual_are_the_numpy_fit_bitwise(
+    pairs: list[tuple[tuple[float, float], tuple[float, float]]], coincide: bool, rnd: Random
 ) -> None:
     pred = [p for p, _ in pairs]
     if coincide:
         pred = [pred[0]] * len(pred)
     true = [q for _, q in pairs]
-    assert procrustes(pred, true) == _procrustes_numpy(np.array(pred), np.array(true))
+    # the kernel gathers the points through index pairs: shuffle the rows it reads from
+    rows, cols = list(range(len(pred))), list(range(len(true)))
+    rnd.shuffle(rows)
+    rnd.shuffle(cols)
+    stored_pred, stored_true = np.empty((len(pred), 2)), np.empty((len(true), 2))
+    stored_pred[rows], stored_true[cols] = pred, true
+    index = list(zip(rows, cols, strict=True))
+    motion = _procrustes_numpy(np.array(pred), np.array(true))
+    assert procrustes(stored_pred, stored_true, index) == motion
+    squares = (moved(np.array(pred), motion) - np.array(true)) ** 2
+    assert fit(stored_pred, stored_true, index)[4] == float(np.add.reduce(squares.ravel()))
 
 
 @given(st.floats(0, 1e12, allow_nan=False), st.integers(-4, 12))
