@@ -6,10 +6,11 @@ and hashing every frame in it would handle each message up to ten times. Here ea
 is handled once:
 
 * :func:`encode_body` gives the exact bytes ``httpx`` would send for ``json=body`` (compact,
-  ``ensure_ascii=False``, no NaN), splicing in the encoding of each item of the body's
-  top-level lists (``messages``, ``contents``) computed once per item (:func:`memo`);
-* it remembers which tree those bytes came from (:func:`sent_tree`), so the redactor builds
-  the canonical body from the same tree, item by item, instead of parsing it back.
+  ``ensure_ascii=False``, no NaN), joining the UTF-8 encoding of each item of the body's
+  top-level lists (``messages``, ``contents``), computed once per item (a :class:`Fragment`);
+* it remembers which tree and fragments those bytes came from (:func:`sent`), so the redactor
+  builds the canonical body from the same fragments, each redacted once and kept on its
+  fragment, instead of parsing the body back.
 
 Items are treated as immutable once encoded (:class:`~pytest_emrd.agent.Conversation` builds
 each message once and never changes it). Both tables are bounded and thread-safe, hold a
@@ -119,9 +120,23 @@ def key_json(key: str, *, ensure_ascii: bool) -> str:
 #: ``httpx``'s encoding of ``json=``: the bytes a client would send without this module.
 wire_json: Final = partial(dumps, ensure_ascii=False, allow_nan=False)
 
+
+class Fragment:
+    """One item of a sent body's top-level list: the item, the UTF-8 bytes of its wire JSON,
+    and its canonical (redacted) bytes once the redactor has computed them."""
+
+    __slots__ = ("canonical", "item", "wire")
+
+    def __init__(self, item: Any, wire: bytes) -> None:
+        self.item = item
+        self.wire = wire
+        self.canonical: bytes | None = None
+
+
 _lock = threading.Lock()
 _items: OrderedDict[tuple[int, Hashable], tuple[Any, Any]] = OrderedDict()
-_bodies: OrderedDict[int, tuple[bytes, Any]] = OrderedDict()
+_fragments: OrderedDict[int, Fragment] = OrderedDict()
+_bodies: OrderedDict[int, tuple[bytes, Any, dict[str, Any]]] = OrderedDict()
 
 
 def _remember(table: OrderedDict[Any, Any], key: Any, value: Any, capacity: int) -> None:
@@ -148,60 +163,95 @@ def spliced(tree: Any) -> bool:
     return isinstance(tree, dict) and all(isinstance(k, str) for k in tree)
 
 
+#: Punctuation of a spliced object, as text and as bytes: comma, colon, brackets, braces.
+_PUNCTUATION: Final = {
+    False: (",", ":", "[", "]", "{", "}"),
+    True: (b",", b":", b"[", b"]", b"{", b"}"),
+}
+
+
 def splice(
     tree: dict[str, Any],
     *,
-    value: Callable[[Any], str],
-    item: Callable[[Any], str],
+    value: Callable[[Any], Any],
+    item: Callable[[Any], Any],
     sort_keys: bool,
     ensure_ascii: bool = False,
-) -> str:
+    binary: bool = False,
+) -> Any:
     """``tree`` as compact JSON, member by member exactly as ``json.dumps`` joins an object
     (``separators=(",", ":")``), each top-level list from its items' texts ``item(x)`` and
     every other member from ``value(v)``; the pieces are joined once (a window of frames is
-    copied once, not once per nesting level)."""
+    copied once, not once per nesting level). ``binary``: the pieces and the result are UTF-8
+    bytes (``value`` and ``item`` return bytes), so nothing is encoded after the join."""
+    comma, colon, left, right, opening, closing = _PUNCTUATION[binary]
     pieces = []
     for key in sorted(tree) if sort_keys else tree:
-        pieces += (",", key_json(key, ensure_ascii=ensure_ascii), ":")
+        name = key_json(key, ensure_ascii=ensure_ascii)
+        pieces += (comma, name.encode() if binary else name, colon)
         v = tree[key]
         if isinstance(v, list):
-            pieces.append("[")
+            pieces.append(left)
             for n, x in enumerate(v):
-                pieces += (",", item(x)) if n else (item(x),)
-            pieces.append("]")
+                pieces += (comma, item(x)) if n else (item(x),)
+            pieces.append(right)
         else:
             pieces.append(value(v))
     if not pieces:
-        return "{}"
-    pieces[0] = "{"  # the first member's comma
-    pieces.append("}")
-    return "".join(pieces)
+        return opening + closing
+    pieces[0] = opening  # the first member's comma
+    pieces.append(closing)
+    return (b"" if binary else "").join(pieces)
 
 
-def _wire_item(item: Any) -> str:
-    return memo(item, "wire", wire_json)  # type: ignore[no-any-return]
+def fragment(item: Any) -> Fragment:
+    """The :class:`Fragment` of ``item``, encoded once while remembered."""
+    hit = _fragments.get(id(item))  # one read is atomic; changes to the table take the lock
+    if hit is not None and hit.item is item:
+        return hit
+    made = Fragment(item, wire_json(item).encode("utf-8"))
+    _remember(_fragments, id(item), made, _ITEMS)
+    return made
+
+
+def _wire_bytes(value: Any) -> bytes:
+    return wire_json(value).encode("utf-8")
+
+
+def _fragment_wire(piece: Fragment) -> bytes:
+    return piece.wire
 
 
 def encode_body(body: Any) -> bytes:
     """The bytes ``httpx`` sends for ``json=body``, each list item encoded once; the redactor
-    can then find ``body`` again from the bytes (:func:`sent_tree`)."""
-    if spliced(body):
-        text = splice(body, value=wire_json, item=_wire_item, sort_keys=False)
-    else:
-        text = wire_json(body)
-    raw = text.encode("utf-8")
-    _remember(_bodies, id(raw), (raw, body), _BODIES)
+    can then find ``body`` and its fragments again from the bytes (:func:`sent`)."""
+    if not spliced(body):
+        raw = wire_json(body).encode("utf-8")
+        _remember(_bodies, id(raw), (raw, body, {}), _BODIES)
+        return raw
+    pieces = {k: [fragment(x) for x in v] if isinstance(v, list) else v for k, v in body.items()}
+    raw = splice(pieces, value=_wire_bytes, item=_fragment_wire, sort_keys=False, binary=True)
+    _remember(_bodies, id(raw), (raw, body, pieces), _BODIES)
     return raw
+
+
+def sent(raw: bytes) -> tuple[Any, dict[str, Any]] | None:
+    """``(tree, pieces)`` :func:`encode_body` encoded into exactly this ``raw`` object (the
+    pieces: the tree's members, each top-level list as its :class:`Fragment` list; empty
+    when the tree was not spliced), else None."""
+    hit = _bodies.get(id(raw))
+    return (hit[1], hit[2]) if hit is not None and hit[0] is raw else None
 
 
 def sent_tree(raw: bytes) -> Any | None:
     """The tree :func:`encode_body` encoded into exactly this ``raw`` object, else None."""
-    hit = _bodies.get(id(raw))
-    return hit[1] if hit is not None and hit[0] is raw else None
+    found = sent(raw)
+    return found[0] if found is not None else None
 
 
 def clear() -> None:
     """Forget every remembered encoding and body (tests, cold benchmarks)."""
     with _lock:
         _items.clear()
+        _fragments.clear()
         _bodies.clear()

@@ -124,7 +124,8 @@ def user_turn(spec: EpisodeSpec, step: int, obs: Observation) -> UserTurn:
     if spec.modality == "text":
         return UserTurn(step, text)
     turn = UserTurn.with_frame(step, text, obs.jpeg, obs.frame_digest)
-    frames.register(turn.jpeg_b64 or "", obs.frame_digest)  # before any request carries it
+    # Before any request carries it; the redactor then finds the frame by its data URL.
+    frames.register(turn.jpeg_b64 or "", obs.frame_digest, data_url=turn.data_url)
     return turn
 
 

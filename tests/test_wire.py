@@ -71,6 +71,24 @@ def test_a_message_is_encoded_and_redacted_once_however_many_windows_carry_it(mo
     assert calls == ["QUJD"]
 
 
+def test_a_frame_registered_with_its_data_url_is_hashed_only_when_registered(monkeypatch):
+    url = "data:image/jpeg;base64,QkNE"
+    hashed: list[str] = []
+    real = frames._payload_key
+    monkeypatch.setattr(frames, "_payload_key", lambda p: hashed.append(p) or real(p))
+    frames.register("QkNE", PIXELS, data_url=url)
+    image = {"role": "user", "content": [{"type": "image_url", "image_url": {"url": url}}]}
+    for window in range(1, 6):
+        body = {"model": "m", "messages": [image] * window}
+        assert f"pixels:{PIXELS}".encode() in redact_body(_wire.encode_body(body)).body
+    assert hashed == ["QkNE"]
+    # An equal data URL that is another string object is found by hashing its payload.
+    copy = "".join(["data:image/jpeg;base64,", "QkNE"])
+    other = {"role": "user", "content": [{"type": "image_url", "image_url": {"url": copy}}]}
+    assert f"pixels:{PIXELS}".encode() in redact_body(_wire.encode_body({"messages": [other]})).body
+    assert hashed == ["QkNE", "QkNE"]
+
+
 def test_bytes_this_process_did_not_build_have_no_tree():
     raw = _wire.encode_body({"model": "m", "messages": []})
     assert _wire.sent_tree(b'{"model":"m","messages":[]}') is None

@@ -17,6 +17,7 @@ from __future__ import annotations
 import base64
 from collections import deque
 from dataclasses import dataclass
+from functools import cached_property
 from typing import Any, Final
 
 from pytest_emrd.errors import check_positive_int
@@ -43,6 +44,12 @@ class UserTurn:
     def with_frame(cls, step: int, text: str, jpeg: bytes, frame_digest: str) -> UserTurn:
         return cls(step, text, base64.b64encode(jpeg).decode("ascii"), frame_digest)
 
+    @cached_property
+    def data_url(self) -> str | None:
+        """The frame as a JPEG data URL, built once (every message showing the frame carries
+        this one string), or None without a frame."""
+        return None if self.jpeg_b64 is None else f"data:image/jpeg;base64,{self.jpeg_b64}"
+
 
 def _user_message(turn: UserTurn, *, image: bool) -> dict[str, Any]:
     if turn.jpeg_b64 is None:
@@ -56,7 +63,7 @@ def _user_message(turn: UserTurn, *, image: bool) -> dict[str, Any]:
         "role": "user",
         "content": [
             {"type": "text", "text": turn.text},
-            {"type": "image_url", "image_url": {"url": f"data:image/jpeg;base64,{turn.jpeg_b64}"}},
+            {"type": "image_url", "image_url": {"url": turn.data_url}},
         ],
     }
 

@@ -252,7 +252,8 @@ def _step_overhead_ms(repeat: int) -> float:
     recorder = _Recorder(client)
     _replay(spec, recorder)
     sent = recorder.sent
-    payloads = [m[-1]["content"][1]["image_url"]["url"].partition(",")[2] for m in sent]
+    urls = [m[-1]["content"][1]["image_url"]["url"] for m in sent]
+    payloads = [url.partition(",")[2] for url in urls]
     digests = [frames.pixel_digest_for(p).removeprefix("pixels:") for p in payloads]
 
     def replay() -> None:
@@ -264,8 +265,8 @@ def _step_overhead_ms(repeat: int) -> float:
             matching="strict",
             rerecord_command="(bench)",
         ):
-            for messages, payload, digest in zip(sent, payloads, digests, strict=True):
-                frames.register(payload, digest)  # the loop registers each new frame once
+            for messages, url, payload, digest in zip(sent, urls, payloads, digests, strict=True):
+                frames.register(payload, digest, data_url=url)  # as the loop does, once a frame
                 client.complete(messages)
 
     try:

@@ -111,6 +111,9 @@ def _redact_tree(node: Any) -> Any:
     """``node`` with every image payload replaced by its frame digest."""
     if isinstance(node, str):
         if node.startswith(_DATA_URL):
+            known = frames.pixel_digest_for_url(node)
+            if known is not None:
+                return known
             _, sep, payload = node.partition(";base64,")
             if sep:
                 return frames.pixel_digest_for(payload)
@@ -154,25 +157,35 @@ def _canonical_item(item: Any) -> str:
     return canonical_json(_redact_tree(item))
 
 
-def _memo_canonical_item(item: Any) -> str:
-    return _wire.memo(item, "canonical", _canonical_item)  # type: ignore[no-any-return]
+def _canonical_bytes(value: Any) -> bytes:
+    return _canonical_item(value).encode()
 
 
-def _canonical_sent(tree: Any) -> str:
+def _canonical_fragment(piece: _wire.Fragment) -> bytes:
+    """A list item's canonical bytes, redacted once and kept on its fragment however many
+    requests carry it (two threads may both compute it: the same bytes)."""
+    if piece.canonical is None:
+        piece.canonical = _canonical_bytes(piece.item)
+    return piece.canonical
+
+
+def _canonical_sent(tree: Any, pieces: dict[str, Any]) -> bytes:
     """Canonical form of a body this process encoded (:mod:`pytest_emrd._wire`): each item of a
     top-level list redacted and serialised once, however many requests carry it. Byte for
     byte what parsing the body and redacting the whole tree gives."""
-    if not _wire.spliced(tree) or _image_mime(tree):
-        return _canonical_item(tree)
-    return _wire.splice(tree, value=_canonical_item, item=_memo_canonical_item, sort_keys=True)
+    if not pieces or _image_mime(tree):
+        return _canonical_bytes(tree)
+    return _wire.splice(
+        pieces, value=_canonical_bytes, item=_canonical_fragment, sort_keys=True, binary=True
+    )
 
 
 def redact_body(body: bytes | str | None) -> Redacted:
     """Canonical form of a request body (pure; see the module docstring)."""
     raw = body.encode() if isinstance(body, str) else (body or b"")
-    sent = _wire.sent_tree(raw)
+    sent = _wire.sent(raw)
     if sent is not None:
-        canonical = _canonical_sent(sent).encode()
+        canonical = _canonical_sent(*sent)
         return Redacted(body=scrub_bytes(canonical, literal_only=True), parsed=True)
     try:
         tree = json.loads(raw)
