@@ -43,7 +43,6 @@ from dataclasses import dataclass, replace
 from typing import Any, Final
 
 import numpy as np
-from statsmodels.stats.multitest import multipletests
 
 from pytest_emrd._serde import from_dict, to_dict
 from pytest_emrd.metrics import GATE_METRICS, EpisodeMetrics, Estimate, as_episode_metrics
@@ -249,6 +248,8 @@ def holm(differences: Sequence[Difference]) -> tuple[Difference, ...]:
     tested = [i for i, d in enumerate(differences) if d.p_value is not None]
     out = list(differences)
     if tested:
+        from statsmodels.stats.multitest import multipletests  # heavy: imported on first use
+
         adjusted = multipletests([differences[i].p_value for i in tested], alpha=ALPHA,
                                  method="holm")[1]  # fmt: skip
         for i, p in zip(tested, adjusted, strict=True):
