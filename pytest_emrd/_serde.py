@@ -129,8 +129,7 @@ def _dataclass_builder(tp: Any) -> _Build:
 
 def _tuple_builder(args: tuple[Any, ...]) -> _Build:
     if len(args) == 2 and args[1] is Ellipsis:
-        item = _builder(args[0])
-        return lambda data: _items(data, [item] * len(data) if _is_list(data) else [])
+        return _homogeneous(_builder(args[0]))
     items = [_builder(a) for a in args]
 
     def build_fixed(data: Any) -> tuple[Any, ...]:
@@ -140,6 +139,23 @@ def _tuple_builder(args: tuple[Any, ...]) -> _Build:
         return _items(data, items)
 
     return build_fixed
+
+
+def _homogeneous(item: _Build) -> _Build:
+    """The builder of ``tuple[X, ...]``: one comprehension over the items; on a bad item, the
+    item-by-item loop again, to say which item it was."""
+
+    def build(data: Any) -> tuple[Any, ...]:
+        if not _is_list(data):
+            raise _Invalid(f"expected a list, got {type(data).__name__}")
+        if item is _same:
+            return tuple(data)
+        try:
+            return tuple([item(v) for v in data])
+        except _Invalid:
+            return _items(data, [item] * len(data))
+
+    return build
 
 
 def _is_list(data: Any) -> bool:

@@ -203,7 +203,11 @@ class ResultsStore:
         self, spec: EpisodeSpec, compute: Callable[[EpisodeSpec], EpisodeRun]
     ) -> StoredEpisode:
         """The stored episode for ``spec``, computing and storing it if needed (waiting for
-        whoever computes it now)."""
+        whoever computes it now). A reusable episode is read without taking its lock: files
+        are replaced atomically, and a reusable one is final."""
+        stored = self._reusable(spec)
+        if stored is not None:
+            return stored
         with self._lock(spec):
             return self._reusable(spec) or self._compute(spec, compute)
 
