@@ -7,6 +7,7 @@ held). Censoring is assumed non-informative, as Kaplan-Meier and the exponential
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -115,8 +116,20 @@ def anchored_km(
     if t.size == 0:
         c = float(coverage)
         return AnchoredKM(c, (0.0,), (c,), (0,), (0,), (c,), (c,))
+    return _fitted(t.tobytes(), e.tobytes(), np.float64(coverage).tobytes())
+
+
+@functools.lru_cache(maxsize=32)
+def _fitted(durations: bytes, observed: bytes, anchor: bytes) -> AnchoredKM:
+    """:func:`anchored_km` of non-empty spells, its arguments as the bytes of float64
+    durations, bool events and the float64 coverage. Memoised on those bytes (exact: ``-0.0``
+    is not ``0.0`` here): one report fits the same pooled spells several times (the KM curve,
+    the Ebbinghaus R^2, its gate), and the result is immutable."""
     from lifelines import KaplanMeierFitter  # heavy: imported on first use
 
+    t = np.frombuffer(durations, dtype=float)
+    e = np.frombuffer(observed, dtype=bool)
+    coverage = float(np.frombuffer(anchor, dtype=float)[0])
     fitter = KaplanMeierFitter().fit(t, event_observed=e)
     table = fitter.event_table
     factor = fitter.survival_function_.to_numpy()[:, 0]
