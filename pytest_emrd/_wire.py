@@ -36,6 +36,9 @@ from typing import Any, Final
 
 #: Item encodings remembered (a window is 21 messages; several episodes may run at once).
 _ITEMS: Final = 2048
+#: Fragments remembered (each holds a message's wire bytes, a frame's ~27 KB for a user turn;
+#: a window is 21 messages, so this serves ~48 episodes running at once).
+_FRAGMENTS: Final = 1024
 #: Sent bodies remembered until the redactor has seen them (a few per request in flight).
 _BODIES: Final = 64
 
@@ -210,7 +213,7 @@ def fragment(item: Any) -> Fragment:
     if hit is not None and hit.item is item:
         return hit
     made = Fragment(item, wire_json(item).encode("utf-8"))
-    _remember(_fragments, id(item), made, _ITEMS)
+    _remember(_fragments, id(item), made, _FRAGMENTS)
     return made
 
 
