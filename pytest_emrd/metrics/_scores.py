@@ -11,7 +11,6 @@ from dataclasses import dataclass
 from typing import Final
 
 import numpy as np
-from scipy.optimize import linear_sum_assignment
 
 from pytest_emrd.metrics._align import COINCIDENT_M, digits
 from pytest_emrd.metrics._match import Matching, rigid_fit
@@ -256,6 +255,8 @@ def reentry_copies(
         k = types.resolve(entries[lb].object_type, lb)
         if k >= 0:
             by_type.setdefault(k, []).append(lb)
+    from scipy.optimize import linear_sum_assignment  # heavy: imported on first use
+
     copies: set[str] = set()
     for k, labels in by_type.items():
         ids = office.ids_of[k]
