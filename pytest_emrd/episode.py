@@ -30,7 +30,6 @@ from typing import Any, Final
 
 from pytest_emrd import frames, world
 from pytest_emrd.agent import (
-    PROMPT_VERSION,
     ChatClient,
     Conversation,
     Registry,
@@ -44,6 +43,7 @@ from pytest_emrd.agent import (
 )
 from pytest_emrd.agent._parse import MAX_REPLY_CHARS
 from pytest_emrd.errors import ConfigError, EmrdError, check_choice, check_positive_int
+from pytest_emrd.protocol import protocol_version
 from pytest_emrd.rooms import SLUG_ROOMS
 from pytest_emrd.trajectory import (
     CONDITIONS,
@@ -64,12 +64,6 @@ REUSED_BACKENDS: Final[frozenset[str]] = frozenset({"ai2thor"})
 """Backends whose simulator :class:`SimulatorPool` keeps across episodes (a Unity process
 takes seconds to start). ``builtin`` is built per episode: it is cheap, and a fresh
 simulator keeps its recorded traffic exactly as it was."""
-
-
-def protocol_version(backend: str = "builtin") -> str:
-    """World + prompt protocol version of ``backend``; cassettes and stored results are keyed
-    by it (``builtin-4+p2``; ``ai2thor-1+builtin-4+p2``)."""
-    return f"{world.world_version(backend)}+{PROMPT_VERSION}"
 
 
 def build_simulator(backend: str, options: Mapping[str, Any] | None = None) -> Simulator:

@@ -100,7 +100,7 @@ class _Capture(httpx.BaseTransport):
 
 
 def _protocol() -> str:
-    from pytest_emrd.episode import protocol_version
+    from pytest_emrd.protocol import protocol_version
 
     return protocol_version()
 

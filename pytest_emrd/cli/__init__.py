@@ -30,7 +30,7 @@ def version_text() -> str:
     """``emrd 0.1.0 (protocol builtin-4+p2, reference agents ref-3)``: what cassettes apply."""
     from pytest_emrd import __version__
     from pytest_emrd.agent.reference import REFERENCE_VERSION
-    from pytest_emrd.episode import protocol_version
+    from pytest_emrd.protocol import protocol_version
 
     return (
         f"emrd {__version__} (protocol {protocol_version()}, reference agents {REFERENCE_VERSION})"

@@ -67,7 +67,7 @@ class Run:
 
     @cached_property
     def protocol(self) -> str:
-        from pytest_emrd.episode import protocol_version
+        from pytest_emrd.protocol import protocol_version
 
         return protocol_version(self.settings.backend)
 

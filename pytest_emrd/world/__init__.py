@@ -6,69 +6,56 @@
 :class:`BuiltinSimulator`, numpy with a numba pixel kernel; ``ai2thor``: the THOR backend,
 extra ``thor``); ``ground_truth`` and ``discoverable_ids`` give what the
 metrics compare against. ``WORLD_VERSION`` keys cassettes.
+Names are imported on first use (:mod:`pytest_emrd._lazy`): reading the world version does
+not import the renderer, the layouts or the simulators.
 """
 
-from pytest_emrd.world._catalog import CATEGORY_OF, KINDS, Kind
-from pytest_emrd.world._conditions import ConditionParams, condition_params
-from pytest_emrd.world._episode import (
-    PAPER_OFFICE_SEED,
-    EpisodeWorld,
-    episode_layout,
-    episode_world,
-    paper_office,
-)
-from pytest_emrd.world._geometry import (
-    footprint,
-    heading_in_spawn_frame,
-    local_to_world,
-    to_spawn_frame,
-)
-from pytest_emrd.world._layout import generate_layout
-from pytest_emrd.world._model import (
-    Doorway,
-    Layout,
-    Observation,
-    Room,
-    Simulator,
-    VisibleObject,
-    WorldObject,
-    WorldPose,
-)
-from pytest_emrd.world._registry import BACKENDS, make_simulator, world_version
-from pytest_emrd.world._simulator import BuiltinSimulator
-from pytest_emrd.world._truth import ground_truth
-from pytest_emrd.world._version import WORLD_VERSION
-from pytest_emrd.world._visibility import discoverable_ids
+from pytest_emrd._lazy import lazy_exports
 
-__all__ = [
-    "BACKENDS",
-    "CATEGORY_OF",
-    "KINDS",
-    "PAPER_OFFICE_SEED",
-    "WORLD_VERSION",
-    "BuiltinSimulator",
-    "ConditionParams",
-    "Doorway",
-    "EpisodeWorld",
-    "Kind",
-    "Layout",
-    "Observation",
-    "Room",
-    "Simulator",
-    "VisibleObject",
-    "WorldObject",
-    "WorldPose",
-    "condition_params",
-    "discoverable_ids",
-    "episode_layout",
-    "episode_world",
-    "footprint",
-    "generate_layout",
-    "ground_truth",
-    "heading_in_spawn_frame",
-    "local_to_world",
-    "make_simulator",
-    "paper_office",
-    "to_spawn_frame",
-    "world_version",
-]
+__getattr__, __dir__, __all__ = lazy_exports(
+    __name__,
+    {
+        "_catalog": (
+            "CATEGORY_OF",
+            "KINDS",
+            "Kind",
+        ),
+        "_conditions": (
+            "ConditionParams",
+            "condition_params",
+        ),
+        "_episode": (
+            "PAPER_OFFICE_SEED",
+            "EpisodeWorld",
+            "episode_layout",
+            "episode_world",
+            "paper_office",
+        ),
+        "_geometry": (
+            "footprint",
+            "heading_in_spawn_frame",
+            "local_to_world",
+            "to_spawn_frame",
+        ),
+        "_layout": ("generate_layout",),
+        "_model": (
+            "Doorway",
+            "Layout",
+            "Observation",
+            "Room",
+            "Simulator",
+            "VisibleObject",
+            "WorldObject",
+            "WorldPose",
+        ),
+        "_registry": (
+            "BACKENDS",
+            "make_simulator",
+            "world_version",
+        ),
+        "_simulator": ("BuiltinSimulator",),
+        "_truth": ("ground_truth",),
+        "_version": ("WORLD_VERSION",),
+        "_visibility": ("discoverable_ids",),
+    },
+)

@@ -1,0 +1,17 @@
+"""The protocol version: what cassettes and stored results are keyed by.
+
+Its own light module because every pytest process reads it (a resumed worker checks each
+stored episode against it) while few need the episode loop, the HTTP clients or the
+renderer that :mod:`pytest_emrd.episode` brings in.
+"""
+
+from __future__ import annotations
+
+from pytest_emrd.agent._prompt import PROMPT_VERSION
+from pytest_emrd.world._registry import world_version
+
+
+def protocol_version(backend: str = "builtin") -> str:
+    """World + prompt protocol version of ``backend``; cassettes and stored results are keyed
+    by it (``builtin-4+p2``; ``ai2thor-1+builtin-4+p2``)."""
+    return f"{world_version(backend)}+{PROMPT_VERSION}"
