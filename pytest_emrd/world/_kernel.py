@@ -167,13 +167,14 @@ def _boxes(
 ) -> None:
     """Paint the boxes back to front, each over the columns it can cover.
 
-    A column's ray hits a box where it is inside both slabs (``x0..x1`` and ``z0..z1``),
-    between the near plane and the wall: from ``tn`` to ``tf``. The box shows its front
-    face, facing the slab it entered last, down to the rows of its bottom edge; its top face
-    when it is below the eye (from the top edge's row at the far hit), its underside when
-    above. Rows ``[start, end)`` take the underside's code when the box is above the eye,
-    else the front's; then its first rows, down to where the front begins (top face) or
-    where the underside begins (front face), take the second code.
+    A column's ray is inside a box from ``tn`` to ``tf`` (the slab test on ``x0..x1`` and
+    ``z0..z1``); it hits the box when that interval lies between the near plane and the wall.
+    The hit column shows rows ``[start, end)``: from the higher of the top edge's rows at
+    ``tn`` and ``tf`` to the lower of the bottom edge's, in the underside's code when the box
+    is above the eye, else the front face's (the face of the slab entered last). Then rows
+    ``[start, over)`` are painted again: a box below the eye shows its top down to the top
+    edge's row at ``tn``, where the front begins; one above it shows its front down to the
+    bottom edge's row at ``tn``, where the underside begins.
     """
     dx, dz, t_wall = view[0], view[1], view[2]
     rel, y, lo, hi, label, extra = boxes
