@@ -56,7 +56,9 @@ def _write_list(obj: Any) -> list[Any]:
 def _dataclass_writer(cls: Any) -> _Write:
     """Field names resolved once; fields whose type hint holds only JSON scalars copied as
     they are, tuples of scalars copied into lists, every other field through :func:`to_dict`
-    (the writer of its value's own class)."""
+    (the writer of its value's own class). The hints are trusted for scalars: a field hinted
+    ``float`` that held a tuple would be copied, not listed (mypy keeps the fields to their
+    hints; ``tests/test_serde.py`` checks every package dataclass against the generic walk)."""
     names = tuple(f.name for f in dataclasses.fields(cls))
     try:
         hints = typing.get_type_hints(cls)
