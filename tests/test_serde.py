@@ -221,6 +221,7 @@ NOT_GENERATED = {
     "Check": "validates its verdict",
     "ValidationReport": "validates its checks' verdicts",
     "Plan": "validates its episode count",
+    "IdTable": "validates that its ids are one to one",
     "Report": "too large to generate in time (its sections and tables are generated)",
 }
 PACKAGE_DATACLASSES = _package_dataclasses()
