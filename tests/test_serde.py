@@ -195,6 +195,11 @@ values = st.recursive(
 )
 
 
+# from_type(Path) alone builds only Path(): fields typed Path get relative and absolute paths
+_PATH_TEXT = r"/?[a-z]{1,3}(/[a-z.]{1,3}){0,2}"
+st.register_type_strategy(Path, st.builds(Path, st.from_regex(_PATH_TEXT, fullmatch=True)))
+
+
 def _mentions_any(hint: Any) -> bool:
     return hint is Any or any(map(_mentions_any, typing.get_args(hint)))
 
