@@ -246,12 +246,6 @@ def sent(raw: bytes) -> tuple[Any, dict[str, Any]] | None:
     return (hit[1], hit[2]) if hit is not None and hit[0] is raw else None
 
 
-def sent_tree(raw: bytes) -> Any | None:
-    """The tree :func:`encode_body` encoded into exactly this ``raw`` object, else None."""
-    found = sent(raw)
-    return found[0] if found is not None else None
-
-
 def clear() -> None:
     """Forget every remembered encoding and body (tests, cold benchmarks)."""
     with _lock:
