@@ -111,36 +111,25 @@ class Walls:
         self, ox: np.ndarray, oz: np.ndarray, dx: np.ndarray, dz: np.ndarray
     ) -> tuple[np.ndarray, np.ndarray]:
         """Ray parameter of the nearest wall hit along ``o + t d`` (``inf`` if none), and
-        whether that wall runs along x. All arguments broadcast to one shape ``S``."""
-        t_x = _hits(oz, ox, dz, dx, self.along_x)
-        t_z = _hits(ox, oz, dx, dz, self.along_z)
-        return np.minimum(t_x, t_z), t_x <= t_z
+        whether that wall runs along x. All arguments broadcast to one shape ``S``.
+
+        A wall ``across == c`` spanning ``[lo, hi]`` of the other coordinate is hit at
+        ``t = (c - across) / d_across`` when ``t > 1e-9`` and ``lo <= along + t * d_along
+        <= hi`` (compiled: :func:`pytest_emrd.world._sightlines.first_hits`)."""
+        from pytest_emrd.world._sightlines import first_hits  # numba: loaded on first use
+
+        rays = [np.asarray(a, dtype=np.float64) for a in (ox, oz, dx, dz)]
+        shape = np.broadcast_shapes(*(a.shape for a in rays))
+        flat = [a.reshape(-1) if a.size == 1 else np.broadcast_to(a, shape).ravel() for a in rays]
+        t = np.empty(shape)
+        along_x = np.empty(shape, dtype=bool)
+        first_hits(*flat, self.along_x, self.along_z, t.reshape(-1), along_x.reshape(-1))
+        return t, along_x
 
     def blocks(self, ax: np.ndarray, az: np.ndarray, bx: np.ndarray, bz: np.ndarray) -> np.ndarray:
         """Whether a wall crosses the open segment from ``a`` to ``b`` (broadcast shapes)."""
         t, _ = self.first_hit(ax, az, bx - ax, bz - az)
         return t < 1.0 - 1e-9
-
-
-def _hits(
-    across: np.ndarray,
-    along: np.ndarray,
-    d_across: np.ndarray,
-    d_along: np.ndarray,
-    segs: np.ndarray,
-) -> np.ndarray:
-    """Nearest positive ray parameter hitting segments at ``across == c`` spanning
-    ``[lo, hi]`` of the ``along`` coordinate. Segments run along a new leading axis, so the
-    nearest hit is an element-wise minimum over a few whole arrays."""
-    if segs.size == 0:
-        return np.full(np.broadcast(across, d_across).shape, np.inf)
-    lead = (-1,) + (1,) * np.broadcast(across, along, d_across, d_along).ndim
-    c, lo, hi = (segs[:, i].reshape(lead) for i in range(3))
-    with np.errstate(divide="ignore", invalid="ignore"):
-        t = (c - across) / d_across
-    hit = along + t * d_along
-    ok = (t > 1e-9) & (hit >= lo) & (hit <= hi) & np.isfinite(t)
-    return np.where(ok, t, np.inf).min(axis=0)
 
 
 @lru_cache(maxsize=64)

@@ -208,3 +208,73 @@ def _boxes(
             entry = table[second]
             for r in range(start, min(over, end)):
                 buf[r, c] = entry
+
+
+@njit(**_JIT)
+def _dist2(rect: np.ndarray, px: float, pz: float) -> float:
+    """Squared distance from ``(px, pz)`` to the nearest point of ``rect`` ``x0, z0, x1, z1``."""
+    ddx = max(max(rect[0] - px, px - rect[2]), 0.0)
+    ddz = max(max(rect[1] - pz, pz - rect[3]), 0.0)
+    return ddx * ddx + ddz * ddz
+
+
+@njit(**_JIT)
+def shown_boxes(
+    scene: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray],
+    eye: tuple[float, float, float, float, float, float],
+    visibility2: float,
+    camera: tuple[float, float, float],
+    out: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray],
+) -> int:
+    """Select the boxes :func:`compose` may paint (:func:`pytest_emrd.world._paint._shown`);
+    returns how many, their indices, columns and draw-order keys in ``out[:][:count]``.
+
+    ``scene``: the scene's ``parts``, ``part_object``, ``part_facing``, object ``rects``,
+    ``centres`` and ``support``; ``eye``: position ``x, z``, forward ``fx, fz``, right
+    ``rx, rz``; ``camera``: the near plane, the focal length and the image size. A box is
+    kept when its object lies within ``visibility2`` squared metres, it shows from the eye's
+    side (or from every side), some footprint corner lies past the near plane and the
+    corners are not all beyond one edge of the view wedge, and its column range (from the
+    extreme ray slopes ``lateral / forward`` over its corners, the forward distance clipped
+    to the near plane, one column of margin) is not empty. ``out``: per kept box its index,
+    first column, one past its last column, and the squared distances to the footprint of
+    the object its object stands on and to its own footprint.
+    """
+    parts, part_object, facing, rects, centres, support = scene
+    px, pz, fx, fz, rx, rz = eye
+    near_plane, focal, size = camera
+    sel, lo, hi, group, own = out
+    count = 0
+    for p in range(parts.shape[0]):
+        obj = part_object[p]
+        if not _dist2(rects[obj], px, pz) <= visibility2:
+            continue
+        always = facing[p, 0] == 0 and facing[p, 1] == 0
+        side = (px - centres[obj, 0]) * facing[p, 0] + (pz - centres[obj, 1]) * facing[p, 1]
+        if not (always or side > facing[p, 2]):
+            continue
+        f_lo, f_hi, l_lo, l_hi = np.inf, -np.inf, np.inf, -np.inf
+        behind, right, left = True, True, True
+        for k in range(4):
+            cx = parts[p, 0 if k < 2 else 2] - px
+            cz = parts[p, 1 if k % 2 == 0 else 3] - pz
+            fwd, lat = cx * fx + cz * fz, cx * rx + cz * rz
+            behind &= fwd <= near_plane
+            right &= lat > fwd
+            left &= lat < -fwd
+            f_lo, f_hi = min(f_lo, fwd), max(f_hi, fwd)
+            l_lo, l_hi = min(l_lo, lat), max(l_hi, lat)
+        if behind or right or left:
+            continue
+        f_lo = max(f_lo, near_plane)
+        u0 = min(l_lo / f_lo, l_lo / f_hi)
+        u1 = max(l_hi / f_lo, l_hi / f_hi)
+        first = min(max(np.floor(u0 * focal + (focal - 0.5)) - 1.0, 0.0), size)
+        last = min(max(np.ceil(u1 * focal + (focal - 0.5)) + 2.0, 0.0), size)
+        if not last > first:
+            continue
+        sel[count], lo[count], hi[count] = p, np.int64(first), np.int64(last)
+        group[count] = _dist2(rects[support[obj]], px, pz)
+        own[count] = _dist2(parts[p], px, pz)
+        count += 1
+    return count

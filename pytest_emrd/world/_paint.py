@@ -5,14 +5,12 @@ from the box's extent in the camera frame (clipped to the near plane, one column
 each side), so the per-column slab test runs on a few thousand (box, column) pairs rather
 than on every box times all 512 columns; columns outside a box's range cannot hit it (its
 rays pass more than a column's angle, ``1 / 256``, away from the box). This module selects
-the boxes and orders them back to front (numpy, per box); the slab test and the painting,
-per column, are :func:`pytest_emrd.world._kernel.compose`'s.
+the boxes (compiled, :func:`pytest_emrd.world._kernel.shown_boxes`) and orders them back to
+front (numpy); the slab test and the painting, per column, are
+:func:`pytest_emrd.world._kernel.compose`'s.
 """
 
 from __future__ import annotations
-
-from dataclasses import dataclass
-from functools import lru_cache
 
 import numpy as np
 
@@ -26,6 +24,7 @@ FOCAL = SIZE / 2
 HORIZON = SIZE // 2
 EYE = 1.5
 NEAR = 0.05
+_CAMERA = (NEAR, float(FOCAL), float(SIZE))
 
 #: Surface orientations: faces across x (east/west), across z (north/south), tops,
 #: undersides. A surface's code is ``(label * 4 + face) << 8 | fog``, its colour
@@ -33,64 +32,24 @@ NEAR = 0.05
 X_FACE, Z_FACE, TOP_FACE, BOTTOM_FACE = 0, 1, 2, 3
 
 
-@dataclass(frozen=True, eq=False)
-class _Boxes:
-    """Per-scene arrays of every box, gathered once (see :func:`_boxes`)."""
-
-    corner_x: np.ndarray
-    """``(P, 4)`` x of the footprint corners."""
-    corner_z: np.ndarray
-    centre: np.ndarray
-    """``(P, 2)`` centre of the box's object."""
-    group: np.ndarray
-    """``(P, 4)`` footprint of the object the box's object stands on (draw order)."""
-    always: np.ndarray
-    """``(P,)`` whether the box shows from every side."""
-
-
-@lru_cache(maxsize=32)
-def _boxes(scene: Scene) -> _Boxes:
-    parts, facing = scene.parts, scene.part_facing
-    return _Boxes(
-        corner_x=np.ascontiguousarray(parts[:, [0, 0, 2, 2]]),
-        corner_z=np.ascontiguousarray(parts[:, [1, 3, 1, 3]]),
-        centre=scene.centres[scene.part_object],
-        group=scene.rects[scene.support[scene.part_object]],
-        always=(facing[:, 0] == 0) & (facing[:, 1] == 0),
-    )
-
-
-def _dist2(rects: np.ndarray, pose: WorldPose) -> np.ndarray:
-    """Squared distance from the agent to the nearest point of each rectangle."""
-    ddx = np.maximum(np.maximum(rects[:, 0] - pose.x, pose.x - rects[:, 2]), 0.0)
-    ddz = np.maximum(np.maximum(rects[:, 1] - pose.z, pose.z - rects[:, 3]), 0.0)
-    return ddx * ddx + ddz * ddz
-
-
 def _shown(scene: Scene, pose: WorldPose, params: ConditionParams) -> tuple[np.ndarray, ...]:
     """Boxes of objects within the visibility distance, minus faces turned away and boxes
-    wholly outside one edge of the view wedge; and for those the first and one past the
-    last image column their rays can hit."""
-    boxes = _boxes(scene)
-    near = (_dist2(scene.rects, pose) <= params.visibility_distance**2)[scene.part_object]
-    nf = scene.part_facing
-    side = (pose.x - boxes.centre[:, 0]) * nf[:, 0] + (pose.z - boxes.centre[:, 1]) * nf[:, 1]
+    wholly outside one edge of the view wedge; for those the first and one past the last
+    image column their rays can hit, and their draw-order keys: the squared distance to the
+    footprint of the object their object stands on and to their own footprint (compiled:
+    :func:`pytest_emrd.world._kernel.shown_boxes`, which says how the columns are bounded)."""
+    from pytest_emrd.world._kernel import shown_boxes  # numba: loaded with the first frame
+
     fx, fz = unit(pose.heading)
     rx, rz = right_of(pose.heading)
-    cx, cz = boxes.corner_x - pose.x, boxes.corner_z - pose.z
-    fwd, lat = cx * fx + cz * fz, cx * rx + cz * rz
-    out_of_view = (fwd <= NEAR).all(axis=1) | (lat > fwd).all(axis=1) | (lat < -fwd).all(axis=1)
-    sel = np.flatnonzero(near & (boxes.always | (side > nf[:, 2])) & ~out_of_view)
-    fwd, lat = fwd[sel], lat[sel]
-    # The box's camera-frame bounding rectangle clipped to the near plane: its rays have
-    # slopes u = lateral / forward between the extremes at the rectangle's corners.
-    f0, f1 = np.maximum(fwd.min(axis=1), NEAR), fwd.max(axis=1)
-    l0, l1 = lat.min(axis=1), lat.max(axis=1)
-    u0, u1 = np.minimum(l0 / f0, l0 / f1), np.maximum(l1 / f0, l1 / f1)
-    lo = np.clip(np.floor(u0 * FOCAL + (FOCAL - 0.5)) - 1, 0, SIZE).astype(np.int64)
-    hi = np.clip(np.ceil(u1 * FOCAL + (FOCAL - 0.5)) + 2, 0, SIZE).astype(np.int64)
-    wide = hi > lo
-    return sel[wide], lo[wide], hi[wide]
+    eye = (float(pose.x), float(pose.z), float(fx), float(fz), float(rx), float(rz))
+    arrays = (scene.parts, scene.part_object, scene.part_facing, scene.rects, scene.centres)
+    n = len(scene.parts)
+    out = (np.empty(n, np.int64), np.empty(n, np.int64), np.empty(n, np.int64))
+    keys = (np.empty(n), np.empty(n))
+    vis2 = params.visibility_distance**2
+    count = shown_boxes((*arrays, scene.support), eye, vis2, _CAMERA, (*out, *keys))
+    return tuple(a[:count] for a in (*out, *keys))
 
 
 def object_boxes(scene: Scene, pose: WorldPose, params: ConditionParams) -> tuple[np.ndarray, ...]:
@@ -103,8 +62,8 @@ def object_boxes(scene: Scene, pose: WorldPose, params: ConditionParams) -> tupl
     column its rays can hit, its label, and which extra face shows: 1 the top (a box below
     the eye), 2 the underside (above the eye), 0 neither.
     """
-    sel, lo, hi = _shown(scene, pose, params)
-    order = _draw_order(scene, pose, sel)
+    sel, lo, hi, group, own = _shown(scene, pose, params)
+    order = np.lexsort((-own, scene.parts[sel, 4], -group))
     sel, lo, hi = sel[order], lo[order], hi[order]
     p = scene.parts[sel]
     extra = np.where(p[:, 5] < EYE, 1, np.where(p[:, 4] > EYE, 2, 0))
@@ -116,11 +75,3 @@ def object_boxes(scene: Scene, pose: WorldPose, params: ConditionParams) -> tupl
         scene.part_label[sel],
         extra,
     )
-
-
-def _draw_order(scene: Scene, pose: WorldPose, sel: np.ndarray) -> np.ndarray:
-    """Indices into ``sel`` back to front: by the distance of the object (an item on a desk
-    takes its desk's), then bottom-up, then farther boxes first."""
-    parts = scene.parts[sel]
-    group = _dist2(_boxes(scene).group[sel], pose)
-    return np.lexsort((-_dist2(parts[:, :4], pose), parts[:, 4], -group))

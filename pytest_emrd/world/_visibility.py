@@ -54,20 +54,16 @@ class Sight:
 
 
 def sight(scene: Scene, pose: WorldPose, visibility: float) -> Sight:
-    """Which objects of ``scene`` are visible from ``pose`` within ``visibility`` metres."""
+    """Which objects of ``scene`` are visible from ``pose`` within ``visibility`` metres
+    (the sample points' test is compiled: :func:`pytest_emrd.world._sightlines.sight_mask`)."""
+    from pytest_emrd.world._sightlines import sight_mask  # numba: loaded on first use
+
     fx, fz = unit(pose.heading)
     rx, rz = right_of(pose.heading)
-    dx = scene.samples[..., 0] - pose.x
-    dz = scene.samples[..., 1] - pose.z
-    fwd = dx * fx + dz * fz
-    lat = dx * rx + dz * rz
-    cand = (fwd > 0) & (np.abs(lat) <= fwd) & (dx * dx + dz * dz <= visibility * visibility)
-    idx = np.nonzero(cand)
-    if idx[0].size:
-        pts = scene.samples[idx]
-        blocked = scene.walls.blocks(np.float64(pose.x), np.float64(pose.z), pts[:, 0], pts[:, 1])
-        cand[idx[0][blocked], idx[1][blocked]] = False
-    mask = cand.any(axis=1)
+    mask = np.empty(len(scene.centres), dtype=bool)
+    frame = (float(pose.x), float(pose.z), float(fx), float(fz), float(rx), float(rz))
+    walls = scene.walls
+    sight_mask(scene.samples, frame, visibility * visibility, walls.along_x, walls.along_z, mask)
     cx = scene.centres[:, 0] - pose.x
     cz = scene.centres[:, 1] - pose.z
     bearing = np.degrees(np.arctan2(cx * rx + cz * rz, cx * fx + cz * fz))
