@@ -7,6 +7,7 @@ the Office is top-left (small ``x``, large ``z``), the Entrance bottom-right.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any, Protocol
 
@@ -147,7 +148,9 @@ class Observation:
 
     ``frame`` is the rendered RGB image (``512 x 512 x 3`` uint8). ``frame_digest`` is the
     SHA-256 of its raw pixel bytes: cassettes key frames by it, never by JPEG bytes, so a
-    recording replays across Pillow versions. ``jpeg`` is the encoded frame the model sees.
+    recording replays across Pillow versions. ``jpeg`` is the encoded frame the model sees,
+    encoded on first read by ``encode_jpeg`` (a replay sends frames by digest and never reads
+    it; encoding is a quarter of a step).
     """
 
     step: int
@@ -161,13 +164,18 @@ class Observation:
     visible: tuple[VisibleObject, ...]
     """Objects in view, sorted by object id."""
     frame_digest: str
-    jpeg: bytes = field(repr=False)
+    encode_jpeg: Callable[[], bytes] = field(repr=False, compare=False)
     frame: np.ndarray | None = field(default=None, repr=False, compare=False)
     done: bool = False
     """True once a Term was executed (whatever room it named)."""
     terminal_room: str | None = None
     """The canonical room the Term named, or None (no Term yet, or a name outside the four
     rooms: focal-point column X)."""
+
+    @property
+    def jpeg(self) -> bytes:
+        """The frame as the JPEG the model is sent (the same bytes on every read)."""
+        return self.encode_jpeg()
 
 
 class Simulator(Protocol):

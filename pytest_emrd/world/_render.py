@@ -29,8 +29,10 @@ walls and boxes begin and end, their codes, and the pixels.
 
 from __future__ import annotations
 
+import functools
 import io
 import threading
+from collections.abc import Callable
 
 import numpy as np
 from PIL import Image
@@ -132,23 +134,17 @@ def render(scene: Scene, pose: WorldPose, params: ConditionParams, table: np.nda
     return frame
 
 
-def render_jpeg(
-    scene: Scene, pose: WorldPose, params: ConditionParams, table: np.ndarray, quality: int
-) -> tuple[np.ndarray, bytes]:
-    """The frame of :func:`render` and its JPEG at ``quality``.
-
-    The JPEG is encoded from the kernel's scratch buffer, which still holds the frame as
-    ``R, G, B, 0`` bytes per pixel (table entries ``R | G << 8 | B << 16`` on the
-    little-endian machines numba runs on): Pillow maps it as an ``RGBX`` image without
-    copying, where ``Image.fromarray(frame)`` would unpack the frame into a new image first.
-    The encoder is handed the same RGB rows either way, so the bytes are the same.
-    """
-    frame = render(scene, pose, params, table)
-    buf = _buffer()
-    image = Image.frombuffer("RGBX", (SIZE, SIZE), buf, "raw", "RGBX", buf.strides[0], 1)
+def encode_jpeg(frame: np.ndarray, quality: int) -> bytes:
+    """``frame`` as the JPEG at ``quality`` the model is sent."""
     out = io.BytesIO()
-    image.save(out, format="JPEG", quality=quality)
-    return frame, out.getvalue()
+    Image.fromarray(frame).save(out, format="JPEG", quality=quality)
+    return out.getvalue()
+
+
+def lazy_jpeg(frame: np.ndarray, quality: int) -> Callable[[], bytes]:
+    """:func:`encode_jpeg` of ``frame``, run on the first call and remembered: a replay never
+    sends a frame's JPEG (a cassette keys frames by their pixels), so it never pays for one."""
+    return functools.cache(functools.partial(encode_jpeg, frame, quality))
 
 
 _LOCAL = threading.local()

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import hashlib
 from collections import OrderedDict
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 
 import numpy as np
 
@@ -27,13 +27,16 @@ from pytest_emrd.world._feedback import (
 )
 from pytest_emrd.world._model import Layout, Observation, WorldPose
 from pytest_emrd.world._motion import approach, spawn_pose, through
-from pytest_emrd.world._render import palette, render_jpeg, shade_table
+from pytest_emrd.world._render import lazy_jpeg, palette, render, shade_table
 from pytest_emrd.world._scene import Scene, scene_of
 from pytest_emrd.world._visibility import Sight, sight
 
 JPEG_QUALITY = 85
 FRAME_CACHE = 16
 """Frames kept per episode (least recently used dropped first)."""
+
+_Shot = tuple[np.ndarray, str, Callable[[], bytes]]
+"""A rendered frame, its pixel digest and its JPEG, encoded on first use."""
 
 
 class BuiltinSimulator(SemanticStep):
@@ -68,7 +71,7 @@ class BuiltinSimulator(SemanticStep):
         self._terminal: str | None = None
         self._symbolic = True
         self._sight: Sight | None = None
-        self._frames: OrderedDict[WorldPose, tuple[np.ndarray, str, bytes]] = OrderedDict()
+        self._frames: OrderedDict[WorldPose, _Shot] = OrderedDict()
 
     # -- protocol ---------------------------------------------------------------------
     def reset(
@@ -167,17 +170,16 @@ class BuiltinSimulator(SemanticStep):
             self._sight = sight(self._require(), self._pose, self._params.visibility_distance)
         return self._sight
 
-    def _render(self) -> tuple[np.ndarray, str, bytes]:
-        """Frame, pixel digest and JPEG of the current pose; agents often come back to a
-        pose (a full sweep ends where it began), so recent frames of the episode are kept."""
+    def _render(self) -> _Shot:
+        """Frame, pixel digest and (lazy) JPEG of the current pose; agents often come back to
+        a pose (a full sweep ends where it began), so recent frames of the episode are kept."""
         cached = self._frames.get(self._pose)
         if cached is not None:
             self._frames.move_to_end(self._pose)
             return cached
-        scene, pose, params = self._require(), self._pose, self._params
-        frame, jpeg = render_jpeg(scene, pose, params, self._table, self._quality)
+        frame = render(self._require(), self._pose, self._params, self._table)
         frame.setflags(write=False)  # shared with the cache
-        entry = (frame, hashlib.sha256(frame.data).hexdigest(), jpeg)
+        entry = (frame, hashlib.sha256(frame.data).hexdigest(), lazy_jpeg(frame, self._quality))
         self._frames[self._pose] = entry
         while len(self._frames) > self._cache_size:
             self._frames.popitem(last=False)
@@ -194,7 +196,7 @@ class BuiltinSimulator(SemanticStep):
             feedback=with_pose(message, pose),
             visible=self._current_sight().listing(scene),
             frame_digest=digest,
-            jpeg=jpeg,
+            encode_jpeg=jpeg,
             frame=frame,
             done=self._ended,
             terminal_room=self._terminal,

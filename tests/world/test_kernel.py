@@ -1,22 +1,13 @@
 """The renderer's compiled stage: numba loads with the first frame, never with the package,
-the plugin or the CLI (collection stays free of it); its scalar helpers on worked examples;
-the JPEG encoded from its buffer. Pixel identity: ``test_frame_identity.py``."""
+the plugin or the CLI (collection stays free of it); its scalar helpers on worked examples.
+Pixel identity: ``test_frame_identity.py``."""
 
 from __future__ import annotations
 
-import io
 import subprocess
 import sys
 
-import numpy as np
-import pytest
-from PIL import Image
-
-from pytest_emrd.trajectory import CONDITIONS
-from pytest_emrd.world import WorldPose, condition_params, paper_office
 from pytest_emrd.world._kernel import first_row, fog_weight
-from pytest_emrd.world._render import palette, render, render_jpeg, shade_table
-from pytest_emrd.world._scene import scene_of
 
 _PROBE = """
 import sys
@@ -41,21 +32,3 @@ def test_fog_weight_and_first_row_worked_examples() -> None:
     assert [fog_weight(d, baseline) for d in (0.0, 3.5, 7.0, 14.0, 28.0)] == [0, 16, 64, 255, 255]
     # Row r's centre lies at r + 0.5: row 9's is at 9.5, row 10's is the first below 9.6.
     assert [first_row(a, 512) for a in (9.5, 9.6, 10.5, -3.0, 600.0)] == [9, 10, 10, 0, 512]
-
-
-@pytest.mark.parametrize("condition", CONDITIONS)
-def test_the_jpeg_encoded_from_the_kernel_buffer_is_the_jpeg_of_the_frame(condition: str) -> None:
-    """The model sees the same JPEG bytes as if the returned frame itself were encoded."""
-    layout = paper_office()
-    scene, params = scene_of(layout), condition_params(condition)
-    table = shade_table(palette(scene, params, 5), params)
-    rng = np.random.default_rng(3)
-    for room in layout.rooms:
-        x, z = np.round(rng.uniform((room.x0, room.z0), (room.x1, room.z1)), 2)
-        for heading, quality in ((0.0, 85), (90.0, 60), (180.0, 95), (270.0, 85)):
-            pose = WorldPose(float(x), float(z), heading)
-            frame, jpeg = render_jpeg(scene, pose, params, table, quality)
-            expected = io.BytesIO()
-            Image.fromarray(frame).save(expected, format="JPEG", quality=quality)
-            assert jpeg == expected.getvalue()
-            assert np.array_equal(frame, render(scene, pose, params, table))

@@ -11,7 +11,8 @@ from PIL import Image
 
 from pytest_emrd.errors import ConfigError
 from pytest_emrd.rooms import ROOM_NAMES
-from pytest_emrd.world import BuiltinSimulator, Layout, make_simulator
+from pytest_emrd.world import BuiltinSimulator, Layout, _render, make_simulator
+from pytest_emrd.world._simulator import JPEG_QUALITY
 
 SCRIPT = ("Turn(Right)", "Turn(Right)", "Goto(Doorway_2)", "Turn(Left)", "Turn(Around)")
 
@@ -37,6 +38,31 @@ def test_observation_carries_frame_digest_and_jpeg(office: Layout, new_sim) -> N
     assert (image.format, image.size, image.mode) == ("JPEG", (512, 512), "RGB")
     assert obs.step == 0 and obs.success and not obs.done and obs.terminal_room is None
     assert obs.feedback == "Episode started. Pose: x=0.00 z=0.00 heading=0."
+
+
+def test_the_jpeg_is_encoded_on_first_read_only_and_once(
+    office: Layout, new_sim, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A replay never reads a frame's JPEG, so stepping must not encode one; a recording
+    reads it (and a revisited pose's cached frame) without encoding it twice."""
+    encoded: list[np.ndarray] = []
+    encode = _render.encode_jpeg
+
+    def counting(frame: np.ndarray, quality: int) -> bytes:
+        encoded.append(frame)
+        return encode(frame, quality)
+
+    monkeypatch.setattr(_render, "encode_jpeg", counting)
+    sim = new_sim()
+    observations = [*_run(sim, office), sim.step("Turn(Around)")]  # back to a cached frame
+    assert encoded == []
+    jpegs = [obs.jpeg for obs in observations] + [obs.jpeg for obs in observations]
+    rendered = {obs.frame_digest for obs in observations}
+    assert len(encoded) == len(rendered) < len(observations)
+    for obs, jpeg in zip(observations * 2, jpegs, strict=True):
+        expected = io.BytesIO()
+        Image.fromarray(obs.frame).save(expected, format="JPEG", quality=JPEG_QUALITY)
+        assert jpeg == expected.getvalue()
 
 
 def test_reset_places_the_agent_in_the_spawn_room_by_slug_or_name(office: Layout, new_sim) -> None:

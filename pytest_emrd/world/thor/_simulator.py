@@ -23,12 +23,10 @@ Every THOR call is bounded by the watchdog (``start_timeout``, ``step_timeout``)
 from __future__ import annotations
 
 import hashlib
-import io
 from collections.abc import Callable, Mapping
 from typing import Any
 
 import numpy as np
-from PIL import Image
 
 from pytest_emrd.errors import ConfigError, TransportError, check_choice
 from pytest_emrd.rooms import ROOM_NAMES, SLUG_ROOMS
@@ -49,6 +47,7 @@ from pytest_emrd.world._feedback import (
 )
 from pytest_emrd.world._model import Doorway, Layout, Observation, VisibleObject, WorldPose
 from pytest_emrd.world._motion import spawn_pose
+from pytest_emrd.world._render import lazy_jpeg
 from pytest_emrd.world._scene import scene_of
 from pytest_emrd.world.thor import _launch
 from pytest_emrd.world.thor._conditions import ThorCondition, thor_condition
@@ -86,12 +85,6 @@ def _positive(name: str, value: float) -> float:
     if isinstance(value, bool) or not isinstance(value, int | float) or value <= 0:
         raise ConfigError(f"{name}={value!r} must be a number of seconds > 0.")
     return float(value)
-
-
-def _jpeg(frame: np.ndarray) -> bytes:
-    buffer = io.BytesIO()
-    Image.fromarray(frame).save(buffer, format="JPEG", quality=JPEG_QUALITY)
-    return buffer.getvalue()
 
 
 def _refused(event: Any) -> ActionFailed | None:
@@ -353,7 +346,7 @@ class ThorSimulator(SemanticStep):
             feedback=with_pose(message, pose),
             visible=self._visible,
             frame_digest=hashlib.sha256(frame.tobytes()).hexdigest(),
-            jpeg=_jpeg(frame),
+            encode_jpeg=lazy_jpeg(frame, JPEG_QUALITY),
             frame=frame,
             done=self._ended,
             terminal_room=self._terminal,
