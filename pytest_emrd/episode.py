@@ -30,6 +30,7 @@ from typing import Any, Final
 
 from pytest_emrd import frames, world
 from pytest_emrd.agent import (
+    JPEG_DATA_URL,
     ChatClient,
     Conversation,
     Registry,
@@ -111,23 +112,29 @@ def capped_reply(text: str) -> str:
     return text[:MAX_REPLY_CHARS] + f"\n[... truncated: the reply had {len(text)} characters]"
 
 
-def user_turn(spec: EpisodeSpec, step: int, obs: Observation) -> UserTurn:
-    """The user turn of step ``step`` showing ``obs`` as ``spec``'s modality asks."""
+def user_turn(spec: EpisodeSpec, step: int, obs: Observation, *, replay: bool = False) -> UserTurn:
+    """The user turn of step ``step`` showing ``obs`` as ``spec``'s modality asks; in a
+    ``replay`` the frame travels as its pixel digest and its JPEG is never encoded."""
     symbolic = obs.visible if spec.modality in ("text", "both") else None
     text = step_text(step=step, max_steps=spec.max_steps, feedback=obs.feedback, visible=symbolic)
     if spec.modality == "text":
         return UserTurn(step, text)
+    if replay:
+        return UserTurn.replayed(step, text, obs.frame_digest)
     turn = UserTurn.with_frame(step, text, obs.jpeg, obs.frame_digest)
+    url = turn.image_url or ""
     # Before any request carries it; the redactor then finds the frame by its data URL.
-    frames.register(turn.jpeg_b64 or "", obs.frame_digest, data_url=turn.data_url)
+    frames.register(url.removeprefix(JPEG_DATA_URL), obs.frame_digest, data_url=url)
     return turn
 
 
 class _Run:
-    """Mutable state of one episode while it runs."""
+    """Mutable state of one episode while it runs (``replay``: see :func:`user_turn`)."""
 
-    def __init__(self, spec: EpisodeSpec, sim: Simulator, conversation: Conversation) -> None:
-        self.spec, self.sim, self.conversation = spec, sim, conversation
+    def __init__(
+        self, spec: EpisodeSpec, sim: Simulator, conversation: Conversation, *, replay: bool
+    ) -> None:
+        self.spec, self.sim, self.conversation, self.replay = spec, sim, conversation, replay
         self.steps: list[Step] = []
         self.belief: tuple[MapEntry, ...] = ()
         self.chosen_room: str | None = None
@@ -136,7 +143,7 @@ class _Run:
 
     def step(self, t: int, obs: Observation, client: ChatClient) -> tuple[Step, Observation]:
         pose, room, visible = obs.pose, self.sim.current_room(), self.sim.visible_ids()
-        turn = user_turn(self.spec, t, obs)
+        turn = user_turn(self.spec, t, obs, replay=self.replay)
         messages = self.conversation.request(turn)
         response = client.complete(messages)
         reply = parse_reply(response.text)
@@ -194,6 +201,7 @@ def run_episode(
     on_step: Callable[[Step], None] | None = None,
     simulator: Simulator | None = None,
     backend_options: Mapping[str, Any] | None = None,
+    replay: bool = False,
 ) -> Trajectory:
     """Run one episode of ``spec`` against its model and return the full trajectory.
 
@@ -203,6 +211,8 @@ def run_episode(
     episode and not closed. Without it one is built with
     ``build_simulator(spec.backend, backend_options)`` and closed at the end; passing both
     is a :class:`ConfigError` (the options belong where the simulator is built).
+    ``replay``: every request is answered by a cassette (nothing reaches a model), so frames
+    are sent as their pixel digests, the form the cassette stores, and never JPEG-encoded.
     """
     _check_spec(spec)
     if simulator is not None and backend_options:
@@ -221,7 +231,8 @@ def run_episode(
         system = build_system_prompt(
             layout.inventory(), spec.variant, modality=spec.modality, max_steps=spec.max_steps
         )
-        run = _Run(spec, sim, Conversation(system, single_image=config.single_image))
+        conversation = Conversation(system, single_image=config.single_image)
+        run = _Run(spec, sim, conversation, replay=replay)
         active = client or make_client(config)
         try:
             for t in range(1, spec.max_steps + 1):

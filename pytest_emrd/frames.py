@@ -11,6 +11,10 @@ The payload is hashed once, when it is registered. The data URL that carries it 
 request may be registered with it: the redactor, handed that very string object, then finds
 the frame by identity (:func:`pixel_digest_for_url`) instead of hashing the payload again.
 
+A replay (every request answered by a cassette) never encodes a frame at all: its requests
+carry :func:`by_digest` where a recording carries the JPEG data URL, the very string the
+redactor would have put there, so the canonical request, and what it matches, is the same.
+
 The tables are bounded (oldest entries evicted first) and thread-safe.
 """
 
@@ -21,6 +25,8 @@ import threading
 from collections import OrderedDict
 from typing import Any, Final
 
+#: What a frame's pixel digest is prefixed with in a canonical request.
+PIXELS: Final = "pixels:"
 _CAPACITY: Final = 4096
 #: Data URLs remembered by identity (each holds its frame: a few windows' worth).
 _URLS: Final = 256
@@ -51,11 +57,16 @@ def register(b64_payload: str | bytes, pixel_digest: str, *, data_url: str | Non
             _remember(_urls, id(data_url), (data_url, pixel_digest), _URLS)
 
 
+def by_digest(pixel_digest: str) -> str:
+    """The frame with ``pixel_digest`` as a replayed request carries it: ``pixels:<sha256>``."""
+    return PIXELS + pixel_digest
+
+
 def pixel_digest_for_url(data_url: str) -> str | None:
     """``pixels:<sha256>`` for the very data URL object registered with a frame, else None
     (an equal string that is another object is not looked at: the caller hashes it)."""
     hit = _urls.get(id(data_url))  # one read is atomic; changes to the table take the lock
-    return f"pixels:{hit[1]}" if hit is not None and hit[0] is data_url else None
+    return by_digest(hit[1]) if hit is not None and hit[0] is data_url else None
 
 
 def pixel_digest_for(b64_payload: str | bytes) -> str:
@@ -63,7 +74,7 @@ def pixel_digest_for(b64_payload: str | bytes) -> str:
     key = _payload_key(b64_payload)
     with _lock:
         digest = _table.get(key)
-    return f"pixels:{digest}" if digest else f"bytes:{key}"
+    return by_digest(digest) if digest else f"bytes:{key}"
 
 
 def clear() -> None:

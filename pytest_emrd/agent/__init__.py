@@ -20,7 +20,7 @@ __getattr__, __dir__, __all__ = lazy_exports(
             "make_client",
         ),
         "_config": ("ANTHROPIC_VERSION", "PROVIDERS", "ModelConfig", "Registry", "load_registry"),
-        "_history": ("HISTORY_TURNS", "Conversation", "UserTurn"),
+        "_history": ("HISTORY_TURNS", "JPEG_DATA_URL", "Conversation", "UserTurn"),
         "_parse": ("REPAIRS", "Reply", "parse_reply"),
         "_prompt": (
             "NEUTRAL_NAMES",

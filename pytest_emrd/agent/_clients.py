@@ -18,17 +18,17 @@ from __future__ import annotations
 
 import os
 from dataclasses import dataclass
-from typing import Any, Final, Protocol
+from typing import Any, Protocol
 
 import httpx
 
+from pytest_emrd import frames
 from pytest_emrd._wire import memo
 from pytest_emrd.agent._config import ANTHROPIC_VERSION, SAMPLING_FIELDS, ModelConfig
+from pytest_emrd.agent._history import JPEG_DATA_URL
 from pytest_emrd.agent._retry import RetryPolicy, post_json
 from pytest_emrd.errors import ConfigError
 from pytest_emrd.trajectory import Usage
-
-_DATA_URL_PREFIX: Final = "data:image/jpeg;base64,"
 
 
 @dataclass(frozen=True)
@@ -148,9 +148,12 @@ class OpenAICompatibleClient(_HttpClient):
 def _anthropic_part(part: dict[str, Any]) -> dict[str, Any]:
     if part.get("type") == "image_url":
         url = part["image_url"]["url"]
-        if not url.startswith(_DATA_URL_PREFIX):
+        if url.startswith(frames.PIXELS):  # a replay: the frame by its digest, as stored
+            data = url
+        elif url.startswith(JPEG_DATA_URL):
+            data = url.removeprefix(JPEG_DATA_URL)
+        else:
             raise ConfigError(f"image url {url[:40]!r}... is not a base64 JPEG data URL.")
-        data = url.removeprefix(_DATA_URL_PREFIX)
         return {
             "type": "image",
             "source": {"type": "base64", "media_type": "image/jpeg", "data": data},

@@ -17,13 +17,14 @@ from __future__ import annotations
 import base64
 from collections import deque
 from dataclasses import dataclass
-from functools import cached_property
 from typing import Any, Final
 
+from pytest_emrd import frames
 from pytest_emrd.errors import check_positive_int
 
 #: Dialogue turns in the window, the current (unanswered) one included.
 HISTORY_TURNS: Final = 10
+JPEG_DATA_URL: Final = "data:image/jpeg;base64,"
 FRAME_NOT_RESENT: Final = "[Camera frame of step {step} not re-sent: single-image mode.]"
 
 
@@ -35,24 +36,27 @@ class UserTurn:
     """1-based step the message belongs to."""
     text: str
     """Engine feedback, pose, step counter and (text/both) the symbolic list."""
-    jpeg_b64: str | None = None
-    """Base64 JPEG of the frame (vision/both), or None."""
+    image_url: str | None = None
+    """The frame (vision/both) as requests carry it: a base64 JPEG data URL, one string for
+    every message showing the frame; in a replay its pixel digest instead (``pixels:<sha256>``,
+    what the cassette holds in the JPEG's place: the JPEG is never encoded). None: no frame."""
     frame_digest: str | None = None
     """Pixel digest of that frame (keys the frame in cassettes)."""
 
     @classmethod
     def with_frame(cls, step: int, text: str, jpeg: bytes, frame_digest: str) -> UserTurn:
-        return cls(step, text, base64.b64encode(jpeg).decode("ascii"), frame_digest)
+        """The turn showing the frame ``jpeg`` (pixels ``frame_digest``) as a model sees it."""
+        payload = base64.b64encode(jpeg).decode("ascii")
+        return cls(step, text, f"{JPEG_DATA_URL}{payload}", frame_digest)
 
-    @cached_property
-    def data_url(self) -> str | None:
-        """The frame as a JPEG data URL, built once (every message showing the frame carries
-        this one string), or None without a frame."""
-        return None if self.jpeg_b64 is None else f"data:image/jpeg;base64,{self.jpeg_b64}"
+    @classmethod
+    def replayed(cls, step: int, text: str, frame_digest: str) -> UserTurn:
+        """The turn showing the frame with pixels ``frame_digest`` in a replay."""
+        return cls(step, text, frames.by_digest(frame_digest), frame_digest)
 
 
 def _user_message(turn: UserTurn, *, image: bool) -> dict[str, Any]:
-    if turn.jpeg_b64 is None:
+    if turn.image_url is None:
         return {"role": "user", "content": turn.text}
     if not image:
         return {
@@ -63,7 +67,7 @@ def _user_message(turn: UserTurn, *, image: bool) -> dict[str, Any]:
         "role": "user",
         "content": [
             {"type": "text", "text": turn.text},
-            {"type": "image_url", "image_url": {"url": turn.data_url}},
+            {"type": "image_url", "image_url": {"url": turn.image_url}},
         ],
     }
 

@@ -91,7 +91,7 @@ def _record() -> tuple[list[Observation], list[ChatResponse], str]:
     obs = sim.reset(episode.layout, SPEC.condition, episode.spawn_room, episode.seed)
     system = build_system_prompt(episode.layout.inventory(), SPEC.variant, modality=SPEC.modality)
     recorder = _Recorder(make_client(load_registry().get(SPEC.model)))
-    run = _Run(SPEC, sim, Conversation(system, single_image=False))
+    run = _Run(SPEC, sim, Conversation(system, single_image=False), replay=False)
     observations = [obs]
     try:
         for t in range(1, SPEC.max_steps + 1):
@@ -112,7 +112,7 @@ def run(*, repeat: int) -> list[Figure]:
 
     def loop_steps() -> None:
         replay.i = 0
-        loop = _Run(SPEC, replay, Conversation(system, single_image=False))
+        loop = _Run(SPEC, replay, Conversation(system, single_image=False), replay=False)
         obs = observations[0]
         for t in range(1, steps + 1):
             _, obs = loop.step(t, obs, replay)

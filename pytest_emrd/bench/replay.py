@@ -32,11 +32,12 @@
   server's volatile response headers, which replay does not reproduce: the ratio is, if
   anything, low). Target 500.
 * ``replay.step_overhead_ms`` — per request of a replayed episode, through the real client:
-  frame registration, body encoding, redaction, vcrpy matching, response rebuild and JSON
-  parse; no world, no agent logic. The messages are captured once from a real episode (each
-  message the same object while it stays in the window, as the loop sends them); every
-  repetition starts with the redaction and encoding caches empty, so each frame is
-  encoded, hashed and redacted as often as in a real run. Target 5 ms.
+  body encoding, redaction, vcrpy matching, response rebuild and JSON parse (a replay sends
+  each frame as its pixel digest: no JPEG, no frame registration); no world, no agent logic.
+  The messages are captured once from a real replay (each message the same object while it
+  stays in the window, as the loop sends them); every repetition starts with the redaction
+  and encoding caches empty, so each message is encoded and redacted as often as in a real
+  run. Target 5 ms.
 """
 
 from __future__ import annotations
@@ -51,7 +52,6 @@ from typing import Any
 import httpx
 import numpy as np
 
-from pytest_emrd import frames
 from pytest_emrd.bench import Figure, median_seconds, paired_ratio, python_env, run_timed
 from pytest_emrd.cassette import (
     cassette_path,
@@ -128,7 +128,7 @@ def _replay(spec: EpisodeSpec, client: Any) -> Trajectory:
     from pytest_emrd.episode import run_episode
 
     def run(s: EpisodeSpec, *, live: bool) -> Trajectory:
-        return run_episode(s, registry=_registry(), client=client)
+        return run_episode(s, registry=_registry(), client=client, replay=not live)
 
     done = run_with_cassette(
         spec, run, cassettes=CASSETTES, protocol=_protocol(), record_mode="none"
@@ -252,9 +252,6 @@ def _step_overhead_ms(repeat: int) -> float:
     recorder = _Recorder(client)
     _replay(spec, recorder)
     sent = recorder.sent
-    urls = [m[-1]["content"][1]["image_url"]["url"] for m in sent]
-    payloads = [url.partition(",")[2] for url in urls]
-    digests = [frames.pixel_digest_for(p).removeprefix("pixels:") for p in payloads]
 
     def replay() -> None:
         clear_caches()  # as at the start of a run: nothing encoded or redacted yet
@@ -265,8 +262,7 @@ def _step_overhead_ms(repeat: int) -> float:
             matching="strict",
             rerecord_command="(bench)",
         ):
-            for messages, url, payload, digest in zip(sent, urls, payloads, digests, strict=True):
-                frames.register(payload, digest, data_url=url)  # as the loop does, once a frame
+            for messages in sent:
                 client.complete(messages)
 
     try:

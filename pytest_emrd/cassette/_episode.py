@@ -48,7 +48,7 @@ class _Discard(Exception):
 
 
 #: Runs one episode; ``live`` says whether the model may really be called (an API key is
-#: needed) or every request will be replayed.
+#: needed) or every request will be replayed (frames then travel as their pixel digests).
 EpisodeRunner = Callable[..., Trajectory]
 
 
@@ -72,7 +72,7 @@ class AgentRunner:
 
         run = self._run or run_episode
         client = self._client(spec.model, live)
-        return run(spec, registry=self._registry, client=client, on_step=on_step)
+        return run(spec, registry=self._registry, client=client, on_step=on_step, replay=not live)
 
     def close(self) -> None:
         """Close every client now (they are also closed when the runner is collected)."""

@@ -73,3 +73,34 @@ def test_traffic_of_another_world_fails_as_drift(tmp_path: Path) -> None:
     assert run.trajectory.status == "errored"
     assert "environment or prompt drift" in (run.trajectory.error or "")
     assert "first differing field" in (run.trajectory.error or "")
+
+
+def test_a_replay_sends_frames_by_digest_and_matches_as_the_recording_sent_them(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """A replay never encodes a JPEG: each request carries the frame's pixel digest where the
+    recording carried its data URL. Both forms redact to the same canonical request, so the
+    episode replayed with real JPEG frames, as a recording sends them, matches the same
+    cassette interaction by interaction and gives the same trajectory."""
+    from pytest_emrd.episode import run_episode
+    from pytest_emrd.world import _render
+
+    def as_recorded(spec: EpisodeSpec, **kwargs: object):
+        return run_episode(spec, **{**kwargs, "replay": False})  # type: ignore[arg-type]
+
+    runner = agent_runner(load_registry(), run=as_recorded)
+    try:
+        sent_as_jpeg = run_with_cassette(
+            SPEC, runner, cassettes=ROOT, protocol=protocol_version(), record_mode="none"
+        )
+    finally:
+        runner.close()
+
+    def never(frame: object, quality: int) -> bytes:
+        raise AssertionError("a replay encoded a JPEG")
+
+    monkeypatch.setattr(_render, "encode_jpeg", never)
+    by_digest = _replay(SPEC, ROOT)
+    assert by_digest.trajectory.status == "terminated"
+    assert by_digest.trajectory == sent_as_jpeg.trajectory
+    assert len(by_digest.trajectory.steps) > 10
