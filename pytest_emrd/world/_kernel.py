@@ -278,3 +278,24 @@ def shown_boxes(
         own[count] = _dist2(parts[p], px, pz)
         count += 1
     return count
+
+
+@njit(**_JIT)
+def shade(
+    colors: np.ndarray, light: np.ndarray, keep: np.ndarray, haze: np.ndarray, out: np.ndarray
+) -> None:
+    """Fill ``out`` (``L * F * W`` uint32) with the shade table of
+    :func:`pytest_emrd.world._render.shade_table`: entry ``(l, f, w)`` packs channels
+    ``rint(colors[l, ch] * light[f] * keep[w] + haze[w, ch])`` clipped to ``0..255`` as
+    ``R | G << 8 | B << 16`` (``keep``: the share of the surface at fog weight ``w``,
+    ``haze``: the fog's)."""
+    faces, weights = light.size, keep.size
+    for label in range(colors.shape[0]):
+        for face in range(faces):
+            base = (label * faces + face) * weights
+            for w in range(weights):
+                entry = np.uint32(0)
+                for ch in range(3):
+                    mix = colors[label, ch] * light[face] * keep[w] + haze[w, ch]
+                    entry |= np.uint32(min(max(np.rint(mix), 0.0), 255.0)) << (8 * ch)
+                out[base + w] = entry

@@ -108,12 +108,14 @@ def shade_table(colors: np.ndarray, params: ConditionParams) -> np.ndarray:
 
     ``rgb = rint(colour * face_light * light_factor * (255 - fog) / 255 + fog_rgb * fog / 255)``
     """
+    from pytest_emrd.world._kernel import shade  # numba: loaded on first use
+
     weight = np.arange(256, dtype=np.float64)
-    lit = colors[:, None, None, :] * (FACE_LIGHT * params.light_factor)[None, :, None, None]
-    mix = lit * ((255.0 - weight) / 255.0)[None, None, :, None]
-    mix = mix + np.array(params.fog_color, dtype=np.float64) * (weight / 255.0)[:, None]
-    rgb = np.clip(np.rint(mix), 0, 255).astype(np.uint32).reshape(-1, 3)
-    return rgb[:, 0] | rgb[:, 1] << 8 | rgb[:, 2] << 16
+    haze = np.array(params.fog_color, dtype=np.float64) * (weight / 255.0)[:, None]
+    table = np.empty(len(colors) * len(FACE_LIGHT) * len(weight), dtype=np.uint32)
+    light = FACE_LIGHT * params.light_factor
+    shade(np.asarray(colors), light, (255.0 - weight) / 255.0, haze, table)
+    return table
 
 
 def render(scene: Scene, pose: WorldPose, params: ConditionParams, table: np.ndarray) -> np.ndarray:
