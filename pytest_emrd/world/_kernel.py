@@ -99,6 +99,13 @@ def compose(
 
 
 @njit(**_JIT)
+def _constant(a: np.ndarray) -> bool:
+    """Whether every entry of ``a`` equals the first (``0.0 == -0.0``: either gives the same
+    raster cell, ``o + depth * 0``)."""
+    return bool((a == a[0]).all())
+
+
+@njit(**_JIT)
 def _background(
     buf: np.ndarray,
     table: np.ndarray,
@@ -114,7 +121,9 @@ def _background(
     skirting and the rest floor: every wall hit lies ahead (``0 < t_wall <= 1000``), the
     wall's top above the eye and the skirting's below, so ``top <= horizon <= skirt <=
     bottom``. Each ceiling and floor row lies at one depth; a floor pixel shows the raster
-    cell under ``o + depth * d``.
+    cell under ``o + depth * d``. When every ray has the same ``dz`` (``dx``), as at the
+    built-in world's headings, that coordinate's cell is the same along a row: it is worked
+    out once per row, with the colours of that raster row (column) at the row's fog.
     """
     dx, dz, t_wall, along_x, ox, oz = view
     floor, room, scale = rooms
@@ -142,13 +151,27 @@ def _background(
         sky = table[((ceiling * 4 + z_face) << 8) | fog_weight(ceiling_depth[r], fog)]
         for c in range(width):
             buf[r, c] = sky if r < top[c] else wall[c]
+    z_fixed, x_fixed = _constant(dz), _constant(dx)
+    line = np.empty(max(nx, nz), np.uint32)
     for r in range(horizon, size):
         d, weight = floor_depth[r - horizon], fog_weight(floor_depth[r - horizon], fog)
+        if z_fixed:  # facing north or south: the row's floor lies on one raster row
+            z = _cell((d * dz[0] + oz) * scale, nz)
+            for x in range(nx):
+                line[x] = table[((floor[z, x] * 4 + z_face) << 8) | weight]
+        elif x_fixed:  # facing east or west: on one raster column
+            x = _cell((d * dx[0] + ox) * scale, nx)
+            for z in range(nz):
+                line[z] = table[((floor[z, x] * 4 + z_face) << 8) | weight]
         for c in range(width):
             if r < skirt[c]:
                 buf[r, c] = wall[c]
             elif r < bottom[c]:
                 buf[r, c] = foot[c]
+            elif z_fixed:
+                buf[r, c] = line[_cell((d * dx[c] + ox) * scale, nx)]
+            elif x_fixed:
+                buf[r, c] = line[_cell((d * dz[c] + oz) * scale, nz)]
             else:
                 x = _cell((d * dx[c] + ox) * scale, nx)
                 z = _cell((d * dz[c] + oz) * scale, nz)

@@ -15,14 +15,17 @@ its centre.
 
 from __future__ import annotations
 
+import threading
 from dataclasses import dataclass
-from functools import lru_cache
+from functools import cached_property, lru_cache
+from weakref import WeakKeyDictionary
 
 import numpy as np
 
+from pytest_emrd.errors import ConfigError
 from pytest_emrd.world._conditions import condition_params
 from pytest_emrd.world._geometry import right_of, unit
-from pytest_emrd.world._model import Layout, VisibleObject, WorldPose
+from pytest_emrd.world._model import Layout, VisibleObject, WorldObject, WorldPose
 from pytest_emrd.world._scene import Scene, scene_of
 
 HALF_FOV = 45.0
@@ -32,19 +35,22 @@ STAND_SPACING = 0.75
 
 @dataclass(frozen=True, eq=False)
 class Sight:
-    """Visibility of every object of a scene from one pose."""
+    """Visibility of every object of a scene from one pose (read-only arrays)."""
 
     mask: np.ndarray
     """``(N,)`` bool."""
     bearing: np.ndarray
     distance: np.ndarray
+    objects: tuple[WorldObject, ...]
+    """The scene's objects, in the arrays' order."""
 
-    def listing(self, scene: Scene) -> tuple[VisibleObject, ...]:
+    @cached_property
+    def visible(self) -> tuple[VisibleObject, ...]:
         """The visible objects as the symbolic modality reports them, sorted by id."""
         out = [
             VisibleObject(
-                object_id=scene.layout.objects[i].object_id,
-                object_type=scene.layout.objects[i].object_type,
+                object_id=self.objects[i].object_id,
+                object_type=self.objects[i].object_type,
                 bearing=round(float(self.bearing[i]), 1),
                 distance=round(float(self.distance[i]), 2),
             )
@@ -52,10 +58,41 @@ class Sight:
         ]
         return tuple(sorted(out, key=lambda v: v.object_id))
 
+    def listing(self, scene: Scene) -> tuple[VisibleObject, ...]:
+        """:attr:`visible`; ``scene`` must be the scene the sight was taken in."""
+        if scene.layout.objects is not self.objects:
+            raise ConfigError(
+                f"listing(scene) of a sight taken in another scene (layout seed "
+                f"{scene.layout.seed}); pass the scene given to sight(...)."
+            )
+        return self.visible
+
+
+SIGHT_MEMO = 512
+"""Sights kept per scene (oldest dropped first): agents come back to the same poses, within
+an episode and across the episodes of one office."""
+_SIGHTS: WeakKeyDictionary[Scene, dict[tuple[WorldPose, float], Sight]] = WeakKeyDictionary()
+_LOCK = threading.Lock()
+
 
 def sight(scene: Scene, pose: WorldPose, visibility: float) -> Sight:
     """Which objects of ``scene`` are visible from ``pose`` within ``visibility`` metres
-    (the sample points' test is compiled: :func:`pytest_emrd.world._sightlines.sight_mask`)."""
+    (the sample points' test is compiled: :func:`pytest_emrd.world._sightlines.sight_mask`).
+    The last :data:`SIGHT_MEMO` sights of each scene are kept and returned again."""
+    key = (pose, visibility)
+    with _LOCK:
+        memo = _SIGHTS.setdefault(scene, {})
+        seen = memo.get(key)
+    if seen is None:
+        seen = _sight(scene, pose, visibility)
+        with _LOCK:
+            memo[key] = seen
+            while len(memo) > SIGHT_MEMO:
+                del memo[next(iter(memo))]
+    return seen
+
+
+def _sight(scene: Scene, pose: WorldPose, visibility: float) -> Sight:
     from pytest_emrd.world._sightlines import sight_mask  # numba: loaded on first use
 
     fx, fz = unit(pose.heading)
@@ -67,7 +104,10 @@ def sight(scene: Scene, pose: WorldPose, visibility: float) -> Sight:
     cx = scene.centres[:, 0] - pose.x
     cz = scene.centres[:, 1] - pose.z
     bearing = np.degrees(np.arctan2(cx * rx + cz * rz, cx * fx + cz * fz))
-    return Sight(mask, np.clip(bearing, -HALF_FOV, HALF_FOV), np.hypot(cx, cz))
+    arrays = (mask, np.clip(bearing, -HALF_FOV, HALF_FOV), np.hypot(cx, cz))
+    for a in arrays:
+        a.setflags(write=False)  # shared by every caller of the memo
+    return Sight(*arrays, scene.layout.objects)
 
 
 def standing_points(scene: Scene) -> np.ndarray:

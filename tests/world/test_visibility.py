@@ -7,7 +7,8 @@ import dataclasses
 import numpy as np
 import pytest
 
-from pytest_emrd.world import Layout, WorldPose, condition_params, discoverable_ids
+from pytest_emrd.errors import EmrdError
+from pytest_emrd.world import Layout, WorldPose, _visibility, condition_params, discoverable_ids
 from pytest_emrd.world._render import palette, render, shade_table
 from pytest_emrd.world._scene import scene_of
 from pytest_emrd.world._visibility import sight
@@ -81,3 +82,23 @@ def test_frame_agrees_with_visibility(two_rooms: Layout) -> None:
     frame = _frame(two_rooms, pose)
     assert np.array_equal(frame, _frame(_without(two_rooms, "Stool_1"), pose))  # behind a wall
     assert not np.array_equal(frame, _frame(_without(two_rooms, "Fridge_1"), pose))
+
+
+def test_sights_are_kept_per_scene_and_read_only(
+    two_rooms: Layout, office: Layout, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    scene = scene_of(two_rooms)
+    pose = WorldPose(3.0, 6.5, 180.0)
+    seen = sight(scene, pose, BASELINE)
+    assert sight(scene, WorldPose(3.0, 6.5, 180.0), BASELINE) is seen
+    assert sight(scene, pose, 3.5) is not seen  # another visibility distance
+    assert seen.listing(scene) is seen.listing(scene)
+    assert not seen.mask.flags.writeable and not seen.distance.flags.writeable
+    with pytest.raises(EmrdError, match="another scene"):
+        seen.listing(scene_of(office))
+    monkeypatch.setattr(_visibility, "SIGHT_MEMO", 3)
+    for x in (1.0, 1.5, 2.0, 2.5):  # four new poses: the oldest kept ones are dropped
+        sight(scene, WorldPose(x, 6.5, 180.0), BASELINE)
+    assert len(_visibility._SIGHTS[scene]) == 3
+    assert sight(scene, pose, BASELINE) is not seen
+    assert sight(scene, pose, BASELINE).listing(scene) == seen.listing(scene)
