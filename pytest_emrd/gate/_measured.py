@@ -138,7 +138,8 @@ class MeasuredStore(Generic[M]):
     def _key(self, episode_file: bytes) -> str:
         return metrics_key(episode_file, self.code)
 
-    def _saved(self, spec: EpisodeSpec) -> M | None:
+    def saved(self, spec: EpisodeSpec) -> M | None:
+        """The metrics saved for the very episode file stored now for ``spec``, or None."""
         return read_saved(
             self.store.run_dir, spec, code=self.code, protocol=self.store.protocol, load=self.load
         )
@@ -147,7 +148,7 @@ class MeasuredStore(Generic[M]):
         """The metrics of ``spec``'s stored episode: read back when saved for the very
         episode file now stored, else measured on ``episode(spec)`` (which computes or
         reads the episode through the store) and saved."""
-        saved = self._saved(spec)
+        saved = self.saved(spec)
         if saved is not None:
             return saved
         trajectory = episode(spec).trajectory

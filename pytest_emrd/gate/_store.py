@@ -156,7 +156,9 @@ class ResultsStore:
             write_head(self.run_dir, stored.head, digest=digest)
         return stored
 
-    def _reusable(self, spec: EpisodeSpec) -> StoredEpisode | None:
+    def reusable(self, spec: EpisodeSpec) -> StoredEpisode | None:
+        """``spec``'s stored episode when it may be reused as it is (spec and protocol match;
+        finished, or errored in this very session), else None (it needs computing)."""
         try:
             stored = self._read(spec)
         except FileNotFoundError:
@@ -172,7 +174,7 @@ class ResultsStore:
 
     def holds(self, spec: EpisodeSpec) -> bool:
         """Whether the store already has a reusable episode for ``spec`` (no compute needed)."""
-        return self._reusable(spec) is not None
+        return self.reusable(spec) is not None
 
     def _lock(self, spec: EpisodeSpec, *, timeout: float = -1) -> FileLock:
         lock_path = self.run_dir / "locks" / f"{spec.case_id}.lock"
@@ -205,11 +207,11 @@ class ResultsStore:
         """The stored episode for ``spec``, computing and storing it if needed (waiting for
         whoever computes it now). A reusable episode is read without taking its lock: files
         are replaced atomically, and a reusable one is final."""
-        stored = self._reusable(spec)
+        stored = self.reusable(spec)
         if stored is not None:
             return stored
         with self._lock(spec):
-            return self._reusable(spec) or self._compute(spec, compute)
+            return self.reusable(spec) or self._compute(spec, compute)
 
     def compute_if_free(
         self, spec: EpisodeSpec, compute: Callable[[EpisodeSpec], EpisodeRun]
@@ -218,7 +220,7 @@ class ResultsStore:
         or process (never waits); whether this call computed it."""
         try:
             with self._lock(spec, timeout=0):
-                if self._reusable(spec) is not None:
+                if self.reusable(spec) is not None:
                     return False
                 self._compute(spec, compute)
                 return True

@@ -18,6 +18,7 @@ from pytest_emrd.errors import EmrdError
 from pytest_emrd.gate import OPTIONS, check_resume, new_run_dir, resolve_settings
 from pytest_emrd.plugin._live import LiveLine
 from pytest_emrd.plugin._report import RunReport
+from pytest_emrd.plugin._resume import resume_in_process
 from pytest_emrd.plugin._run import RUN, Run
 
 
@@ -54,6 +55,7 @@ def pytest_configure(config: pytest.Config) -> None:
     config.pluginmanager.register(run, "emrd-run")
     config.pluginmanager.register(LiveLine(run), "emrd-live")
     config.pluginmanager.register(RunReport(run), "emrd-report")
+    resume_in_process(config, run)
 
 
 @pytest.hookimpl(optionalhook=True)

@@ -232,6 +232,26 @@ class Run:
             self._metrics[spec] = self.measured.get(spec, self.episode)
         return self._metrics[spec]
 
+    def finished(self) -> bool:
+        """Whether the run directory already holds everything this run's grid needs: every
+        episode reusable from the store and, for every gate's cell, the per-episode metrics
+        saved for the episode file stored now. What was read is kept for the tests (nothing
+        is read twice); nothing is computed."""
+        gated = dict.fromkeys(s for cell in self.gate_cells for s in self.cell_specs(cell))
+        stored: dict[EpisodeSpec, StoredEpisode] = {}
+        for spec in {**dict.fromkeys(self.episode_specs), **gated}:
+            if (episode := self.store.reusable(spec)) is None:
+                return False  # stops at the first episode to compute
+            stored[spec] = episode
+        metrics = {}
+        for spec in gated:
+            if (saved := self.measured.saved(spec)) is None:
+                return False
+            metrics[spec] = saved
+        self._stored.update(stored)
+        self._metrics.update(metrics)
+        return True
+
     def summary(self, stored: StoredEpisode) -> EpisodeSummary:
         config = self.registry.get(stored.head.spec.model)
         return EpisodeSummary.of(

@@ -139,3 +139,95 @@ def test_interrupted_run_resumes_reusing_finished_episodes(suite, small, recorde
     second.assert_outcomes(passed=2, deselected=2)
     assert (done.stat().st_mtime_ns, json.loads(done.read_text())["session"]) == before
     assert len(list((run_dir / "episodes").iterdir())) == 2
+
+
+WHERE_TESTS_RUN = """
+import os
+
+import pytest
+
+
+@pytest.fixture(autouse=True)
+def _where(request):
+    with open({log!r}, "a", encoding="utf-8") as out:
+        out.write(os.environ.get("PYTEST_XDIST_WORKER", "controller") + "\\n")
+"""
+
+
+def _junit_cases(path: Path) -> list[tuple[str, str]]:
+    from xml.etree import ElementTree
+
+    cases = ElementTree.parse(path).getroot().iter("testcase")
+    return sorted((c.get("name", ""), ",".join(child.tag for child in c)) for c in cases)
+
+
+def test_finished_run_resumes_in_process_and_a_stale_episode_brings_the_workers_back(
+    suite, small, recorded
+):
+    """``-n 2`` on a run directory holding everything runs the same tests in the controller
+    (same outcomes, gate table and JUnit cases, no worker started); one episode stored under
+    another protocol sends the next resume back to the workers, which recompute only it."""
+    run_dir, log = suite.path / "run", suite.path / "where.log"
+    suite.makeconftest(WHERE_TESTS_RUN.format(log=str(log)))
+
+    def resume(name: str) -> tuple[pytest.RunResult, list[str]]:
+        log.unlink(missing_ok=True)
+        result = suite.runpytest_subprocess(
+            *small(
+                f"--emrd-cassettes={recorded}",
+                "--emrd-record-mode=none",
+                f"--emrd-results={run_dir}",
+                f"--junitxml={suite.path / name}.xml",
+                "-n",
+                "2",
+            )
+        )
+        result.assert_outcomes(passed=4)
+        return result, sorted(set(log.read_text().split()))
+
+    first, where = resume("first")
+    assert where == ["gw0", "gw1"] and "no xdist worker started" not in first.stdout.str()
+    second, where = resume("second")
+    assert where == ["controller"]
+    second.stdout.fnmatch_lines(
+        [f"emrd: {run_dir} holds every episode and metric of the run: its tests run in this "
+         "process (no xdist worker started for -n 2)"]
+    )  # fmt: skip
+    assert _gate_section(second) == _gate_section(first)
+    assert "scout: 2/2 gates pass" in _gate_section(second)
+    assert _junit_cases(suite.path / "second.xml") == _junit_cases(suite.path / "first.xml")
+
+    stale = run_dir / "episodes" / "scout-baseline-office-ep01.json"
+    kept = run_dir / "episodes" / "scout-baseline-office-ep00.json"
+    document = json.loads(stale.read_text())
+    document["trajectory"]["protocol"] = "an-older-protocol"
+    stale.write_text(json.dumps(document))
+    before = kept.stat().st_mtime_ns
+    third, where = resume("third")
+    assert where == ["gw0", "gw1"]
+    assert json.loads(stale.read_text())["trajectory"]["protocol"] != "an-older-protocol"
+    assert kept.stat().st_mtime_ns == before  # the finished episode was reused
+    assert _gate_section(third) == _gate_section(first)
+    assert resume("fourth")[1] == ["controller"]
+
+
+def test_resume_without_saved_metrics_keeps_the_workers(suite, small, recorded):
+    """The gates' per-episode metrics are part of what a finished run holds: with one missing,
+    the workers measure it again."""
+    run_dir = suite.path / "run"
+    args = small(
+        f"--emrd-cassettes={recorded}",
+        "--emrd-record-mode=none",
+        f"--emrd-results={run_dir}",
+        "-n",
+        "2",
+        "-v",
+    )
+    suite.runpytest_subprocess(*args).assert_outcomes(passed=4)
+    saved = run_dir / "metrics" / "scout-baseline-office-ep00.json"
+    saved.unlink()
+    result = suite.runpytest_subprocess(*args)
+    result.assert_outcomes(passed=4)
+    assert "no xdist worker started" not in result.stdout.str()
+    result.stdout.fnmatch_lines(["[[]gw?[]]*PASSED*test_gate*"])
+    assert saved.is_file()

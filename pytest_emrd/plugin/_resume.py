@@ -1,0 +1,55 @@
+"""A finished run resumed without xdist workers (controller only, before xdist starts them).
+
+Under ``-n N`` pytest-xdist starts N worker processes, each starting pytest, importing the
+plugins and collecting the tests again, before the first test runs. When ``--emrd-results``
+names a run directory that already holds everything the run's grid needs (every episode
+reusable, every gate's per-episode metrics saved for the episode file stored now), no worker
+would compute anything: the controller then switches distribution off (as ``-n 0`` does) and
+runs the tests itself. They are the same tests with the same outcomes: each episode test still
+checks its episode against the store, each gate is evaluated again from the saved metrics, and
+the gate table, JUnit XML and exit status are those of a distributed run. Anything to compute
+(a missing, stale, errored or unreadable episode, metrics not saved) keeps the distributed run.
+"""
+
+from __future__ import annotations
+
+import pytest
+
+from pytest_emrd.errors import EmrdError
+from pytest_emrd.plugin._run import Run
+
+
+def distributed(config: pytest.Config) -> bool:
+    """Whether pytest-xdist is about to start workers for this session (controller)."""
+    option = config.option
+    dist_on = getattr(option, "dist", "no") != "no" and bool(getattr(option, "tx", None))
+    return dist_on and not option.collectonly and not hasattr(config, "workerinput")
+
+
+class InProcessResume:
+    """Reports, in the session header, that a finished run directory runs without workers."""
+
+    def __init__(self, run: Run, workers: int) -> None:
+        self.run, self.workers = run, workers
+
+    def pytest_report_header(self) -> str:
+        return (
+            f"emrd: {self.run.run_dir} holds every episode and metric of the run: its tests "
+            f"run in this process (no xdist worker started for -n {self.workers})"
+        )
+
+
+def resume_in_process(config: pytest.Config, run: Run) -> None:
+    """Switch xdist off for this session when ``run`` has nothing left to compute (called
+    from ``pytest_configure``, which runs before xdist's)."""
+    if run.settings.results is None or not distributed(config):
+        return
+    try:
+        if not run.finished():
+            return
+    except EmrdError:
+        return  # the distributed run reports it, as it would have
+    option = config.option
+    workers = len(option.tx)
+    option.numprocesses, option.dist, option.tx = 0, "no", []
+    config.pluginmanager.register(InProcessResume(run, workers), "emrd-resume")
