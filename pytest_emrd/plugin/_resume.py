@@ -19,11 +19,15 @@ from pytest_emrd.errors import EmrdError
 from pytest_emrd.plugin._run import Run
 
 
-def distributed(config: pytest.Config) -> bool:
-    """Whether pytest-xdist is about to start workers for this session (controller)."""
+def local_workers(config: pytest.Config) -> bool:
+    """Whether pytest-xdist is about to start workers for this session that share out its
+    tests (``-n N``: local processes of this interpreter; not ``--dist each``, not other
+    ``--tx`` environments), in the controller."""
     option = config.option
-    dist_on = getattr(option, "dist", "no") != "no" and bool(getattr(option, "tx", None))
-    return dist_on and not option.collectonly and not hasattr(config, "workerinput")
+    dist, tx = getattr(option, "dist", "no"), getattr(option, "tx", None)
+    if dist in ("no", "each") or not tx or set(tx) != {"popen"}:
+        return False
+    return not option.collectonly and not hasattr(config, "workerinput")
 
 
 class InProcessResume:
@@ -42,7 +46,7 @@ class InProcessResume:
 def resume_in_process(config: pytest.Config, run: Run) -> None:
     """Switch xdist off for this session when ``run`` has nothing left to compute (called
     from ``pytest_configure``, which runs before xdist's)."""
-    if run.settings.results is None or not distributed(config):
+    if run.settings.results is None or not local_workers(config):
         return
     try:
         if not run.finished():

@@ -142,15 +142,14 @@ def test_interrupted_run_resumes_reusing_finished_episodes(suite, small, recorde
 
 
 WHERE_TESTS_RUN = """
-import os
-
 import pytest
 
 
 @pytest.fixture(autouse=True)
 def _where(request):
+    worker = getattr(request.config, "workerinput", {{}}).get("workerid", "controller")
     with open({log!r}, "a", encoding="utf-8") as out:
-        out.write(os.environ.get("PYTEST_XDIST_WORKER", "controller") + "\\n")
+        out.write(worker + "\\n")
 """
 
 
