@@ -7,14 +7,16 @@ the Office is top-left (small ``x``, large ``z``), the Entrance bottom-right.
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any, Protocol
+from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
 
 from pytest_emrd._serde import from_dict, to_dict
 from pytest_emrd.trajectory import Pose
+
+if TYPE_CHECKING:
+    from pytest_emrd.world._render import View
 
 
 @dataclass(frozen=True)
@@ -148,9 +150,9 @@ class Observation:
 
     ``frame`` is the rendered RGB image (``512 x 512 x 3`` uint8). ``frame_digest`` is the
     SHA-256 of its raw pixel bytes: cassettes key frames by it, never by JPEG bytes, so a
-    recording replays across Pillow versions. ``jpeg`` is the encoded frame the model sees,
-    encoded on first read by ``encode_jpeg`` (a replay sends frames by digest and never reads
-    it; encoding is a quarter of a step).
+    recording replays across Pillow versions. ``jpeg`` is the encoded frame the model sees.
+    Both come from ``view`` on first read: a replay sends frames by digest and reads neither
+    (the JPEG is a quarter of a step; a view seen before in the process is not drawn at all).
     """
 
     step: int
@@ -164,8 +166,7 @@ class Observation:
     visible: tuple[VisibleObject, ...]
     """Objects in view, sorted by object id."""
     frame_digest: str
-    encode_jpeg: Callable[[], bytes] = field(repr=False, compare=False)
-    frame: np.ndarray | None = field(default=None, repr=False, compare=False)
+    view: View = field(repr=False, compare=False)
     done: bool = False
     """True once a Term was executed (whatever room it named)."""
     terminal_room: str | None = None
@@ -173,9 +174,14 @@ class Observation:
     rooms: focal-point column X)."""
 
     @property
+    def frame(self) -> np.ndarray:
+        """The rendered RGB frame (read-only)."""
+        return self.view.pixels
+
+    @property
     def jpeg(self) -> bytes:
         """The frame as the JPEG the model is sent (the same bytes on every read)."""
-        return self.encode_jpeg()
+        return self.view.jpeg
 
 
 class Simulator(Protocol):

@@ -2,9 +2,12 @@
 
 from __future__ import annotations
 
+import functools
 import hashlib
+import threading
 from collections import OrderedDict
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping
+from typing import Any
 
 import numpy as np
 
@@ -27,7 +30,7 @@ from pytest_emrd.world._feedback import (
 )
 from pytest_emrd.world._model import Layout, Observation, WorldPose
 from pytest_emrd.world._motion import approach, spawn_pose, through
-from pytest_emrd.world._render import lazy_jpeg, palette, render, shade_table
+from pytest_emrd.world._render import View, palette, render, shade_table
 from pytest_emrd.world._scene import Scene, scene_of
 from pytest_emrd.world._visibility import Sight, sight
 
@@ -35,8 +38,38 @@ JPEG_QUALITY = 85
 FRAME_CACHE = 16
 """Frames kept per episode (least recently used dropped first)."""
 
-_Shot = tuple[np.ndarray, str, Callable[[], bytes]]
-"""A rendered frame, its pixel digest and its JPEG, encoded on first use."""
+#: Views whose pixel digest this process knows (a few hundred bytes each).
+VIEW_DIGESTS = 1 << 16
+#: Shade tables kept (one per condition of a layout; under ``texture`` one per episode seed).
+SHADE_TABLES = 64
+
+_lock = threading.Lock()
+#: (scene, table, pose) -> digest, keyed by the identities of a memoised scene and table
+#: (each entry holds them, so an id is not reused while the entry lives).
+_digests: OrderedDict[tuple[int, int, WorldPose], tuple[Scene, np.ndarray, str]] = OrderedDict()
+_tables: OrderedDict[tuple[int, ConditionParams, int | None], tuple[Scene, np.ndarray]] = (
+    OrderedDict()
+)
+
+
+def _remember(table: OrderedDict[Any, Any], key: Any, value: Any, capacity: int) -> None:
+    with _lock:
+        table[key] = value
+        table.move_to_end(key)
+        while len(table) > capacity:
+            table.popitem(last=False)
+
+
+def _shades(scene: Scene, params: ConditionParams, seed: int) -> np.ndarray:
+    """The episode's shade table, one object per scene, condition and (``texture``) seed:
+    every episode of the paper office under one condition shares it."""
+    key = (id(scene), params, seed if params.randomize_palette else None)
+    hit = _tables.get(key)
+    if hit is not None and hit[0] is scene:
+        return hit[1]
+    table = shade_table(palette(scene, params, seed), params)
+    _remember(_tables, key, (scene, table), SHADE_TABLES)
+    return table
 
 
 class BuiltinSimulator(SemanticStep):
@@ -71,7 +104,7 @@ class BuiltinSimulator(SemanticStep):
         self._terminal: str | None = None
         self._symbolic = True
         self._sight: Sight | None = None
-        self._frames: OrderedDict[WorldPose, _Shot] = OrderedDict()
+        self._frames: OrderedDict[WorldPose, tuple[str, View]] = OrderedDict()
 
     # -- protocol ---------------------------------------------------------------------
     def reset(
@@ -83,7 +116,7 @@ class BuiltinSimulator(SemanticStep):
         check_choice("spawn_room", room, [*ROOM_NAMES, *SLUG_ROOMS])
         self._params = condition_params(condition)
         self._scene = scene_of(layout)
-        self._table = shade_table(palette(self._scene, self._params, seed), self._params)
+        self._table = _shades(self._scene, self._params, seed)
         self._spawn = self._pose = spawn_pose(self._scene, layout.room(room), seed)
         self._steps, self._ended, self._terminal, self._symbolic = 0, False, None, symbolic
         self._sight = None
@@ -170,17 +203,33 @@ class BuiltinSimulator(SemanticStep):
             self._sight = sight(self._require(), self._pose, self._params.visibility_distance)
         return self._sight
 
-    def _render(self) -> _Shot:
-        """Frame, pixel digest and (lazy) JPEG of the current pose; agents often come back to
-        a pose (a full sweep ends where it began), so recent frames of the episode are kept."""
-        cached = self._frames.get(self._pose)
+    def _render(self) -> tuple[str, View]:
+        """Pixel digest and view of the current pose.
+
+        Agents often come back to a pose (a full sweep ends where it began), so the views of
+        recent poses of the episode are kept, pixels and JPEG included once made. And every
+        episode of the paper office under a condition looks at the same scene through the
+        same shade table: the Gotos of a grid land on the same few poses, so of ~6,600 views
+        of the committed grid ~1,900 differ. The process remembers each view's digest; a view
+        seen before is drawn again only if its pixels or JPEG are read (a recording, the
+        viewer), never for a replay, which needs the digest alone. ``frame_cache=0`` turns
+        both off (every view drawn and hashed).
+        """
+        pose, scene, table = self._pose, self._require(), self._table
+        cached = self._frames.get(pose)
         if cached is not None:
-            self._frames.move_to_end(self._pose)
+            self._frames.move_to_end(pose)
             return cached
-        frame = render(self._require(), self._pose, self._params, self._table)
-        frame.setflags(write=False)  # shared with the cache
-        entry = (frame, hashlib.sha256(frame.data).hexdigest(), lazy_jpeg(frame, self._quality))
-        self._frames[self._pose] = entry
+        view = View(functools.partial(render, scene, pose, self._params, table), self._quality)
+        key = (id(scene), id(table), pose)
+        known = _digests.get(key) if self._cache_size else None
+        if known is not None and known[0] is scene and known[1] is table:
+            entry = known[2], view
+        else:
+            entry = hashlib.sha256(view.pixels.data).hexdigest(), view
+            if self._cache_size:
+                _remember(_digests, key, (scene, table, entry[0]), VIEW_DIGESTS)
+        self._frames[pose] = entry
         while len(self._frames) > self._cache_size:
             self._frames.popitem(last=False)
         return entry
@@ -188,7 +237,7 @@ class BuiltinSimulator(SemanticStep):
     def _observe(self, success: bool, message: str) -> Observation:
         scene = self._require()
         pose = observed_pose(self._spawn, self._pose)
-        frame, digest, jpeg = self._render()
+        digest, view = self._render()
         return Observation(
             step=self._steps,
             pose=pose,
@@ -196,8 +245,7 @@ class BuiltinSimulator(SemanticStep):
             feedback=with_pose(message, pose),
             visible=self._current_sight().listing(scene),
             frame_digest=digest,
-            encode_jpeg=jpeg,
-            frame=frame,
+            view=view,
             done=self._ended,
             terminal_room=self._terminal,
         )

@@ -11,7 +11,14 @@ from PIL import Image
 
 from pytest_emrd.errors import ConfigError
 from pytest_emrd.rooms import ROOM_NAMES
-from pytest_emrd.world import BuiltinSimulator, Layout, _render, make_simulator
+from pytest_emrd.world import (
+    BuiltinSimulator,
+    Layout,
+    WorldPose,
+    _render,
+    _simulator,
+    make_simulator,
+)
 from pytest_emrd.world._simulator import JPEG_QUALITY
 
 SCRIPT = ("Turn(Right)", "Turn(Right)", "Goto(Doorway_2)", "Turn(Left)", "Turn(Around)")
@@ -158,3 +165,30 @@ def test_a_full_sweep_returns_the_same_frame_with_or_without_the_cache(
         back = sim.step("Turn(Right)")
         assert back.frame_digest == start.frame_digest and back.jpeg == start.jpeg
         assert not back.frame.flags.writeable
+
+
+def test_a_view_seen_before_in_the_process_is_not_drawn_again_unless_read(
+    office: Layout, new_sim, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Episodes of one office and condition share views: a second run of the same script
+    knows every digest without drawing; reading a frame draws it, the same pixels;
+    ``frame_cache=0`` draws every view."""
+    first = _run(new_sim(), office, seed=91)
+    drawn: list[WorldPose] = []
+    draw = _simulator.render
+
+    def counting(scene, pose, params, table):  # type: ignore[no-untyped-def]
+        drawn.append(pose)
+        return draw(scene, pose, params, table)
+
+    monkeypatch.setattr(_simulator, "render", counting)
+    again = _run(new_sim(), office, seed=91)
+    assert drawn == []
+    assert [o.frame_digest for o in again] == [o.frame_digest for o in first]
+    for obs, before in zip(again, first, strict=True):
+        assert np.array_equal(obs.frame, before.frame) and obs.jpeg == before.jpeg
+    assert 0 < len(drawn) <= len(again)
+    drawn.clear()
+    uncached = _run(make_simulator("builtin", frame_cache=0), office, seed=91)
+    assert len(drawn) == len(uncached)
+    assert [o.frame_digest for o in uncached] == [o.frame_digest for o in first]

@@ -47,7 +47,7 @@ from pytest_emrd.world._feedback import (
 )
 from pytest_emrd.world._model import Doorway, Layout, Observation, VisibleObject, WorldPose
 from pytest_emrd.world._motion import spawn_pose
-from pytest_emrd.world._render import lazy_jpeg
+from pytest_emrd.world._render import View
 from pytest_emrd.world._scene import scene_of
 from pytest_emrd.world.thor import _launch
 from pytest_emrd.world.thor._conditions import ThorCondition, thor_condition
@@ -346,8 +346,7 @@ class ThorSimulator(SemanticStep):
             feedback=with_pose(message, pose),
             visible=self._visible,
             frame_digest=hashlib.sha256(frame.tobytes()).hexdigest(),
-            encode_jpeg=lazy_jpeg(frame, JPEG_QUALITY),
-            frame=frame,
+            view=View.of(frame, JPEG_QUALITY),
             done=self._ended,
             terminal_room=self._terminal,
         )
