@@ -120,7 +120,10 @@ class Walls:
 
         rays = [np.asarray(a, dtype=np.float64) for a in (ox, oz, dx, dz)]
         shape = np.broadcast_shapes(*(a.shape for a in rays))
-        flat = [a.reshape(-1) if a.size == 1 else np.broadcast_to(a, shape).ravel() for a in rays]
+        flat = [
+            a.reshape(-1) if a.size == 1 or a.shape == shape else np.broadcast_to(a, shape).ravel()
+            for a in rays
+        ]
         t = np.empty(shape)
         along_x = np.empty(shape, dtype=bool)
         first_hits(*flat, self.along_x, self.along_z, t.reshape(-1), along_x.reshape(-1))

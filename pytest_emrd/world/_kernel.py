@@ -242,33 +242,38 @@ def _dist2(rect: np.ndarray, px: float, pz: float) -> float:
 
 
 @njit(**_JIT)
-def shown_boxes(
-    scene: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray],
+def boxes_in_view(
+    scene: tuple[np.ndarray, ...],
     eye: tuple[float, float, float, float, float, float],
     visibility2: float,
-    camera: tuple[float, float, float],
-    out: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray],
+    camera: tuple[float, float, float, float],
+    out: tuple[np.ndarray, ...],
 ) -> int:
-    """Select the boxes :func:`compose` may paint (:func:`pytest_emrd.world._paint._shown`);
-    returns how many, their indices, columns and draw-order keys in ``out[:][:count]``.
+    """The boxes :func:`compose` paints (:func:`pytest_emrd.world._paint.object_boxes`), back
+    to front, into ``out[:][:count]``; returns ``count``.
 
     ``scene``: the scene's ``parts``, ``part_object``, ``part_facing``, object ``rects``,
-    ``centres`` and ``support``; ``eye``: position ``x, z``, forward ``fx, fz``, right
-    ``rx, rz``; ``camera``: the near plane, the focal length and the image size. A box is
+    ``centres``, ``support`` and ``part_label``; ``eye``: position ``x, z``, forward
+    ``fx, fz``, right ``rx, rz``; ``camera``: the near plane, the focal length, the image
+    size and the eye height; ``out``: the arrays :func:`compose` takes as ``boxes``. A box is
     kept when its object lies within ``visibility2`` squared metres, it shows from the eye's
     side (or from every side), some footprint corner lies past the near plane and the
     corners are not all beyond one edge of the view wedge, and its column range (from the
     extreme ray slopes ``lateral / forward`` over its corners, the forward distance clipped
-    to the near plane, one column of margin) is not empty. ``out``: per kept box its index,
-    first column, one past its last column, and the squared distances to the footprint of
-    the object its object stands on and to its own footprint.
+    to the near plane, one column of margin) is not empty. Kept boxes are
+    ordered by the squared distance to the footprint of the object their object stands on
+    (farthest first), then by their bottom (lowest first), then by the squared distance to
+    their own footprint (farthest first), ties in scene order.
     """
-    parts, part_object, facing, rects, centres, support = scene
+    parts, part_object, facing, rects, centres, support, part_label = scene
     px, pz, fx, fz, rx, rz = eye
-    near_plane, focal, size = camera
-    sel, lo, hi, group, own = out
+    near_plane, focal, size, eye_y = camera
+    rel, y, lo, hi, label, extra = out
+    n = parts.shape[0]
+    sel, first, last = np.empty(n, np.int64), np.empty(n, np.int64), np.empty(n, np.int64)
+    group, own = np.empty(n), np.empty(n)
     count = 0
-    for p in range(parts.shape[0]):
+    for p in range(n):
         obj = part_object[p]
         if not _dist2(rects[obj], px, pz) <= visibility2:
             continue
@@ -292,14 +297,27 @@ def shown_boxes(
         f_lo = max(f_lo, near_plane)
         u0 = min(l_lo / f_lo, l_lo / f_hi)
         u1 = max(l_hi / f_lo, l_hi / f_hi)
-        first = min(max(np.floor(u0 * focal + (focal - 0.5)) - 1.0, 0.0), size)
-        last = min(max(np.ceil(u1 * focal + (focal - 0.5)) + 2.0, 0.0), size)
-        if not last > first:
+        col0 = min(max(np.floor(u0 * focal + (focal - 0.5)) - 1.0, 0.0), size)
+        col1 = min(max(np.ceil(u1 * focal + (focal - 0.5)) + 2.0, 0.0), size)
+        if not col1 > col0:
             continue
-        sel[count], lo[count], hi[count] = p, np.int64(first), np.int64(last)
-        group[count] = _dist2(rects[support[obj]], px, pz)
-        own[count] = _dist2(parts[p], px, pz)
+        sel[count], first[count], last[count] = p, np.int64(col0), np.int64(col1)
+        group[count] = -_dist2(rects[support[obj]], px, pz)
+        own[count] = -_dist2(parts[p], px, pz)
         count += 1
+    order = np.argsort(own[:count], kind="mergesort")  # stable sorts, last key first
+    bottom = np.empty(count)
+    for k in range(count):
+        bottom[k] = parts[sel[order[k]], 4]
+    order = order[np.argsort(bottom, kind="mergesort")]
+    order = order[np.argsort(group[:count][order], kind="mergesort")]
+    for k in range(count):
+        p = sel[order[k]]
+        rel[k, 0], rel[k, 1] = parts[p, 0] - px, parts[p, 1] - pz
+        rel[k, 2], rel[k, 3] = parts[p, 2] - px, parts[p, 3] - pz
+        y[k, 0], y[k, 1] = focal * (parts[p, 4] - eye_y), focal * (parts[p, 5] - eye_y)
+        lo[k], hi[k], label[k] = first[order[k]], last[order[k]], part_label[p]
+        extra[k] = 1 if parts[p, 5] < eye_y else 2 if parts[p, 4] > eye_y else 0
     return count
 
 

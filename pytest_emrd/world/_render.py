@@ -29,6 +29,7 @@ walls and boxes begin and end, their codes, and the pixels.
 
 from __future__ import annotations
 
+import functools
 import io
 import threading
 from collections.abc import Callable
@@ -121,9 +122,7 @@ def render(scene: Scene, pose: WorldPose, params: ConditionParams, table: np.nda
     """The ``(512, 512, 3)`` uint8 frame seen from ``pose`` (``table`` from :func:`shade_table`)."""
     from pytest_emrd.world._kernel import compose  # numba: loaded on the first frame only
 
-    fx, fz = unit(pose.heading)
-    rx, rz = right_of(pose.heading)
-    dx, dz = fx + rx * _U, fz + rz * _U
+    dx, dz = _rays(pose.heading)
     ox, oz = np.float64(pose.x), np.float64(pose.z)
     t_wall, along_x = scene.walls.first_hit(ox, oz, dx, dz)
     view = (dx, dz, np.minimum(t_wall, 1e3), along_x, ox, oz)
@@ -133,6 +132,15 @@ def render(scene: Scene, pose: WorldPose, params: ConditionParams, table: np.nda
     frame = np.empty((SIZE, SIZE, 3), dtype=np.uint8)
     compose(frame, _buffer(), table, view, rooms, boxes, _CAMERA, _LABELS, fog)
     return frame
+
+
+@functools.lru_cache(maxsize=16)
+def _rays(heading: float) -> tuple[np.ndarray, np.ndarray]:
+    """Direction ``forward + right * u`` of each column's ray at ``heading`` (shared by every
+    frame at that heading; nothing writes to them)."""
+    fx, fz = unit(heading)
+    rx, rz = right_of(heading)
+    return fx + rx * _U, fz + rz * _U
 
 
 def encode_jpeg(frame: np.ndarray, quality: int) -> bytes:
