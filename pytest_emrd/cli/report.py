@@ -11,10 +11,16 @@ or ``./thresholds.yaml`` when it exists. A comparison writes ``compare.*`` into 
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from pytest_emrd.errors import ConfigError, check_choice
+
+if TYPE_CHECKING:
+    from pytest_emrd.gate import StoredEpisode
+    from pytest_emrd.metrics import EpisodeMetrics
 
 _DEFAULT_THRESHOLDS = Path("thresholds.yaml")
 
@@ -77,32 +83,30 @@ def _run(args: argparse.Namespace) -> int:
 
 def _report(args: argparse.Namespace, formats: list[str]) -> int:
     from pytest_emrd.agent import load_registry
-    from pytest_emrd.gate import (
-        EPISODE_METRICS_CODE,
-        EPISODE_METRICS_LIBRARIES,
-        code_fingerprint,
-        evaluate_all,
-        load_run_episodes,
-        load_thresholds,
-        measured_episodes,
+    from pytest_emrd.gate import evaluate_all, load_run_episodes, load_thresholds
+    from pytest_emrd.metrics import GATE_METRICS
+    from pytest_emrd.report import (
+        aggregates_key,
+        build_report,
+        read_aggregates,
+        write_aggregates,
+        write_report,
     )
-    from pytest_emrd.metrics import GATE_METRICS, EpisodeMetrics, episode_metrics
-    from pytest_emrd.report import build_report, write_report
 
     # read through their heads: a trajectory is decoded only where something needs it
     episodes = load_run_episodes(args.run_dirs)
-    # once per episode, for the gates and the report; read back where the run saved them
-    metrics = measured_episodes(
-        args.run_dirs, episodes, measure=episode_metrics, load=EpisodeMetrics.from_dict,
-        code=code_fingerprint(EPISODE_METRICS_CODE, EPISODE_METRICS_LIBRARIES),
-    )  # fmt: skip
+    home = args.run_dirs[0]
+    key = aggregates_key(episodes, episode=args.episode)
+    saved = None if key is None else read_aggregates(home, key)
     registry = load_registry(args.models)
     thresholds_path = args.thresholds
     if thresholds_path is None and _DEFAULT_THRESHOLDS.is_file():
         thresholds_path = _DEFAULT_THRESHOLDS
+    metrics = None
     verdicts, source = [], None
     if thresholds_path is not None:
         thresholds = load_thresholds(thresholds_path, registry=registry, metrics=GATE_METRICS)
+        metrics = _episode_metrics(args.run_dirs, episodes)
         verdicts = evaluate_all(metrics, thresholds, GATE_METRICS)  # cells by each one's spec
         source = str(thresholds_path)
     prices = {}
@@ -110,6 +114,8 @@ def _report(args: argparse.Namespace, formats: list[str]) -> int:
         if model in registry.names():
             config = registry.get(model)
             prices[model] = (config.price_per_mtok_in, config.price_per_mtok_out)
+    if saved is None and metrics is None:
+        metrics = _episode_metrics(args.run_dirs, episodes)
     report = build_report(
         episodes,
         verdicts=verdicts,
@@ -117,15 +123,42 @@ def _report(args: argparse.Namespace, formats: list[str]) -> int:
         prices=prices,
         episode_metrics=metrics,
         episode=args.episode,
+        statistics=saved,
     )
-    out = args.out if args.out is not None else args.run_dirs[0] / "report"
-    written = write_report(report, out, formats)
+    if saved is None and key is not None:
+        write_aggregates(home, key, report)
+    out = args.out if args.out is not None else home / "report"
+    written = write_report(report, out, formats, processes=_processes())
     print(f"{len(episodes)} episodes from {len(args.run_dirs)} run director(ies)")
     for note in report.missing:
         print(f"note: {note}")
     for path in written:
         print(path)
     return 0
+
+
+def _processes() -> int:
+    """Processes drawing the figures: two where this process may run on two cores or more
+    (the figures are most of the wall time once the statistics are saved), else one."""
+    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
+    return min(2, cores or 1)
+
+
+def _episode_metrics(run_dirs: list[Path], episodes: list[StoredEpisode]) -> list[EpisodeMetrics]:
+    """Each episode's metrics, once, for the gates and the report: read back where the run
+    saved them, measured otherwise."""
+    from pytest_emrd.gate import (
+        EPISODE_METRICS_CODE,
+        EPISODE_METRICS_LIBRARIES,
+        code_fingerprint,
+        measured_episodes,
+    )
+    from pytest_emrd.metrics import EpisodeMetrics, episode_metrics
+
+    return measured_episodes(
+        run_dirs, episodes, measure=episode_metrics, load=EpisodeMetrics.from_dict,
+        code=code_fingerprint(EPISODE_METRICS_CODE, EPISODE_METRICS_LIBRARIES),
+    )  # fmt: skip
 
 
 def _compare(args: argparse.Namespace, formats: list[str]) -> int:

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from collections import Counter
 from collections.abc import Mapping, Sequence
+from dataclasses import replace
 
 from pytest_emrd.gate import EpisodeHead, StoredEpisode, UsageRow, Verdict
 from pytest_emrd.metrics import EpisodeMetrics, as_episode_metrics
@@ -170,6 +171,7 @@ def build_report(
     with_reasoning: bool = True,
     episode_metrics: Sequence[EpisodeMetrics] | None = None,
     episode: str | None = None,
+    statistics: Report | None = None,
 ) -> Report:
     """Every table and figure of the paper for ``episodes`` (any models, conditions,
     variants; errored episodes are excluded and reported). Stored episodes are read through
@@ -181,10 +183,18 @@ def build_report(
     ``with_reasoning=False`` leaves that table empty (no sentence encoder is loaded);
     ``episode_metrics`` are the trajectories' metrics when the caller computed them already;
     ``episode`` is the case id of the episode the map figure shows (default: the first
-    baseline episode with a non-empty map).
+    baseline episode with a non-empty map); ``statistics`` is a report built from the very
+    same episodes and ``episode`` (:func:`~pytest_emrd.report.read_aggregates`): its tables
+    and figures are taken as they are (no metric is computed), the overview, gates and notes
+    are built afresh.
     """
     stored = [e if isinstance(e, StoredEpisode) else _wrap(e) for e in episodes]
     heads = [e.head for e in stored]
+    overview = _overview(heads, prices)
+    gates = Gates(thresholds_source, tuple(verdicts or ()))
+    if statistics is not None:
+        missing = _missing(heads, overview, gates, statistics.reasoning, stored)
+        return replace(statistics, overview=overview, missing=missing, gates=gates)
     metrics = as_episode_metrics(
         [e.trajectory for e in stored] if episode_metrics is None else episode_metrics
     )
@@ -192,8 +202,6 @@ def build_report(
     by_label: dict[str, list[EpisodeMetrics]] = {}
     for (model, variant, _), ems in cells.items():
         by_label.setdefault(row_label(model, variant), []).extend(ems)
-    overview = _overview(heads, prices)
-    gates = Gates(thresholds_source, tuple(verdicts or ()))
     reasons = reasoning(by_label, embed) if with_reasoning else Reasoning(())
     chosen = pick_episode(stored, episode)
     ebbinghaus = ebbinghaus_rows(cells)

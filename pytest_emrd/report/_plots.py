@@ -12,8 +12,13 @@ from __future__ import annotations
 
 import io
 import math
+import multiprocessing
+import sys
 import textwrap
+import threading
 from collections.abc import Callable, Sequence
+from concurrent.futures import ProcessPoolExecutor
+from multiprocessing.context import BaseContext
 from typing import Any, Final
 
 import numpy as np
@@ -322,7 +327,43 @@ def draw_figures(report: Report) -> tuple[dict[str, Figure], dict[str, str]]:
     return drawn, skipped
 
 
-def render_figures(report: Report) -> tuple[dict[str, bytes], dict[str, str]]:
-    """PNG bytes per figure file name, and for each figure not drawn, why not."""
-    drawn, skipped = draw_figures(report)
-    return {name: _png(fig) for name, fig in drawn.items()}, skipped
+#: The figures from the costliest to draw to the cheapest (a 240-episode run of one model),
+#: the order in which worker processes take them up.
+_COSTLIEST_FIRST: Final = (
+    "km.png", "episode_map.png", "pa_by_spawn.png", "sir.png", "miller.png", "tbs.png",
+)  # fmt: skip
+
+
+def _render(report: Report, name: str) -> bytes | None:
+    """The PNG of figure ``name``; None when the report holds nothing to draw in it."""
+    fig = _DRAW[name](report)
+    return None if fig is None else _png(fig)
+
+
+def _fork() -> BaseContext | None:
+    """Forked workers (they start with matplotlib imported and the report in memory) where
+    that is safe: on Linux, with no other thread alive; None elsewhere."""
+    safe = sys.platform == "linux" and threading.active_count() == 1
+    return multiprocessing.get_context("fork") if safe else None
+
+
+def render_figures(
+    report: Report, *, processes: int = 1
+) -> tuple[dict[str, bytes], dict[str, str]]:
+    """PNG bytes per figure file name, and for each figure not drawn, why not.
+
+    ``processes`` > 1 draws the figures in that many forked worker processes (where forking
+    is safe, else here), each taking up the next one (costliest first) when it is free: every
+    figure is still drawn once, by the same code, to the same bytes, in less wall time where
+    there are cores to spare."""
+    names = [spec.name for spec in FIGURES]
+    context = _fork() if processes > 1 else None
+    if context is not None:
+        order = sorted(names, key=_COSTLIEST_FIRST.index)
+        with ProcessPoolExecutor(processes, mp_context=context) as pool:
+            done = dict(zip(order, pool.map(_render, [report] * len(order), order), strict=True))
+        pngs = [done[name] for name in names]
+    else:
+        pngs = [_render(report, name) for name in names]
+    drawn = {name: png for name, png in zip(names, pngs, strict=True) if png is not None}
+    return drawn, {name: _WHY_NOT[name] for name in names if name not in drawn}

@@ -15,7 +15,6 @@ from pytest_emrd.report._compare_doc import compare_document
 from pytest_emrd.report._html import render_html
 from pytest_emrd.report._markdown import render_markdown
 from pytest_emrd.report._model import Report
-from pytest_emrd.report._plots import render_figures
 from pytest_emrd.report._sections import report_document, summary_document
 from pytest_emrd.trajectory import Trajectory
 
@@ -47,12 +46,17 @@ def report_json(report: Report) -> str:
     return json.dumps(_json_safe(report.to_dict()), indent=1, allow_nan=False) + "\n"
 
 
-def render_files(report: Report, formats: Iterable[str] = FORMATS) -> dict[str, bytes]:
-    """File name -> content: ``report.md`` with its PNGs, ``report.html``, ``report.json``."""
+def render_files(
+    report: Report, formats: Iterable[str] = FORMATS, *, processes: int = 1
+) -> dict[str, bytes]:
+    """File name -> content: ``report.md`` with its PNGs, ``report.html``, ``report.json``;
+    ``processes`` > 1 draws the figures in that many worker processes (same bytes)."""
     wanted = check_formats(formats)
     files: dict[str, bytes] = {}
     if "md" in wanted or "html" in wanted:
-        pngs, skipped = render_figures(report)
+        from pytest_emrd.report._plots import render_figures  # matplotlib: imported on use
+
+        pngs, skipped = render_figures(report, processes=processes)
         doc = report_document(report, skipped)
         if "md" in wanted:
             files["report.md"] = render_markdown(doc).encode()

@@ -40,6 +40,9 @@ def append_step_summary(text: str) -> bool:
     return True
 
 
-def write_report(report: Report, out_dir: Path, formats: Iterable[str] = FORMATS) -> list[Path]:
-    """Render ``report`` in ``formats`` and write it into ``out_dir``; the paths written."""
-    return write_files(render_files(report, formats), out_dir)
+def write_report(
+    report: Report, out_dir: Path, formats: Iterable[str] = FORMATS, *, processes: int = 1
+) -> list[Path]:
+    """Render ``report`` in ``formats`` (figures drawn in ``processes`` processes) and write it
+    into ``out_dir``; the paths written."""
+    return write_files(render_files(report, formats, processes=processes), out_dir)
