@@ -98,19 +98,33 @@ def spawn_pose(scene: Scene, room: Room, seed: int) -> WorldPose:
     """The seeded start pose in ``room``: a free spot as near its centre as the furniture
     allows, with a seeded cardinal heading."""
     rng = StableRng(f"emrd-spawn:{seed}:{room.name}")
+    gx, gz, d2, order = spawn_grid(room)
+    for clearance in (SPAWN_CLEARANCE, AGENT_RADIUS):
+        ok = spawn_clear(scene, room, gx, gz, clearance)
+        free = order[ok[order]]
+        if free.size:
+            near = free[d2[free] <= SPAWN_RADIUS**2]
+            k = rng.choice((near if near.size else free[:SPAWN_FALLBACK]).tolist())
+            return WorldPose(float(gx[k]), float(gz[k]), rng.choice((0.0, 90.0, 180.0, 270.0)))
+    raise ConfigError(f"room={room.name!r} has no free spot for the agent; the layout is full.")
+
+
+def spawn_grid(room: Room) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Candidate spawn points of ``room`` on the 0.25 m grid: ``x``, ``z``, squared distance
+    to the room's centre, and their indices nearest the centre first (ties by position)."""
     cx, cz = (room.x0 + room.x1) / 2, (room.z0 + room.z1) / 2
     xs = np.arange(room.x0 + AGENT_RADIUS, room.x1 - AGENT_RADIUS + 1e-9, SPAWN_STEP)
     zs = np.arange(room.z0 + AGENT_RADIUS, room.z1 - AGENT_RADIUS + 1e-9, SPAWN_STEP)
     gx, gz = (np.round(g.ravel(), 2) for g in np.meshgrid(xs, zs))
     d2 = (gx - cx) ** 2 + (gz - cz) ** 2
-    order = np.lexsort((gz, gx, d2))  # nearest the centre first, ties by position
-    for clearance in (SPAWN_CLEARANCE, AGENT_RADIUS):
-        ok = ~scene.crowded(gx, gz, clearance)
-        ok &= (gx >= room.x0 + clearance) & (gx <= room.x1 - clearance)
-        ok &= (gz >= room.z0 + clearance) & (gz <= room.z1 - clearance)
-        free = [int(k) for k in order if ok[k]]
-        if free:
-            near = [k for k in free if d2[k] <= SPAWN_RADIUS**2] or free[:SPAWN_FALLBACK]
-            k = rng.choice(near)
-            return WorldPose(float(gx[k]), float(gz[k]), rng.choice((0.0, 90.0, 180.0, 270.0)))
-    raise ConfigError(f"room={room.name!r} has no free spot for the agent; the layout is full.")
+    return gx, gz, d2, np.lexsort((gz, gx, d2))
+
+
+def spawn_clear(
+    scene: Scene, room: Room, gx: np.ndarray, gz: np.ndarray, clearance: float
+) -> np.ndarray:
+    """Which points keep ``clearance`` metres from the room's walls and floor furniture."""
+    ok = ~scene.crowded(gx, gz, clearance)
+    ok &= (gx >= room.x0 + clearance) & (gx <= room.x1 - clearance)
+    ok &= (gz >= room.z0 + clearance) & (gz <= room.z1 - clearance)
+    return ok

@@ -94,10 +94,8 @@ def palette(scene: Scene, params: ConditionParams, seed: int) -> np.ndarray:
     colors = scene.colors.astype(np.int64)
     if not params.randomize_palette:
         return colors
-    rng = StableRng(seed * 7919 + 17)
-    for label in range(WALL0, len(colors)):
-        if not TILE0 <= label < PART0:
-            colors[label] = [rng.integer(20, 235) for _ in range(3)]
+    labels = [label for label in range(WALL0, len(colors)) if not TILE0 <= label < PART0]
+    colors[labels] = StableRng(seed * 7919 + 17).integers(20, 235, (len(labels), 3))
     colors[TILE0:PART0] = np.maximum(colors[FLOOR0:TILE0] - 12, 0)
     return colors
 

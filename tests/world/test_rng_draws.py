@@ -1,0 +1,77 @@
+"""Vectorised seeded draws against the scalar draws they replace: the ``texture`` palette
+and the spawn pose are the same, bit for bit, as one ``integer`` call at a time made them."""
+
+from __future__ import annotations
+
+import numpy as np
+from hypothesis import given
+from hypothesis import strategies as st
+
+from pytest_emrd.world import condition_params, generate_layout, paper_office
+from pytest_emrd.world._motion import (
+    SPAWN_CLEARANCE,
+    SPAWN_FALLBACK,
+    SPAWN_RADIUS,
+    spawn_clear,
+    spawn_grid,
+    spawn_pose,
+)
+from pytest_emrd.world._render import palette
+from pytest_emrd.world._rng import StableRng
+from pytest_emrd.world._scene import AGENT_RADIUS, FLOOR0, PART0, TILE0, WALL0, scene_of
+
+
+@given(
+    st.one_of(st.integers(), st.text(max_size=8)),
+    st.integers(-50, 50),
+    st.integers(0, 300),
+    st.tuples(st.integers(0, 6), st.integers(1, 4)),
+)
+def test_integers_are_as_many_integer_draws(seed, low: int, span: int, shape: tuple) -> None:
+    one_by_one = StableRng(seed)
+    expected = [one_by_one.integer(low, low + span) for _ in range(shape[0] * shape[1])]
+    got = StableRng(seed).integers(low, low + span, shape)
+    assert got.dtype == np.int64 and got.shape == shape
+    assert got.ravel().tolist() == expected
+
+
+def test_integers_worked_example() -> None:
+    rng = StableRng(3)
+    draws = [rng.random() for _ in range(4)]
+    assert StableRng(3).integers(20, 235, (2, 2)).ravel().tolist() == [
+        20 + min(int(r * 216), 215) for r in draws
+    ]
+
+
+@given(st.integers(0, 30), st.integers(0, 10_000))
+def test_texture_palette_is_the_one_draw_at_a_time_palette(layout_seed: int, seed: int) -> None:
+    scene = scene_of(paper_office() if layout_seed == 0 else generate_layout(layout_seed))
+    expected = scene.colors.astype(np.int64)
+    rng = StableRng(seed * 7919 + 17)
+    for label in range(WALL0, len(expected)):
+        if not TILE0 <= label < PART0:
+            expected[label] = [rng.integer(20, 235) for _ in range(3)]
+    expected[TILE0:PART0] = np.maximum(expected[FLOOR0:TILE0] - 12, 0)
+    got = palette(scene, condition_params("texture"), seed)
+    assert got.dtype == expected.dtype and np.array_equal(got, expected)
+
+
+def _spawn_oracle(scene, room, seed: int):  # type: ignore[no-untyped-def]
+    rng = StableRng(f"emrd-spawn:{seed}:{room.name}")
+    gx, gz, d2, order = spawn_grid(room)
+    for clearance in (SPAWN_CLEARANCE, AGENT_RADIUS):
+        ok = spawn_clear(scene, room, gx, gz, clearance)
+        free = [int(k) for k in order if ok[k]]
+        if free:
+            near = [k for k in free if d2[k] <= SPAWN_RADIUS**2] or free[:SPAWN_FALLBACK]
+            k = rng.choice(near)
+            return float(gx[k]), float(gz[k]), rng.choice((0.0, 90.0, 180.0, 270.0))
+    return None
+
+
+@given(st.integers(0, 30), st.integers(0, 3), st.integers(0, 10_000))
+def test_spawn_pose_is_the_draw_at_a_time_spawn(layout_seed: int, room: int, seed: int) -> None:
+    layout = paper_office() if layout_seed == 0 else generate_layout(layout_seed)
+    scene, spawn_room = scene_of(layout), layout.rooms[room]
+    pose = spawn_pose(scene, spawn_room, seed)
+    assert (pose.x, pose.z, pose.heading) == _spawn_oracle(scene, spawn_room, seed)
