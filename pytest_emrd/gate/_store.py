@@ -26,8 +26,6 @@ from functools import cached_property
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Final
 
-from filelock import FileLock, Timeout
-
 from pytest_emrd._atomic import write_bytes_atomic
 from pytest_emrd._scrub import scrub, scrub_bytes
 from pytest_emrd.errors import ProtocolError
@@ -36,6 +34,8 @@ from pytest_emrd.gate._identity import RunIdentity, write_identity
 from pytest_emrd.trajectory import EpisodeSpec, Trajectory
 
 if TYPE_CHECKING:
+    from filelock import FileLock
+
     from pytest_emrd.cassette import EpisodeRun
 
 STORE_SCHEMA: Final = 1
@@ -177,6 +177,10 @@ class ResultsStore:
         return self.reusable(spec) is not None
 
     def _lock(self, spec: EpisodeSpec, *, timeout: float = -1) -> FileLock:
+        """``spec``'s file lock (filelock is imported here: a resume reads finished episodes
+        without taking their locks)."""
+        from filelock import FileLock
+
         lock_path = self.run_dir / "locks" / f"{spec.case_id}.lock"
         lock_path.parent.mkdir(parents=True, exist_ok=True)
         return FileLock(lock_path, timeout=timeout)
@@ -218,6 +222,8 @@ class ResultsStore:
     ) -> bool:
         """Compute and store ``spec`` unless it is stored or being computed by another thread
         or process (never waits); whether this call computed it."""
+        from filelock import Timeout
+
         try:
             with self._lock(spec, timeout=0):
                 if self.reusable(spec) is not None:
