@@ -7,9 +7,10 @@ leaves every correspondence unchanged, because each choice only compares quantit
 rigid motion preserves (distances between written points, distances between ground-truth
 points, squared residuals after a fit).
 
-The two loops every step runs (each entry's nearest open object after a motion, the seeds'
-scores) are compiled (:mod:`._kernels`, numba, loaded on the first match) and give the bits
-of the numpy expressions they replace (oracles: ``tests/metrics/test_align.py``).
+The loops every step runs (each entry's nearest open object after a motion, the optimal
+assignment where two entries want one object, the seeds' scores, the Procrustes fit) are
+compiled (:mod:`._kernels`, numba, loaded on the first match) and give the bits of the numpy
+and scipy expressions they replace (oracles: ``tests/metrics/test_align.py``).
 """
 
 from __future__ import annotations
@@ -145,7 +146,7 @@ def layout_of(points: Sequence[Point], kinds: Sequence[int], scale: float) -> La
 class Problem:
     """One map's recognised entries against the objects still open to them."""
 
-    __slots__ = ("_blocked", "_open", "candidates", "held", "kinds", "layout", "points", "pred")
+    __slots__ = ("_blocked", "_candidates", "held", "kinds", "layout", "open", "points", "pred")
 
     def __init__(
         self,
@@ -163,14 +164,29 @@ class Problem:
         self.layout = layout
         self.held = held
         """Objects open to no entry (held by carried identities)."""
-        cols_of = layout.cols_of
+        mask = layout.free
         if held:
-            gone = set(held)
-            cols_of = {k: tuple(c for c in cols_of.get(k, ()) if c not in gone) for k in kinds}
-        self.candidates = [cols_of.get(k, ()) for k in kinds]
-        """The objects open to each entry, ascending."""
+            mask = mask.copy()
+            mask[list(held)] = True
+        self.open: Objects = (
+            np.array(kinds, dtype=np.intp), layout.starts, layout.cols, layout.true, mask,
+        )  # fmt: skip
+        """The objects open to each entry as the kernels read them (:data:`Objects`)."""
+        self._candidates: list[tuple[int, ...]] | None = None
         self._blocked: np.ndarray | None = None
-        self._open: Objects | None = None
+
+    @property
+    def candidates(self) -> list[tuple[int, ...]]:
+        """The objects open to each entry, ascending."""
+        if self._candidates is None:
+            cols_of = self.layout.cols_of
+            if self.held:
+                gone = set(self.held)
+                cols_of = {
+                    k: tuple(c for c in cols_of.get(k, ()) if c not in gone) for k in self.kinds
+                }
+            self._candidates = [cols_of.get(k, ()) for k in self.kinds]
+        return self._candidates
 
     @property
     def blocked(self) -> np.ndarray:
@@ -182,19 +198,6 @@ class Problem:
                 true_kinds[list(self.held)] = -1
             self._blocked = np.array(self.kinds, dtype=int)[:, None] != true_kinds
         return self._blocked
-
-    @property
-    def open(self) -> Objects:
-        """``candidates`` as the kernels read them (:data:`Objects`)."""
-        if self._open is None:
-            layout = self.layout
-            held = layout.free
-            if self.held:
-                held = held.copy()
-                held[list(self.held)] = True
-            kinds = np.array(self.kinds, dtype=np.intp)
-            self._open = kinds, layout.starts, layout.cols, layout.true, held
-        return self._open
 
 
 def moved(points: np.ndarray, motion: Motion) -> np.ndarray:
@@ -213,20 +216,20 @@ def assign(problem: Problem, motion: Motion) -> Pairs:
     minimum); types where two entries want the same object go through
     :func:`scipy.optimize.linear_sum_assignment`. Squared distances are rounded to
     :data:`TIE_DECIMALS` relative digits; ties go to the lowest object index (id order).
-    Nearest objects and distances: :func:`._kernels.nearest_open`.
+    Computed by :func:`._kernels.assign_open` (scipy's assignment ported step by step, same
+    pairs, ties included); a distance that is not finite leaves it for numpy's matrix and
+    scipy itself.
     """
     dec = digits(problem.layout.scale, 2)
-    finite, found, distances = compiled().nearest_open(problem.pred, *motion, problem.open, dec)
-    d = None
+    finite, found = compiled().assign_open(problem.pred, *motion, problem.open, dec)
     if finite:
-        nearest = found.tolist()
-    else:  # a distance that is not finite: numpy's matrix and argmin decide
-        d = _distance_matrix(problem, moved(problem.pred, motion), dec)
-        # An entry with no object of its type left (every one held by a carried identity) has
-        # an all-inf row, whose argmin would name object 0 of another type: it stays unmatched.
-        open_rows = np.isfinite(d).any(axis=1).tolist()
-        best = d.argmin(axis=1).tolist()
-        nearest = [j if ok else -1 for j, ok in zip(best, open_rows, strict=True)]
+        return tuple([(i, j) for i, j in enumerate(found.tolist()) if j >= 0])
+    d = _distance_matrix(problem, moved(problem.pred, motion), dec)
+    # An entry with no object of its type left (every one held by a carried identity) has
+    # an all-inf row, whose argmin would name object 0 of another type: it stays unmatched.
+    open_rows = np.isfinite(d).any(axis=1).tolist()
+    best = d.argmin(axis=1).tolist()
+    nearest = [j if ok else -1 for j, ok in zip(best, open_rows, strict=True)]
     taken = [j for j in nearest if j >= 0]
     if len(set(taken)) == len(taken):
         return tuple((i, j) for i, j in enumerate(nearest) if j >= 0)
@@ -240,15 +243,10 @@ def assign(problem: Problem, motion: Motion) -> Pairs:
             clash.add(kinds[i])
         seen[j] = i
     pairs = [(i, j) for i, j in enumerate(nearest) if j >= 0 and kinds[i] not in clash]
-    start = [0, *itertools.accumulate(map(len, problem.candidates))]
     for k in sorted(clash):
         rows = [i for i, kind in enumerate(kinds) if kind == k]
         cols = list(problem.candidates[rows[0]])
-        if d is None:  # the type's block of the matrix, from the pairs' distances
-            block = np.array([distances[start[i] : start[i + 1]] for i in rows])
-        else:
-            block = d[rows][:, cols]
-        r, c = linear_sum_assignment(block)
+        r, c = linear_sum_assignment(d[rows][:, cols])
         pairs += ((rows[i], cols[j]) for i, j in zip(r.tolist(), c.tolist(), strict=True))
     return tuple(sorted(pairs))
 

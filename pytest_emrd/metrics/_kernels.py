@@ -242,3 +242,150 @@ def best_seed_index(seeds: np.ndarray, pred: np.ndarray, objects: Objects, decim
         if score < low:
             best, low = q, score
     return best
+
+
+@_jit
+def linear_sum_assignment(cost: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`scipy.optimize.linear_sum_assignment` of a finite ``cost`` (nr x nc, no NaN):
+    ``(rows, cols)``, rows ascending, the same pairs as scipy's for every matrix, ties included.
+
+    scipy's ``rectangular_lsap.cpp`` step by step (Crouse's shortest augmenting path, the
+    Jonker-Volgenant variant without initialisation): a tall matrix is solved transposed;
+    each row in turn grows a shortest path over the columns not yet scanned, taken in the
+    order ``nc - 1, ..., 0`` then as swapped-in, the first least reduced cost winning except
+    that a free column wins an equal cost; duals updated as scipy does, in its float order
+    (``min + c - u - v``, no multiplication so nothing to fuse). Returns two empty arrays
+    when no assignment is feasible (scipy raises; an infinite cost only).
+    """
+    nr, nc = cost.shape
+    none = np.empty(0, dtype=np.intp)
+    if nr == 0 or nc == 0:
+        return none, none
+    transpose = nc < nr
+    c = np.ascontiguousarray(cost.T) if transpose else cost
+    if transpose:
+        nr, nc = nc, nr
+    u = np.zeros(nr)
+    v = np.zeros(nc)
+    shortest = np.empty(nc)
+    path = np.full(nc, -1, dtype=np.intp)
+    col4row = np.full(nr, -1, dtype=np.intp)
+    row4col = np.full(nc, -1, dtype=np.intp)
+    scanned_rows = np.zeros(nr, dtype=np.bool_)
+    scanned_cols = np.zeros(nc, dtype=np.bool_)
+    remaining = np.empty(nc, dtype=np.intp)
+    for current in range(nr):
+        least = 0.0
+        left = nc
+        for it in range(nc):
+            remaining[it] = nc - it - 1
+        scanned_rows[:] = False
+        scanned_cols[:] = False
+        shortest[:] = np.inf
+        sink = -1
+        i = current
+        while sink == -1:
+            index = -1
+            lowest = np.inf
+            scanned_rows[i] = True
+            for it in range(left):
+                j = remaining[it]
+                r = least + c[i, j] - u[i] - v[j]
+                if r < shortest[j]:
+                    path[j] = i
+                    shortest[j] = r
+                if shortest[j] < lowest or (shortest[j] == lowest and row4col[j] == -1):
+                    lowest = shortest[j]
+                    index = it
+            least = lowest
+            if least == np.inf:
+                return none, none
+            j = remaining[index]
+            if row4col[j] == -1:
+                sink = j
+            else:
+                i = row4col[j]
+            scanned_cols[j] = True
+            left -= 1
+            remaining[index] = remaining[left]
+        u[current] += least
+        for i in range(nr):
+            if scanned_rows[i] and i != current:
+                u[i] += least - shortest[col4row[i]]
+        for j in range(nc):
+            if scanned_cols[j]:
+                v[j] -= least - shortest[j]
+        j = sink
+        while True:
+            i = path[j]
+            row4col[j] = i
+            col4row[i], j = j, col4row[i]
+            if i == current:
+                break
+    if transpose:
+        order = np.argsort(col4row)  # distinct values: every sort gives scipy's order
+        return col4row[order], order.astype(np.intp)
+    return np.arange(nr), col4row
+
+
+@_jit
+def assign_open(
+    pred: np.ndarray,
+    c: float,
+    s: float,
+    tx: float,
+    tz: float,
+    objects: Objects,
+    decimals: int,
+) -> tuple[bool, np.ndarray]:
+    """:func:`._align.assign` after the motion ``(c, s, tx, tz)`` (arguments as
+    :func:`nearest_open`): each entry's object, -1 for none.
+
+    Each entry takes its nearest open object (:func:`nearest_open`); for the types where two
+    entries share one, the type's entries (in entry order) and open objects (ascending) go
+    through :func:`linear_sum_assignment` on their rounded squared distances. Returns
+    ``(finite, objects)``; ``finite`` False as in :func:`nearest_open` (nothing decided).
+    """
+    finite, nearest, distances = nearest_open(pred, c, s, tx, tz, objects, decimals)
+    if not finite:
+        return False, nearest
+    kinds, starts, cols, true, held = objects
+    n = nearest.shape[0]
+    owner = np.full(true.shape[0], -1, dtype=np.intp)
+    clash = np.zeros(starts.shape[0] - 1, dtype=np.bool_)
+    clashes = False
+    for i in range(n):
+        j = nearest[i]
+        if j >= 0:
+            if owner[j] >= 0:
+                clash[kinds[i]] = True
+                clashes = True
+            owner[j] = i
+    if not clashes:
+        return True, nearest
+    # where each entry's distances start: entries before it, one per object open to them
+    open_count = np.zeros(starts.shape[0] - 1, dtype=np.intp)
+    for k in range(open_count.shape[0]):
+        for j in cols[starts[k] : starts[k + 1]]:
+            if not held[j]:
+                open_count[k] += 1
+    start = np.empty(n, dtype=np.intp)
+    at = 0
+    for i in range(n):
+        start[i] = at
+        at += open_count[kinds[i]]
+    for k in range(clash.shape[0]):
+        if not clash[k]:
+            continue
+        rows = np.array([i for i in range(n) if kinds[i] == k], dtype=np.intp)
+        free = np.array([j for j in cols[starts[k] : starts[k + 1]] if not held[j]], dtype=np.intp)
+        width = free.shape[0]
+        block = np.empty((rows.shape[0], width))
+        for r in range(rows.shape[0]):
+            block[r] = distances[start[rows[r]] : start[rows[r]] + width]
+        for i in rows:
+            nearest[i] = -1
+        r_of, c_of = linear_sum_assignment(block)
+        for q in range(r_of.shape[0]):
+            nearest[rows[r_of[q]]] = free[c_of[q]]
+    return True, nearest

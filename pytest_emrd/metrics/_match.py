@@ -186,6 +186,7 @@ class Matcher:
         self._kind_of = self._true_kinds.tolist()
         self._count = np.bincount(self._true_kinds, minlength=len(self._types.names)).tolist()
         self._first = [self._kind_of.index(k) if n else -1 for k, n in enumerate(self._count)]
+        self._once = [n == 1 for n in self._count]
         self._layout = layout_of([(o.x, o.z) for o in ordered], self._kind_of, _extent(self._true))
         self._done: dict[Key, tuple[dict[str, int], bool]] = {}
         self._anchor_fits: dict[tuple[tuple[int, float, float], ...], Motion] = {}
@@ -197,34 +198,39 @@ class Matcher:
         are determined by the same anchors, its identities are carried (step 4).
         """
         seen: dict[str, MapEntry] = {}
-        type_of: dict[str, int] = {}
-        unrecognised: list[str] = []
-        resolve, known = self._types.resolve, self._types.known
         for e in entries:
-            label = e.label
-            if label in seen:
-                continue
-            seen[label] = e
-            k = known.get((e.object_type, label))
-            if k is None:
-                k = resolve(e.object_type, label)
-            if k < 0:
-                unrecognised.append(label)
-            else:
-                type_of[label] = k
+            if e.label not in seen:
+                seen[e.label] = e
         duplicates: tuple[str, ...] = ()
         if len(seen) != len(entries):
             counts = Counter(e.label for e in entries)
             duplicates = tuple(sorted(lb for lb, n in counts.items() if n > 1))
-        key = tuple([(lb, k, float(e.x), float(e.z))
-                     for lb, k in sorted(type_of.items()) for e in (seen[lb],)])  # fmt: skip
-        count = self._count
+        resolve, known = self._types.resolve, self._types.known
+        type_of: dict[str, int] = {}
+        unrecognised: list[str] = []  # sorted, as the labels are visited
+        rows: list[int] = []  # anchor candidates: entries of a type the layout holds once
+        key_list: list[tuple[str, int, float, float]] = []
+        once = self._once
+        for lb in sorted(seen):
+            e = seen[lb]
+            k = known.get((e.object_type, lb))
+            if k is None:
+                k = resolve(e.object_type, lb)
+            if k < 0:
+                unrecognised.append(lb)
+                continue
+            type_of[lb] = k
+            if once[k]:
+                rows.append(len(key_list))
+            key_list.append((lb, k, float(e.x), float(e.z)))
+        key = tuple(key_list)
         # anchors: the only entry of a type the layout holds once
-        singles = [r for r, entry in enumerate(key) if count[entry[1]] == 1]
-        kinds = [key[r][1] for r in singles]
-        rows = [r for r, k in zip(singles, kinds, strict=True) if kinds.count(k) == 1]
+        if len(rows) >= 2:
+            kinds = [key[r][1] for r in rows]
+            if len(set(kinds)) != len(kinds):
+                rows = [r for r, k in zip(rows, kinds, strict=True) if kinds.count(k) == 1]
         determined = len(rows) >= 2 and _spread([key[r][2:] for r in rows]) > COINCIDENT_M
-        anchors = frozenset(key[r][0] for r in rows) if determined else frozenset()
+        anchors = frozenset([key[r][0] for r in rows]) if determined else frozenset()
         if (
             determined
             and previous is not None
@@ -250,7 +256,7 @@ class Matcher:
             identity = done[0]
         unmatched = tuple([entry[0] for entry in key if entry[0] not in identity])
         return Assignment(
-            seen, identity, unmatched, tuple(sorted(unrecognised)), duplicates, determined,
+            seen, identity, unmatched, tuple(unrecognised), duplicates, determined,
             anchors,
         )  # fmt: skip
 

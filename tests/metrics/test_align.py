@@ -166,6 +166,40 @@ def test_assign_on_pairs_is_the_matrix_assignment(case: tuple[Problem, Motion]) 
     assert assign(problem, motion) == _assign_dense(problem, motion)
 
 
+costs = st.integers(1, 7).flatmap(
+    lambda nr: st.integers(1, 7).flatmap(
+        lambda nc: st.one_of(
+            st.lists(st.integers(0, 3).map(float), min_size=nr * nc, max_size=nr * nc),
+            st.lists(
+                st.floats(0, 1e4, allow_nan=False).map(lambda x: round(x, 3)),
+                min_size=nr * nc,
+                max_size=nr * nc,
+            ),
+        ).map(lambda values: np.array(values).reshape(nr, nc))
+    )
+)
+
+
+@given(costs)
+def test_compiled_assignment_is_scipys_including_ties(cost: np.ndarray) -> None:
+    # small integer costs tie often: scipy's choice among equal optima must be kept too
+    from scipy.optimize import linear_sum_assignment
+
+    rows, cols = _kernels.linear_sum_assignment(cost)
+    want_rows, want_cols = linear_sum_assignment(cost)
+    assert (rows.tolist(), cols.tolist()) == (want_rows.tolist(), want_cols.tolist())
+
+
+def test_compiled_assignment_worked_example() -> None:
+    # scipy's docstring example; a constant matrix gives the identity; a tall one transposes
+    rows, cols = _kernels.linear_sum_assignment(np.array([[4.0, 1, 3], [2, 0, 5], [3, 2, 2]]))
+    assert (rows.tolist(), cols.tolist()) == ([0, 1, 2], [1, 0, 2])
+    rows, cols = _kernels.linear_sum_assignment(np.ones((3, 3)))
+    assert cols.tolist() == [0, 1, 2]
+    rows, cols = _kernels.linear_sum_assignment(np.array([[5.0], [1.0], [3.0]]))
+    assert (rows.tolist(), cols.tolist()) == ([1], [0])
+
+
 @given(problems(), st.sampled_from([math.inf, -math.inf, math.nan]))
 def test_a_point_not_finite_is_assigned_by_the_matrix(
     case: tuple[Problem, Motion], bad: float
