@@ -267,12 +267,33 @@ def _sse(problem: Problem, pairs: Pairs) -> tuple[float, Motion]:
     return round(sse, digits(problem.layout.scale, 2)), Motion(c, s, tx, tz)
 
 
+@functools.cache
+def zero_below(decimals: int) -> float:
+    """The largest float ``x`` with ``round(x, decimals) == 0.0`` (Python's correctly rounded
+    ``round``): a non-negative ``x`` rounds to zero exactly when ``x <= zero_below(decimals)``,
+    which a compiled loop can test."""
+    x = 0.5 * 10.0**-decimals
+    while round(x, decimals) != 0.0:
+        x = math.nextafter(x, 0.0)
+    while round(math.nextafter(x, math.inf), decimals) == 0.0:
+        x = math.nextafter(x, math.inf)
+    return x
+
+
 def refine(problem: Problem, seed: Motion) -> Pairs:
     """Alternate :func:`assign` and Procrustes refit from ``seed`` (ICP with known types).
 
     Each round lowers (or keeps) the sum of squared residuals; stops when the assignment
-    repeats, when the fit is exact, or after :data:`MAX_ROUNDS`.
+    repeats, when the fit is exact (the residual rounds to zero), or after
+    :data:`MAX_ROUNDS`. Run by :func:`._kernels.refine`; a distance that is not finite
+    leaves it for the same loop over :func:`assign` here.
     """
+    dec = digits(problem.layout.scale, 2)
+    finite, found = compiled().refine(
+        problem.pred, *seed, problem.open, dec, zero_below(dec), MAX_ROUNDS
+    )
+    if finite:
+        return tuple([(i, j) for i, j in enumerate(found.tolist()) if j >= 0])
     pairs = assign(problem, seed)
     for _ in range(MAX_ROUNDS):
         if not pairs:

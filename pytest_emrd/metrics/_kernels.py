@@ -389,3 +389,57 @@ def assign_open(
         for q in range(r_of.shape[0]):
             nearest[rows[r_of[q]]] = free[c_of[q]]
     return True, nearest
+
+
+@_jit
+def refine(
+    pred: np.ndarray,
+    c: float,
+    s: float,
+    tx: float,
+    tz: float,
+    objects: Objects,
+    decimals: int,
+    zero_at: float,
+    rounds: int,
+) -> tuple[bool, np.ndarray]:
+    """:func:`._align.refine` from the seed ``(c, s, tx, tz)``: :func:`assign_open`, then up to
+    ``rounds`` times the :func:`fit` of the pairs and :func:`assign_open` again, stopping when
+    no entry is assigned, when the residual rounds to zero (``<= zero_at``,
+    :func:`._align.zero_below`) or when the assignment repeats. Returns ``(finite, objects)``
+    as :func:`assign_open` (``finite`` False: some round met a distance that is not finite).
+    """
+    finite, pairs = assign_open(pred, c, s, tx, tz, objects, decimals)
+    if not finite:
+        return False, pairs
+    true = objects[3]
+    n = pairs.shape[0]
+    for _ in range(rounds):
+        k = 0
+        for i in range(n):
+            if pairs[i] >= 0:
+                k += 1
+        if k == 0:
+            break
+        index = np.empty((k, 2), dtype=np.intp)
+        k = 0
+        for i in range(n):
+            if pairs[i] >= 0:
+                index[k, 0] = i
+                index[k, 1] = pairs[i]
+                k += 1
+        c, s, tx, tz, sse = fit(pred, true, index)
+        if sse <= zero_at:
+            break
+        finite, again = assign_open(pred, c, s, tx, tz, objects, decimals)
+        if not finite:
+            return False, again
+        same = True
+        for i in range(n):
+            if again[i] != pairs[i]:
+                same = False
+                break
+        if same:
+            break
+        pairs = again
+    return True, pairs

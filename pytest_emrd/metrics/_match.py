@@ -229,7 +229,7 @@ class Matcher:
             kinds = [key[r][1] for r in rows]
             if len(set(kinds)) != len(kinds):
                 rows = [r for r, k in zip(rows, kinds, strict=True) if kinds.count(k) == 1]
-        determined = len(rows) >= 2 and _spread([key[r][2:] for r in rows]) > COINCIDENT_M
+        determined = len(rows) >= 2 and _apart([key[r][2:] for r in rows])
         anchors = frozenset([key[r][0] for r in rows]) if determined else frozenset()
         if (
             determined
@@ -283,7 +283,7 @@ class Matcher:
         """The fit of known ``(entry row, object)`` pairs: Procrustes of two or more distinct
         points, the translation of one; None when the points coincide (no direction)."""
         written = problem.points
-        if len(pairs) == 1 or _spread([written[r] for r, _ in pairs]) <= COINCIDENT_M:
+        if len(pairs) == 1 or not _apart([written[r] for r, _ in pairs]):
             if len({c for _, c in pairs}) != 1:
                 return None
             (r, c), *_ = pairs
@@ -345,9 +345,11 @@ def _extent(xy: np.ndarray) -> float:
     return float(np.max(np.hypot(*(xy - xy.mean(axis=0)).T)))
 
 
-def _spread(points: Sequence[tuple[float, float]]) -> float:
-    """Largest distance of a point from the first: 0.0 when all coincide (rigid-invariant)."""
-    return max(math.dist(points[0], p) for p in points)
+def _apart(points: Sequence[tuple[float, float]]) -> bool:
+    """Whether some point lies farther than :data:`COINCIDENT_M` from the first (the points do
+    not all coincide; rigid-invariant)."""
+    p0 = points[0]
+    return any(math.dist(p0, p) > COINCIDENT_M for p in points)
 
 
 def step_matchings(

@@ -34,7 +34,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from pytest_emrd.metrics._match import EMPTY_MATCHING, Assignment, Matcher, Matching
-from pytest_emrd.trajectory import Trajectory
+from pytest_emrd.trajectory import MapEntry, Trajectory
 
 
 @dataclass(frozen=True)
@@ -125,20 +125,24 @@ def track_episode(traj: Trajectory) -> Track:
     held: list[dict[str, str]] = []
     tbs: list[float] = []
     first_pos: dict[str, tuple[float, float]] = {}
-    written: list[dict[str, int]] = []
+    written: list[dict[str, MapEntry]] = []
+    loads: list[int] = []
+    forgets: list[bool] = []
     assignment: Assignment | None = None
     for step in traj.steps:
-        order: dict[str, int] = {}
-        for e in step.cognitive_map:
-            first_pos.setdefault(e.label, (e.x, e.z))
-            order.setdefault(e.label, len(order))
-        written.append(order)
         assignment = matcher.assign(step.cognitive_map, assignment)
+        entries = assignment.entries  # label -> its first entry, in the model's order
+        for lb, e in entries.items():
+            if lb not in first_pos:
+                first_pos[lb] = (e.x, e.z)
+        if written and written[-1]:  # Miller: m = |M_{t-1}| distinct labels, M_{t-1} \ M_t
+            loads.append(len(written[-1]))
+            forgets.append(not written[-1].keys() <= entries.keys())
+        written.append(entries)
         held.append(matcher.held(assignment))
         if g_base:
             tbs.append(_tbs_value(assignment, first_pos, scale, g_base))
     discovery = _discovery(held, written)
-    loads, forgets = _miller(traj)
     final = matcher.matching(assignment) if assignment is not None else EMPTY_MATCHING
     return Track(
         held=tuple(held),
@@ -146,21 +150,27 @@ def track_episode(traj: Trajectory) -> Track:
         spells=_spells(traj, held, category, discovery),
         discovery=discovery,
         tbs=tuple(tbs),
-        miller_loads=loads,
-        miller_forgets=forgets,
+        miller_loads=tuple(loads),
+        miller_forgets=tuple(forgets),
         visits=_visits([s.room for s in traj.steps]),
     )
 
 
-def _discovery(held: list[dict[str, str]], written: list[dict[str, int]]) -> dict[str, int]:
-    """Object id -> discovery rank: by first step held, then by entry order in that map."""
-    first: dict[str, tuple[int, int]] = {}
+def _discovery(held: list[dict[str, str]], written: list[dict[str, MapEntry]]) -> dict[str, int]:
+    """Object id -> discovery rank: by first step held, then by entry order in that map
+    (``written[t]``: the labels of ``M_t`` in the order the model wrote them)."""
+    first: dict[str, tuple[int, str]] = {}
     for t, h in enumerate(held):
         for oid, label in h.items():
             if oid not in first:
-                first[oid] = (t, written[t][label])
-    order = sorted(first, key=first.__getitem__)
-    return {oid: rank for rank, oid in enumerate(order, start=1)}
+                first[oid] = (t, label)
+    order: dict[int, dict[str, int]] = {}
+    for t, _ in first.values():
+        if t not in order:
+            order[t] = {lb: i for i, lb in enumerate(written[t])}
+    when = {oid: (t, order[t][label]) for oid, (t, label) in first.items()}
+    ranked = sorted(when, key=when.__getitem__)
+    return {oid: rank for rank, oid in enumerate(ranked, start=1)}
 
 
 def _spells(
@@ -210,19 +220,6 @@ def _tbs_value(
         drift += math.hypot(e.x - x0, e.z - z0)
     n = len(a.identity)
     return exp_ratio(drift / n, scale) * min(n, g_base) / g_base
-
-
-def _miller(traj: Trajectory) -> tuple[tuple[int, ...], tuple[bool, ...]]:
-    loads: list[int] = []
-    forgets: list[bool] = []
-    prev: set[str] | None = None
-    for step in traj.steps:
-        labels = {e.label for e in step.cognitive_map}
-        if prev:
-            loads.append(len(prev))
-            forgets.append(bool(prev - labels))
-        prev = labels
-    return tuple(loads), tuple(forgets)
 
 
 def _visits(rooms: list[str]) -> tuple[RoomVisits, ...]:

@@ -15,6 +15,7 @@ from hypothesis import strategies as st
 
 from pytest_emrd.metrics import _kernels
 from pytest_emrd.metrics._align import (
+    MAX_ROUNDS,
     Motion,
     Problem,
     _distance_matrix,
@@ -24,6 +25,8 @@ from pytest_emrd.metrics._align import (
     layout_of,
     moved,
     procrustes,
+    refine,
+    zero_below,
 )
 
 finite = st.floats(-1e6, 1e6, allow_nan=False, allow_infinity=False)
@@ -198,6 +201,30 @@ def test_compiled_assignment_worked_example() -> None:
     assert cols.tolist() == [0, 1, 2]
     rows, cols = _kernels.linear_sum_assignment(np.array([[5.0], [1.0], [3.0]]))
     assert (rows.tolist(), cols.tolist()) == ([1], [0])
+
+
+@given(problems())
+def test_compiled_refine_is_the_loop_over_assign_and_fit(case: tuple[Problem, Motion]) -> None:
+    problem, seed = case
+    pairs = assign(problem, seed)  # oracle: the loop as written over the checked pieces
+    for _ in range(MAX_ROUNDS):
+        if not pairs:
+            break
+        c, s, tx, tz, sse = fit(problem.pred, problem.layout.true, pairs)
+        if round(sse, 7) == 0.0:
+            break
+        again = assign(problem, Motion(c, s, tx, tz))
+        if again == pairs:
+            break
+        pairs = again
+    assert refine(problem, seed) == pairs
+
+
+@given(st.integers(-3, 15))
+def test_zero_below_is_where_pythons_round_leaves_zero(decimals: int) -> None:
+    x = zero_below(decimals)
+    assert round(x, decimals) == 0.0
+    assert round(math.nextafter(x, math.inf), decimals) != 0.0
 
 
 @given(problems(), st.sampled_from([math.inf, -math.inf, math.nan]))
