@@ -74,6 +74,21 @@ _COMMENT = r"//[^\n]*|/\*.*?(?:\*/|\Z)"
 _INSIDE = re.compile(rf"{_STRING}|{_COMMENT}|[{{}}]", re.DOTALL)
 _COMMENTS = re.compile(rf"({_STRING})|{_COMMENT}", re.DOTALL)
 _TRAILING_COMMAS = re.compile(rf"({_STRING})|,(?=\s*[}}\]])", re.DOTALL)
+#: Where a comment or a trailing comma could be (in a string or not): without one, there is none.
+_MAYBE_COMMENT = re.compile(r"//|/\*")
+_MAYBE_TRAILING_COMMA = re.compile(r",\s*[}\]]")
+_DECODER = json.JSONDecoder()
+
+
+def _json_end(text: str, start: int) -> int | None:
+    """Where the JSON object starting at ``start`` ends, if it is valid JSON. Its span is then
+    the one the token scan of :func:`_balanced_objects` finds (JSON strings are the scan's
+    double-quoted strings, and JSON has no other quote, no comment, no unpaired brace), at C
+    speed: most replies are valid JSON, in a fence or after prose or not."""
+    try:
+        return _DECODER.raw_decode(text, start)[1]
+    except (ValueError, RecursionError):
+        return None
 
 
 def _balanced_objects(text: str) -> list[tuple[int, int]]:
@@ -83,6 +98,11 @@ def _balanced_objects(text: str) -> list[tuple[int, int]]:
     spans: list[tuple[int, int]] = []
     start = text.find("{")
     while start >= 0:
+        end = _json_end(text, start)
+        if end is not None:
+            spans.append((start, end))
+            start = text.find("{", end)
+            continue
         depth, at = 1, start + 1
         while depth and (token := _INSIDE.search(text, at)) is not None:
             at = token.end()
@@ -110,8 +130,10 @@ def _strip_comments_and_commas(text: str) -> tuple[str, tuple[str, ...]]:
 
         return sub
 
-    text = _COMMENTS.sub(drop("comment", " "), text)
-    text = _TRAILING_COMMAS.sub(drop("trailing_comma", ""), text)
+    if _MAYBE_COMMENT.search(text):
+        text = _COMMENTS.sub(drop("comment", " "), text)
+    if _MAYBE_TRAILING_COMMA.search(text):
+        text = _TRAILING_COMMAS.sub(drop("trailing_comma", ""), text)
     return text, tuple(r for r in REPAIRS if r in found)
 
 
