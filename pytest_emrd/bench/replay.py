@@ -28,9 +28,11 @@
   episodes) against what plain vcrpy stores for the same traffic (YAML, base64 frames kept,
   no redaction): each episode is replayed from its cassette while the HTTP requests the agent
   really sends and the responses it gets are captured, then written with vcrpy's own YAML
-  serialiser. Total plain bytes over total committed bytes (plain vcrpy would also keep the
-  server's volatile response headers, which replay does not reproduce: the ratio is, if
-  anything, low). Target 500.
+  serialiser. Total plain bytes over total committed bytes plus, once, the compressed size
+  of the texts pytest-emrd ships for cassettes to name instead of storing (the system
+  prompt, :mod:`pytest_emrd.cassette._shared`): a replay needs them too. Plain vcrpy would
+  also keep the server's volatile response headers, which replay does not reproduce: the
+  ratio is, if anything, low. Target 500.
 * ``replay.step_overhead_ms`` — per request of a replayed episode, through the real client:
   body encoding, redaction, vcrpy matching, response rebuild and JSON parse (a replay sends
   each frame as its pixel digest: no JPEG, no frame registration); no world, no agent logic.
@@ -54,11 +56,13 @@ import numpy as np
 
 from pytest_emrd.bench import Figure, median_seconds, paired_ratio, python_env, run_timed
 from pytest_emrd.cassette import (
+    SUFFIX,
     cassette_path,
     clear_caches,
     decode,
     episode_cassette,
     run_with_cassette,
+    shipped_bytes,
 )
 from pytest_emrd.trajectory import CONDITIONS, EpisodeSpec, Trajectory
 
@@ -168,7 +172,7 @@ def _grid_seconds(repeat: int) -> tuple[float, float, float, float, float]:
 
 
 def _committed_sizes() -> tuple[float, float, int]:
-    paths = sorted((CASSETTES / "scout").rglob("*.yaml.gz"))
+    paths = sorted((CASSETTES / "scout").rglob(f"*{SUFFIX}"))
     if not paths:
         raise RuntimeError(f"no scout cassettes under {CASSETTES}; record them first")
     sizes = [p.stat().st_size / 1024 for p in paths]
@@ -196,7 +200,8 @@ def plain_vcrpy_yaml(exchanges: list[tuple[httpx.Request, httpx.Response]]) -> s
 
 
 def _size_ratio(specs: tuple[EpisodeSpec, ...]) -> float:
-    plain = ours = 0
+    plain = 0
+    ours = shipped_bytes()  # the texts cassettes name instead of storing, counted once
     for spec in specs:
         capture = _Capture()
         client = _scout_client(capture)

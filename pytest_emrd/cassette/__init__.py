@@ -1,4 +1,4 @@
-"""Cassettes: one gzip-compressed, redacted, content-addressed vcrpy cassette per episode.
+"""Cassettes: one xz-compressed, redacted, content-addressed vcrpy cassette per episode.
 
 ``run_with_cassette`` is the entry point; the rest is exported for tools and tests.
 """
@@ -14,9 +14,17 @@ from pytest_emrd.cassette._episode import (
     is_live,
     run_with_cassette,
 )
-from pytest_emrd.cassette._format import CassetteData, FormatError, decode, encode
+from pytest_emrd.cassette._format import (
+    CassetteData,
+    FormatError,
+    NewerFormatError,
+    decode,
+    encode,
+)
 from pytest_emrd.cassette._network import network_blocked
 from pytest_emrd.cassette._paths import (
+    LEGACY_SUFFIX,
+    SUFFIX,
     Invocation,
     cassette_path,
     missing_cassettes,
@@ -32,6 +40,8 @@ from pytest_emrd.cassette._redact import (
     redact_body,
 )
 from pytest_emrd.cassette._routing import routing
+from pytest_emrd.cassette._shared import shipped_bytes
+from pytest_emrd.cassette._upgrade import Upgraded, legacy_files, same_traffic, upgrade
 from pytest_emrd.cassette._use import (
     EpisodeCassette,
     clear_caches,
@@ -41,7 +51,9 @@ from pytest_emrd.cassette._use import (
 )
 
 __all__ = [
+    "LEGACY_SUFFIX",
     "SECRET_HEADERS",
+    "SUFFIX",
     "AgentRunner",
     "CassetteData",
     "EpisodeCassette",
@@ -52,7 +64,9 @@ __all__ = [
     "FrameDriftWarning",
     "Invocation",
     "MatchKeys",
+    "NewerFormatError",
     "Redacted",
+    "Upgraded",
     "agent_runner",
     "canonical_json",
     "cassette_path",
@@ -63,6 +77,7 @@ __all__ = [
     "first_difference",
     "is_live",
     "keep_response",
+    "legacy_files",
     "match_keys",
     "missing_cassettes",
     "missing_summary",
@@ -72,4 +87,7 @@ __all__ = [
     "redact_request",
     "routing",
     "run_with_cassette",
+    "same_traffic",
+    "shipped_bytes",
+    "upgrade",
 ]

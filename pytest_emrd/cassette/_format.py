@@ -1,4 +1,4 @@
-"""The cassette file format: content-addressed YAML inside gzip (pure encode/decode).
+"""The cassette file format: content-addressed YAML inside xz (pure encode/decode).
 
 (The layout below is shown in block style for reading; files are written in YAML's
 JSON-compatible flow style, see :func:`encode`.)
@@ -9,13 +9,15 @@ requests. So the file holds a table of distinct strings and everything else refe
 
 .. code-block:: yaml
 
-    format: emrd-cassette/1
+    format: emrd-cassette/2
     protocol: "builtin-4+p2"       # world + prompt protocol the traffic was recorded under
-    strings:                       # each distinct long string once (prompt, reply, digest)
-      - "You are an autonomous emergency responder ..."
+    strings:                       # each distinct long string once (reply, user text, digest)
+      - "pixels:24bcfde163e2140cffae7feb506edf907154d0cab0aab706b4487f4a0fcd5519"
+      - '{"observation":"8 objects in view.","dedup_check":"8 new, 0 already mapped.",...}'
+      - {from: cebd7bac61aaf8a8, edit: [0, 3431]}   # the system prompt, which pytest-emrd ships
       - ...
     templates:                     # each distinct message once; "\u0000N" = strings[N]
-      - '{"content":"\\u00000","role":"system"}'
+      - '{"content":"\\u00002","role":"system"}'
       - ...
     interactions:
       - request:
@@ -29,7 +31,7 @@ requests. So the file holds a table of distinct strings and everything else refe
         response:
           status: {code: 200, message: OK}
           headers: {content-type: [application/json]}
-          body: {json: '{"choices":[{"message":{"content":"\\u00005"}}]}', mode: compact}
+          body: {json: '{"choices":[{"message":{"content":"\\u00001"}}]}', mode: compact}
 
 Request bodies are stored already redacted and canonical (see :mod:`._redact`): each item of
 a top-level list (``messages``, ``contents``...) is one template, so a message repeated
@@ -38,8 +40,20 @@ Inside templates and response bodies every string of 48 characters or more is re
 a reference (NUL + index into ``strings``), so a reply text is stored once for its response
 and for all the requests that carry it back. Loading rebuilds the canonical bytes
 exactly (canonical JSON is a fixed point of parse + serialise); a JSON response is stored as
-a tree only when compact serialisation reproduces its bytes exactly, else verbatim. Gzip
-runs with ``mtime=0`` so the same traffic always gives the same file bytes.
+a tree only when compact serialisation reproduces its bytes exactly, else verbatim.
+
+A string of the table is either the string or ``{from, edit}``: an edit script over a text
+pytest-emrd ships (:mod:`._shared`), which is how the 3.4 KB system prompt every cassette
+carries costs a few bytes. The document is compressed with xz (LZMA2, 1 MiB dictionary,
+CRC32 check, no timestamp), so the same traffic always gives the same file bytes and
+``xz -dc ep00.yaml.xz`` shows it.
+
+Format ``emrd-cassette/1`` (files ``.yaml.gz``, written before) is the same document without
+``{from, edit}`` entries, in gzip: :func:`decode` reads both, telling the container by its
+magic bytes. Against format 1, the committed cassettes shrank by 36 %: LZMA2 took 13.5 %, the
+shipped system prompt 24 %. Storing each reply as an edit of the previous one, the obvious
+next step, was measured and rejected: LZMA2 already finds those copies across the whole
+file, and an edit script's numbers cost more than its matches (+8.6 % bytes).
 """
 
 from __future__ import annotations
@@ -47,6 +61,7 @@ from __future__ import annotations
 import base64
 import gzip
 import json
+import lzma
 import re
 import zlib
 from collections.abc import Sequence
@@ -58,8 +73,21 @@ from vcr.request import Request
 
 from pytest_emrd._wire import encoder, key_json, splice
 from pytest_emrd.cassette._redact import DIGEST, canonical_json
+from pytest_emrd.cassette._shared import NewerTextError, pack, unpack
+from pytest_emrd.errors import CassetteError
 
-FORMAT: Final = "emrd-cassette/1"
+FORMAT: Final = "emrd-cassette/2"
+#: What :func:`encode` wrote before (gzip, every string stored): still read.
+LEGACY_FORMAT: Final = "emrd-cassette/1"
+_FAMILY: Final = "emrd-cassette/"
+_XZ_MAGIC: Final = b"\xfd7zXZ\x00"
+_GZIP_MAGIC: Final = b"\x1f\x8b"
+#: LZMA2 at its strongest setting, with no 4-byte alignment assumed (``pb=0``: the document
+#: is text); a 1 MiB dictionary holds a whole cassette (the largest committed one is 0.4 MB of
+#: text) and keeps the reader's buffer small.
+_XZ_FILTERS: Final = (
+    {"id": lzma.FILTER_LZMA2, "preset": 9 | lzma.PRESET_EXTREME, "dict_size": 1 << 20, "pb": 0},
+)
 _B64: Final = "base64:"
 _REF: Final = "\x00"
 #: Strings at least this long are stored once in the table and referenced from the trees.
@@ -70,6 +98,11 @@ _Loader = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
 
 class FormatError(ValueError):
     """The bytes are not an EMRD cassette; the message says which part is wrong."""
+
+
+class NewerFormatError(FormatError, CassetteError):
+    """An EMRD cassette written by a newer pytest-emrd: a later format, or a shipped text
+    (:mod:`._shared`) this release does not have."""
 
 
 @dataclass(frozen=True)
@@ -211,8 +244,9 @@ class _Decoder:
 
     def __init__(self, strings: Sequence[str], templates: Sequence[str], *, verbatim: bool) -> None:
         self.strings, self.templates, self.verbatim = strings, templates, verbatim
-        self._items: dict[tuple[int, str], str] = {}
+        self._items: dict[tuple[int, str], bytes] = {}
         self._refs: dict[str, str] = {}
+        self._skeletons: dict[str, Any] = {}
 
     def _ref(self, ref: re.Match[str]) -> str:
         """The JSON of the string ``ref`` points to (a reply is referenced by its response
@@ -228,11 +262,20 @@ class _Decoder:
             return _REF_TEXT.sub(self._ref, text)
         return _SERIALISE[mode](_unpack(json.loads(text), self.strings))
 
-    def _item(self, index: int, mode: str) -> str:
-        text = self._items.get((index, mode))
-        if text is None:
-            text = self._items[(index, mode)] = self._tree_text(self.templates[index], mode)
-        return text
+    def _item(self, index: int, mode: str) -> bytes:
+        data = self._items.get((index, mode))
+        if data is None:
+            data = self._items[(index, mode)] = self._tree_text(
+                self.templates[index], mode
+            ).encode()
+        return data
+
+    def _skeleton(self, text: str) -> Any:
+        """The stored tree ``text`` unpacked (every request of an episode has the same one)."""
+        tree = self._skeletons.get(text)
+        if tree is None:
+            tree = self._skeletons[text] = _unpack(json.loads(text), self.strings)
+        return tree
 
     def body(self, body: dict[str, Any]) -> tuple[bytes, bool]:
         """(body bytes, whether they are canonical JSON)."""
@@ -242,40 +285,45 @@ class _Decoder:
         lists = body.get("lists", {})
         if not lists:
             return self._tree_text(body["json"], mode).encode(), mode == "canonical"
-        # Each list spliced in from its items' serialisations (each template done once).
-        tree = _unpack(json.loads(body["json"]), self.strings)
-        text = splice(
-            {**tree, **{key: _expand(runs) for key, runs in lists.items()}},
-            value=_SERIALISE[mode],
+        # Each list spliced in from its items' UTF-8 serialisations (each template done once).
+        serialise = _SERIALISE[mode]
+        data = splice(
+            {**self._skeleton(body["json"]), **{key: _expand(runs) for key, runs in lists.items()}},
+            value=lambda value: serialise(value).encode(),
             item=lambda index: self._item(index, mode),
             sort_keys=mode == "canonical",
             ensure_ascii=mode == "ascii",
+            binary=True,
         )
-        return text.encode(), mode == "canonical"
+        return data, mode == "canonical"
 
 
 def encode(data: CassetteData) -> bytes:
-    """Gzip-compressed YAML bytes of ``data`` (deterministic).
+    """The xz-compressed YAML bytes of ``data`` in format ``emrd-cassette/2`` (deterministic).
 
     The YAML is written in its JSON-compatible flow style (JSON is a subset of YAML 1.2),
     which any YAML reader loads and which loads here at JSON speed; a cassette edited by
-    hand into block-style YAML still loads (through PyYAML).
+    hand into block-style YAML still loads (through PyYAML). The same traffic gives the same
+    bytes (single-threaded LZMA2 with fixed settings, no timestamp in the container).
     """
     first = _Table()
     _interactions(data, first, _Table())
     # Second pass with the strings grouped by kind (frame digests, JSON texts such as replies,
     # other text), each group in order of first use: like sits next to like, which is what
-    # gzip's 32 KB window rewards. Same content, different indices.
+    # the compressor's matching rewards. Same content, different indices.
     table, templates = _Table(sorted(first.strings, key=_kind)), _Table()
+    interactions = _interactions(data, table, templates)
     document = {
         "format": FORMAT,
         "protocol": data.protocol,
-        "strings": table.strings,
+        "strings": [pack(text) for text in table.strings],
         "templates": templates.strings,
-        "interactions": _interactions(data, table, templates),
+        "interactions": interactions,
     }
     text = json.dumps(document, ensure_ascii=False, separators=(",", ":"))
-    return gzip.compress(text.encode(), compresslevel=9, mtime=0)
+    return lzma.compress(
+        text.encode(), format=lzma.FORMAT_XZ, check=lzma.CHECK_CRC32, filters=_XZ_FILTERS
+    )
 
 
 def _kind(text: str) -> int:
@@ -305,26 +353,53 @@ def _interactions(data: CassetteData, table: _Table, templates: _Table) -> list[
     return interactions
 
 
-def decode(blob: bytes) -> CassetteData:
-    """Inverse of :func:`encode`; :class:`FormatError` says what is wrong with ``blob``."""
+def _text_of(blob: bytes) -> str:
+    """The text inside ``blob``: xz (format 2) or gzip (format 1), told by the magic bytes."""
     try:
-        text = gzip.decompress(blob).decode()
-    except (OSError, EOFError, zlib.error, UnicodeDecodeError) as exc:
-        raise FormatError(f"not a gzip-compressed text file ({exc})") from exc
-    verbatim = True
+        if blob.startswith(_XZ_MAGIC):
+            return lzma.decompress(blob, format=lzma.FORMAT_XZ).decode()
+        if blob.startswith(_GZIP_MAGIC):
+            return gzip.decompress(blob).decode()
+    except (OSError, EOFError, zlib.error, lzma.LZMAError, UnicodeDecodeError) as exc:
+        raise FormatError(f"not a readable xz or gzip file ({exc})") from exc
+    raise FormatError(f"not an xz- or gzip-compressed text file (it starts {blob[:8]!r})")
+
+
+def _document(blob: bytes) -> tuple[dict[str, Any], bool]:
+    """The parsed document of ``blob`` (either format) and whether it is the flow-style text
+    :func:`encode` writes (JSON), rather than YAML edited by hand."""
+    text = _text_of(blob)
     try:
         document = json.loads(text)
     except ValueError:
-        verbatim = False
         try:
             document = yaml.load(text, Loader=_Loader)
         except yaml.YAMLError as exc:
             raise FormatError(f"not valid YAML ({exc})") from exc
-    if not isinstance(document, dict) or document.get("format") != FORMAT:
-        found = document.get("format") if isinstance(document, dict) else type(document).__name__
-        raise FormatError(f"format={found!r} is not {FORMAT!r}")
+        verbatim = False
+    else:
+        verbatim = True
+    found = document.get("format") if isinstance(document, dict) else type(document).__name__
+    if found in (FORMAT, LEGACY_FORMAT):
+        return document, verbatim
+    readable = f"{LEGACY_FORMAT!r} or {FORMAT!r}"
+    if isinstance(found, str) and found.startswith(_FAMILY):
+        raise NewerFormatError(
+            f"format={found!r} is newer than this pytest-emrd reads ({readable}): it was "
+            "written by a newer pytest-emrd"
+        )
+    raise FormatError(f"format={found!r} is not {readable}")
+
+
+def decode(blob: bytes) -> CassetteData:
+    """Inverse of :func:`encode`, for both formats; :class:`FormatError` says what is wrong
+    with ``blob`` (:class:`NewerFormatError` when a newer pytest-emrd wrote it)."""
+    document, verbatim = _document(blob)
     try:
-        decoder = _Decoder(document["strings"], document["templates"], verbatim=verbatim)
+        strings = document["strings"]
+        if document["format"] == FORMAT:
+            strings = [unpack(entry) for entry in strings]
+        decoder = _Decoder(strings, document["templates"], verbatim=verbatim)
         requests, responses, canonical = [], [], []
         for item in document["interactions"]:
             req, resp = item["request"], item["response"]
@@ -341,5 +416,7 @@ def decode(blob: bytes) -> CassetteData:
         return CassetteData(
             str(document["protocol"]), tuple(requests), tuple(responses), tuple(canonical)
         )
+    except NewerTextError as exc:
+        raise NewerFormatError(str(exc)) from exc
     except (KeyError, IndexError, TypeError, ValueError) as exc:
         raise FormatError(f"malformed interaction ({type(exc).__name__}: {exc})") from exc

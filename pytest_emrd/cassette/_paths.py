@@ -8,14 +8,20 @@ from collections import Counter
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Final
 
 from pytest_emrd.gate._settings import RunSettings
 from pytest_emrd.rooms import SLUG_ROOMS
 from pytest_emrd.trajectory import CONDITIONS, EpisodeSpec
 
+#: The file name ending of a cassette (format ``emrd-cassette/2``, xz).
+SUFFIX: Final = ".yaml.xz"
+#: The ending of a format-1 cassette (gzip), which older releases wrote: still read.
+LEGACY_SUFFIX: Final = ".yaml.gz"
+
 
 def cassette_path(root: Path, spec: EpisodeSpec) -> Path:
-    """``<root>/<model>/<condition>/<variant>/<spawn>/ep<NN>.yaml.gz`` on the builtin world
+    """``<root>/<model>/<condition>/<variant>/<spawn>/ep<NN>.yaml.xz`` on the builtin world
     under the paper protocol, ``<root>/<backend>/<model>/...`` on any other backend
     (``cassettes/ai2thor/gemini/...``), and ``.../layouts-generated/<model>/...`` under
     generated layouts (``cassettes/layouts-generated/scout/...``).
@@ -24,18 +30,27 @@ def cassette_path(root: Path, spec: EpisodeSpec) -> Path:
     place; the other backends and generated layouts get their own trees, so a recording never
     answers a run of another world (or the reverse) even when a model happens to be named
     like a backend.
+
+    When only a format-1 file of the episode exists (``ep<NN>.yaml.gz``, recorded by an older
+    release), that file is returned: it replays as it is, and recording over it writes the
+    ``.yaml.xz`` file in its place (see :class:`~._persister.EpisodePersister`).
     """
     base = root if spec.backend == "builtin" else root / spec.backend
     if spec.layouts != "paper":
         base = base / f"layouts-{spec.layouts}"
-    return (
-        base
-        / spec.model
-        / spec.condition
-        / spec.variant
-        / spec.spawn
-        / f"ep{spec.episode:02d}.yaml.gz"
-    )
+    folder = base / spec.model / spec.condition / spec.variant / spec.spawn
+    path = folder / f"ep{spec.episode:02d}{SUFFIX}"
+    legacy = folder / f"ep{spec.episode:02d}{LEGACY_SUFFIX}"
+    return legacy if not path.is_file() and legacy.is_file() else path
+
+
+def current_path(path: Path) -> Path:
+    """Where the cassette at ``path`` is written: ``path`` itself, or the ``.yaml.xz`` file
+    that replaces a format-1 ``.yaml.gz`` one."""
+    name = path.name
+    if name.endswith(LEGACY_SUFFIX):
+        return path.with_name(name[: -len(LEGACY_SUFFIX)] + SUFFIX)
+    return path
 
 
 @dataclass(frozen=True)

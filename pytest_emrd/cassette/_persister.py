@@ -1,4 +1,4 @@
-"""vcrpy persister for EMRD cassettes: gzip, atomic writes, protocol check (file I/O only)."""
+"""vcrpy persister for EMRD cassettes: atomic writes, protocol check (file I/O only)."""
 
 from __future__ import annotations
 
@@ -8,7 +8,14 @@ from typing import Any
 from vcr.persisters.filesystem import CassetteNotFoundError
 
 from pytest_emrd._atomic import write_bytes_atomic
-from pytest_emrd.cassette._format import CassetteData, FormatError, decode, encode
+from pytest_emrd.cassette._format import (
+    CassetteData,
+    FormatError,
+    NewerFormatError,
+    decode,
+    encode,
+)
+from pytest_emrd.cassette._paths import current_path
 from pytest_emrd.cassette._redact import canonical_keys
 from pytest_emrd.errors import CassetteError
 
@@ -18,8 +25,10 @@ class EpisodePersister:
 
     A missing file is "not found" (vcrpy records it when the mode allows); a file that
     cannot be read is a :class:`CassetteError` naming it; a file recorded under another
-    protocol is a :class:`CassetteError` with the command that re-records it. In ``all``
-    mode the old file is never read: it is replaced when the episode finishes.
+    protocol is a :class:`CassetteError` with the command that re-records it; so is a file
+    a newer pytest-emrd wrote, which also says to upgrade. In ``all`` mode the old file is
+    never read: it is replaced when the episode finishes. A format-1 file (``.yaml.gz``) is
+    read as it is; saving over it writes the ``.yaml.xz`` file and removes it.
     """
 
     def __init__(self, *, protocol: str, fresh: bool, rerecord_command: str) -> None:
@@ -33,6 +42,12 @@ class EpisodePersister:
             raise CassetteNotFoundError(str(path))
         try:
             data = decode(path.read_bytes())
+        except NewerFormatError as exc:
+            raise CassetteError(
+                f"cassette={str(path)!r} cannot be read by this pytest-emrd: {exc}. Upgrade "
+                f"pytest-emrd (pip install -U pytest-emrd), or record it again: "
+                f"{self.rerecord_command}"
+            ) from exc
         except (FormatError, OSError) as exc:
             raise CassetteError(
                 f"cassette={str(path)!r} is corrupted: {exc}. Delete it and record it again: "
@@ -57,4 +72,7 @@ class EpisodePersister:
             requests=tuple(cassette_dict["requests"]),
             responses=tuple(cassette_dict["responses"]),
         )
-        write_bytes_atomic(Path(cassette_path), encode(data))
+        path = Path(cassette_path)
+        write_bytes_atomic(current_path(path), encode(data))
+        if current_path(path) != path:
+            path.unlink(missing_ok=True)

@@ -21,6 +21,7 @@ COMMANDS: tuple[str, ...] = (
     "gate",
     "report",
     "view",
+    "cassettes",
     "validate",
     "bench",
 )
