@@ -12,8 +12,8 @@ exactly what its client puts on the wire (less the key).
 from __future__ import annotations
 
 import copy
-import gzip
 import json
+import lzma
 from dataclasses import replace
 from functools import cache
 from pathlib import Path
@@ -260,7 +260,7 @@ def test_a_cassette_recorded_under_the_old_anthropic_version_still_replays(
     recorded = play(legacy, "once")
     assert recorded.recorded and recorded.trajectory.status == "budget"
     assert {h["anthropic-version"] for h in fault_server.headers} == {"2023-06-01"}
-    assert b"anthropic-version" not in gzip.decompress(cassette_path(tmp_path, spec).read_bytes())
+    assert b"anthropic-version" not in lzma.decompress(cassette_path(tmp_path, spec).read_bytes())
     live_requests = len(fault_server.bodies)
     replayed = play(current, "none")
     assert len(fault_server.bodies) == live_requests, "replay reached the server"

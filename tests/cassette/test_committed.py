@@ -41,7 +41,7 @@ def _replay(spec: EpisodeSpec, root: Path):
 
 
 def test_every_committed_cassette_is_of_the_current_protocol() -> None:
-    files = sorted(ROOT.rglob("*.yaml.gz"))
+    files = sorted(ROOT.rglob("*.yaml.xz"))
     assert len(files) >= 240
     stale = [f for f in files if decode(f.read_bytes()).protocol != protocol_version()]
     assert not stale, f"{len(stale)} cassettes need re-recording, e.g. {stale[0]}"

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-import gzip
+import lzma
 from pathlib import Path
 
 import pytest
@@ -23,7 +23,7 @@ def test_record_then_replay_offline_gives_the_same_trajectory(server: FakeServer
     first = _run(spec, FakeRunner(server.url), tmp_path, "once")
     assert first.recorded and first.trajectory.status == "budget"
     path = cassette_path(tmp_path, spec)
-    assert path == tmp_path / "fake/baseline/default/office/ep03.yaml.gz"
+    assert path == tmp_path / "fake/baseline/default/office/ep03.yaml.xz"
     requests_live = len(server.seen_headers)
     again = _run(spec, FakeRunner(server.url), tmp_path, "none")
     assert len(server.seen_headers) == requests_live  # nothing reached the server
@@ -34,7 +34,7 @@ def test_record_then_replay_offline_gives_the_same_trajectory(server: FakeServer
 def test_secrets_never_reach_the_file(server: FakeServer, spec, tmp_path):
     _run(spec, FakeRunner(server.url), tmp_path, "once")
     assert server.seen_headers[0]["Authorization"] == f"Bearer {FAKE_KEY}"
-    text = gzip.decompress(cassette_path(tmp_path, spec).read_bytes()).decode()
+    text = lzma.decompress(cassette_path(tmp_path, spec).read_bytes()).decode()
     assert FAKE_KEY not in text
     assert "base64," not in text and "pixels:" in text
 
@@ -78,8 +78,8 @@ def test_missing_cassette_in_none_mode_names_file_and_command(server: FakeServer
 def test_corrupted_cassette_is_an_error_naming_the_file(server: FakeServer, spec, tmp_path):
     path = cassette_path(tmp_path, spec)
     path.parent.mkdir(parents=True)
-    path.write_bytes(b"\x1f\x8b not really gzip")
-    with pytest.raises(CassetteError, match=r"ep03\.yaml\.gz.*corrupted"):
+    path.write_bytes(b"\xfd7zXZ\x00 not really xz")
+    with pytest.raises(CassetteError, match=r"ep03\.yaml\.xz.*corrupted"):
         _run(spec, FakeRunner(server.url), tmp_path, "once")
 
 

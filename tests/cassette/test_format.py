@@ -4,13 +4,32 @@ from __future__ import annotations
 
 import gzip
 import json
+import lzma
+from pathlib import Path
 
 import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 from vcr.request import Request
 
-from pytest_emrd.cassette import CassetteData, FormatError, canonical_json, decode, encode
+from pytest_emrd.cassette import (
+    CassetteData,
+    FormatError,
+    NewerFormatError,
+    canonical_json,
+    decode,
+    encode,
+    same_traffic,
+)
+from pytest_emrd.errors import CassetteError
+
+ROOT = Path(__file__).resolve().parents[2]
+#: Format-1 files (gzip) as the previous release wrote three committed cassettes.
+FORMAT1 = Path(__file__).with_name("format1")
+
+
+def _xz(text: bytes) -> bytes:
+    return lzma.compress(text, format=lzma.FORMAT_XZ)
 
 
 def _data(n: int) -> CassetteData:
@@ -42,7 +61,7 @@ def test_round_trip_is_exact_and_deterministic():
 
 
 def test_each_distinct_message_is_stored_once():
-    text = gzip.decompress(encode(_data(12))).decode()
+    text = lzma.decompress(encode(_data(12))).decode()
     assert text.count("You are a responder.") == 50  # one system prompt, not twelve
 
 
@@ -62,17 +81,37 @@ def test_non_json_bodies_are_kept_verbatim():
 @pytest.mark.parametrize(
     ("blob", "message"),
     [
-        (b"plain text", "not a gzip"),
-        (gzip.compress(b"a: [unclosed"), "not valid YAML"),
-        (gzip.compress(b"format: other/1\n"), "format='other/1'"),
+        (b"plain text", "not an xz- or gzip-compressed"),
+        (b"\xfd7zXZ\x00 cut short", "not a readable xz or gzip file"),
+        (_xz(b"a: [unclosed"), "not valid YAML"),
+        (_xz(b"format: other/1\n"), "format='other/1'"),
+        (
+            _xz(b"format: emrd-cassette/2\nprotocol: p\nstrings: []\ninteractions: [{}]\n"),
+            "malformed",
+        ),
         (
             gzip.compress(
                 b"format: emrd-cassette/1\nprotocol: p\nstrings: []\ninteractions: [{}]\n"
             ),
             "malformed",
         ),
+        (
+            _xz(
+                b"format: emrd-cassette/2\nprotocol: p\ntemplates: []\ninteractions: []\n"
+                b"strings: [{from: cebd7bac61aaf8a8, edit: [0, 99999]}]\n"
+            ),
+            "copies",
+        ),
     ],
-    ids=["not-gzip", "bad-yaml", "wrong-format", "missing-fields"],
+    ids=[
+        "not-compressed",
+        "truncated-xz",
+        "bad-yaml",
+        "wrong-format",
+        "missing-fields",
+        "missing-fields-format-1",
+        "edit-past-the-end",
+    ],
 )
 def test_bad_files_say_what_is_wrong(blob, message):
     with pytest.raises(FormatError, match=message):
@@ -82,9 +121,9 @@ def test_bad_files_say_what_is_wrong(blob, message):
 def test_the_file_is_yaml_that_any_yaml_reader_loads():
     import yaml
 
-    text = gzip.decompress(encode(_data(3))).decode()
+    text = lzma.decompress(encode(_data(3))).decode()
     assert yaml.safe_load(text) == json.loads(text)
-    block_style = gzip.compress(yaml.safe_dump(json.loads(text)).encode())
+    block_style = _xz(yaml.safe_dump(json.loads(text)).encode())
     assert [r.body for r in decode(block_style).requests] == [r.body for r in _data(3).requests]
 
 
@@ -150,3 +189,45 @@ def test_request_bodies_with_lists_rebuild_exactly_in_every_mode(body, canonical
     back = decode(encode(_one(body.encode())))
     assert back.requests[0].body == body.encode()
     assert back.canonical == (canonical,)
+
+
+@pytest.mark.parametrize(
+    "document",
+    [
+        b"format: emrd-cassette/3\nprotocol: p\n",
+        b"format: emrd-cassette/2\nprotocol: p\ntemplates: []\ninteractions: []\n"
+        b"strings: [{from: 0000000000000000, edit: [0, 1]}]\n",
+    ],
+    ids=["later-format", "unknown-shipped-text"],
+)
+def test_a_file_of_a_newer_release_says_so(document):
+    with pytest.raises(NewerFormatError, match="newer pytest-emrd") as caught:
+        decode(_xz(document))
+    assert isinstance(caught.value, CassetteError)  # an EmrdError: the CLI reports it cleanly
+
+
+def test_the_system_prompt_is_named_not_stored():
+    """A worked example: the committed office episode's prompt (3431 characters) is one entry
+    naming the shipped text; everything else in the table is stored as it is."""
+    blob = (ROOT / "cassettes/scout/baseline/default/office/ep00.yaml.xz").read_bytes()
+    assert blob.startswith(b"\xfd7zXZ\x00")
+    strings = json.loads(lzma.decompress(blob))["strings"]
+    named = [s for s in strings if not isinstance(s, str)]
+    assert named == [{"from": "cebd7bac61aaf8a8", "edit": [0, 3431]}]
+    prompt = decode(blob).requests[0].body.decode()
+    assert "You are an autonomous emergency responder robot." in prompt
+
+
+@pytest.mark.parametrize(
+    "relative",
+    sorted(str(p.relative_to(FORMAT1)) for p in FORMAT1.rglob("*.yaml.gz")),
+)
+def test_format_1_files_decode_to_the_same_traffic_as_their_format_2_twins(relative):
+    """Three committed cassettes as the previous release wrote them (gzip, format 1) and as
+    committed now (xz, format 2): the same interactions byte for byte, and encoding either
+    gives the committed file."""
+    old = (FORMAT1 / relative).read_bytes()
+    new = (ROOT / "cassettes" / relative.replace(".yaml.gz", ".yaml.xz")).read_bytes()
+    assert old.startswith(b"\x1f\x8b") and b"emrd-cassette/1" in gzip.decompress(old)
+    assert same_traffic(decode(old), decode(new))
+    assert encode(decode(old)) == new

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import gzip
 import json
+import lzma
 import threading
 from collections.abc import Iterator
 from dataclasses import dataclass, field
@@ -117,11 +118,13 @@ def leaky_registry(path: Path, provider: Provider, **routes: str) -> Path:
 
 
 def leaks(root: Path, *, skip: tuple[Path, ...] = ()) -> list[str]:
-    """Every file under ``root`` (gzip files decompressed) holding a planted credential."""
+    """Every file under ``root`` (xz and gzip files decompressed) holding a planted credential."""
     found = []
     for path in sorted(p for p in root.rglob("*") if p.is_file() and p not in skip):
         data = path.read_bytes()
-        if path.suffix == ".gz":
+        if path.suffix == ".xz":
+            data = lzma.decompress(data)
+        elif path.suffix == ".gz":
             data = gzip.decompress(data)
         found += [f"{path}: {s}" for s in PLANTED if s.encode() in data]
     return found
