@@ -73,6 +73,7 @@ class EpisodePersister:
             responses=tuple(cassette_dict["responses"]),
         )
         path = Path(cassette_path)
-        write_bytes_atomic(current_path(path), encode(data))
-        if current_path(path) != path:
+        target = current_path(path)
+        write_bytes_atomic(target, encode(data))
+        if target != path:  # a format-1 file recorded over: its replacement is written
             path.unlink(missing_ok=True)
