@@ -52,6 +52,15 @@ def test_a_committed_cassette_replays_offline() -> None:
     assert run.trajectory.status == "terminated" and not run.recorded
 
 
+def test_a_format_1_cassette_replays_as_it_is(tmp_path: Path) -> None:
+    """A cassette as the previous release wrote it (gzip, ``.yaml.gz``) is found and replayed."""
+    spec = EpisodeSpec("scout", "baseline", "office", 0, modality="both")
+    old = shutil.copytree(Path(__file__).with_name("format1"), tmp_path / "cassettes")
+    assert cassette_path(old, spec).name == "ep00.yaml.gz"
+    run = _replay(spec, old)
+    assert run.trajectory.status == "terminated" and not run.recorded
+
+
 def test_a_cassette_of_the_previous_protocol_is_refused_with_the_rerecord_command(
     tmp_path: Path,
 ) -> None:

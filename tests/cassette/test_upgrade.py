@@ -8,18 +8,14 @@ from pathlib import Path
 
 import pytest
 
-from pytest_emrd.agent import load_registry
 from pytest_emrd.cassette import (
     EpisodePersister,
-    agent_runner,
     cassette_path,
     decode,
-    run_with_cassette,
     same_traffic,
     upgrade,
 )
 from pytest_emrd.cli import main
-from pytest_emrd.episode import protocol_version
 from pytest_emrd.errors import CassetteError
 from pytest_emrd.trajectory import EpisodeSpec
 
@@ -31,19 +27,6 @@ SPEC = EpisodeSpec("scout", "baseline", "office", 0, modality="both")
 @pytest.fixture
 def old_tree(tmp_path: Path) -> Path:
     return Path(shutil.copytree(FORMAT1, tmp_path / "cassettes"))
-
-
-def test_a_format_1_cassette_replays_as_it_is(old_tree: Path):
-    path = cassette_path(old_tree, SPEC)
-    assert path.name == "ep00.yaml.gz"
-    runner = agent_runner(load_registry())
-    try:
-        run = run_with_cassette(
-            SPEC, runner, cassettes=old_tree, protocol=protocol_version(), record_mode="none"
-        )
-    finally:
-        runner.close()
-    assert run.trajectory.status == "terminated" and not run.recorded
 
 
 def test_saving_over_a_format_1_cassette_writes_the_xz_file_in_its_place(old_tree: Path):
