@@ -127,12 +127,16 @@ def _scout_client(transport: httpx.BaseTransport | None = None) -> Any:
     )
 
 
-def _replay(spec: EpisodeSpec, client: Any) -> Trajectory:
-    """``spec`` replayed from its committed cassette with ``client``; errors are raised."""
+def _replay(spec: EpisodeSpec, client: Any, *, as_sent_live: bool = False) -> Trajectory:
+    """``spec`` replayed from its committed cassette with ``client``; errors are raised.
+
+    ``as_sent_live``: frames travel as JPEG data URLs, as a live run sends them (what plain
+    vcrpy records), instead of as the pixel digests a replay sends."""
     from pytest_emrd.episode import run_episode
 
     def run(s: EpisodeSpec, *, live: bool) -> Trajectory:
-        return run_episode(s, registry=_registry(), client=client, replay=not live)
+        replay = not (live or as_sent_live)
+        return run_episode(s, registry=_registry(), client=client, replay=replay)
 
     done = run_with_cassette(
         spec, run, cassettes=CASSETTES, protocol=_protocol(), record_mode="none"
@@ -206,7 +210,7 @@ def _size_ratio(specs: tuple[EpisodeSpec, ...]) -> float:
         capture = _Capture()
         client = _scout_client(capture)
         try:
-            _replay(spec, client)
+            _replay(spec, client, as_sent_live=True)
         finally:
             client.close()
         plain += len(plain_vcrpy_yaml(capture.exchanges).encode())
