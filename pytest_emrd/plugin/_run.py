@@ -25,6 +25,7 @@ from pytest_emrd.gate import (
     RunSettings,
     StoredEpisode,
     Verdict,
+    episode_path,
     start_prefetch,
 )
 from pytest_emrd.trajectory import EpisodeSpec
@@ -110,8 +111,6 @@ class Run:
     def missing_summary(self, items: list[pytest.Item]) -> str | None:
         """In record mode ``none``: one message for the episodes the selected items need
         that have neither a stored result nor a cassette, or ``None``."""
-        from pytest_emrd.gate import episode_path
-
         if not self.settings.replays_only:
             return None
         needed: dict[EpisodeSpec, None] = {}
@@ -237,12 +236,22 @@ class Run:
         episode reusable from the store and, for every gate's cell, the per-episode metrics
         saved for the episode file stored now. What was read is kept for the tests (nothing
         is read twice); nothing is computed."""
-        gated = dict.fromkeys(s for cell in self.gate_cells for s in self.cell_specs(cell))
+        if not all(episode_path(self.run_dir, s).is_file() for s in self.episode_specs):
+            return False  # a fresh or unfinished run: not even the protocol is needed
         stored: dict[EpisodeSpec, StoredEpisode] = {}
-        for spec in {**dict.fromkeys(self.episode_specs), **gated}:
-            if (episode := self.store.reusable(spec)) is None:
-                return False  # stops at the first episode to compute
-            stored[spec] = episode
+
+        def all_stored(specs: list[EpisodeSpec]) -> bool:
+            for spec in (s for s in specs if s not in stored):
+                if (episode := self.store.reusable(spec)) is None:
+                    return False  # the first episode to compute ends the check
+                stored[spec] = episode
+            return True
+
+        if not all_stored(self.episode_specs):  # before the gates' thresholds and metrics
+            return False
+        gated = list(dict.fromkeys(s for cell in self.gate_cells for s in self.cell_specs(cell)))
+        if not all_stored(gated):
+            return False
         metrics = {}
         for spec in gated:
             if (saved := self.measured.saved(spec)) is None:

@@ -181,13 +181,16 @@ def test_finished_run_resumes_in_process_and_a_stale_episode_brings_the_workers_
                 "2",
             )
         )
-        result.assert_outcomes(passed=4)
         return result, sorted(set(log.read_text().split()))
+
+    def outcomes(result: pytest.RunResult) -> dict[str, int]:
+        return {k: v for k, v in result.parseoutcomes().items() if k in ("passed", "failed")}
 
     first, where = resume("first")
     assert where == ["gw0", "gw1"] and "no xdist worker started" not in first.stdout.str()
     second, where = resume("second")
     assert where == ["controller"]
+    assert outcomes(first) == outcomes(second) == {"passed": 4}
     second.stdout.fnmatch_lines(
         [f"emrd: {run_dir} holds every episode and metric of the run: its tests run in this "
          "process (no xdist worker started for -n 2)"]
@@ -206,8 +209,14 @@ def test_finished_run_resumes_in_process_and_a_stale_episode_brings_the_workers_
     assert where == ["gw0", "gw1"]
     assert json.loads(stale.read_text())["trajectory"]["protocol"] != "an-older-protocol"
     assert kept.stat().st_mtime_ns == before  # the finished episode was reused
-    assert _gate_section(third) == _gate_section(first)
+    assert _gate_section(third) == _gate_section(first) and outcomes(third) == {"passed": 4}
     assert resume("fourth")[1] == ["controller"]
+
+    suite.makefile(".yaml", thresholds="scout:\n  baseline:\n    te: {max: 1}\n")
+    failing, where = resume("failing")  # a new gate, evaluated from the saved metrics
+    assert where == ["controller"] and failing.ret == pytest.ExitCode.TESTS_FAILED
+    assert outcomes(failing) == {"passed": 2, "failed": 1}
+    failing.stdout.fnmatch_lines(["  FAIL scout-baseline-te: value * > 1"])
 
 
 def test_resume_without_saved_metrics_keeps_the_workers(suite, small, recorded):
