@@ -60,6 +60,14 @@ def _remember(table: OrderedDict[Any, Any], key: Any, value: Any, capacity: int)
             table.popitem(last=False)
 
 
+def forget_views() -> None:
+    """Forget every remembered view digest and shade table, as in a new process (cold
+    benchmarks, tests)."""
+    with _lock:
+        _digests.clear()
+        _tables.clear()
+
+
 def _shades(scene: Scene, params: ConditionParams, seed: int) -> np.ndarray:
     """The episode's shade table, one object per scene, condition and (``texture``) seed:
     every episode of the paper office under one condition shares it."""
