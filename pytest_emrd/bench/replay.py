@@ -207,17 +207,23 @@ def plain_vcrpy_yaml(exchanges: list[tuple[httpx.Request, httpx.Response]]) -> s
     return str(serialize({"requests": requests, "responses": responses}, yamlserializer))
 
 
+def live_exchanges(spec: EpisodeSpec) -> list[tuple[httpx.Request, httpx.Response]]:
+    """The HTTP exchanges of ``spec`` as a live run sends them (JPEG frames), replayed from
+    its committed cassette."""
+    capture = _Capture()
+    client = _scout_client(capture)
+    try:
+        _replay(spec, client, as_sent_live=True)
+    finally:
+        client.close()
+    return capture.exchanges
+
+
 def _size_ratio(specs: tuple[EpisodeSpec, ...]) -> float:
     plain = 0
     ours = shipped_bytes()  # the texts cassettes name instead of storing, counted once
     for spec in specs:
-        capture = _Capture()
-        client = _scout_client(capture)
-        try:
-            _replay(spec, client, as_sent_live=True)
-        finally:
-            client.close()
-        plain += len(plain_vcrpy_yaml(capture.exchanges).encode())
+        plain += len(plain_vcrpy_yaml(live_exchanges(spec)).encode())
         ours += cassette_path(CASSETTES, spec).stat().st_size
     return plain / ours
 

@@ -2,14 +2,7 @@
 
 from __future__ import annotations
 
-from pytest_emrd.bench.replay import (
-    CASSETTES,
-    SAMPLE,
-    _Capture,
-    _replay,
-    _scout_client,
-    plain_vcrpy_yaml,
-)
+from pytest_emrd.bench.replay import CASSETTES, SAMPLE, live_exchanges, plain_vcrpy_yaml
 from pytest_emrd.cassette import cassette_path
 
 
@@ -17,13 +10,8 @@ def test_plain_vcrpy_sees_the_jpeg_frames_a_live_run_sends():
     """A replay sends digests (nothing to encode), but plain vcrpy would have recorded the
     live traffic: the size ratio must be measured on JPEG data URLs, not on digests."""
     spec = SAMPLE[0]
-    capture = _Capture()
-    client = _scout_client(capture)
-    try:
-        _replay(spec, client, as_sent_live=True)
-    finally:
-        client.close()
-    bodies = [request.content for request, _ in capture.exchanges]
+    exchanges = live_exchanges(spec)
+    bodies = [request.content for request, _ in exchanges]
     assert bodies and all(b"data:image/jpeg;base64," in body for body in bodies)
-    plain = len(plain_vcrpy_yaml(capture.exchanges).encode())
+    plain = len(plain_vcrpy_yaml(exchanges).encode())
     assert plain > 300 * cassette_path(CASSETTES, spec).stat().st_size
