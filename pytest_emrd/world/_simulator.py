@@ -220,8 +220,9 @@ class BuiltinSimulator(SemanticStep):
         same shade table: the Gotos of a grid land on the same few poses, so of ~6,600 views
         of the committed grid ~1,900 differ. The process remembers each view's digest; a view
         seen before is drawn again only if its pixels or JPEG are read (a recording, the
-        viewer), never for a replay, which needs the digest alone. ``frame_cache=0`` turns
-        both off (every view drawn and hashed).
+        viewer), never for a replay, which needs the digest alone (not under ``texture``,
+        whose colours differ per episode). ``frame_cache=0`` turns both off (every view
+        drawn and hashed).
         """
         pose, scene, table = self._pose, self._require(), self._table
         cached = self._frames.get(pose)
@@ -229,13 +230,16 @@ class BuiltinSimulator(SemanticStep):
             self._frames.move_to_end(pose)
             return cached
         view = View(functools.partial(render, scene, pose, self._params, table), self._quality)
+        # A texture episode's table is its own (colours drawn from its seed): no other
+        # episode can share its views, and remembering them would keep every such table.
+        shared = self._cache_size > 0 and not self._params.randomize_palette
         key = (id(scene), id(table), pose)
-        known = _digests.get(key) if self._cache_size else None
+        known = _digests.get(key) if shared else None
         if known is not None and known[0] is scene and known[1] is table:
             entry = known[2], view
         else:
             entry = hashlib.sha256(view.pixels.data).hexdigest(), view
-            if self._cache_size:
+            if shared:
                 _remember(_digests, key, (scene, table, entry[0]), VIEW_DIGESTS)
         self._frames[pose] = entry
         while len(self._frames) > self._cache_size:
