@@ -21,10 +21,12 @@ look-up table built with explicit rounding (``np.rint``) and indexed by integer 
 from the table: no arithmetic on colours). The same scene therefore renders to identical
 bytes on every machine and numpy version.
 
-Division of labour: numpy casts the rays to the walls (:class:`~pytest_emrd.world._geometry.Walls`,
-shared with visibility) and picks and orders the boxes in view (:mod:`pytest_emrd.world._paint`);
-the compiled :mod:`pytest_emrd.world._kernel` does the rest per column and per pixel: where
-walls and boxes begin and end, their codes, and the pixels.
+Division of labour: the rays are cast to the walls by
+:meth:`~pytest_emrd.world._geometry.Walls.first_hit` (shared with visibility), the boxes in
+view picked and ordered by :func:`~pytest_emrd.world._paint.object_boxes`, and the compiled
+:func:`~pytest_emrd.world._kernel.compose` does the rest per column and per pixel: where walls
+and boxes begin and end, their codes, and the pixels. All three are numba kernels; this
+module only hands them the scene's arrays.
 """
 
 from __future__ import annotations
