@@ -13,6 +13,8 @@ the gate table, JUnit XML and exit status are those of a distributed run. Anythi
 
 from __future__ import annotations
 
+import warnings
+
 import pytest
 
 from pytest_emrd.errors import EmrdError
@@ -41,6 +43,26 @@ class InProcessResume:
             f"emrd: {self.run.run_dir} holds every episode and metric of the run: its tests "
             f"run in this process (no xdist worker started for -n {self.workers})"
         )
+
+    def pytest_collection_finish(self, session: pytest.Session) -> None:
+        """Say so when the session also collected tests that are not EMRD tests: they run in
+        this process too, without the workers they were given."""
+        others = [i for i in session.items if not _is_emrd(i)]
+        if others:
+            warnings.warn(
+                pytest.PytestWarning(
+                    f"pytest-emrd: {len(others)} non-EMRD test(s) (e.g. {others[0].nodeid}) "
+                    f"run in this process with the finished EMRD run, not in -n "
+                    f"{self.workers} workers; give only the EMRD test paths to keep the "
+                    "workers for them."
+                ),
+                stacklevel=1,
+            )
+
+
+def _is_emrd(item: pytest.Item) -> bool:
+    params = getattr(getattr(item, "callspec", None), "params", {})
+    return "emrd_spec" in params or "emrd_gate" in params
 
 
 def resume_in_process(config: pytest.Config, run: Run) -> None:

@@ -221,7 +221,8 @@ def test_finished_run_resumes_in_process_and_a_stale_episode_brings_the_workers_
 
 def test_resume_without_saved_metrics_keeps_the_workers(suite, small, recorded):
     """The gates' per-episode metrics are part of what a finished run holds: with one missing,
-    the workers measure it again."""
+    the workers measure it again. A finished run in-process says which other tests it runs
+    without the workers."""
     run_dir = suite.path / "run"
     args = small(
         f"--emrd-cassettes={recorded}",
@@ -239,3 +240,10 @@ def test_resume_without_saved_metrics_keeps_the_workers(suite, small, recorded):
     assert "no xdist worker started" not in result.stdout.str()
     result.stdout.fnmatch_lines(["[[]gw?[]]*PASSED*test_gate*"])
     assert saved.is_file()
+    suite.makepyfile(test_other="def test_other():\n    pass\n")
+    mixed = suite.runpytest_subprocess(*args)  # finished again: in-process, saying so
+    mixed.assert_outcomes(passed=5, warnings=1)
+    mixed.stdout.fnmatch_lines(
+        ["*no xdist worker started*", "*pytest-emrd: 1 non-EMRD test(s) (e.g. test_other.py::"
+         "test_other) run in this process with the finished EMRD run, not in -n 2 workers*"]
+    )  # fmt: skip
