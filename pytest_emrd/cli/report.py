@@ -114,6 +114,7 @@ def _report(args: argparse.Namespace, formats: list[str]) -> int:
         if model in registry.names():
             config = registry.get(model)
             prices[model] = (config.price_per_mtok_in, config.price_per_mtok_out)
+    processes = _processes()
     if saved is None and metrics is None:
         metrics = _episode_metrics(args.run_dirs, episodes)
     report = build_report(
@@ -124,11 +125,12 @@ def _report(args: argparse.Namespace, formats: list[str]) -> int:
         episode_metrics=metrics,
         episode=args.episode,
         statistics=saved,
+        processes=processes,
     )
     if saved is None and key is not None:
         write_aggregates(home, key, report)
     out = args.out if args.out is not None else home / "report"
-    written = write_report(report, out, formats, processes=_processes())
+    written = write_report(report, out, formats, processes=processes)
     print(f"{len(episodes)} episodes from {len(args.run_dirs)} run director(ies)")
     for note in report.missing:
         print(f"note: {note}")
@@ -138,8 +140,8 @@ def _report(args: argparse.Namespace, formats: list[str]) -> int:
 
 
 def _processes() -> int:
-    """Processes drawing the figures: two where this process may run on two cores or more
-    (the figures are most of the wall time once the statistics are saved), else one."""
+    """Processes computing the report: two where this process may run on two cores or more
+    (the map alignment beside the tables, then the figures), else one."""
     cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
     return min(2, cores or 1)
 

@@ -22,7 +22,7 @@ from pytest_emrd.report._figdata import (
     sir_series,
     tbs_series,
 )
-from pytest_emrd.report._model import Gates, Overview, Reasoning, Report, row_label
+from pytest_emrd.report._model import EpisodeMap, Gates, Overview, Reasoning, Report, row_label
 from pytest_emrd.report._tables import (
     Cells,
     Embed,
@@ -35,6 +35,7 @@ from pytest_emrd.report._tables import (
     reasoning,
     serial_rows,
 )
+from pytest_emrd.report._workers import beside
 from pytest_emrd.rooms import ROOM_SLUGS
 from pytest_emrd.trajectory import CONDITIONS, VARIANTS, EpisodeSpec, Trajectory
 
@@ -172,6 +173,7 @@ def build_report(
     episode_metrics: Sequence[EpisodeMetrics] | None = None,
     episode: str | None = None,
     statistics: Report | None = None,
+    processes: int = 1,
 ) -> Report:
     """Every table and figure of the paper for ``episodes`` (any models, conditions,
     variants; errored episodes are excluded and reported). Stored episodes are read through
@@ -186,7 +188,8 @@ def build_report(
     baseline episode with a non-empty map); ``statistics`` is a report built from the very
     same episodes and ``episode`` (:func:`~pytest_emrd.report.read_aggregates`): its tables
     and figures are taken as they are (no metric is computed), the overview, gates and notes
-    are built afresh.
+    are built afresh; ``processes`` > 1 aligns the map figure's episode in a forked worker
+    while the tables are computed (same result).
     """
     stored = [e if isinstance(e, StoredEpisode) else _wrap(e) for e in episodes]
     heads = [e.head for e in stored]
@@ -202,28 +205,37 @@ def build_report(
     by_label: dict[str, list[EpisodeMetrics]] = {}
     for (model, variant, _), ems in cells.items():
         by_label.setdefault(row_label(model, variant), []).extend(ems)
-    reasons = reasoning(by_label, embed) if with_reasoning else Reasoning(())
     chosen = pick_episode(stored, episode)
-    ebbinghaus = ebbinghaus_rows(cells)
-    return Report(
-        overview=overview,
-        missing=_missing(heads, overview, gates, reasons, stored),
-        exploration=exploration_rows(cells),
-        focal=focal_tables(cells),
-        fpsg=fpsg_rows(cells),
-        ebbinghaus=ebbinghaus,
-        serial_position=serial_rows(cells),
-        anova=anova_rows(cells),
-        interventions=intervention_tables(cells),
-        reasoning=reasons,
-        gates=gates,
-        tbs=tbs_series(cells),
-        pa=pa_by_spawn(cells),
-        miller=miller_series(cells),
-        km=km_series(cells, {(r.model, r.variant, r.condition): r.fit for r in ebbinghaus}),
-        sir=sir_series(cells),
-        episode_map=episode_map(chosen.trajectory) if chosen is not None else None,
-    )
+    fork = processes > 1 and chosen is not None
+    if fork:  # the alignment and lifelines both use it: imported once, before the fork
+        import scipy.optimize  # noqa: F401
+    with beside(_episode_map, chosen, fork=fork) as mapped:
+        reasons = reasoning(by_label, embed) if with_reasoning else Reasoning(())
+        ebbinghaus = ebbinghaus_rows(cells)
+        return Report(
+            overview=overview,
+            missing=_missing(heads, overview, gates, reasons, stored),
+            exploration=exploration_rows(cells),
+            focal=focal_tables(cells),
+            fpsg=fpsg_rows(cells),
+            ebbinghaus=ebbinghaus,
+            serial_position=serial_rows(cells),
+            anova=anova_rows(cells),
+            interventions=intervention_tables(cells),
+            reasoning=reasons,
+            gates=gates,
+            tbs=tbs_series(cells),
+            pa=pa_by_spawn(cells),
+            miller=miller_series(cells),
+            km=km_series(cells, {(r.model, r.variant, r.condition): r.fit for r in ebbinghaus}),
+            sir=sir_series(cells),
+            episode_map=mapped(),
+        )
+
+
+def _episode_map(chosen: StoredEpisode | None) -> EpisodeMap | None:
+    """The map figure's data of ``chosen`` (its trajectory decoded here), None without one."""
+    return None if chosen is None else episode_map(chosen.trajectory)
 
 
 def _wrap(trajectory: Trajectory) -> StoredEpisode:

@@ -12,13 +12,8 @@ from __future__ import annotations
 
 import io
 import math
-import multiprocessing
-import sys
 import textwrap
-import threading
 from collections.abc import Callable, Sequence
-from concurrent.futures import ProcessPoolExecutor
-from multiprocessing.context import BaseContext
 from typing import Any, Final
 
 import numpy as np
@@ -37,6 +32,7 @@ from pytest_emrd.report._style import (
     CONDITION_NAMES,
     FIGURES,
 )
+from pytest_emrd.report._workers import pool
 from pytest_emrd.rooms import ROOM_SLUGS, SLUG_ROOMS
 from pytest_emrd.trajectory import CONDITIONS
 
@@ -340,13 +336,6 @@ def _render(report: Report, name: str) -> bytes | None:
     return None if fig is None else _png(fig)
 
 
-def _fork() -> BaseContext | None:
-    """Forked workers (they start with matplotlib imported and the report in memory) where
-    that is safe: on Linux, with no other thread alive; None elsewhere."""
-    safe = sys.platform == "linux" and threading.active_count() == 1
-    return multiprocessing.get_context("fork") if safe else None
-
-
 def render_figures(
     report: Report, *, processes: int = 1
 ) -> tuple[dict[str, bytes], dict[str, str]]:
@@ -357,11 +346,11 @@ def render_figures(
     figure is still drawn once, by the same code, to the same bytes, in less wall time where
     there are cores to spare."""
     names = [spec.name for spec in FIGURES]
-    context = _fork() if processes > 1 else None
-    if context is not None:
+    workers = pool(processes)
+    if workers is not None:
         order = sorted(names, key=_COSTLIEST_FIRST.index)
-        with ProcessPoolExecutor(processes, mp_context=context) as pool:
-            done = dict(zip(order, pool.map(_render, [report] * len(order), order), strict=True))
+        with workers:
+            done = dict(zip(order, workers.map(_render, [report] * len(order), order), strict=True))
         pngs = [done[name] for name in names]
     else:
         pngs = [_render(report, name) for name in names]

@@ -146,3 +146,10 @@ def test_figures_drawn_in_worker_processes_are_the_same_bytes(run_dir: Path) -> 
     one, two = render_figures(report), render_figures(report, processes=2)
     assert two == one
     assert list(two[0]) == list(one[0])  # in FIGURES order
+
+
+def test_map_aligned_in_a_worker_process_is_the_same_report(run_dir: Path) -> None:
+    episodes = load_run_episodes([run_dir])
+    here = build_report(episodes, with_reasoning=False)
+    assert build_report(episodes, with_reasoning=False, processes=2) == here
+    assert here.episode_map is not None
