@@ -140,10 +140,11 @@ def _r2(items: Sequence[EpisodeLike], *, rng_seed: int = 0) -> Estimate:
             leave[i, s.duration] += 1
             death[i, s.duration] += s.forgotten
     rng = np.random.default_rng(rng_seed)
-    weights = np.stack(
-        [np.bincount(rng.integers(0, len(kept), len(kept)), minlength=len(kept))
-         for _ in range(N_RESAMPLES)]
-    ).astype(float)  # fmt: skip
+    n = len(kept)
+    draws = np.stack([rng.integers(0, n, n) for _ in range(N_RESAMPLES)])  # one resample a row
+    draws += n * np.arange(N_RESAMPLES)[:, None]  # row r counts into bins r*n .. r*n + n - 1
+    weights = np.bincount(draws.ravel(), minlength=N_RESAMPLES * n).reshape(N_RESAMPLES, n)
+    weights = weights.astype(float)
     draws = _r2_of_histograms(weights @ leave, weights @ death, weights @ mapped, weights @ total)
     draws = draws[np.isfinite(draws)]
     if not len(draws):

@@ -8,6 +8,7 @@ result with a reason instead of a warning or a NaN.
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
@@ -37,6 +38,17 @@ class Estimate:
     """Episodes left out: errored, or where the metric is undefined (e.g. SIR, no re-entry)."""
 
 
+@functools.lru_cache(maxsize=4)
+def resample_rows(rng_seed: int, n: int, n_resamples: int) -> np.ndarray:
+    """The bootstrap's ``(n_resamples, n)`` row indices drawn from
+    ``numpy.random.default_rng(rng_seed)``: a function of its arguments alone, so computed once
+    and shared (read-only) by every interval over ``n`` episodes with that seed (the gate
+    metrics of one run)."""
+    idx = np.random.default_rng(rng_seed).integers(0, n, size=(n_resamples, n))
+    idx.flags.writeable = False
+    return idx
+
+
 def bootstrap_ci(
     data: Sequence[float] | np.ndarray,
     statistic: Callable[[np.ndarray], np.ndarray] | None = None,
@@ -60,8 +72,7 @@ def bootstrap_ci(
     arr = np.asarray(data, dtype=float)
     if len(arr) < 2:
         return None, None
-    rng = np.random.default_rng(rng_seed)
-    idx = rng.integers(0, len(arr), size=(n_resamples, len(arr)))
+    idx = resample_rows(rng_seed, len(arr), n_resamples)
     fn = statistic if statistic is not None else (lambda a: a.mean(axis=1))
     with np.errstate(divide="ignore", invalid="ignore"):
         values = np.asarray(fn(arr[idx]), dtype=float)
