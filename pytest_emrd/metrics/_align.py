@@ -157,7 +157,8 @@ class Problem:
     ) -> None:
         self.points = points
         """Written positions of the recognised entries, in entry order."""
-        self.pred = np.array(points, dtype=float).reshape(-1, 2)
+        self.pred = np.fromiter(itertools.chain.from_iterable(points), float, 2 * len(points))
+        self.pred.shape = (len(points), 2)
         """``points`` as an (n x 2) array."""
         self.kinds = kinds
         """Type index of each entry."""
@@ -324,21 +325,25 @@ def hypotheses(problem: Problem) -> list[Motion]:
     cand = problem.candidates
     d1 = digits(problem.layout.scale, 1)
     n = len(pred)
-    cx = math.fsum(p[0] for p in pred) / n
-    cz = math.fsum(p[1] for p in pred) / n
-    fewest = min(map(len, cand))
-    a = min(
-        (i for i in range(n) if len(cand[i]) == fewest),
-        key=lambda i: -round(math.dist(pred[i], (cx, cz)), d1),
-    )
+    centre = (math.fsum([p[0] for p in pred]) / n, math.fsum([p[1] for p in pred]) / n)
+    sizes = [len(cols) for cols in cand]
+    fewest = min(sizes)
+    a, far = -1, 0.0
+    for i, size in enumerate(sizes):
+        if size == fewest:
+            g = round(math.dist(pred[i], centre), d1)
+            if a < 0 or g > far:
+                a, far = i, g
     # b needs a direction (not coincident with a) and an object other than a's
     b, best, gap = -1, (math.inf, 0.0), 0.0
+    pa = pred[a]
     for i, cols in enumerate(cand):
-        if len(cols) > best[0] or (len(cols) == 1 and cols == cand[a]):
+        size = sizes[i]
+        if size > best[0] or (size == 1 and cols == cand[a]):
             continue
-        g = round(math.dist(pred[i], pred[a]), d1)
-        if g > COINCIDENT_M and (len(cols), -g) < best:
-            b, best, gap = i, (len(cols), -g), g
+        g = round(math.dist(pred[i], pa), d1)
+        if g > COINCIDENT_M and (size, -g) < best:
+            b, best, gap = i, (size, -g), g
     if b < 0:
         return [Motion(1.0, 0.0, true[o][0] - pred[a][0], true[o][1] - pred[a][1]) for o in cand[a]]
     options = sorted(
