@@ -29,7 +29,8 @@ class Upgraded:
 
 
 def same_traffic(a: CassetteData, b: CassetteData) -> bool:
-    """Whether two cassettes hold the same protocol and the same interactions, byte for byte."""
+    """Whether two cassettes read back (:func:`decode`) hold the same protocol and the same
+    interactions, byte for byte (``canonical`` is compared too: it is known once read back)."""
 
     def requests(data: CassetteData) -> list[tuple]:
         return [(r.method, r.uri, r.body, sorted(r.headers.items())) for r in data.requests]

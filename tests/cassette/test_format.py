@@ -8,7 +8,7 @@ import lzma
 from pathlib import Path
 
 import pytest
-from hypothesis import given
+from hypothesis import given, settings
 from hypothesis import strategies as st
 from vcr.request import Request
 
@@ -231,3 +231,23 @@ def test_format_1_files_decode_to_the_same_traffic_as_their_format_2_twins(relat
     assert old.startswith(b"\x1f\x8b") and b"emrd-cassette/1" in gzip.decompress(old)
     assert same_traffic(decode(old), decode(new))
     assert encode(decode(old)) == new
+
+
+@settings(max_examples=30, deadline=None)
+@given(st.integers(0, 3431), st.integers(0, 200), st.text(max_size=40))
+def test_traffic_carrying_an_edited_system_prompt_round_trips(start, cut, inserted):
+    """Requests whose system prompt is the shipped one with a random edit (another variant,
+    layout or release): named by an edit script when that pays, always rebuilt exactly."""
+    from pytest_emrd.cassette._shared import shared_texts
+
+    (shipped,) = shared_texts().values()
+    prompt = shipped[:start] + inserted + shipped[start + cut :]
+    body = canonical_json({"messages": [{"content": prompt, "role": "system"}]}).encode()
+    response = {"status": {"code": 200, "message": "OK"}, "headers": {}, "body": {"string": b"{}"}}
+    data = CassetteData("p", (Request("POST", "http://h/v1", body, {}),), (response,))
+    blob = encode(data)
+    back = decode(blob)
+    assert back.requests[0].body == body and encode(back) == blob
+    if len(prompt) > 2000:  # most of the shipped text is still there: it is named
+        (entry,) = json.loads(lzma.decompress(blob))["strings"]
+        assert entry["from"] in shared_texts()
