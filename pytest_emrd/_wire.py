@@ -34,6 +34,8 @@ from functools import partial
 from json.encoder import encode_basestring, encode_basestring_ascii
 from typing import Any, Final
 
+from pytest_emrd._bounded import remember
+
 #: Item encodings remembered (a window is 21 messages; several episodes may run at once).
 _ITEMS: Final = 2048
 #: Fragments remembered (each holds a message's wire bytes, a frame's ~27 KB for a user turn;
@@ -144,10 +146,7 @@ _bodies: OrderedDict[int, tuple[bytes, Any, dict[str, Any]]] = OrderedDict()
 
 def _remember(table: OrderedDict[Any, Any], key: Any, value: Any, capacity: int) -> None:
     with _lock:
-        table[key] = value
-        table.move_to_end(key)
-        while len(table) > capacity:
-            table.popitem(last=False)
+        remember(table, key, value, capacity)
 
 
 def memo(item: Any, kind: Hashable, compute: Callable[[Any], Any]) -> Any:

@@ -23,7 +23,9 @@ from __future__ import annotations
 import hashlib
 import threading
 from collections import OrderedDict
-from typing import Any, Final
+from typing import Final
+
+from pytest_emrd._bounded import remember
 
 #: What a frame's pixel digest is prefixed with in a canonical request.
 PIXELS: Final = "pixels:"
@@ -40,21 +42,14 @@ def _payload_key(b64_payload: str | bytes) -> str:
     return hashlib.sha256(raw).hexdigest()
 
 
-def _remember(table: OrderedDict[Any, Any], key: Any, value: Any, capacity: int) -> None:
-    table[key] = value
-    table.move_to_end(key)
-    while len(table) > capacity:
-        table.popitem(last=False)
-
-
 def register(b64_payload: str | bytes, pixel_digest: str, *, data_url: str | None = None) -> None:
     """Remember that this base64 image payload shows the frame with ``pixel_digest``, and
     that ``data_url`` (the string object a request will carry, if given) holds it."""
     key = _payload_key(b64_payload)
     with _lock:
-        _remember(_table, key, pixel_digest, _CAPACITY)
+        remember(_table, key, pixel_digest, _CAPACITY)
         if data_url is not None:
-            _remember(_urls, id(data_url), (data_url, pixel_digest), _URLS)
+            remember(_urls, id(data_url), (data_url, pixel_digest), _URLS)
 
 
 def by_digest(pixel_digest: str) -> str:

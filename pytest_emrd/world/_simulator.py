@@ -11,6 +11,7 @@ from typing import Any
 
 import numpy as np
 
+from pytest_emrd._bounded import remember
 from pytest_emrd.errors import ConfigError, check_choice, check_range
 from pytest_emrd.rooms import ROOM_NAMES, SLUG_ROOMS
 from pytest_emrd.world._actions import Action
@@ -54,10 +55,7 @@ _tables: OrderedDict[tuple[int, ConditionParams, int | None], tuple[Scene, np.nd
 
 def _remember(table: OrderedDict[Any, Any], key: Any, value: Any, capacity: int) -> None:
     with _lock:
-        table[key] = value
-        table.move_to_end(key)
-        while len(table) > capacity:
-            table.popitem(last=False)
+        remember(table, key, value, capacity)
 
 
 def forget_views() -> None:
