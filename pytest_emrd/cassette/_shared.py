@@ -129,6 +129,15 @@ def _cost(script: Edit) -> int:
     return sum(len(op) if isinstance(op, str) else 5 for op in script)
 
 
+@functools.lru_cache(maxsize=32)
+def _script(text: str, base: str) -> Edit:
+    """:func:`edit_script`, once per text and base in a process: every cassette of a run under
+    one variant, modality and step budget carries the same system prompt, and aligning it
+    with the shipped one takes tens of milliseconds, holding the GIL that concurrent episodes
+    (``--emrd-concurrency``) share."""
+    return [0, len(base)] if text == base else edit_script(text, base)
+
+
 def pack(text: str) -> str | dict[str, Any]:
     """``text``, or the entry naming the shipped text it is (nearly) a copy of.
 
@@ -142,7 +151,7 @@ def pack(text: str) -> str | dict[str, Any]:
     for name, base in shared_texts().items():
         if not len(base) // 2 <= len(text) <= 2 * len(base) or not _resembles(text, base):
             continue
-        script = [0, len(base)] if text == base else edit_script(text, base)
+        script = list(_script(text, base))
         cost = _cost(script)
         if cost * 3 < len(text) and (best is None or cost < best[0]):
             best = (cost, name, script)
