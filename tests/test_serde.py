@@ -13,6 +13,7 @@ import typing
 from pathlib import Path, PurePosixPath
 from typing import Any
 
+import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
@@ -32,6 +33,7 @@ from pytest_emrd.trajectory import (
     Trajectory,
     Usage,
 )
+from pytest_emrd.world._model import View
 
 finite = st.floats(-1e6, 1e6, allow_nan=False)
 labels = st.text(min_size=1, max_size=12)
@@ -198,6 +200,17 @@ values = st.recursive(
 # from_type(Path) alone builds only Path(): fields typed Path get relative and absolute paths
 _PATH_TEXT = r"/?[a-z]{1,3}(/[a-z.]{1,3}){0,2}"
 st.register_type_strategy(Path, st.builds(Path, st.from_regex(_PATH_TEXT, fullmatch=True)))
+
+
+# A rendered view is carried as it is (pixels and JPEG made on first use): any small one.
+st.register_type_strategy(
+    View,
+    st.builds(
+        View.of,
+        st.integers(0, 255).map(lambda v: np.full((2, 2, 3), v, dtype=np.uint8)),
+        st.integers(1, 95),
+    ),
+)
 
 
 def _mentions_any(hint: Any) -> bool:

@@ -7,16 +7,14 @@ the Office is top-left (small ``x``, large ``z``), the Entrance bottom-right.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any, Protocol
+from typing import Any, Protocol
 
 import numpy as np
 
 from pytest_emrd._serde import from_dict, to_dict
 from pytest_emrd.trajectory import Pose
-
-if TYPE_CHECKING:
-    from pytest_emrd.world._render import View
 
 
 @dataclass(frozen=True)
@@ -142,6 +140,45 @@ class VisibleObject:
     """Degrees, negative to the left of the view axis, within [-45, 45]."""
     distance: float
     """Metres from the agent to the object's centre."""
+
+
+class View:
+    """One view's RGB pixels and their JPEG, each made on first use and kept: a replay sends
+    frames by pixel digest, so it needs neither (two threads may both make one: the same
+    bytes). The pixels are read-only."""
+
+    __slots__ = ("_draw", "_jpeg", "_pixels", "_quality")
+
+    def __init__(self, draw: Callable[[], np.ndarray], quality: int) -> None:
+        self._draw, self._quality = draw, quality
+        self._pixels: np.ndarray | None = None
+        self._jpeg: bytes | None = None
+
+    @classmethod
+    def of(cls, pixels: np.ndarray, quality: int) -> View:
+        """The view of pixels already drawn."""
+        view = cls(lambda: pixels, quality)
+        view._keep(pixels)
+        return view
+
+    def _keep(self, pixels: np.ndarray) -> np.ndarray:
+        pixels.setflags(write=False)  # shared by every observation of the view
+        self._pixels = pixels
+        return pixels
+
+    @property
+    def pixels(self) -> np.ndarray:
+        """The ``(H, W, 3)`` uint8 frame."""
+        return self._keep(self._draw()) if self._pixels is None else self._pixels
+
+    @property
+    def jpeg(self) -> bytes:
+        """The frame as the JPEG the model is sent."""
+        if self._jpeg is None:
+            from pytest_emrd.world import _render  # Pillow: imported by the first JPEG only
+
+            self._jpeg = _render.encode_jpeg(self.pixels, self._quality)
+        return self._jpeg
 
 
 @dataclass(frozen=True)

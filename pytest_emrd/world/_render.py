@@ -34,7 +34,6 @@ from __future__ import annotations
 import functools
 import io
 import threading
-from collections.abc import Callable
 
 import numpy as np
 from PIL import Image
@@ -148,43 +147,6 @@ def encode_jpeg(frame: np.ndarray, quality: int) -> bytes:
     out = io.BytesIO()
     Image.fromarray(frame).save(out, format="JPEG", quality=quality)
     return out.getvalue()
-
-
-class View:
-    """One view's RGB pixels and their JPEG, each made on first use and kept: a replay sends
-    frames by pixel digest, so it needs neither (two threads may both make one: the same
-    bytes). The pixels are read-only."""
-
-    __slots__ = ("_draw", "_jpeg", "_pixels", "_quality")
-
-    def __init__(self, draw: Callable[[], np.ndarray], quality: int) -> None:
-        self._draw, self._quality = draw, quality
-        self._pixels: np.ndarray | None = None
-        self._jpeg: bytes | None = None
-
-    @classmethod
-    def of(cls, pixels: np.ndarray, quality: int) -> View:
-        """The view of pixels already drawn."""
-        view = cls(lambda: pixels, quality)
-        view._keep(pixels)
-        return view
-
-    def _keep(self, pixels: np.ndarray) -> np.ndarray:
-        pixels.setflags(write=False)  # shared by every observation of the view
-        self._pixels = pixels
-        return pixels
-
-    @property
-    def pixels(self) -> np.ndarray:
-        """The ``(H, W, 3)`` uint8 frame."""
-        return self._keep(self._draw()) if self._pixels is None else self._pixels
-
-    @property
-    def jpeg(self) -> bytes:
-        """The frame as the JPEG the model is sent."""
-        if self._jpeg is None:
-            self._jpeg = encode_jpeg(self.pixels, self._quality)
-        return self._jpeg
 
 
 _LOCAL = threading.local()

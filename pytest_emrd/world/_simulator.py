@@ -29,9 +29,9 @@ from pytest_emrd.world._feedback import (
     turn_degrees,
     with_pose,
 )
-from pytest_emrd.world._model import Layout, Observation, WorldPose
+from pytest_emrd.world._model import Layout, Observation, View, WorldPose
 from pytest_emrd.world._motion import approach, spawn_pose, through
-from pytest_emrd.world._render import View, palette, render, shade_table
+from pytest_emrd.world._render import palette, render, shade_table
 from pytest_emrd.world._scene import Scene, scene_of
 from pytest_emrd.world._visibility import Sight, sight
 

@@ -45,9 +45,15 @@ from pytest_emrd.world._feedback import (
     turn_degrees,
     with_pose,
 )
-from pytest_emrd.world._model import Doorway, Layout, Observation, VisibleObject, WorldPose
+from pytest_emrd.world._model import (
+    Doorway,
+    Layout,
+    Observation,
+    View,
+    VisibleObject,
+    WorldPose,
+)
 from pytest_emrd.world._motion import spawn_pose
-from pytest_emrd.world._render import View
 from pytest_emrd.world._scene import scene_of
 from pytest_emrd.world.thor import _launch
 from pytest_emrd.world.thor._conditions import ThorCondition, thor_condition
