@@ -20,7 +20,10 @@
   digests and shade tables forgotten, as in a fresh worker (a warm world knows every view of
   the sample and draws none: the ratio would then compare the replay with almost nothing),
   so the world draws each view of the sample once on both sides and only the replay's cost
-  remains above 1. Target 1.2.
+  remains above 1. Target 1.2. And ``replay.httpx_vcrpy_floor_vs_world_ratio``, no target:
+  the same ratio with the replay replaced by httpx and vcrpy alone answering the sample's
+  requests (the cheapest matching vcrpy allows; no cassette load, redaction, parsing or agent),
+  so the part of ``vs_world_ratio`` that is the real client and vcrpy is shown apart from ours.
 * ``replay.cassette_kb_per_episode`` — mean size of the committed scout cassettes; and
   ``replay.cassette_kb_per_50_steps`` — the size of a full 50-step episode, predicted by a
   least-squares line of cassette size on request count over the committed grid (episodes run
@@ -51,6 +54,7 @@ import functools
 import statistics
 import sys
 import tempfile
+import time
 from pathlib import Path
 from typing import Any
 
@@ -207,13 +211,16 @@ def plain_vcrpy_yaml(exchanges: list[tuple[httpx.Request, httpx.Response]]) -> s
     return str(serialize({"requests": requests, "responses": responses}, yamlserializer))
 
 
-def live_exchanges(spec: EpisodeSpec) -> list[tuple[httpx.Request, httpx.Response]]:
+def live_exchanges(
+    spec: EpisodeSpec, *, as_sent_live: bool = True
+) -> list[tuple[httpx.Request, httpx.Response]]:
     """The HTTP exchanges of ``spec`` as a live run sends them (JPEG frames), replayed from
-    its committed cassette."""
+    its committed cassette; or, with ``as_sent_live=False``, as a replay sends them (pixel
+    digests)."""
     capture = _Capture()
     client = _scout_client(capture)
     try:
-        _replay(spec, client, as_sent_live=True)
+        _replay(spec, client, as_sent_live=as_sent_live)
     finally:
         client.close()
     return capture.exchanges
@@ -265,6 +272,73 @@ def _vs_world_ratio(specs: tuple[EpisodeSpec, ...], repeat: int) -> float:
         client.close()
 
 
+def _httpx_vcrpy_floor_ratio(specs: tuple[EpisodeSpec, ...], repeat: int) -> float:
+    """(world alone + httpx and vcrpy alone answering the same requests) / world alone: the
+    least ``replay.vs_world_ratio`` a replay through httpx and vcrpy can reach.
+
+    The requests are the sample's, as a replay sends them (digest frames), sent through a
+    bare ``httpx.Client`` inside vcrpy's own ``use_cassette`` over its YAML files, with the
+    cheapest matching vcrpy allows: the method alone, playback repeats on, so the first
+    recorded interaction answers at once. Only the requests are timed: no cassette load, no
+    redaction, no reply parsing, no agent; everything the replay does beyond this is ours."""
+    import vcr
+
+    trajectories = _replayed(specs)
+    episodes = [live_exchanges(spec, as_sent_live=False) for spec in specs]
+    plain = httpx.Client()
+
+    def alone() -> None:
+        forget_views()
+        for trajectory in trajectories:
+            world_alone(trajectory)
+
+    def requests(folder: Path) -> float:
+        seconds = 0.0
+        for n, exchanges in enumerate(episodes):
+            path = str(folder / f"{n}.yaml")
+            with vcr.use_cassette(
+                path, record_mode="none", match_on=("method",), allow_playback_repeats=True
+            ):
+                start = time.process_time()
+                for request, _ in exchanges:
+                    plain.send(plain.build_request(**_resent(request))).read()
+                seconds += time.process_time() - start
+        return seconds
+
+    with tempfile.TemporaryDirectory() as tmp:
+        folder = Path(tmp)
+        for n, exchanges in enumerate(episodes):
+            (folder / f"{n}.yaml").write_text(plain_vcrpy_yaml(exchanges))
+        try:
+            alone(), requests(folder)  # warm-up
+            ratios = []
+            for _ in range(repeat):
+                start = time.process_time()
+                alone()
+                world = time.process_time() - start
+                ratios.append((world + requests(folder)) / world)
+        finally:
+            plain.close()
+    return statistics.median(ratios)
+
+
+def _resent(request: httpx.Request) -> dict[str, Any]:
+    return {
+        "method": request.method,
+        "url": request.url,
+        "content": request.content,
+        "headers": request.headers,
+    }
+
+
+def _replayed(specs: tuple[EpisodeSpec, ...]) -> list[Trajectory]:
+    client = _scout_client()
+    try:
+        return [_replay(spec, client) for spec in specs]
+    finally:
+        client.close()
+
+
 def _step_overhead_ms(repeat: int) -> float:
     from pytest_emrd.bench.loop import _Recorder
 
@@ -296,6 +370,7 @@ def _step_overhead_ms(repeat: int) -> float:
 def run(*, repeat: int) -> list[Figure]:
     overhead = _step_overhead_ms(repeat)
     vs_world = _vs_world_ratio(SAMPLE, repeat)
+    floor = _httpx_vcrpy_floor_ratio(SAMPLE, repeat)
     ratio = _size_ratio(SIZE_SAMPLE)
     kb, kb_50, count = _committed_sizes()
     grid, grid_cpu, resume, resume_cpu, resume_nobytecode = _grid_seconds(repeat)
@@ -306,6 +381,7 @@ def run(*, repeat: int) -> list[Figure]:
         Figure("replay.resume_240_cpu_s", resume_cpu, "s", None, repeat),
         Figure("replay.resume_240_nobytecode_s", resume_nobytecode, "s", None, repeat),
         Figure("replay.vs_world_ratio", vs_world, "ratio", 1.2, repeat),
+        Figure("replay.httpx_vcrpy_floor_vs_world_ratio", floor, "ratio", None, repeat),
         Figure("replay.cassette_kb_per_episode", kb, "KB", 15.0, count),
         Figure("replay.cassette_kb_per_50_steps", kb_50, "KB", 15.0, count),
         Figure(
