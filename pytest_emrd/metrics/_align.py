@@ -10,7 +10,10 @@ points, squared residuals after a fit).
 The loops every step runs (each entry's nearest open object after a motion, the optimal
 assignment where two entries want one object, the seeds' scores, the Procrustes fit) are
 compiled (:mod:`._kernels`, numba, loaded on the first match) and give the bits of the numpy
-and scipy expressions they replace (oracles: ``tests/metrics/test_align.py``).
+and scipy expressions they replace (oracles: ``tests/metrics/test_align.py``); so is the
+whole undetermined frame (:mod:`._seeds`: the seeds, with Python's ``math.dist``,
+``math.fsum`` and ``round`` compiled bitwise in :mod:`._pyfloat`; oracle:
+``tests/metrics/test_seeds.py``).
 """
 
 from __future__ import annotations
@@ -75,18 +78,14 @@ def fit(
 ) -> tuple[float, float, float, float, float]:
     """:func:`procrustes` as ``(c, s, tx, tz)`` and the sum of squared residuals it leaves
     (:func:`._kernels.fit`)."""
-    return compiled().fit(pred, true, np.array(pairs, dtype=np.intp).reshape(-1, 2))
+    return compiled().fit(pred, true, pair_array(pairs))
 
 
-def two_point(pa: Point, pb: Point, qa: Point, qb: Point) -> Motion:
-    """:func:`procrustes` of the two correspondences ``pa -> qa``, ``pb -> qb``."""
-    ux, uz = pb[0] - pa[0], pb[1] - pa[1]
-    vx, vz = qb[0] - qa[0], qb[1] - qa[1]
-    theta = math.atan2(ux * vz - uz * vx, ux * vx + uz * vz)
-    c, s = math.cos(theta), math.sin(theta)
-    mx, mz = (pa[0] + pb[0]) / 2, (pa[1] + pb[1]) / 2
-    nx, nz = (qa[0] + qb[0]) / 2, (qa[1] + qb[1]) / 2
-    return Motion(c, s, nx - (c * mx - s * mz), nz - (s * mx + c * mz))
+def pair_array(pairs: Sequence[tuple[int, int]]) -> np.ndarray:
+    """``(entry, object)`` pairs as a (k x 2) index array."""
+    flat = np.fromiter(itertools.chain.from_iterable(pairs), np.intp, 2 * len(pairs))
+    flat.shape = (len(pairs), 2)
+    return flat
 
 
 @functools.cache
@@ -95,6 +94,14 @@ def compiled() -> ModuleType:
     from pytest_emrd.metrics import _kernels
 
     return _kernels
+
+
+@functools.cache
+def compiled_seeds() -> ModuleType:
+    """:mod:`._seeds` (the undetermined frame's kernel), imported (with numba) on first use."""
+    from pytest_emrd.metrics import _seeds
+
+    return _seeds
 
 
 @functools.cache
@@ -309,75 +316,26 @@ def refine(problem: Problem, seed: Motion) -> Pairs:
     return pairs
 
 
-def hypotheses(problem: Problem) -> list[Motion]:
-    """Seeds for an undetermined frame, from correspondences of a frame-free base pair.
-
-    The base entry ``a`` has the fewest candidate objects (ties: farthest from the written
-    centroid, then entry order); the second ``b`` has the fewest candidates among entries not
-    coincident with ``a`` (ties: farthest from ``a``). Every pair of distinct candidates
-    ``(o_a, o_b)`` gives the motion fitting ``a -> o_a, b -> o_b``; the
-    :data:`MAX_HYPOTHESES` whose ground-truth distance best matches the written one are kept
-    (ties: object order). When no entry can serve as ``b`` (every entry coincides with ``a``,
-    or all share ``a``'s single object) no rotation can be read: translations ``a -> o_a``.
-    """
-    pred = problem.points
-    true = problem.layout.points
-    cand = problem.candidates
-    d1 = digits(problem.layout.scale, 1)
-    n = len(pred)
-    centre = (math.fsum([p[0] for p in pred]) / n, math.fsum([p[1] for p in pred]) / n)
-    sizes = [len(cols) for cols in cand]
-    fewest = min(sizes)
-    a, far = -1, 0.0
-    for i, size in enumerate(sizes):
-        if size == fewest:
-            g = round(math.dist(pred[i], centre), d1)
-            if a < 0 or g > far:
-                a, far = i, g
-    # b needs a direction (not coincident with a) and an object other than a's
-    b, best, gap = -1, (math.inf, 0.0), 0.0
-    pa = pred[a]
-    for i, cols in enumerate(cand):
-        size = sizes[i]
-        if size > best[0] or (size == 1 and cols == cand[a]):
-            continue
-        g = round(math.dist(pred[i], pa), d1)
-        if g > COINCIDENT_M and (size, -g) < best:
-            b, best, gap = i, (size, -g), g
-    if b < 0:
-        return [Motion(1.0, 0.0, true[o][0] - pred[a][0], true[o][1] - pred[a][1]) for o in cand[a]]
-    options = sorted(
-        (round(abs(math.dist(true[oa], true[ob]) - gap), d1), oa, ob)
-        for oa in cand[a]
-        for ob in cand[b]
-        if oa != ob
-    )
-    return [
-        two_point(pred[a], pred[b], true[oa], true[ob]) for _, oa, ob in options[:MAX_HYPOTHESES]
-    ]
-
-
-def undetermined_fit(problem: Problem, first: Sequence[Motion] = ()) -> Pairs:
+def undetermined_fit(
+    problem: Problem, kept: Sequence[tuple[int, int]] = (), named: Sequence[tuple[int, int]] = ()
+) -> Pairs:
     """Correspondence of a map whose frame no anchors determine: a joint estimate.
 
-    The seeds are ``first`` (the caller's tie-breakers, in order) followed by those of
-    :func:`hypotheses`; the :func:`best_seed` is refined by :func:`refine`.
+    The seeds are the fits of ``kept`` and of ``named`` (the caller's known ``(entry,
+    object)`` pairs, its tie-breakers, in that order; :func:`._seeds.known_seed`), then the
+    correspondence hypotheses of a frame-free base pair (:func:`._seeds.hypotheses`, at most
+    :data:`MAX_HYPOTHESES`). The seed whose motion leaves the smallest summed squared distance
+    of each entry to its nearest open object of its type wins (rounded to
+    :data:`TIE_DECIMALS` relative digits; ties: the first; an entry no object can take makes
+    every score infinite: the first seed) and is refined by :func:`refine`. Computed by
+    :func:`._seeds.undetermined` in one call; a distance that is not finite leaves the
+    refinement to :func:`refine`'s matrix path.
     """
-    seeds = [*first, *hypotheses(problem)]
-    if not seeds:
-        return ()
-    return refine(problem, best_seed(problem, seeds))
-
-
-def best_seed(problem: Problem, seeds: Sequence[Motion]) -> Motion:
-    """The seed whose motion leaves the smallest summed squared distance of each entry to its
-    nearest object of its type (rounded to :data:`TIE_DECIMALS` relative digits; ties: the
-    first), computed by :func:`._kernels.best_seed_index`. An entry no object can take makes
-    every score infinite: the first seed.
-    """
-    if len(seeds) == 1 or not all(problem.candidates):
-        return seeds[0]
-    best = compiled().best_seed_index(
-        np.array(seeds), problem.pred, problem.open, digits(problem.layout.scale, 2)
-    )
-    return seeds[best]
+    d1, d2 = digits(problem.layout.scale, 1), digits(problem.layout.scale, 2)
+    finite, found, seed = compiled_seeds().undetermined(
+        problem.pred, problem.open, pair_array(kept), pair_array(named), d1, d2,
+        zero_below(d2), MAX_ROUNDS, MAX_HYPOTHESES, COINCIDENT_M,
+    )  # fmt: skip
+    if finite:
+        return tuple([(i, j) for i, j in enumerate(found.tolist()) if j >= 0])
+    return refine(problem, Motion(*seed.tolist()))

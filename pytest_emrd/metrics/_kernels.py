@@ -209,8 +209,8 @@ def nearest_open(
 
 @_jit
 def best_seed_index(seeds: np.ndarray, pred: np.ndarray, objects: Objects, decimals: int) -> int:
-    """Index of :func:`._align.best_seed`'s choice among ``seeds`` (k x 4 motions); every
-    entry has an open object (arguments as :func:`nearest_open`).
+    """Index of the best seed of :func:`._align.undetermined_fit` among ``seeds`` (k x 4
+    motions); every entry has an open object (arguments as :func:`nearest_open`).
 
     Per seed: each entry moved as ``c p + s (-z, x) + t``, its least squared distance to an
     object of its type (``np.minimum``, NaN first), summed over entries pairwise, rounded;

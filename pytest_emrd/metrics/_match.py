@@ -28,7 +28,7 @@ and from that map alone:
      ``Door`` in every EMRD layout), the seed is the Procrustes fit of the anchors.
    * **Undetermined frame** (fewer than two anchors). The seeds are the motions that carry
      two base entries onto every pair of candidate objects (see
-     :func:`pytest_emrd.metrics._align.hypotheses`), preceded by the fit of the previous
+     :func:`pytest_emrd.metrics._seeds.hypotheses`), preceded by the fit of the previous
      step's identities of the labels still present, then by the fit of the labels that are
      object ids of the layout (``Chair_3``). The lowest residual wins; between fits the
      geometry cannot tell apart (one chair left in the map; three chairs of an evenly
@@ -275,20 +275,8 @@ class Matcher:
         named = [(r, index[lb]) for r, (lb, k, _, _) in enumerate(key)
                  if lb in index and kind_of[index[lb]] == k]  # fmt: skip
         kept = [(r, before[lb]) for r, (lb, _, _, _) in enumerate(key) if lb in before]
-        seeds = [self._seed(problem, pairs) for pairs in (kept, named) if pairs]
-        pairs = undetermined_fit(problem, [m for m in seeds if m is not None])
+        pairs = undetermined_fit(problem, kept, named)
         return {key[r][0]: c for r, c in pairs}, False
-
-    def _seed(self, problem: Problem, pairs: list[tuple[int, int]]) -> Motion | None:
-        """The fit of known ``(entry row, object)`` pairs: Procrustes of two or more distinct
-        points, the translation of one; None when the points coincide (no direction)."""
-        written = problem.points
-        if len(pairs) == 1 or not _apart([written[r] for r, _ in pairs]):
-            if len({c for _, c in pairs}) != 1:
-                return None
-            (r, c), *_ = pairs
-            return Motion(1.0, 0.0, *(self._true[c] - problem.pred[r]).tolist())
-        return procrustes(problem.pred, self._true, pairs)
 
     def _in_frame(self, key: Key, anchor_rows: list[int], kept: dict[str, int]) -> dict[str, int]:
         """The labels of ``key`` not in ``kept``, assigned among the objects not kept, in the
