@@ -132,9 +132,9 @@ def track_episode(traj: Trajectory) -> Track:
     for step in traj.steps:
         assignment = matcher.assign(step.cognitive_map, assignment)
         entries = assignment.entries  # label -> its first entry, in the model's order
-        for lb, e in entries.items():
-            if lb not in first_pos:
-                first_pos[lb] = (e.x, e.z)
+        for lb in entries.keys() - first_pos.keys():
+            e = entries[lb]
+            first_pos[lb] = (e.x, e.z)
         if written and written[-1]:  # Miller: m = |M_{t-1}| distinct labels, M_{t-1} \ M_t
             loads.append(len(written[-1]))
             forgets.append(not written[-1].keys() <= entries.keys())
@@ -180,12 +180,7 @@ def _spells(
     discovery: dict[str, int],
 ) -> tuple[Spell, ...]:
     open_at: dict[str, int] = {}
-    done: list[Spell] = []
-
-    def close(oid: str, duration: int, forgotten: bool) -> None:
-        start = open_at.pop(oid)
-        done.append(Spell(oid, category[oid], start, duration, forgotten, discovery[oid]))
-
+    done: list[tuple[int, str, int, bool]] = []  # (start, object, duration, forgotten)
     prev_visible: frozenset[str] = frozenset()
     for i, step in enumerate(traj.steps):
         t = step.index
@@ -193,18 +188,23 @@ def _spells(
         if i > 0:
             for oid in (prev_visible - visible) & held[i - 1].keys():
                 open_at[oid] = t
-        now = held[i]
-        for oid in [o for o in open_at if o in visible or o not in now]:
-            if oid in visible:
-                close(oid, t - open_at[oid], False)
-            else:
-                close(oid, t - open_at[oid] + 1, True)
+        if open_at:
+            now = held[i]
+            for oid in [o for o in open_at if o in visible or o not in now]:
+                start = open_at.pop(oid)
+                if oid in visible:
+                    done.append((start, oid, t - start, False))
+                else:
+                    done.append((start, oid, t - start + 1, True))
         prev_visible = visible
     if traj.steps:
         last = traj.steps[-1].index
-        for oid in list(open_at):
-            close(oid, last - open_at[oid] + 1, False)
-    return tuple(sorted(done, key=lambda s: (s.start, s.object_id)))
+        done.extend((start, oid, last - start + 1, False) for oid, start in open_at.items())
+    done.sort()  # by start, then object: an object has one spell open at a time
+    return tuple(
+        Spell(oid, category[oid], start, duration, forgotten, discovery[oid])
+        for start, oid, duration, forgotten in done
+    )
 
 
 def _tbs_value(
