@@ -19,6 +19,7 @@ whole undetermined frame (:mod:`._seeds`: the seeds, with Python's ``math.dist``
 from __future__ import annotations
 
 import functools
+import importlib
 import itertools
 import math
 from collections.abc import Sequence
@@ -89,19 +90,10 @@ def pair_array(pairs: Sequence[tuple[int, int]]) -> np.ndarray:
 
 
 @functools.cache
-def compiled() -> ModuleType:
-    """:mod:`._kernels`, imported (with numba) on first use."""
-    from pytest_emrd.metrics import _kernels
-
-    return _kernels
-
-
-@functools.cache
-def compiled_seeds() -> ModuleType:
-    """:mod:`._seeds` (the undetermined frame's kernel), imported (with numba) on first use."""
-    from pytest_emrd.metrics import _seeds
-
-    return _seeds
+def compiled(module: str = "_kernels") -> ModuleType:
+    """A compiled module of the metrics (:mod:`._kernels`, :mod:`._seeds`, :mod:`._copies`),
+    imported (with numba) on first use."""
+    return importlib.import_module(f"pytest_emrd.metrics.{module}")
 
 
 @functools.cache
@@ -332,7 +324,7 @@ def undetermined_fit(
     refinement to :func:`refine`'s matrix path.
     """
     d1, d2 = digits(problem.layout.scale, 1), digits(problem.layout.scale, 2)
-    finite, found, seed = compiled_seeds().undetermined(
+    finite, found, seed = compiled("_seeds").undetermined(
         problem.pred, problem.open, pair_array(kept), pair_array(named), d1, d2,
         zero_below(d2), MAX_ROUNDS, MAX_HYPOTHESES, COINCIDENT_M,
     )  # fmt: skip

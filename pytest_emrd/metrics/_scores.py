@@ -12,7 +12,7 @@ from typing import Final
 
 import numpy as np
 
-from pytest_emrd.metrics._align import COINCIDENT_M, digits
+from pytest_emrd.metrics._align import COINCIDENT_M, Layout, compiled, digits, layout_of
 from pytest_emrd.metrics._match import Matching, rigid_fit
 from pytest_emrd.metrics._tracking import Track, exp_ratio, layout_scale
 from pytest_emrd.metrics._vocab import TypeResolver
@@ -201,8 +201,10 @@ class Office:
 
     objects: dict[str, GroundTruthObject]
     types: TypeResolver
-    ids_of: dict[int, list[str]]
-    """Type index -> the ids of its objects, sorted."""
+    layout: Layout
+    """The objects sorted by id, grouped by type index (:func:`~._align.layout_of`)."""
+    ids: tuple[str, ...]
+    """Object ids, sorted: the objects of ``layout``."""
     decimals: int
     """Squared distances are compared at :data:`~._align.TIE_DECIMALS` relative to the
     office's size, so ties go the same way in every frame."""
@@ -211,11 +213,15 @@ class Office:
     def of(cls, traj: Trajectory) -> Office:
         objects = {o.object_id: o for o in traj.ground_truth.objects}
         types = TypeResolver(o.object_type for o in objects.values())
-        ids_of: dict[int, list[str]] = {}
-        for oid in sorted(objects):
-            ids_of.setdefault(types.index[objects[oid].object_type], []).append(oid)
+        ids = tuple(sorted(objects))
         xy = np.array([(o.x, o.z) for o in objects.values()], dtype=float).reshape(-1, 2)
-        return cls(objects, types, ids_of, digits(layout_scale(xy), 2))
+        scale = layout_scale(xy)
+        layout = layout_of(
+            [(objects[o].x, objects[o].z) for o in ids],
+            [types.index[objects[o].object_type] for o in ids],
+            scale,
+        )
+        return cls(objects, types, layout, ids, digits(scale, 2))
 
 
 def reentry_copies(
@@ -236,6 +242,9 @@ def reentry_copies(
     matcher's (:class:`~pytest_emrd.metrics._vocab.TypeResolver`); unrecognised entries copy
     nothing. Edge case: fewer than two matched entries at distinct positions leave the
     rotation undetermined; then no copy is found (the frame cannot say which object is meant).
+    Squared distances are rounded to ``office.decimals``; the geometry is computed by
+    :func:`._copies.meant` (bitwise the numpy and scipy expressions); a written coordinate
+    that is not finite raises scipy's ``ValueError``, as the assignment did.
     """
     entries = {e.label: e for e in reversed(traj.steps[end].cognitive_map)}
     before = {e.label for e in traj.steps[start - 1].cognitive_map} if start > 0 else set()
@@ -243,33 +252,36 @@ def reentry_copies(
     label_of = held[end]
     if not new or len(label_of) < 2:
         return frozenset()
-    objects, types = office.objects, office.types
-    pairs = sorted(label_of.items())
-    pred = np.array([(entries[lb].x, entries[lb].z) for _, lb in pairs], dtype=float)
-    true = np.array([(objects[o].x, objects[o].z) for o, _ in pairs], dtype=float)
-    if float(np.max(np.hypot(*(pred - pred[0]).T))) <= COINCIDENT_M:
-        return frozenset()
-    rotation, shift = rigid_fit(pred, true)
     by_type: dict[int, list[str]] = {}
     for lb in sorted(new):
-        k = types.resolve(entries[lb].object_type, lb)
+        k = office.types.resolve(entries[lb].object_type, lb)
         if k >= 0:
             by_type.setdefault(k, []).append(lb)
-    from scipy.optimize import linear_sum_assignment  # heavy: imported on first use
-
-    copies: set[str] = set()
-    for k, labels in by_type.items():
-        ids = office.ids_of[k]
-        where = np.array([(entries[lb].x, entries[lb].z) for lb in labels]) @ rotation.T + shift
-        spot = np.array([(objects[o].x, objects[o].z) for o in ids], dtype=float)
-        cost = np.round(((where[:, None, :] - spot[None, :, :]) ** 2).sum(axis=2), office.decimals)
-        rows, cols = linear_sum_assignment(cost)
-        meant = dict(zip(rows.tolist(), cols.tolist(), strict=True))
-        for r, lb in enumerate(labels):  # entries beyond the type's count: their nearest
-            o = ids[meant[r] if r in meant else int(np.argmin(cost[r]))]
-            if o in label_of and label_of[o] != lb:
-                copies.add(o)
-    return frozenset(copies)
+    labels = [lb for group in by_type.values() for lb in group]
+    if not labels:
+        return frozenset()
+    objects = office.objects
+    pairs = sorted(label_of.items())
+    layout = office.layout
+    copies = compiled("_copies")
+    outcome, found = copies.meant(
+        np.array([(entries[lb].x, entries[lb].z) for _, lb in pairs], dtype=float),
+        np.array([(objects[o].x, objects[o].z) for o, _ in pairs], dtype=float),
+        np.array([(entries[lb].x, entries[lb].z) for lb in labels], dtype=float),
+        np.array([k for k, group in by_type.items() for _ in group], dtype=np.intp),
+        layout.starts, layout.cols, layout.true, office.decimals, COINCIDENT_M,
+    )  # fmt: skip
+    if outcome == copies.INVALID:
+        raise ValueError("matrix contains invalid numeric entries")
+    if outcome == copies.INFEASIBLE:
+        raise ValueError("cost matrix is infeasible")
+    if outcome == copies.COINCIDENT:
+        return frozenset()
+    ids = office.ids
+    return frozenset(
+        ids[c] for lb, c in zip(labels, found.tolist(), strict=True)
+        if ids[c] in label_of and label_of[ids[c]] != lb
+    )  # fmt: skip
 
 
 def discovery_thirds(n: int) -> np.ndarray:

@@ -7,7 +7,7 @@ caller's known pairs (:func:`known_seed`), the correspondence hypotheses of a ba
 the hypotheses are Python's (:mod:`._pyfloat`), so every choice is the one specified and
 made before in Python (oracle: ``tests/metrics/test_seeds.py``).
 
-Imported on first use only, with numba (:func:`._align.compiled_seeds`).
+Imported on first use only, with numba (:func:`._align.compiled`).
 """
 
 from __future__ import annotations
