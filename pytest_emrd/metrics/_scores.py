@@ -16,7 +16,7 @@ from pytest_emrd.metrics._align import COINCIDENT_M, Layout, compiled, digits, l
 from pytest_emrd.metrics._match import Matching, rigid_fit
 from pytest_emrd.metrics._tracking import Track, exp_ratio, layout_scale
 from pytest_emrd.metrics._vocab import TypeResolver
-from pytest_emrd.trajectory import GroundTruthObject, Trajectory
+from pytest_emrd.trajectory import GroundTruthObject, MapEntry, Trajectory
 
 #: Ground-truth type of doorways (left out of ``O_F`` by FPSG's doorway-free variant).
 DOORWAY_TYPE: Final = "Doorway"
@@ -224,6 +224,22 @@ class Office:
         return cls(objects, types, layout, ids, digits(scale, 2))
 
 
+def new_entries(
+    traj: Trajectory, office: Office, start: int, end: int
+) -> tuple[dict[str, MapEntry], dict[int, list[str]]]:
+    """The map of step ``end`` (label -> its first entry) and its labels not in the map of the
+    step before ``start``, recognised ones only, by type index (sorted labels, types in the
+    order of their first label)."""
+    entries = {e.label: e for e in reversed(traj.steps[end].cognitive_map)}
+    before = {e.label for e in traj.steps[start - 1].cognitive_map} if start > 0 else set()
+    by_type: dict[int, list[str]] = {}
+    for lb in sorted(entries.keys() - before):
+        k = office.types.resolve(entries[lb].object_type, lb)
+        if k >= 0:
+            by_type.setdefault(k, []).append(lb)
+    return entries, by_type
+
+
 def reentry_copies(
     traj: Trajectory, office: Office, held: Sequence[dict[str, str]], start: int, end: int
 ) -> frozenset[str]:
@@ -246,17 +262,10 @@ def reentry_copies(
     :func:`._copies.meant` (bitwise the numpy and scipy expressions); a written coordinate
     that is not finite raises scipy's ``ValueError``, as the assignment did.
     """
-    entries = {e.label: e for e in reversed(traj.steps[end].cognitive_map)}
-    before = {e.label for e in traj.steps[start - 1].cognitive_map} if start > 0 else set()
-    new = [lb for lb in entries if lb not in before]
+    entries, by_type = new_entries(traj, office, start, end)
     label_of = held[end]
-    if not new or len(label_of) < 2:
+    if not by_type or len(label_of) < 2:
         return frozenset()
-    by_type: dict[int, list[str]] = {}
-    for lb in sorted(new):
-        k = office.types.resolve(entries[lb].object_type, lb)
-        if k >= 0:
-            by_type.setdefault(k, []).append(lb)
     labels = [lb for group in by_type.values() for lb in group]
     if not labels:
         return frozenset()

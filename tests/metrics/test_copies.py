@@ -17,7 +17,7 @@ from scipy.optimize import linear_sum_assignment
 
 from pytest_emrd.metrics import _copies, rigid_fit
 from pytest_emrd.metrics._align import COINCIDENT_M, layout_of
-from pytest_emrd.metrics._scores import Office, reentry_copies
+from pytest_emrd.metrics._scores import Office, new_entries, reentry_copies
 from pytest_emrd.metrics._tracking import track_episode
 from pytest_emrd.metrics.synthetic import synthetic_grid
 from pytest_emrd.trajectory import Trajectory
@@ -120,27 +120,18 @@ def _copies_numpy(
 ) -> set[str]:
     """``reentry_copies`` as written with numpy and scipy."""
     office = Office.of(traj)
-    entries = {e.label: e for e in reversed(traj.steps[end].cognitive_map)}
-    before = {e.label for e in traj.steps[start - 1].cognitive_map} if start > 0 else set()
-    new = [lb for lb in entries if lb not in before]
+    entries, by_type = new_entries(traj, office, start, end)
     label_of = held[end]
-    if not new or len(label_of) < 2:
+    if not by_type or len(label_of) < 2:
         return set()
     objects = office.objects
     pairs = sorted(label_of.items())
     pred = np.array([(entries[lb].x, entries[lb].z) for _, lb in pairs], dtype=float)
     true = np.array([(objects[o].x, objects[o].z) for o, _ in pairs], dtype=float)
-    by_type: dict[int, list[str]] = {}
-    for lb in sorted(new):
-        k = office.types.resolve(entries[lb].object_type, lb)
-        if k >= 0:
-            by_type.setdefault(k, []).append(lb)
     ids_of = {k: [o for o in office.ids if office.types.index[objects[o].object_type] == k]
               for k in by_type}  # fmt: skip
     groups = [np.array([(entries[lb].x, entries[lb].z) for lb in by_type[k]]) for k in by_type]
     spots = [np.array([(objects[o].x, objects[o].z) for o in ids_of[k]]) for k in by_type]
-    if not groups:
-        return set()
     outcome, found = _meant_numpy(pred, true, groups, spots, office.decimals)
     if outcome == _copies.COINCIDENT:
         return set()
