@@ -83,6 +83,8 @@ from pytest_emrd.metrics._align import (
     Motion,
     Problem,
     assign,
+    compiled,
+    digits,
     layout_of,
     procrustes,
     undetermined_fit,
@@ -189,7 +191,6 @@ class Matcher:
         self._once = [n == 1 for n in self._count]
         self._layout = layout_of([(o.x, o.z) for o in ordered], self._kind_of, _extent(self._true))
         self._done: dict[Key, tuple[dict[str, int], bool]] = {}
-        self._anchor_fits: dict[tuple[tuple[int, float, float], ...], Motion] = {}
 
     def assign(self, entries: Sequence[MapEntry], previous: Assignment | None = None) -> Assignment:
         """Steps 1-4 of the procedure on plain dicts (the fast path of episodes).
@@ -280,22 +281,31 @@ class Matcher:
 
     def _in_frame(self, key: Key, anchor_rows: list[int], kept: dict[str, int]) -> dict[str, int]:
         """The labels of ``key`` not in ``kept``, assigned among the objects not kept, in the
-        frame the anchors fix (:func:`procrustes` of the anchors onto their objects)."""
-        anchors = tuple(key[r][1:] for r in anchor_rows)  # (type, x, z): the fit's input
-        motion = self._anchor_fits.get(anchors)
-        if motion is None:
-            first = self._first
-            written = np.array([a[1:] for a in anchors], dtype=float)
-            motion = procrustes(
-                written, self._true, [(i, first[a[0]]) for i, a in enumerate(anchors)]
-            )
-            self._anchor_fits[anchors] = motion
-        todo = [entry for entry in key if entry[0] not in kept]
-        problem = Problem(
-            [(x, z) for _, _, x, z in todo], [k for _, k, _, _ in todo], self._layout,
-            tuple(kept.values()),
+        frame the anchors fix (:func:`procrustes` of the anchors onto their objects; both in
+        one call, :func:`._seeds.anchored`)."""
+        first = self._first
+        todo = [r for r, entry in enumerate(key) if entry[0] not in kept]
+        flat: list[float] = []
+        for r in anchor_rows:
+            flat += key[r][2:]
+        for r in todo:
+            flat += key[r][2:]
+        points = np.array(flat)
+        points.shape = (len(anchor_rows) + len(todo), 2)
+        layout = self._layout
+        finite, found, motion = compiled("_seeds").anchored(
+            points,
+            np.array([first[key[r][1]] for r in anchor_rows], dtype=np.intp),
+            np.array([key[r][1] for r in todo], dtype=np.intp),
+            np.array(list(kept.values()), dtype=np.intp),
+            layout.starts, layout.cols, layout.true, digits(layout.scale, 2),
         )  # fmt: skip
-        return {todo[r][0]: c for r, c in assign(problem, motion)}
+        if finite:
+            return {key[todo[i]][0]: c for i, c in enumerate(found.tolist()) if c >= 0}
+        problem = Problem(
+            [key[r][2:] for r in todo], [key[r][1] for r in todo], layout, tuple(kept.values())
+        )  # a distance that is not finite: the matrix path
+        return {key[todo[i]][0]: c for i, c in assign(problem, Motion(*motion))}
 
     def held(self, assignment: Assignment) -> dict[str, str]:
         """Object id -> label of an assignment (what :attr:`Matching.label_of` gives)."""

@@ -1,6 +1,8 @@
-"""The undetermined frame compiled: frame-free seeds, the best of them, its refinement.
+"""Each step's frame compiled: its seed and the assignment it gives, in one call.
 
-:func:`undetermined` is :func:`._align.undetermined_fit` in one call: the seeds of the
+:func:`anchored` is a determined frame (:meth:`._match.Matcher._in_frame`): the Procrustes fit
+of the anchors onto their objects and the assignment of the other entries in it.
+:func:`undetermined` is :func:`._align.undetermined_fit`: the seeds of the
 caller's known pairs (:func:`known_seed`), the correspondence hypotheses of a base pair
 (:func:`hypotheses`), the best seed (:func:`._kernels.best_seed_index`) and its refinement
 (:func:`._kernels.refine`). Distances, sums and roundings that choose the base pair and order
@@ -17,8 +19,41 @@ import math
 import numpy as np
 
 from pytest_emrd.metrics._align import Objects
-from pytest_emrd.metrics._kernels import _jit, best_seed_index, fit, refine
+from pytest_emrd.metrics._kernels import _jit, assign_open, best_seed_index, fit, refine
 from pytest_emrd.metrics._pyfloat import dist, fsum, round_half_even
+
+
+@_jit
+def anchored(
+    points: np.ndarray,
+    anchors: np.ndarray,
+    kinds: np.ndarray,
+    held: np.ndarray,
+    starts: np.ndarray,
+    cols: np.ndarray,
+    true: np.ndarray,
+    decimals: int,
+) -> tuple[bool, np.ndarray, tuple[float, float, float, float]]:
+    """The anchors' frame and the entries assigned in it.
+
+    ``points`` (n x 2): the anchors' written points (their objects ``anchors``, a >= 1), then
+    those of the entries to assign (types ``kinds``); ``held``: objects open to none of them.
+    The motion is :func:`._kernels.fit` of the anchors onto their objects (in order), the
+    assignment :func:`._kernels.assign_open` among the objects not held (``starts``, ``cols``,
+    ``true`` as in :data:`._align.Objects`). Returns ``(finite, objects, motion)`` as
+    :func:`._kernels.assign_open`, with the motion ``(c, s, tx, tz)``.
+    """
+    a = anchors.shape[0]
+    pairs = np.empty((a, 2), dtype=np.intp)
+    for i in range(a):
+        pairs[i, 0], pairs[i, 1] = i, anchors[i]
+    c, s, tx, tz, _ = fit(points, true, pairs)
+    mask = np.zeros(true.shape[0], dtype=np.bool_)
+    for j in held:
+        mask[j] = True
+    pred = points[a:].copy()
+    finite, found = assign_open(pred, c, s, tx, tz, (kinds, starts, cols, true, mask), decimals)
+    return finite, found, (c, s, tx, tz)
 
 
 @_jit

@@ -15,12 +15,13 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from pytest_emrd.metrics import _kernels, _pyfloat
+from pytest_emrd.metrics import _kernels, _pyfloat, _seeds
 from pytest_emrd.metrics._align import (
     COINCIDENT_M,
     MAX_HYPOTHESES,
     Motion,
     Problem,
+    assign,
     digits,
     layout_of,
     procrustes,
@@ -207,3 +208,28 @@ def test_undetermined_fit_of_a_point_not_finite_is_the_python_procedure() -> Non
     for bad in (math.inf, -math.inf, math.nan):
         problem = Problem([(bad, 0.0), (1.0, 0.5), (0.0, 2.0)], [0, 0, 1], layout)
         assert undetermined_fit(problem) == _undetermined_fit_python(problem, [], [])
+
+
+@given(maps(), st.data())
+def test_anchored_is_the_anchors_fit_then_the_assignment(
+    case: tuple[Problem, list[tuple[int, int]], list[tuple[int, int]]], data: st.DataObject
+) -> None:
+    problem, known, _ = case
+    layout = problem.layout
+    anchors = data.draw(
+        st.lists(st.tuples(point, st.integers(0, len(layout.points) - 1)), min_size=1, max_size=4)
+    )
+    held = sorted({c for _, c in known})
+    points = np.array([p for p, _ in anchors] + problem.points, dtype=float)
+    finite, found, motion = _seeds.anchored(
+        points, np.array([c for _, c in anchors], dtype=np.intp),
+        np.array(problem.kinds, dtype=np.intp), np.array(held, dtype=np.intp),
+        layout.starts, layout.cols, layout.true, digits(layout.scale, 2),
+    )  # fmt: skip
+    want = procrustes(
+        np.array([p for p, _ in anchors]), layout.true, list(enumerate(c for _, c in anchors))
+    )
+    assert motion == tuple(want)
+    assert finite
+    pairs = assign(Problem(problem.points, problem.kinds, layout, held), want)
+    assert tuple((i, c) for i, c in enumerate(found.tolist()) if c >= 0) == pairs
