@@ -9,6 +9,7 @@ errored episodes (counted in ``excluded``) and attaches a seeded percentile boot
 
 from __future__ import annotations
 
+import functools
 import math
 from collections import Counter
 from collections.abc import Callable, Iterable, Mapping, Sequence
@@ -21,7 +22,7 @@ import numpy as np
 from pytest_emrd.errors import check_choice
 from pytest_emrd.metrics._decide import consensus
 from pytest_emrd.metrics._episode import EpisodeLike, EpisodeMetrics, as_episode_metrics
-from pytest_emrd.metrics._stats import N_RESAMPLES, Estimate, bootstrap_ci
+from pytest_emrd.metrics._stats import N_RESAMPLES, Estimate, bootstrap_ci, bootstrap_sums_ci
 from pytest_emrd.metrics._survival import ebbinghaus_fit
 from pytest_emrd.rooms import FOCAL_COLUMNS, OTHER_LETTER
 
@@ -84,11 +85,10 @@ def _ratio_of(
             why = kept[0].reasons.get(name) or f"{name} has an empty denominator"
             return Estimate(None, None, None, len(kept), why, errored)
 
-        def ratio(sample: np.ndarray) -> np.ndarray:
-            s = sample.sum(axis=1)
-            return np.divide(s[:, 0], s[:, 1])
+        def ratio(sums: np.ndarray) -> np.ndarray:
+            return np.divide(sums[:, 0], sums[:, 1])
 
-        low, high = bootstrap_ci(pairs, ratio, rng_seed=rng_seed)
+        low, high = bootstrap_sums_ci(pairs, ratio, rng_seed=rng_seed)
         value = math.inf if total_den == 0 else float(total_num / total_den)
         reason = None
         if math.isinf(value):
@@ -108,10 +108,10 @@ def _consensus(items: Sequence[EpisodeLike], *, rng_seed: int = 0) -> Estimate:
     onehot[np.arange(len(kept)), [FOCAL_COLUMNS.index(m.chosen_letter) for m in kept]] = 1.0
     rooms = [FOCAL_COLUMNS.index(c) for c in FOCAL_COLUMNS if c != OTHER_LETTER]
 
-    def share(sample: np.ndarray) -> np.ndarray:
-        return sample.sum(axis=1)[:, rooms].max(axis=1) / sample.shape[1]
+    def share(sums: np.ndarray) -> np.ndarray:
+        return sums[:, rooms].max(axis=1) / len(kept)
 
-    low, high = bootstrap_ci(onehot, share, rng_seed=rng_seed)
+    low, high = bootstrap_sums_ci(onehot, share, rng_seed=rng_seed)
     return Estimate(result.share, low, high, len(kept), None, errored)
 
 
@@ -139,18 +139,28 @@ def _r2(items: Sequence[EpisodeLike], *, rng_seed: int = 0) -> Estimate:
         for s in ss:
             leave[i, s.duration] += 1
             death[i, s.duration] += s.forgotten
-    rng = np.random.default_rng(rng_seed)
-    n = len(kept)
-    draws = np.stack([rng.integers(0, n, n) for _ in range(N_RESAMPLES)])  # one resample a row
-    draws += n * np.arange(N_RESAMPLES)[:, None]  # row r counts into bins r*n .. r*n + n - 1
-    weights = np.bincount(draws.ravel(), minlength=N_RESAMPLES * n).reshape(N_RESAMPLES, n)
-    weights = weights.astype(float)
+    weights = _histogram_weights(rng_seed, len(kept))
     draws = _r2_of_histograms(weights @ leave, weights @ death, weights @ mapped, weights @ total)
     draws = draws[np.isfinite(draws)]
     if not len(draws):
         return Estimate(full.r2, None, None, len(kept), "R^2 undefined in every resample", errored)
     low, high = np.quantile(draws, [0.025, 0.975])
     return Estimate(full.r2, float(low), float(high), len(kept), None, errored)
+
+
+@functools.lru_cache(maxsize=4)
+def _histogram_weights(rng_seed: int, n: int) -> np.ndarray:
+    """How often each of ``n`` episodes is drawn in each of :data:`N_RESAMPLES` resamples of
+    :func:`_r2`'s bootstrap, one ``default_rng(rng_seed).integers(0, n, n)`` per resample
+    (``N_RESAMPLES x n`` floats): a function of its arguments alone, so computed once and
+    shared read-only."""
+    rng = np.random.default_rng(rng_seed)
+    draws = np.stack([rng.integers(0, n, n) for _ in range(N_RESAMPLES)])  # one resample a row
+    draws += n * np.arange(N_RESAMPLES)[:, None]  # row r counts into bins r*n .. r*n + n - 1
+    weights = np.bincount(draws.ravel(), minlength=N_RESAMPLES * n).reshape(N_RESAMPLES, n)
+    weights = weights.astype(float)
+    weights.flags.writeable = False
+    return weights
 
 
 def _r2_of_histograms(

@@ -76,6 +76,53 @@ def bootstrap_ci(
     fn = statistic if statistic is not None else (lambda a: a.mean(axis=1))
     with np.errstate(divide="ignore", invalid="ignore"):
         values = np.asarray(fn(arr[idx]), dtype=float)
+    return _percentiles(values, confidence)
+
+
+@functools.lru_cache(maxsize=4)
+def resample_counts(rng_seed: int, n: int, n_resamples: int) -> np.ndarray:
+    """How often each of the ``n`` rows is drawn in each resample of :func:`resample_rows`
+    (``n_resamples x n``, as floats; read-only, shared like the rows)."""
+    idx = resample_rows(rng_seed, n, n_resamples)
+    flat = (idx + n * np.arange(n_resamples)[:, None]).ravel()
+    counts = np.bincount(flat, minlength=n_resamples * n).reshape(n_resamples, n)
+    counts = counts.astype(float)
+    counts.flags.writeable = False
+    return counts
+
+
+def bootstrap_sums_ci(
+    data: np.ndarray,
+    statistic: Callable[[np.ndarray], np.ndarray],
+    *,
+    rng_seed: int = 0,
+    n_resamples: int = N_RESAMPLES,
+    confidence: float = 0.95,
+) -> tuple[float | None, float | None]:
+    r""":func:`bootstrap_ci` of a statistic of the resampled column sums of ``data`` (n x k):
+    ``statistic`` receives the ``(n_resamples, k)`` sums ``data[rows].sum(axis=1)`` of the
+    same resamples, and returns ``n_resamples`` values.
+
+    For whole numbers whose sums stay below ``2**53`` (counts: events, steps, one-hot
+    choices) every partial sum is exact, so the sums are computed as resample counts times
+    ``data`` (:func:`resample_counts`) instead of gathering ``n_resamples x n`` rows: the
+    same bits in any order of addition. Other data is resampled row by row
+    (:func:`bootstrap_ci`). Edge cases as :func:`bootstrap_ci`.
+    """
+    arr = np.asarray(data, dtype=float)
+    n = len(arr)
+    whole = n >= 2 and bool(np.all(arr == np.round(arr))) and float(np.abs(arr).max()) * n < 2**53
+    if not whole:
+        return bootstrap_ci(arr, lambda a: statistic(a.sum(axis=1)), rng_seed=rng_seed,
+                            n_resamples=n_resamples, confidence=confidence)  # fmt: skip
+    sums = resample_counts(rng_seed, n, n_resamples) @ arr
+    with np.errstate(divide="ignore", invalid="ignore"):
+        values = np.asarray(statistic(sums), dtype=float)
+    return _percentiles(values, confidence)
+
+
+def _percentiles(values: np.ndarray, confidence: float) -> tuple[float | None, float | None]:
+    """The percentile interval of the resampled statistic (NaN resamples dropped)."""
     values = values[~np.isnan(values)]
     if not len(values):
         return None, None
