@@ -107,8 +107,6 @@ class Layout(NamedTuple):
 
     true: np.ndarray
     """Object positions (m x 2)."""
-    points: tuple[Point, ...]
-    """``true`` as tuples."""
     kinds: np.ndarray
     """Type index of each object (m)."""
     cols_of: dict[int, tuple[int, ...]]
@@ -132,7 +130,6 @@ def layout_of(points: Sequence[Point], kinds: Sequence[int], scale: float) -> La
     counts = [len(cols_of.get(k, ())) for k in range(top)]
     return Layout(
         np.array(points, dtype=float).reshape(-1, 2),
-        tuple((float(x), float(z)) for x, z in points),
         np.array(kinds, dtype=np.intp),
         cols_of,
         scale,

@@ -98,7 +98,8 @@ def _two_point(pa: Point, pb: Point, qa: Point, qb: Point) -> Motion:
 
 
 def _hypotheses(problem: Problem) -> list[Motion]:
-    pred, true, cand = problem.points, problem.layout.points, problem.candidates
+    pred, cand = problem.points, problem.candidates
+    true = [tuple(p) for p in problem.layout.true.tolist()]
     d1 = digits(problem.layout.scale, 1)
     n = len(pred)
     centre = (math.fsum([p[0] for p in pred]) / n, math.fsum([p[1] for p in pred]) / n)
@@ -217,7 +218,7 @@ def test_anchored_is_the_anchors_fit_then_the_assignment(
     problem, known, _ = case
     layout = problem.layout
     anchors = data.draw(
-        st.lists(st.tuples(point, st.integers(0, len(layout.points) - 1)), min_size=1, max_size=4)
+        st.lists(st.tuples(point, st.integers(0, len(layout.true) - 1)), min_size=1, max_size=4)
     )
     held = sorted({c for _, c in known})
     points = np.array([p for p, _ in anchors] + problem.points, dtype=float)
