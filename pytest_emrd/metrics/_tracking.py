@@ -213,11 +213,12 @@ def _tbs_value(
     """``TBS(t)`` of one step: 0.0 when nothing is matched (coverage 0)."""
     if not a.identity:
         return 0.0
+    entries, hypot = a.entries, math.hypot
     drift = 0.0
-    for lb in a.identity:
-        e = a.entries[lb]
+    for lb in a.identity:  # summed in the matcher's order of the labels
+        e = entries[lb]
         x0, z0 = first_pos[lb]
-        drift += math.hypot(e.x - x0, e.z - z0)
+        drift += hypot(e.x - x0, e.z - z0)
     n = len(a.identity)
     return exp_ratio(drift / n, scale) * min(n, g_base) / g_base
 
