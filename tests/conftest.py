@@ -1,4 +1,5 @@
-"""Shared test configuration: hypothesis profiles, a loopback JSON server.
+"""Shared test configuration: hypothesis profiles, a bytecode cache for the Python processes
+tests start, the order of the slow tests, a loopback JSON server.
 
 ``ci`` (the default here) is derandomized with no deadline so CI results are
 reproducible and immune to a slow shared machine; ``dev`` explores more.
@@ -10,12 +11,16 @@ import importlib
 import json
 import os
 import pkgutil
+import shutil
+import tempfile
 import threading
 from collections.abc import Callable, Iterator
 from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
+from pathlib import Path
 from typing import Any
 
 import pytest
+from filelock import FileLock
 from hypothesis import HealthCheck, settings
 
 #: ``answer(method, path, json_body_or_None) -> (status, payload)`` of :func:`json_server`.
@@ -54,6 +59,85 @@ def _import_the_whole_product() -> None:
 
 
 _import_the_whole_product()
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    if not hasattr(config, "workerinput"):  # the controller, before xdist starts its workers
+        _cache_bytecode_of_child_processes(config)
+        _hand_out_one_test_at_a_time(config)
+
+
+def _cache_bytecode_of_child_processes(config: pytest.Config) -> None:
+    """Give the Python processes this session starts one throw-away bytecode cache.
+
+    With ``PYTHONDONTWRITEBYTECODE=1`` (a machine that keeps ``.pyc`` files out of its source
+    trees), every ``pytest`` a test starts (pytester sessions, their xdist workers, the CI
+    example's shards) would compile every module of the product again and re-rewrite every
+    plugin package pytest rewrites (hypothesis' among them): about 1.5 s of CPU per process.
+    Those processes instead read and write ``.pyc`` files under a temporary
+    ``PYTHONPYCACHEPREFIX``, never next to a source; it is removed when the session ends.
+    Where bytecode is written anyway (a fresh CI checkout) nothing changes. xdist's workers
+    inherit it.
+    """
+    if not os.environ.get("PYTHONDONTWRITEBYTECODE") or os.environ.get("PYTHONPYCACHEPREFIX"):
+        return
+    cache = tempfile.mkdtemp(prefix="emrd-tests-pycache-")
+    os.environ["PYTHONPYCACHEPREFIX"] = cache
+    written = os.environ.pop("PYTHONDONTWRITEBYTECODE")
+
+    def restore() -> None:
+        os.environ["PYTHONDONTWRITEBYTECODE"] = written
+        del os.environ["PYTHONPYCACHEPREFIX"]
+        shutil.rmtree(cache, ignore_errors=True)
+
+    config.add_cleanup(restore)
+
+
+def _hand_out_one_test_at_a_time(config: pytest.Config) -> None:
+    """A few dozen tests of several seconds each (``slow``, sorted first by
+    :func:`pytest_collection_modifyitems`) among ~1600 quick ones: xdist's ``load`` schedule
+    gives each worker a first batch of a quarter of its share, which would put every slow test
+    on the first worker. One test at a time (``--maxschedchunk=1``, unless given) keeps both
+    workers busy to the end."""
+    if not config.pluginmanager.hasplugin("xdist") or config.getoption("dist") != "load":
+        return
+    if config.getoption("maxschedchunk") is None:
+        config.option.maxschedchunk = 1
+
+
+@pytest.hookimpl(trylast=True)
+def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
+    """Tests marked ``slow`` (whole pytest sessions, recorded grids) run first: under xdist
+    they then spread over the workers instead of ending the run on one of them. The order is
+    otherwise kept (after pytest's own fixture-scope ordering)."""
+    items.sort(key=lambda item: item.get_closest_marker("slow") is None)
+
+
+@pytest.fixture(scope="session")
+def shared_folder(
+    tmp_path_factory: pytest.TempPathFactory,
+) -> Callable[[str, Callable[[Path], None]], Path]:
+    """``shared_folder(name, build)``: a folder filled by ``build(folder)`` once per test
+    session, however many xdist workers ask for it; the first builds it under a file lock, the
+    others wait for it and reuse it. Callers must not change it (copy it first). A worker that
+    finds a failed attempt runs ``build`` again, so the error shows wherever it matters.
+    """
+    base = tmp_path_factory.getbasetemp()
+    if os.environ.get("PYTEST_XDIST_WORKER"):
+        base = base.parent  # this session's folder, above each worker's own
+
+    def get(name: str, build: Callable[[Path], None]) -> Path:
+        folder = base / f"shared-{name}"
+        with FileLock(f"{folder}.lock"):
+            if not folder.is_dir():
+                partial = base / f"shared-{name}.partial"
+                shutil.rmtree(partial, ignore_errors=True)
+                partial.mkdir()
+                build(partial)
+                partial.rename(folder)
+        return folder
+
+    return get
 
 
 @pytest.fixture(autouse=True)

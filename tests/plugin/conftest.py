@@ -43,15 +43,12 @@ def small() -> Callable[..., list[str]]:
     return args
 
 
-@pytest.fixture(scope="module")
-def recorded(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    """Cassettes of scout-baseline-office-ep00/ep01, recorded live from the reference server."""
+def _record(root: Path) -> None:
     from pytest_emrd.agent import load_registry
     from pytest_emrd.cassette import agent_runner, run_with_cassette
     from pytest_emrd.episode import protocol_version
     from pytest_emrd.trajectory import EpisodeSpec
 
-    root = tmp_path_factory.mktemp("cassettes")
     runner = agent_runner(load_registry())
     for episode in (0, 1):
         spec = EpisodeSpec("scout", "baseline", "office", episode, modality="both")
@@ -59,7 +56,13 @@ def recorded(tmp_path_factory: pytest.TempPathFactory) -> Path:
             spec, runner, cassettes=root, protocol=protocol_version(), record_mode="once"
         )
         assert run.recorded and run.trajectory.status != "errored", run.trajectory.error
-    return root
+
+
+@pytest.fixture(scope="session")
+def recorded(shared_folder: Callable[..., Path]) -> Path:
+    """Cassettes of scout-baseline-office-ep00/ep01, recorded live from the reference server
+    once per session (read-only: copy them to change them)."""
+    return shared_folder("cassettes", _record)
 
 
 THOR_CONFTEST = """

@@ -23,11 +23,17 @@ pytestmark = pytest.mark.slow
 EFC_TOLERANCE = 0.4
 
 
-@pytest.fixture(scope="module")
-def rows(tmp_path_factory: pytest.TempPathFactory) -> dict[str, dict]:
-    out: Path = tmp_path_factory.mktemp("validation")
+def _validate(out: Path) -> None:
     code = main(["validate", "--episodes", "1", "--out", str(out), "--jobs", "2",
                  "--family", "scout", "--family", "mimic"])  # fmt: skip
+    (out / "exit-code").write_text(str(code))
+
+
+@pytest.fixture(scope="module")
+def rows(shared_folder) -> dict[str, dict]:
+    """The checks of one reduced run, made once per session (xdist workers share it)."""
+    out: Path = shared_folder("validation", _validate)
+    code = int((out / "exit-code").read_text())
     report = json.loads((out / "validation.json").read_text())
     assert (out / "validation.md").read_text().startswith(f"{len(report['checks'])} checks")
     assert code == (1 if any(c["verdict"] == "fail" for c in report["checks"]) else 0)
