@@ -56,6 +56,13 @@ def _import_the_whole_product() -> None:
     for info in pkgutil.walk_packages(pytest_emrd.__path__, "pytest_emrd."):
         if not info.name.endswith("__main__"):
             importlib.import_module(info.name)
+    # numba imports ~70 more modules of its own (``numba.np.polynomial`` ...) the first time a
+    # kernel is compiled or loaded from its cache; imported again after pytester dropped them,
+    # they register their types twice ("duplicate registration for PolynomialType").
+    from numba.core.registry import cpu_target
+
+    cpu_target.typing_context.refresh()
+    cpu_target.target_context.refresh()
 
 
 _import_the_whole_product()
