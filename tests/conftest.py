@@ -69,35 +69,53 @@ _import_the_whole_product()
 
 
 def pytest_configure(config: pytest.Config) -> None:
+    _cache_bytecode_of_child_processes(config)
     if not hasattr(config, "workerinput"):  # the controller, before xdist starts its workers
-        _cache_bytecode_of_child_processes(config)
         _hand_out_one_test_at_a_time(config)
 
 
+#: The session's bytecode cache, named by the controller for its xdist workers.
+_PYCACHE = "EMRD_TESTS_PYCACHE"
+
+
 def _cache_bytecode_of_child_processes(config: pytest.Config) -> None:
-    """Give the Python processes this session starts one throw-away bytecode cache.
+    """Give the Python processes the tests start one throw-away bytecode cache.
 
     With ``PYTHONDONTWRITEBYTECODE=1`` (a machine that keeps ``.pyc`` files out of its source
     trees), every ``pytest`` a test starts (pytester sessions, their xdist workers, the CI
     example's shards) would compile every module of the product again and re-rewrite every
-    plugin package pytest rewrites (hypothesis' among them): about 1.5 s of CPU per process.
-    Those processes instead read and write ``.pyc`` files under a temporary
-    ``PYTHONPYCACHEPREFIX``, never next to a source; it is removed when the session ends.
-    Where bytecode is written anyway (a fresh CI checkout) nothing changes. xdist's workers
-    inherit it.
+    plugin package pytest rewrites (hypothesis' among them): 1.5 to 2 s of CPU per process.
+    Those processes instead read and write ``.pyc`` files under one temporary
+    ``PYTHONPYCACHEPREFIX`` per session, never next to a source; the controller removes it
+    when the session ends. This process and xdist's workers keep their own start-up as it is
+    (the variables change after they started): compiling the whole virtualenv and standard
+    library into an empty cache would cost them more than it saves. Where bytecode is written
+    anyway (a fresh CI checkout) nothing changes.
     """
-    if not os.environ.get("PYTHONDONTWRITEBYTECODE") or os.environ.get("PYTHONPYCACHEPREFIX"):
-        return
-    cache = tempfile.mkdtemp(prefix="emrd-tests-pycache-")
-    os.environ["PYTHONPYCACHEPREFIX"] = cache
-    written = os.environ.pop("PYTHONDONTWRITEBYTECODE")
+    cache = os.environ.get(_PYCACHE)
+    if cache is None:
+        if not os.environ.get("PYTHONDONTWRITEBYTECODE") or os.environ.get("PYTHONPYCACHEPREFIX"):
+            return
+        cache = tempfile.mkdtemp(prefix="emrd-tests-pycache-")
+        config.add_cleanup(lambda: shutil.rmtree(cache, ignore_errors=True))
+        if _distributes(config):  # the workers start after this and take it from here
+            os.environ[_PYCACHE] = cache
+            config.add_cleanup(lambda: os.environ.pop(_PYCACHE, None))
+            return
+    written = os.environ.pop("PYTHONDONTWRITEBYTECODE", None)
 
     def restore() -> None:
-        os.environ["PYTHONDONTWRITEBYTECODE"] = written
-        del os.environ["PYTHONPYCACHEPREFIX"]
-        shutil.rmtree(cache, ignore_errors=True)
+        os.environ.pop("PYTHONPYCACHEPREFIX", None)
+        if written is not None:
+            os.environ["PYTHONDONTWRITEBYTECODE"] = written
 
     config.add_cleanup(restore)
+    os.environ["PYTHONPYCACHEPREFIX"] = cache
+
+
+def _distributes(config: pytest.Config) -> bool:
+    """Whether this process is an xdist controller handing tests to workers."""
+    return config.pluginmanager.hasplugin("xdist") and config.getoption("dist") != "no"
 
 
 def _hand_out_one_test_at_a_time(config: pytest.Config) -> None:
@@ -106,9 +124,8 @@ def _hand_out_one_test_at_a_time(config: pytest.Config) -> None:
     gives each worker a first batch of a quarter of its share, which would put every slow test
     on the first worker. One test at a time (``--maxschedchunk=1``, unless given) keeps both
     workers busy to the end."""
-    if not config.pluginmanager.hasplugin("xdist") or config.getoption("dist") != "load":
-        return
-    if config.getoption("maxschedchunk") is None:
+    load = _distributes(config) and config.getoption("dist") == "load"
+    if load and config.getoption("maxschedchunk") is None:
         config.option.maxschedchunk = 1
 
 
