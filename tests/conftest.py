@@ -56,13 +56,31 @@ def _import_the_whole_product() -> None:
     for info in pkgutil.walk_packages(pytest_emrd.__path__, "pytest_emrd."):
         if not info.name.endswith("__main__"):
             importlib.import_module(info.name)
+    _import_what_the_product_imports_on_first_use()
+
+
+def _import_what_the_product_imports_on_first_use() -> None:
+    """The libraries the product (or a library it uses) imports inside a function, for the
+    same reason: a pytester test may be the first to use them, in process."""
+    import httpx
+    import lifelines  # noqa: F401
+    import scipy.optimize
+    import scipy.stats  # noqa: F401
+    import statsmodels.stats.multitest
+    import statsmodels.stats.oneway  # noqa: F401
+    import vcr  # noqa: F401
+    from numba.core.registry import cpu_target
+    from PIL import Image
+
     # numba imports ~70 more modules of its own (``numba.np.polynomial`` ...) the first time a
     # kernel is compiled or loaded from its cache; imported again after pytester dropped them,
     # they register their types twice ("duplicate registration for PolynomialType").
-    from numba.core.registry import cpu_target
-
     cpu_target.typing_context.refresh()
     cpu_target.target_context.refresh()
+    # httpx imports httpcore with its first transport; a second httpcore's ConnectError is
+    # not the class httpx maps to its own exceptions, so it would escape every handler.
+    httpx.HTTPTransport().close()
+    Image.init()  # Pillow's image format plugins
 
 
 _import_the_whole_product()
