@@ -217,13 +217,20 @@ def live_exchanges(
     """The HTTP exchanges of ``spec`` as a live run sends them (JPEG frames), replayed from
     its committed cassette; or, with ``as_sent_live=False``, as a replay sends them (pixel
     digests)."""
+    return _captured(spec, as_sent_live=as_sent_live)[1]
+
+
+def _captured(
+    spec: EpisodeSpec, *, as_sent_live: bool
+) -> tuple[Trajectory, list[tuple[httpx.Request, httpx.Response]]]:
+    """``spec`` replayed from its committed cassette, and the HTTP exchanges it made."""
     capture = _Capture()
     client = _scout_client(capture)
     try:
-        _replay(spec, client, as_sent_live=as_sent_live)
+        trajectory = _replay(spec, client, as_sent_live=as_sent_live)
     finally:
         client.close()
-    return capture.exchanges
+    return trajectory, capture.exchanges
 
 
 def _size_ratio(specs: tuple[EpisodeSpec, ...]) -> float:
@@ -283,8 +290,9 @@ def _httpx_vcrpy_floor_ratio(specs: tuple[EpisodeSpec, ...], repeat: int) -> flo
     redaction, no reply parsing, no agent; everything the replay does beyond this is ours."""
     import vcr
 
-    trajectories = _replayed(specs)
-    episodes = [live_exchanges(spec, as_sent_live=False) for spec in specs]
+    captured = [_captured(spec, as_sent_live=False) for spec in specs]
+    trajectories = [trajectory for trajectory, _ in captured]
+    episodes = [exchanges for _, exchanges in captured]
     plain = httpx.Client()
 
     def alone() -> None:
@@ -310,7 +318,8 @@ def _httpx_vcrpy_floor_ratio(specs: tuple[EpisodeSpec, ...], repeat: int) -> flo
         for n, exchanges in enumerate(episodes):
             (folder / f"{n}.yaml").write_text(plain_vcrpy_yaml(exchanges))
         try:
-            alone(), requests(folder)  # warm-up
+            alone()  # warm-up, both sides
+            requests(folder)
             ratios = []
             for _ in range(repeat):
                 start = time.process_time()
@@ -329,14 +338,6 @@ def _resent(request: httpx.Request) -> dict[str, Any]:
         "content": request.content,
         "headers": request.headers,
     }
-
-
-def _replayed(specs: tuple[EpisodeSpec, ...]) -> list[Trajectory]:
-    client = _scout_client()
-    try:
-        return [_replay(spec, client) for spec in specs]
-    finally:
-        client.close()
 
 
 def _step_overhead_ms(repeat: int) -> float:
