@@ -22,7 +22,13 @@ import numpy as np
 from pytest_emrd.errors import check_choice
 from pytest_emrd.metrics._decide import consensus
 from pytest_emrd.metrics._episode import EpisodeLike, EpisodeMetrics, as_episode_metrics
-from pytest_emrd.metrics._stats import N_RESAMPLES, Estimate, bootstrap_ci, bootstrap_sums_ci
+from pytest_emrd.metrics._stats import (
+    N_RESAMPLES,
+    Estimate,
+    bootstrap_ci,
+    bootstrap_sums_ci,
+    draw_counts,
+)
 from pytest_emrd.metrics._survival import ebbinghaus_fit
 from pytest_emrd.rooms import FOCAL_COLUMNS, OTHER_LETTER
 
@@ -155,12 +161,7 @@ def _histogram_weights(rng_seed: int, n: int) -> np.ndarray:
     (``N_RESAMPLES x n`` floats): a function of its arguments alone, so computed once and
     shared read-only."""
     rng = np.random.default_rng(rng_seed)
-    draws = np.stack([rng.integers(0, n, n) for _ in range(N_RESAMPLES)])  # one resample a row
-    draws += n * np.arange(N_RESAMPLES)[:, None]  # row r counts into bins r*n .. r*n + n - 1
-    weights = np.bincount(draws.ravel(), minlength=N_RESAMPLES * n).reshape(N_RESAMPLES, n)
-    weights = weights.astype(float)
-    weights.flags.writeable = False
-    return weights
+    return draw_counts(np.stack([rng.integers(0, n, n) for _ in range(N_RESAMPLES)]))
 
 
 def _r2_of_histograms(

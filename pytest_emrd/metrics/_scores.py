@@ -267,8 +267,6 @@ def reentry_copies(
     if not by_type or len(label_of) < 2:
         return frozenset()
     labels = [lb for group in by_type.values() for lb in group]
-    if not labels:
-        return frozenset()
     objects = office.objects
     pairs = sorted(label_of.items())
     layout = office.layout

@@ -83,8 +83,14 @@ def bootstrap_ci(
 def resample_counts(rng_seed: int, n: int, n_resamples: int) -> np.ndarray:
     """How often each of the ``n`` rows is drawn in each resample of :func:`resample_rows`
     (``n_resamples x n``, as floats; read-only, shared like the rows)."""
-    idx = resample_rows(rng_seed, n, n_resamples)
-    flat = (idx + n * np.arange(n_resamples)[:, None]).ravel()
+    return draw_counts(resample_rows(rng_seed, n, n_resamples))
+
+
+def draw_counts(idx: np.ndarray) -> np.ndarray:
+    """How often each of ``n`` rows appears in each row of ``idx`` (``n_resamples x n`` row
+    indices): the ``n_resamples x n`` counts as read-only floats, ready to multiply data."""
+    n_resamples, n = idx.shape
+    flat = (idx + n * np.arange(n_resamples)[:, None]).ravel()  # row r counts into r*n ..
     counts = np.bincount(flat, minlength=n_resamples * n).reshape(n_resamples, n)
     counts = counts.astype(float)
     counts.flags.writeable = False
