@@ -13,19 +13,21 @@ Importing this package does not import ``ai2thor``; that happens when a
 
 from __future__ import annotations
 
-from pytest_emrd.world.thor._assets import ASSET_IDS, SCHEMA, THOR_ROOM_TYPES
+from pytest_emrd.world.thor._assets import SCHEMA, THOR_ROOM_TYPES, Asset, assets, choose_asset
 from pytest_emrd.world.thor._house import build_house
 from pytest_emrd.world.thor._ids import IdTable
 from pytest_emrd.world.thor._simulator import DEFAULTS, ThorSimulator
 from pytest_emrd.world.thor._version import THOR_VERSION
 
 __all__ = [
-    "ASSET_IDS",
     "DEFAULTS",
     "SCHEMA",
     "THOR_ROOM_TYPES",
     "THOR_VERSION",
+    "Asset",
     "IdTable",
     "ThorSimulator",
+    "assets",
     "build_house",
+    "choose_asset",
 ]

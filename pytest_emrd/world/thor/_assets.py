@@ -1,16 +1,29 @@
-"""Vendored look-up tables for turning an EMRD layout into a ProcTHOR house.
+"""ProcTHOR assets for the EMRD office: which prefab stands in for which layout object.
 
-ProcTHOR knows four room types and instantiates furniture from prefab asset ids. The
-tables below pick one asset per AI2-THOR ``objectType`` the EMRD office uses, so the
-same layout always produces the same house. They are deliberately small and explicit:
-a layout object whose type is missing here is a configuration error (see
-:func:`asset_for`), never a silent guess. Callers with a different THOR build pass
-their own ``asset_ids`` mapping to :func:`pytest_emrd.world.thor.build_house`.
+``assets.json`` (next to this module) holds every asset of the object types the office
+uses, with its bounding box, copied from allenai/procthor ``procthor/databases/
+asset-database.json`` at commit 53d5bd4c8c96a699e6a615dc390abb670cc9d353 (the file's
+last change: d4c4c6a9, 2022-07-25). THOR spawns a house object by its ``assetId`` and
+centres that asset's bounding box on the object's ``position`` (ai2thor
+``ProceduralTools.cs``, ``spawnHouseObject``: ``positionBoundingBoxCenter: true``); an id
+missing from the build's database is logged ("Asset not in Database") and skipped while
+``CreateHouse`` still succeeds. So an id this package emits must exist, and the object's
+size and height come from that asset, not from the EMRD catalogue.
+
+:func:`choose_asset` picks, per layout object, the asset of its type whose box is closest
+to the object's width, depth and height (oversize counts double: a bigger asset may cross
+a wall or a doorway's approach). The same layout always gets the same assets. Callers
+override the choice per type with ``asset_ids={"Desk": "Desk_204_1"}``; an id outside
+this table is refused at build time (:func:`asset_by_id`).
 """
 
 from __future__ import annotations
 
+import json
 from collections.abc import Mapping
+from dataclasses import dataclass
+from functools import cache
+from importlib import resources
 from typing import Final
 
 from pytest_emrd.errors import ConfigError
@@ -28,25 +41,9 @@ THOR_ROOM_TYPES: Final[Mapping[str, str]] = {
     ENTRANCE: "LivingRoom",
 }
 
-#: AI2-THOR ``objectType`` -> ProcTHOR prefab ``assetId``.
-ASSET_IDS: Final[Mapping[str, str]] = {
-    "ArmChair": "Armchair_208_1",
-    "Chair": "Chair_007_1",
-    "CoffeeMachine": "Coffee_Machine_1",
-    "CounterTop": "Countertop_I_8x2",
-    "Desk": "Desk_310_1",
-    "DiningTable": "Dining_Table_16_1",
-    "Door": "Doorway_1",
-    "Doorway": "Doorway_1",
-    "Fridge": "Fridge_1",
-    "HousePlant": "Houseplant_1",
-    "Laptop": "Laptop_1",
-    "Microwave": "Microwave_1",
-    "ShelvingUnit": "Shelving_Unit_307_1",
-    "Sink": "Sink_1",
-    "Stool": "Stool_1",
-    "Television": "Television_1",
-}
+#: EMRD ``objectType`` -> the asset-database type its assets come from, where they differ:
+#: the building exit is a wall hole filled with a doorway asset, like the inner doorways.
+ASSET_TYPES: Final[Mapping[str, str]] = {"Door": "Doorway"}
 
 DOOR_TYPES: Final[frozenset[str]] = frozenset({"Doorway", "Door"})
 """Object types built as wall holes (``doors``), not as free-standing objects."""
@@ -54,18 +51,98 @@ DOOR_TYPES: Final[frozenset[str]] = frozenset({"Doorway", "Door"})
 FLOOR_MATERIAL: Final = "DarkWoodFloors"
 CEILING_MATERIAL: Final = "ps_mat"
 SKYBOX_ID: Final = "Sky1"
+"""procthor ``skyboxes.json``: a ``Midday`` sky (the baseline's ambient light)."""
+DIM_SKYBOX_ID: Final = "Sky2Dusk"
+"""procthor ``skyboxes.json``: a ``BlueHour`` sky, the darkest procthor lights a house with
+(its ``Midnight`` skies are refused as "too dark to see all of the objects",
+``generation/skyboxes.py``). THOR takes the ambient light from the skybox
+(``RenderSettings.skybox`` then ``DynamicGI.UpdateEnvironment()`` in ``CreateHouse``), so
+``low_light`` dims the ambient and sky contribution by switching to it."""
 
 WALL_COLOR: Final[tuple[float, float, float]] = (0.93, 0.92, 0.89)
 """Baseline wall albedo (warm white)."""
 
 
-def asset_for(object_type: str, table: Mapping[str, str]) -> str:
-    """The ``assetId`` for ``object_type``, or :class:`ConfigError` naming the fix."""
-    try:
-        return table[object_type]
-    except KeyError:
+@dataclass(frozen=True)
+class Asset:
+    """One ProcTHOR prefab and its bounding box (metres, the asset's own axes)."""
+
+    asset_id: str
+    object_type: str
+    """Its type in the asset database (``Doorway`` for an EMRD ``Door``)."""
+    width: float
+    """``boundingBox.x``: extent along the asset's own x axis."""
+    height: float
+    """``boundingBox.y``."""
+    depth: float
+    """``boundingBox.z``."""
+
+
+@cache
+def _table() -> dict[str, Asset]:
+    text = resources.files(__package__).joinpath("assets.json").read_text(encoding="utf-8")
+    data = json.loads(text)["assets"]
+    return {
+        asset_id: Asset(asset_id, object_type, *box)
+        for object_type, rows in data.items()
+        for asset_id, box in rows.items()
+    }
+
+
+def assets() -> Mapping[str, Asset]:
+    """Every vendored asset, by id."""
+    return _table()
+
+
+def candidates(object_type: str) -> tuple[Asset, ...]:
+    """The vendored assets an EMRD object of ``object_type`` can be built from, by id."""
+    wanted = ASSET_TYPES.get(object_type, object_type)
+    found = tuple(
+        sorted((a for a in _table().values() if a.object_type == wanted), key=lambda a: a.asset_id)
+    )
+    if not found:
         raise ConfigError(
-            f"object_type={object_type!r} has no ProcTHOR asset in the vendored table; "
-            "pass asset_ids={..., " + repr(object_type) + ": '<assetId>'} to build_house "
-            "with an asset id from your THOR build."
-        ) from None
+            f"object_type={object_type!r} has no ProcTHOR asset in the vendored table "
+            "(pytest_emrd/world/thor/assets.json); use one of the office's object types."
+        )
+    return found
+
+
+def asset_by_id(asset_id: str, object_type: str) -> Asset:
+    """The vendored asset ``asset_id`` for an object of ``object_type``, or ConfigError."""
+    options = candidates(object_type)
+    for asset in options:
+        if asset.asset_id == asset_id:
+            return asset
+    raise ConfigError(
+        f"asset_ids={{{object_type!r}: {asset_id!r}}} names no {object_type} in the ProcTHOR "
+        "asset database (THOR would skip it silently and the object would be missing); use "
+        f"one of: {', '.join(a.asset_id for a in options)}."
+    )
+
+
+def _misfit(asset: Asset, width: float, depth: float, height: float) -> float:
+    """Metres by which ``asset`` misses the wanted box; oversize counts double."""
+    total = 0.0
+    for have, want in ((asset.width, width), (asset.depth, depth), (asset.height, height)):
+        total += 2.0 * (have - want) if have > want else want - have
+    return total
+
+
+def choose_asset(
+    object_type: str,
+    width: float,
+    depth: float,
+    height: float,
+    overrides: Mapping[str, str] | None = None,
+) -> Asset:
+    """The asset for a layout object of this type and box (``overrides`` win per type).
+
+    Ties go to the smaller asset id, so the choice is stable.
+    """
+    if overrides and object_type in overrides:
+        return asset_by_id(overrides[object_type], object_type)
+    return min(
+        candidates(object_type),
+        key=lambda a: (round(_misfit(a, width, depth, height), 6), a.asset_id),
+    )

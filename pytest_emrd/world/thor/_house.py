@@ -3,13 +3,17 @@
 The house is what ``Controller(scene=house)`` / ``CreateHouse`` accept: ``rooms`` with
 ``floorPolygon`` and a THOR ``roomType``; ``walls`` (one per boundary piece and room, plus
 one-sided ``wall|exterior|...`` faces); ``doors`` cut as ``holePolygon`` into a wall both
-rooms own, the hole measured along ``wall0`` from its first point; ``objects`` with a
-vendored ``assetId``; ``proceduralParameters`` with lights; ``metadata`` with the agent
-pose, the schema and our own ``emrd`` block (room names, the THOR-id -> EMRD-id table).
+rooms own, the hole measured along ``wall0`` from its first point; ``objects`` with an
+``assetId`` chosen by footprint and placed at its bounding-box height inside its room
+(:mod:`._placement`); ``proceduralParameters`` with lights and skybox; ``metadata`` with the
+schema, the agent's start in ``agentPoses`` (the only pose ``CreateHouse`` applies: ai2thor
+``ProceduralTools.cs``, ``setAgentPose``; ``agent`` repeats it, procthor's own convention)
+on THOR's grid, and our own ``emrd`` block (room names, the THOR-id -> EMRD-id table).
 
 Conditions: ``low_light`` multiplies every light's intensity by the condition's light
-factor; ``texture`` gives walls and floors seeded random colours (the simulator adds
-``RandomizeMaterials`` + ``RandomizeColors`` at reset). The same ``(layout, condition,
+factor and swaps the skybox, THOR's source of ambient light, for a dim one; ``texture``
+gives walls and floors seeded random colours (the simulator adds ``RandomizeMaterials`` +
+``RandomizeColors`` at reset). The same ``(layout, condition,
 seed)`` always yields the same dict.
 """
 
@@ -25,17 +29,18 @@ from pytest_emrd.world._catalog import WALL_HEIGHT as CEILING_HEIGHT
 from pytest_emrd.world._model import Doorway, Layout, WorldObject, WorldPose
 from pytest_emrd.world._rng import StableRng
 from pytest_emrd.world.thor._assets import (
-    ASSET_IDS,
     CEILING_MATERIAL,
+    DIM_SKYBOX_ID,
     DOOR_TYPES,
     FLOOR_MATERIAL,
     SCHEMA,
     SKYBOX_ID,
     THOR_ROOM_TYPES,
     WALL_COLOR,
-    asset_for,
+    choose_asset,
 )
 from pytest_emrd.world.thor._conditions import thor_condition
+from pytest_emrd.world.thor._placement import Placed, place, spawn_point
 from pytest_emrd.world.thor._walls import WallPiece, corners, wall_pieces
 
 AGENT_Y = 0.9009997
@@ -92,7 +97,10 @@ def _hole(piece: WallPiece, x: float, z: float, width: float, what: str) -> dict
 
 
 def _interior_door(
-    doorway: Doorway, numbers: Mapping[str, int], pieces: tuple[WallPiece, ...]
+    doorway: Doorway,
+    numbers: Mapping[str, int],
+    pieces: tuple[WallPiece, ...],
+    assets: Mapping[str, str],
 ) -> dict[str, Any]:
     a, b = numbers[doorway.room_a], numbers[doorway.room_b]
     wall0 = next(
@@ -115,7 +123,7 @@ def _interior_door(
         "room1": f"room|{b}",
         "wall0": wall0.wall_id,
         "wall1": f"wall|{b}|{wall0.position_id}",
-        "assetId": ASSET_IDS["Doorway"],
+        "assetId": choose_asset("Doorway", doorway.width, 0.1, DOOR_HEIGHT, assets).asset_id,
         "openable": True,
         "openness": 1.0,
         **_hole(wall0, doorway.x, doorway.z, doorway.width, doorway.object_id),
@@ -140,7 +148,7 @@ def _exterior_door(
         "room1": f"room|{n}",
         "wall0": wall0.wall_id,
         "wall1": f"wall|exterior|{wall0.position_id}",
-        "assetId": asset_for(obj.object_type, assets),
+        "assetId": choose_asset(obj.object_type, obj.width, obj.depth, obj.height, assets).asset_id,
         "openable": False,
         "openness": 0.0,
         **_hole(wall0, x, z, obj.width, obj.object_id),
@@ -178,14 +186,35 @@ def _lights(layout: Layout, factor: float) -> list[dict[str, Any]]:
     return lights
 
 
-def _object_dict(obj: WorldObject, thor_id: str, assets: Mapping[str, str]) -> dict[str, Any]:
+def _object_dict(placed: Placed, thor_id: str) -> dict[str, Any]:
     return {
         "id": thor_id,
-        "assetId": asset_for(obj.object_type, assets),
-        "position": _xyz(obj.x, obj.elevation + obj.height / 2, obj.z),
-        "rotation": _xyz(0.0, obj.rotation % 360, 0.0),
+        "assetId": placed.asset.asset_id,
+        "position": _xyz(placed.x, placed.y, placed.z),
+        "rotation": _xyz(0.0, placed.rotation, 0.0),
         "kinematic": True,
         "layer": "Procedural0",
+    }
+
+
+def _start(layout: Layout, placed: Mapping[str, Placed], agent: WorldPose | None) -> dict[str, Any]:
+    """The agent's start on THOR's grid, clear of every asset (see :mod:`._placement`)."""
+    first = layout.rooms[0]
+    wanted = agent or WorldPose((first.x0 + first.x1) / 2, (first.z0 + first.z1) / 2, 0.0)
+    name = layout.room_at(wanted.x, wanted.z)
+    spot = None
+    if name is not None:
+        spot = spawn_point(layout.room(name), [p.rect for p in placed.values()], wanted.x, wanted.z)
+    if spot is None:
+        raise ConfigError(
+            f"agent pose x={wanted.x}, z={wanted.z} has no free THOR grid point in its room "
+            f"({name!r}); start the agent inside a room with free floor."
+        )
+    return {
+        "horizon": 0,
+        "position": _xyz(spot[0], AGENT_Y, spot[1]),
+        "rotation": _xyz(0.0, wanted.heading % 360, 0.0),
+        "standing": True,
     }
 
 
@@ -196,15 +225,19 @@ def build_house(
     *,
     agent: WorldPose | None = None,
     asset_ids: Mapping[str, str] | None = None,
+    agent_mode: str = "default",
 ) -> dict[str, Any]:
     """The ProcTHOR house (schema 1.0.0) for ``layout`` under ``condition``.
 
-    ``seed`` drives the ``texture`` colours; ``agent`` is the pose written to
-    ``metadata.agent`` (default: centre of the first room, facing north); ``asset_ids``
-    overrides or extends the vendored ``objectType -> assetId`` table.
+    ``seed`` drives the ``texture`` colours; ``agent`` is where the agent should start
+    (default: centre of the first room, facing north), moved to the nearest free grid point
+    of its room and written to ``metadata.agentPoses[agent_mode]``; ``asset_ids`` picks the
+    asset per ``objectType`` (``{"Desk": "Desk_204_1"}``) instead of the footprint choice,
+    from the vendored asset table only (ConfigError otherwise).
     """
     check_choice("condition", condition, CONDITIONS)
-    assets = {**ASSET_IDS, **(asset_ids or {})}
+    assets = dict(asset_ids or {})
+    placed = place(layout, assets)
     numbers = {room.name: n for n, room in enumerate(layout.rooms, start=1)}
     pieces = wall_pieces(layout)
     rng = StableRng(seed)
@@ -231,7 +264,7 @@ def build_house(
     walls += [_exterior_dict(p, f"room|{p.room}") for p in pieces if p.neighbour is None]
 
     doorway_ids = {d.object_id for d in layout.doorways}
-    doors = [_interior_door(d, numbers, pieces) for d in layout.doorways]
+    doors = [_interior_door(d, numbers, pieces, assets) for d in layout.doorways]
     ids = {door["id"]: d.object_id for door, d in zip(doors, layout.doorways, strict=True)}
     objects, per_room = [], dict.fromkeys(numbers.values(), 0)
     for obj in layout.objects:
@@ -245,11 +278,10 @@ def build_house(
             continue
         thor_id = f"{obj.object_type}|{n}|{per_room[n]}"
         per_room[n] += 1
-        objects.append(_object_dict(obj, thor_id, assets))
+        objects.append(_object_dict(placed[obj.object_id], thor_id))
         ids[thor_id] = obj.object_id
 
-    first = layout.rooms[0]
-    pose = agent or WorldPose((first.x0 + first.x1) / 2, (first.z0 + first.z1) / 2, 0.0)
+    start = _start(layout, placed, agent)
     return {
         "id": f"emrd-{layout.seed}-{condition}-{seed}",
         "rooms": rooms,
@@ -262,17 +294,13 @@ def build_house(
             "floorColliderThickness": 1.0,
             "receptacleHeight": 0.7,
             "reflections": [],
-            "skyboxId": SKYBOX_ID,
+            "skyboxId": DIM_SKYBOX_ID if condition == "low_light" else SKYBOX_ID,
             "lights": _lights(layout, thor_condition(condition).light_factor),
         },
         "metadata": {
             "schema": SCHEMA,
-            "agent": {
-                "horizon": 0,
-                "position": _xyz(pose.x, AGENT_Y, pose.z),
-                "rotation": _xyz(0.0, pose.heading % 360, 0.0),
-                "standing": True,
-            },
+            "agentPoses": {agent_mode: start},
+            "agent": start,
             "emrd": {
                 "layout_seed": layout.seed,
                 "condition": condition,

@@ -7,7 +7,23 @@ Everything here fails fast with a message that says what to install or set:
 * ``platform=CloudRendering`` without a Vulkan loader -> install ``libvulkan1``;
 * no THOR build for this ai2thor commit under ``~/.ai2thor/releases`` (and downloads not
   allowed) -> download once or pass ``local_executable_path``;
-* a Unity process that exits or never answers -> bounded by ``start_timeout``.
+* a Unity process that exits or never answers -> bounded by ``start_timeout``, after which
+  the Unity process and its process group are killed (:func:`kill_unity`).
+
+Two things ai2thor 5.0.0 does not do for us:
+
+* ``local_executable_path`` on a headless machine. ai2thor wraps a local executable as an
+  ``ExternalBuild`` whose platform is always ``Linux64`` (``ai2thor/build.py`` lines 73-77),
+  and ``Linux64.launch_env`` (``ai2thor/platform.py`` lines 78-83) puts ``DISPLAY=None``
+  into the child's environment when it finds no X display, which ``subprocess.Popen``
+  (``ai2thor/controller.py`` line 1132) rejects with a ``TypeError``. A CloudRendering build
+  renders through Vulkan and never reads ``DISPLAY``, so :func:`headless_options` passes
+  ``x_display=":0"`` when neither the caller nor the environment names a display.
+* Unity in its own process group. ``Controller.stop_unity`` kills the one process it
+  started (``controller.py`` lines 1452-1463), and nothing at all is killed when the
+  constructor never returns. :func:`launcher` starts Unity under ``setsid`` (a fresh
+  process group led by the Unity process itself) and remembers each controller as soon as
+  it exists, so a start-up or step timeout can kill the whole group.
 
 No pre-flight check touches the network; a build download happens only when the caller
 passes ``allow_download=True``, and then still under the start-up time limit.
@@ -16,9 +32,12 @@ passes ``allow_download=True``, and then still under the start-up time limit.
 from __future__ import annotations
 
 import os
+import shutil
+import signal
+import subprocess
 from collections.abc import Callable, Mapping
 from types import ModuleType
-from typing import Any
+from typing import Any, Final
 
 from pytest_emrd.errors import ConfigError, missing_extra
 from pytest_emrd.world.thor._watchdog import bounded
@@ -33,6 +52,10 @@ BUILD_HINT = (
     'Controller(platform=CloudRendering, download_only=True)" (or pass allow_download=True), '
     "or pass local_executable_path='/path/to/thor-<platform>-<commit>/thor-<platform>-<commit>'."
 )
+
+
+HEADLESS_DISPLAY: Final = ":0"
+"""The ``x_display`` a local build gets when there is no X display (see module docstring)."""
 
 
 def import_ai2thor() -> ModuleType:
@@ -69,15 +92,7 @@ def preflight(thor: ModuleType, options: Mapping[str, Any], *, allow_download: b
     platform = options.get("platform")
     if platform is None or _platform_name(platform) != "CloudRendering":
         return
-    request = thor.platform.Request(
-        "Linux", options.get("width", 300), options.get("height", 300), None, False
-    )
-    problems = thor.platform.CloudRendering.validate(request)
-    if problems:
-        raise ConfigError(
-            f"AI2-THOR platform=CloudRendering cannot run here ({' '.join(problems)}). "
-            + VULKAN_HINT
-        )
+    _check_vulkan(thor, options)
     if allow_download:
         return
     commit = options.get("commit_id") or thor.build.COMMIT_ID
@@ -87,6 +102,61 @@ def preflight(thor: ModuleType, options: Mapping[str, Any], *, allow_download: b
             f"no AI2-THOR build {build.name} in {releases_dir()} (ai2thor "
             f"{thor.__version__} wants commit_id={commit}). {BUILD_HINT}"
         )
+
+
+def _check_vulkan(thor: ModuleType, options: Mapping[str, Any]) -> None:
+    request = thor.platform.Request(
+        "Linux", options.get("width", 300), options.get("height", 300), None, False
+    )
+    problems = thor.platform.CloudRendering.validate(request)
+    if problems:
+        raise ConfigError(
+            f"AI2-THOR platform=CloudRendering cannot run here ({' '.join(problems)}). "
+            + VULKAN_HINT
+        )
+
+
+def headless_options(options: Mapping[str, Any]) -> dict[str, Any]:
+    """``options`` with ``x_display`` set for a local build when no display is known."""
+    out = dict(options)
+    local = out.get("local_executable_path")
+    if local and not out.get("x_display") and not os.environ.get("DISPLAY"):
+        out["x_display"] = HEADLESS_DISPLAY
+    return out
+
+
+def launcher(base: type, started: list[Any]) -> type:
+    """``base`` (ai2thor's Controller) launching Unity under ``setsid``; every instance is
+    appended to ``started`` before its constructor starts Unity."""
+    setsid = shutil.which("setsid")
+
+    class Launcher(base):  # type: ignore[misc, valid-type]
+        def __init__(self, **options: Any) -> None:
+            started.append(self)
+            super().__init__(**options)
+
+        def unity_command(self, width: int, height: int, headless: bool) -> list[str]:
+            command = list(super().unity_command(width, height, headless))
+            return [setsid, *command] if setsid else command
+
+    Launcher.__name__ = Launcher.__qualname__ = base.__name__
+    return Launcher
+
+
+def kill_unity(controller: Any) -> None:
+    """Kill the Unity process of ``controller`` and, if it leads one, its process group."""
+    proc = getattr(getattr(controller, "server", None), "unity_proc", None)
+    if not isinstance(proc, subprocess.Popen) or proc.poll() is not None:
+        return
+    try:
+        group = os.getpgid(proc.pid)
+        if group == proc.pid and group != os.getpgrp():
+            os.killpg(group, signal.SIGKILL)
+        else:
+            proc.kill()
+        proc.wait(timeout=5)
+    except (ProcessLookupError, subprocess.TimeoutExpired):
+        return
 
 
 def _translate(exc: BaseException) -> ConfigError:
@@ -101,10 +171,22 @@ def _translate(exc: BaseException) -> ConfigError:
     return ConfigError(f"AI2-THOR failed to start: {type(exc).__name__}: {text}")
 
 
-def start(factory: Callable[..., Any], options: Mapping[str, Any], *, seconds: float) -> Any:
-    """``factory(**options)`` within ``seconds``, start-up failures turned into ConfigError."""
+def start(
+    factory: Callable[..., Any],
+    options: Mapping[str, Any],
+    *,
+    seconds: float,
+    started: list[Any] | None = None,
+) -> Any:
+    """``factory(**options)`` within ``seconds``, start-up failures turned into ConfigError.
+
+    On a timeout, the Unity process of every controller in ``started`` (filled by a
+    :func:`launcher` class) is killed with its process group before the error is raised.
+    """
 
     def on_timeout() -> ConfigError:
+        for controller in started or ():
+            kill_unity(controller)
         return ConfigError(
             f"AI2-THOR did not start within start_timeout={seconds:g} s (no answer from the "
             f"Unity process). {VULKAN_HINT} If the build is still downloading, download it "

@@ -141,24 +141,29 @@ def visible_objects(
     objects: Sequence[Mapping[str, Any]],
     agent: WorldPose,
     *,
-    max_distance: float,
     ids: IdTable,
     types: Mapping[str, str],
 ) -> tuple[VisibleObject, ...]:
-    """EMRD objects THOR reports ``visible`` within ``max_distance``, sorted by id.
+    """EMRD objects THOR reports ``visible``, sorted by id.
 
+    THOR's ``visible`` flag is the only filter: THOR sets it when one of the object's
+    visibility points lies in the view, unoccluded, within ``visibilityDistance`` measured
+    horizontally from the camera (the controller runs with the condition's distance). A
+    second filter on the distance to the object's pivot would drop large objects THOR
+    sees. ``distance`` is the horizontal distance from the agent to the object's position.
     ``types`` maps EMRD id -> EMRD object type (THOR's own ``objectType`` for a door is
     ``Doorway``/``Doorframe`` and may differ from ours). Bearings are clipped to the field
     of view: a large object can be visible while its centre lies just outside it.
     """
     seen: dict[str, VisibleObject] = {}
     for obj in objects:
-        if not obj.get("visible") or float(obj["distance"]) > max_distance:
+        if not obj.get("visible"):
             continue
         ours = ids.emrd(str(obj["objectId"]))
         if ours is None:
             continue
-        pos = obj["position"]
-        b = min(HALF_FOV, max(-HALF_FOV, bearing(agent, float(pos["x"]), float(pos["z"]))))
-        seen[ours] = VisibleObject(ours, types[ours], round(b, 1), round(float(obj["distance"]), 2))
+        x, z = float(obj["position"]["x"]), float(obj["position"]["z"])
+        b = min(HALF_FOV, max(-HALF_FOV, bearing(agent, x, z)))
+        distance = round(math.hypot(x - agent.x, z - agent.z), 2)
+        seen[ours] = VisibleObject(ours, types[ours], round(b, 1), distance)
     return tuple(seen[k] for k in sorted(seen))

@@ -14,10 +14,18 @@ so an agent cannot tell the backends apart by their text. Semantic actions map t
 * ``Term(room)`` -> no THOR call; ends the episode.
 
 The spawn pose is the builtin world's (:func:`pytest_emrd.world._motion.spawn_pose`: the
-seeded free point and heading), snapped to THOR's nearest reachable position in the
-spawn room, so a spec starts at the same place in both backends.
+seeded free point and heading), moved to the nearest free point of THOR's grid and written
+to the house's ``metadata.agentPoses`` (:func:`~._house.build_house`), so a spec starts at
+the same place in both backends, up to at most one grid step. Reset then checks each THOR
+answer it depends on: ``CreateHouse`` (run by ``Controller(scene=...)`` / ``reset``),
+``GetReachablePositions`` (the lattice THOR walks from that start), the condition's
+``RandomizeMaterials``/``RandomizeColors``, and the first ``TeleportFull`` (to the lattice
+point, at the height THOR returned for it). A refusal is one :class:`ConfigError` line
+carrying THOR's own ``errorMessage``.
 
-Every THOR call is bounded by the watchdog (``start_timeout``, ``step_timeout``).
+Every THOR call is bounded by the watchdog (``start_timeout``, ``step_timeout``); on a
+timeout the Unity process group is killed (:func:`._launch.kill_unity`) and the next reset
+starts a new controller.
 """
 
 from __future__ import annotations
@@ -57,7 +65,7 @@ from pytest_emrd.world._motion import spawn_pose
 from pytest_emrd.world._scene import scene_of
 from pytest_emrd.world.thor import _launch
 from pytest_emrd.world.thor._conditions import ThorCondition, thor_condition
-from pytest_emrd.world.thor._house import AGENT_Y, build_house
+from pytest_emrd.world.thor._house import build_house
 from pytest_emrd.world.thor._ids import IdTable
 from pytest_emrd.world.thor._navigation import (
     agent_pose,
@@ -91,6 +99,17 @@ def _positive(name: str, value: float) -> float:
     if isinstance(value, bool) or not isinstance(value, int | float) or value <= 0:
         raise ConfigError(f"{name}={value!r} must be a number of seconds > 0.")
     return float(value)
+
+
+def _check(event: Any, what: str) -> Any:
+    """``event`` if THOR reports success, else ConfigError with THOR's own message."""
+    metadata = event.metadata
+    if metadata["lastActionSuccess"]:
+        return event
+    message = " ".join(str(metadata.get("errorMessage") or "no errorMessage").split())
+    raise ConfigError(
+        f"AI2-THOR refused {what}: {message} (see ~/.ai2thor/log/unity.log for the Unity side)."
+    )
 
 
 def _refused(event: Any) -> ActionFailed | None:
@@ -139,12 +158,14 @@ class ThorSimulator(SemanticStep):
         self._rooms = room_table(room_aliases)
         self._user_options = dict(controller_options)
         self._controller: Any = None
+        self._started: list[Any] = []
         self._layout: Layout | None = None
         self._house: dict[str, Any] = {}
         self._ids = IdTable({})
         self._types: dict[str, str] = {}
         self._condition = ThorCondition(0.0, 1.0, False)
         self._points = np.empty((0, 2))
+        self._heights: dict[tuple[float, float], float] = {}
         self._spawn = WorldPose(0.0, 0.0, 0.0)
         self._visible: tuple[VisibleObject, ...] = ()
         self._steps = 0
@@ -161,18 +182,26 @@ class ThorSimulator(SemanticStep):
             server_timeout=self._step_timeout,
             server_start_timeout=self._start_timeout,
         )
+        self._started = []
         if self._factory is None:
             thor = _launch.import_ai2thor()
             options.setdefault("platform", thor.platform.CloudRendering)
+            options = _launch.headless_options(options)
             _launch.preflight(thor, options, allow_download=self._allow_download)
-            factory: Callable[..., Any] = thor.controller.Controller
+            factory: Callable[..., Any] = _launch.launcher(
+                thor.controller.Controller, self._started
+            )
         else:
             options.setdefault("platform", "CloudRendering")
             factory = self._factory
-        self._controller = _launch.start(factory, options, seconds=self._start_timeout)
+        self._controller = _launch.start(
+            factory, options, seconds=self._start_timeout, started=self._started
+        )
 
     def _call(self, what: str, fn: Callable[[], Any]) -> Any:
         def on_timeout() -> TransportError:
+            controller, self._controller, self._layout = self._controller, None, None
+            _launch.kill_unity(controller)
             return TransportError(
                 f"AI2-THOR did not answer {what} within step_timeout={self._step_timeout:g} s; "
                 "the Unity process hangs or died (see ~/.ai2thor/log/unity.log)."
@@ -189,13 +218,22 @@ class ThorSimulator(SemanticStep):
         return self._call(action, lambda: self._controller.step(action=action, **args))
 
     def _teleport(self, pose: WorldPose) -> Any:
+        """``TeleportFull`` to a lattice point, at the height THOR returned for it."""
+        y = self._heights[(round(pose.x, 2), round(pose.z, 2))]
         return self._act(
             "TeleportFull",
-            position={"x": pose.x, "y": AGENT_Y, "z": pose.z},
+            position={"x": pose.x, "y": y, "z": pose.z},
             rotation={"x": 0.0, "y": pose.heading, "z": 0.0},
             horizon=0,
             standing=True,
         )
+
+    def _lattice(self) -> None:
+        """THOR's reachable positions from the agent's start, with their heights."""
+        event = _check(self._act("GetReachablePositions"), "GetReachablePositions")
+        returned = event.metadata["actionReturn"] or []
+        self._points = grid(returned)
+        self._heights = {(round(p["x"], 2), round(p["z"], 2)): float(p["y"]) for p in returned}
 
     # -- Simulator protocol ------------------------------------------------------------
     def reset(
@@ -208,7 +246,10 @@ class ThorSimulator(SemanticStep):
         self._condition = thor_condition(condition)
         room = layout.room(name)
         wanted = spawn_pose(scene_of(layout), room, seed)
-        house = build_house(layout, condition, seed, agent=wanted, asset_ids=self._asset_ids)
+        mode = str({**DEFAULTS, **self._user_options}["agentMode"])
+        house = build_house(
+            layout, condition, seed, agent=wanted, asset_ids=self._asset_ids, agent_mode=mode
+        )
         if self._controller is None:
             self._start(house)
         else:
@@ -216,24 +257,28 @@ class ThorSimulator(SemanticStep):
             self._call("reset", lambda: self._controller.reset(scene=house, visibilityDistance=vis))
         self._layout, self._house, self._ids = layout, house, IdTable.from_house(house)
         self._types = {o.object_id: o.object_type for o in layout.objects}
-        self._points = grid(self._act("GetReachablePositions").metadata["actionReturn"] or [])
+        _check(self._controller.last_event, f"CreateHouse of house {house['id']!r}")
+        self._lattice()
         if self._condition.randomize_materials:
-            self._act(
-                "RandomizeMaterials",
-                useTrainMaterials=True,
-                useValMaterials=True,
-                useTestMaterials=True,
-            )
-            self._act("RandomizeColors")
-        spot = nearest_in_room(self._points, wanted.x, wanted.z, room)
+            for action, args in (
+                (
+                    "RandomizeMaterials",
+                    {"useTrainMaterials": True, "useValMaterials": True, "useTestMaterials": True},
+                ),
+                ("RandomizeColors", {}),
+            ):
+                _check(self._act(action, **args), action)
+        start = house["metadata"]["agentPoses"][mode]["position"]
+        spot = nearest_in_room(self._points, start["x"], start["z"], room)
         if spot is None:
             raise ConfigError(
-                f"AI2-THOR reports no reachable position in spawn_room={spawn_room!r}; "
-                "check that the build loaded the house (see ~/.ai2thor/log/unity.log)."
+                f"AI2-THOR reports no reachable position in spawn_room={spawn_room!r} from the "
+                f"start x={start['x']}, z={start['z']} of house {house['id']!r}; check that "
+                "the build loaded the house (see ~/.ai2thor/log/unity.log)."
             )
-        event = self._teleport(WorldPose(spot[0], spot[1], wanted.heading))
-        if not event.metadata["lastActionSuccess"]:
-            raise ConfigError(f"AI2-THOR refused the spawn pose: {event.metadata['errorMessage']}")
+        event = _check(
+            self._teleport(WorldPose(spot[0], spot[1], wanted.heading)), "the spawn TeleportFull"
+        )
         self._spawn = agent_pose(event.metadata)
         self._steps, self._ended, self._terminal, self._symbolic = 0, False, None, symbolic
         return self._observe(True, "Episode started.")
@@ -269,7 +314,10 @@ class ThorSimulator(SemanticStep):
         controller, self._controller = self._controller, None
         self._layout = None
         if controller is not None:
-            self._call("stop", controller.stop)
+            try:
+                self._call("stop", controller.stop)
+            finally:
+                _launch.kill_unity(controller)
 
     # -- actions -----------------------------------------------------------------------
     def _goto(self, action: Action) -> str:
@@ -337,7 +385,6 @@ class ThorSimulator(SemanticStep):
         self._visible = visible_objects(
             event.metadata["objects"],
             world,
-            max_distance=self._condition.visibility_distance,
             ids=self._ids,
             types=self._types,
         )
