@@ -37,6 +37,7 @@ from pytest_emrd.world.thor._assets import (
     SKYBOX_ID,
     THOR_ROOM_TYPES,
     WALL_COLOR,
+    asset_by_id,
     choose_asset,
 )
 from pytest_emrd.world.thor._conditions import thor_condition
@@ -237,6 +238,8 @@ def build_house(
     """
     check_choice("condition", condition, CONDITIONS)
     assets = dict(asset_ids or {})
+    for object_type, asset_id in assets.items():
+        asset_by_id(asset_id, object_type)
     placed = place(layout, assets)
     numbers = {room.name: n for n, room in enumerate(layout.rooms, start=1)}
     pieces = wall_pieces(layout)

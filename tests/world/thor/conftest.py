@@ -345,7 +345,7 @@ class FakeController:
         """Where the agent's capsule fits: on a room's floor, clear of walls and assets."""
         on_floor = np.zeros(px.shape, dtype=bool)
         for _, (x0, z0, x1, z1) in self.rooms:
-            on_floor |= (px > x0) & (px < x1) & (pz > z0) & (pz < z1)
+            on_floor |= (px >= x0) & (px <= x1) & (pz >= z0) & (pz <= z1)
         free = on_floor
         for a, b in self.walls:
             free &= _segment_distance(px, pz, a, b) >= AGENT_RADIUS

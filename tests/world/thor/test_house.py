@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import math
 from dataclasses import replace
+from pathlib import Path
 from typing import Any
 
 import pytest
@@ -12,10 +13,12 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from pytest_emrd.errors import ConfigError
+from pytest_emrd.trajectory import CONDITIONS
 from pytest_emrd.world._conditions import condition_params
+from pytest_emrd.world._episode import PAPER_OFFICE_SEED
 from pytest_emrd.world._layout import generate_layout
-from pytest_emrd.world._model import Doorway, Layout
-from pytest_emrd.world.thor import SCHEMA, IdTable, build_house
+from pytest_emrd.world._model import Doorway, Layout, WorldPose
+from pytest_emrd.world.thor import SCHEMA, IdTable, assets, build_house, choose_asset
 
 
 def _inside(polygon: list[dict[str, float]], x: float, z: float) -> bool:
@@ -105,27 +108,105 @@ def test_exit_is_a_closed_door_in_an_outside_wall(layout: Layout) -> None:
     assert IdTable.from_house(house).emrd(exit_door["id"]) == "Door_1"
 
 
-@pytest.mark.parametrize("seed", [3, 11])
-def test_objects_are_centred_on_their_support_height(seed: int) -> None:
-    """``y = elevation + height / 2``: items on desks and counters sit on their tops."""
-    layout = generate_layout(seed)
-    house = build_house(layout, "baseline", seed)
-    ours = {o.object_id: o for o in layout.objects}
+DB = json.loads((Path(__file__).parent / "data" / "asset_database.json").read_text())["assets"]
+"""The vendored ProcTHOR asset database: assetId -> [objectType, box x, box y, box z]."""
+
+
+def _footprint(placed: dict[str, Any]) -> tuple[float, float, float, float]:
+    _, bx, _, bz = DB[placed["assetId"]]
+    if round(placed["rotation"]["y"]) % 180 == 90:
+        bx, bz = bz, bx
+    x, z = placed["position"]["x"], placed["position"]["z"]
+    return (x - bx / 2, z - bz / 2, x + bx / 2, z + bz / 2)
+
+
+def check_geometry(house: dict[str, Any], layout: Layout) -> None:
+    """Each asset's box stands on the floor or on the top of the asset it stands on, and
+    its footprint stays inside its room (walls are ``wall_thickness`` thick)."""
     ids = IdTable.from_house(house)
+    ours = {o.object_id: o for o in layout.objects}
+    tops = []
+    for placed in house["objects"]:
+        _, _, height, _ = DB[placed["assetId"]]
+        tops.append((placed, placed["position"]["y"] + height / 2))
+    half = layout.wall_thickness / 2
     for placed in house["objects"]:
         obj = ours[ids.emrd(placed["id"]) or ""]
-        assert placed["position"]["y"] == pytest.approx(obj.elevation + obj.height / 2, abs=1e-4)
-    assert any(o.elevation > 0 for o in layout.objects), "no item on a desk or counter"
+        object_type, _, height, _ = DB[placed["assetId"]]
+        assert object_type == obj.object_type, placed
+        bottom = placed["position"]["y"] - height / 2
+        x0, z0, x1, z1 = _footprint(placed)
+        room = layout.room(obj.room)
+        assert room.x0 + half - 1e-4 <= x0 and x1 <= room.x1 - half + 1e-4, placed["id"]
+        assert room.z0 + half - 1e-4 <= z0 and z1 <= room.z1 - half + 1e-4, placed["id"]
+        if obj.elevation == 0:
+            assert bottom == pytest.approx(0.0, abs=1e-3), placed["id"]
+            continue
+        x, z = placed["position"]["x"], placed["position"]["z"]
+        supports = [
+            top
+            for other, top in tops
+            if other is not placed
+            and _footprint(other)[0] <= x <= _footprint(other)[2]
+            and _footprint(other)[1] <= z <= _footprint(other)[3]
+        ]
+        assert any(top == pytest.approx(bottom, abs=1e-3) for top in supports), placed["id"]
 
 
-def test_a_laptop_stands_on_the_desk_top_and_carries_its_asset() -> None:
+def test_every_vendored_asset_is_in_the_procthor_database() -> None:
+    """Every id the adapter can emit exists in ProcTHOR's database with that type and box."""
+    for asset_id, asset in assets().items():
+        object_type, bx, by, bz = DB[asset_id]
+        assert object_type == asset.object_type
+        assert (asset.width, asset.height, asset.depth) == (bx, by, bz)
+
+
+@pytest.mark.parametrize("seed", [*range(100), PAPER_OFFICE_SEED])
+def test_assets_exist_stand_on_their_support_and_stay_in_their_room(seed: int) -> None:
+    layout = generate_layout(seed)
+    house = build_house(layout, "baseline", seed)
+    emitted = [o["assetId"] for o in house["objects"]] + [d["assetId"] for d in house["doors"]]
+    assert set(emitted) <= set(DB)
+    check_geometry(house, layout)
+
+
+def test_a_laptop_stands_on_its_desk_and_a_sink_on_its_counter() -> None:
     layout = generate_layout(3)
     house = build_house(layout, "baseline", 3)
     ids = IdTable.from_house(house)
-    laptop = next(o for o in house["objects"] if ids.emrd(o["id"]) == "Laptop_1")
-    obj = next(o for o in layout.objects if o.object_id == "Laptop_1")
-    assert obj.elevation > 0.7 and laptop["position"]["y"] > obj.elevation
-    assert laptop["assetId"] == "Laptop_1" and laptop["kinematic"] is True
+    placed = {ids.emrd(o["id"]): o for o in house["objects"]}
+
+    def top(oid: str) -> float:
+        return placed[oid]["position"]["y"] + DB[placed[oid]["assetId"]][2] / 2
+
+    def bottom(oid: str) -> float:
+        return placed[oid]["position"]["y"] - DB[placed[oid]["assetId"]][2] / 2
+
+    assert bottom("Laptop_1") == pytest.approx(top("Desk_1"), abs=1e-3)
+    assert bottom("Sink_1") == pytest.approx(top("CounterTop_1"), abs=1e-3)
+    assert placed["Laptop_1"]["kinematic"] is True
+
+
+def test_each_object_gets_the_asset_closest_to_its_size() -> None:
+    """The conference table is a long table, not a square one (EMRD: 2.6-3.2 x 1.1 m)."""
+    layout = generate_layout(3)
+    table = next(o for o in layout.objects if o.object_type == "DiningTable")
+    chosen = choose_asset("DiningTable", table.width, table.depth, table.height)
+    assert chosen.width > 2.0 and chosen.depth < 1.3
+    assert chosen == min(
+        (a for a in assets().values() if a.object_type == "DiningTable"),
+        key=lambda a: (
+            sum(
+                2 * (have - want) if have > want else want - have
+                for have, want in (
+                    (a.width, table.width),
+                    (a.depth, table.depth),
+                    (a.height, table.height),
+                )
+            ),
+            a.asset_id,
+        ),
+    )
 
 
 def test_low_light_dims_every_light_by_the_condition_factor(layout: Layout) -> None:
@@ -133,6 +214,11 @@ def test_low_light_dims_every_light_by_the_condition_factor(layout: Layout) -> N
     dark = build_house(layout, "low_light", 0)["proceduralParameters"]["lights"]
     factor = condition_params("low_light").light_factor
     assert [d["intensity"] for d in dark] == [pytest.approx(b["intensity"] * factor) for b in base]
+
+
+def test_low_light_also_dims_the_sky_thor_takes_ambient_light_from(layout: Layout) -> None:
+    sky = {c: build_house(layout, c, 0)["proceduralParameters"]["skyboxId"] for c in CONDITIONS}
+    assert sky["low_light"] == "Sky2Dusk" != sky["baseline"] == sky["texture"] == "Sky1"
 
 
 def test_texture_colours_are_seeded(layout: Layout) -> None:
@@ -150,23 +236,36 @@ def test_same_inputs_give_the_same_house(layout: Layout) -> None:
     assert build_house(layout, "texture", 5) == build_house(layout, "texture", 5)
 
 
-def test_agent_pose_goes_into_metadata(layout: Layout) -> None:
-    from pytest_emrd.world._model import WorldPose
-
-    house = build_house(layout, "baseline", 0, agent=WorldPose(2.0, 5.0, 270.0))
-    agent = house["metadata"]["agent"]
-    assert (agent["position"]["x"], agent["position"]["z"], agent["rotation"]["y"]) == (
+def test_the_start_goes_into_agent_poses_on_the_grid(layout: Layout) -> None:
+    """``CreateHouse`` reads ``metadata.agentPoses[agentMode]`` only; its x and z are on
+    THOR's 0.25 m grid, so the reachable lattice THOR walks from it is the grid itself."""
+    house = build_house(layout, "baseline", 0, agent=WorldPose(2.07, 5.1, 270.0))
+    pose = house["metadata"]["agentPoses"]["default"]
+    assert (pose["position"]["x"], pose["position"]["z"], pose["rotation"]["y"]) == (
         2.0,
         5.0,
         270.0,
     )
+    assert (pose["horizon"], pose["standing"]) == (0, True)
+    other = build_house(layout, "baseline", 0, agent=WorldPose(2.0, 5.0, 0.0), agent_mode="arm")
+    assert set(other["metadata"]["agentPoses"]) == {"arm"}
+
+
+def test_a_start_inside_furniture_moves_to_the_nearest_free_grid_point(layout: Layout) -> None:
+    desk = next(o for o in layout.objects if o.object_id == "Desk_1")
+    house = build_house(layout, "baseline", 0, agent=WorldPose(desk.x, desk.z, 0.0))
+    pose = house["metadata"]["agentPoses"]["default"]["position"]
+    desk_box = next(o for o in house["objects"] if o["id"].startswith("Desk|"))
+    x0, z0, x1, z1 = _footprint(desk_box)
+    gap = math.hypot(max(x0 - pose["x"], 0, pose["x"] - x1), max(z0 - pose["z"], 0, pose["z"] - z1))
+    assert gap >= 0.3 and pose["x"] % 0.25 == 0 and pose["z"] % 0.25 == 0
 
 
 def test_asset_override_wins_over_the_vendored_table(layout: Layout) -> None:
-    house = build_house(layout, "baseline", 0, asset_ids={"Desk": "Desk_207_1"})
+    house = build_house(layout, "baseline", 0, asset_ids={"Desk": "Desk_204_1"})
     ids = IdTable.from_house(house)
     desk = next(o for o in house["objects"] if ids.emrd(o["id"]) == "Desk_1")
-    assert desk["assetId"] == "Desk_207_1"
+    assert desk["assetId"] == "Desk_204_1"
 
 
 def _off_wall(layout: Layout) -> Layout:
@@ -190,7 +289,7 @@ def _unknown_type(layout: Layout) -> Layout:
         (lambda lay: lay, "smoke", "condition='smoke'"),
         (_off_wall, "baseline", "not on a wall shared by"),
         (_too_wide, "baseline", "does not fit on wall"),
-        (_unknown_type, "baseline", "object_type='Piano'.*asset_ids="),
+        (_unknown_type, "baseline", "object_type='Piano' has no ProcTHOR asset"),
     ],
     ids=["unknown-condition", "doorway-off-the-wall", "doorway-past-wall-end", "unmapped-type"],
 )
@@ -199,3 +298,18 @@ def test_bad_input_is_a_config_error(
 ) -> None:
     with pytest.raises(ConfigError, match=message):
         build_house(make(layout), condition, 0)
+
+
+@pytest.mark.parametrize(
+    "asset_ids",
+    [{"CoffeeMachine": "Coffee_Machine_1"}, {"Stool": "Stool_1"}, {"Desk": "Desk_207_1"}],
+    ids=["coffee-machine", "stool", "desk"],
+)
+def test_an_asset_id_thor_would_skip_is_refused_at_build_time(
+    layout: Layout, asset_ids: dict[str, str]
+) -> None:
+    """THOR skips an unknown ``assetId`` silently; the house builder refuses it instead."""
+    ((object_type, asset_id),) = asset_ids.items()
+    with pytest.raises(ConfigError, match=f"names no {object_type} in the ProcTHOR asset"):
+        build_house(layout, "baseline", 0, asset_ids=asset_ids)
+    assert asset_id not in DB

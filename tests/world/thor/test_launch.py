@@ -2,10 +2,15 @@
 
 from __future__ import annotations
 
+import os
+import signal
+import subprocess
 import sys
 import threading
 import time
 from collections.abc import Callable
+from pathlib import Path
+from types import SimpleNamespace
 from typing import Any
 
 import pytest
@@ -45,6 +50,51 @@ def test_a_step_that_never_returns_is_a_transport_error(
         sim.step("Turn(Left)")
     assert time.monotonic() - started < 3.0
     never.set()
+
+
+def test_a_step_timeout_kills_unity_and_its_process_group(
+    fake_controller: type, layout: Layout, tmp_path: Path
+) -> None:
+    """The controller's Unity process leads its own group (as :func:`launcher` starts it)
+    and has a child; a step that never returns must leave neither running."""
+    pids = tmp_path / "pids.txt"
+    unity = subprocess.Popen(
+        ["sh", "-c", f"sleep 300 & echo $$ $! > {pids}; wait"], start_new_session=True
+    )
+
+    class WithUnity(fake_controller):  # type: ignore[misc, valid-type]
+        def __init__(self, **init: Any) -> None:
+            super().__init__(**init)
+            self.server = SimpleNamespace(unity_proc=unity)
+
+    try:
+        sim = ThorSimulator(controller_factory=WithUnity, step_timeout=0.5)
+        sim.reset(layout, "baseline", "Office", 0)
+        while not pids.exists() or len(pids.read_text().split()) < 2:
+            time.sleep(0.02)
+        started = [int(p) for p in pids.read_text().split()]
+        never = threading.Event()
+        fake_controller.instances[-1].step = lambda *a, **k: never.wait()
+        with pytest.raises(TransportError, match="step_timeout"):
+            sim.step("Turn(Left)")
+        never.set()
+        deadline = time.monotonic() + 5.0
+        while any(_alive(p) for p in started) and time.monotonic() < deadline:
+            time.sleep(0.05)
+        assert not [p for p in started if _alive(p)]
+    finally:
+        if unity.poll() is None:
+            os.killpg(unity.pid, signal.SIGKILL)
+        unity.wait()
+
+
+def _alive(pid: int) -> bool:
+    """Whether ``pid`` runs (a zombie awaiting its reaper counts as dead)."""
+    try:
+        with open(f"/proc/{pid}/stat", encoding="ascii") as stat:
+            return stat.read().rsplit(")", 1)[1].split()[0] != "Z"
+    except FileNotFoundError:
+        return False
 
 
 @pytest.mark.parametrize(

@@ -8,6 +8,7 @@ a message naming what to install.
 from __future__ import annotations
 
 import ctypes.util
+import time
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -79,3 +80,53 @@ def test_unity_that_never_answers_is_abandoned(
     sim = ThorSimulator(local_executable_path=str(unity), x_display=":0", start_timeout=2.0)
     error = failed_reset(sim, layout, 10.0)
     assert "start_timeout=2" in str(error) and "libvulkan1" in str(error)
+
+
+def _alive(pid: int) -> bool:
+    """Whether ``pid`` runs (a zombie awaiting its reaper counts as dead)."""
+    try:
+        with open(f"/proc/{pid}/stat", encoding="ascii") as stat:
+            return stat.read().rsplit(")", 1)[1].split()[0] != "Z"
+    except FileNotFoundError:
+        return False
+
+
+def _stub_unity(tmp_path: Path, body: str) -> Path:
+    """An executable standing in for the Unity player: ai2thor's real start-up code
+    launches it; it never answers, so only its side effects are observable."""
+    unity = tmp_path / "thor-CloudRendering-stub"
+    unity.write_text("#!/bin/sh\n" + body)
+    unity.chmod(0o755)
+    return unity
+
+
+def test_local_executable_path_starts_on_a_machine_without_a_display(
+    failed_reset: FailedReset, layout: Layout, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """ai2thor wraps a local build as an ExternalBuild (platform Linux64), whose launch
+    environment is ``DISPLAY=None`` without an X display: ``Popen`` raised ``TypeError``
+    before the build ever ran. Now the build runs (and here, never answers)."""
+    monkeypatch.delenv("DISPLAY", raising=False)
+    seen = tmp_path / "display.txt"
+    unity = _stub_unity(tmp_path, f'echo "$DISPLAY" > {seen}\nexec sleep 30\n')
+    sim = ThorSimulator(local_executable_path=str(unity), start_timeout=2.0)
+    error = failed_reset(sim, layout, 15.0)
+    assert "did not start within start_timeout=2" in str(error), error
+    assert seen.read_text().strip() == ":0"
+
+
+def test_a_start_up_timeout_kills_unity_and_its_process_group(
+    failed_reset: FailedReset, layout: Layout, tmp_path: Path
+) -> None:
+    """The stand-in starts a child of its own, as Unity's crash handler does; after the
+    start-up timeout neither may outlive the failed reset."""
+    pids = tmp_path / "pids.txt"
+    unity = _stub_unity(tmp_path, f"sleep 300 &\necho $$ $! > {pids}\nwait\n")
+    sim = ThorSimulator(local_executable_path=str(unity), x_display=":0", start_timeout=2.0)
+    failed_reset(sim, layout, 15.0)
+    started = [int(p) for p in pids.read_text().split()]
+    assert len(started) == 2
+    deadline = time.monotonic() + 5.0
+    while any(_alive(p) for p in started) and time.monotonic() < deadline:
+        time.sleep(0.05)
+    assert not [p for p in started if _alive(p)]

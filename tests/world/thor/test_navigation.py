@@ -107,10 +107,8 @@ def test_visible_objects_filters_maps_and_sorts() -> None:
             _meta("Desk|1|0", -1.0, 2.0),
             _meta("Chair|1|1", 0.0, 1.0, visible=False),
             _meta("Wall|1|0", 0.0, 1.0),  # not ours
-            _meta("Desk|1|0", 0.0, 9.0, distance=9.0),  # beyond the condition's distance
         ],
         agent,
-        max_distance=3.0,
         ids=ids,
         types=types,
     )
@@ -118,6 +116,20 @@ def test_visible_objects_filters_maps_and_sorts() -> None:
         ("Desk_1", "Desk", pytest.approx(-26.6)),
         ("Doorway_1", "Doorway", 45.0),
     ]
+
+
+def test_thor_s_visible_flag_decides_and_distance_is_horizontal() -> None:
+    """Low light (3.5 m): a 2.8 m table whose near edge is 2.5 m away is visible to THOR
+    (its visibility points lie within the distance, measured horizontally) although its
+    pivot is 3.9 m away; it stays in the list, at its horizontal distance."""
+    ids = IdTable({"DiningTable|2|0": "DiningTable_1"})
+    agent = WorldPose(0.0, 0.0, 0.0)
+    table = {
+        **_meta("DiningTable|2|0", 0.0, 3.9, distance=4.05),
+        "position": {"x": 0.0, "y": 0.32, "z": 3.9},
+    }
+    (seen,) = visible_objects([table], agent, ids=ids, types={"DiningTable_1": "DiningTable"})
+    assert (seen.object_id, seen.distance) == ("DiningTable_1", 3.9)
 
 
 def test_wrap180_wraps_into_half_open_interval() -> None:
