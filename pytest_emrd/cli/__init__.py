@@ -24,6 +24,7 @@ COMMANDS: tuple[str, ...] = (
     "cassettes",
     "validate",
     "bench",
+    "thor_smoke",
 )
 
 
