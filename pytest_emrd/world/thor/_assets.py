@@ -94,6 +94,7 @@ def assets() -> Mapping[str, Asset]:
     return _table()
 
 
+@cache
 def candidates(object_type: str) -> tuple[Asset, ...]:
     """The vendored assets an EMRD object of ``object_type`` can be built from, by id."""
     wanted = ASSET_TYPES.get(object_type, object_type)
