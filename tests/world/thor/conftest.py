@@ -28,7 +28,8 @@ allenai/ai2thor ``unity/Assets/Scripts``; houses: allenai/procthor 1.0.0):
   reports. Every position carries the agent's standing height.
 * ``TeleportFull(position, rotation, horizon, standing, forceAction=False)``
   (``PhysicsRemoteFPSAgentController.cs``) refuses, in ``teleportFull``'s order
-  (``BaseFPSAgentController.cs``): pitch or roll, a horizon outside [-30, 60], a position
+  (``BaseFPSAgentController.cs``; the wording as in ``FpinAgentController.teleportFull``,
+  which repeats those checks): pitch or roll, a horizon outside [-30, 60], a position
   out of the scene bounds, a position off the grid (``isPositionOnGrid``: ``x`` and ``z``
   multiples of ``gridSize``), a colliding capsule, and a ``y`` more than 0.05 m from where
   the agent stands on the floor (``assertTeleportedNearGround``).
