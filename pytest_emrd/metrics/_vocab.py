@@ -31,17 +31,18 @@ the thing is; the words before it only say which one or what kind. The procedure
    phrase denotes none. **Parts** (:data:`PART_WORDS`): a head that names a part of the object
    its modifier names (``fridge door``, ``chair seat``) denotes no object; ``chair leg`` denotes
    none already, as ``leg`` names no type.
-4. **Misspellings.** When no run ending at the last word is a key, each such run (longest
-   first) is compared with every key of at least :data:`FUZZY_MIN_LENGTH` letters by
-   rapidfuzz's optimal-string-alignment similarity (one insertion, deletion, substitution or
-   swap of two neighbours is one edit, normalised by the longer length). A key at similarity
-   :data:`FUZZY_THRESHOLD` (0.8) or more is taken, the most similar first, when one type list
-   is the single best: ``chiar`` (1 edit in 5), ``labtop`` (1 in 6), ``refridgerator``
-   (1 in 13) and ``televsion`` are read; ``chain``, ``cable``, ``tablet`` and ``handle`` are
-   never read as ``Chair``, ``DiningTable`` or ``Candle``, because a word of
-   :data:`REAL_WORDS` (English words that are this close to a key, listed from an English
-   dictionary) is never corrected, nor is a word shorter than 5 letters (``dusk``, ``sofas``
-   is exact).
+4. **Misspellings.** When no run ending at the last word is a key, the last word (as written,
+   then made singular) is compared with every key of at least :data:`FUZZY_MIN_LENGTH` (5)
+   letters by rapidfuzz's optimal-string-alignment distance (one insertion, deletion,
+   substitution or swap of two neighbours is one edit). A key whose similarity ``1 - edits /
+   longer length`` is at least :data:`FUZZY_THRESHOLD` (0.8: one edit in 5 to 9 letters, two
+   in 10 to 14) is taken, the fewest edits first, when that key's types are the single best:
+   ``chiar`` (1 edit in 5), ``labtop`` (1 in 6), ``refridgerator`` (1 in 13) and
+   ``televsion`` are read. A word shorter than 5 letters is never corrected (``dsek``), nor
+   is a word of :data:`REAL_WORDS`, the English words this close to a key that are no
+   spelling of it: ``chain``, ``cable``, ``tablet`` and ``handle`` are never a ``Chair``,
+   a ``DiningTable`` or a ``Candle``. Only the head noun is corrected (``cofee machine``
+   denotes nothing: ``machine`` names no type).
 5. **Candidates.** A synonym lists the engine types it names, most likely first (``table`` ->
    ``DiningTable``, ``CoffeeTable``, ``SideTable``, ``Desk``): only types the word is a name for
    (the kinds a general word covers: a seat is a chair, a stool, an armchair or a sofa), never a
@@ -360,7 +361,7 @@ def noun_phrase(words: tuple[str, ...]) -> tuple[str, ...]:
     end = len(words)
     for i in range(1, len(words)):
         if words[i] in QUALIFIER_WORDS:
-            if words[i] in POSITION_WORDS and not _exact(_trimmed(words[:i])):
+            if words[i] in POSITION_WORDS and not _denotes(_trimmed(words[:i])):
                 continue
             end = i
             break
@@ -434,10 +435,12 @@ def candidate_types(text: str) -> tuple[str, ...]:
     ``candidate_types("exit sign")`` are ``()``; ``candidate_types("chiar")`` is
     ``("Chair",)``.
     """
-    phrase = noun_phrase(head_words(text))
-    if not phrase:
-        return ()
-    return _exact(phrase) or _fuzzy(phrase)
+    return _denotes(noun_phrase(head_words(text)))
+
+
+def _denotes(phrase: tuple[str, ...]) -> tuple[str, ...]:
+    """Candidates of a noun phrase (steps 3 and 4); ``()`` for an empty phrase."""
+    return (_exact(phrase) or _fuzzy(phrase)) if phrase else ()
 
 
 def canonical_type(text: str, *, present: Iterable[str] | None = None) -> str | None:
