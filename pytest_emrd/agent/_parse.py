@@ -17,9 +17,9 @@ count them; see :data:`REPAIRS`):
 
 Each reads the reply one way only: the first five are *syntax-only* edits, removing them
 cannot change what any value of the object means; the last three read a position written in
-another notation, in metres, without guessing. Also tolerated, as schema leniency rather than repairs: numbers
-written as strings (``"1.5"``), a cognitive map given as a list of objects with a
-``label``/``id``/``name`` key, missing optional keys (``observation``, ``dedup_check``,
+another notation, in metres, without guessing. Also tolerated, as schema leniency rather than
+repairs: numbers written as strings (``"1.5"``), a cognitive map given as a list of objects
+with a ``label``/``id``/``name`` key, missing optional keys (``observation``, ``dedup_check``,
 ``reasoning``), map entries without ``room``/``facing``.
 
 **Parse failures** (:attr:`Reply.error` says why; the episode loop keeps the previous map as the
