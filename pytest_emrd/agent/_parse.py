@@ -7,12 +7,19 @@ count them; see :data:`REPAIRS`):
 * ``prose`` — text before or after the JSON object (or its fence);
 * ``comment`` — ``// ...`` line comments or ``/* ... */`` block comments outside strings;
 * ``trailing_comma`` — a comma right before ``}`` or ``]``;
-* ``python_literal`` — single-quoted strings or Python spellings (``True``/``None``).
+* ``python_literal`` — single-quoted strings or Python spellings (``True``/``None``);
+* ``position_list`` — a position written as a list ``[x, z]`` (the order the prompt gives):
+  the entry itself (``"Desk_1": [1.5, -2]``) or its ``position`` (``pos``, ``xz``,
+  ``coords``, ``coordinates``, ``location``) instead of ``x`` and ``z`` keys;
+* ``unit`` — a coordinate with a metric unit (``"2 m"``, ``"2.5 metres"``, ``"250 cm"``);
+* ``decimal_comma`` — a coordinate with a decimal comma (``"2,5"`` is 2.5 m; a coordinate
+  inside a building is never in the thousands, so the comma is no thousands separator).
 
-Each is a *syntax-only* edit whose reading is unambiguous: removing it cannot change what any
-value of the object means. Also tolerated, as schema leniency rather than repairs: numbers
-written as strings (``"1.5"``, ``"2 m"``), a cognitive map given as a list of objects with a
-``label``/``id``/``name`` key, missing optional keys (``observation``, ``dedup_check``,
+Each reads the reply one way only: the first five are *syntax-only* edits, removing them
+cannot change what any value of the object means; the last three read a position written in
+another notation, in metres, without guessing. Also tolerated, as schema leniency rather than
+repairs: numbers written as strings (``"1.5"``), a cognitive map given as a list of objects
+with a ``label``/``id``/``name`` key, missing optional keys (``observation``, ``dedup_check``,
 ``reasoning``), map entries without ``room``/``facing``.
 
 **Parse failures** (:attr:`Reply.error` says why; the episode loop keeps the previous map as the
@@ -20,9 +27,15 @@ model's belief): no complete JSON object (prose only; a reply cut off mid-object
 token limit), an object no repair above makes valid (a missing comma between two values,
 unquoted keys, a ``...`` placeholder standing for elided entries), or an object without an
 ``action`` string or a ``cognitive_map``. Those are not repaired because any repair would guess
-content: where a comma was missing, what ``...`` stood for, what a cut-off map still held. Map
-entries without finite numeric ``x`` and ``z`` are not positions and are left out.
-:func:`parse_reply` never raises.
+content: where a comma was missing, what ``...`` stood for, what a cut-off map still held.
+
+**No position is lost in silence.** A map entry whose position none of the above reads
+(``"x": "near the door"``, ``null``, ``NaN``, ``"6 ft"``, a list ``[x, y, z]``, no ``x``/``z``
+at all) makes the reply a parse failure naming the entry (``cognitive_map entry 'Desk_1' has
+no number of metres as x: "near the door"``), as a reply with no map does. Dropping the entry
+alone would make the model look as if it had forgotten the object, and keeping it would guess
+where it is; the failure is counted with the others (the replies check of ``emrd validate``,
+``Step.parse_error``). :func:`parse_reply` never raises.
 """
 
 from __future__ import annotations
@@ -40,7 +53,16 @@ from pytest_emrd.trajectory import MapEntry
 #: Replies longer than this are not searched for JSON (a runaway generation, not a reply).
 MAX_REPLY_CHARS: Final = 200_000
 #: Every repair :func:`parse_reply` may apply, in the order :attr:`Reply.repairs` lists them.
-REPAIRS: Final[tuple[str, ...]] = ("fence", "prose", "comment", "trailing_comma", "python_literal")
+REPAIRS: Final[tuple[str, ...]] = (
+    "fence",
+    "prose",
+    "comment",
+    "trailing_comma",
+    "python_literal",
+    "position_list",
+    "unit",
+    "decimal_comma",
+)
 _FENCE = re.compile(r"```[A-Za-z0-9_-]*[ \t]*\n?(.*?)```", re.DOTALL)
 _LITERAL_NAMES: Final[dict[str, Any]] = {
     "true": True,
@@ -78,6 +100,25 @@ _TRAILING_COMMAS = re.compile(rf"({_STRING})|,(?=\s*[}}\]])", re.DOTALL)
 _MAYBE_COMMENT = re.compile(r"//|/\*")
 _MAYBE_TRAILING_COMMA = re.compile(r",\s*[}\]]")
 _DECODER = json.JSONDecoder()
+#: A coordinate written as text: a number (decimal point or comma), then maybe a metric unit.
+_WRITTEN_NUMBER = re.compile(
+    r"(?P<number>[+-]?(?:\d+(?:[.,]\d+)?|[.,]\d+)(?:[eE][+-]?\d+)?)\s*"
+    r"(?P<unit>m|metres?|meters?|cm|centimetres?|centimeters?)?\.?",
+    re.IGNORECASE,
+)
+_METRES_PER_UNIT: Final[dict[str, float]] = {
+    **dict.fromkeys(("m", "metre", "metres", "meter", "meters"), 1.0),
+    **dict.fromkeys(("cm", "centimetre", "centimetres", "centimeter", "centimeters"), 0.01),
+}
+#: Keys under which an entry may give its position as a list ``[x, z]``.
+_POSITION_KEYS: Final[tuple[str, ...]] = (
+    "position",
+    "pos",
+    "xz",
+    "coords",
+    "coordinates",
+    "location",
+)
 
 
 def _json_end(text: str, start: int) -> int | None:
@@ -214,19 +255,63 @@ def _find_object(text: str) -> tuple[dict[str, Any] | None, tuple[str, ...]]:
     return obj, tuple(r for r in REPAIRS if r in applied)
 
 
-def _number(value: Any) -> float | None:
+def _coordinate(value: Any) -> tuple[float, tuple[str, ...]] | None:
+    """One coordinate in metres and the repairs that read it; None when it is no number.
+
+    A JSON number, or a string holding one (``"1.5"``, schema leniency). Repaired: a metric
+    unit (``"2 m"``, ``"2.5 metres"``, ``"250 cm"``: ``unit``) and a decimal comma (``"2,5"``:
+    ``decimal_comma``). Anything else (``"near the door"``, ``null``, ``true``, ``NaN``,
+    ``"6 ft"``) is no coordinate.
+    """
     if type(value) is float:  # the common case first: a map holds dozens of coordinates
-        return value if math.isfinite(value) else None
+        return (value, ()) if math.isfinite(value) else None
     if isinstance(value, bool):
         return None
-    if isinstance(value, str):
-        try:
-            value = float(value.strip().removesuffix("m").strip())
-        except ValueError:
-            return None
-    if isinstance(value, int | float) and math.isfinite(value):
-        return float(value)
-    return None
+    if isinstance(value, int | float):
+        return (float(value), ()) if math.isfinite(value) else None
+    if not isinstance(value, str):
+        return None
+    written = _WRITTEN_NUMBER.fullmatch(value.strip())
+    if written is None:
+        return None
+    number, unit = written.group("number"), (written.group("unit") or "").lower()
+    repairs = []
+    if "," in number:
+        number = number.replace(",", ".")
+        repairs.append("decimal_comma")
+    metres = float(number)
+    if unit:
+        metres *= _METRES_PER_UNIT[unit]
+        repairs.append("unit")
+    if not math.isfinite(metres):
+        return None
+    return metres, tuple(r for r in REPAIRS if r in repairs)
+
+
+def _position(fields: Any) -> tuple[float, float, tuple[str, ...]] | str:
+    """``(x, z, repairs)`` of an entry, or why it has none.
+
+    ``x`` and ``z`` keys as the prompt asks, else a list ``[x, z]`` (``position_list``): the
+    entry itself, or its ``position`` (``pos``, ``xz``, ``coords``, ``coordinates``,
+    ``location``). A list of any other length is no position (``[x, y, z]`` would be a guess).
+    """
+    repairs: tuple[str, ...] = ()
+    if isinstance(fields, dict) and ("x" in fields or "z" in fields):
+        x, z = fields.get("x"), fields.get("z")
+    else:
+        pair = fields
+        if isinstance(fields, dict):
+            pair = next((fields[k] for k in _POSITION_KEYS if k in fields), None)
+        if not isinstance(pair, list) or len(pair) != 2:
+            written = json.dumps(fields, sort_keys=True)[:80]
+            return f"has no x and z (nor a [x, z] list): {written}"
+        (x, z), repairs = pair, ("position_list",)
+    read_x, read_z = _coordinate(x), _coordinate(z)
+    if read_x is None or read_z is None:
+        bad = ("x", x) if read_x is None else ("z", z)
+        return f"has no number of metres as {bad[0]}: {json.dumps(bad[1])[:80]}"
+    found = {*repairs, *read_x[1], *read_z[1]}
+    return read_x[0], read_z[0], tuple(r for r in REPAIRS if r in found)
 
 
 def _text(value: Any) -> str:
@@ -235,14 +320,14 @@ def _text(value: Any) -> str:
     return value if isinstance(value, str) else json.dumps(value, sort_keys=True)
 
 
-def _entry(label: str, fields: Any) -> MapEntry | None:
-    if not isinstance(fields, dict):
-        return None
-    x, z = _number(fields.get("x")), _number(fields.get("z"))
-    if x is None or z is None:
-        return None
-    get = fields.get
-    return MapEntry(
+def _entry(label: str, fields: Any) -> tuple[MapEntry, tuple[str, ...]] | str:
+    """The entry ``label`` and the repairs that read its position, or why it cannot be read."""
+    position = _position(fields)
+    if isinstance(position, str):
+        return f"cognitive_map entry {label!r} {position}"
+    x, z, repairs = position
+    get = fields.get if isinstance(fields, dict) else {}.get
+    entry = MapEntry(
         label,
         _text(get("type")).strip(),
         x,
@@ -250,10 +335,11 @@ def _entry(label: str, fields: Any) -> MapEntry | None:
         _text(get("room")).strip() or None,
         _text(get("facing")).strip() or None,
     )
+    return entry, repairs
 
 
-def _cognitive_map(raw: Any) -> tuple[MapEntry, ...] | str:
-    """The parsed map, or the reason it cannot be read."""
+def _cognitive_map(raw: Any) -> tuple[tuple[MapEntry, ...], tuple[str, ...]] | str:
+    """The parsed map and the repairs that read its positions, or why it cannot be read."""
     if isinstance(raw, list):
         items = []
         for item in raw:
@@ -267,8 +353,14 @@ def _cognitive_map(raw: Any) -> tuple[MapEntry, ...] | str:
         items = [(str(k), v) for k, v in raw.items()]
     else:
         return f"cognitive_map is {type(raw).__name__}, not an object"
-    entries = [e for label, fields in items if (e := _entry(label.strip(), fields))]
-    return tuple(entries)
+    entries, repairs = [], set()
+    for label, fields in items:
+        read = _entry(label.strip(), fields)
+        if isinstance(read, str):
+            return read
+        entries.append(read[0])
+        repairs.update(read[1])
+    return tuple(entries), tuple(r for r in REPAIRS if r in repairs)
 
 
 def parse_reply(text: str) -> Reply:
@@ -296,4 +388,7 @@ def parse_reply(text: str) -> Reply:
     parsed = _cognitive_map(obj["cognitive_map"])
     if isinstance(parsed, str):
         return Reply(**common, error=parsed)
-    return Reply(**common, cognitive_map=parsed)
+    entries, read_with = parsed
+    if read_with:
+        common["repairs"] = tuple(r for r in REPAIRS if r in {*repairs, *read_with})
+    return Reply(**common, cognitive_map=entries)

@@ -2,50 +2,77 @@
 
 A VLM names the objects of its cognitive map in its own words: ``"office chair"``,
 ``"TV"``, ``"chairs (2)"``, ``"Chair_3"``, ``"small wooden table by the door"``,
-``"the red armchair"``. :func:`canonical_type` reads such a text and returns the AI2-THOR
-``objectType`` it denotes, or None when it denotes none. The procedure, in order:
+``"the red armchair"``, ``"chiar"``. :func:`canonical_type` reads such a text and returns the
+AI2-THOR ``objectType`` it denotes, or None when it denotes none. It reads a label the way
+English reads a noun phrase: the **head noun**, the last noun before any qualifier, says what
+the thing is; the words before it only say which one or what kind. The procedure, in order:
 
 1. **Split words.** CamelCase and acronyms are split (``DiningTable`` -> ``dining table``,
    ``TVStand`` -> ``tv stand``), then the text is lower-cased; ``(...)``/``[...]``/``{...}``
    asides are removed (``chairs (2)`` -> ``chairs``); anything that is not a letter or a digit
-   separates words (``Chair_3`` -> ``chair 3``, ``chair#2``, ``chair-2``).
-2. **Cut qualifiers.** The text is cut at the first word that opens a locative or descriptive
-   phrase (:data:`QUALIFIER_WORDS`: ``near``, ``by``, ``next``, ``beside``, ``in``, ``on``,
-   ``at``, ``with``, ``of``, ...), so ``chair near the window`` is read as ``chair``, never as
-   ``window``. Only when the words before the cut name no type is the whole text read
-   (``back left chair``: ``left`` is a position, ``chair`` the head noun).
-3. **Find the head noun.** Words that are numbers or single letters (instance suffixes,
-   ``chair 2``, ``stool b``, ``2 chairs``) are dropped. Among the remaining words, the longest
-   run of consecutive words that names a type is taken, the rightmost on equal length (English
-   puts the head noun last: ``small wooden table`` -> ``table``, ``office chair`` ->
-   ``office chair`` -> ``Chair``). A run names a type when its words joined (``arm chair`` ->
-   ``armchair``), or joined with the last word made singular (``chairs``, ``shelves``,
-   ``couches``, ``boxes``), is a key of :data:`SYNONYMS` or the lower-cased name of an engine
-   type (:data:`ENGINE_TYPES`).
-4. **Candidates.** A synonym lists the engine types it may denote, most likely first
-   (``table`` -> ``DiningTable``, ``CoffeeTable``, ``SideTable``, ``Desk``); an engine type's
-   own name denotes only itself.
+   separates words (``Chair_3`` -> ``chair 3``, ``chair#2``, ``chair-2``). Words that are
+   numbers or single letters (instance suffixes: ``chair 2``, ``stool b``, ``2 chairs``) are
+   dropped.
+2. **Cut qualifiers.** The noun phrase ends before the first word, after the first, that opens
+   a locative or descriptive phrase (:data:`QUALIFIER_WORDS`: ``near``, ``by``, ``next``,
+   ``beside``, ``in``, ``on``, ``at``, ``with``, ``of``, ...): ``chair near the window`` is a
+   chair, ``lamp on the desk`` a lamp, ``picture of a plant`` a picture. ``left`` and ``right``
+   are also adjectives (:data:`POSITION_WORDS`): when the words before them name no type, the
+   phrase runs on past them (``back left chair`` is a chair). Trailing states
+   (:data:`STATE_WORDS`: ``door open``) are dropped.
+3. **Head noun.** The phrase denotes what its last word denotes, read together with the words
+   before it when they form a compound the vocabulary knows: the longest run of at most
+   four words *ending at the last word* whose words joined (``arm chair`` -> ``armchair``), or
+   joined with the last word made singular (``chairs``, ``shelves``, ``couches``, ``boxes``),
+   is a key of :data:`SYNONYMS` or the lower-cased name of an engine type
+   (:data:`ENGINE_TYPES`). So ``office chair`` is a chair, ``table lamp`` a lamp (``DeskLamp``,
+   never ``DiningTable``), ``exit sign`` a sign (no type, never ``Door``), ``fridge magnet`` a
+   magnet (no type). A modifier never names the thing: when the last word denotes no type, the
+   phrase denotes none. **Parts** (:data:`PART_WORDS`): a head that names a part of the object
+   its modifier names (``fridge door``, ``chair seat``) denotes no object; ``chair leg`` denotes
+   none already, as ``leg`` names no type.
+4. **Misspellings.** When no run ending at the last word is a key, the last word (as written,
+   then made singular) is compared with every key of at least :data:`FUZZY_MIN_LENGTH` (5)
+   letters by rapidfuzz's optimal-string-alignment distance (one insertion, deletion,
+   substitution or swap of two neighbours is one edit). A key whose similarity ``1 - edits /
+   longer length`` is at least :data:`FUZZY_THRESHOLD` (0.8: one edit in 5 to 9 letters, two
+   in 10 to 14) is taken, the fewest edits first, when that key's types are the single best:
+   ``chiar`` (1 edit in 5), ``labtop`` (1 in 6), ``refridgerator`` (1 in 13) and
+   ``televsion`` are read. A word shorter than 5 letters is never corrected (``dsek``), nor
+   is a word of :data:`REAL_WORDS`, the English words this close to a key that are no
+   spelling of it: ``chain``, ``cable``, ``tablet`` and ``handle`` are never a ``Chair``,
+   a ``DiningTable`` or a ``Candle``. Only the head noun is corrected (``cofee machine``
+   denotes nothing: ``machine`` names no type).
+5. **Candidates.** A synonym lists the engine types it names, most likely first (``table`` ->
+   ``DiningTable``, ``CoffeeTable``, ``SideTable``, ``Desk``): only types the word is a name for
+   (the kinds a general word covers: a seat is a chair, a stool, an armchair or a sofa), never a
+   look-alike (a sofa is not an armchair). An engine type's own name denotes only itself.
 
 Inside an episode (:class:`TypeResolver`) the first candidate the layout actually holds wins,
 so ``table`` is the ``DiningTable`` where the layout has one and a ``Desk`` where it has no
 table, and ``door`` is a ``Doorway`` where the layout has doorways.
 
-**Hallucinations.** Text that denotes no engine type (``fire extinguisher``, ``ghost``), and
-an engine type the layout does not hold (a ``sofa`` in an office without one), match no
-ground-truth object: the entry is *unrecognised* (:attr:`Matching.unrecognised`). As in the
-paper's Eq. AEC, whose ``min(|M_k|, |E_k|)`` term "prevents hallucinated or double-counted
-objects from inflating the score", such entries count for nothing: not in ``K`` (AEC, PA),
-not in ``M_t`` of TBS, not in SIR's ``M_first``/``M_return``, and they open no forgetting
-spell. They do count in Miller's load ``|M_{t-1}|``, which the paper defines on the map's
-labels (what the model holds), not on matched objects.
+**Hallucinations.** Text that denotes no engine type (``fire extinguisher``, ``exit sign``,
+``ghost``), and a type the layout does not hold (``sofa`` in an office without one: its only
+candidate is ``Sofa``), match no ground-truth object: the entry is *unrecognised*
+(:attr:`Matching.unrecognised`). As in the paper's Eq. AEC, whose ``min(|M_k|, |E_k|)`` term
+"prevents hallucinated or double-counted objects from inflating the score", such entries count
+for nothing: not in ``K`` (AEC, PA), not in ``M_t`` of TBS, not in SIR's
+``M_first``/``M_return``, and they open no forgetting spell. They do count in Miller's load
+``|M_{t-1}|``, which the paper defines on the map's labels (what the model holds), not on
+matched objects.
 """
 
 from __future__ import annotations
 
 import re
 from collections.abc import Iterable
+from fractions import Fraction
 from functools import lru_cache
 from typing import Final
+
+from rapidfuzz import process
+from rapidfuzz.distance import OSA
 
 
 def _split(text: str) -> list[str]:
@@ -71,24 +98,33 @@ ENGINE_TYPES: Final[frozenset[str]] = frozenset(
     )
 )
 
-#: Words VLMs use (joined, singular, lower case) -> engine types they may denote, most
-#: likely first. Engine type names need no entry (``diningtable`` denotes ``DiningTable``).
+#: Words VLMs use (joined, singular, lower case) -> engine types they name, most likely first.
+#: Engine type names need no entry (``diningtable`` denotes ``DiningTable``). A list holds
+#: only types the word is a name for, never a look-alike: a type the layout lacks is a
+#: hallucination, not a licence to pick the nearest thing it has.
 SYNONYMS: Final[dict[str, tuple[str, ...]]] = {
     # seating
     "chair": ("Chair",),
     "officechair": ("Chair",),
     "deskchair": ("Chair",),
     "swivelchair": ("Chair",),
-    "seat": ("Chair", "Stool", "ArmChair"),
+    "deckchair": ("Chair",),
+    "seat": ("Chair", "Stool", "ArmChair", "Sofa"),
     "armchair": ("ArmChair",),
     "loungechair": ("ArmChair",),
     "easychair": ("ArmChair",),
+    "clubchair": ("ArmChair",),
+    "wingchair": ("ArmChair",),
+    "wingbackchair": ("ArmChair",),
     "recliner": ("ArmChair",),
-    "sofa": ("Sofa", "ArmChair"),
-    "couch": ("Sofa", "ArmChair"),
-    "loveseat": ("Sofa", "ArmChair"),
+    "sofa": ("Sofa",),
+    "couch": ("Sofa",),
+    "loveseat": ("Sofa",),
+    "settee": ("Sofa",),
     "stool": ("Stool",),
     "barstool": ("Stool",),
+    "footrest": ("Footstool", "Ottoman"),
+    "pouf": ("Ottoman",),
     # tables and desks
     "table": ("DiningTable", "CoffeeTable", "SideTable", "Desk"),
     "conferencetable": ("DiningTable",),
@@ -96,15 +132,19 @@ SYNONYMS: Final[dict[str, tuple[str, ...]]] = {
     "boardroomtable": ("DiningTable",),
     "longtable": ("DiningTable",),
     "kitchentable": ("DiningTable",),
+    "endtable": ("SideTable",),
+    "bedsidetable": ("SideTable",),
+    "nightstand": ("SideTable",),
     "desk": ("Desk",),
     "officedesk": ("Desk",),
     "workstation": ("Desk",),
     "receptiondesk": ("Desk",),
     "frontdesk": ("Desk",),
     "reception": ("Desk",),
-    "counter": ("CounterTop", "Desk"),
     "receptioncounter": ("Desk",),
+    "counter": ("CounterTop",),
     "kitchencounter": ("CounterTop",),
+    "kitchenisland": ("CounterTop",),
     "worktop": ("CounterTop",),
     "countertop": ("CounterTop",),
     # storage
@@ -112,24 +152,37 @@ SYNONYMS: Final[dict[str, tuple[str, ...]]] = {
     "shelving": ("ShelvingUnit", "Shelf"),
     "bookshelf": ("ShelvingUnit", "Shelf"),
     "bookcase": ("ShelvingUnit", "Shelf"),
-    "cabinet": ("Cabinet", "ShelvingUnit"),
-    "filingcabinet": ("Cabinet", "ShelvingUnit"),
+    "cabinet": ("Cabinet",),
+    "cupboard": ("Cabinet",),
+    "filingcabinet": ("Cabinet",),
+    "tvcabinet": ("TVStand",),
+    "mediaconsole": ("TVStand",),
     # screens and computers
     "tv": ("Television",),
     "television": ("Television",),
     "televisionset": ("Television",),
     "flatscreen": ("Television",),
+    "smarttv": ("Television",),
     "screen": ("Television", "Laptop"),
     "monitor": ("Television", "Desktop", "Laptop"),
     "display": ("Television",),
     "computer": ("Laptop", "Desktop"),
+    "laptopcomputer": ("Laptop",),
+    "notebookcomputer": ("Laptop",),
     "notebook": ("Laptop",),
+    "macbook": ("Laptop",),
+    "desktopcomputer": ("Desktop",),
     "pc": ("Desktop", "Laptop"),
     # plants
     "plant": ("HousePlant",),
     "pottedplant": ("HousePlant",),
+    "plantpot": ("HousePlant",),
     "indoorplant": ("HousePlant",),
     "flowerpot": ("HousePlant",),
+    "fern": ("HousePlant",),
+    "ficus": ("HousePlant",),
+    "cactus": ("HousePlant",),
+    "succulent": ("HousePlant",),
     # kitchen
     "fridge": ("Fridge",),
     "refrigerator": ("Fridge",),
@@ -138,8 +191,35 @@ SYNONYMS: Final[dict[str, tuple[str, ...]]] = {
     "coffeemaker": ("CoffeeMachine",),
     "espressomachine": ("CoffeeMachine",),
     "coffeemachine": ("CoffeeMachine",),
+    "coffeepot": ("CoffeeMachine",),
     "kitchensink": ("Sink",),
     "basin": ("Sink", "SinkBasin"),
+    "stove": ("StoveBurner",),
+    "tap": ("Faucet",),
+    "trashcan": ("GarbageCan",),
+    "wastebasket": ("GarbageCan",),
+    "dustbin": ("GarbageCan",),
+    "bin": ("GarbageCan",),
+    # lamps, pictures, decor
+    "lamp": ("DeskLamp", "FloorLamp"),
+    "tablelamp": ("DeskLamp",),
+    "readinglamp": ("DeskLamp",),
+    "standinglamp": ("FloorLamp",),
+    "picture": ("Painting", "Poster"),
+    "pictureframe": ("Painting",),
+    "artwork": ("Painting",),
+    "photo": ("Painting",),
+    "photograph": ("Painting",),
+    "sculpture": ("Statue",),
+    "figurine": ("Statue",),
+    "curtain": ("Curtains",),
+    "drape": ("Curtains",),
+    "blind": ("Blinds",),
+    "phone": ("CellPhone",),
+    "smartphone": ("CellPhone",),
+    "iphone": ("CellPhone",),
+    "mobilephone": ("CellPhone",),
+    "remote": ("RemoteControl",),
     # ways through
     "doorway": ("Doorway",),
     "door": ("Doorway", "Door"),
@@ -149,6 +229,7 @@ SYNONYMS: Final[dict[str, tuple[str, ...]]] = {
     "archway": ("Doorway",),
     "doorframe": ("Doorway",),
     "entryway": ("Doorway",),
+    "entrance": ("Doorway", "Door"),
     "exit": ("Door",),
     "exitdoor": ("Door",),
     "frontdoor": ("Door",),
@@ -167,17 +248,89 @@ QUALIFIER_WORDS: Final[frozenset[str]] = frozenset(
         "around"
     )
 )
+#: Qualifier words that are also adjectives of position (``back left chair``).
+POSITION_WORDS: Final[frozenset[str]] = frozenset({"left", "right"})
+#: States written after the noun (``door open``), dropped from the end of the phrase.
+STATE_WORDS: Final[frozenset[str]] = frozenset(_split("open opened closed shut ajar off"))
+#: Head nouns that, after a modifier naming an object, name a part of it (``fridge door``).
+PART_WORDS: Final[frozenset[str]] = frozenset({"door", "seat"})
+#: Misspelling correction: least rapidfuzz OSA normalised similarity to a key (1 - edits /
+#: longer length; 0.8 is one edit in 5 to 9 letters, two in 10 to 14).
+FUZZY_THRESHOLD: Final = 0.8
+#: Misspelling correction: fewest letters of a word (and of a key) it applies to.
+FUZZY_MIN_LENGTH: Final = 5
+
+#: English words within :data:`FUZZY_THRESHOLD` of a key that are no spelling of it (from
+#: pyspellchecker's English frequency list, every word of at least 5 letters that step 4
+#: would otherwise correct, less misspellings and words naming the same thing). Never
+#: corrected: ``cable`` is a cable, not a misspelt table.
+REAL_WORDS: Final[frozenset[str]] = frozenset(
+    _split(
+        "alate ample applet applets applies apply baseball baseballs basic basics basie basil "
+        "basing basion basis batch batches battle battles billow billows binds bland blate "
+        "blend blendes blends blini blinis blink blinks blond blondes blonds blots blunger "
+        "boaster boasters boats bolts boobs booms boons boors boost boosts bootees booth booths "
+        "booties bootle booty bottled bottler bottlers bouts bowel bowels brawer break breaks "
+        "bream breams breda breed breeds bridge bridges broad broads cable cables cacus candies "
+        "candled candler candlers cantle cantles cantus catch catches caudle cellophane certain "
+        "chagres chain chains chaises charr choir choirs chunter chunters clair cloches clothe "
+        "clotho clots coach coaches coaster coasters coffeecake coffeecakes commuter commuters "
+        "compute computed computerizes computes conch conches conchs coots cough coughs coulter "
+        "coulters counted countermoves countertype courter couth crape crapes crouch crouches "
+        "curtail curtails dandle dandles dapple dapples deception deceptions decliner decliners "
+        "demote demotes displaces dobbed dogged dottle dottles douches dowel dowels drake "
+        "drakes draped drawee dread dreads dreiser dressed dresses dressier drupe drupes dustin "
+        "elate elates emote emotes entranced fable fables facet facets fainting fauces fettle "
+        "fichus figuring focus focuses foots forestation foster fosters freeze freezes fringe "
+        "fringes fucus fucuses gable gables garbageman grape grapes handle handles hatch "
+        "hatches holograph holographs homograph homographs hoots kittle knifed ladies ladled "
+        "ladler latch latches loots lunger lungers mable massage massages match matches "
+        "mellophone mettle microwaved misplay misplays monitory moots mottle mottles mounter "
+        "mounters natch nettle nettles nightshades opining oread paginating paining palate "
+        "palates panting pantograph pantographs passade patch patches penetrance perception "
+        "perceptions pester pesters phobos phoned phonemes phoney phoneys phonies phonograph "
+        "phonographs phonography phons phony photogram photographed photographer photographers "
+        "photographic photography photon photons phots phytography pictograph pictographs "
+        "pictured pilate pilates pillowy place places plage plages plaint plaints plait plaits "
+        "planet planets plank planks plano plans plata plated platen platens plater plath "
+        "platies plato plats platte platy platys pliant plunder plunders plunge plunged plunges "
+        "plunker plunkers pointing porter porters poser posers posher posted postern posterns "
+        "postures potter potters pottle pottles potto pottos pouch pouches pouter pouters prate "
+        "prates presser pressers printing printings prone racketball rawer recaption recline "
+        "reclined reclines recreation recreations redemption reentrance refrigerate "
+        "refrigerated refrigerates refrigeration remoter remove removes repainting rephotograph "
+        "rephotographs rhone ridge ridges roaster roasters roots roster rosters rowel rowels "
+        "sable sables sasin scree screed screeds screes sculptural sculptured setter setters "
+        "sheaf sheaves sheaving shell shelling shellings shells shone shool shoon shove "
+        "shovelhead shovelheads shoves showbread showered slant slants slate slates sloth "
+        "sloths soapbark spoof spoofs spook spooks spoony spoor spoors stable stables state "
+        "states statued stature statures status statuses statute statutes stave staves steve "
+        "stoke stokes stole stoles stone stones stood stooges stook stoop stoops stope store "
+        "stores stover stovers stowe strove succulence succulency succulently suttee suttees "
+        "swatch swatches swoon swoons tabla tablas tabled tablet tablets tainting taster "
+        "tasters televising toasted toastier toile toiled toiler toilers toots touch touches "
+        "towed tower towers trapes tread treads trowel trowels vouch vouches vowel vowels widow "
+        "widows willow willows windrow windrows winnow winnows witch witches zoster zosters"
+    )
+)
 
 _CAMEL = re.compile(r"(?<=[a-z0-9])(?=[A-Z])|(?<=[A-Z])(?=[A-Z][a-z]{2})")
 _ASIDE = re.compile(r"\(.*?\)|\[.*?\]|\{.*?\}")
 _WORDS = re.compile(r"[a-z]+|[0-9]+")
 _TYPE_OF_KEY: Final[dict[str, str]] = {t.lower(): t for t in ENGINE_TYPES}
 _MAX_RUN: Final = 4
+_EDITS_PER_LETTER: Final = Fraction(1) - Fraction(str(FUZZY_THRESHOLD))
+_FUZZY_KEYS: Final[tuple[str, ...]] = tuple(
+    sorted(k for k in {*SYNONYMS, *_TYPE_OF_KEY} if len(k) >= FUZZY_MIN_LENGTH)
+)
 
 
 def _singulars(word: str) -> tuple[str, ...]:
-    """``word`` then its plausible singulars (``shelves`` -> ``shelf``, ``couches``)."""
+    """``word`` then its plausible singulars (``shelves`` -> ``shelf``, ``knives`` ->
+    ``knife``, ``couches`` -> ``couch``)."""
     forms = [word]
+    if len(word) > 4 and word.endswith("ives"):
+        forms.append(word[:-3] + "fe")
     if len(word) > 3 and word.endswith("ves"):
         forms.append(word[:-3] + "f")
     if len(word) > 3 and word.endswith("es"):
@@ -196,18 +349,81 @@ def _lookup(key: str) -> tuple[str, ...]:
 
 
 def head_words(text: str) -> tuple[str, ...]:
-    """Step 1 and 3's words: split, lower-cased, instance numbers and letters dropped."""
+    """Step 1's words: split, lower-cased, instance numbers and letters dropped."""
     spaced = _CAMEL.sub(" ", _ASIDE.sub(" ", text))
     words = _WORDS.findall(spaced.lower())
     return tuple(w for w in words if not w.isdigit() and len(w) > 1)
 
 
-def _cut(words: tuple[str, ...]) -> tuple[str, ...]:
-    """The words before the first qualifier word (not counting the first word)."""
-    for i, w in enumerate(words):
-        if i > 0 and w in QUALIFIER_WORDS:
-            return words[:i]
-    return words
+def noun_phrase(words: tuple[str, ...]) -> tuple[str, ...]:
+    """Step 2: ``words`` up to the first qualifier word (not counting the first word), read
+    past ``left``/``right`` when the words before them name no type; trailing states dropped."""
+    end = len(words)
+    for i in range(1, len(words)):
+        if words[i] in QUALIFIER_WORDS:
+            if words[i] in POSITION_WORDS and not _denotes(_trimmed(words[:i])):
+                continue
+            end = i
+            break
+    return _trimmed(words[:end])
+
+
+def _trimmed(words: tuple[str, ...]) -> tuple[str, ...]:
+    end = len(words)
+    while end > 1 and words[end - 1] in STATE_WORDS:
+        end -= 1
+    return words[:end]
+
+
+def _exact(words: tuple[str, ...]) -> tuple[str, ...]:
+    """Step 3: candidates of the longest run ending at the head noun that is a key."""
+    for size, key in _sized_runs(words):
+        hit = _lookup(key)
+        if hit:
+            if size == 1 and _is_part(words):
+                return ()
+            return hit
+    return ()
+
+
+def _sized_runs(words: tuple[str, ...]) -> Iterable[tuple[int, str]]:
+    """Step 3's keys with their sizes: runs ending at the last word, longest first, each with
+    the last word as written and then made singular."""
+    for size in range(min(_MAX_RUN, len(words)), 0, -1):
+        run = words[len(words) - size :]
+        stem = "".join(run[:-1])
+        for last in _singulars(run[-1]):
+            yield size, stem + last
+
+
+def _is_part(words: tuple[str, ...]) -> bool:
+    """``fridge door``: a part word after a word that names an object (step 3)."""
+    if len(words) < 2 or not any(f in PART_WORDS for f in _singulars(words[-1])):
+        return False
+    return any(_lookup(f) for f in _singulars(words[-2]))
+
+
+def _fuzzy(words: tuple[str, ...]) -> tuple[str, ...]:
+    """Step 4: candidates of the key closest to the head noun (as written, then singular)."""
+    forms = _singulars(words[-1])
+    if any(f in REAL_WORDS for f in forms):
+        return ()
+    for form in forms:
+        if len(form) < FUZZY_MIN_LENGTH:
+            continue
+        # 1 - edits / longer >= FUZZY_THRESHOLD, in whole numbers (no rounding at the edge)
+        near = [
+            (edits, key)
+            for key, edits, _ in process.extract(
+                form, _FUZZY_KEYS, scorer=OSA.distance, score_cutoff=len(form), limit=None
+            )
+            if edits <= _EDITS_PER_LETTER * max(len(form), len(key))
+        ]
+        if near:
+            least = min(edits for edits, _ in near)
+            best = {_lookup(key) for edits, key in near if edits == least}
+            return best.pop() if len(best) == 1 else ()
+    return ()
 
 
 @lru_cache(maxsize=8192)
@@ -215,25 +431,16 @@ def candidate_types(text: str) -> tuple[str, ...]:
     """Engine types ``text`` may denote, most likely first; ``()`` for none (a hallucination).
 
     See the module docstring for the procedure. ``candidate_types("table by the door")`` is
-    ``("DiningTable", "CoffeeTable", "SideTable", "Desk")``; ``candidate_types("ghost")`` is
-    ``()``.
+    ``("DiningTable", "CoffeeTable", "SideTable", "Desk")``; ``candidate_types("ghost")`` and
+    ``candidate_types("exit sign")`` are ``()``; ``candidate_types("chiar")`` is
+    ``("Chair",)``.
     """
-    words = head_words(text)
-    cut = _cut(words)
-    return _head(cut) or (_head(words) if cut != words else ())
+    return _denotes(noun_phrase(head_words(text)))
 
 
-def _head(words: tuple[str, ...]) -> tuple[str, ...]:
-    """Candidates of the longest (then rightmost) run of ``words`` naming a type (step 3)."""
-    for size in range(min(_MAX_RUN, len(words)), 0, -1):
-        for start in range(len(words) - size, -1, -1):
-            run = words[start : start + size]
-            stem = "".join(run[:-1])
-            for last in _singulars(run[-1]):
-                hit = _lookup(stem + last)
-                if hit:
-                    return hit
-    return ()
+def _denotes(phrase: tuple[str, ...]) -> tuple[str, ...]:
+    """Candidates of a noun phrase (steps 3 and 4); ``()`` for an empty phrase."""
+    return (_exact(phrase) or _fuzzy(phrase)) if phrase else ()
 
 
 def canonical_type(text: str, *, present: Iterable[str] | None = None) -> str | None:
@@ -241,12 +448,14 @@ def canonical_type(text: str, *, present: Iterable[str] | None = None) -> str | 
 
     ``canonical_type("office chair") == "Chair"``, ``"TV" -> "Television"``,
     ``"chairs (2)" -> "Chair"``, ``"small wooden table by the door" -> "DiningTable"``,
-    ``"the red armchair" -> "ArmChair"``, ``"fire extinguisher" -> None``.
+    ``"the red armchair" -> "ArmChair"``, ``"table lamp" -> "DeskLamp"``,
+    ``"fire extinguisher" -> None``, ``"exit sign" -> None``.
 
     ``present``: the types a layout holds. Given, the first candidate among them wins
     (``canonical_type("table", present={"Desk"}) == "Desk"``) and None is returned when the
-    layout holds none of the candidates. Without it, the most likely engine type is returned.
-    None means the text names no engine type (or none the layout holds): a hallucination.
+    layout holds none of the candidates (``canonical_type("sofa", present={"ArmChair"})`` is
+    None). Without it, the most likely engine type is returned. None means the text names no
+    engine type (or none the layout holds): a hallucination.
     """
     candidates = candidate_types(text)
     if present is None:
@@ -256,7 +465,12 @@ def canonical_type(text: str, *, present: Iterable[str] | None = None) -> str | 
 
 
 class TypeResolver:
-    """Resolves written type names to the index of a ground-truth type of one episode."""
+    """Resolves written type names to the index of a ground-truth type of one episode.
+
+    An entry's ``object_type`` is read first, then its label; each by
+    :func:`canonical_type` restricted to the episode's types, so a type the layout does not
+    hold resolves to nothing (-1), never to a neighbouring type it holds.
+    """
 
     def __init__(self, types: Iterable[str]) -> None:
         self.names: list[str] = sorted(set(types))

@@ -82,12 +82,105 @@ def test_map_as_a_list_of_labelled_objects() -> None:
     assert reply.cognitive_map == (DESK, MapEntry("Sofa", "", 0.0, 0.0))
 
 
-def test_entries_without_numeric_position_are_left_out() -> None:
-    reply = parse_reply(
-        '{"action": "Turn(Left)", "cognitive_map": {"A": {"x": null, "z": 1}, "B": {"x": "far", '
-        '"z": 1}, "C": {"x": true, "z": 1}, "D": {"x": NaN, "z": 1}, "E": {"x": 1, "z": 2}}}'
+def _with_desk(fields: str) -> str:
+    """A reply whose map holds a desk written as ``fields`` (JSON), then a chair as asked."""
+    return (
+        '{"action": "Turn(Left)", "cognitive_map": {"Desk_1": ' + fields + ', "Chair_1": '
+        '{"type": "Chair", "x": 0.5, "z": 1}}}'
     )
-    assert [e.label for e in reply.cognitive_map] == ["E"]
+
+
+CHAIR = MapEntry("Chair_1", "Chair", 0.5, 1.0)
+
+
+@pytest.mark.parametrize(
+    ("fields", "x", "z", "repairs"),
+    [
+        ('{"type": "Desk", "x": "1.5", "z": "-2"}', 1.5, -2.0, ()),
+        ('{"type": "Desk", "position": [1.5, -2]}', 1.5, -2.0, ("position_list",)),
+        ('{"type": "Desk", "pos": [1.5, -2.0]}', 1.5, -2.0, ("position_list",)),
+        ('{"type": "Desk", "coordinates": ["1.5", "-2"]}', 1.5, -2.0, ("position_list",)),
+        ("[1.5, -2]", 1.5, -2.0, ("position_list",)),
+        ('{"type": "Desk", "x": "2 metres", "z": "-2 m"}', 2.0, -2.0, ("unit",)),
+        ('{"type": "Desk", "x": "2.5 m", "z": "-2.0m"}', 2.5, -2.0, ("unit",)),
+        ('{"type": "Desk", "x": "250 cm", "z": "-2 Meters"}', 2.5, -2.0, ("unit",)),
+        ('{"type": "Desk", "x": "2,5", "z": -2}', 2.5, -2.0, ("decimal_comma",)),
+        ('{"type": "Desk", "x": "-0,75", "z": "1,5 m"}', -0.75, 1.5, ("unit", "decimal_comma")),
+        ('{"type": "Desk", "xz": ["2,5 m", -2]}', 2.5, -2.0,
+         ("position_list", "unit", "decimal_comma")),
+    ],
+    ids=["string-numbers", "position-list", "pos-list", "coordinates-strings", "bare-list",
+         "metres", "m", "cm", "decimal-comma", "comma-and-unit", "all-three"],
+)  # fmt: skip
+def test_positions_in_other_notations_are_read_and_their_repairs_named(
+    fields: str, x: float, z: float, repairs: tuple[str, ...]
+) -> None:
+    reply = parse_reply(_with_desk(fields))
+    assert reply.error is None
+    desk, chair = reply.cognitive_map
+    assert (desk.label, desk.x, desk.z) == ("Desk_1", pytest.approx(x), pytest.approx(z))
+    assert chair == CHAIR
+    assert reply.repairs == repairs
+
+
+def test_position_repairs_join_the_syntax_repairs_in_order() -> None:
+    body = _with_desk('{"x": "2,5", "z": 1}')
+    reply = parse_reply(f"```json\n{body}\n```")
+    assert reply.error is None and reply.repairs == ("fence", "decimal_comma")
+
+
+@pytest.mark.parametrize(
+    ("fields", "reason"),
+    [
+        ('{"type": "Desk", "x": "near the door", "z": 1}', 'as x: "near the door"'),
+        ('{"type": "Desk", "x": null, "z": 1}', "as x: null"),
+        ('{"type": "Desk", "x": 1, "z": "far"}', 'as z: "far"'),
+        ('{"type": "Desk", "x": true, "z": 1}', "as x: true"),
+        ('{"type": "Desk", "x": NaN, "z": 1}', "as x: NaN"),
+        ('{"type": "Desk", "x": "6 ft", "z": 1}', 'as x: "6 ft"'),
+        ('{"type": "Desk", "x": "1,5,2", "z": 1}', 'as x: "1,5,2"'),
+        ('{"type": "Desk", "x": 1}', "as z: null"),
+        ('{"type": "Desk", "room": "Office"}', "has no x and z"),
+        ('{"type": "Desk", "position": [1.5, 0.8, -2]}', "has no x and z"),
+        ('{"type": "Desk", "position": "near the door"}', "has no x and z"),
+        ('"near the door"', "has no x and z"),
+        ("[1.5]", "has no x and z"),
+    ],
+    ids=["words", "null", "words-in-z", "bool", "nan", "feet", "two-commas", "no-z", "no-xz",
+         "xyz-list", "position-words", "entry-is-words", "one-number-list"],
+)  # fmt: skip
+def test_an_unreadable_position_is_a_parse_failure_naming_the_entry(
+    fields: str, reason: str
+) -> None:
+    reply = parse_reply(_with_desk(fields))
+    assert reply.error is not None
+    assert reply.error.startswith("cognitive_map entry 'Desk_1' ") and reason in reply.error
+    assert reply.cognitive_map == ()
+    assert reply.action == "Turn(Left)"
+
+
+def test_an_unquoted_decimal_comma_is_a_parse_failure() -> None:
+    """``"x": 2,5`` is not JSON; no repair guesses where the number ends."""
+    reply = parse_reply(_with_desk('{"type": "Desk", "x": 2,5, "z": 1}'))
+    assert reply.error is not None and "no JSON object" in reply.error
+
+
+@given(
+    st.floats(-50, 50, allow_nan=False).map(lambda v: round(v, 3)),
+    st.sampled_from(["{}", "{} m", "{}m", "{} metres", "{} meters"]),
+    st.booleans(),
+)
+def test_a_written_coordinate_reads_as_the_number(value: float, unit: str, comma: bool) -> None:
+    written = unit.format(repr(value))
+    if comma:
+        written = written.replace(".", ",")
+    reply = parse_reply(_with_desk(json.dumps({"x": written, "z": 0})))
+    assert reply.error is None
+    assert reply.cognitive_map[0].x == pytest.approx(value, abs=1e-12)
+    expected = {"unit"} if unit != "{}" else set()
+    if comma and "." in repr(value):
+        expected.add("decimal_comma")
+    assert set(reply.repairs) == expected
 
 
 @pytest.mark.parametrize(
