@@ -5,7 +5,7 @@ from __future__ import annotations
 import json
 import shlex
 from collections import Counter
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Final
@@ -18,6 +18,8 @@ from pytest_emrd.trajectory import CONDITIONS, EpisodeSpec
 #: The folder, inside the cassette folder, that holds lock files and unfinished writes. It
 #: holds a ``.gitignore`` of ``*``, so ``git add cassettes`` never commits what is in it.
 SCRATCH: Final = ".emrd-tmp"
+#: The file name endings older releases wrote (``emrd cassettes upgrade`` converts them).
+LEGACY_SUFFIXES: Final = (".yaml.gz", ".yaml.xz")
 
 
 def cassette_path(root: Path, spec: EpisodeSpec) -> Path:
@@ -139,7 +141,20 @@ def missing_summary(
     per_model = Counter(spec.model for spec in missing)
     models = ", ".join(f"{m} ({n})" for m, n in sorted(per_model.items()))
     command = record_command(missing, record_mode="once", cassettes=root, invocation=invocation)
+    old = sum(any(_legacy_twins(cassette_path(root, spec))) for spec in missing)
+    convert = (
+        f" {old} of them have a cassette an older pytest-emrd wrote: convert those first with: "
+        f"emrd cassettes upgrade {root}."
+        if old
+        else ""
+    )
     return (
         f"{len(missing)} of {total} episode(s) have no cassette under {root} and record mode "
-        f"'none' replays only; missing for: {models}. Record them all with: {command}"
+        f"'none' replays only; missing for: {models}.{convert} Record them all "
+        f"with: {command}"
     )
+
+
+def _legacy_twins(path: Path) -> Iterator[bool]:
+    stem = path.name[: -len(SUFFIX)]
+    return (path.with_name(stem + suffix).is_file() for suffix in LEGACY_SUFFIXES)

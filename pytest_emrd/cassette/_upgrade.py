@@ -12,16 +12,12 @@ from __future__ import annotations
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Final
 
 from pytest_emrd._atomic import write_bytes_atomic
 from pytest_emrd.cassette._file import SUFFIX, decode, encode, same_interactions
 from pytest_emrd.cassette._legacy import LegacyError, read_legacy
-from pytest_emrd.cassette._paths import SCRATCH, scratch_path
+from pytest_emrd.cassette._paths import LEGACY_SUFFIXES, SCRATCH, scratch_path
 from pytest_emrd.errors import CassetteError
-
-#: The file name endings older releases wrote.
-LEGACY_SUFFIXES: Final = (".yaml.gz", ".yaml.xz")
 
 
 @dataclass(frozen=True)

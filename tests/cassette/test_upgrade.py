@@ -8,7 +8,14 @@ from pathlib import Path
 import pytest
 
 from pytest_emrd.agent import load_registry
-from pytest_emrd.cassette import agent_runner, cassette_path, decode, run_with_cassette
+from pytest_emrd.cassette import (
+    Invocation,
+    agent_runner,
+    cassette_path,
+    decode,
+    missing_summary,
+    run_with_cassette,
+)
 from pytest_emrd.cli import main
 from pytest_emrd.episode import protocol_version
 from pytest_emrd.trajectory import EpisodeSpec
@@ -63,3 +70,9 @@ def test_a_file_that_is_no_cassette_is_named(old: Path, capsys) -> None:
     bad.write_bytes(b"\xfd7zXZ\x00 garbage")
     assert main(["cassettes", "upgrade", str(old)]) == 2
     assert f"cassette={str(bad)!r} is not an old cassette" in capsys.readouterr().err
+
+
+def test_a_replay_only_run_missing_old_cassettes_says_to_convert_them(old: Path) -> None:
+    message = missing_summary(SPECS, total=2, root=old, invocation=Invocation())
+    assert "2 of them have a cassette an older pytest-emrd wrote" in message
+    assert f"emrd cassettes upgrade {old}." in message
