@@ -67,6 +67,19 @@ def test_vcrpy_replays_it_through_the_persister(recorded: Path, server: FakeServ
     assert reply == json.loads(data.responses[1]["body"]["string"])
 
 
+def test_decompressed_plain_vcrpy_replays_it(recorded: Path, tmp_path: Path) -> None:
+    plain = tmp_path / "ep03.json"
+    plain.write_bytes(lzma.decompress(recorded.read_bytes()))
+    data = decode(recorded.read_bytes())
+    request = data.requests[0]
+    with (
+        vcr.use_cassette(str(plain), serializer="json", record_mode="none"),
+        httpx.Client() as http,
+    ):
+        reply = http.post(request.uri, content=request.body).json()
+    assert reply == json.loads(data.responses[0]["body"]["string"])
+
+
 def test_the_same_traffic_gives_the_same_bytes(server: FakeServer, spec, tmp_path: Path) -> None:
     for name in ("a", "b"):
         run_with_cassette(
