@@ -50,8 +50,11 @@ class EpisodePersister:
             raise CassetteNotFoundError(str(path))
         try:
             data = decode(path.read_bytes())
-        except LegacyFormatError as exc:
-            raise CassetteError(f"cassette={str(path)!r} cannot be replayed: {exc}") from None
+        except LegacyFormatError:
+            raise CassetteError(
+                f"cassette={str(path)!r} is in the format an older pytest-emrd wrote; convert "
+                f"it once with: emrd cassettes upgrade {self.root or path.parent}"
+            ) from None
         except IntegrityError as exc:
             raise CassetteError(
                 f"cassette={str(path)!r} was changed after it was recorded: {exc}. A cassette "
