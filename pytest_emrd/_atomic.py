@@ -7,13 +7,16 @@ import tempfile
 from pathlib import Path
 
 
-def write_bytes_atomic(path: Path, data: bytes) -> None:
-    """Write ``data`` to ``path`` via a temporary file in the same folder and a rename.
+def write_bytes_atomic(path: Path, data: bytes, *, temp: Path | None = None) -> None:
+    """Write ``data`` to ``path`` via a temporary file and a rename.
 
-    The file gets the usual permissions (``0o666`` minus the umask), not ``mkstemp``'s 0600.
+    The temporary file is ``<temp>.<random>.tmp`` (``temp`` on the same file system as
+    ``path``), by default ``.<name>.<random>.tmp`` beside ``path``. The file gets the usual
+    permissions (``0o666`` minus the umask), not ``mkstemp``'s 0600.
     """
     path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    temp = temp or path.with_name(f".{path.name}")
+    fd, tmp = tempfile.mkstemp(prefix=f"{temp.name}.", suffix=".tmp", dir=temp.parent)
     try:
         with os.fdopen(fd, "wb") as handle:
             handle.write(data)

@@ -1,7 +1,8 @@
 """Bounded retries with exponential backoff and jitter, honouring ``Retry-After`` (tenacity).
 
 Retried: HTTP 429, any 5xx in :data:`RETRY_STATUSES`, transport errors (connection refused
-or reset, timeouts) and 2xx bodies that are not the JSON the provider promised. Not
+or reset, timeouts) and 2xx bodies that are not the JSON the provider promised (empty, not
+JSON, nested too deep to parse, or of another shape). Not
 retried: other 4xx (a bad key or a bad request does not heal). Jitter only changes how long
 we sleep; the request sent again is the same object, byte for byte.
 
@@ -145,7 +146,7 @@ def _attempt(http: httpx.Client, request: httpx.Request, url: str, read: Callabl
         )
     try:
         return read(response.json())
-    except (ValueError, KeyError, TypeError, IndexError) as exc:
+    except (ValueError, KeyError, TypeError, IndexError, AttributeError, RecursionError) as exc:
         raise _Retryable(
             f"HTTP {response.status_code} with an unreadable body "
             f"({type(exc).__name__}: {exc}): {_excerpt(response)}"

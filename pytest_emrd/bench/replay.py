@@ -34,9 +34,7 @@
   episodes) against what plain vcrpy stores for the same traffic (YAML, base64 frames kept,
   no redaction): each episode is replayed from its cassette while the HTTP requests the agent
   really sends and the responses it gets are captured, then written with vcrpy's own YAML
-  serialiser. Total plain bytes over total committed bytes plus, once, the compressed size
-  of the texts pytest-emrd ships for cassettes to name instead of storing (the system
-  prompt, :mod:`pytest_emrd.cassette._shared`): a replay needs them too. Plain vcrpy would
+  serialiser. Total plain bytes over total committed bytes. Plain vcrpy would
   also keep the server's volatile response headers, which replay does not reproduce: the
   ratio is, if anything, low. Target 500.
 * ``replay.step_overhead_ms`` — per request of a replayed episode, through the real client:
@@ -69,7 +67,6 @@ from pytest_emrd.cassette import (
     decode,
     episode_cassette,
     run_with_cassette,
-    shipped_bytes,
 )
 from pytest_emrd.trajectory import CONDITIONS, EpisodeSpec, Trajectory
 from pytest_emrd.world._simulator import forget_views
@@ -235,7 +232,7 @@ def _captured(
 
 def _size_ratio(specs: tuple[EpisodeSpec, ...]) -> float:
     plain = 0
-    ours = shipped_bytes()  # the texts cassettes name instead of storing, counted once
+    ours = 0
     for spec in specs:
         plain += len(plain_vcrpy_yaml(live_exchanges(spec)).encode())
         ours += cassette_path(CASSETTES, spec).stat().st_size

@@ -1,4 +1,4 @@
-"""Cassettes: one xz-compressed, redacted, content-addressed vcrpy cassette per episode.
+"""Cassettes: one redacted vcrpy cassette per episode, compressed with xz (see :mod:`._file`).
 
 ``run_with_cassette`` is the entry point; the rest is exported for tools and tests.
 """
@@ -14,24 +14,27 @@ from pytest_emrd.cassette._episode import (
     is_live,
     run_with_cassette,
 )
-from pytest_emrd.cassette._format import (
+from pytest_emrd.cassette._file import (
+    SUFFIX,
     CassetteData,
     FormatError,
-    NewerFormatError,
+    IntegrityError,
+    LegacyFormatError,
     decode,
+    decompress,
     encode,
+    same_interactions,
 )
 from pytest_emrd.cassette._network import network_blocked
 from pytest_emrd.cassette._paths import (
-    LEGACY_SUFFIX,
-    SUFFIX,
+    SCRATCH,
     Invocation,
     cassette_path,
     missing_cassettes,
     missing_summary,
     record_command,
 )
-from pytest_emrd.cassette._persister import EpisodePersister
+from pytest_emrd.cassette._persister import EpisodePersister, writer_lock
 from pytest_emrd.cassette._redact import (
     MatchKeys,
     Redacted,
@@ -40,8 +43,7 @@ from pytest_emrd.cassette._redact import (
     redact_body,
 )
 from pytest_emrd.cassette._routing import routing
-from pytest_emrd.cassette._shared import shipped_bytes
-from pytest_emrd.cassette._upgrade import Upgraded, legacy_files, same_traffic, upgrade
+from pytest_emrd.cassette._upgrade import Upgraded, legacy_files, upgrade
 from pytest_emrd.cassette._use import (
     EpisodeCassette,
     clear_caches,
@@ -51,7 +53,7 @@ from pytest_emrd.cassette._use import (
 )
 
 __all__ = [
-    "LEGACY_SUFFIX",
+    "SCRATCH",
     "SECRET_HEADERS",
     "SUFFIX",
     "AgentRunner",
@@ -62,9 +64,10 @@ __all__ = [
     "EpisodeRunner",
     "FormatError",
     "FrameDriftWarning",
+    "IntegrityError",
     "Invocation",
+    "LegacyFormatError",
     "MatchKeys",
-    "NewerFormatError",
     "Redacted",
     "Upgraded",
     "agent_runner",
@@ -72,6 +75,7 @@ __all__ = [
     "cassette_path",
     "clear_caches",
     "decode",
+    "decompress",
     "encode",
     "episode_cassette",
     "first_difference",
@@ -87,7 +91,7 @@ __all__ = [
     "redact_request",
     "routing",
     "run_with_cassette",
-    "same_traffic",
-    "shipped_bytes",
+    "same_interactions",
     "upgrade",
+    "writer_lock",
 ]

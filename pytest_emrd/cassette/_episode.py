@@ -15,6 +15,7 @@ from pytest_emrd._scrub import scrub
 from pytest_emrd.cassette._drift import modality_message
 from pytest_emrd.cassette._network import network_blocked
 from pytest_emrd.cassette._paths import Invocation, cassette_path, record_command
+from pytest_emrd.cassette._persister import LOCK_TIMEOUT_S, writer_lock
 from pytest_emrd.cassette._use import episode_cassette
 from pytest_emrd.errors import check_choice
 from pytest_emrd.gate._settings import MATCHING_MODES, RECORD_MODES
@@ -124,6 +125,7 @@ def run_with_cassette(
     record_mode: str = "once",
     matching: str = "strict",
     invocation: Invocation | None = None,
+    lock_timeout_s: float = LOCK_TIMEOUT_S,
 ) -> EpisodeRun:
     """Run ``run(spec, live=...)`` with the model traffic recorded to / replayed from its cassette.
 
@@ -133,11 +135,31 @@ def run_with_cassette(
     in ``none`` mode, drift, a modality other than the recorded one, a recorded response the
     client could not read), each with the command that fixes it, built for ``invocation``
     (the test paths and user registry of the run). The error text is scrubbed of secrets. A
-    corrupted or stale cassette raises :class:`~pytest_emrd.errors.CassetteError`.
+    corrupted, edited or stale cassette raises :class:`~pytest_emrd.errors.CassetteError`.
+
+    An episode that may record holds its cassette's lock (:func:`~._persister.writer_lock`)
+    while it runs: a second run of the same episode waits, then replays what the first one
+    recorded (in ``once`` mode), or refuses after ``lock_timeout_s`` seconds.
     """
     check_choice("record_mode", record_mode, RECORD_MODES)
     check_choice("matching", matching, MATCHING_MODES)
     path = cassette_path(cassettes, spec)
+    if not is_live(spec, cassettes=cassettes, record_mode=record_mode):
+        return _run(spec, run, path, cassettes, protocol, record_mode, matching, invocation)
+    with writer_lock(cassettes, path, timeout=lock_timeout_s):
+        return _run(spec, run, path, cassettes, protocol, record_mode, matching, invocation)
+
+
+def _run(
+    spec: EpisodeSpec,
+    run: EpisodeRunner,
+    path: Path,
+    cassettes: Path,
+    protocol: str,
+    record_mode: str,
+    matching: str,
+    invocation: Invocation | None,
+) -> EpisodeRun:
     missing = record_mode == "none" and not path.is_file()
     live = is_live(spec, cassettes=cassettes, record_mode=record_mode)
     rerecord = record_command(spec, record_mode="all", cassettes=cassettes, invocation=invocation)
@@ -151,6 +173,7 @@ def run_with_cassette(
                 record_mode=record_mode,
                 matching=matching,
                 rerecord_command=rerecord,
+                root=cassettes,
             ) as cassette,
         ):
             trajectory = run(spec, live=live)

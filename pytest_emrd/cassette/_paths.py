@@ -5,23 +5,25 @@ from __future__ import annotations
 import json
 import shlex
 from collections import Counter
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Final
 
+from pytest_emrd.cassette._file import SUFFIX
 from pytest_emrd.gate._settings import RunSettings
 from pytest_emrd.rooms import SLUG_ROOMS
 from pytest_emrd.trajectory import CONDITIONS, EpisodeSpec
 
-#: The file name ending of a cassette (format ``emrd-cassette/2``, xz).
-SUFFIX: Final = ".yaml.xz"
-#: The ending of a format-1 cassette (gzip), which older releases wrote: still read.
-LEGACY_SUFFIX: Final = ".yaml.gz"
+#: The folder, inside the cassette folder, that holds lock files and unfinished writes. It
+#: holds a ``.gitignore`` of ``*``, so ``git add cassettes`` never commits what is in it.
+SCRATCH: Final = ".emrd-tmp"
+#: The file name endings older releases wrote (``emrd cassettes upgrade`` converts them).
+LEGACY_SUFFIXES: Final = (".yaml.gz", ".yaml.xz")
 
 
 def cassette_path(root: Path, spec: EpisodeSpec) -> Path:
-    """``<root>/<model>/<condition>/<variant>/<spawn>/ep<NN>.yaml.xz`` on the builtin world
+    """``<root>/<model>/<condition>/<variant>/<spawn>/ep<NN>.json.xz`` on the builtin world
     under the paper protocol, ``<root>/<backend>/<model>/...`` on any other backend
     (``cassettes/ai2thor/gemini/...``), and ``.../layouts-generated/<model>/...`` under
     generated layouts (``cassettes/layouts-generated/scout/...``).
@@ -30,27 +32,25 @@ def cassette_path(root: Path, spec: EpisodeSpec) -> Path:
     place; the other backends and generated layouts get their own trees, so a recording never
     answers a run of another world (or the reverse) even when a model happens to be named
     like a backend.
-
-    When only a format-1 file of the episode exists (``ep<NN>.yaml.gz``, recorded by an older
-    release), that file is returned: it replays as it is, and recording over it writes the
-    ``.yaml.xz`` file in its place (see :class:`~._persister.EpisodePersister`).
     """
     base = root if spec.backend == "builtin" else root / spec.backend
     if spec.layouts != "paper":
         base = base / f"layouts-{spec.layouts}"
     folder = base / spec.model / spec.condition / spec.variant / spec.spawn
-    path = folder / f"ep{spec.episode:02d}{SUFFIX}"
-    legacy = folder / f"ep{spec.episode:02d}{LEGACY_SUFFIX}"
-    return legacy if not path.is_file() and legacy.is_file() else path
+    return folder / f"ep{spec.episode:02d}{SUFFIX}"
 
 
-def current_path(path: Path) -> Path:
-    """Where the cassette at ``path`` is written: ``path`` itself, or the ``.yaml.xz`` file
-    that replaces a format-1 ``.yaml.gz`` one."""
-    name = path.name
-    if name.endswith(LEGACY_SUFFIX):
-        return path.with_name(name[: -len(LEGACY_SUFFIX)] + SUFFIX)
-    return path
+def scratch_path(root: Path, path: Path, suffix: str) -> Path:
+    """Where the lock file (``.lock``) or an unfinished write (``.<random>.tmp``) of the
+    cassette ``path`` under ``root`` lives: the same relative path under ``<root>/.emrd-tmp``,
+    a folder that ignores itself in git (created here with its ``.gitignore``)."""
+    scratch = root / SCRATCH
+    target = scratch / path.relative_to(root)
+    target.parent.mkdir(parents=True, exist_ok=True)
+    ignore = scratch / ".gitignore"
+    if not ignore.is_file():
+        ignore.write_text("# pytest-emrd: cassette locks and unfinished writes\n*\n")
+    return target.with_name(target.name + suffix)
 
 
 @dataclass(frozen=True)
@@ -141,7 +141,20 @@ def missing_summary(
     per_model = Counter(spec.model for spec in missing)
     models = ", ".join(f"{m} ({n})" for m, n in sorted(per_model.items()))
     command = record_command(missing, record_mode="once", cassettes=root, invocation=invocation)
+    old = sum(any(_legacy_twins(cassette_path(root, spec))) for spec in missing)
+    convert = (
+        f" {old} of them have a cassette an older pytest-emrd wrote: convert those first with: "
+        f"emrd cassettes upgrade {root}."
+        if old
+        else ""
+    )
     return (
         f"{len(missing)} of {total} episode(s) have no cassette under {root} and record mode "
-        f"'none' replays only; missing for: {models}. Record them all with: {command}"
+        f"'none' replays only; missing for: {models}.{convert} Record them all "
+        f"with: {command}"
     )
+
+
+def _legacy_twins(path: Path) -> Iterator[bool]:
+    stem = path.name[: -len(SUFFIX)]
+    return (path.with_name(stem + suffix).is_file() for suffix in LEGACY_SUFFIXES)

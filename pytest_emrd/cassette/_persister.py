@@ -1,40 +1,48 @@
-"""vcrpy persister for EMRD cassettes: atomic writes, protocol check (file I/O only)."""
+"""vcrpy persister for EMRD cassettes (file I/O only), and the lock of a cassette's writer."""
 
 from __future__ import annotations
 
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
 from vcr.persisters.filesystem import CassetteNotFoundError
 
 from pytest_emrd._atomic import write_bytes_atomic
-from pytest_emrd.cassette._format import (
+from pytest_emrd.cassette._file import (
     CassetteData,
     FormatError,
-    NewerFormatError,
+    IntegrityError,
+    LegacyFormatError,
     decode,
     encode,
 )
-from pytest_emrd.cassette._paths import current_path
+from pytest_emrd.cassette._paths import scratch_path
 from pytest_emrd.cassette._redact import canonical_keys
 from pytest_emrd.errors import CassetteError
 
 
 class EpisodePersister:
-    """Loads and saves one episode's cassette under the current protocol version.
+    """Loads and saves one episode's cassette (:mod:`._file`) under the current protocol.
 
-    A missing file is "not found" (vcrpy records it when the mode allows); a file that
-    cannot be read is a :class:`CassetteError` naming it; a file recorded under another
-    protocol is a :class:`CassetteError` with the command that re-records it; so is a file
-    a newer pytest-emrd wrote, which also says to upgrade. In ``all`` mode the old file is
-    never read: it is replaced when the episode finishes. A format-1 file (``.yaml.gz``) is
-    read as it is; saving over it writes the ``.yaml.xz`` file and removes it.
+    A missing file is "not found" (vcrpy records it when the mode allows). Each file that
+    cannot be replayed is a :class:`CassetteError` naming it and the fix, in one line: a file
+    that is not a cassette, one an older release wrote (convert it with ``emrd cassettes
+    upgrade``), one edited by hand (its digest no longer matches) and one recorded under
+    another protocol (re-record it). In ``all`` mode the old file is never read: it is
+    replaced when the episode finishes. A file is written to ``<root>/.emrd-tmp`` first and
+    renamed into place, so a write cut short leaves nothing in the cassette tree.
     """
 
-    def __init__(self, *, protocol: str, fresh: bool, rerecord_command: str) -> None:
+    def __init__(
+        self, *, protocol: str, fresh: bool, rerecord_command: str, root: Path | None = None
+    ) -> None:
         self.protocol = protocol
         self.fresh = fresh
         self.rerecord_command = rerecord_command
+        self.root = root
+        """The cassette folder (temporary files go to its ``.emrd-tmp``); ``None``: beside."""
 
     def load_cassette(self, cassette_path: str | Path, serializer: Any = None) -> tuple[list, list]:
         path = Path(cassette_path)
@@ -42,38 +50,76 @@ class EpisodePersister:
             raise CassetteNotFoundError(str(path))
         try:
             data = decode(path.read_bytes())
-        except NewerFormatError as exc:
+        except LegacyFormatError:
             raise CassetteError(
-                f"cassette={str(path)!r} cannot be read by this pytest-emrd: {exc}. Upgrade "
-                f"pytest-emrd (pip install -U pytest-emrd), or record it again: "
-                f"{self.rerecord_command}"
-            ) from exc
+                f"cassette={str(path)!r} is in the format an older pytest-emrd wrote; convert "
+                f"it once with: emrd cassettes upgrade {self.root or path.parent}"
+            ) from None
+        except IntegrityError as exc:
+            raise CassetteError(
+                f"cassette={str(path)!r} was changed after it was recorded: {exc}. A cassette "
+                f"is replayed only as recorded; re-record it: {self.rerecord_command}"
+            ) from None
         except (FormatError, OSError) as exc:
             raise CassetteError(
                 f"cassette={str(path)!r} is corrupted: {exc}. Delete it and record it again: "
                 f"{self.rerecord_command}"
-            ) from exc
+            ) from None
         if data.protocol != self.protocol:
             raise CassetteError(
                 f"cassette={str(path)!r} was recorded under protocol {data.protocol!r}, but the "
                 f"world and prompt are now at {self.protocol!r}; replaying it would compare "
                 f"stale traffic. Re-record it: {self.rerecord_command}"
             )
-        for request, canonical in zip(data.requests, data.canonical, strict=True):
-            if canonical:  # recorded already redacted: keyed as it is, never parsed again
+        for index, request in enumerate(data.requests):
+            if index not in data.raw:  # recorded redacted: keyed as it is, never parsed again
                 request.emrd_keys = canonical_keys(request.method, request.path, request.body)
         return list(data.requests), list(data.responses)
 
     def save_cassette(
         self, cassette_path: str | Path, cassette_dict: dict[str, Any], serializer: Any = None
     ) -> None:
-        data = CassetteData(
-            protocol=self.protocol,
-            requests=tuple(cassette_dict["requests"]),
-            responses=tuple(cassette_dict["responses"]),
-        )
+        requests = tuple(cassette_dict["requests"])
+        raw = frozenset(i for i, request in enumerate(requests) if not _canonical(request))
+        data = CassetteData(self.protocol, requests, tuple(cassette_dict["responses"]), raw)
         path = Path(cassette_path)
-        target = current_path(path)
-        write_bytes_atomic(target, encode(data))
-        if target != path:  # a format-1 file recorded over: its replacement is written
-            path.unlink(missing_ok=True)
+        temp = scratch_path(self.root, path, "") if self.root is not None else None
+        write_bytes_atomic(path, encode(data), temp=temp)
+
+
+def _canonical(request: Any) -> bool:
+    """Whether ``request``'s body is canonical JSON (it was redacted, or read back as such)."""
+    keys = getattr(request, "emrd_keys", None)
+    return keys is not None and keys.redacted.parsed
+
+
+#: How long a run waits for another run that records the same cassette before refusing.
+LOCK_TIMEOUT_S = 1800.0
+
+
+@contextmanager
+def writer_lock(root: Path, path: Path, *, timeout: float = LOCK_TIMEOUT_S) -> Iterator[None]:
+    """Hold the lock of the cassette ``path`` (one writer per cassette across processes),
+    then remove what an earlier writer of it left unfinished (a killed run's temporary file).
+
+    A run that waits longer than ``timeout`` seconds gets a :class:`CassetteError` in one
+    line. The lock is an OS file lock: it is released when its holder ends, killed or not.
+    """
+    from filelock import FileLock, Timeout
+
+    lock_file = scratch_path(root, path, ".lock")
+    try:
+        lock = FileLock(lock_file, timeout=timeout)
+        lock.acquire()
+    except Timeout:
+        raise CassetteError(
+            f"cassette={str(path)!r} is being recorded by another run (lock {lock_file}); "
+            f"waited {timeout:g} s. Let that run finish, or give this one its own "
+            "--emrd-cassettes folder."
+        ) from None
+    try:
+        for leftover in lock_file.parent.glob(f"{path.name}.*.tmp"):
+            leftover.unlink(missing_ok=True)
+        yield
+    finally:
+        lock.release()

@@ -1,9 +1,10 @@
-"""Rewrite format-1 cassettes (``.yaml.gz``) in the current format (``.yaml.xz``), verified.
+"""``emrd cassettes upgrade``: convert the cassettes older releases wrote, once, verified.
 
-Format-1 cassettes replay as they are; upgrading only makes them smaller (about a third, see
-:mod:`._format`). Nothing is re-recorded: each file is decoded, encoded again, and the new
-file is written only if it decodes to exactly the same interactions (every method, URI,
-header and body byte), after which the old file is removed.
+Formats ``emrd-cassette/1`` (``ep<NN>.yaml.gz``) and ``emrd-cassette/2`` (``ep<NN>.yaml.xz``)
+become vcrpy cassettes (``ep<NN>.json.xz``, :mod:`._file`). Nothing is re-recorded: each
+file is read (:mod:`._legacy`), written in the new format, and the new file is kept only if
+it reads back to exactly the same protocol and interactions (every method, URI, header and
+body byte); the old file is removed after that.
 """
 
 from __future__ import annotations
@@ -13,14 +14,15 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from pytest_emrd._atomic import write_bytes_atomic
-from pytest_emrd.cassette._format import CassetteData, FormatError, decode, encode
-from pytest_emrd.cassette._paths import LEGACY_SUFFIX, current_path
+from pytest_emrd.cassette._file import SUFFIX, decode, encode, same_interactions
+from pytest_emrd.cassette._legacy import LegacyError, read_legacy
+from pytest_emrd.cassette._paths import LEGACY_SUFFIXES, SCRATCH, scratch_path
 from pytest_emrd.errors import CassetteError
 
 
 @dataclass(frozen=True)
 class Upgraded:
-    """One cassette rewritten: where it was and is, and its size before and after."""
+    """One cassette converted: where it was and is, and its size before and after."""
 
     old: Path
     new: Path
@@ -28,35 +30,21 @@ class Upgraded:
     new_bytes: int
 
 
-def same_traffic(a: CassetteData, b: CassetteData) -> bool:
-    """Whether two cassettes read back (:func:`decode`) hold the same protocol and the same
-    interactions, byte for byte (``canonical`` is compared too: it is known once read back)."""
-
-    def requests(data: CassetteData) -> list[tuple]:
-        return [(r.method, r.uri, r.body, sorted(r.headers.items())) for r in data.requests]
-
-    return (
-        a.protocol == b.protocol
-        and a.canonical == b.canonical
-        and requests(a) == requests(b)
-        and list(a.responses) == list(b.responses)
-    )
-
-
 def legacy_files(root: Path) -> list[Path]:
-    """The format-1 cassette files under ``root`` (recursively), sorted."""
-    return sorted(root.rglob(f"*{LEGACY_SUFFIX}"))
+    """The cassette files under ``root`` with an old release's name ending, sorted."""
+    found = (p for suffix in LEGACY_SUFFIXES for p in root.rglob(f"*{suffix}"))
+    return sorted(p for p in found if SCRATCH not in p.relative_to(root).parts)
 
 
 def upgrade(root: Path) -> Iterator[Upgraded]:
-    """Upgrade every ``*.yaml.gz`` under ``root``, one file at a time (each one is done or
-    not: an interrupted run leaves no half-written file).
+    """Convert every old cassette under ``root``, one file at a time (each one is done or
+    not: an interrupted run leaves no half-written file, and running it again goes on).
 
-    :class:`CassetteError` names a file that is not a readable cassette, or whose ``.yaml.xz``
-    twin already exists (which one to keep is the user's call); files before it stay upgraded.
+    :class:`CassetteError` names a file that is not an old cassette, or whose new twin
+    already exists (which one to keep is the user's call); files before it stay converted.
     """
     for old in legacy_files(root):
-        new = current_path(old)
+        new = old.with_name(old.name[: -len(".yaml.gz")] + SUFFIX)
         if new.exists():
             raise CassetteError(
                 f"cassette={str(old)!r} has a twin {new.name} already, which replays instead; "
@@ -64,12 +52,12 @@ def upgrade(root: Path) -> Iterator[Upgraded]:
             )
         blob = old.read_bytes()
         try:
-            data = decode(blob)
-        except FormatError as exc:
-            raise CassetteError(f"cassette={str(old)!r} is not readable: {exc}") from exc
+            data = read_legacy(blob)
+        except LegacyError as exc:
+            raise CassetteError(f"cassette={str(old)!r} is not an old cassette: {exc}") from None
         rewritten = encode(data)
-        if not same_traffic(decode(rewritten), data):  # a format bug must never lose traffic
-            raise CassetteError(f"cassette={str(old)!r} did not survive re-encoding; kept as is")
-        write_bytes_atomic(new, rewritten)
+        if not same_interactions(decode(rewritten), data):  # a bug must never lose traffic
+            raise CassetteError(f"cassette={str(old)!r} did not survive conversion; kept as is")
+        write_bytes_atomic(new, rewritten, temp=scratch_path(root, new, ""))
         old.unlink()
         yield Upgraded(old, new, len(blob), len(rewritten))

@@ -127,6 +127,7 @@ class EpisodeCassette(Cassette):
         self._by_size: dict[tuple[str, int], list[int]] = {}
         self._indexed = 0
         self._loading = False
+        self._loaded = 0
 
     def _load(self) -> None:
         self._loading = True
@@ -134,18 +135,36 @@ class EpisodeCassette(Cassette):
             super()._load()
         finally:
             self._loading = False
+            self._loaded = len(self.data)
 
     def append(self, request: Request, response: dict[str, Any]) -> None:
-        """vcrpy's ``append``; an interaction read back from our own file is not deep-copied
-        first (vcrpy protects a live response that way; the decoder built this one for this
-        cassette alone)."""
+        """vcrpy's ``append``, keeping only the replies that counted.
+
+        A request recorded again right after itself is a retry: the client sends the same
+        bytes again only when it could not read the reply (an empty or invalid-JSON 200;
+        other failures are never recorded). The reply it could not read is replaced by the
+        new one, so a replay gets the good reply first: no retry, no backoff sleep. An
+        interaction read back from our own file is not deep-copied first (vcrpy protects a
+        live response that way; the decoder built this one for this cassette alone).
+        """
         if not self._loading:
-            super().append(request, response)
-            return
+            response = copy.deepcopy(response)
         kept = self._before_record_request(request), self._before_record_response(response)
-        if kept[0] and kept[1] is not None:
+        if not kept[0] or kept[1] is None:
+            return
+        if not self._loading and self._retried(kept[0]):
+            self.data[-1] = kept
+        else:
             self.data.append(kept)
-            self.dirty = True
+        self.dirty = True
+
+    def _retried(self, request: Request) -> bool:
+        """Whether ``request`` repeats the last interaction recorded live (not one read back
+        from the file, which a replay plays before any request is recorded)."""
+        if len(self.data) <= self._loaded:
+            return False
+        key = _keys(request).strict
+        return key is not None and key == _keys(self.data[-1][0]).strict
 
     def _responses(self, request: Request) -> Iterator[tuple[int, dict[str, Any]]]:
         """vcrpy's lookup (every recorded request tried in turn, for each request made),
@@ -235,7 +254,13 @@ def _before_record_response(response: dict[str, Any]) -> dict[str, Any] | None:
 
 @contextmanager
 def episode_cassette(
-    path: Path, *, protocol: str, record_mode: str, matching: str, rerecord_command: str
+    path: Path,
+    *,
+    protocol: str,
+    record_mode: str,
+    matching: str,
+    rerecord_command: str,
+    root: Path | None = None,
 ) -> Iterator[EpisodeCassette]:
     """Patch httpx with the episode's cassette for the duration of the block.
 
@@ -243,12 +268,16 @@ def episode_cassette(
     ``record_on_exception`` off (raise inside the block to discard a failed episode), and
     in ``all`` mode the file is rebuilt from scratch. Inside :func:`~._routing.routing`
     (concurrent episodes) the cassette is bound to this thread instead of patching httpx.
+    ``root`` is the cassette folder (see :class:`~._persister.EpisodePersister`).
     """
     frame_drift: set[tuple[Any, Any]] = set()
     settings: dict[str, Any] = dict(
         path=str(path),
         persister=EpisodePersister(
-            protocol=protocol, fresh=record_mode == "all", rerecord_command=rerecord_command
+            protocol=protocol,
+            fresh=record_mode == "all",
+            rerecord_command=rerecord_command,
+            root=root,
         ),
         record_mode=RecordMode(record_mode),
         match_on=(make_matcher(matching, frame_drift),),

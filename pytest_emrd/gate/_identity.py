@@ -109,15 +109,24 @@ def check_resume(run_dir: Path, shard: tuple[int, int] | None) -> None:
 
 
 def write_identity(run_dir: Path, identity: RunIdentity) -> None:
-    """Record ``identity`` in ``run_dir`` (atomic; rewritten only when it changes)."""
+    """Record ``identity`` in ``run_dir`` (atomic; rewritten only when it changes), refusing
+    a directory that holds another shard (:func:`check_resume`). Checked and written under
+    the directory's lock: of two runs of different shards started at once on one directory,
+    the first to compute an episode claims it and the other is refused."""
+    from filelock import FileLock
+
     path = run_dir / RUN_FILE
     blob = json.dumps(identity.to_dict(), sort_keys=True, indent=1).encode()
-    try:
-        if path.read_bytes() == blob:
-            return
-    except FileNotFoundError:
-        pass
-    write_bytes_atomic(path, blob)
+    lock = run_dir / "locks" / "run.lock"
+    lock.parent.mkdir(parents=True, exist_ok=True)
+    with FileLock(lock):
+        check_resume(run_dir, identity.shard)
+        try:
+            if path.read_bytes() == blob:
+                return
+        except FileNotFoundError:
+            pass
+        write_bytes_atomic(path, blob)
 
 
 def check_shard_set(run_dirs: Sequence[Path], *, allow_partial: bool = False) -> list[str]:

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from pytest_emrd.bench.replay import CASSETTES, SAMPLE, live_exchanges, plain_vcrpy_yaml
-from pytest_emrd.cassette import cassette_path
+from pytest_emrd.cassette import SUFFIX, cassette_path
 
 
 def test_plain_vcrpy_sees_the_jpeg_frames_a_live_run_sends():
@@ -15,3 +15,10 @@ def test_plain_vcrpy_sees_the_jpeg_frames_a_live_run_sends():
     assert bodies and all(b"data:image/jpeg;base64," in body for body in bodies)
     plain = len(plain_vcrpy_yaml(exchanges).encode())
     assert plain > 300 * cassette_path(CASSETTES, spec).stat().st_size
+
+
+def test_the_committed_grid_stays_within_10_kb_per_episode():
+    """Every committed cassette, all models: the mean file size per episode."""
+    sizes = [p.stat().st_size for p in CASSETTES.rglob(f"*{SUFFIX}")]
+    assert len(sizes) >= 320
+    assert sum(sizes) / len(sizes) <= 10 * 1024

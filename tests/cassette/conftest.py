@@ -34,6 +34,8 @@ class FakeServer:
     url: str
     seen_headers: list[dict[str, str]] = field(default_factory=list)
     fail_next: int = 0
+    unreadable_next: list[bytes] = field(default_factory=list)
+    """Bodies sent with status 200 instead of the next replies (garbage a client retries)."""
 
 
 @pytest.fixture
@@ -52,6 +54,9 @@ def server() -> Iterator[FakeServer]:
                 self.send_response(500)
                 self.end_headers()
                 return
+            if state.unreadable_next:
+                self._send(state.unreadable_next.pop(0))
+                return
             messages = json.loads(body)["messages"]
             reply = f"reply {len(messages)} {hashlib.sha256(body).hexdigest()[:8]}"
             payload = json.dumps(
@@ -60,6 +65,9 @@ def server() -> Iterator[FakeServer]:
                     "usage": {"prompt_tokens": len(body) // 4, "completion_tokens": 7},
                 }
             ).encode()
+            self._send(payload)
+
+        def _send(self, payload: bytes) -> None:
             self.send_response(200)
             self.send_header("Content-Type", "application/json")
             self.send_header("Content-Length", str(len(payload)))

@@ -41,7 +41,7 @@ def _replay(spec: EpisodeSpec, root: Path):
 
 
 def test_every_committed_cassette_is_of_the_current_protocol() -> None:
-    files = sorted(ROOT.rglob("*.yaml.xz"))
+    files = sorted(ROOT.rglob("*.json.xz"))
     assert len(files) >= 240
     stale = [f for f in files if decode(f.read_bytes()).protocol != protocol_version()]
     assert not stale, f"{len(stale)} cassettes need re-recording, e.g. {stale[0]}"
@@ -49,15 +49,6 @@ def test_every_committed_cassette_is_of_the_current_protocol() -> None:
 
 def test_a_committed_cassette_replays_offline() -> None:
     run = _replay(SPEC, ROOT)
-    assert run.trajectory.status == "terminated" and not run.recorded
-
-
-def test_a_format_1_cassette_replays_as_it_is(tmp_path: Path) -> None:
-    """A cassette as the previous release wrote it (gzip, ``.yaml.gz``) is found and replayed."""
-    spec = EpisodeSpec("scout", "baseline", "office", 0, modality="both")
-    old = shutil.copytree(Path(__file__).with_name("format1"), tmp_path / "cassettes")
-    assert cassette_path(old, spec).name == "ep00.yaml.gz"
-    run = _replay(spec, old)
     assert run.trajectory.status == "terminated" and not run.recorded
 
 

@@ -23,7 +23,7 @@ def test_record_then_replay_offline_gives_the_same_trajectory(server: FakeServer
     first = _run(spec, FakeRunner(server.url), tmp_path, "once")
     assert first.recorded and first.trajectory.status == "budget"
     path = cassette_path(tmp_path, spec)
-    assert path == tmp_path / "fake/baseline/default/office/ep03.yaml.xz"
+    assert path == tmp_path / "fake/baseline/default/office/ep03.json.xz"
     requests_live = len(server.seen_headers)
     again = _run(spec, FakeRunner(server.url), tmp_path, "none")
     assert len(server.seen_headers) == requests_live  # nothing reached the server
@@ -79,7 +79,7 @@ def test_corrupted_cassette_is_an_error_naming_the_file(server: FakeServer, spec
     path = cassette_path(tmp_path, spec)
     path.parent.mkdir(parents=True)
     path.write_bytes(b"\xfd7zXZ\x00 not really xz")
-    with pytest.raises(CassetteError, match=r"ep03\.yaml\.xz.*corrupted"):
+    with pytest.raises(CassetteError, match=r"ep03\.json\.xz.*corrupted"):
         _run(spec, FakeRunner(server.url), tmp_path, "once")
 
 

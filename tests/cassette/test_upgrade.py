@@ -1,76 +1,78 @@
-"""Format-1 cassettes (``.yaml.gz``) replay as they are and upgrade to ``.yaml.xz`` verified."""
+"""``emrd cassettes upgrade`` converts the cassettes older releases wrote, once, verified."""
 
 from __future__ import annotations
 
-import lzma
 import shutil
 from pathlib import Path
 
 import pytest
 
+from pytest_emrd.agent import load_registry
 from pytest_emrd.cassette import (
-    EpisodePersister,
+    Invocation,
+    agent_runner,
     cassette_path,
     decode,
-    same_traffic,
-    upgrade,
+    missing_summary,
+    run_with_cassette,
 )
 from pytest_emrd.cli import main
-from pytest_emrd.errors import CassetteError
+from pytest_emrd.episode import protocol_version
 from pytest_emrd.trajectory import EpisodeSpec
 
-ROOT = Path(__file__).resolve().parents[2] / "cassettes"
-FORMAT1 = Path(__file__).with_name("format1")
-SPEC = EpisodeSpec("scout", "baseline", "office", 0, modality="both")
+LEGACY = Path(__file__).with_name("legacy")
+#: ep00 was written in format 1 (gzip), ep01 in format 2 (xz, shipped system prompt named).
+SPECS = [EpisodeSpec("scout", "baseline", "office", n, modality="both") for n in (0, 1)]
 
 
 @pytest.fixture
-def old_tree(tmp_path: Path) -> Path:
-    return Path(shutil.copytree(FORMAT1, tmp_path / "cassettes"))
+def old(tmp_path: Path) -> Path:
+    return shutil.copytree(LEGACY, tmp_path / "cassettes")
 
 
-def test_saving_over_a_format_1_cassette_writes_the_xz_file_in_its_place(old_tree: Path):
-    old = cassette_path(old_tree, SPEC)
-    data = decode(old.read_bytes())
-    persister = EpisodePersister(protocol=data.protocol, fresh=False, rerecord_command="x")
-    persister.save_cassette(old, {"requests": data.requests, "responses": data.responses})
-    assert not old.exists() and cassette_path(old_tree, SPEC) == old.with_name("ep00.yaml.xz")
-    assert same_traffic(decode(cassette_path(old_tree, SPEC).read_bytes()), data)
+def test_both_old_formats_become_vcrpy_cassettes_that_replay(
+    old: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    assert main(["cassettes", "upgrade", str(old)]) == 0
+    assert "upgraded 2 cassettes" in capsys.readouterr().out
+    folder = old / "scout/baseline/default/office"
+    assert sorted(p.name for p in folder.iterdir()) == ["ep00.json.xz", "ep01.json.xz"]
+    runner = agent_runner(load_registry())
+    try:
+        for spec in SPECS:
+            assert decode(cassette_path(old, spec).read_bytes()).protocol == protocol_version()
+            run = run_with_cassette(
+                spec, runner, cassettes=old, protocol=protocol_version(), record_mode="none"
+            )
+            assert run.trajectory.status == "terminated" and not run.recorded
+    finally:
+        runner.close()
 
 
-def test_upgrade_rewrites_every_old_file_as_the_committed_one(old_tree: Path):
-    done = list(upgrade(old_tree))
-    assert len(done) == 3 and all(d.new_bytes < d.old_bytes for d in done)
-    assert not list(old_tree.rglob("*.yaml.gz"))
-    for item in done:
-        committed = ROOT / item.new.relative_to(old_tree)
-        assert item.new.read_bytes() == committed.read_bytes()
-    assert list(upgrade(old_tree)) == []
-
-
-def test_upgrade_stops_at_an_unreadable_file_or_a_twin(old_tree: Path):
-    twin = cassette_path(old_tree, SPEC).with_name("ep00.yaml.xz")
-    shutil.copy(ROOT / twin.relative_to(old_tree), twin)
-    with pytest.raises(CassetteError, match=r"twin ep00\.yaml\.xz already"):
-        list(upgrade(old_tree))
-    twin.unlink()
-    cassette_path(old_tree, SPEC).write_bytes(b"\x1f\x8b garbage")
-    with pytest.raises(CassetteError, match=r"ep00\.yaml\.gz.*not readable"):
-        list(upgrade(old_tree))
-
-
-def test_the_upgrade_command(old_tree: Path, capsys: pytest.CaptureFixture[str]):
-    assert main(["cassettes", "upgrade", str(old_tree)]) == 0
-    assert "upgraded 3 cassettes under" in capsys.readouterr().out
-    assert main(["cassettes", "upgrade", str(old_tree)]) == 0
+def test_a_second_upgrade_has_nothing_to_do(old: Path, capsys) -> None:
+    main(["cassettes", "upgrade", str(old)])
+    converted = {p: p.read_bytes() for p in old.rglob("*.json.xz")}
+    assert main(["cassettes", "upgrade", str(old)]) == 0
     assert "nothing to upgrade" in capsys.readouterr().out
-    assert main(["cassettes", "upgrade", str(old_tree / "nowhere")]) == 2
-    assert "is not a folder" in capsys.readouterr().err
+    assert {p: p.read_bytes() for p in old.rglob("*.json.xz")} == converted
 
 
-def test_a_cassette_of_a_newer_release_asks_for_an_upgrade(tmp_path: Path):
-    path = tmp_path / "ep00.yaml.xz"
-    path.write_bytes(lzma.compress(b"format: emrd-cassette/9\n", format=lzma.FORMAT_XZ))
-    persister = EpisodePersister(protocol="p", fresh=False, rerecord_command="pytest again")
-    with pytest.raises(CassetteError, match=r"newer pytest-emrd.*pip install -U.*pytest again"):
-        persister.load_cassette(path)
+def test_an_existing_new_twin_is_left_to_the_user(old: Path, capsys) -> None:
+    folder = old / "scout/baseline/default/office"
+    (folder / "ep00.json.xz").write_bytes(b"mine")
+    assert main(["cassettes", "upgrade", str(old)]) == 2
+    assert "has a twin ep00.json.xz" in capsys.readouterr().err
+    assert (folder / "ep00.yaml.gz").is_file() and (folder / "ep00.json.xz").read_bytes() == b"mine"
+
+
+def test_a_file_that_is_no_cassette_is_named(old: Path, capsys) -> None:
+    bad = old / "scout/baseline/default/office/ep02.yaml.xz"
+    bad.write_bytes(b"\xfd7zXZ\x00 garbage")
+    assert main(["cassettes", "upgrade", str(old)]) == 2
+    assert f"cassette={str(bad)!r} is not an old cassette" in capsys.readouterr().err
+
+
+def test_a_replay_only_run_missing_old_cassettes_says_to_convert_them(old: Path) -> None:
+    message = missing_summary(SPECS, total=2, root=old, invocation=Invocation())
+    assert "2 of them have a cassette an older pytest-emrd wrote" in message
+    assert f"emrd cassettes upgrade {old}." in message

@@ -25,7 +25,7 @@ def test_identical_requests_replay_in_recorded_order_once_each(tmp_path, matchin
     other = canonical_json({"messages": [{"content": "other", "role": "user"}]}).encode()
     requests = tuple(Request("POST", URL, b, {}) for b in (body, other, body))
     data = CassetteData(PROTOCOL, requests, (_response("1"), _response("2"), _response("3")))
-    path = tmp_path / "ep.yaml.xz"
+    path = tmp_path / "ep.json.xz"
     path.write_bytes(encode(data))
     with (
         episode_cassette(

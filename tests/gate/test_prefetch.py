@@ -48,8 +48,8 @@ def test_concurrent_recording_writes_the_cassettes_a_lone_episode_writes(tmp_pat
         for spec in SPECS:
             alone(spec)
     assert sorted(calls, key=str) == sorted(SPECS, key=str), "each episode computed once"
-    together_files = sorted((tmp_path / "together" / "cassettes").rglob("*.yaml.xz"))
-    alone_files = sorted((tmp_path / "alone" / "cassettes").rglob("*.yaml.xz"))
+    together_files = sorted((tmp_path / "together" / "cassettes").rglob("*.json.xz"))
+    alone_files = sorted((tmp_path / "alone" / "cassettes").rglob("*.json.xz"))
     assert [p.relative_to(tmp_path / "together") for p in together_files] == [
         p.relative_to(tmp_path / "alone") for p in alone_files
     ]

@@ -58,7 +58,7 @@ def test_a_recorded_run_leaks_no_planted_credential(
     recorded = pytester.run(sys.executable, "-m", *args)
     assert recorded.ret == 0, _outputs(recorded)
     recorded.stdout.fnmatch_lines(["*1 passed, 1 deselected*"])
-    cassette = pytester.path / "cassettes/leaky/baseline/default/office/ep00.yaml.xz"
+    cassette = pytester.path / "cassettes/leaky/baseline/default/office/ep00.json.xz"
     assert cassette.is_file()
 
     # Replay the recording, and a model whose endpoint answers 401 echoing the key.

@@ -92,8 +92,8 @@ def test_ai2thor_records_and_replays_with_one_controller_per_worker(thor_suite, 
     assert [e["event"] for e in events] == ["start", "stop"], "one controller for two episodes"
     assert events[0]["gpu_device"] == 1 and events[0]["local"].endswith("thor-Linux64-local")
     tree = suite.path / "cassettes" / "ai2thor" / "scout" / "baseline" / "default" / "office"
-    assert sorted(p.name for p in tree.iterdir()) == ["ep00.yaml.xz", "ep01.yaml.xz"]
-    assert decode((tree / "ep00.yaml.xz").read_bytes()).protocol == protocol_version("ai2thor")
+    assert sorted(p.name for p in tree.iterdir()) == ["ep00.json.xz", "ep01.json.xz"]
+    assert decode((tree / "ep00.json.xz").read_bytes()).protocol == protocol_version("ai2thor")
     assert not (suite.path / "cassettes" / "scout").exists(), "the builtin tree stays untouched"
 
     log.unlink()

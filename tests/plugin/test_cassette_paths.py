@@ -18,15 +18,15 @@ ROOT = Path("cassettes")
     [
         (
             EpisodeSpec("scout", "low_light", "kitchen", 7),
-            "cassettes/scout/low_light/default/kitchen/ep07.yaml.xz",
+            "cassettes/scout/low_light/default/kitchen/ep07.json.xz",
         ),
         (
             EpisodeSpec("gemini", "texture", "office", 12, variant="B3", backend="ai2thor"),
-            "cassettes/ai2thor/gemini/texture/B3/office/ep12.yaml.xz",
+            "cassettes/ai2thor/gemini/texture/B3/office/ep12.json.xz",
         ),
         (
             EpisodeSpec("ai2thor", "baseline", "entrance", 0),
-            "cassettes/ai2thor/baseline/default/entrance/ep00.yaml.xz",
+            "cassettes/ai2thor/baseline/default/entrance/ep00.json.xz",
         ),
     ],
     ids=["builtin", "ai2thor", "builtin-model-named-like-a-backend"],

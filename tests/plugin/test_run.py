@@ -102,13 +102,13 @@ def test_missing_cassettes_stop_the_run_with_one_summary(suite, small, workers):
 def test_corrupted_cassette_is_a_clear_error_naming_the_file(suite, small, recorded):
     copy = suite.path / "cassettes"
     shutil.copytree(recorded, copy)
-    (copy / "scout/baseline/default/office/ep01.yaml.xz").write_bytes(b"garbage")
+    (copy / "scout/baseline/default/office/ep01.json.xz").write_bytes(b"garbage")
     result = suite.runpytest_subprocess(
         *small(f"--emrd-cassettes={copy}", "--emrd-record-mode=none", "-k", "test_episode")
     )
     result.assert_outcomes(passed=1, errors=1, deselected=2)
     result.stdout.fnmatch_lines(
-        ["*scout-baseline-office-ep01: cassette=*office/ep01.yaml.xz* is corrupted: not an xz*"]
+        ["*scout-baseline-office-ep01: cassette=*office/ep01.json.xz* is corrupted: not an xz*"]
     )
 
 

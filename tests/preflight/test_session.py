@@ -9,7 +9,7 @@ SPECS = [EpisodeSpec("gpt", "baseline", "office", i) for i in range(3)]
 
 
 def test_live_grid_leaves_out_cassettes_and_stored_episodes(tmp_path):
-    recorded = tmp_path / "gpt" / "baseline" / "default" / "office" / "ep00.yaml.xz"
+    recorded = tmp_path / "gpt" / "baseline" / "default" / "office" / "ep00.json.xz"
     recorded.parent.mkdir(parents=True)
     recorded.write_bytes(b"")
     grid = live_grid(

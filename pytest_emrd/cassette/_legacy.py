@@ -1,0 +1,125 @@
+"""Read the cassettes older releases wrote (formats ``emrd-cassette/1`` and ``/2``), for
+``emrd cassettes upgrade`` only: nothing replays them any more.
+
+Both formats are one JSON-compatible YAML document with a table of long strings, a table of
+messages (templates) and interactions whose bodies refer to both. Format 1 is gzip; format
+2 is xz and may store a string as an edit of a text that release shipped
+(``legacy_texts.json``, the system prompt it wrote into every cassette):
+``{from: <id>, edit: [start, length, "inserted text", ...]}``. This module rebuilds every
+request and response body byte for byte; :func:`pytest_emrd.cassette.upgrade` checks that
+the converted file holds exactly the same interactions.
+"""
+
+from __future__ import annotations
+
+import base64
+import functools
+import json
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any, Final
+
+from vcr.request import Request
+
+from pytest_emrd._wire import encoder
+from pytest_emrd.cassette._file import CassetteData, decompress
+from pytest_emrd.cassette._redact import canonical_json
+
+FORMATS: Final = ("emrd-cassette/1", "emrd-cassette/2")  # see _file.LEGACY_HEAD
+_TEXTS: Final = Path(__file__).with_name("legacy_texts.json")
+_SERIALISE: Final = {
+    "canonical": canonical_json,
+    "compact": encoder(sort_keys=False, ensure_ascii=False),
+    "ascii": encoder(sort_keys=False, ensure_ascii=True),
+}
+_B64: Final = "base64:"
+_REF: Final = "\x00"
+
+
+class LegacyError(ValueError):
+    """The bytes are not a cassette of format 1 or 2; the message says what is wrong."""
+
+
+@functools.cache
+def _shipped() -> dict[str, str]:
+    return json.loads(_TEXTS.read_text(encoding="utf-8"))
+
+
+def _apply_edit(base: str, script: Sequence[int | str]) -> str:
+    """The text an edit script builds: a string is inserted, ``start, length`` copies."""
+    parts, k = [], 0
+    while k < len(script):
+        if isinstance(script[k], str):
+            parts.append(script[k])
+            k += 1
+        else:
+            start, length = int(script[k]), int(script[k + 1])
+            parts.append(base[start : start + length])
+            k += 2
+    return "".join(str(p) for p in parts)
+
+
+def _string(entry: str | dict[str, Any]) -> str:
+    if isinstance(entry, str):
+        return entry
+    base = _shipped().get(entry["from"])
+    if base is None:
+        raise LegacyError(f"it names the shipped text {entry['from']!r}, which is unknown")
+    return _apply_edit(base, entry["edit"])
+
+
+def _unpack(node: Any, strings: Sequence[str]) -> Any:
+    if isinstance(node, str):
+        return strings[int(node[1:])] if node.startswith(_REF) else node
+    if isinstance(node, dict):
+        return {k: _unpack(v, strings) for k, v in node.items()}
+    if isinstance(node, list):
+        return [_unpack(v, strings) for v in node]
+    return node
+
+
+def _body(body: dict[str, Any], strings: Sequence[str], templates: Sequence[str]) -> bytes:
+    if "raw" in body:
+        text = strings[body["raw"]]
+        if text.startswith(_B64):
+            return base64.b64decode(text[len(_B64) :])
+        return text.encode()
+    tree = _unpack(json.loads(body["json"]), strings)
+    for key, runs in body.get("lists", {}).items():
+        tree[key] = [
+            _unpack(json.loads(templates[start + k]), strings)
+            for start, length in runs
+            for k in range(length)
+        ]
+    return _SERIALISE[body["mode"]](tree).encode()
+
+
+def read_legacy(blob: bytes) -> CassetteData:
+    """Everything a format-1 or format-2 cassette holds (:class:`LegacyError` if it is not one)."""
+    try:
+        document = json.loads(decompress(blob))
+        if document.get("format") not in FORMATS:
+            raise LegacyError(f"format={document.get('format')!r} is not {' or '.join(FORMATS)}")
+        strings = [_string(entry) for entry in document["strings"]]
+        templates = document["templates"]
+        requests, responses, raw = [], [], []
+        for index, item in enumerate(document["interactions"]):
+            req, resp = item["request"], item["response"]
+            body = _body(req["body"], strings, templates)
+            requests.append(Request(req["method"], req["uri"], body, req["headers"]))
+            if req["body"].get("mode") != "canonical":
+                raw.append(index)
+            responses.append(
+                {
+                    "status": resp["status"],
+                    "headers": resp["headers"],
+                    "body": {"string": _body(resp["body"], strings, templates)},
+                }
+            )
+    except LegacyError:
+        raise
+    except (KeyError, IndexError, TypeError, ValueError, AttributeError) as exc:
+        raise LegacyError(f"malformed document ({type(exc).__name__}: {exc})") from exc
+    return CassetteData(
+        str(document["protocol"]), tuple(requests), tuple(responses), frozenset(raw)
+    )
