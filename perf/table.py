@@ -74,15 +74,15 @@ def _met(figure: dict[str, Any] | None) -> str:
 def markdown_table(figures: list[dict[str, Any]]) -> str:
     """One row per measurement: its warm and cold value, target and whether each meets it."""
     by_name = {f["figure"]: f for f in figures}
-    names = list(dict.fromkeys(f["figure"].removesuffix(COLD) for f in figures))
+    first: dict[str, dict[str, Any]] = {}  # measurement -> its first figure, warm or cold
+    for figure in figures:
+        first.setdefault(figure["figure"].removesuffix(COLD), figure)
     rows = [
         "| figure | what | warm | cold | target | met (warm / cold) | n |",
         "|---|---|---:|---:|---:|---|---|",
     ]
-    for name in names:
+    for name, any_one in first.items():
         warm, cold = by_name.get(name), by_name.get(name + COLD)
-        any_one = warm or cold
-        assert any_one is not None
         target = any_one["target"]
         bound = "—" if target is None else ("≥ " if any_one.get("higher_is_better") else "≤ ")
         bound += "" if target is None else f"{float(target):g}"
