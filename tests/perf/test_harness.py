@@ -68,6 +68,18 @@ def test_an_unknown_stage_is_one_line_naming_the_stages(capsys: pytest.CaptureFi
     assert "'all'" in err
 
 
+def test_a_cold_stage_refuses_to_measure_another_checkout(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    import perf.__main__
+
+    monkeypatch.setenv(COLD_ENV, "1")
+    monkeypatch.setattr(perf.__main__, "ROOT", tmp_path)
+    assert main(["world"]) == 2
+    err = capsys.readouterr().err
+    assert "not from the fresh copy" in err and str(tmp_path) in err
+
+
 @pytest.mark.slow
 def test_one_command_prints_warm_and_cold_figures_as_json() -> None:
     done = subprocess.run(
