@@ -24,11 +24,19 @@ def emrd_help() -> str:
     """One section per ``emrd`` subcommand: its help as the console script prints it."""
     from pytest_emrd.cli import build_parser
 
+    columns = os.environ.get("COLUMNS")
     os.environ["COLUMNS"] = "100"  # argparse wraps help to the terminal width
-    parser = build_parser()
-    sections = [f"```text\n{parser.format_help().rstrip()}\n```"]
-    for name, sub in _subcommands(parser).items():
-        sections.append(f"### `emrd {name}`\n\n```text\n{sub.format_help().rstrip()}\n```")
+    try:
+        parser = build_parser()
+        sections = [f"```text\n{parser.format_help().rstrip()}\n```"]
+        for name, sub in _subcommands(parser).items():
+            help_text = sub.format_help().rstrip()
+            sections.append(f"### `emrd {name}`\n\n```text\n{help_text}\n```")
+    finally:
+        if columns is None:
+            os.environ.pop("COLUMNS")
+        else:
+            os.environ["COLUMNS"] = columns
     return "\n\n".join(sections)
 
 
