@@ -5,8 +5,8 @@ partially observable building within the action budget, keep a cognitive map wit
 deduplication check every step, and end the run naming the safest evacuation gathering
 point. Its building overview is the room list, each room's furniture profile (the paper's
 "large conference table + 8 chairs", with the engine type name of every item in brackets)
-and the engine type names ``Goto`` accepts. The full text is printed in the README (kept
-equal to :func:`build_system_prompt` by a test).
+and the engine type names ``Goto`` accepts. The full text is printed in the docs
+(``docs/reference/protocol.md``, kept equal to :func:`build_system_prompt` by a test).
 
 Prompt variants (Appendices E and F):
 

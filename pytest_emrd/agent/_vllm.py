@@ -1,13 +1,13 @@
 """Serving the open models with vLLM: the ``vllm serve`` command of each shipped open model.
 
-:func:`serve_command` gives the command (the README shows the same strings; a test keeps them
-equal). Reading a server's refusal back into the missing flag is preflight's job
+:func:`serve_command` gives the command (``docs/user-guide/vllm.md`` shows the same strings; a
+test keeps them equal). Reading a server's refusal back into the missing flag is preflight's job
 (:func:`pytest_emrd.preflight.vllm_refusal`, run by ``emrd check``).
 
 Flag syntax is vLLM >= 0.11.0 (the first release with Qwen3-VL): ``--limit-mm-per-prompt``
 takes JSON since 0.10.0 (the older ``image=10`` form is refused, vllm-project/vllm#21615).
 Sizes, measured with :func:`~pytest_emrd.agent.build_request` on a full history window of the
-``scout`` agent (README "Serving the open models with vLLM" has the arithmetic): at most
+``scout`` agent (``docs/user-guide/vllm.md`` has the arithmetic): at most
 :data:`~pytest_emrd.agent.HISTORY_TURNS` frames, and prompt plus ``max_tokens`` 4096 stays
 under 30.5k tokens for every model, so 32768 tokens of context fit all four.
 """

@@ -23,7 +23,6 @@ COMMANDS: tuple[str, ...] = (
     "view",
     "cassettes",
     "validate",
-    "bench",
     "thor_smoke",
 )
 

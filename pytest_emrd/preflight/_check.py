@@ -230,8 +230,8 @@ def _url(config: ModelConfig, base_url: str) -> tuple[Check, int | None]:
     if not info.reachable:
         local = httpx.URL(base_url).host in ("localhost", "127.0.0.1", "::1")
         fix = (
-            "start the server (README: the vllm serve command of each open model) or point the "
-            "model's base_url at it (its EMRD_*_BASE_URL variable, or a user registry)"
+            "start the server (docs/user-guide/vllm.md: the vllm serve command of each model) "
+            "or point the model's base_url at it (its EMRD_*_BASE_URL variable, or a user registry)"
             if local
             else "check this machine's network access to it, or the model's base_url"
         )

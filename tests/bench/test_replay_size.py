@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from pytest_emrd.bench.replay import CASSETTES, SAMPLE, live_exchanges, plain_vcrpy_yaml
+from perf.replay import CASSETTES, SAMPLE, live_exchanges, plain_vcrpy_yaml
 from pytest_emrd.cassette import SUFFIX, cassette_path
 
 

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pytest
 
-from pytest_emrd.bench.report import write_run_dir
+from perf.report import write_run_dir
 from pytest_emrd.cli import main
 from pytest_emrd.gate import load_run_episodes
 from pytest_emrd.metrics.synthetic import synthetic_grid

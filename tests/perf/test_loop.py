@@ -1,8 +1,8 @@
-"""``emrd bench loop`` produces its two figures (values are measured by the bench, not here)."""
+"""``python -m perf loop`` produces its two figures (the harness measures the values)."""
 
 from __future__ import annotations
 
-from pytest_emrd.bench import run_stages
+from perf import run_stages
 
 
 def test_loop_bench_reports_both_figures() -> None:

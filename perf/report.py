@@ -1,4 +1,4 @@
-"""``emrd bench report``: ``emrd report`` on a finished 240-episode run directory.
+"""``python -m perf report``: ``emrd report`` on a finished 240-episode run directory.
 
 The run directory holds one model x 3 conditions x 4 spawns x 20 episodes of 50 steps from
 :mod:`pytest_emrd.metrics.synthetic`, written as the results store writes episodes, with the
@@ -7,7 +7,7 @@ per-episode metrics saved beside them as a pytest run leaves them (built once, n
 * ``report.grid_240_s`` — the whole ``emrd report RUN_DIR --out DIR`` process (interpreter
   start-up, reading the run back, every gate, table and figure, writing Markdown, HTML, JSON
   and the PNGs), wall time, under Python's default bytecode policy (``.pyc`` cached, as on a
-  user's machine from the second run on; :func:`~pytest_emrd.bench.python_env`, warmed up
+  user's machine from the second run on; :func:`~perf.python_env`, warmed up
   before timing). Target 3 s. ``report.grid_240_cpu_s``: its CPU time.
   The run directory holds the statistics an earlier report saved beside it
   (:mod:`pytest_emrd.report._cache`, written by the untimed warm-up run), as it does from a
@@ -28,7 +28,7 @@ import sys
 import tempfile
 from pathlib import Path
 
-from pytest_emrd.bench import Figure, python_env, run_timed
+from perf import Figure, python_env, run_timed
 from pytest_emrd.trajectory import Trajectory
 
 TARGET_GRID_240_S = 3.0
@@ -59,7 +59,7 @@ def write_run_dir(run_dir: Path, trajectories: list[Trajectory]) -> None:
         measured.get(spec, lambda s: store.get_or_compute(s, by_spec.__getitem__))
 
 
-def run(*, repeat: int) -> list[Figure]:
+def run(*, repeat: int, warmup: int) -> list[Figure]:
     from pytest_emrd.metrics.synthetic import synthetic_grid
     from pytest_emrd.report._cache import aggregates_path
 
@@ -70,14 +70,14 @@ def run(*, repeat: int) -> list[Figure]:
         run_dir, out = Path(tmp) / "run", Path(tmp) / "report"
         write_run_dir(run_dir, synthetic_grid())
         cmd = [sys.executable, "-m", "pytest_emrd.cli", "report", str(run_dir), "--out", str(out)]
-        for i in range(repeat + 1):  # the first, untimed, warms the bytecode cache up
+        for i in range(warmup + repeat):  # the warm-up fills the bytecode cache
             for policy, env in policies:
                 if policy == "_first":
                     aggregates_path(run_dir).unlink()
                 done, wall, cpu = run_timed(cmd, cwd=Path(tmp), env=env)
                 if done.returncode != 0:
                     raise RuntimeError(f"emrd report failed:\n{done.stdout[-2000:]}{done.stderr}")
-                if i:
+                if i >= warmup:
                     samples[policy].append((wall, cpu))
     median = statistics.median
     return [

@@ -1,4 +1,4 @@
-"""``emrd bench metrics``: every EMRD metric over a 240-episode grid.
+"""``python -m perf metrics``: every EMRD metric over a 240-episode grid.
 
 The grid is one model x 3 conditions x 4 spawns x 20 episodes of 50 steps, generated once
 by :mod:`pytest_emrd.metrics.synthetic` (not timed). Timed: per-episode metrics for every
@@ -7,7 +7,7 @@ trajectory, every gate metric with its bootstrap CI, and every report aggregate.
 
 from __future__ import annotations
 
-from pytest_emrd.bench import Figure, median_seconds
+from perf import Figure, median_seconds
 from pytest_emrd.metrics import (
     anova_conditions,
     as_episode_metrics,
@@ -50,7 +50,7 @@ def all_metrics(trajectories: list[Trajectory]) -> dict[str, object]:
     return results
 
 
-def run(*, repeat: int) -> list[Figure]:
+def run(*, repeat: int, warmup: int) -> list[Figure]:
     grid = synthetic_grid()
-    seconds = median_seconds(lambda: all_metrics(grid), repeat=repeat)
+    seconds = median_seconds(lambda: all_metrics(grid), repeat=repeat, warmup=warmup)
     return [Figure("metrics.grid_240_s", seconds, "s", TARGET_GRID_240_S, repeat)]

@@ -1,12 +1,12 @@
-"""``emrd bench world`` reports the four world figures with their targets."""
+"""``python -m perf world`` reports the four world figures with their targets."""
 
 from __future__ import annotations
 
-from pytest_emrd.bench import world
+from perf import world
 
 
 def test_world_bench_reports_step_render_episode_and_layout_figures() -> None:
-    figures = {f.figure: f for f in world.run(repeat=1)}
+    figures = {f.figure: f for f in world.run(repeat=1, warmup=1)}
     assert list(figures) == [
         "world.step_ms",
         "world.render_ms",

@@ -1,12 +1,12 @@
-"""``emrd bench plugin``: the plugin's own cost in a pytest session.
+"""``python -m perf plugin``: the plugin's own cost in a pytest session.
 
 * ``plugin.collect_7x240_s`` — the whole process of ``pytest benchmarks --collect-only -q``
   for the seven paper models x 240 cases (3 conditions x 4 spawns x 20 episodes, plus their
   gate items): interpreter start-up, pytest and every installed plugin, collection and the
   end of the session, wall time, under Python's default bytecode policy (``.pyc`` cached, as
-  on a user's machine from the second run on; :func:`~pytest_emrd.bench.python_env`, warmed
-  up before timing). Target 1.5 s. ``plugin.collect_7x240_cpu_s``: that process's CPU time
-  (user + system), which other load on the machine stretches less.
+  on a user's machine from the second run on; :func:`~perf.python_env`, warmed
+  up before timing). Target 1.5 s. ``plugin.collect_7x240_cpu_s``: that process's CPU
+  time (user + system), which other load on the machine stretches less.
 * ``plugin.empty_session_s`` — the floor under it: the same command on one empty test file
   with pytest-emrd switched off (``-p no:emrd``), i.e. the interpreter, pytest and the other
   installed plugins (hypothesis, anyio, xdist) alone; ``plugin.empty_session_cpu_s`` its CPU
@@ -27,9 +27,8 @@ import sys
 import tempfile
 from pathlib import Path
 
-from pytest_emrd.bench import Figure, python_env, run_timed
+from perf import ROOT, Figure, python_env, run_timed
 
-ROOT = Path(__file__).resolve().parents[2]
 PAPER_MODELS = (
     "gemini",
     "gpt",
@@ -52,7 +51,7 @@ def _session(cmd: list[str], cwd: Path, env: dict[str, str]) -> tuple[int, float
     return int(match[1]), wall, cpu
 
 
-def run(*, repeat: int) -> list[Figure]:
+def run(*, repeat: int, warmup: int) -> list[Figure]:
     policies = {"": python_env(bytecode=True), "_nobytecode": python_env(bytecode=False)}
     samples: dict[str, list[tuple[int, float, float]]] = {}
     with tempfile.TemporaryDirectory() as tmp:
@@ -61,8 +60,9 @@ def run(*, repeat: int) -> list[Figure]:
             "collect_7x240": (["benchmarks", *(f"--emrd-model={m}" for m in PAPER_MODELS)], ROOT),
             "empty_session": (["-p", "no:emrd", "test_empty.py"], Path(tmp)),
         }
-        for cmd, cwd in sessions.values():  # warm-up, filling the bytecode cache
-            _session(cmd, cwd, policies[""])
+        for _ in range(warmup):  # filling the bytecode cache
+            for cmd, cwd in sessions.values():
+                _session(cmd, cwd, policies[""])
         for _ in range(repeat):  # alternated, so every command sees the same load
             for name, (cmd, cwd) in sessions.items():
                 for policy, env in policies.items():

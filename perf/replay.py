@@ -1,4 +1,4 @@
-"""``emrd bench replay``: what replaying cassettes costs, in time and bytes.
+"""``python -m perf replay``: what replaying cassettes costs, in time and bytes.
 
 * ``replay.grid_240_s`` — wall time of ``pytest benchmarks -n 2 --emrd-record-mode=none``
   over the full reference grid (scout x 3 conditions x 4 spawns x 20 episodes, committed
@@ -8,8 +8,8 @@
   metrics saved beside it). Target 3 s. ``replay.grid_240_cpu_s`` and
   ``replay.resume_240_cpu_s``: the CPU time of those commands (controller and workers),
   which other load on the machine stretches less than wall time. All under Python's default
-  bytecode policy (:func:`~pytest_emrd.bench.python_env`; one untimed round first warms the
-  cache up, as on a user's machine from the second run on); ``replay.resume_240_nobytecode_s``,
+  bytecode policy (:func:`~perf.python_env`; warm: one untimed round first fills the
+  cache, as on a user's machine from the second run on); ``replay.resume_240_nobytecode_s``,
   no target, is the resume again with ``PYTHONDONTWRITEBYTECODE=1``, where every one of the
   three pytest processes compiles our package and rewrites the plugin packages again.
 * ``replay.vs_world_ratio`` — replaying :data:`SAMPLE` (12 committed episodes, one per
@@ -59,7 +59,7 @@ from typing import Any
 import httpx
 import numpy as np
 
-from pytest_emrd.bench import Figure, median_seconds, paired_ratio, python_env, run_timed
+from perf import ROOT, Figure, median_seconds, paired_ratio, python_env, run_timed
 from pytest_emrd.cassette import (
     SUFFIX,
     cassette_path,
@@ -71,7 +71,6 @@ from pytest_emrd.cassette import (
 from pytest_emrd.trajectory import CONDITIONS, EpisodeSpec, Trajectory
 from pytest_emrd.world._simulator import forget_views
 
-ROOT = Path(__file__).resolve().parents[2]
 CASSETTES = ROOT / "cassettes"
 _SPAWNS = ("office", "conference", "kitchen", "entrance")
 
@@ -151,7 +150,7 @@ def _replay(spec: EpisodeSpec, client: Any, *, as_sent_live: bool = False) -> Tr
     return done.trajectory
 
 
-def _grid_seconds(repeat: int) -> tuple[float, float, float, float, float]:
+def _grid_seconds(repeat: int, warmup: int) -> tuple[float, float, float, float, float]:
     """Median wall and CPU times of the grid replayed into a fresh run directory, and of the
     same command run again on that finished directory (every episode read back from the
     store), bytecode cached; and of that second command with ``PYTHONDONTWRITEBYTECODE=1``:
@@ -160,15 +159,15 @@ def _grid_seconds(repeat: int) -> tuple[float, float, float, float, float]:
     runs: dict[str, list[tuple[float, float]]] = {"fresh": [], "again": [], "nobytecode": []}
     cmd = [sys.executable, "-m", "pytest", "benchmarks", "-n", "2", "-q", "-p", "no:cacheprovider"]
     cmd += ["--emrd-record-mode=none"]
-    warmup = ["--emrd-episodes=1"]  # every module of a replay and of a resume, untimed
-    for i in range(repeat + 1):
+    quick = ["--emrd-episodes=1"]  # the warm-up: every module of a replay and a resume
+    for i in range(warmup + repeat):
         with tempfile.TemporaryDirectory() as tmp:
             for name, env in (("fresh", cached), ("again", cached), ("nobytecode", uncached)):
-                args = [*cmd, f"--emrd-results={tmp}", *(warmup if i == 0 else ())]
+                args = [*cmd, f"--emrd-results={tmp}", *(quick if i < warmup else ())]
                 done, wall, cpu = run_timed(args, cwd=ROOT, env=env)
                 if done.returncode != 0:
                     raise RuntimeError(f"replay of the grid failed:\n{done.stdout[-3000:]}")
-                if i:
+                if i >= warmup:
                     runs[name].append((wall, cpu))
     median = statistics.median
     return (
@@ -256,7 +255,7 @@ def world_alone(trajectory: Trajectory) -> None:
     sim.close()
 
 
-def _vs_world_ratio(specs: tuple[EpisodeSpec, ...], repeat: int) -> float:
+def _vs_world_ratio(specs: tuple[EpisodeSpec, ...], repeat: int, warmup: int) -> float:
     client = _scout_client()
     trajectories: list[Trajectory] = []
 
@@ -271,12 +270,12 @@ def _vs_world_ratio(specs: tuple[EpisodeSpec, ...], repeat: int) -> float:
             world_alone(trajectory)
 
     try:
-        return paired_ratio(replay, alone, repeat=repeat)
+        return paired_ratio(replay, alone, repeat=repeat, warmup=warmup)
     finally:
         client.close()
 
 
-def _httpx_vcrpy_floor_ratio(specs: tuple[EpisodeSpec, ...], repeat: int) -> float:
+def _httpx_vcrpy_floor_ratio(specs: tuple[EpisodeSpec, ...], repeat: int, warmup: int) -> float:
     """(world alone + httpx and vcrpy alone answering the same requests) / world alone: the
     least ``replay.vs_world_ratio`` a replay through httpx and vcrpy can reach.
 
@@ -315,8 +314,9 @@ def _httpx_vcrpy_floor_ratio(specs: tuple[EpisodeSpec, ...], repeat: int) -> flo
         for n, exchanges in enumerate(episodes):
             (folder / f"{n}.yaml").write_text(plain_vcrpy_yaml(exchanges))
         try:
-            alone()  # warm-up, both sides
-            requests(folder)
+            for _ in range(warmup):  # both sides
+                alone()
+                requests(folder)
             ratios = []
             for _ in range(repeat):
                 start = time.process_time()
@@ -337,8 +337,8 @@ def _resent(request: httpx.Request) -> dict[str, Any]:
     }
 
 
-def _step_overhead_ms(repeat: int) -> float:
-    from pytest_emrd.bench.loop import _Recorder
+def _step_overhead_ms(repeat: int, warmup: int) -> float:
+    from perf.loop import _Recorder
 
     spec = SAMPLE[0]
     client = _scout_client()
@@ -359,19 +359,19 @@ def _step_overhead_ms(repeat: int) -> float:
                 client.complete(messages)
 
     try:
-        seconds = median_seconds(replay, repeat=repeat)
+        seconds = median_seconds(replay, repeat=repeat, warmup=warmup)
     finally:
         client.close()
     return seconds / len(sent) * 1000
 
 
-def run(*, repeat: int) -> list[Figure]:
-    overhead = _step_overhead_ms(repeat)
-    vs_world = _vs_world_ratio(SAMPLE, repeat)
-    floor = _httpx_vcrpy_floor_ratio(SAMPLE, repeat)
+def run(*, repeat: int, warmup: int) -> list[Figure]:
+    grid, grid_cpu, resume, resume_cpu, resume_nobytecode = _grid_seconds(repeat, warmup)
+    overhead = _step_overhead_ms(repeat, warmup)
+    vs_world = _vs_world_ratio(SAMPLE, repeat, warmup)
+    floor = _httpx_vcrpy_floor_ratio(SAMPLE, repeat, warmup)
     ratio = _size_ratio(SIZE_SAMPLE)
     kb, kb_50, count = _committed_sizes()
-    grid, grid_cpu, resume, resume_cpu, resume_nobytecode = _grid_seconds(repeat)
     return [
         Figure("replay.grid_240_s", grid, "s", 20.0, repeat),
         Figure("replay.grid_240_cpu_s", grid_cpu, "s", None, repeat),

@@ -1,4 +1,4 @@
-"""``emrd bench live``: recording episodes concurrently against a slow remote model.
+"""``python -m perf live``: recording episodes concurrently against a slow remote model.
 
 * ``live.concurrency_16_vs_floor`` — 64 ``scout`` episodes (at most 6 steps each, the 64
   first cases of the grid) recorded by one process with ``--emrd-concurrency 16``'s
@@ -17,7 +17,7 @@ import time
 from pathlib import Path
 from typing import Any
 
-from pytest_emrd.bench import Figure
+from perf import Figure
 from pytest_emrd.trajectory import CONDITIONS, EpisodeSpec
 
 LATENCY_S = 0.5
@@ -68,9 +68,11 @@ def _record_all(root: Path) -> float:
     return wall / floor
 
 
-def run(*, repeat: int) -> list[Figure]:
+def run(*, repeat: int, warmup: int) -> list[Figure]:
     ratios = []
-    for _ in range(repeat):
+    for i in range(warmup + repeat):
         with tempfile.TemporaryDirectory() as tmp:
-            ratios.append(_record_all(Path(tmp)))
+            ratio = _record_all(Path(tmp))
+        if i >= warmup:
+            ratios.append(ratio)
     return [Figure("live.concurrency_16_vs_floor", statistics.median(ratios), "ratio", 1.3, repeat)]

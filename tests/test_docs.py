@@ -1,0 +1,141 @@
+"""The docs site builds with ``mkdocs build --strict`` and states what the code does."""
+
+from __future__ import annotations
+
+import dataclasses
+import os
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+DOCS = ROOT / "docs"
+PAGES = sorted(DOCS.rglob("*.md"))
+
+
+@pytest.fixture(scope="module")
+def site(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """The site built from this checkout (its hooks import this checkout's package)."""
+    out = tmp_path_factory.mktemp("site")
+    env = {**os.environ, "NO_MKDOCS_2_WARNING": "1"}
+    env["PYTHONPATH"] = os.pathsep.join([str(ROOT), *filter(None, [env.get("PYTHONPATH")])])
+    done = subprocess.run(
+        [sys.executable, "-m", "mkdocs", "build", "--strict", "--site-dir", str(out)],
+        cwd=ROOT,
+        env=env,
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    assert done.returncode == 0, done.stderr[-4000:]
+    return out
+
+
+@pytest.mark.slow
+def test_the_metrics_reference_documents_every_public_function_with_its_equations(
+    site: Path,
+) -> None:
+    import pytest_emrd.metrics as metrics
+
+    page = (site / "reference" / "metrics" / "index.html").read_text()
+    functions = [n for n in metrics.__all__ if callable(getattr(metrics, n)) and n.islower()]
+    missing = [n for n in functions if f'id="pytest_emrd.metrics.{n}"' not in page]
+    assert functions and missing == []
+    assert page.count('class="arithmatex"') >= 10  # the docstrings' .. math:: blocks
+    assert ".. math::" not in page and ":func:`" not in page
+
+
+@pytest.mark.slow
+def test_the_cli_reference_prints_every_emrd_subcommand(site: Path) -> None:
+    from pytest_emrd.cli import COMMANDS
+
+    page = (site / "reference" / "cli" / "index.html").read_text()
+    assert all(f"emrd {name}" in page for name in COMMANDS)
+    assert "usage: emrd report" in page
+
+
+@pytest.mark.slow
+def test_the_performance_page_holds_the_generated_table(site: Path) -> None:
+    page = (site / "performance" / "index.html").read_text()
+    assert "<!-- performance-table -->" not in page
+    assert re.search(r"<th[^>]*>warm</th>", page) and re.search(r"<th[^>]*>cold</th>", page)
+    assert "<code>metrics.grid_240_s</code>" in page
+
+
+def test_every_pytest_option_is_in_the_options_reference() -> None:
+    done = subprocess.run(
+        [sys.executable, "-m", "pytest", "--help", "-p", "no:cacheprovider"],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        check=True,
+    )
+    flags = set(re.findall(r"(--emrd-[a-z-]+)", done.stdout))
+    reference = (DOCS / "reference" / "cli.md").read_text()
+    assert flags and sorted(f for f in flags if f"`{f}" not in reference) == []
+
+
+def _yaml(value: object) -> str:
+    if value is None:
+        return "null"
+    return str(value).lower() if isinstance(value, bool) else str(value)
+
+
+def test_the_registry_reference_gives_every_field_and_its_default() -> None:
+    from pytest_emrd.agent import ModelConfig
+
+    page = (DOCS / "reference" / "registry.md").read_text()
+    for field in dataclasses.fields(ModelConfig):
+        if field.name == "name":
+            continue  # the entry's key
+        if field.default is not dataclasses.MISSING:
+            default = f"`{_yaml(field.default)}`"
+        elif field.default_factory is not dataclasses.MISSING:
+            default = f"`{_yaml(field.default_factory())}`"
+        else:
+            default = "required"
+        assert f"| `{field.name}` | {default}" in page, field.name
+
+
+def test_the_protocol_page_prints_the_system_prompt_the_code_builds() -> None:
+    """The paper's prompt figures are blank, so this copy is the reference others cite."""
+    from pytest_emrd.agent import build_system_prompt
+    from pytest_emrd.world import paper_office
+
+    text = (DOCS / "reference" / "protocol.md").read_text()
+    section = text.split("## The system prompt", 1)[1]
+    printed = re.search(r"```text\n(.*?)\n```", section, re.DOTALL)
+    assert printed, "the protocol page lost its ```text block"
+    code = build_system_prompt(paper_office().inventory(), "default", modality="vision")
+    assert printed.group(1) == code
+
+
+def test_the_protocol_page_states_the_paper_office_as_built() -> None:
+    from pytest_emrd.world import paper_office
+
+    office = paper_office()
+    text = " ".join((DOCS / "reference" / "protocol.md").read_text().split())
+    assert f"{office.width} m × {office.depth} m" in text
+    for room in office.rooms:
+        size = f"({room.x1 - room.x0:.1f} × {room.z1 - room.z0:.1f} m)"
+        assert re.search(rf"{room.name} (top|bottom)-(left|right) {re.escape(size)}", text), room
+    assert f"adjacent rooms; {len(office.objects)} objects" in text
+
+
+def test_the_architecture_page_names_every_package_and_only_those() -> None:
+    listed = re.findall(r"^([a-z_]+)/ ", (DOCS / "architecture.md").read_text(), re.MULTILINE)
+    beside = re.findall(r"^\| `([a-z_]+)/` \|", (DOCS / "architecture.md").read_text(), re.M)
+    packages = {p.parent.name for p in (ROOT / "pytest_emrd").glob("*/__init__.py")}
+    repository = {"benchmarks", "cassettes", "docs", "examples", "perf", "pytest_emrd", "tests"}
+    assert set(listed) | set(beside) == packages | repository
+
+
+@pytest.mark.parametrize("page", PAGES, ids=lambda p: str(p.relative_to(DOCS)))
+def test_the_docs_are_no_diary(page: Path) -> None:
+    """History belongs to git log: no commit hashes, no load averages, no "previous stop"."""
+    text = page.read_text()
+    assert not re.search(r"\b(?=[0-9a-f]*\d)(?=[0-9a-f]*[a-f])[0-9a-f]{7,40}\b", text)
+    assert not re.search(r"load average|previous (stop|table|release)", text, re.IGNORECASE)
