@@ -38,9 +38,11 @@ def register(sub: argparse._SubParsersAction) -> None:
 def _run(args: argparse.Namespace) -> int:
     from pytest_emrd._atomic import write_bytes_atomic
     from pytest_emrd._scrub import scrub_bytes
+    from pytest_emrd.cli import check_run_dirs
     from pytest_emrd.gate import load_run_dirs
     from pytest_emrd.view import index_page, render_episode
 
+    check_run_dirs([args.run_dir])
     trajectories = sorted(load_run_dirs([args.run_dir]), key=lambda t: t.spec.case_id)
     if args.episodes:
 
