@@ -68,7 +68,8 @@ _CREDENTIAL_FIELD: Final = re.compile(
 )
 """``extra_body`` field names that look like credentials (``api_key``, ``access_token``,
 ``client_secret``): their value must be an environment variable reference, ``${VAR}``."""
-_AUTH_HEADER: Final = {"openai": "Authorization: Bearer", "anthropic": "x-api-key"}
+_AUTH_HEADER: Final = {"anthropic": "x-api-key header"}
+"""How each provider sends the key (default: a Bearer token in the Authorization header)."""
 
 _ENV_REF = re.compile(r"\$\{(?P<var>[A-Z_][A-Z0-9_]*)(?::-(?P<default>[^}]*))?\}")
 _DECAY = re.compile(r"^scout-decay-(?P<mean>\d+(?:\.\d+)?)$")
@@ -190,11 +191,11 @@ def _check_base_url(config: ModelConfig, where: str) -> None:
             "URL with a host, e.g. https://api.example.com/v1."
         )
     if "@" in parts.netloc:
-        header = _AUTH_HEADER.get(config.provider, "Authorization: Bearer")
+        header = _AUTH_HEADER.get(config.provider, "Authorization header, as a Bearer token")
         raise ConfigError(
             f"{where}: base_url carries a user name or password before '@' "
             f"({scrub(config.base_url or '')}); remove it: the key goes in the environment "
-            f"variable named by api_key_env, which is sent as the {header} header."
+            f"variable named by api_key_env, which is sent in the {header}."
         )
 
 
