@@ -287,9 +287,9 @@ def _check_body_credentials(entry: dict[str, Any], where: str) -> None:
         if ref is None:
             raise ConfigError(
                 f"{where}: {at} looks like a credential and is written out; a request body "
-                f"is stored in every cassette, so write it as an environment variable "
-                f"reference, {at.rpartition('.')[2]}: ${{MY_SECRET}}, and export MY_SECRET "
-                "(its value is then removed from every file and log)."
+                "is stored in every cassette, so write the value as an environment variable "
+                "reference, ${MY_SECRET}, and export MY_SECRET (its value is then removed "
+                "from every file and log)."
             )
         watch_env([ref.group("var")])
 
