@@ -214,7 +214,10 @@ _ANTHROPIC = "provider: anthropic, model_id: m, base_url: 'http://x'"
             f"{_OPENAI}, extra_headers: {{Authorization: 'Bearer sk-x'}}",
             "extra_headers may not carry the credential header Authorization;.*api_key_env",
         ),
-        (f"{_OPENAI}, extra_headers: {{X-Trace: 7}}", "extra_headers.X-Trace must be a string, got int; quote"),
+        (
+            f"{_OPENAI}, extra_headers: {{X-Trace: 7}}",
+            "extra_headers.X-Trace must be a string, got int; quote",
+        ),
         (
             f"{_ANTHROPIC}, temperature: 1.0",
             r"temperature=1.0 is rejected by the Anthropic Messages API version 2026-10-21; "
