@@ -19,6 +19,7 @@ _FIXES: Final = {
     "another folder",
     errno.EISDIR: "the path is a folder where a file belongs; move that folder away",
     errno.ENOENT: "it does not exist; create it or use another path",
+    errno.EEXIST: "a file is in the way where a folder belongs; move it away or use another folder",
 }
 
 

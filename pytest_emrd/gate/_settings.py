@@ -307,10 +307,18 @@ def resolve_settings(
     default_mode = "none" if in_ci(env) else "once"
     backend = raw["backend"] or "builtin"
     results = _path(raw["results"], rootdir) if raw["results"] else None
-    if results is not None and results.exists() and not results.is_dir():
+    if results is not None and (blocker := _file_in_the_way(results)) is not None:
+        where = "is a file" if blocker == results else f"lies under the file {blocker}"
         raise ConfigError(
-            f"--emrd-results={results} is a file; pass a directory (a new one, or a run "
+            f"--emrd-results={results} {where}; pass a directory (a new one, or a run "
             "directory to resume)."
+        )
+    cassettes = _path(raw["cassettes"] or "cassettes", rootdir)
+    if (blocker := _file_in_the_way(cassettes)) is not None:
+        where = "is a file" if blocker == cassettes else f"lies under the file {blocker}"
+        raise ConfigError(
+            f"--emrd-cassettes={cassettes} {where}; pass the cassette folder (default: "
+            "<rootdir>/cassettes)."
         )
     concurrency = _count("--emrd-concurrency", raw["concurrency"])
     if concurrency is not None and concurrency > MAX_CONCURRENCY:
@@ -348,11 +356,19 @@ def resolve_settings(
         results=results,
         thresholds=_thresholds(raw["thresholds"], rootdir),
         models_file=_path(raw["models"], rootdir) if raw["models"] else None,
-        cassettes=_path(raw["cassettes"] or "cassettes", rootdir),
+        cassettes=cassettes,
         shard=parse_shard(str(raw["shard"])) if raw["shard"] else None,
         concurrency=concurrency or 1,
         preflight=raw["preflight"] != "off",
     )
+
+
+def _file_in_the_way(folder: Path) -> Path | None:
+    """The file at ``folder`` or at its nearest existing ancestor, if that is not a folder."""
+    existing = folder
+    while not existing.exists() and existing != existing.parent:
+        existing = existing.parent
+    return None if existing.is_dir() else existing
 
 
 def _count(flag: str, value: Any) -> int | None:

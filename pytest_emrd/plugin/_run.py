@@ -53,6 +53,14 @@ class CassetteNotSavedWarning(UserWarning):
     """A live episode's cassette could not be written; its result was kept elsewhere."""
 
 
+def failure_line(exc: EmrdError | OSError, what: str = "pytest-emrd") -> str:
+    """The one scrubbed line an :class:`EmrdError` or a file system failure (most often in
+    the run directory) ends in: ``<what>: <message>``."""
+    if isinstance(exc, OSError):
+        return f"{what}: {scrub(os_error_line(exc, doing='write', option='--emrd-results DIR'))}"
+    return f"{what}: {scrub(str(exc))}"
+
+
 def _writable_folder(folder: Path) -> None:
     """Raise the :class:`OSError` writing into ``folder`` would meet, judged from its
     nearest existing ancestor (nothing is created)."""
@@ -86,11 +94,8 @@ class Run:
         raised outside the ``except``: no "During handling" chain)."""
         try:
             return fn(self)
-        except EmrdError as exc:
-            message = f"{what}: {scrub(str(exc))}"
-        except OSError as exc:
-            line = os_error_line(exc, doing="write", option="--emrd-results DIR")
-            message = f"{what}: {scrub(line)}"
+        except (EmrdError, OSError) as exc:
+            message = failure_line(exc, what)
         pytest.fail(message, pytrace=False)
 
     @cached_property
