@@ -44,7 +44,7 @@ def test_yaml_12_floats_and_pyyaml_error_wording():
 
 
 def test_anchors_asterisks_in_text_and_nesting_up_to_the_cap_are_read():
-    nested = "[" * _yaml.MAX_DEPTH + "]" * _yaml.MAX_DEPTH
+    nested = "[" * (_yaml.MAX_DEPTH - 1) + "]" * (_yaml.MAX_DEPTH - 1)  # under the root mapping
     text = f"a: &kept {{x: 1}}\nb: '*not an alias'\nc: {nested}\n"
     data = _yaml.load(text, "x.yaml")
     assert data["a"] == {"x": 1} and data["b"] == "*not an alias"
