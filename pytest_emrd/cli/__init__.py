@@ -89,7 +89,6 @@ _WRITES: dict[str, str] = {
     "view": "--out DIR",
     "report": "--out DIR",
     "render": "--out DIR",
-    "gate": "$GITHUB_STEP_SUMMARY",
 }
 
 
