@@ -223,7 +223,10 @@ class ScrubFilter(logging.Filter):
     def filter(self, record: logging.LogRecord) -> bool:
         if getattr(record, "emrd_scrubbed", False):
             return True
-        message = record.getMessage()
+        try:
+            message = record.getMessage()
+        except Exception:  # a bad format string: the handler reports it, as it would without us
+            return True
         clean = scrub(message)
         if clean != message:
             record.msg, record.args = clean, None

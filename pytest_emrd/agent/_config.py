@@ -284,7 +284,7 @@ def _check_body_credentials(entry: dict[str, Any], where: str) -> None:
     """Credential-like ``extra_body`` fields must be ``${VAR}`` references (then watched)."""
     for at, value in _credential_fields(entry.get("extra_body") or {}):
         ref = _ENV_REF.fullmatch(value) if isinstance(value, str) else None
-        if ref is None:
+        if ref is None or ref.group("default") is not None:  # a default is a written value
             raise ConfigError(
                 f"{where}: {at} looks like a credential and is written out; a request body "
                 "is stored in every cassette, so write the value as an environment variable "

@@ -76,6 +76,11 @@ REGISTRY_PROBES = [
         id="extra-body-nested-secret",
     ),
     pytest.param(
+        f"models:\n  m: {{{OK}, extra_body: {{password: '${{PW:-hunter2-default}}'}}}}\n",
+        "extra_body.password looks like a credential and is written out",
+        id="extra-body-secret-as-a-default",
+    ),
+    pytest.param(
         f"models:\n  m: {{{OK}, extra_body: {{options: [{{access_token: tok-lit-1}}]}}}}\n",
         "extra_body.options[0].access_token looks like a credential",
         id="extra-body-secret-in-list",
