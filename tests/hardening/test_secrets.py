@@ -88,7 +88,7 @@ def test_a_recorded_run_leaks_no_planted_credential(
         "--log-file-level=DEBUG",
     )
     run.assert_outcomes(passed=2, failed=2)
-    failures = [x for x in run.stdout.lines if x.startswith("FAILED")]
+    failures = [x for x in run.stdout.lines if x.startswith("FAILED test_emrd.py")]
     assert [x.split("[")[1].split("]")[0] for x in failures] == [
         "denied-baseline-office-ep00",
         "rejected-baseline-office-ep00",
