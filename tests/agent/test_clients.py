@@ -340,3 +340,18 @@ def test_anthropic_keeps_the_base_query_too(fault_server, sleeps) -> None:
     with make_client(config, policy=RetryPolicy(sleep=sleeps), require_key=False) as client:
         client.complete(MESSAGES)
     assert fault_server.paths == ["/proxy/v1/messages?api-version=7"]
+
+
+@pytest.mark.parametrize(
+    ("provider", "base", "listing"),
+    [
+        ("openai", "https://h/openai/v1?api-version=7", "https://h/openai/v1/models?api-version=7"),
+        ("openai", "https://h/v1beta/openai/?key=K", "https://h/v1beta/openai/models?key=K"),
+        ("anthropic", "https://api.anthropic.com", "https://api.anthropic.com/v1/models"),
+    ],
+    ids=["azure", "google", "anthropic"],
+)
+def test_the_preflight_model_listing_is_joined_like_the_endpoint(provider, base, listing):
+    from pytest_emrd.preflight import models_url
+
+    assert models_url(provider, base) == listing
