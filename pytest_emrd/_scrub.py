@@ -14,17 +14,28 @@ It removes:
 * credential-like headers and fields written as text (``Authorization: Bearer ...``,
   ``"x-api-key": "..."``) and bare ``Bearer`` tokens.
 
+A key value is also removed URL-encoded (``%2B``, ``+`` for a space) and base64-encoded (as a
+value of its own: a key inside a longer base64 text is not found there).
+
+Logs are scrubbed by :class:`ScrubFilter`, which :func:`install_log_scrub` attaches to the
+handlers of the root logger (pytest's live-log, capture and log-file handlers while they are
+installed) and to the ``httpx``, ``httpcore``, ``urllib3`` and ``vcr`` loggers and their
+children: ``pytest --log-cli-level=DEBUG`` prints httpx's request line with the query key
+and the userinfo already removed.
+
 Values shorter than :data:`MIN_SECRET_CHARS` are not treated as keys (a variable set to
 ``1`` must not blank every digit of a report).
 """
 
 from __future__ import annotations
 
+import base64
+import logging
 import os
 import re
 from collections.abc import Iterable, Mapping
 from typing import Any, Final
-from urllib.parse import parse_qsl, urlencode, urlsplit, urlunsplit
+from urllib.parse import parse_qsl, quote, quote_plus, urlencode, urlsplit, urlunsplit
 
 REDACTED: Final = "<redacted>"
 #: Query parameters whose value is a credential (compared case-insensitively).
@@ -110,12 +121,23 @@ def secret_values(env: Mapping[str, str] | None = None) -> tuple[str, ...]:
 
 def _secret_values(env: Mapping[str, str]) -> tuple[str, ...]:
     values = {
-        value.strip()
+        form
         for name, value in env.items()
         if (name in _watched or SECRET_ENV.search(name.upper()))
         and len(value.strip()) >= MIN_SECRET_CHARS
+        for form in encoded_forms(value.strip())
     }
     return tuple(sorted(values, key=lambda v: (-len(v), v)))
+
+
+def encoded_forms(secret: str) -> tuple[str, ...]:
+    """``secret`` as written, URL-encoded (``quote`` and ``quote_plus``) and base64-encoded
+    (standard and URL-safe alphabets, with and without padding)."""
+    raw = secret.encode()
+    b64 = base64.b64encode(raw).decode()
+    urlsafe = base64.urlsafe_b64encode(raw).decode()
+    forms = (secret, quote(secret, safe=""), quote_plus(secret), b64, b64.rstrip("="), urlsafe)
+    return tuple(dict.fromkeys(f for f in (*forms, urlsafe.rstrip("=")) if f))
 
 
 def scrub_secrets(text: str, secrets: Iterable[str] | None = None) -> str:
@@ -188,3 +210,55 @@ def scrub_report(report: Any) -> None:
     sections = getattr(report, "sections", None)
     if sections:
         report.sections = [(title, scrub(body)) for title, body in sections]
+
+
+#: Loggers of the libraries that print request lines (URL with its query) and headers.
+LIBRARY_LOGGERS: Final = ("httpx", "httpcore", "urllib3", "vcr")
+
+
+class ScrubFilter(logging.Filter):
+    """A logging filter that keeps every record and scrubs it in place: its message (``msg``
+    with its ``args`` applied), its formatted traceback and its stack (:func:`scrub`)."""
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        if getattr(record, "emrd_scrubbed", False):
+            return True
+        try:
+            message = record.getMessage()
+        except Exception:  # a bad format string: the handler reports it, as it would without us
+            return True
+        clean = scrub(message)
+        if clean != message:
+            record.msg, record.args = clean, None
+        if record.exc_info and not record.exc_text:
+            record.exc_text = logging.Formatter().formatException(record.exc_info)
+        if record.exc_text:
+            record.exc_text = scrub(record.exc_text)
+        if record.stack_info:
+            record.stack_info = scrub(record.stack_info)
+        record.emrd_scrubbed = True
+        return True
+
+
+SCRUB_FILTER: Final = ScrubFilter()
+
+
+def install_log_scrub() -> None:
+    """Attach :data:`SCRUB_FILTER` to every handler of the root logger and to the loggers of
+    :data:`LIBRARY_LOGGERS` and their children (idempotent: call it whenever handlers may
+    have been added, e.g. at the start of each pytest phase)."""
+    for handler in logging.getLogger().handlers:
+        handler.addFilter(SCRUB_FILTER)
+    prefixes = tuple(f"{name}." for name in LIBRARY_LOGGERS)
+    names = [n for n in list(logging.Logger.manager.loggerDict) if n.startswith(prefixes)]
+    for name in (*LIBRARY_LOGGERS, *names):
+        logging.getLogger(name).addFilter(SCRUB_FILTER)
+
+
+def remove_log_scrub() -> None:
+    """Detach :data:`SCRUB_FILTER` from every logger and root handler it was attached to."""
+    for handler in logging.getLogger().handlers:
+        handler.removeFilter(SCRUB_FILTER)
+    for logger in list(logging.Logger.manager.loggerDict.values()):
+        if isinstance(logger, logging.Logger):
+            logger.removeFilter(SCRUB_FILTER)

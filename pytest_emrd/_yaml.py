@@ -5,6 +5,12 @@ the line where there is one, and what to do: a missing file, a directory passed 
 an unreadable file, bytes that are not UTF-8, malformed YAML. ``pytest`` and ``emrd gate``
 print the same text.
 
+User files are bounded: a file larger than :data:`MAX_FILE_BYTES` is refused before it is
+parsed, and so is any YAML alias (``*name``): an alias repeats a whole subtree, so a few
+nested ones expand a small file into gigabytes (the "billion laughs"). Anchors without
+aliases are harmless and allowed. Collections nested deeper than :data:`MAX_DEPTH` are
+refused too.
+
 PyYAML resolves scalars by YAML 1.1, where ``1e9`` and ``5e-3`` are strings (1.1 floats
 need a dot and a signed exponent). :class:`Loader` adds the YAML 1.2 core-schema float, so
 every number a person writes reads as a number.
@@ -14,11 +20,16 @@ from __future__ import annotations
 
 import re
 from pathlib import Path
-from typing import Any
+from typing import Any, Final
 
 import yaml
 
 from pytest_emrd.errors import ConfigError
+
+MAX_FILE_BYTES: Final = 1_000_000
+"""Largest user YAML file read (a thresholds file or registry is a few kilobytes)."""
+MAX_DEPTH: Final = 32
+"""Deepest nesting of collections accepted in a user YAML file."""
 
 _FLOAT_12 = re.compile(
     r"""^(?:[-+]?(?:\.[0-9]+|[0-9]+(?:\.[0-9]*)?)(?:[eE][-+]?[0-9]+)?
@@ -49,7 +60,8 @@ def read_text(path: Path, *, what: str, flag: str) -> str:
     """The UTF-8 text of ``path`` (``what`` = "thresholds file"; ``flag`` = the option that
     names it), or a one-line :class:`ConfigError` saying what is wrong and what to pass."""
     try:
-        data = Path(path).read_bytes()
+        with Path(path).open("rb") as handle:
+            data = handle.read(MAX_FILE_BYTES + 1)
     except FileNotFoundError:
         raise ConfigError(
             f"{what} {path} does not exist; pass an existing file with {flag}."
@@ -60,6 +72,11 @@ def read_text(path: Path, *, what: str, flag: str) -> str:
         ) from None
     except OSError as exc:
         raise ConfigError(f"{what} {path} cannot be read ({exc.strerror}); check {flag}.") from None
+    if len(data) > MAX_FILE_BYTES:
+        raise ConfigError(
+            f"{what} {path} is larger than {MAX_FILE_BYTES // 1000} KB, more than such a file "
+            f"ever needs; pass the right file with {flag}."
+        )
     try:
         return data.decode("utf-8")
     except UnicodeDecodeError as exc:
@@ -81,7 +98,37 @@ def yaml_error(exc: yaml.YAMLError, source: str) -> ConfigError:
     return ConfigError(f"{source}{where}: malformed YAML ({' '.join(str(detail).split())}).")
 
 
+def _check_bounds(text: str, source: str) -> None:
+    """A one-line :class:`ConfigError` at the first alias of ``text`` or at a collection
+    nested deeper than :data:`MAX_DEPTH` (libyaml's composer recurses in C: a file of
+    100,000 ``[`` crashes the interpreter). A streaming parse (libyaml's, a state machine
+    with its own stack) sees both before anything is composed; malformed YAML is left to the
+    parser, whose error is the one reported."""
+    depth = 0
+    try:
+        for event in yaml.parse(text, Loader=_FastLoader):
+            if isinstance(event, yaml.CollectionStartEvent):
+                depth += 1
+                if depth > MAX_DEPTH:
+                    raise ConfigError(
+                        f"{source}, line {event.start_mark.line + 1}: YAML nested more than "
+                        f"{MAX_DEPTH} levels deep; flatten it (a thresholds file or model "
+                        "registry needs five levels)."
+                    )
+            elif isinstance(event, yaml.CollectionEndEvent):
+                depth -= 1
+            elif isinstance(event, yaml.AliasEvent):
+                raise ConfigError(
+                    f"{source}, line {event.start_mark.line + 1}: YAML alias *{event.anchor} "
+                    "is not allowed in this file (aliases can expand a small file without "
+                    "bound); write the value out in full."
+                )
+    except yaml.YAMLError:
+        return
+
+
 def _parsed(parse: Any, text: str, source: str) -> Any:
+    _check_bounds(text, source)
     try:
         return parse(text, Loader=_FastLoader)
     except yaml.YAMLError:

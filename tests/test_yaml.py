@@ -41,3 +41,34 @@ def test_yaml_12_floats_and_pyyaml_error_wording():
     with pytest.raises(ConfigError, match=r"x\.yaml, line 1, column 5: malformed YAML") as fast:
         _yaml.load("a: b: c", "x.yaml")
     assert str(slow.value.problem) in str(fast.value)
+
+
+def test_anchors_asterisks_in_text_and_nesting_up_to_the_cap_are_read():
+    nested = "[" * (_yaml.MAX_DEPTH - 1) + "]" * (_yaml.MAX_DEPTH - 1)  # under the root mapping
+    text = f"a: &kept {{x: 1}}\nb: '*not an alias'\nc: {nested}\n"
+    data = _yaml.load(text, "x.yaml")
+    assert data["a"] == {"x": 1} and data["b"] == "*not an alias"
+
+
+@pytest.mark.parametrize(
+    ("text", "message"),
+    [
+        ("a: &x 1\nb: *x\n", r"x\.yaml, line 2: YAML alias \*x is not allowed"),
+        ("a: " + "[" * 40 + "]" * 40, r"x\.yaml, line 1: YAML nested more than 32 levels deep"),
+    ],
+    ids=["alias", "too-deep"],
+)
+def test_aliases_and_deep_nesting_are_refused_before_composing(text, message):
+    with pytest.raises(ConfigError, match=message):
+        _yaml.compose(text, "x.yaml")
+
+
+def test_a_file_over_the_cap_is_refused_unread(tmp_path):
+    path = tmp_path / "big.yaml"
+    path.write_bytes(b"#" * (_yaml.MAX_FILE_BYTES + 1))
+    with pytest.raises(ConfigError, match="is larger than 1000 KB"):
+        _yaml.read_text(path, what="thresholds file", flag="--emrd-thresholds")
+    path.write_bytes(b"#" * _yaml.MAX_FILE_BYTES)
+    assert len(_yaml.read_text(path, what="thresholds file", flag="--emrd-thresholds")) == (
+        _yaml.MAX_FILE_BYTES
+    )

@@ -6,6 +6,12 @@ request ids, no secrets (keys travel in headers, which cassettes strip). What is
 provider's published request schema. Sampling fields set to None are left out (the
 provider's default); ``extra_body`` and ``extra_headers`` are passed through as written.
 
+The endpoint URL is ``base_url`` with the endpoint path appended to its path, its query kept
+(``https://x.openai.azure.com/openai/v1?api-version=2025-04-01`` posts to
+``.../openai/v1/chat/completions?api-version=2025-04-01``). ``timeout_s`` is a deadline on
+each attempt, connect to last byte: :class:`DeadlineTransport` shuts the connection down
+when it passes, so a server dripping its reply a byte at a time cannot hold a request open.
+
 Why not the official SDKs (``anthropic`` 2.10, ``openai`` 3.51, both on ``httpx2``, which
 vcrpy 9.4 also records): their retry loop obeys ``Retry-After`` without a cap (anthropic
 2.10 ``_calculate_retry_timeout``: up to 2**32 ms), draws jitter from the global ``random``
@@ -16,7 +22,11 @@ against the SDK's own request type instead: the guarantee stays, the runtime doe
 
 from __future__ import annotations
 
+import contextlib
 import os
+import socket
+import threading
+import time
 from dataclasses import dataclass
 from typing import Any, Protocol
 
@@ -69,6 +79,110 @@ def _api_key(config: ModelConfig, *, required: bool) -> str | None:
     return key or None
 
 
+def endpoint_url(base_url: str, path: str) -> str:
+    """``base_url`` with ``path`` appended to its path, query and fragment kept."""
+    base = httpx.URL(base_url)
+    return str(base.copy_with(path=base.path.rstrip("/") + path))
+
+
+class _Deadline:
+    """One attempt's deadline: when it passes, the attempt's connection is shut down (a read
+    blocked on it returns at once). The timer starts with the first connection, so a replay,
+    which never connects, starts no thread."""
+
+    _STREAM_EVENTS = ("connection.connect_tcp.complete", "connection.start_tls.complete")
+
+    def __init__(self, seconds: float) -> None:
+        self.end = time.monotonic() + seconds
+        self.expired = False
+        self._lock = threading.Lock()
+        self._sock: socket.socket | None = None
+        self._timer: threading.Timer | None = None
+
+    def trace(self, event: str, info: dict[str, Any]) -> None:
+        """httpcore's ``trace`` extension: keep the newest socket of the attempt."""
+        if event not in self._STREAM_EVENTS or info.get("return_value") is None:
+            return
+        sock = info["return_value"].get_extra_info("socket")
+        with self._lock:
+            self._sock = sock
+            if self._timer is None and not self.expired:
+                self._timer = threading.Timer(max(0.0, self.end - time.monotonic()), self.expire)
+                self._timer.daemon = True
+                self._timer.start()
+        if self.expired or time.monotonic() >= self.end:
+            self.expire()
+
+    def expire(self) -> None:
+        with self._lock:
+            self.expired, sock = True, self._sock
+        if sock is not None:
+            with contextlib.suppress(OSError):  # already closed: the attempt ended on its own
+                sock.shutdown(socket.SHUT_RDWR)
+
+    def cancel(self) -> None:
+        with self._lock:
+            if self._timer is not None:
+                self._timer.cancel()
+
+
+class DeadlineTransport(httpx.BaseTransport):
+    """A transport that gives each request at most ``seconds``, connect to last byte (the
+    whole body is read inside the deadline), raising :class:`httpx.ReadTimeout` past it."""
+
+    def __init__(self, inner: httpx.BaseTransport, seconds: float) -> None:
+        self.inner = inner
+        self.seconds = seconds
+
+    def handle_request(self, request: httpx.Request) -> httpx.Response:
+        deadline = _Deadline(self.seconds)
+        given = request.extensions
+        request.extensions = {**given, "trace": deadline.trace}
+        try:
+            response = self.inner.handle_request(request)
+            try:
+                raw = b"".join(response.iter_raw())
+            finally:
+                response.close()
+        except httpx.TransportError:
+            if not deadline.expired:
+                raise
+            raw = None
+        finally:
+            request.extensions = given
+            deadline.cancel()
+        if deadline.expired or raw is None:
+            raise httpx.ReadTimeout(
+                f"no complete reply within timeout_s={self.seconds:g} s", request=request
+            )
+        return httpx.Response(
+            response.status_code,
+            headers=response.headers,
+            stream=httpx.ByteStream(raw),
+            extensions={k: v for k, v in response.extensions.items() if k != "network_stream"},
+        )
+
+    def close(self) -> None:
+        self.inner.close()
+
+
+def _http_client(timeout_s: float, transport: httpx.BaseTransport | None) -> httpx.Client:
+    """The httpx client of a model: ``transport`` as given (tests), else httpx's transports
+    (environment proxies included) each under a :class:`DeadlineTransport`, with no
+    keep-alive, so that every attempt's connection is its own and can be shut at its
+    deadline."""
+    timeout = httpx.Timeout(timeout_s)
+    if transport is not None:
+        return httpx.Client(timeout=timeout, transport=transport)
+    client = httpx.Client(timeout=timeout, limits=httpx.Limits(max_keepalive_connections=0))
+    client._transport = DeadlineTransport(client._transport, timeout_s)
+    client._mounts = {
+        pattern: None if mounted is None else DeadlineTransport(mounted, timeout_s)
+        for pattern, mounted in client._mounts.items()
+    }
+    return client
+
+
 class _HttpClient:
     """What both providers share: one httpx client, a retry policy, the API key."""
 
@@ -82,10 +196,11 @@ class _HttpClient:
         require_key: bool = True,
     ) -> None:
         self.config = config
-        self.base_url = base_url.rstrip("/")
+        self.base_url = base_url
         self.policy = policy or RetryPolicy(max_retries=config.max_retries)
         self._key = _api_key(config, required=require_key)
-        self._http = httpx.Client(timeout=httpx.Timeout(config.timeout_s), transport=transport)
+        self._http = _http_client(config.timeout_s, transport)
+        self._urls: dict[str, str] = {}
 
     @staticmethod
     def _auth(key: str) -> dict[str, str]:
@@ -101,9 +216,12 @@ class _HttpClient:
         """Send :func:`build_request` for ``messages`` (plus the key) and read the reply."""
         request = build_request(self.config, messages)
         headers = request.headers | self._auth(self._key) if self._key else request.headers
+        url = self._urls.get(request.path)
+        if url is None:
+            url = self._urls[request.path] = endpoint_url(self.base_url, request.path)
         return post_json(
             self._http,
-            f"{self.base_url}{request.path}",
+            url,
             body=request.body,
             headers=headers,
             policy=self.policy,

@@ -21,10 +21,13 @@ from dataclasses import dataclass, field, fields, replace
 from importlib import resources
 from pathlib import Path
 from typing import Any, Final
+from urllib.parse import urlsplit
 
 import yaml
 
 from pytest_emrd import _yaml
+from pytest_emrd._names import check_slug
+from pytest_emrd._scrub import scrub, watch_env
 from pytest_emrd.agent.reference._knobs import FAMILY, check_knobs, mimic_knobs
 from pytest_emrd.agent.reference._version import versioned_id
 from pytest_emrd.errors import ConfigError, check_choice, check_positive_int, check_range
@@ -58,6 +61,15 @@ _CLIENT_BODY_KEYS: Final = frozenset(
     {"model", "messages", "system", "max_tokens", "max_completion_tokens", "stream", "top_k"}
 )
 _CREDENTIAL_HEADERS: Final = frozenset({"authorization", "x-api-key", "api-key", "x-goog-api-key"})
+_CREDENTIAL_FIELD: Final = re.compile(
+    r"api[_-]?key|secret|passw(?:or)?d|credential|private[_-]?key|access[_-]?key"
+    r"|^(?:key|auth|authorization|sig|signature|token|bearer)$|[_-](?:token|auth)$",
+    re.IGNORECASE,
+)
+"""``extra_body`` field names that look like credentials (``api_key``, ``access_token``,
+``client_secret``): their value must be an environment variable reference, ``${VAR}``."""
+_AUTH_HEADER: Final = {"anthropic": "x-api-key header"}
+"""How each provider sends the key (default: a Bearer token in the Authorization header)."""
 
 _ENV_REF = re.compile(r"\$\{(?P<var>[A-Z_][A-Z0-9_]*)(?::-(?P<default>[^}]*))?\}")
 _DECAY = re.compile(r"^scout-decay-(?P<mean>\d+(?:\.\d+)?)$")
@@ -91,7 +103,8 @@ class ModelConfig:
     modality: str = "vision"
     """Default modality of this model's episodes: ``vision``, ``text`` or ``both``."""
     timeout_s: float = 120.0
-    """Per-request timeout in seconds."""
+    """Deadline of one request attempt in seconds, connect to last byte (a server that
+    drips its reply slowly is cut off at it too)."""
     max_retries: int = 4
     """Retries after the first attempt on 429, 5xx, transport errors and garbage bodies."""
     price_per_mtok_in: float | None = None
@@ -103,7 +116,9 @@ class ModelConfig:
     max_tokens_param: str = "max_tokens"
     """Body key carrying ``max_tokens`` (``max_completion_tokens`` for newer OpenAI models)."""
     extra_body: dict[str, Any] = field(default_factory=dict)
-    """Provider-specific body fields sent as written (``{"reasoning_effort": "none"}``)."""
+    """Provider-specific body fields sent as written (``{"reasoning_effort": "none"}``); a
+    field named like a credential must be written ``${VAR}`` (its value is then scrubbed
+    from every file and log, as the API key is)."""
     extra_headers: dict[str, str] = field(default_factory=dict)
     """Extra request headers (``{"anthropic-version": "2023-06-01"}``); never credentials."""
     planted: dict[str, Any] = field(default_factory=dict)
@@ -128,6 +143,8 @@ class ModelConfig:
         check_range(f"{where}: max_retries", self.max_retries, 0, 20)
         if self.provider != "reference" and not self.base_url:
             raise ConfigError(f"{where}: base_url is required for provider={self.provider!r}.")
+        if self.base_url:
+            _check_base_url(self, where)
         if self.planted and self.provider != "reference":
             raise ConfigError(f"{where}: planted parameters are only for reference agents.")
         check_knobs(where, self.planted)
@@ -158,10 +175,54 @@ def _check_sampling(config: ModelConfig, where: str) -> None:
     _check_number(f"{where}: top_p", config.top_p, 0.0, 1.0)
 
 
+def _check_base_url(config: ModelConfig, where: str) -> None:
+    """An http(s) URL without userinfo: httpx would send ``user:password`` as Basic auth in
+    place of the key, and the password would sit in the registry file."""
+    try:
+        parts = urlsplit(config.base_url or "")
+        parts.port  # noqa: B018 - raises ValueError on a port that is not a number
+    except ValueError as exc:
+        raise ConfigError(
+            f"{where}: base_url is not a URL ({exc}); write e.g. https://api.example.com/v1."
+        ) from None
+    if parts.scheme not in ("http", "https") or not parts.hostname:
+        raise ConfigError(
+            f"{where}: base_url={scrub(config.base_url or '')!r} must be an http:// or https:// "
+            "URL with a host, e.g. https://api.example.com/v1."
+        )
+    if "@" in parts.netloc:
+        header = _AUTH_HEADER.get(config.provider, "Authorization header, as a Bearer token")
+        raise ConfigError(
+            f"{where}: base_url carries a user name or password before '@' "
+            f"({scrub(config.base_url or '')}); remove it: the key goes in the environment "
+            f"variable named by api_key_env, which is sent in the {header}."
+        )
+
+
+def _credential_fields(body: Any, path: str = "extra_body") -> list[tuple[str, Any]]:
+    """``(dotted path, value)`` of every field of ``body`` whose name looks like a credential."""
+    found: list[tuple[str, Any]] = []
+    items = (
+        body.items()
+        if isinstance(body, dict)
+        else enumerate(body)
+        if isinstance(body, list)
+        else ()
+    )
+    for key, value in items:
+        at = f"{path}.{key}" if isinstance(key, str) else f"{path}[{key}]"
+        if isinstance(key, str) and _CREDENTIAL_FIELD.search(key):
+            found.append((at, value))
+        found += _credential_fields(value, at)
+    return found
+
+
 def _check_extras(config: ModelConfig, where: str) -> None:
     for name, value in (("extra_body", config.extra_body), ("extra_headers", config.extra_headers)):
         if not isinstance(value, dict) or not all(isinstance(k, str) for k in value):
-            raise ConfigError(f"{where}: {name}={value!r} must be a mapping of name -> value.")
+            raise ConfigError(
+                f"{where}: {name} must be a mapping of name -> value, got {type(value).__name__}."
+            )
     owned = sorted(set(config.extra_body) & (_CLIENT_BODY_KEYS | set(SAMPLING_FIELDS)))
     if owned:
         raise ConfigError(
@@ -180,18 +241,29 @@ def _check_extras(config: ModelConfig, where: str) -> None:
     for header, value in config.extra_headers.items():
         if header.lower() in _CREDENTIAL_HEADERS:
             raise ConfigError(
-                f"{where}: extra_headers may not carry {header!r}: keys come only from the "
-                "environment variable named by api_key_env."
+                f"{where}: extra_headers may not carry the credential header {header}; keys "
+                "come only from the environment variable named by api_key_env."
             )
         if not isinstance(value, str):
-            raise ConfigError(f"{where}: extra_headers.{header}={value!r} must be a string.")
+            raise ConfigError(
+                f"{where}: extra_headers.{header} must be a string, got "
+                f"{type(value).__name__}; quote the value in the registry file."
+            )
 
 
 _FIELDS: Final = {f.name for f in fields(ModelConfig)}
 
 
-def _expand_env(value: str) -> str:
-    """``${VAR}`` / ``${VAR:-default}`` in a registry string, resolved from the environment."""
+def _expand_env(value: Any, where: str, field_name: str) -> Any:
+    """``${VAR}`` / ``${VAR:-default}`` in a registry string (or in the strings of a mapping
+    or list, ``extra_body``), resolved from the environment; ``where`` names the file, line
+    and model in the error of an unset variable without a default."""
+    if isinstance(value, dict):
+        return {k: _expand_env(v, where, f"{field_name}.{k}") for k, v in value.items()}
+    if isinstance(value, list):
+        return [_expand_env(v, where, field_name) for v in value]
+    if not isinstance(value, str):
+        return value
 
     def sub(match: re.Match[str]) -> str:
         var, default = match.group("var"), match.group("default")
@@ -199,10 +271,27 @@ def _expand_env(value: str) -> str:
         if found:
             return found
         if default is None:
-            raise ConfigError(f"{value!r} needs the environment variable {var}; set it.")
+            raise ConfigError(
+                f"{where}: {field_name} needs the environment variable {var}, which is not "
+                f"set; export {var}=..., or write ${{{var}:-default}} for a fallback."
+            )
         return default
 
     return _ENV_REF.sub(sub, value)
+
+
+def _check_body_credentials(entry: dict[str, Any], where: str) -> None:
+    """Credential-like ``extra_body`` fields must be ``${VAR}`` references (then watched)."""
+    for at, value in _credential_fields(entry.get("extra_body") or {}):
+        ref = _ENV_REF.fullmatch(value) if isinstance(value, str) else None
+        if ref is None or ref.group("default") is not None:  # a default is a written value
+            raise ConfigError(
+                f"{where}: {at} looks like a credential and is written out; a request body "
+                "is stored in every cassette, so write the value as an environment variable "
+                "reference, ${MY_SECRET}, and export MY_SECRET (its value is then removed "
+                "from every file and log)."
+            )
+        watch_env([ref.group("var")])
 
 
 Lines = dict[tuple[str, str | None], int]
@@ -223,13 +312,22 @@ def _build(name: str, entry: Any, source: str, lines: Lines) -> ModelConfig:
         raise ConfigError(
             f"{_at(source, lines, name)}: model {name!r} must be a mapping of fields."
         )
+    check_slug(
+        _at(source, lines, name),
+        name,
+        becomes="a model name is a cassette folder and part of every episode file name",
+    )
     unknown = sorted(set(entry) - _FIELDS)
     if unknown:
         raise ConfigError(
             f"{_at(source, lines, name, unknown[0])}: model {name!r} has unknown field(s) "
             f"{unknown}; known fields: {', '.join(sorted(_FIELDS - {'name'}))}."
         )
-    values = {k: _expand_env(v) if isinstance(v, str) else v for k, v in entry.items()}
+    _check_body_credentials(entry, f"{_at(source, lines, name, 'extra_body')}: model {name!r}")
+    values = {
+        k: _expand_env(v, f"{_at(source, lines, name, k)}: model {name!r}", k)
+        for k, v in entry.items()
+    }
     values["name"] = name
     if values.get("provider") == "anthropic":
         values.setdefault("temperature", None)  # Appendix C: Claude at the provider default

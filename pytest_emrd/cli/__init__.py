@@ -9,8 +9,9 @@ from __future__ import annotations
 import argparse
 import importlib
 import sys
+from pathlib import Path
 
-from pytest_emrd.errors import EmrdError
+from pytest_emrd.errors import ConfigError, EmrdError
 
 #: Subcommand modules, in the order ``emrd --help`` lists them.
 COMMANDS: tuple[str, ...] = (
@@ -66,12 +67,46 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def check_run_dirs(run_dirs: list[Path]) -> None:
+    """A one-line :class:`ConfigError` for a RUN_DIR argument that is not a folder."""
+    for run_dir in run_dirs:
+        if run_dir.is_dir():
+            continue
+        if run_dir.exists():
+            raise ConfigError(
+                f"RUN_DIR {run_dir} is a file, not a run directory; pass the folder a pytest "
+                "run wrote (--emrd-results DIR, or one under .emrd/runs); a thresholds file "
+                "goes after --thresholds."
+            )
+        raise ConfigError(
+            f"RUN_DIR {run_dir} does not exist; pass the folder a pytest run wrote "
+            "(--emrd-results DIR, or one under .emrd/runs)."
+        )
+
+
+#: The option that picks where each command writes, named in a file system error.
+_WRITES: dict[str, str] = {
+    "view": "--out DIR",
+    "report": "--out DIR",
+    "render": "--out DIR",
+}
+
+
 def main(argv: list[str] | None = None) -> int:
+    """Run one command; an :class:`EmrdError` or a file system failure (full disk, read-only
+    folder, a file where a folder belongs) ends it in one scrubbed line and exit status 2."""
+    from pytest_emrd._scrub import install_log_scrub, scrub
+
+    install_log_scrub()
     args = build_parser().parse_args(argv)
     try:
         return int(args.func(args) or 0)
     except EmrdError as exc:
-        from pytest_emrd._scrub import scrub
+        message = str(exc)
+    except OSError as exc:
+        from pytest_emrd._disk import os_error_line
 
-        print(f"emrd {args.command}: error: {scrub(str(exc))}", file=sys.stderr)
-        return 2
+        doing = "read" if isinstance(exc, FileNotFoundError) else "write"
+        message = os_error_line(exc, doing=doing, option=_WRITES.get(args.command, ""))
+    print(f"emrd {args.command}: error: {scrub(message)}", file=sys.stderr)
+    return 2

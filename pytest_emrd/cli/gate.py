@@ -39,6 +39,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def _run(args: argparse.Namespace) -> int:
     from pytest_emrd.agent import load_registry
+    from pytest_emrd.cli import check_run_dirs
     from pytest_emrd.gate import (
         check_shard_set,
         evaluate_all,
@@ -48,6 +49,7 @@ def _run(args: argparse.Namespace) -> int:
     )
     from pytest_emrd.metrics import GATE_METRICS, episode_metrics
 
+    check_run_dirs(args.run_dirs)
     for problem in check_shard_set(args.run_dirs, allow_partial=args.allow_partial):
         print(f"emrd gate: warning: partial shard set: {problem}", file=sys.stderr)
     registry = load_registry(args.models)

@@ -3,7 +3,9 @@
 One row per registered model: provider, default modality, model id, endpoint, the API-key
 variable and whether it is set in this environment (``set``, ``missing`` when the model
 needs it, ``unset`` when it is optional; its value is never read out), and the
-registry's prices per million tokens. Parametric reference agents (``scout-decay-<m>``,
+registry's prices per million tokens. The endpoint is printed scrubbed
+(:func:`pytest_emrd._scrub.scrub`: a ``?key=`` or a key value read from the environment
+shows as ``<redacted>``). Parametric reference agents (``scout-decay-<m>``,
 ``scout-window-<k>``) resolve from their name and are listed once as patterns.
 """
 
@@ -14,6 +16,8 @@ import json
 import os
 from pathlib import Path
 from typing import Any
+
+from pytest_emrd._scrub import scrub
 
 PARAMETRIC = ("scout-decay-<mean steps>", "scout-window-<k>")
 
@@ -39,7 +43,8 @@ def _price(value: float | None) -> str:
 
 
 def model_rows(registry: Any) -> list[dict[str, Any]]:
-    """One plain dict per registered model (no secret: only whether the key is set)."""
+    """One plain dict per registered model (no secret: only whether the key is set, and the
+    endpoint scrubbed)."""
     rows = []
     for name in registry.names():
         config = registry.get(name)
@@ -49,7 +54,9 @@ def model_rows(registry: Any) -> list[dict[str, Any]]:
                 "provider": config.provider,
                 "modality": config.modality,
                 "model_id": config.model_id,
-                "base_url": config.base_url or "built-in reference server",
+                "base_url": scrub(config.base_url)
+                if config.base_url
+                else "built-in reference server",
                 "api_key_env": config.api_key_env,
                 "key": key_state(config),
                 "price_per_mtok_in": config.price_per_mtok_in,

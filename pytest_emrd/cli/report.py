@@ -83,6 +83,7 @@ def _run(args: argparse.Namespace) -> int:
 
 def _report(args: argparse.Namespace, formats: list[str]) -> int:
     from pytest_emrd.agent import load_registry
+    from pytest_emrd.cli import check_run_dirs
     from pytest_emrd.gate import evaluate_all, load_run_episodes, load_thresholds
     from pytest_emrd.metrics import GATE_METRICS
     from pytest_emrd.report import (
@@ -93,6 +94,7 @@ def _report(args: argparse.Namespace, formats: list[str]) -> int:
         write_report,
     )
 
+    check_run_dirs(args.run_dirs)
     # read through their heads: a trajectory is decoded only where something needs it
     episodes = load_run_episodes(args.run_dirs)
     home = args.run_dirs[0]

@@ -37,10 +37,13 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def _run(args: argparse.Namespace) -> int:
     from pytest_emrd._atomic import write_bytes_atomic
+    from pytest_emrd._names import check_inside
     from pytest_emrd._scrub import scrub_bytes
+    from pytest_emrd.cli import check_run_dirs
     from pytest_emrd.gate import load_run_dirs
     from pytest_emrd.view import index_page, render_episode
 
+    check_run_dirs([args.run_dir])
     trajectories = sorted(load_run_dirs([args.run_dir]), key=lambda t: t.spec.case_id)
     if args.episodes:
 
@@ -63,10 +66,10 @@ def _run(args: argparse.Namespace) -> int:
     rows = []
     for t in trajectories:
         view = render_episode(t, cassettes=cassettes, gif=args.gif)
-        page = out / f"{t.spec.case_id}.html"
+        page = check_inside(out, out / f"{t.spec.case_id}.html", what="page")  # a stored name
         write_bytes_atomic(page, scrub_bytes(view.html.encode()))
         if view.gif:
-            write_bytes_atomic(out / f"{t.spec.case_id}.gif", view.gif)
+            write_bytes_atomic(page.with_suffix(".gif"), view.gif)
         check = view.row.check
         status = (f"{len(check.mismatched)} of {check.checked} frames DIFFER from the cassette"
                   if check.mismatched else f"{check.checked} frames match the cassette"

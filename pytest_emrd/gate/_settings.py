@@ -20,6 +20,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Final
 
+from pytest_emrd._names import check_slug
 from pytest_emrd.errors import ConfigError, check_choice, check_positive_int
 from pytest_emrd.rooms import ROOM_SLUGS
 from pytest_emrd.trajectory import CONDITIONS, LAYOUTS, MODALITIES, VARIANTS
@@ -30,6 +31,9 @@ BACKENDS: Final[tuple[str, ...]] = ("builtin", "ai2thor")
 SPAWNS: Final[tuple[str, ...]] = tuple(ROOM_SLUGS.values())
 MAX_EPISODES: Final = 1000
 """Cap on ``--emrd-episodes`` (episodes per spawn room; the paper's setting is 20)."""
+MAX_CONCURRENCY: Final = 32
+"""Cap on ``--emrd-concurrency`` (threads per process; a provider's rate limit is reached
+long before, and each thread holds an episode's frames in memory)."""
 _NOT_CI: Final = frozenset({"", "0", "false", "no", "off"})
 #: What ``pytest benchmarks`` covers with neither ``--emrd-model`` nor ``--emrd-condition``:
 #: the reference agents whose cassettes are committed, each under the conditions recorded
@@ -120,7 +124,7 @@ OPTIONS: Final[tuple[Option, ...]] = (
     Option("shard", "run the K-th of N deterministic slices of the episodes (gates are then "
            "evaluated with `emrd gate RUN_DIR...`)", metavar="K/N"),
     Option("concurrency", "live episodes each process records at once, in threads, against "
-           "a remote model (default: 1); replays are not affected", metavar="N"),
+           "a remote model (default: 1, at most 32); replays are not affected", metavar="N"),
     Option("preflight", "check each model once before its first live recording: key, "
            "endpoint, one probe request, context, cost (default: on)", ("on", "off")),
 )  # fmt: skip
@@ -179,10 +183,18 @@ def parse_shard(text: str) -> tuple[int, int]:
     """``"2/4"`` -> ``(2, 4)``; :class:`ConfigError` unless ``1 <= K <= N``."""
     k, sep, n = text.partition("/")
     if not (sep and k.strip().isdigit() and n.strip().isdigit()):
-        raise ConfigError(f"shard={text!r} must look like K/N, e.g. --emrd-shard=2/4.")
+        raise ConfigError(f"--emrd-shard={text!r} must look like K/N, e.g. --emrd-shard=2/4.")
     pair = int(k), int(n)
+    if pair[1] < 1:
+        raise ConfigError(
+            f"--emrd-shard={text!r} splits the episodes into N={pair[1]} slices; N must be at "
+            "least 1, e.g. --emrd-shard=1/4 for the first of four slices."
+        )
     if not 1 <= pair[0] <= pair[1]:
-        raise ConfigError(f"shard={text!r} needs 1 <= K <= N, e.g. --emrd-shard=1/{pair[1]}.")
+        raise ConfigError(
+            f"--emrd-shard={text!r} needs 1 <= K <= N; the slices of N={pair[1]} are "
+            f"--emrd-shard=1/{pair[1]} to --emrd-shard={pair[1]}/{pair[1]}."
+        )
     return pair
 
 
@@ -295,12 +307,25 @@ def resolve_settings(
     default_mode = "none" if in_ci(env) else "once"
     backend = raw["backend"] or "builtin"
     results = _path(raw["results"], rootdir) if raw["results"] else None
-    if results is not None and results.exists() and not results.is_dir():
+    if results is not None and (blocker := _file_in_the_way(results)) is not None:
+        where = "is a file" if blocker == results else f"lies under the file {blocker}"
         raise ConfigError(
-            f"--emrd-results={results} is a file; pass a directory (a new one, or a run "
+            f"--emrd-results={results} {where}; pass a directory (a new one, or a run "
             "directory to resume)."
         )
+    cassettes = _path(raw["cassettes"] or "cassettes", rootdir)
+    if (blocker := _file_in_the_way(cassettes)) is not None:
+        where = "is a file" if blocker == cassettes else f"lies under the file {blocker}"
+        raise ConfigError(
+            f"--emrd-cassettes={cassettes} {where}; pass the cassette folder (default: "
+            "<rootdir>/cassettes)."
+        )
     concurrency = _count("--emrd-concurrency", raw["concurrency"])
+    if concurrency is not None and concurrency > MAX_CONCURRENCY:
+        raise ConfigError(
+            f"--emrd-concurrency={concurrency} is more than {MAX_CONCURRENCY} threads per "
+            f"process; pass at most {MAX_CONCURRENCY}, and add processes with -n N for more."
+        )
     if (concurrency or 1) > 1 and backend != "builtin":
         raise ConfigError(
             f"--emrd-concurrency={concurrency} runs episodes in threads, which the {backend} "
@@ -312,6 +337,8 @@ def resolve_settings(
         models = tuple(dict.fromkeys(m for m, _ in cells))
     else:
         models = _listed(by_name["model"], raw["model"], ())
+        for model in models:
+            check_slug("--emrd-model", model, becomes="a model name is a cassette folder")
         cells = tuple((m, c) for m in models for c in conditions)
     return RunSettings(
         models=models,
@@ -329,11 +356,19 @@ def resolve_settings(
         results=results,
         thresholds=_thresholds(raw["thresholds"], rootdir),
         models_file=_path(raw["models"], rootdir) if raw["models"] else None,
-        cassettes=_path(raw["cassettes"] or "cassettes", rootdir),
+        cassettes=cassettes,
         shard=parse_shard(str(raw["shard"])) if raw["shard"] else None,
         concurrency=concurrency or 1,
         preflight=raw["preflight"] != "off",
     )
+
+
+def _file_in_the_way(folder: Path) -> Path | None:
+    """The file at ``folder`` or at its nearest existing ancestor, if that is not a folder."""
+    existing = folder
+    while not existing.exists() and existing != existing.parent:
+        existing = existing.parent
+    return None if existing.is_dir() else existing
 
 
 def _count(flag: str, value: Any) -> int | None:

@@ -13,6 +13,10 @@ Every mistake is a :class:`~pytest_emrd.errors.ConfigError` of one line naming t
 the line, the field and the allowed values. A bound must lie in its metric's domain
 (:func:`domain`: fractions in [0, 1], ``te`` in [0, max_steps], R² at most 1, never NaN or
 infinite); numbers follow YAML 1.2, so ``1e9`` is a number (:mod:`pytest_emrd._yaml`).
+
+A file that holds no gate (empty, only comments, or models without metrics) is an error:
+a run given such a file would pass green with nothing checked. A run without gates is one
+given no thresholds file.
 """
 
 from __future__ import annotations
@@ -164,10 +168,10 @@ def parse_thresholds(
     """
     reader = _Reader(source)
     root = _yaml.compose(text, source)
-    if root is None:
-        return Thresholds(source, ())
     bounds: list[Bound] = []
-    for model, model_key, conditions in reader.mapping(root, "the top level (models)"):
+    for model, model_key, conditions in (
+        reader.mapping(root, "the top level (models)") if root else ()
+    ):
         if not is_model(model):
             _choice(reader, model_key, "model", model, model_names, unknown_model_hint)
         for key, cond_key, metric_map in reader.mapping(conditions, f"model {model!r}"):
@@ -180,6 +184,12 @@ def parse_thresholds(
                 allowed = domain(metric, _unit(metrics, metric))
                 bound = _bound(reader, model, condition, metric, metric_key, spec, allowed)
                 bounds.append(replace(bound, layouts=layouts or "paper"))
+    if not bounds:
+        raise ConfigError(
+            f"{source} holds no gate, so a run would pass with nothing checked; write one "
+            "(<model>: <condition>: <metric>: {min: 0.5}); to run without gates, delete the "
+            "file and pass no --emrd-thresholds."
+        )
     return Thresholds(source, tuple(bounds))
 
 

@@ -23,6 +23,8 @@ Wiring only, one concern per module (the only modules of the package that import
 * :mod:`~pytest_emrd.plugin._report` — the end-of-run tables and ``$GITHUB_STEP_SUMMARY``
   (controller);
 * :mod:`~pytest_emrd.plugin._fixtures` — the ``emrd_*`` fixtures.
+* :mod:`~pytest_emrd.plugin._logs` — the scrub filter on pytest's log handlers and on the
+  HTTP libraries' loggers.
 """
 
 from pytest_emrd.plugin._collect import (

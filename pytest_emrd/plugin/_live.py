@@ -14,8 +14,9 @@ from typing import Any
 import pytest
 
 from pytest_emrd._scrub import scrub
+from pytest_emrd.errors import EmrdError
 from pytest_emrd.gate import GateCell
-from pytest_emrd.plugin._run import Run
+from pytest_emrd.plugin._run import Run, failure_line
 
 
 class LiveLine:
@@ -71,7 +72,10 @@ class LiveLine:
 
         cells = (run.cell_specs(p) if isinstance(p, GateCell) else [p] for p in params)
         specs = [spec for group in cells for spec in group]
-        reports, live = run.call(lambda _: self.preflights.run(specs))
+        try:
+            reports, live = self.preflights.run(specs)
+        except (EmrdError, OSError) as exc:  # during collection: end the session in one line
+            pytest.exit(failure_line(exc), returncode=pytest.ExitCode.USAGE_ERROR)
         for line in (line for report in reports for line in report.lines()):
             self.write_line(line)
         failed = next((r for r in reports if r.failed), None)

@@ -3,10 +3,21 @@
 One :class:`Run` per process (the only one, or each xdist worker), kept in
 ``config.stash[RUN]``; everything heavy is built on first use, so a session that collects
 no EMRD test imports, starts and writes nothing.
+
+Paid work is never lost to the disk. Before a live episode, the cassette folder must be
+writable (else the test fails in one line and nothing is sent to the model). If the
+cassette still cannot be saved when the episode ends (a full disk), the episode's result,
+with every reply and its token usage, goes to ``<run>/unsaved/<case_id>.json`` and to the
+results store, a :class:`CassetteNotSavedWarning` says where, and the episode is not run
+again by this run or by a resumed one. Any other file system failure is one line naming the
+path and the fix.
 """
 
 from __future__ import annotations
 
+import json
+import os
+import time
 import warnings
 from dataclasses import dataclass
 from functools import cached_property
@@ -15,8 +26,11 @@ from typing import Any
 
 import pytest
 
-from pytest_emrd._scrub import scrub, watch_env
-from pytest_emrd.errors import EmrdError
+from pytest_emrd._atomic import write_bytes_atomic
+from pytest_emrd._disk import os_error_line
+from pytest_emrd._names import check_inside
+from pytest_emrd._scrub import scrub, scrub_bytes, watch_env
+from pytest_emrd.errors import CassetteError, EmrdError
 from pytest_emrd.gate import (
     EpisodeSummary,
     GateCell,
@@ -31,6 +45,32 @@ from pytest_emrd.gate import (
 from pytest_emrd.trajectory import EpisodeSpec
 
 RUN = pytest.StashKey["Run"]()
+UNSAVED = "unsaved"
+"""Folder of a run directory holding live episodes whose cassette could not be written."""
+
+
+class CassetteNotSavedWarning(UserWarning):
+    """A live episode's cassette could not be written; its result was kept elsewhere."""
+
+
+def failure_line(exc: EmrdError | OSError, what: str = "pytest-emrd") -> str:
+    """The one scrubbed line an :class:`EmrdError` or a file system failure (most often in
+    the run directory) ends in: ``<what>: <message>``."""
+    if isinstance(exc, OSError):
+        return f"{what}: {scrub(os_error_line(exc, doing='write', option='--emrd-results DIR'))}"
+    return f"{what}: {scrub(str(exc))}"
+
+
+def _writable_folder(folder: Path) -> None:
+    """Raise the :class:`OSError` writing into ``folder`` would meet, judged from its
+    nearest existing ancestor (nothing is created)."""
+    existing = folder
+    while not existing.exists() and existing != existing.parent:
+        existing = existing.parent
+    if not existing.is_dir():
+        raise NotADirectoryError(20, "Not a directory", str(existing))
+    if not os.access(existing, os.W_OK | os.X_OK):
+        raise PermissionError(13, "Permission denied", str(existing))
 
 
 @dataclass(eq=False)
@@ -46,14 +86,16 @@ class Run:
         self._stored: dict[EpisodeSpec, StoredEpisode] = {}
         self._metrics: dict[EpisodeSpec, Any] = {}
         self._prefetch_started, self._prefetcher = False, None
+        self._unsaved: dict[EpisodeSpec, str] = {}
+        """Live episodes whose cassette could not be written: the line that says so."""
 
     def call(self, fn: Any, what: str = "pytest-emrd") -> Any:
         """``fn(self)``, turning an :class:`EmrdError` into one clean failure line (scrubbed,
         raised outside the ``except``: no "During handling" chain)."""
         try:
             return fn(self)
-        except EmrdError as exc:
-            message = f"{what}: {scrub(str(exc))}"
+        except (EmrdError, OSError) as exc:
+            message = failure_line(exc, what)
         pytest.fail(message, pytrace=False)
 
     @cached_property
@@ -152,15 +194,37 @@ class Run:
 
         return StatusFile(self.run_dir)
 
-    def episode(self, spec: EpisodeSpec) -> StoredEpisode:
+    def compute(self, spec: EpisodeSpec) -> Any:
+        """Run ``spec`` through its cassette (see the module docstring for a cassette that
+        cannot be written)."""
+        from pytest_emrd.cassette import EpisodeRun, cassette_path, is_live
+        from pytest_emrd.gate import episode_path
+        from pytest_emrd.progress import run_watched
+
         settings = self.settings
+        path = check_inside(
+            settings.cassettes, cassette_path(settings.cassettes, spec), what="cassette"
+        )
+        check_inside(self.run_dir, episode_path(self.run_dir, spec), what="episode file")
+        live = is_live(spec, cassettes=settings.cassettes, record_mode=settings.record_mode)
+        if live:
+            try:
+                _writable_folder(path.parent)
+            except OSError as exc:
+                line = os_error_line(exc, doing="write", path=path, option="--emrd-cassettes DIR")
+                raise CassetteError(f"the cassette {line} Nothing was sent to the model.") from None
+        kept = []
 
-        def compute(s: EpisodeSpec) -> Any:
-            from pytest_emrd.progress import run_watched
+        def runner(s: EpisodeSpec, **kwargs: Any) -> Any:
+            trajectory = self.runner(s, **kwargs)
+            kept.append(trajectory)
+            return trajectory
 
+        start = time.perf_counter()
+        try:
             return run_watched(
-                s,
-                self.runner,
+                spec,
+                runner,
                 status=self.status_file,
                 cassettes=settings.cassettes,
                 protocol=self.protocol,
@@ -168,14 +232,39 @@ class Run:
                 matching=settings.matching,
                 invocation=self.invocation,
             )
+        except OSError as exc:
+            if not (live and kept):
+                raise
+            self.keep_unsaved(spec, kept[-1], path, exc)
+            return EpisodeRun(kept[-1], True, 0, time.perf_counter() - start)
 
+    def keep_unsaved(self, spec: EpisodeSpec, trajectory: Any, path: Path, exc: OSError) -> None:
+        """Write a live episode whose cassette ``path`` could not be saved to the run
+        directory's :data:`UNSAVED` folder, and remember the line that says where."""
+        fallback = self.run_dir / UNSAVED / f"{spec.case_id}.json"
+        cause = os_error_line(exc, doing="write", path=path, option="--emrd-cassettes DIR")
+        record: dict[str, Any] = {"case_id": spec.case_id, "cassette": str(path), "cause": cause}
+        record["trajectory"] = trajectory.to_dict()
+        write_bytes_atomic(fallback, scrub_bytes(json.dumps(record).encode()))
+        self._unsaved[spec] = (
+            f"{spec.case_id}: the cassette {cause} The live episode is kept in {fallback} and "
+            f"in the run directory: resume with --emrd-results {self.run_dir} to reuse it "
+            "without calling the model again."
+        )
+
+    def episode(self, spec: EpisodeSpec) -> StoredEpisode:
+        """The stored episode of ``spec``, computed on first use (a failure: one line)."""
         if spec in self._stored:
             return self._stored[spec]
         if not self._prefetch_started:  # --emrd-concurrency: live episodes ahead, in threads
             self._prefetch_started = True
-            self._prefetcher = start_prefetch(settings, self.store, compute, self.episode_specs)
-        stored = self.call(lambda run: run.store.get_or_compute(spec, compute), spec.case_id)
+            self._prefetcher = start_prefetch(
+                self.settings, self.store, self.compute, self.episode_specs
+            )
+        stored = self.call(lambda run: run.store.get_or_compute(spec, run.compute), spec.case_id)
         self._stored[spec] = stored
+        if spec in self._unsaved:
+            warnings.warn(CassetteNotSavedWarning(scrub(self._unsaved.pop(spec))), stacklevel=2)
         if stored.frame_drift and stored.computed_now:
             from pytest_emrd.cassette import FrameDriftWarning
 

@@ -43,9 +43,11 @@ class ServerInfo:
 
 
 def models_url(provider: str, base_url: str) -> str:
-    """The model listing of an endpoint (Anthropic's lives under ``/v1``)."""
-    root = base_url.rstrip("/")
-    return f"{root}/v1/models" if provider == "anthropic" else f"{root}/models"
+    """The model listing of an endpoint (Anthropic's lives under ``/v1``), joined as the
+    clients join their endpoints: after the base path, the base query kept."""
+    from pytest_emrd.agent._clients import endpoint_url
+
+    return endpoint_url(base_url, "/v1/models" if provider == "anthropic" else "/models")
 
 
 def _entries(data: Any) -> list[dict[str, Any]]:

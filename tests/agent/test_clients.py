@@ -294,7 +294,7 @@ def test_the_key_never_reaches_logs_or_errors(fault_server, sleeps, monkeypatch,
 
 
 def test_credentials_in_the_url_are_not_logged(sleeps, caplog) -> None:
-    config = _config(base_url="http://user:pw-zq81@127.0.0.1:9/v1", max_retries=1)
+    config = _config(base_url="http://127.0.0.1:9/v1?key=pw-zq81", max_retries=1)
     client = OpenAICompatibleClient(
         config, base_url=config.base_url or "", policy=RetryPolicy(max_retries=1, sleep=sleeps)
     )
@@ -302,3 +302,56 @@ def test_credentials_in_the_url_are_not_logged(sleeps, caplog) -> None:
         client.complete(MESSAGES)
     for text in (caplog.text, str(info.value)):
         assert "pw-zq81" not in text and "http://127.0.0.1:9/v1/chat/completions" in text
+
+
+@pytest.mark.parametrize(
+    ("base", "sent"),
+    [
+        pytest.param("/v1", "/v1/chat/completions", id="plain"),
+        pytest.param("/v1/", "/v1/chat/completions", id="trailing-slash"),
+        pytest.param(
+            "/openai/v1?api-version=2025-04-01",
+            "/openai/v1/chat/completions?api-version=2025-04-01",
+            id="azure-api-version",
+        ),
+        pytest.param(
+            "/v1beta/openai?key=K123&alt=json",
+            "/v1beta/openai/chat/completions?key=K123&alt=json",
+            id="google-key",
+        ),
+    ],
+)
+def test_the_endpoint_path_goes_after_the_base_path_and_the_query_is_kept(
+    fault_server, sleeps, base, sent
+) -> None:
+    config = _config(base_url=f"{fault_server.base_url}{base}")
+    with make_client(config, policy=RetryPolicy(sleep=sleeps), require_key=False) as client:
+        client.complete(MESSAGES)
+    assert fault_server.paths == [sent]
+
+
+def test_anthropic_keeps_the_base_query_too(fault_server, sleeps) -> None:
+    fault_server.ok_body = {"content": [{"type": "text", "text": "hi"}], "usage": {}}
+    config = _config(
+        provider="anthropic",
+        temperature=None,
+        base_url=f"{fault_server.base_url}/proxy?api-version=7",
+    )
+    with make_client(config, policy=RetryPolicy(sleep=sleeps), require_key=False) as client:
+        client.complete(MESSAGES)
+    assert fault_server.paths == ["/proxy/v1/messages?api-version=7"]
+
+
+@pytest.mark.parametrize(
+    ("provider", "base", "listing"),
+    [
+        ("openai", "https://h/openai/v1?api-version=7", "https://h/openai/v1/models?api-version=7"),
+        ("openai", "https://h/v1beta/openai/?key=K", "https://h/v1beta/openai/models?key=K"),
+        ("anthropic", "https://api.anthropic.com", "https://api.anthropic.com/v1/models"),
+    ],
+    ids=["azure", "google", "anthropic"],
+)
+def test_the_preflight_model_listing_is_joined_like_the_endpoint(provider, base, listing):
+    from pytest_emrd.preflight import models_url
+
+    assert models_url(provider, base) == listing

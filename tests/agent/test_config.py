@@ -202,7 +202,7 @@ _ANTHROPIC = "provider: anthropic, model_id: m, base_url: 'http://x'"
         (f"{_OPENAI}, top_p: 1.5", r"top_p=1.5 must lie in \[0.0, 1.0\]"),
         (f"{_OPENAI}, max_tokens_param: max_output_tokens", "'max_tokens', 'max_completion"),
         (f"{_OPENAI}, api_key_required: maybe", "api_key_required='maybe' must be true or false"),
-        (f"{_OPENAI}, extra_body: [1]", r"extra_body=\[1\] must be a mapping"),
+        (f"{_OPENAI}, extra_body: [1]", "extra_body must be a mapping of name -> value, got list"),
         (f"{_OPENAI}, extra_body: {{temperature: 0}}", "extra_body may not set 'temperature'"),
         (f"{_OPENAI}, extra_body: {{messages: []}}", "extra_body may not set 'messages'"),
         (
@@ -212,9 +212,12 @@ _ANTHROPIC = "provider: anthropic, model_id: m, base_url: 'http://x'"
         (f"{_OPENAI}, extra_body: {{verbosity: loud}}", "verbosity='loud' is not one of 'low'"),
         (
             f"{_OPENAI}, extra_headers: {{Authorization: 'Bearer sk-x'}}",
-            "extra_headers may not carry 'Authorization'.*api_key_env",
+            "extra_headers may not carry the credential header Authorization;.*api_key_env",
         ),
-        (f"{_OPENAI}, extra_headers: {{X-Trace: 7}}", "extra_headers.X-Trace=7 must be a string"),
+        (
+            f"{_OPENAI}, extra_headers: {{X-Trace: 7}}",
+            "extra_headers.X-Trace must be a string, got int; quote",
+        ),
         (
             f"{_ANTHROPIC}, temperature: 1.0",
             r"temperature=1.0 is rejected by the Anthropic Messages API version 2026-10-21; "
@@ -258,7 +261,7 @@ def test_bad_provider_fields_name_file_field_and_allowed_values(
     ("entry", "line", "match"),
     [
         ("    temperature: 3\n", 6, r"temperature=3 must lie in \[0.0, 2.0\]"),
-        ("    extra_headers: {x-trace: 7}\n", 6, "extra_headers.x-trace=7 must be a string"),
+        ("    extra_headers: {x-trace: 7}\n", 6, "extra_headers.x-trace must be a string, got int"),
         ("    temprature: 0.2\n", 6, "unknown field"),
         ("    max_retries: 1\n", 3, "base_url is required"),
     ],

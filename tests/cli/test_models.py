@@ -42,6 +42,24 @@ def test_models_json_and_a_user_registry(capsys, monkeypatch, tmp_path):
     assert row["price_per_mtok_in"] is None
 
 
+@pytest.mark.parametrize("as_json", [False, True], ids=["table", "json"])
+def test_models_prints_endpoints_without_their_keys(capsys, monkeypatch, tmp_path, as_json):
+    monkeypatch.setenv("MY_VLM_KEY", FAKE_KEY)
+    monkeypatch.setenv("MY_VLM_HOST", f"http://127.0.0.1:9/v1?key={FAKE_KEY}")
+    user = tmp_path / "models.yaml"
+    user.write_text(
+        "models:\n"
+        "  google: {provider: openai, model_id: g, base_url: 'https://g.example/v1?key=AIzaQUERY1'}\n"
+        "  azure: {provider: openai, model_id: a, base_url: '${MY_VLM_HOST}'}\n",
+        encoding="utf-8",
+    )
+    assert main(["models", "--models", str(user), *(["--json"] if as_json else [])]) == 0
+    out = capsys.readouterr().out
+    assert FAKE_KEY not in out and "AIzaQUERY1" not in out
+    assert "https://g.example/v1?key=<redacted>" in out
+    assert "http://127.0.0.1:9/v1?key=<redacted>" in out
+
+
 def test_version_names_the_package_and_the_protocol(capsys):
     with pytest.raises(SystemExit) as exit_info:
         main(["--version"])

@@ -39,8 +39,12 @@ def test_worked_example():
     assert t.for_cell("gemini", "texture") == (third,) and t.models() == ("scout", "gemini")
 
 
-def test_empty_file_has_no_gates():
-    assert _parse("").bounds == ()
+@pytest.mark.parametrize(
+    "text", ["", "# gates come later\n", "scout: {}\n"], ids=["empty", "comments", "no-metric"]
+)
+def test_a_file_without_gates_is_an_error(text):
+    with pytest.raises(ConfigError, match="holds no gate, so a run would pass with nothing"):
+        _parse(text)
 
 
 @pytest.mark.parametrize(

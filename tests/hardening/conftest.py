@@ -4,8 +4,10 @@ The provider is a real HTTP server. Under ``/ok/`` it forwards to the built-in r
 server (so a whole episode can be recorded through it), under ``/deny/`` it answers 401
 with a body that echoes the key and the URL (as some providers do), under ``/huge/`` it
 answers a 200 whose reply is 20 MB. The user registry written by :func:`leaky_registry`
-points its models at it with a password in the URL userinfo, a key in the query and an API
-key in an environment variable (sent as ``Authorization: Bearer``).
+points its models at it with a key in the query, a secret in ``extra_body`` (an environment
+variable reference) and an API key in an environment variable (sent as ``Authorization:
+Bearer``). :func:`leaks` and :func:`text_leaks` look for each planted value as written,
+URL-encoded and base64-encoded.
 """
 
 from __future__ import annotations
@@ -23,15 +25,20 @@ from typing import Any
 import httpx
 import pytest
 
+from pytest_emrd._scrub import encoded_forms
 from pytest_emrd.agent.reference import reference_base_url
 from pytest_emrd.agent.reference._version import versioned_id
 
 #: Planted credentials: none of them may reach a file or the terminal.
 PLANTED_KEY = "sk-planted-apikey-5f3c9a7e"  # the API key, in the env var of api_key_env
-PLANTED_PASSWORD = "planted-password-81d2"  # URL userinfo
+PLANTED_PASSWORD = "planted-password-81d2"  # URL userinfo (refused in a registry)
 PLANTED_QUERY = "planted-querykey-44ab"  # ?key=
-PLANTED = (PLANTED_KEY, PLANTED_PASSWORD, PLANTED_QUERY)
+PLANTED_BODY = "planted body/secret+9c1"  # extra_body client_secret: ${BODY_ENV}
+PLANTED = (PLANTED_KEY, PLANTED_PASSWORD, PLANTED_QUERY, PLANTED_BODY)
 KEY_ENV = "EMRD_HARDENING_CRED"  # no credential-like suffix: found only through api_key_env
+BODY_ENV = "EMRD_HARDENING_BODY"  # found only through the extra_body reference
+#: Every planted value in each form a leak could take.
+PLANTED_FORMS = tuple(form for secret in PLANTED for form in encoded_forms(secret))
 HUGE_CHARS = 20 * 1024 * 1024
 
 
@@ -41,11 +48,9 @@ class Provider:
     seen: list[str] = field(default_factory=list)
     """Authorization header and path of every request (the planted values did travel)."""
 
-    def base_url(self, route: str, *, userinfo: bool = True) -> str:
-        """A base URL with planted credentials: a password in the userinfo (httpx then sends
-        Basic auth instead of the Bearer key) and a key in the query."""
-        user = f"planted-user:{PLANTED_PASSWORD}@" if userinfo else ""
-        return f"http://{user}127.0.0.1:{self.port}/{route}/v1?key={PLANTED_QUERY}&to="
+    def base_url(self, route: str) -> str:
+        """A base URL with a planted key in the query (kept after the endpoint path)."""
+        return f"http://127.0.0.1:{self.port}/{route}/v1?key={PLANTED_QUERY}&to="
 
 
 @pytest.fixture(scope="session")
@@ -93,20 +98,21 @@ def provider() -> Iterator[Provider]:
 
 @pytest.fixture
 def planted_env(monkeypatch: pytest.MonkeyPatch) -> str:
-    """The planted API key in the environment variable the user registry names."""
+    """The planted API key and body secret in the environment variables the registry names."""
     monkeypatch.setenv(KEY_ENV, PLANTED_KEY)
+    monkeypatch.setenv(BODY_ENV, PLANTED_BODY)
     return KEY_ENV
 
 
 def leaky_registry(path: Path, provider: Provider, **routes: str) -> Path:
-    """A user registry: ``name=route`` models of the reference agent behind ``provider``
-    (``route`` ``deny-key`` is ``deny`` without userinfo: the Bearer key is sent)."""
+    """A user registry: ``name=route`` models of the reference agent behind ``provider``."""
     models = {
         name: {
             "provider": "openai",
             "model_id": versioned_id("scout"),
-            "base_url": provider.base_url(route.split("-")[0], userinfo=route != "deny-key"),
+            "base_url": provider.base_url(route),
             "api_key_env": KEY_ENV,
+            "extra_body": {"client_secret": "${" + BODY_ENV + "}"},
             "modality": "text",
             "max_retries": 0,
             "timeout_s": 60,
@@ -126,10 +132,10 @@ def leaks(root: Path, *, skip: tuple[Path, ...] = ()) -> list[str]:
             data = lzma.decompress(data)
         elif path.suffix == ".gz":
             data = gzip.decompress(data)
-        found += [f"{path}: {s}" for s in PLANTED if s.encode() in data]
+        found += [f"{path}: {s}" for s in PLANTED_FORMS if s.encode() in data]
     return found
 
 
 def text_leaks(text: str) -> list[str]:
-    """The planted credentials present in ``text``."""
-    return [s for s in PLANTED if s in text]
+    """The planted credentials present in ``text`` (in any of their forms)."""
+    return [s for s in PLANTED_FORMS if s in text]

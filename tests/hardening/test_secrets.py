@@ -1,6 +1,7 @@
-"""Probe 1 and 6 end to end: credentials planted in URL userinfo, query, header and an echoed
-401 body never reach a cassette, the results, junit, a report or the terminal; the printed
-record command works verbatim for a model of a user registry."""
+"""Probe 1 and 6 end to end: credentials planted in the URL query, a header, ``extra_body`` and
+an echoed 401 body never reach a cassette, the results, junit, a report or the terminal (DEBUG
+live logs of httpx and httpcore included), raw, URL-encoded or base64; the printed record
+command works verbatim for a model of a user registry."""
 
 from __future__ import annotations
 
@@ -10,7 +11,15 @@ from pathlib import Path
 
 import pytest
 
-from pytest_emrd._scrub import REDACTED, scrub, scrub_bytes, scrub_uri, secret_values, watch_env
+from pytest_emrd._scrub import (
+    REDACTED,
+    encoded_forms,
+    scrub,
+    scrub_bytes,
+    scrub_uri,
+    secret_values,
+    watch_env,
+)
 from pytest_emrd.agent import load_registry
 from pytest_emrd.cli import main as emrd
 from pytest_emrd.episode import capped_reply, run_episode
@@ -42,7 +51,7 @@ def test_a_recorded_run_leaks_no_planted_credential(
     pytester.makepyfile(test_emrd=(ROOT / "benchmarks" / "test_emrd.py").read_text())
     pytester.makefile(".yaml", thresholds="leaky:\n  baseline:\n    errored_rate: {max: 0.0}\n")
     registry = pytester.path / "user-models.yaml"
-    leaky_registry(registry, provider, leaky="ok", denied="deny", rejected="deny-key")
+    leaky_registry(registry, provider, leaky="ok", denied="deny", rejected="deny")
     models = f"--emrd-models={registry}"
 
     # Replay only, nothing recorded: one summary and one command, which works verbatim.
@@ -55,7 +64,7 @@ def test_a_recorded_run_leaks_no_planted_credential(
     assert f"--emrd-models={registry}" in command and "--emrd-modality=text" in command
     args = shlex.split(command)
     assert args[0] == "pytest"
-    recorded = pytester.run(sys.executable, "-m", *args)
+    recorded = pytester.run(sys.executable, "-m", *args, "--log-cli-level=DEBUG")
     assert recorded.ret == 0, _outputs(recorded)
     recorded.stdout.fnmatch_lines(["*1 passed, 1 deselected*"])
     cassette = pytester.path / "cassettes/leaky/baseline/default/office/ep00.json.xz"
@@ -74,9 +83,12 @@ def test_a_recorded_run_leaks_no_planted_credential(
         "--emrd-preflight=off",  # here: what an episode that meets a 401 writes
         f"--emrd-results={pytester.path / 'run'}",
         f"--junitxml={pytester.path / 'junit.xml'}",
+        "--log-cli-level=DEBUG",
+        f"--log-file={pytester.path / 'debug.log'}",
+        "--log-file-level=DEBUG",
     )
     run.assert_outcomes(passed=2, failed=2)
-    failures = [x for x in run.stdout.lines if x.startswith("FAILED")]
+    failures = [x for x in run.stdout.lines if x.startswith("FAILED test_emrd.py")]
     assert [x.split("[")[1].split("]")[0] for x in failures] == [
         "denied-baseline-office-ep00",
         "rejected-baseline-office-ep00",
@@ -86,7 +98,8 @@ def test_a_recorded_run_leaks_no_planted_credential(
         assert "HTTP 401" in stored and f"key={REDACTED}" in stored
     on_the_wire = "\n".join(provider.seen)
     assert f"Bearer {PLANTED_KEY}" in on_the_wire and f"key={PLANTED_QUERY}" in on_the_wire
-    assert "Basic " in on_the_wire  # the userinfo password, as httpx sends it
+    assert "Basic " not in on_the_wire  # no userinfo: the Bearer key is what is sent
+    assert "HTTP Request: POST http://127.0.0.1" in _outputs(recorded)  # httpx logged, scrubbed
 
     capsys.readouterr()
     run_dir, thresholds = str(pytester.path / "run"), str(pytester.path / "thresholds.yaml")
@@ -120,7 +133,8 @@ def test_scrub_removes_each_kind_of_credential(planted_env):
 
 def test_only_values_long_enough_to_be_keys_are_scrubbed():
     env = {"A_API_KEY": "1", "B_TOKEN": "tok-123456", "PATH": "/usr/bin:/bin", "MY": "x" * 20}
-    assert secret_values(env) == ("tok-123456",)
+    assert set(secret_values(env)) == set(encoded_forms("tok-123456"))
+    assert set(encoded_forms("tok-123456")) >= {"tok-123456", "dG9rLTEyMzQ1Ng==", "dG9rLTEyMzQ1Ng"}
     assert scrub("see https://example.com/a?b=c#d, x=1.00 z=2.00") == (
         "see https://example.com/a?b=c#d, x=1.00 z=2.00"
     )

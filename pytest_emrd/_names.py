@@ -1,0 +1,49 @@
+"""Names that become path components, and paths that must stay inside their root (pure).
+
+A model name is a cassette folder (``cassettes/<model>/...``) and part of every episode
+file name (``<run>/episodes/<model>-<condition>-<spawn>-epNN.json``). A name that is not a
+plain slug (``../../evil``, ``/tmp/x``, ``a/b``) would write outside those roots, so names
+are checked where they enter (the model registry, ``--emrd-model``) and every built path is
+checked against its root before anything is written (:func:`check_inside`).
+"""
+
+from __future__ import annotations
+
+import os
+import re
+from pathlib import Path
+from typing import Final
+
+from pytest_emrd.errors import ConfigError
+
+SLUG: Final = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._-]{0,99}$")
+"""A plain name: a letter or digit, then up to 99 letters, digits, ``.``, ``_`` or ``-``
+(no separator, no leading dot, so never ``.`` or ``..``)."""
+SLUG_RULE: Final = "use 1-100 letters, digits, '.', '_' or '-', starting with a letter or digit"
+
+
+def is_slug(name: object) -> bool:
+    """Whether ``name`` is a string matching :data:`SLUG`."""
+    return isinstance(name, str) and SLUG.match(name) is not None
+
+
+def check_slug(where: str, name: object, *, becomes: str) -> str:
+    """``name`` if it is a slug, else a one-line :class:`ConfigError`: ``where`` names the
+    file or option, ``becomes`` what the name is used as (``a cassette folder``)."""
+    if not is_slug(name):
+        raise ConfigError(f"{where}: name {name!r} is not a plain name ({becomes}); {SLUG_RULE}.")
+    return str(name)
+
+
+def check_inside(root: Path, path: Path, *, what: str) -> Path:
+    """``path`` if, once ``..`` and ``.`` are resolved lexically, it lies inside ``root``;
+    else a one-line :class:`ConfigError` (symbolic links inside ``root`` are the user's own
+    and are not followed)."""
+    base = Path(os.path.normpath(os.path.abspath(root)))
+    full = Path(os.path.normpath(os.path.abspath(path)))
+    if full != base and base not in full.parents:
+        raise ConfigError(
+            f"{what} {path} lies outside {root}; model and file names must be plain names "
+            f"({SLUG_RULE})."
+        )
+    return path
