@@ -12,6 +12,8 @@ from pathlib import Path
 
 import pytest
 
+from pytest_emrd.cassette import SUFFIX
+
 ROOT = Path(__file__).resolve().parents[2]
 CASE = "scout-baseline-office-ep00"
 GRID = [
@@ -32,7 +34,7 @@ def _output(result: pytest.RunResult) -> str:
 
 @pytest.mark.slow
 def test_an_episode_whose_cassette_cannot_be_written_is_kept_and_not_run_again(suite):
-    cassette = suite.path / "cassettes/scout/baseline/default/office/ep00.yaml.xz"
+    cassette = suite.path / f"cassettes/scout/baseline/default/office/ep00{SUFFIX}"
     cassette.mkdir(parents=True)  # a folder where the file goes: the save fails at the end
     run_dir = suite.path / "run"
     first = suite.runpytest_subprocess(*GRID, f"--emrd-results={run_dir}")
