@@ -7,10 +7,8 @@ reproducible and immune to a slow shared machine; ``dev`` explores more.
 
 from __future__ import annotations
 
-import importlib
 import json
 import os
-import pkgutil
 import shutil
 import tempfile
 import threading
@@ -22,6 +20,8 @@ from typing import Any
 import pytest
 from filelock import FileLock
 from hypothesis import HealthCheck, settings
+
+from tests._sandbox import Sandbox
 
 #: ``answer(method, path, json_body_or_None) -> (status, payload)`` of :func:`json_server`.
 Answer = Callable[[str, str, Any], tuple[int, Any]]
@@ -36,54 +36,6 @@ settings.register_profile(
 )
 settings.register_profile("dev", deadline=None, max_examples=500)
 settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "ci"))
-
-pytest_plugins = ["pytester"]
-
-
-def _import_the_whole_product() -> None:
-    """Import every module of pytest_emrd (and so numpy, scipy, PIL, libyaml, matplotlib) now.
-
-    The ``pytester`` fixture restores ``sys.modules`` when its test ends, dropping whatever was
-    first imported during that test. The product imports lazily, so without this a module
-    could first load inside a pytester test: a compiled extension dropped that way cannot be
-    loaded again in the process ("cannot load module more than once per process"), and a
-    dropped module of ours would come back with new classes that ``isinstance`` and
-    ``pytest.raises`` no longer recognise. Which test first imports what depends on how xdist
-    spreads the tests, so the failures would come and go.
-    """
-    import pytest_emrd
-
-    for info in pkgutil.walk_packages(pytest_emrd.__path__, "pytest_emrd."):
-        if not info.name.endswith("__main__"):
-            importlib.import_module(info.name)
-    _import_what_the_product_imports_on_first_use()
-
-
-def _import_what_the_product_imports_on_first_use() -> None:
-    """The libraries the product (or a library it uses) imports inside a function, for the
-    same reason: a pytester test may be the first to use them, in process."""
-    import httpx
-    import lifelines  # noqa: F401
-    import scipy.optimize
-    import scipy.stats  # noqa: F401
-    import statsmodels.stats.multitest
-    import statsmodels.stats.oneway  # noqa: F401
-    import vcr  # noqa: F401
-    from numba.core.registry import cpu_target
-    from PIL import Image
-
-    # numba imports ~70 more modules of its own (``numba.np.polynomial`` ...) the first time a
-    # kernel is compiled or loaded from its cache; imported again after pytester dropped them,
-    # they register their types twice ("duplicate registration for PolynomialType").
-    cpu_target.typing_context.refresh()
-    cpu_target.target_context.refresh()
-    # httpx imports httpcore with its first transport; a second httpcore's ConnectError is
-    # not the class httpx maps to its own exceptions, so it would escape every handler.
-    httpx.HTTPTransport().close()
-    Image.init()  # Pillow's image format plugins
-
-
-_import_the_whole_product()
 
 
 def pytest_configure(config: pytest.Config) -> None:
@@ -100,7 +52,7 @@ def _cache_bytecode_of_child_processes(config: pytest.Config) -> None:
     """Give the Python processes the tests start one throw-away bytecode cache.
 
     With ``PYTHONDONTWRITEBYTECODE=1`` (a machine that keeps ``.pyc`` files out of its source
-    trees), every ``pytest`` a test starts (pytester sessions, their xdist workers, the CI
+    trees), every ``pytest`` a test starts (sandbox sessions, their xdist workers, the CI
     example's shards) would compile every module of the product again and re-rewrite every
     plugin package pytest rewrites (hypothesis' among them): 1.5 to 2 s of CPU per process.
     Those processes instead read and write ``.pyc`` files under one temporary
@@ -155,6 +107,18 @@ def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
     items.sort(key=lambda item: item.get_closest_marker("slow") is None)
 
 
+@pytest.fixture
+def sandbox(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, request: pytest.FixtureRequest
+) -> Sandbox:
+    """A throw-away root directory (also the working directory) where a test runs whole pytest
+    sessions in child processes: see :class:`tests._sandbox.Sandbox`."""
+    folder = tmp_path / "sandbox"
+    folder.mkdir()
+    monkeypatch.chdir(folder)
+    return Sandbox(folder, request.node.originalname)
+
+
 @pytest.fixture(scope="session")
 def shared_folder(
     tmp_path_factory: pytest.TempPathFactory,
@@ -185,7 +149,7 @@ def shared_folder(
 @pytest.fixture(autouse=True)
 def _outside_ci(monkeypatch: pytest.MonkeyPatch) -> None:
     """Tests start from a developer's environment even when CI runs them (``CI=true`` would
-    make every recording run of a pytester suite replay-only); a test that is about CI sets
+    make every recording run of a sandbox suite replay-only); a test that is about CI sets
     the variables itself."""
     for name in ("CI", "GITHUB_STEP_SUMMARY", "GITHUB_ACTIONS"):
         monkeypatch.delenv(name, raising=False)

@@ -6,14 +6,16 @@ from pathlib import Path
 
 import pytest
 
+from tests._sandbox import Sandbox
+
 ROOT = Path(__file__).resolve().parents[1]
 EXAMPLE = ROOT / "examples" / "own_repo" / "test_my_agent.py"
 
 
-def _run(pytester: pytest.Pytester, source: str) -> pytest.RunResult:
-    pytester.makepyfile(test_my_agent=source)
-    assert not (pytester.path / "thresholds.yaml").exists(), "a user repo without gates"
-    return pytester.runpytest_subprocess(
+def _run(sandbox: Sandbox, source: str) -> pytest.RunResult:
+    sandbox.makepyfile(test_my_agent=source)
+    assert not (sandbox.path / "thresholds.yaml").exists(), "a user repo without gates"
+    return sandbox.runpytest(
         "-p", "no:cacheprovider", f"--emrd-cassettes={ROOT / 'cassettes'}",
         "--emrd-record-mode=none", "--emrd-model=scout", "--emrd-condition=baseline",
         "--emrd-spawn=office",
@@ -22,8 +24,8 @@ def _run(pytester: pytest.Pytester, source: str) -> pytest.RunResult:
 
 
 @pytest.mark.slow
-def test_the_example_runs_in_a_repo_without_thresholds(pytester: pytest.Pytester):
-    result = _run(pytester, EXAMPLE.read_text(encoding="utf-8"))
+def test_the_example_runs_in_a_repo_without_thresholds(sandbox: Sandbox):
+    result = _run(sandbox, EXAMPLE.read_text(encoding="utf-8"))
     result.assert_outcomes(passed=4)
     result.stdout.fnmatch_lines(
         [
@@ -34,11 +36,11 @@ def test_the_example_runs_in_a_repo_without_thresholds(pytester: pytest.Pytester
 
 
 @pytest.mark.slow
-def test_the_custom_gate_fails_with_its_numbers(pytester: pytest.Pytester):
+def test_the_custom_gate_fails_with_its_numbers(sandbox: Sandbox):
     source = EXAMPLE.read_text(encoding="utf-8").replace(
         "MIN_ACTION_SUCCESS = 0.6", "MIN_ACTION_SUCCESS = 1.01"
     )
-    result = _run(pytester, source)
+    result = _run(sandbox, source)
     result.assert_outcomes(passed=3, failed=1)
     result.stdout.fnmatch_lines(
         ["*scout/baseline: action success *, 95% CI [[]*[]], n=3; the gate needs*>= 1.01"]

@@ -22,7 +22,8 @@ Wiring only, one concern per module (the only modules of the package that import
 * :mod:`~pytest_emrd.plugin._live` — preflight and the live progress line (controller);
 * :mod:`~pytest_emrd.plugin._report` — the end-of-run tables and ``$GITHUB_STEP_SUMMARY``
   (controller);
-* :mod:`~pytest_emrd.plugin._fixtures` — the ``emrd_*`` fixtures.
+* :mod:`~pytest_emrd.plugin._fixtures` — the ``emrd_*`` fixtures: overridable session
+  fixtures and the per-test ones derived from them;
 * :mod:`~pytest_emrd.plugin._logs` — the scrub filter on pytest's log handlers and on the
   HTTP libraries' loggers.
 """
@@ -33,7 +34,10 @@ from pytest_emrd.plugin._collect import (
     pytest_runtest_makereport,
 )
 from pytest_emrd.plugin._fixtures import (
+    _emrd_run,
+    emrd_cassette_dir,
     emrd_episode,
+    emrd_record_mode,
     emrd_settings,
     emrd_store,
     emrd_trajectories,
@@ -47,7 +51,10 @@ from pytest_emrd.plugin._options import (
 )
 
 __all__ = [
+    "_emrd_run",
+    "emrd_cassette_dir",
     "emrd_episode",
+    "emrd_record_mode",
     "emrd_settings",
     "emrd_store",
     "emrd_trajectories",

@@ -1,36 +1,73 @@
-"""The ``emrd_*`` fixtures: settings, store, episodes, trajectories and verdicts of the run."""
+"""The ``emrd_*`` fixtures, built the way pytest-recording builds ``vcr``: overridable session
+fixtures (:func:`emrd_settings`, :func:`emrd_cassette_dir`, :func:`emrd_record_mode`) and
+the fixtures derived from them (the run, its store, episodes, trajectories and verdicts).
+
+A ``conftest.py`` that overrides one of the first three changes how every EMRD test of its
+directory runs its episodes. The grid itself (models, conditions, spawns, episodes, gates) is
+collected from the ``--emrd-*`` options before any fixture runs, so an override may change
+everything but that (see :meth:`~pytest_emrd.plugin._run.Run.adopt`).
+"""
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable
+from pathlib import Path
 
 import pytest
 
 from pytest_emrd.gate import GateCell, ResultsStore, RunSettings, StoredEpisode, Verdict
-from pytest_emrd.plugin._run import RUN
+from pytest_emrd.plugin._run import RUN, Run
 from pytest_emrd.trajectory import EpisodeSpec, Trajectory
 
 
 @pytest.fixture(scope="session")
 def emrd_settings(pytestconfig: pytest.Config) -> RunSettings:
-    """The resolved ``--emrd-*`` settings of this run."""
+    """The run's settings, resolved from the ``--emrd-*`` options and ini keys. Override it
+    to change any setting but the grid (``dataclasses.replace(settings, matching=...)``)."""
     return pytestconfig.stash[RUN].settings
 
 
 @pytest.fixture(scope="session")
-def emrd_store(pytestconfig: pytest.Config) -> ResultsStore:
+def emrd_cassette_dir(emrd_settings: RunSettings) -> Path:
+    """The cassette folder episodes replay from and record into (``emrd_settings.cassettes``
+    unless overridden)."""
+    return emrd_settings.cassettes
+
+
+@pytest.fixture(scope="session")
+def emrd_record_mode(emrd_settings: RunSettings) -> str:
+    """The cassette record mode (``emrd_settings.record_mode`` unless overridden)."""
+    return emrd_settings.record_mode
+
+
+@pytest.fixture(scope="session")
+def _emrd_run(
+    pytestconfig: pytest.Config,
+    emrd_settings: RunSettings,
+    emrd_cassette_dir: Path,
+    emrd_record_mode: str,
+) -> Run:
+    """The process's run, running the collected grid with the three fixtures above."""
+    wanted = dataclasses.replace(
+        emrd_settings, cassettes=Path(emrd_cassette_dir), record_mode=emrd_record_mode
+    )
+    return pytestconfig.stash[RUN].call(lambda run: run.adopt(wanted), "emrd_settings")
+
+
+@pytest.fixture(scope="session")
+def emrd_store(_emrd_run: Run) -> ResultsStore:
     """The results store of this run's directory (shared by all xdist workers)."""
-    return pytestconfig.stash[RUN].store
+    return _emrd_run.store
 
 
 @pytest.fixture
 def emrd_episode(
-    emrd_spec: EpisodeSpec, pytestconfig: pytest.Config, request: pytest.FixtureRequest
+    emrd_spec: EpisodeSpec, _emrd_run: Run, request: pytest.FixtureRequest
 ) -> StoredEpisode:
     """The stored episode for ``emrd_spec``, computed (recorded or replayed) if needed."""
-    run = pytestconfig.stash[RUN]
-    stored = run.episode(emrd_spec)
-    request.node.user_properties.append(("emrd_episode", run.summary(stored).to_dict()))
+    stored = _emrd_run.episode(emrd_spec)
+    request.node.user_properties.append(("emrd_episode", _emrd_run.summary(stored).to_dict()))
     return stored
 
 
@@ -41,23 +78,20 @@ def emrd_trajectory(emrd_episode: StoredEpisode) -> Trajectory:
 
 
 @pytest.fixture(scope="session")
-def emrd_trajectories(pytestconfig: pytest.Config) -> Callable[[str, str], list[Trajectory]]:
+def emrd_trajectories(_emrd_run: Run) -> Callable[[str, str], list[Trajectory]]:
     """``emrd_trajectories(model, condition)``: the trajectories of that cell of the run's grid
     (for custom gates), each computed through the results store if needed."""
-    run = pytestconfig.stash[RUN]
 
     def cell(model: str, condition: str) -> list[Trajectory]:
-        cell_specs = run.call(lambda r: r.cell_specs_of(model, condition))
-        return [run.episode(spec).trajectory for spec in cell_specs]
+        cell_specs = _emrd_run.call(lambda r: r.cell_specs_of(model, condition))
+        return [_emrd_run.episode(spec).trajectory for spec in cell_specs]
 
     return cell
 
 
 @pytest.fixture
-def emrd_verdict(
-    emrd_gate: GateCell, pytestconfig: pytest.Config, request: pytest.FixtureRequest
-) -> Verdict:
+def emrd_verdict(emrd_gate: GateCell, _emrd_run: Run, request: pytest.FixtureRequest) -> Verdict:
     """The verdict of ``emrd_gate`` over its cell's episodes (computed through the store)."""
-    verdict = pytestconfig.stash[RUN].verdict(emrd_gate)
+    verdict = _emrd_run.verdict(emrd_gate)
     request.node.user_properties.append(("emrd_verdict", verdict.to_dict()))
     return verdict

@@ -30,7 +30,7 @@ from pytest_emrd._atomic import write_bytes_atomic
 from pytest_emrd._disk import os_error_line
 from pytest_emrd._names import check_inside
 from pytest_emrd._scrub import scrub, scrub_bytes, watch_env
-from pytest_emrd.errors import CassetteError, EmrdError
+from pytest_emrd.errors import CassetteError, ConfigError, EmrdError
 from pytest_emrd.gate import (
     EpisodeSummary,
     GateCell,
@@ -47,6 +47,24 @@ from pytest_emrd.trajectory import EpisodeSpec
 RUN = pytest.StashKey["Run"]()
 UNSAVED = "unsaved"
 """Folder of a run directory holding live episodes whose cassette could not be written."""
+
+
+#: Settings the collected grid, the run directory and the store's identity were built from.
+COLLECTED = (
+    "models",
+    "conditions",
+    "cells",
+    "spawns",
+    "episodes",
+    "variant",
+    "layouts",
+    "backend",
+    "modality",
+    "results",
+    "thresholds",
+    "models_file",
+    "shard",
+)
 
 
 class CassetteNotSavedWarning(UserWarning):
@@ -88,6 +106,21 @@ class Run:
         self._prefetch_started, self._prefetcher = False, None
         self._unsaved: dict[EpisodeSpec, str] = {}
         """Live episodes whose cassette could not be written: the line that says so."""
+
+    def adopt(self, settings: RunSettings) -> Run:
+        """Run the rest of the session with ``settings`` (the ``emrd_*`` fixtures, perhaps
+        overridden in a ``conftest.py``); returns this run.
+
+        The fields of :data:`COLLECTED` shaped the test ids and the run directory before any
+        fixture ran: a :class:`ConfigError` names any the new settings change."""
+        changed = [f for f in COLLECTED if getattr(settings, f) != getattr(self.settings, f)]
+        if changed:
+            raise ConfigError(
+                f"the emrd_settings fixture changes {', '.join(changed)}, which the collected "
+                "tests were built from; set them with --emrd-* options or ini keys instead."
+            )
+        self.settings = settings
+        return self
 
     def call(self, fn: Any, what: str = "pytest-emrd") -> Any:
         """``fn(self)``, turning an :class:`EmrdError` into one clean failure line (scrubbed,

@@ -17,6 +17,7 @@ from pytest_emrd.gate import RECORD_MODES, load_thresholds, resolve_settings
 from pytest_emrd.gate._settings import in_ci
 from pytest_emrd.gate._thresholds import domain
 from pytest_emrd.metrics import GATE_METRICS
+from tests._sandbox import Sandbox
 
 ROOT = Path(__file__).resolve().parents[2]
 FLAG = "--emrd-thresholds (emrd gate --thresholds)"
@@ -220,9 +221,9 @@ def test_episodes_are_capped_with_a_clear_message(tmp_path):
 
 
 @pytest.fixture
-def suite(pytester: pytest.Pytester) -> pytest.Pytester:
-    pytester.makepyfile(test_emrd=(ROOT / "benchmarks" / "test_emrd.py").read_text())
-    return pytester
+def suite(sandbox: Sandbox) -> Sandbox:
+    sandbox.makepyfile(test_emrd=(ROOT / "benchmarks" / "test_emrd.py").read_text())
+    return sandbox
 
 
 @pytest.mark.slow
@@ -253,7 +254,7 @@ def suite(pytester: pytest.Pytester) -> pytest.Pytester:
 def test_pytest_prints_one_line_once(suite, args, setup, message):
     if setup:
         (suite.path / setup).write_bytes(b"\xff\xfe\x00")
-    result = suite.runpytest_subprocess("-p", "no:cacheprovider", *args)
+    result = suite.runpytest("-p", "no:cacheprovider", *args)
     assert result.ret != 0
     output = result.stdout.str() + result.stderr.str()
     expected = message.replace("{root}", str(suite.path))

@@ -7,9 +7,8 @@ from __future__ import annotations
 
 import logging
 
-import pytest
-
 from pytest_emrd._scrub import REDACTED, SCRUB_FILTER, watch_env
+from tests._sandbox import Sandbox
 
 from .conftest import KEY_ENV, PLANTED_FORMS, PLANTED_KEY, PLANTED_QUERY, text_leaks
 
@@ -35,14 +34,14 @@ def test_posts_with_secrets():
 """
 
 
-def _run(pytester: pytest.Pytester, json_server, monkeypatch, *plugin: str) -> str:
+def _run(sandbox: Sandbox, json_server, monkeypatch, *plugin: str) -> str:
     monkeypatch.setenv(LOG_KEY_ENV, PLANTED_KEY)
     server = json_server(lambda method, path, body: (200, {"ok": True}))
-    pytester.makepyfile(
+    sandbox.makepyfile(
         test_leak=TEST_FILE.format(url=server.rstrip("/"), query=PLANTED_QUERY, env=LOG_KEY_ENV)
     )
-    log_file = pytester.path / "debug.log"
-    result = pytester.runpytest_subprocess(
+    log_file = sandbox.path / "debug.log"
+    result = sandbox.runpytest(
         "-p", "no:cacheprovider", *plugin, "--log-cli-level=DEBUG",
         f"--log-file={log_file}", "--log-file-level=DEBUG", "-rA",
     )  # fmt: skip
@@ -50,15 +49,15 @@ def _run(pytester: pytest.Pytester, json_server, monkeypatch, *plugin: str) -> s
     return result.stdout.str() + result.stderr.str() + log_file.read_text()
 
 
-def test_debug_logs_carry_no_planted_secret(pytester, json_server, monkeypatch):
-    printed = _run(pytester, json_server, monkeypatch)
+def test_debug_logs_carry_no_planted_secret(sandbox, json_server, monkeypatch):
+    printed = _run(sandbox, json_server, monkeypatch)
     assert "HTTP Request: POST" in printed and f"key={REDACTED}" in printed
     assert "Traceback" in printed and "receive_response_headers" in printed
     assert text_leaks(printed) == []
 
 
-def test_without_the_plugin_the_same_run_leaks(pytester, json_server, monkeypatch):
-    printed = _run(pytester, json_server, monkeypatch, "-p", "no:emrd")
+def test_without_the_plugin_the_same_run_leaks(sandbox, json_server, monkeypatch):
+    printed = _run(sandbox, json_server, monkeypatch, "-p", "no:emrd")
     assert PLANTED_QUERY in printed
 
 

@@ -46,16 +46,16 @@ def _outputs(*results: pytest.RunResult) -> str:
 
 @pytest.mark.slow
 def test_a_recorded_run_leaks_no_planted_credential(
-    pytester, provider, planted_env, capsys, monkeypatch
+    sandbox, provider, planted_env, capsys, monkeypatch
 ):
-    pytester.makepyfile(test_emrd=(ROOT / "benchmarks" / "test_emrd.py").read_text())
-    pytester.makefile(".yaml", thresholds="leaky:\n  baseline:\n    errored_rate: {max: 0.0}\n")
-    registry = pytester.path / "user-models.yaml"
+    sandbox.makepyfile(test_emrd=(ROOT / "benchmarks" / "test_emrd.py").read_text())
+    sandbox.makefile(".yaml", thresholds="leaky:\n  baseline:\n    errored_rate: {max: 0.0}\n")
+    registry = sandbox.path / "user-models.yaml"
     leaky_registry(registry, provider, leaky="ok", denied="deny", rejected="deny")
     models = f"--emrd-models={registry}"
 
     # Replay only, nothing recorded: one summary and one command, which works verbatim.
-    missing = pytester.runpytest_subprocess(
+    missing = sandbox.runpytest(
         *GRID, models, "--emrd-model=leaky", "--emrd-episodes=1", "--emrd-record-mode=none"
     )
     assert missing.ret != 0
@@ -64,16 +64,16 @@ def test_a_recorded_run_leaks_no_planted_credential(
     assert f"--emrd-models={registry}" in command and "--emrd-modality=text" in command
     args = shlex.split(command)
     assert args[0] == "pytest"
-    recorded = pytester.run(sys.executable, "-m", *args, "--log-cli-level=DEBUG")
+    recorded = sandbox.run(sys.executable, "-m", *args, "--log-cli-level=DEBUG")
     assert recorded.ret == 0, _outputs(recorded)
     recorded.stdout.fnmatch_lines(["*1 passed, 1 deselected*"])
-    cassette = pytester.path / "cassettes/leaky/baseline/default/office/ep00.json.xz"
+    cassette = sandbox.path / "cassettes/leaky/baseline/default/office/ep00.json.xz"
     assert cassette.is_file()
 
     # Replay the recording, and a model whose endpoint answers 401 echoing the key.
-    summary = pytester.path / "step-summary.md"
+    summary = sandbox.path / "step-summary.md"
     monkeypatch.setenv("GITHUB_STEP_SUMMARY", str(summary))
-    run = pytester.runpytest_subprocess(
+    run = sandbox.runpytest(
         *GRID,
         models,
         "--emrd-model=leaky",
@@ -81,10 +81,10 @@ def test_a_recorded_run_leaks_no_planted_credential(
         "--emrd-model=rejected",
         "--emrd-episodes=1",
         "--emrd-preflight=off",  # here: what an episode that meets a 401 writes
-        f"--emrd-results={pytester.path / 'run'}",
-        f"--junitxml={pytester.path / 'junit.xml'}",
+        f"--emrd-results={sandbox.path / 'run'}",
+        f"--junitxml={sandbox.path / 'junit.xml'}",
         "--log-cli-level=DEBUG",
-        f"--log-file={pytester.path / 'debug.log'}",
+        f"--log-file={sandbox.path / 'debug.log'}",
         "--log-file-level=DEBUG",
     )
     run.assert_outcomes(passed=2, failed=2)
@@ -94,7 +94,7 @@ def test_a_recorded_run_leaks_no_planted_credential(
         "rejected-baseline-office-ep00",
     ]
     for name in ("denied", "rejected"):
-        stored = (pytester.path / f"run/episodes/{name}-baseline-office-ep00.json").read_text()
+        stored = (sandbox.path / f"run/episodes/{name}-baseline-office-ep00.json").read_text()
         assert "HTTP 401" in stored and f"key={REDACTED}" in stored
     on_the_wire = "\n".join(provider.seen)
     assert f"Bearer {PLANTED_KEY}" in on_the_wire and f"key={PLANTED_QUERY}" in on_the_wire
@@ -102,15 +102,15 @@ def test_a_recorded_run_leaks_no_planted_credential(
     assert "HTTP Request: POST http://127.0.0.1" in _outputs(recorded)  # httpx logged, scrubbed
 
     capsys.readouterr()
-    run_dir, thresholds = str(pytester.path / "run"), str(pytester.path / "thresholds.yaml")
-    report = ["report", run_dir, "--out", str(pytester.path / "report"), "--models", str(registry)]
+    run_dir, thresholds = str(sandbox.path / "run"), str(sandbox.path / "thresholds.yaml")
+    report = ["report", run_dir, "--out", str(sandbox.path / "report"), "--models", str(registry)]
     assert emrd(report) == 0
     assert emrd(["gate", run_dir, "--thresholds", thresholds, "--models", str(registry)]) == 0
     printed = capsys.readouterr()
 
-    assert (pytester.path / "report").is_dir() and (pytester.path / "junit.xml").is_file()
+    assert (sandbox.path / "report").is_dir() and (sandbox.path / "junit.xml").is_file()
     assert "denied" in summary.read_text()
-    assert leaks(pytester.path, skip=(registry,)) == []
+    assert leaks(sandbox.path, skip=(registry,)) == []
     assert text_leaks(_outputs(missing, recorded, run) + printed.out + printed.err) == []
 
 

@@ -93,10 +93,10 @@ def test_a_run_directory_keeps_its_shard(tmp_path):
 
 
 @pytest.mark.slow
-def test_pytest_records_the_shard_in_the_run_directory(pytester):
-    pytester.makepyfile(test_emrd=(ROOT / "benchmarks" / "test_emrd.py").read_text())
-    run_dir = pytester.path / "shard"
-    result = pytester.runpytest_subprocess(
+def test_pytest_records_the_shard_in_the_run_directory(sandbox):
+    sandbox.makepyfile(test_emrd=(ROOT / "benchmarks" / "test_emrd.py").read_text())
+    run_dir = sandbox.path / "shard"
+    result = sandbox.runpytest(
         "-p",
         "no:cacheprovider",
         "--emrd-model=scout",
@@ -111,7 +111,7 @@ def test_pytest_records_the_shard_in_the_run_directory(pytester):
     identity = read_identity(run_dir)
     assert identity is not None and identity.shard == (2, 2)
     assert identity.grid["models"] == ["scout"] and identity.grid["episodes"] == 2
-    again = pytester.runpytest_subprocess(
+    again = sandbox.runpytest(
         "-p", "no:cacheprovider", "--emrd-shard=1/2", f"--emrd-results={run_dir}"
     )
     assert again.ret != 0

@@ -13,6 +13,7 @@ from pathlib import Path
 import pytest
 
 from pytest_emrd.cassette import SUFFIX
+from tests._sandbox import Sandbox
 
 ROOT = Path(__file__).resolve().parents[2]
 CASE = "scout-baseline-office-ep00"
@@ -23,9 +24,9 @@ GRID = [
 
 
 @pytest.fixture
-def suite(pytester: pytest.Pytester) -> pytest.Pytester:
-    pytester.makepyfile(test_emrd=(ROOT / "benchmarks" / "test_emrd.py").read_text())
-    return pytester
+def suite(sandbox: Sandbox) -> Sandbox:
+    sandbox.makepyfile(test_emrd=(ROOT / "benchmarks" / "test_emrd.py").read_text())
+    return sandbox
 
 
 def _output(result: pytest.RunResult) -> str:
@@ -37,7 +38,7 @@ def test_an_episode_whose_cassette_cannot_be_written_is_kept_and_not_run_again(s
     cassette = suite.path / f"cassettes/scout/baseline/default/office/ep00{SUFFIX}"
     cassette.mkdir(parents=True)  # a folder where the file goes: the save fails at the end
     run_dir = suite.path / "run"
-    first = suite.runpytest_subprocess(*GRID, f"--emrd-results={run_dir}")
+    first = suite.runpytest(*GRID, f"--emrd-results={run_dir}")
     first.assert_outcomes(passed=1)
     fallback = run_dir / "unsaved" / f"{CASE}.json"
     lines = [x for x in _output(first).splitlines() if "CassetteNotSavedWarning" in x]
@@ -54,9 +55,7 @@ def test_an_episode_whose_cassette_cannot_be_written_is_kept_and_not_run_again(s
     assert (run_dir / "episodes" / f"{CASE}.json").is_file()
 
     # Replay only, and still no cassette: the episode comes from the run directory.
-    again = suite.runpytest_subprocess(
-        *GRID, f"--emrd-results={run_dir}", "--emrd-record-mode=none"
-    )
+    again = suite.runpytest(*GRID, f"--emrd-results={run_dir}", "--emrd-record-mode=none")
     again.assert_outcomes(passed=1)
     assert cassette.is_dir() and "CassetteNotSavedWarning" not in _output(again)
 
@@ -91,7 +90,7 @@ def test_a_folder_that_cannot_be_written_is_one_line(suite, setup, option, messa
     (suite.path / setup).parent.mkdir(parents=True, exist_ok=True)
     (suite.path / setup).write_text("not a folder\n")
     root = str(suite.path)
-    result = suite.runpytest_subprocess(*GRID, option.format(root=root))
+    result = suite.runpytest(*GRID, option.format(root=root))
     assert result.ret != 0
     output = _output(result)
     expected = message.format(root=root, case=CASE)

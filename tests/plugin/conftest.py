@@ -1,4 +1,4 @@
-"""A throw-away copy of the benchmark suite inside ``pytester``, run as a black box."""
+"""A throw-away copy of the benchmark suite inside ``sandbox``, run as a black box."""
 
 from __future__ import annotations
 
@@ -6,6 +6,8 @@ from collections.abc import Callable
 from pathlib import Path
 
 import pytest
+
+from tests._sandbox import Sandbox
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -18,11 +20,11 @@ scout:
 
 
 @pytest.fixture
-def suite(pytester: pytest.Pytester) -> pytest.Pytester:
+def suite(sandbox: Sandbox) -> Sandbox:
     """The real benchmarks/test_emrd.py plus a small thresholds.yaml, in a temp rootdir."""
-    pytester.makepyfile(test_emrd=(ROOT / "benchmarks" / "test_emrd.py").read_text())
-    pytester.makefile(".yaml", thresholds=GATES)
-    return pytester
+    sandbox.makepyfile(test_emrd=(ROOT / "benchmarks" / "test_emrd.py").read_text())
+    sandbox.makefile(".yaml", thresholds=GATES)
+    return sandbox
 
 
 @pytest.fixture
@@ -99,11 +101,11 @@ ai2thor.controller.Controller = LoggedController
 
 
 @pytest.fixture
-def thor_suite(suite: pytest.Pytester) -> tuple[pytest.Pytester, list[str], Path]:
+def thor_suite(suite: Sandbox) -> tuple[Sandbox, list[str], Path]:
     """The suite on ``--emrd-backend=ai2thor`` through ai2thor's own start-up path, with the
     fake controller of ``tests/world/thor/conftest.py`` as ``ai2thor.controller.Controller``.
 
-    Returns the pytester, the backend arguments (a real executable file as
+    Returns the sandbox, the backend arguments (a real executable file as
     ``local_executable_path``, ``gpu_device=1``) and the JSON-lines log of controller
     starts and stops (one line per event, with the process id).
     """

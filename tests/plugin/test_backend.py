@@ -11,6 +11,7 @@ import pytest
 
 from pytest_emrd.cassette import decode
 from pytest_emrd.episode import protocol_version
+from tests._sandbox import Sandbox
 
 PRINT_SETTINGS = """
 def test_settings(emrd_settings):
@@ -52,10 +53,10 @@ def test_settings(emrd_settings):
         "options-cli-over-ini",
     ],
 )
-def test_backend_settings_per_level(pytester: pytest.Pytester, ini, cli, expected):
-    pytester.makeini(f"[pytest]\n{ini}\n")
-    pytester.makepyfile(PRINT_SETTINGS)
-    result = pytester.runpytest_subprocess("-s", "-p", "no:cacheprovider", *cli)
+def test_backend_settings_per_level(sandbox: Sandbox, ini, cli, expected):
+    sandbox.makeini(f"[pytest]\n{ini}\n")
+    sandbox.makepyfile(PRINT_SETTINGS)
+    result = sandbox.runpytest("-s", "-p", "no:cacheprovider", *cli)
     result.assert_outcomes(passed=1)
     out = result.stdout.str()
     assert expected in out
@@ -63,9 +64,9 @@ def test_backend_settings_per_level(pytester: pytest.Pytester, ini, cli, expecte
     assert warned == ("MATCHING strict" in expected and "ai2thor" in expected)
 
 
-def test_a_malformed_backend_option_is_a_usage_error(pytester: pytest.Pytester):
-    pytester.makepyfile(PRINT_SETTINGS)
-    result = pytester.runpytest_subprocess("--emrd-backend-option=gpu_device")
+def test_a_malformed_backend_option_is_a_usage_error(sandbox: Sandbox):
+    sandbox.makepyfile(PRINT_SETTINGS)
+    result = sandbox.runpytest("--emrd-backend-option=gpu_device")
     assert result.ret == pytest.ExitCode.USAGE_ERROR
     result.stderr.fnmatch_lines(["*--emrd-backend-option='gpu_device' must look like KEY=VALUE*"])
 
@@ -84,7 +85,7 @@ def _trajectories(run_dir: Path) -> dict[str, dict]:
 @pytest.mark.slow
 def test_ai2thor_records_and_replays_with_one_controller_per_worker(thor_suite, small):
     suite, backend, log = thor_suite
-    record = suite.runpytest_subprocess(
+    record = suite.runpytest(
         *small(*backend, f"--emrd-results={suite.path / 'recorded'}", "--emrd-record-mode=once")
     )
     record.assert_outcomes(passed=4)
@@ -97,7 +98,7 @@ def test_ai2thor_records_and_replays_with_one_controller_per_worker(thor_suite, 
     assert not (suite.path / "cassettes" / "scout").exists(), "the builtin tree stays untouched"
 
     log.unlink()
-    replay = suite.runpytest_subprocess(
+    replay = suite.runpytest(
         *small(*backend, f"--emrd-results={suite.path / 'replayed'}", "--emrd-record-mode=none"),
         "-n",
         "2",
@@ -117,14 +118,14 @@ def test_builtin_results_are_not_reused_for_ai2thor(thor_suite, small, recorded)
     """The same run directory resumed on another backend recomputes: protocols differ."""
     suite, backend, log = thor_suite
     run_dir = suite.path / "run"
-    builtin = suite.runpytest_subprocess(
+    builtin = suite.runpytest(
         *small(
             f"--emrd-cassettes={recorded}", "--emrd-record-mode=none", f"--emrd-results={run_dir}"
         )
     )
     builtin.assert_outcomes(passed=4)
     assert not log.exists()
-    thor = suite.runpytest_subprocess(
+    thor = suite.runpytest(
         *small(*backend, "--emrd-record-mode=once", f"--emrd-results={run_dir}", "-k", "ep00")
     )
     thor.assert_outcomes(passed=1, deselected=3)

@@ -10,7 +10,7 @@ def _ids(result: pytest.RunResult) -> list[str]:
 
 
 def test_ids_follow_the_options(suite: pytest.Pytester):
-    result = suite.runpytest_subprocess(
+    result = suite.runpytest(
         "--collect-only",
         "-q",
         "--emrd-condition=low_light",
@@ -26,13 +26,13 @@ def test_ids_follow_the_options(suite: pytest.Pytester):
 
 
 def test_gate_ids_per_model_condition_metric(suite: pytest.Pytester):
-    result = suite.runpytest_subprocess("--collect-only", "-q", "--emrd-episodes=1")
+    result = suite.runpytest("--collect-only", "-q", "--emrd-episodes=1")
     gates = [i for i in _ids(result) if i.startswith("test_gate")]
     assert gates == ["test_gate[scout-baseline-errored_rate]", "test_gate[scout-baseline-aec]"]
 
 
 def test_variant_and_several_models(suite: pytest.Pytester):
-    result = suite.runpytest_subprocess(
+    result = suite.runpytest(
         "--collect-only",
         "-q",
         "--emrd-model=scout",
@@ -49,13 +49,13 @@ def test_variant_and_several_models(suite: pytest.Pytester):
 @pytest.mark.slow
 def test_shard_takes_a_deterministic_slice_and_leaves_gates_to_emrd_gate(suite: pytest.Pytester):
     full = _ids(
-        suite.runpytest_subprocess(
+        suite.runpytest(
             "--collect-only", "-q", "--emrd-episodes=3", "-k", "test_episode"
         )
     )
     parts = []
     for k in (1, 2, 3):
-        result = suite.runpytest_subprocess(
+        result = suite.runpytest(
             "--collect-only", "-q", "--emrd-episodes=3", f"--emrd-shard={k}/3"
         )
         parts.append(_ids(result))
@@ -65,12 +65,12 @@ def test_shard_takes_a_deterministic_slice_and_leaves_gates_to_emrd_gate(suite: 
 
 
 def test_unknown_model_lists_the_known_ones(suite: pytest.Pytester):
-    result = suite.runpytest_subprocess("--collect-only", "-q", "--emrd-model=gpt9")
+    result = suite.runpytest("--collect-only", "-q", "--emrd-model=gpt9")
     result.stdout.fnmatch_lines(["*pytest-emrd:*gpt9*gemini*"])
     assert result.ret != 0
 
 
 def test_bad_thresholds_fail_collection_naming_file_and_line(suite: pytest.Pytester):
     suite.makefile(".yaml", thresholds="scout:\n  baseline:\n    speed: {min: 1}\n")
-    result = suite.runpytest_subprocess("--collect-only", "-q")
+    result = suite.runpytest("--collect-only", "-q")
     result.stdout.fnmatch_lines(["*thresholds.yaml, line 3: unknown metric 'speed'; allowed: aec*"])

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import pytest
 
+from tests._sandbox import Sandbox
+
 PRINT_SETTINGS = """
 def test_settings(emrd_settings):
     print("EPISODES", emrd_settings.episodes, "MODE", emrd_settings.record_mode,
@@ -11,10 +13,10 @@ def test_settings(emrd_settings):
 """
 
 
-def test_help_documents_every_option(pytester: pytest.Pytester):
+def test_help_documents_every_option(sandbox: Sandbox):
     from pytest_emrd.gate import OPTIONS
 
-    result = pytester.runpytest_subprocess("--help")
+    result = sandbox.runpytest("--help")
     out = result.stdout.str()
     assert "pytest-emrd (Explore, Map, Remember, Decide benchmark)" in out
     for option in OPTIONS:
@@ -39,25 +41,25 @@ def test_help_documents_every_option(pytester: pytest.Pytester):
     ],
     ids=["default", "ini", "cli-over-ini"],
 )
-def test_precedence_per_level(pytester: pytest.Pytester, monkeypatch, ini, cli, expected):
+def test_precedence_per_level(sandbox: Sandbox, monkeypatch, ini, cli, expected):
     monkeypatch.delenv("CI", raising=False)
-    pytester.makeini(f"[pytest]\n{ini}\n")
-    pytester.makepyfile(PRINT_SETTINGS)
-    result = pytester.runpytest_subprocess("-s", *cli)
+    sandbox.makeini(f"[pytest]\n{ini}\n")
+    sandbox.makepyfile(PRINT_SETTINGS)
+    result = sandbox.runpytest("-s", *cli)
     result.assert_outcomes(passed=1)
     result.stdout.fnmatch_lines([f"*{expected}*"])
 
 
-def test_bad_option_is_a_usage_error(pytester: pytest.Pytester):
-    pytester.makepyfile(PRINT_SETTINGS)
-    result = pytester.runpytest_subprocess("--emrd-episodes=0")
+def test_bad_option_is_a_usage_error(sandbox: Sandbox):
+    sandbox.makepyfile(PRINT_SETTINGS)
+    result = sandbox.runpytest("--emrd-episodes=0")
     assert result.ret == pytest.ExitCode.USAGE_ERROR
     result.stderr.fnmatch_lines(["*--emrd-episodes=0 must be a whole number >= 1*"])
 
 
-def test_plugin_is_inert_without_emrd_tests(pytester: pytest.Pytester):
-    pytester.makepyfile("def test_plain():\n    assert 1 + 1 == 2\n")
-    result = pytester.runpytest_subprocess("-p", "no:cacheprovider")
+def test_plugin_is_inert_without_emrd_tests(sandbox: Sandbox):
+    sandbox.makepyfile("def test_plain():\n    assert 1 + 1 == 2\n")
+    result = sandbox.runpytest("-p", "no:cacheprovider")
     result.assert_outcomes(passed=1)
     assert "EMRD" not in result.stdout.str()
-    assert not (pytester.path / ".emrd").exists()
+    assert not (sandbox.path / ".emrd").exists()

@@ -38,7 +38,7 @@ def test_replay_is_deterministic_and_xdist_and_shards_give_the_same_gates(
     runs = {}
     for name, extra in (("serial", []), ("xdist", ["-n", "2"])):
         run_dir = suite.path / name
-        result = suite.runpytest_subprocess(
+        result = suite.runpytest(
             *small(
                 f"--emrd-cassettes={recorded}",
                 "--emrd-record-mode=none",
@@ -51,7 +51,7 @@ def test_replay_is_deterministic_and_xdist_and_shards_give_the_same_gates(
     assert runs["serial"] == runs["xdist"]
     assert "scout: 2/2 gates pass" in runs["serial"][0]
     for k in (1, 2):
-        result = suite.runpytest_subprocess(
+        result = suite.runpytest(
             *small(
                 f"--emrd-cassettes={recorded}",
                 "--emrd-record-mode=none",
@@ -69,7 +69,7 @@ def test_replay_is_deterministic_and_xdist_and_shards_give_the_same_gates(
 
 def test_broken_threshold_fails_the_session_with_the_table(suite, small, recorded):
     suite.makefile(".yaml", thresholds="scout:\n  baseline:\n    te: {max: 1}\n")
-    result = suite.runpytest_subprocess(
+    result = suite.runpytest(
         *small(f"--emrd-cassettes={recorded}", "--emrd-record-mode=none")
     )
     result.assert_outcomes(passed=2, failed=1)
@@ -86,7 +86,7 @@ def test_broken_threshold_fails_the_session_with_the_table(suite, small, recorde
 
 @pytest.mark.parametrize("workers", [[], ["-n", "2"]], ids=["serial", "xdist"])
 def test_missing_cassettes_stop_the_run_with_one_summary(suite, small, workers):
-    result = suite.runpytest_subprocess(
+    result = suite.runpytest(
         *small("--emrd-record-mode=none", "--emrd-cassettes=nowhere", *workers)
     )
     assert result.ret != 0
@@ -103,7 +103,7 @@ def test_corrupted_cassette_is_a_clear_error_naming_the_file(suite, small, recor
     copy = suite.path / "cassettes"
     shutil.copytree(recorded, copy)
     (copy / "scout/baseline/default/office/ep01.json.xz").write_bytes(b"garbage")
-    result = suite.runpytest_subprocess(
+    result = suite.runpytest(
         *small(f"--emrd-cassettes={copy}", "--emrd-record-mode=none", "-k", "test_episode")
     )
     result.assert_outcomes(passed=1, errors=1, deselected=2)
@@ -129,13 +129,13 @@ def test_interrupted_run_resumes_reusing_finished_episodes(suite, small, recorde
         "test_episode",
     )
     suite.makeconftest(INTERRUPT_AFTER_FIRST)
-    first = suite.runpytest_subprocess(*args)
+    first = suite.runpytest(*args)
     assert first.ret == pytest.ExitCode.INTERRUPTED
     done = run_dir / "episodes" / "scout-baseline-office-ep00.json"
     assert [p.name for p in (run_dir / "episodes").iterdir()] == [done.name]
     before = (done.stat().st_mtime_ns, json.loads(done.read_text())["session"])
     suite.makeconftest("")
-    second = suite.runpytest_subprocess(*args)
+    second = suite.runpytest(*args)
     second.assert_outcomes(passed=2, deselected=2)
     assert (done.stat().st_mtime_ns, json.loads(done.read_text())["session"]) == before
     assert len(list((run_dir / "episodes").iterdir())) == 2
@@ -171,7 +171,7 @@ def test_finished_run_resumes_in_process_and_a_stale_episode_brings_the_workers_
 
     def resume(name: str) -> tuple[pytest.RunResult, list[str]]:
         log.unlink(missing_ok=True)
-        result = suite.runpytest_subprocess(
+        result = suite.runpytest(
             *small(
                 f"--emrd-cassettes={recorded}",
                 "--emrd-record-mode=none",
@@ -232,16 +232,16 @@ def test_resume_without_saved_metrics_keeps_the_workers(suite, small, recorded):
         "2",
         "-v",
     )
-    suite.runpytest_subprocess(*args).assert_outcomes(passed=4)
+    suite.runpytest(*args).assert_outcomes(passed=4)
     saved = run_dir / "metrics" / "scout-baseline-office-ep00.json"
     saved.unlink()
-    result = suite.runpytest_subprocess(*args)
+    result = suite.runpytest(*args)
     result.assert_outcomes(passed=4)
     assert "no xdist worker started" not in result.stdout.str()
     result.stdout.fnmatch_lines(["[[]gw?[]]*PASSED*test_gate*"])
     assert saved.is_file()
     suite.makepyfile(test_other="def test_other():\n    pass\n")
-    mixed = suite.runpytest_subprocess(*args)  # finished again: in-process, saying so
+    mixed = suite.runpytest(*args)  # finished again: in-process, saying so
     mixed.assert_outcomes(passed=5, warnings=1)
     mixed.stdout.fnmatch_lines(
         ["*no xdist worker started*", "*pytest-emrd: 1 non-EMRD test(s) (e.g. test_other.py::"

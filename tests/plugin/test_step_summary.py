@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import pytest
 
+from tests._sandbox import Sandbox
+
 EARLIER = "## an earlier step\n\nkept as it was\n"
 
 
@@ -13,7 +15,7 @@ def test_the_summary_is_appended_once(suite, small, recorded, monkeypatch, xdist
     target = suite.path / "step_summary.md"
     target.write_text(EARLIER, encoding="utf-8")
     monkeypatch.setenv("GITHUB_STEP_SUMMARY", str(target))
-    result = suite.runpytest_subprocess(
+    result = suite.runpytest(
         *small(f"--emrd-cassettes={recorded}", "--emrd-record-mode=none"), *xdist
     )
     result.assert_outcomes(passed=4)
@@ -27,9 +29,9 @@ def test_the_summary_is_appended_once(suite, small, recorded, monkeypatch, xdist
     assert "scout" in summary and "baseline" in summary
 
 
-def test_no_summary_without_emrd_cases(pytester: pytest.Pytester, monkeypatch):
-    target = pytester.path / "step_summary.md"
+def test_no_summary_without_emrd_cases(sandbox: Sandbox, monkeypatch):
+    target = sandbox.path / "step_summary.md"
     monkeypatch.setenv("GITHUB_STEP_SUMMARY", str(target))
-    pytester.makepyfile("def test_plain():\n    assert 2 * 2 == 4\n")
-    pytester.runpytest_subprocess("-p", "no:cacheprovider").assert_outcomes(passed=1)
+    sandbox.makepyfile("def test_plain():\n    assert 2 * 2 == 4\n")
+    sandbox.runpytest("-p", "no:cacheprovider").assert_outcomes(passed=1)
     assert not target.exists()

@@ -6,13 +6,15 @@ from pathlib import Path
 
 import pytest
 
+from tests._sandbox import Sandbox
+
 ROOT = Path(__file__).resolve().parents[2]
 
 
 @pytest.fixture
-def bench(pytester: pytest.Pytester) -> pytest.Pytester:
-    pytester.makepyfile(test_emrd=(ROOT / "benchmarks" / "test_emrd.py").read_text())
-    return pytester
+def bench(sandbox: Sandbox) -> Sandbox:
+    sandbox.makepyfile(test_emrd=(ROOT / "benchmarks" / "test_emrd.py").read_text())
+    return sandbox
 
 
 def _args(*extra: str) -> list[str]:
@@ -29,9 +31,7 @@ def test_a_refusing_server_stops_the_live_grid_before_any_episode(
 ):
     fake_vllm.image_limit = 1
     models = registry_for(fake_vllm.base_url)
-    result = bench.runpytest_subprocess(
-        *_args("--emrd-model=qwen3-vl-32b", f"--emrd-models={models}"), *xdist
-    )
+    result = bench.runpytest(*_args("--emrd-model=qwen3-vl-32b", f"--emrd-models={models}"), *xdist)
     assert result.ret == pytest.ExitCode.USAGE_ERROR
     result.stdout.fnmatch_lines(
         [
@@ -50,11 +50,11 @@ def test_a_refusing_server_stops_the_live_grid_before_any_episode(
 def test_a_passing_preflight_runs_the_grid_and_a_replay_needs_none(bench, fake_vllm, registry_for):
     models = registry_for(fake_vllm.base_url)
     args = _args("--emrd-model=qwen3-vl-32b", f"--emrd-models={models}", "-k", "ep00")
-    first = bench.runpytest_subprocess(*args)
+    first = bench.runpytest(*args)
     first.assert_outcomes(passed=1)
     assert "PASS  probe" in first.stdout.str() and "1 episodes x <= 50 steps" in first.stdout.str()
     seen = len(fake_vllm.requests)
-    replay = bench.runpytest_subprocess(*args, "--emrd-record-mode=none")
+    replay = bench.runpytest(*args, "--emrd-record-mode=none")
     replay.assert_outcomes(passed=1)
     assert "emrd preflight" not in replay.stdout.str(), "a replay calls nobody"
     assert len(fake_vllm.requests) == seen
@@ -62,7 +62,7 @@ def test_a_passing_preflight_runs_the_grid_and_a_replay_needs_none(bench, fake_v
 
 def test_collect_only_preflights_nothing(bench, fake_vllm, registry_for):
     models = registry_for(fake_vllm.base_url)
-    result = bench.runpytest_subprocess(
+    result = bench.runpytest(
         *_args("--emrd-model=qwen3-vl-32b", f"--emrd-models={models}", "--collect-only")
     )
     assert result.ret == 0 and fake_vllm.requests == []
@@ -72,7 +72,7 @@ def test_collect_only_preflights_nothing(bench, fake_vllm, registry_for):
 def test_preflight_off_lets_the_episode_meet_the_refusal(bench, fake_vllm, registry_for):
     fake_vllm.image_limit = 1
     models = registry_for(fake_vllm.base_url)
-    result = bench.runpytest_subprocess(
+    result = bench.runpytest(
         *_args("--emrd-model=qwen3-vl-32b", f"--emrd-models={models}", "-k", "ep00"),
         "--emrd-preflight=off",
     )

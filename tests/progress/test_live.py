@@ -130,11 +130,11 @@ def test_the_board_prints_retries_at_once_and_steps_at_most_every_interval(tmp_p
 
 @pytest.mark.slow
 @pytest.mark.parametrize("xdist", [["-p", "no:xdist"], ["-n", "2"]], ids=["serial", "xdist"])
-def test_a_live_session_shows_steps_retries_and_the_table(pytester, flaky, xdist):
+def test_a_live_session_shows_steps_retries_and_the_table(sandbox, flaky, xdist):
     flaky.fail_on = frozenset({2, 3})  # request 1 is the preflight probe
-    pytester.makepyfile(test_emrd=(ROOT / "benchmarks" / "test_emrd.py").read_text())
-    models = flaky.registry_file(pytester.path)
-    result = pytester.runpytest_subprocess(
+    sandbox.makepyfile(test_emrd=(ROOT / "benchmarks" / "test_emrd.py").read_text())
+    models = flaky.registry_file(sandbox.path)
+    result = sandbox.runpytest(
         "-p",
         "no:cacheprovider",
         "--emrd-model=flaky",
