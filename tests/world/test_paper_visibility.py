@@ -83,7 +83,6 @@ def test_from_1m_before_a_doorway_at_most_3_objects_of_the_next_room_are_visible
         assert len(next_room) <= 3, (doorway, sorted(next_room))
 
 
-
 @pytest.mark.parametrize("room", ["Office", "Entrance", "Conference Room"])
 def test_the_simulator_starts_the_20_episodes_of_a_room_on_the_spawn_poses(room: str) -> None:
     sim = BuiltinSimulator()

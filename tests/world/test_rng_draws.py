@@ -8,9 +8,9 @@ import numpy as np
 from hypothesis import given
 from hypothesis import strategies as st
 
-from pytest_emrd.world import condition_params, generate_layout, paper_office
 from pytest_emrd.rooms import ROOM_SLUGS
 from pytest_emrd.trajectory import EpisodeSpec
+from pytest_emrd.world import condition_params, generate_layout, paper_office
 from pytest_emrd.world._motion import SPAWN_POSES, is_free, spawn_points, spawn_pose
 from pytest_emrd.world._render import palette
 from pytest_emrd.world._rng import StableRng

@@ -63,6 +63,7 @@ def fresh_plan() -> dict[str, Any]:
         "near": [],
         "sweeps": [],
         "moves": 0,
+        "clears": 0,
         "tried": [],
         "blocked": [],
         "visited": [],
@@ -123,7 +124,7 @@ def _vote(plan: dict[str, Any], briefing: Briefing, visible: tuple[Seen, ...]) -
 
 def _enter_room(plan: dict[str, Any]) -> None:
     """Reset per-visit bookkeeping after walking through a doorway."""
-    plan.update(phase="sweep", turns=0, votes={}, here={}, found=0, tries=0, moves=0)
+    plan.update(phase="sweep", turns=0, votes={}, here={}, found=0, tries=0, moves=0, clears=0)
     plan.update(spots={}, near=[], sweeps=[], tried=[], blocked=[])
     plan["used"] = [d for d in plan["used"] if d != plan["target"]] + [plan["target"]]
     plan.update(target="", goal="")
