@@ -32,6 +32,7 @@ AWKWARD = [
     "Turn(Up)",
     "walk around",
     "Goto(Doorway)",
+    "Goto(Door)",
     "Turn(Right)",
     "Goto(Chair)",
 ]

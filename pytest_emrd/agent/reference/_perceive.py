@@ -64,6 +64,8 @@ def fresh_plan() -> dict[str, Any]:
         "sweeps": [],
         "moves": 0,
         "clears": 0,
+        "acted": 0,
+        "reach": 0.0,
         "tried": [],
         "blocked": [],
         "visited": [],
@@ -168,6 +170,7 @@ def perceive(
         x, z = _place(percept, seen)
         if seen.object_type == DOORWAY:
             plan["doors"][seen.object_id] = [x, z]
+            plan["reach"] = max(plan["reach"], round(seen.distance, 2))
             rooms = plan["door_rooms"].setdefault(seen.object_id, [])
             if seen.object_id in inside:  # Goto of a doorway seen through another stops short
                 plan["here"].setdefault(seen.object_id, round(seen.distance, 2))

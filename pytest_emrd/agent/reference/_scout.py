@@ -8,16 +8,18 @@ scout decides, in this order:
 2. **clear the room**: while it is not complete (see rule 4), the visit has a clearing
    move left (:data:`MAX_CLEARS`) and the budget affords one (:data:`RESERVE` actions,
    leaving :data:`PER_ROOM` for each room not yet visited): ``Goto`` the object of the
-   last sweep farthest from every point this visit swept from, and sweep again;
+   last sweep farthest from every point this visit swept from, among those from which a
+   known doorway lies no farther than any doorway has yet been seen (so that the doorway
+   can be seen again from there), and sweep again;
 3. an unused doorway seen during this visit (nearest first): face it, ``Goto`` through;
 4. **reposition**, while rooms remain unvisited, fewer than :data:`MAX_MOVES` repositions
-   were made in this visit and the room is not complete (no doorway, or not every object
-   its inventory line lists, seen during this visit; a room it cannot identify is never
-   complete): ``Goto`` an object of this room seen during the last sweep, at least
-   :data:`MIN_MOVE_M` away and not targeted before: the one nearest to an unused doorway
-   known to open from this room (seen inside it, on this visit or an earlier one), else
-   the one farthest from every point this visit swept from (towards unexplored space);
-   then sweep again;
+   (:data:`LOST_MOVES` before it sees a doorway) were made in this visit and the room is
+   not complete (no doorway, or not every object its inventory line lists, seen during
+   this visit; a room it cannot identify is never complete): ``Goto`` an object of this
+   room seen during the last sweep, at least :data:`MIN_MOVE_M` away and not targeted
+   before: the one nearest to an unused doorway known to open from this room (seen inside
+   it, on this visit or an earlier one), else the one farthest from every point this
+   visit swept from (towards unexplored space); then sweep again;
 5. every doorway it knows of already used: ``Term`` (nothing left to try);
 6. the doorway of this visit used longest ago: back through it;
 7. otherwise ``Term``.
@@ -60,6 +62,8 @@ from pytest_emrd.agent.reference._read import Briefing, Percept
 MAX_FACE_TRIES: Final = 2
 #: Repositions per room visit (each costs about five actions of the 50).
 MAX_MOVES: Final = 3
+#: Repositions of a visit that has seen no doorway yet (lost in the dark).
+LOST_MOVES: Final = 6
 #: Clearing moves per room visit (rule 2), besides the repositions.
 MAX_CLEARS: Final = 2
 #: A reposition target lies at least this far (m) from where the scout stands.
@@ -100,10 +104,13 @@ def _complete(plan: Mapping[str, Any], briefing: Briefing) -> bool:
     return all(seen[t] >= n for t, n in counts.items())
 
 
-def _spot(plan: Mapping[str, Any], towards: list[list[float]]) -> str:
+def _spot(
+    plan: Mapping[str, Any], towards: list[list[float]], within: list[list[float]] | None = None
+) -> str:
     """An object of the last sweep to reposition at ("" when none): the one nearest to a
     point of ``towards`` and nearer to it than the scout, or with ``towards`` empty the one
-    farthest from every point this visit swept from."""
+    farthest from every point this visit swept from. ``within``: only objects no farther
+    from one of these points than the farthest a doorway has been seen (``reach``)."""
     spots: dict[str, list[Any]] = plan["spots"]
 
     def xz(label: str) -> tuple[float, float]:
@@ -114,6 +121,10 @@ def _spot(plan: Mapping[str, Any], towards: list[list[float]]) -> str:
 
     far = [o for o in plan["near"] if math.dist(xz(o), plan["at"]) >= MIN_MOVE_M]
     candidates = [o for o in far if o not in plan["tried"]]
+    if within is not None:
+        candidates = [
+            o for o in candidates if any(math.dist(xz(o), p) <= plan["reach"] for p in within)
+        ]
     if towards:
         here = gap(plan["at"])
         closer = [o for o in candidates if gap(xz(o)) < here]
@@ -123,8 +134,10 @@ def _spot(plan: Mapping[str, Any], towards: list[list[float]]) -> str:
 
 
 def _reposition(plan: dict[str, Any], towards: list[list[float]]) -> bool:
-    """Target a spot (see :func:`_spot`) if the visit has a reposition left."""
-    spot = _spot(plan, towards) if plan["moves"] < MAX_MOVES else ""
+    """Target a spot (see :func:`_spot`) if the visit has a reposition left
+    (:data:`MAX_MOVES`, or :data:`LOST_MOVES` while it has seen no doorway)."""
+    limit = MAX_MOVES if plan["here"] else LOST_MOVES
+    spot = _spot(plan, towards) if plan["moves"] < limit else ""
     if spot:
         plan["tried"].append(spot)
         plan.update(target=spot, goal="spot", moves=plan["moves"] + 1, phase="face", tries=0)
@@ -136,7 +149,8 @@ def _clear(plan: dict[str, Any], briefing: Briefing, percept: Percept) -> bool:
     complete, the visit has a clearing move left and the budget affords it."""
     if plan["clears"] >= MAX_CLEARS or _complete(plan, briefing):
         return False
-    spot = _spot(plan, []) if _affordable(plan, briefing, percept) else ""
+    doors = [xz for d, xz in plan["doors"].items() if d not in plan["blocked"]]
+    spot = _spot(plan, [], doors) if _affordable(plan, briefing, percept) else ""
     if spot:
         plan["tried"].append(spot)
         plan.update(target=spot, goal="spot", clears=plan["clears"] + 1, phase="face", tries=0)
@@ -151,8 +165,9 @@ def _clear_last(plan: dict[str, Any], briefing: Briefing, percept: Percept) -> b
 
 def _affordable(plan: Mapping[str, Any], briefing: Briefing, percept: Percept) -> bool:
     """Whether a reposition (:data:`RESERVE` actions) leaves :data:`PER_ROOM` actions for
-    each room not yet visited."""
-    left = percept.max_steps - percept.step - RESERVE
+    each room not yet visited, counting the scout's own actions (``acted``): a wasted step
+    (an unreadable reply, a planted invalid action) changes no decision."""
+    left = percept.max_steps - plan["acted"] - RESERVE
     return left > PER_ROOM * (len(briefing.rooms) - len(plan["visited"]))
 
 
@@ -234,6 +249,7 @@ def scout_action(
     plan: dict[str, Any], briefing: Briefing, percept: Percept, *, homing: bool = False
 ) -> tuple[str, str]:
     """(action, reasoning) of the room-clearing scout (``homing``: see the module docstring)."""
+    plan["acted"] += 1
     if percept.step >= percept.max_steps:
         _close_room(plan)
         room, why = _home_term(plan, briefing)
