@@ -113,7 +113,7 @@ def _sight(scene: Scene, pose: WorldPose, visibility: float, landmarks: float) -
     dz = scene.samples[..., 1] - pose.z
     fwd = dx * fx + dz * fz
     lat = dx * rx + dz * rz
-    limit = np.where(_landmark(scene), landmarks, visibility)[:, None]
+    limit = np.where(occluders(scene).landmark, landmarks, visibility)[:, None]
     near = (fwd > 0) & (np.abs(lat) <= fwd) & (dx * dx + dz * dz <= limit * limit)
     obj, j = np.nonzero(near)
     clear = in_line_of_sight(scene, np.float64(pose.x), np.float64(pose.z), obj, j)
@@ -128,14 +128,10 @@ def _sight(scene: Scene, pose: WorldPose, visibility: float, landmarks: float) -
     return Sight(*arrays, scene.layout.objects)
 
 
-def _landmark(scene: Scene) -> np.ndarray:
-    """``(N,)`` whether each object is a landmark (a doorway or the exit)."""
-    return occluders(scene).landmark
-
-
 @dataclass(frozen=True, eq=False)
 class Occluders:
-    """The furniture that hides what stands behind it, and every object's top."""
+    """Per scene: the furniture that hides what stands behind it, every object's top, and
+    which objects are landmarks (seen as far as the frame draws)."""
 
     index: np.ndarray
     """``(K,)`` object indices of the occluders."""

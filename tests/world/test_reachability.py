@@ -21,8 +21,8 @@ def _reachable_rooms(layout: Layout, spawn: str, condition: str, doorways_only: 
         pose = frontier.pop()
         room = layout.room_at(pose.x, pose.z) or ""
         nexts = [WorldPose(pose.x, pose.z, (pose.heading + d) % 360) for d in (90, 180, 270)]
-        seen = sight(scene, pose, params.visibility_distance, params.draw_distance)
-        for i in seen.mask.nonzero()[0]:
+        view = sight(scene, pose, params.visibility_distance, params.draw_distance)
+        for i in view.mask.nonzero()[0]:
             obj = layout.objects[i]
             if obj.object_type == "Doorway":
                 door = next(d for d in layout.doorways if d.object_id == obj.object_id)
