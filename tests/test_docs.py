@@ -53,7 +53,7 @@ def test_the_cli_reference_prints_every_emrd_subcommand(site: Path) -> None:
     from pytest_emrd.cli import COMMANDS
 
     page = (site / "reference" / "cli" / "index.html").read_text()
-    assert all(f"emrd {name}" in page for name in COMMANDS)
+    assert all(f"emrd {name.replace('_', '-')}" in page for name in COMMANDS)
     assert "usage: emrd report" in page
 
 

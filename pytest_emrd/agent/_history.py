@@ -4,9 +4,16 @@ Appendix C: the context keeps the system prompt plus the last 10 dialogue turns;
 grows past 21 messages the oldest user/assistant pairs are dropped, never the system
 prompt. A turn is one user message and the model's reply, and the step being asked is
 the newest (still unanswered) turn, so a request carries the system prompt, at most 9
-answered turns and the current user message. In ``single_image`` mode (the paper's
-Claude setting) only the current frame travels as an image; earlier user messages keep
-their text and say that their frame is not re-sent.
+answered turns and the current user message.
+
+``single_image`` mode (the paper's Claude setting: "only the latest frame is sent as an
+image; prior frames are converted to text-only summaries"): the current frame is the one
+image of every request; an earlier frame travels as its summary, which is the model's own
+``observation`` text of that step (:data:`FRAME_SUMMARY`, read with
+:func:`~pytest_emrd.agent._parse.parse_reply`). The paper does not say who wrote its
+summaries; the model's own description is the one summary that adds no second model and no
+information the model did not have. A step whose reply has no readable observation keeps
+its text only.
 
 Messages are OpenAI chat-completions dicts; :mod:`pytest_emrd.agent._clients` converts
 them for the Anthropic Messages API.
@@ -20,12 +27,13 @@ from dataclasses import dataclass
 from typing import Any, Final
 
 from pytest_emrd import frames
+from pytest_emrd.agent._parse import parse_reply
 from pytest_emrd.errors import check_positive_int
 
 #: Dialogue turns in the window, the current (unanswered) one included.
 HISTORY_TURNS: Final = 10
 JPEG_DATA_URL: Final = "data:image/jpeg;base64,"
-FRAME_NOT_RESENT: Final = "[Camera frame of step {step} not re-sent: single-image mode.]"
+FRAME_SUMMARY: Final = "Camera frame of step {step}, as you described it: {observation}"
 
 
 @dataclass(frozen=True)
@@ -56,13 +64,8 @@ class UserTurn:
 
 
 def _user_message(turn: UserTurn, *, image: bool) -> dict[str, Any]:
-    if turn.image_url is None:
+    if turn.image_url is None or not image:
         return {"role": "user", "content": turn.text}
-    if not image:
-        return {
-            "role": "user",
-            "content": f"{turn.text}\n{FRAME_NOT_RESENT.format(step=turn.step)}",
-        }
     return {
         "role": "user",
         "content": [
@@ -110,7 +113,18 @@ class Conversation:
         pending = self._pending if self._pending and self._pending[0] is current else None
         if pending is not None and not self.single_image:
             user = pending[1]
+        elif self.single_image and current.image_url is not None:
+            user = _summarised(current, reply)
         else:
             user = _user_message(current, image=not self.single_image)
         self._pending = None
         self._answered.append((current, user, {"role": "assistant", "content": reply}))
+
+
+def _summarised(turn: UserTurn, reply: str) -> dict[str, Any]:
+    """``turn``'s message with its frame replaced by the summary (single-image mode)."""
+    observation = " ".join(parse_reply(reply).observation.split())
+    if not observation:
+        return {"role": "user", "content": turn.text}
+    summary = FRAME_SUMMARY.format(step=turn.step, observation=observation)
+    return {"role": "user", "content": f"{turn.text}\n{summary}"}

@@ -14,8 +14,10 @@ Prompt variants (Appendices E and F):
 * ``B1``..``B4`` — the same descriptive suffix appended to all four rooms, neutralising
   one feature as a discriminator (open space, centrality, exits, hazards).
 * ``neutral`` — rooms called Room A-D in Appendix E's order: Room A = Conference Room,
-  Room B = Entrance, Room C = Office, Room D = Kitchen. No real room name appears in any
-  text the model is sent (furniture descriptions such as "large conference table" stay:
+  Room B = Entrance, Room C = Office, Room D = Kitchen, listed in the default order
+  (Room C, Room A, Room D, Room B: "all other prompt components remain identical", so the
+  Neutral vs Baseline test compares names, not line order). No real room name appears in
+  any text the model is sent (furniture descriptions such as "large conference table" stay:
   the paper finds the prior "encoded at the furniture-description level").
 * ``no_inventory`` — the engine's type names (needed for ``Goto``) are kept; counts, the
   room mapping and furniture descriptions are removed.
@@ -29,6 +31,10 @@ protocol: cassettes recorded under another version are stale.
 
 * ``p2`` — furniture profiles, evacuation framing, Appendix E's neutral order, modality-aware
   ``Goto`` wording, ``Term`` always ends the run, one pose line per user message.
+* ``p3`` — MAP asks for every object the coverage inventory ``E`` counts (furniture, items
+  on desks and counters, doorways, the building exit), so a model that maps what it is
+  asked for can reach AEC 1.0; ``neutral`` lists its rooms in the default order (only the
+  names differ from ``default``); single-image summaries (:mod:`pytest_emrd.agent._history`).
 """
 
 from __future__ import annotations
@@ -44,7 +50,7 @@ from pytest_emrd.trajectory import MAX_STEPS, MODALITIES, VARIANTS
 if TYPE_CHECKING:
     from pytest_emrd.world._model import VisibleObject
 
-PROMPT_VERSION: Final = "p2"
+PROMPT_VERSION: Final = "p3"
 
 #: Appendix E: the suffix every room receives under each body-level intervention.
 ROOM_SUFFIXES: Final[dict[str, str]] = {
@@ -100,8 +106,9 @@ building, which you can only partially observe, and locate the safest evacuation
 point within a budget of {max_steps} actions. You see through a first-person RGB camera \
 (90-degree field of view) and cannot see through walls. Your goals:
 1. EXPLORE: visit every room of the building within the action budget.
-2. MAP: keep a cognitive map of every salient piece of furniture you discover, with its \
-global 2D position (x, z) in metres and the direction it faces. Use the frame of your \
+2. MAP: keep a cognitive map of every object you discover: each piece of furniture, each \
+item on a desk or counter, every doorway and the building exit, with its global 2D \
+position (x, z) in metres and the direction it faces. Use the frame of your \
 starting pose: origin (0, 0) where you started, +z straight ahead along your initial \
 heading, +x to your right. Headings are degrees clockwise from your initial heading.
 3. REMEMBER: before updating the map, run a DEDUPLICATION CHECK every step: for each object \
@@ -205,9 +212,9 @@ def read_profile(text: str) -> dict[str, int]:
 
 
 def _room_order(variant: str) -> list[tuple[str, str]]:
-    """(label shown, canonical room) in prompt order."""
-    aliases = room_aliases(variant)
-    return sorted(aliases.items()) if variant == "neutral" else list(aliases.items())
+    """(label shown, canonical room) in prompt order: the default order under every variant."""
+    label = {room: alias for alias, room in room_aliases(variant).items()}
+    return [(label[room], room) for room in rooms.ROOM_NAMES]
 
 
 def _overview(inventory: Mapping[str, Mapping[str, int]], variant: str) -> str:

@@ -4,12 +4,23 @@
 test keeps them equal). Reading a server's refusal back into the missing flag is preflight's job
 (:func:`pytest_emrd.preflight.vllm_refusal`, run by ``emrd check``).
 
+As the paper served them (Appendix C, Table "Inference Hyperparameters"): Qwen3-VL-32B,
+Ovis2-34B and Pixtral-12B on vLLM with 4-way tensor parallelism in BFloat16, with 16,384 /
+24,576 / 16,384 tokens of context (:data:`PAPER_CONTEXT`). InternVL3-14B ran on HF
+Transformers in INT8 (bitsandbytes) with the model's default context; here it is served by
+vLLM in BFloat16 on one GPU with the model's default context (no ``--max-model-len``): the
+one stated departure, because the product talks to every model through an OpenAI-compatible
+endpoint (docs/interpretation/world.md has the arithmetic and the departures).
+
+A full 10-turn window at 512x512 (prompt estimated as in :mod:`pytest_emrd.preflight`, 500
+tokens a reply) plus ``max_tokens`` 4096 needs about 12.2k tokens for Qwen3-VL (256 tokens a
+frame), 22.6k for Ovis2 (1,290) and 20.2k for Pixtral (1,056): Pixtral's 16,384 holds 7 turns
+of such a window, so vLLM refuses the longer requests of an episode (prompt plus
+``max_tokens`` over ``--max-model-len`` is an HTTP 400). The recipe keeps the paper's figure;
+``emrd check`` reports the shortfall before a run.
+
 Flag syntax is vLLM >= 0.11.0 (the first release with Qwen3-VL): ``--limit-mm-per-prompt``
 takes JSON since 0.10.0 (the older ``image=10`` form is refused, vllm-project/vllm#21615).
-Sizes, measured with :func:`~pytest_emrd.agent.build_request` on a full history window of the
-``scout`` agent (``docs/user-guide/vllm.md`` has the arithmetic): at most
-:data:`~pytest_emrd.agent.HISTORY_TURNS` frames, and prompt plus ``max_tokens`` 4096 stays
-under 30.5k tokens for every model, so 32768 tokens of context fit all four.
 """
 
 from __future__ import annotations
@@ -19,10 +30,21 @@ from typing import Final
 from pytest_emrd.agent._config import ModelConfig
 from pytest_emrd.agent._history import HISTORY_TURNS
 
-MAX_MODEL_LEN: Final = 32768
-"""``--max-model-len`` for the four shipped open models (full window + max_tokens fits)."""
+PAPER_CONTEXT: Final[dict[str, int | None]] = {
+    "Qwen/Qwen3-VL-32B-Instruct": 16384,
+    "AIDC-AI/Ovis2-34B": 24576,
+    "mistralai/Pixtral-12B-2409": 16384,
+    "OpenGVLab/InternVL3-14B": None,
+}
+"""``--max-model-len`` per model: the paper's context lengths (None: the model's default)."""
+TENSOR_PARALLEL: Final[dict[str, int]] = {
+    "Qwen/Qwen3-VL-32B-Instruct": 4,
+    "AIDC-AI/Ovis2-34B": 4,
+    "mistralai/Pixtral-12B-2409": 4,
+    "OpenGVLab/InternVL3-14B": 1,
+}
+"""GPUs per model: the paper's TP=4 on L4s; InternVL3-14B on a single GPU."""
 IMAGE_LIMIT_FLAG: Final = f"--limit-mm-per-prompt '{{\"image\": {HISTORY_TURNS}}}'"
-CONTEXT_FLAG: Final = f"--max-model-len {MAX_MODEL_LEN}"
 
 _MODEL_FLAGS: Final[dict[str, tuple[str, ...]]] = {
     "Qwen/Qwen3-VL-32B-Instruct": (),
@@ -41,10 +63,14 @@ config and load formats for Pixtral-12B-2409 (Mistral's vLLM deployment guide)."
 
 def serve_command(config: ModelConfig, *, port: int = 8000) -> str:
     """The ``vllm serve`` command for a shipped open model (``KeyError`` for any other)."""
+    model = config.model_id
+    context = PAPER_CONTEXT[model]
     flags = (
-        *_MODEL_FLAGS[config.model_id],
+        *_MODEL_FLAGS[model],
+        "--dtype bfloat16",
+        f"--tensor-parallel-size {TENSOR_PARALLEL[model]}",
         IMAGE_LIMIT_FLAG,
-        CONTEXT_FLAG,
+        *(() if context is None else (f"--max-model-len {context}",)),
         f"--port {port}",
     )
     return " \\\n    ".join((f"vllm serve {config.model_id}", *flags))

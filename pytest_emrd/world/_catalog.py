@@ -220,6 +220,14 @@ KINDS: Final[Mapping[str, Kind]] = {
     )
 }
 
+#: Types whose bodies hide what stands behind them (:mod:`pytest_emrd.world._visibility`):
+#: every floor-standing kind with a solid body (cabinets, tops, screens, upholstery).
+#: Chairs, stools and plants are open frames or foliage and hide nothing; doorways and the
+#: exit are openings in the wall.
+OCCLUDER_TYPES: Final = frozenset(
+    {"Desk", "DiningTable", "ShelvingUnit", "Television", "Fridge", "CounterTop", "ArmChair"}
+)
+
 #: objectType -> category, for every type the built-in office uses.
 CATEGORY_OF: Final[Mapping[str, str]] = {k.object_type: k.category for k in KINDS.values()}
 

@@ -20,7 +20,7 @@ from functools import cache
 from typing import Final
 
 from pytest_emrd.errors import check_choice
-from pytest_emrd.rooms import SLUG_ROOMS
+from pytest_emrd.rooms import ROOM_SLUGS, SLUG_ROOMS
 from pytest_emrd.trajectory import LAYOUTS, EpisodeSpec
 from pytest_emrd.world._layout import generate_layout
 from pytest_emrd.world._model import Layout
@@ -60,3 +60,20 @@ def episode_world(spec: EpisodeSpec) -> EpisodeWorld:
     """The world of ``spec``: its office, spawn room and seed."""
     check_choice("spawn", spec.spawn, SLUG_ROOMS)
     return EpisodeWorld(episode_layout(spec.layouts, spec.seed), SLUG_ROOMS[spec.spawn], spec.seed)
+
+
+INDEXED_EPISODES: Final = 1000
+"""Episode indices :func:`episode_index` recognises per spawn room."""
+
+
+@cache
+def _indices(spawn_room: str) -> dict[int, int]:
+    slug = ROOM_SLUGS[spawn_room]
+    return {EpisodeSpec("", "baseline", slug, i).seed: i for i in range(INDEXED_EPISODES)}
+
+
+def episode_index(spawn_room: str, seed: int) -> int | None:
+    """The index of the episode of ``spawn_room`` (canonical name) whose seed is ``seed``
+    (:attr:`EpisodeSpec.seed`, the same for every model, condition and variant), among the
+    first :data:`INDEXED_EPISODES`; None for any other seed."""
+    return _indices(spawn_room).get(seed)

@@ -8,10 +8,15 @@
 * ``Goto(Doorway_N)``: from one of its rooms the agent passes through to 1 m inside the
   other room, facing away from the doorway; a doorway seen through another doorway is
   walked up to (1 m before it, facing it), so a single action never skips a room.
-* Spawn: a point within 1.5 m of the spawn room's centre with 0.6 m clear around it (when
-  a table fills the centre, one of the 8 free points nearest to it; the clearance drops to
-  the agent's radius only if the room has no such point), chosen by the episode seed on a
-  0.25 m grid, with a seeded cardinal heading.
+* Spawn: the episodes of a spawn room stand on distinct points. The room's spawn points
+  are the free points of a 0.25 m grid with 0.6 m clear around them (the agent's radius
+  only if the room has none) within 1.0 m of its centre, widened to the
+  :data:`SPAWN_POSES` free points nearest the centre when fewer lie that close (a table
+  fills the Conference Room's centre), in an order shuffled once per room. Episode ``i``
+  of the room (recognised by its seed, :func:`pytest_emrd.world._episode.episode_index`)
+  stands on point ``i`` of that order, so the first :data:`SPAWN_POSES` episodes of a room
+  never share a position; its cardinal heading is drawn from the episode seed. A seed of
+  no episode (a benchmark's) picks a point by the seed.
 """
 
 from __future__ import annotations
@@ -26,13 +31,12 @@ from pytest_emrd.world._scene import AGENT_RADIUS, Scene
 STAND_OFF = (0.7, 0.6, 0.8)
 SLIDES = (0.0, -0.4, 0.4, -0.8, 0.8)
 THROUGH = 1.0
-SPAWN_RADIUS = 1.5
+SPAWN_RADIUS = 1.0
 SPAWN_STEP = 0.25
 SPAWN_CLEARANCE = 0.6
 """Free space around a spawn point, so the first view is not a table top."""
-SPAWN_FALLBACK = 8
-"""When nothing within 1.5 m of the centre is free, the seed picks among this many free
-spots nearest the centre."""
+SPAWN_POSES = 20
+"""Spawn points per room at least (the paper's 20 runs per starting room)."""
 #: Outward normal of a footprint side -> heading that faces the side from outside.
 _SIDES = (((0.0, 1.0), 180.0), ((0.0, -1.0), 0.0), ((1.0, 0.0), 270.0), ((-1.0, 0.0), 90.0))
 
@@ -95,17 +99,27 @@ def through(scene: Scene, doorway: Doorway, pose: WorldPose, current: str) -> Wo
 
 
 def spawn_pose(scene: Scene, room: Room, seed: int) -> WorldPose:
-    """The seeded start pose in ``room``: a free spot as near its centre as the furniture
-    allows, with a seeded cardinal heading."""
+    """The start pose in ``room`` of the episode with ``seed``: its own spawn point (see the
+    module docstring), with a cardinal heading drawn from the seed."""
+    from pytest_emrd.world._episode import episode_index
+
+    points = spawn_points(scene, room)
     rng = StableRng(f"emrd-spawn:{seed}:{room.name}")
+    index = episode_index(room.name, seed)
+    x, z = points[index % len(points) if index is not None else rng.integer(0, len(points) - 1)]
+    return WorldPose(x, z, rng.choice((0.0, 90.0, 180.0, 270.0)))
+
+
+def spawn_points(scene: Scene, room: Room) -> list[tuple[float, float]]:
+    """The spawn points of ``room``, in the order episodes take them (shuffled per room)."""
     gx, gz, d2, order = spawn_grid(room)
     for clearance in (SPAWN_CLEARANCE, AGENT_RADIUS):
-        ok = spawn_clear(scene, room, gx, gz, clearance)
-        free = order[ok[order]]
+        free = order[spawn_clear(scene, room, gx, gz, clearance)[order]]
         if free.size:
             near = free[d2[free] <= SPAWN_RADIUS**2]
-            k = rng.choice((near if near.size else free[:SPAWN_FALLBACK]).tolist())
-            return WorldPose(float(gx[k]), float(gz[k]), rng.choice((0.0, 90.0, 180.0, 270.0)))
+            pool = near if near.size >= SPAWN_POSES else free[:SPAWN_POSES]
+            points = [(float(gx[k]), float(gz[k])) for k in pool]
+            return StableRng(f"emrd-spawn-points:{room.name}").shuffled(points)
     raise ConfigError(f"room={room.name!r} has no free spot for the agent; the layout is full.")
 
 

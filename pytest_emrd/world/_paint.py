@@ -51,6 +51,6 @@ def object_boxes(scene: Scene, pose: WorldPose, params: ConditionParams) -> tupl
     arrays = (scene.parts, scene.part_object, scene.part_facing, scene.rects, scene.centres)
     n = len(scene.parts)
     out = (np.empty((n, 4)), np.empty((n, 2)), *(np.empty(n, np.int64) for _ in range(4)))
-    vis2 = params.visibility_distance**2
+    vis2 = params.draw_distance**2
     count = boxes_in_view((*arrays, scene.support, scene.part_label), eye, vis2, _CAMERA, out)
     return tuple(a[:count] for a in out)

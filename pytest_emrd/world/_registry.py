@@ -44,7 +44,7 @@ def world_version(backend: str = "builtin") -> str:
     ``builtin``: :data:`~pytest_emrd.world.WORLD_VERSION`. ``ai2thor``: the thor backend's
     own version joined with the builtin one, because THOR episodes are built from the builtin
     layouts and spawn poses and answer with the builtin feedback wording; a change to either
-    invalidates them (``ai2thor-1+builtin-4``).
+    invalidates them (``ai2thor-1+builtin-5``).
     """
     from pytest_emrd.world._version import WORLD_VERSION
 

@@ -127,7 +127,7 @@ def render(scene: Scene, pose: WorldPose, params: ConditionParams, table: np.nda
     view = (dx, dz, np.minimum(t_wall, 1e3), along_x, ox, oz)
     rooms = (scene.floor_raster, scene.room_raster, float(RASTER))
     boxes = object_boxes(scene, pose, params)
-    fog = (params.visibility_distance, params.fog)
+    fog = (params.draw_distance, params.fog)
     frame = np.empty((SIZE, SIZE, 3), dtype=np.uint8)
     compose(frame, _buffer(), table, view, rooms, boxes, _CAMERA, _LABELS, fog)
     return frame

@@ -206,7 +206,9 @@ class BuiltinSimulator(SemanticStep):
 
     def _current_sight(self) -> Sight:
         if self._sight is None:
-            self._sight = sight(self._require(), self._pose, self._params.visibility_distance)
+            params = self._params
+            scene, pose = self._require(), self._pose
+            self._sight = sight(scene, pose, params.visibility_distance, params.draw_distance)
         return self._sight
 
     def _render(self) -> tuple[str, View]:

@@ -1,16 +1,24 @@
-"""What the agent sees: field of view, distance limit and wall occlusion.
+"""What the agent sees: field of view, distance limit, walls and furniture occlude.
 
 An object is visible from a pose when at least one of its sample points (centre, edge
 midpoints and corners of its footprint; points along the gap for a doorway) is
 
 * inside the 90 degree field of view (``|lateral| <= forward``),
-* no farther than the condition's visibility distance, and
-* not hidden by a wall: the segment from the agent to the point crosses no wall segment
-  (doorway gaps are open, so rooms are seen through doorways, never through walls).
+* no farther than the condition's visibility distance (baseline 3 m, low light 1.5 m:
+  :mod:`pytest_emrd.world._conditions`), and
+* in the line of sight: the segment from the agent to the point crosses no wall segment
+  (doorway gaps are open), and the line from the eye (1.5 m up) to the object's top above
+  that point passes through no occluding piece of furniture (a box from the floor to its
+  height over its footprint; :data:`~pytest_emrd.world._catalog.OCCLUDER_TYPES`: desks,
+  tables, shelving, television, fridge, counters, armchairs). An object never hides itself
+  nor the items standing on it.
 
-Furniture does not occlude in this test. A visible object's bearing is that of its centre,
-clipped to the field of view (``[-45, 45]``, negative to the left), and its distance is to
-its centre.
+The frame draws the same boxes, so furniture hides in it what it hides here: a shelf or a
+fridge hides what stands behind it up to 1.8 / 1.9 m, a counter or a desk what is lower
+than the line over its top. A visible object's bearing is that of its centre, clipped to
+the field of view (``[-45, 45]``, negative to the left), and its distance is to its centre.
+Plain numpy: one sight is a few (sample points x walls) and (sample points x furniture)
+arrays.
 """
 
 from __future__ import annotations
@@ -23,12 +31,15 @@ from weakref import WeakKeyDictionary
 import numpy as np
 
 from pytest_emrd.errors import ConfigError
+from pytest_emrd.world._catalog import OCCLUDER_TYPES
 from pytest_emrd.world._conditions import condition_params
 from pytest_emrd.world._geometry import right_of, unit
 from pytest_emrd.world._model import Layout, VisibleObject, WorldObject, WorldPose
 from pytest_emrd.world._scene import Scene, scene_of
 
 HALF_FOV = 45.0
+EYE = 1.5
+"""Eye height in metres (the camera's, :data:`pytest_emrd.world._paint.EYE`)."""
 STAND_SPACING = 0.75
 """Grid spacing of the standing points that define ``G_base``."""
 
@@ -71,20 +82,23 @@ class Sight:
 SIGHT_MEMO = 512
 """Sights kept per scene (oldest dropped first): agents come back to the same poses, within
 an episode and across the episodes of one office."""
-_SIGHTS: WeakKeyDictionary[Scene, dict[tuple[WorldPose, float], Sight]] = WeakKeyDictionary()
+_SIGHTS: WeakKeyDictionary[Scene, dict[tuple[WorldPose, float, float], Sight]] = WeakKeyDictionary()
 _LOCK = threading.Lock()
 
 
-def sight(scene: Scene, pose: WorldPose, visibility: float) -> Sight:
-    """Which objects of ``scene`` are visible from ``pose`` within ``visibility`` metres
-    (the sample points' test is compiled: :func:`pytest_emrd.world._sightlines.sight_mask`).
+def sight(
+    scene: Scene, pose: WorldPose, visibility: float, landmarks: float | None = None
+) -> Sight:
+    """Which objects of ``scene`` are visible from ``pose``: objects within ``visibility``
+    metres, landmarks (doorways, the exit) within ``landmarks`` metres (default: the same).
     The last :data:`SIGHT_MEMO` sights of each scene are kept and returned again."""
-    key = (pose, visibility)
+    reach = visibility if landmarks is None else landmarks
+    key = (pose, visibility, reach)
     with _LOCK:
         memo = _SIGHTS.setdefault(scene, {})
         seen = memo.get(key)
     if seen is None:
-        seen = _sight(scene, pose, visibility)
+        seen = _sight(scene, pose, visibility, reach)
         with _LOCK:
             memo[key] = seen
             while len(memo) > SIGHT_MEMO:
@@ -92,15 +106,19 @@ def sight(scene: Scene, pose: WorldPose, visibility: float) -> Sight:
     return seen
 
 
-def _sight(scene: Scene, pose: WorldPose, visibility: float) -> Sight:
-    from pytest_emrd.world._sightlines import sight_mask  # numba: loaded on first use
-
+def _sight(scene: Scene, pose: WorldPose, visibility: float, landmarks: float) -> Sight:
     fx, fz = unit(pose.heading)
     rx, rz = right_of(pose.heading)
-    mask = np.empty(len(scene.centres), dtype=bool)
-    frame = (float(pose.x), float(pose.z), float(fx), float(fz), float(rx), float(rz))
-    walls = scene.walls
-    sight_mask(scene.samples, frame, visibility * visibility, walls.along_x, walls.along_z, mask)
+    dx = scene.samples[..., 0] - pose.x
+    dz = scene.samples[..., 1] - pose.z
+    fwd = dx * fx + dz * fz
+    lat = dx * rx + dz * rz
+    limit = np.where(occluders(scene).landmark, landmarks, visibility)[:, None]
+    near = (fwd > 0) & (np.abs(lat) <= fwd) & (dx * dx + dz * dz <= limit * limit)
+    obj, j = np.nonzero(near)
+    clear = in_line_of_sight(scene, np.float64(pose.x), np.float64(pose.z), obj, j)
+    mask = np.zeros(len(scene.centres), dtype=bool)
+    mask[obj[clear]] = True
     cx = scene.centres[:, 0] - pose.x
     cz = scene.centres[:, 1] - pose.z
     bearing = np.degrees(np.arctan2(cx * rx + cz * rz, cx * fx + cz * fz))
@@ -108,6 +126,89 @@ def _sight(scene: Scene, pose: WorldPose, visibility: float) -> Sight:
     for a in arrays:
         a.setflags(write=False)  # shared by every caller of the memo
     return Sight(*arrays, scene.layout.objects)
+
+
+@dataclass(frozen=True, eq=False)
+class Occluders:
+    """Per scene: the furniture that hides what stands behind it, every object's top, and
+    which objects are landmarks (seen as far as the frame draws)."""
+
+    index: np.ndarray
+    """``(K,)`` object indices of the occluders."""
+    rects: np.ndarray
+    """``(K, 4)`` their footprints."""
+    height: np.ndarray
+    """``(K,)`` their tops above the floor."""
+    top: np.ndarray
+    """``(N,)`` every object's top above the floor (``elevation + height``)."""
+    landmark: np.ndarray
+    """``(N,)`` whether each object is a landmark (category ``landmark``)."""
+
+
+_OCCLUDERS: WeakKeyDictionary[Scene, Occluders] = WeakKeyDictionary()
+
+
+def occluders(scene: Scene) -> Occluders:
+    """The occluders of ``scene``: floor-standing objects of an :data:`OCCLUDER_TYPES` type."""
+    with _LOCK:
+        known = _OCCLUDERS.get(scene)
+    if known is None:
+        objs = scene.layout.objects
+        index = np.array(
+            [i for i, o in enumerate(objs) if scene.floor[i] and o.object_type in OCCLUDER_TYPES],
+            dtype=np.int64,
+        )
+        top = np.array([o.elevation + o.height for o in objs], dtype=float)
+        landmark = np.array([o.category == "landmark" for o in objs], dtype=bool)
+        known = Occluders(index, scene.rects[index].reshape(-1, 4), top[index], top, landmark)
+        with _LOCK:
+            _OCCLUDERS[scene] = known
+    return known
+
+
+def in_line_of_sight(
+    scene: Scene, px: np.ndarray, pz: np.ndarray, obj: np.ndarray, j: np.ndarray
+) -> np.ndarray:
+    """Whether sample point ``j[m]`` of object ``obj[m]`` is in the line of sight from the
+    eye at ``(px, pz)`` (scalars or arrays as long as ``obj``): no wall crosses the segment
+    to it, and the line from the eye to the object's top above it passes through no
+    occluder other than the object and the object it stands on.
+
+    An occluder is crossed between the segment's parameters ``t_in < t_out`` (slab test on
+    its footprint, clipped to ``[0, 1]``); the line's height ``EYE + (top - EYE) * t`` is
+    linear in ``t``, so it clears the occluder when it is at least the occluder's height
+    at both ends of that interval.
+    """
+    sx, sz = scene.samples[obj, j, 0], scene.samples[obj, j, 1]
+    ddx, ddz = sx - px, sz - pz
+    clear = ~scene.walls.blocks(px, pz, sx, sz)
+    occ = occluders(scene)
+    if not occ.index.size or not obj.size:
+        return clear
+    ox, oz = np.broadcast_to(px, obj.shape)[:, None], np.broadcast_to(pz, obj.shape)[:, None]
+    t_in, t_out = _slab(ox, ddx[:, None], occ.rects[:, 0], occ.rects[:, 2])
+    tz_in, tz_out = _slab(oz, ddz[:, None], occ.rects[:, 1], occ.rects[:, 3])
+    t_in = np.maximum(np.maximum(t_in, tz_in), 0.0)
+    t_out = np.minimum(np.minimum(t_out, tz_out), 1.0)
+    rise = (occ.top[obj] - EYE)[:, None]
+    low = np.minimum(EYE + rise * t_in, EYE + rise * t_out)
+    own = (occ.index[None, :] == obj[:, None]) | (occ.index[None, :] == scene.support[obj][:, None])
+    hidden = (t_in < t_out) & (low < occ.height[None, :]) & ~own
+    return clear & ~hidden.any(axis=1)
+
+
+def _slab(
+    o: np.ndarray, d: np.ndarray, lo: np.ndarray, hi: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """The parameters ``t`` between which ``o + t d`` lies strictly inside ``(lo, hi)``
+    (all ``t`` when ``d == 0`` and ``o`` is inside, none when it is outside)."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        a, b = (lo - o) / d, (hi - o) / d
+    flat = d == 0
+    inside = (o > lo) & (o < hi)
+    t_in = np.where(flat, np.where(inside, -np.inf, np.inf), np.minimum(a, b))
+    t_out = np.where(flat, np.where(inside, np.inf, -np.inf), np.maximum(a, b))
+    return t_in, t_out
 
 
 def standing_points(scene: Scene) -> np.ndarray:
@@ -132,18 +233,22 @@ def discoverable_ids(layout: Layout) -> tuple[str, ...]:
     Standing points are a 0.75 m grid of free points in every room plus the points 1 m
     either side of each doorway; from each, the four cardinal headings together cover
     every direction, so an object counts when one of its sample points lies within the
-    baseline visibility distance with no wall in between. Sorted; cached per layout.
+    baseline visibility distance (a landmark: the drawn distance) in the line of sight
+    (walls and furniture, :func:`in_line_of_sight`). Sorted; cached per layout.
     """
     scene = scene_of(layout)
-    vis = condition_params("baseline").visibility_distance
+    params = condition_params("baseline")
+    vis, landmarks = params.visibility_distance, params.draw_distance
+    limit = np.where(occluders(scene).landmark, landmarks, vis)[:, None] + np.zeros(
+        scene.samples.shape[:2]
+    )
     stand = standing_points(scene)
-    pts = scene.samples.reshape(-1, 2)
-    dx = pts[None, :, 0] - stand[:, None, 0]
-    dz = pts[None, :, 1] - stand[:, None, 1]
-    near = dx * dx + dz * dz <= vis * vis
-    si, pi = np.nonzero(near)
-    clear = ~scene.walls.blocks(stand[si, 0], stand[si, 1], pts[pi, 0], pts[pi, 1])
-    seen = np.zeros(len(pts), dtype=bool)
-    seen[pi[clear]] = True
-    per_object = seen.reshape(scene.samples.shape[:2]).any(axis=1)
-    return tuple(sorted(layout.objects[i].object_id for i in np.flatnonzero(per_object)))
+    seen = np.zeros(len(layout.objects), dtype=bool)
+    obj_all, j_all = np.indices(scene.samples.shape[:2]).reshape(2, -1)
+    for x, z in stand:
+        dx = scene.samples[..., 0].ravel() - x
+        dz = scene.samples[..., 1].ravel() - z
+        near = (dx * dx + dz * dz <= limit.ravel() ** 2) & ~seen[obj_all]
+        obj, j = obj_all[near], j_all[near]
+        seen[obj[in_line_of_sight(scene, np.float64(x), np.float64(z), obj, j)]] = True
+    return tuple(sorted(layout.objects[i].object_id for i in np.flatnonzero(seen)))

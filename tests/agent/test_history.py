@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import base64
+import json
 
 import pytest
 
@@ -79,16 +80,33 @@ def test_every_windowed_frame_is_an_image_in_multi_image_mode() -> None:
     assert len(images) == 5
 
 
-def test_single_image_sends_only_the_newest_frame() -> None:
+def _reply(step: int, observation: str) -> str:
+    body = {"observation": observation, "cognitive_map": {}, "action": "Turn(Right)"}
+    return f"Sure.\n```json\n{json.dumps(body)}\n```"
+
+
+def test_single_image_sends_only_the_newest_frame_and_summaries_of_the_others() -> None:
     conversation = Conversation("SYS", single_image=True)
-    messages = _run(conversation, 4)
+    for step in range(1, 5):
+        conversation.request(_turn(step))
+        conversation.record(_turn(step), _reply(step, f"A desk,\n  a chair ({step})."))
+    messages = conversation.request(_turn(5))
     users = [m for m in messages if m["role"] == "user"]
     assert all(isinstance(m["content"], str) for m in users[:-1])
-    assert (
-        users[0]["content"]
-        == "Step 1 of 50.\n[Camera frame of step 1 not re-sent: single-image mode.]"
+    assert users[0]["content"] == (
+        "Step 1 of 50.\nCamera frame of step 1, as you described it: A desk, a chair (1)."
     )
     assert [p["type"] for p in users[-1]["content"]] == ["text", "image_url"]
+    images = [p for m in messages if isinstance(m["content"], list) for p in m["content"]]
+    assert [p["type"] for p in images].count("image_url") == 1
+
+
+@pytest.mark.parametrize("reply", ["not json at all", _reply(1, ""), _reply(1, "   ")])
+def test_single_image_without_a_readable_observation_keeps_the_text_only(reply: str) -> None:
+    conversation = Conversation("SYS", single_image=True)
+    conversation.request(_turn(1))
+    conversation.record(_turn(1), reply)
+    assert conversation.request(_turn(2))[1] == {"role": "user", "content": "Step 1 of 50."}
 
 
 def test_text_modality_sends_plain_strings() -> None:

@@ -16,9 +16,11 @@ from hypothesis import strategies as st
 
 from pytest_emrd.agent import ROOM_SUFFIXES, build_system_prompt, room_aliases
 from pytest_emrd.agent._prompt import GOTO_TYPES_LEAD, OVERVIEW_HEADING, read_profile
+from pytest_emrd.metrics import aec_score
+from pytest_emrd.metrics._match import match_map
 from pytest_emrd.rooms import ROOM_NAMES
-from pytest_emrd.trajectory import MODALITIES, VARIANTS
-from pytest_emrd.world import Layout, generate_layout, paper_office
+from pytest_emrd.trajectory import MODALITIES, VARIANTS, MapEntry
+from pytest_emrd.world import Layout, WorldPose, generate_layout, ground_truth, paper_office
 from pytest_emrd.world._layout import PAIRS
 
 _ROOMS = re.compile(r"^The building has four rooms: (?P<names>.+)\.$", re.MULTILINE)
@@ -63,3 +65,38 @@ def test_claims_hold_in_the_paper_office(variant: str, modality: str) -> None:
 )
 def test_claims_hold_in_generated_layouts(seed: int, variant: str, modality: str) -> None:
     check_claims(generate_layout(seed), variant, modality)
+
+
+#: What the MAP goal asks for, phrase -> the engine types it names beyond the profiles.
+_ASKED_BEYOND_PROFILES = {"every doorway": "Doorway", "the building exit": "Door"}
+
+
+def _asked_types(text: str) -> set[str]:
+    """The engine types the default prompt asks the model to map: every type of the furniture
+    profiles (MAP: "every object you discover: each piece of furniture, each item on a desk
+    or counter") plus the landmarks the MAP line names."""
+    goal = next(line for line in text.splitlines() if line.startswith("2. MAP:"))
+    assert "every object you discover" in goal, goal
+    profiles = [m["items"] for m in _LINE.finditer(text.split(OVERVIEW_HEADING, 1)[1])]
+    asked = {t for items in profiles for t in read_profile(items)}
+    return asked | {t for phrase, t in _ASKED_BEYOND_PROFILES.items() if phrase in goal}
+
+
+@pytest.mark.parametrize("modality", MODALITIES)
+def test_a_model_mapping_exactly_what_it_is_asked_for_reaches_aec_1(modality: str) -> None:
+    """The prompt asks for every object ``E`` holds (doorways and the exit included), so the
+    AEC ceiling of a model that maps exactly what it is asked for is 1.0 (under ``p2``'s
+    "every salient piece of furniture" it was 37/41 = 0.902 on the paper office)."""
+    office = paper_office()
+    spawn = WorldPose(3.0, 7.0, 90.0)
+    truth = ground_truth(office, spawn, "office")
+    asked = _asked_types(build_system_prompt(office.inventory(), "default", modality=modality))
+    assert {o.object_type for o in truth.objects} <= asked
+    entries = [
+        MapEntry(o.object_id.lower(), o.object_type, o.x, o.z, o.room)
+        for o in truth.objects
+        if o.object_type in asked
+    ]
+    assert aec_score(match_map(entries, truth.objects), len(truth.objects)) == 1.0
+    furniture_only = [e for e in entries if e.object_type not in ("Doorway",)]
+    assert aec_score(match_map(furniture_only, truth.objects), len(truth.objects)) == 37 / 41

@@ -17,20 +17,20 @@ import pytest
 from pytest_emrd.world import WORLD_VERSION, Layout, make_simulator, paper_office
 
 GOLDEN = {
-    "builtin-4": {
+    "builtin-5": {
         "layout": "522fa1ecba82114fe61e836f680c8efdd62cdca36f37b052d1831c06ff7e0957",
         "paper_office": "2407f20637b377faf8accafb8689803cb37456ab7903a39c0629ad0963ebb162",
         "baseline": (
-            "64d223ae0409244752a168b81500abc64ac9e053edab714ed1eee7dd6c5a0dfe",
-            "a8ff5e3f524970cffd9999448be6b0ab50f35ce23ad7b23aeba869e3382bb03f",
+            "4e8abdd888a1e1dd9f9b8741ff103574faf79e8e954bc6dff7fa74775dd765f3",
+            "2357834e5fe8afb49f8ec089e8af42d906b977f37eedd4b051c868d1ec000a1c",
         ),
         "low_light": (
-            "f05b231ecb95c6934143ebef68bc03568aa592dbddb97f1ed99b54b60770d992",
-            "29f1607f0150b1e7dd34ce5a12356126769dc9f72ac2d8807af08847b45c5b01",
+            "21fcdd968f030489559cbe2310aab09e49157dbeb1f960159cfdb25a7ca8ceb9",
+            "844adada60487252336a557edcc2d7e48b64b3325f7c5e6f55c4d185c20f2c4b",
         ),
         "texture": (
-            "29d1806d562629c8a7eba768d9e24f1c23daa0bbfd10e8488e57080347605c0f",
-            "a86be10bdc4db88a4cfba838de569e25d9b5f51d6dd6d0b1e1a4f34038e334dc",
+            "0d1cac1bbb979d09a5f61a8712fb99f51abcda1f21f3a2a9a476178b88c12de6",
+            "338c96c79ff974ab6565ae2336dac889ffe0752763984054c6c449036fc4e92f",
         ),
     }
 }

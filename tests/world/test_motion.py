@@ -12,8 +12,10 @@ from pytest_emrd.world._geometry import unit
 TURNS = ("", "Turn(Right)", "Turn(Around)", "Turn(Left)")
 
 
-def _facing(sim: BuiltinSimulator, turn: str, layout: Layout, spawn: str) -> list[str]:
-    obs = sim.reset(layout, "baseline", spawn, 5)
+def _facing(
+    sim: BuiltinSimulator, turn: str, layout: Layout, spawn: str, seed: int = 5
+) -> list[str]:
+    obs = sim.reset(layout, "baseline", spawn, seed)
     if turn:
         obs = sim.step(turn)
     return [v.object_id for v in obs.visible]
@@ -36,12 +38,19 @@ def _ahead(pose: WorldPose, rect: tuple[float, float, float, float]) -> bool:
 def test_goto_object_stands_in_front_of_it_in_its_room(office: Layout, new_sim, turn) -> None:
     sim = new_sim()
     objects = {o.object_id: o for o in office.objects}
-    targets = [
-        i for i in _facing(sim, turn, office, "office") if objects[i].object_type != "Doorway"
-    ]
-    assert targets
+    seed, targets = next(
+        (seed, found)
+        for seed in range(40)
+        if (
+            found := [
+                i
+                for i in _facing(sim, turn, office, "office", seed)
+                if objects[i].object_type != "Doorway"
+            ]
+        )
+    )
     for target in targets:
-        _facing(sim, turn, office, "office")
+        _facing(sim, turn, office, "office", seed)
         obs = sim.step(f"Goto({target})")
         assert obs.success, obs.feedback
         obj = objects[target]
@@ -97,15 +106,18 @@ def test_goto_doorway_passes_into_the_other_room(office: Layout, new_sim) -> Non
 
 
 def test_a_doorway_seen_through_another_is_walked_up_to(new_sim) -> None:
-    office = paper_office()  # two such views from spawn (seed 7's office has none)
+    office = paper_office()  # such views from some spawn (seed 7's office has none)
     sim = new_sim()
     cases = 0
     for doorway in office.doorways:
         for spawn in {r.name for r in office.rooms} - {doorway.room_a, doorway.room_b}:
-            for turn in TURNS:
-                if doorway.object_id in _facing(sim, turn, office, spawn):
-                    break
-            else:
+            seen = (
+                (turn, seed)
+                for seed in range(20)
+                for turn in TURNS
+                if doorway.object_id in _facing(sim, turn, office, spawn, seed)
+            )
+            if next(seen, None) is None:
                 continue
             cases += 1
             assert sim.step(f"Goto({doorway.object_id})").success

@@ -27,7 +27,7 @@ def _object_boxes_oracle(scene: Scene, pose: WorldPose, params: ConditionParams)
     corner_x, corner_z = parts[:, [0, 0, 2, 2]], parts[:, [1, 3, 1, 3]]
     centre = scene.centres[scene.part_object]
     always = (facing[:, 0] == 0) & (facing[:, 1] == 0)
-    near = (_dist2(scene.rects, pose) <= params.visibility_distance**2)[scene.part_object]
+    near = (_dist2(scene.rects, pose) <= params.draw_distance**2)[scene.part_object]
     side = (pose.x - centre[:, 0]) * facing[:, 0] + (pose.z - centre[:, 1]) * facing[:, 1]
     fx, fz = unit(pose.heading)
     rx, rz = right_of(pose.heading)

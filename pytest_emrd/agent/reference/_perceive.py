@@ -63,6 +63,9 @@ def fresh_plan() -> dict[str, Any]:
         "near": [],
         "sweeps": [],
         "moves": 0,
+        "clears": 0,
+        "acted": 0,
+        "reach": 0.0,
         "tried": [],
         "blocked": [],
         "visited": [],
@@ -123,7 +126,7 @@ def _vote(plan: dict[str, Any], briefing: Briefing, visible: tuple[Seen, ...]) -
 
 def _enter_room(plan: dict[str, Any]) -> None:
     """Reset per-visit bookkeeping after walking through a doorway."""
-    plan.update(phase="sweep", turns=0, votes={}, here={}, found=0, tries=0, moves=0)
+    plan.update(phase="sweep", turns=0, votes={}, here={}, found=0, tries=0, moves=0, clears=0)
     plan.update(spots={}, near=[], sweeps=[], tried=[], blocked=[])
     plan["used"] = [d for d in plan["used"] if d != plan["target"]] + [plan["target"]]
     plan.update(target="", goal="")
@@ -167,6 +170,7 @@ def perceive(
         x, z = _place(percept, seen)
         if seen.object_type == DOORWAY:
             plan["doors"][seen.object_id] = [x, z]
+            plan["reach"] = max(plan["reach"], round(seen.distance, 2))
             rooms = plan["door_rooms"].setdefault(seen.object_id, [])
             if seen.object_id in inside:  # Goto of a doorway seen through another stops short
                 plan["here"].setdefault(seen.object_id, round(seen.distance, 2))

@@ -3,28 +3,36 @@
 Per room visit, the entry view plus three ``Turn(Right)`` sweep 360 degrees; then the
 scout decides, in this order:
 
-1. every room of the prompt identified: ``Term``;
-2. an unused doorway seen during this visit (nearest first): face it, ``Goto`` through;
-3. **reposition**, while rooms remain unvisited, fewer than :data:`MAX_MOVES` repositions
-   were made in this visit and the room is not complete (no doorway, or not every object
-   its inventory line lists, seen during this visit; a room it cannot identify is never
-   complete): ``Goto`` an object of this room seen during the last sweep, at least
-   :data:`MIN_MOVE_M` away and not targeted before: the one nearest to an unused doorway
-   known to open from this room (seen inside it, on this visit or an earlier one), else
-   the one farthest from every point this visit swept from (towards unexplored space);
-   then sweep again;
-4. every doorway it knows of already used: ``Term`` (nothing left to try);
-5. the doorway of this visit used longest ago: back through it;
-6. otherwise ``Term``.
+1. every room of the prompt identified: in the last room, clear it as in rule 2;
+   otherwise ``Term``;
+2. **clear the room**: while it is not complete (see rule 4), the visit has a clearing
+   move left (:data:`MAX_CLEARS`) and the budget affords one (:data:`RESERVE` actions,
+   leaving :data:`PER_ROOM` for each room not yet visited): ``Goto`` the object of the
+   last sweep farthest from every point this visit swept from, among those from which a
+   known doorway lies no farther than any doorway has yet been seen (so that the doorway
+   can be seen again from there), and sweep again;
+3. an unused doorway seen during this visit (nearest first): face it, ``Goto`` through;
+4. **reposition**, while rooms remain unvisited, fewer than :data:`MAX_MOVES` repositions
+   (:data:`LOST_MOVES` before it sees a doorway) were made in this visit and the room is
+   not complete (no doorway, or not every object its inventory line lists, seen during
+   this visit; a room it cannot identify is never complete): ``Goto`` an object of this
+   room seen during the last sweep, at least :data:`MIN_MOVE_M` away and not targeted
+   before: the one nearest to an unused doorway known to open from this room (seen inside
+   it, on this visit or an earlier one), else the one farthest from every point this
+   visit swept from (towards unexplored space); then sweep again;
+5. every doorway it knows of already used: ``Term`` (nothing left to try);
+6. the doorway of this visit used longest ago: back through it;
+7. otherwise ``Term``.
 
 A target still out of view after :data:`MAX_FACE_TRIES` turns towards it is given up and
 the decision is taken again; a doorway given up this way is first approached, if the visit
 has a reposition left: the scout goes to the object of the last sweep nearest to it (and
 nearer than the scout), where doorways given up before may be faced again.
 
-Under ``baseline`` a swept room is seen whole, so rule 3 rarely fires; under ``low_light``
-(3.5 m visibility) it is what keeps the scout from stopping after its first rooms, so the
-darkness costs coverage *and* time, as the paper reports for real models.
+Objects are visible within 3.3 m (1.65 m under ``low_light``) and furniture hides what
+stands behind it, so one sweep from a doorway sees part of a room: rules 2 and 4 walk the
+scout into the room's far parts, and the darkness costs coverage *and* time, as the paper
+reports for real models.
 
 Term rule: at a ``Term`` decision or the last step of the budget, the room where it
 discovered the most objects (ties: prompt order; rooms it could not identify, as under
@@ -54,8 +62,16 @@ from pytest_emrd.agent.reference._read import Briefing, Percept
 MAX_FACE_TRIES: Final = 2
 #: Repositions per room visit (each costs about five actions of the 50).
 MAX_MOVES: Final = 3
+#: Repositions of a visit that has seen no doorway yet (lost in the dark).
+LOST_MOVES: Final = 6
+#: Clearing moves per room visit (rule 2), besides the repositions.
+MAX_CLEARS: Final = 2
 #: A reposition target lies at least this far (m) from where the scout stands.
 MIN_MOVE_M: Final = 1.0
+#: Actions a reposition may need (turns to face, Goto, three sweep turns).
+RESERVE: Final = 6
+#: Actions kept per room not yet visited (face a doorway, cross, sweep).
+PER_ROOM: Final = 6
 
 
 def _close_room(plan: dict[str, Any]) -> None:
@@ -88,10 +104,13 @@ def _complete(plan: Mapping[str, Any], briefing: Briefing) -> bool:
     return all(seen[t] >= n for t, n in counts.items())
 
 
-def _spot(plan: Mapping[str, Any], towards: list[list[float]]) -> str:
+def _spot(
+    plan: Mapping[str, Any], towards: list[list[float]], within: list[list[float]] | None = None
+) -> str:
     """An object of the last sweep to reposition at ("" when none): the one nearest to a
     point of ``towards`` and nearer to it than the scout, or with ``towards`` empty the one
-    farthest from every point this visit swept from."""
+    farthest from every point this visit swept from. ``within``: only objects no farther
+    from one of these points than the farthest a doorway has been seen (``reach``)."""
     spots: dict[str, list[Any]] = plan["spots"]
 
     def xz(label: str) -> tuple[float, float]:
@@ -102,6 +121,10 @@ def _spot(plan: Mapping[str, Any], towards: list[list[float]]) -> str:
 
     far = [o for o in plan["near"] if math.dist(xz(o), plan["at"]) >= MIN_MOVE_M]
     candidates = [o for o in far if o not in plan["tried"]]
+    if within is not None:
+        candidates = [
+            o for o in candidates if any(math.dist(xz(o), p) <= plan["reach"] for p in within)
+        ]
     if towards:
         here = gap(plan["at"])
         closer = [o for o in candidates if gap(xz(o)) < here]
@@ -111,17 +134,48 @@ def _spot(plan: Mapping[str, Any], towards: list[list[float]]) -> str:
 
 
 def _reposition(plan: dict[str, Any], towards: list[list[float]]) -> bool:
-    """Target a spot (see :func:`_spot`) if the visit has a reposition left."""
-    spot = _spot(plan, towards) if plan["moves"] < MAX_MOVES else ""
+    """Target a spot (see :func:`_spot`) if the visit has a reposition left
+    (:data:`MAX_MOVES`, or :data:`LOST_MOVES` while it has seen no doorway)."""
+    limit = MAX_MOVES if plan["here"] else LOST_MOVES
+    spot = _spot(plan, towards) if plan["moves"] < limit else ""
     if spot:
         plan["tried"].append(spot)
         plan.update(target=spot, goal="spot", moves=plan["moves"] + 1, phase="face", tries=0)
     return bool(spot)
 
 
-def _choose(plan: dict[str, Any], briefing: Briefing) -> None:
-    """Set ``target`` and ``goal`` by rules 2-5; an empty target means ``Term``."""
+def _clear(plan: dict[str, Any], briefing: Briefing, percept: Percept) -> bool:
+    """Rule 2: target the spot farthest from this visit's sweeps if the room is not
+    complete, the visit has a clearing move left and the budget affords it."""
+    if plan["clears"] >= MAX_CLEARS or _complete(plan, briefing):
+        return False
+    doors = [xz for d, xz in plan["doors"].items() if d not in plan["blocked"]]
+    spot = _spot(plan, [], doors) if _affordable(plan, briefing, percept) else ""
+    if spot:
+        plan["tried"].append(spot)
+        plan.update(target=spot, goal="spot", clears=plan["clears"] + 1, phase="face", tries=0)
+    return bool(spot)
+
+
+def _clear_last(plan: dict[str, Any], briefing: Briefing, percept: Percept) -> bool:
+    """Rule 1a: in the last room, while it is not complete and the budget leaves
+    :data:`RESERVE` actions, reposition (towards unexplored space) instead of ``Term``."""
+    return not plan.get("home") and _clear(plan, briefing, percept)
+
+
+def _affordable(plan: Mapping[str, Any], briefing: Briefing, percept: Percept) -> bool:
+    """Whether a reposition (:data:`RESERVE` actions) leaves :data:`PER_ROOM` actions for
+    each room not yet visited, counting the scout's own actions (``acted``): a wasted step
+    (an unreadable reply, a planted invalid action) changes no decision."""
+    left = percept.max_steps - plan["acted"] - RESERVE
+    return left > PER_ROOM * (len(briefing.rooms) - len(plan["visited"]))
+
+
+def _choose(plan: dict[str, Any], briefing: Briefing, percept: Percept) -> None:
+    """Set ``target`` and ``goal`` by rules 2-6; an empty target means ``Term``."""
     plan.update(phase="face", tries=0)
+    if _clear(plan, briefing, percept):
+        return
     door = _unused_here(plan)
     if door:
         plan.update(target=door, goal="door")
@@ -195,6 +249,7 @@ def scout_action(
     plan: dict[str, Any], briefing: Briefing, percept: Percept, *, homing: bool = False
 ) -> tuple[str, str]:
     """(action, reasoning) of the room-clearing scout (``homing``: see the module docstring)."""
+    plan["acted"] += 1
     if percept.step >= percept.max_steps:
         _close_room(plan)
         room, why = _home_term(plan, briefing)
@@ -205,11 +260,13 @@ def scout_action(
     if plan["phase"] in ("sweep", "decide"):
         _close_room(plan)
         if len(plan["visited"]) >= len(briefing.rooms):
-            if not (homing and _homing(plan, briefing)):
+            if _clear_last(plan, briefing, percept):
+                pass
+            elif not (homing and _homing(plan, briefing)):
                 room, why = _home_term(plan, briefing)
                 return f"Term({room})", why
         else:
-            _choose(plan, briefing)
+            _choose(plan, briefing, percept)
     visible = {s.object_id for s in percept.visible}
     while plan["target"]:
         target, door = plan["target"], plan["goal"] == "door"
@@ -228,6 +285,6 @@ def scout_action(
         if "home" in plan:
             _homing(plan, briefing)
         else:
-            _choose(plan, briefing)
+            _choose(plan, briefing, percept)
     room, why = _home_term(plan, briefing)
     return f"Term({room})", f"No doorway left to try. {why}"

@@ -15,6 +15,9 @@ Bump :data:`REFERENCE_VERSION` with every change to what a reference agent repli
   (walking back into the named room; names without ``b`` reply exactly as before).
 * ``ref-3`` — the shipped ``mimic`` walks back into the room it names (``back: 1.0``), so
   the committed mimic grid re-enters rooms: duplicates on re-entry and SIR are exercised.
+* ``ref-4`` — world ``builtin-5`` (objects visible within 3.3 m, furniture occludes): the
+  scout clears a room that is not complete before leaving it, in the last room too (up to
+  two clearing moves per visit, while the budget leaves six actions per room to visit).
 """
 
 from __future__ import annotations
@@ -23,7 +26,7 @@ from typing import Final
 
 from pytest_emrd.errors import ConfigError
 
-REFERENCE_VERSION: Final = "ref-3"
+REFERENCE_VERSION: Final = "ref-4"
 _SEP: Final = "@"
 
 

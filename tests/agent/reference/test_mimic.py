@@ -206,6 +206,8 @@ def test_wasted_steps_do_not_change_its_decisions(clean: Trajectory) -> None:
         if s.parse_error is None and not PLANTED_INVALID.match(s.action)
     ]
     assert len(kept) < len(noisy.steps)
+    if len(noisy.steps) == noisy.spec.max_steps:  # the budget ran out: its Term is forced
+        kept = kept[:-1]
     assert kept == [s.action for s in clean.steps][: len(kept)]
 
 
@@ -218,7 +220,8 @@ def test_duplicates_come_on_re_entry_and_grow_with_p() -> None:
                 if "id" in r and ids.count(r["id"]) > 1 and "x" not in r}  # fmt: skip
 
     low, high = dups("mimic-p0.3-q0-a0"), dups("mimic-p1-q0-a0")
-    assert low < high and all(visit >= 2 for _, visit in high)
+    assert {i for i, _ in low} <= {i for i, _ in high} and len(low) < len(high)
+    assert all(visit >= 2 for _, visit in high)
 
 
 @pytest.mark.parametrize("spawn", ["office", "kitchen", "entrance"])

@@ -30,15 +30,33 @@ def test_scout_repositions_when_no_doorway_is_in_sight(drive) -> None:
     arrived = scout.see([("CounterTop_1", "CounterTop", 0.0, 0.7)], Pose(2.3, 0.0, 90.0))
     assert arrived["action"] == "Turn(Right)", "a new sweep starts where it arrived"
     assert arrived["plan"]["sweeps"] == [[0.0, 0.0], [2.3, 0.0]]
-    assert arrived["plan"]["moves"] == 1
+    assert (arrived["plan"]["clears"], arrived["plan"]["moves"]) == (0, 1)
 
 
-def test_scout_goes_through_an_unused_doorway_instead(drive) -> None:
-    scout = drive("scout")
+def test_scout_clears_the_room_before_an_unused_doorway(drive) -> None:
+    """The kitchen is not complete: before leaving, the scout walks to the object farthest
+    from where it swept among those within 3 m (the farthest it saw a doorway) of the
+    doorway: the stool (the counter, farther, lies 6 m from the doorway)."""
     views = [*DARK_KITCHEN[:3], [*DARK_KITCHEN[3], ("Doorway_2", "Doorway", -5.0, 3.0)]]
-    replies = _sweep(scout, views)
+    replies = _sweep(drive("scout"), views)
+    assert replies[-1]["action"] == "Goto(Stool_1)"
+    assert replies[-1]["plan"]["clears"] == 1
+
+
+def test_scout_goes_through_an_unused_doorway_of_a_complete_room(drive) -> None:
+    kitchen = [
+        ("CounterTop_2", "CounterTop", -10.0, 2.0),
+        ("CoffeeMachine_1", "CoffeeMachine", 5.0, 2.5),
+        ("Microwave_1", "Microwave", 15.0, 2.0),
+    ]
+    views = [
+        [*DARK_KITCHEN[0], *kitchen],
+        *DARK_KITCHEN[1:3],
+        [*DARK_KITCHEN[3], ("Doorway_2", "Doorway", -5.0, 3.0)],
+    ]
+    replies = _sweep(drive("scout"), views)
     assert replies[-1]["action"] == "Goto(Doorway_2)"
-    assert replies[-1]["plan"]["moves"] == 0
+    assert (replies[-1]["plan"]["clears"], replies[-1]["plan"]["moves"]) == (0, 0)
 
 
 def test_scout_with_nothing_in_sight_terminates(drive) -> None:

@@ -26,7 +26,7 @@ def test_briefing_round_trips_the_inventory(inventory, variant) -> None:
 
 def test_briefing_under_neutral_uses_the_aliases(inventory) -> None:
     briefing = read_briefing(build_system_prompt(inventory, "neutral"))
-    assert briefing.rooms == ("Room A", "Room B", "Room C", "Room D")
+    assert briefing.rooms == ("Room C", "Room A", "Room D", "Room B")  # the default order
     assert briefing.inventory == {alias: inventory[room] for alias, room in NEUTRAL_NAMES.items()}
 
 
