@@ -11,7 +11,8 @@ from __future__ import annotations
 
 import pytest
 
-from pytest_emrd.gate import StoredEpisode, Verdict
+from pytest_emrd.gate import Verdict
+from pytest_emrd.run import StoredEpisode
 
 
 def test_episode(emrd_episode: StoredEpisode) -> None:

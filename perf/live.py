@@ -38,7 +38,7 @@ def _record_all(root: Path) -> float:
     from pytest_emrd.agent.reference import ReferenceServer
     from pytest_emrd.cassette import run_with_cassette
     from pytest_emrd.episode import protocol_version, run_episode
-    from pytest_emrd.gate import Prefetcher, ResultsStore
+    from pytest_emrd.run import Prefetcher, ResultsStore
 
     registry, protocol = load_registry(), protocol_version()
     with ReferenceServer(registry=registry, latency_s=LATENCY_S) as server:

@@ -38,14 +38,14 @@ def write_run_dir(run_dir: Path, trajectories: list[Trajectory]) -> None:
     """``trajectories`` stored in ``run_dir`` by the results store, as a finished pytest run
     leaves them: the episodes, their heads and their saved per-episode metrics."""
     from pytest_emrd.cassette import EpisodeRun
-    from pytest_emrd.gate import (
+    from pytest_emrd.metrics import EpisodeMetrics, episode_metrics
+    from pytest_emrd.run import (
         EPISODE_METRICS_CODE,
         EPISODE_METRICS_LIBRARIES,
         MeasuredStore,
         ResultsStore,
         code_fingerprint,
     )
-    from pytest_emrd.metrics import EpisodeMetrics, episode_metrics
 
     store = ResultsStore(run_dir, session="bench", protocol=trajectories[0].protocol)
     measured = MeasuredStore(

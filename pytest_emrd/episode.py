@@ -23,7 +23,9 @@ process serves every episode of a worker.
 from __future__ import annotations
 
 import re
+import threading
 import warnings
+import weakref
 from collections.abc import Callable, Mapping
 from types import TracebackType
 from typing import Any, Final
@@ -322,3 +324,55 @@ class SimulatorPool:
         self, kind: type[BaseException] | None, exc: BaseException | None, tb: TracebackType | None
     ) -> None:
         self.close()
+
+
+class AgentRunner:
+    """:func:`run_episode` with one client per model and key mode, kept
+    for the runner's lifetime: the connection pool and TLS context (tens of milliseconds
+    to build) serve every episode; the clients close when the runner is collected or at exit.
+    """
+
+    def __init__(self, registry: Registry, run: Callable[..., Trajectory] | None) -> None:
+        self._registry = registry
+        self._run = run
+        self._clients: dict[tuple[str, bool], ChatClient] = {}
+        self._lock = threading.Lock()
+        self._finalizer = weakref.finalize(self, _close_all, self._clients)
+
+    def __call__(
+        self, spec: EpisodeSpec, *, live: bool, on_step: Callable[[Step], None] | None = None
+    ) -> Trajectory:
+        run = self._run or run_episode
+        client = self._client(spec.model, live)
+        return run(spec, registry=self._registry, client=client, on_step=on_step, replay=not live)
+
+    def close(self) -> None:
+        """Close every client now (they are also closed when the runner is collected)."""
+        self._finalizer()
+
+    def _client(self, model: str, live: bool) -> ChatClient:
+        with self._lock:
+            client = self._clients.get((model, live))
+            if client is None:
+                config = self._registry.get(model)
+                client = self._clients[(model, live)] = make_client(config, require_key=live)
+        return client
+
+
+def _close_all(clients: dict[tuple[str, bool], ChatClient]) -> None:
+    for client in clients.values():
+        client.close()
+    clients.clear()
+
+
+def agent_runner(
+    registry: Registry, *, run: Callable[..., Trajectory] | None = None
+) -> AgentRunner:
+    """The real runner: :func:`run_episode` with the model's client.
+
+    ``run`` replaces ``run_episode`` (same keywords ``registry`` and ``client``), e.g. a
+    :class:`SimulatorPool`'s ``run`` that keeps one AI2-THOR process per
+    worker. Replays need no API key (recorded requests carry none), so a replay's client is
+    built with ``require_key=False`` and a live episode's with ``require_key=True``.
+    """
+    return AgentRunner(registry, run)

@@ -33,6 +33,10 @@ CONDITIONS: Final[tuple[str, ...]] = ("baseline", "low_light", "texture")
 VARIANTS: Final[tuple[str, ...]] = ("default", "B1", "B2", "B3", "B4", "neutral", "no_inventory")
 MODALITIES: Final[tuple[str, ...]] = ("vision", "text", "both")
 LAYOUTS: Final[tuple[str, ...]] = ("paper", "generated")
+#: How an episode is obtained: the cassette record modes (vcrpy's, ``none`` replays only) and
+#: how a replayed request is matched to its recording (``lenient`` ignores frame pixels).
+RECORD_MODES: Final[tuple[str, ...]] = ("none", "once", "new_episodes", "all")
+MATCHING_MODES: Final[tuple[str, ...]] = ("strict", "lenient")
 """Which offices a run uses: ``paper`` (the paper's protocol, one fixed office for every
 episode) or ``generated`` (one procedurally generated office per spawn x episode, a
 generalisation study reported as its own cells)."""

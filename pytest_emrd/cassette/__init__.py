@@ -6,11 +6,9 @@
 from pytest_emrd._scrub import SECRET_HEADERS
 from pytest_emrd.cassette._drift import first_difference
 from pytest_emrd.cassette._episode import (
-    AgentRunner,
     EpisodeRun,
     EpisodeRunner,
     FrameDriftWarning,
-    agent_runner,
     is_live,
     run_with_cassette,
 )
@@ -56,7 +54,6 @@ __all__ = [
     "SCRATCH",
     "SECRET_HEADERS",
     "SUFFIX",
-    "AgentRunner",
     "CassetteData",
     "EpisodeCassette",
     "EpisodePersister",
@@ -70,7 +67,6 @@ __all__ = [
     "MatchKeys",
     "Redacted",
     "Upgraded",
-    "agent_runner",
     "canonical_json",
     "cassette_path",
     "clear_caches",

@@ -3,13 +3,10 @@
 from __future__ import annotations
 
 import dataclasses
-import threading
 import time
-import weakref
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 from pytest_emrd._scrub import scrub
 from pytest_emrd.cassette._drift import modality_message
@@ -18,11 +15,7 @@ from pytest_emrd.cassette._paths import Invocation, cassette_path, record_comman
 from pytest_emrd.cassette._persister import LOCK_TIMEOUT_S, writer_lock
 from pytest_emrd.cassette._use import episode_cassette
 from pytest_emrd.errors import check_choice
-from pytest_emrd.gate._settings import MATCHING_MODES, RECORD_MODES
-from pytest_emrd.trajectory import EpisodeSpec, Step, Trajectory
-
-if TYPE_CHECKING:
-    from pytest_emrd.agent import ChatClient, Registry
+from pytest_emrd.trajectory import MATCHING_MODES, RECORD_MODES, EpisodeSpec, Trajectory
 
 
 @dataclass(frozen=True)
@@ -51,62 +44,6 @@ class _Discard(Exception):
 #: Runs one episode; ``live`` says whether the model may really be called (an API key is
 #: needed) or every request will be replayed (frames then travel as their pixel digests).
 EpisodeRunner = Callable[..., Trajectory]
-
-
-class AgentRunner:
-    """:func:`pytest_emrd.episode.run_episode` with one client per model and key mode, kept
-    for the runner's lifetime: the connection pool and TLS context (tens of milliseconds
-    to build) serve every episode; the clients close when the runner is collected or at exit.
-    """
-
-    def __init__(self, registry: Registry, run: Callable[..., Trajectory] | None) -> None:
-        self._registry = registry
-        self._run = run
-        self._clients: dict[tuple[str, bool], ChatClient] = {}
-        self._lock = threading.Lock()
-        self._finalizer = weakref.finalize(self, _close_all, self._clients)
-
-    def __call__(
-        self, spec: EpisodeSpec, *, live: bool, on_step: Callable[[Step], None] | None = None
-    ) -> Trajectory:
-        from pytest_emrd.episode import run_episode
-
-        run = self._run or run_episode
-        client = self._client(spec.model, live)
-        return run(spec, registry=self._registry, client=client, on_step=on_step, replay=not live)
-
-    def close(self) -> None:
-        """Close every client now (they are also closed when the runner is collected)."""
-        self._finalizer()
-
-    def _client(self, model: str, live: bool) -> ChatClient:
-        from pytest_emrd.agent import make_client
-
-        with self._lock:
-            client = self._clients.get((model, live))
-            if client is None:
-                config = self._registry.get(model)
-                client = self._clients[(model, live)] = make_client(config, require_key=live)
-        return client
-
-
-def _close_all(clients: dict[tuple[str, bool], ChatClient]) -> None:
-    for client in clients.values():
-        client.close()
-    clients.clear()
-
-
-def agent_runner(
-    registry: Registry, *, run: Callable[..., Trajectory] | None = None
-) -> AgentRunner:
-    """The real runner: :func:`pytest_emrd.episode.run_episode` with the model's client.
-
-    ``run`` replaces ``run_episode`` (same keywords ``registry`` and ``client``), e.g. a
-    :class:`~pytest_emrd.episode.SimulatorPool`'s ``run`` that keeps one AI2-THOR process per
-    worker. Replays need no API key (recorded requests carry none), so a replay's client is
-    built with ``require_key=False`` and a live episode's with ``require_key=True``.
-    """
-    return AgentRunner(registry, run)
 
 
 def is_live(spec: EpisodeSpec, *, cassettes: Path, record_mode: str) -> bool:

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 import shlex
 from collections import Counter
 from collections.abc import Iterator, Sequence
@@ -11,7 +10,6 @@ from pathlib import Path
 from typing import Final
 
 from pytest_emrd.cassette._file import SUFFIX
-from pytest_emrd.gate._settings import RunSettings
 from pytest_emrd.rooms import SLUG_ROOMS
 from pytest_emrd.trajectory import CONDITIONS, EpisodeSpec
 
@@ -65,20 +63,6 @@ class Invocation:
     """The cassette folder (``--emrd-cassettes``); ``None``: the default."""
     backend_options: tuple[str, ...] = ()
     """``--emrd-backend-option`` values as given (a THOR build path, a GPU)."""
-
-    @classmethod
-    def of(cls, settings: RunSettings, *, paths: Sequence[str] = ()) -> Invocation:
-        """The invocation of a run with ``settings`` over the test ``paths`` it was given."""
-        options = tuple(
-            f"{key}={value if isinstance(value, str) else json.dumps(value)}"
-            for key, value in settings.backend_options
-        )
-        return cls(
-            paths=tuple(paths) or ("benchmarks",),
-            models_file=settings.models_file,
-            cassettes=settings.cassettes,
-            backend_options=options,
-        )
 
 
 def record_command(

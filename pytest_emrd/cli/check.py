@@ -15,7 +15,7 @@ import argparse
 import json
 from pathlib import Path
 
-from pytest_emrd.gate import OPTIONS
+from pytest_emrd.run import OPTIONS
 
 #: The ``--emrd-*`` options that shape what a live run sends.
 GRID_OPTIONS = ("model", "condition", "spawn", "episodes", "variant", "modality", "models")
@@ -39,8 +39,8 @@ def register(sub: argparse._SubParsersAction) -> None:
 def _run(args: argparse.Namespace) -> int:
     from pytest_emrd._scrub import scrub
     from pytest_emrd.agent import load_registry
-    from pytest_emrd.gate import episode_specs, resolve_settings
     from pytest_emrd.preflight import preflight
+    from pytest_emrd.run import episode_specs, resolve_settings
 
     cli = {name: getattr(args, name) for name in GRID_OPTIONS}
     settings = resolve_settings(cli, {}, rootdir=Path.cwd())

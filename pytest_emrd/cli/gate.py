@@ -40,14 +40,9 @@ def register(sub: argparse._SubParsersAction) -> None:
 def _run(args: argparse.Namespace) -> int:
     from pytest_emrd.agent import load_registry
     from pytest_emrd.cli import check_run_dirs
-    from pytest_emrd.gate import (
-        check_shard_set,
-        evaluate_all,
-        gate_tables,
-        load_run_dirs,
-        load_thresholds,
-    )
+    from pytest_emrd.gate import evaluate_all, gate_tables, load_thresholds
     from pytest_emrd.metrics import GATE_METRICS, episode_metrics
+    from pytest_emrd.run import check_shard_set, load_run_dirs
 
     check_run_dirs(args.run_dirs)
     for problem in check_shard_set(args.run_dirs, allow_partial=args.allow_partial):

@@ -19,8 +19,8 @@ from typing import TYPE_CHECKING
 from pytest_emrd.errors import ConfigError, check_choice
 
 if TYPE_CHECKING:
-    from pytest_emrd.gate import StoredEpisode
     from pytest_emrd.metrics import EpisodeMetrics
+    from pytest_emrd.run import StoredEpisode
 
 _DEFAULT_THRESHOLDS = Path("thresholds.yaml")
 
@@ -84,7 +84,7 @@ def _run(args: argparse.Namespace) -> int:
 def _report(args: argparse.Namespace, formats: list[str]) -> int:
     from pytest_emrd.agent import load_registry
     from pytest_emrd.cli import check_run_dirs
-    from pytest_emrd.gate import evaluate_all, load_run_episodes, load_thresholds
+    from pytest_emrd.gate import evaluate_all, load_thresholds
     from pytest_emrd.metrics import GATE_METRICS
     from pytest_emrd.report import (
         aggregates_key,
@@ -93,6 +93,7 @@ def _report(args: argparse.Namespace, formats: list[str]) -> int:
         write_aggregates,
         write_report,
     )
+    from pytest_emrd.run import load_run_episodes
 
     check_run_dirs(args.run_dirs)
     # read through their heads: a trajectory is decoded only where something needs it
@@ -151,13 +152,13 @@ def _processes() -> int:
 def _episode_metrics(run_dirs: list[Path], episodes: list[StoredEpisode]) -> list[EpisodeMetrics]:
     """Each episode's metrics, once, for the gates and the report: read back where the run
     saved them, measured otherwise."""
-    from pytest_emrd.gate import (
+    from pytest_emrd.metrics import EpisodeMetrics, episode_metrics
+    from pytest_emrd.run import (
         EPISODE_METRICS_CODE,
         EPISODE_METRICS_LIBRARIES,
         code_fingerprint,
         measured_episodes,
     )
-    from pytest_emrd.metrics import EpisodeMetrics, episode_metrics
 
     return measured_episodes(
         run_dirs, episodes, measure=episode_metrics, load=EpisodeMetrics.from_dict,
@@ -166,8 +167,8 @@ def _episode_metrics(run_dirs: list[Path], episodes: list[StoredEpisode]) -> lis
 
 
 def _compare(args: argparse.Namespace, formats: list[str]) -> int:
-    from pytest_emrd.gate import load_run_dirs
     from pytest_emrd.report import compare_runs, render_comparison, write_files
+    from pytest_emrd.run import load_run_dirs
 
     if args.compare:
         run_a, run_b = args.compare

@@ -40,7 +40,7 @@ def _run(args: argparse.Namespace) -> int:
     from pytest_emrd._names import check_inside
     from pytest_emrd._scrub import scrub_bytes
     from pytest_emrd.cli import check_run_dirs
-    from pytest_emrd.gate import load_run_dirs
+    from pytest_emrd.run import load_run_dirs
     from pytest_emrd.view import index_page, render_episode
 
     check_run_dirs([args.run_dir])

@@ -1,16 +1,14 @@
-"""Reading gate inputs from disk: thresholds files and run directories (file I/O only)."""
+"""Reading a thresholds file from disk and checking its models against a registry."""
 
 from __future__ import annotations
 
-from collections.abc import Collection, Sequence
+from collections.abc import Collection
 from pathlib import Path
 from typing import Any, Final, Protocol
 
 from pytest_emrd._yaml import read_text
-from pytest_emrd.errors import ConfigError, EmrdError
-from pytest_emrd.gate._store import StoredEpisode, iter_run_episodes
+from pytest_emrd.errors import EmrdError
 from pytest_emrd.gate._thresholds import Thresholds, parse_thresholds
-from pytest_emrd.trajectory import Trajectory
 
 #: How to make a model of one's own registry known to every run (ends unknown-model errors).
 REGISTER_MODEL_HINT: Final = (
@@ -51,24 +49,3 @@ def load_thresholds(path: Path, *, registry: RegistryLike, metrics: Collection[s
         metrics=metrics,
         unknown_model_hint=REGISTER_MODEL_HINT,
     )
-
-
-def load_run_episodes(run_dirs: Sequence[Path]) -> list[StoredEpisode]:
-    """The episodes of several run directories (shards), sorted by case id; the first copy of
-    a case wins. Each is read through its head when it has one (trajectories decoded on first
-    use, :func:`~pytest_emrd.gate.read_episode`)."""
-    seen: dict[str, StoredEpisode] = {}
-    for run_dir in run_dirs:
-        if not (run_dir / "episodes").is_dir():
-            raise ConfigError(
-                f"run_dir={str(run_dir)!r} holds no episodes/ folder; pass the directories "
-                "that `pytest benchmarks --emrd-results DIR` wrote."
-            )
-        for stored in iter_run_episodes(run_dir):
-            seen.setdefault(stored.head.spec.case_id, stored)
-    return [seen[key] for key in sorted(seen)]
-
-
-def load_run_dirs(run_dirs: Sequence[Path]) -> list[Trajectory]:
-    """Trajectories of several run directories (shards); the first copy of a case wins."""
-    return [stored.trajectory for stored in load_run_episodes(run_dirs)]

@@ -16,8 +16,9 @@ from pathlib import Path
 
 import pytest
 
-from pytest_emrd.gate import GateCell, ResultsStore, RunSettings, StoredEpisode, Verdict
+from pytest_emrd.gate import GateCell, Verdict
 from pytest_emrd.plugin._run import RUN, Run
+from pytest_emrd.run import ResultsStore, RunSettings, StoredEpisode
 from pytest_emrd.trajectory import EpisodeSpec, Trajectory
 
 

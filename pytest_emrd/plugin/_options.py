@@ -15,12 +15,12 @@ import pytest
 
 from pytest_emrd._scrub import scrub
 from pytest_emrd.errors import EmrdError
-from pytest_emrd.gate import OPTIONS, check_resume, new_run_dir, resolve_settings
 from pytest_emrd.plugin._live import LiveLine
 from pytest_emrd.plugin._logs import LogScrub
 from pytest_emrd.plugin._report import RunReport
 from pytest_emrd.plugin._resume import resume_in_process
 from pytest_emrd.plugin._run import RUN, Run
+from pytest_emrd.run import OPTIONS, check_resume, new_run_dir, resolve_settings
 
 
 def pytest_addoption(parser: pytest.Parser) -> None:

@@ -10,8 +10,9 @@ from typing import Any
 import pytest
 
 from pytest_emrd.errors import EmrdError
-from pytest_emrd.gate import EpisodeSummary, Verdict
+from pytest_emrd.gate import Verdict
 from pytest_emrd.plugin._run import Run
+from pytest_emrd.run import EpisodeSummary
 
 
 class RunReport:
@@ -45,8 +46,8 @@ class RunReport:
             return
         if not (self.episodes or self.verdicts) or not (run_dir / "episodes").is_dir():
             return
-        from pytest_emrd.gate import load_run_dirs
         from pytest_emrd.report import append_step_summary, step_summary_markdown
+        from pytest_emrd.run import load_run_dirs
 
         source = self.run.settings.thresholds
         if source is not None and source.is_relative_to(self.config.rootpath):
@@ -63,7 +64,8 @@ class RunReport:
         )
 
     def pytest_terminal_summary(self, terminalreporter: Any) -> None:
-        from pytest_emrd.gate import gate_tables, usage_rows, usage_table
+        from pytest_emrd.gate import gate_tables, usage_table
+        from pytest_emrd.run import usage_rows
 
         if not (self.episodes or self.verdicts):
             return

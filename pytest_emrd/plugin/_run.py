@@ -31,14 +31,13 @@ from pytest_emrd._disk import os_error_line
 from pytest_emrd._names import check_inside
 from pytest_emrd._scrub import scrub, scrub_bytes, watch_env
 from pytest_emrd.errors import CassetteError, ConfigError, EmrdError
-from pytest_emrd.gate import (
+from pytest_emrd.gate import GateCell, Verdict
+from pytest_emrd.run import (
     EpisodeSummary,
-    GateCell,
     ResultsStore,
     RunIdentity,
     RunSettings,
     StoredEpisode,
-    Verdict,
     episode_path,
     start_prefetch,
 )
@@ -152,15 +151,16 @@ class Run:
 
     @cached_property
     def episode_specs(self) -> list[EpisodeSpec]:
-        from pytest_emrd.gate import episode_specs, shard
+        from pytest_emrd.run import episode_specs, shard
 
         specs = episode_specs(self.settings, self.modality_of)
         return shard(specs, *self.settings.shard) if self.settings.shard else specs
 
     @cached_property
     def gate_cells(self) -> list[GateCell]:
-        from pytest_emrd.gate import gate_cells, load_thresholds
+        from pytest_emrd.gate import load_thresholds
         from pytest_emrd.metrics import GATE_METRICS
+        from pytest_emrd.run import gate_cells
 
         if self.settings.shard or self.settings.thresholds is None:
             return []
@@ -181,7 +181,16 @@ class Run:
         """What printed ``pytest`` commands carry: this run's test paths, registry, options."""
         from pytest_emrd.cassette import Invocation
 
-        return Invocation.of(self.settings, paths=tuple(self.config.args))
+        options = tuple(
+            f"{key}={value if isinstance(value, str) else json.dumps(value)}"
+            for key, value in self.settings.backend_options
+        )
+        return Invocation(
+            paths=tuple(self.config.args) or ("benchmarks",),
+            models_file=self.settings.models_file,
+            cassettes=self.settings.cassettes,
+            backend_options=options,
+        )
 
     def missing_summary(self, items: list[pytest.Item]) -> str | None:
         """In record mode ``none``: one message for the episodes the selected items need
@@ -216,7 +225,7 @@ class Run:
     @cached_property
     def runner(self) -> Any:
         """Runs an episode on this process's simulator pool, one model client per key mode."""
-        from pytest_emrd.cassette import agent_runner
+        from pytest_emrd.episode import agent_runner
 
         return agent_runner(self.registry, run=self.simulators.run)
 
@@ -231,8 +240,8 @@ class Run:
         """Run ``spec`` through its cassette (see the module docstring for a cassette that
         cannot be written)."""
         from pytest_emrd.cassette import EpisodeRun, cassette_path, is_live
-        from pytest_emrd.gate import episode_path
         from pytest_emrd.progress import run_watched
+        from pytest_emrd.run import episode_path
 
         settings = self.settings
         path = check_inside(
@@ -315,7 +324,7 @@ class Run:
 
     def cell_specs_of(self, model: str, condition: str) -> list[EpisodeSpec]:
         from pytest_emrd.errors import check_choice
-        from pytest_emrd.gate import cell_specs
+        from pytest_emrd.run import cell_specs
         from pytest_emrd.trajectory import CONDITIONS
 
         self.registry.get(model)
@@ -326,13 +335,13 @@ class Run:
     def measured(self) -> Any:
         """Per-episode metrics saved beside this run's episodes (shared by every worker and
         every resumed run)."""
-        from pytest_emrd.gate import (
+        from pytest_emrd.metrics import EpisodeMetrics, episode_metrics
+        from pytest_emrd.run import (
             EPISODE_METRICS_CODE,
             EPISODE_METRICS_LIBRARIES,
             MeasuredStore,
             code_fingerprint,
         )
-        from pytest_emrd.metrics import EpisodeMetrics, episode_metrics
 
         code = code_fingerprint(EPISODE_METRICS_CODE, EPISODE_METRICS_LIBRARIES)
         return MeasuredStore(

@@ -8,7 +8,7 @@ Compute (pure): :func:`build_report` turns trajectories (and gate verdicts) into
 
 Typical use::
 
-    trajectories = pytest_emrd.gate.load_run_dirs([Path("results/run1")])
+    trajectories = pytest_emrd.run.load_run_dirs([Path("results/run1")])
     write_report(build_report(trajectories), Path("results/run1/report"))
 """
 

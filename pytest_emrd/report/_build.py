@@ -11,7 +11,7 @@ from collections import Counter
 from collections.abc import Mapping, Sequence
 from dataclasses import replace
 
-from pytest_emrd.gate import EpisodeHead, StoredEpisode, UsageRow, Verdict
+from pytest_emrd.gate import UsageRow, Verdict
 from pytest_emrd.metrics import EpisodeMetrics, as_episode_metrics
 from pytest_emrd.report._figdata import (
     episode_map,
@@ -37,6 +37,7 @@ from pytest_emrd.report._tables import (
 )
 from pytest_emrd.report._workers import beside
 from pytest_emrd.rooms import ROOM_SLUGS
+from pytest_emrd.run import EpisodeHead, StoredEpisode
 from pytest_emrd.trajectory import CONDITIONS, VARIANTS, EpisodeSpec, Trajectory
 
 #: Model name -> USD per million (prompt, completion) tokens, for the usage table.

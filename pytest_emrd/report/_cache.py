@@ -1,6 +1,6 @@
 """A report's statistics saved beside the run they were computed from (file I/O).
 
-Layout, next to the results store's (:mod:`pytest_emrd.gate._head`, ``_measured``)::
+Layout, next to the results store's (:mod:`pytest_emrd.run._head`, ``_measured``)::
 
     <run>/aggregates/report.json    {"key": ..., "report": {...}}
 
@@ -13,7 +13,7 @@ thresholds file) reads the statistics back instead of fitting them again.
 
 The saved report is used only while its ``key`` matches: the SHA-256 over each episode's case
 id and the SHA-256 of its episode file (as the run's heads were read for), ``--episode``, and
-the :func:`~pytest_emrd.gate.code_fingerprint` of the computing code and the installed versions
+the :func:`~pytest_emrd.run.code_fingerprint` of the computing code and the installed versions
 of its libraries (the ``nlp`` extra's too, or that it is absent). What depends on anything
 else (overview and usage, prices, gate verdicts, the notes on what is missing) is never read
 from here: :func:`~pytest_emrd.report.build_report` recomputes it. The file is scrubbed like
@@ -34,8 +34,8 @@ from typing import Final
 from pytest_emrd._atomic import write_bytes_atomic
 from pytest_emrd._scrub import scrub_bytes
 from pytest_emrd.errors import EmrdError
-from pytest_emrd.gate import StoredEpisode, code_fingerprint
 from pytest_emrd.report._model import Report
+from pytest_emrd.run import StoredEpisode, code_fingerprint
 
 #: The code that turns episode files into a report's tables and figures (fingerprinted).
 AGGREGATES_CODE: Final = (

@@ -8,7 +8,6 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 
 from pytest_emrd.errors import ConfigError
-from pytest_emrd.gate import StoredEpisode
 from pytest_emrd.metrics import (
     Ebbinghaus,
     EpisodeMetrics,
@@ -31,6 +30,7 @@ from pytest_emrd.report._model import (
     TBSSeries,
 )
 from pytest_emrd.report._tables import Cells
+from pytest_emrd.run import StoredEpisode
 from pytest_emrd.trajectory import MapEntry, Trajectory
 
 

@@ -1,6 +1,6 @@
 """The validation runner (I/O): run a plan's episodes in worker processes, cached on disk.
 
-Episodes go through the results store (:class:`~pytest_emrd.gate.ResultsStore`) under
+Episodes go through the results store (:class:`~pytest_emrd.run.ResultsStore`) under
 ``<out>/episodes/``: each is computed once, written atomically and reused by the next run
 with the same protocol, so a rerun only recomputes the checks. Workers are spawned
 processes (each starts its own reference server on demand); what crosses the process
@@ -41,7 +41,7 @@ def _episode(spec: dict[str, Any], run_dir: str, session: str) -> tuple[dict[str
     """Worker: the stored or freshly computed trajectory of ``spec`` (plain data)."""
     from pytest_emrd.cassette import EpisodeRun
     from pytest_emrd.episode import protocol_version, run_episode
-    from pytest_emrd.gate import ResultsStore
+    from pytest_emrd.run import ResultsStore
 
     def compute(s: EpisodeSpec) -> EpisodeRun:
         start = time.perf_counter()

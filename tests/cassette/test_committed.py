@@ -15,14 +15,8 @@ from pathlib import Path
 import pytest
 
 from pytest_emrd.agent import load_registry
-from pytest_emrd.cassette import (
-    agent_runner,
-    cassette_path,
-    decode,
-    encode,
-    run_with_cassette,
-)
-from pytest_emrd.episode import protocol_version
+from pytest_emrd.cassette import cassette_path, decode, encode, run_with_cassette
+from pytest_emrd.episode import agent_runner, protocol_version
 from pytest_emrd.errors import CassetteError
 from pytest_emrd.trajectory import EpisodeSpec
 

@@ -10,14 +10,13 @@ import pytest
 from pytest_emrd.agent import load_registry
 from pytest_emrd.cassette import (
     Invocation,
-    agent_runner,
     cassette_path,
     decode,
     missing_summary,
     run_with_cassette,
 )
 from pytest_emrd.cli import main
-from pytest_emrd.episode import protocol_version
+from pytest_emrd.episode import agent_runner, protocol_version
 from pytest_emrd.trajectory import EpisodeSpec
 
 LEGACY = Path(__file__).with_name("legacy")

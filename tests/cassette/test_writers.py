@@ -171,7 +171,7 @@ def test_two_shards_started_at_once_on_one_run_directory_cannot_both_claim_it(
         import sys, time
         from pathlib import Path
         from pytest_emrd.errors import ConfigError
-        from pytest_emrd.gate import RunIdentity, resolve_settings, write_identity
+        from pytest_emrd.run import RunIdentity, resolve_settings, write_identity
         run_dir, go, shard = Path(sys.argv[1]), Path(sys.argv[2]), sys.argv[3]
         settings = resolve_settings({"model": ["gpt"], "shard": shard}, {}, rootdir=run_dir,
                                     env={})

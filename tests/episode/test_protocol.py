@@ -15,8 +15,8 @@ from typing import Any
 import pytest
 
 from pytest_emrd.agent import load_registry
-from pytest_emrd.cassette import agent_runner, cassette_path, decode, run_with_cassette
-from pytest_emrd.episode import protocol_version, run_episode
+from pytest_emrd.cassette import cassette_path, decode, run_with_cassette
+from pytest_emrd.episode import agent_runner, protocol_version, run_episode
 from pytest_emrd.rooms import ROOM_NAMES
 from pytest_emrd.trajectory import EpisodeSpec
 from pytest_emrd.world import episode_world

@@ -15,8 +15,9 @@ from pytest_emrd._yaml import MAX_DEPTH, MAX_FILE_BYTES
 from pytest_emrd.agent import load_registry
 from pytest_emrd.cli import main as emrd
 from pytest_emrd.errors import ConfigError
-from pytest_emrd.gate import load_thresholds, resolve_settings
+from pytest_emrd.gate import load_thresholds
 from pytest_emrd.metrics import GATE_METRICS
+from pytest_emrd.run import resolve_settings
 
 from .conftest import KEY_ENV, PLANTED_FORMS, PLANTED_KEY, PLANTED_PASSWORD, PLANTED_QUERY
 

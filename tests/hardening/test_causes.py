@@ -11,16 +11,9 @@ from pathlib import Path
 import pytest
 
 from pytest_emrd.agent import load_registry
-from pytest_emrd.cassette import (
-    Invocation,
-    agent_runner,
-    cassette_path,
-    decode,
-    encode,
-    run_with_cassette,
-)
+from pytest_emrd.cassette import Invocation, cassette_path, decode, encode, run_with_cassette
 from pytest_emrd.cassette._drift import text_context
-from pytest_emrd.episode import protocol_version
+from pytest_emrd.episode import agent_runner, protocol_version
 from pytest_emrd.trajectory import EpisodeSpec
 
 SPEC = EpisodeSpec("scout", "baseline", "office", 0, modality="text")

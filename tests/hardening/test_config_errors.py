@@ -13,10 +13,11 @@ from hypothesis import strategies as st
 from pytest_emrd.agent import load_registry
 from pytest_emrd.cli import main as emrd
 from pytest_emrd.errors import ConfigError
-from pytest_emrd.gate import RECORD_MODES, load_thresholds, resolve_settings
-from pytest_emrd.gate._settings import in_ci
+from pytest_emrd.gate import load_thresholds
 from pytest_emrd.gate._thresholds import domain
 from pytest_emrd.metrics import GATE_METRICS
+from pytest_emrd.run import RECORD_MODES, resolve_settings
+from pytest_emrd.run._settings import in_ci
 from tests._sandbox import Sandbox
 
 ROOT = Path(__file__).resolve().parents[2]

@@ -9,7 +9,7 @@ import pytest
 
 from pytest_emrd.cli import main as emrd
 from pytest_emrd.errors import ConfigError
-from pytest_emrd.gate import (
+from pytest_emrd.run import (
     RunIdentity,
     check_resume,
     check_shard_set,

@@ -100,8 +100,8 @@ def test_a_folder_that_cannot_be_written_is_one_line(suite, setup, option, messa
 
 def test_a_cassette_path_under_a_file_is_refused_before_the_model_is_called(tmp_path):
     from pytest_emrd.errors import CassetteError
-    from pytest_emrd.gate import resolve_settings
     from pytest_emrd.plugin._run import Run
+    from pytest_emrd.run import resolve_settings
 
     (tmp_path / "notes.txt").write_text("x")
     settings = resolve_settings({"model": ["scout"]}, {}, rootdir=tmp_path, env={})

@@ -153,8 +153,8 @@ COMMITTED = [("conference", 0), ("office", 3), ("kitchen", 11), ("entrance", 8)]
 def committed() -> list[Trajectory]:
     """Committed scout episodes, replayed offline from cassettes/scout."""
     from pytest_emrd.agent import load_registry
-    from pytest_emrd.cassette import agent_runner, run_with_cassette
-    from pytest_emrd.episode import protocol_version
+    from pytest_emrd.cassette import run_with_cassette
+    from pytest_emrd.episode import agent_runner, protocol_version
 
     root = Path(__file__).resolve().parents[2] / "cassettes"
     runner = agent_runner(load_registry())

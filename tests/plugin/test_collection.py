@@ -48,16 +48,10 @@ def test_variant_and_several_models(suite: pytest.Pytester):
 
 @pytest.mark.slow
 def test_shard_takes_a_deterministic_slice_and_leaves_gates_to_emrd_gate(suite: pytest.Pytester):
-    full = _ids(
-        suite.runpytest(
-            "--collect-only", "-q", "--emrd-episodes=3", "-k", "test_episode"
-        )
-    )
+    full = _ids(suite.runpytest("--collect-only", "-q", "--emrd-episodes=3", "-k", "test_episode"))
     parts = []
     for k in (1, 2, 3):
-        result = suite.runpytest(
-            "--collect-only", "-q", "--emrd-episodes=3", f"--emrd-shard={k}/3"
-        )
+        result = suite.runpytest("--collect-only", "-q", "--emrd-episodes=3", f"--emrd-shard={k}/3")
         parts.append(_ids(result))
         result.stdout.fnmatch_lines(["*1 deselected*"])
     assert sorted(i for p in parts for i in p) == sorted(full)

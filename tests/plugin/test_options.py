@@ -14,7 +14,7 @@ def test_settings(emrd_settings):
 
 
 def test_help_documents_every_option(sandbox: Sandbox):
-    from pytest_emrd.gate import OPTIONS
+    from pytest_emrd.run import OPTIONS
 
     result = sandbox.runpytest("--help")
     out = result.stdout.str()

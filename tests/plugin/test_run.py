@@ -69,9 +69,7 @@ def test_replay_is_deterministic_and_xdist_and_shards_give_the_same_gates(
 
 def test_broken_threshold_fails_the_session_with_the_table(suite, small, recorded):
     suite.makefile(".yaml", thresholds="scout:\n  baseline:\n    te: {max: 1}\n")
-    result = suite.runpytest(
-        *small(f"--emrd-cassettes={recorded}", "--emrd-record-mode=none")
-    )
+    result = suite.runpytest(*small(f"--emrd-cassettes={recorded}", "--emrd-record-mode=none"))
     result.assert_outcomes(passed=2, failed=1)
     result.stdout.fnmatch_lines(
         [

@@ -8,8 +8,8 @@ from pathlib import Path
 import pytest
 
 from pytest_emrd.agent import load_registry
-from pytest_emrd.cassette import agent_runner, run_with_cassette
-from pytest_emrd.episode import protocol_version
+from pytest_emrd.cassette import run_with_cassette
+from pytest_emrd.episode import agent_runner, protocol_version
 from pytest_emrd.progress import LiveBoard, StatusFile, read_statuses, render_line, watch_episode
 from pytest_emrd.progress._status import WorkerStatus
 from pytest_emrd.trajectory import EpisodeSpec

@@ -10,8 +10,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from pytest_emrd.gate import StoredEpisode
 from pytest_emrd.metrics.synthetic import synthetic_grid, synthetic_trajectory
+from pytest_emrd.run import StoredEpisode
 from pytest_emrd.trajectory import EpisodeSpec, Trajectory
 
 

@@ -141,7 +141,7 @@ def test_a_stored_run_is_reported_from_its_heads_decoding_only_the_map_episode(
     tmp_path, grid: list[Trajectory]
 ) -> None:
     from pytest_emrd.cassette import EpisodeRun
-    from pytest_emrd.gate import ResultsStore, load_run_episodes
+    from pytest_emrd.run import ResultsStore, load_run_episodes
 
     store = ResultsStore(tmp_path, session="s", protocol=grid[0].protocol)
     for t in grid:

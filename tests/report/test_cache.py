@@ -11,7 +11,6 @@ import pytest
 
 from perf.report import write_run_dir
 from pytest_emrd.cli import main
-from pytest_emrd.gate import load_run_episodes
 from pytest_emrd.metrics.synthetic import synthetic_grid
 from pytest_emrd.report import (
     _build,
@@ -23,6 +22,7 @@ from pytest_emrd.report import (
     write_aggregates,
 )
 from pytest_emrd.report._plots import render_figures
+from pytest_emrd.run import load_run_episodes
 
 THRESHOLDS = """\
 scout:
@@ -103,7 +103,7 @@ def test_a_changed_episode_file_or_episode_option_computes_again(
 
 
 def test_episodes_without_a_file_digest_have_no_key(grid, make_run_dir) -> None:
-    from pytest_emrd.gate import StoredEpisode
+    from pytest_emrd.run import StoredEpisode
 
     handed = [StoredEpisode.of(t, session="", recorded=False, frame_drift=0, seconds=0.0)
               for t in grid[:2]]  # fmt: skip

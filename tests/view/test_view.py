@@ -11,8 +11,8 @@ import pytest
 from PIL import Image
 
 from pytest_emrd.cli import main
-from pytest_emrd.gate import StoredEpisode
 from pytest_emrd.metrics import episode_metrics
+from pytest_emrd.run import StoredEpisode
 from pytest_emrd.trajectory import Trajectory
 from pytest_emrd.view import (
     Recorded,

@@ -8,7 +8,8 @@ from typing import Any
 import pytest
 
 from pytest_emrd.cassette import EpisodeRun
-from pytest_emrd.gate import (
+from pytest_emrd.metrics import EpisodeMetrics, episode_metrics
+from pytest_emrd.run import (
     EPISODE_METRICS_CODE,
     EPISODE_METRICS_LIBRARIES,
     MeasuredStore,
@@ -17,7 +18,6 @@ from pytest_emrd.gate import (
     code_fingerprint,
     measured_episodes,
 )
-from pytest_emrd.metrics import EpisodeMetrics, episode_metrics
 from pytest_emrd.trajectory import EpisodeSpec, Trajectory
 
 from .conftest import make_trajectory

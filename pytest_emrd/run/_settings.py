@@ -23,10 +23,15 @@ from typing import Any, Final
 from pytest_emrd._names import check_slug
 from pytest_emrd.errors import ConfigError, check_choice, check_positive_int
 from pytest_emrd.rooms import ROOM_SLUGS
-from pytest_emrd.trajectory import CONDITIONS, LAYOUTS, MODALITIES, VARIANTS
+from pytest_emrd.trajectory import (
+    CONDITIONS,
+    LAYOUTS,
+    MATCHING_MODES,
+    MODALITIES,
+    RECORD_MODES,
+    VARIANTS,
+)
 
-RECORD_MODES: Final[tuple[str, ...]] = ("none", "once", "new_episodes", "all")
-MATCHING_MODES: Final[tuple[str, ...]] = ("strict", "lenient")
 BACKENDS: Final[tuple[str, ...]] = ("builtin", "ai2thor")
 SPAWNS: Final[tuple[str, ...]] = tuple(ROOM_SLUGS.values())
 MAX_EPISODES: Final = 1000

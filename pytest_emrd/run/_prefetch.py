@@ -18,8 +18,8 @@ from concurrent.futures import ThreadPoolExecutor
 from typing import TYPE_CHECKING
 
 from pytest_emrd.errors import EmrdError
-from pytest_emrd.gate._settings import RunSettings
-from pytest_emrd.gate._store import ResultsStore
+from pytest_emrd.run._settings import RunSettings
+from pytest_emrd.run._store import ResultsStore
 from pytest_emrd.trajectory import EpisodeSpec
 
 if TYPE_CHECKING:

@@ -1,7 +1,7 @@
 """The head of a stored episode: what a run needs to know about it without decoding its
 trajectory (file I/O).
 
-Layout, next to :mod:`pytest_emrd.gate._store`'s::
+Layout, next to :mod:`pytest_emrd.run._store`'s::
 
     <run>/heads/<case_id>.json    {"episode_sha256": ..., "code": ..., "head": {...}}
 
@@ -13,7 +13,7 @@ written beside the episode when the store writes it (or first reads it back).
 
 A head is used only while it describes the very episode file stored now, as the current code
 would read it: ``episode_sha256`` is the SHA-256 of the episode file's bytes and ``code`` the
-:func:`~pytest_emrd.gate.code_fingerprint` of the code that reads episode files
+:func:`~pytest_emrd.run.code_fingerprint` of the code that reads episode files
 (:data:`HEAD_CODE`). A changed episode file, or a reader that would now read it differently (or
 refuse it), sends the store back to the file itself, which is then decoded and validated in
 full. Same bytes, same reader: the head states what decoding the file gave when the head was
@@ -33,7 +33,7 @@ from pytest_emrd._atomic import write_bytes_atomic
 from pytest_emrd._scrub import scrub, scrub_bytes
 from pytest_emrd._serde import from_versioned_dict, to_dict
 from pytest_emrd.errors import ProtocolError
-from pytest_emrd.gate._fingerprint import code_fingerprint
+from pytest_emrd.run._fingerprint import code_fingerprint
 from pytest_emrd.trajectory import EpisodeSpec, Trajectory, Usage
 
 HEAD_SCHEMA: Final = 1
@@ -42,8 +42,8 @@ HEAD_SCHEMA: Final = 1
 HEAD_CODE: Final = (
     "pytest_emrd.trajectory",
     "pytest_emrd._serde",
-    "pytest_emrd.gate._store",
-    "pytest_emrd.gate._head",
+    "pytest_emrd.run._store",
+    "pytest_emrd.run._head",
 )
 
 

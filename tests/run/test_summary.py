@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from pytest_emrd.gate import EpisodeSummary, StoredEpisode, usage_rows
+from pytest_emrd.run import EpisodeSummary, StoredEpisode, usage_rows
 from pytest_emrd.trajectory import EpisodeSpec
 
 from .conftest import make_trajectory

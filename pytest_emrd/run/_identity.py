@@ -20,7 +20,7 @@ from typing import Any, Final
 
 from pytest_emrd._atomic import write_bytes_atomic
 from pytest_emrd.errors import ConfigError
-from pytest_emrd.gate._settings import RunSettings
+from pytest_emrd.run._settings import RunSettings
 
 RUN_FILE: Final = "run.json"
 IDENTITY_SCHEMA: Final = 1

@@ -8,7 +8,7 @@ from pytest_emrd.agent import OpenAICompatibleClient, load_registry
 from pytest_emrd.agent.reference import ReferenceServer
 from pytest_emrd.cassette import run_with_cassette
 from pytest_emrd.episode import protocol_version, run_episode
-from pytest_emrd.gate import Prefetcher, ResultsStore, resolve_settings, start_prefetch
+from pytest_emrd.run import Prefetcher, ResultsStore, resolve_settings, start_prefetch
 from pytest_emrd.trajectory import EpisodeSpec
 
 SPECS = [

@@ -29,8 +29,8 @@ from typing import TYPE_CHECKING, Any, Final
 from pytest_emrd._atomic import write_bytes_atomic
 from pytest_emrd._scrub import scrub, scrub_bytes
 from pytest_emrd.errors import ProtocolError
-from pytest_emrd.gate._head import EpisodeHead, file_digest, read_head, write_head
-from pytest_emrd.gate._identity import RunIdentity, write_identity
+from pytest_emrd.run._head import EpisodeHead, file_digest, read_head, write_head
+from pytest_emrd.run._identity import RunIdentity, write_identity
 from pytest_emrd.trajectory import EpisodeSpec, Trajectory
 
 if TYPE_CHECKING:

@@ -6,7 +6,7 @@ import threading
 import time
 
 from pytest_emrd.cassette import EpisodeRun
-from pytest_emrd.gate import ResultsStore, iter_run_dir, load_run_dirs
+from pytest_emrd.run import ResultsStore, iter_run_dir, load_run_dirs
 from pytest_emrd.trajectory import EpisodeSpec
 
 from .conftest import make_trajectory

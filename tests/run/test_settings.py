@@ -7,7 +7,7 @@ from pathlib import Path
 import pytest
 
 from pytest_emrd.errors import ConfigError
-from pytest_emrd.gate import MatchingWarning, resolve_settings
+from pytest_emrd.run import MatchingWarning, resolve_settings
 
 ROOT = Path("/repo")
 

@@ -7,8 +7,8 @@ from dataclasses import dataclass
 from typing import Any
 
 from pytest_emrd._serde import from_dict, to_dict
-from pytest_emrd.gate._store import StoredEpisode
 from pytest_emrd.gate._table import UsageRow
+from pytest_emrd.run._store import StoredEpisode
 
 
 @dataclass(frozen=True)

@@ -9,8 +9,8 @@ import pytest
 
 from pytest_emrd.cassette import EpisodeRun
 from pytest_emrd.errors import ProtocolError
-from pytest_emrd.gate import EpisodeHead, ResultsStore, StoredEpisode
-from pytest_emrd.gate._head import head_path
+from pytest_emrd.run import EpisodeHead, ResultsStore, StoredEpisode
+from pytest_emrd.run._head import head_path
 from pytest_emrd.trajectory import EpisodeSpec, Trajectory, Usage
 
 from .conftest import make_trajectory

@@ -6,9 +6,9 @@ import gc
 
 import pytest
 
-import pytest_emrd.agent
+import pytest_emrd.episode
 from pytest_emrd.agent import load_registry
-from pytest_emrd.cassette import agent_runner
+from pytest_emrd.episode import agent_runner
 
 
 class _Client:
@@ -27,7 +27,7 @@ def built(monkeypatch) -> list[_Client]:
         clients.append(_Client(config.name, require_key))
         return clients[-1]
 
-    monkeypatch.setattr(pytest_emrd.agent, "make_client", make_client)
+    monkeypatch.setattr(pytest_emrd.episode, "make_client", make_client)
     return clients
 
 

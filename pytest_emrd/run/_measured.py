@@ -1,6 +1,6 @@
 """Per-episode metrics saved beside the results store's episodes (file I/O).
 
-Layout, next to :mod:`pytest_emrd.gate._store`'s::
+Layout, next to :mod:`pytest_emrd.run._store`'s::
 
     <run>/metrics/<case_id>.json    {"key": ..., "protocol": ..., "metrics": {...}}
 
@@ -11,7 +11,7 @@ resumed run evaluates its gates without rebuilding a single trajectory.
 
 A saved file is used only while it still describes the stored episode: its ``key`` is the
 SHA-256 of the episode file's bytes together with a fingerprint of the code that computes the
-metrics (:func:`~pytest_emrd.gate.code_fingerprint`), so a recomputed episode or changed metric
+metrics (:func:`~pytest_emrd.run.code_fingerprint`), so a recomputed episode or changed metric
 code is measured again. Errored episodes are never saved (the store retries them in a new session).
 Saved files are scrubbed like the episodes (an episode's rationale is model text).
 """
@@ -26,7 +26,7 @@ from typing import Any, Final, Generic, Protocol, TypeVar
 
 from pytest_emrd._atomic import write_bytes_atomic
 from pytest_emrd._scrub import scrub_bytes
-from pytest_emrd.gate._store import ResultsStore, StoredEpisode, episode_path
+from pytest_emrd.run._store import ResultsStore, StoredEpisode, episode_path
 from pytest_emrd.trajectory import EpisodeSpec, Trajectory
 
 
@@ -99,7 +99,7 @@ def measured_episodes(
     code: str,
 ) -> list[M]:
     """The measure of each episode read from ``run_dirs`` (the first directory holding it,
-    as :func:`~pytest_emrd.gate.load_run_episodes` reads them): read back where the run saved
+    as :func:`~pytest_emrd.run.load_run_episodes` reads them): read back where the run saved
     it for that very episode file, measured otherwise (a stored episode's trajectory is
     decoded only then). Nothing is written: reading a run never changes it."""
     out = []

@@ -7,7 +7,8 @@ from pathlib import Path
 from hypothesis import given
 from hypothesis import strategies as st
 
-from pytest_emrd.gate import Bound, Thresholds, episode_specs, gate_cells, resolve_settings, shard
+from pytest_emrd.gate import Bound, Thresholds
+from pytest_emrd.run import episode_specs, gate_cells, resolve_settings, shard
 
 
 def _settings(**cli):

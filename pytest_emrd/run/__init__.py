@@ -1,0 +1,90 @@
+"""A run: its settings, the episode grid, the results store of its directory, prefetch.
+
+:mod:`pytest_emrd.gate` judges what a run measured; this package feeds it (it imports
+``gate`` and ``cassette``, never the reverse).
+"""
+
+from pytest_emrd.run._files import load_run_dirs, load_run_episodes
+from pytest_emrd.run._fingerprint import code_fingerprint
+from pytest_emrd.run._grid import cell_specs, episode_specs, gate_cells, shard
+from pytest_emrd.run._head import EpisodeHead
+from pytest_emrd.run._identity import (
+    RunIdentity,
+    check_resume,
+    check_shard_set,
+    read_identity,
+    write_identity,
+)
+from pytest_emrd.run._measured import (
+    EPISODE_METRICS_CODE,
+    EPISODE_METRICS_LIBRARIES,
+    MeasuredStore,
+    measured_episodes,
+)
+from pytest_emrd.run._prefetch import Prefetcher, start_prefetch
+from pytest_emrd.run._settings import (
+    BACKENDS,
+    LENIENT_BACKENDS,
+    OPTIONS,
+    SPAWNS,
+    MatchingWarning,
+    Option,
+    RunSettings,
+    parse_backend_option,
+    parse_shard,
+    resolve_settings,
+)
+from pytest_emrd.run._store import (
+    ResultsStore,
+    StoredEpisode,
+    episode_path,
+    iter_run_dir,
+    iter_run_episodes,
+    new_run_dir,
+    read_episode,
+)
+from pytest_emrd.run._summary import EpisodeSummary, usage_rows
+from pytest_emrd.trajectory import MATCHING_MODES, RECORD_MODES
+
+__all__ = [
+    "BACKENDS",
+    "EPISODE_METRICS_CODE",
+    "EPISODE_METRICS_LIBRARIES",
+    "LENIENT_BACKENDS",
+    "MATCHING_MODES",
+    "OPTIONS",
+    "RECORD_MODES",
+    "SPAWNS",
+    "EpisodeHead",
+    "EpisodeSummary",
+    "MatchingWarning",
+    "MeasuredStore",
+    "Option",
+    "Prefetcher",
+    "ResultsStore",
+    "RunIdentity",
+    "RunSettings",
+    "StoredEpisode",
+    "cell_specs",
+    "check_resume",
+    "check_shard_set",
+    "code_fingerprint",
+    "episode_path",
+    "episode_specs",
+    "gate_cells",
+    "iter_run_dir",
+    "iter_run_episodes",
+    "load_run_dirs",
+    "load_run_episodes",
+    "measured_episodes",
+    "new_run_dir",
+    "parse_backend_option",
+    "parse_shard",
+    "read_episode",
+    "read_identity",
+    "resolve_settings",
+    "shard",
+    "start_prefetch",
+    "usage_rows",
+    "write_identity",
+]

@@ -1,0 +1,95 @@
+"""The packages of pytest_emrd import each other one way: no upward import, no circle.
+
+The graph is built from the source with :mod:`ast`, every import counted wherever it is
+written (inside a function, under ``TYPE_CHECKING``): a lazy import is still a dependency.
+"""
+
+from __future__ import annotations
+
+import ast
+from graphlib import CycleError, TopologicalSorter
+from pathlib import Path
+
+import pytest_emrd
+
+PACKAGE = Path(pytest_emrd.__file__).parent
+
+#: ``user -> used`` pairs that must not appear: the lower stage never imports the higher one.
+FORBIDDEN = [
+    ("cassette", "gate"),
+    ("cassette", "run"),
+    ("cassette", "plugin"),
+    ("gate", "run"),
+    ("gate", "cassette"),
+    ("gate", "plugin"),
+    ("run", "plugin"),
+    ("run", "cli"),
+    ("run", "report"),
+    ("episode", "cassette"),
+    ("episode", "run"),
+    ("metrics", "run"),
+    ("metrics", "gate"),
+]
+
+
+#: Modules left out of the graph, with why. ``emrd thor-smoke``'s body lives in ``world/thor/``
+#: and runs whole episodes (``episode``) with the command's arguments (``cli``): a command
+#: inside the world package, which belongs under ``cli/``.
+OUTSIDE = {Path("world/thor/smoke.py")}
+
+UNITS = {p.name.removesuffix(".py") for p in PACKAGE.iterdir() if p.suffix == ".py" or p.is_dir()}
+
+
+def _unit(path: Path) -> str:
+    """The top-level package or module a source file belongs to (``gate``, ``episode``)."""
+    return path.relative_to(PACKAGE).parts[0].removesuffix(".py")
+
+
+def _imported(tree: ast.AST) -> set[str]:
+    """The top-level units of pytest_emrd a module's source imports."""
+    found: set[str] = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            names = [alias.name for alias in node.names]
+        elif isinstance(node, ast.ImportFrom) and node.level == 0 and node.module:
+            names = [node.module]
+            if node.module == "pytest_emrd":
+                names = [f"pytest_emrd.{alias.name}" for alias in node.names]
+        else:
+            continue
+        found.update(n.split(".")[1] for n in names if n.startswith("pytest_emrd."))
+    return found & UNITS
+
+
+def import_graph() -> dict[str, set[str]]:
+    """``unit -> units it imports`` over every module of pytest_emrd (itself left out)."""
+    graph: dict[str, set[str]] = {}
+    for path in PACKAGE.rglob("*.py"):
+        if path.relative_to(PACKAGE) in OUTSIDE:
+            continue
+        unit = _unit(path)
+        used = _imported(ast.parse(path.read_text(encoding="utf-8"), filename=str(path)))
+        graph.setdefault(unit, set()).update(used - {unit})
+    return graph
+
+
+def test_the_graph_sees_the_imports_it_checks() -> None:
+    graph = import_graph()
+    assert {"gate", "cassette"} <= graph["run"]
+    assert "episode" in graph["plugin"]
+    assert "run" in graph["plugin"]
+
+
+def test_no_package_imports_a_higher_stage() -> None:
+    graph = import_graph()
+    upward = [(user, used) for user, used in FORBIDDEN if used in graph.get(user, set())]
+    assert upward == []
+
+
+def test_the_packages_import_each_other_without_a_circle() -> None:
+    try:
+        order = list(TopologicalSorter(import_graph()).static_order())
+    except CycleError as exc:
+        raise AssertionError(f"import circle between packages: {exc.args[1]}") from None
+    assert order.index("run") > order.index("gate")
+    assert order.index("plugin") > order.index("run") > order.index("cassette")
