@@ -18,7 +18,6 @@ from pytest_emrd.errors import EmrdError
 from pytest_emrd.plugin._live import LiveLine
 from pytest_emrd.plugin._logs import LogScrub
 from pytest_emrd.plugin._report import RunReport
-from pytest_emrd.plugin._resume import resume_in_process
 from pytest_emrd.plugin._run import RUN, Run
 from pytest_emrd.run import OPTIONS, check_resume, new_run_dir, resolve_settings
 
@@ -57,7 +56,6 @@ def pytest_configure(config: pytest.Config) -> None:
     config.pluginmanager.register(LiveLine(run), "emrd-live")
     config.pluginmanager.register(RunReport(run), "emrd-report")
     config.pluginmanager.register(LogScrub(), "emrd-log-scrub")
-    resume_in_process(config, run)
 
 
 @pytest.hookimpl(optionalhook=True)

@@ -362,36 +362,6 @@ class Run:
             self._metrics[spec] = self.measured.get(spec, self.episode)
         return self._metrics[spec]
 
-    def finished(self) -> bool:
-        """Whether the run directory already holds everything this run's grid needs: every
-        episode reusable from the store and, for every gate's cell, the per-episode metrics
-        saved for the episode file stored now. What was read is kept for the tests (nothing
-        is read twice); nothing is computed."""
-        if not all(episode_path(self.run_dir, s).is_file() for s in self.episode_specs):
-            return False  # a fresh or unfinished run: not even the protocol is needed
-        stored: dict[EpisodeSpec, StoredEpisode] = {}
-
-        def all_stored(specs: list[EpisodeSpec]) -> bool:
-            for spec in (s for s in specs if s not in stored):
-                if (episode := self.store.reusable(spec)) is None:
-                    return False  # the first episode to compute ends the check
-                stored[spec] = episode
-            return True
-
-        if not all_stored(self.episode_specs):  # before the gates' thresholds and metrics
-            return False
-        gated = list(dict.fromkeys(s for cell in self.gate_cells for s in self.cell_specs(cell)))
-        if not all_stored(gated):
-            return False
-        metrics = {}
-        for spec in gated:
-            if (saved := self.measured.saved(spec)) is None:
-                return False
-            metrics[spec] = saved
-        self._stored.update(stored)
-        self._metrics.update(metrics)
-        return True
-
     def summary(self, stored: StoredEpisode) -> EpisodeSummary:
         config = self.registry.get(stored.head.spec.model)
         return EpisodeSummary.of(
