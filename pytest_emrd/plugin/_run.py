@@ -152,13 +152,21 @@ class Run:
 
         return StatusFile(self.run_dir)
 
+    @cached_property
+    def endpoints(self) -> Any:
+        """Consecutive unreachable episodes per model: a dead endpoint stops its model."""
+        from pytest_emrd.plugin._endpoint import EndpointWatch
+
+        return EndpointWatch(self.run_dir, self.session, self.config.invocation_params.args)
+
     def episode(self, spec: EpisodeSpec) -> StoredEpisode:
         settings = self.settings
 
         def compute(s: EpisodeSpec) -> Any:
             from pytest_emrd.progress import run_watched
 
-            return run_watched(
+            self.endpoints.skip_if_stopped(s.model)
+            done = run_watched(
                 s,
                 self.runner,
                 status=self.status_file,
@@ -168,6 +176,9 @@ class Run:
                 matching=settings.matching,
                 invocation=self.invocation,
             )
+            endpoint = self.registry.get(s.model).base_url or "the built-in reference server"
+            self.endpoints.record(s.model, endpoint, done.trajectory.status, done.trajectory.error)
+            return done
 
         if spec in self._stored:
             return self._stored[spec]
