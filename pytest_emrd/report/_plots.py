@@ -131,7 +131,7 @@ def _tbs(report: Report) -> Figure | None:
         ax.fill_between(t, mean - sd, mean + sd, color=colour(s.condition), alpha=0.12, lw=0)
     for label, ax in axes.items():
         _axes_title(ax, label)
-        ax.set(xlabel="step t", ylabel="TBS(t) (0-1)", ylim=(0, 1.02))
+        ax.set(xlabel="step t", ylabel="TBS(t) (0-1)", ylim=(-0.02, 1.02))
         ax.grid(alpha=0.3)
     _title(fig, "Temporal Belief Stability (mean ± 1 sd)")
     _legend(fig, list(dict.fromkeys(s.condition for s in series)))
@@ -211,7 +211,7 @@ def _km(report: Report) -> Figure | None:
             ax = grid[i][j]
             _axes_title(ax, f"{label}: {category}")
             ax.set(xlabel="steps out of view t", ylabel="S(t) (discovered & held)",
-                   ylim=(0, 1.02))  # fmt: skip
+                   ylim=(-0.02, 1.02))  # fmt: skip
             ax.grid(alpha=0.3)
     _title(fig, "Coverage-anchored Kaplan-Meier survival, 95 % band (thin dashed: Ebbinghaus fit)")
     _legend(fig, list(dict.fromkeys(s.condition for s in series)))

@@ -110,3 +110,18 @@ def test_room_names_on_the_episode_map_print_over_nothing(figures) -> None:
         for text, box in zip(names, boxes, strict=True):
             inside = [p for p in points if box.x0 < p[0] < box.x1 and box.y0 < p[1] < box.y1]
             assert not inside, (key, text.get_text(), inside)
+
+
+@pytest.mark.parametrize("name", ["tbs.png", "miller.png", "km.png", "sir.png"])
+def test_no_curve_lies_on_an_axis(figures, name: str) -> None:
+    """A share of 0 or 1 stays visible: every plotted y lies strictly inside the view."""
+    import numpy as np
+
+    for key in (f"one/{name}", f"many/{name}"):
+        for ax in figures[key].axes:
+            low, high = ax.get_ylim()
+            for line in ax.get_lines():
+                y = np.asarray(line.get_ydata(), float)
+                y = y[np.isfinite(y)]
+                if y.size and line.get_visible():
+                    assert low < y.min() and y.max() < high, (key, line.get_label(), low, high)
