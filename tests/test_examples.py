@@ -67,3 +67,15 @@ def test_the_registry_schema_in_the_docs_lists_every_field_and_default() -> None
         else:
             shown = f"`{default}`"
         assert rows[name].strip() == shown, (name, rows[name], default)
+
+
+def test_the_packaged_suite_prints_commands_that_run_as_printed(pytester: pytest.Pytester):
+    """``pytest --pyargs pytest_emrd.benchmarks`` in a repository without the suite: a missing
+    cassette names a record command that carries ``--pyargs`` (it would find no file else)."""
+    result = pytester.runpytest_subprocess(
+        "--pyargs", "pytest_emrd.benchmarks", "-p", "no:cacheprovider", "--emrd-model=scout",
+        "--emrd-condition=baseline", "--emrd-spawn=office", "--emrd-episodes=1",
+        "--emrd-record-mode=none",
+    )  # fmt: skip
+    assert result.ret == pytest.ExitCode.USAGE_ERROR
+    result.stderr.fnmatch_lines(["*pytest --pyargs pytest_emrd.benchmarks --emrd-model=scout*"])

@@ -106,7 +106,8 @@ class Run:
         """What printed ``pytest`` commands carry: this run's test paths, registry, options."""
         from pytest_emrd.cassette import Invocation
 
-        return Invocation.of(self.settings, paths=tuple(self.config.args))
+        pyargs = ("--pyargs",) if self.config.option.pyargs else ()  # pytest_emrd.benchmarks
+        return Invocation.of(self.settings, paths=(*pyargs, *self.config.args))
 
     def missing_summary(self, items: list[pytest.Item]) -> str | None:
         """In record mode ``none``: one message for the episodes the selected items need
