@@ -148,7 +148,8 @@ class Run:
         """What printed ``pytest`` commands carry: this run's test paths, registry, options."""
         from pytest_emrd.cassette import Invocation
 
-        return Invocation.of(self.settings, paths=tuple(self.config.args))
+        pyargs = ("--pyargs",) if self.config.option.pyargs else ()  # pytest_emrd.benchmarks
+        return Invocation.of(self.settings, paths=(*pyargs, *self.config.args))
 
     def missing_summary(self, items: list[pytest.Item]) -> str | None:
         """In record mode ``none``: one message for the episodes the selected items need
@@ -194,6 +195,13 @@ class Run:
 
         return StatusFile(self.run_dir)
 
+    @cached_property
+    def endpoints(self) -> Any:
+        """Consecutive unreachable episodes per model: a dead endpoint stops its model."""
+        from pytest_emrd.plugin._endpoint import EndpointWatch
+
+        return EndpointWatch(self.run_dir, self.session, self.config.invocation_params.args)
+
     def compute(self, spec: EpisodeSpec) -> Any:
         """Run ``spec`` through its cassette (see the module docstring for a cassette that
         cannot be written)."""
@@ -220,9 +228,10 @@ class Run:
             kept.append(trajectory)
             return trajectory
 
+        self.endpoints.skip_if_stopped(spec.model)
         start = time.perf_counter()
         try:
-            return run_watched(
+            done = run_watched(
                 spec,
                 runner,
                 status=self.status_file,
@@ -237,6 +246,9 @@ class Run:
                 raise
             self.keep_unsaved(spec, kept[-1], path, exc)
             return EpisodeRun(kept[-1], True, 0, time.perf_counter() - start)
+        endpoint = self.registry.get(spec.model).base_url or "the built-in reference server"
+        self.endpoints.record(spec.model, endpoint, done.trajectory.status, done.trajectory.error)
+        return done
 
     def keep_unsaved(self, spec: EpisodeSpec, trajectory: Any, path: Path, exc: OSError) -> None:
         """Write a live episode whose cassette ``path`` could not be saved to the run
