@@ -45,30 +45,6 @@ def test_the_custom_gate_fails_with_its_numbers(pytester: pytest.Pytester):
     )
 
 
-def test_the_registry_schema_in_the_docs_lists_every_field_and_default() -> None:
-    """docs/user-guide/own-repository.md: one table row per ModelConfig field, with its real default."""
-    import dataclasses
-    import re
-
-    from pytest_emrd.agent._config import ModelConfig
-
-    doc = (ROOT / "docs" / "user-guide" / "own-repository.md").read_text(encoding="utf-8")
-    rows = dict(re.findall(r"^\| `(\w+)` \| ([^|]+) \|", doc, flags=re.MULTILINE))
-    fields = {f.name: f for f in dataclasses.fields(ModelConfig) if f.name != "name"}
-    assert set(rows) == set(fields)
-    for name, field in fields.items():
-        if field.default is dataclasses.MISSING and field.default_factory is dataclasses.MISSING:
-            assert rows[name].strip() == "required", name
-            continue
-        default = (field.default if field.default is not dataclasses.MISSING
-                   else field.default_factory())  # type: ignore[misc]  # fmt: skip
-        if default is None or isinstance(default, bool):
-            shown = f"`{'null' if default is None else str(default).lower()}`"
-        else:
-            shown = f"`{default}`"
-        assert rows[name].strip() == shown, (name, rows[name], default)
-
-
 def test_the_packaged_suite_prints_commands_that_run_as_printed(pytester: pytest.Pytester):
     """``pytest --pyargs pytest_emrd.benchmarks`` in a repository without the suite: a missing
     cassette names a record command that carries ``--pyargs`` (it would find no file else)."""
