@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import re
 import threading
+import time
 import warnings
 import weakref
 from collections.abc import Callable, Mapping
@@ -147,7 +148,9 @@ class _Run:
         pose, room, visible = obs.pose, self.sim.current_room(), self.sim.visible_ids()
         turn = user_turn(self.spec, t, obs, replay=self.replay)
         messages = self.conversation.request(turn)
+        start = time.perf_counter()
         response = client.complete(messages)
+        latency = None if self.replay else round(time.perf_counter() - start, 3)
         reply = parse_reply(response.text)
         raw = capped_reply(response.text)
         if reply.error is None:
@@ -171,6 +174,7 @@ class _Run:
             raw_reply=raw,
             usage=response.usage,
             repairs=reply.repairs,
+            latency_s=latency,
         )
         self.steps.append(step)
         return step, after

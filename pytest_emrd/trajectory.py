@@ -209,6 +209,10 @@ class Step:
     """Repairs the parser applied to read the reply (``fence``, ``prose``, ``comment``,
     ``trailing_comma``, ``python_literal``; see :func:`pytest_emrd.agent.parse_reply`); ``()``
     for a reply read as written; None when not recorded (schema 1 files, hand-built steps)."""
+    latency_s: float | None = field(default=None, compare=False)
+    """Wall time of this step's request in seconds, retries included, as the model was
+    called; None when no model was (a cassette answered) or not recorded. Not compared: a
+    replay equals its recording."""
 
 
 @dataclass(frozen=True)

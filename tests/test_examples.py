@@ -45,3 +45,15 @@ def test_the_custom_gate_fails_with_its_numbers(sandbox: Sandbox):
     result.stdout.fnmatch_lines(
         ["*scout/baseline: action success *, 95% CI [[]*[]], n=3; the gate needs*>= 1.01"]
     )
+
+
+def test_the_packaged_suite_prints_commands_that_run_as_printed(sandbox: Sandbox):
+    """``pytest --pyargs pytest_emrd.benchmarks`` in a repository without the suite: a missing
+    cassette names a record command that carries ``--pyargs`` (it would find no file else)."""
+    result = sandbox.runpytest(
+        "--pyargs", "pytest_emrd.benchmarks", "-p", "no:cacheprovider", "--emrd-model=scout",
+        "--emrd-condition=baseline", "--emrd-spawn=office", "--emrd-episodes=1",
+        "--emrd-record-mode=none",
+    )  # fmt: skip
+    assert result.ret == pytest.ExitCode.USAGE_ERROR
+    result.stderr.fnmatch_lines(["*pytest --pyargs pytest_emrd.benchmarks --emrd-model=scout*"])

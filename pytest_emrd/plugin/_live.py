@@ -60,6 +60,7 @@ class LiveLine:
             record_mode=settings.record_mode,
             holds=run.store.holds,
             enabled=settings.preflight,
+            models_file=settings.models_file,
         )
 
     def preflight(self, params: list[Any]) -> None:

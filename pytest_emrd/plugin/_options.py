@@ -56,6 +56,8 @@ def pytest_configure(config: pytest.Config) -> None:
     config.pluginmanager.register(LiveLine(run), "emrd-live")
     config.pluginmanager.register(RunReport(run), "emrd-report")
     config.pluginmanager.register(LogScrub(), "emrd-log-scrub")
+    if workerinput is None:  # the controller names a stopped model's endpoint once, at the end
+        config.pluginmanager.register(run.endpoints, "emrd-endpoints")
 
 
 @pytest.hookimpl(optionalhook=True)

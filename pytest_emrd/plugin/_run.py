@@ -185,8 +185,9 @@ class Run:
             f"{key}={value if isinstance(value, str) else json.dumps(value)}"
             for key, value in self.settings.backend_options
         )
+        pyargs = ("--pyargs",) if self.config.option.pyargs else ()  # pytest_emrd.benchmarks
         return Invocation(
-            paths=tuple(self.config.args) or ("benchmarks",),
+            paths=(*pyargs, *self.config.args) or ("benchmarks",),
             models_file=self.settings.models_file,
             cassettes=self.settings.cassettes,
             backend_options=options,
@@ -236,6 +237,13 @@ class Run:
 
         return StatusFile(self.run_dir)
 
+    @cached_property
+    def endpoints(self) -> Any:
+        """Consecutive unreachable episodes per model: a dead endpoint stops its model."""
+        from pytest_emrd.plugin._endpoint import EndpointWatch
+
+        return EndpointWatch(self.run_dir, self.session, self.config.invocation_params.args)
+
     def compute(self, spec: EpisodeSpec) -> Any:
         """Run ``spec`` through its cassette (see the module docstring for a cassette that
         cannot be written)."""
@@ -262,9 +270,10 @@ class Run:
             kept.append(trajectory)
             return trajectory
 
+        self.endpoints.skip_if_stopped(spec.model)
         start = time.perf_counter()
         try:
-            return run_watched(
+            done = run_watched(
                 spec,
                 runner,
                 status=self.status_file,
@@ -279,6 +288,9 @@ class Run:
                 raise
             self.keep_unsaved(spec, kept[-1], path, exc)
             return EpisodeRun(kept[-1], True, 0, time.perf_counter() - start)
+        endpoint = self.registry.get(spec.model).base_url or "the built-in reference server"
+        self.endpoints.record(spec.model, endpoint, done.trajectory.status, done.trajectory.error)
+        return done
 
     def keep_unsaved(self, spec: EpisodeSpec, trajectory: Any, path: Path, exc: OSError) -> None:
         """Write a live episode whose cassette ``path`` could not be saved to the run

@@ -18,6 +18,7 @@ A refusal vLLM explains (too many images, context too short) fails ``images`` or
 from __future__ import annotations
 
 import os
+import shlex
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -26,7 +27,14 @@ from typing import Any, Final
 import httpx
 
 from pytest_emrd._serde import to_dict
-from pytest_emrd.agent import HISTORY_TURNS, ChatClient, ModelConfig, make_client, parse_reply
+from pytest_emrd.agent import (
+    HISTORY_TURNS,
+    ChatClient,
+    ModelConfig,
+    build_request,
+    make_client,
+    parse_reply,
+)
 from pytest_emrd.errors import EmrdError
 from pytest_emrd.preflight._estimate import CostEstimate, Measured, estimate_cost
 from pytest_emrd.preflight._refusals import vllm_refusal
@@ -40,7 +48,7 @@ from pytest_emrd.preflight._requests import (
 from pytest_emrd.preflight._server import models_url, server_info
 from pytest_emrd.trajectory import EpisodeSpec
 
-STATUSES: Final = ("pass", "fail", "skip", "info")
+STATUSES: Final = ("pass", "fail", "skip", "warn", "info")
 _EXCERPT: Final = 160
 
 
@@ -50,7 +58,8 @@ class Check:
 
     name: str
     status: str
-    """``pass``, ``fail``, ``skip`` (a prerequisite failed) or ``info``."""
+    """``pass``, ``fail``, ``skip`` (a prerequisite failed), ``warn`` (go ahead, but read
+    it) or ``info``."""
     detail: str
     fix: str = ""
     """What to do when it failed."""
@@ -63,6 +72,9 @@ class PreflightReport:
     model: str
     checks: tuple[Check, ...]
     estimate: CostEstimate | None = None
+    models_file: str | None = None
+    """The user registry the run was given (``--emrd-models``): the check-again command
+    needs it to know the model."""
 
     @property
     def failed(self) -> Check | None:
@@ -87,8 +99,14 @@ class PreflightReport:
         return (
             f"preflight of model {self.model!r} failed at '{failed.name}': "
             f"{failed.detail.rstrip('.')}. Fix: {failed.fix.rstrip('.')}. "
-            f"Check again with: emrd check --emrd-model={self.model}"
+            f"Check again with: {self.check_command}"
         )
+
+    @property
+    def check_command(self) -> str:
+        """``emrd check`` for this model, with the registry that defines it."""
+        registry = f" --emrd-models={shlex.quote(self.models_file)}" if self.models_file else ""
+        return f"emrd check --emrd-model={shlex.quote(self.model)}{registry}"
 
     def to_dict(self) -> dict[str, Any]:
         return to_dict(self)
@@ -225,8 +243,36 @@ def _context(probe: _Probe, max_model_len: int | None, done: list[Check]) -> Che
     return Check("context", "fail", detail, refusal.fix if refusal else "")
 
 
+def _listing_headers(config: ModelConfig) -> dict[str, str]:
+    """What the probe will send besides the body: the provider's headers and the key."""
+    probe = build_request(config, [{"role": "user", "content": "."}])
+    headers = dict(probe.headers)
+    key = os.environ.get(config.api_key_env or "", "").strip()
+    if key:
+        auth = "x-api-key" if config.provider == "anthropic" else "Authorization"
+        headers[auth] = key if config.provider == "anthropic" else f"Bearer {key}"
+    return headers
+
+
 def _url(config: ModelConfig, base_url: str) -> tuple[Check, int | None]:
-    info = server_info(models_url(config.provider, base_url), config.model_id)
+    url = models_url(config.provider, base_url)
+    info = server_info(url, config.model_id, headers=_listing_headers(config))
+    if info.refused:
+        sent = bool(os.environ.get(config.api_key_env or "", "").strip())
+        detail = f"{info.url} answered HTTP {info.status}: " + (
+            f"the key in {config.api_key_env} was refused"
+            if sent
+            else "the endpoint wants a key and none was sent"
+        )
+        fix = (
+            f"check the key in {config.api_key_env}"
+            if sent
+            else f"set api_key_env for {config.name!r} in your registry (--emrd-models FILE) "
+            "and export that variable"
+            if config.api_key_env is None
+            else f"export {config.api_key_env}=<your key>"
+        )
+        return Check("url", "fail", detail, fix), None
     if not info.reachable:
         local = httpx.URL(base_url).host in ("localhost", "127.0.0.1", "::1")
         fix = (
@@ -258,9 +304,11 @@ def preflight(
     episodes: int,
     probe: bool = True,
     client_factory: Callable[[ModelConfig], ChatClient] = make_client,
+    models_file: str | None = None,
 ) -> PreflightReport:
     """Check that ``config`` can run ``episodes`` live episodes like ``spec`` (its modality,
-    variant and budget); ``probe=False`` checks the key and estimates without any network."""
+    variant and budget); ``probe=False`` checks the key and estimates without any network.
+    ``models_file``: the user registry that defines it, for the check-again command."""
     window: Sweep = sweep(spec, single_image=config.single_image)
     messages = window.request(HISTORY_TURNS, sample_reply())
     state = _Probe(
@@ -284,5 +332,7 @@ def preflight(
     estimate = estimate_cost(
         config, window, episodes=episodes, max_steps=spec.max_steps, measured=state.measured
     )
+    if estimate.warning is not None:
+        checks.append(Check("usage", "warn", estimate.warning))
     checks.append(Check("estimate", "info", estimate.line()))
-    return PreflightReport(config.name, tuple(checks), estimate)
+    return PreflightReport(config.name, tuple(checks), estimate, models_file)

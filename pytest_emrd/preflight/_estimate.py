@@ -10,6 +10,14 @@ When a probe call was answered, the provider's own count calibrates the estimate
 prompt figure is scaled by ``measured / estimated`` for the probe request (a full window,
 so the mix of text and images matches the steps that dominate the total), and the probe's
 reply gives the completion tokens per step and the size of the replies in the window.
+The server's count is not taken on trust: when it and our own count of the same request
+(text and images) differ by more than :data:`TRUSTED_RATIO` either way, the estimate keeps
+our count and says why (:attr:`CostEstimate.warning`); a server reporting 1 prompt token
+for a request of ten frames does not make a grid look free.
+
+Completion tokens are given twice: the expected total (the probe's reply length, or
+:data:`DEFAULT_COMPLETION_TOKENS`) and the bound the registry's ``max_tokens`` puts on every
+reply; the cost likewise (expected, and at most).
 """
 
 from __future__ import annotations
@@ -23,6 +31,8 @@ from pytest_emrd.preflight._requests import CHARS_PER_TOKEN, Sweep, request_toke
 #: Assumed completion tokens per step before a probe measured one: a 20-object cognitive
 #: map (about 75 characters an entry) and a few sentences, without hidden reasoning.
 DEFAULT_COMPLETION_TOKENS: Final = 500
+#: The server's prompt count calibrates ours only within this factor either way.
+TRUSTED_RATIO: Final = 4.0
 
 
 @dataclass(frozen=True)
@@ -49,22 +59,36 @@ class CostEstimate:
     """Steps per episode assumed (the action budget)."""
     prompt_tokens: int
     completion_tokens: int
+    """Expected completion tokens (the probe's reply length per step, or the default)."""
     peak_request_tokens: int
     """Prompt tokens of the largest request (a full window): what the context must hold."""
     cost_usd: float | None
-    """``None`` when the registry has no prices (self-hosted models)."""
+    """Expected cost; ``None`` when the registry has no prices (self-hosted models)."""
     basis: str
     """``registry`` (static figures) or ``probe`` (calibrated by an answered probe)."""
     model_hours: float | None = None
     """Hours of model calls at the probe's latency, one call at a time (``None`` unprobed)."""
+    completion_bound: int = 0
+    """Completion tokens if every reply used ``max_tokens``: the most the grid can bill."""
+    max_tokens: int = 0
+    """The registry's ``max_tokens`` behind :attr:`completion_bound`."""
+    cost_bound_usd: float | None = None
+    """Cost with :attr:`completion_bound` completion tokens (``None`` without prices)."""
+    warning: str | None = None
+    """Why the server's token count was not used (it differs from ours by more than
+    :data:`TRUSTED_RATIO`), else ``None``."""
 
     def line(self) -> str:
-        """``240 episodes x <= 50 steps: <= 38.1 M prompt + 6.0 M completion tokens, ...``."""
-        cost = "no price in the registry" if self.cost_usd is None else f"<= ${self.cost_usd:,.2f}"
+        """``240 episodes x <= 50 steps: <= 38.1 M prompt + ~6.0 M completion tokens
+        (<= 49.2 M at max_tokens 4096), ~$X (<= $Y) ...``."""
+        cost = "no price in the registry"
+        if self.cost_usd is not None and self.cost_bound_usd is not None:
+            cost = f"~${self.cost_usd:,.2f} expected, <= ${self.cost_bound_usd:,.2f}"
         hours = "" if self.model_hours is None else f", <= {_duration(self.model_hours)} of calls"
         return (
             f"{self.episodes} episodes x <= {self.steps} steps: <= {_tokens(self.prompt_tokens)} "
-            f"prompt + {_tokens(self.completion_tokens)} completion tokens, {cost}{hours} "
+            f"prompt + ~{_tokens(self.completion_tokens)} completion tokens expected (<= "
+            f"{_tokens(self.completion_bound)} at max_tokens {self.max_tokens:,}), {cost}{hours} "
             f"({self.basis} estimate; largest request ~{self.peak_request_tokens:,} tokens)"
         )
 
@@ -89,24 +113,36 @@ def estimate_cost(
     measured: Measured | None = None,
 ) -> CostEstimate:
     """Estimate ``episodes`` live episodes of ``config`` (a ``ModelConfig``) of ``max_steps``."""
+    warning = None
     if measured is None:
         completion = DEFAULT_COMPLETION_TOKENS
         reply = "x" * (DEFAULT_COMPLETION_TOKENS * CHARS_PER_TOKEN)
         scale = 1.0
     else:
         completion, reply = max(measured.completion_tokens, 1), measured.reply
-        scale = measured.prompt_tokens / max(measured.estimated_prompt_tokens, 1)
+        scale = max(measured.prompt_tokens, 0) / max(measured.estimated_prompt_tokens, 1)
+        if not 1 / TRUSTED_RATIO <= scale <= TRUSTED_RATIO:
+            warning = (
+                f"the server reported {measured.prompt_tokens:,} prompt tokens for the probe, "
+                f"our count of its text and frames is {measured.estimated_prompt_tokens:,} "
+                f"({_ratio(scale)}): more than {TRUSTED_RATIO:g}x apart, so the estimate uses "
+                f"our count; check image_tokens for {config.name!r} in the registry, or the "
+                "server's usage report"
+            )
+            scale = 1.0
+    completion = min(completion, config.max_tokens)
     per_step = [
         request_tokens(sweep.request(t, reply), image_tokens=config.image_tokens)
         for t in range(1, max_steps + 1)
     ]
     prompt = round(sum(per_step) * scale) * episodes
     completion_total = completion * max_steps * episodes
-    cost = None
+    bound = config.max_tokens * max_steps * episodes
+    cost = cost_bound = None
     if config.price_per_mtok_in is not None and config.price_per_mtok_out is not None:
-        cost = (
-            prompt * config.price_per_mtok_in + completion_total * config.price_per_mtok_out
-        ) / 1e6
+        price_in, price_out = config.price_per_mtok_in, config.price_per_mtok_out
+        cost = (prompt * price_in + completion_total * price_out) / 1e6
+        cost_bound = (prompt * price_in + bound * price_out) / 1e6
     return CostEstimate(
         model=config.name,
         episodes=episodes,
@@ -115,6 +151,15 @@ def estimate_cost(
         completion_tokens=completion_total,
         peak_request_tokens=round(max(per_step) * scale),
         cost_usd=cost,
-        basis="registry" if measured is None else "probe",
+        basis="probe" if measured is not None and warning is None else "registry",
         model_hours=None if measured is None else measured.seconds * max_steps * episodes / 3600,
+        completion_bound=bound,
+        max_tokens=config.max_tokens,
+        cost_bound_usd=cost_bound,
+        warning=warning,
     )
+
+
+def _ratio(scale: float) -> str:
+    """``0.0001x`` / ``12x``: how the server's count compares with ours."""
+    return "the server's is 0x" if scale == 0 else f"the server's is {scale:.2g}x ours"

@@ -1,8 +1,10 @@
 """What the endpoint says about itself: ``GET /models`` (reachability, served ids, context).
 
-Any HTTP answer means the server is reachable (hosted APIs answer 401 without a key: the
-probe call checks the key). vLLM lists each served model with ``max_model_len``, the
-context length it was started with; that figure is reported as the server gives it.
+The listing is asked for with the model's key and headers, as the probe will be: HTTP 401 or
+403 means the endpoint is up and refuses us, which the ``url`` check reports as a failure
+(:attr:`ServerInfo.refused`), never as a pass. vLLM lists each served model with
+``max_model_len``, the context length it was started with; that figure is reported as the
+server gives it.
 """
 
 from __future__ import annotations
@@ -34,6 +36,11 @@ class ServerInfo:
     def reachable(self) -> bool:
         return self.status is not None
 
+    @property
+    def refused(self) -> bool:
+        """The server answered that our credentials are missing or wrong (401, 403)."""
+        return self.status in (401, 403)
+
     def serves(self, model_id: str) -> bool | None:
         """Whether the listing names ``model_id`` (``models/`` prefixes ignored); ``None``
         when there is no readable listing."""
@@ -55,10 +62,17 @@ def _entries(data: Any) -> list[dict[str, Any]]:
     return [i for i in items if isinstance(i, dict)] if isinstance(items, list) else []
 
 
-def server_info(url: str, model_id: str, *, timeout: float = LIST_TIMEOUT_S) -> ServerInfo:
-    """``GET url`` without credentials; never raises for a network or protocol failure."""
+def server_info(
+    url: str,
+    model_id: str,
+    *,
+    timeout: float = LIST_TIMEOUT_S,
+    headers: dict[str, str] | None = None,
+) -> ServerInfo:
+    """``GET url`` with ``headers`` (the key, when there is one); never raises for a network
+    or protocol failure."""
     try:
-        response = httpx.get(url, timeout=timeout)
+        response = httpx.get(url, timeout=timeout, headers=headers)
     except httpx.HTTPError as exc:
         return ServerInfo(url, None, error=f"{type(exc).__name__}: {exc}")
     if response.status_code != 200:

@@ -33,11 +33,13 @@ def live_grid(
 
 
 def preflight_live(
-    grid: Mapping[str, Sequence[EpisodeSpec]], registry: Any
+    grid: Mapping[str, Sequence[EpisodeSpec]], registry: Any, models_file: Path | None = None
 ) -> list[PreflightReport]:
-    """One preflight per model of ``grid``, estimating exactly its live episodes."""
+    """One preflight per model of ``grid``, estimating exactly its live episodes
+    (``models_file``: the user registry, named in the check-again command)."""
+    where = None if models_file is None else str(models_file)
     return [
-        preflight(registry.get(model), specs[0], episodes=len(specs))
+        preflight(registry.get(model), specs[0], episodes=len(specs), models_file=where)
         for model, specs in grid.items()
     ]
 
@@ -53,8 +55,10 @@ class SessionPreflight:
         record_mode: str,
         holds: Callable[[EpisodeSpec], bool],
         enabled: bool = True,
+        models_file: Path | None = None,
     ) -> None:
         self.registry = registry
+        self.models_file = models_file
         self.enabled = enabled
         self.cassettes = cassettes
         self.record_mode = record_mode
@@ -77,7 +81,7 @@ class SessionPreflight:
             for model, mine in grid.items()
             if self.registry.get(model).provider != "reference"
         }
-        reports = preflight_live(remote, self.registry) if self.enabled else []
+        reports = preflight_live(remote, self.registry, self.models_file) if self.enabled else []
         return reports, sum(len(mine) for mine in grid.values())
 
 

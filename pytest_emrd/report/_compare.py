@@ -24,11 +24,19 @@ For every compared gate metric (:data:`COMPARED`) and cell:
 * the p-values of the whole comparison corrected together for multiple testing with Holm's
   step-down method (:func:`statsmodels.stats.multitest.multipletests`, ``method="holm"``,
   family-wise error ``ALPHA``);
+* the smallest Holm-adjusted p the test could reach with its ``n`` pairs, whatever the data:
+  ``min(1, m * p_min(n))`` for ``m`` tests, where ``p_min(n) = 2 / 2^n`` for the exact test
+  (only the observed sign pattern and its mirror image are as extreme) and ``1 / (R + 1)``
+  for ``R`` random patterns;
 * a verdict: ``better`` / ``worse`` when the Holm-adjusted p is below ``ALPHA`` (the direction
-  from ``GATE_METRICS[name].better``: ``higher`` or ``lower`` is better), ``no change``
-  otherwise, ``n/a`` when there is no test (undefined or unbounded value, fewer than two
-  pairs, unbounded bootstrap distribution). The CI and the test can disagree for a few pairs;
-  the verdict follows the test.
+  from ``GATE_METRICS[name].better``: ``higher`` or ``lower`` is better); ``inconclusive``
+  when it is not and could not have been (the reachable p above is ``ALPHA`` or more: eight
+  pairs that all moved the same way still give ``2 / 2^8 = 0.0078``, times ``m``); ``no
+  change`` when the test could have found a difference and did not, or when every resample
+  of ``B - A`` is exactly 0 (the same episodes on both sides); ``n/a`` when there is no
+  test (undefined or unbounded value, fewer than two pairs, unbounded bootstrap
+  distribution). The CI and the test can disagree for a few pairs; the verdict follows the
+  test.
 
 Pairing removes the between-world variance (spawn pose, layout) that an unpaired comparison
 counts as noise, and a pair whose episodes are identical contributes exactly 0: the same
@@ -74,7 +82,7 @@ _RATIOS: Final[dict[str, tuple[Callable[[EpisodeMetrics], float], ...]]] = {
 #: Compared metrics, in report order (every one a key of GATE_METRICS).
 COMPARED: Final[tuple[str, ...]] = (*_MEANS, *_RATIOS, "errored_rate")
 #: Verdicts, in the order the document explains them.
-VERDICTS: Final[tuple[str, ...]] = ("better", "worse", "no change", "n/a")
+VERDICTS: Final[tuple[str, ...]] = ("better", "worse", "no change", "inconclusive", "n/a")
 
 Pair = tuple[EpisodeMetrics, EpisodeMetrics]
 
@@ -101,12 +109,17 @@ class Difference:
     p_holm: float | None
     """``p_value`` after Holm's correction across every test of the comparison."""
     verdict: str
-    """``better``, ``worse``, ``no change`` or ``n/a`` (see the module docstring)."""
+    """``better``, ``worse``, ``no change``, ``inconclusive`` or ``n/a`` (module docstring)."""
     model_b: str
     unpaired: int = 0
     """Episodes of the cell on either side without a partner (left out)."""
     reason: str | None = None
-    """Why there is no test (``verdict == 'n/a'``)."""
+    """Why there is no test (``verdict == 'n/a'``), or why it could not decide
+    (``inconclusive``)."""
+    pairs: int = 0
+    """Pairs the metric is compared on (both episodes define it)."""
+    p_reachable: float | None = None
+    """The smallest Holm-adjusted p this test's pairs could give (None without a test)."""
 
     @property
     def significant(self) -> bool | None:
@@ -216,10 +229,12 @@ def _difference(
     def result(diff: float | None, low: float | None = None, high: float | None = None,
                p: float | None = None, why: str | None = None) -> Difference:  # fmt: skip
         return Difference(*key, name, ea, eb, diff, low, high, p, None, "n/a", model_b,
-                          unpaired, why)  # fmt: skip
+                          unpaired, why, len(used))  # fmt: skip
 
     if not pairs:
         return result(None, why="no paired episodes (same condition, spawn room and episode)")
+    if not used:
+        return result(None, why=_why_no_pair(name, pairs))
     if ea.value is None or eb.value is None:
         undefined = ea if ea.value is None else eb
         return result(None, why=f"undefined in every pair ({undefined.reason})")
@@ -235,16 +250,38 @@ def _difference(
     return result(diff, *tested)
 
 
-def _verdict(d: Difference, p_holm: float) -> Difference:
+def _why_no_pair(name: str, pairs: list[Pair]) -> str:
+    """Why no pair defines ``name``: errored episodes, or the metric's own reason."""
+    clean = [(x, y) for x, y in pairs if not x.errored and not y.errored]
+    if not clean:
+        return "every pair holds an errored episode"
+    get = _MEANS.get(name)
+    undefined = [m for pair in clean for m in pair if get is not None and get(m) is None]
+    why = dict.fromkeys(m.reasons.get(name, "undefined") for m in undefined)
+    return f"undefined in every pair: {'; '.join(why) or 'no value'}"
+
+
+def smallest_p(n: int, resamples: int) -> float:
+    """The smallest two-sided sign-flip p that ``n`` pairs can give (module docstring):
+    ``2 / 2^n`` when every pattern is enumerated, ``1 / (R + 1)`` over ``R`` random ones."""
+    return 2.0 / 2**n if 2**n <= resamples else 1.0 / (resamples + 1)
+
+
+def _verdict(d: Difference, p_holm: float, reachable: float) -> Difference:
     better = GATE_METRICS[d.metric].better
-    verdict = "no change"
+    verdict, why = "no change", d.reason
     if p_holm < ALPHA and d.diff:
         verdict = "better" if (d.diff > 0) == (better == "higher") else "worse"
-    return replace(d, p_holm=p_holm, verdict=verdict)
+    elif reachable >= ALPHA and not d.diff == d.ci_low == d.ci_high == 0:  # not identical
+        verdict = "inconclusive"
+        why = (f"{d.pairs} pairs cannot reach Holm p < {ALPHA}: the smallest reachable is "
+               f"{reachable:.3g}; more episodes per cell can")  # fmt: skip
+    return replace(d, p_holm=p_holm, verdict=verdict, p_reachable=reachable, reason=why)
 
 
-def holm(differences: Sequence[Difference]) -> tuple[Difference, ...]:
-    """Holm-adjust every p-value of ``differences`` together and set the verdicts."""
+def holm(differences: Sequence[Difference], resamples: int = N_RESAMPLES) -> tuple[Difference, ...]:
+    """Holm-adjust every p-value of ``differences`` together and set the verdicts
+    (``resamples``: the sign-flip test's pattern budget, for the reachable p)."""
     tested = [i for i, d in enumerate(differences) if d.p_value is not None]
     out = list(differences)
     if tested:
@@ -253,7 +290,9 @@ def holm(differences: Sequence[Difference]) -> tuple[Difference, ...]:
         adjusted = multipletests([differences[i].p_value for i in tested], alpha=ALPHA,
                                  method="holm")[1]  # fmt: skip
         for i, p in zip(tested, adjusted, strict=True):
-            out[i] = _verdict(differences[i], float(p))
+            d = differences[i]
+            reachable = min(1.0, len(tested) * smallest_p(d.pairs, resamples))
+            out[i] = _verdict(d, float(p), reachable)
     return tuple(out)
 
 
@@ -289,7 +328,7 @@ def compare_runs(
         return "/".join((models[side] if models else k[0], *k[1:]))
 
     return Comparison(
-        names[0], names[1], holm(diffs),
+        names[0], names[1], holm(diffs, resamples),
         tuple(cell(k, 0) for k in cells_a if k not in cells_b),
         tuple(cell(k, 1) for k in cells_b if k not in cells_a),
         rng_seed, resamples, models,

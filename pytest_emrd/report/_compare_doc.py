@@ -33,7 +33,7 @@ def _row(d: Difference) -> tuple[Cell, ...]:
         Cell(num(d.diff)),
         Cell("n/a" if d.ci_low is None else f"[{num(d.ci_low)}, {num(d.ci_high)}]"),
         Cell(pval(d.p_holm)),
-        Cell(d.verdict, bold=d.verdict in ("better", "worse")),
+        Cell(d.verdict, bold=d.verdict in ("better", "worse", "inconclusive")),
         Cell(note),
     )
 
@@ -50,8 +50,10 @@ def compare_document(c: Comparison) -> Document:
             f"bootstrap ({c.n_resamples} resamples); two-sided p from a paired sign-flip test "
             f"(exact up to {c.n_resamples} patterns), Holm-corrected across all "
             f"{sum(d.p_value is not None for d in c.differences)} tests. Verdict **better** / "
-            f"**worse** when the Holm p < {c.alpha} (direction: the Better column), else no "
-            "change; n/a without a test."
+            f"**worse** when the Holm p < {c.alpha} (direction: the Better column); "
+            "**inconclusive** when it is not and the pairs could not have made it so (the "
+            "Note gives the smallest Holm p they could reach): run more episodes before "
+            "reading it as no change; else no change; n/a without a test."
         )
     ]
     if c.only_a or c.only_b:

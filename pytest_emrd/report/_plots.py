@@ -131,7 +131,7 @@ def _tbs(report: Report) -> Figure | None:
         ax.fill_between(t, mean - sd, mean + sd, color=colour(s.condition), alpha=0.12, lw=0)
     for label, ax in axes.items():
         _axes_title(ax, label)
-        ax.set(xlabel="step t", ylabel="TBS(t) (0-1)", ylim=(0, 1.02))
+        ax.set(xlabel="step t", ylabel="TBS(t) (0-1)", ylim=(-0.02, 1.02))
         ax.grid(alpha=0.3)
     _title(fig, "Temporal Belief Stability (mean ± 1 sd)")
     _legend(fig, list(dict.fromkeys(s.condition for s in series)))
@@ -211,7 +211,7 @@ def _km(report: Report) -> Figure | None:
             ax = grid[i][j]
             _axes_title(ax, f"{label}: {category}")
             ax.set(xlabel="steps out of view t", ylabel="S(t) (discovered & held)",
-                   ylim=(0, 1.02))  # fmt: skip
+                   ylim=(-0.02, 1.02))  # fmt: skip
             ax.grid(alpha=0.3)
     _title(fig, "Coverage-anchored Kaplan-Meier survival, 95 % band (thin dashed: Ebbinghaus fit)")
     _legend(fig, list(dict.fromkeys(s.condition for s in series)))
@@ -257,8 +257,13 @@ def _episode_map(report: Report) -> Figure | None:
     for room in m.rooms:
         poly = np.array([*room.polygon, room.polygon[0]])
         ax.fill(poly[:, 0], poly[:, 1], color="#f2f2f2", ec="#555555", lw=1.5, zorder=0)
-        cx, cz = poly[:-1].mean(axis=0)
-        ax.text(cx, cz, room.name, ha="center", va="center", fontsize=13, color="#999999")
+        # the name sits inside the room's top edge, under every marker, on a white ground:
+        # it never prints over an object, an entry or another room's name
+        cx, top = poly[:-1, 0].mean(), poly[:-1, 1].max()
+        ax.annotate(room.name, (cx, top), xytext=(0, -4), textcoords="offset points",
+                    ha="center", va="top", fontsize=9, color="#777777", zorder=1,
+                    bbox={"boxstyle": "round,pad=0.15", "fc": "white", "ec": "none",
+                          "alpha": 0.8})  # fmt: skip
     truth = {o.object_id: o for o in m.objects}
     for category, marker in _CATEGORY_MARKERS.items():
         objs = [o for o in m.objects if o.category == category]

@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from typing import TypeVar
+from typing import Final, TypeVar
+
+import numpy as np
 
 from pytest_emrd.metrics import FocalRow
 from pytest_emrd.report._document import (
@@ -29,7 +31,14 @@ _LETTER_ROOMS = {letter: room for room, letter in ROOM_LETTERS.items()} | {"X": 
 
 
 def _cond(condition: str) -> str:
-    return CONDITION_NAMES.get(condition, condition)
+    """The paper's name and the key thresholds.yaml and ``--emrd-condition`` use:
+    ``Light & Vis. (low_light)``; a name that is its key is printed once."""
+    name = CONDITION_NAMES.get(condition, condition)
+    return name if name.lower() == condition else f"{name} ({condition})"
+
+
+#: Below this R² the exponential explains less of the KM curve than its own mean does.
+R2_MEANINGLESS: Final = 0.0
 
 
 def _pivot(
@@ -73,6 +82,12 @@ def overview(report: Report) -> Section:
         )  # fmt: skip
         header = ("Model", "Episodes", "Prompt tokens", "Completion tokens", "Est. cost")
         blocks.append(Table("usage", "Token usage per model", header, rows))
+        unpriced = [u.model for u in o.usage if u.cost_usd is None]
+        if unpriced:
+            blocks.append(Paragraph(
+                f"Est. cost n/a for {', '.join(unpriced)}: the registry this report read has no "
+                "price for it (a self-hosted model; or a model of your own registry: pass "
+                "`--models FILE` to `emrd report`, as to the run)."))  # fmt: skip
     if report.missing:
         blocks.append(Paragraph("**What this run is missing:**"))
         blocks.append(Bullets(report.missing))
@@ -97,7 +112,9 @@ def gates(report: Report) -> Section:
     header = ("Model", "Condition", "Prompt", "Metric", "Value", "95% CI", "n", "Bound",
               "Result", "Why")  # fmt: skip
     return Section("gates", "Gates", (
-        Paragraph(f"{passed}/{len(g.verdicts)} gates pass ({g.source})."),
+        Paragraph(f"{passed}/{len(g.verdicts)} gates pass ({g.source}). Values, CIs and bounds "
+                  "are in the units of the thresholds file: rates and shares as fractions "
+                  "(0.9), which the tables below print as percentages (90.0)."),
         Table("gates", "Every threshold: value, bootstrap 95% CI, n, bound, verdict", header,
               rows),
     ))  # fmt: skip
@@ -111,6 +128,27 @@ def exploration(report: Report) -> Section:
     caption = "Exploration Competence: AEC (%) and TE (actions), mean ± sd (Eq. AEC, TE)"
     return Section("exploration", "Exploration Competence",
                    (Table("exploration", caption, header, tuple(rows)),))  # fmt: skip
+
+
+def positional_accuracy(report: Report) -> Section:
+    """PA (Eq. PA) per spawn room and condition: the numbers behind pa_by_spawn.png."""
+    rows = []
+    for g in report.pa:
+        values = np.asarray(g.values, float)
+        sd = float(np.std(values, ddof=1)) if len(values) > 1 else None
+        mean = float(values.mean()) if len(values) else None
+        rows.append((Cell(row_label(g.model, g.variant)), Cell(_cond(g.condition)),
+                     Cell(SLUG_ROOMS.get(g.spawn, g.spawn)),
+                     Cell(f"{mean_sd(mean, sd, digits=3)} (n={len(values)})")))  # fmt: skip
+    if not rows:
+        text = "Positional Accuracy is undefined in every episode (|G_base| = 0)."
+        return Section("pa", "Positional Accuracy", (Paragraph(text),))
+    header = ("Model", "Condition", "Spawn room", "PA (0-1), mean ± sd")
+    caption = (
+        "Positional Accuracy per spawn room (Eq. PA; episodes where it is defined), "
+        "the figure pa_by_spawn.png in numbers"
+    )
+    return Section("pa", "Positional Accuracy", (Table("pa", caption, header, tuple(rows)),))
 
 
 def _focal_cells(row: FocalRow) -> tuple[Cell, ...]:
@@ -189,6 +227,16 @@ def ebbinghaus(report: Report) -> Section:
     caption = ("Ebbinghaus memory strength EFC (steps; inf: nothing forgotten) and R² of "
                "C exp(-t/EFC) against the anchored KM")  # fmt: skip
     blocks: list[Block] = [Table("ebbinghaus", caption, header, rows)]
+    poor = sorted(
+        f"{row_label(r.model, r.variant)}, {_cond(r.condition)} (R² {num(r.fit.pooled.r2, 2)})"
+        for r in report.ebbinghaus
+        if r.fit.pooled.r2 is not None and r.fit.pooled.r2 < R2_MEANINGLESS
+    )
+    if poor:
+        blocks.append(Paragraph(
+            "**R² below 0 means the exponential fits the KM curve worse than a flat line at "
+            "its mean: the EFC of these cells describes no forgetting curve and is not to be "
+            f"compared:** {'; '.join(poor)}."))  # fmt: skip
     if report.anova:
         anova_rows = tuple(
             (Cell(row_label(a.model, a.variant)), Cell(num(a.anova.statistic, 2)),
@@ -309,8 +357,9 @@ def figures(report: Report, skipped: dict[str, str]) -> Section:
 def report_document(report: Report, skipped: dict[str, str]) -> Document:
     """The full report: overview, gates, every table, every figure."""
     return Document("EMRD report", (
-        overview(report), gates(report), exploration(report), focal(report), fpsg(report),
-        ebbinghaus(report), serial_position(report), interventions(report), reasoning(report),
+        overview(report), gates(report), exploration(report), positional_accuracy(report),
+        focal(report), fpsg(report), ebbinghaus(report), serial_position(report),
+        interventions(report), reasoning(report),
         figures(report, skipped),
     ))  # fmt: skip
 

@@ -1,6 +1,11 @@
 """The data of one episode page: per step what the model saw, said and did, its map aligned
 onto the ground truth, and the metrics at that step (pure).
 
+A step is laid out in the order the model lived it: the frame and pose shown *before* the
+action, the request (system prompt, this step's text, the frames of the history window),
+the reply and its action (tokens, latency), then the engine's feedback on that action, the
+*result*, with where the agent stood after it.
+
 Per step ``t`` the map ``M_t`` is matched by :func:`pytest_emrd.metrics.step_matchings`
 (identities carried and revised exactly as every episode metric does), aligned with the report's
 :func:`~pytest_emrd.report.align_map` (Procrustes on the matched pairs), and scored
@@ -14,7 +19,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
-from pytest_emrd.agent import parse_reply
+from pytest_emrd.agent import HISTORY_TURNS, parse_reply
 from pytest_emrd.metrics import (
     aec_score,
     episode_metrics,
@@ -73,12 +78,14 @@ def episode_data(
     recorded: Recorded,
     note: str | None = None,
     spawn: WorldPose | None = None,
+    system: str | None = None,
 ) -> tuple[dict[str, Any], FrameCheck]:
     """The JSON the page script reads (frames by index into ``frames``) and the frame check.
 
     The plan (rooms, objects, the aligned map, the agent) is drawn in the office's own frame
     when ``spawn`` (the spawn pose in it) is known, so every episode of an office reads north
-    up; the pose line keeps the spawn-frame odometry the model was shown.
+    up; the pose line keeps the spawn-frame odometry the model was shown. ``system`` is the
+    system prompt of the episode (None: not rebuilt).
     """
     place, turn = _office(spawn), spawn.heading if spawn else 0.0
     truth = traj.ground_truth
@@ -90,6 +97,7 @@ def episode_data(
     for i, (s, matching) in enumerate(zip(traj.steps, matchings, strict=True)):
         points, rotation, rmse = align_map(s.cognitive_map, matching)
         reply = parse_reply(s.raw_reply)
+        after = traj.steps[i + 1] if i + 1 < len(traj.steps) else None
         steps.append({
             "t": s.index, "action": s.action, "success": s.success, "feedback": s.feedback,
             "parse_error": s.parse_error, "observation": reply.observation,
@@ -104,6 +112,12 @@ def episode_data(
             "tbs": _round(tbs[i]) if i < len(tbs) else None,
             "frame": i if i < len(frames) else None,
             "frame_ok": status[i] if i < len(status) else None,
+            "prompt": frames[i].text or None if i < len(frames) else None,
+            "window": [j for j in range(max(0, i - HISTORY_TURNS + 1), i + 1) if j < len(frames)],
+            "tokens": [s.usage.prompt_tokens, s.usage.completion_tokens],
+            "latency": s.latency_s,
+            "after": (f"{after.room} (x={after.pose.x:.2f} z={after.pose.z:.2f} "
+                      f"heading={after.pose.heading:.0f}°)" if after else traj.final_room),
         })  # fmt: skip
     notes = [n for n in (note, check.note) if n]
     if check.mismatched:
@@ -116,7 +130,7 @@ def episode_data(
         "spawn": traj.spec.spawn, "episode": traj.spec.episode, "status": traj.status,
         "protocol": traj.protocol, "chosen_room": traj.chosen_room,
         "chosen_raw": traj.chosen_room_raw, "rationale": traj.rationale, "error": traj.error,
-        "final_room": traj.final_room, "notes": notes,
+        "final_room": traj.final_room, "notes": notes, "system": system,
         "plan_frame": "the office's frame, north up" if spawn else "the spawn frame",
         "rooms": [{"name": r.name, "polygon": [list(place(*p)) for p in r.polygon]}
                   for r in truth.rooms],

@@ -59,24 +59,38 @@ spawn {e(data["spawn"])} · episode {data["episode"]} · protocol {e(data["proto
 <input id="slider" type="range" min="0" value="0" aria-label="step">
 <button id="next" title="next step (→)">▶</button><span id="stepno"></span></div>
 <div class="grid">
- <div class="panel"><h2>What the model saw (re-rendered)</h2><img id="frame" alt="frame">
-  <div id="frameflag"></div></div>
- <div class="panel"><h2>Cognitive map, aligned onto the ground truth (top down, in
-  {e(data["plan_frame"])})</h2>
+ <div class="col">
+ <div class="panel"><h2>1 · Before the action: what the model saw (re-rendered)</h2>
+  <img id="frame" alt="frame"><div id="frameflag"></div>
+  <dl><dt>pose shown</dt><dd id="pose"></dd><dt>in view (truth)</dt><dd id="visible"></dd></dl>
+ </div>
+ <div class="panel"><h2>2 · The request</h2>
+  <details><summary>system prompt (the same at every step)</summary>
+  <pre id="system">{e(data["system"] or "not rebuilt (see the notes above)")}</pre></details>
+  <div class="cap">this step's text</div><pre id="prompt"></pre>
+  <div class="cap" id="windowcap"></div><div id="window" class="thumbs"></div></div>
+ <div class="panel"><h2>3 · Reply and action</h2><dl>
+  <dt>action</dt><dd id="action"></dd>
+  <dt>observation</dt><dd id="observation"></dd><dt>dedup check</dt><dd id="dedup"></dd>
+  <dt>reasoning</dt><dd id="reasoning"></dd><dt>parse error</dt><dd id="parse"></dd>
+  <dt>tokens</dt><dd id="tokens"></dd><dt>latency</dt><dd id="latency"></dd></dl>
+  <details><summary>raw reply</summary><pre id="raw"></pre></details></div>
+ <div class="panel result"><h2>4 · Result: the engine's feedback on this action</h2><dl>
+  <dt>outcome</dt><dd id="outcome"></dd><dt>feedback</dt><dd id="feedback"></dd>
+  <dt>agent after</dt><dd id="after"></dd></dl></div>
+ </div>
+ <div class="col">
+ <div class="panel"><h2>Cognitive map after this step, aligned onto the ground truth (top
+  down, in {e(data["plan_frame"])})</h2>
   <svg id="plan" role="img" aria-label="plan" style="aspect-ratio: 1 / 1"></svg>
   <div class="legend"><span style="color:#888">● object</span><span style="color:#f0a800">◯
   in view now</span><span style="color:#1f5fbf">● agent, field of view, path</span>
   <span style="color:#d62728">✕ map entry → its object</span><span style="color:#ff9900">✕
   unmatched entry</span></div><div id="scores"></div></div>
- <div class="panel"><h2>Reply and action</h2><dl>
-  <dt>action</dt><dd id="action"></dd><dt>feedback</dt><dd id="feedback"></dd>
-  <dt>observation</dt><dd id="observation"></dd><dt>dedup check</dt><dd id="dedup"></dd>
-  <dt>reasoning</dt><dd id="reasoning"></dd><dt>parse error</dt><dd id="parse"></dd>
-  <dt>pose shown</dt><dd id="pose"></dd><dt>in view (truth)</dt><dd id="visible"></dd></dl>
-  <details><summary>raw reply</summary><pre id="raw"></pre></details></div>
  <div class="panel"><h2>Metrics over time</h2><svg id="chart" role="img" aria-label="metrics">
   </svg><div class="legend"><span style="color:#1f5fbf">— coverage |K|/|E|</span>
   <span style="color:#d62728">- - PA</span><span style="color:#2ca02c">··· TBS(t)</span></div>
+ </div>
  </div>
 </div>
 <script>const DATA = {_script_json(data)};

@@ -15,9 +15,10 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from pytest_emrd.agent import build_system_prompt
 from pytest_emrd.cassette import FormatError, cassette_path, decode
 from pytest_emrd.cassette._redact import DIGEST
-from pytest_emrd.episode import build_simulator, start_world, world_action
+from pytest_emrd.episode import build_simulator, start_world, user_turn, world_action
 from pytest_emrd.errors import EmrdError
 from pytest_emrd.trajectory import Trajectory
 from pytest_emrd.world import WorldPose
@@ -31,6 +32,8 @@ class Replay:
     """The frame shown at each step."""
     spawn: WorldPose
     """The spawn pose in the office's own frame (the page draws the plan in it, north up)."""
+    system: str = ""
+    """The system prompt the episode loop sends for this spec (the same for every step)."""
 
 
 @dataclass(frozen=True)
@@ -40,23 +43,32 @@ class Frame:
     jpeg: bytes
     digest: str
     """Pixel digest the world computed (``pixels:`` + SHA-256), as a cassette records it."""
+    text: str = ""
+    """The user turn's text shown with this frame (feedback of the previous action, pose,
+    step counter, and under ``text``/``both`` the symbolic list), as the loop built it."""
 
 
 def replay_frames(traj: Trajectory) -> Replay:
-    """The frame shown at each step of ``traj`` (``len(traj.steps)`` frames) and the spawn pose.
+    """The frame and user text shown at each step of ``traj`` (``len(traj.steps)`` frames),
+    the system prompt and the spawn pose.
 
     Raises :class:`EmrdError` when the spec's backend cannot be built here (AI2-THOR without
     its extra or a GPU).
     """
     sim = build_simulator(traj.spec.backend)
     try:
-        _, obs = start_world(traj.spec, sim)
+        spec = traj.spec
+        layout, obs = start_world(spec, sim)
         spawn = sim.spawn_pose
+        system = build_system_prompt(
+            layout.inventory(), spec.variant, modality=spec.modality, max_steps=spec.max_steps
+        )
         frames = []
         for step in traj.steps:
-            frames.append(Frame(obs.jpeg, f"pixels:{obs.frame_digest}"))
-            obs = sim.step(world_action(step.action, traj.spec.variant)[0])
-        return Replay(tuple(frames), spawn)
+            text = user_turn(spec, step.index, obs, replay=True).text
+            frames.append(Frame(obs.jpeg, f"pixels:{obs.frame_digest}", text))
+            obs = sim.step(world_action(step.action, spec.variant)[0])
+        return Replay(tuple(frames), spawn, system)
     finally:
         sim.close()
 

@@ -85,9 +85,35 @@
       else if (st.frame_ok === false) { flag.className = "warn"; flag.textContent = "⚠ re-rendered frame differs from the recorded digest: not what the model saw"; }
       else { flag.className = "warn"; flag.textContent = "⚠ frame not checked against a recorded digest"; }
     }
-    // reply
-    $("action").textContent = `${st.action || "(none)"} — ${st.success ? "succeeded" : "failed"}`;
+    // request: this step's text and the frames of the history window
+    $("prompt").textContent = st.prompt || "not rebuilt (see the notes above)";
+    const thumbs = $("window");
+    thumbs.replaceChildren();
+    st.window.forEach((j) => {
+      const past = steps[j], box = document.createElement("figure");
+      const im = document.createElement("img");
+      if (past.frame !== null) im.src = "data:image/jpeg;base64," + FRAMES[past.frame];
+      im.alt = `frame of step ${past.t}`;
+      const cap = document.createElement("figcaption");
+      cap.textContent = past.t === st.t ? `t=${past.t} (now)` : `t=${past.t}`;
+      if (past.t === st.t) box.className = "now";
+      box.append(im, cap);
+      thumbs.appendChild(box);
+    });
+    $("windowcap").textContent = st.window.length
+      ? `frames in the request's history window: steps ${steps[st.window[0]].t}–${st.t}`
+      : "no frame in the request";
+    // reply and action
+    $("action").textContent = st.action || "(none)";
+    $("tokens").textContent = `${st.tokens[0].toLocaleString()} prompt + ` +
+      `${st.tokens[1].toLocaleString()} completion`;
+    $("latency").textContent = st.latency === null
+      ? "not recorded (a cassette answered this request)" : `${st.latency.toFixed(2)} s`;
+    // result: the engine's feedback on the action, after it
+    $("outcome").textContent = st.success ? "executed" : "not executed";
+    $("outcome").className = st.success ? "ok" : "warn";
     $("feedback").textContent = st.feedback;
+    $("after").textContent = st.after;
     $("observation").textContent = st.observation || "";
     $("dedup").textContent = st.dedup || "";
     $("reasoning").textContent = st.reasoning || "";

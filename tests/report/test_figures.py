@@ -85,3 +85,43 @@ def test_pa_bars_carry_a_hatch_per_condition(figures) -> None:
     ax = figures["one/pa_by_spawn.png"].axes[0]
     hatches = {(p.get_facecolor()[:3], p.get_hatch()) for p in ax.patches}
     assert len({h for _, h in hatches}) == 3
+
+
+def test_room_names_on_the_episode_map_print_over_nothing(figures) -> None:
+    """Each room's name lies inside its room, clear of every other name and of every marker
+    (objects, map entries, the path's ends)."""
+    import numpy as np
+    from matplotlib.collections import PathCollection
+
+    for key in ("one/episode_map.png", "many/episode_map.png"):
+        fig = figures[key]
+        FigureCanvasAgg(fig)
+        renderer = fig.canvas.get_renderer()
+        fig.draw(renderer)
+        ax = fig.axes[0]
+        names = [t for t in ax.texts if t.get_text().strip()]
+        boxes = [t.get_window_extent(renderer) for t in names]
+        assert len(boxes) >= 4, key
+        for i, a in enumerate(boxes):
+            for b in boxes[i + 1 :]:
+                assert not a.overlaps(b), (key, names[boxes.index(a)].get_text())
+        offsets = [c.get_offsets() for c in ax.collections if isinstance(c, PathCollection)]
+        points = np.concatenate([ax.transData.transform(o) for o in offsets])
+        for text, box in zip(names, boxes, strict=True):
+            inside = [p for p in points if box.x0 < p[0] < box.x1 and box.y0 < p[1] < box.y1]
+            assert not inside, (key, text.get_text(), inside)
+
+
+@pytest.mark.parametrize("name", ["tbs.png", "miller.png", "km.png", "sir.png"])
+def test_no_curve_lies_on_an_axis(figures, name: str) -> None:
+    """A share of 0 or 1 stays visible: every plotted y lies strictly inside the view."""
+    import numpy as np
+
+    for key in (f"one/{name}", f"many/{name}"):
+        for ax in figures[key].axes:
+            low, high = ax.get_ylim()
+            for line in ax.get_lines():
+                y = np.asarray(line.get_ydata(), float)
+                y = y[np.isfinite(y)]
+                if y.size and line.get_visible():
+                    assert low < y.min() and y.max() < high, (key, line.get_label(), low, high)

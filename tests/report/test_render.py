@@ -15,8 +15,9 @@ from pytest_emrd.report import FIGURES, Report, build_report, render_files, step
 from pytest_emrd.trajectory import Trajectory
 
 _VOID = {"meta", "img", "br", "hr", "link", "input"}
-TABLE_IDS = ("usage", "exploration", "focal-syn", "fpsg", "ebbinghaus", "anova", "serial-position",
-             "intervention-syn-baseline", "inventory-syn-baseline", "reasoning")  # fmt: skip
+TABLE_IDS = ("usage", "exploration", "pa", "focal-syn", "fpsg", "ebbinghaus", "anova",
+             "serial-position", "intervention-syn-baseline", "inventory-syn-baseline",
+             "reasoning")  # fmt: skip
 
 
 class _Checker(HTMLParser):
@@ -160,3 +161,53 @@ def test_step_summary_markdown(grid: list[Trajectory]) -> None:
     assert "## Exploration Competence" in md and "## Focal-Point Spatial Grounding" in md
     assert "![" not in md and "Representative reasoning" not in md
     assert "No thresholds file" in step_summary_markdown(grid, [])
+
+
+def test_the_pa_table_holds_the_figures_numbers(report: Report, files) -> None:
+    import numpy as np
+
+    md = files["report.md"].decode()
+    assert "## Positional Accuracy" in md
+    g = next(g for g in report.pa if len(g.values) > 1)
+    row = f"{np.mean(g.values):.3f} ± {np.std(g.values, ddof=1):.3f} (n={len(g.values)})"
+    assert row in md
+
+
+def test_conditions_carry_their_gate_keys_and_units_are_stated(grid) -> None:
+    """The gate row names the condition as thresholds.yaml does, in the file's unit."""
+    from pytest_emrd.gate import Bound, GateCell, evaluate_cell
+    from pytest_emrd.metrics import GATE_METRICS
+
+    cell = [t for t in grid if t.spec.condition == "low_light"]
+    verdict = evaluate_cell(GateCell(Bound("syn", "low_light", "aec", "min", 0.5)), cell,
+                            GATE_METRICS)  # fmt: skip
+    md = render_files(build_report(grid, verdicts=[verdict], with_reasoning=False),
+                      ["md"])["report.md"].decode()  # fmt: skip
+    assert f"| syn | Light & Vis. (low_light) | default | aec | {verdict.value:.3f} |" in md
+    assert "rates and shares as fractions (0.9), which the tables below print as " in md
+    assert "AEC (%) Light & Vis. (low_light)" in md and "Texture & Col. (texture)" in md
+
+
+def test_a_negative_r2_gets_a_caveat(report: Report) -> None:
+    import dataclasses
+
+    from pytest_emrd.report._sections import ebbinghaus
+
+    row = report.ebbinghaus[0]
+    fit = dataclasses.replace(row.fit, pooled=dataclasses.replace(row.fit.pooled, r2=-1304.58))
+    bad = dataclasses.replace(report, ebbinghaus=(dataclasses.replace(row, fit=fit),
+                                                  *report.ebbinghaus[1:]))  # fmt: skip
+    text = str(ebbinghaus(bad))
+    assert "R² below 0 means the exponential fits the KM curve worse" in text
+    assert "(R² -1304.58)" in text
+    assert "R² below 0" not in str(ebbinghaus(report)) or any(
+        r.fit.pooled.r2 is not None and r.fit.pooled.r2 < 0 for r in report.ebbinghaus
+    )
+
+
+def test_an_unpriced_model_says_why_its_cost_is_na(grid) -> None:
+    md = render_files(build_report(grid, with_reasoning=False), ["md"])["report.md"].decode()
+    assert "Est. cost n/a for syn: the registry this report read has no price" in md
+    assert "pass `--models FILE` to `emrd report`" in md
+    priced = build_report(grid, with_reasoning=False, prices={"syn": (1.0, 2.0)})
+    assert "Est. cost n/a" not in render_files(priced, ["md"])["report.md"].decode()

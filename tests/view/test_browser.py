@@ -104,3 +104,29 @@ def test_the_screenshot_shows_the_frame(chromium, pages, tmp_path: Path) -> None
     # the rendered frame (top left) is a photo-like image, not an empty box
     frame = image.crop((30, 200, 530, 650))
     assert len(frame.getcolors(maxcolors=1 << 16) or range(1 << 16)) > 500
+
+
+def test_the_step_reads_in_order_with_request_tokens_latency_and_result(
+    chromium, episode, tmp_path: Path
+) -> None:
+    """The page with the rebuilt request: the step's text, the window's frames, tokens,
+    latency, and the engine's feedback under "Result", in that order on the screen."""
+    replay = replay_frames(episode)
+    data, _ = episode_data(episode, replay.frames, Recorded(()), None, replay.spawn,
+                           replay.system)  # fmt: skip
+    page = tmp_path / "page.html"
+    page.write_text(episode_page(data, replay.frames))
+    dom = browse(chromium, page, 12, "--dump-dom").stdout
+    step = episode.steps[11]
+    assert by_id(dom, "feedback") == step.feedback
+    assert by_id(dom, "outcome") == ("executed" if step.success else "not executed")
+    assert by_id(dom, "tokens") == (f"{step.usage.prompt_tokens:,} prompt + "
+                                    f"{step.usage.completion_tokens:,} completion")  # fmt: skip
+    assert re.fullmatch(r"\d+\.\d\d s", by_id(dom, "latency"))
+    assert episode.steps[10].feedback in by_id(dom, "prompt")
+    assert by_id(dom, "windowcap") == "frames in the request's history window: steps 3–12"
+    window = dom[dom.index('id="window"') : dom.index("</div>", dom.index('id="window"'))]
+    assert window.count("<img") == 10 and "t=12 (now)" in window
+    shot = tmp_path / "step.png"
+    browse(chromium, page, 12, f"--screenshot={shot}", "--window-size=1280,2200")
+    assert Image.open(shot).size == (1280, 2200)

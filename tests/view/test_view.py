@@ -127,3 +127,50 @@ def test_cli_writes_pages_index_and_gif(episode, cassettes, tmp_path: Path, caps
     assert f"{len(episode.steps)} frames match the cassette" in capsys.readouterr().out
     assert main(["view", str(run), "*-kitchen-*"]) == 2
     assert "match no episode" in capsys.readouterr().err
+
+
+def test_each_step_is_laid_out_as_the_model_lived_it(episode: Trajectory) -> None:
+    """Frame and pose before the action, the request (system prompt, the step's text, the
+    window's frames), reply and action with tokens and latency, then the engine's feedback
+    labelled as the result, with where the agent stood after it."""
+    from pytest_emrd.agent import HISTORY_TURNS
+
+    replay = replay_frames(episode)
+    data, _ = episode_data(episode, replay.frames, Recorded(()), None, replay.spawn,
+                           replay.system)  # fmt: skip
+    assert data["system"] == replay.system and "REPLY FORMAT" in data["system"]
+    steps = data["steps"]
+    first, fifth, twelfth = steps[0], steps[4], steps[11]
+    assert first["window"] == [0] and fifth["window"] == [0, 1, 2, 3, 4]
+    assert twelfth["window"] == list(range(12 - HISTORY_TURNS, 12))
+    # the text shown with frame t carries the feedback of action t-1, never of action t
+    assert episode.steps[3].feedback in fifth["prompt"]
+    assert fifth["feedback"] == episode.steps[4].feedback
+    assert fifth["after"].startswith(episode.steps[5].room)
+    assert fifth["tokens"] == [episode.steps[4].usage.prompt_tokens,
+                               episode.steps[4].usage.completion_tokens]  # fmt: skip
+    assert fifth["latency"] == episode.steps[4].latency_s
+    assert all(s["latency"] is not None and s["latency"] >= 0 for s in steps), "run live"
+    html = episode_page(data, replay.frames)
+    order = ["1 · Before the action", "2 · The request", "3 · Reply and action",
+             "4 · Result: the engine's feedback on this action"]  # fmt: skip
+    positions = [html.index(h) for h in order]
+    assert positions == sorted(positions)
+    assert "<details><summary>system prompt (the same at every step)</summary>" in html
+
+
+def test_latency_is_recorded_live_and_not_compared() -> None:
+    import dataclasses
+
+    from pytest_emrd.episode import run_episode
+    from pytest_emrd.trajectory import EpisodeSpec
+
+    spec = EpisodeSpec("scout", "baseline", "office", 1, modality="both", max_steps=3)
+    live = run_episode(spec)
+    assert all(s.latency_s is not None and 0 <= s.latency_s < 30 for s in live.steps)
+    blank = dataclasses.replace(live, steps=tuple(
+        dataclasses.replace(s, latency_s=None) for s in live.steps))  # fmt: skip
+    assert blank == live, "a replay (no latency) equals its recording"
+    from pytest_emrd.trajectory import Trajectory as T
+
+    assert T.from_dict(live.to_dict()).steps[0].latency_s == live.steps[0].latency_s

@@ -15,7 +15,11 @@ class ThorCondition:
     """What a condition changes in THOR."""
 
     visibility_distance: float
-    """Metres; THOR's ``visibilityDistance`` and our distance filter on ``visible``."""
+    """Metres; how far an object THOR reports ``visible`` counts as visible (horizontally, to
+    the nearest point of its bounding box)."""
+    draw_distance: float
+    """Metres; THOR's ``visibilityDistance``, and how far landmarks (doorways, the exit) count
+    as visible: the builtin world's two distances (:mod:`pytest_emrd.world._conditions`)."""
     light_factor: float
     """Multiplier on every house light's intensity (1.0 = baseline)."""
     randomize_materials: bool
@@ -29,6 +33,7 @@ def thor_condition(name: str) -> ThorCondition:
     params = condition_params(name)
     return ThorCondition(
         visibility_distance=float(params.visibility_distance),
+        draw_distance=float(params.draw_distance),
         light_factor=float(params.light_factor),
         randomize_materials=params.randomize_palette,
     )

@@ -143,14 +143,19 @@ def visible_objects(
     *,
     ids: IdTable,
     types: Mapping[str, str],
+    landmarks: frozenset[str],
+    visibility_distance: float,
 ) -> tuple[VisibleObject, ...]:
     """EMRD objects THOR reports ``visible``, sorted by id.
 
-    THOR's ``visible`` flag is the only filter: THOR sets it when one of the object's
-    visibility points lies in the view, unoccluded, within ``visibilityDistance`` measured
-    horizontally from the camera (the controller runs with the condition's distance). A
-    second filter on the distance to the object's pivot would drop large objects THOR
-    sees. ``distance`` is the horizontal distance from the agent to the object's position.
+    THOR sets ``visible`` when one of the object's visibility points lies in the view,
+    unoccluded, within ``visibilityDistance`` measured horizontally from the camera. The
+    controller runs with the condition's draw distance, as far as the builtin world counts
+    landmarks (``landmarks``: EMRD ids of doorways and the exit) visible; every other object
+    must also lie within ``visibility_distance`` of the agent, measured horizontally to the
+    nearest point of its axis-aligned bounding box (never to its pivot, which would drop large
+    objects THOR sees). ``distance`` is the horizontal distance from the agent to the object's
+    position.
     ``types`` maps EMRD id -> EMRD object type (THOR's own ``objectType`` for a door is
     ``Doorway``/``Doorframe`` and may differ from ours). Bearings are clipped to the field
     of view: a large object can be visible while its centre lies just outside it.
@@ -163,7 +168,19 @@ def visible_objects(
         if ours is None:
             continue
         x, z = float(obj["position"]["x"]), float(obj["position"]["z"])
+        if ours not in landmarks and _box_distance(obj, agent) > visibility_distance:
+            continue
         b = min(HALF_FOV, max(-HALF_FOV, bearing(agent, x, z)))
         distance = round(math.hypot(x - agent.x, z - agent.z), 2)
         seen[ours] = VisibleObject(ours, types[ours], round(b, 1), distance)
     return tuple(seen[k] for k in sorted(seen))
+
+
+def _box_distance(obj: Mapping[str, Any], agent: WorldPose) -> float:
+    """Horizontal distance from the agent to the nearest point of ``obj``'s bounding box."""
+    box = obj["axisAlignedBoundingBox"]
+    cx, cz = float(box["center"]["x"]), float(box["center"]["z"])
+    hx, hz = float(box["size"]["x"]) / 2, float(box["size"]["z"]) / 2
+    dx = max(abs(agent.x - cx) - hx, 0.0)
+    dz = max(abs(agent.z - cz) - hz, 0.0)
+    return math.hypot(dx, dz)

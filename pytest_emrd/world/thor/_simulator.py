@@ -163,7 +163,8 @@ class ThorSimulator(SemanticStep):
         self._house: dict[str, Any] = {}
         self._ids = IdTable({})
         self._types: dict[str, str] = {}
-        self._condition = ThorCondition(0.0, 1.0, False)
+        self._landmarks: frozenset[str] = frozenset()
+        self._condition = ThorCondition(0.0, 0.0, 1.0, False)
         self._points = np.empty((0, 2))
         self._heights: dict[tuple[float, float], float] = {}
         self._spawn = WorldPose(0.0, 0.0, 0.0)
@@ -178,7 +179,7 @@ class ThorSimulator(SemanticStep):
         options = {**DEFAULTS, **self._user_options}
         options.update(
             scene=house,
-            visibilityDistance=self._condition.visibility_distance,
+            visibilityDistance=self._condition.draw_distance,
             server_timeout=self._step_timeout,
             server_start_timeout=self._start_timeout,
         )
@@ -253,10 +254,11 @@ class ThorSimulator(SemanticStep):
         if self._controller is None:
             self._start(house)
         else:
-            vis = self._condition.visibility_distance
+            vis = self._condition.draw_distance
             self._call("reset", lambda: self._controller.reset(scene=house, visibilityDistance=vis))
         self._layout, self._house, self._ids = layout, house, IdTable.from_house(house)
         self._types = {o.object_id: o.object_type for o in layout.objects}
+        self._landmarks = frozenset(o.object_id for o in layout.objects if o.category == "landmark")
         _check(self._controller.last_event, f"CreateHouse of house {house['id']!r}")
         self._lattice()
         if self._condition.randomize_materials:
@@ -387,6 +389,8 @@ class ThorSimulator(SemanticStep):
             world,
             ids=self._ids,
             types=self._types,
+            landmarks=self._landmarks,
+            visibility_distance=self._condition.visibility_distance,
         )
         frame = np.ascontiguousarray(event.frame, dtype=np.uint8)
         if frame.ndim != 3 or frame.shape[2] != 3:

@@ -87,13 +87,25 @@ def test_entry_lands_past_the_doorway_facing_into_the_room(into: Room, heading: 
     assert abs(pose.z - 2.0) <= 0.25
 
 
-def _meta(oid: str, x: float, z: float, *, visible: bool = True, distance: float = 2.0) -> dict:
+def _meta(
+    oid: str,
+    x: float,
+    z: float,
+    *,
+    visible: bool = True,
+    distance: float = 2.0,
+    size: tuple[float, float] = (0.5, 0.5),
+) -> dict:
     return {
         "objectId": oid,
         "objectType": oid.split("|")[0],
         "position": {"x": x, "y": 0.5, "z": z},
         "visible": visible,
         "distance": distance,
+        "axisAlignedBoundingBox": {
+            "center": {"x": x, "y": 0.5, "z": z},
+            "size": {"x": size[0], "y": 1.0, "z": size[1]},
+        },
     }
 
 
@@ -111,6 +123,8 @@ def test_visible_objects_filters_maps_and_sorts() -> None:
         agent,
         ids=ids,
         types=types,
+        landmarks=frozenset({"Doorway_1"}),
+        visibility_distance=3.3,
     )
     assert [(v.object_id, v.object_type, v.bearing) for v in seen] == [
         ("Desk_1", "Desk", pytest.approx(-26.6)),
@@ -125,11 +139,38 @@ def test_thor_s_visible_flag_decides_and_distance_is_horizontal() -> None:
     ids = IdTable({"DiningTable|2|0": "DiningTable_1"})
     agent = WorldPose(0.0, 0.0, 0.0)
     table = {
-        **_meta("DiningTable|2|0", 0.0, 3.9, distance=4.05),
+        **_meta("DiningTable|2|0", 0.0, 3.9, distance=4.05, size=(1.1, 2.8)),
         "position": {"x": 0.0, "y": 0.32, "z": 3.9},
     }
-    (seen,) = visible_objects([table], agent, ids=ids, types={"DiningTable_1": "DiningTable"})
+    (seen,) = visible_objects(
+        [table],
+        agent,
+        ids=ids,
+        types={"DiningTable_1": "DiningTable"},
+        landmarks=frozenset(),
+        visibility_distance=3.5,
+    )
     assert (seen.object_id, seen.distance) == ("DiningTable_1", 3.9)
+
+
+def test_landmarks_count_to_the_draw_distance_and_other_objects_to_the_visibility_distance() -> (
+    None
+):
+    """THOR runs with the draw distance (7 m baseline); a chair 5 m away that THOR reports
+    visible is dropped at the 3.3 m visibility distance, a doorway at the same place is kept,
+    as in the builtin world."""
+    ids = IdTable({"Chair|1|1": "Chair_1", "door|1|2": "Doorway_1"})
+    types = {"Chair_1": "Chair", "Doorway_1": "Doorway"}
+    agent = WorldPose(0.0, 0.0, 0.0)
+    seen = visible_objects(
+        [_meta("Chair|1|1", 0.0, 5.0), _meta("door|1|2", 0.5, 5.0)],
+        agent,
+        ids=ids,
+        types=types,
+        landmarks=frozenset({"Doorway_1"}),
+        visibility_distance=3.3,
+    )
+    assert [v.object_id for v in seen] == ["Doorway_1"]
 
 
 def test_wrap180_wraps_into_half_open_interval() -> None:

@@ -54,7 +54,7 @@ def test_reset_starts_thor_with_the_paper_settings(
         "fieldOfView": 90,
     }
     assert init["snapToGrid"] is True and init["rotateStepDegrees"] == 90
-    assert init["visibilityDistance"] == condition_params(condition).visibility_distance
+    assert init["visibilityDistance"] == condition_params(condition).draw_distance
     assert init["scene"] is sim.house and init["scene"]["metadata"]["schema"] == "1.0.0"
 
 
@@ -254,7 +254,7 @@ def test_second_reset_reuses_the_controller(
     sim.reset(layout, "low_light", "Entrance", 4)
     assert len(fake_controller.instances) == 1
     args = next(a for name, a in _controller(fake_controller).calls if name == "reset")
-    assert args == {"visibilityDistance": condition_params("low_light").visibility_distance}
+    assert args == {"visibilityDistance": condition_params("low_light").draw_distance}
     assert sim.current_room() == "Entrance"
 
 

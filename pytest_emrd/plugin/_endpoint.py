@@ -1,0 +1,126 @@
+"""Fail fast on a dead endpoint: a model whose last :data:`DEAD_AFTER` computed episodes in a
+row ended on a connection failure or a timeout is not called again in this session.
+
+Its remaining episodes are skipped with one shared reason (pytest prints it once) and the
+end of the run names the endpoint and the command that resumes the run; every episode
+already recorded stays in the run directory and its cassette, and the errored ones are
+computed again by the resumed session (an errored episode is reused only by the session
+that produced it). The count lives in ``<run>/endpoints/<model>.json`` under a file lock,
+so the xdist workers of one session share it; a resumed session starts from zero.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+import shlex
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Final
+
+import pytest
+
+from pytest_emrd._atomic import write_bytes_atomic
+from pytest_emrd._scrub import scrub
+
+DEAD_AFTER: Final = 3
+"""Consecutive unreachable episodes of one model that stop its remaining episodes."""
+#: Transport failures that say nothing answered (as opposed to an answer we did not like).
+_UNREACHABLE: Final = re.compile(
+    r"Connect(?:Error|Timeout)|(?:Read|Write|Pool)Timeout|timed out|RemoteProtocolError|"
+    r"ReadError|Connection refused|Name or service not known"
+)
+
+
+def unreachable(status: str, error: str | None) -> bool:
+    """Whether an episode ended because its endpoint could not be reached or timed out."""
+    return status == "errored" and error is not None and bool(_UNREACHABLE.search(error))
+
+
+@dataclass(frozen=True)
+class Stop:
+    """A model this session stopped calling."""
+
+    model: str
+    endpoint: str
+    failed: int
+    """Consecutive unreachable episodes that stopped it."""
+    error: str
+
+
+class EndpointWatch:
+    """Per model, the consecutive unreachable episodes of this session (shared by workers)."""
+
+    def __init__(self, run_dir: Path, session: str, args: Sequence[str]) -> None:
+        self.folder = run_dir / "endpoints"
+        self.run_dir, self.session, self.args = run_dir, session, tuple(args)
+
+    def _read(self, model: str) -> dict[str, Any]:
+        path = self.folder / f"{model}.json"
+        try:
+            data = json.loads(path.read_text(encoding="utf-8"))
+        except (OSError, ValueError):
+            return {}
+        return data if isinstance(data, dict) and data.get("session") == self.session else {}
+
+    def stopped(self, model: str) -> Stop | None:
+        """The stop of ``model`` in this session, if any."""
+        data = self._read(model)
+        if not data.get("stopped"):
+            return None
+        return Stop(model, data["endpoint"], data["consecutive"], data["error"])
+
+    def record(self, model: str, endpoint: str, status: str, error: str | None) -> Stop | None:
+        """Count one computed episode of ``model``; the stop when this one made it."""
+        from filelock import FileLock
+
+        self.folder.mkdir(parents=True, exist_ok=True)
+        with FileLock(str(self.folder / f"{model}.lock")):
+            data = self._read(model) or {"session": self.session, "consecutive": 0}
+            if data.get("stopped"):
+                return None
+            down = unreachable(status, error)
+            data["consecutive"] = data["consecutive"] + 1 if down else 0
+            if down and data["consecutive"] >= DEAD_AFTER:
+                data.update(stopped=True, endpoint=endpoint, error=error)
+            blob = json.dumps(data).encode()
+            write_bytes_atomic(self.folder / f"{model}.json", blob)
+        return self.stopped(model) if data.get("stopped") else None
+
+    def resume_command(self) -> str:
+        """This session's ``pytest`` command, resuming its run directory."""
+        args, skip = [], False
+        for arg in self.args:
+            if skip:
+                skip = False
+                continue
+            if arg == "--emrd-results":
+                skip = True
+                continue
+            if not arg.startswith("--emrd-results="):
+                args.append(arg)
+        return shlex.join(["pytest", *args, f"--emrd-results={self.run_dir}"])
+
+    def reason(self, stop: Stop) -> str:
+        """The one message of a stop: what happened, the endpoint, how to resume."""
+        return scrub(
+            f"pytest-emrd: stopped calling model {stop.model!r}: {stop.failed} episodes in a "
+            f"row could not reach {stop.endpoint} (last: {stop.error}). Its remaining episodes "
+            "were not attempted; every recorded episode is kept. When the endpoint answers "
+            f"again, resume with: {self.resume_command()}"
+        )
+
+    def skip_if_stopped(self, model: str) -> None:
+        """Skip the calling test when ``model`` was stopped (one reason for all of them)."""
+        stop = self.stopped(model)
+        if stop is not None:
+            pytest.skip(self.reason(stop))
+
+    def pytest_terminal_summary(self, terminalreporter: Any) -> None:
+        if not self.folder.is_dir():
+            return
+        for path in sorted(self.folder.glob("*.json")):
+            stop = self.stopped(path.stem)
+            if stop is not None:
+                terminalreporter.write_line(self.reason(stop), red=True)
