@@ -103,9 +103,10 @@ def run(*, repeat: int, warmup: int) -> list[Figure]:
 
     Targets are what a user feels: a replayed 50-step episode within 1 s (warm or cold), a
     recorded step at a new pose (render, digest, JPEG) within 15 ms, beside a model's reply
-    of a second or more. The frame alone has no target: plain numpy draws one in about 3-7
-    ms (this machine, idle to loaded), and the 2 ms the compiled kernel met cost a 17 s
-    compilation on a fresh clone's first episode, which no user run earns back."""
+    of a second or more. The frame alone has no target: plain numpy draws one in about 4-5
+    ms (this machine, 2 cores under load), not the 2 ms the compiled kernel met, and that
+    kernel cost a 17 s compilation on a fresh clone's first episode, which no run earns
+    back."""
     seeds = iter(range(SEED, SEED + 100_000))
     episode_s = median_seconds(lambda: _episode(next(seeds)), repeat=repeat, warmup=warmup)
 

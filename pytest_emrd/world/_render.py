@@ -26,8 +26,8 @@ Division of labour: the rays are cast to the walls by
 view picked and ordered by :func:`~pytest_emrd.world._paint.object_boxes`; this module works
 out, per column, the rows where the wall, the skirting and each box begin and end and the
 shade-table code each shows, and fills a ``uint32`` frame of shade-table entries (ceiling,
-walls, skirting, the floor's raster look-up, then the boxes), all in plain numpy: about
-7 ms a frame, with nothing to compile.
+walls, skirting, the floor's raster look-up, then the boxes), all in plain numpy: a few
+milliseconds a frame, with nothing to compile.
 """
 
 from __future__ import annotations
