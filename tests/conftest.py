@@ -69,14 +69,8 @@ def _import_what_the_product_imports_on_first_use() -> None:
     import statsmodels.stats.multitest
     import statsmodels.stats.oneway  # noqa: F401
     import vcr  # noqa: F401
-    from numba.core.registry import cpu_target
     from PIL import Image
 
-    # numba imports ~70 more modules of its own (``numba.np.polynomial`` ...) the first time a
-    # kernel is compiled or loaded from its cache; imported again after pytester dropped them,
-    # they register their types twice ("duplicate registration for PolynomialType").
-    cpu_target.typing_context.refresh()
-    cpu_target.target_context.refresh()
     # httpx imports httpcore with its first transport; a second httpcore's ConnectError is
     # not the class httpx maps to its own exceptions, so it would escape every handler.
     httpx.HTTPTransport().close()
