@@ -35,8 +35,8 @@ the layout, keeps its residual, and loses pairs at the gate.
 
 **Across steps** (:class:`Matcher.step`, the per-step metrics: TBS, spells, SIR) each map is
 matched by the same rules, with two uses of history: the previous step's frame is tried first
-(the full hypothesis search runs only when an entry that was explained is no longer, or a new
-one is not), and a label keeps the object it held at the previous step on exact ties (its
+(the full hypothesis search runs again when an entry that was explained is no longer, when a
+new one is not, and whenever the map has grown by :data:`REVISIT` since the last search), and a label keeps the object it held at the previous step on exact ties (its
 rounded cost is lowered by half a rounding unit). A carried pairing that the geometry
 contradicts (beyond the gate, or a clearly cheaper assignment) is dropped. The terminal
 map's scores (AEC, PA, precision, FPSG) use :func:`match_map` of that map alone.
@@ -52,7 +52,6 @@ from itertools import combinations
 from typing import Final, NamedTuple
 
 import numpy as np
-from scipy.optimize import linear_sum_assignment
 
 from pytest_emrd.metrics._vocab import TypeResolver
 from pytest_emrd.trajectory import GroundTruthObject, MapEntry
@@ -67,6 +66,9 @@ COINCIDENT_M: Final = 1e-6
 BASE_ENTRIES: Final = 6
 #: Most alternations of assignment and refit.
 MAX_ROUNDS: Final = 10
+#: Across steps, the frame is searched for again once the map has grown by this factor since
+#: the last search (an early frame read from a few entries is revisited as the map grows).
+REVISIT: Final = 1.5
 
 _UNITS_GATE: Final = round(GATE_M**2 / TIE_M2)
 _FORBIDDEN: Final = 1e15  # cost of a pair outside the gate: more than any sum of allowed ones
@@ -176,6 +178,11 @@ class _Problem:
         self.labels, self.kinds, self.pred, self.layout = labels, kinds, pred, layout
         self.same = np.asarray(kinds, dtype=int)[:, None] == layout.kinds[None, :]
         """(n x m): object ``j`` is of entry ``i``'s type."""
+        rows, cols = np.nonzero(self.same)
+        self.candidates = rows, cols
+        """Every (entry, object of its type), by entry."""
+        self.starts = np.searchsorted(rows, np.arange(len(kinds)))
+        """Where each entry's candidates start in ``candidates``."""
 
 
 @dataclass(frozen=True)
@@ -200,6 +207,27 @@ class _Layout:
         return found
 
 
+def assign_rows(cost: np.ndarray, allowed: np.ndarray) -> list[tuple[int, int]]:
+    """The one-to-one pairs ``(row, col)`` among ``allowed`` ones: the most pairs, then the
+    least summed ``cost`` (:func:`scipy.optimize.linear_sum_assignment`). When every row's
+    cheapest allowed column (the first on equal costs) is a different one, that is the
+    optimum and scipy is not needed (nor imported: it costs a cold process half a second)."""
+    rows = np.flatnonzero(allowed.any(axis=1))
+    if not len(rows):
+        return []
+    masked = np.where(allowed, cost, np.inf)[rows]
+    best = masked.argmin(axis=1)
+    if len(np.unique(best)) == len(best):
+        return list(zip(rows.tolist(), best.tolist(), strict=True))
+    from scipy.optimize import linear_sum_assignment  # heavy: imported on first conflict
+
+    cols = np.flatnonzero(allowed[rows].any(axis=0))
+    block = np.where(allowed[np.ix_(rows, cols)], cost[np.ix_(rows, cols)], _FORBIDDEN)
+    r, c = linear_sum_assignment(block)
+    return [(int(rows[i]), int(cols[j])) for i, j in zip(r, c, strict=True)
+            if allowed[rows[i], cols[j]]]  # fmt: skip
+
+
 def _assign(problem: _Problem, motion: Motion, prefer: np.ndarray | None = None) -> Pairs:
     """Step 4: the gated one-to-one assignment after ``motion`` (most pairs, then least
     rounded squared distance; ``prefer`` (n x m) lowers a carried pair by half a unit)."""
@@ -207,17 +235,9 @@ def _assign(problem: _Problem, motion: Motion, prefer: np.ndarray | None = None)
     diff = moved[:, None, :] - problem.layout.true[None, :, :]
     cost = _units(np.sum(diff * diff, axis=2))
     allowed = problem.same & (cost <= _UNITS_GATE)
-    rows, cols = np.flatnonzero(allowed.any(axis=1)), np.flatnonzero(allowed.any(axis=0))
-    if not len(rows):
-        return ()
     if prefer is not None:
         cost = cost - 0.5 * prefer
-    block = np.where(allowed, cost, _FORBIDDEN)[np.ix_(rows, cols)]
-    r, c = linear_sum_assignment(block)
-    return tuple(sorted(
-        (int(rows[i]), int(cols[j])) for i, j in zip(r, c, strict=True)
-        if allowed[rows[i], cols[j]]
-    ))  # fmt: skip
+    return tuple(sorted(assign_rows(cost, allowed)))
 
 
 def _refit(problem: _Problem, pairs: Pairs, motion: Motion) -> Motion:
@@ -228,7 +248,9 @@ def _refit(problem: _Problem, pairs: Pairs, motion: Motion) -> Motion:
     if len(pairs) >= 2 and np.ptp(p, axis=0).max() > COINCIDENT_M:
         return _procrustes(p, q)
     moved = _moved(p[:1], motion)[0]
-    return Motion(motion.c, motion.s, motion.tx + q[0, 0] - moved[0], motion.tz + q[0, 1] - moved[1])
+    return Motion(
+        motion.c, motion.s, motion.tx + q[0, 0] - moved[0], motion.tz + q[0, 1] - moved[1]
+    )
 
 
 def _refine(problem: _Problem, motion: Motion, prefer: np.ndarray | None) -> tuple[Pairs, Motion]:
@@ -255,26 +277,20 @@ def _hypotheses(problem: _Problem) -> np.ndarray:
     base = sorted(range(len(kinds)),
                   key=lambda i: (len(layout.cols_of[kinds[i]]), -spread[i], labels[i]))  # fmt: skip
     base = base[:BASE_ENTRIES]
-    rows_a: list[np.ndarray] = []
-    rows_b: list[np.ndarray] = []
-    objects: list[np.ndarray] = []
-    for a, b in combinations(base, 2):
-        written = math.dist(pred[a], pred[b])
-        if written <= COINCIDENT_M:
-            continue
-        pairs, span = layout.pairs_of(kinds[a], kinds[b])
-        keep = np.abs(span - written) <= 2 * GATE_M
-        if keep.any():
-            objects.append(pairs[keep])
-            rows_a.append(np.full(int(keep.sum()), a))
-            rows_b.append(np.full(int(keep.sum()), b))
+    found = [(a, b, dist, *layout.pairs_of(kinds[a], kinds[b]))
+             for a, b in combinations(base, 2)
+             if (dist := math.dist(pred[a], pred[b])) > COINCIDENT_M]  # fmt: skip
     true = layout.true
-    if not objects:  # one entry, or coincident entries: no direction to read
+    if found:
+        sizes = [len(pairs) for *_, pairs, _ in found]
+        keep = np.concatenate([np.abs(span - d) for _, _, d, _, span in found]) <= 2 * GATE_M
+        oab = np.concatenate([pairs for *_, pairs, _ in found])[keep]
+        pa = pred[np.repeat([a for a, *_ in found], sizes)[keep]]
+        pb = pred[np.repeat([b for _, b, *_ in found], sizes)[keep]]
+    if not found or not len(oab):  # one entry, or coincident entries: no direction to read
         cols = list(layout.cols_of[kinds[base[0]]])
         shift = true[cols] - pred[base[0]]
         return np.column_stack([np.ones(len(cols)), np.zeros(len(cols)), shift])
-    oab = np.concatenate(objects)
-    pa, pb = pred[np.concatenate(rows_a)], pred[np.concatenate(rows_b)]
     qa, qb = true[oab[:, 0]], true[oab[:, 1]]
     u, v = pb - pa, qb - qa
     theta = np.arctan2(u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0], np.sum(u * v, axis=1))
@@ -288,11 +304,11 @@ def _scores(problem: _Problem, motions: np.ndarray) -> np.ndarray:
     """MSAC score of each motion (rows ``(c, s, tx, tz)``): summed capped squared distance of
     every entry to the nearest object of its type, in rounded units."""
     c, s, tx, tz = (motions[:, k : k + 1] for k in range(4))
-    x, z = problem.pred[:, 0], problem.pred[:, 1]
-    mx, mz = c * x - s * z + tx, s * x + c * z + tz  # (H x n)
+    rows, cols = problem.candidates
+    x, z = problem.pred[rows, 0], problem.pred[rows, 1]
     true = problem.layout.true
-    d2 = (mx[:, :, None] - true[:, 0]) ** 2 + (mz[:, :, None] - true[:, 1]) ** 2
-    nearest = np.where(problem.same, d2, np.inf).min(axis=2)
+    d2 = (c * x - s * z + tx - true[cols, 0]) ** 2 + (s * x + c * z + tz - true[cols, 1]) ** 2
+    nearest = np.minimum.reduceat(d2, problem.starts, axis=1)
     return np.minimum(_units(nearest), _UNITS_GATE).sum(axis=1)
 
 
@@ -327,6 +343,8 @@ class StepMatch(NamedTuple):
     """The frame found (None: no recognised entry)."""
     key: Key
     """The recognised entries."""
+    solved: int = 0
+    """Recognised entries when the frame was last searched for (:meth:`Matcher._match`)."""
 
 
 class Matcher:
@@ -354,7 +372,11 @@ class Matcher:
         if len(seen) != len(entries):
             counts = Counter(e.label for e in entries)
             duplicates = tuple(sorted(lb for lb, n in counts.items() if n > 1))
-        kind_of = {lb: self.types.resolve(e.object_type, lb) for lb, e in seen.items()}
+        known, resolve = self.types.known, self.types.resolve
+        kind_of = {}
+        for lb, e in seen.items():
+            k = known.get((e.object_type, lb))
+            kind_of[lb] = resolve(e.object_type, lb) if k is None else k
         return seen, kind_of, duplicates
 
     def step(self, entries: Sequence[MapEntry], previous: StepMatch | None = None) -> StepMatch:
@@ -383,24 +405,26 @@ class Matcher:
         its type within the gate, no two want the same one, and no object was freed that an
         unmatched entry might take. None otherwise (the caller matches afresh)."""
         motion = previous.motion
-        if motion is None or len(previous.identity) < 3:
+        if motion is None or len(previous.identity) < 3 or len(key) >= REVISIT * previous.solved:
             return None
-        before = {lb: (k, x, z) for lb, k, x, z in previous.key}
+        before = set(previous.key)
+        held = previous.identity
         identity: dict[str, int] = {}
         changed: list[tuple[str, int, float, float]] = []
-        for lb, k, x, z in key:
-            if before.get(lb) != (k, x, z):
-                changed.append((lb, k, x, z))
-            elif lb in previous.identity:
-                identity[lb] = previous.identity[lb]
-        moved = {c[0] for c in changed}
-        unmatched = tuple(lb for lb in previous.unmatched if lb in before and lb not in moved)
+        kept: set[str] = set()
+        for entry in key:
+            if entry not in before:
+                changed.append(entry)
+            else:
+                kept.add(entry[0])
+                if entry[0] in held:
+                    identity[entry[0]] = held[entry[0]]
+        unmatched = tuple(lb for lb in previous.unmatched if lb in kept)
         cols_of = self._layout.cols_of
         taken = set(identity.values())
         freed = set(previous.identity.values()) - taken
         if freed and unmatched:
-            for lb in unmatched:
-                k, x, z = before[lb]
+            for _, k, x, z in (e for e in key if e[0] in unmatched):
                 near = self._nearest(motion, x, z, [j for j in cols_of[k] if j in freed])
                 if near[0] >= 0:
                     return None
@@ -410,7 +434,7 @@ class Matcher:
                 return None
             identity[lb] = best
             taken.add(best)
-        return StepMatch({}, {}, identity, unmatched, (), (), motion, key)
+        return StepMatch({}, {}, identity, unmatched, (), (), motion, key, previous.solved)
 
     def _nearest(self, motion: Motion, x: float, z: float, cols: list[int]) -> tuple[int, int]:
         """The object of ``cols`` nearest to written point ``(x, z)`` after ``motion`` within
@@ -443,19 +467,11 @@ class Matcher:
                 j = previous.identity.get(lb)
                 if j is not None and problem.same[i, j]:
                     prefer[i, j] = 1.0
-        pairs: Pairs | None = None
-        if previous is not None and previous.motion is not None:
-            pairs, motion = _refine(problem, previous.motion, prefer)
-            matched = {i for i, _ in pairs}
-            missing = {labels[i] for i in range(len(labels)) if i not in matched}
-            if not missing <= set(previous.unmatched):
-                pairs = None
-        if pairs is None:
-            seeds = () if previous is None or previous.motion is None else (previous.motion,)
-            pairs, motion = _solve(problem, seeds, prefer)
+        seeds = () if previous is None or previous.motion is None else (previous.motion,)
+        pairs, motion = _solve(problem, seeds, prefer)
         identity = {labels[i]: j for i, j in pairs}
         unmatched = tuple(lb for lb in labels if lb not in identity)
-        return StepMatch({}, {}, identity, unmatched, (), (), motion, key)
+        return StepMatch({}, {}, identity, unmatched, (), (), motion, key, len(key))
 
     def matching(self, found: StepMatch) -> Matching:
         """The :class:`Matching` of one matched map."""
@@ -470,7 +486,9 @@ class Matcher:
         per_type = Counter(k for k in found.kind_of.values() if k >= 0)
         capacity = self._layout.cols_of
         covered = sum(min(n, len(capacity[k])) for k, n in per_type.items())
-        return Matching(tuple(pairs), found.unmatched, found.unrecognised, found.duplicates, covered)
+        return Matching(
+            tuple(pairs), found.unmatched, found.unrecognised, found.duplicates, covered
+        )
 
     def held(self, found: StepMatch) -> dict[str, str]:
         """Object id -> label of one matched map."""

@@ -12,9 +12,7 @@ from typing import Final
 
 import numpy as np
 
-from scipy.optimize import linear_sum_assignment
-
-from pytest_emrd.metrics._match import COINCIDENT_M, TIE_M2, Matching, rigid_fit
+from pytest_emrd.metrics._match import COINCIDENT_M, TIE_M2, Matching, assign_rows, rigid_fit
 from pytest_emrd.metrics._tracking import Track, exp_ratio, layout_scale
 from pytest_emrd.metrics._vocab import TypeResolver
 from pytest_emrd.trajectory import GroundTruthObject, MapEntry, Trajectory
@@ -307,7 +305,7 @@ def reentry_copies(
     ``start``. In the alignment of ``M_end`` (the proper rigid motion fitting every matched
     entry onto its object, :func:`rigid_fit`) the new entries of each type are paired one to
     one with the ground-truth objects of that type at the least total squared distance
-    (:func:`scipy.optimize.linear_sum_assignment` on distances rounded to ``TIE_M2``; entries
+    (:func:`~._match.assign_rows` on distances rounded to ``TIE_M2``; entries
     beyond the type's instance count take their nearest object, the first by id on ties): the
     object each new entry *means*. A new entry copies ``o`` when it means ``o`` and ``o`` is
     held by *another* label: the model re-mapped an object it already had instead of
@@ -332,9 +330,11 @@ def reentry_copies(
         new = np.array([(entries[lb].x, entries[lb].z) for lb in labels], dtype=float)
         diff = (new @ rot.T + shift)[:, None, :] - office.true[cols][None, :, :]
         cost = np.round(np.sum(diff * diff, axis=2) / TIE_M2)
+        if not np.isfinite(cost).all():
+            raise ValueError(f"a written coordinate of {labels} is not finite")
         meant = cols[cost.argmin(axis=1)]
-        rows, picked = linear_sum_assignment(cost)
-        meant[rows] = cols[picked]
+        for r, j in assign_rows(cost, np.ones(cost.shape, dtype=bool)):
+            meant[r] = cols[j]
         for lb, c in zip(labels, meant.tolist(), strict=True):
             holder = label_of.get(office.ids[c])
             if holder is not None and holder != lb:
