@@ -11,14 +11,15 @@ decides which physical object each entry of one map stands for, from that map al
    *unrecognised* (a hallucination) and takes no part in the frame or the matching.
 3. **Frame** (:func:`_solve`), robust to hallucinated entries. *Hypotheses*: the entries
    with the fewest candidate objects (ties: farthest from the written centroid, then label
-   order; at most :data:`BASE_ENTRIES`) are paired, and every pair of distinct candidate objects whose distance agrees with the
-   written one within ``2 * GATE_M`` gives the proper rigid motion carrying the two entries
-   onto them. *Score* (truncated least squares, MSAC): after the motion, each recognised
-   entry costs its squared distance to the nearest object of its type, capped at
-   ``GATE_M ** 2``, so an outlier (an invented "exit sign" read as a door) costs a constant
-   and cannot pull the frame. The lowest score wins (ties: the first hypothesis). *Refit*:
-   assign (step 4), fit Procrustes (:func:`rigid_fit`) on the matched pairs only (the
-   inliers), assign again, until the pairs repeat (at most :data:`MAX_ROUNDS`).
+   order; at most :data:`BASE_ENTRIES`) are paired, and every pair of distinct candidate
+   objects whose distance agrees with the written one within ``2 * GATE_M`` gives the
+   proper rigid motion carrying the two entries onto them. *Score* (truncated least
+   squares, MSAC): after the motion, each recognised entry costs its squared distance to the
+   nearest object of its type, capped at ``GATE_M ** 2``, so an outlier (an invented "exit
+   sign" read as a door) costs a constant and cannot pull the frame. The lowest score wins
+   (ties: the first hypothesis). *Refit*: assign (step 4), fit Procrustes
+   (:func:`rigid_fit`) on the matched pairs only (the inliers), assign again, until the
+   pairs repeat (at most :data:`MAX_ROUNDS`).
 4. **Assignment with a gate.** An entry may match an object of its type only when it lies
    within :data:`GATE_M` metres of it after alignment. Among the one-to-one assignments the
    one with the most pairs is taken, then the least summed squared distance
@@ -33,13 +34,16 @@ is the same in every frame (up to the 1e-9 tie rounding): **invariant under any 
 motion** of the map. **Reflections are not forgiven**: a mirrored map cannot be rotated onto
 the layout, keeps its residual, and loses pairs at the gate.
 
-**Across steps** (:class:`Matcher.step`, the per-step metrics: TBS, spells, SIR) each map is
-matched by the same rules, with two uses of history: the previous step's frame is tried first
-(the full hypothesis search runs again when an entry that was explained is no longer, when a
-new one is not, and whenever the map has grown by :data:`REVISIT` since the last search), and a label keeps the object it held at the previous step on exact ties (its
-rounded cost is lowered by half a rounding unit). A carried pairing that the geometry
-contradicts (beyond the gate, or a clearly cheaper assignment) is dropped. The terminal
-map's scores (AEC, PA, precision, FPSG) use :func:`match_map` of that map alone.
+**Across steps** (:meth:`Matcher.step`, for the per-step metrics: TBS, spells, SIR) each map
+is matched by the same rules, with two uses of history. (a) The previous step's frame and
+pairs are extended to the entries written or moved since when they explain them all (each
+lands within the gate of a free object of its type, and no object was freed that an
+unmatched entry could take); otherwise, and whenever the map has grown by :data:`REVISIT`
+since the last search, the full search runs, with the previous frame as one more hypothesis.
+(b) A label keeps the object it held at the previous step on exact ties (its rounded cost is
+lowered by half a rounding unit). A carried pairing that the geometry contradicts (beyond the
+gate, or a cheaper assignment) is dropped. The terminal map's scores (AEC, PA, precision,
+FPSG) use :func:`match_map` of that map alone, never this history.
 """
 
 from __future__ import annotations

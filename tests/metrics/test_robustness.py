@@ -142,7 +142,7 @@ def test_one_hallucinated_landmark_moves_pa_by_at_most_0_02_and_no_memory_metric
         final = traj.steps[-1].cognitive_map
         spot = (final[0].x + 4.0, final[0].z - 3.0)  # somewhere in the model's frame
         sign = MapEntry("exit sign", written_type, *spot)
-        with_sign = _with_maps(traj, lambda i, m: (*m, sign) if i >= 1 else m)
+        with_sign = _with_maps(traj, lambda i, m, sign=sign: (*m, sign) if i >= 1 else m)
         base, hallucinated = episode_metrics(traj), episode_metrics(with_sign)
         assert base.pa is not None and hallucinated.pa is not None
         assert abs(hallucinated.pa - base.pa) <= 0.02
