@@ -16,8 +16,10 @@ decides which physical object each entry of one map stands for, from that map al
    proper rigid motion carrying the two entries onto them. *Score* (truncated least
    squares, MSAC): after the motion, each recognised entry costs its squared distance to the
    nearest object of its type, capped at ``GATE_M ** 2``, so an outlier (an invented "exit
-   sign" read as a door) costs a constant and cannot pull the frame. The lowest score wins
-   (ties: the first hypothesis). *Refit*: assign (step 4), fit Procrustes
+   sign" read as a door) costs a constant and cannot pull the frame. The lowest score wins;
+   on equal scores (a symmetric layout: a row of chairs fits shifted by one chair) the
+   first, and the Procrustes fit of the labels that are object ids of the layout
+   (``Chair_3``) comes before the pair hypotheses. *Refit*: assign (step 4), fit Procrustes
    (:func:`rigid_fit`) on the matched pairs only (the inliers), assign again, until the
    pairs repeat (at most :data:`MAX_ROUNDS`).
 4. **Assignment with a gate.** An entry may match an object of its type only when it lies
@@ -365,6 +367,7 @@ class Matcher:
         true = np.array([(o.x, o.z) for o in ordered], dtype=float).reshape(-1, 2)
         self._layout = _Layout(true, np.array(kinds, dtype=int), cols_of)
         self._points: list[tuple[float, float]] = [(o.x, o.z) for o in ordered]
+        self._index = {o.object_id: j for j, o in enumerate(ordered)}
         self._fresh: dict[Key, StepMatch] = {}
 
     def _read(self, entries: Sequence[MapEntry]) -> tuple[dict[str, MapEntry], dict[str, int],
@@ -471,7 +474,13 @@ class Matcher:
                 j = previous.identity.get(lb)
                 if j is not None and problem.same[i, j]:
                     prefer[i, j] = 1.0
-        seeds = () if previous is None or previous.motion is None else (previous.motion,)
+        seeds = [] if previous is None or previous.motion is None else [previous.motion]
+        named = [(i, self._index[lb]) for i, lb in enumerate(labels)
+                 if lb in self._index and problem.same[i, self._index[lb]]]  # fmt: skip
+        if len(named) >= 2:
+            p = problem.pred[[i for i, _ in named]]
+            if np.ptp(p, axis=0).max() > COINCIDENT_M:
+                seeds.append(_procrustes(p, self._layout.true[[j for _, j in named]]))
         pairs, motion = _solve(problem, seeds, prefer)
         identity = {labels[i]: j for i, j in pairs}
         unmatched = tuple(lb for lb in labels if lb not in identity)
