@@ -74,7 +74,7 @@ BASE_ENTRIES: Final = 6
 MAX_ROUNDS: Final = 10
 #: Across steps, the frame is searched for again once the map has grown by this factor since
 #: the last search (an early frame read from a few entries is revisited as the map grows).
-REVISIT: Final = 1.5
+REVISIT: Final = 2.0
 
 _UNITS_GATE: Final = round(GATE_M**2 / TIE_M2)
 _FORBIDDEN: Final = 1e15  # cost of a pair outside the gate: more than any sum of allowed ones
@@ -432,31 +432,30 @@ class Matcher:
         freed = set(previous.identity.values()) - taken
         if freed and unmatched:
             for _, k, x, z in (e for e in key if e[0] in unmatched):
-                near = self._nearest(motion, x, z, [j for j in cols_of[k] if j in freed])
-                if near[0] >= 0:
+                if self._nearest(motion, x, z, [j for j in cols_of[k] if j in freed]) >= 0:
                     return None
         for lb, k, x, z in changed:
-            best, _ = self._nearest(motion, x, z, [j for j in cols_of[k] if j not in taken])
+            best = self._nearest(motion, x, z, [j for j in cols_of[k] if j not in taken])
             if best < 0:
                 return None
             identity[lb] = best
             taken.add(best)
         return StepMatch({}, {}, identity, unmatched, (), (), motion, key, previous.solved)
 
-    def _nearest(self, motion: Motion, x: float, z: float, cols: list[int]) -> tuple[int, int]:
+    def _nearest(self, motion: Motion, x: float, z: float, cols: list[int]) -> int:
         """The object of ``cols`` nearest to written point ``(x, z)`` after ``motion`` within
-        the gate (the first on equal rounded distances) and that distance in units of
-        :data:`TIE_M2`; ``(-1, 0)`` when none is within the gate."""
+        the gate, -1 when none is. Tie rule: a later object replaces the best so far only when
+        nearer by more than :data:`TIE_M2`, so the first (lowest id) wins near-ties."""
         c, s, tx, tz = motion
         px, pz = c * x - s * z + tx, s * x + c * z + tz
-        best, least = -1, _UNITS_GATE + 1
+        best, least = -1, GATE_M**2 + TIE_M2
         points = self._points
         for j in cols:
             qx, qz = points[j]
-            d2 = round(((px - qx) ** 2 + (pz - qz) ** 2) / TIE_M2)
-            if d2 < least:
+            d2 = (px - qx) ** 2 + (pz - qz) ** 2
+            if d2 < least - TIE_M2:
                 best, least = j, d2
-        return (best, least) if best >= 0 else (-1, 0)
+        return best
 
     def _match(self, key: Key, previous: StepMatch | None) -> StepMatch:
         """Steps 3-4 on the recognised entries ``key`` (see :meth:`step`)."""
