@@ -40,8 +40,9 @@ the layout, keeps its residual, and loses pairs at the gate.
 is matched by the same rules, with two uses of history. (a) The previous step's frame and
 pairs are extended to the entries written or moved since when they explain them all (each
 lands within the gate of a free object of its type, and no object was freed that an
-unmatched entry could take); otherwise, and whenever the map has grown by :data:`REVISIT`
-since the last search, the full search runs, with the previous frame as one more hypothesis.
+unmatched entry could take); otherwise, and when a frame found on fewer than :data:`SETTLED`
+entries has grown by :data:`REVISIT`, the full search runs, with the previous frame as one
+more hypothesis.
 (b) A label keeps the object it held at the previous step on exact ties (its rounded cost is
 lowered by half a rounding unit). A carried pairing that the geometry contradicts (beyond the
 gate, or a cheaper assignment) is dropped. The terminal map's scores (AEC, PA, precision,
@@ -72,9 +73,11 @@ COINCIDENT_M: Final = 1e-6
 BASE_ENTRIES: Final = 6
 #: Most alternations of assignment and refit.
 MAX_ROUNDS: Final = 10
-#: Across steps, the frame is searched for again once the map has grown by this factor since
-#: the last search (an early frame read from a few entries is revisited as the map grows).
-REVISIT: Final = 2.0
+#: Across steps, a frame searched for on fewer than :data:`SETTLED` entries is searched for
+#: again once the map has grown by this factor (an early frame read from a few entries is
+#: revisited as the map grows).
+REVISIT: Final = 1.5
+SETTLED: Final = 12
 
 _UNITS_GATE: Final = round(GATE_M**2 / TIE_M2)
 _FORBIDDEN: Final = 1e15  # cost of a pair outside the gate: more than any sum of allowed ones
@@ -412,7 +415,9 @@ class Matcher:
         its type within the gate, no two want the same one, and no object was freed that an
         unmatched entry might take. None otherwise (the caller matches afresh)."""
         motion = previous.motion
-        if motion is None or len(previous.identity) < 3 or len(key) >= REVISIT * previous.solved:
+        if motion is None or len(previous.identity) < 3:
+            return None
+        if previous.solved < SETTLED and len(key) >= REVISIT * previous.solved:
             return None
         before = set(previous.key)
         held = previous.identity
