@@ -96,18 +96,18 @@ def anchored_km(
     *,
     coverage: float,
 ) -> AnchoredKM:
-    r"""Coverage-anchored Kaplan-Meier estimate (Appendix B), the product-limit estimator.
+    r"""Coverage-anchored Kaplan-Meier estimate (Appendix B), fitted by lifelines.
 
     .. math::
         \hat{S}_{\mathcal{X}}(t) = C_{\mathcal{X}} \prod_{\tau \le t}
             \left(1 - \frac{d_\tau}{n_\tau}\right)
 
     The absolute probability that an object of the set is both discovered and still held
-    ``t`` steps after leaving view. ``n_tau`` counts spells still at risk at ``tau`` (a spell
-    censored at ``tau`` is at risk at ``tau``); the 95 % band is Greenwood's variance
-    ``sum d / (n (n - d))`` on the log(-log) scale, as :class:`lifelines.KaplanMeierFitter`
-    computes it (the tests' oracle). Curve and band are then multiplied by the anchor ``C``
-    (a fixed scale: the band is the KM factor's band, not ``C``'s uncertainty).
+    ``t`` steps after leaving view. The product-limit factor and its 95 % Greenwood band
+    (log(-log) scale) come from :class:`lifelines.KaplanMeierFitter` (``n_tau`` counts spells
+    still at risk at ``tau``: a spell censored at ``tau`` is at risk at ``tau``); both are then
+    multiplied by the anchor ``C`` (a fixed scale: the band is the KM factor's band, not
+    ``C``'s uncertainty).
     Starts at ``C`` and never increases. Edge cases: no spells gives the single point
     ``(0, C)``; no events gives a flat curve at ``C``; ties are counted together.
     ``coverage`` must lie in [0, 1]; durations must be finite and > 0.
@@ -120,38 +120,30 @@ def anchored_km(
     return _fitted(t.tobytes(), e.tobytes(), np.float64(coverage).tobytes())
 
 
-#: Two-sided 95 % normal quantile of the Greenwood band.
-_Z95: Final = 1.959963984540054
-
-
 @functools.lru_cache(maxsize=32)
 def _fitted(durations: bytes, observed: bytes, anchor: bytes) -> AnchoredKM:
     """:func:`anchored_km` of non-empty spells, its arguments as the bytes of float64
     durations, bool events and the float64 coverage. Memoised on those bytes (exact: ``-0.0``
     is not ``0.0`` here): one report fits the same pooled spells several times (the KM curve,
     the Ebbinghaus R^2, its gate), and the result is immutable."""
+    from lifelines import KaplanMeierFitter  # heavy: imported on first use
+
     t = np.frombuffer(durations, dtype=float)
     e = np.frombuffer(observed, dtype=bool)
     coverage = float(np.frombuffer(anchor, dtype=float)[0])
-    times = np.unique(t)
-    at_risk = len(t) - np.searchsorted(np.sort(t), times, side="left")  # spells with t_j >= tau
-    events = np.bincount(np.searchsorted(times, t[e]), minlength=len(times))
-    with np.errstate(divide="ignore", invalid="ignore"):
-        factor = np.cumprod(1.0 - events / at_risk)
-        greenwood = np.cumsum(events / (at_risk * (at_risk - events)))
-        v = np.log(factor)  # log(-log) band (lifelines' "exponential Greenwood")
-        spread = _Z95 * np.sqrt(greenwood) / v
-        one, two = (np.exp(-np.exp(np.log(-v) + sign * spread)) for sign in (1.0, -1.0))
-    low, high = (np.where(np.isfinite(b), b, factor) for b in (np.minimum(one, two),
-                                                                np.maximum(one, two)))  # fmt: skip
+    fitter = KaplanMeierFitter().fit(t, event_observed=e)
+    table = fitter.event_table
+    factor = fitter.survival_function_.to_numpy()[:, 0]
+    band = fitter.confidence_interval_survival_function_.to_numpy()
+    band = np.where(np.isfinite(band), band, factor[:, None])
     return AnchoredKM(
-        coverage=coverage,
-        times=(0.0, *times.tolist()),
-        survival=(coverage, *(coverage * factor).tolist()),
-        at_risk=(len(t), *at_risk.tolist()),
-        events=(0, *events.tolist()),
-        ci_low=(coverage, *(coverage * low).tolist()),
-        ci_high=(coverage, *(coverage * high).tolist()),
+        coverage=float(coverage),
+        times=tuple(table.index.to_numpy(dtype=float).tolist()),
+        survival=tuple((coverage * factor).tolist()),
+        at_risk=tuple(table["at_risk"].to_numpy(dtype=int).tolist()),
+        events=tuple(table["observed"].to_numpy(dtype=int).tolist()),
+        ci_low=tuple((coverage * band[:, 0]).tolist()),
+        ci_high=tuple((coverage * band[:, 1]).tolist()),
     )
 
 
