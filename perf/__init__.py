@@ -7,11 +7,11 @@ Each stage module (``world``, ``loop``, ``metrics``, ``replay``, ``live``, ``plu
 
 Every figure is measured twice (:mod:`perf.__main__`):
 
-* **warm** — in this process, after one warm-up: code imported, kernels compiled, bytecode
-  cached, as on a developer's machine from the second run on;
+* **warm** — in this process, after one warm-up: code imported, bytecode cached, as on a
+  developer's machine from the second run on;
 * **cold** (``<figure>_cold``) — the same stage run with no warm-up in a fresh process on a
-  fresh copy of the checkout (:func:`cold_figures`): no bytecode of the product, no compile
-  cache, no run directory, as a CI job that has just cloned the repository. Where a stage
+  fresh copy of the checkout (:func:`cold_figures`): no bytecode of the product, no run
+  directory, as a CI job that has just cloned the repository. Where a stage
   runs several commands in a row (a replay, then the same replay resumed), only its first
   measurement starts from empty caches; the later ones see what the first left behind, as
   the second command of that CI job would.
@@ -180,12 +180,12 @@ def run_stages(names: Sequence[str], *, repeat: int, warmup: int = 1) -> list[Fi
 
 #: What a fresh clone holds that a stage reads; ``cassettes`` is linked, not copied (data only).
 _COPIED = ("pytest_emrd", "perf", "benchmarks", "pyproject.toml", "thresholds.yaml")
-_NOT_COPIED = shutil.ignore_patterns("__pycache__", "*.pyc", "*.nbi", "*.nbc", ".emrd")
+_NOT_COPIED = shutil.ignore_patterns("__pycache__", "*.pyc", ".emrd")
 
 
 def fresh_copy(root: Path, into: Path) -> Path:
-    """The sources of ``root`` copied into ``into/checkout`` without any bytecode or compile
-    cache (the cassettes linked): what ``git clone`` gives a CI job."""
+    """The sources of ``root`` copied into ``into/checkout`` without any bytecode (the
+    cassettes linked): what ``git clone`` gives a CI job."""
     copy = into / "checkout"
     copy.mkdir()
     for name in _COPIED:
@@ -200,12 +200,11 @@ def fresh_copy(root: Path, into: Path) -> Path:
 
 def cold_env(copy: Path) -> dict[str, str]:
     """The environment of a cold stage: the copy first on the import path, default bytecode
-    policy, an empty numba cache (numba may still be installed), :data:`COLD_ENV` set."""
+    policy, :data:`COLD_ENV` set."""
     env = dict(os.environ)
-    for name in ("PYTHONPYCACHEPREFIX", "PYTHONDONTWRITEBYTECODE", "NUMBA_CACHE_DIR"):
+    for name in ("PYTHONPYCACHEPREFIX", "PYTHONDONTWRITEBYTECODE"):
         env.pop(name, None)
     env["PYTHONPATH"] = os.pathsep.join([str(copy), *filter(None, [env.get("PYTHONPATH")])])
-    env["NUMBA_CACHE_DIR"] = str(copy / ".numba-cache")
     env[COLD_ENV] = "1"
     return env
 

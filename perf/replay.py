@@ -16,7 +16,7 @@
   condition and spawn) through their cassettes, as the plugin does (cassette load, the whole
   episode loop, redaction, matching), over the world alone doing the same work: layout,
   reset, ground truth and the same actions, with the same per-step reads. Both run warm
-  (one warm-up each: code loaded, kernels compiled) and both start with the world's view
+  (one warm-up each: code loaded) and both start with the world's view
   digests and shade tables forgotten, as in a fresh worker (a warm world knows every view of
   the sample and draws none: the ratio would then compare the replay with almost nothing),
   so the world draws each view of the sample once on both sides and only the replay's cost

@@ -5,10 +5,12 @@ and walks up to what it sees. ``world.step_ms`` runs with the frame cache off, s
 step renders, hashes and encodes a frame (its JPEG is read, as a recording sends it): it is
 the cost of a step at a new pose.
 ``world.render_ms`` is the renderer alone (the 512 x 512 frame, no digest, no JPEG), per
-frame over the poses of a 20-step walk through the paper office under each condition.
+frame over the poses of a 20-step walk through the paper office under each condition; it
+has no target of its own (see :func:`run`): a user meets it inside a step or an episode.
 ``world.episode_s`` is what the episode loop pays per episode in the world when it replays
 (frame cache on, no JPEG read: a replay sends frames by digest): layout, reset, ground truth
-(with ``G_base``) and 50 steps.
+(with ``G_base``) and 50 steps. Its target, 1 s, holds warm and cold alike: the renderer is
+plain numpy, so a fresh clone's first episode compiles nothing.
 """
 
 from __future__ import annotations
@@ -97,7 +99,14 @@ def _render_all(frames: list[Frame]) -> None:
 
 def run(*, repeat: int, warmup: int) -> list[Figure]:
     """The four figures; the episode is timed first, so that cold it is a fresh process's
-    first episode (kernels compiled, modules imported on the way), as a user first meets it."""
+    first episode (modules imported on the way), as a user first meets it.
+
+    Targets are what a user feels: a replayed 50-step episode within 1 s (warm or cold), a
+    recorded step at a new pose (render, digest, JPEG) within 15 ms, beside a model's reply
+    of a second or more. The frame alone has no target: plain numpy draws one in about 4-5
+    ms (this machine, 2 cores under load), not the 2 ms the compiled kernel met, and that
+    kernel cost a 17 s compilation on a fresh clone's first episode, which no run earns
+    back."""
     seeds = iter(range(SEED, SEED + 100_000))
     episode_s = median_seconds(lambda: _episode(next(seeds)), repeat=repeat, warmup=warmup)
 
@@ -114,7 +123,7 @@ def run(*, repeat: int, warmup: int) -> list[Figure]:
     )
     return [
         Figure("world.step_ms", step_s / STEPS_PER_REPEAT * 1e3, "ms", 15.0, repeat),
-        Figure("world.render_ms", render_s * 1e3, "ms", 2.0, repeat),
+        Figure("world.render_ms", render_s * 1e3, "ms", None, repeat),
         Figure("world.episode_s", episode_s, "s", 1.0, repeat),
         Figure("world.layout_ms", layout_s * 1e3, "ms", 20.0, repeat),
     ]

@@ -27,6 +27,7 @@ from pytest_emrd.metrics._explore_map import TBSCurve, positional_accuracy, tbs_
 from pytest_emrd.metrics._frame import random_reframe, reframe
 from pytest_emrd.metrics._gates import GATE_METRICS, GateMetric, evaluate_gates
 from pytest_emrd.metrics._match import (
+    GATE_M,
     MatchedPair,
     Matching,
     match_map,
@@ -54,7 +55,10 @@ from pytest_emrd.metrics._scores import (
     aec_score,
     discovery_thirds,
     grounding_scores,
+    hallucination_score,
+    pa_coverage,
     positional_accuracy_score,
+    precision_score,
     serial_position_bins,
     sir_score,
     te_score,
@@ -83,6 +87,7 @@ from pytest_emrd.metrics._vocab import ENGINE_TYPES, SYNONYMS, candidate_types, 
 
 __all__ = [
     "ENGINE_TYPES",
+    "GATE_M",
     "GATE_METRICS",
     "R2_POINTS",
     "SYNONYMS",
@@ -131,11 +136,14 @@ __all__ = [
     "forgetting_spells",
     "fpsg",
     "grounding_scores",
+    "hallucination_score",
     "kaplan_meier_anchored",
     "match_map",
     "miller_curve",
+    "pa_coverage",
     "positional_accuracy",
     "positional_accuracy_score",
+    "precision_score",
     "random_reframe",
     "reframe",
     "representative_reasoning",

@@ -18,7 +18,9 @@ from pytest_emrd._serde import from_versioned_dict, to_dict
 from pytest_emrd.metrics._scores import (
     aec_score,
     grounding_scores,
+    hallucination_score,
     positional_accuracy_score,
+    precision_score,
     serial_position_bins,
     sir_score,
     te_score,
@@ -27,7 +29,7 @@ from pytest_emrd.metrics._tracking import Spell, first_spells, track_episode
 from pytest_emrd.rooms import room_letter
 from pytest_emrd.trajectory import CATEGORIES, EpisodeSpec, Trajectory
 
-SCHEMA_VERSION: Final = 1
+SCHEMA_VERSION: Final = 2
 
 
 @dataclass(frozen=True)
@@ -53,6 +55,12 @@ class EpisodeMetrics:
     """``|K|``: terminal-map entries matched to ground truth."""
     g_base: int
     """``|G_base|``: objects discoverable under the unperturbed baseline."""
+    unmatched: int
+    """``|U|``: recognised terminal-map entries left without an object (PA's charge)."""
+    precision: float | None
+    """Map precision: share of the terminal map's entries standing for a real object."""
+    hallucination_rate: float | None
+    """Share of the terminal map's entries of a type the office does not hold."""
     tbs: tuple[float, ...]
     """Temporal Belief Stability ``TBS(t)`` for ``t = 1..steps`` (Eq. TBS)."""
     fpsg_local: float | None
@@ -140,6 +148,10 @@ def episode_metrics(traj: Trajectory) -> EpisodeMetrics:
         reasons["aec"] = "the ground truth lists no object (|E| = 0)"
     if pa is None:
         reasons["pa"] = "no object is discoverable under the baseline (|G_base| = 0)"
+    precision = precision_score(final)
+    hallucination = hallucination_score(final)
+    if precision is None:
+        reasons["precision"] = reasons["hallucination_rate"] = "the terminal map is empty"
     if g_base == 0:
         reasons["tbs"] = "no object is discoverable under the baseline (|G_base| = 0)"
     grounding = grounding_scores(traj, final)
@@ -165,6 +177,9 @@ def episode_metrics(traj: Trajectory) -> EpisodeMetrics:
         pa=pa,
         matched=len(final.pairs),
         g_base=g_base,
+        unmatched=len(final.unmatched),
+        precision=precision,
+        hallucination_rate=hallucination,
         tbs=track.tbs,
         fpsg_local=grounding.fpsg_local,
         fpsg_global=grounding.fpsg_global,
@@ -191,6 +206,8 @@ def _errored(traj: Trajectory, objects_by_category: dict[str, int], g_base: int)
         "te",
         "aec",
         "pa",
+        "precision",
+        "hallucination_rate",
         "tbs",
         "fpsg_local",
         "fpsg_global",
@@ -202,7 +219,8 @@ def _errored(traj: Trajectory, objects_by_category: dict[str, int], g_base: int)
     return EpisodeMetrics(
         spec=traj.spec, status=traj.status, errored=True, steps=len(traj.steps),
         parse_failures=sum(s.parse_error is not None for s in traj.steps), te=None, aec=None,
-        pa=None, matched=0, g_base=g_base, tbs=(), fpsg_local=None, fpsg_global=None,
+        pa=None, matched=0, g_base=g_base, unmatched=0, precision=None,
+        hallucination_rate=None, tbs=(), fpsg_local=None, fpsg_global=None,
         never_visited=None, any_bias=None, chosen_letter=room_letter(None), sir=None, spells=(),
         mapped_by_category={}, objects_by_category=objects_by_category,
         serial_position=(None, None, None), miller_loads=(), miller_forgets=(),

@@ -1,71 +1,52 @@
 """Label-to-ground-truth matching: the one procedure every metric uses.
 
 A model writes its cognitive map as ``{label: {type, x, z, room}}`` with labels and types of
-its own choosing and coordinates in a frame of its own: the paper's "arbitrary egocentric
-origins", which it resolves "using an optimal rigid-body Procrustes alignment". Every metric
-that needs to know *which physical object* a map entry stands for calls :func:`match_map`
-(episodes: :class:`Matcher`, once per step), which decides, for the map ``M_t`` of one step
-and from that map alone:
+its own choosing and coordinates in a frame of its own (the paper's "arbitrary egocentric
+origins", resolved "using an optimal rigid-body Procrustes alignment"). :func:`match_map`
+decides which physical object each entry of one map stands for, from that map alone:
 
-1. **Labels.** A label is one recorded instance; a repeated label keeps its first entry (the
-   JSON map is keyed by label, so repeats only come from malformed input).
-2. **Types** (:mod:`pytest_emrd.metrics._vocab`). The entry's ``object_type`` is read first,
-   then its label, by :func:`~pytest_emrd.metrics.canonical_type` restricted to the types the
-   layout holds. An entry that denotes no type of the layout is *unrecognised* (a
-   hallucination): it is matched to nothing.
-3. **Correspondence and alignment, jointly.** Among the assignments that pair, per type
-   ``k``, exactly ``min(|M_k|, |E_k|)`` entries with distinct objects of type ``k`` (the
-   paper's AEC cap), the one chosen is the one whose optimal proper rigid motion
-   (Procrustes, :func:`rigid_fit`) leaves the smallest sum of squared residuals: the
-   correspondence under which the map is most accurate, i.e. the RMSE of Eq. PA minimised
-   over the correspondences the labels' types allow as well as over the motion. It is found
-   by alternating per-type optimal assignment (:func:`scipy.optimize.linear_sum_assignment`)
-   and Procrustes refit from *frame-free seeds*:
+1. **Labels.** A label is one recorded instance; a repeated label keeps its first entry.
+2. **Types** (:mod:`pytest_emrd.metrics._vocab`): the entry's ``object_type``, else its
+   label, restricted to the types the layout holds. An entry of no such type is
+   *unrecognised* (a hallucination) and takes no part in the frame or the matching.
+3. **Frame** (:func:`_solve`), robust to hallucinated entries. *Hypotheses*: the entries
+   with the fewest candidate objects (ties: farthest from the written centroid, then label
+   order; at most :data:`BASE_ENTRIES`) are paired, and every pair of distinct candidate
+   objects whose distance agrees with the written one within ``2 * GATE_M`` gives the
+   proper rigid motion carrying the two entries onto them. *Score* (truncated least
+   squares, MSAC): after the motion, each recognised entry costs its squared distance to the
+   nearest object of its type, capped at ``GATE_M ** 2``, so an outlier (an invented "exit
+   sign" read as a door) costs a constant and cannot pull the frame. The lowest score wins;
+   on equal scores (a symmetric layout: a row of chairs fits shifted by one chair) the
+   first, and the Procrustes fit of the labels that are object ids of the layout
+   (``Chair_3``) comes before the pair hypotheses. *Refit*: assign (step 4), fit Procrustes
+   (:func:`rigid_fit`) on the matched pairs only (the inliers), assign again, until the
+   pairs repeat (at most :data:`MAX_ROUNDS`).
+4. **Assignment with a gate.** An entry may match an object of its type only when it lies
+   within :data:`GATE_M` metres of it after alignment. Among the one-to-one assignments the
+   one with the most pairs is taken, then the least summed squared distance
+   (:func:`scipy.optimize.linear_sum_assignment`). **Tie rule**: squared distances are
+   rounded to :data:`TIE_M2` (1e-9 m^2) before the assignment, so differences at floating
+   tolerance (another CPU, BLAS kernel or library version) cannot flip a pair.
 
-   * **Determined frame.** When the map holds two or more *anchors* at distinct written
-     positions (an anchor is an entry whose type has one entry in the map and one instance
-     in the layout, so its object is fixed by its type alone: ``Fridge``, ``Television``,
-     ``Door`` in every EMRD layout), the seed is the Procrustes fit of the anchors.
-   * **Undetermined frame** (fewer than two anchors). The seeds are the motions that carry
-     two base entries onto every pair of candidate objects (see
-     :func:`pytest_emrd.metrics._seeds.hypotheses`), preceded by the fit of the previous
-     step's identities of the labels still present, then by the fit of the labels that are
-     object ids of the layout (``Chair_3``). The lowest residual wins; between fits the
-     geometry cannot tell apart (one chair left in the map; three chairs of an evenly
-     spaced row) the previous identities decide, then the labels.
+Recognised entries left without a pair are *unmatched*: their type's objects are all taken,
+or none lies within the gate. They are what Eq. PA's charge counts (:func:`._scores.pa_score`)
+and what map precision leaves out. Everything is computed from distances, so the matching
+is the same in every frame (up to the 1e-9 tie rounding): **invariant under any proper rigid
+motion** of the map. **Reflections are not forgiven**: a mirrored map cannot be rotated onto
+the layout, keeps its residual, and loses pairs at the gate.
 
-   Every seed is computed from distances and residuals only, so the result is the same in
-   every frame: the matching, and every metric built on it, is **invariant under any proper
-   rigid motion** (rotation + translation) of the map, exactly, not approximately (residuals
-   and distances are compared at 1e-9 relative precision so ties break alike in every frame;
-   remaining exact ties go to the lowest object id). It is also invariant under the order of
-   the entries, and under any consistent renaming of the labels except where two
-   correspondences fit exactly equally well.
-
-**Reflections are not forgiven.** The paper's alignment is rigid-body: rotation and
-translation, ``det R = +1``. A mirrored map (left and right swapped) cannot be rotated onto
-the layout; it keeps its residual and Positional Accuracy falls (except for a collinear map,
-which a half-turn maps onto its own mirror image). Swapping left and right is a spatial
-error a responder must not make, so we do not forgive it by allowing improper alignments.
-
-4. **Identity over time** (episodes: :meth:`Matcher.assign` with the previous step's
-   assignment). Objects are followed across steps by label (Appendix B: "matched across time
-   steps exclusively using the string labels"). A label keeps the object it held at step
-   ``t-1`` only when the identity was decided in a *determined* frame and step ``t`` is
-   determined too, by no anchor that ``t-1`` lacked; its type must still resolve to that
-   object's type. The other labels are assigned among the remaining objects in step ``t``'s
-   anchor frame. Identities are **revised** (decided afresh by step 3) whenever a new anchor
-   appears (the frame is better determined than when they were decided) and at every
-   undetermined step: an identity decided while the frame was undetermined never persists
-   by itself; at an undetermined step the previous identities only break ties the map's
-   geometry cannot break (one chair left in the map: still the chair it was). Every rule
-   reads labels, types and equivariant fits, so carrying keeps the invariance.
-
-**No distance gate.** A type-correct entry is matched however far it lies from its object:
-(a) a gate would have to be set in the model's untrusted frame; (b) the paper's coverage
-(Eq. AEC) counts instances per type with a ``min`` cap and no position test, and matching
-must agree with it: ``|K| = sum_k min(|M_k|, |E_k|)`` so that AEC is ``|K| / |E|``.
-Geometric error is the job of Positional Accuracy, not of the matcher.
+**Across steps** (:meth:`Matcher.step`, for the per-step metrics: TBS, spells, SIR) each map
+is matched by the same rules, with two uses of history. (a) The previous step's frame and
+pairs are extended to the entries written or moved since when they explain them all (each
+lands within the gate of a free object of its type, and no object was freed that an
+unmatched entry could take); otherwise, and when a frame found on fewer than :data:`SETTLED`
+entries has grown by :data:`REVISIT`, the full search runs, with the previous frame as one
+more hypothesis.
+(b) A label keeps the object it held at the previous step on exact ties (its rounded cost is
+lowered by half a rounding unit). A carried pairing that the geometry contradicts (beyond the
+gate, or a cheaper assignment) is dropped. The terminal map's scores (AEC, PA, precision,
+FPSG) use :func:`match_map` of that map alone, never this history.
 """
 
 from __future__ import annotations
@@ -73,24 +54,33 @@ from __future__ import annotations
 import math
 from collections import Counter
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from itertools import combinations
 from typing import Final, NamedTuple
 
 import numpy as np
 
-from pytest_emrd.metrics._align import (
-    COINCIDENT_M,
-    Motion,
-    Problem,
-    assign,
-    compiled,
-    digits,
-    layout_of,
-    procrustes,
-    undetermined_fit,
-)
 from pytest_emrd.metrics._vocab import TypeResolver
 from pytest_emrd.trajectory import GroundTruthObject, MapEntry
+
+#: Largest distance (metres, after alignment) at which an entry may stand for an object.
+GATE_M: Final = 1.5
+#: Squared distances are rounded to this (m^2) before any comparison: the tie rule.
+TIE_M2: Final = 1e-9
+#: Written points closer than this (metres) carry no direction: they cannot fix a rotation.
+COINCIDENT_M: Final = 1e-6
+#: Entries (fewest candidate objects first) whose pairs seed the frame hypotheses.
+BASE_ENTRIES: Final = 6
+#: Most alternations of assignment and refit.
+MAX_ROUNDS: Final = 10
+#: Across steps, a frame searched for on fewer than :data:`SETTLED` entries is searched for
+#: again once the map has grown by this factor (an early frame read from a few entries is
+#: revisited as the map grows).
+REVISIT: Final = 1.5
+SETTLED: Final = 12
+
+_UNITS_GATE: Final = round(GATE_M**2 / TIE_M2)
+_FORBIDDEN: Final = 1e15  # cost of a pair outside the gate: more than any sum of allowed ones
 
 
 @dataclass(frozen=True)
@@ -115,14 +105,13 @@ class Matching:
     pairs: tuple[MatchedPair, ...]
     """Matched pairs ``K``, ordered by object id."""
     unmatched: tuple[str, ...]
-    """Labels of a ground-truth type beyond that type's instance count (sorted)."""
+    """Recognised labels left without an object (type exhausted, or none within the gate)."""
     unrecognised: tuple[str, ...]
     """Labels whose type resolves to no ground-truth type (sorted)."""
     duplicates: tuple[str, ...]
     """Labels that appeared more than once; only their first entry was used."""
-    determined: bool
-    """Whether two or more anchors determined the frame (step 3); else correspondence
-    hypotheses did."""
+    covered: int
+    """``sum_k min(|M_k|, |E_k|)`` over the layout's types: Eq. AEC's numerator."""
 
     @property
     def object_ids(self) -> frozenset[str]:
@@ -133,233 +122,410 @@ class Matching:
         """Object id -> the label matched to it."""
         return {p.object_id: p.label for p in self.pairs}
 
+    @property
+    def labels(self) -> int:
+        """Distinct labels of the map: matched, unmatched and unrecognised."""
+        return len(self.pairs) + len(self.unmatched) + len(self.unrecognised)
 
-EMPTY_MATCHING: Final = Matching((), (), (), (), False)
+
+EMPTY_MATCHING: Final = Matching((), (), (), (), 0)
+
+
+class Motion(NamedTuple):
+    """A proper rigid motion ``x -> R(theta) x + t`` as ``(cos, sin, tx, tz)``."""
+
+    c: float
+    s: float
+    tx: float
+    tz: float
+
+
+def _procrustes(pred: np.ndarray, true: np.ndarray) -> Motion:
+    """Optimal proper rigid motion taking ``pred`` (k x 2) onto ``true`` (k x 2)."""
+    cp, cq = pred.mean(axis=0), true.mean(axis=0)
+    a, b = pred - cp, true - cq
+    dot = float(np.sum(a * b))
+    cross = float(np.sum(a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]))
+    theta = math.atan2(cross, dot) if math.hypot(dot, cross) > COINCIDENT_M**2 else 0.0
+    c, s = math.cos(theta), math.sin(theta)
+    return Motion(c, s, cq[0] - (c * cp[0] - s * cp[1]), cq[1] - (s * cp[0] + c * cp[1]))
+
+
+def rigid_fit(pred: np.ndarray, true: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    r"""Optimal proper rigid motion (rotation + translation) taking ``pred`` onto ``true``.
+
+    2-D orthogonal Procrustes without scaling or reflection (Kabsch with ``det R = +1``):
+    for centred points ``a_j``, ``b_j`` the rotation maximising ``sum_j b_j . R a_j`` has
+    angle ``atan2(sum a x b, sum a . b)``, and ``t = mean(b) - R mean(a)``. Returns
+    ``(R, t)`` with ``aligned = pred @ R.T + t``. One point, or all points coincident:
+    the identity rotation and the translation between centroids.
+    """
+    pred = np.asarray(pred, dtype=float).reshape(-1, 2)
+    true = np.asarray(true, dtype=float).reshape(-1, 2)
+    m = _procrustes(pred, true)
+    return np.array([[m.c, -m.s], [m.s, m.c]]), np.array([m.tx, m.tz])
+
+
+def _moved(points: np.ndarray, m: Motion) -> np.ndarray:
+    x, z = points[:, 0], points[:, 1]
+    return np.stack([m.c * x - m.s * z + m.tx, m.s * x + m.c * z + m.tz], axis=1)
+
+
+def _units(d2: np.ndarray) -> np.ndarray:
+    """Squared distances in units of :data:`TIE_M2`, rounded (the tie rule)."""
+    return np.round(d2 / TIE_M2)
+
+
+Pairs = tuple[tuple[int, int], ...]
+"""``(entry row, object column)`` pairs, sorted."""
+
+
+class _Problem:
+    """One map's recognised entries against the layout."""
+
+    def __init__(self, labels: list[str], kinds: list[int], pred: np.ndarray, layout: _Layout):
+        self.labels, self.kinds, self.pred, self.layout = labels, kinds, pred, layout
+        self.same = np.asarray(kinds, dtype=int)[:, None] == layout.kinds[None, :]
+        """(n x m): object ``j`` is of entry ``i``'s type."""
+        rows, cols = np.nonzero(self.same)
+        self.candidates = rows, cols
+        """Every (entry, object of its type), by entry."""
+        self.starts = np.searchsorted(rows, np.arange(len(kinds)))
+        """Where each entry's candidates start in ``candidates``."""
+
+
+@dataclass(frozen=True)
+class _Layout:
+    true: np.ndarray
+    """Object positions (m x 2), objects sorted by id."""
+    kinds: np.ndarray
+    """Type index of each object."""
+    cols_of: dict[int, tuple[int, ...]]
+    """Type index -> its objects, ascending."""
+    _pairs: dict[tuple[int, int], tuple[np.ndarray, np.ndarray]] = field(default_factory=dict)
+
+    def pairs_of(self, ka: int, kb: int) -> tuple[np.ndarray, np.ndarray]:
+        """Every ``(o_a, o_b)`` of distinct objects of types ``ka``, ``kb`` (k x 2, in
+        ``(o_a, o_b)`` order) and their distances."""
+        found = self._pairs.get((ka, kb))
+        if found is None:
+            pairs = np.array([(i, j) for i in self.cols_of[ka] for j in self.cols_of[kb]
+                              if i != j], dtype=int).reshape(-1, 2)  # fmt: skip
+            v = self.true[pairs[:, 1]] - self.true[pairs[:, 0]]
+            found = self._pairs[(ka, kb)] = (pairs, np.hypot(v[:, 0], v[:, 1]))
+        return found
+
+
+def assign_rows(cost: np.ndarray, allowed: np.ndarray) -> list[tuple[int, int]]:
+    """The one-to-one pairs ``(row, col)`` among ``allowed`` ones: the most pairs, then the
+    least summed ``cost`` (:func:`scipy.optimize.linear_sum_assignment`). When every row's
+    cheapest allowed column (the first on equal costs) is a different one, that is the
+    optimum and scipy is not needed (nor imported: it costs a cold process half a second)."""
+    rows = np.flatnonzero(allowed.any(axis=1))
+    if not len(rows):
+        return []
+    masked = np.where(allowed, cost, np.inf)[rows]
+    best = masked.argmin(axis=1)
+    if len(np.unique(best)) == len(best):
+        return list(zip(rows.tolist(), best.tolist(), strict=True))
+    from scipy.optimize import linear_sum_assignment  # heavy: imported on first conflict
+
+    cols = np.flatnonzero(allowed[rows].any(axis=0))
+    block = np.where(allowed[np.ix_(rows, cols)], cost[np.ix_(rows, cols)], _FORBIDDEN)
+    r, c = linear_sum_assignment(block)
+    return [(int(rows[i]), int(cols[j])) for i, j in zip(r, c, strict=True)
+            if allowed[rows[i], cols[j]]]  # fmt: skip
+
+
+def _assign(problem: _Problem, motion: Motion, prefer: np.ndarray | None = None) -> Pairs:
+    """Step 4: the gated one-to-one assignment after ``motion`` (most pairs, then least
+    rounded squared distance; ``prefer`` (n x m) lowers a carried pair by half a unit)."""
+    moved = _moved(problem.pred, motion)
+    diff = moved[:, None, :] - problem.layout.true[None, :, :]
+    cost = _units(np.sum(diff * diff, axis=2))
+    allowed = problem.same & (cost <= _UNITS_GATE)
+    if prefer is not None:
+        cost = cost - 0.5 * prefer
+    return tuple(sorted(assign_rows(cost, allowed)))
+
+
+def _refit(problem: _Problem, pairs: Pairs, motion: Motion) -> Motion:
+    """Procrustes on the pairs (two or more points not all coincident); with fewer, the
+    current rotation with the translation that puts the first pair's entry on its object."""
+    p = problem.pred[[i for i, _ in pairs]]
+    q = problem.layout.true[[j for _, j in pairs]]
+    if len(pairs) >= 2 and np.ptp(p, axis=0).max() > COINCIDENT_M:
+        return _procrustes(p, q)
+    moved = _moved(p[:1], motion)[0]
+    return Motion(
+        motion.c, motion.s, motion.tx + q[0, 0] - moved[0], motion.tz + q[0, 1] - moved[1]
+    )
+
+
+def _refine(problem: _Problem, motion: Motion, prefer: np.ndarray | None) -> tuple[Pairs, Motion]:
+    """Alternate assignment and refit on the inliers from ``motion`` until the pairs repeat."""
+    pairs = _assign(problem, motion, prefer)
+    for _ in range(MAX_ROUNDS):
+        if not pairs:
+            break
+        motion = _refit(problem, pairs, motion)
+        again = _assign(problem, motion, prefer)
+        if again == pairs:
+            break
+        pairs = again
+    return pairs, motion
+
+
+def _hypotheses(problem: _Problem) -> np.ndarray:
+    """Frame hypotheses from base pairs of entries (module docstring, step 3), as rows
+    ``(c, s, tx, tz)``: the motion taking entry ``a`` onto object ``o_a`` and ``b`` onto ``o_b``
+    in direction, with the midpoints matched."""
+    layout, pred = problem.layout, problem.pred
+    kinds, labels = problem.kinds, problem.labels
+    spread = _units(np.sum((pred - pred.mean(axis=0)) ** 2, axis=1)).tolist()
+    base = sorted(range(len(kinds)),
+                  key=lambda i: (len(layout.cols_of[kinds[i]]), -spread[i], labels[i]))  # fmt: skip
+    base = base[:BASE_ENTRIES]
+    found = [(a, b, dist, *layout.pairs_of(kinds[a], kinds[b]))
+             for a, b in combinations(base, 2)
+             if (dist := math.dist(pred[a], pred[b])) > COINCIDENT_M]  # fmt: skip
+    true = layout.true
+    if found:
+        sizes = [len(pairs) for *_, pairs, _ in found]
+        keep = np.concatenate([np.abs(span - d) for _, _, d, _, span in found]) <= 2 * GATE_M
+        oab = np.concatenate([pairs for *_, pairs, _ in found])[keep]
+        pa = pred[np.repeat([a for a, *_ in found], sizes)[keep]]
+        pb = pred[np.repeat([b for _, b, *_ in found], sizes)[keep]]
+    if not found or not len(oab):  # one entry, or coincident entries: no direction to read
+        cols = list(layout.cols_of[kinds[base[0]]])
+        shift = true[cols] - pred[base[0]]
+        return np.column_stack([np.ones(len(cols)), np.zeros(len(cols)), shift])
+    qa, qb = true[oab[:, 0]], true[oab[:, 1]]
+    u, v = pb - pa, qb - qa
+    theta = np.arctan2(u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0], np.sum(u * v, axis=1))
+    c, s = np.cos(theta), np.sin(theta)
+    m, n = (pa + pb) / 2, (qa + qb) / 2
+    return np.column_stack([c, s, n[:, 0] - (c * m[:, 0] - s * m[:, 1]),
+                            n[:, 1] - (s * m[:, 0] + c * m[:, 1])])  # fmt: skip
+
+
+def _scores(problem: _Problem, motions: np.ndarray) -> np.ndarray:
+    """MSAC score of each motion (rows ``(c, s, tx, tz)``): summed capped squared distance of
+    every entry to the nearest object of its type, in rounded units."""
+    c, s, tx, tz = (motions[:, k : k + 1] for k in range(4))
+    rows, cols = problem.candidates
+    x, z = problem.pred[rows, 0], problem.pred[rows, 1]
+    true = problem.layout.true
+    d2 = (c * x - s * z + tx - true[cols, 0]) ** 2 + (s * x + c * z + tz - true[cols, 1]) ** 2
+    nearest = np.minimum.reduceat(d2, problem.starts, axis=1)
+    return np.minimum(_units(nearest), _UNITS_GATE).sum(axis=1)
+
+
+def _solve(
+    problem: _Problem, seeds: Sequence[Motion] = (), prefer: np.ndarray | None = None
+) -> tuple[Pairs, Motion]:
+    """Step 3: the best of ``seeds`` and the hypotheses (the first on equal scores), refined."""
+    motions = _hypotheses(problem)
+    if seeds:
+        motions = np.concatenate([np.asarray(seeds, dtype=float), motions])
+    best = int(np.argmin(_scores(problem, motions))) if len(motions) > 1 else 0
+    return _refine(problem, Motion(*motions[best].tolist()), prefer)
+
 
 Key = tuple[tuple[str, int, float, float], ...]
 """A map's recognised entries as ``(label, type index, x, z)``, sorted by label."""
 
 
-def rigid_fit(pred: np.ndarray, true: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Optimal proper rigid motion (rotation + translation) taking ``pred`` onto ``true``.
-
-    2-D orthogonal Procrustes without scaling or reflection (Kabsch with ``det R = +1``):
-    the rotation angle maximising ``sum_j q_j . R p_j`` for centred points is
-    ``atan2(sum p x q, sum p . q)``. Returns ``(R, t)`` with ``aligned = pred @ R.T + t``.
-    Degenerate input (one point, or all points coincident) gives the identity rotation and
-    the translation between centroids.
-    """
-    pred = np.ascontiguousarray(pred, dtype=float).reshape(-1, 2)
-    true = np.ascontiguousarray(true, dtype=float).reshape(-1, 2)
-    m = procrustes(pred, true, [(i, i) for i in range(len(pred))])
-    return np.array([[m.c, -m.s], [m.s, m.c]]), np.array([m.tx, m.tz])
-
-
-class Assignment(NamedTuple):
-    """Raw result of :meth:`Matcher.assign` (plain dicts: the fast path of episodes)."""
+class StepMatch(NamedTuple):
+    """One map matched (what :meth:`Matcher.step` returns and takes back)."""
 
     entries: dict[str, MapEntry]
-    """Label -> its first entry."""
+    """Label -> its first entry, in the model's order."""
+    kind_of: dict[str, int]
+    """Label -> type index (-1: unrecognised)."""
     identity: dict[str, int]
-    """Label -> index (objects sorted by id) of the object matched to it."""
+    """Label -> object index (objects sorted by id) of the object it stands for."""
     unmatched: tuple[str, ...]
     unrecognised: tuple[str, ...]
     duplicates: tuple[str, ...]
-    determined: bool
-    anchors: frozenset[str]
-    """Labels of the anchors that determined the frame (empty when undetermined)."""
+    motion: Motion | None
+    """The frame found (None: no recognised entry)."""
+    key: Key
+    """The recognised entries."""
+    solved: int = 0
+    """Recognised entries when the frame was last searched for (:meth:`Matcher._match`)."""
 
 
 class Matcher:
-    """:func:`match_map` bound to one episode's ground truth, reusable across its steps.
-
-    Holds per-episode look-up tables (the type of each text seen so far) and the result of
-    every distinct map already matched afresh.
-    """
+    """:func:`match_map` bound to one episode's ground truth, reusable across its steps."""
 
     def __init__(self, objects: Sequence[GroundTruthObject]) -> None:
         ordered = sorted(objects, key=lambda o: o.object_id)
-        self._objects = ordered
-        self._types = TypeResolver(o.object_type for o in ordered)
-        self._ids = [o.object_id for o in ordered]
-        self._index = {oid: c for c, oid in enumerate(self._ids)}
-        self._true = np.array([(o.x, o.z) for o in ordered], dtype=float).reshape(-1, 2)
-        self._true_kinds = np.array([self._types.index[o.object_type] for o in ordered], dtype=int)
-        self._kind_of = self._true_kinds.tolist()
-        self._count = np.bincount(self._true_kinds, minlength=len(self._types.names)).tolist()
-        self._first = [self._kind_of.index(k) if n else -1 for k, n in enumerate(self._count)]
-        self._once = [n == 1 for n in self._count]
-        self._layout = layout_of([(o.x, o.z) for o in ordered], self._kind_of, _extent(self._true))
-        self._done: dict[Key, tuple[dict[str, int], bool]] = {}
+        self.objects = ordered
+        self.types = TypeResolver(o.object_type for o in ordered)
+        kinds = [self.types.index[o.object_type] for o in ordered]
+        cols_of: dict[int, tuple[int, ...]] = {k: () for k in range(len(self.types.names))}
+        for j, k in enumerate(kinds):
+            cols_of[k] = (*cols_of[k], j)
+        true = np.array([(o.x, o.z) for o in ordered], dtype=float).reshape(-1, 2)
+        self._layout = _Layout(true, np.array(kinds, dtype=int), cols_of)
+        self._points: list[tuple[float, float]] = [(o.x, o.z) for o in ordered]
+        self._index = {o.object_id: j for j, o in enumerate(ordered)}
+        self._fresh: dict[Key, StepMatch] = {}
 
-    def assign(self, entries: Sequence[MapEntry], previous: Assignment | None = None) -> Assignment:
-        """Steps 1-4 of the procedure on plain dicts (the fast path of episodes).
-
-        ``previous`` is the assignment of the step before (episodes only): when both steps
-        are determined by the same anchors, its identities are carried (step 4).
-        """
+    def _read(self, entries: Sequence[MapEntry]) -> tuple[dict[str, MapEntry], dict[str, int],
+                                                           tuple[str, ...]]:  # fmt: skip
         seen: dict[str, MapEntry] = {}
         for e in entries:
-            if e.label not in seen:
-                seen[e.label] = e
+            seen.setdefault(e.label, e)
         duplicates: tuple[str, ...] = ()
         if len(seen) != len(entries):
             counts = Counter(e.label for e in entries)
             duplicates = tuple(sorted(lb for lb, n in counts.items() if n > 1))
-        resolve, known = self._types.resolve, self._types.known
-        type_of: dict[str, int] = {}
-        unrecognised: list[str] = []  # sorted, as the labels are visited
-        rows: list[int] = []  # anchor candidates: entries of a type the layout holds once
-        key_list: list[tuple[str, int, float, float]] = []
-        once = self._once
-        for lb in sorted(seen):
-            e = seen[lb]
+        known, resolve = self.types.known, self.types.resolve
+        kind_of = {}
+        for lb, e in seen.items():
             k = known.get((e.object_type, lb))
-            if k is None:
-                k = resolve(e.object_type, lb)
-            if k < 0:
-                unrecognised.append(lb)
-                continue
-            type_of[lb] = k
-            if once[k]:
-                rows.append(len(key_list))
-            key_list.append((lb, k, float(e.x), float(e.z)))
-        key = tuple(key_list)
-        # anchors: the only entry of a type the layout holds once
-        if len(rows) >= 2:
-            kinds = [key[r][1] for r in rows]
-            if len(set(kinds)) != len(kinds):
-                rows = [r for r, k in zip(rows, kinds, strict=True) if kinds.count(k) == 1]
-        determined = len(rows) >= 2 and _apart([key[r][2:] for r in rows])
-        anchors = frozenset([key[r][0] for r in rows]) if determined else frozenset()
-        if (
-            determined
-            and previous is not None
-            and previous.determined
-            and anchors <= previous.anchors
-        ):
-            kind_of = self._kind_of
-            identity = {
-                lb: c for lb, c in previous.identity.items()
-                if type_of.get(lb, -1) == kind_of[c]
-            }  # fmt: skip
-            if len(identity) < len(key):
-                identity.update(self._in_frame(key, rows, identity))
-        else:
-            kind_of = self._kind_of
-            before = () if determined or previous is None else tuple(sorted(
-                (lb, c) for lb, c in previous.identity.items() if type_of.get(lb, -1) == kind_of[c]
-            ))  # fmt: skip
-            done = self._done.get((key, before))  # seen before (parse failures repeat a map)
-            if done is None:
-                done = self._afresh(key, rows if determined else None, dict(before))
-                self._done[(key, before)] = done
-            identity = done[0]
-        unmatched = tuple([entry[0] for entry in key if entry[0] not in identity])
-        return Assignment(
-            seen, identity, unmatched, tuple(unrecognised), duplicates, determined,
-            anchors,
+            kind_of[lb] = resolve(e.object_type, lb) if k is None else k
+        return seen, kind_of, duplicates
+
+    def step(self, entries: Sequence[MapEntry], previous: StepMatch | None = None) -> StepMatch:
+        """Match one step's map; ``previous`` (the step before) seeds the frame and breaks
+        exact ties in favour of the labels' previous objects (module docstring)."""
+        seen, kind_of, duplicates = self._read(entries)
+        key = tuple(sorted((lb, k, float(seen[lb].x), float(seen[lb].z))
+                           for lb, k in kind_of.items() if k >= 0))  # fmt: skip
+        unrecognised = tuple(sorted(lb for lb, k in kind_of.items() if k < 0))
+        extra = {"entries": seen, "kind_of": kind_of, "unrecognised": unrecognised,
+                 "duplicates": duplicates}  # fmt: skip
+        if previous is not None and previous.key == key:
+            return previous._replace(**extra)
+        if previous is None and key in self._fresh:
+            return self._fresh[key]._replace(**extra)
+        found = None if previous is None else self._extend(previous, key)
+        if found is None:
+            found = self._match(key, previous)
+            if previous is None:
+                self._fresh[key] = found
+        return found._replace(**extra)
+
+    def _extend(self, previous: StepMatch, key: Key) -> StepMatch | None:
+        """The previous step's matching extended to the entries written or moved since, in
+        its frame, when that explains them all: every new or moved entry has a free object of
+        its type within the gate, no two want the same one, and no object was freed that an
+        unmatched entry might take. None otherwise (the caller matches afresh)."""
+        motion = previous.motion
+        if motion is None or len(previous.identity) < 3:
+            return None
+        if previous.solved < SETTLED and len(key) >= REVISIT * previous.solved:
+            return None
+        before = set(previous.key)
+        held = previous.identity
+        identity: dict[str, int] = {}
+        changed: list[tuple[str, int, float, float]] = []
+        kept: set[str] = set()
+        for entry in key:
+            if entry not in before:
+                changed.append(entry)
+            else:
+                kept.add(entry[0])
+                if entry[0] in held:
+                    identity[entry[0]] = held[entry[0]]
+        unmatched = tuple(lb for lb in previous.unmatched if lb in kept)
+        cols_of = self._layout.cols_of
+        taken = set(identity.values())
+        freed = set(previous.identity.values()) - taken
+        if freed and unmatched:
+            for _, k, x, z in (e for e in key if e[0] in unmatched):
+                if self._nearest(motion, x, z, [j for j in cols_of[k] if j in freed]) >= 0:
+                    return None
+        for lb, k, x, z in changed:
+            best = self._nearest(motion, x, z, [j for j in cols_of[k] if j not in taken])
+            if best < 0:
+                return None
+            identity[lb] = best
+            taken.add(best)
+        return StepMatch({}, {}, identity, unmatched, (), (), motion, key, previous.solved)
+
+    def _nearest(self, motion: Motion, x: float, z: float, cols: list[int]) -> int:
+        """The object of ``cols`` nearest to written point ``(x, z)`` after ``motion`` within
+        the gate, -1 when none is. Tie rule: a later object replaces the best so far only when
+        nearer by more than :data:`TIE_M2`, so the first (lowest id) wins near-ties."""
+        c, s, tx, tz = motion
+        px, pz = c * x - s * z + tx, s * x + c * z + tz
+        best, least = -1, GATE_M**2 + TIE_M2
+        points = self._points
+        for j in cols:
+            qx, qz = points[j]
+            d2 = (px - qx) ** 2 + (pz - qz) ** 2
+            if d2 < least - TIE_M2:
+                best, least = j, d2
+        return best
+
+    def _match(self, key: Key, previous: StepMatch | None) -> StepMatch:
+        """Steps 3-4 on the recognised entries ``key`` (see :meth:`step`)."""
+        labels = [lb for lb, _, _, _ in key]
+        if not labels:
+            return StepMatch({}, {}, {}, (), (), (), None, key)
+        problem = _Problem(
+            labels, [k for _, k, _, _ in key],
+            np.array([(x, z) for _, _, x, z in key], dtype=float), self._layout,
         )  # fmt: skip
+        prefer = None
+        if previous is not None and previous.identity:
+            prefer = np.zeros(problem.same.shape)
+            for i, lb in enumerate(labels):
+                j = previous.identity.get(lb)
+                if j is not None and problem.same[i, j]:
+                    prefer[i, j] = 1.0
+        seeds = [] if previous is None or previous.motion is None else [previous.motion]
+        named = [(i, self._index[lb]) for i, lb in enumerate(labels)
+                 if lb in self._index and problem.same[i, self._index[lb]]]  # fmt: skip
+        if len(named) >= 2:
+            p = problem.pred[[i for i, _ in named]]
+            if np.ptp(p, axis=0).max() > COINCIDENT_M:
+                seeds.append(_procrustes(p, self._layout.true[[j for _, j in named]]))
+        pairs, motion = _solve(problem, seeds, prefer)
+        identity = {labels[i]: j for i, j in pairs}
+        unmatched = tuple(lb for lb in labels if lb not in identity)
+        return StepMatch({}, {}, identity, unmatched, (), (), motion, key, len(key))
 
-    def _afresh(
-        self, key: Key, anchor_rows: list[int] | None, before: dict[str, int]
-    ) -> tuple[dict[str, int], bool]:
-        """Step 3: every identity of a map decided from the map (``before``: the identities of
-        the previous step, which break ties the map's geometry cannot break)."""
-        if not key:
-            return {}, False
-        if anchor_rows is not None:
-            return self._in_frame(key, anchor_rows, {}), True
-        written = [(x, z) for _, _, x, z in key]
-        problem = Problem(written, [k for _, k, _, _ in key], self._layout)
-        index, kind_of = self._index, self._kind_of
-        named = [(r, index[lb]) for r, (lb, k, _, _) in enumerate(key)
-                 if lb in index and kind_of[index[lb]] == k]  # fmt: skip
-        kept = [(r, before[lb]) for r, (lb, _, _, _) in enumerate(key) if lb in before]
-        pairs = undetermined_fit(problem, kept, named)
-        return {key[r][0]: c for r, c in pairs}, False
-
-    def _in_frame(self, key: Key, anchor_rows: list[int], kept: dict[str, int]) -> dict[str, int]:
-        """The labels of ``key`` not in ``kept``, assigned among the objects not kept, in the
-        frame the anchors fix (:func:`procrustes` of the anchors onto their objects; both in
-        one call, :func:`._seeds.anchored`)."""
-        first = self._first
-        todo = [r for r, entry in enumerate(key) if entry[0] not in kept]
-        flat: list[float] = []
-        for r in anchor_rows:
-            flat += key[r][2:]
-        for r in todo:
-            flat += key[r][2:]
-        points = np.array(flat)
-        points.shape = (len(anchor_rows) + len(todo), 2)
-        layout = self._layout
-        finite, found, motion = compiled("_seeds").anchored(
-            points,
-            np.array([first[key[r][1]] for r in anchor_rows], dtype=np.intp),
-            np.array([key[r][1] for r in todo], dtype=np.intp),
-            np.array(list(kept.values()), dtype=np.intp),
-            layout.starts, layout.cols, layout.true, digits(layout.scale, 2),
+    def matching(self, found: StepMatch) -> Matching:
+        """The :class:`Matching` of one matched map."""
+        true = self._layout.true
+        pairs = sorted(
+            (MatchedPair(lb, self.objects[j].object_id, self.objects[j].object_type,
+                         float(found.entries[lb].x), float(found.entries[lb].z),
+                         float(true[j, 0]), float(true[j, 1]))
+             for lb, j in found.identity.items()),
+            key=lambda p: p.object_id,
         )  # fmt: skip
-        if finite:
-            return {key[todo[i]][0]: c for i, c in enumerate(found.tolist()) if c >= 0}
-        problem = Problem(
-            [key[r][2:] for r in todo], [key[r][1] for r in todo], layout, tuple(kept.values())
-        )  # a distance that is not finite: the matrix path
-        return {key[todo[i]][0]: c for i, c in assign(problem, Motion(*motion))}
+        per_type = Counter(k for k in found.kind_of.values() if k >= 0)
+        capacity = self._layout.cols_of
+        covered = sum(min(n, len(capacity[k])) for k, n in per_type.items())
+        return Matching(
+            tuple(pairs), found.unmatched, found.unrecognised, found.duplicates, covered
+        )
 
-    def held(self, assignment: Assignment) -> dict[str, str]:
-        """Object id -> label of an assignment (what :attr:`Matching.label_of` gives)."""
-        ids = self._ids
-        return {ids[c]: lb for lb, c in assignment.identity.items()}
+    def held(self, found: StepMatch) -> dict[str, str]:
+        """Object id -> label of one matched map."""
+        return {self.objects[j].object_id: lb for lb, j in found.identity.items()}
 
     def match(self, entries: Sequence[MapEntry]) -> Matching:
-        """Match one cognitive map afresh (see the module docstring)."""
-        return self.matching(self.assign(entries))
-
-    def matching(self, a: Assignment) -> Matching:
-        """The :class:`Matching` of an assignment."""
-        pairs = sorted(
-            (
-                MatchedPair(
-                    label=lb,
-                    object_id=self._objects[c].object_id,
-                    object_type=self._objects[c].object_type,
-                    pred_x=float(a.entries[lb].x),
-                    pred_z=float(a.entries[lb].z),
-                    true_x=float(self._true[c, 0]),
-                    true_z=float(self._true[c, 1]),
-                )
-                for lb, c in a.identity.items()
-            ),
-            key=lambda p: p.object_id,
-        )
-        return Matching(tuple(pairs), a.unmatched, a.unrecognised, a.duplicates, a.determined)
-
-
-def _extent(xy: np.ndarray) -> float:
-    """Largest distance of a point from the centroid (0.0 for no point)."""
-    if not len(xy):
-        return 0.0
-    return float(np.max(np.hypot(*(xy - xy.mean(axis=0)).T)))
-
-
-def _apart(points: Sequence[tuple[float, float]]) -> bool:
-    """Whether some point lies farther than :data:`COINCIDENT_M` from the first (the points do
-    not all coincide; rigid-invariant)."""
-    p0 = points[0]
-    return any(math.dist(p0, p) > COINCIDENT_M for p in points)
+        """Match one cognitive map on its own (see the module docstring)."""
+        return self.matching(self.step(entries))
 
 
 def step_matchings(
     steps: Sequence[Sequence[MapEntry]], objects: Sequence[GroundTruthObject]
 ) -> tuple[Matching, ...]:
-    """The matching of every step's map of an episode, as the episode metrics see them
-    (identities carried and revised by step 4 of the procedure)."""
+    """The matching of every step's map of an episode, as the per-step metrics see them
+    (previous frame tried first, previous identities winning exact ties)."""
     matcher = Matcher(objects)
     out: list[Matching] = []
-    previous: Assignment | None = None
+    previous: StepMatch | None = None
     for entries in steps:
-        previous = matcher.assign(entries, previous)
+        previous = matcher.step(entries, previous)
         out.append(matcher.matching(previous))
     return tuple(out)
 
@@ -367,12 +533,19 @@ def step_matchings(
 def match_map(entries: Sequence[MapEntry], objects: Sequence[GroundTruthObject]) -> Matching:
     """Match a cognitive map to ground truth: THE procedure of every EMRD metric.
 
-    See the module docstring of :mod:`pytest_emrd.metrics._match` for the steps, why the
-    result does not depend on the model's frame, and why no distance gate applies.
+    See the module docstring of :mod:`pytest_emrd.metrics._match` for the steps, the gate,
+    the frame rule and the tie rule. Depends on this map and the ground truth only.
 
-    Edge cases: an empty map or an empty ground truth gives no pairs; entries whose type is
-    unknown are listed in ``unrecognised``; a single entry and a single object of the same
-    type always match; a single entry of a type with several instances takes the first of
-    them by id (with one point nothing in the map can tell them apart).
+    Edge cases: an empty map or an empty ground truth gives no pairs; entries of unknown type
+    are listed in ``unrecognised``; a single entry and a single object of the same type always
+    match; a single entry of a type with several instances takes the first of them by id (with
+    one point nothing in the map can tell them apart); entries beyond their type's instance
+    count, or beyond :data:`GATE_M` of every free object of their type, are ``unmatched``.
+
+    Worked example: ``Desk_1`` at (0, 0), ``Desk_2`` at (1, 0), ``Door_1`` at (-3, 2); the map
+    writes ``d1`` at (10, 10) and ``d2`` at (10, 11) (a frame turned by 90 degrees) and an
+    "exit sign" of type ``Door`` at (10, 25), 15 m from the desks where the door is 4 m from
+    them: the desks are matched (``d1`` -> ``Desk_1``), the sign is ``unmatched`` (no motion
+    puts it within :data:`GATE_M` of the door while keeping the desks).
     """
     return Matcher(objects).match(entries)

@@ -12,8 +12,7 @@ from typing import Final
 
 import numpy as np
 
-from pytest_emrd.metrics._align import COINCIDENT_M, Layout, compiled, digits, layout_of
-from pytest_emrd.metrics._match import Matching, rigid_fit
+from pytest_emrd.metrics._match import COINCIDENT_M, TIE_M2, Matching, assign_rows, rigid_fit
 from pytest_emrd.metrics._tracking import Track, exp_ratio, layout_scale
 from pytest_emrd.metrics._vocab import TypeResolver
 from pytest_emrd.trajectory import GroundTruthObject, MapEntry, Trajectory
@@ -28,15 +27,18 @@ def aec_score(matching: Matching, n_objects: int) -> float | None:
     .. math::
         AEC^{(i)} = \frac{1}{|E|} \sum_{k \in \mathcal{T}} \min(|M_k^{(i)}|, |E_k|)
 
-    ``|M_k|`` counts distinct labels resolved to type ``k``; the ``min`` cap means duplicates
-    and hallucinations never raise the score, and entries of types absent from the ground truth
-    count for nothing. Because :func:`match_map` forms exactly ``min(|M_k|, |E_k|)`` pairs per
-    type, this is ``|K| / |E|``. A fraction in [0, 1]. Empty map: 0.0 (nothing was mapped, a
-    real zero). ``|E| = 0``: None (no ground truth to cover).
+    ``|M_k|`` counts distinct labels resolved to type ``k`` (:attr:`Matching.covered` is the
+    sum); the ``min`` cap means duplicates and hallucinations never raise the score, and entries
+    of types absent from the ground truth count for nothing. As in the paper, no position
+    enters: AEC counts what was recorded, PA and precision judge where. A fraction in [0, 1].
+    Empty map: 0.0 (nothing was mapped, a real zero). ``|E| = 0``: None (no ground truth).
+
+    Worked example: 3 chairs and a table in the office, a map with 4 chairs and a sofa the
+    office lacks: ``(min(4, 3) + 0) / 4 = 0.75``.
     """
     if n_objects == 0:
         return None
-    return len(matching.pairs) / n_objects
+    return matching.covered / n_objects
 
 
 def te_score(traj: Trajectory) -> int:
@@ -50,24 +52,50 @@ def te_score(traj: Trajectory) -> int:
     return len(traj.steps) - terminal
 
 
+#: Share of a map's recognised entries that may stay unmatched at no cost to PA (one stray
+#: entry in a full office map of 41 costs nothing; spraying guesses does).
+FREE_UNMATCHED: Final = 0.05
+
+
+def pa_coverage(matched: int, unmatched: int, g_base: int) -> float:
+    r"""The coverage factor of Eq. PA with our charge for unmatched entries.
+
+    .. math::
+        c = \frac{\max\left(0,\ \min(|K|, |G_{base}|) - u\right)}{|G_{base}|},\qquad
+        u = \max\left(0,\ |U| - \lfloor 0.05\,(|K| + |U|) \rfloor\right)
+
+    ``U`` are the recognised entries left unmatched (:attr:`Matching.unmatched`): each one
+    beyond :data:`FREE_UNMATCHED` of the recognised entries cancels one matched object, so an
+    entry that is a guess pays only if more than half of such guesses land within the gate of
+    a free object. Without unmatched entries this is the paper's factor. ``g_base = 0``: 0.0.
+    """
+    if g_base == 0:
+        return 0.0
+    charged = max(0, unmatched - math.floor(FREE_UNMATCHED * (matched + unmatched)))
+    return max(0, min(matched, g_base) - charged) / g_base
+
+
 def positional_accuracy_score(matching: Matching, g_base: int) -> float | None:
     r"""Positional Accuracy of one terminal map (inner term of Eq. PA).
 
     .. math::
-        PA^{(i)} = \exp\!\left(-\frac{RMSE^{(i)}}{L_{gt}^{(i)}}\right)
-                   \cdot \frac{\min(|K^{(i)}|, |G_{base}^{(i)}|)}{|G_{base}^{(i)}|}
+        PA^{(i)} = \exp\!\left(-\frac{RMSE^{(i)}}{L_{gt}^{(i)}}\right) \cdot c^{(i)}
 
-    ``K`` are the matched pairs; predicted positions are rigidly aligned onto their ground truth
+    ``K`` are the matched pairs (:func:`match_map`: within :data:`~._match.GATE_M` after the
+    robust alignment); predicted positions are rigidly aligned onto their ground truth
     (:func:`rigid_fit`: rotation + translation, no scaling, no reflection) and ``RMSE`` is the
     root-mean-square post-alignment residual. ``L_gt`` is the RMS distance of the *matched*
-    ground-truth points from their centroid (dynamic scale over the mapped sub-graph).
-    ``G_base`` is the set of objects discoverable under the unperturbed baseline, so a condition
-    that hides objects cannot inflate the score. The coverage factor is capped at 1 (objects
-    outside ``G_base`` may still be matched). Result in [0, 1].
+    ground-truth points from their centroid. ``c`` is the paper's coverage
+    ``min(|K|, |G_base|) / |G_base|`` with our charge for unmatched entries
+    (:func:`pa_coverage`): over-reporting never pays. Result in [0, 1].
 
     Edge cases: ``|K| = 0`` gives 0.0; ``|K| = 1`` aligns perfectly (``exp(0) = 1``) and gives
-    ``1 / |G_base|``; matched ground truth all at one point gives the coverage factor when the
-    residual is 0 and 0.0 otherwise; ``|G_base| = 0`` gives None.
+    ``c``; matched ground truth all at one point gives ``c`` when the residual is 0 and 0.0
+    otherwise; ``|G_base| = 0`` gives None.
+
+    Worked example (Appendix B): 5 discoverable objects, 3 mapped exactly, nothing else
+    written: ``exp(0) * 3 / 5 = 0.6``. Add 3 entries standing for nothing: ``u = 3``,
+    ``c = (3 - 3) / 5``, PA 0.
     """
     if g_base == 0:
         return None
@@ -80,8 +108,42 @@ def positional_accuracy_score(matching: Matching, g_base: int) -> float | None:
     rmse = float(np.sqrt(np.mean(np.sum(residual**2, axis=1))))
     if rmse < 1e-9 * max(1.0, float(np.abs(true).max())):
         rmse = 0.0
-    coverage = min(len(matching.pairs), g_base) / g_base
+    coverage = pa_coverage(len(matching.pairs), len(matching.unmatched), g_base)
     return exp_ratio(rmse, layout_scale(true)) * coverage
+
+
+def precision_score(matching: Matching) -> float | None:
+    r"""Map precision of one terminal map: the share of its entries that stand for a real
+    object.
+
+    .. math::
+        P^{(i)} = \frac{|K^{(i)}|}{|M_T^{(i)}|}
+
+    ``M_T`` counts the map's distinct labels, recognised or not; ``K`` the entries matched to
+    an object within the gate (:func:`match_map`). Duplicates, entries beyond a type's count,
+    entries far from every object of their type and hallucinated types all lower it. Empty
+    map: None (no entry to judge). Worked example: 41 correct entries and one "exit sign"
+    that stands for nothing: ``41 / 42 = 0.976``.
+    """
+    if not matching.labels:
+        return None
+    return len(matching.pairs) / matching.labels
+
+
+def hallucination_score(matching: Matching) -> float | None:
+    r"""Hallucination rate of one terminal map: the share of entries of a type the office
+    does not hold.
+
+    .. math::
+        H^{(i)} = \frac{|M_T^{(i)} \setminus M_{rec}^{(i)}|}{|M_T^{(i)}|}
+
+    ``M_rec`` are the entries whose type resolves to a ground-truth type
+    (:attr:`Matching.unrecognised` are the rest). ``H <= 1 - P``. Empty map: None. Worked
+    example: 40 chairs and desks of the office and 2 sofas it lacks: ``2 / 42``.
+    """
+    if not matching.labels:
+        return None
+    return len(matching.unrecognised) / matching.labels
 
 
 @dataclass(frozen=True)
@@ -201,27 +263,21 @@ class Office:
 
     objects: dict[str, GroundTruthObject]
     types: TypeResolver
-    layout: Layout
-    """The objects sorted by id, grouped by type index (:func:`~._align.layout_of`)."""
     ids: tuple[str, ...]
-    """Object ids, sorted: the objects of ``layout``."""
-    decimals: int
-    """Squared distances are compared at :data:`~._align.TIE_DECIMALS` relative to the
-    office's size, so ties go the same way in every frame."""
+    """Object ids, sorted."""
+    true: np.ndarray
+    """Their positions (m x 2)."""
+    kinds: np.ndarray
+    """Their type indices (m)."""
 
     @classmethod
     def of(cls, traj: Trajectory) -> Office:
         objects = {o.object_id: o for o in traj.ground_truth.objects}
         types = TypeResolver(o.object_type for o in objects.values())
         ids = tuple(sorted(objects))
-        xy = np.array([(o.x, o.z) for o in objects.values()], dtype=float).reshape(-1, 2)
-        scale = layout_scale(xy)
-        layout = layout_of(
-            [(objects[o].x, objects[o].z) for o in ids],
-            [types.index[objects[o].object_type] for o in ids],
-            scale,
-        )
-        return cls(objects, types, layout, ids, digits(scale, 2))
+        true = np.array([(objects[o].x, objects[o].z) for o in ids], dtype=float).reshape(-1, 2)
+        kinds = np.array([types.index[objects[o].object_type] for o in ids], dtype=int)
+        return cls(objects, types, ids, true, kinds)
 
 
 def new_entries(
@@ -249,46 +305,41 @@ def reentry_copies(
     ``start``. In the alignment of ``M_end`` (the proper rigid motion fitting every matched
     entry onto its object, :func:`rigid_fit`) the new entries of each type are paired one to
     one with the ground-truth objects of that type at the least total squared distance
-    (:func:`scipy.optimize.linear_sum_assignment`; entries beyond the type's instance count
-    take their nearest object): the object each new entry *means*. A new entry copies ``o``
-    when it means ``o`` and ``o`` is held by *another* label: the model re-mapped an object it
-    already had instead of recognising it. A new entry meaning an object no other label holds
-    is a newly mapped object, not a copy. Pairing one to one keeps two copies of neighbouring
-    chairs, written with noise, from both landing on the same chair. Type resolution is the
-    matcher's (:class:`~pytest_emrd.metrics._vocab.TypeResolver`); unrecognised entries copy
-    nothing. Edge case: fewer than two matched entries at distinct positions leave the
-    rotation undetermined; then no copy is found (the frame cannot say which object is meant).
-    Squared distances are rounded to ``office.decimals``; the geometry is computed by
-    :func:`._copies.meant` (bitwise the numpy and scipy expressions); a written coordinate
-    that is not finite raises scipy's ``ValueError``, as the assignment did.
+    (:func:`~._match.assign_rows` on distances rounded to ``TIE_M2``; entries
+    beyond the type's instance count take their nearest object, the first by id on ties): the
+    object each new entry *means*. A new entry copies ``o`` when it means ``o`` and ``o`` is
+    held by *another* label: the model re-mapped an object it already had instead of
+    recognising it. A new entry meaning an object no other label holds is a newly mapped
+    object, not a copy. Type resolution is the matcher's; unrecognised entries copy nothing.
+    Edge case: fewer than two matched entries at distinct positions leave the rotation
+    undetermined; then no copy is found (the frame cannot say which object is meant).
     """
     entries, by_type = new_entries(traj, office, start, end)
     label_of = held[end]
     if not by_type or len(label_of) < 2:
         return frozenset()
-    labels = [lb for group in by_type.values() for lb in group]
-    objects = office.objects
     pairs = sorted(label_of.items())
-    layout = office.layout
-    copies = compiled("_copies")
-    outcome, found = copies.meant(
-        np.array([(entries[lb].x, entries[lb].z) for _, lb in pairs], dtype=float),
-        np.array([(objects[o].x, objects[o].z) for o, _ in pairs], dtype=float),
-        np.array([(entries[lb].x, entries[lb].z) for lb in labels], dtype=float),
-        np.array([k for k, group in by_type.items() for _ in group], dtype=np.intp),
-        layout.starts, layout.cols, layout.true, office.decimals, COINCIDENT_M,
-    )  # fmt: skip
-    if outcome == copies.INVALID:
-        raise ValueError("matrix contains invalid numeric entries")
-    if outcome == copies.INFEASIBLE:
-        raise ValueError("cost matrix is infeasible")
-    if outcome == copies.COINCIDENT:
+    objects = office.objects
+    pred = np.array([(entries[lb].x, entries[lb].z) for _, lb in pairs], dtype=float)
+    if np.ptp(pred, axis=0).max() <= COINCIDENT_M:
         return frozenset()
-    ids = office.ids
-    return frozenset(
-        ids[c] for lb, c in zip(labels, found.tolist(), strict=True)
-        if ids[c] in label_of and label_of[ids[c]] != lb
-    )  # fmt: skip
+    rot, shift = rigid_fit(pred, np.array([(objects[o].x, objects[o].z) for o, _ in pairs]))
+    copies: set[str] = set()
+    for k, labels in by_type.items():
+        cols = np.flatnonzero(office.kinds == k)
+        new = np.array([(entries[lb].x, entries[lb].z) for lb in labels], dtype=float)
+        diff = (new @ rot.T + shift)[:, None, :] - office.true[cols][None, :, :]
+        cost = np.round(np.sum(diff * diff, axis=2) / TIE_M2)
+        if not np.isfinite(cost).all():
+            raise ValueError(f"a written coordinate of {labels} is not finite")
+        meant = cols[cost.argmin(axis=1)]
+        for r, j in assign_rows(cost, np.ones(cost.shape, dtype=bool)):
+            meant[r] = cols[j]
+        for lb, c in zip(labels, meant.tolist(), strict=True):
+            holder = label_of.get(office.ids[c])
+            if holder is not None and holder != lb:
+                copies.add(office.ids[c])
+    return frozenset(copies)
 
 
 def discovery_thirds(n: int) -> np.ndarray:

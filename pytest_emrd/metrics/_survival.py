@@ -103,10 +103,11 @@ def anchored_km(
             \left(1 - \frac{d_\tau}{n_\tau}\right)
 
     The absolute probability that an object of the set is both discovered and still held
-    ``t`` steps after leaving view. The product-limit factor and its Greenwood band come from
-    :class:`lifelines.KaplanMeierFitter` (``n_tau`` counts spells still at risk at ``tau``:
-    a spell censored at ``tau`` is at risk at ``tau``); both are then multiplied by the
-    anchor ``C`` (a fixed scale: the band is the KM factor's band, not ``C``'s uncertainty).
+    ``t`` steps after leaving view. The product-limit factor and its 95 % Greenwood band
+    (log(-log) scale) come from :class:`lifelines.KaplanMeierFitter` (``n_tau`` counts spells
+    still at risk at ``tau``: a spell censored at ``tau`` is at risk at ``tau``); both are then
+    multiplied by the anchor ``C`` (a fixed scale: the band is the KM factor's band, not
+    ``C``'s uncertainty).
     Starts at ``C`` and never increases. Edge cases: no spells gives the single point
     ``(0, C)``; no events gives a flat curve at ``C``; ties are counted together.
     ``coverage`` must lie in [0, 1]; durations must be finite and > 0.

@@ -7,17 +7,23 @@ the :class:`Track` built here, so an episode's steps are matched once.
 Definitions (step ``t`` is 1-based; see :mod:`pytest_emrd.trajectory` for the timeline):
 
 * ``held(o, t)``: ground-truth object ``o`` is in the map ``M_t``: the matching of ``M_t``
-  (:mod:`._match`: decided afresh, or carried from ``M_{t-1}`` only while the same anchors
-  determine both frames) assigns one of its entries to it. The terminal map's matching (used
-  by AEC, PA and FPSG) is the last step's.
+  (:meth:`._match.Matcher.step`) pairs one of its entries with it; that entry's label is
+  ``o``'s *holder* at ``t``. The terminal map's scores (AEC, PA, precision, FPSG) use
+  :func:`._match.match_map` of the terminal map alone, not this history.
 * ``in_view(o, t)``: ``o`` is among ``visible_ids`` of step ``t``.
 * **Spell** (out-of-view interval): starts at step ``s`` when ``o`` was in view and held at
-  ``s-1`` and is out of view at ``s``. From ``s`` on, the map is checked at every step:
-  the first out-of-view step ``t`` with ``o`` not held is a *forgetting event* of duration
+  ``s-1`` and is out of view at ``s``; it follows ``o``'s holder at ``s-1``, the label
+  ``l``. **Forgetting is what the model did** (Appendix B: an object is "only considered
+  forgotten if the agent explicitly drops it from its JSON working memory"): the first
+  out-of-view step ``t`` at which ``l`` is gone from ``M_t``, or relabelled away (its type no
+  longer resolves to ``o``'s type), is a *forgetting event* of duration
   ``t - s + 1`` (dropped at its ``(t-s+1)``-th step out of view; the paper's KM example counts
   ``tau = 1`` as the first step after leaving view). The spell is *right-censored* at duration
-  ``t - s`` when ``o`` comes back into view at ``t`` still held, and at ``T - s + 1`` when the
-  episode ends at ``T`` still held. An object mapped while out of view opens no spell.
+  ``t - s`` when ``o`` comes back into view at ``t`` with ``l`` still written, and at
+  ``T - s + 1`` when the episode ends at ``T`` with ``l`` still written. Whichever object the
+  matcher pairs ``l`` with meanwhile (a noisier, moved or mirrored entry) does not matter: a
+  map in which no label disappears or changes type has no forgetting event. An object mapped
+  while out of view opens no spell.
 * **Discovery** of ``o``: the first step it is held; discovery rank orders discovered objects
   by first step, and objects first held at the same step in the order the model wrote their
   entries in that step's map (the model's own order of discovery; never by id string, which
@@ -33,7 +39,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from pytest_emrd.metrics._match import EMPTY_MATCHING, Assignment, Matcher, Matching
+from pytest_emrd.metrics._match import EMPTY_MATCHING, Matcher, Matching, StepMatch
 from pytest_emrd.trajectory import MapEntry, Trajectory
 
 
@@ -72,7 +78,7 @@ class Track:
     held: tuple[dict[str, str], ...]
     """For every step, object id -> label of the entry of ``M_t`` matched to it."""
     final: Matching
-    """``match_map(M_T)`` of the terminal map (empty when there is no step)."""
+    """``match_map(M_T)`` of the terminal map on its own (empty when there is no step)."""
     spells: tuple[Spell, ...]
     """Every spell of every object, in start order."""
     discovery: dict[str, int]
@@ -123,31 +129,32 @@ def track_episode(traj: Trajectory) -> Track:
     scale = layout_scale(np.array([(o.x, o.z) for o in gt.objects], dtype=float).reshape(-1, 2))
     g_base = len(gt.discoverable_ids)
     held: list[dict[str, str]] = []
+    matches: list[StepMatch] = []
     tbs: list[float] = []
     first_pos: dict[str, tuple[float, float]] = {}
-    written: list[dict[str, MapEntry]] = []
     loads: list[int] = []
     forgets: list[bool] = []
-    assignment: Assignment | None = None
+    found: StepMatch | None = None
     for step in traj.steps:
-        assignment = matcher.assign(step.cognitive_map, assignment)
-        entries = assignment.entries  # label -> its first entry, in the model's order
+        found = matcher.step(step.cognitive_map, found)
+        entries = found.entries  # label -> its first entry, in the model's order
         for lb in entries.keys() - first_pos.keys():
             e = entries[lb]
             first_pos[lb] = (e.x, e.z)
-        if written and written[-1]:  # Miller: m = |M_{t-1}| distinct labels, M_{t-1} \ M_t
-            loads.append(len(written[-1]))
-            forgets.append(not written[-1].keys() <= entries.keys())
-        written.append(entries)
-        held.append(matcher.held(assignment))
+        if matches and matches[-1].entries:  # Miller: m = |M_{t-1}| labels, M_{t-1} \ M_t
+            loads.append(len(matches[-1].entries))
+            forgets.append(not matches[-1].entries.keys() <= entries.keys())
+        matches.append(found)
+        held.append(matcher.held(found))
         if g_base:
-            tbs.append(_tbs_value(assignment, first_pos, scale, g_base))
-    discovery = _discovery(held, written)
-    final = matcher.matching(assignment) if assignment is not None else EMPTY_MATCHING
+            tbs.append(_tbs_value(found, first_pos, scale, g_base))
+    discovery = _discovery(held, [m.entries for m in matches])
+    final = matcher.match(traj.steps[-1].cognitive_map) if traj.steps else EMPTY_MATCHING
+    kind_of = {o.object_id: matcher.types.index[o.object_type] for o in gt.objects}
     return Track(
         held=tuple(held),
         final=final,
-        spells=_spells(traj, held, category, discovery),
+        spells=_spells(traj, held, matches, kind_of, category, discovery),
         discovery=discovery,
         tbs=tuple(tbs),
         miller_loads=tuple(loads),
@@ -176,10 +183,13 @@ def _discovery(held: list[dict[str, str]], written: list[dict[str, MapEntry]]) -
 def _spells(
     traj: Trajectory,
     held: list[dict[str, str]],
+    matches: list[StepMatch],
+    kind_of: dict[str, int],
     category: dict[str, str],
     discovery: dict[str, int],
 ) -> tuple[Spell, ...]:
-    open_at: dict[str, int] = {}
+    """Every spell, following each object's holder label (module docstring)."""
+    open_at: dict[str, tuple[int, str]] = {}  # object -> (start, holder label)
     done: list[tuple[int, str, int, bool]] = []  # (start, object, duration, forgotten)
     prev_visible: frozenset[str] = frozenset()
     for i, step in enumerate(traj.steps):
@@ -187,19 +197,21 @@ def _spells(
         visible = frozenset(step.visible_ids)
         if i > 0:
             for oid in (prev_visible - visible) & held[i - 1].keys():
-                open_at[oid] = t
+                open_at[oid] = (t, held[i - 1][oid])
         if open_at:
-            now = held[i]
-            for oid in [o for o in open_at if o in visible or o not in now]:
-                start = open_at.pop(oid)
+            kinds = matches[i].kind_of
+            for oid, (start, label) in list(open_at.items()):
                 if oid in visible:
                     done.append((start, oid, t - start, False))
-                else:
+                elif kinds.get(label, -1) != kind_of[oid]:  # dropped or relabelled away
                     done.append((start, oid, t - start + 1, True))
+                else:
+                    continue
+                del open_at[oid]
         prev_visible = visible
     if traj.steps:
         last = traj.steps[-1].index
-        done.extend((start, oid, last - start + 1, False) for oid, start in open_at.items())
+        done.extend((s, oid, last - s + 1, False) for oid, (s, _) in open_at.items())
     done.sort()  # by start, then object: an object has one spell open at a time
     return tuple(
         Spell(oid, category[oid], start, duration, forgotten, discovery[oid])
@@ -208,18 +220,17 @@ def _spells(
 
 
 def _tbs_value(
-    a: Assignment, first_pos: dict[str, tuple[float, float]], scale: float, g_base: int
+    found: StepMatch, first_pos: dict[str, tuple[float, float]], scale: float, g_base: int
 ) -> float:
     """``TBS(t)`` of one step: 0.0 when nothing is matched (coverage 0)."""
-    if not a.identity:
+    if not found.identity:
         return 0.0
-    entries, hypot = a.entries, math.hypot
-    drift = 0.0
-    for lb in a.identity:  # summed in the matcher's order of the labels
-        e = entries[lb]
-        x0, z0 = first_pos[lb]
-        drift += hypot(e.x - x0, e.z - z0)
-    n = len(a.identity)
+    entries = found.entries
+    drift = math.fsum(
+        math.hypot(entries[lb].x - first_pos[lb][0], entries[lb].z - first_pos[lb][1])
+        for lb in sorted(found.identity)
+    )
+    n = len(found.identity)
     return exp_ratio(drift / n, scale) * min(n, g_base) / g_base
 
 

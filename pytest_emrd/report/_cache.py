@@ -47,7 +47,7 @@ AGGREGATES_CODE: Final = (
     "pytest_emrd._serde",
 )
 #: The libraries it computes with (their versions enter the key).
-AGGREGATES_LIBRARIES: Final = ("numpy", "scipy", "statsmodels", "lifelines", "pandas", "numba")
+AGGREGATES_LIBRARIES: Final = ("numpy", "scipy", "statsmodels", "lifelines", "pandas")
 #: The ``nlp`` extra (representative reasoning): its versions, or that it is absent.
 OPTIONAL_LIBRARIES: Final = ("sentence-transformers", "torch")
 

@@ -44,7 +44,13 @@ import numpy as np
 from statsmodels.stats.proportion import proportion_confint
 
 from pytest_emrd.agent.reference._malform import read_state
-from pytest_emrd.metrics import EpisodeMetrics, bootstrap_ci, episode_metrics, match_map
+from pytest_emrd.metrics import (
+    EpisodeMetrics,
+    bootstrap_ci,
+    episode_metrics,
+    match_map,
+    pa_coverage,
+)
 from pytest_emrd.metrics._tracking import layout_scale, track_episode
 from pytest_emrd.trajectory import Trajectory
 from pytest_emrd.validate._check import Check, fmt, judged, pct
@@ -79,21 +85,24 @@ def _max_gap(a: Sequence[float | None], b: Sequence[float | None]) -> float:
     return math.inf if undefined else max(gaps, default=0.0)
 
 
-def rmse_from_pa(pa: float | None, matched: int, g_base: int, truth: np.ndarray) -> float:
+def rmse_from_pa(
+    pa: float | None, matched: int, g_base: int, truth: np.ndarray, unmatched: int = 0
+) -> float:
     r"""The RMSE inside Eq. PA, read back from the score.
 
     .. math::
-        PA = \exp(-RMSE / L_{gt}) \cdot c,\quad c = \min(|K|, |G_{base}|) / |G_{base}|
-        \;\Rightarrow\; RMSE = -L_{gt} \ln(PA / c)
+        PA = \exp(-RMSE / L_{gt}) \cdot c \;\Rightarrow\; RMSE = -L_{gt} \ln(PA / c)
 
+    ``c`` is PA's coverage factor with its charge for ``unmatched`` entries
+    (:func:`~pytest_emrd.metrics.pa_coverage`).
     ``truth`` are the matched ground-truth points (``L_gt`` is their RMS spread). NaN when it
     cannot be read back: PA undefined or 0, ``|G_base| = 0``, or fewer than two points
     (``L_gt = 0``).
     """
     scale = layout_scale(np.asarray(truth, dtype=float).reshape(-1, 2))
-    if pa is None or pa <= 0.0 or g_base == 0 or scale == 0.0:
+    coverage = pa_coverage(matched, unmatched, g_base)
+    if pa is None or pa <= 0.0 or coverage == 0.0 or scale == 0.0:
         return math.nan
-    coverage = min(matched, g_base) / g_base
     return -scale * math.log(min(1.0, pa / coverage))
 
 
@@ -117,7 +126,8 @@ def _rmse(traj: Trajectory, m: EpisodeMetrics) -> tuple[int, float, float]:
     truth = np.array(
         [(p.true_x, p.true_z) for p in match_map(traj.final_map, traj.ground_truth.objects).pairs]
     ).reshape(-1, 2)
-    return m.matched, rmse_from_pa(m.pa, m.matched, m.g_base, truth), layout_scale(truth)
+    rmse = rmse_from_pa(m.pa, m.matched, m.g_base, truth, m.unmatched)
+    return m.matched, rmse, layout_scale(truth)
 
 
 def own_frame_checks(spawn: Paired, own: Paired) -> list[Check]:

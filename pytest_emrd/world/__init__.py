@@ -3,7 +3,7 @@
 ``episode_world(spec)`` is the world of an episode (the paper's fixed office
 ``paper_office()`` by default, ``generate_layout(seed)`` under generated layouts);
 ``make_simulator(backend)`` returns a :class:`Simulator` (``builtin``:
-:class:`BuiltinSimulator`, numpy with a numba pixel kernel; ``ai2thor``: the THOR backend,
+:class:`BuiltinSimulator`, plain numpy; ``ai2thor``: the THOR backend,
 extra ``thor``); ``ground_truth`` and ``discoverable_ids`` give what the
 metrics compare against. ``WORLD_VERSION`` keys cassettes.
 Names are imported on first use (:mod:`pytest_emrd._lazy`): reading the world version does

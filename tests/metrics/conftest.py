@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
+from pathlib import Path
 from typing import Any
 
 import pytest
@@ -106,3 +107,27 @@ def small_grid() -> list[Trajectory]:
 @pytest.fixture(scope="session")
 def small_grid_metrics(small_grid: list[Trajectory]) -> list[EpisodeMetrics]:
     return as_episode_metrics(small_grid)
+
+
+#: One committed episode per spawn room, the conference one being issue 12's swapped chairs.
+COMMITTED = [("conference", 0), ("office", 3), ("kitchen", 11), ("entrance", 8)]
+
+
+@pytest.fixture(scope="session")
+def committed() -> list[Trajectory]:
+    """Committed scout episodes, replayed offline from cassettes/scout."""
+    from pytest_emrd.agent import load_registry
+    from pytest_emrd.cassette import run_with_cassette
+    from pytest_emrd.episode import agent_runner, protocol_version
+
+    root = Path(__file__).resolve().parents[2] / "cassettes"
+    runner = agent_runner(load_registry())
+    out = []
+    for spawn, ep in COMMITTED:
+        spec = EpisodeSpec("scout", "baseline", spawn, ep, modality="both")
+        run = run_with_cassette(
+            spec, runner, cassettes=root, protocol=protocol_version("builtin"), record_mode="none"
+        )
+        assert run.trajectory.status != "errored", run.trajectory.error
+        out.append(run.trajectory)
+    return out

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -143,30 +142,6 @@ def test_every_episode_metric_is_frame_invariant_on_synthetic_episodes(
 ) -> None:
     traj = synthetic_trajectory(EpisodeSpec("synthetic", "baseline", spawn, episode))
     _same(episode_metrics(traj), episode_metrics(random_reframe(traj, np.random.default_rng(seed))))
-
-
-#: One committed episode per spawn room, the conference one being the issue's swapped chairs.
-COMMITTED = [("conference", 0), ("office", 3), ("kitchen", 11), ("entrance", 8)]
-
-
-@pytest.fixture(scope="module")
-def committed() -> list[Trajectory]:
-    """Committed scout episodes, replayed offline from cassettes/scout."""
-    from pytest_emrd.agent import load_registry
-    from pytest_emrd.cassette import run_with_cassette
-    from pytest_emrd.episode import agent_runner, protocol_version
-
-    root = Path(__file__).resolve().parents[2] / "cassettes"
-    runner = agent_runner(load_registry())
-    out = []
-    for spawn, ep in COMMITTED:
-        spec = EpisodeSpec("scout", "baseline", spawn, ep, modality="both")
-        run = run_with_cassette(
-            spec, runner, cassettes=root, protocol=protocol_version("builtin"), record_mode="none"
-        )
-        assert run.trajectory.status != "errored", run.trajectory.error
-        out.append(run.trajectory)
-    return out
 
 
 @pytest.mark.slow

@@ -1,4 +1,4 @@
-"""match_map: types, anchors, frame-free correspondence, per-type assignment, the AEC cap."""
+"""match_map: types, the robust frame, the gate, per-type assignment, the AEC cap."""
 
 from __future__ import annotations
 
@@ -9,7 +9,13 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from pytest_emrd.metrics import aec_score, match_map, positional_accuracy_score, step_matchings
+from pytest_emrd.metrics import (
+    GATE_M,
+    aec_score,
+    match_map,
+    positional_accuracy_score,
+    step_matchings,
+)
 from pytest_emrd.rooms import CONFERENCE, KITCHEN
 from pytest_emrd.trajectory import GroundTruthObject, MapEntry
 
@@ -73,7 +79,6 @@ def test_without_anchors_the_frame_comes_from_the_correspondences(make_obj: Make
     ]
     m = match_map(entries, truth)
     assert m.label_of == {"Chair_1": "c", "Chair_2": "a", "Chair_3": "b"}
-    assert not m.determined
     assert positional_accuracy_score(m, 3) == pytest.approx(1.0, abs=1e-12)
 
 
@@ -91,7 +96,6 @@ def test_two_anchors_align_a_rotated_map_before_assigning(make_obj: MakeObj) -> 
         MapEntry("chair", "Chair", 100, 95),
     ]
     m = match_map(entries, truth)
-    assert m.determined
     assert m.label_of["Chair_1"] == "chair"
 
 
@@ -124,7 +128,7 @@ def test_an_entry_whose_type_is_all_held_by_carried_labels_matches_nothing(
     first = [*anchors, MapEntry("door", "Doorway", 3, 0), MapEntry("armchair", "ArmChair", 5, 5)]
     second = [*first, MapEntry("passage 2", "Doorway", 3.2, 0)]
     before, after = step_matchings([first, second], truth)
-    assert after.determined and after.label_of == before.label_of
+    assert after.label_of == before.label_of
     assert after.unmatched == ("passage 2",)
     assert len(after.object_ids) == len(after.pairs) == 4
 
@@ -136,9 +140,21 @@ def test_repeated_label_uses_its_first_entry(make_obj: MakeObj) -> None:
     assert (m.pairs[0].pred_x, m.pairs[0].pred_z) == (1, 2)
 
 
-def test_no_distance_gate_a_far_entry_of_the_right_type_matches(make_obj: MakeObj) -> None:
+def test_a_lone_entry_matches_wherever_it_is_written(make_obj: MakeObj) -> None:
+    # one point fixes only a translation: any frame puts it on its object
     m = match_map([MapEntry("f", "Fridge", 1000.0, -1000.0)], [make_obj("Fridge_1")])
     assert m.object_ids == {"Fridge_1"}
+
+
+def test_an_entry_beyond_the_gate_after_alignment_stands_for_nothing(make_obj: MakeObj) -> None:
+    truth = [make_obj("Fridge_1", x=0), make_obj("Television_1", x=6), make_obj("Sink_1", z=4)]
+    far = GATE_M + 0.5
+    entries = [MapEntry("f", "Fridge", 0, 0), MapEntry("tv", "Television", 6, 0),
+               MapEntry("sink", "Sink", 0, 4 + far)]  # fmt: skip
+    m = match_map(entries, truth)
+    assert m.label_of == {"Fridge_1": "f", "Television_1": "tv"}
+    assert m.unmatched == ("sink",)
+    assert aec_score(m, 3) == 1.0  # Eq. AEC counts recorded types, not positions
 
 
 @pytest.mark.parametrize(
@@ -172,7 +188,7 @@ def maps_and_truth(draw: st.DrawFn) -> tuple[list[MapEntry], list[GroundTruthObj
 
 
 @given(maps_and_truth())
-def test_matched_count_is_the_aec_numerator(
+def test_covered_is_the_aec_numerator_and_bounds_the_pairs(
     case: tuple[list[MapEntry], list[GroundTruthObject]],
 ) -> None:
     entries, truth = case
@@ -181,8 +197,9 @@ def test_matched_count_is_the_aec_numerator(
         min(sum(e.object_type == t for e in entries), sum(o.object_type == t for o in truth))
         for t in TYPES
     )
-    assert len(m.pairs) == expected
-    assert len(m.object_ids) == len(m.pairs)
+    assert m.covered == expected
+    assert len(m.object_ids) == len(m.pairs) <= expected
+    assert len(m.pairs) + len(m.unmatched) + len(m.unrecognised) == m.labels
 
 
 @given(maps_and_truth(), st.sampled_from(["duplicate", "absent-type", "type-at-cap"]))
@@ -245,3 +262,21 @@ def test_pa_invariant_under_rigid_motion_and_bounded_by_coverage(
     assert pa is not None and pa_moved is not None
     assert pa_moved == pytest.approx(pa, abs=1e-7)
     assert 0.0 <= pa <= len(m.pairs) / g_base + 1e-12
+
+
+def test_worked_example_of_the_docstring(make_obj: MakeObj) -> None:
+    truth = [make_obj("Desk_1", x=0), make_obj("Desk_2", x=1), make_obj("Door_1", x=-3, z=2)]
+    entries = [MapEntry("d1", "Desk", 10, 10), MapEntry("d2", "Desk", 10, 11),
+               MapEntry("exit sign", "Door", 10, 25)]  # fmt: skip
+    m = match_map(entries, truth)
+    assert m.label_of == {"Desk_1": "d1", "Desk_2": "d2"}
+    assert m.unmatched == ("exit sign",)
+
+
+def test_costs_equal_within_the_tie_rounding_break_alike(make_obj: MakeObj) -> None:
+    # two chairs exactly as far from the one entry, up to 1e-12 m^2: the first by id wins
+    truth = [make_obj("Chair_1", x=-1.0), make_obj("Chair_2", x=1.0 + 1e-13),
+             make_obj("Fridge_1", z=3), make_obj("Television_1", z=-3)]  # fmt: skip
+    entries = [MapEntry("f", "Fridge", 0, 3), MapEntry("tv", "Television", 0, -3),
+               MapEntry("c", "Chair", 0, 0)]  # fmt: skip
+    assert match_map(entries, truth).label_of["Chair_1"] == "c"

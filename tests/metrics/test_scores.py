@@ -15,8 +15,11 @@ from pytest_emrd.metrics import (
     aec_score,
     episode_metrics,
     grounding_scores,
+    hallucination_score,
     match_map,
+    pa_coverage,
     positional_accuracy_score,
+    precision_score,
     serial_position_bins,
     te_score,
 )
@@ -52,6 +55,73 @@ def test_pa_appendix_b_example_three_of_five_mapped_perfectly(make_obj: MakeObj)
     m = match_map(entries, truth)
     assert len(m.pairs) == 3
     assert positional_accuracy_score(m, 5) == pytest.approx(3 / 5, abs=1e-12)
+
+
+def test_pa_charges_entries_that_stand_for_nothing(make_obj: MakeObj) -> None:
+    # the docstring's example: Appendix B's map plus 3 entries of its types far from anything
+    truth = [make_obj("Desk_1", x=0, z=0), make_obj("Fridge_1", x=4, z=0),
+             make_obj("Sink_1", x=0, z=3), make_obj("Stool_1", x=9, z=9),
+             make_obj("Sofa_1", x=-9, z=9)]  # fmt: skip
+    entries = [MapEntry("A", "Desk", 5, 5), MapEntry("B", "Fridge", 5, 9),
+               MapEntry("C", "Sink", 2, 5), MapEntry("x", "Desk", 40, 40),
+               MapEntry("y", "Desk", 41, 40), MapEntry("z", "Desk", 40, 41)]  # fmt: skip
+    m = match_map(entries, truth)
+    assert (len(m.pairs), len(m.unmatched)) == (3, 3)
+    assert positional_accuracy_score(m, 5) == 0.0
+    assert precision_score(m) == 0.5
+
+
+@pytest.mark.parametrize(
+    ("matched", "unmatched", "g_base", "coverage"),
+    [(3, 0, 5, 0.6), (40, 1, 41, 40 / 41), (40, 2, 41, 40 / 41), (40, 3, 41, 39 / 41),
+     (41, 959, 41, 0.0), (0, 0, 5, 0.0), (3, 0, 0, 0.0)],
+    ids=["paper", "one-free", "two-free", "third-charged", "spray", "nothing", "no-g-base"],
+)  # fmt: skip
+def test_pa_coverage_worked_examples(
+    matched: int, unmatched: int, g_base: int, coverage: float
+) -> None:
+    assert pa_coverage(matched, unmatched, g_base) == pytest.approx(coverage)
+
+
+@given(st.integers(0, 60), st.integers(0, 60), st.integers(1, 60), st.integers(1, 60))
+def test_pa_coverage_never_rises_with_unmatched_entries(
+    matched: int, unmatched: int, g_base: int, extra: int
+) -> None:
+    before = pa_coverage(matched, unmatched, g_base)
+    assert 0.0 <= before <= 1.0
+    assert pa_coverage(matched, unmatched + extra, g_base) <= before
+
+
+def test_precision_and_hallucination_rate_worked_example(make_obj: MakeObj) -> None:
+    # 2 desks and a chair mapped, a third desk the office lacks a place for, 2 sofas it lacks
+    truth = [make_obj("Desk_1", x=0), make_obj("Desk_2", x=3), make_obj("Chair_1", z=2)]
+    entries = [MapEntry("d1", "Desk", 0, 0), MapEntry("d2", "Desk", 3, 0),
+               MapEntry("d3", "Desk", 6, 0), MapEntry("c", "Chair", 0, 2),
+               MapEntry("s1", "Sofa", 1, 1), MapEntry("s2", "Sofa", 2, 1)]  # fmt: skip
+    m = match_map(entries, truth)
+    assert precision_score(m) == pytest.approx(3 / 6)
+    assert hallucination_score(m) == pytest.approx(2 / 6)
+    assert precision_score(match_map([], truth)) is None
+    assert hallucination_score(match_map([], truth)) is None
+
+
+WRITTEN = st.tuples(st.sampled_from(["Desk", "Chair", "Sofa", "ghost"]), st.floats(-5, 5),
+                    st.floats(-5, 5))  # fmt: skip
+
+
+@given(st.lists(WRITTEN, min_size=1, max_size=10))
+def test_precision_and_hallucination_rate_are_shares_that_exclude_each_other(
+    make_obj: MakeObj, written: list[tuple[str, float, float]]
+) -> None:
+    truth = [make_obj("Desk_1", x=0), make_obj("Desk_2", x=3), make_obj("Chair_1", z=2)]
+    m = match_map([MapEntry(f"e{i}", *w) for i, w in enumerate(written)], truth)
+    p, h = precision_score(m), hallucination_score(m)
+    assert p is not None and h is not None
+    assert 0.0 <= p <= 1.0 - h + 1e-12
+    ghost = match_map([*(MapEntry(f"e{i}", *w) for i, w in enumerate(written)),
+                       MapEntry("ghost", "ghost", 0, 0)], truth)  # fmt: skip
+    assert positional_accuracy_score(ghost, 3) == positional_accuracy_score(m, 3)
+    assert hallucination_score(ghost) > h or h == 1.0
 
 
 def test_pa_with_residual_matches_a_brute_force_procrustes(make_obj: MakeObj) -> None:

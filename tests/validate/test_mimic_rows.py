@@ -18,7 +18,7 @@ def _pa(truth: np.ndarray, pred: np.ndarray, g_base: int) -> float | None:
         MatchedPair(f"chair {i}", f"Chair_{i}", "Chair", px, pz, tx, tz)
         for i, ((px, pz), (tx, tz)) in enumerate(zip(pred.tolist(), truth.tolist(), strict=True))
     )
-    return positional_accuracy_score(Matching(pairs, (), (), (), False), g_base)
+    return positional_accuracy_score(Matching(pairs, (), (), (), len(pairs)), g_base)
 
 
 def _moved(points: np.ndarray, theta: float, shift: tuple[float, float]) -> np.ndarray:

@@ -1,0 +1,30 @@
+"""The renderer's scalar rules on worked examples: fog weight by depth, the first row below
+a continuous row, and the shade table's colours. Pixel identity: ``test_frame_identity.py``."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from pytest_emrd.world import condition_params
+from pytest_emrd.world._paint import first_row, fog_weight
+from pytest_emrd.world._render import shade_table
+
+
+def test_fog_weight_and_first_row_worked_examples() -> None:
+    depths = np.array([0.0, 3.5, 7.0, 14.0, 28.0])  # drawn to 7 m, a quarter fog at 7 m
+    assert fog_weight(depths, 7.0, 0.25).tolist() == [0, 16, 64, 255, 255]
+    # Row r's centre lies at r + 0.5: row 9's is at 9.5, row 10's is the first below 9.6.
+    rows = first_row(np.array([9.5, 9.6, 10.5, -3.0, 600.0]))
+    assert rows.tolist() == [9, 10, 10, 0, 512]
+
+
+def test_shade_table_worked_example() -> None:
+    """White under baseline light: a lit top at fog 0 is white, an x face 74 % of it
+    (188.7 -> 189), and at full fog every face is the fog colour."""
+    params = condition_params("baseline")
+    table = shade_table(np.array([[255, 255, 255]]), params).reshape(4, 256)
+    assert table.dtype == np.uint32
+    assert table[2, 0] == 0xFFFFFF
+    assert table[0, 0] == 189 | 189 << 8 | 189 << 16
+    r, g, b = params.fog_color
+    assert (table[:, 255] == r | g << 8 | b << 16).all()
