@@ -27,6 +27,7 @@ from typing import Any
 
 import pytest
 import yaml
+from filelock import FileLock
 
 ROOT = Path(__file__).resolve().parents[1]
 WORKFLOW = ROOT / "examples" / "ci" / "emrd.yml"
@@ -61,12 +62,24 @@ class Venv:
         return {**env, **extra}
 
 
+def _built_wheel(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """The wheel of this checkout, built once per session under a file lock: setuptools builds
+    in the source tree (``build/``), so two xdist workers building at once collide."""
+    shared = tmp_path_factory.getbasetemp().parent  # one folder for every worker of a session
+    with FileLock(shared / "emrd-wheel.lock"):
+        out = shared / "emrd-wheel"
+        if not any(out.glob("pytest_emrd-*.whl")):
+            pip = [sys.executable, "-m", "pip", "--disable-pip-version-check"]
+            subprocess.run([*pip, "wheel", str(ROOT), "--no-deps", "-q", "-w", str(out)],
+                           check=True)  # fmt: skip
+        (wheel,) = out.glob("pytest_emrd-*.whl")
+    return wheel
+
+
 @pytest.fixture(scope="module")
 def venv(tmp_path_factory: pytest.TempPathFactory) -> Venv:
     tmp = tmp_path_factory.mktemp("wheel")
-    pip = [sys.executable, "-m", "pip", "--disable-pip-version-check"]
-    subprocess.run([*pip, "wheel", str(ROOT), "--no-deps", "-q", "-w", str(tmp)], check=True)
-    (wheel,) = tmp.glob("pytest_emrd-*.whl")
+    wheel = _built_wheel(tmp_path_factory)
     root = tmp / "venv"
     subprocess.run([sys.executable, "-m", "venv", str(root)], check=True)
     python = root / "bin" / "python"

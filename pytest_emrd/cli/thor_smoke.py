@@ -1,5 +1,5 @@
 """``emrd thor-smoke --out DIR``: one episode per condition on AI2-THOR vs the builtin world
-(:mod:`pytest_emrd.world.thor.smoke`; needs the ``thor`` extra, a GPU and a THOR build)."""
+(:mod:`pytest_emrd.cli._smoke`; needs the ``thor`` extra, a GPU and a THOR build)."""
 
 from __future__ import annotations
 
@@ -33,6 +33,6 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def _run(args: argparse.Namespace) -> int:
-    from pytest_emrd.world.thor.smoke import run
+    from pytest_emrd.cli._smoke import run
 
     return run(args)

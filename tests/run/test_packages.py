@@ -32,11 +32,6 @@ FORBIDDEN = [
 ]
 
 
-#: Modules left out of the graph, with why. ``emrd thor-smoke``'s body lives in ``world/thor/``
-#: and runs whole episodes (``episode``) with the command's arguments (``cli``): a command
-#: inside the world package, which belongs under ``cli/``.
-OUTSIDE = {Path("world/thor/smoke.py")}
-
 UNITS = {p.name.removesuffix(".py") for p in PACKAGE.iterdir() if p.suffix == ".py" or p.is_dir()}
 
 
@@ -65,8 +60,6 @@ def import_graph() -> dict[str, set[str]]:
     """``unit -> units it imports`` over every module of pytest_emrd (itself left out)."""
     graph: dict[str, set[str]] = {}
     for path in PACKAGE.rglob("*.py"):
-        if path.relative_to(PACKAGE) in OUTSIDE:
-            continue
         unit = _unit(path)
         used = _imported(ast.parse(path.read_text(encoding="utf-8"), filename=str(path)))
         graph.setdefault(unit, set()).update(used - {unit})

@@ -8,8 +8,8 @@ from pathlib import Path
 import pytest
 
 from pytest_emrd.cli import main as emrd
+from pytest_emrd.cli._smoke import run_smoke
 from pytest_emrd.trajectory import CONDITIONS
-from pytest_emrd.world.thor.smoke import run_smoke
 
 
 def test_one_episode_per_condition_on_both_backends(fake_controller: type, tmp_path: Path) -> None:

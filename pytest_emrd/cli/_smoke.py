@@ -10,14 +10,13 @@ without THOR refusing anything. Exit status: 0 when it does, 1 when not, 2 on a
 configuration error (no build, no Vulkan: the message names the fix).
 
     emrd thor-smoke --out smoke/ --local-executable-path ~/thor-CloudRendering-<commit>/...
-    python -m pytest_emrd.world.thor.smoke --out smoke/        # the same
+    python -m pytest_emrd.cli thor-smoke --out smoke/         # the same
 """
 
 from __future__ import annotations
 
 import argparse
 import json
-import sys
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -106,14 +105,6 @@ def run_smoke(
     return results
 
 
-def _parser() -> argparse.ArgumentParser:
-    from pytest_emrd.cli.thor_smoke import add_arguments
-
-    p = argparse.ArgumentParser(prog="emrd thor-smoke", description=__doc__.splitlines()[0])
-    add_arguments(p)
-    return p
-
-
 def run(args: argparse.Namespace) -> int:
     """Run the smoke episodes of parsed ``args``; print the comparison; 0 when all is OK."""
     options: dict[str, Any] = {"start_timeout": args.start_timeout}
@@ -134,18 +125,3 @@ def run(args: argparse.Namespace) -> int:
         print("\n".join(result.lines()))
     print(f"trajectories: {args.out}")
     return 0 if all(r.ok for r in results) else 1
-
-
-def main(argv: list[str] | None = None) -> int:
-    from pytest_emrd.errors import EmrdError
-
-    args = _parser().parse_args(argv)
-    try:
-        return run(args)
-    except EmrdError as exc:
-        print(f"emrd thor-smoke: error: {exc}", file=sys.stderr)
-        return 2
-
-
-if __name__ == "__main__":
-    sys.exit(main())
