@@ -229,7 +229,6 @@ def _instances(cls: type) -> st.SearchStrategy[Any]:
 
 #: Dataclasses hypothesis cannot build from their hints, and why (each part of them is covered).
 NOT_GENERATED = {
-    "_Recorder": "a field typed by a Protocol that is not runtime-checkable",
     "GateMetric": "a field typed by a Protocol that is not runtime-checkable",
     "Run": "holds a pytest Config",
     "CassetteData": "holds vcrpy Requests",

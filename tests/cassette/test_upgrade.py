@@ -17,9 +17,12 @@ from pytest_emrd.cassette import (
 )
 from pytest_emrd.cli import main
 from pytest_emrd.episode import agent_runner, protocol_version
+from pytest_emrd.errors import EmrdError
 from pytest_emrd.trajectory import EpisodeSpec
 
 LEGACY = Path(__file__).with_name("legacy")
+#: The protocol the legacy cassettes were recorded under.
+LEGACY_PROTOCOL = "builtin-4+p2"
 #: ep00 was written in format 1 (gzip), ep01 in format 2 (xz, shipped system prompt named).
 SPECS = [EpisodeSpec("scout", "baseline", "office", n, modality="both") for n in (0, 1)]
 
@@ -39,11 +42,14 @@ def test_both_old_formats_become_vcrpy_cassettes_that_replay(
     runner = agent_runner(load_registry())
     try:
         for spec in SPECS:
-            assert decode(cassette_path(old, spec).read_bytes()).protocol == protocol_version()
-            run = run_with_cassette(
-                spec, runner, cassettes=old, protocol=protocol_version(), record_mode="none"
-            )
-            assert run.trajectory.status == "terminated" and not run.recorded
+            upgraded = decode(cassette_path(old, spec).read_bytes())
+            # The protocol they were recorded under travels with them; today's world refuses
+            # them as stale, with the command that records them again.
+            assert upgraded.protocol == LEGACY_PROTOCOL and upgraded.requests
+            with pytest.raises(EmrdError, match=r"(?s)builtin-4\+p2.*--emrd-record-mode=all"):
+                run_with_cassette(
+                    spec, runner, cassettes=old, protocol=protocol_version(), record_mode="none"
+                )
     finally:
         runner.close()
 

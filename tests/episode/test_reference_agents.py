@@ -33,7 +33,7 @@ def test_scout_visits_all_four_rooms_within_budget(spawn: str) -> None:
 
 def test_same_spec_twice_gives_identical_trajectories() -> None:
     first, second = _run("scout-decay-4", "kitchen", 3), _run("scout-decay-4", "kitchen", 3)
-    assert first.to_dict() == second.to_dict()
+    assert first == second  # every field but each request's wall time (no part of equality)
 
 
 def test_scout_variants_walk_the_same_path_and_differ_in_memory() -> None:

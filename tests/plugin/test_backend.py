@@ -11,6 +11,7 @@ import pytest
 
 from pytest_emrd.cassette import decode
 from pytest_emrd.episode import protocol_version
+from pytest_emrd.trajectory import Trajectory
 from tests._sandbox import Sandbox
 
 PRINT_SETTINGS = """
@@ -75,9 +76,10 @@ def _events(log: Path) -> list[dict]:
     return [json.loads(line) for line in log.read_text().splitlines()] if log.exists() else []
 
 
-def _trajectories(run_dir: Path) -> dict[str, dict]:
+def _trajectories(run_dir: Path) -> dict[str, Trajectory]:
+    """Each stored trajectory (compared as trajectories: a step's wall time is no part of it)."""
     return {
-        p.name: json.loads(p.read_text())["trajectory"]
+        p.name: Trajectory.from_dict(json.loads(p.read_text())["trajectory"])
         for p in sorted((run_dir / "episodes").glob("*.json"))
     }
 

@@ -10,6 +10,7 @@ from pathlib import Path
 import pytest
 
 from pytest_emrd.agent.reference import REFERENCE_VERSION, ReferenceServer
+from pytest_emrd.cassette import SUFFIX
 from pytest_emrd.plugin._endpoint import DEAD_AFTER, unreachable
 from tests._sandbox import Sandbox
 
@@ -60,4 +61,5 @@ def test_a_dead_endpoint_stops_the_model_and_the_resume_command_finishes(
         resumed = sandbox.runpytest(*shlex.split(command)[1:])
     resumed.assert_outcomes(passed=4)
     assert "stopped calling" not in resumed.stdout.str()
-    assert models.is_file() and len(list((sandbox.path / "cassettes").rglob("ep00.*"))) == 4
+    recorded = (sandbox.path / "cassettes" / "my-vlm").rglob(f"ep00{SUFFIX}")
+    assert models.is_file() and len(list(recorded)) == 4

@@ -90,7 +90,10 @@ def test_compare_models_within_one_run(make_run_dir, capsys) -> None:
         (["report"], "give either RUN_DIR... or --compare RUN_A RUN_B"),
         (["report", "x", "--compare", "a", "b"], "give either RUN_DIR... or --compare"),
         (["report", "x", "--format", "md,pdf"], "format='pdf' is not one of"),
-        (["report", "nowhere"], "run_dir='nowhere' holds no episodes/ folder"),
+        (
+            ["report", "nowhere"],
+            "RUN_DIR nowhere does not exist; pass the folder a pytest run wrote",
+        ),
     ],
     ids=["neither", "both", "bad-format", "not-a-run-dir"],
 )
