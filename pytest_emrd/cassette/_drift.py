@@ -152,7 +152,8 @@ def modality_message(
             f"{head} The {recorded!r} episode has its own cassette, {home} (replay it with "
             f"--emrd-modality={recorded}); re-record this one in {asked!r}: {rerecord}"
         )
-    move = shlex.join(["mv", str(cassette), str(home)])
+    folder = shlex.join(["mkdir", "-p", str(home.parent)])
+    move = f"{folder} && {shlex.join(['mv', str(cassette), str(home)])}"
     return (
         f"{head} A {recorded!r} episode belongs at {home}: move it there ({move}; it then "
         f"replays with --emrd-modality={recorded}), then record the {asked!r} episode: {record}"

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import dataclasses
 import shlex
+import subprocess
 from pathlib import Path
 
 import pytest
@@ -136,7 +137,7 @@ def test_each_modality_of_a_reference_model_replays_from_its_own_cassette(runner
 
 
 def test_the_mismatch_fix_moves_the_recording_and_never_overwrites_it(runner, tmp_path):
-    # a text recording where the vision episode lives (as releases before this one stored it)
+    # a text recording where the default (both) episode lives, as older releases stored it
     text = _run(TEXT, runner, tmp_path, "once")
     plain = cassette_path(tmp_path, BOTH)
     home = cassette_path(tmp_path, TEXT, modality_of=modality_of)
@@ -146,17 +147,18 @@ def test_the_mismatch_fix_moves_the_recording_and_never_overwrites_it(runner, tm
     head = (
         f"modality mismatch: cassette={str(plain)!r} was recorded in modality 'text' and this "
         f"run shows the model 'both'. A 'text' episode belongs at {home}: move it there "
-        f"({shlex.join(['mv', str(plain), str(home)])}; it then replays with "
+        f"({shlex.join(['mkdir', '-p', str(home.parent)])} && "
+        f"{shlex.join(['mv', str(plain), str(home)])}; it then replays with "
         "--emrd-modality=text), then record the 'both' episode: "
     )
     assert (error or "").startswith(head)
     command = shlex.split((error or "")[len(head) :])
     assert "--emrd-record-mode=once" in command and "--emrd-modality=both" in command
 
-    home.parent.mkdir(parents=True)
-    plain.rename(home)  # the printed fix, then its record command
-    vision = _run(BOTH, runner, tmp_path, "once", modality_of=modality_of)
-    assert vision.recorded and vision.trajectory.status != "errored", vision.trajectory.error
+    move = head.split("move it there (", 1)[1].split("; it then", 1)[0]
+    subprocess.run(["sh", "-c", move], check=True)  # the printed fix, then its record command
+    both = _run(BOTH, runner, tmp_path, "once", modality_of=modality_of)
+    assert both.recorded and both.trajectory.status != "errored", both.trajectory.error
     assert home.read_bytes() == kept
     again = _run(TEXT, runner, tmp_path, "none", modality_of=modality_of)
     assert again.trajectory == text.trajectory
