@@ -49,6 +49,14 @@ def cassette_path(root: Path, spec: EpisodeSpec, *, modality_of: ModalityOf | No
     return folder / f"ep{spec.episode:02d}{SUFFIX}"
 
 
+def found_cassette(root: Path, spec: EpisodeSpec) -> Path:
+    """The cassette of ``spec`` where no registry tells its model's default modality (a
+    viewer of stored episodes): its ``<variant>+<modality>`` file when there is one (the
+    modality is not the default), else the plain one."""
+    own = cassette_path(root, spec, modality_of=lambda model: "")  # "": never the default
+    return own if own.is_file() else cassette_path(root, spec)
+
+
 def scratch_path(root: Path, path: Path, suffix: str) -> Path:
     """Where the lock file (``.lock``) or an unfinished write (``.<random>.tmp``) of the
     cassette ``path`` under ``root`` lives: the same relative path under ``<root>/.emrd-tmp``,

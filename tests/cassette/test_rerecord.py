@@ -12,7 +12,7 @@ from pathlib import Path
 import pytest
 
 from pytest_emrd.agent import load_registry
-from pytest_emrd.cassette import cassette_path, decode, run_with_cassette
+from pytest_emrd.cassette import cassette_path, decode, found_cassette, run_with_cassette
 from pytest_emrd.episode import agent_runner, protocol_version
 from pytest_emrd.trajectory import EpisodeSpec
 
@@ -93,7 +93,10 @@ def test_a_text_recording_of_a_vision_model_leaves_the_vision_cassette_alone(
 
     assert done.recorded and done.trajectory.status == "budget", done.trajectory.error
     assert plain.read_bytes() == kept
-    assert len(_texts(tmp_path / "fake/baseline/default+text/office/ep03.json.xz")) == 2
+    own = tmp_path / "fake/baseline/default+text/office/ep03.json.xz"
+    assert len(_texts(own)) == 2
+    # without the registry (the viewer), each episode still finds its own recording
+    assert found_cassette(tmp_path, text) == own and found_cassette(tmp_path, spec) == plain
 
 
 BOTH = EpisodeSpec("scout", "baseline", "office", 0, modality="both")  # its default
