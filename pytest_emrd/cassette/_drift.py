@@ -14,6 +14,8 @@ Three causes, three messages, each ending with the command that fixes it:
 
 from __future__ import annotations
 
+import shlex
+from pathlib import Path
 from typing import Any, Final
 
 from pytest_emrd._scrub import scrub
@@ -125,12 +127,36 @@ def drift_message(
     return f"{head}; first differing field {where} {detail}.{fix}"
 
 
-def modality_message(*, cassette: str, recorded: str, asked: str, command: str) -> str:
-    """The failure text of a replay in another modality than the recording."""
+def modality_message(
+    *, cassette: Path, recorded: str, asked: str, home: Path, record: str, rerecord: str
+) -> str:
+    """The failure text of a replay in another modality than the recording.
+
+    ``home`` is where an episode in the ``recorded`` modality keeps its cassette. When it is
+    free, the fix moves the file there (it then replays under ``--emrd-modality=<recorded>``)
+    and records the ``asked`` episode with ``record``; when ``home`` already holds one, this
+    file is a stray copy and ``rerecord`` replaces it in place. Never does the suggested
+    command overwrite a cassette of the ``recorded`` modality at its own path.
+    """
+    head = (
+        f"modality mismatch: cassette={str(cassette)!r} was recorded in modality {recorded!r} "
+        f"and this run shows the model {asked!r}."
+    )
+    if home == cassette:  # no registry to tell the modalities' paths apart
+        return (
+            f"{head} Replay it with --emrd-modality={recorded}, or replace it by the {asked!r} "
+            f"episode (the {recorded!r} recording is lost): {rerecord}"
+        )
+    if home.is_file():
+        return (
+            f"{head} The {recorded!r} episode has its own cassette, {home} (replay it with "
+            f"--emrd-modality={recorded}); re-record this one in {asked!r}: {rerecord}"
+        )
+    folder = shlex.join(["mkdir", "-p", str(home.parent)])
+    move = f"{folder} && {shlex.join(['mv', str(cassette), str(home)])}"
     return (
-        f"modality mismatch: cassette={cassette!r} was recorded in modality {recorded!r} and "
-        f"this run shows the model {asked!r}. Replay it with --emrd-modality={recorded}, or "
-        f"record the {asked!r} episode: {command}"
+        f"{head} A {recorded!r} episode belongs at {home}: move it there ({move}; it then "
+        f"replays with --emrd-modality={recorded}), then record the {asked!r} episode: {record}"
     )
 
 

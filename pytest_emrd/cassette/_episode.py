@@ -11,7 +11,7 @@ from pathlib import Path
 from pytest_emrd._scrub import scrub
 from pytest_emrd.cassette._drift import modality_message
 from pytest_emrd.cassette._network import network_blocked
-from pytest_emrd.cassette._paths import Invocation, cassette_path, record_command
+from pytest_emrd.cassette._paths import Invocation, ModalityOf, cassette_path, record_command
 from pytest_emrd.cassette._persister import LOCK_TIMEOUT_S, writer_lock
 from pytest_emrd.cassette._use import episode_cassette
 from pytest_emrd.errors import check_choice
@@ -46,11 +46,15 @@ class _Discard(Exception):
 EpisodeRunner = Callable[..., Trajectory]
 
 
-def is_live(spec: EpisodeSpec, *, cassettes: Path, record_mode: str) -> bool:
-    """Whether running ``spec`` calls the model (records), rather than replaying only."""
+def is_live(
+    spec: EpisodeSpec, *, cassettes: Path, record_mode: str, modality_of: ModalityOf | None = None
+) -> bool:
+    """Whether running ``spec`` calls the model (records), rather than replaying only
+    (``modality_of``: the models' default modalities, see :func:`~._paths.cassette_path`)."""
     if record_mode in ("all", "new_episodes"):
         return True
-    return record_mode == "once" and not cassette_path(cassettes, spec).is_file()
+    path = cassette_path(cassettes, spec, modality_of=modality_of)
+    return record_mode == "once" and not path.is_file()
 
 
 def run_with_cassette(
@@ -63,6 +67,7 @@ def run_with_cassette(
     matching: str = "strict",
     invocation: Invocation | None = None,
     lock_timeout_s: float = LOCK_TIMEOUT_S,
+    modality_of: ModalityOf | None = None,
 ) -> EpisodeRun:
     """Run ``run(spec, live=...)`` with the model traffic recorded to / replayed from its cassette.
 
@@ -74,31 +79,57 @@ def run_with_cassette(
     (the test paths and user registry of the run). The error text is scrubbed of secrets. A
     corrupted, edited or stale cassette raises :class:`~pytest_emrd.errors.CassetteError`.
 
+    The cassette of an episode in another modality than its model's default (``modality_of``)
+    has its own path (:func:`~._paths.cassette_path`). Under ``new_episodes`` an episode whose
+    replay drifts is stopped at the first request the cassette does not hold and recorded
+    again whole, as under ``all``: its cassette is replaced by the new run's interactions
+    only, never appended to.
+
     An episode that may record holds its cassette's lock (:func:`~._persister.writer_lock`)
     while it runs: a second run of the same episode waits, then replays what the first one
     recorded (in ``once`` mode), or refuses after ``lock_timeout_s`` seconds.
     """
     check_choice("record_mode", record_mode, RECORD_MODES)
     check_choice("matching", matching, MATCHING_MODES)
-    path = cassette_path(cassettes, spec)
-    if not is_live(spec, cassettes=cassettes, record_mode=record_mode):
-        return _run(spec, run, path, cassettes, protocol, record_mode, matching, invocation)
-    with writer_lock(cassettes, path, timeout=lock_timeout_s):
-        return _run(spec, run, path, cassettes, protocol, record_mode, matching, invocation)
+    where = _Where(cassettes, cassette_path(cassettes, spec, modality_of=modality_of), modality_of)
+    if not is_live(spec, cassettes=cassettes, record_mode=record_mode, modality_of=modality_of):
+        return _run(spec, run, where, protocol, record_mode, matching, invocation)
+    with writer_lock(cassettes, where.path, timeout=lock_timeout_s):
+        start = time.perf_counter()
+        try:
+            return _run(spec, run, where, protocol, record_mode, matching, invocation)
+        except _Redo:  # drift under new_episodes: the whole episode again, from scratch
+            done = _run(spec, run, where, protocol, "all", matching, invocation)
+            return dataclasses.replace(done, seconds=time.perf_counter() - start)
+
+
+@dataclass(frozen=True)
+class _Where:
+    """Where an episode's cassette lives: the cassette folder, the file, the defaults."""
+
+    root: Path
+    path: Path
+    modality_of: ModalityOf | None
+
+
+class _Redo(Exception):
+    """The episode drifted under ``new_episodes``: it must be recorded again whole."""
 
 
 def _run(
     spec: EpisodeSpec,
     run: EpisodeRunner,
-    path: Path,
-    cassettes: Path,
+    where: _Where,
     protocol: str,
     record_mode: str,
     matching: str,
     invocation: Invocation | None,
 ) -> EpisodeRun:
+    cassettes, path = where.root, where.path
     missing = record_mode == "none" and not path.is_file()
-    live = is_live(spec, cassettes=cassettes, record_mode=record_mode)
+    live = is_live(
+        spec, cassettes=cassettes, record_mode=record_mode, modality_of=where.modality_of
+    )
     rerecord = record_command(spec, record_mode="all", cassettes=cassettes, invocation=invocation)
     start = time.perf_counter()
     try:
@@ -116,9 +147,12 @@ def _run(
             trajectory = run(spec, live=live)
             recorded, drift = cassette.dirty, cassette.drift
             frame_drift = len(cassette.frame_drift)
-            if trajectory.status == "errored":
+            redo = record_mode == "new_episodes" and drift is not None
+            if trajectory.status == "errored" or redo:
                 raise _Discard
     except _Discard:
+        if redo:
+            raise _Redo from None
         recorded = False
         cause = trajectory.error or ""
         if missing:
@@ -133,8 +167,24 @@ def _run(
             cause = drift
             modality = cassette.recorded_modality
             if not cassette.unreadable and modality not in (None, spec.modality):
-                cause = modality_message(
-                    cassette=str(path), recorded=modality, asked=spec.modality, command=rerecord
-                )
+                cause = _mismatch(spec, where, modality, rerecord, invocation)
         trajectory = dataclasses.replace(trajectory, error=scrub(cause))
     return EpisodeRun(trajectory, recorded, frame_drift, time.perf_counter() - start)
+
+
+def _mismatch(
+    spec: EpisodeSpec, where: _Where, recorded: str, rerecord: str, invocation: Invocation | None
+) -> str:
+    """The modality-mismatch text, whose fix never overwrites the ``recorded`` recording: the
+    file is moved to where an episode in ``recorded`` lives, then the asked one is recorded."""
+    owner = dataclasses.replace(spec, modality=recorded)
+    home = cassette_path(where.root, owner, modality_of=where.modality_of)
+    record = record_command(spec, record_mode="once", cassettes=where.root, invocation=invocation)
+    return modality_message(
+        cassette=where.path,
+        recorded=recorded,
+        asked=spec.modality,
+        home=home,
+        record=record,
+        rerecord=rerecord,
+    )

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import shlex
 from collections import Counter
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Final
@@ -19,8 +19,11 @@ SCRATCH: Final = ".emrd-tmp"
 #: The file name endings older releases wrote (``emrd cassettes upgrade`` converts them).
 LEGACY_SUFFIXES: Final = (".yaml.gz", ".yaml.xz")
 
+#: A model's registry default modality (``Registry.get(model).modality``), by model name.
+ModalityOf = Callable[[str], str]
 
-def cassette_path(root: Path, spec: EpisodeSpec) -> Path:
+
+def cassette_path(root: Path, spec: EpisodeSpec, *, modality_of: ModalityOf | None = None) -> Path:
     """``<root>/<model>/<condition>/<variant>/<spawn>/ep<NN>.json.xz`` on the builtin world
     under the paper protocol, ``<root>/<backend>/<model>/...`` on any other backend
     (``cassettes/ai2thor/gemini/...``), and ``.../layouts-generated/<model>/...`` under
@@ -30,12 +33,28 @@ def cassette_path(root: Path, spec: EpisodeSpec) -> Path:
     place; the other backends and generated layouts get their own trees, so a recording never
     answers a run of another world (or the reverse) even when a model happens to be named
     like a backend.
+
+    An episode in another modality than its model's default (``modality_of``, the registry)
+    lives in a ``<variant>+<modality>`` folder (``cassettes/scout/baseline/default+text/...``),
+    so recording it never replaces the default-modality cassette; the default modality keeps
+    the plain folder. Without ``modality_of``, ``spec.modality`` is taken as the default.
     """
     base = root if spec.backend == "builtin" else root / spec.backend
     if spec.layouts != "paper":
         base = base / f"layouts-{spec.layouts}"
-    folder = base / spec.model / spec.condition / spec.variant / spec.spawn
+    variant = spec.variant
+    if modality_of is not None and spec.modality != modality_of(spec.model):
+        variant = f"{variant}+{spec.modality}"
+    folder = base / spec.model / spec.condition / variant / spec.spawn
     return folder / f"ep{spec.episode:02d}{SUFFIX}"
+
+
+def found_cassette(root: Path, spec: EpisodeSpec) -> Path:
+    """The cassette of ``spec`` where no registry tells its model's default modality (a
+    viewer of stored episodes): its ``<variant>+<modality>`` file when there is one (the
+    modality is not the default), else the plain one."""
+    own = cassette_path(root, spec, modality_of=lambda model: "")  # "": never the default
+    return own if own.is_file() else cassette_path(root, spec)
 
 
 def scratch_path(root: Path, path: Path, suffix: str) -> Path:
@@ -112,20 +131,29 @@ def _ordered(group: Sequence[EpisodeSpec], field: str, order: Sequence[str]) -> 
     return [x for x in order if x in present] + sorted(present - set(order))
 
 
-def missing_cassettes(specs: Sequence[EpisodeSpec], root: Path) -> list[EpisodeSpec]:
+def missing_cassettes(
+    specs: Sequence[EpisodeSpec], root: Path, *, modality_of: ModalityOf | None = None
+) -> list[EpisodeSpec]:
     """The episodes of ``specs`` whose cassette file does not exist under ``root``."""
-    return [spec for spec in specs if not cassette_path(root, spec).is_file()]
+    return [s for s in specs if not cassette_path(root, s, modality_of=modality_of).is_file()]
 
 
 def missing_summary(
-    missing: Sequence[EpisodeSpec], *, total: int, root: Path, invocation: Invocation
+    missing: Sequence[EpisodeSpec],
+    *,
+    total: int,
+    root: Path,
+    invocation: Invocation,
+    modality_of: ModalityOf | None = None,
 ) -> str:
     """The one message for a replay-only run with missing cassettes: how many, for which
     models, and one command that records them all."""
     per_model = Counter(spec.model for spec in missing)
     models = ", ".join(f"{m} ({n})" for m, n in sorted(per_model.items()))
     command = record_command(missing, record_mode="once", cassettes=root, invocation=invocation)
-    old = sum(any(_legacy_twins(cassette_path(root, spec))) for spec in missing)
+    old = sum(
+        any(_legacy_twins(cassette_path(root, spec, modality_of=modality_of))) for spec in missing
+    )
     convert = (
         f" {old} of them have a cassette an older pytest-emrd wrote: convert those first with: "
         f"emrd cassettes upgrade {root}."

@@ -124,6 +124,9 @@ class EpisodeCassette(Cassette):
         self.rerecord_command = ""
         self.unreadable = False
         """The failure is a recorded response the client could not read (not drift)."""
+        self.stop_on_drift = False
+        """``new_episodes``: a request the recording does not hold stops the episode (it is
+        then recorded again whole) instead of being appended to the recording."""
         self._by_size: dict[tuple[str, int], list[int]] = {}
         self._indexed = 0
         self._loading = False
@@ -186,9 +189,15 @@ class EpisodeCassette(Cassette):
             if _keys(self.data[index][0]).strict == key:
                 yield index, self.data[index][1]
 
+    @property
+    def write_protected(self) -> bool:
+        """vcrpy's rule, and under ``stop_on_drift`` a drifted replay records nothing more."""
+        return bool(super().write_protected) or (self.stop_on_drift and self.drift is not None)
+
     def can_play_response_for(self, request: Request) -> bool:
         playable = bool(super().can_play_response_for(request))
-        if not playable and self.write_protected and self.drift is None:
+        replaying = self.write_protected or (self.stop_on_drift and self._loaded > 0)
+        if not playable and replaying and self.drift is None:
             self.drift = self._explain(_keys(self._before_record_request(request)))
         self.requests_made += 1
         return playable
@@ -295,4 +304,5 @@ def episode_cassette(
         cassette.frame_drift = frame_drift
         cassette.strict = matching == "strict"
         cassette.rerecord_command = rerecord_command
+        cassette.stop_on_drift = record_mode == "new_episodes"
         yield cassette

@@ -210,11 +210,16 @@ class Run:
             return None
         from pytest_emrd.cassette import missing_cassettes, missing_summary
 
-        missing = missing_cassettes(unstored, self.settings.cassettes)
+        root = self.settings.cassettes
+        missing = missing_cassettes(unstored, root, modality_of=self.modality_of)
         if not missing:
             return None
         return missing_summary(
-            missing, total=len(needed), root=self.settings.cassettes, invocation=self.invocation
+            missing,
+            total=len(needed),
+            root=root,
+            invocation=self.invocation,
+            modality_of=self.modality_of,
         )
 
     @cached_property
@@ -253,10 +258,17 @@ class Run:
 
         settings = self.settings
         path = check_inside(
-            settings.cassettes, cassette_path(settings.cassettes, spec), what="cassette"
+            settings.cassettes,
+            cassette_path(settings.cassettes, spec, modality_of=self.modality_of),
+            what="cassette",
         )
         check_inside(self.run_dir, episode_path(self.run_dir, spec), what="episode file")
-        live = is_live(spec, cassettes=settings.cassettes, record_mode=settings.record_mode)
+        live = is_live(
+            spec,
+            cassettes=settings.cassettes,
+            record_mode=settings.record_mode,
+            modality_of=self.modality_of,
+        )
         if live:
             try:
                 _writable_folder(path.parent)
@@ -282,6 +294,7 @@ class Run:
                 record_mode=settings.record_mode,
                 matching=settings.matching,
                 invocation=self.invocation,
+                modality_of=self.modality_of,
             )
         except OSError as exc:
             if not (live and kept):
@@ -313,7 +326,7 @@ class Run:
         if not self._prefetch_started:  # --emrd-concurrency: live episodes ahead, in threads
             self._prefetch_started = True
             self._prefetcher = start_prefetch(
-                self.settings, self.store, self.compute, self.episode_specs
+                self.settings, self.store, self.compute, self.episode_specs, self.modality_of
             )
         stored = self.call(lambda run: run.store.get_or_compute(spec, run.compute), spec.case_id)
         self._stored[spec] = stored

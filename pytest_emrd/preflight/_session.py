@@ -23,11 +23,14 @@ def live_grid(
     cassettes: Path,
     record_mode: str,
     holds: Callable[[EpisodeSpec], bool],
+    modality_of: Callable[[str], str] | None = None,
 ) -> dict[str, list[EpisodeSpec]]:
-    """Model -> its episodes that will be recorded live (in order, without duplicates)."""
+    """Model -> its episodes that will be recorded live (in order, without duplicates);
+    ``modality_of``: each model's default modality, which places a cassette."""
     grid: dict[str, list[EpisodeSpec]] = {}
     for spec in dict.fromkeys(specs):
-        if is_live(spec, cassettes=cassettes, record_mode=record_mode) and not holds(spec):
+        live = is_live(spec, cassettes=cassettes, record_mode=record_mode, modality_of=modality_of)
+        if live and not holds(spec):
             grid.setdefault(spec.model, []).append(spec)
     return grid
 
@@ -69,7 +72,11 @@ class SessionPreflight:
         """Reports for the models not checked yet (none when disabled), and how many live
         episodes they have."""
         grid = live_grid(
-            specs, cassettes=self.cassettes, record_mode=self.record_mode, holds=self.holds
+            specs,
+            cassettes=self.cassettes,
+            record_mode=self.record_mode,
+            holds=self.holds,
+            modality_of=lambda model: str(self.registry.get(model).modality),
         )
         grid = {model: mine for model, mine in grid.items() if model not in self.checked}
         self.checked.update(grid)

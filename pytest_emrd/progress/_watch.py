@@ -147,5 +147,6 @@ def run_watched(
             spec, run, cassettes=cassettes, record_mode=record_mode, **cassette
         )
 
-    live = is_live(spec, cassettes=cassettes, record_mode=record_mode)
+    modality_of = cassette.get("modality_of")
+    live = is_live(spec, cassettes=cassettes, record_mode=record_mode, modality_of=modality_of)
     return watch_episode(spec, compute, live=live, status=status)

@@ -67,6 +67,7 @@ def start_prefetch(
     store: ResultsStore,
     compute: Callable[[EpisodeSpec], EpisodeRun],
     specs: Iterable[EpisodeSpec],
+    modality_of: Callable[[str], str] | None = None,
 ) -> Prefetcher | None:
     """A :class:`Prefetcher` of the live episodes among ``specs`` (those whose cassette will
     be recorded), or None when ``--emrd-concurrency`` is 1 or every episode replays (then the
@@ -78,7 +79,12 @@ def start_prefetch(
     live = [
         s
         for s in specs
-        if is_live(s, cassettes=settings.cassettes, record_mode=settings.record_mode)
+        if is_live(
+            s,
+            cassettes=settings.cassettes,
+            record_mode=settings.record_mode,
+            modality_of=modality_of,
+        )
     ]
     if not live:
         return None

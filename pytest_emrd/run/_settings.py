@@ -112,8 +112,8 @@ OPTIONS: Final[tuple[Option, ...]] = (
     Option("modality", "what the model is shown (default: the model's registry entry)",
            MODALITIES),
     Option("record_mode", "cassette record mode: none replays only with the network blocked, "
-           "once records missing cassettes, new_episodes adds unmatched requests, all "
-           "re-records (default: once, or none when the CI environment variable is set)",
+           "once records missing cassettes, new_episodes also re-records a drifted episode "
+           "whole, all re-records (default: once, or none when the CI environment variable is set)",
            RECORD_MODES),
     Option("matching", "request matching: strict keys frames by pixel digest, lenient only "
            "warns on differing frames (default: lenient on ai2thor, strict otherwise)",

@@ -16,7 +16,7 @@ from pathlib import Path
 from typing import Any
 
 from pytest_emrd.agent import build_system_prompt
-from pytest_emrd.cassette import FormatError, cassette_path, decode
+from pytest_emrd.cassette import FormatError, decode, found_cassette
 from pytest_emrd.cassette._redact import DIGEST
 from pytest_emrd.episode import build_simulator, start_world, user_turn, world_action
 from pytest_emrd.errors import EmrdError
@@ -101,7 +101,7 @@ def recorded_digests(traj: Trajectory, cassettes: Path | None) -> Recorded:
                         "its camera would have shown")  # fmt: skip
     if cassettes is None:
         return Recorded((), "no cassette folder given (--cassettes): frames not checked")
-    path = cassette_path(cassettes, traj.spec)
+    path = found_cassette(cassettes, traj.spec)
     try:
         data = decode(path.read_bytes())
     except FileNotFoundError:

@@ -127,6 +127,8 @@ class FakeRunner:
     pixel_shift: int = 0
     budget: int = 50
     """The total announced in "Step t of <budget>" (independent of ``steps``)."""
+    suffix_from: int = 1
+    """The first step whose text carries ``suffix`` (a drift in the middle of the episode)."""
     calls: int = 0
 
     def __call__(self, spec: EpisodeSpec, *, live: bool) -> Trajectory:
@@ -140,9 +142,10 @@ class FakeRunner:
                     buf = io.BytesIO()
                     Image.fromarray(pixels).save(buf, format="JPEG", quality=self.quality)
                     b64 = base64.b64encode(buf.getvalue()).decode()
+                    tail = self.suffix if t >= self.suffix_from else ""
                     frames.register(b64, hashlib.sha256(pixels.tobytes()).hexdigest())
                     content = [
-                        {"type": "text", "text": f"Step {t} of {self.budget}{self.suffix}"},
+                        {"type": "text", "text": f"Step {t} of {self.budget}{tail}"},
                         {
                             "type": "image_url",
                             "image_url": {"url": f"data:image/jpeg;base64,{b64}"},

@@ -88,8 +88,8 @@ def test_another_modality_than_the_recorded_one_is_named(recorded, runner):
     path = cassette_path(recorded, spec)
     assert _replay(spec, runner, recorded) == (
         f"modality mismatch: cassette={str(path)!r} was recorded in modality 'text' and this "
-        "run shows the model 'both'. Replay it with --emrd-modality=text, or record the 'both' "
-        f"episode: {_rerecord(spec, recorded)}"
+        "run shows the model 'both'. Replay it with --emrd-modality=text, or replace it by the "
+        f"'both' episode (the 'text' recording is lost): {_rerecord(spec, recorded)}"
     )
 
 
