@@ -4,8 +4,8 @@ episode per spawn room (4 each), on the built-in world through the reference ser
 
 Tolerances of the reduced run (4 episodes per agent instead of the full run's 80) are
 stated per row below; the episodes are deterministic, so so are the verdicts. One row is
-left to the full run: with 4 episodes the exponential fit of ``scout-decay-3`` (R^2 0.89)
-is too noisy to sit 0.1 above ``scout-window-10`` (0.85); over 80 it does (0.95 vs 0.83).
+left to the full run: with 4 episodes the exponential fit of ``scout-decay-3`` (R^2 0.93) is
+too noisy to sit 0.1 above ``scout-window-5`` (0.84); over 80 it does (0.96 vs 0.84).
 """
 
 from __future__ import annotations
@@ -83,7 +83,7 @@ def test_row_passes(rows, name: str) -> None:
     assert rows[name]["verdict"] == "pass", rows[name]["note"]
 
 
-@pytest.mark.parametrize("k", [5, 20])
+@pytest.mark.parametrize("k", [10, 20])
 def test_window_fits_worse_than_decay(rows, k: int) -> None:
     (fit,) = [r for n, r in rows.items() if n.startswith(f"Exponential fit, scout-window-{k} ")]
     assert fit["verdict"] == "pass", fit["note"]
