@@ -42,7 +42,11 @@ pairs are extended to the entries written or moved since when they explain them 
 lands within the gate of a free object of its type, and no object was freed that an
 unmatched entry could take); otherwise, and when a frame found on fewer than :data:`SETTLED`
 entries has grown by :data:`REVISIT`, the full search runs, with the previous frame as one
-more hypothesis.
+more hypothesis. Only a frame whose rotation the map determined (read from a pair of
+entries, or a Procrustes fit of two or more distinct points) is carried: one entry, or
+entries no pair of which agrees with the layout, fix no direction, and the identity rotation
+they get is the model frame's own, so carrying it would make the next step's matching depend
+on the frame (the frame-invariance rule across steps).
 (b) A label keeps the object it held at the previous step on exact ties (its rounded cost is
 lowered by half a rounding unit). A carried pairing that the geometry contradicts (beyond the
 gate, or a cheaper assignment) is dropped. The terminal map's scores (AEC, PA, precision,
@@ -249,37 +253,45 @@ def _assign(problem: _Problem, motion: Motion, prefer: np.ndarray | None = None)
     return tuple(sorted(assign_rows(cost, allowed)))
 
 
-def _refit(problem: _Problem, pairs: Pairs, motion: Motion) -> Motion:
+def _refit(problem: _Problem, pairs: Pairs, motion: Motion) -> tuple[Motion, bool]:
     """Procrustes on the pairs (two or more points not all coincident); with fewer, the
-    current rotation with the translation that puts the first pair's entry on its object."""
+    current rotation with the translation that puts the first pair's entry on its object.
+    The flag: the rotation was read from the pairs (Procrustes)."""
     p = problem.pred[[i for i, _ in pairs]]
     q = problem.layout.true[[j for _, j in pairs]]
     if len(pairs) >= 2 and np.ptp(p, axis=0).max() > COINCIDENT_M:
-        return _procrustes(p, q)
+        return _procrustes(p, q), True
     moved = _moved(p[:1], motion)[0]
     return Motion(
         motion.c, motion.s, motion.tx + q[0, 0] - moved[0], motion.tz + q[0, 1] - moved[1]
-    )
+    ), False
 
 
-def _refine(problem: _Problem, motion: Motion, prefer: np.ndarray | None) -> tuple[Pairs, Motion]:
-    """Alternate assignment and refit on the inliers from ``motion`` until the pairs repeat."""
+def _refine(
+    problem: _Problem, motion: Motion, prefer: np.ndarray | None, read: bool
+) -> tuple[Pairs, Motion, bool]:
+    """Alternate assignment and refit on the inliers from ``motion`` until the pairs repeat.
+    ``read``: the rotation of ``motion`` was read from the map (returned updated: true when
+    it was, or when a refit read it from the pairs)."""
     pairs = _assign(problem, motion, prefer)
     for _ in range(MAX_ROUNDS):
         if not pairs:
             break
-        motion = _refit(problem, pairs, motion)
+        motion, fitted = _refit(problem, pairs, motion)
+        read = read or fitted
         again = _assign(problem, motion, prefer)
         if again == pairs:
             break
         pairs = again
-    return pairs, motion
+    return pairs, motion, read
 
 
-def _hypotheses(problem: _Problem) -> np.ndarray:
+def _hypotheses(problem: _Problem) -> tuple[np.ndarray, bool]:
     """Frame hypotheses from base pairs of entries (module docstring, step 3), as rows
     ``(c, s, tx, tz)``: the motion taking entry ``a`` onto object ``o_a`` and ``b`` onto ``o_b``
-    in direction, with the midpoints matched."""
+    in direction, with the midpoints matched. The flag is False when no pair gives a
+    direction: the rows are then translations with the identity rotation *of the model's
+    frame*, a rotation the map does not determine."""
     layout, pred = problem.layout, problem.pred
     kinds, labels = problem.kinds, problem.labels
     spread = _units(np.sum((pred - pred.mean(axis=0)) ** 2, axis=1)).tolist()
@@ -299,14 +311,14 @@ def _hypotheses(problem: _Problem) -> np.ndarray:
     if not found or not len(oab):  # one entry, or coincident entries: no direction to read
         cols = list(layout.cols_of[kinds[base[0]]])
         shift = true[cols] - pred[base[0]]
-        return np.column_stack([np.ones(len(cols)), np.zeros(len(cols)), shift])
+        return np.column_stack([np.ones(len(cols)), np.zeros(len(cols)), shift]), False
     qa, qb = true[oab[:, 0]], true[oab[:, 1]]
     u, v = pb - pa, qb - qa
     theta = np.arctan2(u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0], np.sum(u * v, axis=1))
     c, s = np.cos(theta), np.sin(theta)
     m, n = (pa + pb) / 2, (qa + qb) / 2
     return np.column_stack([c, s, n[:, 0] - (c * m[:, 0] - s * m[:, 1]),
-                            n[:, 1] - (s * m[:, 0] + c * m[:, 1])])  # fmt: skip
+                            n[:, 1] - (s * m[:, 0] + c * m[:, 1])]), True  # fmt: skip
 
 
 def _scores(problem: _Problem, motions: np.ndarray) -> np.ndarray:
@@ -323,13 +335,15 @@ def _scores(problem: _Problem, motions: np.ndarray) -> np.ndarray:
 
 def _solve(
     problem: _Problem, seeds: Sequence[Motion] = (), prefer: np.ndarray | None = None
-) -> tuple[Pairs, Motion]:
-    """Step 3: the best of ``seeds`` and the hypotheses (the first on equal scores), refined."""
-    motions = _hypotheses(problem)
+) -> tuple[Pairs, Motion, bool]:
+    """Step 3: the best of ``seeds`` and the hypotheses (the first on equal scores), refined.
+    ``seeds`` are motions whose rotation was read from a map; the flag: so is the result's
+    (False: the map fixes no direction, the rotation is the model frame's own)."""
+    motions, read = _hypotheses(problem)
     if seeds:
         motions = np.concatenate([np.asarray(seeds, dtype=float), motions])
     best = int(np.argmin(_scores(problem, motions))) if len(motions) > 1 else 0
-    return _refine(problem, Motion(*motions[best].tolist()), prefer)
+    return _refine(problem, Motion(*motions[best].tolist()), prefer, read or best < len(seeds))
 
 
 Key = tuple[tuple[str, int, float, float], ...]
@@ -349,7 +363,8 @@ class StepMatch(NamedTuple):
     unrecognised: tuple[str, ...]
     duplicates: tuple[str, ...]
     motion: Motion | None
-    """The frame found (None: no recognised entry)."""
+    """The frame found (None: no recognised entry, or a frame whose rotation the map does
+    not determine: one point, or points giving no direction; such a frame is not carried)."""
     key: Key
     """The recognised entries."""
     solved: int = 0
@@ -485,10 +500,13 @@ class Matcher:
             p = problem.pred[[i for i, _ in named]]
             if np.ptp(p, axis=0).max() > COINCIDENT_M:
                 seeds.append(_procrustes(p, self._layout.true[[j for _, j in named]]))
-        pairs, motion = _solve(problem, seeds, prefer)
+        pairs, motion, read = _solve(problem, seeds, prefer)
         identity = {labels[i]: j for i, j in pairs}
         unmatched = tuple(lb for lb in labels if lb not in identity)
-        return StepMatch({}, {}, identity, unmatched, (), (), motion, key, len(key))
+        # A rotation the map did not determine is the model frame's own: carried to the next
+        # step as a seed it would make that step's matching depend on the frame.
+        kept = motion if read else None
+        return StepMatch({}, {}, identity, unmatched, (), (), kept, key, len(key))
 
     def matching(self, found: StepMatch) -> Matching:
         """The :class:`Matching` of one matched map."""

@@ -17,9 +17,13 @@ from pytest_emrd.metrics import (
     positional_accuracy_score,
     random_reframe,
     reframe,
+    step_matchings,
 )
 from pytest_emrd.metrics.synthetic import synthetic_trajectory
+from pytest_emrd.rooms import OFFICE
 from pytest_emrd.trajectory import EpisodeSpec, GroundTruthObject, MapEntry, Trajectory
+
+from .conftest import build, obj
 
 TOL = 1e-9
 #: (type, instances): singletons (anchors when mapped once) and repeated types.
@@ -158,3 +162,27 @@ def test_committed_scout_episodes_are_frame_invariant(committed: list[Trajectory
 def test_the_conference_chairs_are_no_longer_swapped(committed: list[Trajectory]) -> None:
     pa = episode_metrics(committed[0]).pa
     assert pa is not None and pa > 0.999  # was 0.912: a swap decided before the frame was known
+
+
+def test_a_frame_read_from_one_point_is_not_carried_to_the_next_step() -> None:
+    """One entry fixes no rotation: the frame of a one-entry map is the model's own (found
+    in scout-decay-3 entrance ep03, whose ``Doorway_2`` label followed ``Door_1``'s frame onto
+    ``Doorway_2`` in the spawn frame and onto ``Doorway_1`` in any other)."""
+    objects = [obj("Door_1", x=-0.97, z=2.72), obj("Doorway_1", x=3.15, z=-4.51),
+               obj("Doorway_2", x=3.75, z=0.53)]  # fmt: skip
+    traj = build(
+        objects,
+        [
+            (OFFICE, ["Door_1"], {"Door_1": ("Door", -0.97, 2.72)}),
+            (OFFICE, ["Doorway_2"], {"Doorway_2": ("Doorway", 3.75, 0.53)}),
+            (OFFICE, [], {"Doorway_2": ("Doorway", 3.75, 0.53)}),
+            (OFFICE, [], {}),
+        ],
+    )
+    held = [m.label_of for m in step_matchings([s.cognitive_map for s in traj.steps], objects)]
+    base = episode_metrics(traj)
+    for theta in (0.3, math.pi / 2, 2.0, math.pi, 5.1):
+        moved = reframe(traj, theta, 40.0, -7.5)
+        there = step_matchings([s.cognitive_map for s in moved.steps], moved.ground_truth.objects)
+        assert [m.label_of for m in there] == held
+        _same(base, episode_metrics(moved))
