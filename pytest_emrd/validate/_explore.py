@@ -1,5 +1,16 @@
-"""Explore rows: the scout's coverage reaches what is discoverable, and low light costs
-coverage and time for the same agent in the same offices (paired episodes)."""
+"""Explore rows: the scout's coverage is what it was shown, and low light costs coverage and
+time for the same agent in the same offices (paired episodes).
+
+The scout has perfect memory and maps every object in its view, so its planted coverage is
+the share of ``E`` that was in view at some step: ``|union_t V_t| / |E|`` with ``V_t`` the
+step's ground-truth visible ids (the ids the text list reports: objects within the
+visibility distance, landmarks within the drawn distance, walls and furniture occluding).
+That is what Eq. AEC must recover, per episode, exactly. ``|G_base| / |E|`` (visible from
+*some* standing point of the layout) is not: it measures the office, not the tour. Since
+furniture occludes and objects count as visible within 3.3 m, a 50-step scout that leaves
+a room once it has seen a doorway on leaves parts of the open-plan Office unseen (on the
+paper office about 5 % of ``E``), which no metric can recover. The row reports it beside.
+"""
 
 from __future__ import annotations
 
@@ -8,10 +19,12 @@ from collections.abc import Sequence
 from typing import Final
 
 from pytest_emrd.metrics import GATE_METRICS, Estimate, as_episode_metrics
+from pytest_emrd.trajectory import Trajectory
 from pytest_emrd.validate._check import Check, Episode, fmt, judged
 
-#: Baseline AEC of the perfect scout may fall short of ``|G_base| / |E|`` by at most this.
-COVERAGE_GAP: Final = 0.05
+#: Per episode, the scout's AEC may differ from the fraction it was shown by at most this
+#: (numbers agree to 1e-9 across CPUs).
+COVERAGE_TOL: Final = 1e-9
 
 
 def _value(estimate: Estimate) -> float:
@@ -22,24 +35,47 @@ def _ci(estimate: Estimate) -> str:
     return f"95 % CI {fmt(estimate.ci_low, 3)}-{fmt(estimate.ci_high, 3)}"
 
 
-def exploration_checks(baseline: Sequence[Episode], low_light: Sequence[Episode]) -> list[Check]:
-    """AEC close to the discoverable fraction; low_light lowers AEC and raises TE."""
+def shown_fraction(traj: Trajectory) -> float | None:
+    """``|union_t V_t ∩ E| / |E|``: the share of the ground-truth objects in view at some
+    step of ``traj`` (what a perfect-memory agent that maps all it sees covers). None when
+    the ground truth lists no object."""
+    ids = {o.object_id for o in traj.ground_truth.objects}
+    if not ids:
+        return None
+    seen: set[str] = set()
+    for step in traj.steps:
+        seen.update(step.visible_ids)
+    return len(seen & ids) / len(ids)
+
+
+def _mean(values: Sequence[float]) -> float:
+    return math.fsum(values) / len(values) if values else math.nan
+
+
+def exploration_checks(baseline: Sequence[Trajectory], low_light: Sequence[Episode]) -> list[Check]:
+    """Scout AEC equals the fraction it was shown, per episode; low_light lowers AEC and
+    raises TE. ``baseline`` must be trajectories (the first row reads the visible ids)."""
     aec, te = GATE_METRICS["aec"], GATE_METRICS["te"]
-    base_aec, dark_aec = aec.compute(baseline), aec.compute(low_light)
-    base_te, dark_te = te.compute(baseline), te.compute(low_light)
-    fractions = [
-        m.g_base / total
-        for m in as_episode_metrics(baseline)
-        if (total := sum(m.objects_by_category.values()))
+    metrics = as_episode_metrics(baseline)
+    base_aec, dark_aec = aec.compute(metrics), aec.compute(low_light)
+    base_te, dark_te = te.compute(metrics), te.compute(low_light)
+    pairs = [
+        (m.aec, shown, m.g_base / len(t.ground_truth.objects))
+        for t, m in zip(baseline, metrics, strict=True)
+        if m.aec is not None and (shown := shown_fraction(t)) is not None
     ]
-    discoverable = math.fsum(fractions) / len(fractions) if fractions else math.nan
-    gap = abs(discoverable - _value(base_aec))
+    planted = _mean([s for _, s, _ in pairs])
+    discoverable = _mean([g for _, _, g in pairs])
+    worst = max((abs(a - s) for a, s, _ in pairs), default=math.nan)
     return [
-        Check("Explore", "AEC vs discoverable fraction, scout", f"{fmt(discoverable, 3)}",
-              f"{fmt(base_aec.value, 3)}", f"within {COVERAGE_GAP}",
-              judged(gap <= COVERAGE_GAP),
-              f"{base_aec.n} episodes; discoverable = mean |G_base|/|E|; {_ci(base_aec)}",
-              {"aec": base_aec.value, "discoverable": discoverable}),
+        Check("Explore", "AEC vs fraction shown, scout", fmt(planted, 3),
+              f"{fmt(base_aec.value, 3)}; max |diff| {worst:.1e}",
+              f"exactly, per episode (<= {COVERAGE_TOL:g})", judged(worst <= COVERAGE_TOL),
+              f"{len(pairs)} episodes; shown = |union_t V_t|/|E| (ids in view at some step); "
+              f"mean |G_base|/|E| {fmt(discoverable, 3)} (the rest of G_base was never in "
+              f"view); {_ci(base_aec)}",
+              {"aec": base_aec.value, "shown": planted, "max_diff": worst,
+               "discoverable": discoverable}),
         Check("Explore", "AEC, scout: low_light vs baseline", "lower",
               f"{fmt(dark_aec.value, 3)} vs {fmt(base_aec.value, 3)}", "strictly lower",
               judged(_value(dark_aec) < _value(base_aec)),

@@ -97,7 +97,7 @@ def scout_checks(groups: Groups) -> list[Check]:
     serial = _need(groups, Group("scout-serial", "baseline"))
     prior = _need(groups, Group("prior", "baseline"))
     return [
-        *exploration_checks(scout, dark),
+        *exploration_checks(_trajectories(groups, Group("scout", "baseline").name), dark),
         *frame_checks(groups),
         *decay_checks(decays),
         *window_fit_checks(windows, decays),

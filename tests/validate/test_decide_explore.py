@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import pytest
+
 from pytest_emrd.rooms import ROOM_NAMES
 from pytest_emrd.validate import exploration_checks, prior_checks, scout_decide_checks
 
@@ -47,4 +49,28 @@ def test_exploration_rows(build, chairs) -> None:
     assert [coverage.verdict, aec.verdict, te.verdict] == ["pass", "pass", "pass"]
     assert te.data == {"te_low_light": 5.0, "te_baseline": 3.0}
     swapped = exploration_checks([dark], [base])
-    assert [r.verdict for r in swapped] == ["fail", "fail", "fail"]
+    # The dark scout maps the one chair it was shown: its coverage row still holds.
+    assert [r.verdict for r in swapped] == ["pass", "fail", "fail"]
+
+
+def test_coverage_row_counts_what_the_scout_was_shown(build, chairs) -> None:
+    # Regression (issue 24's visibility): every object is discoverable from some standing
+    # point (|G_base| = |E|), but the tour has only chairs 1-30 in view. A perfect scout
+    # maps those 30: its AEC 0.75 is the planted coverage, not |G_base| / |E| = 1.
+    shown = chairs(*range(1, 31))
+    tour = build([(OFFICE, shown[:15], shown[:15]), (OFFICE, shown[15:], shown)],
+                 chosen=OFFICE)  # fmt: skip
+    dark = build([(OFFICE, [], [])] * 3, condition="low_light", chosen=OFFICE)
+    coverage = exploration_checks([tour], [dark])[0]
+    assert coverage.verdict == "pass"
+    assert coverage.data == {"aec": 0.75, "shown": 0.75, "max_diff": 0.0, "discoverable": 1.0}
+
+
+def test_coverage_row_fails_when_a_shown_object_is_not_counted(build, chairs) -> None:
+    # Chair 30 was in view at step 1 and is gone from the terminal map.
+    tour = build([(OFFICE, chairs(*range(1, 31)), chairs(*range(1, 31))),
+                  (OFFICE, [], chairs(*range(1, 30)))], chosen=OFFICE)  # fmt: skip
+    dark = build([(OFFICE, [], [])] * 3, condition="low_light", chosen=OFFICE)
+    coverage = exploration_checks([tour], [dark])[0]
+    assert coverage.verdict == "fail"
+    assert coverage.data["max_diff"] == pytest.approx(1 / 40)

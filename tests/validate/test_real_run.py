@@ -51,7 +51,7 @@ def test_ebbinghaus_recovers_the_planted_mean(rows, mean: int) -> None:
 @pytest.mark.parametrize(
     "name",
     [
-        "AEC vs discoverable fraction, scout",
+        "AEC vs fraction shown, scout",
         "AEC, scout: low_light vs baseline",
         "TE, scout: low_light vs baseline",
         "Miller inflection, scout-window-5",
