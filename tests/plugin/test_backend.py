@@ -111,7 +111,7 @@ def test_ai2thor_records_and_replays_with_one_controller_per_worker(thor_suite, 
     stops = Counter(e["pid"] for e in events if e["event"] == "stop")
     assert starts == stops and set(starts.values()) == {1} and 1 <= len(starts) <= 2
     assert _trajectories(suite.path / "replayed") == _trajectories(suite.path / "recorded")
-    protocols = {t["protocol"] for t in _trajectories(suite.path / "replayed").values()}
+    protocols = {t.protocol for t in _trajectories(suite.path / "replayed").values()}
     assert protocols == {protocol_version("ai2thor")}
 
 
