@@ -214,12 +214,20 @@ def halluc_checks(halluc: Paired, clean: Paired, h: float) -> list[Check]:
     ]  # fmt: skip
 
 
-def _duplicated(traj: Trajectory, end: int) -> set[str]:
-    """Objects with two or more labels in the agent's state after step index ``end``."""
-    ids = Counter(
-        rec["id"] for rec in read_state(traj.steps[end].raw_reply)["map"].values() if "id" in rec
-    )
-    return {o for o, n in ids.items() if n > 1}
+def _planted_ids(traj: Trajectory, step: int) -> dict[str, str]:
+    """Label -> planted object id in the agent's state after step index ``step``."""
+    entries = read_state(traj.steps[step].raw_reply)["map"]
+    return {label: rec["id"] for label, rec in entries.items() if "id" in rec}
+
+
+def _copied_during(traj: Trajectory, start: int, end: int) -> set[str]:
+    """Objects the agent wrote a copy of between step indices ``start`` and ``end``: two or more
+    labels after ``end``, one of them new since before ``start`` (as SIR's copies are new
+    entries), so an object duplicated before the re-entry and copied again during it counts."""
+    before = set(_planted_ids(traj, start - 1)) if start > 0 else set()
+    after = _planted_ids(traj, end)
+    labels = Counter(after.values())
+    return {o for label, o in after.items() if labels[o] > 1 and label not in before}
 
 
 def _sir_ratio_planted(traj: Trajectory) -> float | None:
@@ -228,11 +236,11 @@ def _sir_ratio_planted(traj: Trajectory) -> float | None:
     room_of = {o.object_id: o.room for o in traj.ground_truth.objects}
     ratios = []
     for v in track.visits:
-        if v.return_end is None:
+        if v.return_end is None or v.return_start is None:
             continue
         first = {o for o in track.held[v.first_end] if room_of[o] == v.room}
         if first:
-            dup = _duplicated(traj, v.return_end) - _duplicated(traj, v.first_end)
+            dup = _copied_during(traj, v.return_start, v.return_end)
             ratios.append(len(first - dup) / len(first))
     return float(np.mean(ratios)) if ratios else None
 
