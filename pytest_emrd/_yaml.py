@@ -110,11 +110,7 @@ def _check_bounds(text: str, source: str) -> None:
             if isinstance(event, yaml.CollectionStartEvent):
                 depth += 1
                 if depth > MAX_DEPTH:
-                    raise ConfigError(
-                        f"{source}, line {event.start_mark.line + 1}: YAML nested more than "
-                        f"{MAX_DEPTH} levels deep; flatten it (a thresholds file or model "
-                        "registry needs five levels)."
-                    )
+                    raise _too_deep(source, event.start_mark.line + 1)
             elif isinstance(event, yaml.CollectionEndEvent):
                 depth -= 1
             elif isinstance(event, yaml.AliasEvent):
@@ -123,8 +119,20 @@ def _check_bounds(text: str, source: str) -> None:
                     "is not allowed in this file (aliases can expand a small file without "
                     "bound); write the value out in full."
                 )
-    except yaml.YAMLError:
+    except yaml.YAMLError as exc:
+        # libyaml >= 0.2.6 stops at its own nesting limit before our count reaches it
+        if "nesting depth" in str(exc):
+            mark = getattr(exc, "problem_mark", None)
+            raise _too_deep(source, mark.line + 1 if mark else None) from None
         return
+
+
+def _too_deep(source: str, line: int | None) -> ConfigError:
+    where = f"{source}, line {line}" if line is not None else source
+    return ConfigError(
+        f"{where}: YAML nested more than {MAX_DEPTH} levels deep; flatten it (a thresholds file "
+        "or model registry needs five levels)."
+    )
 
 
 def _parsed(parse: Any, text: str, source: str) -> Any:
