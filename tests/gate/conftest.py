@@ -7,7 +7,7 @@ from dataclasses import dataclass
 
 import pytest
 
-from pytest_emrd.trajectory import EpisodeSpec, GroundTruth, Trajectory
+from pytest_emrd.trajectory import Trajectory
 
 
 @dataclass(frozen=True)
@@ -31,21 +31,6 @@ class StepsMetric:
         values = [float(len(t.steps)) for t in trajectories]
         mean = sum(values) / len(values)
         return Estimate(mean, values[0], values[-1], len(values))
-
-
-def make_trajectory(
-    spec: EpisodeSpec, *, status: str = "budget", protocol: str = "p1"
-) -> Trajectory:
-    gt = GroundTruth(objects=(), rooms=(), discoverable_ids=(), spawn_room="Office")
-    return Trajectory(
-        spec=spec,
-        protocol=protocol,
-        ground_truth=gt,
-        steps=(),
-        status=status,
-        final_room="Office",
-        error="boom" if status == "errored" else None,
-    )
 
 
 @pytest.fixture

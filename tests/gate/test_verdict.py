@@ -17,8 +17,9 @@ from pytest_emrd.gate import (
     usage_table,
 )
 from pytest_emrd.trajectory import EpisodeSpec
+from tests.run.conftest import make_trajectory
 
-from .conftest import Estimate, make_trajectory
+from .conftest import Estimate
 
 
 def _cell(kind: str, value: float, ci: str | None = None, variant: str = "default") -> GateCell:
