@@ -656,3 +656,20 @@ def thor_installed(
     FakeController.instances.clear()
     monkeypatch.setattr(ai2thor.controller, "Controller", FakeController)
     return FakeController
+
+
+def still_running(pids: list[int], *, within: float = 5.0) -> list[int]:
+    """The processes of ``pids`` still alive after waiting up to ``within`` seconds for them to
+    exit (a zombie awaiting its reaper counts as exited)."""
+
+    def alive(pid: int) -> bool:
+        try:
+            with open(f"/proc/{pid}/stat", encoding="ascii") as stat:
+                return stat.read().rsplit(")", 1)[1].split()[0] != "Z"
+        except FileNotFoundError:
+            return False
+
+    deadline = time.monotonic() + within
+    while any(alive(p) for p in pids) and time.monotonic() < deadline:
+        time.sleep(0.05)
+    return [p for p in pids if alive(p)]

@@ -20,6 +20,8 @@ from pytest_emrd.world._model import Layout
 from pytest_emrd.world.thor import ThorSimulator
 from pytest_emrd.world.thor._launch import import_ai2thor
 
+from .conftest import still_running
+
 FailedReset = Callable[[ThorSimulator, Layout, float], ConfigError]
 
 
@@ -78,23 +80,11 @@ def test_a_step_timeout_kills_unity_and_its_process_group(
         with pytest.raises(TransportError, match="step_timeout"):
             sim.step("Turn(Left)")
         never.set()
-        deadline = time.monotonic() + 5.0
-        while any(_alive(p) for p in started) and time.monotonic() < deadline:
-            time.sleep(0.05)
-        assert not [p for p in started if _alive(p)]
+        assert not still_running(started)
     finally:
         if unity.poll() is None:
             os.killpg(unity.pid, signal.SIGKILL)
         unity.wait()
-
-
-def _alive(pid: int) -> bool:
-    """Whether ``pid`` runs (a zombie awaiting its reaper counts as dead)."""
-    try:
-        with open(f"/proc/{pid}/stat", encoding="ascii") as stat:
-            return stat.read().rsplit(")", 1)[1].split()[0] != "Z"
-    except FileNotFoundError:
-        return False
 
 
 @pytest.mark.parametrize(

@@ -8,7 +8,6 @@ a message naming what to install.
 from __future__ import annotations
 
 import ctypes.util
-import time
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -20,6 +19,8 @@ from pytest_emrd.errors import ConfigError
 from pytest_emrd.world._model import Layout
 from pytest_emrd.world.thor import ThorSimulator
 from pytest_emrd.world.thor._launch import import_ai2thor, preflight, releases_dir
+
+from .conftest import still_running
 
 FailedReset = Callable[[ThorSimulator, Layout, float], ConfigError]
 
@@ -82,15 +83,6 @@ def test_unity_that_never_answers_is_abandoned(
     assert "start_timeout=2" in str(error) and "libvulkan1" in str(error)
 
 
-def _alive(pid: int) -> bool:
-    """Whether ``pid`` runs (a zombie awaiting its reaper counts as dead)."""
-    try:
-        with open(f"/proc/{pid}/stat", encoding="ascii") as stat:
-            return stat.read().rsplit(")", 1)[1].split()[0] != "Z"
-    except FileNotFoundError:
-        return False
-
-
 def _stub_unity(tmp_path: Path, body: str) -> Path:
     """An executable standing in for the Unity player: ai2thor's real start-up code
     launches it; it never answers, so only its side effects are observable."""
@@ -126,7 +118,4 @@ def test_a_start_up_timeout_kills_unity_and_its_process_group(
     failed_reset(sim, layout, 15.0)
     started = [int(p) for p in pids.read_text().split()]
     assert len(started) == 2
-    deadline = time.monotonic() + 5.0
-    while any(_alive(p) for p in started) and time.monotonic() < deadline:
-        time.sleep(0.05)
-    assert not [p for p in started if _alive(p)]
+    assert not still_running(started)
