@@ -16,6 +16,11 @@ import json
 import os
 import sys
 from pathlib import Path
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from pytest_emrd.metrics import EpisodeMetrics
+    from pytest_emrd.run import StoredEpisode
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -30,6 +35,13 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--models", type=Path, default=None, help="user model registry YAML")
     p.add_argument("--json", action="store_true", help="print the verdicts as one JSON list")
     p.add_argument(
+        "--jobs",
+        type=int,
+        default=None,
+        metavar="J",
+        help="processes decoding and measuring the episodes (default: every available core)",
+    )
+    p.add_argument(
         "--allow-partial",
         action="store_true",
         help="gate an incomplete or duplicated set of shards (the problems go to stderr)",
@@ -38,27 +50,39 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def _run(args: argparse.Namespace) -> int:
+    from pytest_emrd._fork import available_cores, fork_map
     from pytest_emrd.agent import load_registry
     from pytest_emrd.cli import check_run_dirs
+    from pytest_emrd.errors import check_positive_int
     from pytest_emrd.gate import evaluate_all, gate_tables, load_thresholds
-    from pytest_emrd.metrics import GATE_METRICS, episode_metrics
-    from pytest_emrd.run import check_shard_set, load_run_dirs
+    from pytest_emrd.metrics import GATE_METRICS
+    from pytest_emrd.run import check_shard_set, load_run_episodes
 
+    jobs = available_cores() if args.jobs is None else args.jobs
+    check_positive_int("--jobs", jobs)
     check_run_dirs(args.run_dirs)
     for problem in check_shard_set(args.run_dirs, allow_partial=args.allow_partial):
         print(f"emrd gate: warning: partial shard set: {problem}", file=sys.stderr)
     registry = load_registry(args.models)
     thresholds = load_thresholds(args.thresholds, registry=registry, metrics=GATE_METRICS)
-    trajectories = load_run_dirs(args.run_dirs)
-    verdicts = evaluate_all(trajectories, thresholds, GATE_METRICS, prepare=episode_metrics)
+    stored = load_run_episodes(args.run_dirs)
+    # Decoding and measuring each episode is most of a gate's time, and episodes are independent.
+    verdicts = evaluate_all(fork_map(_measure, stored, jobs), thresholds, GATE_METRICS)
     if os.environ.get("GITHUB_STEP_SUMMARY"):
         from pytest_emrd.report import append_step_summary, step_summary_markdown
 
         source = str(args.thresholds)
+        trajectories = [episode.trajectory for episode in stored]
         append_step_summary(step_summary_markdown(trajectories, verdicts, thresholds_source=source))
     if args.json:
         print(json.dumps([v.to_dict() for v in verdicts]))
     else:
-        print(f"{len(trajectories)} episodes from {len(args.run_dirs)} run director(ies)")
+        print(f"{len(stored)} episodes from {len(args.run_dirs)} run director(ies)")
         print("\n".join(gate_tables(verdicts)) or "no gate applies to these episodes")
     return 0 if all(v.passed for v in verdicts) else 1
+
+
+def _measure(stored: StoredEpisode) -> EpisodeMetrics:
+    from pytest_emrd.metrics import episode_metrics
+
+    return episode_metrics(stored.trajectory)

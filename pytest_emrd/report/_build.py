@@ -35,7 +35,7 @@ from pytest_emrd.report._tables import (
     reasoning,
     serial_rows,
 )
-from pytest_emrd.report._workers import beside
+from pytest_emrd._fork import beside
 from pytest_emrd.rooms import ROOM_SLUGS
 from pytest_emrd.run import EpisodeHead, StoredEpisode
 from pytest_emrd.trajectory import CONDITIONS, VARIANTS, EpisodeSpec, Trajectory

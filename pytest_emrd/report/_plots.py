@@ -32,7 +32,7 @@ from pytest_emrd.report._style import (
     CONDITION_NAMES,
     FIGURES,
 )
-from pytest_emrd.report._workers import pool
+from pytest_emrd._fork import pool
 from pytest_emrd.rooms import ROOM_SLUGS, SLUG_ROOMS
 from pytest_emrd.trajectory import CONDITIONS
 

@@ -26,9 +26,11 @@ def _episodes(run_dir: Path) -> dict[str, dict]:
     }
 
 
-def _gate_json(capsys: pytest.CaptureFixture[str], thresholds: Path, *run_dirs: Path) -> str:
+def _gate_json(
+    capsys: pytest.CaptureFixture[str], thresholds: Path, *run_dirs: Path, jobs: int = 2
+) -> str:
     capsys.readouterr()
-    emrd(["gate", *map(str, run_dirs), "--thresholds", str(thresholds), "--json"])
+    emrd(["gate", *map(str, run_dirs), "--thresholds", str(thresholds), "--json", f"--jobs={jobs}"])
     return capsys.readouterr().out
 
 
@@ -63,6 +65,7 @@ def test_replay_is_deterministic_and_xdist_and_shards_give_the_same_gates(
     thresholds = suite.path / "thresholds.yaml"
     serial = _gate_json(capsys, thresholds, suite.path / "serial")
     assert '"passed": true' in serial and '"passed": false' not in serial
+    assert _gate_json(capsys, thresholds, suite.path / "serial", jobs=1) == serial
     assert _gate_json(capsys, thresholds, suite.path / "xdist") == serial
     assert _gate_json(capsys, thresholds, suite.path / "shard1", suite.path / "shard2") == serial
 
