@@ -11,6 +11,7 @@ from collections import Counter
 from collections.abc import Mapping, Sequence
 from dataclasses import replace
 
+from pytest_emrd._fork import beside
 from pytest_emrd.gate import UsageRow, Verdict
 from pytest_emrd.metrics import EpisodeMetrics, as_episode_metrics
 from pytest_emrd.report._figdata import (
@@ -35,7 +36,6 @@ from pytest_emrd.report._tables import (
     reasoning,
     serial_rows,
 )
-from pytest_emrd._fork import beside
 from pytest_emrd.rooms import ROOM_SLUGS
 from pytest_emrd.run import EpisodeHead, StoredEpisode
 from pytest_emrd.trajectory import CONDITIONS, VARIANTS, EpisodeSpec, Trajectory

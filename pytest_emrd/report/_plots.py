@@ -25,6 +25,7 @@ from matplotlib.image import imsave
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
+from pytest_emrd._fork import pool
 from pytest_emrd.report._model import EpisodeMap, Report, row_label
 from pytest_emrd.report._style import (
     CONDITION_COLOURS,
@@ -32,7 +33,6 @@ from pytest_emrd.report._style import (
     CONDITION_NAMES,
     FIGURES,
 )
-from pytest_emrd._fork import pool
 from pytest_emrd.rooms import ROOM_SLUGS, SLUG_ROOMS
 from pytest_emrd.trajectory import CONDITIONS
 
