@@ -12,7 +12,7 @@ from pytest_emrd._scrub import scrub
 from pytest_emrd.cassette._drift import modality_message
 from pytest_emrd.cassette._network import network_blocked
 from pytest_emrd.cassette._paths import Invocation, ModalityOf, cassette_path, record_command
-from pytest_emrd.cassette._persister import LOCK_TIMEOUT_S, writer_lock
+from pytest_emrd.cassette._persister import LOCK_TIMEOUT_S, UnsavedCassette, writer_lock
 from pytest_emrd.cassette._use import episode_cassette
 from pytest_emrd.errors import check_choice
 from pytest_emrd.trajectory import MATCHING_MODES, RECORD_MODES, EpisodeSpec, Trajectory
@@ -31,6 +31,9 @@ class EpisodeRun:
     """Wall time of the episode."""
     retries: int = 0
     """Model requests retried while it ran (set by whoever watched it)."""
+    unsaved: UnsavedCassette | None = None
+    """The recording, when its cassette file could not be written (the episode is still
+    good: keep the recording elsewhere, or it is lost); None otherwise."""
 
 
 class FrameDriftWarning(UserWarning):
@@ -78,6 +81,8 @@ def run_with_cassette(
     client could not read), each with the command that fixes it, built for ``invocation``
     (the test paths and user registry of the run). The error text is scrubbed of secrets. A
     corrupted, edited or stale cassette raises :class:`~pytest_emrd.errors.CassetteError`.
+    A recorded episode whose cassette cannot be written (a full disk, a read-only folder)
+    raises nothing: the run's ``unsaved`` holds the cassette's bytes and the cause.
 
     The cassette of an episode in another modality than its model's default (``modality_of``)
     has its own path (:func:`~._paths.cassette_path`). Under ``new_episodes`` an episode whose
@@ -132,6 +137,7 @@ def _run(
     )
     rerecord = record_command(spec, record_mode="all", cassettes=cassettes, invocation=invocation)
     start = time.perf_counter()
+    unsaved = None
     try:
         with (
             network_blocked(record_mode == "none"),
@@ -150,6 +156,7 @@ def _run(
             redo = record_mode == "new_episodes" and drift is not None
             if trajectory.status == "errored" or redo:
                 raise _Discard
+        unsaved = cassette.unsaved  # the cassette was saved (or not) as the block closed
     except _Discard:
         if redo:
             raise _Redo from None
@@ -169,7 +176,8 @@ def _run(
             if not cassette.unreadable and modality not in (None, spec.modality):
                 cause = _mismatch(spec, where, modality, rerecord, invocation)
         trajectory = dataclasses.replace(trajectory, error=scrub(cause))
-    return EpisodeRun(trajectory, recorded, frame_drift, time.perf_counter() - start)
+    seconds = time.perf_counter() - start
+    return EpisodeRun(trajectory, recorded, frame_drift, seconds, unsaved=unsaved)
 
 
 def _mismatch(
