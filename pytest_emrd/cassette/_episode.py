@@ -71,6 +71,7 @@ def run_with_cassette(
     invocation: Invocation | None = None,
     lock_timeout_s: float = LOCK_TIMEOUT_S,
     modality_of: ModalityOf | None = None,
+    keep_unsaved: bool = False,
 ) -> EpisodeRun:
     """Run ``run(spec, live=...)`` with the model traffic recorded to / replayed from its cassette.
 
@@ -82,7 +83,8 @@ def run_with_cassette(
     (the test paths and user registry of the run). The error text is scrubbed of secrets. A
     corrupted, edited or stale cassette raises :class:`~pytest_emrd.errors.CassetteError`.
     A recorded episode whose cassette cannot be written (a full disk, a read-only folder)
-    raises nothing: the run's ``unsaved`` holds the cassette's bytes and the cause.
+    raises the :class:`OSError`; with ``keep_unsaved`` it raises nothing, and the run's
+    ``unsaved`` holds the cassette's bytes and the cause, for the caller to keep.
 
     The cassette of an episode in another modality than its model's default (``modality_of``)
     has its own path (:func:`~._paths.cassette_path`). Under ``new_episodes`` an episode whose
@@ -97,14 +99,16 @@ def run_with_cassette(
     check_choice("record_mode", record_mode, RECORD_MODES)
     check_choice("matching", matching, MATCHING_MODES)
     where = _Where(cassettes, cassette_path(cassettes, spec, modality_of=modality_of), modality_of)
+    modes = _Modes(protocol, record_mode, matching, keep_unsaved)
     if not is_live(spec, cassettes=cassettes, record_mode=record_mode, modality_of=modality_of):
-        return _run(spec, run, where, protocol, record_mode, matching, invocation)
+        return _run(spec, run, where, modes, invocation)
     with writer_lock(cassettes, where.path, timeout=lock_timeout_s):
         start = time.perf_counter()
         try:
-            return _run(spec, run, where, protocol, record_mode, matching, invocation)
+            return _run(spec, run, where, modes, invocation)
         except _Redo:  # drift under new_episodes: the whole episode again, from scratch
-            done = _run(spec, run, where, protocol, "all", matching, invocation)
+            again = dataclasses.replace(modes, record_mode="all")
+            done = _run(spec, run, where, again, invocation)
             return dataclasses.replace(done, seconds=time.perf_counter() - start)
 
 
@@ -117,6 +121,16 @@ class _Where:
     modality_of: ModalityOf | None
 
 
+@dataclass(frozen=True)
+class _Modes:
+    """How an episode's cassette is used (see :func:`run_with_cassette`)."""
+
+    protocol: str
+    record_mode: str
+    matching: str
+    keep_unsaved: bool
+
+
 class _Redo(Exception):
     """The episode drifted under ``new_episodes``: it must be recorded again whole."""
 
@@ -125,12 +139,11 @@ def _run(
     spec: EpisodeSpec,
     run: EpisodeRunner,
     where: _Where,
-    protocol: str,
-    record_mode: str,
-    matching: str,
+    modes: _Modes,
     invocation: Invocation | None,
 ) -> EpisodeRun:
     cassettes, path = where.root, where.path
+    record_mode, matching = modes.record_mode, modes.matching
     missing = record_mode == "none" and not path.is_file()
     live = is_live(
         spec, cassettes=cassettes, record_mode=record_mode, modality_of=where.modality_of
@@ -143,11 +156,12 @@ def _run(
             network_blocked(record_mode == "none"),
             episode_cassette(
                 path,
-                protocol=protocol,
+                protocol=modes.protocol,
                 record_mode=record_mode,
                 matching=matching,
                 rerecord_command=rerecord,
                 root=cassettes,
+                keep_unsaved=modes.keep_unsaved,
             ) as cassette,
         ):
             trajectory = run(spec, live=live)

@@ -277,6 +277,7 @@ def episode_cassette(
     matching: str,
     rerecord_command: str,
     root: Path | None = None,
+    keep_unsaved: bool = False,
 ) -> Iterator[EpisodeCassette]:
     """Patch httpx with the episode's cassette for the duration of the block.
 
@@ -284,8 +285,9 @@ def episode_cassette(
     ``record_on_exception`` off (raise inside the block to discard a failed episode), and
     in ``all`` mode the file is rebuilt from scratch. Inside :func:`~._routing.routing`
     (concurrent episodes) the cassette is bound to this thread instead of patching httpx.
-    ``root`` is the cassette folder (see :class:`~._persister.EpisodePersister`). A recording
-    that cannot be written raises nothing: it is kept in :attr:`EpisodeCassette.unsaved`.
+    ``root`` is the cassette folder and ``keep_unsaved`` keeps a recording that cannot be
+    written in :attr:`EpisodeCassette.unsaved` instead of raising (see
+    :class:`~._persister.EpisodePersister`).
     """
     frame_drift: set[tuple[Any, Any]] = set()
     settings: dict[str, Any] = dict(
@@ -295,7 +297,7 @@ def episode_cassette(
             fresh=record_mode == "all",
             rerecord_command=rerecord_command,
             root=root,
-            keep_unsaved=True,
+            keep_unsaved=keep_unsaved,
         ),
         record_mode=RecordMode(record_mode),
         match_on=(make_matcher(matching, frame_drift),),

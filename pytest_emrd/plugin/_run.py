@@ -290,6 +290,7 @@ class Run:
             matching=settings.matching,
             invocation=self.invocation,
             modality_of=self.modality_of,
+            keep_unsaved=True,
         )
         if done.unsaved is not None:
             self.keep_unsaved(spec, done)

@@ -20,6 +20,7 @@ from pytest_emrd.cassette import (
     EpisodeRun,
     cassette_path,
     decode,
+    routing,
     run_with_cassette,
 )
 from pytest_emrd.trajectory import EpisodeSpec, Trajectory
@@ -62,8 +63,12 @@ class SabotagedRunner(FakeRunner):
         return super().__call__(spec, live=live)
 
 
-def _record(spec: EpisodeSpec, runner: FakeRunner, root: Path, mode: str = "once") -> EpisodeRun:
-    return run_with_cassette(spec, runner, cassettes=root, protocol=PROTOCOL, record_mode=mode)
+def _record(
+    spec: EpisodeSpec, runner: FakeRunner, root: Path, mode: str = "once", *, keep: bool = True
+) -> EpisodeRun:
+    return run_with_cassette(
+        spec, runner, cassettes=root, protocol=PROTOCOL, record_mode=mode, keep_unsaved=keep
+    )
 
 
 @pytest.mark.parametrize("cause", list(SABOTAGES))
@@ -110,6 +115,17 @@ def test_the_unsaved_cassette_moved_into_place_replays_with_no_request(
     assert again.unsaved is None and len(server.seen_headers) == sent
 
 
+def test_episodes_run_concurrently_keep_an_unsaved_cassette_too(
+    server: FakeServer, spec: EpisodeSpec, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    path = cassette_path(tmp_path, spec)
+    runner = SabotagedRunner(server.url, lambda: _folder_in_the_way(path, monkeypatch))
+    with routing():  # --emrd-concurrency: the cassette is bound to its thread
+        run = _record(spec, runner, tmp_path)
+    assert run.unsaved is not None and run.unsaved.path == path
+    assert len(decode(run.unsaved.blob).requests) == runner.steps
+
+
 def test_http_is_unpatched_after_a_cassette_that_could_not_be_written(
     server: FakeServer, spec: EpisodeSpec, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
@@ -119,6 +135,16 @@ def test_http_is_unpatched_after_a_cassette_that_could_not_be_written(
     sent = len(server.seen_headers)
     reply = httpx.post(f"{server.url}/v1/chat/completions", json={"messages": []}, timeout=5)
     assert reply.status_code == 200 and len(server.seen_headers) == sent + 1
+
+
+def test_a_caller_that_does_not_keep_unsaved_cassettes_gets_the_error(
+    server: FakeServer, spec: EpisodeSpec, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    path = cassette_path(tmp_path, spec)
+    runner = SabotagedRunner(server.url, lambda: _folder_in_the_way(path, monkeypatch))
+    with pytest.raises(IsADirectoryError):
+        _record(spec, runner, tmp_path, keep=False)
+    assert runner.calls == 1 and list((tmp_path / SCRATCH).rglob("*.tmp")) == []
 
 
 def test_a_persister_not_asked_to_keep_unsaved_cassettes_raises(tmp_path: Path) -> None:
