@@ -42,10 +42,10 @@ from pytest_emrd.run import (
     episode_path,
     start_prefetch,
 )
-from pytest_emrd.trajectory import EpisodeSpec
+from pytest_emrd.trajectory import EpisodeSpec, Trajectory
 
 if TYPE_CHECKING:
-    from pytest_emrd.cassette import EpisodeRun
+    from pytest_emrd.cassette import UnsavedCassette
 
 RUN = pytest.StashKey["Run"]()
 UNSAVED = "unsaved"
@@ -293,25 +293,27 @@ class Run:
             keep_unsaved=True,
         )
         if done.unsaved is not None:
-            self.keep_unsaved(spec, done)
+            self.keep_unsaved(spec, done.unsaved, done.trajectory, retries=done.retries)
         endpoint = self.registry.get(spec.model).base_url or "the built-in reference server"
         self.endpoints.record(spec.model, endpoint, done.trajectory.status, done.trajectory.error)
         return done
 
-    def keep_unsaved(self, spec: EpisodeSpec, done: EpisodeRun) -> None:
-        """Write a live episode whose cassette could not be saved (``done.unsaved``) to the
-        run directory's :data:`UNSAVED` folder, and remember the line that says where: the
-        cassette as it would have been (``<case_id>.json.xz``, ready to move into place) and
-        the result with its retries (``<case_id>.json``)."""
-        unsaved, folder = done.unsaved, self.run_dir / UNSAVED
+    def keep_unsaved(
+        self, spec: EpisodeSpec, unsaved: UnsavedCassette, trajectory: Trajectory, *, retries: int
+    ) -> None:
+        """Write a live episode whose cassette could not be saved to the run directory's
+        :data:`UNSAVED` folder, and remember the line that says where: the cassette as it
+        would have been (``<case_id>.json.xz``, ready to move into place) and the result with
+        its retries (``<case_id>.json``)."""
+        folder = self.run_dir / UNSAVED
         traffic, fallback = folder / f"{spec.case_id}.json.xz", folder / f"{spec.case_id}.json"
         cause = os_error_line(
             unsaved.cause, doing="write", path=unsaved.path, option="--emrd-cassettes DIR"
         )
         write_bytes_atomic(traffic, unsaved.blob)
         record: dict[str, Any] = {"case_id": spec.case_id, "cassette": str(unsaved.path)}
-        record |= {"cause": cause, "interactions": str(traffic), "retries": done.retries}
-        record["trajectory"] = done.trajectory.to_dict()
+        record |= {"cause": cause, "interactions": str(traffic), "retries": retries}
+        record["trajectory"] = trajectory.to_dict()
         write_bytes_atomic(fallback, scrub_bytes(json.dumps(record).encode()))
         move = shlex.join(["mv", str(traffic), str(unsaved.path)])
         parent = shlex.join(["mkdir", "-p", str(unsaved.path.parent)])
