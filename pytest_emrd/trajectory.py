@@ -206,9 +206,11 @@ class Step:
     """The model's reply text, verbatim."""
     usage: Usage = field(default_factory=Usage)
     repairs: tuple[str, ...] | None = None
-    """Repairs the parser applied to read the reply (``fence``, ``prose``, ``comment``,
-    ``trailing_comma``, ``python_literal``; see :func:`pytest_emrd.agent.parse_reply`); ``()``
-    for a reply read as written; None when not recorded (schema 1 files, hand-built steps)."""
+    """Repairs the parser applied to read the reply, in this order: ``fence``, ``prose``,
+    ``comment``, ``trailing_comma``, ``python_literal`` (syntax only), ``position_list``,
+    ``unit``, ``decimal_comma`` (a position in another notation; see
+    :data:`pytest_emrd.agent.REPAIRS`); ``()`` for a reply read as written; None when
+    not recorded (schema 1 files, hand-built steps)."""
     latency_s: float | None = field(default=None, compare=False)
     """Wall time of this step's request in seconds, retries included, as the model was
     called; None when no model was (a cassette answered) or not recorded. Not compared: a

@@ -33,7 +33,7 @@ from pytest_emrd.cassette._paths import (
     missing_summary,
     record_command,
 )
-from pytest_emrd.cassette._persister import EpisodePersister, writer_lock
+from pytest_emrd.cassette._persister import EpisodePersister, UnsavedCassette, writer_lock
 from pytest_emrd.cassette._redact import (
     MatchKeys,
     Redacted,
@@ -67,6 +67,7 @@ __all__ = [
     "LegacyFormatError",
     "MatchKeys",
     "Redacted",
+    "UnsavedCassette",
     "Upgraded",
     "canonical_json",
     "cassette_path",

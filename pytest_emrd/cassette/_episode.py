@@ -12,7 +12,7 @@ from pytest_emrd._scrub import scrub
 from pytest_emrd.cassette._drift import modality_message
 from pytest_emrd.cassette._network import network_blocked
 from pytest_emrd.cassette._paths import Invocation, ModalityOf, cassette_path, record_command
-from pytest_emrd.cassette._persister import LOCK_TIMEOUT_S, writer_lock
+from pytest_emrd.cassette._persister import LOCK_TIMEOUT_S, UnsavedCassette, writer_lock
 from pytest_emrd.cassette._use import episode_cassette
 from pytest_emrd.errors import check_choice
 from pytest_emrd.trajectory import MATCHING_MODES, RECORD_MODES, EpisodeSpec, Trajectory
@@ -31,6 +31,9 @@ class EpisodeRun:
     """Wall time of the episode."""
     retries: int = 0
     """Model requests retried while it ran (set by whoever watched it)."""
+    unsaved: UnsavedCassette | None = None
+    """The recording, when its cassette file could not be written (the episode is still
+    good: keep the recording elsewhere, or it is lost); None otherwise."""
 
 
 class FrameDriftWarning(UserWarning):
@@ -68,6 +71,7 @@ def run_with_cassette(
     invocation: Invocation | None = None,
     lock_timeout_s: float = LOCK_TIMEOUT_S,
     modality_of: ModalityOf | None = None,
+    keep_unsaved: bool = False,
 ) -> EpisodeRun:
     """Run ``run(spec, live=...)`` with the model traffic recorded to / replayed from its cassette.
 
@@ -78,6 +82,9 @@ def run_with_cassette(
     client could not read), each with the command that fixes it, built for ``invocation``
     (the test paths and user registry of the run). The error text is scrubbed of secrets. A
     corrupted, edited or stale cassette raises :class:`~pytest_emrd.errors.CassetteError`.
+    A recorded episode whose cassette cannot be written (a full disk, a read-only folder)
+    raises the :class:`OSError`; with ``keep_unsaved`` it raises nothing, and the run's
+    ``unsaved`` holds the cassette's bytes and the cause, for the caller to keep.
 
     The cassette of an episode in another modality than its model's default (``modality_of``)
     has its own path (:func:`~._paths.cassette_path`). Under ``new_episodes`` an episode whose
@@ -92,14 +99,16 @@ def run_with_cassette(
     check_choice("record_mode", record_mode, RECORD_MODES)
     check_choice("matching", matching, MATCHING_MODES)
     where = _Where(cassettes, cassette_path(cassettes, spec, modality_of=modality_of), modality_of)
+    modes = _Modes(protocol, record_mode, matching, keep_unsaved)
     if not is_live(spec, cassettes=cassettes, record_mode=record_mode, modality_of=modality_of):
-        return _run(spec, run, where, protocol, record_mode, matching, invocation)
+        return _run(spec, run, where, modes, invocation)
     with writer_lock(cassettes, where.path, timeout=lock_timeout_s):
         start = time.perf_counter()
         try:
-            return _run(spec, run, where, protocol, record_mode, matching, invocation)
+            return _run(spec, run, where, modes, invocation)
         except _Redo:  # drift under new_episodes: the whole episode again, from scratch
-            done = _run(spec, run, where, protocol, "all", matching, invocation)
+            again = dataclasses.replace(modes, record_mode="all")
+            done = _run(spec, run, where, again, invocation)
             return dataclasses.replace(done, seconds=time.perf_counter() - start)
 
 
@@ -112,6 +121,16 @@ class _Where:
     modality_of: ModalityOf | None
 
 
+@dataclass(frozen=True)
+class _Modes:
+    """How an episode's cassette is used (see :func:`run_with_cassette`)."""
+
+    protocol: str
+    record_mode: str
+    matching: str
+    keep_unsaved: bool
+
+
 class _Redo(Exception):
     """The episode drifted under ``new_episodes``: it must be recorded again whole."""
 
@@ -120,28 +139,29 @@ def _run(
     spec: EpisodeSpec,
     run: EpisodeRunner,
     where: _Where,
-    protocol: str,
-    record_mode: str,
-    matching: str,
+    modes: _Modes,
     invocation: Invocation | None,
 ) -> EpisodeRun:
     cassettes, path = where.root, where.path
+    record_mode, matching = modes.record_mode, modes.matching
     missing = record_mode == "none" and not path.is_file()
     live = is_live(
         spec, cassettes=cassettes, record_mode=record_mode, modality_of=where.modality_of
     )
     rerecord = record_command(spec, record_mode="all", cassettes=cassettes, invocation=invocation)
     start = time.perf_counter()
+    unsaved = None
     try:
         with (
             network_blocked(record_mode == "none"),
             episode_cassette(
                 path,
-                protocol=protocol,
+                protocol=modes.protocol,
                 record_mode=record_mode,
                 matching=matching,
                 rerecord_command=rerecord,
                 root=cassettes,
+                keep_unsaved=modes.keep_unsaved,
             ) as cassette,
         ):
             trajectory = run(spec, live=live)
@@ -150,6 +170,7 @@ def _run(
             redo = record_mode == "new_episodes" and drift is not None
             if trajectory.status == "errored" or redo:
                 raise _Discard
+        unsaved = cassette.unsaved  # the cassette was saved (or not) as the block closed
     except _Discard:
         if redo:
             raise _Redo from None
@@ -169,7 +190,8 @@ def _run(
             if not cassette.unreadable and modality not in (None, spec.modality):
                 cause = _mismatch(spec, where, modality, rerecord, invocation)
         trajectory = dataclasses.replace(trajectory, error=scrub(cause))
-    return EpisodeRun(trajectory, recorded, frame_drift, time.perf_counter() - start)
+    seconds = time.perf_counter() - start
+    return EpisodeRun(trajectory, recorded, frame_drift, seconds, unsaved=unsaved)
 
 
 def _mismatch(

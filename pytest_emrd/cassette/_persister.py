@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from collections.abc import Iterator
 from contextlib import contextmanager
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -23,6 +24,17 @@ from pytest_emrd.cassette._redact import canonical_keys
 from pytest_emrd.errors import CassetteError
 
 
+@dataclass(frozen=True)
+class UnsavedCassette:
+    """A recorded cassette that could not be written to its file: where it belonged, why,
+    and the bytes of the file (redacted exactly as the cassette holds them), which replay as
+    that cassette once written to ``path``."""
+
+    path: Path
+    cause: OSError
+    blob: bytes
+
+
 class EpisodePersister:
     """Loads and saves one episode's cassette (:mod:`._file`) under the current protocol.
 
@@ -33,16 +45,30 @@ class EpisodePersister:
     another protocol (re-record it). In ``all`` mode the old file is never read: it is
     replaced when the episode finishes. A file is written to ``<root>/.emrd-tmp`` first and
     renamed into place, so a write cut short leaves nothing in the cassette tree.
+
+    With ``keep_unsaved``, a write that fails (a full disk, a read-only folder, a file where
+    a folder belongs) raises nothing: the encoded cassette is kept in :attr:`unsaved` for the
+    caller to put elsewhere, and vcrpy closes the cassette as after a save. Without it, the
+    :class:`OSError` is raised.
     """
 
     def __init__(
-        self, *, protocol: str, fresh: bool, rerecord_command: str, root: Path | None = None
+        self,
+        *,
+        protocol: str,
+        fresh: bool,
+        rerecord_command: str,
+        root: Path | None = None,
+        keep_unsaved: bool = False,
     ) -> None:
         self.protocol = protocol
         self.fresh = fresh
         self.rerecord_command = rerecord_command
         self.root = root
         """The cassette folder (temporary files go to its ``.emrd-tmp``); ``None``: beside."""
+        self.keep_unsaved = keep_unsaved
+        self.unsaved: UnsavedCassette | None = None
+        """The last cassette that could not be written (with ``keep_unsaved``), else None."""
 
     def load_cassette(self, cassette_path: str | Path, serializer: Any = None) -> tuple[list, list]:
         path = Path(cassette_path)
@@ -82,9 +108,14 @@ class EpisodePersister:
         requests = tuple(cassette_dict["requests"])
         raw = frozenset(i for i, request in enumerate(requests) if not _canonical(request))
         data = CassetteData(self.protocol, requests, tuple(cassette_dict["responses"]), raw)
-        path = Path(cassette_path)
-        temp = scratch_path(self.root, path, "") if self.root is not None else None
-        write_bytes_atomic(path, encode(data), temp=temp)
+        path, blob = Path(cassette_path), encode(data)
+        try:
+            temp = scratch_path(self.root, path, "") if self.root is not None else None
+            write_bytes_atomic(path, blob, temp=temp)
+        except OSError as exc:
+            if not self.keep_unsaved:
+                raise
+            self.unsaved = UnsavedCassette(path, exc, blob)
 
 
 def _canonical(request: Any) -> bool:

@@ -22,7 +22,7 @@ from pytest_emrd.cassette._drift import (
     request_modality,
     unreadable_message,
 )
-from pytest_emrd.cassette._persister import EpisodePersister
+from pytest_emrd.cassette._persister import EpisodePersister, UnsavedCassette
 from pytest_emrd.cassette._redact import MatchKeys, match_keys, redact_body, scrub_headers
 
 #: Response headers kept in a cassette (the body is stored decoded, so no Content-Encoding).
@@ -235,6 +235,13 @@ class EpisodeCassette(Cassette):
         return None
 
     @property
+    def unsaved(self) -> UnsavedCassette | None:
+        """The recording, once the block has closed, when its file could not be written
+        (see :class:`~._persister.EpisodePersister`); None when it was saved or not due."""
+        persister = self._persister
+        return persister.unsaved if isinstance(persister, EpisodePersister) else None
+
+    @property
     def recorded_modality(self) -> str | None:
         """The modality of the recording (from its first request), ``None`` if empty."""
         return request_modality(_keys(self.data[0][0]).redacted) if self.data else None
@@ -270,6 +277,7 @@ def episode_cassette(
     matching: str,
     rerecord_command: str,
     root: Path | None = None,
+    keep_unsaved: bool = False,
 ) -> Iterator[EpisodeCassette]:
     """Patch httpx with the episode's cassette for the duration of the block.
 
@@ -277,7 +285,9 @@ def episode_cassette(
     ``record_on_exception`` off (raise inside the block to discard a failed episode), and
     in ``all`` mode the file is rebuilt from scratch. Inside :func:`~._routing.routing`
     (concurrent episodes) the cassette is bound to this thread instead of patching httpx.
-    ``root`` is the cassette folder (see :class:`~._persister.EpisodePersister`).
+    ``root`` is the cassette folder and ``keep_unsaved`` keeps a recording that cannot be
+    written in :attr:`EpisodeCassette.unsaved` instead of raising (see
+    :class:`~._persister.EpisodePersister`).
     """
     frame_drift: set[tuple[Any, Any]] = set()
     settings: dict[str, Any] = dict(
@@ -287,6 +297,7 @@ def episode_cassette(
             fresh=record_mode == "all",
             rerecord_command=rerecord_command,
             root=root,
+            keep_unsaved=keep_unsaved,
         ),
         record_mode=RecordMode(record_mode),
         match_on=(make_matcher(matching, frame_drift),),

@@ -7,22 +7,23 @@ no EMRD test imports, starts and writes nothing.
 Paid work is never lost to the disk. Before a live episode, the cassette folder must be
 writable (else the test fails in one line and nothing is sent to the model). If the
 cassette still cannot be saved when the episode ends (a full disk), the episode's result,
-with every reply and its token usage, goes to ``<run>/unsaved/<case_id>.json`` and to the
-results store, a :class:`CassetteNotSavedWarning` says where, and the episode is not run
-again by this run or by a resumed one. Any other file system failure is one line naming the
-path and the fix.
+with every reply, its token usage and its retries, goes to ``<run>/unsaved/<case_id>.json``
+and to the results store, the cassette itself (redacted, ready to move into place) to
+``<run>/unsaved/<case_id>.json.xz``, a :class:`CassetteNotSavedWarning` says where, and the
+episode is not run again by this run or by a resumed one. Any other file system failure is
+one line naming the path and the fix.
 """
 
 from __future__ import annotations
 
 import json
 import os
-import time
+import shlex
 import warnings
 from dataclasses import dataclass
 from functools import cached_property
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import pytest
 
@@ -41,7 +42,10 @@ from pytest_emrd.run import (
     episode_path,
     start_prefetch,
 )
-from pytest_emrd.trajectory import EpisodeSpec
+from pytest_emrd.trajectory import EpisodeSpec, Trajectory
+
+if TYPE_CHECKING:
+    from pytest_emrd.cassette import UnsavedCassette
 
 RUN = pytest.StashKey["Run"]()
 UNSAVED = "unsaved"
@@ -252,7 +256,7 @@ class Run:
     def compute(self, spec: EpisodeSpec) -> Any:
         """Run ``spec`` through its cassette (see the module docstring for a cassette that
         cannot be written)."""
-        from pytest_emrd.cassette import EpisodeRun, cassette_path, is_live
+        from pytest_emrd.cassette import cassette_path, is_live
         from pytest_emrd.progress import run_watched
         from pytest_emrd.run import episode_path
 
@@ -275,48 +279,49 @@ class Run:
             except OSError as exc:
                 line = os_error_line(exc, doing="write", path=path, option="--emrd-cassettes DIR")
                 raise CassetteError(f"the cassette {line} Nothing was sent to the model.") from None
-        kept = []
-
-        def runner(s: EpisodeSpec, **kwargs: Any) -> Any:
-            trajectory = self.runner(s, **kwargs)
-            kept.append(trajectory)
-            return trajectory
-
         self.endpoints.skip_if_stopped(spec.model)
-        start = time.perf_counter()
-        try:
-            done = run_watched(
-                spec,
-                runner,
-                status=self.status_file,
-                cassettes=settings.cassettes,
-                protocol=self.protocol,
-                record_mode=settings.record_mode,
-                matching=settings.matching,
-                invocation=self.invocation,
-                modality_of=self.modality_of,
-            )
-        except OSError as exc:
-            if not (live and kept):
-                raise
-            self.keep_unsaved(spec, kept[-1], path, exc)
-            return EpisodeRun(kept[-1], True, 0, time.perf_counter() - start)
+        done = run_watched(
+            spec,
+            self.runner,
+            status=self.status_file,
+            cassettes=settings.cassettes,
+            protocol=self.protocol,
+            record_mode=settings.record_mode,
+            matching=settings.matching,
+            invocation=self.invocation,
+            modality_of=self.modality_of,
+            keep_unsaved=True,
+        )
+        if done.unsaved is not None:
+            self.keep_unsaved(spec, done.unsaved, done.trajectory, retries=done.retries)
         endpoint = self.registry.get(spec.model).base_url or "the built-in reference server"
         self.endpoints.record(spec.model, endpoint, done.trajectory.status, done.trajectory.error)
         return done
 
-    def keep_unsaved(self, spec: EpisodeSpec, trajectory: Any, path: Path, exc: OSError) -> None:
-        """Write a live episode whose cassette ``path`` could not be saved to the run
-        directory's :data:`UNSAVED` folder, and remember the line that says where."""
-        fallback = self.run_dir / UNSAVED / f"{spec.case_id}.json"
-        cause = os_error_line(exc, doing="write", path=path, option="--emrd-cassettes DIR")
-        record: dict[str, Any] = {"case_id": spec.case_id, "cassette": str(path), "cause": cause}
+    def keep_unsaved(
+        self, spec: EpisodeSpec, unsaved: UnsavedCassette, trajectory: Trajectory, *, retries: int
+    ) -> None:
+        """Write a live episode whose cassette could not be saved to the run directory's
+        :data:`UNSAVED` folder, and remember the line that says where: the cassette as it
+        would have been (``<case_id>.json.xz``, ready to move into place) and the result with
+        its retries (``<case_id>.json``)."""
+        folder = self.run_dir / UNSAVED
+        traffic, fallback = folder / f"{spec.case_id}.json.xz", folder / f"{spec.case_id}.json"
+        cause = os_error_line(
+            unsaved.cause, doing="write", path=unsaved.path, option="--emrd-cassettes DIR"
+        )
+        write_bytes_atomic(traffic, unsaved.blob)
+        record: dict[str, Any] = {"case_id": spec.case_id, "cassette": str(unsaved.path)}
+        record |= {"cause": cause, "interactions": str(traffic), "retries": retries}
         record["trajectory"] = trajectory.to_dict()
         write_bytes_atomic(fallback, scrub_bytes(json.dumps(record).encode()))
+        move = shlex.join(["mv", str(traffic), str(unsaved.path)])
+        parent = shlex.join(["mkdir", "-p", str(unsaved.path.parent)])
         self._unsaved[spec] = (
             f"{spec.case_id}: the cassette {cause} The live episode is kept in {fallback} and "
             f"in the run directory: resume with --emrd-results {self.run_dir} to reuse it "
-            "without calling the model again."
+            f"without calling the model again. Its recorded cassette is {traffic}; to replay "
+            f"it offline, fix the cause, then: {parent} && {move}"
         )
 
     def episode(self, spec: EpisodeSpec) -> StoredEpisode:

@@ -42,12 +42,15 @@ def test_an_episode_whose_cassette_cannot_be_written_is_kept_and_not_run_again(s
     first = suite.runpytest(*GRID, f"--emrd-results={run_dir}")
     first.assert_outcomes(passed=1)
     fallback = run_dir / "unsaved" / f"{CASE}.json"
+    traffic = run_dir / "unsaved" / f"{CASE}{SUFFIX}"
     lines = [x for x in _output(first).splitlines() if "CassetteNotSavedWarning" in x]
     assert len(lines) == 1 and lines[0].endswith(
         f"CassetteNotSavedWarning: {CASE}: the cassette cannot write {cassette}: the path is a "
         "folder where a file belongs; move that folder away (--emrd-cassettes DIR). The live "
         f"episode is kept in {fallback} and in the run directory: resume with --emrd-results "
-        f"{run_dir} to reuse it without calling the model again."
+        f"{run_dir} to reuse it without calling the model again. Its recorded cassette is "
+        f"{traffic}; to replay it offline, fix the cause, then: mkdir -p {cassette.parent} && "
+        f"mv {traffic} {cassette}"
     ), lines
     assert "Traceback" not in _output(first)
     kept = json.loads(fallback.read_text())
