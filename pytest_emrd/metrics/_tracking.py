@@ -24,10 +24,18 @@ Definitions (step ``t`` is 1-based; see :mod:`pytest_emrd.trajectory` for the ti
   matcher pairs ``l`` with meanwhile (a noisier, moved or mirrored entry) does not matter: a
   map in which no label disappears or changes type has no forgetting event. An object mapped
   while out of view opens no spell.
-* **Discovery** of ``o``: the first step it is held; discovery rank orders discovered objects
-  by first step, and objects first held at the same step in the order the model wrote their
-  entries in that step's map (the model's own order of discovery; never by id string, which
-  would put ``Chair_10`` before ``Chair_2``).
+* **Discovery** of ``o`` is, like forgetting, what the model did: the step at which the
+  model wrote, as it still stands, an entry whose label holds ``o`` for good (at that step's
+  matching and at every later step that writes the label). A pairing the matcher later
+  withdraws from a label still written does not discover ``o``, and a pairing the matcher
+  makes late of an entry written unchanged earlier counts from when it was written: on a
+  sparse early map (two or three entries) a hallucinated entry fits the layout as well as
+  the real ones (an invented "exit sign" read as the office's door) until later entries fix
+  the frame, and the entries of those steps are read in that wrong frame meanwhile. An
+  object that no label holds for good is discovered at the first step it is held. Discovery
+  rank orders discovered objects by that step, and objects discovered at the same step in
+  the order the model wrote their entries in that step's map (the model's own order of
+  discovery; never by id string, which would put ``Chair_10`` before ``Chair_2``).
 * Miller's law and TBS follow the paper in tracking *labels* across steps ("objects are
   matched across time steps exclusively using the string labels", Appendix B).
 """
@@ -164,20 +172,62 @@ def track_episode(traj: Trajectory) -> Track:
 
 
 def _discovery(held: list[dict[str, str]], written: list[dict[str, MapEntry]]) -> dict[str, int]:
-    """Object id -> discovery rank: by first step held, then by entry order in that map
-    (``written[t]``: the labels of ``M_t`` in the order the model wrote them)."""
-    first: dict[str, tuple[int, str]] = {}
+    """Object id -> discovery rank: by discovery step (module docstring), then by entry order
+    in that step's map (``written[t]``: the labels of ``M_t`` in the order the model wrote
+    them)."""
+    kept = _kept_pairings(held, written)
+    first: dict[str, tuple[int, int, bool]] = {}
+    fallback: dict[str, tuple[int, int, bool]] = {}
     for t, h in enumerate(held):
         for oid, label in h.items():
-            if oid not in first:
-                first[oid] = (t, label)
-    order: dict[int, dict[str, int]] = {}
-    for t, _ in first.values():
-        if t not in order:
-            order[t] = {lb: i for i, lb in enumerate(written[t])}
-    when = {oid: (t, order[t][label]) for oid, (t, label) in first.items()}
+            # Held by a withdrawn pairing only: ranked after an object its label kept then.
+            fallback.setdefault(oid, (t, list(written[t]).index(label), True))
+            if (oid, label) in kept[t]:
+                since = _unchanged_since(written, label, t)
+                when = (since, list(written[since]).index(label), False)
+                first[oid] = min(first.get(oid, when), when)
+    when = {oid: first.get(oid, at) for oid, at in fallback.items()}
     ranked = sorted(when, key=when.__getitem__)
     return {oid: rank for rank, oid in enumerate(ranked, start=1)}
+
+
+def _unchanged_since(written: list[dict[str, MapEntry]], label: str, t: int) -> int:
+    """The first step of the run of steps up to ``t`` writing ``label``'s entry of step ``t``
+    unchanged (type and position)."""
+    entry = written[t][label]
+    since = t
+    while since > 0:
+        before = written[since - 1].get(label)
+        if before is None or (before.object_type, before.x, before.z) != (
+            entry.object_type, entry.x, entry.z,
+        ):  # fmt: skip
+            break
+        since -= 1
+    return since
+
+
+_WITHDRAWN = ""
+"""A label that a later step shows without the object it holds now (or with another one)."""
+
+
+def _kept_pairings(
+    held: list[dict[str, str]], written: list[dict[str, MapEntry]]
+) -> list[set[tuple[str, str]]]:
+    """For every step, the ``(object, label)`` pairs the label keeps: at every later step at
+    which the label is written it still holds that object. Walked backwards, remembering for
+    each label the object it holds at all later steps that write it (:data:`_WITHDRAWN` when
+    those differ, or when one leaves it unmatched)."""
+    later: dict[str, str] = {}
+    kept: list[set[tuple[str, str]]] = [set() for _ in held]
+    for t in range(len(held) - 1, -1, -1):
+        holds = {label: oid for oid, label in held[t].items()}
+        for oid, label in held[t].items():
+            if later.get(label, oid) == oid:
+                kept[t].add((oid, label))
+        for label in written[t]:
+            now = holds.get(label, _WITHDRAWN)
+            later[label] = now if later.get(label, now) == now else _WITHDRAWN
+    return kept
 
 
 def _spells(

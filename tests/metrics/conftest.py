@@ -113,9 +113,16 @@ def small_grid_metrics(small_grid: list[Trajectory]) -> list[EpisodeMetrics]:
 COMMITTED = [("conference", 0), ("office", 3), ("kitchen", 11), ("entrance", 8)]
 
 
-@pytest.fixture(scope="session")
-def committed() -> list[Trajectory]:
-    """Committed scout episodes, replayed offline from cassettes/scout."""
+#: Committed scout episodes in which an invented "exit sign" typed as a door enters a map of
+#: one to five entries: it fits the layout as well as the real entries until the map grows.
+SPARSE_EARLY = [
+    ("conference", 4), ("conference", 10), ("conference", 17),
+    ("kitchen", 13), ("kitchen", 14), ("kitchen", 18),
+]  # fmt: skip
+
+
+def _replay(episodes: list[tuple[str, int]]) -> list[Trajectory]:
+    """Committed scout baseline episodes, replayed offline from cassettes/scout."""
     from pytest_emrd.agent import load_registry
     from pytest_emrd.cassette import run_with_cassette
     from pytest_emrd.episode import agent_runner, protocol_version
@@ -123,7 +130,7 @@ def committed() -> list[Trajectory]:
     root = Path(__file__).resolve().parents[2] / "cassettes"
     runner = agent_runner(load_registry())
     out = []
-    for spawn, ep in COMMITTED:
+    for spawn, ep in episodes:
         spec = EpisodeSpec("scout", "baseline", spawn, ep, modality="both")
         run = run_with_cassette(
             spec, runner, cassettes=root, protocol=protocol_version("builtin"), record_mode="none"
@@ -131,3 +138,15 @@ def committed() -> list[Trajectory]:
         assert run.trajectory.status != "errored", run.trajectory.error
         out.append(run.trajectory)
     return out
+
+
+@pytest.fixture(scope="session")
+def committed() -> list[Trajectory]:
+    """Committed scout episodes, one per spawn room (:data:`COMMITTED`)."""
+    return _replay(COMMITTED)
+
+
+@pytest.fixture(scope="session")
+def sparse_early() -> list[Trajectory]:
+    """The committed episodes of :data:`SPARSE_EARLY`."""
+    return _replay(SPARSE_EARLY)

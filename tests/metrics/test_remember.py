@@ -222,3 +222,24 @@ def test_anova_conditions_agrees_with_scipy(small_grid_metrics: list[EpisodeMetr
     assert res.statistic == pytest.approx(ref.statistic)
     assert res.p_value == pytest.approx(ref.pvalue)
     assert set(res.groups) == {"baseline", "low_light", "texture"}
+
+
+def test_discovery_counts_from_when_the_entry_was_written_not_when_the_matcher_read_it(
+    make_obj: MakeObj, make_traj: MakeTraj
+) -> None:
+    # One chair alone fixes no frame: the matcher reads it as Chair_1 (the first by id) until
+    # the desk written at step 2 shows it is Chair_2. The model mapped Chair_2 at step 1.
+    truth = [
+        make_obj("Chair_1", x=0.0, category="clutter"),
+        make_obj("Chair_2", x=3.0, category="clutter"),
+        make_obj("Desk_1", z=5.0, category="salient"),
+    ]
+    chair, desk = ("Chair", 13.0, 10.0), ("Desk", 10.0, 15.0)  # the model's frame: shifted
+    steps = [
+        (OFFICE, ["Chair_2"], {"c": chair}),
+        (OFFICE, ["Chair_2", "Desk_1"], {"c": chair, "d": desk}),
+        (OFFICE, [], {"c": chair, "d": desk}),
+    ]
+    m = episode_metrics(make_traj(truth, steps))
+    ranks = {s.object_id: s.discovery_rank for s in m.spells}
+    assert ranks == {"Chair_2": 1, "Desk_1": 3}  # Chair_1 (read at step 1, withdrawn) is 2nd

@@ -133,12 +133,14 @@ def test_a_dropped_label_is_forgotten_however_the_rest_is_rematched(
 
 @pytest.mark.slow
 @pytest.mark.parametrize("written_type", ["exit sign", "Door"], ids=["as-written", "as-a-door"])
+@pytest.mark.parametrize("episodes", ["committed", "sparse_early"])
 def test_one_hallucinated_landmark_moves_pa_by_at_most_0_02_and_no_memory_metric(
-    committed: list[Trajectory], written_type: str
+    request: pytest.FixtureRequest, episodes: str, written_type: str
 ) -> None:
     # Issue: an "exit sign" read as the office's only Door became an anchor: PA 0.9997 -> 0.743,
-    # EFC infinity -> 44.
-    for traj in committed:
+    # EFC infinity -> 44. On a map of a few entries it fits as well as the real ones and moved
+    # discovery ranks (serial position) in the sparse_early episodes.
+    for traj in request.getfixturevalue(episodes):
         final = traj.steps[-1].cognitive_map
         spot = (final[0].x + 4.0, final[0].z - 3.0)  # somewhere in the model's frame
         sign = MapEntry("exit sign", written_type, *spot)
