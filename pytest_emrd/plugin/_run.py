@@ -356,23 +356,6 @@ class Run:
         check_choice("condition", condition, CONDITIONS)
         return cell_specs(self.settings, model, condition, self.modality_of)
 
-    @cached_property
-    def measured(self) -> Any:
-        """Per-episode metrics saved beside this run's episodes (shared by every worker and
-        every resumed run)."""
-        from pytest_emrd.metrics import EpisodeMetrics, episode_metrics
-        from pytest_emrd.run import (
-            EPISODE_METRICS_CODE,
-            EPISODE_METRICS_LIBRARIES,
-            MeasuredStore,
-            code_fingerprint,
-        )
-
-        code = code_fingerprint(EPISODE_METRICS_CODE, EPISODE_METRICS_LIBRARIES)
-        return MeasuredStore(
-            self.store, measure=episode_metrics, load=EpisodeMetrics.from_dict, code=code
-        )
-
     def verdict(self, cell: GateCell) -> Verdict:
         from pytest_emrd.gate import evaluate_cell
         from pytest_emrd.metrics import GATE_METRICS
@@ -381,10 +364,12 @@ class Run:
         return evaluate_cell(cell, episodes, GATE_METRICS)
 
     def episode_metrics(self, spec: EpisodeSpec) -> Any:
-        """Per-episode metrics of ``spec``, measured once per run directory: every gate of
-        a cell, every worker and every resumed run reads them back."""
+        """Per-episode metrics of ``spec``, measured once per process: every gate of a cell
+        that this process runs reads them back from here."""
         if spec not in self._metrics:
-            self._metrics[spec] = self.measured.get(spec, self.episode)
+            from pytest_emrd.metrics import episode_metrics
+
+            self._metrics[spec] = episode_metrics(self.episode(spec).trajectory)
         return self._metrics[spec]
 
     def summary(self, stored: StoredEpisode) -> EpisodeSummary:
