@@ -145,3 +145,13 @@ def test_a_stored_episode_round_trips_through_its_file():
     )
     again = StoredEpisode.from_json(stored.to_json())
     assert again.head == stored.head and again.trajectory == stored.trajectory
+
+
+def test_an_episode_file_of_an_unknown_layout_is_one_line_naming_it(tmp_path):
+    _computed(tmp_path)
+    path = _store(tmp_path).path_for(SPEC)
+    path.write_bytes(path.read_bytes().replace(b'"store_schema":2', b'"store_schema":3'))
+    message = r"episode file=.*cannot be read \(store_schema=3 is not 2\); delete it and rerun"
+    with pytest.raises(ProtocolError, match=message):
+        load_run_episodes([tmp_path])
+    assert _store(tmp_path, "s2").reusable(SPEC) is None  # recomputed by a resume
