@@ -86,8 +86,8 @@ def _report(args: argparse.Namespace, formats: list[str]) -> int:
 
     check_run_dirs(args.run_dirs)
     episodes = load_run_episodes(args.run_dirs)
-    # each episode measured once, for the gates and the report
-    metrics = [episode_metrics(e.trajectory) for e in episodes]
+    # each episode measured once, for the gates and the report, its trajectory not kept
+    metrics = [episode_metrics(e.decode_trajectory()) for e in episodes]
     registry = load_registry(args.models)
     thresholds_path = args.thresholds
     if thresholds_path is None and _DEFAULT_THRESHOLDS.is_file():

@@ -365,11 +365,12 @@ class Run:
 
     def episode_metrics(self, spec: EpisodeSpec) -> Any:
         """Per-episode metrics of ``spec``, measured once per process: every gate of a cell
-        that this process runs reads them back from here."""
+        that this process runs reads them back from here (an episode read from the store is
+        decoded for it, not kept)."""
         if spec not in self._metrics:
             from pytest_emrd.metrics import episode_metrics
 
-            self._metrics[spec] = episode_metrics(self.episode(spec).trajectory)
+            self._metrics[spec] = episode_metrics(self.episode(spec).decode_trajectory())
         return self._metrics[spec]
 
     def summary(self, stored: StoredEpisode) -> EpisodeSummary:

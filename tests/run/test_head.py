@@ -155,3 +155,10 @@ def test_an_episode_file_of_an_unknown_layout_is_one_line_naming_it(tmp_path):
     with pytest.raises(ProtocolError, match=message):
         load_run_episodes([tmp_path])
     assert _store(tmp_path, "s2").reusable(SPEC) is None  # recomputed by a resume
+
+
+def test_decoding_a_trajectory_without_keeping_it_gives_the_same_trajectory(tmp_path):
+    computed = _computed(tmp_path)
+    resumed = _store(tmp_path, "s2").get_or_compute(SPEC, _never)
+    assert resumed.decode_trajectory() == computed.trajectory and not _decoded(resumed)
+    assert resumed.trajectory is resumed.decode_trajectory()  # once kept, the kept one
