@@ -39,6 +39,7 @@ from pytest_emrd.run import (
     RunSettings,
     StoredEpisode,
     episode_path,
+    scratch_dir,
     start_prefetch,
 )
 from pytest_emrd.trajectory import EpisodeSpec
@@ -235,12 +236,20 @@ class Run:
 
         return agent_runner(self.registry, run=self.simulators.run)
 
+    @property
+    def session_folder(self) -> Path:
+        """Where this session's processes share transient state (the live line's status
+        files): a folder of the run directory's scratch space, outside it
+        (:func:`~pytest_emrd.run.scratch_dir`)."""
+        return scratch_dir(self.run_dir) / self.session
+
     @cached_property
     def status_file(self) -> Any:
-        """This process's live status (``<run>/live/<worker>.json``) for the live line."""
+        """This process's live status for the live line (``live/<worker>.json`` in
+        :attr:`session_folder`)."""
         from pytest_emrd.progress import StatusFile
 
-        return StatusFile(self.run_dir)
+        return StatusFile(self.session_folder)
 
     @cached_property
     def endpoints(self) -> Any:
