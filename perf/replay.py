@@ -4,12 +4,13 @@
   over the full reference grid (scout x 3 conditions x 4 spawns x 20 episodes, committed
   cassettes, gates included), in a fresh run directory. Target 20 s. And
   ``replay.resume_240_s``: the same command again on that finished run directory (every
-  episode checked against the results store, every gate evaluated again from the per-episode
-  metrics saved beside it). Target 3 s. ``replay.grid_240_cpu_s`` and
-  ``replay.resume_240_cpu_s``: the CPU time of those commands (controller and workers),
-  which other load on the machine stretches less than wall time. All under Python's default
-  bytecode policy (:func:`~perf.python_env`; warm: one untimed round first fills the
-  cache, as on a user's machine from the second run on); ``replay.resume_240_nobytecode_s``,
+  episode checked against the results store from its head line, every gate evaluated again:
+  each worker decodes and measures the episodes of the cells it gates). Target 3 s.
+  ``replay.grid_240_cpu_s`` and ``replay.resume_240_cpu_s``: the CPU time of those
+  commands (controller and workers), which other load on the machine stretches less than
+  wall time. All under Python's default bytecode policy (:func:`~perf.python_env`; warm: one
+  untimed round first fills the cache, as on a user's machine from the second run on);
+  ``replay.resume_240_nobytecode_s``,
   no target, is the resume again with ``PYTHONDONTWRITEBYTECODE=1``, where every one of the
   three pytest processes compiles our package and rewrites the plugin packages again.
 * ``replay.vs_world_ratio`` — replaying :data:`SAMPLE` (12 committed episodes, one per

@@ -48,8 +48,6 @@ ABOUT: dict[str, str] = {
     "plugin.empty_session_nobytecode_s": "the floor with `PYTHONDONTWRITEBYTECODE=1`",
     "report.grid_240_s": "`emrd report` on a 240-episode run, whole process",
     "report.grid_240_cpu_s": "its CPU time",
-    "report.grid_240_first_s": "the first report of that run",
-    "report.grid_240_first_cpu_s": "its CPU time",
     "report.grid_240_nobytecode_s": "the same with `PYTHONDONTWRITEBYTECODE=1`",
 }
 

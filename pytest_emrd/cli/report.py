@@ -14,13 +14,8 @@ import argparse
 import os
 import sys
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 from pytest_emrd.errors import ConfigError, check_choice
-
-if TYPE_CHECKING:
-    from pytest_emrd.metrics import EpisodeMetrics
-    from pytest_emrd.run import StoredEpisode
 
 _DEFAULT_THRESHOLDS = Path("thresholds.yaml")
 
@@ -85,31 +80,21 @@ def _report(args: argparse.Namespace, formats: list[str]) -> int:
     from pytest_emrd.agent import load_registry
     from pytest_emrd.cli import check_run_dirs
     from pytest_emrd.gate import evaluate_all, load_thresholds
-    from pytest_emrd.metrics import GATE_METRICS
-    from pytest_emrd.report import (
-        aggregates_key,
-        build_report,
-        read_aggregates,
-        write_aggregates,
-        write_report,
-    )
+    from pytest_emrd.metrics import GATE_METRICS, episode_metrics
+    from pytest_emrd.report import build_report, write_report
     from pytest_emrd.run import load_run_episodes
 
     check_run_dirs(args.run_dirs)
-    # read through their heads: a trajectory is decoded only where something needs it
     episodes = load_run_episodes(args.run_dirs)
-    home = args.run_dirs[0]
-    key = aggregates_key(episodes, episode=args.episode)
-    saved = None if key is None else read_aggregates(home, key)
+    # each episode measured once, for the gates and the report, its trajectory not kept
+    metrics = [episode_metrics(e.decode_trajectory()) for e in episodes]
     registry = load_registry(args.models)
     thresholds_path = args.thresholds
     if thresholds_path is None and _DEFAULT_THRESHOLDS.is_file():
         thresholds_path = _DEFAULT_THRESHOLDS
-    metrics = None
     verdicts, source = [], None
     if thresholds_path is not None:
         thresholds = load_thresholds(thresholds_path, registry=registry, metrics=GATE_METRICS)
-        metrics = _episode_metrics(args.run_dirs, episodes)
         verdicts = evaluate_all(metrics, thresholds, GATE_METRICS)  # cells by each one's spec
         source = str(thresholds_path)
     prices = {}
@@ -118,8 +103,6 @@ def _report(args: argparse.Namespace, formats: list[str]) -> int:
             config = registry.get(model)
             prices[model] = (config.price_per_mtok_in, config.price_per_mtok_out)
     processes = _processes()
-    if saved is None and metrics is None:
-        metrics = _episode_metrics(args.run_dirs, episodes)
     report = build_report(
         episodes,
         verdicts=verdicts,
@@ -127,12 +110,9 @@ def _report(args: argparse.Namespace, formats: list[str]) -> int:
         prices=prices,
         episode_metrics=metrics,
         episode=args.episode,
-        statistics=saved,
         processes=processes,
     )
-    if saved is None and key is not None:
-        write_aggregates(home, key, report)
-    out = args.out if args.out is not None else home / "report"
+    out = args.out if args.out is not None else args.run_dirs[0] / "report"
     written = write_report(report, out, formats, processes=processes)
     print(f"{len(episodes)} episodes from {len(args.run_dirs)} run director(ies)")
     for note in report.missing:
@@ -147,23 +127,6 @@ def _processes() -> int:
     (the map alignment beside the tables, then the figures), else one."""
     cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
     return min(2, cores or 1)
-
-
-def _episode_metrics(run_dirs: list[Path], episodes: list[StoredEpisode]) -> list[EpisodeMetrics]:
-    """Each episode's metrics, once, for the gates and the report: read back where the run
-    saved them, measured otherwise."""
-    from pytest_emrd.metrics import EpisodeMetrics, episode_metrics
-    from pytest_emrd.run import (
-        EPISODE_METRICS_CODE,
-        EPISODE_METRICS_LIBRARIES,
-        code_fingerprint,
-        measured_episodes,
-    )
-
-    return measured_episodes(
-        run_dirs, episodes, measure=episode_metrics, load=EpisodeMetrics.from_dict,
-        code=code_fingerprint(EPISODE_METRICS_CODE, EPISODE_METRICS_LIBRARIES),
-    )  # fmt: skip
 
 
 def _compare(args: argparse.Namespace, formats: list[str]) -> int:

@@ -5,8 +5,9 @@ Its remaining episodes are skipped with one shared reason (pytest prints it once
 end of the run names the endpoint and the command that resumes the run; every episode
 already recorded stays in the run directory and its cassette, and the errored ones are
 computed again by the resumed session (an errored episode is reused only by the session
-that produced it). The count lives in ``<run>/endpoints/<model>.json`` under a file lock,
-so the xdist workers of one session share it; a resumed session starts from zero.
+that produced it). The count lives beside the run directory's locks, outside it
+(:func:`~pytest_emrd.run.scratch_dir`), in ``endpoints/<model>.json`` under a file lock, so
+the xdist workers of one session share it; a resumed session starts from zero.
 """
 
 from __future__ import annotations
@@ -23,6 +24,7 @@ import pytest
 
 from pytest_emrd._atomic import write_bytes_atomic
 from pytest_emrd._scrub import scrub
+from pytest_emrd.run import scratch_dir
 
 DEAD_AFTER: Final = 3
 """Consecutive unreachable episodes of one model that stop its remaining episodes."""
@@ -53,7 +55,7 @@ class EndpointWatch:
     """Per model, the consecutive unreachable episodes of this session (shared by workers)."""
 
     def __init__(self, run_dir: Path, session: str, args: Sequence[str]) -> None:
-        self.folder = run_dir / "endpoints"
+        self.folder = scratch_dir(run_dir) / "endpoints"
         self.run_dir, self.session, self.args = run_dir, session, tuple(args)
 
     def _read(self, model: str) -> dict[str, Any]:
@@ -75,7 +77,7 @@ class EndpointWatch:
         """Count one computed episode of ``model``; the stop when this one made it."""
         from filelock import FileLock
 
-        self.folder.mkdir(parents=True, exist_ok=True)
+        self.folder.mkdir(mode=0o700, parents=True, exist_ok=True)
         with FileLock(str(self.folder / f"{model}.lock")):
             data = self._read(model) or {"session": self.session, "consecutive": 0}
             if data.get("stopped"):

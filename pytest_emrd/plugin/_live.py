@@ -84,7 +84,7 @@ class LiveLine:
             message = scrub(f"pytest-emrd: {failed.message()}")
             pytest.exit(message, returncode=pytest.ExitCode.USAGE_ERROR)
         if live and self._ticker is None:
-            board = LiveBoard(run.run_dir, total=live)
+            board = LiveBoard(run.session_folder, total=live)
             self._ticker = Ticker(board, self.write_line).start()
 
     def write_line(self, line: str) -> None:

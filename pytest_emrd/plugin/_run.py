@@ -40,6 +40,7 @@ from pytest_emrd.run import (
     RunSettings,
     StoredEpisode,
     episode_path,
+    scratch_dir,
     start_prefetch,
 )
 from pytest_emrd.trajectory import EpisodeSpec, Trajectory
@@ -239,12 +240,20 @@ class Run:
 
         return agent_runner(self.registry, run=self.simulators.run)
 
+    @property
+    def session_folder(self) -> Path:
+        """Where this session's processes share transient state (the live line's status
+        files): a folder of the run directory's scratch space, outside it
+        (:func:`~pytest_emrd.run.scratch_dir`)."""
+        return scratch_dir(self.run_dir) / self.session
+
     @cached_property
     def status_file(self) -> Any:
-        """This process's live status (``<run>/live/<worker>.json``) for the live line."""
+        """This process's live status for the live line (``live/<worker>.json`` in
+        :attr:`session_folder`)."""
         from pytest_emrd.progress import StatusFile
 
-        return StatusFile(self.run_dir)
+        return StatusFile(self.session_folder)
 
     @cached_property
     def endpoints(self) -> Any:
@@ -361,23 +370,6 @@ class Run:
         check_choice("condition", condition, CONDITIONS)
         return cell_specs(self.settings, model, condition, self.modality_of)
 
-    @cached_property
-    def measured(self) -> Any:
-        """Per-episode metrics saved beside this run's episodes (shared by every worker and
-        every resumed run)."""
-        from pytest_emrd.metrics import EpisodeMetrics, episode_metrics
-        from pytest_emrd.run import (
-            EPISODE_METRICS_CODE,
-            EPISODE_METRICS_LIBRARIES,
-            MeasuredStore,
-            code_fingerprint,
-        )
-
-        code = code_fingerprint(EPISODE_METRICS_CODE, EPISODE_METRICS_LIBRARIES)
-        return MeasuredStore(
-            self.store, measure=episode_metrics, load=EpisodeMetrics.from_dict, code=code
-        )
-
     def verdict(self, cell: GateCell) -> Verdict:
         from pytest_emrd.gate import evaluate_cell
         from pytest_emrd.metrics import GATE_METRICS
@@ -386,10 +378,13 @@ class Run:
         return evaluate_cell(cell, episodes, GATE_METRICS)
 
     def episode_metrics(self, spec: EpisodeSpec) -> Any:
-        """Per-episode metrics of ``spec``, measured once per run directory: every gate of
-        a cell, every worker and every resumed run reads them back."""
+        """Per-episode metrics of ``spec``, measured once per process: every gate of a cell
+        that this process runs reads them back from here (an episode read from the store is
+        decoded for it, not kept)."""
         if spec not in self._metrics:
-            self._metrics[spec] = self.measured.get(spec, self.episode)
+            from pytest_emrd.metrics import episode_metrics
+
+            self._metrics[spec] = episode_metrics(self.episode(spec).decode_trajectory())
         return self._metrics[spec]
 
     def summary(self, stored: StoredEpisode) -> EpisodeSummary:

@@ -1,8 +1,9 @@
 """Where a running episode stands, shared between processes through small JSON files.
 
 Each process that runs live episodes (the only one, or each pytest-xdist worker) writes
-one file, ``<run>/live/<worker>.json``, atomically on every step and retry; the controller
-reads them all for the live line. Only live (recording) episodes publish: replays are too
+one file, ``<folder>/live/<worker>.json``, atomically on every step and retry (the plugin's
+``folder``: the session's, beside the run directory's locks); the controller reads them all
+for the live line. Only live (recording) episodes publish: replays are too
 fast to watch and must stay as cheap as they are.
 """
 
@@ -56,14 +57,14 @@ def worker_name() -> str:
 
 
 class StatusFile:
-    """This process's ``<run>/live/<worker>.json``, rewritten atomically on each change.
+    """This process's ``<folder>/live/<worker>.json``, rewritten atomically on each change.
 
     Episodes computed ahead in threads (``--emrd-concurrency``) each get their own file,
     ``<worker>-t<n>.json``: one status per running episode.
     """
 
-    def __init__(self, run_dir: Path, worker: str | None = None) -> None:
-        self.folder = run_dir / LIVE_FOLDER
+    def __init__(self, folder: Path, worker: str | None = None) -> None:
+        self.folder = folder / LIVE_FOLDER
         self.name = worker or worker_name()
         self._main = threading.get_ident()
         self._by_thread: dict[int, WorkerStatus] = {}
@@ -88,10 +89,10 @@ class StatusFile:
         return status
 
 
-def read_statuses(run_dir: Path) -> list[WorkerStatus]:
-    """Every readable status file of a run directory, by worker name."""
+def read_statuses(folder: Path) -> list[WorkerStatus]:
+    """Every readable status file under ``folder``, by worker name."""
     statuses = []
-    for path in sorted((run_dir / LIVE_FOLDER).glob("*.json")):
+    for path in sorted((folder / LIVE_FOLDER).glob("*.json")):
         try:
             statuses.append(WorkerStatus.from_dict(json.loads(path.read_bytes())))
         except (OSError, ValueError, KeyError, TypeError):

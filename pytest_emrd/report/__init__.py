@@ -13,7 +13,6 @@ Typical use::
 """
 
 from pytest_emrd.report._build import build_report, group_cells
-from pytest_emrd.report._cache import aggregates_key, read_aggregates, write_aggregates
 from pytest_emrd.report._compare import COMPARED, Comparison, Difference, compare_runs
 from pytest_emrd.report._figdata import align_map
 from pytest_emrd.report._model import (
@@ -77,20 +76,17 @@ __all__ = [
     "SerialRow",
     "TBSSeries",
     "VariantTest",
-    "aggregates_key",
     "align_map",
     "append_step_summary",
     "build_report",
     "check_formats",
     "compare_runs",
     "group_cells",
-    "read_aggregates",
     "render_comparison",
     "render_files",
     "report_json",
     "row_label",
     "step_summary_markdown",
-    "write_aggregates",
     "write_files",
     "write_report",
 ]

@@ -1,6 +1,6 @@
 """Build a :class:`Report` from trajectories: grouping, every table and figure, what is missing.
 
-Pure: episodes (trajectories, or stored episodes read through their heads) and verdicts in, a
+Pure: episodes (trajectories, or stored episodes read from their heads) and verdicts in, a
 report model out. Reading run directories and
 thresholds files, and writing files, is the caller's job (:mod:`._write`, the CLI).
 """
@@ -9,7 +9,6 @@ from __future__ import annotations
 
 from collections import Counter
 from collections.abc import Mapping, Sequence
-from dataclasses import replace
 
 from pytest_emrd._fork import beside
 from pytest_emrd.gate import UsageRow, Verdict
@@ -173,7 +172,6 @@ def build_report(
     with_reasoning: bool = True,
     episode_metrics: Sequence[EpisodeMetrics] | None = None,
     episode: str | None = None,
-    statistics: Report | None = None,
     processes: int = 1,
 ) -> Report:
     """Every table and figure of the paper for ``episodes`` (any models, conditions,
@@ -186,19 +184,13 @@ def build_report(
     ``with_reasoning=False`` leaves that table empty (no sentence encoder is loaded);
     ``episode_metrics`` are the trajectories' metrics when the caller computed them already;
     ``episode`` is the case id of the episode the map figure shows (default: the first
-    baseline episode with a non-empty map); ``statistics`` is a report built from the very
-    same episodes and ``episode`` (:func:`~pytest_emrd.report.read_aggregates`): its tables
-    and figures are taken as they are (no metric is computed), the overview, gates and notes
-    are built afresh; ``processes`` > 1 aligns the map figure's episode in a forked worker
-    while the tables are computed (same result).
+    baseline episode with a non-empty map); ``processes`` > 1 aligns the map figure's
+    episode in a forked worker while the tables are computed (same result).
     """
     stored = [e if isinstance(e, StoredEpisode) else _wrap(e) for e in episodes]
     heads = [e.head for e in stored]
     overview = _overview(heads, prices)
     gates = Gates(thresholds_source, tuple(verdicts or ()))
-    if statistics is not None:
-        missing = _missing(heads, overview, gates, statistics.reasoning, stored)
-        return replace(statistics, overview=overview, missing=missing, gates=gates)
     metrics = as_episode_metrics(
         [e.trajectory for e in stored] if episode_metrics is None else episode_metrics
     )

@@ -5,7 +5,6 @@
 """
 
 from pytest_emrd.run._files import load_run_dirs, load_run_episodes
-from pytest_emrd.run._fingerprint import code_fingerprint
 from pytest_emrd.run._grid import cell_specs, episode_specs, gate_cells, shard
 from pytest_emrd.run._head import EpisodeHead
 from pytest_emrd.run._identity import (
@@ -15,12 +14,7 @@ from pytest_emrd.run._identity import (
     read_identity,
     write_identity,
 )
-from pytest_emrd.run._measured import (
-    EPISODE_METRICS_CODE,
-    EPISODE_METRICS_LIBRARIES,
-    MeasuredStore,
-    measured_episodes,
-)
+from pytest_emrd.run._locks import scratch_dir
 from pytest_emrd.run._prefetch import Prefetcher, start_prefetch
 from pytest_emrd.run._settings import (
     BACKENDS,
@@ -48,8 +42,6 @@ from pytest_emrd.trajectory import MATCHING_MODES, RECORD_MODES
 
 __all__ = [
     "BACKENDS",
-    "EPISODE_METRICS_CODE",
-    "EPISODE_METRICS_LIBRARIES",
     "LENIENT_BACKENDS",
     "MATCHING_MODES",
     "OPTIONS",
@@ -58,7 +50,6 @@ __all__ = [
     "EpisodeHead",
     "EpisodeSummary",
     "MatchingWarning",
-    "MeasuredStore",
     "Option",
     "Prefetcher",
     "ResultsStore",
@@ -68,7 +59,6 @@ __all__ = [
     "cell_specs",
     "check_resume",
     "check_shard_set",
-    "code_fingerprint",
     "episode_path",
     "episode_specs",
     "gate_cells",
@@ -76,13 +66,13 @@ __all__ = [
     "iter_run_episodes",
     "load_run_dirs",
     "load_run_episodes",
-    "measured_episodes",
     "new_run_dir",
     "parse_backend_option",
     "parse_shard",
     "read_episode",
     "read_identity",
     "resolve_settings",
+    "scratch_dir",
     "shard",
     "start_prefetch",
     "usage_rows",

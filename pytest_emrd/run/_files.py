@@ -12,8 +12,8 @@ from pytest_emrd.trajectory import Trajectory
 
 def load_run_episodes(run_dirs: Sequence[Path]) -> list[StoredEpisode]:
     """The episodes of several run directories (shards), sorted by case id; the first copy of
-    a case wins. Each is read through its head when it has one (trajectories decoded on first
-    use, :func:`~pytest_emrd.run.read_episode`)."""
+    a case wins. Each is read from its head (its trajectory decoded on first use,
+    :func:`~pytest_emrd.run.read_episode`)."""
     seen: dict[str, StoredEpisode] = {}
     for run_dir in run_dirs:
         if not (run_dir / "episodes").is_dir():

@@ -20,6 +20,7 @@ from typing import Any, Final
 
 from pytest_emrd._atomic import write_bytes_atomic
 from pytest_emrd.errors import ConfigError
+from pytest_emrd.run._locks import run_lock
 from pytest_emrd.run._settings import RunSettings
 
 RUN_FILE: Final = "run.json"
@@ -113,13 +114,9 @@ def write_identity(run_dir: Path, identity: RunIdentity) -> None:
     a directory that holds another shard (:func:`check_resume`). Checked and written under
     the directory's lock: of two runs of different shards started at once on one directory,
     the first to compute an episode claims it and the other is refused."""
-    from filelock import FileLock
-
     path = run_dir / RUN_FILE
     blob = json.dumps(identity.to_dict(), sort_keys=True, indent=1).encode()
-    lock = run_dir / "locks" / "run.lock"
-    lock.parent.mkdir(parents=True, exist_ok=True)
-    with FileLock(lock):
+    with run_lock(run_dir, RUN_FILE):
         check_resume(run_dir, identity.shard)
         try:
             if path.read_bytes() == blob:

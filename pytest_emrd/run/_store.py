@@ -1,18 +1,29 @@
-"""The results store: one JSON trajectory per episode under a run directory (file I/O).
+"""The results store: one file per episode under a run directory (file I/O).
 
 Layout of a run directory::
 
     <run>/run.json                  the grid and shard this directory holds (_identity)
-    <run>/episodes/<case_id>.json   one stored episode (trajectory + how it was obtained)
-    <run>/heads/<case_id>.json      its head: what reusing it needs, without decoding (_head)
-    <run>/locks/<case_id>.lock      the episode's file lock
+    <run>/episodes/<case_id>.json   one stored episode: its head, then its trajectory
+
+An episode file is one JSON document whose first line holds its head (what reusing it
+needs: spec, protocol, status, tokens, how it was obtained; :class:`EpisodeHead`) and whose
+second line holds the trajectory::
+
+    {"store_schema":2,"trajectory_schema":2,"head":{...},
+    "trajectory":{...}}
+
+A resume reads the first line of each finished episode and decodes a trajectory only where
+something needs it (a gate, a report). Files of an older layout (``store_schema`` 1: no head,
+with ``heads/``, ``metrics/``, ``locks/`` folders beside them) are decoded in full and the
+folders ignored.
 
 Any process (pytest-xdist workers, shards on one machine) may ask for any episode: the
-first takes the episode's lock, computes it and writes it atomically; everyone else waits
-for the lock and reads the file. An episode is reused when its spec and protocol match and
-it finished (an ``errored`` episode is reused only within the session that produced it,
-so rerunning a run directory retries failures). Stored files are scrubbed of secrets
-(:mod:`pytest_emrd._scrub`): an errored episode's error text may quote a URL or a body.
+first takes the episode's lock (:mod:`pytest_emrd.run._locks`, outside the run directory),
+computes it and writes it atomically; everyone else waits for the lock and reads the file. An
+episode is reused when its spec and protocol match and it finished (an ``errored`` episode
+is reused only within the session that produced it, so rerunning a run directory retries
+failures). Stored files are scrubbed of secrets (:mod:`pytest_emrd._scrub`): an errored
+episode's error text may quote a URL or a body.
 """
 
 from __future__ import annotations
@@ -29,16 +40,20 @@ from typing import TYPE_CHECKING, Any, Final
 from pytest_emrd._atomic import write_bytes_atomic
 from pytest_emrd._scrub import scrub, scrub_bytes
 from pytest_emrd.errors import ProtocolError
-from pytest_emrd.run._head import EpisodeHead, file_digest, read_head, write_head
+from pytest_emrd.run._head import EpisodeHead
 from pytest_emrd.run._identity import RunIdentity, write_identity
-from pytest_emrd.trajectory import EpisodeSpec, Trajectory
+from pytest_emrd.run._locks import run_lock
+from pytest_emrd.trajectory import OLDER_SCHEMAS, SCHEMA_VERSION, EpisodeSpec, Trajectory
 
 if TYPE_CHECKING:
     from filelock import FileLock
 
     from pytest_emrd.cassette import EpisodeRun
 
-STORE_SCHEMA: Final = 1
+STORE_SCHEMA: Final = 2
+#: The layout before heads moved into the episode file (read, never written).
+LEGACY_STORE_SCHEMA: Final = 1
+_COMPACT: Final = {"separators": (",", ":")}
 
 
 def _from_head(name: str) -> Any:
@@ -51,9 +66,8 @@ class StoredEpisode:
     an episode read back from the store decodes from the file on first use."""
 
     head: EpisodeHead
-    source: Trajectory | tuple[Path, str] = field(repr=False, compare=False)
-    """The trajectory itself, or where the store holds it: the episode file and the SHA-256
-    its head was read for."""
+    source: Trajectory | Path = field(repr=False, compare=False)
+    """The trajectory itself, or the episode file holding it."""
     computed_now: bool = False
     """Computed by this call (as opposed to read from the store)."""
 
@@ -65,18 +79,29 @@ class StoredEpisode:
 
     @cached_property
     def trajectory(self) -> Trajectory:
-        """The trajectory (decoded and validated from the store's file on first use; a file
-        changed since its head was read is a :class:`ProtocolError`)."""
+        """The trajectory, decoded on first use (:meth:`decode_trajectory`) and kept."""
+        return self.decode_trajectory()
+
+    def decode_trajectory(self) -> Trajectory:
+        """The trajectory without keeping it: the one held, else decoded and validated from
+        the store's file (a file replaced since its head was read is a
+        :class:`ProtocolError`). A process that only measures an episode holds no decoded
+        copy (about 0.6 MB of objects per 50-step episode)."""
+        if "trajectory" in self.__dict__:
+            return self.trajectory
         if isinstance(self.source, Trajectory):
             return self.source
-        path, digest = self.source
-        blob = path.read_bytes()
-        if file_digest(blob) != digest:
+        path = self.source
+        try:
+            stored = StoredEpisode.from_json(path.read_bytes())
+        except (ValueError, KeyError, TypeError, ProtocolError) as exc:
+            raise _unreadable(path, exc) from exc
+        if stored.head != self.head:
             raise ProtocolError(
                 f"episode file={str(path)!r} changed while this run was reading it; rerun "
                 "the run directory."
             )
-        return StoredEpisode.from_json(blob).trajectory
+        return stored.trajectory
 
     session = _from_head("session")
     recorded = _from_head("recorded")
@@ -85,37 +110,54 @@ class StoredEpisode:
     retries = _from_head("retries")
 
     def to_json(self) -> bytes:
-        """The stored file: configured key values removed everywhere, and URL credentials,
-        secret parameters and headers removed from the error text (the only place our own
-        messages, which quote URLs and response bodies, enter a trajectory)."""
+        """The stored file (see the module): configured key values removed everywhere, and
+        URL credentials, secret parameters and headers removed from the error text (the only
+        place our own messages, which quote URLs and response bodies, enter a trajectory)."""
         trajectory = self.trajectory.to_dict()
         if trajectory.get("error"):
             trajectory["error"] = scrub(trajectory["error"])
-        document = {
+        first = {
             "store_schema": STORE_SCHEMA,
-            "session": self.session,
-            "recorded": self.recorded,
-            "frame_drift": self.frame_drift,
-            "seconds": self.seconds,
-            "retries": self.retries,
-            "trajectory": trajectory,
+            "trajectory_schema": trajectory["schema_version"],
+            "head": self.head.to_dict(),
         }
-        return scrub_bytes(json.dumps(document, separators=(",", ":")).encode(), literal_only=True)
+        blob = (
+            json.dumps(first, **_COMPACT)[:-1]
+            + ',\n"trajectory":'
+            + json.dumps(trajectory, **_COMPACT)
+            + "}\n"
+        )
+        return scrub_bytes(blob.encode(), literal_only=True)
 
     @classmethod
     def from_json(cls, blob: bytes) -> StoredEpisode:
-        """A stored file, decoded and validated in full."""
+        """A stored file, decoded and validated in full (its head must describe its
+        trajectory)."""
         document: dict[str, Any] = json.loads(blob)
-        if document.get("store_schema") != STORE_SCHEMA:
-            raise ProtocolError(f"store_schema={document.get('store_schema')!r} is not 1")
-        return cls.of(
-            Trajectory.from_dict(document["trajectory"]),
-            session=str(document["session"]),
-            recorded=bool(document["recorded"]),
-            frame_drift=int(document["frame_drift"]),
-            seconds=float(document["seconds"]),
-            retries=int(document.get("retries", 0)),
-        )
+        schema = document.get("store_schema")
+        trajectory = Trajectory.from_dict(document["trajectory"])
+        if schema == LEGACY_STORE_SCHEMA:
+            return cls.of(
+                trajectory,
+                session=str(document["session"]),
+                recorded=bool(document["recorded"]),
+                frame_drift=int(document["frame_drift"]),
+                seconds=float(document["seconds"]),
+                retries=int(document.get("retries", 0)),
+            )
+        if schema != STORE_SCHEMA:
+            raise ProtocolError(f"store_schema={schema!r} is not {STORE_SCHEMA}")
+        head = EpisodeHead.from_dict(document["head"])
+        if not head.describes(trajectory):
+            raise ProtocolError("its head does not describe its trajectory")
+        return cls(head, trajectory)
+
+
+def _unreadable(path: Path, exc: Exception) -> ProtocolError:
+    return ProtocolError(
+        f"episode file={str(path)!r} cannot be read ({exc}); delete it and rerun the run "
+        "directory to recompute it."
+    )
 
 
 def episode_path(run_dir: Path, spec: EpisodeSpec) -> Path:
@@ -148,19 +190,11 @@ class ResultsStore:
     def path_for(self, spec: EpisodeSpec) -> Path:
         return episode_path(self.run_dir, spec)
 
-    def _read(self, spec: EpisodeSpec) -> StoredEpisode:
-        """``spec``'s stored episode (:func:`read_episode`); an episode decoded in full gets
-        its head written, so the next run reads the head."""
-        stored, digest = _read_file(self.path_for(spec))
-        if isinstance(stored.source, Trajectory):
-            write_head(self.run_dir, stored.head, digest=digest)
-        return stored
-
     def reusable(self, spec: EpisodeSpec) -> StoredEpisode | None:
         """``spec``'s stored episode when it may be reused as it is (spec and protocol match;
         finished, or errored in this very session), else None (it needs computing)."""
         try:
-            stored = self._read(spec)
+            stored = read_episode(self.path_for(spec))
         except FileNotFoundError:
             return None
         except (ValueError, KeyError, TypeError, ProtocolError):
@@ -177,13 +211,8 @@ class ResultsStore:
         return self.reusable(spec) is not None
 
     def _lock(self, spec: EpisodeSpec, *, timeout: float = -1) -> FileLock:
-        """``spec``'s file lock (filelock is imported here: a resume reads finished episodes
-        without taking their locks)."""
-        from filelock import FileLock
-
-        lock_path = self.run_dir / "locks" / f"{spec.case_id}.lock"
-        lock_path.parent.mkdir(parents=True, exist_ok=True)
-        return FileLock(lock_path, timeout=timeout)
+        """``spec``'s file lock (a resume reads finished episodes without taking it)."""
+        return run_lock(self.run_dir, spec.case_id, timeout=timeout)
 
     def _compute(
         self, spec: EpisodeSpec, compute: Callable[[EpisodeSpec], EpisodeRun]
@@ -200,9 +229,7 @@ class ResultsStore:
             seconds=run.seconds,
             retries=run.retries,
         )
-        blob = stored.to_json()
-        write_bytes_atomic(self.path_for(spec), blob)
-        write_head(self.run_dir, stored.head, digest=file_digest(blob))
+        write_bytes_atomic(self.path_for(spec), stored.to_json())
         return replace(stored, computed_now=True)
 
     def get_or_compute(
@@ -235,19 +262,21 @@ class ResultsStore:
 
 
 def read_episode(path: Path) -> StoredEpisode:
-    """The episode stored in file ``path``: through its head when the head describes the
-    bytes stored now (the trajectory decoded on first use), else decoded and validated in
-    full. Writes nothing."""
-    return _read_file(path)[0]
-
-
-def _read_file(path: Path) -> tuple[StoredEpisode, str]:
-    blob = path.read_bytes()
-    digest = file_digest(blob)
-    head = read_head(path, digest=digest)
-    if head is not None:
-        return StoredEpisode(head, (path, digest)), digest
-    return StoredEpisode.from_json(blob), digest
+    """The episode stored in file ``path``: its head read from the first line, the trajectory
+    decoded on first use; a file of the older layout is decoded and validated in full.
+    Writes nothing."""
+    with path.open("rb") as file:
+        first = file.readline()
+        if first.endswith(b",\n"):
+            document = json.loads(first[:-2] + b"}")
+            readable = (SCHEMA_VERSION, *OLDER_SCHEMAS)
+            if (
+                document.get("store_schema") == STORE_SCHEMA
+                and document.get("trajectory_schema") in readable
+            ):
+                return StoredEpisode(EpisodeHead.from_dict(document["head"]), path)
+        blob = first + file.read()
+    return StoredEpisode.from_json(blob)
 
 
 def iter_run_episodes(run_dir: Path) -> Iterator[StoredEpisode]:
@@ -257,10 +286,7 @@ def iter_run_episodes(run_dir: Path) -> Iterator[StoredEpisode]:
         try:
             yield read_episode(path)
         except (ValueError, KeyError, TypeError, ProtocolError) as exc:
-            raise ProtocolError(
-                f"episode file={str(path)!r} cannot be read ({exc}); delete it and rerun "
-                "the run directory to recompute it."
-            ) from exc
+            raise _unreadable(path, exc) from exc
 
 
 def iter_run_dir(run_dir: Path) -> Iterator[Trajectory]:

@@ -3,10 +3,13 @@ settings, the cassette folder or the record mode changes how the episodes run.""
 
 from __future__ import annotations
 
+import re
 import shutil
+from pathlib import Path
 
 import pytest
 
+import pytest_emrd.plugin as plugin
 from tests._sandbox import Sandbox
 
 pytestmark = pytest.mark.slow
@@ -73,3 +76,11 @@ def test_an_override_cannot_change_the_collected_grid(suite: Sandbox, small, rec
     result = suite.runpytest(*small(f"--emrd-cassettes={recorded}", "--emrd-record-mode=none"))
     result.assert_outcomes(errors=4)
     result.stdout.fnmatch_lines(["*emrd_settings fixture changes episodes*--emrd-*"])
+
+
+def test_the_fixtures_reference_has_one_row_per_fixture():
+    page = Path(__file__).parents[2] / "docs" / "reference" / "fixtures.md"
+    rows = re.findall(r"^\| `(\w+)` \|", page.read_text(encoding="utf-8"), re.MULTILINE)
+    fixtures = [name for name in plugin.__all__ if not name.startswith("pytest_")]
+    parameters = ["emrd_spec", "emrd_gate"]  # pytest_generate_tests parametrises these
+    assert sorted(rows) == sorted(fixtures + parameters)

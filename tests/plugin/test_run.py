@@ -49,6 +49,7 @@ def test_replay_is_deterministic_and_xdist_and_shards_give_the_same_gates(
             )
         )
         result.assert_outcomes(passed=4)
+        assert sorted(p.name for p in run_dir.iterdir()) == ["episodes", "run.json"]
         runs[name] = (_gate_section(result), _episodes(run_dir))
     assert runs["serial"] == runs["xdist"]
     assert "scout: 2/2 gates pass" in runs["serial"][0]
@@ -121,22 +122,23 @@ def pytest_runtest_logreport(report):
 
 
 def test_interrupted_run_resumes_reusing_finished_episodes(suite, small, recorded):
+    def args(run_dir: Path) -> list[str]:
+        return small(
+            f"--emrd-cassettes={recorded}", "--emrd-record-mode=none", f"--emrd-results={run_dir}"
+        )
+
     run_dir = suite.path / "run"
-    args = small(
-        f"--emrd-cassettes={recorded}",
-        "--emrd-record-mode=none",
-        f"--emrd-results={run_dir}",
-        "-k",
-        "test_episode",
-    )
     suite.makeconftest(INTERRUPT_AFTER_FIRST)
-    first = suite.runpytest(*args)
+    first = suite.runpytest(*args(run_dir))
     assert first.ret == pytest.ExitCode.INTERRUPTED
     done = run_dir / "episodes" / "scout-baseline-office-ep00.json"
     assert [p.name for p in (run_dir / "episodes").iterdir()] == [done.name]
-    before = (done.stat().st_mtime_ns, json.loads(done.read_text())["session"])
+    before = (done.stat().st_mtime_ns, json.loads(done.read_text())["head"]["session"])
     suite.makeconftest("")
-    second = suite.runpytest(*args)
-    second.assert_outcomes(passed=2, deselected=2)
-    assert (done.stat().st_mtime_ns, json.loads(done.read_text())["session"]) == before
+    second = suite.runpytest(*args(run_dir))
+    second.assert_outcomes(passed=4)
+    assert (done.stat().st_mtime_ns, json.loads(done.read_text())["head"]["session"]) == before
     assert len(list((run_dir / "episodes").iterdir())) == 2
+    uninterrupted = suite.runpytest(*args(suite.path / "whole"))
+    uninterrupted.assert_outcomes(passed=4)
+    assert _gate_section(second) == _gate_section(uninterrupted)

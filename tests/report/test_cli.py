@@ -135,3 +135,31 @@ def test_markdown_and_html_carry_the_protocol_tables(
     for name in ("report.md", "report.html"):
         text = (out / name).read_text()
         assert all(n in text for n in needles), (name, needles)
+
+
+def test_a_report_leaves_the_run_directory_as_it_was_and_repeats_itself(
+    run_dir: Path, tmp_path: Path, monkeypatch
+) -> None:
+    monkeypatch.chdir(tmp_path)  # no ./thresholds.yaml here
+    before = sorted(p.relative_to(run_dir) for p in run_dir.rglob("*"))
+    written = []
+    for name in ("first", "second"):
+        assert main(["report", str(run_dir), "--out", str(tmp_path / name)]) == 0
+        written.append({p.name: p.read_bytes() for p in (tmp_path / name).iterdir()})
+    assert sorted(p.relative_to(run_dir) for p in run_dir.rglob("*")) == before
+    assert written[0] == written[1]
+
+
+def test_an_old_layout_run_directory_is_reported(grid: list[Trajectory], tmp_path: Path) -> None:
+    """Episode files without a head line, with ``heads/`` and ``metrics/`` beside them."""
+    run = tmp_path / "old"
+    for folder in ("episodes", "heads", "metrics"):
+        (run / folder).mkdir(parents=True)
+    for t in grid:
+        legacy = {"store_schema": 1, "session": "s", "recorded": False, "frame_drift": 0,
+                  "seconds": 0.1, "trajectory": t.to_dict()}  # fmt: skip
+        (run / "episodes" / f"{t.spec.case_id}.json").write_text(json.dumps(legacy))
+        (run / "heads" / f"{t.spec.case_id}.json").write_text('{"stale": true}')
+    out = tmp_path / "out"
+    assert main(["report", str(run), "--out", str(out), "--format", "json"]) == 0
+    assert json.loads((out / "report.json").read_text())["overview"]["episodes"] == len(grid)
