@@ -176,15 +176,24 @@ def _discovery(held: list[dict[str, str]], written: list[dict[str, MapEntry]]) -
     in that step's map (``written[t]``: the labels of ``M_t`` in the order the model wrote
     them)."""
     kept = _kept_pairings(held, written)
+    order: dict[int, dict[str, int]] = {}
+
+    def at(t: int, label: str) -> int:
+        if t not in order:
+            order[t] = {lb: i for i, lb in enumerate(written[t])}
+        return order[t][label]
+
     first: dict[str, tuple[int, int, bool]] = {}
     fallback: dict[str, tuple[int, int, bool]] = {}
+    seen: set[tuple[str, str]] = set()
     for t, h in enumerate(held):
         for oid, label in h.items():
-            # Held by a withdrawn pairing only: ranked after an object its label kept then.
-            fallback.setdefault(oid, (t, list(written[t]).index(label), True))
-            if (oid, label) in kept[t]:
+            if oid not in fallback:  # held by a withdrawn pairing only: after a kept one
+                fallback[oid] = (t, at(t, label), True)
+            if (oid, label) in kept[t] and (oid, label) not in seen:
+                seen.add((oid, label))  # kept from here on: its first step is the earliest
                 since = _unchanged_since(written, label, t)
-                when = (since, list(written[since]).index(label), False)
+                when = (since, at(since, label), False)
                 first[oid] = min(first.get(oid, when), when)
     when = {oid: first.get(oid, at) for oid, at in fallback.items()}
     ranked = sorted(when, key=when.__getitem__)
