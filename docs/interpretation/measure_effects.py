@@ -14,6 +14,7 @@ never by patching the metrics. About 2 minutes on one core.
 
 from __future__ import annotations
 
+import csv
 import dataclasses
 import math
 import random
@@ -57,6 +58,9 @@ from pytest_emrd.metrics._vocab import _exact, _fuzzy, _lookup, _singulars, head
 from pytest_emrd.metrics.synthetic import synthetic_grid
 from pytest_emrd.run import load_run_dirs
 from pytest_emrd.trajectory import GroundTruthObject, MapEntry, Trajectory
+from pytest_emrd.world._catalog import KINDS
+
+LABELS = Path(__file__).resolve().parents[2] / "tests" / "metrics" / "vocab_labels.csv"
 
 
 def mean(values: Iterable[float]) -> float:
@@ -287,6 +291,23 @@ def vlm_maps(trajs: Sequence[Trajectory]) -> None:
                 for r in readers
             )
             print(f"{when} | {name} | {cells}")
+
+
+def label_table() -> None:
+    """The 202 labels of ``tests/metrics/vocab_labels.csv`` read with each rule on and off:
+    accepted per kind, and the labels whose office type differs from the table's."""
+    rows = list(csv.DictReader(LABELS.open()))
+    office = {kind.object_type for kind in KINDS.values()}
+    readers = {"head noun": candidate_types, "head noun off": first_word_types,
+               "fuzzy off": exact_types}  # fmt: skip
+    for name, reader in readers.items():
+        read = {r["label"]: next((c for c in reader(r["label"]) if c in office), "") for r in rows}
+        accepted = Counter(r["kind"] for r in rows if read[r["label"]])
+        shares = ", ".join(f"{k} {accepted[k]}" for k in dict.fromkeys(r["kind"] for r in rows))
+        wrong = [f"{r['label']} -> {read[r['label']] or '-'}" for r in rows
+                 if read[r["label"]] != r["in_office"]]  # fmt: skip
+        print(f"{name}: accepted {sum(accepted.values())} of {len(rows)} ({shares});"
+              f" {len(wrong)} differ from the table: {'; '.join(wrong)}")  # fmt: skip
 
 
 # --- the random maps of the gate table ------------------------------------------------------
@@ -534,6 +555,9 @@ def main(run_dir: Path) -> None:
             f"  {cond}: pooled EFC (sum t / d) over the {len(kept)} kept {pooled_efc(kept):.1f},"
             f" over all {len(cg)} {pooled_efc(cg):.1f}"
         )
+
+    print("\n== the label table, each vocabulary rule on and off")
+    label_table()
 
     print("\n== VLM-style maps of 20 scout baseline episodes (4 spawns x episodes 0-4)")
     vlm_maps([t for t in scout_base if t.spec.episode < 5])
