@@ -37,12 +37,18 @@ from pytest_emrd.metrics import (
     anova_conditions,
     as_episode_metrics,
     candidate_types,
+    discovery_thirds,
     efc,
+    fpsg,
     match_map,
     positional_accuracy_score,
     precision_score,
+    random_reframe,
     reframe,
+    serial_position_bins,
+    spatial_identity_resolution,
     step_matchings,
+    tbs_curve,
 )
 from pytest_emrd.metrics._match import (
     TIE_M2,
@@ -58,6 +64,7 @@ from pytest_emrd.metrics._vocab import _exact, _fuzzy, _lookup, _singulars, head
 from pytest_emrd.metrics.synthetic import synthetic_grid
 from pytest_emrd.run import load_run_dirs
 from pytest_emrd.trajectory import GroundTruthObject, MapEntry, Trajectory
+from pytest_emrd.validate._mimic import _sir_ratio_planted
 from pytest_emrd.world._catalog import KINDS
 
 LABELS = Path(__file__).resolve().parents[2] / "tests" / "metrics" / "vocab_labels.csv"
@@ -382,6 +389,70 @@ def with_maps(traj: Trajectory, change: Callable[[int, tuple[MapEntry, ...]], tu
     return dataclasses.replace(traj, steps=steps)
 
 
+def frame_invariance(trajs: Sequence[Trajectory], ms: Sequence[EpisodeMetrics]) -> None:
+    """Every map re-expressed in a seeded random proper rigid frame: the largest change."""
+    moved = as_episode_metrics(
+        random_reframe(t, np.random.default_rng(i)) for i, t in enumerate(trajs)
+    )
+    pa = max(abs((a.pa or 0.0) - (b.pa or 0.0)) for a, b in zip(ms, moved, strict=True))
+    same = Counter()
+    for a, b in zip(ms, moved, strict=True):
+        same["AEC"] += a.aec == b.aec
+        same["SIR"] += a.sir == b.sir
+        same["FPSG"] += (a.fpsg_local, a.fpsg_global) == (b.fpsg_local, b.fpsg_global)
+        same["spells"] += a.spells == b.spells
+        same["serial position"] += a.serial_position == b.serial_position
+    print(f"max |dPA| {pa:.1e}; episodes unchanged of {len(ms)}: {dict(same)}")
+
+
+def serial_ties(trajs: Sequence[Trajectory]) -> None:
+    """Discovery ties broken by the model's write order (the rule) or by id string."""
+    shared = changed = found = 0
+    bins: dict[str, list[tuple[float | None, ...]]] = {"write order": [], "id string": []}
+    for t in trajs:
+        track = track_episode(t)
+        first: dict[str, int] = {}
+        for step, held in enumerate(track.held):
+            for oid in held:
+                first.setdefault(oid, step)
+        by_step = Counter(first.values())
+        shared += sum(1 for oid in first if by_step[first[oid]] > 1)
+        found += len(first)
+        ordered = sorted(track.discovery, key=track.discovery.__getitem__)
+        by_id = sorted(first, key=lambda o: (first[o], o))
+        third = discovery_thirds(len(ordered))
+        changed += sum(third[ordered.index(o)] != third[i] for i, o in enumerate(by_id))
+        ttf = {s.object_id: float(s.duration) for s in first_spells(track.spells)}
+        bins["write order"].append(serial_position_bins([ttf.get(o) for o in ordered]))
+        bins["id string"].append(serial_position_bins([ttf.get(o) for o in by_id]))
+    means = {
+        name: " / ".join(
+            f"{mean(v for b in rows if (v := b[k]) is not None):.2f}" for k in range(3)
+        )
+        for name, rows in bins.items()
+    }
+    print(f"{shared} of {found} discovered objects share their step, {changed} change third;"
+          f" E/M/L {means}")  # fmt: skip
+
+
+def label_identity_sir(traj: Trajectory) -> float | None:
+    """SIR's ratio read as label identity alone (copies not excluded): the ablation of the
+    deduplication rule of :func:`~pytest_emrd.metrics.sir_score`."""
+    track = track_episode(traj)
+    room_of = {o.object_id: o.room for o in traj.ground_truth.objects}
+    ratios = []
+    for v in track.visits:
+        if v.return_end is None:
+            continue
+        first = {o: lb for o, lb in track.held[v.first_end].items() if room_of[o] == v.room}
+        if first:
+            room_by_label = {lb: room_of[o] for o, lb in track.held[v.return_end].items()}
+            ratios.append(
+                sum(room_by_label.get(lb) == v.room for lb in first.values()) / len(first)
+            )
+    return mean(ratios) if ratios else None
+
+
 def pooled_efc(ms: Sequence[EpisodeMetrics]) -> float:
     """Eq. SMLE over the first spells of ``ms`` pooled: ``sum t_j / d``."""
     return sum(m.retained_steps for m in ms) / sum(m.forget_events for m in ms)
@@ -556,6 +627,54 @@ def main(run_dir: Path) -> None:
             f" over all {len(cg)} {pooled_efc(cg):.1f}"
         )
 
+    print("\n== frame invariance (seeded random proper rigid frames)")
+    for model in ("scout", "mimic"):
+        idx = [i for i, t in enumerate(trajs) if t.spec.model == model]
+        print(model, end=": ")
+        frame_invariance([trajs[i] for i in idx], [ms[i] for i in idx])
+
+    print("\n== FPSG with and without doorways in O_F; TBS at t = 50; PA's cap")
+    for (model, cond), idx in sorted(cells.items()):
+        cm = [ms[i] for i in idx]
+        f = fpsg(cm)
+        tbs = [m.tbs for m in cm if m.tbs]
+        running = [v[49] for v in tbs if len(v) >= 50]
+        print(
+            f"{model} {cond}: FPSG local {f.local_mean:.3f} / ex doorways"
+            f" {f.local_mean_ex_doorways:.3f}, global {f.global_mean:.3f} /"
+            f" {f.global_mean_ex_doorways:.3f}, any-bias {f.any_bias:.3f};"
+            f" TE {mean(m.te or 0 for m in cm):.1f}; TBS(50) carried"
+            f" {tbs_curve(cm).mean[49]:.3f}, running only {len(running)} episodes"
+            f" {mean(running) if running else float('nan'):.3f}, zero-filled"
+            f" {mean(v[49] if len(v) >= 50 else 0.0 for v in tbs):.3f};"
+            f" cap binds in {sum(m.matched > m.g_base for m in cm)}"
+        )
+    synth = as_episode_metrics(synthetic_grid())
+    print(
+        f"synthetic grid: cap binds in {sum(m.matched > m.g_base for m in synth)} of {len(synth)}"
+    )
+
+    print("\n== serial position: ties in discovery order (scout)")
+    for cond in ("baseline", "low_light"):
+        print(cond, end=": ")
+        serial_ties([trajs[i] for i in cells["scout", cond]])
+
+    print("\n== SIR on the committed mimic: label identity alone, with copies, planted")
+    rows = []
+    for i in cells["mimic", "baseline"]:
+        m = ms[i]
+        if m.sir is not None and m.aec:
+            t = trajs[i]
+            reentries = sum(v.return_end is not None for v in track_episode(t).visits)
+            rows.append((label_identity_sir(t), m.sir / m.aec, _sir_ratio_planted(t), reentries))
+    print(
+        f"{len(rows)} episodes, {sum(r[3] for r in rows)} re-entries: label identity"
+        f" {mean(r[0] or 0.0 for r in rows):.3f}, with copies {mean(r[1] for r in rows):.3f},"
+        f" planted {mean(r[2] or 0.0 for r in rows):.3f}; equal to planted in"
+        f" {sum(abs(r[1] - (r[2] or 0.0)) < 1e-9 for r in rows)}; SIR"
+        f" {spatial_identity_resolution([ms[i] for i in cells['mimic', 'baseline']]).mean:.3f}"
+    )
+
     print("\n== the label table, each vocabulary rule on and off")
     label_table()
 
@@ -582,5 +701,29 @@ def main(run_dir: Path) -> None:
         print(model, dict(sorted(count.items())))
 
 
+def paper_vs_generated(paper: Sequence[EpisodeMetrics], generated: Path) -> None:
+    """Scout baseline in the paper's office against per-episode generated offices."""
+    other = as_episode_metrics(
+        t
+        for t in load_run_dirs([generated])
+        if (t.spec.model, t.spec.condition) == ("scout", "baseline")
+    )
+    for name, group in (("paper office", paper), ("generated", other)):
+        rooms = Counter(m.chosen_letter for m in group)
+        print(
+            f"{name} ({len(group)}): AEC {estimate('aec', group)}, TE {estimate('te', group)},"
+            f" PA {estimate('pa', group)}; chosen C/O/K/E/X"
+            f" {'/'.join(str(rooms[r]) for r in 'COKEX')}"
+        )
+
+
 if __name__ == "__main__":
     main(Path(sys.argv[1]))
+    if len(sys.argv) > 2:  # a run with --emrd-layouts=generated (scout, baseline)
+        print("\n== scout baseline: the paper's office vs generated offices")
+        base = [
+            m
+            for m in as_episode_metrics(load_run_dirs([Path(sys.argv[1])]))
+            if (m.spec.model, m.spec.condition) == ("scout", "baseline")
+        ]
+        paper_vs_generated(base, Path(sys.argv[2]))
