@@ -46,7 +46,6 @@ from pytest_emrd.metrics import (
     random_reframe,
     reframe,
     serial_position_bins,
-    spatial_identity_resolution,
     step_matchings,
     tbs_curve,
 )
@@ -659,21 +658,27 @@ def main(run_dir: Path) -> None:
         print(cond, end=": ")
         serial_ties([trajs[i] for i in cells["scout", cond]])
 
-    print("\n== SIR on the committed mimic: label identity alone, with copies, planted")
-    rows = []
-    for i in cells["mimic", "baseline"]:
-        m = ms[i]
-        if m.sir is not None and m.aec:
-            t = trajs[i]
-            reentries = sum(v.return_end is not None for v in track_episode(t).visits)
-            rows.append((label_identity_sir(t), m.sir / m.aec, _sir_ratio_planted(t), reentries))
-    print(
-        f"{len(rows)} episodes, {sum(r[3] for r in rows)} re-entries: label identity"
-        f" {mean(r[0] or 0.0 for r in rows):.3f}, with copies {mean(r[1] for r in rows):.3f},"
-        f" planted {mean(r[2] or 0.0 for r in rows):.3f}; equal to planted in"
-        f" {sum(abs(r[1] - (r[2] or 0.0)) < 1e-9 for r in rows)}; SIR"
-        f" {spatial_identity_resolution([ms[i] for i in cells['mimic', 'baseline']]).mean:.3f}"
-    )
+    print("\n== SIR / AEC: label identity alone, with copies excluded, planted (mimic)")
+    for model, cond in (("mimic", "baseline"), ("scout", "low_light"), ("scout", "baseline")):
+        rows = []
+        for i in cells[model, cond]:
+            m, t = ms[i], trajs[i]
+            if m.sir is not None and m.aec:
+                reentries = sum(v.return_end is not None for v in track_episode(t).visits)
+                planted = _sir_ratio_planted(t) if model == "mimic" else None
+                rows.append((label_identity_sir(t) or 0.0, m.sir / m.aec, planted, reentries))
+        line = f"{model} {cond}: {len(rows)} episodes with a re-entry"
+        if rows:
+            line += (
+                f", {sum(r[3] for r in rows)} re-entered rooms: label identity"
+                f" {mean(r[0] for r in rows):.3f}, with copies {mean(r[1] for r in rows):.3f}"
+            )
+        if rows and model == "mimic":
+            line += (
+                f", planted {mean(r[2] or 0.0 for r in rows):.3f}; equal to planted in"
+                f" {sum(abs(r[1] - (r[2] or 0.0)) < 1e-9 for r in rows)}"
+            )
+        print(line)
 
     print("\n== the label table, each vocabulary rule on and off")
     label_table()
