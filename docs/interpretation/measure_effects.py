@@ -3,13 +3,14 @@
 Usage, from the repository root::
 
     PYTHONPATH=$PWD python -m pytest benchmarks -q -p no:cacheprovider --emrd-results=RUN
-    PYTHONPATH=$PWD python docs/interpretation/measure_effects.py RUN
+    PYTHONPATH=$PWD python docs/interpretation/measure_effects.py RUN [GEN]
 
-``RUN`` holds the 240 scout and 80 mimic episodes replayed from the committed cassettes. Every
-number the pages "Map and memory metrics a model cannot fool" and "Reading what a model
-writes" quote for the committed runs is printed here, each rule with and without it. A rule
-the metric functions take no parameter for is switched off by an ablation written out below,
-never by patching the metrics. About 2 minutes on one core.
+``RUN`` holds the 240 scout and 80 mimic episodes replayed from the committed cassettes; the
+optional ``GEN`` a scout baseline run with ``--emrd-layouts=generated`` (compared with the
+paper's office). Every number the pages under docs/interpretation quote for the committed runs
+is printed here, each rule with and without it. A rule the metric functions take no parameter
+for is switched off by an ablation written out below, never by patching the metrics. About a
+minute on one core.
 """
 
 from __future__ import annotations
@@ -76,7 +77,7 @@ def mean(values: Iterable[float]) -> float:
 def estimate(name: str, ms: Sequence[EpisodeMetrics]) -> str:
     """A gate metric's value and seeded bootstrap 95 % CI, as ``emrd gate`` reports it."""
     e = GATE_METRICS[name].compute(ms)
-    return f"{e.value:.3f} [{e.ci_low:.3f}, {e.ci_high:.3f}]"
+    return f"{e.value:.4f} [{e.ci_low:.3f}, {e.ci_high:.3f}]"
 
 
 # --- ablations of the matcher (same frame search, one rule off) ---------------------------
@@ -97,7 +98,7 @@ def without_gate(entries: Sequence[MapEntry], objects: Sequence[GroundTruthObjec
     if not labels:
         return gated
     c, s, tx, tz = found.motion or Motion(1.0, 0.0, 0.0, 0.0)
-    if found.motion is None and found.identity:  # one point: the translation onto its object
+    if found.motion is None and found.identity:  # no rotation read: translate onto a pair
         lb, j = next(iter(found.identity.items()))
         e = found.entries[lb]
         tx, tz = matcher.objects[j].x - e.x, matcher.objects[j].z - e.z
@@ -134,9 +135,9 @@ def _matching(
 
 
 def untruncated(entries: Sequence[MapEntry], objects: Sequence[GroundTruthObject]) -> Matching:
-    """The frame rule without its truncation: hypotheses scored by plain least squares (every
-    entry's squared distance to the nearest object of its type, uncapped), then the same
-    assignment and inlier refit."""
+    """The frame rule without its truncation: the pair hypotheses scored by plain least squares
+    (every entry's squared distance to the nearest object of its type, uncapped), then the same
+    gated assignment and inlier refit."""
     matcher = Matcher(objects)
     found = matcher.step(entries)
     gated = matcher.matching(found)
