@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import importlib.util
 import os
 import re
 import subprocess
@@ -139,3 +140,14 @@ def test_the_docs_are_no_diary(page: Path) -> None:
     text = page.read_text()
     assert not re.search(r"\b(?=[0-9a-f]*\d)(?=[0-9a-f]*[a-f])[0-9a-f]{7,40}\b", text)
     assert not re.search(r"load average|previous (stop|table|release)", text, re.IGNORECASE)
+
+
+def test_the_interpretation_script_imports_what_it_measures_with() -> None:
+    # It reaches into private functions to switch rules off; a rename must fail here, not
+    # when someone next regenerates the pages' figures.
+    path = ROOT / "docs" / "interpretation" / "measure_effects.py"
+    spec = importlib.util.spec_from_file_location("measure_effects", path)
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    assert callable(module.main) and callable(module.serial_ties)

@@ -59,7 +59,7 @@ from pytest_emrd.metrics._match import (
     _refine,
     assign_rows,
 )
-from pytest_emrd.metrics._tracking import first_spells, track_episode
+from pytest_emrd.metrics._tracking import discovered, first_spells, track_episode
 from pytest_emrd.metrics._vocab import _exact, _fuzzy, _lookup, _singulars, head_words, noun_phrase
 from pytest_emrd.metrics.synthetic import synthetic_grid
 from pytest_emrd.run import load_run_dirs
@@ -405,16 +405,22 @@ def frame_invariance(trajs: Sequence[Trajectory], ms: Sequence[EpisodeMetrics]) 
     print(f"max |dPA| {pa:.1e}; episodes unchanged of {len(ms)}: {dict(same)}")
 
 
+def step_map(entries: Iterable[MapEntry]) -> dict[str, MapEntry]:
+    """Label -> its first entry, in the model's order (how the matcher reads a map)."""
+    seen: dict[str, MapEntry] = {}
+    for e in entries:
+        seen.setdefault(e.label, e)
+    return seen
+
+
 def serial_ties(trajs: Sequence[Trajectory]) -> None:
     """Discovery ties broken by the model's write order (the rule) or by id string."""
     shared = changed = found = 0
     bins: dict[str, list[tuple[float | None, ...]]] = {"write order": [], "id string": []}
     for t in trajs:
         track = track_episode(t)
-        first: dict[str, int] = {}
-        for step, held in enumerate(track.held):
-            for oid in held:
-                first.setdefault(oid, step)
+        written = [step_map(s.cognitive_map) for s in t.steps]
+        first = {oid: when[0] for oid, when in discovered(list(track.held), written).items()}
         by_step = Counter(first.values())
         shared += sum(1 for oid in first if by_step[first[oid]] > 1)
         found += len(first)

@@ -175,6 +175,16 @@ def _discovery(held: list[dict[str, str]], written: list[dict[str, MapEntry]]) -
     """Object id -> discovery rank: by discovery step (module docstring), then by entry order
     in that step's map (``written[t]``: the labels of ``M_t`` in the order the model wrote
     them)."""
+    when = discovered(held, written)
+    ranked = sorted(when, key=when.__getitem__)
+    return {oid: rank for rank, oid in enumerate(ranked, start=1)}
+
+
+def discovered(
+    held: list[dict[str, str]], written: list[dict[str, MapEntry]]
+) -> dict[str, tuple[int, int, bool]]:
+    """Object id -> ``(discovery step (0-based), position of its entry in that step's map,
+    discovered by a withdrawn pairing only)``, the key :func:`_discovery` ranks by."""
     kept = _kept_pairings(held, written)
     order: dict[int, dict[str, int]] = {}
 
@@ -195,9 +205,7 @@ def _discovery(held: list[dict[str, str]], written: list[dict[str, MapEntry]]) -
                 since = _unchanged_since(written, label, t)
                 when = (since, at(since, label), False)
                 first[oid] = min(first.get(oid, when), when)
-    when = {oid: first.get(oid, at) for oid, at in fallback.items()}
-    ranked = sorted(when, key=when.__getitem__)
-    return {oid: rank for rank, oid in enumerate(ranked, start=1)}
+    return {oid: first.get(oid, at) for oid, at in fallback.items()}
 
 
 def _unchanged_since(written: list[dict[str, MapEntry]], label: str, t: int) -> int:
