@@ -16,11 +16,6 @@ import json
 import os
 import sys
 from pathlib import Path
-from typing import TYPE_CHECKING
-
-if TYPE_CHECKING:
-    from pytest_emrd.metrics import EpisodeMetrics
-    from pytest_emrd.run import StoredEpisode
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -50,24 +45,22 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def _run(args: argparse.Namespace) -> int:
-    from pytest_emrd._fork import available_cores, fork_map
     from pytest_emrd.agent import load_registry
     from pytest_emrd.cli import check_run_dirs
     from pytest_emrd.errors import check_positive_int
     from pytest_emrd.gate import evaluate_all, gate_tables, load_thresholds
     from pytest_emrd.metrics import GATE_METRICS
-    from pytest_emrd.run import check_shard_set, load_run_episodes
+    from pytest_emrd.run import check_shard_set, load_run_episodes, measure_episodes
 
-    jobs = available_cores() if args.jobs is None else args.jobs
-    check_positive_int("--jobs", jobs)
+    if args.jobs is not None:
+        check_positive_int("--jobs", args.jobs)
     check_run_dirs(args.run_dirs)
     for problem in check_shard_set(args.run_dirs, allow_partial=args.allow_partial):
         print(f"emrd gate: warning: partial shard set: {problem}", file=sys.stderr)
     registry = load_registry(args.models)
     thresholds = load_thresholds(args.thresholds, registry=registry, metrics=GATE_METRICS)
     stored = load_run_episodes(args.run_dirs)
-    # Decoding and measuring each episode is most of a gate's time, and episodes are independent.
-    verdicts = evaluate_all(fork_map(_measure, stored, jobs), thresholds, GATE_METRICS)
+    verdicts = evaluate_all(measure_episodes(stored, args.jobs), thresholds, GATE_METRICS)
     if os.environ.get("GITHUB_STEP_SUMMARY"):
         from pytest_emrd.report import append_step_summary, step_summary_markdown
 
@@ -80,9 +73,3 @@ def _run(args: argparse.Namespace) -> int:
         print(f"{len(stored)} episodes from {len(args.run_dirs)} run director(ies)")
         print("\n".join(gate_tables(verdicts)) or "no gate applies to these episodes")
     return 0 if all(v.passed for v in verdicts) else 1
-
-
-def _measure(stored: StoredEpisode) -> EpisodeMetrics:
-    from pytest_emrd.metrics import episode_metrics
-
-    return episode_metrics(stored.trajectory)

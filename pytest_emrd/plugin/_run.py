@@ -373,19 +373,13 @@ class Run:
     def verdict(self, cell: GateCell) -> Verdict:
         from pytest_emrd.gate import evaluate_cell
         from pytest_emrd.metrics import GATE_METRICS
+        from pytest_emrd.run import measure_episodes
 
-        episodes = [self.episode_metrics(spec) for spec in self.cell_specs(cell)]
-        return evaluate_cell(cell, episodes, GATE_METRICS)
-
-    def episode_metrics(self, spec: EpisodeSpec) -> Any:
-        """Per-episode metrics of ``spec``, measured once per process: every gate of a cell
-        that this process runs reads them back from here (an episode read from the store is
-        decoded for it, not kept)."""
-        if spec not in self._metrics:
-            from pytest_emrd.metrics import episode_metrics
-
-            self._metrics[spec] = episode_metrics(self.episode(spec).decode_trajectory())
-        return self._metrics[spec]
+        specs = self.cell_specs(cell)
+        missing = [spec for spec in specs if spec not in self._metrics]
+        stored = [self.episode(spec) for spec in missing]  # computed here, if at all
+        self._metrics.update(zip(missing, measure_episodes(stored), strict=True))
+        return evaluate_cell(cell, [self._metrics[spec] for spec in specs], GATE_METRICS)
 
     def summary(self, stored: StoredEpisode) -> EpisodeSummary:
         config = self.registry.get(stored.head.spec.model)

@@ -4,7 +4,7 @@
 ``gate`` and ``cassette``, never the reverse).
 """
 
-from pytest_emrd.run._files import load_run_dirs, load_run_episodes
+from pytest_emrd.run._files import load_run_dirs, load_run_episodes, measure_episodes
 from pytest_emrd.run._grid import cell_specs, episode_specs, gate_cells, shard
 from pytest_emrd.run._head import EpisodeHead
 from pytest_emrd.run._identity import (
@@ -66,6 +66,7 @@ __all__ = [
     "iter_run_episodes",
     "load_run_dirs",
     "load_run_episodes",
+    "measure_episodes",
     "new_run_dir",
     "parse_backend_option",
     "parse_shard",

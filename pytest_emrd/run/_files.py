@@ -1,13 +1,19 @@
-"""Reading the episodes of several run directories (shards) from disk."""
+"""Reading the episodes of several run directories (shards) from disk, and measuring them."""
 
 from __future__ import annotations
 
+import os
 from collections.abc import Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING
 
+from pytest_emrd._fork import available_cores, fork_map
 from pytest_emrd.errors import ConfigError
 from pytest_emrd.run._store import StoredEpisode, iter_run_episodes
 from pytest_emrd.trajectory import Trajectory
+
+if TYPE_CHECKING:
+    from pytest_emrd.metrics import EpisodeMetrics
 
 
 def load_run_episodes(run_dirs: Sequence[Path]) -> list[StoredEpisode]:
@@ -29,3 +35,21 @@ def load_run_episodes(run_dirs: Sequence[Path]) -> list[StoredEpisode]:
 def load_run_dirs(run_dirs: Sequence[Path]) -> list[Trajectory]:
     """Trajectories of several run directories (shards); the first copy of a case wins."""
     return [stored.trajectory for stored in load_run_episodes(run_dirs)]
+
+
+def measure_episodes(
+    episodes: Sequence[StoredEpisode], processes: int | None = None
+) -> list[EpisodeMetrics]:
+    """Each episode's :func:`~pytest_emrd.metrics.episode_metrics`, in order, decoded and
+    measured in ``processes`` forked workers (default: every available core, one inside an
+    xdist worker, whose siblings hold the other cores). Decoding and measuring are most of
+    the time of a gate over stored episodes, and episodes are independent."""
+    if processes is None:
+        processes = 1 if os.environ.get("PYTEST_XDIST_WORKER") else available_cores()
+    return fork_map(_measure, episodes, processes)
+
+
+def _measure(stored: StoredEpisode) -> EpisodeMetrics:
+    from pytest_emrd.metrics import episode_metrics
+
+    return episode_metrics(stored.decode_trajectory())
