@@ -15,9 +15,10 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any
 
+import httpx
+
 from perf import Figure, median_seconds
 from pytest_emrd import world
-from pytest_emrd._wire import encode_body
 from pytest_emrd.agent import (
     ChatClient,
     ChatResponse,
@@ -62,7 +63,7 @@ class _Replay:
     i: int = 0
 
     def complete(self, messages: list[dict[str, Any]]) -> ChatResponse:
-        encode_body({"model": "bench", "messages": messages})  # the client's body encoding
+        httpx.Request("POST", "http://bench/", json={"model": "bench", "messages": messages})
         return self.replies[self.i % len(self.replies)]
 
     def step(self, action: str) -> Observation:

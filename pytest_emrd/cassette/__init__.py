@@ -45,7 +45,6 @@ from pytest_emrd.cassette._routing import routing
 from pytest_emrd.cassette._upgrade import Upgraded, legacy_files, upgrade
 from pytest_emrd.cassette._use import (
     EpisodeCassette,
-    clear_caches,
     episode_cassette,
     keep_response,
     redact_request,
@@ -70,7 +69,6 @@ __all__ = [
     "Upgraded",
     "canonical_json",
     "cassette_path",
-    "clear_caches",
     "decode",
     "decompress",
     "encode",

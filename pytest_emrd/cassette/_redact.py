@@ -22,6 +22,7 @@ index and image count are compared).
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import json
 import re
@@ -29,7 +30,7 @@ from dataclasses import dataclass
 from functools import cached_property
 from typing import Any, Final
 
-from pytest_emrd import _wire, frames
+from pytest_emrd import frames
 from pytest_emrd._scrub import scrub_bytes
 
 #: Request headers kept in a cassette; everything else (credentials included) is dropped.
@@ -96,7 +97,9 @@ class MatchKeys:
 
 
 #: Sorted-key compact JSON, the one serialisation every key and cassette body uses.
-canonical_json: Final = _wire.encoder(sort_keys=True, ensure_ascii=False)
+canonical_json: Final = functools.partial(
+    json.dumps, sort_keys=True, ensure_ascii=False, separators=(",", ":")
+)
 
 
 def _image_mime(node: dict[str, Any]) -> bool:
@@ -111,9 +114,6 @@ def _redact_tree(node: Any) -> Any:
     """``node`` with every image payload replaced by its frame digest."""
     if isinstance(node, str):
         if node.startswith(_DATA_URL):
-            known = frames.pixel_digest_for_url(node)
-            if known is not None:
-                return known
             _, sep, payload = node.partition(";base64,")
             if sep:
                 return frames.pixel_digest_for(payload)
@@ -153,40 +153,9 @@ def _without_images(node: Any) -> Any:
     return node
 
 
-def _canonical_item(item: Any) -> str:
-    return canonical_json(_redact_tree(item))
-
-
-def _canonical_bytes(value: Any) -> bytes:
-    return _canonical_item(value).encode()
-
-
-def _canonical_fragment(piece: _wire.Fragment) -> bytes:
-    """A list item's canonical bytes, redacted once and kept on its fragment however many
-    requests carry it (two threads may both compute it: the same bytes)."""
-    if piece.canonical is None:
-        piece.canonical = _canonical_bytes(piece.item)
-    return piece.canonical
-
-
-def _canonical_sent(tree: Any, pieces: dict[str, Any]) -> bytes:
-    """Canonical form of a body this process encoded (:mod:`pytest_emrd._wire`): each item of a
-    top-level list redacted and serialised once, however many requests carry it. Byte for
-    byte what parsing the body and redacting the whole tree gives."""
-    if not pieces or _image_mime(tree):
-        return _canonical_bytes(tree)
-    return _wire.splice(
-        pieces, value=_canonical_bytes, item=_canonical_fragment, sort_keys=True, binary=True
-    )
-
-
 def redact_body(body: bytes | str | None) -> Redacted:
     """Canonical form of a request body (pure; see the module docstring)."""
     raw = body.encode() if isinstance(body, str) else (body or b"")
-    sent = _wire.sent(raw)
-    if sent is not None:
-        canonical = _canonical_sent(*sent)
-        return Redacted(body=scrub_bytes(canonical, literal_only=True), parsed=True)
     try:
         tree = json.loads(raw)
     except (ValueError, UnicodeDecodeError):
