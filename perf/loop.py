@@ -15,10 +15,9 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any
 
-import httpx
-
 from perf import Figure, median_seconds
 from pytest_emrd import world
+from pytest_emrd._wire import encode_body
 from pytest_emrd.agent import (
     ChatClient,
     ChatResponse,
@@ -63,7 +62,7 @@ class _Replay:
     i: int = 0
 
     def complete(self, messages: list[dict[str, Any]]) -> ChatResponse:
-        httpx.Request("POST", "http://bench/", json={"model": "bench", "messages": messages})
+        encode_body({"model": "bench", "messages": messages})  # the client's body encoding
         return self.replies[self.i % len(self.replies)]
 
     def step(self, action: str) -> Observation:

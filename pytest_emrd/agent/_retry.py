@@ -31,6 +31,7 @@ import tenacity
 
 from pytest_emrd import __version__
 from pytest_emrd._logging import RETRY_ATTR
+from pytest_emrd._wire import encode_body
 from pytest_emrd.errors import TransportError
 
 RETRY_STATUSES: Final = frozenset({429, 500, 502, 503, 504, 520, 522, 524, 529})
@@ -183,10 +184,11 @@ def post_json(
     URL, the attempts and the last cause. ``secrets`` (the API key) are masked in every
     log line and error message.
     """
+    content = encode_body(body)  # what json=body sends, each message encoded once per episode
     request = httpx.Request(
         "POST",
         _parsed_url(url),
-        json=body,
+        content=content,
         headers=_request_headers(headers),
         extensions={"timeout": http.timeout.as_dict()},
     )

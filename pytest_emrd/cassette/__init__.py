@@ -45,6 +45,7 @@ from pytest_emrd.cassette._routing import routing
 from pytest_emrd.cassette._upgrade import Upgraded, legacy_files, upgrade
 from pytest_emrd.cassette._use import (
     EpisodeCassette,
+    clear_caches,
     episode_cassette,
     keep_response,
     redact_request,
@@ -69,6 +70,7 @@ __all__ = [
     "Upgraded",
     "canonical_json",
     "cassette_path",
+    "clear_caches",
     "decode",
     "decompress",
     "encode",

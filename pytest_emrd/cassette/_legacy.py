@@ -21,6 +21,7 @@ from typing import Any, Final
 
 from vcr.request import Request
 
+from pytest_emrd._wire import encoder
 from pytest_emrd.cassette._file import CassetteData, decompress
 from pytest_emrd.cassette._redact import canonical_json
 
@@ -28,8 +29,8 @@ FORMATS: Final = ("emrd-cassette/1", "emrd-cassette/2")  # see _file.LEGACY_HEAD
 _TEXTS: Final = Path(__file__).with_name("legacy_texts.json")
 _SERIALISE: Final = {
     "canonical": canonical_json,
-    "compact": functools.partial(json.dumps, separators=(",", ":"), ensure_ascii=False),
-    "ascii": functools.partial(json.dumps, separators=(",", ":")),
+    "compact": encoder(sort_keys=False, ensure_ascii=False),
+    "ascii": encoder(sort_keys=False, ensure_ascii=True),
 }
 _B64: Final = "base64:"
 _REF: Final = "\x00"

@@ -22,7 +22,6 @@ index and image count are compared).
 
 from __future__ import annotations
 
-import functools
 import hashlib
 import json
 import re
@@ -30,7 +29,7 @@ from dataclasses import dataclass
 from functools import cached_property
 from typing import Any, Final
 
-from pytest_emrd import frames
+from pytest_emrd import _wire, frames
 from pytest_emrd._scrub import scrub_bytes
 
 #: Request headers kept in a cassette; everything else (credentials included) is dropped.
@@ -97,9 +96,7 @@ class MatchKeys:
 
 
 #: Sorted-key compact JSON, the one serialisation every key and cassette body uses.
-canonical_json: Final = functools.partial(
-    json.dumps, sort_keys=True, ensure_ascii=False, separators=(",", ":")
-)
+canonical_json: Final = _wire.encoder(sort_keys=True, ensure_ascii=False)
 
 
 def _image_mime(node: dict[str, Any]) -> bool:
@@ -153,9 +150,40 @@ def _without_images(node: Any) -> Any:
     return node
 
 
+def _canonical_item(item: Any) -> str:
+    return canonical_json(_redact_tree(item))
+
+
+def _canonical_bytes(value: Any) -> bytes:
+    return _canonical_item(value).encode()
+
+
+def _canonical_fragment(piece: _wire.Fragment) -> bytes:
+    """A list item's canonical bytes, redacted once and kept on its fragment however many
+    requests carry it (two threads may both compute it: the same bytes)."""
+    if piece.canonical is None:
+        piece.canonical = _canonical_bytes(piece.item)
+    return piece.canonical
+
+
+def _canonical_sent(tree: Any, pieces: dict[str, Any]) -> bytes:
+    """Canonical form of a body this process encoded (:mod:`pytest_emrd._wire`): each item of a
+    top-level list redacted and serialised once, however many requests carry it. Byte for
+    byte what parsing the body and redacting the whole tree gives."""
+    if not pieces or _image_mime(tree):
+        return _canonical_bytes(tree)
+    return _wire.splice(
+        pieces, value=_canonical_bytes, item=_canonical_fragment, sort_keys=True, binary=True
+    )
+
+
 def redact_body(body: bytes | str | None) -> Redacted:
     """Canonical form of a request body (pure; see the module docstring)."""
     raw = body.encode() if isinstance(body, str) else (body or b"")
+    sent = _wire.sent(raw)
+    if sent is not None:
+        canonical = _canonical_sent(*sent)
+        return Redacted(body=scrub_bytes(canonical, literal_only=True), parsed=True)
     try:
         tree = json.loads(raw)
     except (ValueError, UnicodeDecodeError):

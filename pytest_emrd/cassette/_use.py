@@ -14,6 +14,7 @@ from vcr.cassette import Cassette
 from vcr.record_mode import RecordMode
 from vcr.request import Request
 
+from pytest_emrd import _wire
 from pytest_emrd._scrub import scrub_bytes, scrub_uri, secret_values
 from pytest_emrd.cassette import _routing
 from pytest_emrd.cassette._drift import (
@@ -26,6 +27,12 @@ from pytest_emrd.cassette._redact import MatchKeys, match_keys, redact_body, scr
 
 #: Response headers kept in a cassette (the body is stored decoded, so no Content-Encoding).
 KEPT_RESPONSE_HEADERS: Final = frozenset({"content-type"})
+
+
+def clear_caches() -> None:
+    """Forget every cached message encoding and redaction, as at the start of a run
+    (cold benchmarks, tests)."""
+    _wire.clear()
 
 
 def _match_keys(request: Request) -> MatchKeys:
