@@ -8,6 +8,7 @@ typo in a stored file is an error, never silently dropped data.
 from __future__ import annotations
 
 import dataclasses
+import math
 import operator
 import types
 import typing
@@ -278,3 +279,15 @@ def from_versioned_dict(
     if found != version and (found not in older or isinstance(found, bool)):
         raise ProtocolError(f"{what} schema_version={found!r} is not {version}; {remedy}")
     return from_dict(cls, {**data, "schema_version": version})
+
+
+def json_safe(data: Any) -> Any:
+    """:func:`to_dict` output made strict JSON: a non-finite float (an unbounded memory
+    strength, an EFC with no forgetting event) becomes ``"inf"``, ``"-inf"`` or ``"nan"``."""
+    if isinstance(data, float) and not math.isfinite(data):
+        return "nan" if math.isnan(data) else ("inf" if data > 0 else "-inf")
+    if isinstance(data, dict):
+        return {k: json_safe(v) for k, v in data.items()}
+    if isinstance(data, list):
+        return [json_safe(v) for v in data]
+    return data

@@ -17,10 +17,6 @@ each message once and never changes it). Both tables are bounded and thread-safe
 reference to what they key (so an ``id`` is never reused while remembered) and are checked
 by identity: a miss, or bytes this process did not build, only costs time (the redactor
 then parses the body as before).
-
-:func:`dumps` is ``json.dumps`` (compact separators) that copies a long string with nothing to
-escape (a base64 frame) as it is, instead of escaping it character by character (0.2 ms
-for a 19 KB frame on a busy 2-core machine): the same text, tested against ``json.dumps``.
 """
 
 from __future__ import annotations
@@ -29,27 +25,17 @@ import functools
 import json
 import threading
 from collections import OrderedDict
-from collections.abc import Callable, Hashable
-from functools import partial
+from collections.abc import Callable
 from json.encoder import encode_basestring, encode_basestring_ascii
 from typing import Any, Final
 
 from pytest_emrd._bounded import remember
 
-#: Item encodings remembered (a window is 21 messages; several episodes may run at once).
-_ITEMS: Final = 2048
 #: Fragments remembered (each holds a message's wire bytes, a frame's ~27 KB for a user turn;
 #: a window is 21 messages, so this serves ~48 episodes running at once).
 _FRAGMENTS: Final = 1024
 #: Sent bodies remembered until the redactor has seen them (a few per request in flight).
 _BODIES: Final = 64
-
-#: Strings at least this long are copied whole when they hold nothing to escape.
-_LONG: Final = 1024
-#: What ``json.dumps`` escapes in a string (and, under ``ensure_ascii``, any non-ASCII);
-#: the likeliest first, so that a string with something to escape is told early.
-_ESCAPED: Final = ('"', "\\", "\n", *(chr(c) for c in range(0x20) if c != 0x0A))
-_MARK: Final = "\x00emrd-verbatim-"
 
 
 @functools.cache
@@ -61,69 +47,13 @@ def encoder(sort_keys: bool, ensure_ascii: bool, allow_nan: bool = True) -> Call
     ).encode
 
 
-def _verbatim(text: str, ensure_ascii: bool) -> bool:
-    """Whether ``json.dumps`` writes ``text`` unchanged between quotes (one ``in`` test per
-    escaped character is a ``memchr``, far cheaper than the encoder's per-character loop)."""
-    if ensure_ascii and not text.isascii():
-        return False
-    return not any(c in text for c in _ESCAPED)
-
-
-def _long(node: Any, ensure_ascii: bool) -> bool:
-    """Whether ``node`` holds a long string to copy whole (exact types only: a subclass may
-    encode its own way)."""
-    kind = type(node)
-    if kind is str:
-        return len(node) >= _LONG and _verbatim(node, ensure_ascii)
-    if kind is dict:
-        return any(_long(v, ensure_ascii) for v in node.values())
-    if kind is list or kind is tuple:
-        return any(_long(v, ensure_ascii) for v in node)
-    return False
-
-
-def dumps(
-    tree: Any, *, sort_keys: bool = False, ensure_ascii: bool = True, allow_nan: bool = True
-) -> str:
-    """``json.dumps(tree, separators=(",", ":"), ...)``, byte for byte, with every long string
-    that needs no escaping swapped for a short mark while encoding and put back after."""
-    encode = encoder(sort_keys, ensure_ascii, allow_nan)
-    try:
-        if not _long(tree, ensure_ascii):
-            return encode(tree)
-    except RecursionError:  # a circular tree: json.dumps says so
-        return encode(tree)
-    longs: list[str] = []
-
-    def swap(node: Any) -> Any:
-        kind = type(node)
-        if kind is str:
-            if len(node) < _LONG or not _verbatim(node, ensure_ascii):
-                return node
-            longs.append(node)
-            return f"{_MARK}{len(longs) - 1}"
-        if kind is dict:
-            return {k: swap(v) for k, v in node.items()}
-        if kind is list or kind is tuple:
-            return [swap(v) for v in node]
-        return node
-
-    text = encode(swap(tree))
-    for index, long in enumerate(longs):
-        mark = encode(f"{_MARK}{index}")
-        if text.count(mark) != 1:  # a string of the tree spells a mark: no shortcut
-            return encode(tree)
-        text = text.replace(mark, f'"{long}"')
-    return text
-
-
 def key_json(key: str, *, ensure_ascii: bool) -> str:
     """A string as ``json.dumps`` writes it (its own shortcut for a string)."""
     return encode_basestring_ascii(key) if ensure_ascii else encode_basestring(key)
 
 
 #: ``httpx``'s encoding of ``json=``: the bytes a client would send without this module.
-wire_json: Final = partial(dumps, ensure_ascii=False, allow_nan=False)
+wire_json: Final = encoder(sort_keys=False, ensure_ascii=False, allow_nan=False)
 
 
 class Fragment:
@@ -139,7 +69,6 @@ class Fragment:
 
 
 _lock = threading.Lock()
-_items: OrderedDict[tuple[int, Hashable], tuple[Any, Any]] = OrderedDict()
 _fragments: OrderedDict[int, Fragment] = OrderedDict()
 _bodies: OrderedDict[int, tuple[bytes, Any, dict[str, Any]]] = OrderedDict()
 
@@ -147,17 +76,6 @@ _bodies: OrderedDict[int, tuple[bytes, Any, dict[str, Any]]] = OrderedDict()
 def _remember(table: OrderedDict[Any, Any], key: Any, value: Any, capacity: int) -> None:
     with _lock:
         remember(table, key, value, capacity)
-
-
-def memo(item: Any, kind: Hashable, compute: Callable[[Any], Any]) -> Any:
-    """``compute(item)``, computed once per ``(item, kind)`` while remembered."""
-    key = (id(item), kind)
-    hit = _items.get(key)  # one read is atomic; changes to the table take the lock
-    if hit is not None and hit[0] is item:
-        return hit[1]
-    value = compute(item)
-    _remember(_items, key, (item, value), _ITEMS)
-    return value
 
 
 def spliced(tree: Any) -> bool:
@@ -248,6 +166,5 @@ def sent(raw: bytes) -> tuple[Any, dict[str, Any]] | None:
 def clear() -> None:
     """Forget every remembered encoding and body (tests, cold benchmarks)."""
     with _lock:
-        _items.clear()
         _fragments.clear()
         _bodies.clear()

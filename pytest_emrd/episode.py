@@ -126,8 +126,8 @@ def user_turn(spec: EpisodeSpec, step: int, obs: Observation, *, replay: bool = 
         return UserTurn.replayed(step, text, obs.frame_digest)
     turn = UserTurn.with_frame(step, text, obs.jpeg, obs.frame_digest)
     url = turn.image_url or ""
-    # Before any request carries it; the redactor then finds the frame by its data URL.
-    frames.register(url.removeprefix(JPEG_DATA_URL), obs.frame_digest, data_url=url)
+    # Before any request carries it; the redactor then finds the frame by its payload.
+    frames.register(url.removeprefix(JPEG_DATA_URL), obs.frame_digest)
     return turn
 
 

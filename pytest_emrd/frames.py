@@ -7,15 +7,11 @@ pixel digest; the agent registers the data-URL payload it sends together with th
 (:func:`pixel_digest_for`). Unknown payloads (a frame this process did not render) fall
 back to a digest of the payload itself, marked ``bytes:`` so the two kinds never collide.
 
-The payload is hashed once, when it is registered. The data URL that carries it in the
-request may be registered with it: the redactor, handed that very string object, then finds
-the frame by identity (:func:`pixel_digest_for_url`) instead of hashing the payload again.
-
 A replay (every request answered by a cassette) never encodes a frame at all: its requests
 carry :func:`by_digest` where a recording carries the JPEG data URL, the very string the
 redactor would have put there, so the canonical request, and what it matches, is the same.
 
-The tables are bounded (oldest entries evicted first) and thread-safe.
+The table is bounded (oldest entries evicted first) and thread-safe.
 """
 
 from __future__ import annotations
@@ -30,11 +26,8 @@ from pytest_emrd._bounded import remember
 #: What a frame's pixel digest is prefixed with in a canonical request.
 PIXELS: Final = "pixels:"
 _CAPACITY: Final = 4096
-#: Data URLs remembered by identity (each holds its frame: a few windows' worth).
-_URLS: Final = 256
 _lock = threading.Lock()
 _table: OrderedDict[str, str] = OrderedDict()
-_urls: OrderedDict[int, tuple[str, str]] = OrderedDict()
 
 
 def _payload_key(b64_payload: str | bytes) -> str:
@@ -42,26 +35,16 @@ def _payload_key(b64_payload: str | bytes) -> str:
     return hashlib.sha256(raw).hexdigest()
 
 
-def register(b64_payload: str | bytes, pixel_digest: str, *, data_url: str | None = None) -> None:
-    """Remember that this base64 image payload shows the frame with ``pixel_digest``, and
-    that ``data_url`` (the string object a request will carry, if given) holds it."""
+def register(b64_payload: str | bytes, pixel_digest: str) -> None:
+    """Remember that this base64 image payload shows the frame with ``pixel_digest``."""
     key = _payload_key(b64_payload)
     with _lock:
         remember(_table, key, pixel_digest, _CAPACITY)
-        if data_url is not None:
-            remember(_urls, id(data_url), (data_url, pixel_digest), _URLS)
 
 
 def by_digest(pixel_digest: str) -> str:
     """The frame with ``pixel_digest`` as a replayed request carries it: ``pixels:<sha256>``."""
     return PIXELS + pixel_digest
-
-
-def pixel_digest_for_url(data_url: str) -> str | None:
-    """``pixels:<sha256>`` for the very data URL object registered with a frame, else None
-    (an equal string that is another object is not looked at: the caller hashes it)."""
-    hit = _urls.get(id(data_url))  # one read is atomic; changes to the table take the lock
-    return by_digest(hit[1]) if hit is not None and hit[0] is data_url else None
 
 
 def pixel_digest_for(b64_payload: str | bytes) -> str:
@@ -76,4 +59,3 @@ def clear() -> None:
     """Forget every registered frame (tests)."""
     with _lock:
         _table.clear()
-        _urls.clear()

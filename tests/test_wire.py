@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import json
-
 import httpx
 import pytest
 from hypothesis import given
@@ -71,24 +69,6 @@ def test_a_message_is_encoded_and_redacted_once_however_many_windows_carry_it(mo
     assert calls == ["QUJD"]
 
 
-def test_a_frame_registered_with_its_data_url_is_hashed_only_when_registered(monkeypatch):
-    url = "data:image/jpeg;base64,QkNE"
-    hashed: list[str] = []
-    real = frames._payload_key
-    monkeypatch.setattr(frames, "_payload_key", lambda p: hashed.append(p) or real(p))
-    frames.register("QkNE", PIXELS, data_url=url)
-    image = {"role": "user", "content": [{"type": "image_url", "image_url": {"url": url}}]}
-    for window in range(1, 6):
-        body = {"model": "m", "messages": [image] * window}
-        assert f"pixels:{PIXELS}".encode() in redact_body(_wire.encode_body(body)).body
-    assert hashed == ["QkNE"]
-    # An equal data URL that is another string object is found by hashing its payload.
-    copy = "".join(["data:image/jpeg;base64,", "QkNE"])
-    other = {"role": "user", "content": [{"type": "image_url", "image_url": {"url": copy}}]}
-    assert f"pixels:{PIXELS}".encode() in redact_body(_wire.encode_body({"messages": [other]})).body
-    assert hashed == ["QkNE", "QkNE"]
-
-
 def test_bytes_this_process_did_not_build_have_no_tree():
     raw = _wire.encode_body({"model": "m", "messages": []})
     assert _wire.sent(b'{"model":"m","messages":[]}') is None
@@ -99,28 +79,3 @@ def test_a_body_that_is_not_an_object_is_encoded_whole():
     assert _wire.encode_body([1, "a"]) == b'[1,"a"]'
     with pytest.raises(ValueError, match="Out of range float"):
         _wire.encode_body({"t": float("nan")})
-
-
-_long_text = st.text(min_size=1000, max_size=1100) | st.text(
-    'ABCabc+/=\x00"\\\n\u00e9', min_size=1024, max_size=1100
-)
-
-
-@given(
-    st.recursive(
-        _scalars | _long_text,
-        lambda inner: st.lists(inner, max_size=3) | st.dictionaries(st.text(), inner, max_size=3),
-        max_leaves=8,
-    ),
-    st.booleans(),
-    st.booleans(),
-)
-def test_dumps_is_json_dumps_with_long_strings_copied_whole(tree, sort_keys, ensure_ascii):
-    options = {"sort_keys": sort_keys, "ensure_ascii": ensure_ascii}
-    assert _wire.dumps(tree, **options) == json.dumps(tree, separators=(",", ":"), **options)
-
-
-def test_a_string_spelling_the_mark_falls_back_to_json_dumps():
-    frame = "QUJD" * 300
-    tree = {"a": frame, "b": "\x00emrd-verbatim-0", "c": ("x", frame)}
-    assert _wire.dumps(tree) == json.dumps(tree, separators=(",", ":"))

@@ -33,7 +33,6 @@ from typing import Any, Protocol
 import httpx
 
 from pytest_emrd import frames
-from pytest_emrd._wire import memo
 from pytest_emrd.agent._config import ANTHROPIC_VERSION, SAMPLING_FIELDS, ModelConfig
 from pytest_emrd.agent._history import JPEG_DATA_URL
 from pytest_emrd.agent._retry import RetryPolicy, post_json
@@ -286,13 +285,9 @@ def _anthropic_message(message: dict[str, Any]) -> dict[str, Any]:
 
 
 def to_anthropic(messages: list[dict[str, Any]]) -> tuple[str, list[dict[str, Any]]]:
-    """(system prompt, Messages-API messages) from OpenAI-format messages; each message is
-    converted once while it travels in the window (the same dict out for the same dict in)."""
+    """(system prompt, Messages-API messages) from OpenAI-format messages."""
     system = "\n\n".join(m["content"] for m in messages if m["role"] == "system")
-    converted = [
-        memo(m, "anthropic", _anthropic_message) for m in messages if m["role"] != "system"
-    ]
-    return system, converted
+    return system, [_anthropic_message(m) for m in messages if m["role"] != "system"]
 
 
 def _read_anthropic(data: Any) -> ChatResponse:

@@ -111,9 +111,6 @@ def _redact_tree(node: Any) -> Any:
     """``node`` with every image payload replaced by its frame digest."""
     if isinstance(node, str):
         if node.startswith(_DATA_URL):
-            known = frames.pixel_digest_for_url(node)
-            if known is not None:
-                return known
             _, sep, payload = node.partition(";base64,")
             if sep:
                 return frames.pixel_digest_for(payload)

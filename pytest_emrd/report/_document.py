@@ -6,8 +6,6 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from pytest_emrd.metrics import Estimate
-
 
 @dataclass(frozen=True)
 class Cell:
@@ -94,10 +92,3 @@ def mean_sd(mean: float | None, sd: float | None, *, scale: float = 1.0, digits:
     if sd is None:
         return f"{mean * scale:.{digits}f}"
     return f"{mean * scale:.{digits}f} ± {sd * scale:.{digits}f}"
-
-
-def estimate_ci(e: Estimate, *, scale: float = 1.0, digits: int = 3) -> str:
-    """``[0.41, 0.52]`` of a bootstrap CI, ``n/a`` when undefined."""
-    if e.ci_low is None or e.ci_high is None:
-        return "n/a"
-    return f"[{num(e.ci_low * scale, digits)}, {num(e.ci_high * scale, digits)}]"

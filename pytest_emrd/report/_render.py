@@ -3,10 +3,10 @@
 from __future__ import annotations
 
 import json
-import math
 from collections.abc import Iterable, Sequence
-from typing import Any, Final
+from typing import Final
 
+from pytest_emrd._serde import json_safe
 from pytest_emrd.errors import check_choice
 from pytest_emrd.gate import Verdict
 from pytest_emrd.report._build import build_report
@@ -22,17 +22,6 @@ from pytest_emrd.trajectory import Trajectory
 FORMATS: Final[tuple[str, ...]] = ("md", "html", "json")
 
 
-def _json_safe(data: Any) -> Any:
-    """Strict JSON: ``inf`` (an unbounded memory strength) becomes the string ``"inf"``."""
-    if isinstance(data, float) and not math.isfinite(data):
-        return "nan" if math.isnan(data) else ("inf" if data > 0 else "-inf")
-    if isinstance(data, dict):
-        return {k: _json_safe(v) for k, v in data.items()}
-    if isinstance(data, list):
-        return [_json_safe(v) for v in data]
-    return data
-
-
 def check_formats(formats: Iterable[str]) -> list[str]:
     """The requested formats, deduplicated; ConfigError naming an unknown one."""
     wanted = list(dict.fromkeys(formats))
@@ -43,7 +32,7 @@ def check_formats(formats: Iterable[str]) -> list[str]:
 
 def report_json(report: Report) -> str:
     """Every aggregate of the report as strict JSON (non-finite floats as strings)."""
-    return json.dumps(_json_safe(report.to_dict()), indent=1, allow_nan=False) + "\n"
+    return json.dumps(json_safe(report.to_dict()), indent=1, allow_nan=False) + "\n"
 
 
 def render_files(
@@ -97,6 +86,6 @@ def render_comparison(comparison: Comparison, formats: Iterable[str] = FORMATS) 
     if "html" in wanted:
         files["compare.html"] = render_html(doc, {}).encode()
     if "json" in wanted:
-        data = _json_safe(comparison.to_dict())
+        data = json_safe(comparison.to_dict())
         files["compare.json"] = (json.dumps(data, indent=1, allow_nan=False) + "\n").encode()
     return files

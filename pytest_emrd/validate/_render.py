@@ -3,10 +3,9 @@
 from __future__ import annotations
 
 import json
-import math
 from collections import Counter
-from typing import Any
 
+from pytest_emrd._serde import json_safe
 from pytest_emrd.validate._check import ValidationReport
 
 _COLUMNS = ("Check", "Planted", "Recovered", "Tolerance", "Verdict", "Note")
@@ -38,17 +37,7 @@ def markdown(report: ValidationReport) -> str:
     return "\n".join([head, *lines]) + "\n"
 
 
-def _strict(value: Any) -> Any:
-    if isinstance(value, float) and not math.isfinite(value):
-        return "nan" if math.isnan(value) else ("inf" if value > 0 else "-inf")
-    if isinstance(value, dict):
-        return {k: _strict(v) for k, v in value.items()}
-    if isinstance(value, list):
-        return [_strict(v) for v in value]
-    return value
-
-
 def to_json(report: ValidationReport) -> str:
     """The report as indented, strict JSON (:meth:`ValidationReport.to_dict`); unbounded and
     undefined numbers (an EFC with no forgetting event) are the strings ``"inf"``/``"nan"``."""
-    return json.dumps(_strict(report.to_dict()), indent=2, allow_nan=False) + "\n"
+    return json.dumps(json_safe(report.to_dict()), indent=2, allow_nan=False) + "\n"

@@ -26,6 +26,7 @@ from pytest_emrd.errors import ConfigError, check_choice
 from pytest_emrd.trajectory import CONDITIONS
 from pytest_emrd.world._catalog import DOOR_HEIGHT
 from pytest_emrd.world._catalog import WALL_HEIGHT as CEILING_HEIGHT
+from pytest_emrd.world._conditions import condition_params
 from pytest_emrd.world._model import Doorway, Layout, WorldObject, WorldPose
 from pytest_emrd.world._rng import StableRng
 from pytest_emrd.world.thor._assets import (
@@ -40,7 +41,6 @@ from pytest_emrd.world.thor._assets import (
     asset_by_id,
     choose_asset,
 )
-from pytest_emrd.world.thor._conditions import thor_condition
 from pytest_emrd.world.thor._placement import Placed, place, spawn_point
 from pytest_emrd.world.thor._walls import WallPiece, corners, wall_pieces
 
@@ -298,7 +298,7 @@ def build_house(
             "receptacleHeight": 0.7,
             "reflections": [],
             "skyboxId": DIM_SKYBOX_ID if condition == "low_light" else SKYBOX_ID,
-            "lights": _lights(layout, thor_condition(condition).light_factor),
+            "lights": _lights(layout, condition_params(condition).light_factor),
         },
         "metadata": {
             "schema": SCHEMA,

@@ -39,6 +39,7 @@ import numpy as np
 from pytest_emrd.errors import ConfigError, TransportError, check_choice
 from pytest_emrd.rooms import ROOM_NAMES, SLUG_ROOMS
 from pytest_emrd.world._actions import Action
+from pytest_emrd.world._conditions import condition_params
 from pytest_emrd.world._feedback import (
     ActionFailed,
     SemanticStep,
@@ -64,7 +65,6 @@ from pytest_emrd.world._model import (
 from pytest_emrd.world._motion import spawn_pose
 from pytest_emrd.world._scene import scene_of
 from pytest_emrd.world.thor import _launch
-from pytest_emrd.world.thor._conditions import ThorCondition, thor_condition
 from pytest_emrd.world.thor._house import build_house
 from pytest_emrd.world.thor._ids import IdTable
 from pytest_emrd.world.thor._navigation import (
@@ -164,7 +164,7 @@ class ThorSimulator(SemanticStep):
         self._ids = IdTable({})
         self._types: dict[str, str] = {}
         self._landmarks: frozenset[str] = frozenset()
-        self._condition = ThorCondition(0.0, 0.0, 1.0, False)
+        self._condition = condition_params("baseline")
         self._points = np.empty((0, 2))
         self._heights: dict[tuple[float, float], float] = {}
         self._spawn = WorldPose(0.0, 0.0, 0.0)
@@ -244,7 +244,7 @@ class ThorSimulator(SemanticStep):
         ``symbolic=False`` (``vision``): no feedback names an object id."""
         name = SLUG_ROOMS.get(spawn_room, spawn_room)
         check_choice("spawn_room", name, [*ROOM_NAMES, *SLUG_ROOMS])
-        self._condition = thor_condition(condition)
+        self._condition = condition_params(condition)
         room = layout.room(name)
         wanted = spawn_pose(scene_of(layout), room, seed)
         mode = str({**DEFAULTS, **self._user_options}["agentMode"])
@@ -261,7 +261,7 @@ class ThorSimulator(SemanticStep):
         self._landmarks = frozenset(o.object_id for o in layout.objects if o.category == "landmark")
         _check(self._controller.last_event, f"CreateHouse of house {house['id']!r}")
         self._lattice()
-        if self._condition.randomize_materials:
+        if self._condition.randomize_palette:
             for action, args in (
                 (
                     "RandomizeMaterials",

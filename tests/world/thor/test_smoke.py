@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 
 from pytest_emrd.cli import main as emrd
-from pytest_emrd.cli._smoke import run_smoke
+from pytest_emrd.cli.thor_smoke import run_smoke
 from pytest_emrd.trajectory import CONDITIONS
 
 
