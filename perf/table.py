@@ -28,6 +28,11 @@ ABOUT: dict[str, str] = {
     "loop.step_overhead_ms": "prompt, data URL, body encoding, parse, bookkeeping",
     "loop.episode_s": "one scout episode against the local reference server",
     "metrics.grid_240_s": "every metric, 240 synthetic episodes × 50 steps",
+    "metrics.gate_320_cold_s": "`emrd gate` on the committed 320-episode run: fresh process, "
+    "no bytecode cache",
+    "metrics.gate_320_cold_cpu_s": "its CPU time, over every core",
+    "metrics.gate_320_s": "the same command with its bytecode cached",
+    "metrics.gate_320_cold_ratio": "cold over warm",
     "replay.grid_240_s": "`pytest benchmarks -n 2`: the default grid replayed, gates included",
     "replay.grid_240_cpu_s": "its CPU time, controller and workers",
     "replay.resume_240_s": "the same command again on the finished run directory",
