@@ -11,7 +11,6 @@ or ``./thresholds.yaml`` when it exists. A comparison writes ``compare.*`` into 
 from __future__ import annotations
 
 import argparse
-import os
 import sys
 from pathlib import Path
 
@@ -80,14 +79,14 @@ def _report(args: argparse.Namespace, formats: list[str]) -> int:
     from pytest_emrd.agent import load_registry
     from pytest_emrd.cli import check_run_dirs
     from pytest_emrd.gate import evaluate_all, load_thresholds
-    from pytest_emrd.metrics import GATE_METRICS, episode_metrics
+    from pytest_emrd.metrics import GATE_METRICS
     from pytest_emrd.report import build_report, write_report
-    from pytest_emrd.run import load_run_episodes
+    from pytest_emrd.run import load_run_episodes, measure_episodes
 
     check_run_dirs(args.run_dirs)
     episodes = load_run_episodes(args.run_dirs)
-    # each episode measured once, for the gates and the report, its trajectory not kept
-    metrics = [episode_metrics(e.decode_trajectory()) for e in episodes]
+    # each episode measured once (on every core), for the gates and the report, not kept
+    metrics = measure_episodes(episodes)
     registry = load_registry(args.models)
     thresholds_path = args.thresholds
     if thresholds_path is None and _DEFAULT_THRESHOLDS.is_file():
@@ -125,8 +124,9 @@ def _report(args: argparse.Namespace, formats: list[str]) -> int:
 def _processes() -> int:
     """Processes computing the report: two where this process may run on two cores or more
     (the map alignment beside the tables, then the figures), else one."""
-    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
-    return min(2, cores or 1)
+    from pytest_emrd._fork import available_cores
+
+    return min(2, available_cores())
 
 
 def _compare(args: argparse.Namespace, formats: list[str]) -> int:
