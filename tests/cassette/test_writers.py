@@ -70,6 +70,7 @@ def test_a_second_run_waits_for_the_writer_and_replays_its_recording(
     b.join(10)
     one, two = results["a"], results["b"]
     assert one.recorded and not two.recorded  # type: ignore[attr-defined]
+    assert two.trajectory.error is None, two.trajectory.error  # type: ignore[attr-defined]
     assert one.trajectory == two.trajectory  # type: ignore[attr-defined]
     assert len(server.seen_headers) == 4  # the episode's four requests, recorded once
 
