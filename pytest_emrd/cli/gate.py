@@ -60,13 +60,15 @@ def _run(args: argparse.Namespace) -> int:
     registry = load_registry(args.models)
     thresholds = load_thresholds(args.thresholds, registry=registry, metrics=GATE_METRICS)
     stored = load_run_episodes(args.run_dirs)
-    verdicts = evaluate_all(measure_episodes(stored, args.jobs), thresholds, GATE_METRICS)
+    metrics = measure_episodes(stored, args.jobs)
+    verdicts = evaluate_all(metrics, thresholds, GATE_METRICS)
     if os.environ.get("GITHUB_STEP_SUMMARY"):
         from pytest_emrd.report import append_step_summary, step_summary_markdown
 
-        source = str(args.thresholds)
-        trajectories = [episode.trajectory for episode in stored]
-        append_step_summary(step_summary_markdown(trajectories, verdicts, thresholds_source=source))
+        summary = step_summary_markdown(
+            stored, verdicts, thresholds_source=str(args.thresholds), episode_metrics=metrics
+        )
+        append_step_summary(summary)
     if args.json:
         print(json.dumps([v.to_dict() for v in verdicts]))
     else:

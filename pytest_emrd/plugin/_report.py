@@ -47,19 +47,23 @@ class RunReport:
         if not (self.episodes or self.verdicts) or not (run_dir / "episodes").is_dir():
             return
         from pytest_emrd.report import append_step_summary, step_summary_markdown
-        from pytest_emrd.run import load_run_dirs
+        from pytest_emrd.run import load_run_episodes, measure_episodes
 
         source = self.run.settings.thresholds
         if source is not None and source.is_relative_to(self.config.rootpath):
             source = source.relative_to(self.config.rootpath)
         try:
-            trajectories = load_run_dirs([run_dir])
+            stored = load_run_episodes([run_dir])
+            metrics = measure_episodes(stored)
         except EmrdError as exc:
             warnings.warn(f"pytest-emrd wrote no step summary: {exc}", stacklevel=1)
             return
         append_step_summary(
             step_summary_markdown(
-                trajectories, self.verdicts, thresholds_source=source and str(source)
+                stored,
+                self.verdicts,
+                thresholds_source=source and str(source),
+                episode_metrics=metrics,
             )
         )
 

@@ -9,6 +9,7 @@ from typing import Final
 from pytest_emrd._serde import json_safe
 from pytest_emrd.errors import check_choice
 from pytest_emrd.gate import Verdict
+from pytest_emrd.metrics import EpisodeMetrics
 from pytest_emrd.report._build import build_report
 from pytest_emrd.report._compare import Comparison
 from pytest_emrd.report._compare_doc import compare_document
@@ -16,6 +17,7 @@ from pytest_emrd.report._html import render_html
 from pytest_emrd.report._markdown import render_markdown
 from pytest_emrd.report._model import Report
 from pytest_emrd.report._sections import report_document, summary_document
+from pytest_emrd.run import StoredEpisode
 from pytest_emrd.trajectory import Trajectory
 
 #: Output formats of ``emrd report --format``.
@@ -58,20 +60,26 @@ def render_files(
 
 
 def step_summary_markdown(
-    trajectories: Sequence[Trajectory],
+    episodes: Sequence[Trajectory | StoredEpisode],
     verdicts: Sequence[Verdict],
     *,
     thresholds_source: str | None = None,
+    episode_metrics: Sequence[EpisodeMetrics] | None = None,
 ) -> str:
     """Markdown for a PR comment or ``$GITHUB_STEP_SUMMARY``: run overview, what is missing,
     the gate table, Exploration Competence and FPSG (no figures, no sentence encoder).
 
     ``thresholds_source`` names the thresholds file in the gate section (default
-    ``thresholds`` when there are verdicts).
+    ``thresholds`` when there are verdicts); ``episode_metrics``, the episodes' metrics when
+    the caller measured them already (as :func:`build_report` takes them).
     """
     source = thresholds_source or ("thresholds" if verdicts else None)
     report = build_report(
-        trajectories, verdicts=verdicts, thresholds_source=source, with_reasoning=False
+        episodes,
+        verdicts=verdicts,
+        thresholds_source=source,
+        with_reasoning=False,
+        episode_metrics=episode_metrics,
     )
     return render_markdown(summary_document(report))
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import pytest
 
+from pytest_emrd.cli import main as emrd
 from tests._sandbox import Sandbox
 
 EARLIER = "## an earlier step\n\nkept as it was\n"
@@ -35,3 +36,19 @@ def test_no_summary_without_emrd_cases(sandbox: Sandbox, monkeypatch):
     sandbox.makepyfile("def test_plain():\n    assert 2 * 2 == 4\n")
     sandbox.runpytest("-p", "no:cacheprovider").assert_outcomes(passed=1)
     assert not target.exists()
+
+
+@pytest.mark.slow
+def test_emrd_gate_appends_the_summary_the_session_wrote(suite, small, recorded, monkeypatch):
+    session_md, gate_md = suite.path / "session.md", suite.path / "gate.md"
+    monkeypatch.setenv("GITHUB_STEP_SUMMARY", str(session_md))
+    run_dir = suite.path / "run"
+    result = suite.runpytest(
+        *small(f"--emrd-cassettes={recorded}", "--emrd-record-mode=none"),
+        f"--emrd-results={run_dir}",
+    )
+    result.assert_outcomes(passed=4)
+    monkeypatch.setenv("GITHUB_STEP_SUMMARY", str(gate_md))
+    monkeypatch.chdir(suite.path)
+    assert emrd(["gate", "run", "--thresholds", "thresholds.yaml"]) == 0
+    assert gate_md.read_text(encoding="utf-8") == session_md.read_text(encoding="utf-8")
