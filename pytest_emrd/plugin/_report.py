@@ -35,7 +35,11 @@ class RunReport:
         summary = EpisodeSummary.from_dict(props["emrd_episode"])
         self.episodes[summary.case] = summary
         reporter = self.config.pluginmanager.get_plugin("terminalreporter")
-        if summary.recorded and reporter is not None and not hasattr(self.config, "workerinput"):
+        if (
+            summary.head.recorded
+            and reporter is not None
+            and not hasattr(self.config, "workerinput")
+        ):
             reporter.ensure_newline()
             reporter.write_line(summary.progress_line(len(self.episodes)))
 
