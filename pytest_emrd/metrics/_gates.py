@@ -21,7 +21,13 @@ import numpy as np
 
 from pytest_emrd.errors import check_choice
 from pytest_emrd.metrics._decide import consensus
-from pytest_emrd.metrics._episode import EpisodeLike, EpisodeMetrics, as_episode_metrics
+from pytest_emrd.metrics._episode import (
+    EpisodeLike,
+    EpisodeMetrics,
+    as_episode_metrics,
+    split_errored,
+)
+from pytest_emrd.metrics._remember import pooled_fit
 from pytest_emrd.metrics._stats import (
     N_RESAMPLES,
     Estimate,
@@ -29,7 +35,6 @@ from pytest_emrd.metrics._stats import (
     bootstrap_sums_ci,
     draw_counts,
 )
-from pytest_emrd.metrics._survival import ebbinghaus_fit
 from pytest_emrd.rooms import FOCAL_COLUMNS, OTHER_LETTER
 
 
@@ -49,12 +54,6 @@ class GateMetric:
     compute: Compute
 
 
-def _split(items: Iterable[EpisodeLike]) -> tuple[list[EpisodeMetrics], int]:
-    metrics = as_episode_metrics(items)
-    kept = [m for m in metrics if not m.errored]
-    return kept, len(metrics) - len(kept)
-
-
 def _why_none(kept: list[EpisodeMetrics], name: str) -> str:
     if not kept:
         return "no non-errored episode"
@@ -64,7 +63,7 @@ def _why_none(kept: list[EpisodeMetrics], name: str) -> str:
 
 def _mean_of(name: str, get: Callable[[EpisodeMetrics], float | bool | None]) -> Compute:
     def compute(items: Sequence[EpisodeLike], *, rng_seed: int = 0) -> Estimate:
-        kept, errored = _split(items)
+        kept, errored = split_errored(items)
         values = [float(v) for m in kept if (v := get(m)) is not None]
         excluded = errored + len(kept) - len(values)
         if not values:
@@ -82,7 +81,7 @@ def _ratio_of(
     """Pooled ``sum num / sum den`` with an episode-level bootstrap."""
 
     def compute(items: Sequence[EpisodeLike], *, rng_seed: int = 0) -> Estimate:
-        kept, errored = _split(items)
+        kept, errored = split_errored(items)
         if not kept:
             return Estimate(None, None, None, 0, _why_none(kept, name), errored)
         pairs = np.array([(num(m), den(m)) for m in kept], dtype=float)
@@ -106,7 +105,7 @@ def _ratio_of(
 
 def _consensus(items: Sequence[EpisodeLike], *, rng_seed: int = 0) -> Estimate:
     """:func:`consensus` share, bootstrapped over episodes."""
-    kept, errored = _split(items)
+    kept, errored = split_errored(items)
     result = consensus(kept)
     if result.share is None:
         return Estimate(None, None, None, 0, "no non-errored episode", errored)
@@ -123,17 +122,13 @@ def _consensus(items: Sequence[EpisodeLike], *, rng_seed: int = 0) -> Estimate:
 
 def _r2(items: Sequence[EpisodeLike], *, rng_seed: int = 0) -> Estimate:
     """Pooled R^2 (value from :func:`ebbinghaus_fit`); CI from resampled episode histograms."""
-    kept, errored = _split(items)
+    kept, errored = split_errored(items)
     if not kept:
         return Estimate(None, None, None, 0, "no non-errored episode", errored)
+    full = pooled_fit(kept, None)
     spells = [m.ttf_spells for m in kept]
     mapped = np.array([sum(m.mapped_by_category.values()) for m in kept], dtype=float)
     total = np.array([sum(m.objects_by_category.values()) for m in kept], dtype=float)
-    full = ebbinghaus_fit(
-        [s.duration for ss in spells for s in ss],
-        [s.forgotten for ss in spells for s in ss],
-        coverage=float(mapped.sum() / total.sum()) if total.sum() else 0.0,
-    )
     if full.r2 is None:
         return Estimate(None, None, None, len(kept), full.reason, errored)
     if len(kept) < 2:

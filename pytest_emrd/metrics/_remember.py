@@ -61,14 +61,26 @@ def time_to_forget(items: Iterable[EpisodeLike]) -> TimeToForget:
 
 
 def _pooled(kept: list[EpisodeMetrics], category: str | None) -> tuple[list[Spell], float]:
-    spells = [s for m in kept for s in m.ttf_spells if category is None or s.category == category]
-    if category is None:
-        mapped = sum(sum(m.mapped_by_category.values()) for m in kept)
-        total = sum(sum(m.objects_by_category.values()) for m in kept)
-    else:
-        mapped = sum(m.mapped_by_category.get(category, 0) for m in kept)
-        total = sum(m.objects_by_category.get(category, 0) for m in kept)
+    """First spells of ``category`` (None: all) and its coverage ``C`` = mapped / total."""
+    spells = [s for m in kept for s in m.ttf_spells if category in (None, s.category)]
+
+    def count(by_category: dict[str, int]) -> int:
+        return sum(n for c, n in by_category.items() if category in (None, c))
+
+    mapped = sum(count(m.mapped_by_category) for m in kept)
+    total = sum(count(m.objects_by_category) for m in kept)
     return spells, (mapped / total if total else 0.0)
+
+
+def pooled_fit(
+    kept: list[EpisodeMetrics], category: str | None, points: str = "durations"
+) -> EbbinghausFit:
+    """:func:`ebbinghaus_fit` of the first spells of ``category`` (None: all) of ``kept``."""
+    spells, coverage = _pooled(kept, category)
+    return ebbinghaus_fit(
+        [s.duration for s in spells], [s.forgotten for s in spells], coverage=coverage,
+        points=points,
+    )  # fmt: skip
 
 
 def kaplan_meier_anchored(items: Iterable[EpisodeLike]) -> dict[str, AnchoredKM]:
@@ -113,15 +125,8 @@ def ebbinghaus(items: Iterable[EpisodeLike], *, points: str = "durations") -> Eb
     values are expected for abrupt, non-exponential forgetting).
     """
     kept, excluded = split_errored(items)
-
-    def fit(category: str | None) -> EbbinghausFit:
-        spells, coverage = _pooled(kept, category)
-        return ebbinghaus_fit(
-            [s.duration for s in spells], [s.forgotten for s in spells], coverage=coverage,
-            points=points,
-        )  # fmt: skip
-
-    return Ebbinghaus({c: fit(c) for c in categories_of(kept)}, fit(None), excluded)
+    by_category = {c: pooled_fit(kept, c, points) for c in categories_of(kept)}
+    return Ebbinghaus(by_category, pooled_fit(kept, None, points), excluded)
 
 
 @dataclass(frozen=True)

@@ -12,10 +12,16 @@ from typing import Final
 
 import numpy as np
 
-from pytest_emrd.metrics._match import COINCIDENT_M, TIE_M2, Matching, assign_rows, rigid_fit
+from pytest_emrd.metrics._match import (
+    COINCIDENT_M,
+    TIE_M2,
+    Matcher,
+    Matching,
+    assign_rows,
+    rigid_fit,
+)
 from pytest_emrd.metrics._tracking import Track, exp_ratio, layout_scale
-from pytest_emrd.metrics._vocab import TypeResolver
-from pytest_emrd.trajectory import GroundTruthObject, MapEntry, Trajectory
+from pytest_emrd.trajectory import Trajectory
 
 #: Ground-truth type of doorways (left out of ``O_F`` by FPSG's doorway-free variant).
 DOORWAY_TYPE: Final = "Doorway"
@@ -239,12 +245,11 @@ def sir_score(traj: Trajectory, track: Track, aec: float | None) -> tuple[float 
     held = track.held
     ratios: list[float] = []
     reentered = [v for v in track.visits if v.return_end is not None]
-    office = Office.of(traj) if reentered else None
     for v in reentered:
         first = {o: lb for o, lb in held[v.first_end].items() if room_of[o] == v.room}
-        if first and office and v.return_end is not None and v.return_start is not None:
+        if first and v.return_end is not None and v.return_start is not None:
             room_by_label = {lb: room_of[o] for o, lb in held[v.return_end].items()}
-            copies = reentry_copies(traj, office, held, v.return_start, v.return_end)
+            copies = reentry_copies(traj, track.matcher, held, v.return_start, v.return_end)
             kept = sum(room_by_label.get(lb) == v.room and o not in copies
                        for o, lb in first.items())  # fmt: skip
             ratios.append(kept / len(first))
@@ -257,47 +262,8 @@ def sir_score(traj: Trajectory, track: Track, aec: float | None) -> tuple[float 
     return aec * float(np.mean(ratios)), ""
 
 
-@dataclass(frozen=True)
-class Office:
-    """What :func:`reentry_copies` reads from an episode's ground truth, built once."""
-
-    objects: dict[str, GroundTruthObject]
-    types: TypeResolver
-    ids: tuple[str, ...]
-    """Object ids, sorted."""
-    true: np.ndarray
-    """Their positions (m x 2)."""
-    kinds: np.ndarray
-    """Their type indices (m)."""
-
-    @classmethod
-    def of(cls, traj: Trajectory) -> Office:
-        objects = {o.object_id: o for o in traj.ground_truth.objects}
-        types = TypeResolver(o.object_type for o in objects.values())
-        ids = tuple(sorted(objects))
-        true = np.array([(objects[o].x, objects[o].z) for o in ids], dtype=float).reshape(-1, 2)
-        kinds = np.array([types.index[objects[o].object_type] for o in ids], dtype=int)
-        return cls(objects, types, ids, true, kinds)
-
-
-def new_entries(
-    traj: Trajectory, office: Office, start: int, end: int
-) -> tuple[dict[str, MapEntry], dict[int, list[str]]]:
-    """The map of step ``end`` (label -> its first entry) and its labels not in the map of the
-    step before ``start``, recognised ones only, by type index (sorted labels, types in the
-    order of their first label)."""
-    entries = {e.label: e for e in reversed(traj.steps[end].cognitive_map)}
-    before = {e.label for e in traj.steps[start - 1].cognitive_map} if start > 0 else set()
-    by_type: dict[int, list[str]] = {}
-    for lb in sorted(entries.keys() - before):
-        k = office.types.resolve(entries[lb].object_type, lb)
-        if k >= 0:
-            by_type.setdefault(k, []).append(lb)
-    return entries, by_type
-
-
 def reentry_copies(
-    traj: Trajectory, office: Office, held: Sequence[dict[str, str]], start: int, end: int
+    traj: Trajectory, matcher: Matcher, held: Sequence[dict[str, str]], start: int, end: int
 ) -> frozenset[str]:
     """Objects that an entry written during a re-entry (steps ``start..end``) copies.
 
@@ -314,21 +280,27 @@ def reentry_copies(
     Edge case: fewer than two matched entries at distinct positions leave the rotation
     undetermined; then no copy is found (the frame cannot say which object is meant).
     """
-    entries, by_type = new_entries(traj, office, start, end)
+    entries = {e.label: e for e in reversed(traj.steps[end].cognitive_map)}
+    before = {e.label for e in traj.steps[start - 1].cognitive_map} if start > 0 else set()
+    by_type: dict[int, list[str]] = {}
+    for lb in sorted(entries.keys() - before):
+        k = matcher.types.resolve(entries[lb].object_type, lb)
+        if k >= 0:
+            by_type.setdefault(k, []).append(lb)
     label_of = held[end]
     if not by_type or len(label_of) < 2:
         return frozenset()
     pairs = sorted(label_of.items())
-    objects = office.objects
     pred = np.array([(entries[lb].x, entries[lb].z) for _, lb in pairs], dtype=float)
     if np.ptp(pred, axis=0).max() <= COINCIDENT_M:
         return frozenset()
-    rot, shift = rigid_fit(pred, np.array([(objects[o].x, objects[o].z) for o, _ in pairs]))
+    layout, ids = matcher._layout, [o.object_id for o in matcher.objects]
+    rot, shift = rigid_fit(pred, layout.true[[matcher._index[o] for o, _ in pairs]])
     copies: set[str] = set()
     for k, labels in by_type.items():
-        cols = np.flatnonzero(office.kinds == k)
+        cols = np.flatnonzero(layout.kinds == k)
         new = np.array([(entries[lb].x, entries[lb].z) for lb in labels], dtype=float)
-        diff = (new @ rot.T + shift)[:, None, :] - office.true[cols][None, :, :]
+        diff = (new @ rot.T + shift)[:, None, :] - layout.true[cols][None, :, :]
         cost = np.round(np.sum(diff * diff, axis=2) / TIE_M2)
         if not np.isfinite(cost).all():
             raise ValueError(f"a written coordinate of {labels} is not finite")
@@ -336,9 +308,9 @@ def reentry_copies(
         for r, j in assign_rows(cost, np.ones(cost.shape, dtype=bool)):
             meant[r] = cols[j]
         for lb, c in zip(labels, meant.tolist(), strict=True):
-            holder = label_of.get(office.ids[c])
+            holder = label_of.get(ids[c])
             if holder is not None and holder != lb:
-                copies.add(office.ids[c])
+                copies.add(ids[c])
     return frozenset(copies)
 
 

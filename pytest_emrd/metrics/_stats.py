@@ -79,13 +79,6 @@ def bootstrap_ci(
     return _percentiles(values, confidence)
 
 
-@functools.lru_cache(maxsize=4)
-def resample_counts(rng_seed: int, n: int, n_resamples: int) -> np.ndarray:
-    """How often each of the ``n`` rows is drawn in each resample of :func:`resample_rows`
-    (``n_resamples x n``, as floats; read-only, shared like the rows)."""
-    return draw_counts(resample_rows(rng_seed, n, n_resamples))
-
-
 def draw_counts(idx: np.ndarray) -> np.ndarray:
     """How often each of ``n`` rows appears in each row of ``idx`` (``n_resamples x n`` row
     indices): the ``n_resamples x n`` counts as read-only floats, ready to multiply data."""
@@ -105,23 +98,19 @@ def bootstrap_sums_ci(
     n_resamples: int = N_RESAMPLES,
     confidence: float = 0.95,
 ) -> tuple[float | None, float | None]:
-    r""":func:`bootstrap_ci` of a statistic of the resampled column sums of ``data`` (n x k):
-    ``statistic`` receives the ``(n_resamples, k)`` sums ``data[rows].sum(axis=1)`` of the
-    same resamples, and returns ``n_resamples`` values.
+    r""":func:`bootstrap_ci` of a statistic of the resampled column sums of whole-number
+    ``data`` (n x k counts: events, steps, one-hot choices).
 
-    For whole numbers whose sums stay below ``2**53`` (counts: events, steps, one-hot
-    choices) every partial sum is exact, so the sums are computed as resample counts times
-    ``data`` (:func:`resample_counts`) instead of gathering ``n_resamples x n`` rows: the
-    same bits in any order of addition. Other data is resampled row by row
-    (:func:`bootstrap_ci`). Edge cases as :func:`bootstrap_ci`.
+    ``statistic`` receives the ``(n_resamples, k)`` sums ``data[rows].sum(axis=1)`` of the
+    resamples of :func:`bootstrap_ci` and returns ``n_resamples`` values. The sums are taken
+    as resample counts (:func:`draw_counts`) times ``data``: for whole numbers below ``2**53``
+    every partial sum is exact, so this is the row resampling's interval, bit for bit, without
+    gathering ``n_resamples x n`` rows. Edge cases as :func:`bootstrap_ci`.
     """
     arr = np.asarray(data, dtype=float)
-    n = len(arr)
-    whole = n >= 2 and bool(np.all(arr == np.round(arr))) and float(np.abs(arr).max()) * n < 2**53
-    if not whole:
-        return bootstrap_ci(arr, lambda a: statistic(a.sum(axis=1)), rng_seed=rng_seed,
-                            n_resamples=n_resamples, confidence=confidence)  # fmt: skip
-    sums = resample_counts(rng_seed, n, n_resamples) @ arr
+    if len(arr) < 2:
+        return None, None
+    sums = draw_counts(resample_rows(rng_seed, len(arr), n_resamples)) @ arr
     with np.errstate(divide="ignore", invalid="ignore"):
         values = np.asarray(statistic(sums), dtype=float)
     return _percentiles(values, confidence)

@@ -99,6 +99,8 @@ class Track:
     """Whether ``M_{t-1} \\ M_t`` is non-empty, aligned with ``miller_loads``."""
     visits: tuple[RoomVisits, ...]
     """Rooms in order of first visit."""
+    matcher: Matcher
+    """The episode's matcher (its ground truth and type resolution)."""
 
 
 def first_spells(spells: tuple[Spell, ...]) -> tuple[Spell, ...]:
@@ -168,6 +170,7 @@ def track_episode(traj: Trajectory) -> Track:
         miller_loads=tuple(loads),
         miller_forgets=tuple(forgets),
         visits=_visits([s.room for s in traj.steps]),
+        matcher=matcher,
     )
 
 

@@ -1,66 +1,36 @@
 """Vocabulary of the matcher: what models write -> AI2-THOR engine types.
 
-A VLM names the objects of its cognitive map in its own words: ``"office chair"``,
-``"TV"``, ``"chairs (2)"``, ``"Chair_3"``, ``"small wooden table by the door"``,
-``"the red armchair"``, ``"chiar"``. :func:`canonical_type` reads such a text and returns the
-AI2-THOR ``objectType`` it denotes, or None when it denotes none. It reads a label the way
-English reads a noun phrase: the **head noun**, the last noun before any qualifier, says what
-the thing is; the words before it only say which one or what kind. The procedure, in order:
+:func:`canonical_type` reads a label the way English reads a noun phrase: the **head noun**
+(the last noun before any qualifier) says what the thing is, the words before it only which
+one or what kind. The rules, with examples and their measured effect, are on the docs page
+"Reading what a model writes" (``docs/interpretation/vocabulary.md``); in order:
 
-1. **Split words.** CamelCase and acronyms are split (``DiningTable`` -> ``dining table``,
-   ``TVStand`` -> ``tv stand``), then the text is lower-cased; ``(...)``/``[...]``/``{...}``
-   asides are removed (``chairs (2)`` -> ``chairs``); anything that is not a letter or a digit
-   separates words (``Chair_3`` -> ``chair 3``, ``chair#2``, ``chair-2``). Words that are
-   numbers or single letters (instance suffixes: ``chair 2``, ``stool b``, ``2 chairs``) are
-   dropped.
-2. **Cut qualifiers.** The noun phrase ends before the first word, after the first, that opens
-   a locative or descriptive phrase (:data:`QUALIFIER_WORDS`: ``near``, ``by``, ``next``,
-   ``beside``, ``in``, ``on``, ``at``, ``with``, ``of``, ...): ``chair near the window`` is a
-   chair, ``lamp on the desk`` a lamp, ``picture of a plant`` a picture. ``left`` and ``right``
-   are also adjectives (:data:`POSITION_WORDS`): when the words before them name no type, the
-   phrase runs on past them (``back left chair`` is a chair). Trailing states
-   (:data:`STATE_WORDS`: ``door open``) are dropped.
-3. **Head noun.** The phrase denotes what its last word denotes, read together with the words
-   before it when they form a compound the vocabulary knows: the longest run of at most
-   four words *ending at the last word* whose words joined (``arm chair`` -> ``armchair``), or
-   joined with the last word made singular (``chairs``, ``shelves``, ``couches``, ``boxes``),
-   is a key of :data:`SYNONYMS` or the lower-cased name of an engine type
-   (:data:`ENGINE_TYPES`). So ``office chair`` is a chair, ``table lamp`` a lamp (``DeskLamp``,
-   never ``DiningTable``), ``exit sign`` a sign (no type, never ``Door``), ``fridge magnet`` a
-   magnet (no type). A modifier never names the thing: when the last word denotes no type, the
-   phrase denotes none. **Parts** (:data:`PART_WORDS`): a head that names a part of the object
-   its modifier names (``fridge door``, ``chair seat``) denotes no object; ``chair leg`` denotes
-   none already, as ``leg`` names no type.
-4. **Misspellings.** When no run ending at the last word is a key, the last word (as written,
-   then made singular) is compared with every key of at least :data:`FUZZY_MIN_LENGTH` (5)
-   letters by rapidfuzz's optimal-string-alignment distance (one insertion, deletion,
-   substitution or swap of two neighbours is one edit). A key whose similarity ``1 - edits /
-   longer length`` is at least :data:`FUZZY_THRESHOLD` (0.8: one edit in 5 to 9 letters, two
-   in 10 to 14) is taken, the fewest edits first, when that key's types are the single best:
-   ``chiar`` (1 edit in 5), ``labtop`` (1 in 6), ``refridgerator`` (1 in 13) and
-   ``televsion`` are read. A word shorter than 5 letters is never corrected (``dsek``), nor
-   is a word of :data:`REAL_WORDS`, the English words this close to a key that are no
-   spelling of it: ``chain``, ``cable``, ``tablet`` and ``handle`` are never a ``Chair``,
-   a ``DiningTable`` or a ``Candle``. Only the head noun is corrected (``cofee machine``
-   denotes nothing: ``machine`` names no type).
-5. **Candidates.** A synonym lists the engine types it names, most likely first (``table`` ->
-   ``DiningTable``, ``CoffeeTable``, ``SideTable``, ``Desk``): only types the word is a name for
-   (the kinds a general word covers: a seat is a chair, a stool, an armchair or a sofa), never a
-   look-alike (a sofa is not an armchair). An engine type's own name denotes only itself.
+1. **Split words.** CamelCase and acronyms are split (``TVStand`` -> ``tv stand``), text is
+   lower-cased, ``(...)``/``[...]``/``{...}`` asides are removed, anything not a letter or a
+   digit separates words, and numbers and single letters (``Chair_3``, ``stool b``) are dropped.
+2. **Cut qualifiers.** The phrase ends before the first word, after the first, of
+   :data:`QUALIFIER_WORDS` (``chair near the window`` is a chair), read past
+   :data:`POSITION_WORDS` when the words before them name no type (``back left chair``);
+   trailing :data:`STATE_WORDS` (``door open``) are dropped.
+3. **Head noun.** The longest run of at most four words *ending at the last word* whose words
+   joined (with the last word as written, then made singular) are a key of :data:`SYNONYMS`
+   or a lower-cased :data:`ENGINE_TYPES` name: ``table lamp`` is a ``DeskLamp``, ``exit sign``
+   no type. A modifier never names the thing. A head of :data:`PART_WORDS` after a word that
+   names an object (``fridge door``) denotes no object.
+4. **Misspellings.** Otherwise the last word (as written, then singular) of at least
+   :data:`FUZZY_MIN_LENGTH` letters is compared with every key that long by rapidfuzz's
+   optimal-string-alignment distance; a key with similarity ``1 - edits / longer length >=``
+   :data:`FUZZY_THRESHOLD` is taken, the fewest edits first, when its types are the single
+   best (``chiar``, ``labtop``). Words of :data:`REAL_WORDS` (``cable``, ``chain``) are never
+   corrected.
+5. **Candidates.** A synonym lists the types it names, most likely first, never a look-alike;
+   an engine type's own name denotes only itself.
 
-Inside an episode (:class:`TypeResolver`) the first candidate the layout actually holds wins,
-so ``table`` is the ``DiningTable`` where the layout has one and a ``Desk`` where it has no
-table, and ``door`` is a ``Doorway`` where the layout has doorways.
-
-**Hallucinations.** Text that denotes no engine type (``fire extinguisher``, ``exit sign``,
-``ghost``), and a type the layout does not hold (``sofa`` in an office without one: its only
-candidate is ``Sofa``), match no ground-truth object: the entry is *unrecognised*
-(:attr:`Matching.unrecognised`). As in the paper's Eq. AEC, whose ``min(|M_k|, |E_k|)`` term
-"prevents hallucinated or double-counted objects from inflating the score", such entries count
-for nothing: not in ``K`` (AEC, PA), not in ``M_t`` of TBS, not in SIR's
-``M_first``/``M_return``, and they open no forgetting spell. They do count in Miller's load
-``|M_{t-1}|``, which the paper defines on the map's labels (what the model holds), not on
-matched objects.
+Inside an episode (:class:`TypeResolver`) the first candidate the layout holds wins. Text that
+denotes no engine type, or only types the layout lacks, is *unrecognised*
+(:attr:`Matching.unrecognised`): a hallucination, which (as Eq. AEC's ``min`` intends) counts
+for nothing in AEC, PA, TBS, SIR or the spells, but does count in Miller's load ``|M_{t-1}|``,
+which the paper defines on the map's labels.
 """
 
 from __future__ import annotations
@@ -98,146 +68,59 @@ ENGINE_TYPES: Final[frozenset[str]] = frozenset(
     )
 )
 
-#: Words VLMs use (joined, singular, lower case) -> engine types they name, most likely first.
-#: Engine type names need no entry (``diningtable`` denotes ``DiningTable``). A list holds
-#: only types the word is a name for, never a look-alike: a type the layout lacks is a
-#: hallucination, not a licence to pick the nearest thing it has.
+#: Engine types (most likely first) -> the words VLMs use for them (joined, singular, lower
+#: case). A word lists only types it is a name for, never a look-alike: a type the layout
+#: lacks is a hallucination, not a licence to pick the nearest thing it has.
+_NAMED: Final[dict[tuple[str, ...], str]] = {
+    ("Chair",): "chair officechair deskchair swivelchair deckchair",
+    ("Chair", "Stool", "ArmChair", "Sofa"): "seat",
+    ("ArmChair",): "armchair loungechair easychair clubchair wingchair wingbackchair recliner",
+    ("Sofa",): "sofa couch loveseat settee",
+    ("Stool",): "stool barstool",
+    ("Footstool", "Ottoman"): "footrest",
+    ("Ottoman",): "pouf",
+    ("DiningTable", "CoffeeTable", "SideTable", "Desk"): "table",
+    ("DiningTable",): "conferencetable meetingtable boardroomtable longtable kitchentable",
+    ("SideTable",): "endtable bedsidetable nightstand",
+    ("Desk",): "desk officedesk workstation receptiondesk frontdesk reception receptioncounter",
+    ("CounterTop",): "counter kitchencounter kitchenisland worktop countertop",
+    ("ShelvingUnit", "Shelf"): "shelf shelving bookshelf bookcase",
+    ("Cabinet",): "cabinet cupboard filingcabinet",
+    ("TVStand",): "tvcabinet mediaconsole",
+    ("Television",): "tv television televisionset flatscreen smarttv display",
+    ("Television", "Laptop"): "screen",
+    ("Television", "Desktop", "Laptop"): "monitor",
+    ("Laptop", "Desktop"): "computer",
+    ("Laptop",): "laptopcomputer notebookcomputer notebook macbook",
+    ("Desktop",): "desktopcomputer",
+    ("Desktop", "Laptop"): "pc",
+    ("HousePlant",): "plant pottedplant plantpot indoorplant flowerpot fern ficus cactus succulent",
+    ("Fridge",): "fridge refrigerator freezer",
+    ("Microwave",): "microwaveoven",
+    ("CoffeeMachine",): "coffeemaker espressomachine coffeemachine coffeepot",
+    ("Sink",): "kitchensink",
+    ("Sink", "SinkBasin"): "basin",
+    ("StoveBurner",): "stove",
+    ("Faucet",): "tap",
+    ("GarbageCan",): "trashcan wastebasket dustbin bin",
+    ("DeskLamp", "FloorLamp"): "lamp",
+    ("DeskLamp",): "tablelamp readinglamp",
+    ("FloorLamp",): "standinglamp",
+    ("Painting", "Poster"): "picture",
+    ("Painting",): "pictureframe artwork photo photograph",
+    ("Statue",): "sculpture figurine",
+    ("Curtains",): "curtain drape",
+    ("Blinds",): "blind",
+    ("CellPhone",): "phone smartphone iphone mobilephone",
+    ("RemoteControl",): "remote",
+    ("Doorway",): "doorway opening passage passageway archway doorframe entryway",
+    ("Doorway", "Door"): "door entrance",
+    ("Door",): "exit exitdoor frontdoor maindoor entrancedoor emergencyexit fireexit buildingexit",
+}
+#: Word VLMs use -> the engine types it names, most likely first (from ``_NAMED``). Engine
+#: type names need no entry (``diningtable`` denotes ``DiningTable``).
 SYNONYMS: Final[dict[str, tuple[str, ...]]] = {
-    # seating
-    "chair": ("Chair",),
-    "officechair": ("Chair",),
-    "deskchair": ("Chair",),
-    "swivelchair": ("Chair",),
-    "deckchair": ("Chair",),
-    "seat": ("Chair", "Stool", "ArmChair", "Sofa"),
-    "armchair": ("ArmChair",),
-    "loungechair": ("ArmChair",),
-    "easychair": ("ArmChair",),
-    "clubchair": ("ArmChair",),
-    "wingchair": ("ArmChair",),
-    "wingbackchair": ("ArmChair",),
-    "recliner": ("ArmChair",),
-    "sofa": ("Sofa",),
-    "couch": ("Sofa",),
-    "loveseat": ("Sofa",),
-    "settee": ("Sofa",),
-    "stool": ("Stool",),
-    "barstool": ("Stool",),
-    "footrest": ("Footstool", "Ottoman"),
-    "pouf": ("Ottoman",),
-    # tables and desks
-    "table": ("DiningTable", "CoffeeTable", "SideTable", "Desk"),
-    "conferencetable": ("DiningTable",),
-    "meetingtable": ("DiningTable",),
-    "boardroomtable": ("DiningTable",),
-    "longtable": ("DiningTable",),
-    "kitchentable": ("DiningTable",),
-    "endtable": ("SideTable",),
-    "bedsidetable": ("SideTable",),
-    "nightstand": ("SideTable",),
-    "desk": ("Desk",),
-    "officedesk": ("Desk",),
-    "workstation": ("Desk",),
-    "receptiondesk": ("Desk",),
-    "frontdesk": ("Desk",),
-    "reception": ("Desk",),
-    "receptioncounter": ("Desk",),
-    "counter": ("CounterTop",),
-    "kitchencounter": ("CounterTop",),
-    "kitchenisland": ("CounterTop",),
-    "worktop": ("CounterTop",),
-    "countertop": ("CounterTop",),
-    # storage
-    "shelf": ("ShelvingUnit", "Shelf"),
-    "shelving": ("ShelvingUnit", "Shelf"),
-    "bookshelf": ("ShelvingUnit", "Shelf"),
-    "bookcase": ("ShelvingUnit", "Shelf"),
-    "cabinet": ("Cabinet",),
-    "cupboard": ("Cabinet",),
-    "filingcabinet": ("Cabinet",),
-    "tvcabinet": ("TVStand",),
-    "mediaconsole": ("TVStand",),
-    # screens and computers
-    "tv": ("Television",),
-    "television": ("Television",),
-    "televisionset": ("Television",),
-    "flatscreen": ("Television",),
-    "smarttv": ("Television",),
-    "screen": ("Television", "Laptop"),
-    "monitor": ("Television", "Desktop", "Laptop"),
-    "display": ("Television",),
-    "computer": ("Laptop", "Desktop"),
-    "laptopcomputer": ("Laptop",),
-    "notebookcomputer": ("Laptop",),
-    "notebook": ("Laptop",),
-    "macbook": ("Laptop",),
-    "desktopcomputer": ("Desktop",),
-    "pc": ("Desktop", "Laptop"),
-    # plants
-    "plant": ("HousePlant",),
-    "pottedplant": ("HousePlant",),
-    "plantpot": ("HousePlant",),
-    "indoorplant": ("HousePlant",),
-    "flowerpot": ("HousePlant",),
-    "fern": ("HousePlant",),
-    "ficus": ("HousePlant",),
-    "cactus": ("HousePlant",),
-    "succulent": ("HousePlant",),
-    # kitchen
-    "fridge": ("Fridge",),
-    "refrigerator": ("Fridge",),
-    "freezer": ("Fridge",),
-    "microwaveoven": ("Microwave",),
-    "coffeemaker": ("CoffeeMachine",),
-    "espressomachine": ("CoffeeMachine",),
-    "coffeemachine": ("CoffeeMachine",),
-    "coffeepot": ("CoffeeMachine",),
-    "kitchensink": ("Sink",),
-    "basin": ("Sink", "SinkBasin"),
-    "stove": ("StoveBurner",),
-    "tap": ("Faucet",),
-    "trashcan": ("GarbageCan",),
-    "wastebasket": ("GarbageCan",),
-    "dustbin": ("GarbageCan",),
-    "bin": ("GarbageCan",),
-    # lamps, pictures, decor
-    "lamp": ("DeskLamp", "FloorLamp"),
-    "tablelamp": ("DeskLamp",),
-    "readinglamp": ("DeskLamp",),
-    "standinglamp": ("FloorLamp",),
-    "picture": ("Painting", "Poster"),
-    "pictureframe": ("Painting",),
-    "artwork": ("Painting",),
-    "photo": ("Painting",),
-    "photograph": ("Painting",),
-    "sculpture": ("Statue",),
-    "figurine": ("Statue",),
-    "curtain": ("Curtains",),
-    "drape": ("Curtains",),
-    "blind": ("Blinds",),
-    "phone": ("CellPhone",),
-    "smartphone": ("CellPhone",),
-    "iphone": ("CellPhone",),
-    "mobilephone": ("CellPhone",),
-    "remote": ("RemoteControl",),
-    # ways through
-    "doorway": ("Doorway",),
-    "door": ("Doorway", "Door"),
-    "opening": ("Doorway",),
-    "passage": ("Doorway",),
-    "passageway": ("Doorway",),
-    "archway": ("Doorway",),
-    "doorframe": ("Doorway",),
-    "entryway": ("Doorway",),
-    "entrance": ("Doorway", "Door"),
-    "exit": ("Door",),
-    "exitdoor": ("Door",),
-    "frontdoor": ("Door",),
-    "maindoor": ("Door",),
-    "entrancedoor": ("Door",),
-    "emergencyexit": ("Door",),
-    "fireexit": ("Door",),
-    "buildingexit": ("Door",),
+    word: types for types, words in _NAMED.items() for word in words.split()
 }
 
 #: Words that open a qualifier phrase; the label is cut before the first of them.
