@@ -13,17 +13,32 @@ Label-to-ground-truth matching is one procedure, :func:`match_map`; what a model
 denotes is :func:`canonical_type` (the vocabulary of free-form labels).
 """
 
-from pytest_emrd.metrics._decide import (
+from pytest_emrd.metrics._aggregates import (
     Consensus,
+    Ebbinghaus,
     FocalDistribution,
     FocalRow,
     FPSGSummary,
+    MillerCurve,
+    SerialPosition,
+    SpatialIdentityResolution,
+    TBSCurve,
+    TimeToForget,
+    anova_conditions,
     consensus,
+    ebbinghaus,
     focal_distribution,
+    forgetting_spells,
     fpsg,
+    kaplan_meier_anchored,
+    miller_curve,
+    positional_accuracy,
+    serial_position,
+    spatial_identity_resolution,
+    tbs_curve,
+    time_to_forget,
 )
 from pytest_emrd.metrics._episode import EpisodeMetrics, as_episode_metrics, episode_metrics
-from pytest_emrd.metrics._explore_map import TBSCurve, positional_accuracy, tbs_curve
 from pytest_emrd.metrics._frame import random_reframe, reframe
 from pytest_emrd.metrics._gates import GATE_METRICS, GateMetric, evaluate_gates
 from pytest_emrd.metrics._match import (
@@ -35,21 +50,6 @@ from pytest_emrd.metrics._match import (
     step_matchings,
 )
 from pytest_emrd.metrics._reasoning import Representative, representative_reasoning
-from pytest_emrd.metrics._remember import (
-    Ebbinghaus,
-    MillerCurve,
-    SerialPosition,
-    SpatialIdentityResolution,
-    TimeToForget,
-    anova_conditions,
-    ebbinghaus,
-    forgetting_spells,
-    kaplan_meier_anchored,
-    miller_curve,
-    serial_position,
-    spatial_identity_resolution,
-    time_to_forget,
-)
 from pytest_emrd.metrics._scores import (
     Grounding,
     aec_score,

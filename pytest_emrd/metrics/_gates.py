@@ -20,14 +20,13 @@ from typing import Literal, Protocol
 import numpy as np
 
 from pytest_emrd.errors import check_choice
-from pytest_emrd.metrics._decide import consensus
+from pytest_emrd.metrics._aggregates import consensus, pooled_fit
 from pytest_emrd.metrics._episode import (
     EpisodeLike,
     EpisodeMetrics,
     as_episode_metrics,
     split_errored,
 )
-from pytest_emrd.metrics._remember import pooled_fit
 from pytest_emrd.metrics._stats import (
     N_RESAMPLES,
     Estimate,

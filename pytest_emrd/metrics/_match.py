@@ -1,56 +1,49 @@
 """Label-to-ground-truth matching: the one procedure every metric uses.
 
 A model writes its cognitive map as ``{label: {type, x, z, room}}`` with labels and types of
-its own choosing and coordinates in a frame of its own (the paper's "arbitrary egocentric
-origins", resolved "using an optimal rigid-body Procrustes alignment"). :func:`match_map`
-decides which physical object each entry of one map stands for, from that map alone:
+its own and coordinates in a frame of its own (the paper's "arbitrary egocentric origins",
+resolved "using an optimal rigid-body Procrustes alignment"). :func:`match_map` decides which
+physical object each entry of one map stands for, from that map alone:
 
 1. **Labels.** A label is one recorded instance; a repeated label keeps its first entry.
-2. **Types** (:mod:`pytest_emrd.metrics._vocab`): the entry's ``object_type``, else its
-   label, restricted to the types the layout holds. An entry of no such type is
-   *unrecognised* (a hallucination) and takes no part in the frame or the matching.
-3. **Frame** (:func:`_solve`), robust to hallucinated entries. *Hypotheses*: the entries
-   with the fewest candidate objects (ties: farthest from the written centroid, then label
-   order; at most :data:`BASE_ENTRIES`) are paired, and every pair of distinct candidate
-   objects whose distance agrees with the written one within ``2 * GATE_M`` gives the
-   proper rigid motion carrying the two entries onto them. *Score* (truncated least
-   squares, MSAC): after the motion, each recognised entry costs its squared distance to the
-   nearest object of its type, capped at ``GATE_M ** 2``, so an outlier (an invented "exit
-   sign" read as a door) costs a constant and cannot pull the frame. The lowest score wins;
-   on equal scores (a symmetric layout: a row of chairs fits shifted by one chair) the
-   first, and the Procrustes fit of the labels that are object ids of the layout
-   (``Chair_3``) comes before the pair hypotheses. *Refit*: assign (step 4), fit Procrustes
-   (:func:`rigid_fit`) on the matched pairs only (the inliers), assign again, until the
-   pairs repeat (at most :data:`MAX_ROUNDS`).
-4. **Assignment with a gate.** An entry may match an object of its type only when it lies
-   within :data:`GATE_M` metres of it after alignment. Among the one-to-one assignments the
-   one with the most pairs is taken, then the least summed squared distance
-   (:func:`scipy.optimize.linear_sum_assignment`). **Tie rule**: squared distances are
-   rounded to :data:`TIE_M2` (1e-9 m^2) before the assignment, so differences at floating
-   tolerance (another CPU, BLAS kernel or library version) cannot flip a pair.
+2. **Types** (:mod:`._vocab`): the entry's ``object_type``, else its label, restricted to the
+   layout's types. An entry of no such type is *unrecognised* (a hallucination) and takes no
+   part in the frame or the matching.
+3. **Frame** (:func:`_solve`), robust to hallucinated entries. *Hypotheses*: the entries with
+   the fewest candidate objects (ties: farthest from the written centroid, then label order;
+   at most :data:`BASE_ENTRIES`) are paired, and every pair of distinct candidate objects
+   whose distance agrees with the written one within ``2 * GATE_M`` gives the proper rigid
+   motion carrying the two entries onto them. *Score* (truncated least squares, MSAC): each
+   recognised entry costs its squared distance to the nearest object of its type, capped at
+   ``GATE_M ** 2``, so an outlier cannot pull the frame. The lowest score wins; on equal
+   scores (a symmetric layout) the first, and the Procrustes fit of the labels that are
+   object ids of the layout (``Chair_3``) comes before the pair hypotheses. *Refit*: assign
+   (step 4), fit Procrustes (:func:`rigid_fit`) on the matched pairs only, assign again,
+   until the pairs repeat (at most :data:`MAX_ROUNDS`).
+4. **Assignment with a gate.** An entry may match an object of its type only within
+   :data:`GATE_M` metres after alignment. The one-to-one assignment with the most pairs, then
+   the least summed squared distance, is taken (:func:`scipy.optimize.linear_sum_assignment`).
+   **Tie rule**: squared distances are rounded to :data:`TIE_M2` first, so differences at
+   floating tolerance (another CPU, BLAS or library version) cannot flip a pair.
 
-Recognised entries left without a pair are *unmatched*: their type's objects are all taken,
-or none lies within the gate. They are what Eq. PA's charge counts (:func:`._scores.pa_score`)
-and what map precision leaves out. Everything is computed from distances, so the matching
-is the same in every frame (up to the 1e-9 tie rounding): **invariant under any proper rigid
-motion** of the map. **Reflections are not forgiven**: a mirrored map cannot be rotated onto
-the layout, keeps its residual, and loses pairs at the gate.
+Recognised entries left without a pair are *unmatched* (their type's objects all taken, or
+none within the gate): Eq. PA's charge and what map precision leaves out. Everything is
+computed from distances, so the matching is **invariant under any proper rigid motion** of
+the map (up to the tie rounding). **Reflections are not forgiven**: a mirrored map cannot be
+rotated onto the layout, keeps its residual, and loses pairs at the gate.
 
-**Across steps** (:meth:`Matcher.step`, for the per-step metrics: TBS, spells, SIR) each map
-is matched by the same rules, with two uses of history. (a) The previous step's frame and
-pairs are extended to the entries written or moved since when they explain them all (each
-lands within the gate of a free object of its type, and no object was freed that an
-unmatched entry could take); otherwise, and when a frame found on fewer than :data:`SETTLED`
-entries has grown by :data:`REVISIT`, the full search runs, with the previous frame as one
-more hypothesis. Only a frame whose rotation the map determined (read from a pair of
-entries, or a Procrustes fit of two or more distinct points) is carried: one entry, or
-entries no pair of which agrees with the layout, fix no direction, and the identity rotation
-they get is the model frame's own, so carrying it would make the next step's matching depend
-on the frame (the frame-invariance rule across steps).
-(b) A label keeps the object it held at the previous step on exact ties (its rounded cost is
-lowered by half a rounding unit). A carried pairing that the geometry contradicts (beyond the
-gate, or a cheaper assignment) is dropped. The terminal map's scores (AEC, PA, precision,
-FPSG) use :func:`match_map` of that map alone, never this history.
+**Across steps** (:meth:`Matcher.step`, for TBS, spells and SIR) each map is matched by the
+same rules, with two uses of history. (a) The previous frame and pairs are extended to the
+entries written or moved since when they explain them all (each lands within the gate of a
+free object of its type, and no object was freed that an unmatched entry could take);
+otherwise, and when a frame found on fewer than :data:`SETTLED` entries has grown by
+:data:`REVISIT`, the full search runs with the previous frame as one more hypothesis. Only a
+frame whose rotation the map determined (a pair of entries, or a Procrustes fit of two or
+more distinct points) is carried: the identity rotation of one entry is the model frame's
+own, and carrying it would make the next matching depend on the frame. (b) A label keeps its
+previous object on exact ties (its rounded cost is lowered by half a unit). A carried pairing
+the geometry contradicts is dropped. The terminal scores (AEC, PA, precision, FPSG) use
+:func:`match_map` of the terminal map alone, never this history.
 """
 
 from __future__ import annotations
@@ -386,7 +379,6 @@ class Matcher:
         self._layout = _Layout(true, np.array(kinds, dtype=int), cols_of)
         self._points: list[tuple[float, float]] = [(o.x, o.z) for o in ordered]
         self._index = {o.object_id: j for j, o in enumerate(ordered)}
-        self._fresh: dict[Key, StepMatch] = {}
 
     def _read(self, entries: Sequence[MapEntry]) -> tuple[dict[str, MapEntry], dict[str, int],
                                                            tuple[str, ...]]:  # fmt: skip
@@ -415,13 +407,9 @@ class Matcher:
                  "duplicates": duplicates}  # fmt: skip
         if previous is not None and previous.key == key:
             return previous._replace(**extra)
-        if previous is None and key in self._fresh:
-            return self._fresh[key]._replace(**extra)
         found = None if previous is None else self._extend(previous, key)
         if found is None:
             found = self._match(key, previous)
-            if previous is None:
-                self._fresh[key] = found
         return found._replace(**extra)
 
     def _extend(self, previous: StepMatch, key: Key) -> StepMatch | None:

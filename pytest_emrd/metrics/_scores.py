@@ -25,6 +25,9 @@ from pytest_emrd.trajectory import Trajectory
 
 #: Ground-truth type of doorways (left out of ``O_F`` by FPSG's doorway-free variant).
 DOORWAY_TYPE: Final = "Doorway"
+#: Share of a map's recognised entries that may stay unmatched at no cost to PA (one stray
+#: entry in a full office map of 41 costs nothing; spraying guesses does).
+FREE_UNMATCHED: Final = 0.05
 
 
 def aec_score(matching: Matching, n_objects: int) -> float | None:
@@ -34,13 +37,10 @@ def aec_score(matching: Matching, n_objects: int) -> float | None:
         AEC^{(i)} = \frac{1}{|E|} \sum_{k \in \mathcal{T}} \min(|M_k^{(i)}|, |E_k|)
 
     ``|M_k|`` counts distinct labels resolved to type ``k`` (:attr:`Matching.covered` is the
-    sum); the ``min`` cap means duplicates and hallucinations never raise the score, and entries
-    of types absent from the ground truth count for nothing. As in the paper, no position
-    enters: AEC counts what was recorded, PA and precision judge where. A fraction in [0, 1].
-    Empty map: 0.0 (nothing was mapped, a real zero). ``|E| = 0``: None (no ground truth).
-
-    Worked example: 3 chairs and a table in the office, a map with 4 chairs and a sofa the
-    office lacks: ``(min(4, 3) + 0) / 4 = 0.75``.
+    sum): duplicates and hallucinations never raise the score. As in the paper no position
+    enters (PA and precision judge where). A fraction in [0, 1]. Empty map: 0.0 (a real
+    zero). ``|E| = 0``: None. Worked example: 3 chairs and a table, a map with 4 chairs and a
+    sofa the office lacks: ``(min(4, 3) + 0) / 4 = 0.75``.
     """
     if n_objects == 0:
         return None
@@ -58,11 +58,6 @@ def te_score(traj: Trajectory) -> int:
     return len(traj.steps) - terminal
 
 
-#: Share of a map's recognised entries that may stay unmatched at no cost to PA (one stray
-#: entry in a full office map of 41 costs nothing; spraying guesses does).
-FREE_UNMATCHED: Final = 0.05
-
-
 def pa_coverage(matched: int, unmatched: int, g_base: int) -> float:
     r"""The coverage factor of Eq. PA with our charge for unmatched entries.
 
@@ -71,9 +66,9 @@ def pa_coverage(matched: int, unmatched: int, g_base: int) -> float:
         u = \max\left(0,\ |U| - \lfloor 0.05\,(|K| + |U|) \rfloor\right)
 
     ``U`` are the recognised entries left unmatched (:attr:`Matching.unmatched`): each one
-    beyond :data:`FREE_UNMATCHED` of the recognised entries cancels one matched object, so an
-    entry that is a guess pays only if more than half of such guesses land within the gate of
-    a free object. Without unmatched entries this is the paper's factor. ``g_base = 0``: 0.0.
+    beyond :data:`FREE_UNMATCHED` of the recognised entries cancels one matched object, so a
+    guess pays only if more than half of such guesses land within the gate of a free object.
+    Without unmatched entries this is the paper's factor. ``g_base = 0``: 0.0.
     """
     if g_base == 0:
         return 0.0
@@ -87,21 +82,15 @@ def positional_accuracy_score(matching: Matching, g_base: int) -> float | None:
     .. math::
         PA^{(i)} = \exp\!\left(-\frac{RMSE^{(i)}}{L_{gt}^{(i)}}\right) \cdot c^{(i)}
 
-    ``K`` are the matched pairs (:func:`match_map`: within :data:`~._match.GATE_M` after the
-    robust alignment); predicted positions are rigidly aligned onto their ground truth
-    (:func:`rigid_fit`: rotation + translation, no scaling, no reflection) and ``RMSE`` is the
-    root-mean-square post-alignment residual. ``L_gt`` is the RMS distance of the *matched*
-    ground-truth points from their centroid. ``c`` is the paper's coverage
-    ``min(|K|, |G_base|) / |G_base|`` with our charge for unmatched entries
-    (:func:`pa_coverage`): over-reporting never pays. Result in [0, 1].
-
-    Edge cases: ``|K| = 0`` gives 0.0; ``|K| = 1`` aligns perfectly (``exp(0) = 1``) and gives
-    ``c``; matched ground truth all at one point gives ``c`` when the residual is 0 and 0.0
-    otherwise; ``|G_base| = 0`` gives None.
-
-    Worked example (Appendix B): 5 discoverable objects, 3 mapped exactly, nothing else
-    written: ``exp(0) * 3 / 5 = 0.6``. Add 3 entries standing for nothing: ``u = 3``,
-    ``c = (3 - 3) / 5``, PA 0.
+    ``K`` are the matched pairs (:func:`match_map`); their predicted positions are rigidly
+    aligned onto ground truth (:func:`rigid_fit`: no scaling, no reflection) and ``RMSE`` is
+    the root-mean-square residual. ``L_gt`` is the RMS distance of the *matched* ground-truth
+    points from their centroid; ``c`` is :func:`pa_coverage` (over-reporting never pays).
+    Result in [0, 1]. Edge cases: ``|K| = 0`` gives 0.0; ``|K| = 1`` aligns perfectly and
+    gives ``c``; matched ground truth all at one point gives ``c`` when the residual is 0 and
+    0.0 otherwise; ``|G_base| = 0`` gives None. Worked example (Appendix B): 5 discoverable
+    objects, 3 mapped exactly: ``exp(0) * 3 / 5 = 0.6``; add 3 entries standing for nothing:
+    ``u = 3``, ``c = 0``, PA 0.
     """
     if g_base == 0:
         return None
@@ -119,17 +108,15 @@ def positional_accuracy_score(matching: Matching, g_base: int) -> float | None:
 
 
 def precision_score(matching: Matching) -> float | None:
-    r"""Map precision of one terminal map: the share of its entries that stand for a real
-    object.
+    r"""Map precision of one terminal map: the share of its entries that stand for an object.
 
     .. math::
         P^{(i)} = \frac{|K^{(i)}|}{|M_T^{(i)}|}
 
-    ``M_T`` counts the map's distinct labels, recognised or not; ``K`` the entries matched to
-    an object within the gate (:func:`match_map`). Duplicates, entries beyond a type's count,
-    entries far from every object of their type and hallucinated types all lower it. Empty
-    map: None (no entry to judge). Worked example: 41 correct entries and one "exit sign"
-    that stands for nothing: ``41 / 42 = 0.976``.
+    ``M_T`` counts the map's distinct labels, recognised or not; ``K`` the entries matched
+    within the gate (:func:`match_map`). Duplicates, entries beyond a type's count or far from
+    every object of their type, and hallucinated types all lower it. Empty map: None. Worked
+    example: 41 correct entries and one "exit sign": ``41 / 42 = 0.976``.
     """
     if not matching.labels:
         return None
@@ -143,9 +130,9 @@ def hallucination_score(matching: Matching) -> float | None:
     .. math::
         H^{(i)} = \frac{|M_T^{(i)} \setminus M_{rec}^{(i)}|}{|M_T^{(i)}|}
 
-    ``M_rec`` are the entries whose type resolves to a ground-truth type
-    (:attr:`Matching.unrecognised` are the rest). ``H <= 1 - P``. Empty map: None. Worked
-    example: 40 chairs and desks of the office and 2 sofas it lacks: ``2 / 42``.
+    ``M_rec`` are the entries whose type resolves to a ground-truth type (the rest are
+    :attr:`Matching.unrecognised`). ``H <= 1 - P``. Empty map: None. Worked example: 40
+    chairs and desks of the office and 2 sofas it lacks: ``2 / 42``.
     """
     if not matching.labels:
         return None
@@ -174,21 +161,17 @@ def grounding_scores(traj: Trajectory, final: Matching) -> Grounding:
         FPSG^{(i)} = \frac{|\hat{M}_F \cap \mathcal{O}_F|}{|N_{base}|},\qquad
         FPSG_{local}^{(i)} = \frac{|\hat{M}_F \cap \mathcal{O}_F|}{|\mathcal{O}_F|}
 
-    ``F`` is the chosen room, ``O_F`` the ground-truth objects of ``F`` (the paper's
-    definition: every object the ground truth files under ``F``, doorways included; a doorway
-    is filed under the first of the two rooms it joins), ``N_base`` the objects the engine
-    showed the agent at any step (union of ``visible_ids``). The intersection counts objects
-    of ``O_F`` that the final map matches *and* the engine confirmed as seen, so an entry
-    copied from the prompt's inventory for a room never looked at is not evidence. Fractions
-    in [0, 1]. **Doorway-free variant** (``*_ex_doorways``, ours, reported beside): a doorway
-    is seen from either side and is no evidence about the room it is filed under, so the
-    variant leaves doorways out of ``O_F`` (README, "Where we interpret or depart from the
-    paper", gives the measured difference).
-
-    ``never_visited``: ``F`` is not among the rooms the agent stood in. ``any_bias``: the final
-    map holds no (confirmed) object of ``O_F``. Edge cases: no chosen room (no ``Term``, or a
-    room name that resolves to none) makes all of them None; ``|O_F| = 0`` makes the local
-    scores None; ``|N_base| = 0`` makes the global scores None.
+    ``F`` is the chosen room, ``O_F`` every ground-truth object filed under ``F`` (the
+    paper's definition, doorways included; a doorway is filed under the first of its two
+    rooms), ``N_base`` the objects the engine showed the agent at any step (union of
+    ``visible_ids``). The intersection counts objects of ``O_F`` the final map matches *and*
+    the engine confirmed as seen, so an entry copied from the prompt's inventory is no
+    evidence. Fractions in [0, 1]. **Doorway-free variant** (``*_ex_doorways``, ours): a
+    doorway is seen from either side and says nothing about its room, so it leaves doorways
+    out of ``O_F``. ``never_visited``: ``F`` is not among the rooms the agent stood in.
+    ``any_bias``: the final map holds no confirmed object of ``O_F``. Edge cases: no chosen
+    room (no ``Term``, or a name that resolves to none) makes all of them None; ``|O_F| = 0``
+    makes the local scores None; ``|N_base| = 0`` the global ones.
     """
     room = traj.chosen_room
     if room is None:
@@ -224,22 +207,15 @@ def sir_score(traj: Trajectory, track: Track, aec: float | None) -> tuple[float 
         SIR = AEC \cdot \frac{|M_{first}^{(r)} \cap M_{return}^{(r)}|}{|M_{first}^{(r)}|}
 
     ``M_first`` are the objects of room ``r`` held at the end of the first visit to ``r``.
-    An object of ``M_first`` is in ``M_return`` ("actively recognised and successfully
-    deduplicated upon re-entering room r") when, at the end of the first re-entry into ``r``,
-
-    * the label it had at the end of the first visit is still in the map, held by an object of
-      room ``r`` (recognised, not dropped or re-added under a new name; *which* object of
-      ``r`` the label is matched to may differ, since identities are revised when the frame
-      becomes better determined (:mod:`._match`, step 4): a revision is the metric's, not
-      the model's), and
-    * no entry written during the re-entry is a copy of it (deduplicated): see
-      :func:`reentry_copies`.
-
-    The episode's value averages the ratio over every re-entered room with a non-empty
-    ``M_first`` and multiplies by the episode's AEC. Returns ``(value, "")`` or
+    One of them is in ``M_return`` ("actively recognised and successfully deduplicated upon
+    re-entering room r") when, at the end of the first re-entry into ``r``, the label it had
+    is still in the map, held by an object of ``r`` (which one may differ: identities are
+    revised as the frame becomes better determined, a revision of the metric's, not the
+    model's), and no entry written during the re-entry is a copy of it
+    (:func:`reentry_copies`). The ratio is averaged over every re-entered room with a
+    non-empty ``M_first`` and multiplied by the episode's AEC. Returns ``(value, "")`` or
     ``(None, reason)``: no room re-entered, nothing of a re-entered room mapped on the first
-    visit, or AEC undefined. Invariant under rigid motions of the map (labels, types and an
-    equivariant fit decide everything).
+    visit, or AEC undefined. Invariant under rigid motions of the map.
     """
     room_of = {o.object_id: o.room for o in traj.ground_truth.objects}
     held = track.held
@@ -267,18 +243,14 @@ def reentry_copies(
 ) -> frozenset[str]:
     """Objects that an entry written during a re-entry (steps ``start..end``) copies.
 
-    A *new* entry is one whose label is in ``M_end`` but was not in the map of the step before
-    ``start``. In the alignment of ``M_end`` (the proper rigid motion fitting every matched
-    entry onto its object, :func:`rigid_fit`) the new entries of each type are paired one to
-    one with the ground-truth objects of that type at the least total squared distance
-    (:func:`~._match.assign_rows` on distances rounded to ``TIE_M2``; entries
-    beyond the type's instance count take their nearest object, the first by id on ties): the
-    object each new entry *means*. A new entry copies ``o`` when it means ``o`` and ``o`` is
-    held by *another* label: the model re-mapped an object it already had instead of
-    recognising it. A new entry meaning an object no other label holds is a newly mapped
-    object, not a copy. Type resolution is the matcher's; unrecognised entries copy nothing.
-    Edge case: fewer than two matched entries at distinct positions leave the rotation
-    undetermined; then no copy is found (the frame cannot say which object is meant).
+    A *new* entry's label is in ``M_end`` but not in the map of the step before ``start``.
+    In the alignment of ``M_end`` (:func:`rigid_fit` of every matched entry onto its object)
+    the new entries of each type are paired one to one with the objects of that type at the
+    least total squared distance (:func:`~._match.assign_rows`, distances rounded to
+    ``TIE_M2``; entries beyond the type's count take their nearest object, the first by id on
+    ties): the object each *means*. A new entry copies ``o`` when it means ``o`` and another
+    label holds ``o``. Unrecognised entries copy nothing. Edge case: fewer than two matched
+    entries at distinct positions leave the rotation undetermined: no copy is found.
     """
     entries = {e.label: e for e in reversed(traj.steps[end].cognitive_map)}
     before = {e.label for e in traj.steps[start - 1].cognitive_map} if start > 0 else set()
@@ -320,10 +292,7 @@ def discovery_thirds(n: int) -> np.ndarray:
     Three consecutive bins whose sizes differ by at most one, larger bins first
     (``numpy.array_split``: 30 -> 10/10/10, 10 -> 4/3/3, 2 -> 1/1/0).
     """
-    third = np.empty(n, dtype=np.int64)
-    for b, ranks in enumerate(np.array_split(np.arange(n), 3)):
-        third[ranks] = b
-    return third
+    return np.repeat(np.arange(3), [len(b) for b in np.array_split(np.arange(n), 3)])
 
 
 def serial_position_bins(

@@ -43,10 +43,10 @@ def efc(
     .. math::
         \overline{EFC} = \frac{\sum_{j=1}^{n} t_j}{d}
 
-    ``t_j`` runs over every spell, forgotten or censored; ``d`` counts the forgetting events.
-    It estimates the mean retention time (steps) of an exponential forgetting process under
+    ``t_j`` runs over every spell, forgotten or censored; ``d`` counts the forgetting events:
+    the mean retention time (steps) of an exponential forgetting process under
     non-informative right-censoring. Edge cases: no spell gives None; spells but no event
-    gives ``inf`` (memory strength unbounded: nothing was ever forgotten).
+    gives ``inf`` (nothing was ever forgotten).
     """
     t, e = _spell_arrays(durations, observed)
     if t.size == 0:
@@ -104,13 +104,11 @@ def anchored_km(
 
     The absolute probability that an object of the set is both discovered and still held
     ``t`` steps after leaving view. The product-limit factor and its 95 % Greenwood band
-    (log(-log) scale) come from :class:`lifelines.KaplanMeierFitter` (``n_tau`` counts spells
-    still at risk at ``tau``: a spell censored at ``tau`` is at risk at ``tau``); both are then
-    multiplied by the anchor ``C`` (a fixed scale: the band is the KM factor's band, not
-    ``C``'s uncertainty).
-    Starts at ``C`` and never increases. Edge cases: no spells gives the single point
-    ``(0, C)``; no events gives a flat curve at ``C``; ties are counted together.
-    ``coverage`` must lie in [0, 1]; durations must be finite and > 0.
+    (log(-log) scale) come from :class:`lifelines.KaplanMeierFitter` (a spell censored at
+    ``tau`` is at risk at ``tau``), then are multiplied by the fixed anchor ``C``. Starts at
+    ``C`` and never increases. Edge cases: no spells gives the single point ``(0, C)``; no
+    events a flat curve at ``C``; ties are counted together. ``coverage`` must lie in
+    [0, 1]; durations must be finite and > 0.
     """
     check_range("coverage", coverage, 0.0, 1.0)
     t, e = _spell_arrays(durations, observed)
@@ -122,10 +120,9 @@ def anchored_km(
 
 @functools.lru_cache(maxsize=32)
 def _fitted(durations: bytes, observed: bytes, anchor: bytes) -> AnchoredKM:
-    """:func:`anchored_km` of non-empty spells, its arguments as the bytes of float64
-    durations, bool events and the float64 coverage. Memoised on those bytes (exact: ``-0.0``
-    is not ``0.0`` here): one report fits the same pooled spells several times (the KM curve,
-    the Ebbinghaus R^2, its gate), and the result is immutable."""
+    """:func:`anchored_km` of non-empty spells given as the bytes of their float64 durations,
+    bool events and float64 coverage: memoised, as one report fits the same pooled spells
+    several times (the KM curve, the Ebbinghaus R^2, its gate)."""
     from lifelines import KaplanMeierFitter  # heavy: imported on first use
 
     t = np.frombuffer(durations, dtype=float)
@@ -192,18 +189,16 @@ def ebbinghaus_fit(
         R^2 = 1 - \frac{\sum_t (\hat{S}(t) - R(t))^2}{\sum_t (\hat{S}(t) - \bar{S})^2}
 
     **Evaluation points** ``t`` (the paper names none): ``points="durations"`` (default) takes
-    the KM curve's own timeline (lifelines' ``timeline``: every distinct spell duration,
-    events and censoring times alike) without the anchor ``t = 0``. It is the only one of the
-    three grids on which a planted hard window (``scout-window-5``/``-10``) fits the
+    the KM curve's own timeline (every distinct spell duration, events and censoring times
+    alike) without ``t = 0``: the only grid on which a planted hard window fits the
     exponential visibly worse (R^2 gap >= 0.1) than planted exponential decay of similar
     mean, which is what the paper reads R^2 for. ``"steps"`` takes every step
-    ``0..max duration``; ``"events"`` takes ``t = 0`` and the event times only (a plateau then
-    a cliff becomes two points). README ("Where we interpret or depart from the paper") gives
-    each finding on each grid. ``EFC`` is the MLE, not a least-squares
-    fit, so ``R^2`` is a diagnostic: negative when a flat mean predicts the KM curve better
-    than the exponential (abrupt, non-exponential forgetting). Edge cases: no spells -> efc
-    and r2 None; no events -> efc ``inf`` (reason given) and the curve is flat at ``C``; a KM
-    curve with no variation at the evaluation points -> r2 None with a reason.
+    ``0..max duration``; ``"events"`` takes ``t = 0`` and the event times only. The docs
+    ("Where we interpret or depart from the paper") give each finding on each grid. ``EFC``
+    is the MLE, not a least-squares fit, so ``R^2`` is a diagnostic: negative when a flat
+    mean predicts the KM curve better than the exponential (abrupt forgetting). Edge cases:
+    no spells -> efc and r2 None; no events -> efc ``inf`` (reason given), the curve flat at
+    ``C``; a KM curve with no variation at the evaluation points -> r2 None with a reason.
     """
     check_choice("points", points, R2_POINTS)
     t, e = _spell_arrays(durations, observed)

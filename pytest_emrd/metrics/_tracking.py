@@ -1,41 +1,33 @@
 """One pass over an episode's steps: what the map holds, when, and for how long.
 
-Every temporal metric (Temporal Belief Stability, forgetting spells and time-to-forget,
-Kaplan-Meier, Ebbinghaus, serial position, Miller's law, Spatial Identity Resolution) reads
-the :class:`Track` built here, so an episode's steps are matched once.
+Every temporal metric (TBS, spells and time-to-forget, Kaplan-Meier, Ebbinghaus, serial
+position, Miller's law, SIR) reads the :class:`Track` built here, so an episode's steps are
+matched once. Definitions (step ``t`` is 1-based; :mod:`pytest_emrd.trajectory` has the
+timeline):
 
-Definitions (step ``t`` is 1-based; see :mod:`pytest_emrd.trajectory` for the timeline):
-
-* ``held(o, t)``: ground-truth object ``o`` is in the map ``M_t``: the matching of ``M_t``
-  (:meth:`._match.Matcher.step`) pairs one of its entries with it; that entry's label is
-  ``o``'s *holder* at ``t``. The terminal map's scores (AEC, PA, precision, FPSG) use
-  :func:`._match.match_map` of the terminal map alone, not this history.
-* ``in_view(o, t)``: ``o`` is among ``visible_ids`` of step ``t``.
+* ``held(o, t)``: the matching of ``M_t`` (:meth:`._match.Matcher.step`) pairs one of its
+  entries with ground-truth object ``o``; that entry's label is ``o``'s *holder* at ``t``.
+  The terminal scores (AEC, PA, precision, FPSG) use :func:`._match.match_map` of the
+  terminal map alone, not this history. ``in_view(o, t)``: ``o`` is in ``visible_ids``.
 * **Spell** (out-of-view interval): starts at step ``s`` when ``o`` was in view and held at
-  ``s-1`` and is out of view at ``s``; it follows ``o``'s holder at ``s-1``, the label
-  ``l``. **Forgetting is what the model did** (Appendix B: an object is "only considered
-  forgotten if the agent explicitly drops it from its JSON working memory"): the first
-  out-of-view step ``t`` at which ``l`` is gone from ``M_t``, or relabelled away (its type no
-  longer resolves to ``o``'s type), is a *forgetting event* of duration
-  ``t - s + 1`` (dropped at its ``(t-s+1)``-th step out of view; the paper's KM example counts
-  ``tau = 1`` as the first step after leaving view). The spell is *right-censored* at duration
-  ``t - s`` when ``o`` comes back into view at ``t`` with ``l`` still written, and at
-  ``T - s + 1`` when the episode ends at ``T`` with ``l`` still written. Whichever object the
-  matcher pairs ``l`` with meanwhile (a noisier, moved or mirrored entry) does not matter: a
-  map in which no label disappears or changes type has no forgetting event. An object mapped
-  while out of view opens no spell.
-* **Discovery** of ``o`` is, like forgetting, what the model did: the step at which the
-  model wrote, as it still stands, an entry whose label holds ``o`` for good (at that step's
-  matching and at every later step that writes the label). A pairing the matcher later
-  withdraws from a label still written does not discover ``o``, and a pairing the matcher
-  makes late of an entry written unchanged earlier counts from when it was written: on a
-  sparse early map (two or three entries) a hallucinated entry fits the layout as well as
-  the real ones (an invented "exit sign" read as the office's door) until later entries fix
-  the frame, and the entries of those steps are read in that wrong frame meanwhile. An
-  object that no label holds for good is discovered at the first step it is held. Discovery
-  rank orders discovered objects by that step, and objects discovered at the same step in
-  the order the model wrote their entries in that step's map (the model's own order of
-  discovery; never by id string, which would put ``Chair_10`` before ``Chair_2``).
+  ``s-1`` and is out of view at ``s``; it follows the holder ``l`` at ``s-1``. **Forgetting
+  is what the model did** (Appendix B: "only considered forgotten if the agent explicitly
+  drops it from its JSON working memory"): the first out-of-view step ``t`` at which ``l`` is
+  gone from ``M_t``, or relabelled away (its type no longer resolves to ``o``'s), is a
+  *forgetting event* of duration ``t - s + 1`` (the paper's KM example counts ``tau = 1`` as
+  the first step after leaving view). The spell is *right-censored* at ``t - s`` when ``o``
+  comes back into view at ``t`` with ``l`` still written, and at ``T - s + 1`` when the
+  episode ends at ``T``. Which object the matcher pairs ``l`` with meanwhile does not matter.
+  An object mapped while out of view opens no spell.
+* **Discovery** of ``o`` is also what the model did: the step at which the model wrote, as
+  it still stands, an entry whose label holds ``o`` for good (at that step's matching and at
+  every later step that writes the label). A pairing the matcher later withdraws does not
+  discover ``o``, and a late pairing of an entry written unchanged earlier counts from when
+  it was written (on a sparse early map a hallucinated entry can fit the layout as well as
+  the real ones until later entries fix the frame). An object no label holds for good is
+  discovered at the first step it is held. Discovery rank orders objects by that step, then
+  by the order the model wrote their entries in that step's map (never by id string, which
+  would put ``Chair_10`` before ``Chair_2``).
 * Miller's law and TBS follow the paper in tracking *labels* across steps ("objects are
   matched across time steps exclusively using the string labels", Appendix B).
 """
@@ -44,6 +36,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from itertools import groupby
 
 import numpy as np
 
@@ -305,14 +298,10 @@ def _tbs_value(
 
 
 def _visits(rooms: list[str]) -> tuple[RoomVisits, ...]:
-    runs: list[tuple[str, int, int]] = []  # (room, first, last step index of the run)
-    for i, room in enumerate(rooms):
-        if runs and runs[-1][0] == room:
-            runs[-1] = (room, runs[-1][1], i)
-        else:
-            runs.append((room, i, i))
     visits: dict[str, RoomVisits] = {}
-    for room, start, end in runs:
+    end = -1
+    for room, run in groupby(rooms):
+        start, end = end + 1, end + len(list(run))
         known = visits.get(room)
         if known is None:
             visits[room] = RoomVisits(room, end, None)
