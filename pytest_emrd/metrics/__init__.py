@@ -2,15 +2,7 @@
 
 Pure functions over :class:`~pytest_emrd.trajectory.Trajectory` data: no I/O (except loading
 the optional sentence encoder), no global state, randomness only from explicit seeds.
-Fractions are reported in [0, 1], never percent. Undefined values are None with a reason.
-
-Compute :func:`episode_metrics` once per trajectory (it matches every step's map to ground
-truth) and hand the resulting :class:`EpisodeMetrics` to the gate metrics
-(``GATE_METRICS[name].compute``, or :func:`evaluate_gates` for several) and to the report
-aggregates (:func:`kaplan_meier_anchored`, :func:`miller_curve`, ...). Every aggregate also
-accepts trajectories directly; errored episodes are excluded and counted.
-Label-to-ground-truth matching is one procedure, :func:`match_map`; what a model's label
-denotes is :func:`canonical_type` (the vocabulary of free-form labels).
+Fractions are in [0, 1], never percent; undefined values are None with a reason.
 """
 
 from pytest_emrd.metrics._aggregates import (
@@ -38,7 +30,22 @@ from pytest_emrd.metrics._aggregates import (
     tbs_curve,
     time_to_forget,
 )
-from pytest_emrd.metrics._episode import EpisodeMetrics, as_episode_metrics, episode_metrics
+from pytest_emrd.metrics._episode import (
+    EpisodeMetrics,
+    Grounding,
+    aec_score,
+    as_episode_metrics,
+    discovery_thirds,
+    episode_metrics,
+    grounding_scores,
+    hallucination_score,
+    pa_coverage,
+    positional_accuracy_score,
+    precision_score,
+    serial_position_bins,
+    sir_score,
+    te_score,
+)
 from pytest_emrd.metrics._frame import random_reframe, reframe
 from pytest_emrd.metrics._gates import GATE_METRICS, GateMetric, evaluate_gates
 from pytest_emrd.metrics._match import (
@@ -50,110 +57,38 @@ from pytest_emrd.metrics._match import (
     step_matchings,
 )
 from pytest_emrd.metrics._reasoning import Representative, representative_reasoning
-from pytest_emrd.metrics._scores import (
-    Grounding,
-    aec_score,
-    discovery_thirds,
-    grounding_scores,
-    hallucination_score,
-    pa_coverage,
-    positional_accuracy_score,
-    precision_score,
-    serial_position_bins,
-    sir_score,
-    te_score,
-)
 from pytest_emrd.metrics._stats import (
+    R2_POINTS,
+    AnchoredKM,
     Anova,
     ChiSquare,
+    EbbinghausFit,
     Estimate,
     FisherExact,
+    anchored_km,
     anova_groups,
     bootstrap_ci,
     chi_square,
     cramers_v,
-    fisher_exact_2x2,
-)
-from pytest_emrd.metrics._survival import (
-    R2_POINTS,
-    AnchoredKM,
-    EbbinghausFit,
-    anchored_km,
     ebbinghaus_fit,
     efc,
+    fisher_exact_2x2,
 )
 from pytest_emrd.metrics._tracking import Spell
 from pytest_emrd.metrics._vocab import ENGINE_TYPES, SYNONYMS, candidate_types, canonical_type
 
 __all__ = [
-    "ENGINE_TYPES",
-    "GATE_M",
-    "GATE_METRICS",
-    "R2_POINTS",
-    "SYNONYMS",
-    "AnchoredKM",
-    "Anova",
-    "ChiSquare",
-    "Consensus",
-    "Ebbinghaus",
-    "EbbinghausFit",
-    "EpisodeMetrics",
-    "Estimate",
-    "FPSGSummary",
-    "FisherExact",
-    "FocalDistribution",
-    "FocalRow",
-    "GateMetric",
-    "Grounding",
-    "MatchedPair",
-    "Matching",
-    "MillerCurve",
-    "Representative",
-    "SerialPosition",
-    "SpatialIdentityResolution",
-    "Spell",
-    "TBSCurve",
-    "TimeToForget",
-    "aec_score",
-    "anchored_km",
-    "anova_conditions",
-    "anova_groups",
-    "as_episode_metrics",
-    "bootstrap_ci",
-    "candidate_types",
-    "canonical_type",
-    "chi_square",
-    "consensus",
-    "cramers_v",
-    "discovery_thirds",
-    "ebbinghaus",
-    "ebbinghaus_fit",
-    "efc",
-    "episode_metrics",
-    "evaluate_gates",
-    "fisher_exact_2x2",
-    "focal_distribution",
-    "forgetting_spells",
-    "fpsg",
-    "grounding_scores",
-    "hallucination_score",
-    "kaplan_meier_anchored",
-    "match_map",
-    "miller_curve",
-    "pa_coverage",
-    "positional_accuracy",
-    "positional_accuracy_score",
-    "precision_score",
-    "random_reframe",
-    "reframe",
-    "representative_reasoning",
-    "rigid_fit",
-    "serial_position",
-    "serial_position_bins",
-    "sir_score",
-    "spatial_identity_resolution",
-    "step_matchings",
-    "tbs_curve",
-    "te_score",
-    "time_to_forget",
-]
+    "ENGINE_TYPES", "GATE_M", "GATE_METRICS", "R2_POINTS", "SYNONYMS", "AnchoredKM", "Anova",
+    "ChiSquare", "Consensus", "Ebbinghaus", "EbbinghausFit", "EpisodeMetrics", "Estimate",
+    "FPSGSummary", "FisherExact", "FocalDistribution", "FocalRow", "GateMetric", "Grounding",
+    "MatchedPair", "Matching", "MillerCurve", "Representative", "SerialPosition",
+    "SpatialIdentityResolution", "Spell", "TBSCurve", "TimeToForget", "aec_score", "anchored_km",
+    "anova_conditions", "anova_groups", "as_episode_metrics", "bootstrap_ci", "candidate_types",
+    "canonical_type", "chi_square", "consensus", "cramers_v", "discovery_thirds", "ebbinghaus",
+    "ebbinghaus_fit", "efc", "episode_metrics", "evaluate_gates", "fisher_exact_2x2",
+    "focal_distribution", "forgetting_spells", "fpsg", "grounding_scores", "hallucination_score",
+    "kaplan_meier_anchored", "match_map", "miller_curve", "pa_coverage", "positional_accuracy",
+    "positional_accuracy_score", "precision_score", "random_reframe", "reframe",
+    "representative_reasoning", "rigid_fit", "serial_position", "serial_position_bins", "sir_score",
+    "spatial_identity_resolution", "step_matchings", "tbs_curve", "te_score", "time_to_forget",
+]  # fmt: skip

@@ -22,14 +22,15 @@ from pytest_emrd.metrics._episode import (
     EpisodeMetrics,
     as_episode_metrics,
     categories_of,
+    discovery_thirds,
     split_errored,
 )
-from pytest_emrd.metrics._scores import discovery_thirds
-from pytest_emrd.metrics._stats import Anova, anova_groups
-from pytest_emrd.metrics._survival import (
+from pytest_emrd.metrics._stats import (
     AnchoredKM,
+    Anova,
     EbbinghausFit,
     anchored_km,
+    anova_groups,
     ebbinghaus_fit,
     efc,
 )

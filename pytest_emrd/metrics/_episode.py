@@ -1,8 +1,10 @@
-"""The per-episode result: every EMRD score of one trajectory, as plain data.
+"""The per-episode scores (the inner terms of the paper's equations) and their result.
 
-:class:`EpisodeMetrics` is what the results store may save beside each trajectory and what
-every aggregate and gate reads, so an episode's steps are matched once however many metrics
-are asked for. Aggregates accept trajectories or ``EpisodeMetrics`` interchangeably.
+:class:`EpisodeMetrics` holds every EMRD score of one trajectory as plain data: what the
+results store may save beside each trajectory and what every aggregate and gate reads, so an
+episode's steps are matched once however many metrics are asked for. Aggregates accept
+trajectories or ``EpisodeMetrics`` interchangeably. All functions are pure; "undefined" is
+``None`` together with a reason, never a silent 0.0.
 """
 
 from __future__ import annotations
@@ -14,20 +16,321 @@ from dataclasses import dataclass, field
 from functools import cached_property
 from typing import Any, Final
 
+import numpy as np
+
 from pytest_emrd._serde import from_versioned_dict, to_dict
-from pytest_emrd.metrics._scores import (
-    aec_score,
-    grounding_scores,
-    hallucination_score,
-    positional_accuracy_score,
-    precision_score,
-    serial_position_bins,
-    sir_score,
-    te_score,
+from pytest_emrd.metrics._match import (
+    COINCIDENT_M,
+    TIE_M2,
+    Matcher,
+    Matching,
+    assign_rows,
+    rigid_fit,
 )
-from pytest_emrd.metrics._tracking import Spell, first_spells, track_episode
+from pytest_emrd.metrics._tracking import (
+    Spell,
+    Track,
+    exp_ratio,
+    first_spells,
+    layout_scale,
+    track_episode,
+)
 from pytest_emrd.rooms import room_letter
 from pytest_emrd.trajectory import CATEGORIES, EpisodeSpec, Trajectory
+
+#: Ground-truth type of doorways (left out of ``O_F`` by FPSG's doorway-free variant).
+DOORWAY_TYPE: Final = "Doorway"
+#: Share of a map's recognised entries that may stay unmatched at no cost to PA (one stray
+#: entry in a full office map of 41 costs nothing; spraying guesses does).
+FREE_UNMATCHED: Final = 0.05
+
+
+def aec_score(matching: Matching, n_objects: int) -> float | None:
+    r"""Absolute Environment Coverage of one terminal map (inner term of Eq. AEC).
+
+    .. math::
+        AEC^{(i)} = \frac{1}{|E|} \sum_{k \in \mathcal{T}} \min(|M_k^{(i)}|, |E_k|)
+
+    ``|M_k|`` counts distinct labels resolved to type ``k`` (:attr:`Matching.covered` is the
+    sum): duplicates and hallucinations never raise the score. As in the paper no position
+    enters (PA and precision judge where). A fraction in [0, 1]. Empty map: 0.0 (a real
+    zero). ``|E| = 0``: None. Worked example: 3 chairs and a table, a map with 4 chairs and a
+    sofa the office lacks: ``(min(4, 3) + 0) / 4 = 0.75``.
+    """
+    if n_objects == 0:
+        return None
+    return matching.covered / n_objects
+
+
+def te_score(traj: Trajectory) -> int:
+    r"""Temporal Efficiency of one episode (inner term of Eq. TE): ``|tau^{(i)}| <= T_max``.
+
+    The number of actions executed before ``Term`` or until the budget ran out. Invalid and
+    unparseable actions consume a step and count; the ``Term`` action itself does not. A
+    ``Term`` on the first step gives 0; an episode without steps gives 0.
+    """
+    terminal = 1 if traj.status == "terminated" and traj.steps else 0
+    return len(traj.steps) - terminal
+
+
+def pa_coverage(matched: int, unmatched: int, g_base: int) -> float:
+    r"""The coverage factor of Eq. PA with our charge for unmatched entries.
+
+    .. math::
+        c = \frac{\max\left(0,\ \min(|K|, |G_{base}|) - u\right)}{|G_{base}|},\qquad
+        u = \max\left(0,\ |U| - \lfloor 0.05\,(|K| + |U|) \rfloor\right)
+
+    ``U`` are the recognised entries left unmatched (:attr:`Matching.unmatched`): each one
+    beyond :data:`FREE_UNMATCHED` of the recognised entries cancels one matched object, so a
+    guess pays only if more than half of such guesses land within the gate of a free object.
+    Without unmatched entries this is the paper's factor. ``g_base = 0``: 0.0.
+    """
+    if g_base == 0:
+        return 0.0
+    charged = max(0, unmatched - math.floor(FREE_UNMATCHED * (matched + unmatched)))
+    return max(0, min(matched, g_base) - charged) / g_base
+
+
+def positional_accuracy_score(matching: Matching, g_base: int) -> float | None:
+    r"""Positional Accuracy of one terminal map (inner term of Eq. PA).
+
+    .. math::
+        PA^{(i)} = \exp\!\left(-\frac{RMSE^{(i)}}{L_{gt}^{(i)}}\right) \cdot c^{(i)}
+
+    ``K`` are the matched pairs (:func:`match_map`); their predicted positions are rigidly
+    aligned onto ground truth (:func:`rigid_fit`: no scaling, no reflection) and ``RMSE`` is
+    the root-mean-square residual. ``L_gt`` is the RMS distance of the *matched* ground-truth
+    points from their centroid; ``c`` is :func:`pa_coverage` (over-reporting never pays).
+    Result in [0, 1]. Edge cases: ``|K| = 0`` gives 0.0; ``|K| = 1`` aligns perfectly and
+    gives ``c``; matched ground truth all at one point gives ``c`` when the residual is 0 and
+    0.0 otherwise; ``|G_base| = 0`` gives None. Worked example (Appendix B): 5 discoverable
+    objects, 3 mapped exactly: ``exp(0) * 3 / 5 = 0.6``; add 3 entries standing for nothing:
+    ``u = 3``, ``c = 0``, PA 0.
+    """
+    if g_base == 0:
+        return None
+    if not matching.pairs:
+        return 0.0
+    pred = np.array([(p.pred_x, p.pred_z) for p in matching.pairs], dtype=float)
+    true = np.array([(p.true_x, p.true_z) for p in matching.pairs], dtype=float)
+    rot, shift = rigid_fit(pred, true)
+    residual = pred @ rot.T + shift - true
+    rmse = float(np.sqrt(np.mean(np.sum(residual**2, axis=1))))
+    if rmse < 1e-9 * max(1.0, float(np.abs(true).max())):
+        rmse = 0.0
+    coverage = pa_coverage(len(matching.pairs), len(matching.unmatched), g_base)
+    return exp_ratio(rmse, layout_scale(true)) * coverage
+
+
+def precision_score(matching: Matching) -> float | None:
+    r"""Map precision of one terminal map: the share of its entries that stand for an object.
+
+    .. math::
+        P^{(i)} = \frac{|K^{(i)}|}{|M_T^{(i)}|}
+
+    ``M_T`` counts the map's distinct labels, recognised or not; ``K`` the entries matched
+    within the gate (:func:`match_map`). Duplicates, entries beyond a type's count or far from
+    every object of their type, and hallucinated types all lower it. Empty map: None. Worked
+    example: 41 correct entries and one "exit sign": ``41 / 42 = 0.976``.
+    """
+    if not matching.labels:
+        return None
+    return len(matching.pairs) / matching.labels
+
+
+def hallucination_score(matching: Matching) -> float | None:
+    r"""Hallucination rate of one terminal map: the share of entries of a type the office
+    does not hold.
+
+    .. math::
+        H^{(i)} = \frac{|M_T^{(i)} \setminus M_{rec}^{(i)}|}{|M_T^{(i)}|}
+
+    ``M_rec`` are the entries whose type resolves to a ground-truth type (the rest are
+    :attr:`Matching.unrecognised`). ``H <= 1 - P``. Empty map: None. Worked example: 40
+    chairs and desks of the office and 2 sofas it lacks: ``2 / 42``.
+    """
+    if not matching.labels:
+        return None
+    return len(matching.unrecognised) / matching.labels
+
+
+@dataclass(frozen=True)
+class Grounding:
+    """Decide-phase scores of one episode (Appendix B, FPSG)."""
+
+    fpsg_local: float | None
+    fpsg_global: float | None
+    never_visited: bool | None
+    any_bias: bool | None
+    reasons: dict[str, str]
+    fpsg_local_ex_doorways: float | None = None
+    """``fpsg_local`` with doorways left out of ``O_F`` (our variant, reported beside)."""
+    fpsg_global_ex_doorways: float | None = None
+    """``fpsg_global`` with doorways left out of ``O_F``."""
+
+
+def grounding_scores(traj: Trajectory, final: Matching) -> Grounding:
+    r"""Focal-Point Spatial Grounding, Never-Visited and Any-Bias of one episode.
+
+    .. math::
+        FPSG^{(i)} = \frac{|\hat{M}_F \cap \mathcal{O}_F|}{|N_{base}|},\qquad
+        FPSG_{local}^{(i)} = \frac{|\hat{M}_F \cap \mathcal{O}_F|}{|\mathcal{O}_F|}
+
+    ``F`` is the chosen room, ``O_F`` every ground-truth object filed under ``F`` (the
+    paper's definition, doorways included; a doorway is filed under the first of its two
+    rooms), ``N_base`` the objects the engine showed the agent at any step (union of
+    ``visible_ids``). The intersection counts objects of ``O_F`` the final map matches *and*
+    the engine confirmed as seen, so an entry copied from the prompt's inventory is no
+    evidence. Fractions in [0, 1]. **Doorway-free variant** (``*_ex_doorways``, ours): a
+    doorway is seen from either side and says nothing about its room, so it leaves doorways
+    out of ``O_F``. ``never_visited``: ``F`` is not among the rooms the agent stood in.
+    ``any_bias``: the final map holds no confirmed object of ``O_F``. Edge cases: no chosen
+    room (no ``Term``, or a name that resolves to none) makes all of them None; ``|O_F| = 0``
+    makes the local scores None; ``|N_base| = 0`` the global ones.
+    """
+    room = traj.chosen_room
+    if room is None:
+        why = "no chosen room (no Term, or a room name that resolves to no room)"
+        keys = ("fpsg_local", "fpsg_global", "never_visited", "any_bias")
+        return Grounding(None, None, None, None, dict.fromkeys(keys, why))
+    in_room = {o.object_id for o in traj.ground_truth.objects if o.room == room}
+    doorways = {o.object_id for o in traj.ground_truth.objects if o.object_type == DOORWAY_TYPE}
+    observed = {oid for s in traj.steps for oid in s.visible_ids}
+    confirmed = final.object_ids & observed
+    reasons: dict[str, str] = {}
+
+    def scores(objects: set[str]) -> tuple[float | None, float | None, int]:
+        grounded = len(confirmed & objects)
+        local = grounded / len(objects) if objects else None
+        return local, (grounded / len(observed) if observed else None), grounded
+
+    local, glob, grounded = scores(in_room)
+    local_ex, glob_ex, _ = scores(in_room - doorways)
+    if local is None:
+        reasons["fpsg_local"] = f"chosen room {room!r} holds no ground-truth object"
+    if glob is None:
+        reasons["fpsg_global"] = "the engine showed the agent no object (|N_base| = 0)"
+    return Grounding(
+        local, glob, room not in traj.rooms_visited, grounded == 0, reasons, local_ex, glob_ex
+    )
+
+
+def sir_score(traj: Trajectory, track: Track, aec: float | None) -> tuple[float | None, str]:
+    r"""Coverage-anchored Spatial Identity Resolution of one episode (Appendix B).
+
+    .. math::
+        SIR = AEC \cdot \frac{|M_{first}^{(r)} \cap M_{return}^{(r)}|}{|M_{first}^{(r)}|}
+
+    ``M_first`` are the objects of room ``r`` held at the end of the first visit to ``r``.
+    One of them is in ``M_return`` ("actively recognised and successfully deduplicated upon
+    re-entering room r") when, at the end of the first re-entry into ``r``, the label it had
+    is still in the map, held by an object of ``r`` (which one may differ: identities are
+    revised as the frame becomes better determined, a revision of the metric's, not the
+    model's), and no entry written during the re-entry is a copy of it
+    (:func:`reentry_copies`). The ratio is averaged over every re-entered room with a
+    non-empty ``M_first`` and multiplied by the episode's AEC. Returns ``(value, "")`` or
+    ``(None, reason)``: no room re-entered, nothing of a re-entered room mapped on the first
+    visit, or AEC undefined. Invariant under rigid motions of the map.
+    """
+    room_of = {o.object_id: o.room for o in traj.ground_truth.objects}
+    held = track.held
+    ratios: list[float] = []
+    reentered = [v for v in track.visits if v.return_end is not None]
+    for v in reentered:
+        first = {o: lb for o, lb in held[v.first_end].items() if room_of[o] == v.room}
+        if first and v.return_end is not None and v.return_start is not None:
+            room_by_label = {lb: room_of[o] for o, lb in held[v.return_end].items()}
+            copies = reentry_copies(traj, track.matcher, held, v.return_start, v.return_end)
+            kept = sum(room_by_label.get(lb) == v.room and o not in copies
+                       for o, lb in first.items())  # fmt: skip
+            ratios.append(kept / len(first))
+    if not reentered:
+        return None, "no room was re-entered"
+    if not ratios:
+        return None, "no object of a re-entered room was mapped on its first visit"
+    if aec is None:
+        return None, "AEC is undefined (no ground-truth objects)"
+    return aec * float(np.mean(ratios)), ""
+
+
+def reentry_copies(
+    traj: Trajectory, matcher: Matcher, held: Sequence[dict[str, str]], start: int, end: int
+) -> frozenset[str]:
+    """Objects that an entry written during a re-entry (steps ``start..end``) copies.
+
+    A *new* entry's label is in ``M_end`` but not in the map of the step before ``start``.
+    In the alignment of ``M_end`` (:func:`rigid_fit` of every matched entry onto its object)
+    the new entries of each type are paired one to one with the objects of that type at the
+    least total squared distance (:func:`~._match.assign_rows`, distances rounded to
+    ``TIE_M2``; entries beyond the type's count take their nearest object, the first by id on
+    ties): the object each *means*. A new entry copies ``o`` when it means ``o`` and another
+    label holds ``o``. Unrecognised entries copy nothing. Edge case: fewer than two matched
+    entries at distinct positions leave the rotation undetermined: no copy is found.
+    """
+    entries = {e.label: e for e in reversed(traj.steps[end].cognitive_map)}
+    before = {e.label for e in traj.steps[start - 1].cognitive_map} if start > 0 else set()
+    by_type: dict[int, list[str]] = {}
+    for lb in sorted(entries.keys() - before):
+        k = matcher.types.resolve(entries[lb].object_type, lb)
+        if k >= 0:
+            by_type.setdefault(k, []).append(lb)
+    label_of = held[end]
+    if not by_type or len(label_of) < 2:
+        return frozenset()
+    pairs = sorted(label_of.items())
+    pred = np.array([(entries[lb].x, entries[lb].z) for _, lb in pairs], dtype=float)
+    if np.ptp(pred, axis=0).max() <= COINCIDENT_M:
+        return frozenset()
+    layout, ids = matcher._layout, [o.object_id for o in matcher.objects]
+    rot, shift = rigid_fit(pred, layout.true[[matcher._index[o] for o, _ in pairs]])
+    copies: set[str] = set()
+    for k, labels in by_type.items():
+        cols = np.flatnonzero(layout.kinds == k)
+        new = np.array([(entries[lb].x, entries[lb].z) for lb in labels], dtype=float)
+        diff = (new @ rot.T + shift)[:, None, :] - layout.true[cols][None, :, :]
+        cost = np.round(np.sum(diff * diff, axis=2) / TIE_M2)
+        if not np.isfinite(cost).all():
+            raise ValueError(f"a written coordinate of {labels} is not finite")
+        meant = cols[cost.argmin(axis=1)]
+        for r, j in assign_rows(cost, np.ones(cost.shape, dtype=bool)):
+            meant[r] = cols[j]
+        for lb, c in zip(labels, meant.tolist(), strict=True):
+            holder = label_of.get(ids[c])
+            if holder is not None and holder != lb:
+                copies.add(ids[c])
+    return frozenset(copies)
+
+
+def discovery_thirds(n: int) -> np.ndarray:
+    """Discovery third (0 Early, 1 Middle, 2 Late) of ranks ``1..n``, at index ``rank - 1``.
+
+    Three consecutive bins whose sizes differ by at most one, larger bins first
+    (``numpy.array_split``: 30 -> 10/10/10, 10 -> 4/3/3, 2 -> 1/1/0).
+    """
+    return np.repeat(np.arange(3), [len(b) for b in np.array_split(np.arange(n), 3)])
+
+
+def serial_position_bins(
+    ttf_by_rank: Sequence[float | None],
+) -> tuple[float | None, float | None, float | None]:
+    r"""Early / Middle / Late mean time-to-forget of one episode (inner term of Eq. SPE).
+
+    .. math::
+        \overline{TTF}_b^{(i)} = \frac{1}{|\mathcal{D}_b^{(i)}|}
+            \sum_{j \in \mathcal{D}_b^{(i)}} TTF_j^{(i)}
+
+    ``ttf_by_rank[j]`` is the TTF of the object of discovery rank ``j + 1`` (None when it never
+    left view while mapped). Ranks are split into thirds by :func:`discovery_thirds`. A bin's
+    mean is over its objects with a TTF; a bin with none, or no bin at all (fewer than three
+    discovered objects leave later bins empty), gives None for that bin.
+    """
+    third = discovery_thirds(len(ttf_by_rank))
+    out: list[float | None] = []
+    for b in range(3):
+        values = [v for v, t in zip(ttf_by_rank, third, strict=True) if t == b and v is not None]
+        out.append(math.fsum(values) / len(values) if values else None)
+    return out[0], out[1], out[2]
+
 
 SCHEMA_VERSION: Final = 2
 
@@ -167,55 +470,27 @@ def episode_metrics(traj: Trajectory) -> EpisodeMetrics:
     ttf = {s.object_id: float(s.duration) for s in first_spells(track.spells)}
     by_rank = sorted(track.discovery, key=track.discovery.__getitem__)
     return EpisodeMetrics(
-        spec=traj.spec,
-        status=traj.status,
-        errored=False,
-        steps=len(traj.steps),
-        parse_failures=sum(s.parse_error is not None for s in traj.steps),
-        te=te_score(traj),
-        aec=aec,
-        pa=pa,
-        matched=len(final.pairs),
-        g_base=g_base,
-        unmatched=len(final.unmatched),
-        precision=precision,
-        hallucination_rate=hallucination,
-        tbs=track.tbs,
-        fpsg_local=grounding.fpsg_local,
-        fpsg_global=grounding.fpsg_global,
-        never_visited=grounding.never_visited,
-        any_bias=grounding.any_bias,
-        chosen_letter=room_letter(traj.chosen_room),
-        sir=sir,
-        spells=track.spells,
+        spec=traj.spec, status=traj.status, errored=False, steps=len(traj.steps),
+        parse_failures=sum(s.parse_error is not None for s in traj.steps), te=te_score(traj),
+        aec=aec, pa=pa, matched=len(final.pairs), g_base=g_base, unmatched=len(final.unmatched),
+        precision=precision, hallucination_rate=hallucination, tbs=track.tbs,
+        fpsg_local=grounding.fpsg_local, fpsg_global=grounding.fpsg_global,
+        never_visited=grounding.never_visited, any_bias=grounding.any_bias,
+        chosen_letter=room_letter(traj.chosen_room), sir=sir, spells=track.spells,
         mapped_by_category=dict(Counter(category[o] for o in track.discovery)),
         objects_by_category=objects_by_category,
         serial_position=serial_position_bins([ttf.get(o) for o in by_rank]),
-        miller_loads=track.miller_loads,
-        miller_forgets=track.miller_forgets,
-        rationale=traj.rationale,
-        reasons=reasons,
+        miller_loads=track.miller_loads, miller_forgets=track.miller_forgets,
+        rationale=traj.rationale, reasons=reasons,
         fpsg_local_ex_doorways=grounding.fpsg_local_ex_doorways,
         fpsg_global_ex_doorways=grounding.fpsg_global_ex_doorways,
-    )
+    )  # fmt: skip
 
 
 def _errored(traj: Trajectory, objects_by_category: dict[str, int], g_base: int) -> EpisodeMetrics:
     why = f"episode errored: {traj.error or 'no cause recorded'}"
-    names = (
-        "te",
-        "aec",
-        "pa",
-        "precision",
-        "hallucination_rate",
-        "tbs",
-        "fpsg_local",
-        "fpsg_global",
-        "never_visited",
-        "any_bias",
-        "sir",
-        "memory_strength",
-    )
+    names = ("te", "aec", "pa", "precision", "hallucination_rate", "tbs", "fpsg_local",
+             "fpsg_global", "never_visited", "any_bias", "sir", "memory_strength")  # fmt: skip
     return EpisodeMetrics(
         spec=traj.spec, status=traj.status, errored=True, steps=len(traj.steps),
         parse_failures=sum(s.parse_error is not None for s in traj.steps), te=None, aec=None,

@@ -43,11 +43,9 @@ def reframe(
     return dataclasses.replace(traj, steps=tuple(steps))
 
 
-def random_reframe(
-    traj: Trajectory, rng: np.random.Generator, *, span: float = 100.0
-) -> Trajectory:
+def random_reframe(traj: Trajectory, rng: np.random.Generator) -> Trajectory:
     """:func:`reframe` with a proper motion drawn from ``rng``: a uniform heading and an
-    origin uniform in ``[-span, span]^2`` metres."""
+    origin uniform in ``[-100, 100]^2`` metres."""
     theta = float(rng.uniform(0.0, 2.0 * math.pi))
-    dx, dz = (float(v) for v in rng.uniform(-span, span, 2))
+    dx, dz = (float(v) for v in rng.uniform(-100.0, 100.0, 2))
     return reframe(traj, theta, dx, dz)

@@ -12,7 +12,7 @@ from __future__ import annotations
 import functools
 import math
 from collections import Counter
-from collections.abc import Callable, Iterable, Mapping, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from types import MappingProxyType
 from typing import Literal, Protocol
@@ -60,10 +60,12 @@ def _why_none(kept: list[EpisodeMetrics], name: str) -> str:
     return f"undefined in every episode ({reasons.most_common(1)[0][0]})"
 
 
-def _mean_of(name: str, get: Callable[[EpisodeMetrics], float | bool | None]) -> Compute:
+def _mean_of(name: str) -> Compute:
+    """Mean over episodes of the per-episode score ``name`` (where defined)."""
+
     def compute(items: Sequence[EpisodeLike], *, rng_seed: int = 0) -> Estimate:
         kept, errored = split_errored(items)
-        values = [float(v) for m in kept if (v := get(m)) is not None]
+        values = [float(v) for m in kept if (v := getattr(m, name)) is not None]
         excluded = errored + len(kept) - len(values)
         if not values:
             return Estimate(None, None, None, 0, _why_none(kept, name), excluded)
@@ -74,16 +76,14 @@ def _mean_of(name: str, get: Callable[[EpisodeMetrics], float | bool | None]) ->
     return compute
 
 
-def _ratio_of(
-    name: str, num: Callable[[EpisodeMetrics], float], den: Callable[[EpisodeMetrics], float]
-) -> Compute:
-    """Pooled ``sum num / sum den`` with an episode-level bootstrap."""
+def _ratio_of(name: str, num: str, den: str) -> Compute:
+    """Pooled ``sum num / sum den`` of two per-episode counts, bootstrapped by episode."""
 
     def compute(items: Sequence[EpisodeLike], *, rng_seed: int = 0) -> Estimate:
         kept, errored = split_errored(items)
         if not kept:
             return Estimate(None, None, None, 0, _why_none(kept, name), errored)
-        pairs = np.array([(num(m), den(m)) for m in kept], dtype=float)
+        pairs = np.array([(getattr(m, num), getattr(m, den)) for m in kept], dtype=float)
         total_num, total_den = pairs.sum(axis=0)
         if total_den == 0 and total_num == 0:
             why = kept[0].reasons.get(name) or f"{name} has an empty denominator"
@@ -152,8 +152,7 @@ def _r2(items: Sequence[EpisodeLike], *, rng_seed: int = 0) -> Estimate:
 def _histogram_weights(rng_seed: int, n: int) -> np.ndarray:
     """How often each of ``n`` episodes is drawn in each of :data:`N_RESAMPLES` resamples of
     :func:`_r2`'s bootstrap, one ``default_rng(rng_seed).integers(0, n, n)`` per resample
-    (``N_RESAMPLES x n`` floats): a function of its arguments alone, so computed once and
-    shared read-only."""
+    (computed once, shared read-only)."""
     rng = np.random.default_rng(rng_seed)
     return draw_counts(np.stack([rng.integers(0, n, n) for _ in range(N_RESAMPLES)]))
 
@@ -192,47 +191,39 @@ def _errored_rate(items: Sequence[EpisodeLike], *, rng_seed: int = 0) -> Estimat
     return Estimate(math.fsum(flags) / len(flags), low, high, len(flags))
 
 
-def _registry(*metrics: GateMetric) -> Mapping[str, GateMetric]:
-    return MappingProxyType({m.name: m for m in metrics})
-
-
 #: Metric name -> gate metric. thresholds.yaml metric names must be keys of this mapping.
-GATE_METRICS: Mapping[str, GateMetric] = _registry(
+GATE_METRICS: Mapping[str, GateMetric] = MappingProxyType({m.name: m for m in (
     GateMetric("aec", "Absolute Environment Coverage of the terminal map (Eq. AEC)", "higher",
-               "fraction", _mean_of("aec", lambda m: m.aec)),
+               "fraction", _mean_of("aec")),
     GateMetric("te", "Temporal Efficiency: actions before Term or the budget (Eq. TE)", "lower",
-               "steps", _mean_of("te", lambda m: m.te)),
+               "steps", _mean_of("te")),
     GateMetric("pa", "Positional Accuracy of the terminal map (Eq. PA)", "higher", "fraction",
-               _mean_of("pa", lambda m: m.pa)),
+               _mean_of("pa")),
     GateMetric("precision", "Map precision: share of terminal-map entries standing for an object",
-               "higher", "fraction", _mean_of("precision", lambda m: m.precision)),
+               "higher", "fraction", _mean_of("precision")),
     GateMetric("hallucination_rate", "Share of terminal-map entries of a type the office lacks",
-               "lower", "fraction",
-               _mean_of("hallucination_rate", lambda m: m.hallucination_rate)),
+               "lower", "fraction", _mean_of("hallucination_rate")),
     GateMetric("fpsg_local", "Focal-Point Spatial Grounding, local to the chosen room",
-               "higher", "fraction", _mean_of("fpsg_local", lambda m: m.fpsg_local)),
+               "higher", "fraction", _mean_of("fpsg_local")),
     GateMetric("fpsg_global", "Focal-Point Spatial Grounding against all observed objects",
-               "higher", "fraction", _mean_of("fpsg_global", lambda m: m.fpsg_global)),
+               "higher", "fraction", _mean_of("fpsg_global")),
     GateMetric("never_visited", "Share of choices naming a room the agent never entered",
-               "lower", "fraction", _mean_of("never_visited", lambda m: m.never_visited)),
+               "lower", "fraction", _mean_of("never_visited")),
     GateMetric("any_bias", "Share of choices with no object of the chosen room in the map",
-               "lower", "fraction", _mean_of("any_bias", lambda m: m.any_bias)),
+               "lower", "fraction", _mean_of("any_bias")),
     GateMetric("sir", "Spatial Identity Resolution on room re-entry (episodes with re-entry)",
-               "higher", "fraction", _mean_of("sir", lambda m: m.sir)),
+               "higher", "fraction", _mean_of("sir")),
     GateMetric("memory_strength", "Ebbinghaus memory strength EFC, pooled over categories",
-               "higher", "steps",
-               _ratio_of("memory_strength", lambda m: m.retained_steps,
-                         lambda m: m.forget_events)),
+               "higher", "steps", _ratio_of("memory_strength", "retained_steps", "forget_events")),
     GateMetric("ebbinghaus_r2", "R^2 of the Ebbinghaus curve against the anchored KM (pooled)",
                "higher", "R^2", _r2),
     GateMetric("consensus", "Share of episodes choosing the modal room", "higher", "fraction",
                _consensus),
     GateMetric("parse_failure_rate", "Share of steps whose reply could not be read", "lower",
-               "fraction",
-               _ratio_of("parse_failure_rate", lambda m: m.parse_failures, lambda m: m.steps)),
+               "fraction", _ratio_of("parse_failure_rate", "parse_failures", "steps")),
     GateMetric("errored_rate", "Share of episodes that errored", "lower", "fraction",
                _errored_rate),
-)  # fmt: skip
+)})  # fmt: skip
 
 
 def evaluate_gates(

@@ -1,49 +1,45 @@
 """Label-to-ground-truth matching: the one procedure every metric uses.
 
 A model writes its cognitive map as ``{label: {type, x, z, room}}`` with labels and types of
-its own and coordinates in a frame of its own (the paper's "arbitrary egocentric origins",
-resolved "using an optimal rigid-body Procrustes alignment"). :func:`match_map` decides which
-physical object each entry of one map stands for, from that map alone:
+its own, in a frame of its own (the paper's "arbitrary egocentric origins", resolved "using an
+optimal rigid-body Procrustes alignment"). :func:`match_map` decides which object each entry
+of one map stands for, from that map alone:
 
 1. **Labels.** A label is one recorded instance; a repeated label keeps its first entry.
 2. **Types** (:mod:`._vocab`): the entry's ``object_type``, else its label, restricted to the
-   layout's types. An entry of no such type is *unrecognised* (a hallucination) and takes no
+   layout's types; an entry of no such type is *unrecognised* (a hallucination) and takes no
    part in the frame or the matching.
 3. **Frame** (:func:`_solve`), robust to hallucinated entries. *Hypotheses*: the entries with
-   the fewest candidate objects (ties: farthest from the written centroid, then label order;
-   at most :data:`BASE_ENTRIES`) are paired, and every pair of distinct candidate objects
-   whose distance agrees with the written one within ``2 * GATE_M`` gives the proper rigid
-   motion carrying the two entries onto them. *Score* (truncated least squares, MSAC): each
-   recognised entry costs its squared distance to the nearest object of its type, capped at
-   ``GATE_M ** 2``, so an outlier cannot pull the frame. The lowest score wins; on equal
-   scores (a symmetric layout) the first, and the Procrustes fit of the labels that are
-   object ids of the layout (``Chair_3``) comes before the pair hypotheses. *Refit*: assign
-   (step 4), fit Procrustes (:func:`rigid_fit`) on the matched pairs only, assign again,
-   until the pairs repeat (at most :data:`MAX_ROUNDS`).
+   the fewest candidate objects (then farthest from the written centroid, then by label; at
+   most :data:`BASE_ENTRIES`) are paired, and every pair of distinct candidate objects whose
+   distance agrees with the written one within ``2 * GATE_M`` gives the proper rigid motion
+   carrying the two entries onto them. *Score* (truncated least squares, MSAC): each entry
+   costs its squared distance to the nearest object of its type, capped at ``GATE_M ** 2``,
+   so an outlier cannot pull the frame. The lowest score wins, the first on equal scores (a
+   symmetric layout), the Procrustes fit of labels that are object ids (``Chair_3``) first.
+   *Refit*: assign (step 4), fit Procrustes (:func:`rigid_fit`) on the matched pairs only,
+   assign again, until the pairs repeat (at most :data:`MAX_ROUNDS`).
 4. **Assignment with a gate.** An entry may match an object of its type only within
-   :data:`GATE_M` metres after alignment. The one-to-one assignment with the most pairs, then
+   :data:`GATE_M` metres after alignment; the one-to-one assignment with the most pairs, then
    the least summed squared distance, is taken (:func:`scipy.optimize.linear_sum_assignment`).
    **Tie rule**: squared distances are rounded to :data:`TIE_M2` first, so differences at
    floating tolerance (another CPU, BLAS or library version) cannot flip a pair.
 
-Recognised entries left without a pair are *unmatched* (their type's objects all taken, or
-none within the gate): Eq. PA's charge and what map precision leaves out. Everything is
-computed from distances, so the matching is **invariant under any proper rigid motion** of
-the map (up to the tie rounding). **Reflections are not forgiven**: a mirrored map cannot be
-rotated onto the layout, keeps its residual, and loses pairs at the gate.
+Recognised entries left without a pair are *unmatched*: Eq. PA's charge, and what map
+precision leaves out. Only distances are compared, so the matching is **invariant under any
+proper rigid motion** of the map; **reflections are not forgiven** (a mirrored map keeps its
+residual and loses pairs at the gate).
 
-**Across steps** (:meth:`Matcher.step`, for TBS, spells and SIR) each map is matched by the
-same rules, with two uses of history. (a) The previous frame and pairs are extended to the
-entries written or moved since when they explain them all (each lands within the gate of a
-free object of its type, and no object was freed that an unmatched entry could take);
-otherwise, and when a frame found on fewer than :data:`SETTLED` entries has grown by
-:data:`REVISIT`, the full search runs with the previous frame as one more hypothesis. Only a
-frame whose rotation the map determined (a pair of entries, or a Procrustes fit of two or
-more distinct points) is carried: the identity rotation of one entry is the model frame's
-own, and carrying it would make the next matching depend on the frame. (b) A label keeps its
-previous object on exact ties (its rounded cost is lowered by half a unit). A carried pairing
-the geometry contradicts is dropped. The terminal scores (AEC, PA, precision, FPSG) use
-:func:`match_map` of the terminal map alone, never this history.
+**Across steps** (:meth:`Matcher.step`: TBS, spells, SIR) two uses of history. (a) The
+previous frame and pairs are extended to the entries written or moved since when they explain
+them all (each within the gate of a free object of its type, no object freed that an
+unmatched entry could take); otherwise, and when a frame found on fewer than :data:`SETTLED`
+entries has grown by :data:`REVISIT`, the full search runs with the previous frame as one more
+hypothesis. Only a frame whose rotation the map determined (from a pair of entries, or a fit
+of two or more distinct points) is carried: one entry's identity rotation is the model
+frame's own. (b) A label keeps its previous object on exact ties (its rounded cost is lowered
+by half a unit); a carried pairing the geometry contradicts is dropped. The terminal scores
+(AEC, PA, precision, FPSG) use :func:`match_map` of the terminal map alone.
 """
 
 from __future__ import annotations
@@ -372,34 +368,22 @@ class Matcher:
         self.objects = ordered
         self.types = TypeResolver(o.object_type for o in ordered)
         kinds = [self.types.index[o.object_type] for o in ordered]
-        cols_of: dict[int, tuple[int, ...]] = {k: () for k in range(len(self.types.names))}
-        for j, k in enumerate(kinds):
-            cols_of[k] = (*cols_of[k], j)
+        cols_of = {k: tuple(j for j, kj in enumerate(kinds) if kj == k)
+                   for k in range(len(self.types.names))}  # fmt: skip
         true = np.array([(o.x, o.z) for o in ordered], dtype=float).reshape(-1, 2)
         self._layout = _Layout(true, np.array(kinds, dtype=int), cols_of)
         self._points: list[tuple[float, float]] = [(o.x, o.z) for o in ordered]
         self._index = {o.object_id: j for j, o in enumerate(ordered)}
 
-    def _read(self, entries: Sequence[MapEntry]) -> tuple[dict[str, MapEntry], dict[str, int],
-                                                           tuple[str, ...]]:  # fmt: skip
-        seen: dict[str, MapEntry] = {}
-        for e in entries:
-            seen.setdefault(e.label, e)
-        duplicates: tuple[str, ...] = ()
-        if len(seen) != len(entries):
-            counts = Counter(e.label for e in entries)
-            duplicates = tuple(sorted(lb for lb, n in counts.items() if n > 1))
-        known, resolve = self.types.known, self.types.resolve
-        kind_of = {}
-        for lb, e in seen.items():
-            k = known.get((e.object_type, lb))
-            kind_of[lb] = resolve(e.object_type, lb) if k is None else k
-        return seen, kind_of, duplicates
-
     def step(self, entries: Sequence[MapEntry], previous: StepMatch | None = None) -> StepMatch:
         """Match one step's map; ``previous`` (the step before) seeds the frame and breaks
         exact ties in favour of the labels' previous objects (module docstring)."""
-        seen, kind_of, duplicates = self._read(entries)
+        seen: dict[str, MapEntry] = {}
+        for e in entries:
+            seen.setdefault(e.label, e)
+        counts = Counter(e.label for e in entries)
+        duplicates = tuple(sorted(lb for lb, n in counts.items() if n > 1))
+        kind_of = {lb: self.types.resolve(e.object_type, lb) for lb, e in seen.items()}
         key = tuple(sorted((lb, k, float(seen[lb].x), float(seen[lb].z))
                            for lb, k in kind_of.items() if k >= 0))  # fmt: skip
         unrecognised = tuple(sorted(lb for lb, k in kind_of.items() if k < 0))

@@ -154,17 +154,10 @@ def track_episode(traj: Trajectory) -> Track:
     discovery = _discovery(held, [m.entries for m in matches])
     final = matcher.match(traj.steps[-1].cognitive_map) if traj.steps else EMPTY_MATCHING
     kind_of = {o.object_id: matcher.types.index[o.object_type] for o in gt.objects}
-    return Track(
-        held=tuple(held),
-        final=final,
-        spells=_spells(traj, held, matches, kind_of, category, discovery),
-        discovery=discovery,
-        tbs=tuple(tbs),
-        miller_loads=tuple(loads),
-        miller_forgets=tuple(forgets),
-        visits=_visits([s.room for s in traj.steps]),
-        matcher=matcher,
-    )
+    spells = _spells(traj, held, matches, kind_of, category, discovery)
+    visits = _visits([s.room for s in traj.steps])
+    return Track(tuple(held), final, spells, discovery, tuple(tbs), tuple(loads), tuple(forgets),
+                 visits, matcher)  # fmt: skip
 
 
 def _discovery(held: list[dict[str, str]], written: list[dict[str, MapEntry]]) -> dict[str, int]:
@@ -182,12 +175,9 @@ def discovered(
     """Object id -> ``(discovery step (0-based), position of its entry in that step's map,
     discovered by a withdrawn pairing only)``, the key :func:`_discovery` ranks by."""
     kept = _kept_pairings(held, written)
-    order: dict[int, dict[str, int]] = {}
 
     def at(t: int, label: str) -> int:
-        if t not in order:
-            order[t] = {lb: i for i, lb in enumerate(written[t])}
-        return order[t][label]
+        return list(written[t]).index(label)
 
     first: dict[str, tuple[int, int, bool]] = {}
     fallback: dict[str, tuple[int, int, bool]] = {}

@@ -1,30 +1,17 @@
 """Vocabulary of the matcher: what models write -> AI2-THOR engine types.
 
 :func:`canonical_type` reads a label the way English reads a noun phrase: the **head noun**
-(the last noun before any qualifier) says what the thing is, the words before it only which
-one or what kind. The rules, with examples and their measured effect, are on the docs page
-"Reading what a model writes" (``docs/interpretation/vocabulary.md``); in order:
-
-1. **Split words.** CamelCase and acronyms are split (``TVStand`` -> ``tv stand``), text is
-   lower-cased, ``(...)``/``[...]``/``{...}`` asides are removed, anything not a letter or a
-   digit separates words, and numbers and single letters (``Chair_3``, ``stool b``) are dropped.
-2. **Cut qualifiers.** The phrase ends before the first word, after the first, of
-   :data:`QUALIFIER_WORDS` (``chair near the window`` is a chair), read past
-   :data:`POSITION_WORDS` when the words before them name no type (``back left chair``);
-   trailing :data:`STATE_WORDS` (``door open``) are dropped.
-3. **Head noun.** The longest run of at most four words *ending at the last word* whose words
-   joined (with the last word as written, then made singular) are a key of :data:`SYNONYMS`
-   or a lower-cased :data:`ENGINE_TYPES` name: ``table lamp`` is a ``DeskLamp``, ``exit sign``
-   no type. A modifier never names the thing. A head of :data:`PART_WORDS` after a word that
-   names an object (``fridge door``) denotes no object.
-4. **Misspellings.** Otherwise the last word (as written, then singular) of at least
-   :data:`FUZZY_MIN_LENGTH` letters is compared with every key that long by rapidfuzz's
-   optimal-string-alignment distance; a key with similarity ``1 - edits / longer length >=``
-   :data:`FUZZY_THRESHOLD` is taken, the fewest edits first, when its types are the single
-   best (``chiar``, ``labtop``). Words of :data:`REAL_WORDS` (``cable``, ``chain``) are never
-   corrected.
-5. **Candidates.** A synonym lists the types it names, most likely first, never a look-alike;
-   an engine type's own name denotes only itself.
+says what the thing is, the words before it only which one or what kind. In order: (1) split
+words (CamelCase, ids, asides, instance numbers and letters dropped); (2) cut the phrase
+before a :data:`QUALIFIER_WORDS` word (past :data:`POSITION_WORDS` when the words before them
+name no type), dropping trailing :data:`STATE_WORDS`; (3) the longest run of at most four
+words *ending at the last word* that is a key of :data:`SYNONYMS` or an engine type name
+(last word as written, then singular) denotes its types, except a :data:`PART_WORDS` head
+after an object (``fridge door``); (4) else the last word is corrected to the key at the
+least rapidfuzz OSA distance (similarity >= :data:`FUZZY_THRESHOLD`, at least
+:data:`FUZZY_MIN_LENGTH` letters, one best answer, never a word of :data:`REAL_WORDS`).
+The rules, their examples and their measured effect are on the docs page "Reading what a
+model writes" (``docs/interpretation/vocabulary.md``).
 
 Inside an episode (:class:`TypeResolver`) the first candidate the layout holds wins. Text that
 denotes no engine type, or only types the layout lacks, is *unrecognised*
@@ -259,24 +246,15 @@ def _trimmed(words: tuple[str, ...]) -> tuple[str, ...]:
 
 
 def _exact(words: tuple[str, ...]) -> tuple[str, ...]:
-    """Step 3: candidates of the longest run ending at the head noun that is a key."""
-    for size, key in _sized_runs(words):
-        hit = _lookup(key)
-        if hit:
-            if size == 1 and _is_part(words):
-                return ()
-            return hit
-    return ()
-
-
-def _sized_runs(words: tuple[str, ...]) -> Iterable[tuple[int, str]]:
-    """Step 3's keys with their sizes: runs ending at the last word, longest first, each with
-    the last word as written and then made singular."""
+    """Step 3: candidates of the longest run ending at the head noun that is a key (longest
+    first, each with the last word as written and then made singular)."""
     for size in range(min(_MAX_RUN, len(words)), 0, -1):
         run = words[len(words) - size :]
-        stem = "".join(run[:-1])
         for last in _singulars(run[-1]):
-            yield size, stem + last
+            hit = _lookup("".join(run[:-1]) + last)
+            if hit:
+                return () if size == 1 and _is_part(words) else hit
+    return ()
 
 
 def _is_part(words: tuple[str, ...]) -> bool:
@@ -360,17 +338,16 @@ class TypeResolver:
         """Ground-truth types, sorted; a type's index is its position here."""
         self.index: dict[str, int] = {t: i for i, t in enumerate(self.names)}
         self._lower = {t.lower(): t for t in self.names}
-        self.known: dict[tuple[str, str], int] = {}
-        """``(object_type, label)`` -> type index, for every entry resolved so far."""
+        self._known: dict[tuple[str, str], int] = {}  # (object_type, label) -> index
 
     def resolve(self, object_type: str, label: str) -> int:
         """Type index of an entry (its ``object_type`` first, then its label); -1 if none."""
-        hit = self.known.get((object_type, label))
+        hit = self._known.get((object_type, label))
         if hit is None:
             hit = self._resolve_text(object_type)
             if hit < 0:
                 hit = self._resolve_text(label)
-            self.known[(object_type, label)] = hit
+            self._known[(object_type, label)] = hit
         return hit
 
     def _resolve_text(self, text: str) -> int:
