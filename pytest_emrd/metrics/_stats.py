@@ -45,10 +45,8 @@ class Estimate:
 
 @functools.lru_cache(maxsize=4)
 def resample_rows(rng_seed: int, n: int, n_resamples: int) -> np.ndarray:
-    """The bootstrap's ``(n_resamples, n)`` row indices drawn from
-    ``numpy.random.default_rng(rng_seed)``: a function of its arguments alone, so computed once
-    and shared (read-only) by every interval over ``n`` episodes with that seed (the gate
-    metrics of one run)."""
+    """The bootstrap's ``(n_resamples, n)`` row indices from ``default_rng(rng_seed)``, shared
+    read-only by every interval over ``n`` episodes with that seed (the gates of one run)."""
     idx = np.random.default_rng(rng_seed).integers(0, n, size=(n_resamples, n))
     idx.flags.writeable = False
     return idx
@@ -104,11 +102,10 @@ def bootstrap_sums_ci(
     r""":func:`bootstrap_ci` of a statistic of the resampled column sums of whole-number
     ``data`` (n x k counts: events, steps, one-hot choices).
 
-    ``statistic`` receives the ``(n_resamples, k)`` sums ``data[rows].sum(axis=1)`` of the
-    resamples of :func:`bootstrap_ci` and returns ``n_resamples`` values. The sums are taken
-    as resample counts (:func:`draw_counts`) times ``data``: for whole numbers below ``2**53``
-    every partial sum is exact, so this is the row resampling's interval, bit for bit, without
-    gathering ``n_resamples x n`` rows. Edge cases as :func:`bootstrap_ci`.
+    ``statistic`` maps the ``(n_resamples, k)`` sums ``data[rows].sum(axis=1)`` to
+    ``n_resamples`` values. The sums are resample counts (:func:`draw_counts`) times
+    ``data``: exact for whole numbers below ``2**53``, so the row resampling's interval bit for
+    bit, without gathering ``n_resamples x n`` rows. Edge cases as :func:`bootstrap_ci`.
     """
     arr = np.asarray(data, dtype=float)
     if len(arr) < 2:
