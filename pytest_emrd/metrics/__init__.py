@@ -46,13 +46,14 @@ from pytest_emrd.metrics._episode import (
     sir_score,
     te_score,
 )
-from pytest_emrd.metrics._frame import random_reframe, reframe
 from pytest_emrd.metrics._gates import GATE_METRICS, GateMetric, evaluate_gates
 from pytest_emrd.metrics._match import (
     GATE_M,
     MatchedPair,
     Matching,
     match_map,
+    random_reframe,
+    reframe,
     rigid_fit,
     step_matchings,
 )

@@ -40,6 +40,10 @@ of two or more distinct points) is carried: one entry's identity rotation is the
 frame's own. (b) A label keeps its previous object on exact ties (its rounded cost is lowered
 by half a unit); a carried pairing the geometry contradicts is dropped. The terminal scores
 (AEC, PA, precision, FPSG) use :func:`match_map` of the terminal map alone.
+
+:func:`reframe` moves every map entry of an episode by one rigid motion (or a mirror), leaving
+ground truth and poses alone, so a caller can check that each metric is unchanged (``emrd
+validate`` and the property tests do).
 """
 
 from __future__ import annotations
@@ -47,14 +51,14 @@ from __future__ import annotations
 import math
 from collections import Counter
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from itertools import combinations
 from typing import Final, NamedTuple
 
 import numpy as np
 
 from pytest_emrd.metrics._vocab import TypeResolver
-from pytest_emrd.trajectory import GroundTruthObject, MapEntry
+from pytest_emrd.trajectory import GroundTruthObject, MapEntry, Trajectory
 
 #: Largest distance (metres, after alignment) at which an entry may stand for an object.
 GATE_M: Final = 1.5
@@ -539,3 +543,36 @@ def match_map(entries: Sequence[MapEntry], objects: Sequence[GroundTruthObject])
     puts it within :data:`GATE_M` of the door while keeping the desks).
     """
     return Matcher(objects).match(entries)
+
+
+def reframe(
+    traj: Trajectory, theta: float, dx: float, dz: float, *, mirror: bool = False
+) -> Trajectory:
+    """``traj`` with every cognitive-map coordinate ``p`` replaced by ``R(theta) M p + t``.
+
+    ``R(theta)`` rotates by ``theta`` radians, ``t = (dx, dz)`` translates, ``M`` mirrors
+    ``x -> -x`` when ``mirror`` (an improper motion, which no metric forgives). One motion
+    for the whole episode, as a model that picked another origin and heading would write.
+    Steps that share a map object (a parse failure repeats the last map) still share it.
+    """
+    c, s = math.cos(theta), math.sin(theta)
+    sign = -1.0 if mirror else 1.0
+    moved: dict[int, tuple[MapEntry, ...]] = {}
+    steps = []
+    for step in traj.steps:
+        key = id(step.cognitive_map)
+        if key not in moved:
+            moved[key] = tuple(
+                replace(e, x=c * sign * e.x - s * e.z + dx, z=s * sign * e.x + c * e.z + dz)
+                for e in step.cognitive_map
+            )
+        steps.append(replace(step, cognitive_map=moved[key]))
+    return replace(traj, steps=tuple(steps))
+
+
+def random_reframe(traj: Trajectory, rng: np.random.Generator) -> Trajectory:
+    """:func:`reframe` with a proper motion drawn from ``rng``: a uniform heading and an
+    origin uniform in ``[-100, 100]^2`` metres."""
+    theta = float(rng.uniform(0.0, 2.0 * math.pi))
+    dx, dz = (float(v) for v in rng.uniform(-100.0, 100.0, 2))
+    return reframe(traj, theta, dx, dz)
