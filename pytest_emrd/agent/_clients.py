@@ -12,12 +12,10 @@ The endpoint URL is ``base_url`` with the endpoint path appended to its path, it
 each attempt, connect to last byte: :class:`DeadlineTransport` shuts the connection down
 when it passes, so a server dripping its reply a byte at a time cannot hold a request open.
 
-Why not the official SDKs (``anthropic`` 2.10, ``openai`` 3.51, both on ``httpx2``, which
-vcrpy 9.4 also records): their retry loop obeys ``Retry-After`` without a cap (anthropic
-2.10 ``_calculate_retry_timeout``: up to 2**32 ms), draws jitter from the global ``random``
-and logs nothing on our logger; they would bring two request paths and pydantic, anyio and
-opentelemetry for bodies that are plain JSON. The conformance tests validate our bodies
-against the SDK's own request type instead: the guarantee stays, the runtime does not.
+Not the official SDKs: their retry loop obeys ``Retry-After`` without a cap and logs
+nothing on our logger, and they would bring a second request path and pydantic for bodies
+that are plain JSON. The conformance tests validate our bodies against the SDKs' own
+request types instead.
 """
 
 from __future__ import annotations
@@ -26,9 +24,9 @@ import contextlib
 import os
 import socket
 import threading
-import time
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any, Protocol
+from typing import Any, Final, Protocol
 
 import httpx
 
@@ -84,33 +82,28 @@ def endpoint_url(base_url: str, path: str) -> str:
     return str(base.copy_with(path=base.path.rstrip("/") + path))
 
 
+_STREAM_EVENTS: Final = ("connection.connect_tcp.complete", "connection.start_tls.complete")
+
+
 class _Deadline:
     """One attempt's deadline: when it passes, the attempt's connection is shut down (a read
-    blocked on it returns at once). The timer starts with the first connection, so a replay,
-    which never connects, starts no thread."""
-
-    _STREAM_EVENTS = ("connection.connect_tcp.complete", "connection.start_tls.complete")
+    blocked on it returns at once)."""
 
     def __init__(self, seconds: float) -> None:
-        self.end = time.monotonic() + seconds
         self.expired = False
         self._lock = threading.Lock()
         self._sock: socket.socket | None = None
-        self._timer: threading.Timer | None = None
+        self._timer = threading.Timer(seconds, self.expire)
+        self._timer.daemon = True
+        self._timer.start()
 
     def trace(self, event: str, info: dict[str, Any]) -> None:
         """httpcore's ``trace`` extension: keep the newest socket of the attempt."""
-        if event not in self._STREAM_EVENTS or info.get("return_value") is None:
-            return
-        sock = info["return_value"].get_extra_info("socket")
-        with self._lock:
-            self._sock = sock
-            if self._timer is None and not self.expired:
-                self._timer = threading.Timer(max(0.0, self.end - time.monotonic()), self.expire)
-                self._timer.daemon = True
-                self._timer.start()
-        if self.expired or time.monotonic() >= self.end:
-            self.expire()
+        if event in _STREAM_EVENTS and info.get("return_value") is not None:
+            with self._lock:
+                self._sock = info["return_value"].get_extra_info("socket")
+            if self.expired:  # connected after the deadline passed
+                self.expire()
 
     def expire(self) -> None:
         with self._lock:
@@ -120,9 +113,7 @@ class _Deadline:
                 sock.shutdown(socket.SHUT_RDWR)
 
     def cancel(self) -> None:
-        with self._lock:
-            if self._timer is not None:
-                self._timer.cancel()
+        self._timer.cancel()
 
 
 class DeadlineTransport(httpx.BaseTransport):
@@ -183,7 +174,12 @@ def _http_client(timeout_s: float, transport: httpx.BaseTransport | None) -> htt
 
 
 class _HttpClient:
-    """What both providers share: one httpx client, a retry policy, the API key."""
+    """What both providers share: one httpx client, a retry policy, the API key. A subclass
+    gives ``_auth`` (the header carrying the key) and ``_read`` (the reply text and usage from
+    the decoded response)."""
+
+    _auth: Callable[[str], dict[str, str]]
+    _read: Callable[[Any], ChatResponse]
 
     def __init__(
         self,
@@ -199,28 +195,14 @@ class _HttpClient:
         self.policy = policy or RetryPolicy(max_retries=config.max_retries)
         self._key = _api_key(config, required=require_key)
         self._http = _http_client(config.timeout_s, transport)
-        self._urls: dict[str, str] = {}
-
-    @staticmethod
-    def _auth(key: str) -> dict[str, str]:
-        """The header carrying ``key`` (provider-specific)."""
-        raise NotImplementedError
-
-    @staticmethod
-    def _read(data: Any) -> ChatResponse:
-        """The reply text and usage from the decoded response (provider-specific)."""
-        raise NotImplementedError
 
     def complete(self, messages: list[dict[str, Any]]) -> ChatResponse:
         """Send :func:`build_request` for ``messages`` (plus the key) and read the reply."""
         request = build_request(self.config, messages)
         headers = request.headers | self._auth(self._key) if self._key else request.headers
-        url = self._urls.get(request.path)
-        if url is None:
-            url = self._urls[request.path] = endpoint_url(self.base_url, request.path)
         return post_json(
             self._http,
-            url,
+            endpoint_url(self.base_url, request.path),
             body=request.body,
             headers=headers,
             policy=self.policy,
@@ -278,16 +260,22 @@ def _anthropic_part(part: dict[str, Any]) -> dict[str, Any]:
     return {"type": "text", "text": part["text"]}
 
 
-def _anthropic_message(message: dict[str, Any]) -> dict[str, Any]:
-    content = message["content"]
-    parts = [_anthropic_part(p) for p in content] if isinstance(content, list) else content
-    return {"role": message["role"], "content": parts}
-
-
 def to_anthropic(messages: list[dict[str, Any]]) -> tuple[str, list[dict[str, Any]]]:
     """(system prompt, Messages-API messages) from OpenAI-format messages."""
     system = "\n\n".join(m["content"] for m in messages if m["role"] == "system")
-    return system, [_anthropic_message(m) for m in messages if m["role"] != "system"]
+    converted = [
+        {
+            "role": m["role"],
+            "content": (
+                [_anthropic_part(p) for p in m["content"]]
+                if isinstance(m["content"], list)
+                else m["content"]
+            ),
+        }
+        for m in messages
+        if m["role"] != "system"
+    ]
+    return system, converted
 
 
 def _read_anthropic(data: Any) -> ChatResponse:
