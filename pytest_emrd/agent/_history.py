@@ -1,22 +1,14 @@
 """The conversation a model is sent each step: a sliding window over the episode.
 
-Appendix C: the context keeps the system prompt plus the last 10 dialogue turns; when it
-grows past 21 messages the oldest user/assistant pairs are dropped, never the system
-prompt. A turn is one user message and the model's reply, and the step being asked is
-the newest (still unanswered) turn, so a request carries the system prompt, at most 9
-answered turns and the current user message.
+Appendix C: the context keeps the system prompt plus the last 10 dialogue turns (one user
+message and the model's reply); the step being asked is the newest, unanswered turn, so a
+request carries the system prompt, at most 9 answered turns and the current user message.
 
 ``single_image`` mode (the paper's Claude setting: "only the latest frame is sent as an
-image; prior frames are converted to text-only summaries"): the current frame is the one
-image of every request; an earlier frame travels as its summary, which is the model's own
-``observation`` text of that step (:data:`FRAME_SUMMARY`, read with
-:func:`~pytest_emrd.agent._parse.parse_reply`). The paper does not say who wrote its
-summaries; the model's own description is the one summary that adds no second model and no
-information the model did not have. A step whose reply has no readable observation keeps
-its text only.
-
-Messages are OpenAI chat-completions dicts; :mod:`pytest_emrd.agent._clients` converts
-them for the Anthropic Messages API.
+image; prior frames are converted to text-only summaries"): an earlier frame travels as the
+model's own ``observation`` text of that step (:data:`FRAME_SUMMARY`), the one summary that
+adds no second model and no information the model did not have. A step whose reply has no
+readable observation keeps its text only.
 """
 
 from __future__ import annotations
@@ -89,19 +81,13 @@ class Conversation:
         self.system = system
         self.single_image = single_image
         self._system = {"role": "system", "content": system}
-        self._answered: deque[tuple[UserTurn, dict[str, Any], dict[str, Any]]] = deque(
-            maxlen=turns - 1
-        )
+        self._answered: deque[tuple[dict[str, Any], dict[str, Any]]] = deque(maxlen=turns - 1)
         self._pending: tuple[UserTurn, dict[str, Any]] | None = None
-
-    def window(self, current: UserTurn) -> list[UserTurn]:
-        """The user turns inside the window, oldest first, the current one last."""
-        return [user for user, _, _ in self._answered] + [current]
 
     def request(self, current: UserTurn) -> list[dict[str, Any]]:
         """System prompt, the answered turns still in the window, then ``current``."""
         messages: list[dict[str, Any]] = [self._system]
-        for _, user, reply in self._answered:
+        for user, reply in self._answered:
             messages += (user, reply)
         if self._pending is None or self._pending[0] is not current:
             self._pending = (current, _user_message(current, image=True))
@@ -118,7 +104,7 @@ class Conversation:
         else:
             user = _user_message(current, image=not self.single_image)
         self._pending = None
-        self._answered.append((current, user, {"role": "assistant", "content": reply}))
+        self._answered.append((user, {"role": "assistant", "content": reply}))
 
 
 def _summarised(turn: UserTurn, reply: str) -> dict[str, Any]:

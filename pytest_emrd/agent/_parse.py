@@ -1,41 +1,22 @@
 """Reading a model's reply: tolerant of what real models write, strict about what matters.
 
-**Repaired** (the reply is read, and :attr:`Reply.repairs` names every repair, so a run can
-count them; see :data:`REPAIRS`):
+**Repaired** (the reply is read, and :attr:`Reply.repairs` names every repair, in the order
+of :data:`REPAIRS`): ``fence`` (the JSON in a Markdown code fence), ``prose`` (text around
+the object or its fence), ``comment`` (``//`` or ``/* */`` outside strings),
+``trailing_comma``, ``python_literal`` (single quotes, ``True``/``None``): syntax-only edits
+that cannot change what any value means; and ``position_list``, ``unit``, ``decimal_comma``:
+a position written in another notation, read in metres without guessing (the table in
+docs/interpretation/vocabulary.md). Also tolerated, as schema leniency rather than repairs:
+numbers written as strings, a cognitive map given as a list of objects with a
+``label``/``id``/``name`` key, missing optional keys, map entries without ``room``/``facing``.
 
-* ``fence`` — the JSON sits in a Markdown code fence (```` ```json ... ``` ````);
-* ``prose`` — text before or after the JSON object (or its fence);
-* ``comment`` — ``// ...`` line comments or ``/* ... */`` block comments outside strings;
-* ``trailing_comma`` — a comma right before ``}`` or ``]``;
-* ``python_literal`` — single-quoted strings or Python spellings (``True``/``None``);
-* ``position_list`` — a position written as a list ``[x, z]`` (the order the prompt gives):
-  the entry itself (``"Desk_1": [1.5, -2]``) or its ``position`` (``pos``, ``xz``,
-  ``coords``, ``coordinates``, ``location``) instead of ``x`` and ``z`` keys;
-* ``unit`` — a coordinate with a metric unit (``"2 m"``, ``"2.5 metres"``, ``"250 cm"``);
-* ``decimal_comma`` — a coordinate with a decimal comma (``"2,5"`` is 2.5 m; a coordinate
-  inside a building is never in the thousands, so the comma is no thousands separator).
-
-Each reads the reply one way only: the first five are *syntax-only* edits, removing them
-cannot change what any value of the object means; the last three read a position written in
-another notation, in metres, without guessing. Also tolerated, as schema leniency rather than
-repairs: numbers written as strings (``"1.5"``), a cognitive map given as a list of objects
-with a ``label``/``id``/``name`` key, missing optional keys (``observation``, ``dedup_check``,
-``reasoning``), map entries without ``room``/``facing``.
-
-**Parse failures** (:attr:`Reply.error` says why; the episode loop keeps the previous map as the
-model's belief): no complete JSON object (prose only; a reply cut off mid-object, as at the
-token limit), an object no repair above makes valid (a missing comma between two values,
-unquoted keys, a ``...`` placeholder standing for elided entries), or an object without an
-``action`` string or a ``cognitive_map``. Those are not repaired because any repair would guess
-content: where a comma was missing, what ``...`` stood for, what a cut-off map still held.
-
-**No position is lost in silence.** A map entry whose position none of the above reads
-(``"x": "near the door"``, ``null``, ``NaN``, ``"6 ft"``, a list ``[x, y, z]``, no ``x``/``z``
-at all) makes the reply a parse failure naming the entry (``cognitive_map entry 'Desk_1' has
-no number of metres as x: "near the door"``), as a reply with no map does. Dropping the entry
-alone would make the model look as if it had forgotten the object, and keeping it would guess
-where it is; the failure is counted with the others (the replies check of ``emrd validate``,
-``Step.parse_error``). :func:`parse_reply` never raises.
+**Parse failures** (:attr:`Reply.error` says why; the episode loop keeps the previous map as
+the model's belief): no complete JSON object (prose only, a reply cut off mid-object), an
+object no repair makes valid (a missing comma, unquoted keys, a ``...`` placeholder), an
+object without an ``action`` or a ``cognitive_map``, and a map entry whose position none of
+the above reads (``"x": "near the door"``, ``null``, ``"6 ft"``, ``[x, y, z]``): any repair
+would guess content, and dropping the entry alone would look like forgetting the object.
+:func:`parse_reply` never raises.
 """
 
 from __future__ import annotations
@@ -96,10 +77,6 @@ _COMMENT = r"//[^\n]*|/\*.*?(?:\*/|\Z)"
 _INSIDE = re.compile(rf"{_STRING}|{_COMMENT}|[{{}}]", re.DOTALL)
 _COMMENTS = re.compile(rf"({_STRING})|{_COMMENT}", re.DOTALL)
 _TRAILING_COMMAS = re.compile(rf"({_STRING})|,(?=\s*[}}\]])", re.DOTALL)
-#: Where a comment or a trailing comma could be (in a string or not): without one, there is none.
-_MAYBE_COMMENT = re.compile(r"//|/\*")
-_MAYBE_TRAILING_COMMA = re.compile(r",\s*[}\]]")
-_DECODER = json.JSONDecoder()
 #: A coordinate written as text: a number (decimal point or comma), then maybe a metric unit.
 _WRITTEN_NUMBER = re.compile(
     r"(?P<number>[+-]?(?:\d+(?:[.,]\d+)?|[.,]\d+)(?:[eE][+-]?\d+)?)\s*"
@@ -121,17 +98,6 @@ _POSITION_KEYS: Final[tuple[str, ...]] = (
 )
 
 
-def _json_end(text: str, start: int) -> int | None:
-    """Where the JSON object starting at ``start`` ends, if it is valid JSON. Its span is then
-    the one the token scan of :func:`_balanced_objects` finds (JSON strings are the scan's
-    double-quoted strings, and JSON has no other quote, no comment, no unpaired brace), at C
-    speed: most replies are valid JSON, in a fence or after prose or not."""
-    try:
-        return _DECODER.raw_decode(text, start)[1]
-    except (ValueError, RecursionError):
-        return None
-
-
 def _balanced_objects(text: str) -> list[tuple[int, int]]:
     """``(start, end)`` of every top-level ``{...}`` span of ``text``. Inside an object, strings
     (both quote kinds) and comments are skipped whole, so a brace or an apostrophe in them
@@ -139,11 +105,6 @@ def _balanced_objects(text: str) -> list[tuple[int, int]]:
     spans: list[tuple[int, int]] = []
     start = text.find("{")
     while start >= 0:
-        end = _json_end(text, start)
-        if end is not None:
-            spans.append((start, end))
-            start = text.find("{", end)
-            continue
         depth, at = 1, start + 1
         while depth and (token := _INSIDE.search(text, at)) is not None:
             at = token.end()
@@ -171,10 +132,8 @@ def _strip_comments_and_commas(text: str) -> tuple[str, tuple[str, ...]]:
 
         return sub
 
-    if _MAYBE_COMMENT.search(text):
-        text = _COMMENTS.sub(drop("comment", " "), text)
-    if _MAYBE_TRAILING_COMMA.search(text):
-        text = _TRAILING_COMMAS.sub(drop("trailing_comma", ""), text)
+    text = _COMMENTS.sub(drop("comment", " "), text)
+    text = _TRAILING_COMMAS.sub(drop("trailing_comma", ""), text)
     return text, tuple(r for r in REPAIRS if r in found)
 
 
@@ -263,8 +222,6 @@ def _coordinate(value: Any) -> tuple[float, tuple[str, ...]] | None:
     ``decimal_comma``). Anything else (``"near the door"``, ``null``, ``true``, ``NaN``,
     ``"6 ft"``) is no coordinate.
     """
-    if type(value) is float:  # the common case first: a map holds dozens of coordinates
-        return (value, ()) if math.isfinite(value) else None
     if isinstance(value, bool):
         return None
     if isinstance(value, int | float):

@@ -5,6 +5,14 @@ assistant message), its randomness is seeded by a hash of the request content, s
 same request gets the same reply byte for byte. Scout-family replies are compact JSON in the
 same protocol a VLM is asked for, plus a ``plan`` key holding the navigation state; agents
 planted with ``writer: vlm`` (the ``mimic`` family, :mod:`._mimic`) write like a VLM.
+
+The ``prior`` policy decides from the prompt alone, with zero spatial evidence: it never
+moves and maps nothing (planted memory ``none``). It turns in place through one sweep, only
+to infer the room it stands in by the inventory vote every scripted agent casts (one view
+is not enough: spawned facing a wall or a doorway, the first view often shows nothing of the
+spawn room), then names the room whose inventory lists the most seats other than that room:
+the furniture prior the paper found behind the Conference Room choice (Never-Visited and
+Any-Bias 100 %, FPSG 0). With nothing identifiable after the sweep it chooses among all four.
 """
 
 from __future__ import annotations
@@ -12,13 +20,12 @@ from __future__ import annotations
 import copy
 import hashlib
 import json
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from typing import TYPE_CHECKING, Any, Final
 
 from pytest_emrd.agent.reference._memory import uniform
 from pytest_emrd.agent.reference._mimic import mimic_reply, request_seed
-from pytest_emrd.agent.reference._perceive import fresh_plan, perceive
-from pytest_emrd.agent.reference._prior import prior_action
+from pytest_emrd.agent.reference._perceive import SWEEP_TURNS, fresh_plan, perceive, room_guess
 from pytest_emrd.agent.reference._read import (
     Briefing,
     Percept,
@@ -34,6 +41,31 @@ from pytest_emrd.errors import ConfigError, ProtocolError
 
 if TYPE_CHECKING:  # _config imports this package (for the version): no runtime import back
     from pytest_emrd.agent._config import Registry
+
+SEATS: Final = ("Chair", "Sofa", "Stool")
+
+
+def seats(counts: Mapping[str, int]) -> int:
+    """Seats an inventory line lists (every type whose name contains Chair, Sofa or Stool)."""
+    return sum(n for t, n in counts.items() if any(s in t for s in SEATS))
+
+
+def prior_action(plan: dict[str, Any], briefing: Briefing, percept: Percept) -> tuple[str, str]:
+    """(action, reasoning) of the prior agent: look around in place, then name another room."""
+    if plan["turns"] < SWEEP_TURNS and percept.step < percept.max_steps:
+        plan["turns"] += 1
+        return "Turn(Right)", f"Looking around to tell where I am ({plan['turns']}/{SWEEP_TURNS})."
+    here = room_guess(plan)
+    others = [r for r in briefing.rooms if r != here]
+    inventory = briefing.inventory
+    room = max(others, key=lambda r: (seats(inventory.get(r, {})), -others.index(r)))
+    where = f"the {here} where I stand" if here else "this room"
+    return (
+        f"Term({room})",
+        f"{room} has the most seating for a gathering ({seats(inventory.get(room, {}))} "
+        f"seats by the building overview), more than any room other than {where}.",
+    )
+
 
 Policy = Callable[[dict[str, Any], Briefing, Percept], tuple[str, str]]
 POLICIES: Final[dict[str, Policy]] = {"scout": scout_action, "prior": prior_action}

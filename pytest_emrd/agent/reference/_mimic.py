@@ -1,23 +1,11 @@
 """The ``mimic`` family: the scout's exploration, a cognitive map written the way VLMs write it.
 
-A mimic walks exactly like ``scout`` (same perception, same room-clearing policy, perfect
+A mimic walks exactly like ``scout`` (same perception, room-clearing policy and perfect
 memory) and keeps the scout's record in its own state, but reports a map the way a real VLM
-does, with every departure planted and known (knobs: :mod:`._knobs`):
-
-* **its own frame** — coordinates are ``R(theta) p + t`` of the spawn-frame position ``p``,
-  with ``theta`` uniform in [0, 360) degrees and ``t`` uniform in [-10, 10]^2 m, drawn once per
-  episode from its first request (``frame: spawn`` writes ``p``); rounded to 0.01 m;
-* **free-form labels** — ``"office chair (2)"``, ``"TV"``, ``"plant near the window"``
-  (:mod:`._phrasing`), one numbering style per episode, a ``type`` field with a generic noun;
-* **position noise** ``sigma`` — fresh N(0, sigma^2) per coordinate at every sighting, keyed
-  by object and step; an object out of view keeps the position of its last sighting;
-* **duplicates on re-entry** ``dup`` — see :mod:`._knobs`; the new entry follows the object
-  from then on, the old one stays where it was last written;
-* **hallucinations** ``halluc`` — an object of :data:`~._phrasing.HALLUCINATIONS` 1-4 m ahead;
-* **malformed replies** ``fail`` / ``repair`` (:mod:`._malform`) and **invalid actions**
-  ``invalid`` (:data:`~._phrasing.INVALID_ACTIONS`);
-* **walking back** ``back`` — the scout's homing (:mod:`._scout`): the episodes it draws
-  re-enter the room they name, so duplicates on re-entry happen and SIR is defined.
+does, with every departure planted and known (:mod:`._knobs`; docs/user-guide/reference-agents.md):
+its own frame ``R(theta) p + t`` per episode, free-form labels (:mod:`._phrasing`), position
+noise per sighting, duplicates on room re-entry, hallucinations, malformed replies
+(:mod:`._malform`), invalid actions, and walking back into the named room (the scout's homing).
 
 A step whose reply is damaged or whose action is invalid changes nothing in the world, so
 the mimic's navigation state rolls back to what it was before that step and it decides again
@@ -27,10 +15,8 @@ Determinism and pairing: the state travels in the reply (``state`` key, :func:`r
 Draws that concern one object (label, noise, duplicate) are keyed by the episode key (a hash
 of the first request) and the object, draws that concern one step (hallucination, damage,
 slip, invalid action) by a hash of the system prompt and the step's user message. Neither
-depends on the knobs, so two mimics that differ only in knobs draw the same numbers and,
-without damage or invalid actions, walk the same path: raising ``dup`` adds duplicates on
-top of those of a lower ``dup``, and the planted effect of each knob can be measured on
-paired episodes.
+depends on the knobs, so two mimics that differ only in knobs walk the same path (without
+damage or invalid actions) and each knob's planted effect is measured on paired episodes.
 """
 
 from __future__ import annotations

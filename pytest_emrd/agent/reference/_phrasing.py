@@ -3,14 +3,9 @@
 Tables of the phrasings real VLMs use in EMRD cognitive maps, per engine type of the office.
 Every choice is a pure function of a uniform number in [0, 1) that the caller draws from the
 request content (:func:`pick`), so the same episode always words the same object the same way.
-
-Labels (:func:`label_for`): a phrase of the object's type (``"office chair"``, ``"TV"``,
-``"potted plant"``), sometimes with a locative qualifier (``"plant near the window"``),
-numbered in the episode's numbering style when the phrase is already taken (``"office chair
-(2)"``, ``"office chair 2"``, ``"office chair #2"``). The ``type`` field holds the short generic
-noun (:data:`TYPE_WORDS`). Hallucinated objects (:data:`HALLUCINATIONS`) are things an office
-plausibly holds but the EMRD office never does, worded so that no engine type is named
-anywhere in the text (no qualifier mentioning a door or a table): they must match nothing.
+Hallucinated objects (:data:`HALLUCINATIONS`) are things an office plausibly holds but the
+EMRD office never does, worded so that no engine type is named anywhere in the text: they
+must match nothing.
 """
 
 from __future__ import annotations

@@ -1,9 +1,8 @@
 """The reference agents behind a real OpenAI-compatible HTTP endpoint on 127.0.0.1.
 
 ``POST /v1/chat/completions`` answers with a scripted agent named by ``model``;
-``GET /v1/models`` lists them. The server binds an ephemeral port unless told otherwise
-and serves from a background thread (:class:`ReferenceServer`) or in the foreground
-(``emrd serve``). :func:`reference_base_url` starts one process-wide server on demand.
+``GET /v1/models`` lists them. :func:`reference_base_url` starts one process-wide server on
+demand; ``emrd serve`` serves in the foreground.
 """
 
 from __future__ import annotations
