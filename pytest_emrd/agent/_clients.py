@@ -1,21 +1,13 @@
 """Model clients on httpx (which vcrpy patches): OpenAI-compatible and Anthropic Messages.
 
-Request bodies depend only on the configuration and the messages: no timestamps, no
-request ids, no secrets (keys travel in headers, which cassettes strip). What is sent is
-:func:`build_request`: a pure function the conformance tests validate against each
-provider's published request schema. Sampling fields set to None are left out (the
-provider's default); ``extra_body`` and ``extra_headers`` are passed through as written.
-
-The endpoint URL is ``base_url`` with the endpoint path appended to its path, its query kept
-(``https://x.openai.azure.com/openai/v1?api-version=2025-04-01`` posts to
-``.../openai/v1/chat/completions?api-version=2025-04-01``). ``timeout_s`` is a deadline on
-each attempt, connect to last byte: :class:`DeadlineTransport` shuts the connection down
-when it passes, so a server dripping its reply a byte at a time cannot hold a request open.
-
-Not the official SDKs: their retry loop obeys ``Retry-After`` without a cap and logs
-nothing on our logger, and they would bring a second request path and pydantic for bodies
-that are plain JSON. The conformance tests validate our bodies against the SDKs' own
-request types instead.
+Request bodies depend only on the configuration and the messages (:func:`build_request`, which
+the conformance tests validate against each provider's published request schema): no
+timestamps, request ids or secrets (keys travel in headers, which cassettes strip).
+``timeout_s`` is a deadline on each attempt, connect to last byte: :class:`DeadlineTransport`
+shuts the connection down when it passes, so a server dripping its reply cannot hold a
+request open. Not the official SDKs: their retry loop obeys ``Retry-After`` without a cap and
+logs nothing on our logger, and they would bring a second request path and pydantic for
+bodies that are plain JSON.
 """
 
 from __future__ import annotations
@@ -43,7 +35,6 @@ class ProviderRequest:
     """One request as it goes on the wire, less the API key (added by the client)."""
 
     path: str
-    """Appended to ``base_url``: ``/chat/completions`` or ``/v1/messages``."""
     headers: dict[str, str]
     body: dict[str, Any]
 
@@ -77,7 +68,8 @@ def _api_key(config: ModelConfig, *, required: bool) -> str | None:
 
 
 def endpoint_url(base_url: str, path: str) -> str:
-    """``base_url`` with ``path`` appended to its path, query and fragment kept."""
+    """``base_url`` with ``path`` appended to its path, query and fragment kept
+    (``https://x.azure.com/v1?api-version=1`` -> ``.../v1/chat/completions?api-version=1``)."""
     base = httpx.URL(base_url)
     return str(base.copy_with(path=base.path.rstrip("/") + path))
 
@@ -157,10 +149,9 @@ class DeadlineTransport(httpx.BaseTransport):
 
 
 def _http_client(timeout_s: float, transport: httpx.BaseTransport | None) -> httpx.Client:
-    """The httpx client of a model: ``transport`` as given (tests), else httpx's transports
-    (environment proxies included) each under a :class:`DeadlineTransport`, with no
-    keep-alive, so that every attempt's connection is its own and can be shut at its
-    deadline."""
+    """The httpx client of a model: ``transport`` as given, else httpx's transports (proxies
+    included) under :class:`DeadlineTransport`, without keep-alive so that each attempt's
+    connection is its own and can be shut at its deadline."""
     timeout = httpx.Timeout(timeout_s)
     if transport is not None:
         return httpx.Client(timeout=timeout, transport=transport)
@@ -174,9 +165,8 @@ def _http_client(timeout_s: float, transport: httpx.BaseTransport | None) -> htt
 
 
 class _HttpClient:
-    """What both providers share: one httpx client, a retry policy, the API key. A subclass
-    gives ``_auth`` (the header carrying the key) and ``_read`` (the reply text and usage from
-    the decoded response)."""
+    """One httpx client, a retry policy and the API key; a subclass gives ``_auth`` (the key's
+    header) and ``_read`` (reply text and usage from the decoded response)."""
 
     _auth: Callable[[str], dict[str, str]]
     _read: Callable[[Any], ChatResponse]
@@ -263,18 +253,12 @@ def _anthropic_part(part: dict[str, Any]) -> dict[str, Any]:
 def to_anthropic(messages: list[dict[str, Any]]) -> tuple[str, list[dict[str, Any]]]:
     """(system prompt, Messages-API messages) from OpenAI-format messages."""
     system = "\n\n".join(m["content"] for m in messages if m["role"] == "system")
-    converted = [
-        {
-            "role": m["role"],
-            "content": (
-                [_anthropic_part(p) for p in m["content"]]
-                if isinstance(m["content"], list)
-                else m["content"]
-            ),
-        }
-        for m in messages
-        if m["role"] != "system"
-    ]
+    converted = []
+    for message in messages:
+        if message["role"] != "system":
+            content = message["content"]
+            parts = [_anthropic_part(p) for p in content] if isinstance(content, list) else content
+            converted.append({"role": message["role"], "content": parts})
     return system, converted
 
 

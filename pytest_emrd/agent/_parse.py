@@ -1,21 +1,16 @@
 """Reading a model's reply: tolerant of what real models write, strict about what matters.
 
-**Repaired** (the reply is read, and :attr:`Reply.repairs` names every repair, in the order
-of :data:`REPAIRS`): ``fence`` (the JSON in a Markdown code fence), ``prose`` (text around
-the object or its fence), ``comment`` (``//`` or ``/* */`` outside strings),
-``trailing_comma``, ``python_literal`` (single quotes, ``True``/``None``): syntax-only edits
-that cannot change what any value means; and ``position_list``, ``unit``, ``decimal_comma``:
-a position written in another notation, read in metres without guessing (the table in
-docs/interpretation/vocabulary.md). Also tolerated, as schema leniency rather than repairs:
-numbers written as strings, a cognitive map given as a list of objects with a
-``label``/``id``/``name`` key, missing optional keys, map entries without ``room``/``facing``.
+**Repaired**, and named in :attr:`Reply.repairs` (:data:`REPAIRS`): syntax-only edits that
+cannot change what any value means (a code fence, prose around the object, comments,
+trailing commas, Python literals), and a position written in another notation, read in
+metres without guessing (a list ``[x, z]``, a unit, a decimal comma; the table in
+docs/interpretation/vocabulary.md). Numbers written as strings, a map given as a list of
+objects with a ``label``/``id``/``name``, and missing optional keys are tolerated as is.
 
-**Parse failures** (:attr:`Reply.error` says why; the episode loop keeps the previous map as
-the model's belief): no complete JSON object (prose only, a reply cut off mid-object), an
-object no repair makes valid (a missing comma, unquoted keys, a ``...`` placeholder), an
-object without an ``action`` or a ``cognitive_map``, and a map entry whose position none of
-the above reads (``"x": "near the door"``, ``null``, ``"6 ft"``, ``[x, y, z]``): any repair
-would guess content, and dropping the entry alone would look like forgetting the object.
+**Parse failures** (:attr:`Reply.error`; the episode keeps the previous map): no complete
+JSON object, an object no repair makes valid (a missing comma, a ``...`` placeholder), no
+``action`` or ``cognitive_map``, or a map entry whose position none of the above reads: any
+repair would guess, and dropping the entry would look like forgetting the object.
 :func:`parse_reply` never raises.
 """
 
@@ -31,7 +26,7 @@ from typing import Any, Final
 
 from pytest_emrd.trajectory import MapEntry
 
-#: Replies longer than this are not searched for JSON (a runaway generation, not a reply).
+#: Longer replies are not searched for JSON (a runaway generation, not a reply).
 MAX_REPLY_CHARS: Final = 200_000
 #: Every repair :func:`parse_reply` may apply, in the order :attr:`Reply.repairs` lists them.
 REPAIRS: Final[tuple[str, ...]] = (
@@ -63,12 +58,10 @@ class Reply:
     dedup_check: str = ""
     cognitive_map: tuple[MapEntry, ...] = ()
     action: str = ""
-    """The action text, stripped (``Goto(Doorway_1)``); empty if none could be read."""
     reasoning: str | None = None
     error: str | None = None
     """Why the reply could not be read (the map is then not the model's); None if fine."""
     repairs: tuple[str, ...] = ()
-    """Repairs applied to read the object (names from :data:`REPAIRS`, in that order)."""
 
 
 _STRING = r"\"(?:[^\"\\]|\\.)*\"|'(?:[^'\\]|\\.)*'"
@@ -215,13 +208,8 @@ def _find_object(text: str) -> tuple[dict[str, Any] | None, tuple[str, ...]]:
 
 
 def _coordinate(value: Any) -> tuple[float, tuple[str, ...]] | None:
-    """One coordinate in metres and the repairs that read it; None when it is no number.
-
-    A JSON number, or a string holding one (``"1.5"``, schema leniency). Repaired: a metric
-    unit (``"2 m"``, ``"2.5 metres"``, ``"250 cm"``: ``unit``) and a decimal comma (``"2,5"``:
-    ``decimal_comma``). Anything else (``"near the door"``, ``null``, ``true``, ``NaN``,
-    ``"6 ft"``) is no coordinate.
-    """
+    """One coordinate in metres and the repairs that read it (``unit``, ``decimal_comma``);
+    None when it is no finite number, written or as a string."""
     if isinstance(value, bool):
         return None
     if isinstance(value, int | float):
@@ -246,12 +234,8 @@ def _coordinate(value: Any) -> tuple[float, tuple[str, ...]] | None:
 
 
 def _position(fields: Any) -> tuple[float, float, tuple[str, ...]] | str:
-    """``(x, z, repairs)`` of an entry, or why it has none.
-
-    ``x`` and ``z`` keys as the prompt asks, else a list ``[x, z]`` (``position_list``): the
-    entry itself, or its ``position`` (``pos``, ``xz``, ``coords``, ``coordinates``,
-    ``location``). A list of any other length is no position (``[x, y, z]`` would be a guess).
-    """
+    """``(x, z, repairs)`` of an entry (``x``/``z`` keys, else a list ``[x, z]``: the entry
+    itself or under :data:`_POSITION_KEYS`), or why it has none."""
     repairs: tuple[str, ...] = ()
     if isinstance(fields, dict) and ("x" in fields or "z" in fields):
         x, z = fields.get("x"), fields.get("z")

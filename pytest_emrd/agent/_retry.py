@@ -1,15 +1,10 @@
 """Bounded retries with exponential backoff and jitter, honouring ``Retry-After``.
 
-Retried: HTTP 429, any 5xx in :data:`RETRY_STATUSES`, transport errors (connection refused
-or reset, timeouts) and 2xx bodies that are not the JSON the provider promised (empty, not
-JSON, nested too deep to parse, or of another shape). Not retried: other 4xx (a bad key or
-a bad request does not heal). Jitter only changes how long we sleep; the request sent again
-is the same object, byte for byte.
-
-Each retry is logged on ``pytest_emrd.agent.retry`` at WARNING with the attempt, the wait
-and the cause; URLs are logged without userinfo or query and the API key's literal value is
-masked wherever it would appear. The record carries the attribute
-:data:`pytest_emrd._logging.RETRY_ATTR` (live progress counts retries by it).
+Retried: HTTP 429, the 5xx of :data:`RETRY_STATUSES`, transport errors and 2xx bodies that
+are not the JSON the provider promised. Not retried: other 4xx (a bad key or request does
+not heal). The request sent again is the same object, byte for byte. Each retry is logged
+on ``pytest_emrd.agent.retry`` at WARNING (docs/user-guide/recording.md) with the attribute
+:data:`pytest_emrd._logging.RETRY_ATTR`, by which live progress counts retries.
 """
 
 from __future__ import annotations
@@ -125,14 +120,9 @@ def post_json(
     read: Callable[[Any], Any],
     secrets: Iterable[str | None] = (),
 ) -> Any:
-    """POST ``body`` and return ``read(json)``, retrying per ``policy``.
-
-    ``read`` turns the decoded JSON into the caller's result and raises ``KeyError``,
-    ``TypeError`` or ``ValueError`` when the shape is wrong (treated as a garbage body).
-    Exhausted retries or a non-retryable status raise :class:`TransportError` naming the
-    URL, the attempts and the last cause. ``secrets`` (the API key) are masked in every
-    log line and error message.
-    """
+    """POST ``body`` and return ``read(json)`` (which raises on a garbage body), retrying per
+    ``policy``; exhausted retries or a non-retryable status raise :class:`TransportError`
+    naming the URL, the attempts and the last cause, with ``secrets`` masked."""
     given = {name.lower() for name in headers}
     defaults = {k: v for k, v in _DEFAULT_HEADERS.items() if k.lower() not in given}
     request = httpx.Request(

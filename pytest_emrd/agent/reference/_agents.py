@@ -1,18 +1,14 @@
 """One chat-completions request in, one scripted reply out: the reference agents' brain.
 
-Pure function of the request: the agent's state is its own previous reply (the last
-assistant message), its randomness is seeded by a hash of the request content, so the
-same request gets the same reply byte for byte. Scout-family replies are compact JSON in the
-same protocol a VLM is asked for, plus a ``plan`` key holding the navigation state; agents
-planted with ``writer: vlm`` (the ``mimic`` family, :mod:`._mimic`) write like a VLM.
+Pure function of the request: the agent's state is its own previous reply, its randomness
+is seeded by a hash of the request content, so the same request gets the same reply byte
+for byte. Scout-family replies are compact JSON in the VLM protocol plus a ``plan`` key (the
+navigation state); ``writer: vlm`` agents (``mimic``, :mod:`._mimic`) write like a VLM.
 
-The ``prior`` policy decides from the prompt alone, with zero spatial evidence: it never
-moves and maps nothing (planted memory ``none``). It turns in place through one sweep, only
-to infer the room it stands in by the inventory vote every scripted agent casts (one view
-is not enough: spawned facing a wall or a doorway, the first view often shows nothing of the
-spawn room), then names the room whose inventory lists the most seats other than that room:
-the furniture prior the paper found behind the Conference Room choice (Never-Visited and
-Any-Bias 100 %, FPSG 0). With nothing identifiable after the sweep it chooses among all four.
+The ``prior`` policy decides from the prompt alone: it never moves and maps nothing. It
+sweeps in place only to infer the room it stands in (one view often shows nothing of it),
+then names the room whose inventory lists the most seats other than that one: the furniture
+prior the paper found behind the Conference Room choice (Never-Visited and Any-Bias 100 %).
 """
 
 from __future__ import annotations
@@ -140,11 +136,8 @@ def reply_text(model: str, planted: dict[str, Any], messages: list[dict[str, Any
 
 
 def complete(body: Any, registry: Registry) -> dict[str, Any]:
-    """An OpenAI ``chat.completion`` object answering ``body``; RequestError if unusable.
-
-    ``model`` is ``<name>@<REFERENCE_VERSION>`` (a bare name means the current version); a
-    request for another version is refused with 404, naming both versions.
-    """
+    """An OpenAI ``chat.completion`` object answering ``body``; RequestError if unusable
+    (404 for an unknown agent or another behaviour version, :func:`agent_name`)."""
     if not isinstance(body, dict) or not isinstance(body.get("messages"), list):
         raise RequestError("body must be a JSON object with a 'messages' list.")
     model = str(body.get("model", ""))
@@ -157,8 +150,7 @@ def complete(body: Any, registry: Registry) -> dict[str, Any]:
         raise RequestError(f"model={model!r} is not a reference agent.", status=404)
     messages = body["messages"]
     text = reply_text(name, config.planted, messages)
-    # The id only has to differ between replies: 8 hex digits of the reply's hash (it travels
-    # in every cassette response, and a longer one is incompressible weight there).
+    # The id only has to differ between replies (a longer one is weight in every cassette).
     digest = hashlib.sha256(text.encode()).hexdigest()[:8]
     return {
         "id": f"chatcmpl-ref-{digest}",

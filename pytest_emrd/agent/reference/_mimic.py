@@ -1,22 +1,16 @@
 """The ``mimic`` family: the scout's exploration, a cognitive map written the way VLMs write it.
 
-A mimic walks exactly like ``scout`` (same perception, room-clearing policy and perfect
-memory) and keeps the scout's record in its own state, but reports a map the way a real VLM
-does, with every departure planted and known (:mod:`._knobs`; docs/user-guide/reference-agents.md):
-its own frame ``R(theta) p + t`` per episode, free-form labels (:mod:`._phrasing`), position
-noise per sighting, duplicates on room re-entry, hallucinations, malformed replies
-(:mod:`._malform`), invalid actions, and walking back into the named room (the scout's homing).
+A mimic walks like ``scout`` (perfect memory, and homing with its ``b`` knob) but reports a
+map as a VLM does, every departure planted and known (docs/user-guide/reference-agents.md):
+its own frame ``R(theta) p + t``, free-form labels (:mod:`._phrasing`), position noise,
+duplicates on room re-entry, hallucinations, malformed replies (:mod:`._malform`) and
+invalid actions. A damaged reply or an invalid action changes nothing in the world, so the
+navigation state rolls back and it decides again from the same view; its written map moves on.
 
-A step whose reply is damaged or whose action is invalid changes nothing in the world, so
-the mimic's navigation state rolls back to what it was before that step and it decides again
-from the same view; its written map (labels, duplicates, hallucinations) moves on.
-
-Determinism and pairing: the state travels in the reply (``state`` key, :func:`read_state`).
-Draws that concern one object (label, noise, duplicate) are keyed by the episode key (a hash
-of the first request) and the object, draws that concern one step (hallucination, damage,
-slip, invalid action) by a hash of the system prompt and the step's user message. Neither
-depends on the knobs, so two mimics that differ only in knobs walk the same path (without
-damage or invalid actions) and each knob's planted effect is measured on paired episodes.
+The state travels in the reply (``state`` key). Draws about one object (label, noise,
+duplicate) are keyed by the episode (a hash of the first request) and the object, draws about
+one step by a hash of the step's request; none depends on the knobs, so mimics that differ
+only in knobs walk the same path and each knob's effect is measured on paired episodes.
 """
 
 from __future__ import annotations
@@ -58,14 +52,10 @@ def _normal(draw: Draw, name: str) -> tuple[float, float]:
 
 
 def fresh_state(key: str, planted: Mapping[str, Any]) -> dict[str, Any]:
-    """The state before the first step of the episode keyed ``key`` (hex).
-
-    ``frame`` is ``[theta_deg, tx, tz]``; ``nav`` the scout's ``plan``, its ``memory`` and the
-    room ``visit`` counter (doorways crossed); ``map`` the written entries by label (``id``,
-    and the ``visit`` in which the object was first placed in a room, or in which the
-    duplicate was written; frozen entries carry their written ``x``/``z``, hallucinations a
-    ``type``); ``seen`` the step of each object's last sighting.
-    """
+    """The state before the first step of the episode keyed ``key`` (hex): ``frame``
+    ``[theta_deg, tx, tz]``; ``nav`` the scout's ``plan``, ``memory`` and room ``visit``
+    counter; ``map`` the written entries by label (``id``, first ``visit``; frozen entries
+    carry their ``x``/``z``, hallucinations a ``type``); ``seen`` each object's last step."""
     draw = _episode_draw(key)
     own = planted.get("frame", "own") == "own"
     frame = (
@@ -195,11 +185,8 @@ def mimic_reply(
     request: bytes,
     previous: str | None,
 ) -> str:
-    """The reply of a mimic with ``planted`` knobs.
-
-    ``request`` is the step's seed material (system prompt and user text), ``previous`` the
-    text of the mimic's last reply (None at the first step).
-    """
+    """The reply of a mimic with ``planted`` knobs to the step seeded by ``request``, after its
+    ``previous`` reply (None at the first step)."""
     seed = hashlib.sha256(request).digest()
     step: Draw = lambda name: uniform(seed, name)  # noqa: E731
     state = read_state(previous) if previous else fresh_state(seed[:8].hex(), planted)

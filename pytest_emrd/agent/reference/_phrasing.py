@@ -32,23 +32,15 @@ PHRASES: Final[dict[str, tuple[str, ...]]] = {
     "Doorway": ("doorway", "open doorway", "passage", "door frame"),
     "Door": ("exit door", "main exit", "front door", "emergency exit"),
 }
-#: Engine type -> the short noun written in the entry's ``type`` field.
+#: Engine type -> the short noun written in the entry's ``type`` field (default: the type in
+#: lower case, ``Chair`` -> ``chair``).
 TYPE_WORDS: Final[dict[str, str]] = {
-    "Chair": "chair",
-    "ArmChair": "armchair",
-    "Stool": "stool",
-    "Desk": "desk",
     "DiningTable": "table",
     "ShelvingUnit": "shelf",
     "Television": "TV",
-    "Fridge": "fridge",
     "CounterTop": "counter",
     "HousePlant": "plant",
-    "Laptop": "laptop",
-    "Sink": "sink",
-    "Microwave": "microwave",
     "CoffeeMachine": "coffee machine",
-    "Doorway": "doorway",
     "Door": "exit door",
 }
 #: Locative qualifiers appended to some labels (probability :data:`QUALIFIED`).
@@ -107,13 +99,9 @@ def pick(options: Sequence[str], u: float) -> str:
 def label_for(
     object_type: str, taken: Container[str], *, style: str, u_phrase: float, u_qualifier: float
 ) -> str:
-    """A free-form label for an object of ``object_type`` not in ``taken``.
-
-    ``style`` is one of :data:`NUMBERING`; ``u_phrase`` picks the phrase (an unknown type is
-    spelled as the engine writes it, lower case), ``u_qualifier < QUALIFIED`` adds a qualifier
-    (picked by ``u_qualifier / QUALIFIED``). A phrase already taken gets the lowest free number
-    from 2 on.
-    """
+    """A free-form label for an object of ``object_type`` not in ``taken``: a phrase (an
+    unknown type in lower case), a qualifier when ``u_qualifier < QUALIFIED``, and the lowest
+    free number from 2 on in ``style`` (one of :data:`NUMBERING`) when the phrase is taken."""
     phrase = pick(PHRASES.get(object_type, (object_type.lower(),)), u_phrase)
     if u_qualifier < QUALIFIED:
         phrase = f"{phrase} {pick(QUALIFIERS, u_qualifier / QUALIFIED)}"

@@ -1,41 +1,32 @@
 """The room-clearing ``scout`` policy.
 
-Per room visit, the entry view plus three ``Turn(Right)`` sweep 360 degrees; then the
-scout decides, in this order:
+Per room visit, the entry view plus three ``Turn(Right)`` sweep 360 degrees; then the scout
+decides, in this order:
 
-1. every room of the prompt identified: in the last room, clear it as in rule 2;
-   otherwise ``Term``;
-2. **clear the room**: while it is not complete (rule 4), the visit has a clearing move
-   left and the budget affords one: ``Goto`` the object of the last sweep farthest from
-   every point this visit swept from, among those from which a known doorway lies no
-   farther than any doorway has yet been seen (so it can be seen again), and sweep again;
+1. every room of the prompt identified: in the last room, clear it as in rule 2; else ``Term``;
+2. **clear the room** while it is not complete, the visit has a clearing move left and the
+   budget affords one: ``Goto`` the object of the last sweep farthest from where this visit
+   swept, among those from which a known doorway can be seen again, and sweep again;
 3. an unused doorway seen during this visit (nearest first): face it, ``Goto`` through;
-4. **reposition**, while rooms remain unvisited, the visit has a reposition left and the
-   room is not complete (a doorway and every object of its inventory line seen during this
-   visit; a room it cannot identify is never complete): ``Goto`` an object of the last
-   sweep at least :data:`MIN_MOVE_M` away, not targeted before: the one nearest to an
-   unused doorway known to open from this room, else the one farthest from every point
-   this visit swept from; then sweep again;
-5. every doorway it knows of already used: ``Term`` (nothing left to try);
+4. **reposition** while rooms remain unvisited, the visit has a move left and the room is not
+   complete (a doorway and every object of its inventory line seen during this visit):
+   ``Goto`` an object of the last sweep, at least :data:`MIN_MOVE_M` away and not tried: the
+   one nearest to an unused doorway known to open from this room, else the one farthest from
+   where this visit swept; then sweep again;
+5. every doorway it knows of already used: ``Term``;
 6. the doorway of this visit used longest ago: back through it;
 7. otherwise ``Term``.
 
-A target still out of view after :data:`MAX_FACE_TRIES` turns towards it is given up and
-the decision is taken again; a doorway given up this way is first approached, if the visit
-has a reposition left, from the object of the last sweep nearest to it. Objects are visible
-within 3.3 m (1.65 m under ``low_light``) and furniture hides what stands behind it, so
-rules 2 and 4 walk the scout into a room's far parts, and darkness costs coverage *and*
-time, as the paper reports for real models.
+A target still out of view after :data:`MAX_FACE_TRIES` turns is given up (a doorway is
+first approached from the nearest object of the last sweep). Objects are visible within
+3.3 m and furniture occludes, so rules 2 and 4 walk the scout into a room's far parts, and
+darkness costs coverage *and* time, as the paper reports for real models. Term rule: the
+room where it discovered the most objects (ties: prompt order; none identified: the first).
 
-Term rule: the room where it discovered the most objects (ties: prompt order; with no room
-identified, as under ``no_inventory``, the first room listed).
-
-**Homing** (the ``mimic`` family's ``b`` knob): at rule 1, a homing scout not in the room
-the Term rule names walks back into it before ``Term``, as a responder leads people to the
-gathering room: through a known doorway of this room seen inside that room, else through
-one into a room from which such a doorway opens, sweeping each room it enters. The room is
-fixed when homing begins (``home``) and named on arrival, when no known doorway leads on, or
-at the budget's end. This gives the room re-entries that Spatial Identity Resolution needs.
+**Homing** (the ``mimic`` ``b`` knob): at rule 1 a homing scout walks back into the room the
+Term rule names (``home``, fixed when homing begins) through known doorways seen inside it,
+or into a room with such a doorway, sweeping each room it enters: the room re-entries that
+Spatial Identity Resolution needs.
 """
 
 from __future__ import annotations
@@ -145,9 +136,8 @@ def _clear(plan: dict[str, Any], briefing: Briefing, percept: Percept) -> bool:
 
 
 def _affordable(plan: Mapping[str, Any], briefing: Briefing, percept: Percept) -> bool:
-    """Whether a reposition (:data:`RESERVE` actions) leaves :data:`PER_ROOM` actions for
-    each room not yet visited, counting the scout's own actions (``acted``): a wasted step
-    (an unreadable reply, a planted invalid action) changes no decision."""
+    """Whether a reposition leaves :data:`PER_ROOM` actions per unvisited room, counting the
+    scout's own actions (``acted``): a wasted step (a planted invalid action) changes nothing."""
     left = percept.max_steps - plan["acted"] - RESERVE
     return left > PER_ROOM * (len(briefing.rooms) - len(plan["visited"]))
 

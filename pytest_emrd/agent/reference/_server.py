@@ -83,12 +83,8 @@ class _Server(ThreadingHTTPServer):
 
 
 class ReferenceServer:
-    """The reference endpoint on a background thread; use as a context manager.
-
-    ``port=0`` binds an ephemeral port; :attr:`base_url` is ``http://127.0.0.1:<port>/v1``.
-    ``latency_s`` is added to every completion, like a remote model's (requests are served
-    concurrently, so concurrent clients wait it out together).
-    """
+    """The reference endpoint on a background thread; use as a context manager. ``port=0``
+    binds an ephemeral port; ``latency_s`` is added to every completion, like a remote model's."""
 
     def __init__(
         self,

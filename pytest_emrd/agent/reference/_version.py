@@ -23,11 +23,8 @@ def versioned_id(name: str) -> str:
 
 
 def agent_name(model: str) -> str:
-    """The registry name in a requested ``model`` field (``scout@ref-3`` -> ``scout``).
-
-    A bare name (``scout``, as a person types it at ``emrd serve``) is accepted as the
-    current version; any other version raises :class:`ConfigError` naming both versions.
-    """
+    """The registry name in a requested ``model`` field (``scout@ref-3`` -> ``scout``); a bare
+    name is the current version, another version a :class:`ConfigError` naming both."""
     name, sep, version = model.partition(_SEP)
     if sep and version != REFERENCE_VERSION:
         raise ConfigError(
