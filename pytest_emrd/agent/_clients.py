@@ -288,13 +288,8 @@ def _sampling(config: ModelConfig) -> dict[str, Any]:
 
 
 def build_request(config: ModelConfig, messages: list[dict[str, Any]]) -> ProviderRequest:
-    """The path, headers (no key) and JSON body ``config``'s provider is sent for ``messages``.
-
-    OpenAI-compatible: ``model, messages, [temperature], [top_p], <max_tokens_param>``, then
-    ``extra_body``. Anthropic: ``model, system, messages, [sampling], max_tokens``, then
-    ``extra_body``, with ``anthropic-version`` (:data:`ANTHROPIC_VERSION` unless
-    ``extra_headers`` pins another). Key order is fixed: cassettes match on the body.
-    """
+    """The path, headers (no key) and JSON body ``config``'s provider is sent for ``messages``;
+    key order is fixed: cassettes match on the body."""
     if config.provider == "anthropic":
         system, converted = to_anthropic(messages)
         body = {"model": config.model_id, "system": system, "messages": converted}
@@ -311,18 +306,12 @@ def build_request(config: ModelConfig, messages: list[dict[str, Any]]) -> Provid
 def make_client(
     config: ModelConfig, *, policy: RetryPolicy | None = None, require_key: bool = True
 ) -> ChatClient:
-    """The client for ``config``; reference agents get the built-in server (started on demand).
-
-    Raises :class:`ConfigError` when the model's API-key variable is not set, unless
-    ``require_key=False`` (cassette replay: recorded requests carry no key anyway).
-    """
-    if config.provider == "anthropic":
-        return AnthropicClient(
-            config, base_url=config.base_url or "", policy=policy, require_key=require_key
-        )
+    """The client for ``config`` (reference agents: the built-in server, started on demand);
+    :class:`ConfigError` when the API-key variable is unset, unless ``require_key=False``."""
+    client = AnthropicClient if config.provider == "anthropic" else OpenAICompatibleClient
     base_url = config.base_url
-    if base_url is None:
+    if base_url is None:  # a reference agent (every other provider has one)
         from pytest_emrd.agent.reference import reference_base_url
 
         base_url = reference_base_url()
-    return OpenAICompatibleClient(config, base_url=base_url, policy=policy, require_key=require_key)
+    return client(config, base_url=base_url, policy=policy, require_key=require_key)

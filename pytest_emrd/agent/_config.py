@@ -192,14 +192,10 @@ def _check_extras(config: ModelConfig, where: str) -> None:
             f"(use the registry field of that name where there is one; allowed extra_body "
             f"keys are any others, e.g. reasoning_effort)."
         )
-    if config.provider == "openai":
-        body = config.extra_body
-        if "reasoning_effort" in body:
-            check_choice(
-                f"{where}: extra_body.reasoning_effort", body["reasoning_effort"], REASONING_EFFORTS
-            )
-        if "verbosity" in body:
-            check_choice(f"{where}: extra_body.verbosity", body["verbosity"], VERBOSITIES)
+    checked = {"reasoning_effort": REASONING_EFFORTS, "verbosity": VERBOSITIES}
+    for key, allowed in checked.items() if config.provider == "openai" else ():
+        if key in config.extra_body:
+            check_choice(f"{where}: extra_body.{key}", config.extra_body[key], allowed)
     for header, value in config.extra_headers.items():
         if header.lower() in _CREDENTIAL_HEADERS:
             raise ConfigError(
@@ -217,9 +213,8 @@ _FIELDS: Final = {f.name for f in fields(ModelConfig)}
 
 
 def _expand_env(value: Any, where: str, field_name: str) -> Any:
-    """``${VAR}`` / ``${VAR:-default}`` in a registry string (or in the strings of a mapping
-    or list, ``extra_body``), resolved from the environment; ``where`` names the file, line
-    and model in the error of an unset variable without a default."""
+    """``${VAR}`` / ``${VAR:-default}`` in a registry string (or in those of a mapping or list),
+    resolved from the environment."""
     if isinstance(value, dict):
         return {k: _expand_env(v, where, f"{field_name}.{k}") for k, v in value.items()}
     if isinstance(value, list):

@@ -81,14 +81,7 @@ _METRES_PER_UNIT: Final[dict[str, float]] = {
     **dict.fromkeys(("cm", "centimetre", "centimetres", "centimeter", "centimeters"), 0.01),
 }
 #: Keys under which an entry may give its position as a list ``[x, z]``.
-_POSITION_KEYS: Final[tuple[str, ...]] = (
-    "position",
-    "pos",
-    "xz",
-    "coords",
-    "coordinates",
-    "location",
-)
+_POSITION_KEYS: Final = ("position", "pos", "xz", "coords", "coordinates", "location")
 
 
 def _balanced_objects(text: str) -> list[tuple[int, int]]:

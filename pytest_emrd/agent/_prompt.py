@@ -139,11 +139,8 @@ def room_aliases(variant: str) -> dict[str, str]:
 
 
 def resolve_room(text: str, variant: str) -> str | None:
-    """Canonical room for a room name or alias as a model wrote it, or None.
-
-    Case, surrounding quotes and spaces are ignored; canonical names and slugs are
-    accepted under every variant (a model may name the physical room it saw).
-    """
+    """Canonical room for a room name or alias as a model wrote it (case, quotes and spaces
+    ignored; canonical names and slugs under every variant), or None."""
     key = " ".join(text.strip().strip("'\"`").split()).casefold()
     table = {alias.casefold(): room for alias, room in room_aliases(variant).items()}
     table.update({name.casefold(): name for name in rooms.ROOM_NAMES})
@@ -162,12 +159,9 @@ def _type_order(object_type: str) -> tuple[int, str]:
 
 
 def furniture_profile(room: str, counts: Mapping[str, int]) -> str:
-    """A room's furniture profile: ``a large conference table (DiningTable) + 8 chairs
-    (Chair), a wall-mounted television (Television)``; "nothing listed" when empty.
-
-    Items follow :data:`FURNITURE` order (unknown types last, by name, described by their type
-    name); chairs join the room's first table type with " + ". :func:`read_profile` inverts it.
-    """
+    """A room's furniture profile, ``a large conference table (DiningTable) + 8 chairs
+    (Chair), a wall-mounted television (Television)``, in :data:`FURNITURE` order (unknown
+    types last); "nothing listed" when empty. :func:`read_profile` inverts it."""
     items: dict[str, str] = {}
     for object_type in sorted((t for t, n in counts.items() if n > 0), key=_type_order):
         words = ROOM_FURNITURE.get((room, object_type)) or FURNITURE.get(object_type)
@@ -213,11 +207,7 @@ def build_system_prompt(
     max_steps: int = MAX_STEPS,
 ) -> str:
     """The system prompt for one episode: role, goals, building overview, actions, format.
-
-    ``inventory`` is room -> object type -> count (``Layout.inventory()``, doorways
-    excluded); rooms are the canonical names whatever the variant. ``modality`` words the
-    ``Goto`` action (types only under ``vision``) and what each step shows.
-    """
+    ``inventory`` is canonical room -> object type -> count (``Layout.inventory()``)."""
     check_choice("variant", variant, VARIANTS)
     check_choice("modality", modality, MODALITIES)
     actions = _ACTIONS.format(goto=_GOTO[modality != "vision"], seen=_SEEN[modality])
@@ -233,12 +223,8 @@ def step_text(
     feedback: str,
     visible: Sequence[VisibleObject] | None,
 ) -> str:
-    """The text part of the user message shown at step ``step`` (1-based).
-
-    ``feedback`` is the engine feedback, which ends with the one pose line
-    (``Pose: x=1.25 z=-0.50 heading=90.``); ``visible`` is the symbolic list (``text``/``both``
-    modality) or None (``vision``).
-    """
+    """The text part of the user message at step ``step`` (1-based): ``feedback`` ends with the
+    pose line; ``visible`` is the symbolic list (``text``/``both``) or None (``vision``)."""
     lines = [f"Step {step} of {max_steps}.", f"Engine feedback: {feedback}"]
     if visible is not None:
         lines.append(VISIBLE_HEADING)

@@ -32,11 +32,8 @@ _NAME = re.compile(rf"^{FAMILY}((?:-(?:spawn|[{''.join(KNOBS)}]\d+(?:\.\d+)?))+)
 
 
 def mimic_knobs(name: str) -> dict[str, Any] | None:
-    """Planted overrides a ``mimic-...`` name spells (None: not such a name).
-
-    ``mimic-s0.3-p0.5`` -> ``{"sigma": 0.3, "dup": 0.5}``; ``mimic-spawn`` ->
-    ``{"frame": "spawn"}``. A token given twice or a value out of range is a ConfigError.
-    """
+    """Planted overrides a ``mimic-...`` name spells (``mimic-s0.3-p0.5`` -> ``{"sigma": 0.3,
+    "dup": 0.5}``), None for another name; a knob given twice or out of range: ConfigError."""
     match = _NAME.match(name)
     if match is None:
         return None

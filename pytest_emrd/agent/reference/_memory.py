@@ -70,12 +70,9 @@ def apply_memory(
     draw: Callable[[str], float],
     expected: int | None = None,
 ) -> dict[str, Entry]:
-    """The entries the planted memory keeps this step (``memory`` already merged).
-
-    ``discovery`` lists every label ever discovered, in order of first discovery;
-    ``draw(label)`` is this step's uniform number for ``label``; ``expected`` is the
-    object total the prompt's inventory announces (None or 0: unknown).
-    """
+    """The entries the planted memory keeps this step (``memory`` already merged):
+    ``discovery`` lists labels in order of first discovery, ``draw(label)`` is this step's
+    uniform number, ``expected`` the inventory's object total (None or 0: unknown)."""
     kind = planted.get("memory", "perfect")
     if kind == "perfect":
         return memory

@@ -172,11 +172,6 @@ class _Writer:
         return out
 
 
-def _invalid_action(writer: _Writer, percept: Percept, u: float) -> str:
-    labels = [lb for s in percept.visible if (lb := writer.live_label(s.object_id))]
-    return pick(INVALID_ACTIONS, u).format(labels[0] if labels else "exit")
-
-
 def mimic_reply(
     planted: Mapping[str, Any],
     briefing: Briefing,
@@ -212,11 +207,13 @@ def mimic_reply(
 
     damaged = step("fail") < float(planted.get("fail", 0.0))
     invalid = not damaged and step("invalid") < float(planted.get("invalid", 0.0))
+    in_view = [lb for s in percept.visible if (lb := writer.live_label(s.object_id))]
     if invalid:
-        action = _invalid_action(writer, percept, step("invalid:which"))
+        action = pick(INVALID_ACTIONS, step("invalid:which")).format(
+            in_view[0] if in_view else "exit"
+        )
     if damaged or invalid:  # the world will not move: decide again from the same view
         state["nav"] = before
-    in_view = [lb for s in percept.visible if (lb := writer.live_label(s.object_id))]
     body = {
         "observation": f"I can see: {', '.join(in_view)}." if in_view else "Nothing new in view.",
         "dedup_check": f"{len(new)} new, {len(in_view) - len(new)} already in my map.",

@@ -83,12 +83,7 @@ COMMENTS: Final[tuple[str, ...]] = (
     "// it's the safest option for now",
 )
 #: Actions the world refuses (``{0}``: the label of an object in view, or ``the exit``).
-INVALID_ACTIONS: Final[tuple[str, ...]] = (
-    "MoveAhead",
-    "Goto(the {0})",
-    "Turn(Back)",
-    "Goto(nearest exit)",
-)
+INVALID_ACTIONS: Final = ("MoveAhead", "Goto(the {0})", "Turn(Back)", "Goto(nearest exit)")
 
 
 def pick(options: Sequence[str], u: float) -> str:
