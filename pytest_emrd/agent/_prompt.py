@@ -67,7 +67,7 @@ FURNITURE: Final[dict[str, tuple[str, str]]] = {
 }
 #: Descriptions that depend on the room (the Entrance's desk is the reception desk).
 ROOM_FURNITURE: Final[dict[tuple[str, str], tuple[str, str]]] = {
-    (rooms.ENTRANCE, "Desk"): ("reception desk", "reception desks"),
+    (rooms.ENTRANCE, "Desk"): ("reception desk", "reception desks")
 }
 _TABLES: Final = ("DiningTable", "Desk")
 _ITEM = re.compile(r"^(?:an?|(?P<n>\d+)) [^()]+ \((?P<type>[A-Za-z]+)\)$")
@@ -217,11 +217,7 @@ def build_system_prompt(
 
 
 def step_text(
-    *,
-    step: int,
-    max_steps: int,
-    feedback: str,
-    visible: Sequence[VisibleObject] | None,
+    *, step: int, max_steps: int, feedback: str, visible: Sequence[VisibleObject] | None
 ) -> str:
     """The text part of the user message at step ``step`` (1-based): ``feedback`` ends with the
     pose line; ``visible`` is the symbolic list (``text``/``both``) or None (``vision``)."""

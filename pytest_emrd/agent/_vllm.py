@@ -25,11 +25,8 @@ SERVED: Final[dict[str, tuple[int | None, int, tuple[str, ...]]]] = {
     "OpenGVLab/InternVL3-14B": (None, 1, ("--trust-remote-code",)),
 }
 """Per model, as the paper served it (Appendix C): ``--max-model-len`` (None: the model's
-default), GPUs (TP=4 on L4s; InternVL3-14B, which the paper ran on HF Transformers in INT8,
-on one GPU in BFloat16: the one stated departure) and model-specific flags:
-``trust_remote_code`` for Ovis2 and InternVL (vLLM's
-``examples/offline_inference/vision_language_multi_image.py``), the ``mistral`` tokenizer,
-config and load formats for Pixtral-12B-2409 (Mistral's vLLM deployment guide)."""
+default), GPUs, and flags (``trust_remote_code`` as in vLLM's multi-image example; Pixtral's
+``mistral`` formats as in Mistral's vLLM guide)."""
 IMAGE_LIMIT_FLAG: Final = f"--limit-mm-per-prompt '{{\"image\": {HISTORY_TURNS}}}'"
 
 

@@ -80,13 +80,8 @@ class RequestError(ProtocolError):
 
 def _usage(messages: list[dict[str, Any]], reply: str) -> dict[str, int]:
     chars = sum(len(message_text(m)) for m in messages)
-    images = sum(
-        1
-        for m in messages
-        if isinstance(m.get("content"), list)
-        for p in m["content"]
-        if p.get("type") == "image_url"
-    )
+    parts = [p for m in messages if isinstance(m.get("content"), list) for p in m["content"]]
+    images = sum(p.get("type") == "image_url" for p in parts)
     prompt = chars // CHARS_PER_TOKEN + TOKENS_PER_IMAGE * images
     completion = len(reply) // CHARS_PER_TOKEN
     return {

@@ -133,10 +133,8 @@ class _Writer:
             return
         x, z = self.position(object_id, entry)
         self.map[label].update(x=x, z=z, type=type_word(entry["type"]), room=room)
-        self.map[self._new_label(entry["type"], f"{object_id}:{visit}")] = {
-            "id": object_id,
-            "visit": visit,
-        }
+        label = self._new_label(entry["type"], f"{object_id}:{visit}")
+        self.map[label] = {"id": object_id, "visit": visit}
 
     def hallucinate(self, percept: Percept, room: str, step: Draw) -> None:
         if step("halluc") >= float(self.planted.get("halluc", 0.0)):
