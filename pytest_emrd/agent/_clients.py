@@ -237,12 +237,10 @@ class OpenAICompatibleClient(_HttpClient):
 def _anthropic_part(part: dict[str, Any]) -> dict[str, Any]:
     if part.get("type") == "image_url":
         url = part["image_url"]["url"]
-        if url.startswith(frames.PIXELS):  # a replay: the frame by its digest, as stored
-            data = url
-        elif url.startswith(JPEG_DATA_URL):
-            data = url.removeprefix(JPEG_DATA_URL)
-        else:
+        # a replay sends the frame by its pixel digest, as the cassette stores it
+        if not url.startswith((JPEG_DATA_URL, frames.PIXELS)):
             raise ConfigError(f"image url {url[:40]!r}... is not a base64 JPEG data URL.")
+        data = url.removeprefix(JPEG_DATA_URL)
         return {
             "type": "image",
             "source": {"type": "base64", "media_type": "image/jpeg", "data": data},

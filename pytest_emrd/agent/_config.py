@@ -164,14 +164,9 @@ def _check_base_url(config: ModelConfig, where: str) -> None:
 def _credential_fields(body: Any, path: str = "extra_body") -> list[tuple[str, Any]]:
     """``(dotted path, value)`` of every field of ``body`` whose name looks like a credential."""
     found: list[tuple[str, Any]] = []
-    items = (
-        body.items()
-        if isinstance(body, dict)
-        else enumerate(body)
-        if isinstance(body, list)
-        else ()
-    )
-    for key, value in items:
+    if isinstance(body, list):
+        body = dict(enumerate(body))
+    for key, value in body.items() if isinstance(body, dict) else ():
         at = f"{path}.{key}" if isinstance(key, str) else f"{path}[{key}]"
         if isinstance(key, str) and _CREDENTIAL_FIELD.search(key):
             found.append((at, value))
@@ -264,11 +259,7 @@ def _at(source: str, lines: Lines, name: str, field_name: str | None = None) -> 
     return f"{source}, line {line}" if line else source
 
 
-def _build(name: str, entry: Any, source: str, lines: Lines) -> ModelConfig:
-    if not isinstance(entry, dict):
-        raise ConfigError(
-            f"{_at(source, lines, name)}: model {name!r} must be a mapping of fields."
-        )
+def _build(name: str, entry: dict[str, Any], source: str, lines: Lines) -> ModelConfig:
     check_slug(
         _at(source, lines, name),
         name,

@@ -92,12 +92,9 @@ class ReferenceServer(ThreadingHTTPServer):
         super().__init__((host, port), _Handler)
 
     @property
-    def port(self) -> int:
-        return int(self.server_address[1])
-
-    @property
     def base_url(self) -> str:
-        return f"http://{self.server_address[0]}:{self.port}/v1"
+        host, port = self.server_address[:2]
+        return f"http://{host}:{port}/v1"
 
     def start(self) -> ReferenceServer:
         if self._thread is None:
