@@ -16,9 +16,10 @@ import contextlib
 import os
 import socket
 import threading
+import time
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any, Final, Protocol
+from typing import Any, Protocol
 
 import httpx
 
@@ -74,28 +75,33 @@ def endpoint_url(base_url: str, path: str) -> str:
     return str(base.copy_with(path=base.path.rstrip("/") + path))
 
 
-_STREAM_EVENTS: Final = ("connection.connect_tcp.complete", "connection.start_tls.complete")
-
-
 class _Deadline:
     """One attempt's deadline: when it passes, the attempt's connection is shut down (a read
-    blocked on it returns at once)."""
+    blocked on it returns at once). The timer starts with the first connection, so a replay,
+    which never connects, starts no thread."""
+
+    _STREAM_EVENTS = ("connection.connect_tcp.complete", "connection.start_tls.complete")
 
     def __init__(self, seconds: float) -> None:
+        self.end = time.monotonic() + seconds
         self.expired = False
         self._lock = threading.Lock()
         self._sock: socket.socket | None = None
-        self._timer = threading.Timer(seconds, self.expire)
-        self._timer.daemon = True
-        self._timer.start()
+        self._timer: threading.Timer | None = None
 
     def trace(self, event: str, info: dict[str, Any]) -> None:
         """httpcore's ``trace`` extension: keep the newest socket of the attempt."""
-        if event in _STREAM_EVENTS and info.get("return_value") is not None:
-            with self._lock:
-                self._sock = info["return_value"].get_extra_info("socket")
-            if self.expired:  # connected after the deadline passed
-                self.expire()
+        if event not in self._STREAM_EVENTS or info.get("return_value") is None:
+            return
+        sock = info["return_value"].get_extra_info("socket")
+        with self._lock:
+            self._sock = sock
+            if self._timer is None and not self.expired:
+                self._timer = threading.Timer(max(0.0, self.end - time.monotonic()), self.expire)
+                self._timer.daemon = True
+                self._timer.start()
+        if self.expired or time.monotonic() >= self.end:
+            self.expire()
 
     def expire(self) -> None:
         with self._lock:
@@ -105,7 +111,9 @@ class _Deadline:
                 sock.shutdown(socket.SHUT_RDWR)
 
     def cancel(self) -> None:
-        self._timer.cancel()
+        with self._lock:
+            if self._timer is not None:
+                self._timer.cancel()
 
 
 class DeadlineTransport(httpx.BaseTransport):
@@ -185,14 +193,17 @@ class _HttpClient:
         self.policy = policy or RetryPolicy(max_retries=config.max_retries)
         self._key = _api_key(config, required=require_key)
         self._http = _http_client(config.timeout_s, transport)
+        self._urls: dict[str, str] = {}
 
     def complete(self, messages: list[dict[str, Any]]) -> ChatResponse:
         """Send :func:`build_request` for ``messages`` (plus the key) and read the reply."""
         request = build_request(self.config, messages)
         headers = request.headers | self._auth(self._key) if self._key else request.headers
+        if request.path not in self._urls:
+            self._urls[request.path] = endpoint_url(self.base_url, request.path)
         return post_json(
             self._http,
-            endpoint_url(self.base_url, request.path),
+            self._urls[request.path],
             body=request.body,
             headers=headers,
             policy=self.policy,

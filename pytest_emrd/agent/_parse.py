@@ -68,6 +68,7 @@ _STRING = r"\"(?:[^\"\\]|\\.)*\"|'(?:[^'\\]|\\.)*'"
 _COMMENT = r"//[^\n]*|/\*.*?(?:\*/|\Z)"
 #: Inside an object: a string (skipped whole), a comment (skipped) or a brace.
 _INSIDE = re.compile(rf"{_STRING}|{_COMMENT}|[{{}}]", re.DOTALL)
+_DECODER = json.JSONDecoder()
 _COMMENTS = re.compile(rf"({_STRING})|{_COMMENT}", re.DOTALL)
 _TRAILING_COMMAS = re.compile(rf"({_STRING})|,(?=\s*[}}\]])", re.DOTALL)
 #: A coordinate written as text: a number (decimal point or comma), then maybe a metric unit.
@@ -84,6 +85,17 @@ _METRES_PER_UNIT: Final[dict[str, float]] = {
 _POSITION_KEYS: Final = ("position", "pos", "xz", "coords", "coordinates", "location")
 
 
+def _json_end(text: str, start: int) -> int | None:
+    """Where the JSON object starting at ``start`` ends, if it is valid JSON. Its span is then
+    the one the token scan of :func:`_balanced_objects` finds (JSON strings are the scan's
+    double-quoted strings, and JSON has no other quote, no comment, no unpaired brace), at C
+    speed: most replies are valid JSON, in a fence or after prose or not."""
+    try:
+        return _DECODER.raw_decode(text, start)[1]
+    except (ValueError, RecursionError):
+        return None
+
+
 def _balanced_objects(text: str) -> list[tuple[int, int]]:
     """``(start, end)`` of every top-level ``{...}`` span of ``text``. Inside an object, strings
     (both quote kinds) and comments are skipped whole, so a brace or an apostrophe in them
@@ -91,6 +103,11 @@ def _balanced_objects(text: str) -> list[tuple[int, int]]:
     spans: list[tuple[int, int]] = []
     start = text.find("{")
     while start >= 0:
+        end = _json_end(text, start)
+        if end is not None:
+            spans.append((start, end))
+            start = text.find("{", end)
+            continue
         depth, at = 1, start + 1
         while depth and (token := _INSIDE.search(text, at)) is not None:
             at = token.end()

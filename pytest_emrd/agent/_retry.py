@@ -10,6 +10,7 @@ on ``pytest_emrd.agent.retry`` at WARNING (docs/user-guide/recording.md) with th
 from __future__ import annotations
 
 import email.utils
+import functools
 import logging
 import random
 import time
@@ -87,6 +88,14 @@ def _excerpt(response: httpx.Response) -> str:
     return text[:_BODY_EXCERPT] + ("..." if len(text) > _BODY_EXCERPT else "")
 
 
+@functools.lru_cache(maxsize=64)
+def _parsed(url: str) -> tuple[httpx.URL, str]:
+    """``url`` parsed once (a client posts to one or two URLs), and as logged: without
+    userinfo or query, either of which may carry a credential."""
+    parsed = httpx.URL(url)
+    return parsed, str(parsed.copy_with(userinfo=b"", query=None, fragment=None))
+
+
 def _attempt(http: httpx.Client, request: httpx.Request, url: str, read: Callable[[Any], Any]):
     """One POST: the read result, :class:`_Retryable`, or a non-retried TransportError."""
     try:
@@ -125,14 +134,14 @@ def post_json(
     naming the URL, the attempts and the last cause, with ``secrets`` masked."""
     given = {name.lower() for name in headers}
     defaults = {k: v for k, v in _DEFAULT_HEADERS.items() if k.lower() not in given}
+    target, shown = _parsed(url)
     request = httpx.Request(
         "POST",
-        url,
+        target,
         content=encode_body(body),
         headers=defaults | headers,
         extensions={"timeout": http.timeout.as_dict()},
     )
-    shown = str(httpx.URL(url).copy_with(userinfo=b"", query=None, fragment=None))
     values = [s for s in secrets if s]
 
     def mask(text: str) -> str:

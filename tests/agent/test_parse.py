@@ -280,3 +280,35 @@ def test_well_formed_maps_round_trip(cmap: dict, wrapping: str) -> None:
     assert [(e.label, e.x, e.z) for e in reply.cognitive_map] == [
         (k.strip(), v["x"], v["z"]) for k, v in cmap.items()
     ]
+
+
+_JSON_VALUES = st.recursive(
+    st.none() | st.booleans() | st.floats(allow_nan=False) | st.text(max_size=8),
+    lambda inner: st.lists(inner, max_size=3) | st.dictionaries(st.text(max_size=6), inner),
+    max_leaves=12,
+)
+_PIECES = st.lists(
+    st.one_of(
+        st.dictionaries(st.text(max_size=6), _JSON_VALUES, max_size=4).map(json.dumps),
+        st.sampled_from(["{", "}", "```json\n", "\n```", "'", '"', "// c\n", "/* c */", ",}"]),
+        st.text(max_size=12),
+    ),
+    max_size=6,
+)
+
+
+@given(_PIECES.map("".join))
+def test_valid_json_spans_are_found_as_the_token_scan_finds_them(text: str) -> None:
+    """The span of an object that is valid JSON is taken from the JSON decoder; it must be the
+    span the brace-and-string token scan finds, on any mix of JSON, prose, fences, stray
+    quotes, braces and comments (the scan alone is the oracle)."""
+    from pytest_emrd.agent import _parse
+
+    fast = _parse._balanced_objects(text)
+    decode = _parse._json_end
+    try:
+        _parse._json_end = lambda text, start: None  # type: ignore[assignment]
+        scanned = _parse._balanced_objects(text)
+    finally:
+        _parse._json_end = decode
+    assert fast == scanned
