@@ -1,23 +1,13 @@
 """Model clients on httpx (which vcrpy patches): OpenAI-compatible and Anthropic Messages.
 
-Request bodies depend only on the configuration and the messages: no timestamps, no
-request ids, no secrets (keys travel in headers, which cassettes strip). What is sent is
-:func:`build_request`: a pure function the conformance tests validate against each
-provider's published request schema. Sampling fields set to None are left out (the
-provider's default); ``extra_body`` and ``extra_headers`` are passed through as written.
-
-The endpoint URL is ``base_url`` with the endpoint path appended to its path, its query kept
-(``https://x.openai.azure.com/openai/v1?api-version=2025-04-01`` posts to
-``.../openai/v1/chat/completions?api-version=2025-04-01``). ``timeout_s`` is a deadline on
-each attempt, connect to last byte: :class:`DeadlineTransport` shuts the connection down
-when it passes, so a server dripping its reply a byte at a time cannot hold a request open.
-
-Why not the official SDKs (``anthropic`` 2.10, ``openai`` 3.51, both on ``httpx2``, which
-vcrpy 9.4 also records): their retry loop obeys ``Retry-After`` without a cap (anthropic
-2.10 ``_calculate_retry_timeout``: up to 2**32 ms), draws jitter from the global ``random``
-and logs nothing on our logger; they would bring two request paths and pydantic, anyio and
-opentelemetry for bodies that are plain JSON. The conformance tests validate our bodies
-against the SDK's own request type instead: the guarantee stays, the runtime does not.
+Request bodies depend only on the configuration and the messages (:func:`build_request`, which
+the conformance tests validate against each provider's published request schema): no
+timestamps, request ids or secrets (keys travel in headers, which cassettes strip).
+``timeout_s`` is a deadline on each attempt, connect to last byte: :class:`DeadlineTransport`
+shuts the connection down when it passes, so a server dripping its reply cannot hold a
+request open. Not the official SDKs: their retry loop obeys ``Retry-After`` without a cap and
+logs nothing on our logger, and they would bring a second request path and pydantic for
+bodies that are plain JSON.
 """
 
 from __future__ import annotations
@@ -27,6 +17,7 @@ import os
 import socket
 import threading
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any, Protocol
 
@@ -45,7 +36,6 @@ class ProviderRequest:
     """One request as it goes on the wire, less the API key (added by the client)."""
 
     path: str
-    """Appended to ``base_url``: ``/chat/completions`` or ``/v1/messages``."""
     headers: dict[str, str]
     body: dict[str, Any]
 
@@ -79,7 +69,8 @@ def _api_key(config: ModelConfig, *, required: bool) -> str | None:
 
 
 def endpoint_url(base_url: str, path: str) -> str:
-    """``base_url`` with ``path`` appended to its path, query and fragment kept."""
+    """``base_url`` with ``path`` appended to its path, query and fragment kept
+    (``https://x.azure.com/v1?api-version=1`` -> ``.../v1/chat/completions?api-version=1``)."""
     base = httpx.URL(base_url)
     return str(base.copy_with(path=base.path.rstrip("/") + path))
 
@@ -166,10 +157,9 @@ class DeadlineTransport(httpx.BaseTransport):
 
 
 def _http_client(timeout_s: float, transport: httpx.BaseTransport | None) -> httpx.Client:
-    """The httpx client of a model: ``transport`` as given (tests), else httpx's transports
-    (environment proxies included) each under a :class:`DeadlineTransport`, with no
-    keep-alive, so that every attempt's connection is its own and can be shut at its
-    deadline."""
+    """The httpx client of a model: ``transport`` as given, else httpx's transports (proxies
+    included) under :class:`DeadlineTransport`, without keep-alive so that each attempt's
+    connection is its own and can be shut at its deadline."""
     timeout = httpx.Timeout(timeout_s)
     if transport is not None:
         return httpx.Client(timeout=timeout, transport=transport)
@@ -183,7 +173,11 @@ def _http_client(timeout_s: float, transport: httpx.BaseTransport | None) -> htt
 
 
 class _HttpClient:
-    """What both providers share: one httpx client, a retry policy, the API key."""
+    """One httpx client, a retry policy and the API key; a subclass gives ``_auth`` (the key's
+    header) and ``_read`` (reply text and usage from the decoded response)."""
+
+    _auth: Callable[[str], dict[str, str]]
+    _read: Callable[[Any], ChatResponse]
 
     def __init__(
         self,
@@ -201,26 +195,15 @@ class _HttpClient:
         self._http = _http_client(config.timeout_s, transport)
         self._urls: dict[str, str] = {}
 
-    @staticmethod
-    def _auth(key: str) -> dict[str, str]:
-        """The header carrying ``key`` (provider-specific)."""
-        raise NotImplementedError
-
-    @staticmethod
-    def _read(data: Any) -> ChatResponse:
-        """The reply text and usage from the decoded response (provider-specific)."""
-        raise NotImplementedError
-
     def complete(self, messages: list[dict[str, Any]]) -> ChatResponse:
         """Send :func:`build_request` for ``messages`` (plus the key) and read the reply."""
         request = build_request(self.config, messages)
         headers = request.headers | self._auth(self._key) if self._key else request.headers
-        url = self._urls.get(request.path)
-        if url is None:
-            url = self._urls[request.path] = endpoint_url(self.base_url, request.path)
+        if request.path not in self._urls:
+            self._urls[request.path] = endpoint_url(self.base_url, request.path)
         return post_json(
             self._http,
-            url,
+            self._urls[request.path],
             body=request.body,
             headers=headers,
             policy=self.policy,
@@ -265,12 +248,10 @@ class OpenAICompatibleClient(_HttpClient):
 def _anthropic_part(part: dict[str, Any]) -> dict[str, Any]:
     if part.get("type") == "image_url":
         url = part["image_url"]["url"]
-        if url.startswith(frames.PIXELS):  # a replay: the frame by its digest, as stored
-            data = url
-        elif url.startswith(JPEG_DATA_URL):
-            data = url.removeprefix(JPEG_DATA_URL)
-        else:
+        # a replay sends the frame by its pixel digest, as the cassette stores it
+        if not url.startswith((JPEG_DATA_URL, frames.PIXELS)):
             raise ConfigError(f"image url {url[:40]!r}... is not a base64 JPEG data URL.")
+        data = url.removeprefix(JPEG_DATA_URL)
         return {
             "type": "image",
             "source": {"type": "base64", "media_type": "image/jpeg", "data": data},
@@ -278,16 +259,16 @@ def _anthropic_part(part: dict[str, Any]) -> dict[str, Any]:
     return {"type": "text", "text": part["text"]}
 
 
-def _anthropic_message(message: dict[str, Any]) -> dict[str, Any]:
-    content = message["content"]
-    parts = [_anthropic_part(p) for p in content] if isinstance(content, list) else content
-    return {"role": message["role"], "content": parts}
-
-
 def to_anthropic(messages: list[dict[str, Any]]) -> tuple[str, list[dict[str, Any]]]:
     """(system prompt, Messages-API messages) from OpenAI-format messages."""
     system = "\n\n".join(m["content"] for m in messages if m["role"] == "system")
-    return system, [_anthropic_message(m) for m in messages if m["role"] != "system"]
+    converted = []
+    for message in messages:
+        if message["role"] != "system":
+            content = message["content"]
+            parts = [_anthropic_part(p) for p in content] if isinstance(content, list) else content
+            converted.append({"role": message["role"], "content": parts})
+    return system, converted
 
 
 def _read_anthropic(data: Any) -> ChatResponse:
@@ -316,13 +297,8 @@ def _sampling(config: ModelConfig) -> dict[str, Any]:
 
 
 def build_request(config: ModelConfig, messages: list[dict[str, Any]]) -> ProviderRequest:
-    """The path, headers (no key) and JSON body ``config``'s provider is sent for ``messages``.
-
-    OpenAI-compatible: ``model, messages, [temperature], [top_p], <max_tokens_param>``, then
-    ``extra_body``. Anthropic: ``model, system, messages, [sampling], max_tokens``, then
-    ``extra_body``, with ``anthropic-version`` (:data:`ANTHROPIC_VERSION` unless
-    ``extra_headers`` pins another). Key order is fixed: cassettes match on the body.
-    """
+    """The path, headers (no key) and JSON body ``config``'s provider is sent for ``messages``;
+    key order is fixed: cassettes match on the body."""
     if config.provider == "anthropic":
         system, converted = to_anthropic(messages)
         body = {"model": config.model_id, "system": system, "messages": converted}
@@ -339,18 +315,12 @@ def build_request(config: ModelConfig, messages: list[dict[str, Any]]) -> Provid
 def make_client(
     config: ModelConfig, *, policy: RetryPolicy | None = None, require_key: bool = True
 ) -> ChatClient:
-    """The client for ``config``; reference agents get the built-in server (started on demand).
-
-    Raises :class:`ConfigError` when the model's API-key variable is not set, unless
-    ``require_key=False`` (cassette replay: recorded requests carry no key anyway).
-    """
-    if config.provider == "anthropic":
-        return AnthropicClient(
-            config, base_url=config.base_url or "", policy=policy, require_key=require_key
-        )
+    """The client for ``config`` (reference agents: the built-in server, started on demand);
+    :class:`ConfigError` when the API-key variable is unset, unless ``require_key=False``."""
+    client = AnthropicClient if config.provider == "anthropic" else OpenAICompatibleClient
     base_url = config.base_url
-    if base_url is None:
+    if base_url is None:  # a reference agent (every other provider has one)
         from pytest_emrd.agent.reference import reference_base_url
 
         base_url = reference_base_url()
-    return OpenAICompatibleClient(config, base_url=base_url, policy=policy, require_key=require_key)
+    return client(config, base_url=base_url, policy=policy, require_key=require_key)

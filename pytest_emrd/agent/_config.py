@@ -1,16 +1,11 @@
 """Model registry: which models exist, how to reach them and how they decode.
 
-The registry ships as ``models.yaml`` next to this module (the paper's Table "Inference
-Hyperparameters" for the seven VLMs, plus the built-in reference agents) and may be
-extended or overridden by a user file: an entry whose name already exists updates the
-shipped fields it names, a new name adds a model.
-
-Reference agents with planted parameters resolve from their name, without a YAML entry
-each: ``scout``, ``scout-decay-<mean steps>``, ``scout-window-<k>``, ``scout-serial``,
-``prior``, ``mimic``, ``mimic-<knobs>`` (:mod:`pytest_emrd.agent.reference._knobs`). A
-reference agent's ``model_id`` is its name (or the ``model_id`` of its entry) with the
-behaviour version appended, ``scout@ref-3`` (see
-:mod:`pytest_emrd.agent.reference._version`), so cassettes of older behaviour fail as drift.
+The registry ships as ``models.yaml`` next to this module and may be extended or overridden
+by a user file, field by field (docs/reference/registry.md). Reference agents with planted
+parameters resolve from their name, without a YAML entry each (``scout-decay-<mean steps>``,
+``scout-window-<k>``, ``mimic-<knobs>``); a reference agent's ``model_id`` carries the
+behaviour version, ``scout@ref-3`` (:mod:`pytest_emrd.agent.reference._version`), so
+cassettes of older behaviour fail as drift.
 """
 
 from __future__ import annotations
@@ -36,26 +31,16 @@ from pytest_emrd.trajectory import MODALITIES
 PROVIDERS: Final[tuple[str, ...]] = ("openai", "anthropic", "reference")
 
 ANTHROPIC_VERSION: Final = "2026-10-21"
-"""``anthropic-version`` sent to the Messages API: the current version (released 2026-10-21
-with the official SDKs' new majors, e.g. ``anthropic`` 2.0.0; 2.10.0 still sends it). It
-answers HTTP 400 to ``temperature``, ``top_p`` and ``top_k``, even at their defaults."""
+"""``anthropic-version`` sent to the Messages API; it answers HTTP 400 to ``temperature``,
+``top_p`` and ``top_k``, even at their defaults (sources: the header of ``models.yaml``)."""
 LEGACY_ANTHROPIC_VERSION: Final = "2023-06-01"
 """The previous version, which still accepts sampling parameters (``temperature`` in [0, 1])."""
 SAMPLING_FIELDS: Final[tuple[str, ...]] = ("temperature", "top_p")
 """Registry fields that are sent only when set; ``null`` means "provider default"."""
-REASONING_EFFORTS: Final[tuple[str, ...]] = (
-    "none",
-    "minimal",
-    "low",
-    "medium",
-    "high",
-    "xhigh",
-    "max",
-)
-"""``reasoning_effort`` values of ``CreateChatCompletionRequest`` (OpenAI OpenAPI spec,
-github:openai/openai-openapi commit f85dbe2, 2026-08-21); not every model takes every value."""
-VERBOSITIES: Final[tuple[str, ...]] = ("low", "medium", "high")
-"""``verbosity`` values of ``CreateChatCompletionRequest`` (same source)."""
+REASONING_EFFORTS: Final = ("none", "minimal", "low", "medium", "high", "xhigh", "max")
+"""``reasoning_effort`` and ``verbosity`` values of ``CreateChatCompletionRequest`` (OpenAI
+OpenAPI spec, github:openai/openai-openapi commit f85dbe2, 2026-08-21)."""
+VERBOSITIES: Final = ("low", "medium", "high")
 MAX_TOKENS_PARAMS: Final[tuple[str, ...]] = ("max_tokens", "max_completion_tokens")
 _CLIENT_BODY_KEYS: Final = frozenset(
     {"model", "messages", "system", "max_tokens", "max_completion_tokens", "stream", "top_k"}
@@ -68,8 +53,6 @@ _CREDENTIAL_FIELD: Final = re.compile(
 )
 """``extra_body`` field names that look like credentials (``api_key``, ``access_token``,
 ``client_secret``): their value must be an environment variable reference, ``${VAR}``."""
-_AUTH_HEADER: Final = {"anthropic": "x-api-key header"}
-"""How each provider sends the key (default: a Bearer token in the Authorization header)."""
 
 _ENV_REF = re.compile(r"\$\{(?P<var>[A-Z_][A-Z0-9_]*)(?::-(?P<default>[^}]*))?\}")
 _DECAY = re.compile(r"^scout-decay-(?P<mean>\d+(?:\.\d+)?)$")
@@ -78,51 +61,29 @@ _WINDOW = re.compile(r"^scout-window-(?P<k>\d+)$")
 
 @dataclass(frozen=True)
 class ModelConfig:
-    """One model as the episode loop and the clients see it."""
+    """One model as the episode loop and the clients see it. Every field, its default and
+    meaning: docs/reference/registry.md (a test keeps that table complete)."""
 
     name: str
-    """Registry name (``gemini``, ``scout-decay-8``); also the cassette folder."""
     provider: str
-    """``openai`` (any OpenAI-compatible endpoint), ``anthropic`` or ``reference``."""
     model_id: str
-    """The ``model`` field sent to the endpoint (``<name>@<version>`` for reference agents)."""
     base_url: str | None = None
-    """Endpoint root (``https://api.openai.com/v1``); None: the built-in reference server."""
     api_key_env: str | None = None
-    """Environment variable holding the API key; None sends no key."""
     api_key_required: bool = True
-    """False: send the key when its variable is set, else none (a vLLM server may or may
-    not have been started with ``--api-key``)."""
     temperature: float | None = 0.0
-    """Sampling temperature; None sends none (the provider's default)."""
     top_p: float | None = None
-    """Nucleus sampling mass; None (the default) sends none."""
     max_tokens: int = 4096
     single_image: bool = False
-    """Send only the newest frame as an image; earlier frames travel as text."""
     modality: str = "vision"
-    """Default modality of this model's episodes: ``vision``, ``text`` or ``both``."""
     timeout_s: float = 120.0
-    """Deadline of one request attempt in seconds, connect to last byte (a server that
-    drips its reply slowly is cut off at it too)."""
     max_retries: int = 4
-    """Retries after the first attempt on 429, 5xx, transport errors and garbage bodies."""
     price_per_mtok_in: float | None = None
-    """USD per million prompt tokens, for cost estimates; None if unknown."""
     price_per_mtok_out: float | None = None
     image_tokens: int = 255
-    """Prompt tokens one 512x512 frame costs at this provider, for estimates before a probe
-    measures it (255: one OpenAI high-detail tile)."""
     max_tokens_param: str = "max_tokens"
-    """Body key carrying ``max_tokens`` (``max_completion_tokens`` for newer OpenAI models)."""
     extra_body: dict[str, Any] = field(default_factory=dict)
-    """Provider-specific body fields sent as written (``{"reasoning_effort": "none"}``); a
-    field named like a credential must be written ``${VAR}`` (its value is then scrubbed
-    from every file and log, as the API key is)."""
     extra_headers: dict[str, str] = field(default_factory=dict)
-    """Extra request headers (``{"anthropic-version": "2023-06-01"}``); never credentials."""
     planted: dict[str, Any] = field(default_factory=dict)
-    """Planted cognition of a reference agent (``{"memory": "decay", "mean_steps": 8.0}``)."""
 
     def __post_init__(self) -> None:
         where = f"model {self.name!r}"
@@ -191,7 +152,8 @@ def _check_base_url(config: ModelConfig, where: str) -> None:
             "URL with a host, e.g. https://api.example.com/v1."
         )
     if "@" in parts.netloc:
-        header = _AUTH_HEADER.get(config.provider, "Authorization header, as a Bearer token")
+        anthropic = config.provider == "anthropic"
+        header = "x-api-key header" if anthropic else "Authorization header, as a Bearer token"
         raise ConfigError(
             f"{where}: base_url carries a user name or password before '@' "
             f"({scrub(config.base_url or '')}); remove it: the key goes in the environment "
@@ -202,14 +164,9 @@ def _check_base_url(config: ModelConfig, where: str) -> None:
 def _credential_fields(body: Any, path: str = "extra_body") -> list[tuple[str, Any]]:
     """``(dotted path, value)`` of every field of ``body`` whose name looks like a credential."""
     found: list[tuple[str, Any]] = []
-    items = (
-        body.items()
-        if isinstance(body, dict)
-        else enumerate(body)
-        if isinstance(body, list)
-        else ()
-    )
-    for key, value in items:
+    if isinstance(body, list):
+        body = dict(enumerate(body))
+    for key, value in body.items() if isinstance(body, dict) else ():
         at = f"{path}.{key}" if isinstance(key, str) else f"{path}[{key}]"
         if isinstance(key, str) and _CREDENTIAL_FIELD.search(key):
             found.append((at, value))
@@ -230,14 +187,10 @@ def _check_extras(config: ModelConfig, where: str) -> None:
             f"(use the registry field of that name where there is one; allowed extra_body "
             f"keys are any others, e.g. reasoning_effort)."
         )
-    if config.provider == "openai":
-        body = config.extra_body
-        if "reasoning_effort" in body:
-            check_choice(
-                f"{where}: extra_body.reasoning_effort", body["reasoning_effort"], REASONING_EFFORTS
-            )
-        if "verbosity" in body:
-            check_choice(f"{where}: extra_body.verbosity", body["verbosity"], VERBOSITIES)
+    checked = {"reasoning_effort": REASONING_EFFORTS, "verbosity": VERBOSITIES}
+    for key, allowed in checked.items() if config.provider == "openai" else ():
+        if key in config.extra_body:
+            check_choice(f"{where}: extra_body.{key}", config.extra_body[key], allowed)
     for header, value in config.extra_headers.items():
         if header.lower() in _CREDENTIAL_HEADERS:
             raise ConfigError(
@@ -255,9 +208,8 @@ _FIELDS: Final = {f.name for f in fields(ModelConfig)}
 
 
 def _expand_env(value: Any, where: str, field_name: str) -> Any:
-    """``${VAR}`` / ``${VAR:-default}`` in a registry string (or in the strings of a mapping
-    or list, ``extra_body``), resolved from the environment; ``where`` names the file, line
-    and model in the error of an unset variable without a default."""
+    """``${VAR}`` / ``${VAR:-default}`` in a registry string (or in those of a mapping or list),
+    resolved from the environment."""
     if isinstance(value, dict):
         return {k: _expand_env(v, where, f"{field_name}.{k}") for k, v in value.items()}
     if isinstance(value, list):
@@ -307,11 +259,7 @@ def _at(source: str, lines: Lines, name: str, field_name: str | None = None) -> 
     return f"{source}, line {line}" if line else source
 
 
-def _build(name: str, entry: Any, source: str, lines: Lines) -> ModelConfig:
-    if not isinstance(entry, dict):
-        raise ConfigError(
-            f"{_at(source, lines, name)}: model {name!r} must be a mapping of fields."
-        )
+def _build(name: str, entry: dict[str, Any], source: str, lines: Lines) -> ModelConfig:
     check_slug(
         _at(source, lines, name),
         name,

@@ -1,22 +1,10 @@
 """The conversation a model is sent each step: a sliding window over the episode.
 
-Appendix C: the context keeps the system prompt plus the last 10 dialogue turns; when it
-grows past 21 messages the oldest user/assistant pairs are dropped, never the system
-prompt. A turn is one user message and the model's reply, and the step being asked is
-the newest (still unanswered) turn, so a request carries the system prompt, at most 9
-answered turns and the current user message.
-
-``single_image`` mode (the paper's Claude setting: "only the latest frame is sent as an
-image; prior frames are converted to text-only summaries"): the current frame is the one
-image of every request; an earlier frame travels as its summary, which is the model's own
-``observation`` text of that step (:data:`FRAME_SUMMARY`, read with
-:func:`~pytest_emrd.agent._parse.parse_reply`). The paper does not say who wrote its
-summaries; the model's own description is the one summary that adds no second model and no
-information the model did not have. A step whose reply has no readable observation keeps
-its text only.
-
-Messages are OpenAI chat-completions dicts; :mod:`pytest_emrd.agent._clients` converts
-them for the Anthropic Messages API.
+Appendix C: the system prompt plus the last :data:`HISTORY_TURNS` dialogue turns, the
+current (unanswered) user message included. ``single_image`` mode (the paper's Claude
+setting, "prior frames are converted to text-only summaries"): an earlier frame travels as
+the model's own ``observation`` of that step (:data:`FRAME_SUMMARY`), the one summary that
+adds no second model and nothing the model did not have.
 """
 
 from __future__ import annotations
@@ -28,7 +16,6 @@ from typing import Any, Final
 
 from pytest_emrd import frames
 from pytest_emrd.agent._parse import parse_reply
-from pytest_emrd.errors import check_positive_int
 
 #: Dialogue turns in the window, the current (unanswered) one included.
 HISTORY_TURNS: Final = 10
@@ -41,15 +28,11 @@ class UserTurn:
     """One step's user message before it is rendered into the wire format."""
 
     step: int
-    """1-based step the message belongs to."""
     text: str
-    """Engine feedback, pose, step counter and (text/both) the symbolic list."""
     image_url: str | None = None
-    """The frame (vision/both) as requests carry it: a base64 JPEG data URL, one string for
-    every message showing the frame; in a replay its pixel digest instead (``pixels:<sha256>``,
-    what the cassette holds in the JPEG's place: the JPEG is never encoded). None: no frame."""
+    """The frame as requests carry it: a base64 JPEG data URL, or in a replay its pixel digest
+    (``pixels:<sha256>``, what the cassette holds in the JPEG's place). None: no frame."""
     frame_digest: str | None = None
-    """Pixel digest of that frame (keys the frame in cassettes)."""
 
     @classmethod
     def with_frame(cls, step: int, text: str, jpeg: bytes, frame_digest: str) -> UserTurn:
@@ -76,32 +59,22 @@ def _user_message(turn: UserTurn, *, image: bool) -> dict[str, Any]:
 
 
 class Conversation:
-    """The episode's dialogue, rendered through the sliding window.
+    """The episode's dialogue, rendered through the sliding window. Each message is built
+    once and the same dict is sent again while it stays in the window (clients encode and
+    redact each one once)."""
 
-    ``request(current)`` gives the messages to send for the current step;
-    ``record(current, reply)`` appends the answered turn once the model replied. Each
-    message is built once and the same dict is sent again while it stays in the window
-    (messages are never changed once built: clients encode and redact each one once).
-    """
-
-    def __init__(self, system: str, *, single_image: bool, turns: int = HISTORY_TURNS) -> None:
-        check_positive_int("turns", turns)
-        self.system = system
+    def __init__(self, system: str, *, single_image: bool) -> None:
         self.single_image = single_image
         self._system = {"role": "system", "content": system}
-        self._answered: deque[tuple[UserTurn, dict[str, Any], dict[str, Any]]] = deque(
-            maxlen=turns - 1
+        self._answered: deque[tuple[dict[str, Any], dict[str, Any]]] = deque(
+            maxlen=HISTORY_TURNS - 1
         )
         self._pending: tuple[UserTurn, dict[str, Any]] | None = None
-
-    def window(self, current: UserTurn) -> list[UserTurn]:
-        """The user turns inside the window, oldest first, the current one last."""
-        return [user for user, _, _ in self._answered] + [current]
 
     def request(self, current: UserTurn) -> list[dict[str, Any]]:
         """System prompt, the answered turns still in the window, then ``current``."""
         messages: list[dict[str, Any]] = [self._system]
-        for _, user, reply in self._answered:
+        for user, reply in self._answered:
             messages += (user, reply)
         if self._pending is None or self._pending[0] is not current:
             self._pending = (current, _user_message(current, image=True))
@@ -118,7 +91,7 @@ class Conversation:
         else:
             user = _user_message(current, image=not self.single_image)
         self._pending = None
-        self._answered.append((current, user, {"role": "assistant", "content": reply}))
+        self._answered.append((user, {"role": "assistant", "content": reply}))
 
 
 def _summarised(turn: UserTurn, reply: str) -> dict[str, Any]:

@@ -1,41 +1,17 @@
 """Reading a model's reply: tolerant of what real models write, strict about what matters.
 
-**Repaired** (the reply is read, and :attr:`Reply.repairs` names every repair, so a run can
-count them; see :data:`REPAIRS`):
+**Repaired**, and named in :attr:`Reply.repairs` (:data:`REPAIRS`): syntax-only edits that
+cannot change what any value means (a code fence, prose around the object, comments,
+trailing commas, Python literals), and a position written in another notation, read in
+metres without guessing (a list ``[x, z]``, a unit, a decimal comma; the table in
+docs/interpretation/vocabulary.md). Numbers written as strings, a map given as a list of
+objects with a ``label``/``id``/``name``, and missing optional keys are tolerated as is.
 
-* ``fence`` — the JSON sits in a Markdown code fence (```` ```json ... ``` ````);
-* ``prose`` — text before or after the JSON object (or its fence);
-* ``comment`` — ``// ...`` line comments or ``/* ... */`` block comments outside strings;
-* ``trailing_comma`` — a comma right before ``}`` or ``]``;
-* ``python_literal`` — single-quoted strings or Python spellings (``True``/``None``);
-* ``position_list`` — a position written as a list ``[x, z]`` (the order the prompt gives):
-  the entry itself (``"Desk_1": [1.5, -2]``) or its ``position`` (``pos``, ``xz``,
-  ``coords``, ``coordinates``, ``location``) instead of ``x`` and ``z`` keys;
-* ``unit`` — a coordinate with a metric unit (``"2 m"``, ``"2.5 metres"``, ``"250 cm"``);
-* ``decimal_comma`` — a coordinate with a decimal comma (``"2,5"`` is 2.5 m; a coordinate
-  inside a building is never in the thousands, so the comma is no thousands separator).
-
-Each reads the reply one way only: the first five are *syntax-only* edits, removing them
-cannot change what any value of the object means; the last three read a position written in
-another notation, in metres, without guessing. Also tolerated, as schema leniency rather than
-repairs: numbers written as strings (``"1.5"``), a cognitive map given as a list of objects
-with a ``label``/``id``/``name`` key, missing optional keys (``observation``, ``dedup_check``,
-``reasoning``), map entries without ``room``/``facing``.
-
-**Parse failures** (:attr:`Reply.error` says why; the episode loop keeps the previous map as the
-model's belief): no complete JSON object (prose only; a reply cut off mid-object, as at the
-token limit), an object no repair above makes valid (a missing comma between two values,
-unquoted keys, a ``...`` placeholder standing for elided entries), or an object without an
-``action`` string or a ``cognitive_map``. Those are not repaired because any repair would guess
-content: where a comma was missing, what ``...`` stood for, what a cut-off map still held.
-
-**No position is lost in silence.** A map entry whose position none of the above reads
-(``"x": "near the door"``, ``null``, ``NaN``, ``"6 ft"``, a list ``[x, y, z]``, no ``x``/``z``
-at all) makes the reply a parse failure naming the entry (``cognitive_map entry 'Desk_1' has
-no number of metres as x: "near the door"``), as a reply with no map does. Dropping the entry
-alone would make the model look as if it had forgotten the object, and keeping it would guess
-where it is; the failure is counted with the others (the replies check of ``emrd validate``,
-``Step.parse_error``). :func:`parse_reply` never raises.
+**Parse failures** (:attr:`Reply.error`; the episode keeps the previous map): no complete
+JSON object, an object no repair makes valid (a missing comma, a ``...`` placeholder), no
+``action`` or ``cognitive_map``, or a map entry whose position none of the above reads: any
+repair would guess, and dropping the entry would look like forgetting the object.
+:func:`parse_reply` never raises.
 """
 
 from __future__ import annotations
@@ -50,7 +26,7 @@ from typing import Any, Final
 
 from pytest_emrd.trajectory import MapEntry
 
-#: Replies longer than this are not searched for JSON (a runaway generation, not a reply).
+#: Longer replies are not searched for JSON (a runaway generation, not a reply).
 MAX_REPLY_CHARS: Final = 200_000
 #: Every repair :func:`parse_reply` may apply, in the order :attr:`Reply.repairs` lists them.
 REPAIRS: Final[tuple[str, ...]] = (
@@ -82,24 +58,19 @@ class Reply:
     dedup_check: str = ""
     cognitive_map: tuple[MapEntry, ...] = ()
     action: str = ""
-    """The action text, stripped (``Goto(Doorway_1)``); empty if none could be read."""
     reasoning: str | None = None
     error: str | None = None
     """Why the reply could not be read (the map is then not the model's); None if fine."""
     repairs: tuple[str, ...] = ()
-    """Repairs applied to read the object (names from :data:`REPAIRS`, in that order)."""
 
 
 _STRING = r"\"(?:[^\"\\]|\\.)*\"|'(?:[^'\\]|\\.)*'"
 _COMMENT = r"//[^\n]*|/\*.*?(?:\*/|\Z)"
 #: Inside an object: a string (skipped whole), a comment (skipped) or a brace.
 _INSIDE = re.compile(rf"{_STRING}|{_COMMENT}|[{{}}]", re.DOTALL)
+_DECODER = json.JSONDecoder()
 _COMMENTS = re.compile(rf"({_STRING})|{_COMMENT}", re.DOTALL)
 _TRAILING_COMMAS = re.compile(rf"({_STRING})|,(?=\s*[}}\]])", re.DOTALL)
-#: Where a comment or a trailing comma could be (in a string or not): without one, there is none.
-_MAYBE_COMMENT = re.compile(r"//|/\*")
-_MAYBE_TRAILING_COMMA = re.compile(r",\s*[}\]]")
-_DECODER = json.JSONDecoder()
 #: A coordinate written as text: a number (decimal point or comma), then maybe a metric unit.
 _WRITTEN_NUMBER = re.compile(
     r"(?P<number>[+-]?(?:\d+(?:[.,]\d+)?|[.,]\d+)(?:[eE][+-]?\d+)?)\s*"
@@ -111,14 +82,7 @@ _METRES_PER_UNIT: Final[dict[str, float]] = {
     **dict.fromkeys(("cm", "centimetre", "centimetres", "centimeter", "centimeters"), 0.01),
 }
 #: Keys under which an entry may give its position as a list ``[x, z]``.
-_POSITION_KEYS: Final[tuple[str, ...]] = (
-    "position",
-    "pos",
-    "xz",
-    "coords",
-    "coordinates",
-    "location",
-)
+_POSITION_KEYS: Final = ("position", "pos", "xz", "coords", "coordinates", "location")
 
 
 def _json_end(text: str, start: int) -> int | None:
@@ -171,10 +135,8 @@ def _strip_comments_and_commas(text: str) -> tuple[str, tuple[str, ...]]:
 
         return sub
 
-    if _MAYBE_COMMENT.search(text):
-        text = _COMMENTS.sub(drop("comment", " "), text)
-    if _MAYBE_TRAILING_COMMA.search(text):
-        text = _TRAILING_COMMAS.sub(drop("trailing_comma", ""), text)
+    text = _COMMENTS.sub(drop("comment", " "), text)
+    text = _TRAILING_COMMAS.sub(drop("trailing_comma", ""), text)
     return text, tuple(r for r in REPAIRS if r in found)
 
 
@@ -256,15 +218,8 @@ def _find_object(text: str) -> tuple[dict[str, Any] | None, tuple[str, ...]]:
 
 
 def _coordinate(value: Any) -> tuple[float, tuple[str, ...]] | None:
-    """One coordinate in metres and the repairs that read it; None when it is no number.
-
-    A JSON number, or a string holding one (``"1.5"``, schema leniency). Repaired: a metric
-    unit (``"2 m"``, ``"2.5 metres"``, ``"250 cm"``: ``unit``) and a decimal comma (``"2,5"``:
-    ``decimal_comma``). Anything else (``"near the door"``, ``null``, ``true``, ``NaN``,
-    ``"6 ft"``) is no coordinate.
-    """
-    if type(value) is float:  # the common case first: a map holds dozens of coordinates
-        return (value, ()) if math.isfinite(value) else None
+    """One coordinate in metres and the repairs that read it (``unit``, ``decimal_comma``);
+    None when it is no finite number, written or as a string."""
     if isinstance(value, bool):
         return None
     if isinstance(value, int | float):
@@ -289,12 +244,8 @@ def _coordinate(value: Any) -> tuple[float, tuple[str, ...]] | None:
 
 
 def _position(fields: Any) -> tuple[float, float, tuple[str, ...]] | str:
-    """``(x, z, repairs)`` of an entry, or why it has none.
-
-    ``x`` and ``z`` keys as the prompt asks, else a list ``[x, z]`` (``position_list``): the
-    entry itself, or its ``position`` (``pos``, ``xz``, ``coords``, ``coordinates``,
-    ``location``). A list of any other length is no position (``[x, y, z]`` would be a guess).
-    """
+    """``(x, z, repairs)`` of an entry (``x``/``z`` keys, else a list ``[x, z]``: the entry
+    itself or under :data:`_POSITION_KEYS`), or why it has none."""
     repairs: tuple[str, ...] = ()
     if isinstance(fields, dict) and ("x" in fields or "z" in fields):
         x, z = fields.get("x"), fields.get("z")

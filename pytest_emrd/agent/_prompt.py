@@ -1,40 +1,18 @@
 """What the model is told: the system prompt (paper Appendix D) and each step's user text.
 
-The system prompt casts the model as the paper's autonomous emergency responder: explore a
-partially observable building within the action budget, keep a cognitive map with a
-deduplication check every step, and end the run naming the safest evacuation gathering
-point. Its building overview is the room list, each room's furniture profile (the paper's
-"large conference table + 8 chairs", with the engine type name of every item in brackets)
-and the engine type names ``Goto`` accepts. The full text is printed in the docs
-(``docs/reference/protocol.md``, kept equal to :func:`build_system_prompt` by a test).
+The system prompt casts the model as the paper's autonomous emergency responder; its
+building overview lists the rooms, each room's furniture profile (the paper's "large
+conference table + 8 chairs", with engine type names in brackets) and the types ``Goto``
+accepts. ``docs/reference/protocol.md`` prints it (a test keeps the copy equal).
 
-Prompt variants (Appendices E and F):
-
-* ``default`` — room names and furniture profiles, no descriptive suffix.
-* ``B1``..``B4`` — the same descriptive suffix appended to all four rooms, neutralising
-  one feature as a discriminator (open space, centrality, exits, hazards).
-* ``neutral`` — rooms called Room A-D in Appendix E's order: Room A = Conference Room,
-  Room B = Entrance, Room C = Office, Room D = Kitchen, listed in the default order
-  (Room C, Room A, Room D, Room B: "all other prompt components remain identical", so the
-  Neutral vs Baseline test compares names, not line order). No real room name appears in
-  any text the model is sent (furniture descriptions such as "large conference table" stay:
-  the paper finds the prior "encoded at the furniture-description level").
-* ``no_inventory`` — the engine's type names (needed for ``Goto``) are kept; counts, the
-  room mapping and furniture descriptions are removed.
-
-The ``Goto`` wording depends on the modality: under ``vision`` the model can read no object
-id from a frame, so ``Goto`` takes an object type (the nearest visible instance); ``text``
-and ``both`` also accept the instance ids of the symbolic list.
+Prompt variants (Appendices E and F): ``B1``..``B4`` append one descriptive suffix to all
+four rooms; ``neutral`` calls the rooms Room A-D in Appendix E's order but lists them in the
+default order, so Neutral vs Baseline compares names, not line order; ``no_inventory``
+keeps only the type names ``Goto`` needs. Under ``vision`` the model can read no object id
+from a frame, so ``Goto`` takes an object type; ``text`` and ``both`` also take the ids.
 
 Bump :data:`PROMPT_VERSION` on any change to the text the model sees or to the reply
 protocol: cassettes recorded under another version are stale.
-
-* ``p2`` — furniture profiles, evacuation framing, Appendix E's neutral order, modality-aware
-  ``Goto`` wording, ``Term`` always ends the run, one pose line per user message.
-* ``p3`` — MAP asks for every object the coverage inventory ``E`` counts (furniture, items
-  on desks and counters, doorways, the building exit), so a model that maps what it is
-  asked for can reach AEC 1.0; ``neutral`` lists its rooms in the default order (only the
-  names differ from ``default``); single-image summaries (:mod:`pytest_emrd.agent._history`).
 """
 
 from __future__ import annotations
@@ -89,7 +67,7 @@ FURNITURE: Final[dict[str, tuple[str, str]]] = {
 }
 #: Descriptions that depend on the room (the Entrance's desk is the reception desk).
 ROOM_FURNITURE: Final[dict[tuple[str, str], tuple[str, str]]] = {
-    (rooms.ENTRANCE, "Desk"): ("reception desk", "reception desks"),
+    (rooms.ENTRANCE, "Desk"): ("reception desk", "reception desks")
 }
 _TABLES: Final = ("DiningTable", "Desk")
 _ITEM = re.compile(r"^(?:an?|(?P<n>\d+)) [^()]+ \((?P<type>[A-Za-z]+)\)$")
@@ -161,11 +139,8 @@ def room_aliases(variant: str) -> dict[str, str]:
 
 
 def resolve_room(text: str, variant: str) -> str | None:
-    """Canonical room for a room name or alias as a model wrote it, or None.
-
-    Case, surrounding quotes and spaces are ignored; canonical names and slugs are
-    accepted under every variant (a model may name the physical room it saw).
-    """
+    """Canonical room for a room name or alias as a model wrote it (case, quotes and spaces
+    ignored; canonical names and slugs under every variant), or None."""
     key = " ".join(text.strip().strip("'\"`").split()).casefold()
     table = {alias.casefold(): room for alias, room in room_aliases(variant).items()}
     table.update({name.casefold(): name for name in rooms.ROOM_NAMES})
@@ -184,12 +159,9 @@ def _type_order(object_type: str) -> tuple[int, str]:
 
 
 def furniture_profile(room: str, counts: Mapping[str, int]) -> str:
-    """A room's furniture profile: ``a large conference table (DiningTable) + 8 chairs
-    (Chair), a wall-mounted television (Television)``; "nothing listed" when empty.
-
-    Items follow :data:`FURNITURE` order (unknown types last, by name, described by their type
-    name); chairs join the room's first table type with " + ". :func:`read_profile` inverts it.
-    """
+    """A room's furniture profile, ``a large conference table (DiningTable) + 8 chairs
+    (Chair), a wall-mounted television (Television)``, in :data:`FURNITURE` order (unknown
+    types last); "nothing listed" when empty. :func:`read_profile` inverts it."""
     items: dict[str, str] = {}
     for object_type in sorted((t for t, n in counts.items() if n > 0), key=_type_order):
         words = ROOM_FURNITURE.get((room, object_type)) or FURNITURE.get(object_type)
@@ -211,20 +183,17 @@ def read_profile(text: str) -> dict[str, int]:
     return counts
 
 
-def _room_order(variant: str) -> list[tuple[str, str]]:
-    """(label shown, canonical room) in prompt order: the default order under every variant."""
-    label = {room: alias for alias, room in room_aliases(variant).items()}
-    return [(label[room], room) for room in rooms.ROOM_NAMES]
-
-
 def _overview(inventory: Mapping[str, Mapping[str, int]], variant: str) -> str:
-    order = _room_order(variant)
-    lines = [OVERVIEW_HEADING, f"The building has four rooms: {', '.join(a for a, _ in order)}."]
+    """The building overview; rooms in the default order under every variant."""
+    label = {room: alias for alias, room in room_aliases(variant).items()}
+    names = ", ".join(label[room] for room in rooms.ROOM_NAMES)
+    lines = [OVERVIEW_HEADING, f"The building has four rooms: {names}."]
     if variant != "no_inventory":
         suffix = f" {ROOM_SUFFIXES[variant]}" if variant in ROOM_SUFFIXES else ""
         lines.append(PROFILE_LEAD)
-        for label, room in order:
-            lines.append(f"- {label}: {furniture_profile(room, inventory.get(room, {}))}.{suffix}")
+        for room in rooms.ROOM_NAMES:
+            profile = furniture_profile(room, inventory.get(room, {}))
+            lines.append(f"- {label[room]}: {profile}.{suffix}")
     types = sorted({t for counts in inventory.values() for t in counts} | {"Doorway"})
     lines.append(f"{GOTO_TYPES_LEAD} {', '.join(types)}.")
     return "\n".join(lines)
@@ -238,11 +207,7 @@ def build_system_prompt(
     max_steps: int = MAX_STEPS,
 ) -> str:
     """The system prompt for one episode: role, goals, building overview, actions, format.
-
-    ``inventory`` is room -> object type -> count (``Layout.inventory()``, doorways
-    excluded); rooms are the canonical names whatever the variant. ``modality`` words the
-    ``Goto`` action (types only under ``vision``) and what each step shows.
-    """
+    ``inventory`` is canonical room -> object type -> count (``Layout.inventory()``)."""
     check_choice("variant", variant, VARIANTS)
     check_choice("modality", modality, MODALITIES)
     actions = _ACTIONS.format(goto=_GOTO[modality != "vision"], seen=_SEEN[modality])
@@ -252,18 +217,10 @@ def build_system_prompt(
 
 
 def step_text(
-    *,
-    step: int,
-    max_steps: int,
-    feedback: str,
-    visible: Sequence[VisibleObject] | None,
+    *, step: int, max_steps: int, feedback: str, visible: Sequence[VisibleObject] | None
 ) -> str:
-    """The text part of the user message shown at step ``step`` (1-based).
-
-    ``feedback`` is the engine feedback, which ends with the one pose line
-    (``Pose: x=1.25 z=-0.50 heading=90.``); ``visible`` is the symbolic list (``text``/``both``
-    modality) or None (``vision``).
-    """
+    """The text part of the user message at step ``step`` (1-based): ``feedback`` ends with the
+    pose line; ``visible`` is the symbolic list (``text``/``both``) or None (``vision``)."""
     lines = [f"Step {step} of {max_steps}.", f"Engine feedback: {feedback}"]
     if visible is not None:
         lines.append(VISIBLE_HEADING)

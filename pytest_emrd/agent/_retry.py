@@ -1,18 +1,10 @@
-"""Bounded retries with exponential backoff and jitter, honouring ``Retry-After`` (tenacity).
+"""Bounded retries with exponential backoff and jitter, honouring ``Retry-After``.
 
-Retried: HTTP 429, any 5xx in :data:`RETRY_STATUSES`, transport errors (connection refused
-or reset, timeouts) and 2xx bodies that are not the JSON the provider promised (empty, not
-JSON, nested too deep to parse, or of another shape). Not
-retried: other 4xx (a bad key or a bad request does not heal). Jitter only changes how long
-we sleep; the request sent again is the same object, byte for byte.
-
-The loop is :class:`tenacity.Retrying` (bounded by ``stop_after_attempt``), entered once a
-first attempt has failed (a request that succeeds at once pays nothing for it); the wait is
-ours, because it must read ``Retry-After`` from the failed response and draw its jitter
-from a seedable generator. Each retry is logged on ``pytest_emrd.agent.retry`` at WARNING
-with the attempt, the wait and the cause; URLs are logged without userinfo or query and
-the API key's literal value is masked wherever it would appear. The record carries the
-attribute :data:`pytest_emrd._logging.RETRY_ATTR` (live progress counts retries by it).
+Retried: HTTP 429, the 5xx of :data:`RETRY_STATUSES`, transport errors and 2xx bodies that
+are not the JSON the provider promised. Not retried: other 4xx (a bad key or request does
+not heal). The request sent again is the same object, byte for byte. Each retry is logged
+on ``pytest_emrd.agent.retry`` at WARNING (docs/user-guide/recording.md) with the attribute
+:data:`pytest_emrd._logging.RETRY_ATTR`, by which live progress counts retries.
 """
 
 from __future__ import annotations
@@ -27,7 +19,6 @@ from dataclasses import dataclass, field
 from typing import Any, Final
 
 import httpx
-import tenacity
 
 from pytest_emrd import __version__
 from pytest_emrd._logging import RETRY_ATTR
@@ -36,13 +27,9 @@ from pytest_emrd.errors import TransportError
 
 RETRY_STATUSES: Final = frozenset({429, 500, 502, 503, 504, 520, 522, 524, 529})
 _BODY_EXCERPT: Final = 300
-_MASK: Final = "***"
 #: Headers of every request besides the provider's (Host and Content-Length come from httpx).
-#: The request is built here rather than by ``httpx.Client.build_request``, which would add
-#: its own defaults (``Accept: */*``, ``Accept-Encoding``, ``Connection``, its user agent)
-#: and the cookies the server set: a model API needs none of them, a cookie would carry state
-#: from one request to the next, and every header is copied and scanned several times per
-#: request on its way through vcrpy and the redactor.
+#: Not ``httpx.Client.build_request``, which would add its own defaults and the cookies the
+#: server set: a model API needs none of them, and a cookie would carry state between requests.
 _DEFAULT_HEADERS: Final = {
     "Accept": "application/json",
     "Content-Type": "application/json",
@@ -96,38 +83,17 @@ def retry_after_seconds(value: str | None) -> float | None:
     return max(0.0, when.timestamp() - time.time())
 
 
-def _masker(secrets: Iterable[str | None]) -> Callable[[str], str]:
-    values = [s for s in secrets if s]
-
-    def mask(text: str) -> str:
-        for value in values:
-            text = text.replace(value, _MASK)
-        return text
-
-    return mask
-
-
 def _excerpt(response: httpx.Response) -> str:
     text = response.text
     return text[:_BODY_EXCERPT] + ("..." if len(text) > _BODY_EXCERPT else "")
 
 
 @functools.lru_cache(maxsize=64)
-def _parsed_url(url: str) -> httpx.URL:
-    """``url`` parsed once (a client posts to one or two URLs; ``httpx.URL`` is immutable)."""
-    return httpx.URL(url)
-
-
-@functools.lru_cache(maxsize=64)
-def _public_url(url: str) -> str:
-    """``url`` without userinfo or query string (either may carry a credential)."""
-    return str(_parsed_url(url).copy_with(userinfo=b"", query=None, fragment=None))
-
-
-def _request_headers(headers: dict[str, str]) -> dict[str, str]:
-    """``headers`` over :data:`_DEFAULT_HEADERS` (names compared case-insensitively)."""
-    given = {name.lower() for name in headers}
-    return {k: v for k, v in _DEFAULT_HEADERS.items() if k.lower() not in given} | headers
+def _parsed(url: str) -> tuple[httpx.URL, str]:
+    """``url`` parsed once (a client posts to one or two URLs), and as logged: without
+    userinfo or query, either of which may carry a credential."""
+    parsed = httpx.URL(url)
+    return parsed, str(parsed.copy_with(userinfo=b"", query=None, fragment=None))
 
 
 def _attempt(http: httpx.Client, request: httpx.Request, url: str, read: Callable[[Any], Any]):
@@ -153,19 +119,6 @@ def _attempt(http: httpx.Client, request: httpx.Request, url: str, read: Callabl
         ) from exc
 
 
-def _made(failure: _Retryable, attempt: Callable[..., Any]) -> Callable[..., Any]:
-    """``attempt`` whose first call raises ``failure``, the outcome of an attempt already
-    made: tenacity counts, logs and waits for it as if it had made it."""
-    pending = [failure]
-
-    def call(*args: Any) -> Any:
-        if pending:
-            raise pending.pop()
-        return attempt(*args)
-
-    return call
-
-
 def post_json(
     http: httpx.Client,
     url: str,
@@ -176,60 +129,48 @@ def post_json(
     read: Callable[[Any], Any],
     secrets: Iterable[str | None] = (),
 ) -> Any:
-    """POST ``body`` and return ``read(json)``, retrying per ``policy``.
-
-    ``read`` turns the decoded JSON into the caller's result and raises ``KeyError``,
-    ``TypeError`` or ``ValueError`` when the shape is wrong (treated as a garbage body).
-    Exhausted retries or a non-retryable status raise :class:`TransportError` naming the
-    URL, the attempts and the last cause. ``secrets`` (the API key) are masked in every
-    log line and error message.
-    """
-    content = encode_body(body)  # what json=body sends, each message encoded once per episode
+    """POST ``body`` and return ``read(json)`` (which raises on a garbage body), retrying per
+    ``policy``; exhausted retries or a non-retryable status raise :class:`TransportError`
+    naming the URL, the attempts and the last cause, with ``secrets`` masked."""
+    given = {name.lower() for name in headers}
+    defaults = {k: v for k, v in _DEFAULT_HEADERS.items() if k.lower() not in given}
+    target, shown = _parsed(url)
     request = httpx.Request(
         "POST",
-        _parsed_url(url),
-        content=content,
-        headers=_request_headers(headers),
+        target,
+        content=encode_body(body),
+        headers=defaults | headers,
         extensions={"timeout": http.timeout.as_dict()},
     )
-    mask = _masker(secrets)
-    shown = _public_url(url)
+    values = [s for s in secrets if s]
+
+    def mask(text: str) -> str:
+        for value in values:
+            text = text.replace(value, "***")
+        return text
+
     attempts = policy.max_retries + 1
-
-    def wait(state: tenacity.RetryCallState) -> float:
-        failure = state.outcome.exception() if state.outcome else None
-        retry_after = failure.retry_after if isinstance(failure, _Retryable) else None
-        return policy.backoff(state.attempt_number - 1, retry_after)
-
-    def log_retry(state: tenacity.RetryCallState) -> None:
-        failure = state.outcome.exception() if state.outcome else None
-        logger.warning(
-            "POST %s attempt %d/%d failed; retrying in %.2f s. Cause: %s",
-            shown,
-            state.attempt_number,
-            attempts,
-            state.upcoming_sleep,
-            mask(str(failure)),
-            extra={RETRY_ATTR: state.attempt_number},
-        )
-
-    try:
-        try:  # most requests succeed at once: no retry machinery for them
+    attempt = 1
+    while True:
+        try:
             return _attempt(http, request, shown, read)
         except _Retryable as failure:
-            first = failure
-        retrying = tenacity.Retrying(
-            stop=tenacity.stop_after_attempt(attempts),
-            wait=wait,
-            retry=tenacity.retry_if_exception_type(_Retryable),
-            before_sleep=log_retry,
-            sleep=policy.sleep,
-        )
-        return retrying(_made(first, _attempt), http, request, shown, read)
-    except tenacity.RetryError as exc:
-        cause = mask(str(exc.last_attempt.exception()))
-        raise TransportError(
-            f"POST {shown} failed after {attempts} attempt(s); last cause: {cause}"
-        ) from None
-    except TransportError as exc:
-        raise TransportError(mask(str(exc))) from None
+            cause = mask(str(failure))
+            if attempt == attempts:
+                raise TransportError(
+                    f"POST {shown} failed after {attempts} attempt(s); last cause: {cause}"
+                ) from None
+            wait = policy.backoff(attempt - 1, failure.retry_after)
+            logger.warning(
+                "POST %s attempt %d/%d failed; retrying in %.2f s. Cause: %s",
+                shown,
+                attempt,
+                attempts,
+                wait,
+                cause,
+                extra={RETRY_ATTR: attempt},
+            )
+            policy.sleep(wait)
+            attempt += 1
+        except TransportError as exc:
+            raise TransportError(mask(str(exc))) from None

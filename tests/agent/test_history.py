@@ -54,19 +54,6 @@ def test_window_keeps_system_and_last_ten_turns(answered: int) -> None:
     ] + [f"Step {answered + 1} of 50."]
 
 
-def test_oldest_pair_leaves_first() -> None:
-    conversation = Conversation("SYS", single_image=False, turns=3)
-    messages = _run(conversation, 5)
-    assert _texts(messages) == [
-        "SYS",
-        "Step 4 of 50.",
-        "reply 4",
-        "Step 5 of 50.",
-        "reply 5",
-        "Step 6 of 50.",
-    ]
-
-
 def test_every_windowed_frame_is_an_image_in_multi_image_mode() -> None:
     conversation = Conversation("SYS", single_image=False)
     messages = _run(conversation, 4)

@@ -7,7 +7,7 @@ from pathlib import Path
 import pytest
 
 from pytest_emrd.agent import HISTORY_TURNS, load_registry, serve_command
-from pytest_emrd.agent._vllm import PAPER_CONTEXT
+from pytest_emrd.agent._vllm import SERVED
 
 OPEN_MODELS = ["qwen3-vl-32b", "ovis2-34b", "pixtral-12b", "internvl3-14b"]
 VLLM_PAGE = Path(__file__).parents[2] / "docs" / "user-guide" / "vllm.md"
@@ -18,7 +18,7 @@ def test_the_docs_show_the_exact_serve_command(name: str) -> None:
     command = serve_command(load_registry().get(name))
     assert command in VLLM_PAGE.read_text()
     assert f"'{{\"image\": {HISTORY_TURNS}}}'" in command
-    context = PAPER_CONTEXT[load_registry().get(name).model_id]
+    context = SERVED[load_registry().get(name).model_id][0]
     assert (f"--max-model-len {context}" in command) == (context is not None)
     assert "--dtype bfloat16" in command
 

@@ -1,11 +1,8 @@
 """Built-in reference agents: scripted, deterministic, served over a local HTTP endpoint.
 
-Profiles (planted cognition, so metrics can be checked against known truth): ``scout``,
-``scout-decay-<mean steps>``, ``scout-window-<k>``, ``scout-serial``, ``prior``. Requests
-name them by versioned id, ``<name>@<REFERENCE_VERSION>`` (see :mod:`._version`).
-
-Names are imported on first use (:mod:`pytest_emrd._lazy`): the registry reads the agents'
-knobs and versions without loading the agents or their server.
+Profiles with planted cognition, so metrics can be checked against known truth
+(docs/user-guide/reference-agents.md). Names are imported on first use: the registry reads
+the agents' knobs and versions without loading the agents or their server.
 """
 
 from pytest_emrd._lazy import lazy_exports

@@ -1,10 +1,14 @@
 """One chat-completions request in, one scripted reply out: the reference agents' brain.
 
-Pure function of the request: the agent's state is its own previous reply (the last
-assistant message), its randomness is seeded by a hash of the request content, so the
-same request gets the same reply byte for byte. Scout-family replies are compact JSON in the
-same protocol a VLM is asked for, plus a ``plan`` key holding the navigation state; agents
-planted with ``writer: vlm`` (the ``mimic`` family, :mod:`._mimic`) write like a VLM.
+Pure function of the request: the agent's state is its own previous reply, its randomness
+is seeded by a hash of the request content, so the same request gets the same reply byte
+for byte. Scout-family replies are compact JSON in the VLM protocol plus a ``plan`` key (the
+navigation state); ``writer: vlm`` agents (``mimic``, :mod:`._mimic`) write like a VLM.
+
+The ``prior`` policy decides from the prompt alone: it never moves and maps nothing. It
+sweeps in place only to infer the room it stands in (one view often shows nothing of it),
+then names the room whose inventory lists the most seats other than that one: the furniture
+prior the paper found behind the Conference Room choice (Never-Visited and Any-Bias 100 %).
 """
 
 from __future__ import annotations
@@ -12,13 +16,12 @@ from __future__ import annotations
 import copy
 import hashlib
 import json
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from typing import TYPE_CHECKING, Any, Final
 
 from pytest_emrd.agent.reference._memory import uniform
 from pytest_emrd.agent.reference._mimic import mimic_reply, request_seed
-from pytest_emrd.agent.reference._perceive import fresh_plan, perceive
-from pytest_emrd.agent.reference._prior import prior_action
+from pytest_emrd.agent.reference._perceive import SWEEP_TURNS, fresh_plan, perceive, room_guess
 from pytest_emrd.agent.reference._read import (
     Briefing,
     Percept,
@@ -34,6 +37,31 @@ from pytest_emrd.errors import ConfigError, ProtocolError
 
 if TYPE_CHECKING:  # _config imports this package (for the version): no runtime import back
     from pytest_emrd.agent._config import Registry
+
+SEATS: Final = ("Chair", "Sofa", "Stool")
+
+
+def seats(counts: Mapping[str, int]) -> int:
+    """Seats an inventory line lists (every type whose name contains Chair, Sofa or Stool)."""
+    return sum(n for t, n in counts.items() if any(s in t for s in SEATS))
+
+
+def prior_action(plan: dict[str, Any], briefing: Briefing, percept: Percept) -> tuple[str, str]:
+    """(action, reasoning) of the prior agent: look around in place, then name another room."""
+    if plan["turns"] < SWEEP_TURNS and percept.step < percept.max_steps:
+        plan["turns"] += 1
+        return "Turn(Right)", f"Looking around to tell where I am ({plan['turns']}/{SWEEP_TURNS})."
+    here = room_guess(plan)
+    others = [r for r in briefing.rooms if r != here]
+    inventory = briefing.inventory
+    room = max(others, key=lambda r: (seats(inventory.get(r, {})), -others.index(r)))
+    where = f"the {here} where I stand" if here else "this room"
+    return (
+        f"Term({room})",
+        f"{room} has the most seating for a gathering ({seats(inventory.get(room, {}))} "
+        f"seats by the building overview), more than any room other than {where}.",
+    )
+
 
 Policy = Callable[[dict[str, Any], Briefing, Percept], tuple[str, str]]
 POLICIES: Final[dict[str, Policy]] = {"scout": scout_action, "prior": prior_action}
@@ -52,13 +80,8 @@ class RequestError(ProtocolError):
 
 def _usage(messages: list[dict[str, Any]], reply: str) -> dict[str, int]:
     chars = sum(len(message_text(m)) for m in messages)
-    images = sum(
-        1
-        for m in messages
-        if isinstance(m.get("content"), list)
-        for p in m["content"]
-        if p.get("type") == "image_url"
-    )
+    parts = [p for m in messages if isinstance(m.get("content"), list) for p in m["content"]]
+    images = sum(p.get("type") == "image_url" for p in parts)
     prompt = chars // CHARS_PER_TOKEN + TOKENS_PER_IMAGE * images
     completion = len(reply) // CHARS_PER_TOKEN
     return {
@@ -108,11 +131,8 @@ def reply_text(model: str, planted: dict[str, Any], messages: list[dict[str, Any
 
 
 def complete(body: Any, registry: Registry) -> dict[str, Any]:
-    """An OpenAI ``chat.completion`` object answering ``body``; RequestError if unusable.
-
-    ``model`` is ``<name>@<REFERENCE_VERSION>`` (a bare name means the current version); a
-    request for another version is refused with 404, naming both versions.
-    """
+    """An OpenAI ``chat.completion`` object answering ``body``; RequestError if unusable
+    (404 for an unknown agent or another behaviour version, :func:`agent_name`)."""
     if not isinstance(body, dict) or not isinstance(body.get("messages"), list):
         raise RequestError("body must be a JSON object with a 'messages' list.")
     model = str(body.get("model", ""))
@@ -125,8 +145,7 @@ def complete(body: Any, registry: Registry) -> dict[str, Any]:
         raise RequestError(f"model={model!r} is not a reference agent.", status=404)
     messages = body["messages"]
     text = reply_text(name, config.planted, messages)
-    # The id only has to differ between replies: 8 hex digits of the reply's hash (it travels
-    # in every cassette response, and a longer one is incompressible weight there).
+    # The id only has to differ between replies (a longer one is weight in every cassette).
     digest = hashlib.sha256(text.encode()).hexdigest()[:8]
     return {
         "id": f"chatcmpl-ref-{digest}",

@@ -1,34 +1,9 @@
 """The knobs of the ``mimic`` family: planted map-writing behaviour, settable from the name.
 
 ``mimic`` is the registry entry with the shipped defaults; ``mimic-<token>-<token>...``
-overrides some of them, each token a letter and a number, or ``spawn``:
-
-=====  ============  =========================================================  ========
-token  planted key   meaning                                                    range
-=====  ============  =========================================================  ========
-s      ``sigma``     position noise: each coordinate of each sighting gets      [0, 5] m
-                     independent N(0, sigma^2) noise, metres
-p      ``dup``       on re-entering a room, each object mapped there on an      [0, 1]
-                     earlier visit and seen again gets a second entry (new
-                     label, old entry kept) with probability p
-h      ``halluc``    each step, with probability h, one entry for an object     [0, 1]
-                     that is not in the office (kept to the end)
-q      ``fail``      each reply, with probability q, is damaged beyond repair   [0, 1]
-                     (truncated, a missing comma, a ``...`` placeholder): a
-                     parse failure
-r      ``repair``    each reply that is not damaged, with probability r, has    [0, 1]
-                     one repairable slip (code fence, prose, comment, trailing
-                     comma)
-a      ``invalid``   each reply that is not damaged, with probability a,        [0, 1]
-                     names an action the world refuses
-b      ``back``      with probability b per episode, once every room is         [0, 1]
-                     identified, walks back into the room it will name before
-                     ``Term`` (the scout's homing): room re-entries, so
-                     duplicates on re-entry and SIR can be measured
-spawn  ``frame``     write the map in the spawn frame (default ``own``: a       —
-                     seeded rotation + translation per episode)
-=====  ============  =========================================================  ========
-
+overrides some of them, each token a letter of :data:`KNOBS` and a number (``s0.3``), or
+``spawn`` (``frame: spawn``, the map in the spawn frame instead of a seeded frame of its own).
+What each knob plants and its default: the table in docs/user-guide/reference-agents.md.
 ``mimic-spawn-s0-p0-h0-q0-r0-a0-b0`` is the clean reference: free-form labels only. This
 module has no imports from the agents so the registry can use it without import cycles.
 """
@@ -57,11 +32,8 @@ _NAME = re.compile(rf"^{FAMILY}((?:-(?:spawn|[{''.join(KNOBS)}]\d+(?:\.\d+)?))+)
 
 
 def mimic_knobs(name: str) -> dict[str, Any] | None:
-    """Planted overrides a ``mimic-...`` name spells (None: not such a name).
-
-    ``mimic-s0.3-p0.5`` -> ``{"sigma": 0.3, "dup": 0.5}``; ``mimic-spawn`` ->
-    ``{"frame": "spawn"}``. A token given twice or a value out of range is a ConfigError.
-    """
+    """Planted overrides a ``mimic-...`` name spells (``mimic-s0.3-p0.5`` -> ``{"sigma": 0.3,
+    "dup": 0.5}``), None for another name; a knob given twice or out of range: ConfigError."""
     match = _NAME.match(name)
     if match is None:
         return None

@@ -1,20 +1,12 @@
 """How a ``mimic`` reply is written out: pretty JSON, sometimes malformed the way VLMs do it.
 
 A reply is rendered as indented JSON whose first key, ``state``, carries the agent's own
-state on one line. Then, per reply, one of three things happens (the caller draws which):
-
-* **clean** — the JSON as is;
-* **repairable** (:data:`REPAIRABLE`) — one syntax slip that
-  :func:`pytest_emrd.agent.parse_reply` repairs and names: ``fence`` (a Markdown code fence),
-  ``prose`` (a sentence before and/or after), ``comment`` (a ``//`` or ``/* */`` comment after
-  the action line), ``trailing_comma`` (a comma after the last value);
-* **failing** (:data:`FAILING`) — damage the parser does not guess at, so the reply is a parse
-  failure: ``truncated`` (cut off inside the object, as at the token limit), ``missing_comma``
-  (no comma after the ``observation`` value), ``ellipsis`` (a bare ``...`` standing for
-  elided map entries, after the observation when the map is empty).
-
-None of them touches the ``state`` line, so the agent reads its own state back from any of its
-replies (:func:`read_state`), exactly as a model reads its own previous answer.
+state on one line. Then, per reply, the caller draws one of: clean; one :data:`REPAIRABLE`
+slip that :func:`pytest_emrd.agent.parse_reply` repairs and names (a code fence, prose around
+it, a comment after the action line, a trailing comma); or :data:`FAILING` damage the parser
+does not guess at (cut off inside the object, no comma after the ``observation`` value, a
+bare ``...`` for elided map entries). None touches the ``state`` line, so the agent reads its
+own state back from any of its replies (:func:`read_state`), as a model reads its own answer.
 """
 
 from __future__ import annotations

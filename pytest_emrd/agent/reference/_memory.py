@@ -1,30 +1,23 @@
 """Planted memory of the scripted agents: what their reported cognitive map keeps.
 
-The map is an ordered ``label -> entry`` dict in *memory order*: objects in view this
-step move to the end (nearest last), new objects are appended. After the view is merged,
-one policy decides what survives; objects in view always survive except under a window
-smaller than the view.
+The map is an ordered ``label -> entry`` dict in *memory order*: objects in view this step
+move to the end (nearest last), new objects are appended. Then one policy decides what
+survives; objects in view always survive except under a window smaller than the view.
 
-* ``perfect`` — nothing is forgotten.
-* ``none`` — nothing is kept: the reported map is always empty (``prior``).
-* ``decay`` (``mean_steps`` = m >= 1) — at every step an out-of-view object is dropped
-  with probability :math:`p = 1/m`, independently of everything else. The number of
-  out-of-view steps up to and including the one where it is dropped is geometric on
-  {1, 2, ...}: :math:`P(T = t) = (1 - p)^{t-1} p`, :math:`S(t) = P(T > t) = (1 - 1/m)^t`,
-  mean exactly m steps. With right-censoring, ``sum t_j / d`` (Eq. SMLE, counting the drop
-  step in ``t_j``) is the maximum-likelihood estimate of that mean, so the Ebbinghaus EFC
-  recovers m without a discretisation bias (a hazard ``1 - exp(-1/m)`` would give a mean
-  of about m + 0.5 steps).
+* ``perfect`` — nothing is forgotten; ``none`` — the reported map is always empty (``prior``).
+* ``decay`` (``mean_steps`` = m >= 1) — at every step an out-of-view object is dropped with
+  probability :math:`p = 1/m`, independently. The out-of-view steps up to and including the
+  drop are geometric on {1, 2, ...}: :math:`P(T = t) = (1 - p)^{t-1} p`,
+  :math:`S(t) = (1 - 1/m)^t`, mean exactly m, so with right-censoring ``sum t_j / d``
+  (Eq. SMLE) is its maximum-likelihood estimate and the Ebbinghaus EFC recovers m without a
+  discretisation bias (a hazard ``1 - exp(-1/m)`` would give a mean of about m + 0.5).
 * ``window`` (``k``) — at most k objects, the least recently seen dropped first.
-* ``serial`` (``mean_steps`` = m) — U-shaped retention: objects whose discovery rank falls
-  in the first or last third of the *expected* total are protected; middle-third objects
-  out of view decay as under ``decay``. The expected total is the object count of the
-  prompt's inventory (what the agent reads; doorways are not listed there, so they only
-  lengthen the late third); without an inventory (``no_inventory``) it falls back to the
-  number discovered so far.
+* ``serial`` (``mean_steps`` = m) — U-shaped retention: objects whose discovery rank falls in
+  the first or last third of the *expected* total (the prompt inventory's object count, else
+  the number discovered so far) are protected; middle-third objects decay as under ``decay``.
 
-Randomness comes from :func:`uniform`, a hash of the request content and the label, so
-the same request always forgets the same objects.
+Randomness comes from :func:`uniform`, a hash of the request content and the label, so the
+same request always forgets the same objects.
 """
 
 from __future__ import annotations
@@ -77,12 +70,9 @@ def apply_memory(
     draw: Callable[[str], float],
     expected: int | None = None,
 ) -> dict[str, Entry]:
-    """The entries the planted memory keeps this step (``memory`` already merged).
-
-    ``discovery`` lists every label ever discovered, in order of first discovery;
-    ``draw(label)`` is this step's uniform number for ``label``; ``expected`` is the
-    object total the prompt's inventory announces (None or 0: unknown).
-    """
+    """The entries the planted memory keeps this step (``memory`` already merged):
+    ``discovery`` lists labels in order of first discovery, ``draw(label)`` is this step's
+    uniform number, ``expected`` the inventory's object total (None or 0: unknown)."""
     kind = planted.get("memory", "perfect")
     if kind == "perfect":
         return memory

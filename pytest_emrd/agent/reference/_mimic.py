@@ -1,36 +1,16 @@
 """The ``mimic`` family: the scout's exploration, a cognitive map written the way VLMs write it.
 
-A mimic walks exactly like ``scout`` (same perception, same room-clearing policy, perfect
-memory) and keeps the scout's record in its own state, but reports a map the way a real VLM
-does, with every departure planted and known (knobs: :mod:`._knobs`):
+A mimic walks like ``scout`` (perfect memory, and homing with its ``b`` knob) but reports a
+map as a VLM does, every departure planted and known (docs/user-guide/reference-agents.md):
+its own frame ``R(theta) p + t``, free-form labels (:mod:`._phrasing`), position noise,
+duplicates on room re-entry, hallucinations, malformed replies (:mod:`._malform`) and
+invalid actions. A damaged reply or an invalid action changes nothing in the world, so the
+navigation state rolls back and it decides again from the same view; its written map moves on.
 
-* **its own frame** — coordinates are ``R(theta) p + t`` of the spawn-frame position ``p``,
-  with ``theta`` uniform in [0, 360) degrees and ``t`` uniform in [-10, 10]^2 m, drawn once per
-  episode from its first request (``frame: spawn`` writes ``p``); rounded to 0.01 m;
-* **free-form labels** — ``"office chair (2)"``, ``"TV"``, ``"plant near the window"``
-  (:mod:`._phrasing`), one numbering style per episode, a ``type`` field with a generic noun;
-* **position noise** ``sigma`` — fresh N(0, sigma^2) per coordinate at every sighting, keyed
-  by object and step; an object out of view keeps the position of its last sighting;
-* **duplicates on re-entry** ``dup`` — see :mod:`._knobs`; the new entry follows the object
-  from then on, the old one stays where it was last written;
-* **hallucinations** ``halluc`` — an object of :data:`~._phrasing.HALLUCINATIONS` 1-4 m ahead;
-* **malformed replies** ``fail`` / ``repair`` (:mod:`._malform`) and **invalid actions**
-  ``invalid`` (:data:`~._phrasing.INVALID_ACTIONS`);
-* **walking back** ``back`` — the scout's homing (:mod:`._scout`): the episodes it draws
-  re-enter the room they name, so duplicates on re-entry happen and SIR is defined.
-
-A step whose reply is damaged or whose action is invalid changes nothing in the world, so
-the mimic's navigation state rolls back to what it was before that step and it decides again
-from the same view; its written map (labels, duplicates, hallucinations) moves on.
-
-Determinism and pairing: the state travels in the reply (``state`` key, :func:`read_state`).
-Draws that concern one object (label, noise, duplicate) are keyed by the episode key (a hash
-of the first request) and the object, draws that concern one step (hallucination, damage,
-slip, invalid action) by a hash of the system prompt and the step's user message. Neither
-depends on the knobs, so two mimics that differ only in knobs draw the same numbers and,
-without damage or invalid actions, walk the same path: raising ``dup`` adds duplicates on
-top of those of a lower ``dup``, and the planted effect of each knob can be measured on
-paired episodes.
+The state travels in the reply (``state`` key). Draws about one object (label, noise,
+duplicate) are keyed by the episode (a hash of the first request) and the object, draws about
+one step by a hash of the step's request; none depends on the knobs, so mimics that differ
+only in knobs walk the same path and each knob's effect is measured on paired episodes.
 """
 
 from __future__ import annotations
@@ -72,14 +52,10 @@ def _normal(draw: Draw, name: str) -> tuple[float, float]:
 
 
 def fresh_state(key: str, planted: Mapping[str, Any]) -> dict[str, Any]:
-    """The state before the first step of the episode keyed ``key`` (hex).
-
-    ``frame`` is ``[theta_deg, tx, tz]``; ``nav`` the scout's ``plan``, its ``memory`` and the
-    room ``visit`` counter (doorways crossed); ``map`` the written entries by label (``id``,
-    and the ``visit`` in which the object was first placed in a room, or in which the
-    duplicate was written; frozen entries carry their written ``x``/``z``, hallucinations a
-    ``type``); ``seen`` the step of each object's last sighting.
-    """
+    """The state before the first step of the episode keyed ``key`` (hex): ``frame``
+    ``[theta_deg, tx, tz]``; ``nav`` the scout's ``plan``, ``memory`` and room ``visit``
+    counter; ``map`` the written entries by label (``id``, first ``visit``; frozen entries
+    carry their ``x``/``z``, hallucinations a ``type``); ``seen`` each object's last step."""
     draw = _episode_draw(key)
     own = planted.get("frame", "own") == "own"
     frame = (
@@ -157,10 +133,8 @@ class _Writer:
             return
         x, z = self.position(object_id, entry)
         self.map[label].update(x=x, z=z, type=type_word(entry["type"]), room=room)
-        self.map[self._new_label(entry["type"], f"{object_id}:{visit}")] = {
-            "id": object_id,
-            "visit": visit,
-        }
+        label = self._new_label(entry["type"], f"{object_id}:{visit}")
+        self.map[label] = {"id": object_id, "visit": visit}
 
     def hallucinate(self, percept: Percept, room: str, step: Draw) -> None:
         if step("halluc") >= float(self.planted.get("halluc", 0.0)):
@@ -196,11 +170,6 @@ class _Writer:
         return out
 
 
-def _invalid_action(writer: _Writer, percept: Percept, u: float) -> str:
-    labels = [lb for s in percept.visible if (lb := writer.live_label(s.object_id))]
-    return pick(INVALID_ACTIONS, u).format(labels[0] if labels else "exit")
-
-
 def mimic_reply(
     planted: Mapping[str, Any],
     briefing: Briefing,
@@ -209,11 +178,8 @@ def mimic_reply(
     request: bytes,
     previous: str | None,
 ) -> str:
-    """The reply of a mimic with ``planted`` knobs.
-
-    ``request`` is the step's seed material (system prompt and user text), ``previous`` the
-    text of the mimic's last reply (None at the first step).
-    """
+    """The reply of a mimic with ``planted`` knobs to the step seeded by ``request``, after its
+    ``previous`` reply (None at the first step)."""
     seed = hashlib.sha256(request).digest()
     step: Draw = lambda name: uniform(seed, name)  # noqa: E731
     state = read_state(previous) if previous else fresh_state(seed[:8].hex(), planted)
@@ -239,11 +205,13 @@ def mimic_reply(
 
     damaged = step("fail") < float(planted.get("fail", 0.0))
     invalid = not damaged and step("invalid") < float(planted.get("invalid", 0.0))
+    in_view = [lb for s in percept.visible if (lb := writer.live_label(s.object_id))]
     if invalid:
-        action = _invalid_action(writer, percept, step("invalid:which"))
+        action = pick(INVALID_ACTIONS, step("invalid:which")).format(
+            in_view[0] if in_view else "exit"
+        )
     if damaged or invalid:  # the world will not move: decide again from the same view
         state["nav"] = before
-    in_view = [lb for s in percept.visible if (lb := writer.live_label(s.object_id))]
     body = {
         "observation": f"I can see: {', '.join(in_view)}." if in_view else "Nothing new in view.",
         "dedup_check": f"{len(new)} new, {len(in_view) - len(new)} already in my map.",

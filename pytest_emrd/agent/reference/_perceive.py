@@ -1,15 +1,11 @@
 """What every scripted agent does with a view: place objects, guess the room, remember.
 
 Every visible object is placed in the spawn frame from the pose and its bearing/distance
-(perfect odometry, so a perfect-memory agent maps exactly). The current room is inferred by
-matching the object types in view against the prompt's inventory (types found in fewer
-rooms weigh more, nearer objects weigh more); objects seen through a doorway lie in the
-next room and neither vote nor get a room. The reported map then passes through the
-planted memory (:mod:`._memory`).
-
-The navigation state lives in the ``plan`` key of the reply (see :func:`fresh_plan`), so
-the agents keep state only in the conversation they are sent. Navigation reads its own
-perfect record there (doorways, objects of the current room), never the reported map, so
+(perfect odometry). The current room is inferred by matching the object types in view
+against the prompt's inventory (types found in fewer rooms and nearer objects weigh more);
+objects seen through a doorway lie in the next room and neither vote nor get a room. The
+reported map then passes through the planted memory (:mod:`._memory`). Navigation reads
+its own perfect record in the ``plan`` (:func:`fresh_plan`), never the reported map, so
 every memory variant of an agent walks the same path.
 """
 
@@ -34,24 +30,18 @@ GAP_HALF_WIDTH_M: Final = 1.0
 
 
 def fresh_plan() -> dict[str, Any]:
-    """Navigation state at the first step.
+    """Navigation state at the first step, carried in the ``plan`` key of every reply.
 
-    ``phase``: ``sweep`` (turning in place), ``decide`` (choose where to go next),
-    ``face`` (turning towards ``target``), ``cross`` (just sent ``Goto`` through a
-    doorway), ``walk`` (just sent ``Goto`` to an object of this room).
-
-    Per room visit: ``turns`` of the current sweep, room ``votes``, doorways seen ``here``
-    in this room, not through another doorway (-> distance), objects ``found`` since the
-    last sweep ended, ``spots`` (objects seen inside: id -> [x, z, type]), ``near`` (ids
-    seen since the current sweep began), ``sweeps`` (where sweeps began), ``moves``
-    (repositions), ``tried`` (spots targeted), ``blocked`` (doorways that could not be
-    faced from here).
-
-    Whole episode: ``visited`` rooms, ``used`` doorways (least recent first), ``doors``
-    (id -> [x, z]), ``door_rooms`` (id -> rooms it was seen inside), ``order`` (discovery
-    order), ``rough`` (placed at the edge of view), ``sizes`` (room -> objects discovered),
-    the current ``target`` with its ``goal`` (``door`` or ``spot``) and face ``tries``, and
-    the pose ``at`` the last step.
+    ``phase``: ``sweep`` (turning in place), ``decide``, ``face`` (turning towards
+    ``target``), ``cross`` / ``walk`` (just sent ``Goto`` through a doorway / to an object).
+    Per room visit: room ``votes``, doorways seen ``here`` (-> distance), objects ``found``,
+    ``spots`` (id -> [x, z, type]), ``near`` (ids of the current sweep), ``sweeps`` (where
+    they began), ``moves``/``clears`` made, spots ``tried``, doorways ``blocked``. Whole
+    episode: ``visited`` rooms, ``used`` doorways (least recent first), ``doors`` (id ->
+    [x, z]), ``door_rooms`` (id -> rooms it was seen inside), discovery ``order``,
+    ``rough`` (placed at the edge of view), ``sizes`` (room -> objects), ``acted``, the
+    ``reach`` of the farthest doorway seen, the ``target``/``goal``/face ``tries`` and the
+    pose ``at`` the last step.
     """
     return {
         "phase": "sweep",

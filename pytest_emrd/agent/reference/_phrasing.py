@@ -3,14 +3,9 @@
 Tables of the phrasings real VLMs use in EMRD cognitive maps, per engine type of the office.
 Every choice is a pure function of a uniform number in [0, 1) that the caller draws from the
 request content (:func:`pick`), so the same episode always words the same object the same way.
-
-Labels (:func:`label_for`): a phrase of the object's type (``"office chair"``, ``"TV"``,
-``"potted plant"``), sometimes with a locative qualifier (``"plant near the window"``),
-numbered in the episode's numbering style when the phrase is already taken (``"office chair
-(2)"``, ``"office chair 2"``, ``"office chair #2"``). The ``type`` field holds the short generic
-noun (:data:`TYPE_WORDS`). Hallucinated objects (:data:`HALLUCINATIONS`) are things an office
-plausibly holds but the EMRD office never does, worded so that no engine type is named
-anywhere in the text (no qualifier mentioning a door or a table): they must match nothing.
+Hallucinated objects (:data:`HALLUCINATIONS`) are things an office plausibly holds but the
+EMRD office never does, worded so that no engine type is named anywhere in the text: they
+must match nothing.
 """
 
 from __future__ import annotations
@@ -37,23 +32,15 @@ PHRASES: Final[dict[str, tuple[str, ...]]] = {
     "Doorway": ("doorway", "open doorway", "passage", "door frame"),
     "Door": ("exit door", "main exit", "front door", "emergency exit"),
 }
-#: Engine type -> the short noun written in the entry's ``type`` field.
+#: Engine type -> the short noun written in the entry's ``type`` field (default: the type in
+#: lower case, ``Chair`` -> ``chair``).
 TYPE_WORDS: Final[dict[str, str]] = {
-    "Chair": "chair",
-    "ArmChair": "armchair",
-    "Stool": "stool",
-    "Desk": "desk",
     "DiningTable": "table",
     "ShelvingUnit": "shelf",
     "Television": "TV",
-    "Fridge": "fridge",
     "CounterTop": "counter",
     "HousePlant": "plant",
-    "Laptop": "laptop",
-    "Sink": "sink",
-    "Microwave": "microwave",
     "CoffeeMachine": "coffee machine",
-    "Doorway": "doorway",
     "Door": "exit door",
 }
 #: Locative qualifiers appended to some labels (probability :data:`QUALIFIED`).
@@ -96,12 +83,7 @@ COMMENTS: Final[tuple[str, ...]] = (
     "// it's the safest option for now",
 )
 #: Actions the world refuses (``{0}``: the label of an object in view, or ``the exit``).
-INVALID_ACTIONS: Final[tuple[str, ...]] = (
-    "MoveAhead",
-    "Goto(the {0})",
-    "Turn(Back)",
-    "Goto(nearest exit)",
-)
+INVALID_ACTIONS: Final = ("MoveAhead", "Goto(the {0})", "Turn(Back)", "Goto(nearest exit)")
 
 
 def pick(options: Sequence[str], u: float) -> str:
@@ -112,13 +94,9 @@ def pick(options: Sequence[str], u: float) -> str:
 def label_for(
     object_type: str, taken: Container[str], *, style: str, u_phrase: float, u_qualifier: float
 ) -> str:
-    """A free-form label for an object of ``object_type`` not in ``taken``.
-
-    ``style`` is one of :data:`NUMBERING`; ``u_phrase`` picks the phrase (an unknown type is
-    spelled as the engine writes it, lower case), ``u_qualifier < QUALIFIED`` adds a qualifier
-    (picked by ``u_qualifier / QUALIFIED``). A phrase already taken gets the lowest free number
-    from 2 on.
-    """
+    """A free-form label for an object of ``object_type`` not in ``taken``: a phrase (an
+    unknown type in lower case), a qualifier when ``u_qualifier < QUALIFIED``, and the lowest
+    free number from 2 on in ``style`` (one of :data:`NUMBERING`) when the phrase is taken."""
     phrase = pick(PHRASES.get(object_type, (object_type.lower(),)), u_phrase)
     if u_qualifier < QUALIFIED:
         phrase = f"{phrase} {pick(QUALIFIERS, u_qualifier / QUALIFIED)}"

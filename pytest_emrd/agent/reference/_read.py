@@ -1,9 +1,5 @@
-"""How a scripted agent reads its request: the prompt, the latest user text, its last reply.
-
-The reference agents see exactly what a VLM is sent and nothing else: the system prompt
-(room list and furniture profiles, under whatever names the variant uses), the ``text`` part
-of the newest user message (step counter, the pose in the engine feedback, symbolic visible
-list) and their own previous reply, which travels back as the last assistant message.
+"""How a scripted agent reads its request: the system prompt, the ``text`` part of the
+newest user message and its own previous reply, exactly what a VLM is sent and no more.
 """
 
 from __future__ import annotations
@@ -48,9 +44,8 @@ class Briefing:
     """What the system prompt tells the agent about the building."""
 
     rooms: tuple[str, ...]
-    """Room names as the prompt spells them, in prompt order."""
     inventory: dict[str, dict[str, int]]
-    """Room (as spelled) -> type -> count; empty under ``no_inventory``."""
+    """Room (as the prompt spells it) -> type -> count; empty under ``no_inventory``."""
 
 
 @dataclass(frozen=True)

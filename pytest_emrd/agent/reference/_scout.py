@@ -1,52 +1,32 @@
 """The room-clearing ``scout`` policy.
 
-Per room visit, the entry view plus three ``Turn(Right)`` sweep 360 degrees; then the
-scout decides, in this order:
+Per room visit, the entry view plus three ``Turn(Right)`` sweep 360 degrees; then the scout
+decides, in this order:
 
-1. every room of the prompt identified: in the last room, clear it as in rule 2;
-   otherwise ``Term``;
-2. **clear the room**: while it is not complete (see rule 4), the visit has a clearing
-   move left (:data:`MAX_CLEARS`) and the budget affords one (:data:`RESERVE` actions,
-   leaving :data:`PER_ROOM` for each room not yet visited): ``Goto`` the object of the
-   last sweep farthest from every point this visit swept from, among those from which a
-   known doorway lies no farther than any doorway has yet been seen (so that the doorway
-   can be seen again from there), and sweep again;
+1. every room of the prompt identified: in the last room, clear it as in rule 2; else ``Term``;
+2. **clear the room** while it is not complete, the visit has a clearing move left and the
+   budget affords one: ``Goto`` the object of the last sweep farthest from where this visit
+   swept, among those from which a known doorway can be seen again, and sweep again;
 3. an unused doorway seen during this visit (nearest first): face it, ``Goto`` through;
-4. **reposition**, while rooms remain unvisited, fewer than :data:`MAX_MOVES` repositions
-   (:data:`LOST_MOVES` before it sees a doorway) were made in this visit and the room is
-   not complete (no doorway, or not every object its inventory line lists, seen during
-   this visit; a room it cannot identify is never complete): ``Goto`` an object of this
-   room seen during the last sweep, at least :data:`MIN_MOVE_M` away and not targeted
-   before: the one nearest to an unused doorway known to open from this room (seen inside
-   it, on this visit or an earlier one), else the one farthest from every point this
-   visit swept from (towards unexplored space); then sweep again;
-5. every doorway it knows of already used: ``Term`` (nothing left to try);
+4. **reposition** while rooms remain unvisited, the visit has a move left and the room is not
+   complete (a doorway and every object of its inventory line seen during this visit):
+   ``Goto`` an object of the last sweep, at least :data:`MIN_MOVE_M` away and not tried: the
+   one nearest to an unused doorway known to open from this room, else the one farthest from
+   where this visit swept; then sweep again;
+5. every doorway it knows of already used: ``Term``;
 6. the doorway of this visit used longest ago: back through it;
 7. otherwise ``Term``.
 
-A target still out of view after :data:`MAX_FACE_TRIES` turns towards it is given up and
-the decision is taken again; a doorway given up this way is first approached, if the visit
-has a reposition left: the scout goes to the object of the last sweep nearest to it (and
-nearer than the scout), where doorways given up before may be faced again.
+A target still out of view after :data:`MAX_FACE_TRIES` turns is given up (a doorway is
+first approached from the nearest object of the last sweep). Objects are visible within
+3.3 m and furniture occludes, so rules 2 and 4 walk the scout into a room's far parts, and
+darkness costs coverage *and* time, as the paper reports for real models. Term rule: the
+room where it discovered the most objects (ties: prompt order; none identified: the first).
 
-Objects are visible within 3.3 m (1.65 m under ``low_light``) and furniture hides what
-stands behind it, so one sweep from a doorway sees part of a room: rules 2 and 4 walk the
-scout into the room's far parts, and the darkness costs coverage *and* time, as the paper
-reports for real models.
-
-Term rule: at a ``Term`` decision or the last step of the budget, the room where it
-discovered the most objects (ties: prompt order; rooms it could not identify, as under
-``no_inventory``, fall back to the first room listed).
-
-**Homing** (``homing=True``; the ``mimic`` family's ``b`` knob): at rule 1, a homing scout
-that is not in the room the Term rule names walks back into it before ``Term``, as a
-responder leads people to the gathering room: through a known doorway of this room that
-was seen inside that room (nearest first), else through one that leads to a room from which
-such a doorway opens (the scout's own record of which doorway it saw inside which room),
-sweeping each room it enters. The room is fixed when homing begins (``home``); it names
-that room in ``Term`` on arrival, when no known doorway leads on, or at the budget's end.
-This gives room re-entries, which Spatial Identity Resolution needs and the plain scout,
-which clears an office in one loop, never makes.
+**Homing** (the ``mimic`` ``b`` knob): at rule 1 a homing scout walks back into the room the
+Term rule names (``home``, fixed when homing begins) through known doorways seen inside it,
+or into a room with such a doorway, sweeping each room it enters: the room re-entries that
+Spatial Identity Resolution needs.
 """
 
 from __future__ import annotations
@@ -108,9 +88,9 @@ def _spot(
     plan: Mapping[str, Any], towards: list[list[float]], within: list[list[float]] | None = None
 ) -> str:
     """An object of the last sweep to reposition at ("" when none): the one nearest to a
-    point of ``towards`` and nearer to it than the scout, or with ``towards`` empty the one
-    farthest from every point this visit swept from. ``within``: only objects no farther
-    from one of these points than the farthest a doorway has been seen (``reach``)."""
+    point of ``towards`` and nearer to it than the scout, else the one farthest from this
+    visit's sweeps; ``within``: only objects no farther from one of these points than the
+    farthest a doorway has been seen (``reach``)."""
     spots: dict[str, list[Any]] = plan["spots"]
 
     def xz(label: str) -> tuple[float, float]:
@@ -134,8 +114,7 @@ def _spot(
 
 
 def _reposition(plan: dict[str, Any], towards: list[list[float]]) -> bool:
-    """Target a spot (see :func:`_spot`) if the visit has a reposition left
-    (:data:`MAX_MOVES`, or :data:`LOST_MOVES` while it has seen no doorway)."""
+    """Rule 4's move towards ``towards``, if the visit has a reposition left."""
     limit = MAX_MOVES if plan["here"] else LOST_MOVES
     spot = _spot(plan, towards) if plan["moves"] < limit else ""
     if spot:
@@ -145,8 +124,7 @@ def _reposition(plan: dict[str, Any], towards: list[list[float]]) -> bool:
 
 
 def _clear(plan: dict[str, Any], briefing: Briefing, percept: Percept) -> bool:
-    """Rule 2: target the spot farthest from this visit's sweeps if the room is not
-    complete, the visit has a clearing move left and the budget affords it."""
+    """Rule 2, if the visit has a clearing move left and the budget affords it."""
     if plan["clears"] >= MAX_CLEARS or _complete(plan, briefing):
         return False
     doors = [xz for d, xz in plan["doors"].items() if d not in plan["blocked"]]
@@ -157,16 +135,9 @@ def _clear(plan: dict[str, Any], briefing: Briefing, percept: Percept) -> bool:
     return bool(spot)
 
 
-def _clear_last(plan: dict[str, Any], briefing: Briefing, percept: Percept) -> bool:
-    """Rule 1a: in the last room, while it is not complete and the budget leaves
-    :data:`RESERVE` actions, reposition (towards unexplored space) instead of ``Term``."""
-    return not plan.get("home") and _clear(plan, briefing, percept)
-
-
 def _affordable(plan: Mapping[str, Any], briefing: Briefing, percept: Percept) -> bool:
-    """Whether a reposition (:data:`RESERVE` actions) leaves :data:`PER_ROOM` actions for
-    each room not yet visited, counting the scout's own actions (``acted``): a wasted step
-    (an unreadable reply, a planted invalid action) changes no decision."""
+    """Whether a reposition leaves :data:`PER_ROOM` actions per unvisited room, counting the
+    scout's own actions (``acted``): a wasted step (a planted invalid action) changes nothing."""
     left = percept.max_steps - plan["acted"] - RESERVE
     return left > PER_ROOM * (len(briefing.rooms) - len(plan["visited"]))
 
@@ -260,9 +231,8 @@ def scout_action(
     if plan["phase"] in ("sweep", "decide"):
         _close_room(plan)
         if len(plan["visited"]) >= len(briefing.rooms):
-            if _clear_last(plan, briefing, percept):
-                pass
-            elif not (homing and _homing(plan, briefing)):
+            cleared = not plan.get("home") and _clear(plan, briefing, percept)
+            if not cleared and not (homing and _homing(plan, briefing)):
                 room, why = _home_term(plan, briefing)
                 return f"Term({room})", why
         else:

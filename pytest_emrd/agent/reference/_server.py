@@ -1,9 +1,8 @@
 """The reference agents behind a real OpenAI-compatible HTTP endpoint on 127.0.0.1.
 
 ``POST /v1/chat/completions`` answers with a scripted agent named by ``model``;
-``GET /v1/models`` lists them. The server binds an ephemeral port unless told otherwise
-and serves from a background thread (:class:`ReferenceServer`) or in the foreground
-(``emrd serve``). :func:`reference_base_url` starts one process-wide server on demand.
+``GET /v1/models`` lists them. :func:`reference_base_url` starts one process-wide server on
+demand; ``emrd serve`` serves in the foreground.
 """
 
 from __future__ import annotations
@@ -24,7 +23,7 @@ _POLL_S: Final = 0.05
 
 
 class _Handler(BaseHTTPRequestHandler):
-    server: _Server
+    server: ReferenceServer
     protocol_version = "HTTP/1.1"
     disable_nagle_algorithm = True  # headers and body go out at once: no delayed-ACK stall
 
@@ -71,25 +70,13 @@ class _Handler(BaseHTTPRequestHandler):
         self._send(HTTPStatus.OK, payload)
 
 
-class _Server(ThreadingHTTPServer):
+class ReferenceServer(ThreadingHTTPServer):
+    """The reference endpoint; as a context manager, served from a background thread
+    (``emrd serve`` calls :meth:`serve_forever` instead). ``port=0`` binds an ephemeral port;
+    ``latency_s`` is added to every completion, like a remote model's."""
+
     daemon_threads = True
     allow_reuse_address = True
-
-    def __init__(
-        self, address: tuple[str, int], registry: _config.Registry, latency_s: float
-    ) -> None:
-        super().__init__(address, _Handler)
-        self.registry = registry
-        self.latency_s = latency_s
-
-
-class ReferenceServer:
-    """The reference endpoint on a background thread; use as a context manager.
-
-    ``port=0`` binds an ephemeral port; :attr:`base_url` is ``http://127.0.0.1:<port>/v1``.
-    ``latency_s`` is added to every completion, like a remote model's (requests are served
-    concurrently, so concurrent clients wait it out together).
-    """
 
     def __init__(
         self,
@@ -99,23 +86,20 @@ class ReferenceServer:
         registry: _config.Registry | None = None,
         latency_s: float = 0.0,
     ) -> None:
-        registry = registry or _config.load_registry()
-        self._server = _Server((host, port), registry, check_range("latency_s", latency_s, 0, 60))
+        self.registry = registry or _config.load_registry()
+        self.latency_s = check_range("latency_s", latency_s, 0, 60)
         self._thread: threading.Thread | None = None
-
-    @property
-    def port(self) -> int:
-        return int(self._server.server_address[1])
+        super().__init__((host, port), _Handler)
 
     @property
     def base_url(self) -> str:
-        host = self._server.server_address[0]
-        return f"http://{host}:{self.port}/v1"
+        host, port = self.server_address[:2]
+        return f"http://{host}:{port}/v1"
 
     def start(self) -> ReferenceServer:
         if self._thread is None:
             self._thread = threading.Thread(
-                target=self._server.serve_forever,
+                target=self.serve_forever,
                 args=(_POLL_S,),
                 name="emrd-reference-server",
                 daemon=True,
@@ -123,16 +107,12 @@ class ReferenceServer:
             self._thread.start()
         return self
 
-    def serve_forever(self) -> None:
-        """Serve in the calling thread until interrupted (``emrd serve``)."""
-        self._server.serve_forever()
-
     def close(self) -> None:
         if self._thread is not None:
-            self._server.shutdown()
+            self.shutdown()
             self._thread.join()
             self._thread = None
-        self._server.server_close()
+        self.server_close()
 
     def __enter__(self) -> ReferenceServer:
         return self.start()

@@ -4,20 +4,7 @@ Cassettes store the reference agents' replies, so a change in what a scripted ag
 would otherwise replay stale behaviour silently. The ``model`` field a client sends to a
 reference agent is therefore ``<name>@<REFERENCE_VERSION>`` (``scout@ref-3``): a cassette
 recorded under an older version no longer matches its requests and fails loudly as drift.
-
 Bump :data:`REFERENCE_VERSION` with every change to what a reference agent replies.
-
-* ``ref-1`` — the first scripted agents (no version in the request).
-* ``ref-2`` — the scout repositions and sweeps again when no unused doorway is in sight;
-  ``prior`` maps nothing (looks around in place, then terminates); planted decay hazard ``1/m``;
-  ``scout-serial`` protects thirds of the prompt's inventory total. The ``mimic`` family was
-  added under ``ref-2`` (no reply of an existing agent changed), and later its ``b`` knob
-  (walking back into the named room; names without ``b`` reply exactly as before).
-* ``ref-3`` — the shipped ``mimic`` walks back into the room it names (``back: 1.0``), so
-  the committed mimic grid re-enters rooms: duplicates on re-entry and SIR are exercised.
-* ``ref-4`` — world ``builtin-5`` (objects visible within 3.3 m, furniture occludes): the
-  scout clears a room that is not complete before leaving it, in the last room too (up to
-  two clearing moves per visit, while the budget leaves six actions per room to visit).
 """
 
 from __future__ import annotations
@@ -36,11 +23,8 @@ def versioned_id(name: str) -> str:
 
 
 def agent_name(model: str) -> str:
-    """The registry name in a requested ``model`` field (``scout@ref-3`` -> ``scout``).
-
-    A bare name (``scout``, as a person types it at ``emrd serve``) is accepted as the
-    current version; any other version raises :class:`ConfigError` naming both versions.
-    """
+    """The registry name in a requested ``model`` field (``scout@ref-3`` -> ``scout``); a bare
+    name is the current version, another version a :class:`ConfigError` naming both."""
     name, sep, version = model.partition(_SEP)
     if sep and version != REFERENCE_VERSION:
         raise ConfigError(

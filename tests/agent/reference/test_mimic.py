@@ -17,8 +17,8 @@ from pytest_emrd.agent.reference._phrasing import (
     HALLUCINATIONS,
     NUMBERING,
     PHRASES,
-    TYPE_WORDS,
     label_for,
+    type_word,
 )
 from pytest_emrd.episode import run_episode
 from pytest_emrd.errors import ConfigError, ProtocolError
@@ -145,7 +145,7 @@ def test_every_phrase_names_its_type_in_the_metrics_vocabulary(object_type: str)
         for q in np.linspace(0, 0.99, 12)
     ]
     assert {canonical_type(label, present=present) for label in labels} == {object_type}
-    assert canonical_type(TYPE_WORDS[object_type], present=present) == object_type
+    assert canonical_type(type_word(object_type), present=present) == object_type
 
 
 WORLD_TYPES = {kind.object_type for kind in KINDS.values()}
