@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import operator
 import types
 import typing
 from collections.abc import Callable, Collection
@@ -26,92 +25,32 @@ def to_dict(obj: Any) -> Any:
 
     Dataclasses become dicts of their fields in declaration order, tuples and lists become
     lists, dict keys become ``str(key)``, sets become sorted lists; anything else (str, numbers
-    including ``-0.0``/``nan``/``inf``, None, enums, paths) is returned as it is. The writer of
-    each class is compiled once (:func:`_writer`), not re-derived for every value.
+    including ``-0.0``/``nan``/``inf``, None, enums, paths) is returned as it is.
     """
-    return _writer(type(obj))(obj)
-
-
-_Write = Callable[[Any], Any]
-
-
-@cache
-def _writer(cls: type) -> _Write:
-    """The function writing values whose class is ``cls``, dispatched on the runtime class so
-    a dataclass subclass writes its own fields."""
-    if dataclasses.is_dataclass(cls):
-        return _dataclass_writer(cls)
-    if issubclass(cls, tuple | list):
-        return _write_list
-    if issubclass(cls, dict):
-        return lambda obj: {str(k): _writer(type(v))(v) for k, v in obj.items()}
-    if issubclass(cls, frozenset | set):
-        return lambda obj: sorted(map(to_dict, obj))
-    return _same
-
-
-def _write_list(obj: Any) -> list[Any]:
-    return [_writer(type(v))(v) for v in obj]  # to_dict inlined: one call less per item
-
-
-def _dataclass_writer(cls: Any) -> _Write:
-    """Field names resolved once; fields whose type hint holds only JSON scalars copied as
-    they are, tuples of scalars copied into lists, every other field through :func:`to_dict`
-    (the writer of its value's own class). The hints are trusted for scalars: a field hinted
-    ``float`` that held a tuple would be copied, not listed (mypy keeps the fields to their
-    hints; ``tests/test_serde.py`` checks every package dataclass against the generic walk)."""
-    names = tuple(f.name for f in dataclasses.fields(cls))
-    try:
-        hints = typing.get_type_hints(cls)
-    except (NameError, TypeError):  # a hint naming a class out of reach: dispatch every field
-        hints = {}
-    writers = [(name, _field_writer(hints.get(name, Any)) or _same) for name in names]
-    if len(names) < 2:  # attrgetter of one name returns the value, not a 1-tuple
-        return lambda obj: {name: write(getattr(obj, name)) for name, write in writers}
-    values = operator.attrgetter(*names)
-    nested = tuple(
-        (i, name, write) for i, (name, write) in enumerate(writers) if write is not _same
-    )
-    if not nested:
-        return lambda obj: dict(zip(names, values(obj), strict=True))
-
-    def write(obj: Any) -> dict[str, Any]:
-        got = values(obj)
-        out = dict(zip(names, got, strict=True))
-        for i, name, write_field in nested:
-            out[name] = write_field(got[i])
-        return out
-
-    return write
-
-
-def _field_writer(hint: Any) -> _Write | None:
-    """How to write a field of type ``hint``: None when the value is copied as it is."""
-    if _is_scalar(hint):
-        return None
-    origin, args = typing.get_origin(hint), typing.get_args(hint)
-    if origin in (typing.Union, types.UnionType) and type(None) in args:
-        inner = [a for a in args if a is not type(None)]
-        if len(inner) == 1 and (write := _field_writer(inner[0])) is not None:
-            return lambda value: None if value is None else write(value)
-    if origin is tuple and args and all(_is_scalar(a) for a in args if a is not Ellipsis):
-        return list
-    return to_dict
+    if isinstance(obj, _SCALARS):
+        return obj
+    names = _field_names(type(obj))
+    if names is not None:
+        return {name: to_dict(getattr(obj, name)) for name in names}
+    if isinstance(obj, tuple | list):
+        return [to_dict(v) for v in obj]
+    if isinstance(obj, dict):
+        return {str(k): to_dict(v) for k, v in obj.items()}
+    if isinstance(obj, frozenset | set):
+        return sorted(map(to_dict, obj))
+    return obj
 
 
 #: The classes JSON writes as scalars; :func:`to_dict` returns their values unchanged.
-_SCALARS: Final = frozenset({str, int, float, bool, type(None)})
+_SCALARS: Final = (str, int, float, type(None))
 
 
-def _is_scalar(hint: Any) -> bool:
-    if hint in _SCALARS or hint is None:
-        return True
-    origin = typing.get_origin(hint)
-    if origin is typing.Literal:
-        return True
-    if origin in (typing.Union, types.UnionType):
-        return all(_is_scalar(a) for a in typing.get_args(hint))
-    return False
+@cache
+def _field_names(cls: type) -> tuple[str, ...] | None:
+    """The field names of dataclass ``cls`` (read once per class), else None."""
+    if dataclasses.is_dataclass(cls):
+        return tuple(f.name for f in dataclasses.fields(cls))
+    return None
 
 
 def from_dict(cls: type[T], data: Any) -> T:

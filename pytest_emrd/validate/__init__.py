@@ -13,9 +13,8 @@ from pytest_emrd._lazy import lazy_exports
 __getattr__, __dir__, __all__ = lazy_exports(
     __name__,
     {
-        "_check": ("VERDICTS", "Check", "ValidationReport"),
-        "_decide": ("prior_checks", "scout_decide_checks"),
-        "_explore": ("exploration_checks",),
+        "_check": ("VERDICTS", "Check", "ValidationReport", "markdown", "to_json"),
+        "_explore": ("exploration_checks", "prior_checks", "scout_decide_checks"),
         "_frame": ("FRAME_SEED", "FRAME_TOLERANCE", "frame_checks"),
         "_paper": ("statistics_checks",),
         "_plan": (
@@ -28,18 +27,17 @@ __getattr__, __dir__, __all__ = lazy_exports(
             "Group",
             "Plan",
         ),
-        "_points": ("r2_points_checks",),
         "_remember": (
             "decay_checks",
             "episodes_needed",
             "error_curve",
             "miller_checks",
             "monotone",
+            "r2_points_checks",
             "serial_checks",
             "u_depth",
             "window_fit_checks",
         ),
-        "_render": ("markdown", "to_json"),
         "_run": ("Progress", "run_plan"),
         "_suite": ("episode_checks", "validation_report"),
     },

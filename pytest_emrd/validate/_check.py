@@ -1,12 +1,15 @@
-"""One row of the validation table: what was planted, what the metric recovered, the verdict."""
+"""One row of the validation table (what was planted, what the metric recovered, the verdict),
+and the table as Markdown (printed and written) and JSON text."""
 
 from __future__ import annotations
 
+import json
 import math
+from collections import Counter
 from dataclasses import dataclass, field
 from typing import Any, Final
 
-from pytest_emrd._serde import from_dict, to_dict
+from pytest_emrd._serde import from_dict, json_safe, to_dict
 from pytest_emrd.errors import ProtocolError, check_choice
 from pytest_emrd.metrics import EpisodeMetrics
 from pytest_emrd.trajectory import Trajectory
@@ -100,3 +103,38 @@ def fmt(value: float | None, digits: int = 2) -> str:
 def pct(value: float | None) -> str:
     """A fraction in [0, 1] as a percentage with one decimal."""
     return "n/a" if value is None else f"{100.0 * value:.1f} %"
+
+
+_COLUMNS: Final = ("Check", "Planted", "Recovered", "Tolerance", "Verdict", "Note")
+
+
+def _cell(text: str) -> str:
+    return text.replace("|", "\\|").replace("\n", " ")
+
+
+def markdown(report: ValidationReport) -> str:
+    """One Markdown table per paper phase, then a one-line summary."""
+    lines: list[str] = []
+    section = None
+    for c in report.checks:
+        if c.section != section:
+            section = c.section
+            lines += ["", f"### {section}", "", "| " + " | ".join(_COLUMNS) + " |",
+                      "|" + "---|" * len(_COLUMNS)]  # fmt: skip
+        verdict = f"**{c.verdict}**" if c.verdict != "pass" else c.verdict
+        cells = (c.name, c.planted, c.recovered, c.tolerance, verdict, c.note)
+        lines.append("| " + " | ".join(_cell(x) for x in cells) + " |")
+    counts = Counter(c.verdict for c in report.checks)
+    summary = ", ".join(f"{counts[v]} {v}" for v in ("pass", "fail", "finding") if counts[v])
+    head = f"{len(report.checks)} checks: {summary}"
+    if report.episodes:
+        head += (
+            f" ({report.episodes} episodes per spawn room and agent, protocol {report.protocol})"
+        )
+    return "\n".join([head, *lines]) + "\n"
+
+
+def to_json(report: ValidationReport) -> str:
+    """The report as indented, strict JSON (:meth:`ValidationReport.to_dict`); unbounded and
+    undefined numbers (an EFC with no forgetting event) are the strings ``"inf"``/``"nan"``."""
+    return json.dumps(json_safe(report.to_dict()), indent=2, allow_nan=False) + "\n"

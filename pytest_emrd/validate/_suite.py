@@ -9,8 +9,7 @@ from pytest_emrd.errors import ConfigError
 from pytest_emrd.metrics import EpisodeMetrics, as_episode_metrics
 from pytest_emrd.trajectory import Trajectory
 from pytest_emrd.validate._check import Check, Episode, ValidationReport
-from pytest_emrd.validate._decide import prior_checks, scout_decide_checks
-from pytest_emrd.validate._explore import exploration_checks
+from pytest_emrd.validate._explore import exploration_checks, prior_checks, scout_decide_checks
 from pytest_emrd.validate._frame import frame_checks
 from pytest_emrd.validate._mimic import (
     dup_checks,
@@ -32,10 +31,10 @@ from pytest_emrd.validate._plan import (
     WINDOW_SIZES,
     Group,
 )
-from pytest_emrd.validate._points import r2_points_checks
 from pytest_emrd.validate._remember import (
     decay_checks,
     miller_checks,
+    r2_points_checks,
     serial_checks,
     window_fit_checks,
 )
