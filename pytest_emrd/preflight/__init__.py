@@ -7,16 +7,23 @@ runs it once per model before any episode is recorded and stops the session on a
 """
 
 from pytest_emrd.preflight._check import Check, PreflightReport, preflight
-from pytest_emrd.preflight._estimate import DEFAULT_COMPLETION_TOKENS, CostEstimate, Measured
-from pytest_emrd.preflight._refusals import Refusal, vllm_refusal
-from pytest_emrd.preflight._requests import (
+from pytest_emrd.preflight._estimate import (
+    DEFAULT_COMPLETION_TOKENS,
+    CostEstimate,
+    Measured,
     Sweep,
     count_images,
     request_tokens,
     sample_reply,
     sweep,
 )
-from pytest_emrd.preflight._server import ServerInfo, models_url, server_info
+from pytest_emrd.preflight._server import (
+    Refusal,
+    ServerInfo,
+    models_url,
+    server_info,
+    vllm_refusal,
+)
 from pytest_emrd.preflight._session import (
     SessionPreflight,
     live_grid,

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import re
 from collections.abc import Callable, Iterable, Mapping, Sequence
+from dataclasses import KW_ONLY, dataclass, field
 from pathlib import Path
 from typing import Any, Final
 
@@ -47,26 +48,18 @@ def preflight_live(
     ]
 
 
+@dataclass
 class SessionPreflight:
     """A session's preflights: each model at most once, only for episodes recorded live."""
 
-    def __init__(
-        self,
-        registry: Any,
-        *,
-        cassettes: Path,
-        record_mode: str,
-        holds: Callable[[EpisodeSpec], bool],
-        enabled: bool = True,
-        models_file: Path | None = None,
-    ) -> None:
-        self.registry = registry
-        self.models_file = models_file
-        self.enabled = enabled
-        self.cassettes = cassettes
-        self.record_mode = record_mode
-        self.holds = holds
-        self.checked: set[str] = set()
+    registry: Any
+    _: KW_ONLY
+    cassettes: Path
+    record_mode: str
+    holds: Callable[[EpisodeSpec], bool]
+    enabled: bool = True
+    models_file: Path | None = None
+    checked: set[str] = field(default_factory=set, init=False)
 
     def run(self, specs: Iterable[EpisodeSpec]) -> tuple[list[PreflightReport], int]:
         """Reports for the models not checked yet (none when disabled), and how many live
