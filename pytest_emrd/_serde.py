@@ -64,13 +64,9 @@ def from_dict(cls: type[T], data: Any) -> T:
 class _Invalid(Exception):
     """A value that does not fit its type; ``path`` grows as the error climbs the tree."""
 
-    def __init__(self, message: str, path: str = "") -> None:
+    def __init__(self, message: str) -> None:
         super().__init__(message)
-        self.message, self.path = message, path
-
-    def under(self, step: str) -> _Invalid:
-        self.path = step + self.path
-        return self
+        self.message, self.path = message, ""
 
 
 _Build = Callable[[Any], Any]
@@ -82,6 +78,15 @@ def _same(data: Any) -> Any:
 
 def _as_float(data: Any) -> Any:
     return float(data) if isinstance(data, int) else data
+
+
+def _at(build: _Build, value: Any, step: str, key: object) -> Any:
+    """``build(value)``; a failure's path gains ``step`` formatted with ``key``."""
+    try:
+        return build(value)
+    except _Invalid as exc:
+        exc.path = step.format(key) + exc.path
+        raise exc from exc.__cause__
 
 
 @cache
@@ -99,24 +104,16 @@ def _builder(tp: Any) -> _Build:
         if type(None) not in args or inner in (_same, _as_float):  # both pass None through
             return inner
         return lambda data: None if data is None else inner(data)
+    if origin is tuple and len(args) == 2 and args[1] is Ellipsis:
+        return _homogeneous(_builder(args[0]))
     if origin is tuple:
-        return _tuple_builder(args)
+        return _fixed([_builder(a) for a in args])
     if origin is frozenset:
         item = _builder(args[0])
         return lambda data: frozenset(map(item, data))
     if origin is dict:
         value = _builder(args[1])
-
-        def build_dict(data: Any) -> Any:
-            out = {}
-            for k, v in data.items():
-                try:
-                    out[k] = value(v)
-                except _Invalid as exc:
-                    raise exc.under(f"[{k!r}]") from exc.__cause__
-            return out
-
-        return build_dict
+        return lambda data: {k: _at(value, v, "[{!r}]", k) for k, v in data.items()}
     return _as_float if tp is float else _same
 
 
@@ -139,7 +136,8 @@ def _dataclass_builder(tp: Any) -> _Build:
             try:
                 kwargs[name] = build_field(value)
             except _Invalid as exc:
-                raise exc.under(f".{name}") from exc.__cause__
+                exc.path = f".{name}{exc.path}"
+                raise exc from exc.__cause__
         try:
             return tp(**kwargs)
         except TypeError as exc:
@@ -148,18 +146,16 @@ def _dataclass_builder(tp: Any) -> _Build:
     return build
 
 
-def _tuple_builder(args: tuple[Any, ...]) -> _Build:
-    if len(args) == 2 and args[1] is Ellipsis:
-        return _homogeneous(_builder(args[0]))
-    items = [_builder(a) for a in args]
+def _fixed(items: list[_Build]) -> _Build:
+    """The builder of ``tuple[X, Y, ...]`` (a fixed length)."""
 
-    def build_fixed(data: Any) -> tuple[Any, ...]:
+    def build(data: Any) -> tuple[Any, ...]:
         if _is_list(data) and len(data) != len(items):
             side = "shorter" if len(data) < len(items) else "longer"
             raise _Invalid(f"zip() argument 2 is {side} than argument 1")
         return _items(data, items)
 
-    return build_fixed
+    return build
 
 
 def _homogeneous(item: _Build) -> _Build:
@@ -186,16 +182,8 @@ def _is_list(data: Any) -> bool:
 def _items(data: Any, builders: list[_Build]) -> tuple[Any, ...]:
     if not _is_list(data):
         raise _Invalid(f"expected a list, got {type(data).__name__}")
-    out = []
-    for i, (build, v) in enumerate(zip(builders, data, strict=False)):
-        if build is _same:
-            out.append(v)
-            continue
-        try:
-            out.append(build(v))
-        except _Invalid as exc:
-            raise exc.under(f"[{i}]") from exc.__cause__
-    return tuple(out)
+    pairs = enumerate(zip(builders, data, strict=False))
+    return tuple(v if build is _same else _at(build, v, "[{}]", i) for i, (build, v) in pairs)
 
 
 def from_versioned_dict(

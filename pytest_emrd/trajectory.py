@@ -31,8 +31,8 @@ MODALITIES: Final[tuple[str, ...]] = ("vision", "text", "both")
 #: Which offices a run uses: ``paper`` (one fixed office, the paper's protocol) or
 #: ``generated`` (one generated office per spawn x episode, reported as its own cells).
 LAYOUTS: Final[tuple[str, ...]] = ("paper", "generated")
-#: How an episode is obtained: the cassette record modes (vcrpy's, ``none`` replays only) and
-#: how a replayed request is matched to its recording (``lenient`` ignores frame pixels).
+#: The cassette record modes (vcrpy's, ``none`` replays only) and how a replayed request is
+#: matched to its recording (``lenient`` ignores frame pixels).
 RECORD_MODES: Final[tuple[str, ...]] = ("none", "once", "new_episodes", "all")
 MATCHING_MODES: Final[tuple[str, ...]] = ("strict", "lenient")
 CATEGORIES: Final[tuple[str, ...]] = ("landmark", "salient", "clutter")
@@ -80,8 +80,8 @@ class EpisodeSpec:
 
     @property
     def case_id(self) -> str:
-        """Readable test id: ``gemini-low_light-kitchen-ep07`` (variant inserted if not default,
-        then ``generated`` under generated layouts: ``gemini-baseline-generated-office-ep00``)."""
+        """Readable test id: ``gemini-low_light-kitchen-ep07``, with the variant if not default
+        and ``generated`` under generated layouts inserted before the spawn room."""
         parts = [self.model, self.condition]
         if self.variant != "default":
             parts.append(self.variant)
@@ -196,15 +196,12 @@ class Step:
     """The model's reply text, verbatim."""
     usage: Usage = field(default_factory=Usage)
     repairs: tuple[str, ...] | None = None
-    """Repairs the parser applied to read the reply, in this order: ``fence``, ``prose``,
-    ``comment``, ``trailing_comma``, ``python_literal`` (syntax only), ``position_list``,
-    ``unit``, ``decimal_comma`` (a position in another notation; see
-    :data:`pytest_emrd.agent.REPAIRS`); ``()`` for a reply read as written; None when
-    not recorded (schema 1 files, hand-built steps)."""
+    """Repairs the parser applied to read the reply, in the order of
+    :data:`pytest_emrd.agent.REPAIRS`; ``()`` for a reply read as written; None when not
+    recorded (schema 1 files, hand-built steps)."""
     latency_s: float | None = field(default=None, compare=False)
-    """Wall time of this step's request in seconds, retries included, as the model was
-    called; None when no model was (a cassette answered) or not recorded. Not compared: a
-    replay equals its recording."""
+    """Wall time of this step's request in seconds, retries included; None when a cassette
+    answered or not recorded. Not compared: a replay equals its recording."""
 
 
 @dataclass(frozen=True)

@@ -1,13 +1,11 @@
 """``emrd thor-smoke``: confirm the ai2thor backend on a machine with a GPU and a THOR build.
 
-Runs one episode per condition (``baseline``, ``low_light``, ``texture``) with the scout
-reference agent (no model, no network) on AI2-THOR and on the builtin world, writes both
-trajectories as JSON, and prints how their shapes compare: status, steps, rooms visited,
-the room chosen, the first step where the actions part. The backends are built from the
-same layout and spawn, but THOR sees with its own renderer and asset sizes, so the shapes
-may part after a few steps; what must hold is that every THOR episode runs to the end
-without THOR refusing anything. Exit status: 0 when it does, 1 when not, 2 on a
-configuration error (no build, no Vulkan: the message names the fix).
+Runs one scout episode per condition (no model, no network) on AI2-THOR and on the builtin
+world, writes both trajectories as JSON, and prints how their shapes compare (status, steps,
+rooms visited, room chosen, the first step where the actions part). THOR renders with its
+own assets, so the shapes may part after a few steps; what must hold is that every THOR
+episode runs to the end without THOR refusing anything. Exit status: 0 when it does, 1 when
+not, 2 on a configuration error (no build, no Vulkan: the message names the fix).
 
     emrd thor-smoke --out smoke/ --local-executable-path ~/thor-CloudRendering-<commit>/...
     python -m pytest_emrd.cli thor-smoke --out smoke/         # the same

@@ -1,10 +1,9 @@
 """``emrd view RUN_DIR [EPISODE...] [--out DIR] [--cassettes DIR] [--gif]``: episode pages.
 
-Writes ``<case_id>.html`` per episode (self-contained: frames, reply, map, metrics over
-time, a step slider; ``#step=N`` opens step N) and ``index.html``; with ``--gif`` also
-``<case_id>.gif``. EPISODE is a case id or a shell pattern (``'*-kitchen-ep0?'``); default
-every episode of the run. Frames are re-rendered and checked against the digests in the
-cassettes under ``--cassettes`` (default ``./cassettes`` when it exists).
+Writes a self-contained ``<case_id>.html`` per episode (``#step=N`` opens step N), and
+``index.html``; with ``--gif`` also ``<case_id>.gif``. EPISODE is a case id or a shell
+pattern (default: every episode). Frames are re-rendered and checked against the digests in
+the cassettes under ``--cassettes`` (default ``./cassettes`` when it exists).
 """
 
 from __future__ import annotations

@@ -59,10 +59,8 @@ class Sweep:
     single_image: bool
 
     def request(self, step: int, reply: str) -> list[dict[str, Any]]:
-        """The messages of step ``step`` (1-based) when every earlier reply was ``reply``.
-
-        Steps past the sweep reuse its turns in turn (same sizes, same number of images).
-        """
+        """The messages of step ``step`` (1-based) when every earlier reply was ``reply``;
+        steps past the sweep reuse its turns in turn (same sizes, same number of images)."""
         conversation = Conversation(self.system, single_image=self.single_image)
         for t in range(max(1, step - HISTORY_TURNS + 1), step):
             conversation.record(self._turn(t), reply)
@@ -89,25 +87,21 @@ def sweep(spec: EpisodeSpec, *, single_image: bool, steps: int = HISTORY_TURNS) 
     return Sweep(system, tuple(turns), single_image)
 
 
+def _parts(message: dict[str, Any]) -> list[dict[str, Any]]:
+    content = message["content"]
+    return content if isinstance(content, list) else [{"type": "text", "text": content}]
+
+
 def count_images(messages: list[dict[str, Any]]) -> int:
     """Image parts in OpenAI-format messages."""
-    return sum(
-        1
-        for m in messages
-        if isinstance(m["content"], list)
-        for part in m["content"]
-        if part.get("type") == "image_url"
-    )
+    return sum(part.get("type") == "image_url" for m in messages for part in _parts(m))
 
 
 def request_tokens(messages: list[dict[str, Any]], *, image_tokens: int) -> int:
     """Estimated prompt tokens: text characters / :data:`CHARS_PER_TOKEN`, plus
     ``image_tokens`` per image (the registry's figure for the provider)."""
-    chars = 0
-    for m in messages:
-        content = m["content"]
-        parts = content if isinstance(content, list) else [{"type": "text", "text": content}]
-        chars += sum(len(p["text"]) for p in parts if p.get("type") == "text")
+    texts = [p["text"] for m in messages for p in _parts(m) if p.get("type") == "text"]
+    chars = sum(map(len, texts))
     return math.ceil(chars / CHARS_PER_TOKEN) + image_tokens * count_images(messages)
 
 

@@ -1,11 +1,8 @@
 """Metric validity: reference agents with planted cognition in, the same numbers out.
 
-Each check is a row (planted value, recovered value, tolerance, verdict, note) computed by
-pure functions over trajectories with :mod:`pytest_emrd.metrics`; :func:`run_plan` runs and
-caches the episodes; ``emrd validate`` prints and writes the table.
-Names are imported on first use (:mod:`pytest_emrd._lazy`): ``emrd --help`` and every other
-``emrd`` command read the plan's constants without importing the checks, the metrics and the
-episode runner.
+Each check is a row (planted, recovered, tolerance, verdict, note) computed by pure functions
+over trajectories; :func:`run_plan` runs and caches the episodes. Names are imported on first
+use (:mod:`pytest_emrd._lazy`), so ``emrd --help`` reads the plan without the metrics.
 """
 
 from pytest_emrd._lazy import lazy_exports

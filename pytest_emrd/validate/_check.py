@@ -6,11 +6,12 @@ from __future__ import annotations
 import json
 import math
 from collections import Counter
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any, Final
 
-from pytest_emrd._serde import from_dict, json_safe, to_dict
-from pytest_emrd.errors import ProtocolError, check_choice
+from pytest_emrd._serde import from_versioned_dict, json_safe, to_dict
+from pytest_emrd.errors import check_choice
 from pytest_emrd.metrics import EpisodeMetrics
 from pytest_emrd.trajectory import Trajectory
 
@@ -78,12 +79,13 @@ class ValidationReport:
 
     @classmethod
     def from_dict(cls, data: dict[str, Any]) -> ValidationReport:
-        if data.get("schema_version") != SCHEMA_VERSION:
-            raise ProtocolError(
-                f"validation report schema_version={data.get('schema_version')!r} is not "
-                f"{SCHEMA_VERSION}; rerun emrd validate with this version of pytest-emrd."
-            )
-        return from_dict(cls, data)
+        return from_versioned_dict(
+            cls,
+            data,
+            version=SCHEMA_VERSION,
+            what="validation report",
+            remedy="rerun emrd validate with this version of pytest-emrd.",
+        )
 
 
 def judged(ok: bool) -> str:
@@ -98,6 +100,21 @@ def fmt(value: float | None, digits: int = 2) -> str:
     if math.isinf(value):
         return "inf"
     return f"{value:.{digits}f}"
+
+
+def max_gap(a: Sequence[float | None], b: Sequence[float | None]) -> float:
+    """Largest ``|a_i - b_i|``; ``inf`` when the two differ in length, in which are undefined,
+    or in an infinite value (equal infinities differ by 0)."""
+    if len(a) != len(b) or any((x is None) != (y is None) for x, y in zip(a, b, strict=True)):
+        return math.inf
+    pairs = [(x, y) for x, y in zip(a, b, strict=True) if x is not None and y is not None]
+    return max([0.0, *(_gap(x, y) for x, y in pairs)])
+
+
+def _gap(x: float, y: float) -> float:
+    if x == y:
+        return 0.0
+    return math.inf if math.isinf(x) or math.isinf(y) else abs(x - y)
 
 
 def pct(value: float | None) -> str:

@@ -53,7 +53,7 @@ from pytest_emrd.metrics import (
 )
 from pytest_emrd.metrics._tracking import layout_scale, track_episode
 from pytest_emrd.trajectory import Trajectory
-from pytest_emrd.validate._check import Check, fmt, judged, pct
+from pytest_emrd.validate._check import Check, fmt, judged, max_gap, pct
 
 #: Coordinates are written to this many metres in every frame.
 WRITTEN_M: Final = 0.01
@@ -77,12 +77,6 @@ def _final_ids(traj: Trajectory) -> dict[str, list[str]]:
         if "id" in rec:
             ids.setdefault(rec["id"], []).append(label)
     return ids
-
-
-def _max_gap(a: Sequence[float | None], b: Sequence[float | None]) -> float:
-    gaps = [abs(x - y) for x, y in zip(a, b, strict=True) if x is not None and y is not None]
-    undefined = sum((x is None) != (y is None) for x, y in zip(a, b, strict=True))
-    return math.inf if undefined else max(gaps, default=0.0)
 
 
 def rmse_from_pa(
@@ -137,9 +131,9 @@ def own_frame_checks(spawn: Paired, own: Paired) -> list[Check]:
         _, _, scale = _rmse(traj, s)
         bound = math.sqrt(2.0) * WRITTEN_M / scale if scale else 0.0
         excess.append(abs((o.pa or 0.0) - (s.pa or 0.0)) - bound)
-    pa_gap = _max_gap([m.pa for _, m in own], [m.pa for _, m in spawn])
-    aec_gap = _max_gap([m.aec for _, m in own], [m.aec for _, m in spawn])
-    sir_gap = _max_gap([m.sir for _, m in own], [m.sir for _, m in spawn])
+    pa_gap = max_gap([m.pa for _, m in own], [m.pa for _, m in spawn])
+    aec_gap = max_gap([m.aec for _, m in own], [m.aec for _, m in spawn])
+    sir_gap = max_gap([m.sir for _, m in own], [m.sir for _, m in spawn])
     same = all(o.matched == s.matched for (_, o), (_, s) in zip(own, spawn, strict=True))
     note = f"{len(own)} paired episodes; the own frame is a seeded rotation + translation"
     return [
@@ -193,7 +187,7 @@ def rate_check(section: str, name: str, planted: float, count: int, total: int,
 def halluc_checks(halluc: Paired, clean: Paired, h: float) -> list[Check]:
     """Hallucinations change no score and are counted as unrecognised, Binomial(T, h)."""
     gaps = {
-        name: _max_gap([getattr(m, name) for _, m in halluc], [getattr(m, name) for _, m in clean])
+        name: max_gap([getattr(m, name) for _, m in halluc], [getattr(m, name) for _, m in clean])
         for name in ("aec", "pa", "sir")
     }
 
@@ -258,7 +252,7 @@ def dup_checks(dup: Paired, clean: Paired, p: float) -> list[Check]:
         predicted.append(sum(min(mapped[k] + extra[k], capacity[k]) for k in capacity) / total)
         recovered.append(md.aec)
         rises.append((md.aec or 0.0) - (mc.aec or 0.0))
-    gap = _max_gap(predicted, recovered)
+    gap = max_gap(predicted, recovered)
     planted, measured = [], []
     for td, md in dup:
         ratio = _sir_ratio_planted(td)
@@ -267,7 +261,7 @@ def dup_checks(dup: Paired, clean: Paired, p: float) -> list[Check]:
             measured.append(md.sir / md.aec)
     want = float(np.mean(planted)) if planted else math.nan
     got = float(np.mean(measured)) if measured else math.nan
-    sir_gap = _max_gap(planted, measured) if planted else math.inf
+    sir_gap = max_gap(planted, measured) if planted else math.inf
     return [
         Check("Explore", f"AEC with duplicates, mimic-p{p:g}: Eq. AEC", "sum_k min(|M_k| + D_k, "
               "|E_k|) / |E|", f"max |diff| {fmt(gap, 4)}; mean rise {fmt(np.mean(rises), 4)}",

@@ -1,7 +1,6 @@
 """Which episodes validation needs: one group of episodes per planted agent and condition.
 
-Pure data: the runner (:mod:`._run`) turns a :class:`Plan` into trajectories, the checks
-read them back by group name. Every group runs the same offices (``EpisodeSpec.seed``
+Pure data, read back by group name. Every group runs the same offices (``EpisodeSpec.seed``
 depends on spawn room and episode index only), so groups are paired episode by episode.
 """
 
