@@ -104,10 +104,8 @@ def _builder(tp: Any) -> _Build:
         if type(None) not in args or inner in (_same, _as_float):  # both pass None through
             return inner
         return lambda data: None if data is None else inner(data)
-    if origin is tuple and len(args) == 2 and args[1] is Ellipsis:
-        return _homogeneous(_builder(args[0]))
     if origin is tuple:
-        return _fixed([_builder(a) for a in args])
+        return _tuple_builder(args)
     if origin is frozenset:
         item = _builder(args[0])
         return lambda data: frozenset(map(item, data))
@@ -127,17 +125,10 @@ def _dataclass_builder(tp: Any) -> _Build:
             raise _Invalid(f"expected an object, got {type(data).__name__}")
         if not names.issuperset(data):
             raise _Invalid(f"unknown field(s) {sorted(set(data) - names)}")
-        kwargs = {}
-        for name, value in data.items():
-            build_field = fields[name]
-            if build_field is _same:
-                kwargs[name] = value
-                continue
-            try:
-                kwargs[name] = build_field(value)
-            except _Invalid as exc:
-                exc.path = f".{name}{exc.path}"
-                raise exc from exc.__cause__
+        kwargs = {
+            name: value if (make := fields[name]) is _same else _at(make, value, ".{}", name)
+            for name, value in data.items()
+        }
         try:
             return tp(**kwargs)
         except TypeError as exc:
@@ -146,44 +137,27 @@ def _dataclass_builder(tp: Any) -> _Build:
     return build
 
 
-def _fixed(items: list[_Build]) -> _Build:
-    """The builder of ``tuple[X, Y, ...]`` (a fixed length)."""
+def _tuple_builder(args: tuple[Any, ...]) -> _Build:
+    """The builder of ``tuple[X, ...]`` or of the fixed ``tuple[X, Y]``."""
+    homogeneous = len(args) == 2 and args[1] is Ellipsis
+    items = [_builder(a) for a in args]
 
     def build(data: Any) -> tuple[Any, ...]:
-        if _is_list(data) and len(data) != len(items):
+        if not isinstance(data, list | tuple):
+            raise _Invalid(f"expected a list, got {type(data).__name__}")
+        if homogeneous:
+            if items[0] is _same:
+                return tuple(data)
+            builders = items[:1] * len(data)
+        elif len(data) != len(items):
             side = "shorter" if len(data) < len(items) else "longer"
             raise _Invalid(f"zip() argument 2 is {side} than argument 1")
-        return _items(data, items)
+        else:
+            builders = items
+        pairs = enumerate(zip(builders, data, strict=True))
+        return tuple(v if b is _same else _at(b, v, "[{}]", i) for i, (b, v) in pairs)
 
     return build
-
-
-def _homogeneous(item: _Build) -> _Build:
-    """The builder of ``tuple[X, ...]``: one comprehension over the items; on a bad item, the
-    item-by-item loop again, to say which item it was."""
-
-    def build(data: Any) -> tuple[Any, ...]:
-        if not _is_list(data):
-            raise _Invalid(f"expected a list, got {type(data).__name__}")
-        if item is _same:
-            return tuple(data)
-        try:
-            return tuple([item(v) for v in data])
-        except _Invalid:
-            return _items(data, [item] * len(data))
-
-    return build
-
-
-def _is_list(data: Any) -> bool:
-    return isinstance(data, list | tuple)
-
-
-def _items(data: Any, builders: list[_Build]) -> tuple[Any, ...]:
-    if not _is_list(data):
-        raise _Invalid(f"expected a list, got {type(data).__name__}")
-    pairs = enumerate(zip(builders, data, strict=False))
-    return tuple(v if build is _same else _at(build, v, "[{}]", i) for i, (build, v) in pairs)
 
 
 def from_versioned_dict(

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import argparse
 import json
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -81,7 +81,6 @@ def run_smoke(
     layouts: str,
     out: Path,
     backend_options: Mapping[str, Any],
-    conditions: Sequence[str] = CONDITIONS,
 ) -> list[Comparison]:
     """One scout episode per condition on both backends; trajectories go to ``out``."""
     from pytest_emrd.episode import SimulatorPool, run_episode
@@ -89,7 +88,7 @@ def run_smoke(
     out.mkdir(parents=True, exist_ok=True)
     results = []
     with SimulatorPool(backend_options) as pool:
-        for condition in conditions:
+        for condition in CONDITIONS:
             runs = {}
             for backend in ("builtin", "ai2thor"):
                 spec = EpisodeSpec(

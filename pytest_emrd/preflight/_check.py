@@ -20,7 +20,6 @@ from __future__ import annotations
 import os
 import shlex
 import time
-from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any, Final
 
@@ -297,7 +296,6 @@ def preflight(
     *,
     episodes: int,
     probe: bool = True,
-    client_factory: Callable[[ModelConfig], ChatClient] = make_client,
     models_file: str | None = None,
 ) -> PreflightReport:
     """Check that ``config`` can run ``episodes`` live episodes like ``spec`` (its modality,
@@ -314,7 +312,7 @@ def preflight(
         if checks[0].status == "fail" or url.status == "fail":
             checks.append(Check("probe", "skip", "needs the key and a reachable endpoint"))
         else:
-            checks += _send(state, client_factory(config))
+            checks += _send(state, make_client(config))
             if all(c.name != "context" for c in checks):
                 checks.append(_context(state, max_model_len))
     estimate = estimate_cost(

@@ -23,7 +23,6 @@ import math
 from dataclasses import dataclass, replace
 from typing import Any, Final
 
-from pytest_emrd._serde import to_dict
 from pytest_emrd.agent import HISTORY_TURNS, Conversation, UserTurn, build_system_prompt
 from pytest_emrd.episode import build_simulator, start_world, user_turn
 from pytest_emrd.trajectory import EpisodeSpec
@@ -33,7 +32,7 @@ SWEEP_ACTION: Final = "Turn(Right)"
 CHARS_PER_TOKEN: Final = 4
 
 
-def sample_reply(action: str = SWEEP_ACTION) -> str:
+def sample_reply() -> str:
     """A reply in the protocol the system prompt asks for (the window's assistant turns)."""
     return json.dumps(
         {
@@ -44,7 +43,7 @@ def sample_reply(action: str = SWEEP_ACTION) -> str:
                 "Chair_1": {"type": "Chair", "room": "Office", "x": 1.0, "z": 1.9, "facing": "+z"},
                 "Doorway_1": {"type": "Doorway", "room": "Office", "x": 3.1, "z": 0.4},
             },
-            "action": action,
+            "action": SWEEP_ACTION,
             "reasoning": "Sweep the room before leaving it.",
         }
     )
@@ -70,13 +69,14 @@ class Sweep:
         return replace(self.turns[(step - 1) % len(self.turns)], step=step)
 
 
-def sweep(spec: EpisodeSpec, *, single_image: bool, steps: int = HISTORY_TURNS) -> Sweep:
-    """The first ``steps`` user turns of ``spec`` on the built-in world, turning right."""
+def sweep(spec: EpisodeSpec, *, single_image: bool) -> Sweep:
+    """The first :data:`~pytest_emrd.agent.HISTORY_TURNS` user turns of ``spec`` on the
+    built-in world, turning right."""
     sim = build_simulator("builtin")
     try:
         layout, obs = start_world(spec, sim)
         turns = []
-        for t in range(1, steps + 1):
+        for t in range(1, HISTORY_TURNS + 1):
             turns.append(user_turn(spec, t, obs))
             obs = sim.step(SWEEP_ACTION)
     finally:
@@ -168,9 +168,6 @@ class CostEstimate:
             f"{_tokens(self.completion_bound)} at max_tokens {self.max_tokens:,}), {cost}{hours} "
             f"({self.basis} estimate; largest request ~{self.peak_request_tokens:,} tokens)"
         )
-
-    def to_dict(self) -> dict[str, Any]:
-        return to_dict(self)
 
 
 def _tokens(n: int) -> str:

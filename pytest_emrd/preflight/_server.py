@@ -69,17 +69,11 @@ def _entries(data: Any) -> list[dict[str, Any]]:
     return [i for i in items if isinstance(i, dict)] if isinstance(items, list) else []
 
 
-def server_info(
-    url: str,
-    model_id: str,
-    *,
-    timeout: float = LIST_TIMEOUT_S,
-    headers: dict[str, str] | None = None,
-) -> ServerInfo:
+def server_info(url: str, model_id: str, *, headers: dict[str, str] | None = None) -> ServerInfo:
     """``GET url`` with ``headers`` (the key, when there is one); never raises for a network
     or protocol failure."""
     try:
-        response = httpx.get(url, timeout=timeout, headers=headers)
+        response = httpx.get(url, timeout=LIST_TIMEOUT_S, headers=headers)
     except httpx.HTTPError as exc:
         return ServerInfo(url, None, error=f"{type(exc).__name__}: {exc}")
     if response.status_code != 200:

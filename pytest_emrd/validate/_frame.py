@@ -54,13 +54,13 @@ def _pooled(ems: Sequence[EpisodeMetrics]) -> dict[str, list[float | None]]:
     }
 
 
-def frame_checks(groups: Mapping[str, Sequence[Episode]], *, seed: int = FRAME_SEED) -> list[Check]:
+def frame_checks(groups: Mapping[str, Sequence[Episode]]) -> list[Check]:
     """One row per metric: max |change| when every trajectory's maps move to a random frame.
 
     Only trajectories can be re-expressed; metrics-only episodes are skipped (counted in the
     note). No trajectory at all: no row.
     """
-    rng = np.random.default_rng(seed)
+    rng = np.random.default_rng(FRAME_SEED)
     worst = dict.fromkeys([*EPISODE_METRICS, *_pooled([])], 0.0)
     n = skipped = 0
     for episodes in groups.values():
@@ -80,7 +80,7 @@ def frame_checks(groups: Mapping[str, Sequence[Episode]], *, seed: int = FRAME_S
         return []
     note = (
         f"{n} trajectories of {len(groups)} groups, each in its own random proper rigid frame "
-        f"(seed {seed})"
+        f"(seed {FRAME_SEED})"
         + (f"; {skipped} errored or metrics-only episodes skipped" if skipped else "")
     )
     return [

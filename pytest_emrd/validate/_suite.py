@@ -29,7 +29,6 @@ from pytest_emrd.validate._plan import (
     MIMIC_MODELS,
     MIMIC_SIGMA,
     WINDOW_SIZES,
-    Group,
 )
 from pytest_emrd.validate._remember import (
     decay_checks,
@@ -52,9 +51,9 @@ def _episodes(groups: Groups, name: str) -> Sequence[Episode]:
     return trajs
 
 
-def _need(groups: Groups, group: Group) -> list[EpisodeMetrics]:
-    """The group's episodes as metrics, matched once and shared by every row."""
-    return as_episode_metrics(_episodes(groups, group.name))
+def _need(groups: Groups, name: str) -> list[EpisodeMetrics]:
+    """The episodes of group ``name`` as metrics, matched once and shared by every row."""
+    return as_episode_metrics(_episodes(groups, name))
 
 
 def _trajectories(groups: Groups, name: str) -> list[Trajectory]:
@@ -89,14 +88,12 @@ def episode_checks(groups: Groups) -> list[Check]:
 
 def scout_checks(groups: Groups) -> list[Check]:
     """Rows of the scout family (and ``prior``)."""
-    scout = _need(groups, Group("scout", "baseline"))
-    dark = _need(groups, Group("scout", "low_light"))
-    decays = {float(m): _need(groups, Group(f"scout-decay-{m}", "baseline")) for m in DECAY_MEANS}
-    windows = {k: _need(groups, Group(f"scout-window-{k}", "baseline")) for k in WINDOW_SIZES}
-    serial = _need(groups, Group("scout-serial", "baseline"))
-    prior = _need(groups, Group("prior", "baseline"))
+    scout, dark = _need(groups, "scout"), _need(groups, "scout@low_light")
+    decays = {float(m): _need(groups, f"scout-decay-{m}") for m in DECAY_MEANS}
+    windows = {k: _need(groups, f"scout-window-{k}") for k in WINDOW_SIZES}
+    serial, prior = _need(groups, "scout-serial"), _need(groups, "prior")
     return [
-        *exploration_checks(_trajectories(groups, Group("scout", "baseline").name), dark),
+        *exploration_checks(_trajectories(groups, "scout"), dark),
         *frame_checks(groups),
         *decay_checks(decays),
         *window_fit_checks(windows, decays),
