@@ -19,6 +19,7 @@ import json
 import threading
 from collections import OrderedDict
 from collections.abc import Callable
+from dataclasses import dataclass
 from json.encoder import encode_basestring
 from typing import Any, Final
 
@@ -43,16 +44,14 @@ def encoder(sort_keys: bool, ensure_ascii: bool, allow_nan: bool = True) -> Call
 wire_json: Final = encoder(sort_keys=False, ensure_ascii=False, allow_nan=False)
 
 
+@dataclass(slots=True, eq=False)
 class Fragment:
     """One item of a sent body's top-level list: the item, the UTF-8 bytes of its wire JSON,
     and its canonical (redacted) bytes once the redactor has computed them."""
 
-    __slots__ = ("canonical", "item", "wire")
-
-    def __init__(self, item: Any, wire: bytes) -> None:
-        self.item = item
-        self.wire = wire
-        self.canonical: bytes | None = None
+    item: Any
+    wire: bytes
+    canonical: bytes | None = None
 
 
 _lock = threading.Lock()

@@ -39,11 +39,6 @@ CATEGORIES: Final[tuple[str, ...]] = ("landmark", "salient", "clutter")
 MAX_STEPS: Final = 50
 
 
-def _stable_seed(*parts: object) -> int:
-    digest = hashlib.sha256("\x1f".join(map(str, parts)).encode()).digest()
-    return int.from_bytes(digest[:4], "big")
-
-
 @dataclass(frozen=True)
 class EpisodeSpec:
     """Which episode to run; everything about an episode follows from this.
@@ -76,7 +71,8 @@ class EpisodeSpec:
     def seed(self) -> int:
         """Episode seed (spawn pose, texture colours, and the office under ``generated``),
         shared across models, conditions and variants."""
-        return _stable_seed("emrd-world", self.spawn, self.episode)
+        digest = hashlib.sha256(f"emrd-world\x1f{self.spawn}\x1f{self.episode}".encode()).digest()
+        return int.from_bytes(digest[:4], "big")
 
     @property
     def case_id(self) -> str:

@@ -13,7 +13,6 @@ import fnmatch
 from pathlib import Path
 
 from pytest_emrd.errors import ConfigError
-from pytest_emrd.trajectory import Trajectory
 
 _DEFAULT_CASSETTES = Path("cassettes")
 
@@ -45,11 +44,8 @@ def _run(args: argparse.Namespace) -> int:
     check_run_dirs([args.run_dir])
     trajectories = sorted(load_run_dirs([args.run_dir]), key=lambda t: t.spec.case_id)
     if args.episodes:
-
-        def wanted(t: Trajectory) -> bool:
-            return any(fnmatch.fnmatchcase(t.spec.case_id, p) for p in args.episodes)
-
-        chosen = [t for t in trajectories if wanted(t)]
+        match = fnmatch.fnmatchcase
+        chosen = [t for t in trajectories if any(match(t.spec.case_id, p) for p in args.episodes)]
         if not chosen:
             raise ConfigError(
                 f"episodes={args.episodes} match no episode of {args.run_dir} (it holds e.g. "

@@ -1,18 +1,10 @@
-"""Preflight of one model: key, endpoint, one real probe call, context, images, cost.
-
-Checks, in order (each ``pass``, ``fail``, ``skip`` or ``info``):
-
-* ``key`` -- the registry's API-key variable is set (its value is never shown);
-* ``url`` -- the endpoint answers ``GET /models`` and, when it lists models, lists ours;
-* ``probe`` -- one real request of the episode loop (:class:`._estimate.Sweep`: a full
-  history window, real 512x512 frames) is answered and reads in our JSON protocol;
-* ``images`` -- the endpoint took as many frames in one request as the window sends;
-* ``context`` -- the context length the server reports holds the largest request plus
-  ``max_tokens`` (vLLM reports it; hosted APIs do not);
-* ``estimate`` -- tokens and cost of the requested live episodes (:mod:`._estimate`).
-
-A refusal vLLM explains (too many images, context too short) fails ``images`` or
-``context`` with the ``vllm serve`` flag that fixes it.
+"""Preflight of one model, checks in order: ``key`` (the registry's API-key variable is set;
+its value is never shown), ``url`` (``GET /models`` answers and, when it lists models, lists
+ours), ``probe`` (one real request of the episode loop, a full window of real frames, is
+answered in our JSON protocol), ``images`` (the endpoint took that many frames), ``context``
+(the context length the server reports holds the largest request plus ``max_tokens``) and
+``estimate`` (tokens and cost of the live episodes). A refusal vLLM explains fails
+``images`` or ``context`` with the ``vllm serve`` flag that fixes it.
 """
 
 from __future__ import annotations
@@ -57,8 +49,8 @@ class Check:
 
     name: str
     status: str
-    """``pass``, ``fail``, ``skip`` (a prerequisite failed), ``warn`` (go ahead, but read
-    it) or ``info``."""
+    """``pass``, ``fail``, ``skip`` (a prerequisite failed), ``warn`` (go ahead, read it) or
+    ``info``."""
     detail: str
     fix: str = ""
     """What to do when it failed."""

@@ -2,14 +2,10 @@
 refusals read back into the ``vllm serve`` flag that prevents them.
 
 The listing is asked for with the model's key and headers, as the probe will be: HTTP 401 or
-403 means the endpoint is up and refuses us, which the ``url`` check reports as a failure
-(:attr:`ServerInfo.refused`), never as a pass. vLLM lists each served model with
-``max_model_len``, the context length it was started with; that figure is reported as the
-server gives it.
-
-The refusal texts are vLLM's own (``vllm/multimodal/processing.py`` ``validate_num_items``;
-``vllm/renderers/params.py`` ``_token_len_check``; the engine's "decoder prompt" check; the
-older serving layer's "maximum context length" message); each names the number the fix needs.
+403 means the endpoint refuses us, a failure (:attr:`ServerInfo.refused`), never a pass.
+vLLM lists each served model with ``max_model_len``. The refusal texts are vLLM's own
+(``validate_num_items``, ``_token_len_check``, the "decoder prompt" and older "maximum context
+length" messages); each names the number the fix needs.
 """
 
 from __future__ import annotations

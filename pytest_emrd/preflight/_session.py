@@ -73,9 +73,8 @@ class SessionPreflight:
         )
         grid = {model: mine for model, mine in grid.items() if model not in self.checked}
         self.checked.update(grid)
-        # Reference agents run on the built-in server in this process: no key, URL or limit
-        # to get wrong, and a probe's made-up history is no conversation their scripted
-        # state accepts (mimic answers it 400).
+        # Reference agents run in this process (nothing to get wrong), and a probe's made-up
+        # history is no conversation their scripted state accepts (mimic answers it 400).
         remote = {
             model: mine
             for model, mine in grid.items()
@@ -105,6 +104,6 @@ def params_of_node_ids(ids: Iterable[str], by_id: Callable[[], Mapping[str, Any]
     for key in found:
         if key in table:
             params.append(table[key])
-            continue
-        params += [p for k, p in table.items() if f"-{key}-".find(f"-{k}-") >= 0]
+        else:
+            params += [p for k, p in table.items() if f"-{k}-" in f"-{key}-"]
     return params

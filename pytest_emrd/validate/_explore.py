@@ -40,12 +40,8 @@ def shown_fraction(traj: Trajectory) -> float | None:
     step of ``traj`` (what a perfect-memory agent that maps all it sees covers). None when
     the ground truth lists no object."""
     ids = {o.object_id for o in traj.ground_truth.objects}
-    if not ids:
-        return None
-    seen: set[str] = set()
-    for step in traj.steps:
-        seen.update(step.visible_ids)
-    return len(seen & ids) / len(ids)
+    seen = {i for step in traj.steps for i in step.visible_ids}
+    return len(seen & ids) / len(ids) if ids else None
 
 
 def _mean(values: Sequence[float]) -> float:

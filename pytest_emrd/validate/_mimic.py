@@ -1,27 +1,22 @@
 """Map, Explore, Remember and reply rows for the ``mimic`` family: the metrics recover what a
 VLM-like writer plants (:mod:`pytest_emrd.agent.reference._mimic`).
 
-Every group walks the same paths (the knobs do not touch navigation, and damaged replies and
+Every group walks the same paths (the knobs do not touch navigation; damaged replies and
 invalid actions are off except in the default group), so groups are compared episode by
-episode. The planted truth of an episode is read from the agent's own state, which travels in
-its replies: which object got a duplicate when.
+episode; the planted truth is read from the agent's own state, which travels in its replies.
 
-* **Frame.** PA of the mimic in its own frame equals PA of the same mimic in the spawn frame.
-  Both write coordinates to 0.01 m, so the own-frame map is a rigid image of the spawn-frame
-  map up to ``delta <= sqrt(2) * 0.01`` m per point (rounding in each frame). The optimal
-  Procrustes residual is 1-Lipschitz in the points (RMS norm), so ``|RMSE_own - RMSE_spawn|
-  <= delta`` and ``|PA_own - PA_spawn| <= delta / L_gt`` (coverage unchanged); that is the
-  bound per episode. AEC and SIR are counts of labels and identities: equal exactly.
+* **Frame.** Both frames write coordinates to 0.01 m, so the own-frame map is a rigid image
+  of the spawn-frame map up to ``delta <= sqrt(2) * 0.01`` m per point. The optimal
+  Procrustes residual is 1-Lipschitz in the points (RMS norm), so ``|PA_own - PA_spawn| <=
+  delta / L_gt`` per episode (coverage unchanged); AEC and SIR (counts) are equal exactly.
 * **Noise.** With ``n`` matched pairs, i.i.d. N(0, sigma^2) noise per coordinate and a proper
-  rigid fit (3 parameters), ``E[SSR] = SSR_0 + sigma^2 (2n - 3)``, where ``SSR = n RMSE^2``
-  and ``SSR_0`` is the residual of the paired noise-free episode (the scout's own placement
-  error). PA gives ``RMSE = -L_gt ln(PA / c)`` (``c`` its coverage factor), so
-  ``sigma_hat^2 = sum_i (SSR_i - SSR_0,i) / sum_i (2 n_i - 3)``, with a bootstrap CI over
-  episodes.
-* **Hallucinations** name no type of the layout: Eq. AEC's ``min`` cap and the matcher leave
-  them unmatched, so AEC, PA and SIR equal the clean episode's exactly, and the count of
-  unrecognised entries in the terminal map is Binomial(T, h): ``h_hat = sum unrecognised /
-  sum T`` with a Clopper-Pearson interval.
+  rigid fit (3 parameters), ``E[SSR] = SSR_0 + sigma^2 (2n - 3)`` (``SSR = n RMSE^2``,
+  ``SSR_0`` of the paired noise-free episode). PA gives ``RMSE = -L_gt ln(PA / c)`` (``c`` its
+  coverage factor), so ``sigma_hat^2 = sum_i (SSR_i - SSR_0,i) / sum_i (2 n_i - 3)``, with a
+  bootstrap CI over episodes.
+* **Hallucinations** name no type of the layout, so AEC, PA and SIR equal the clean
+  episode's exactly, and the unrecognised entries of the terminal map are Binomial(T, h):
+  ``h_hat = sum unrecognised / sum T`` with a Clopper-Pearson interval.
 * **Duplicates.** Eq. AEC per episode: ``AEC_p = sum_k min(|M_k| + D_k, |E_k|) / |E|`` with
   ``|M_k|`` the clean map's entries of type ``k`` and ``D_k`` the planted duplicates: AEC can
   only rise, and only where type ``k`` still has unmapped instances. SIR (Appendix B: objects

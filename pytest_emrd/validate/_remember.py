@@ -54,11 +54,8 @@ def interleaved(trajectories: Sequence[Episode]) -> list[Episode]:
 
 
 def error_curve(trajectories: Sequence[Episode], planted: float) -> list[tuple[int, float]]:
-    """``(N, |EFC_N - planted| / planted)`` over spawn-balanced prefixes of N episodes.
-
-    N runs over multiples of 4 (one episode per spawn room) up to every episode; a prefix
-    whose EFC is undefined or unbounded has error ``inf``.
-    """
+    """``(N, |EFC_N - planted| / planted)`` over spawn-balanced prefixes of N = 4, 8, ...
+    episodes; a prefix whose EFC is undefined has error ``inf``."""
     ordered = interleaved(trajectories)
     curve = []
     for n in range(4, len(ordered) + 1, 4):
@@ -192,12 +189,9 @@ def _flat(values: Sequence[float | None]) -> bool:
 
 
 def monotone(early: float | None, middle: float | None, late: float | None) -> bool:
-    """Monotone within tolerance ``tau`` (:data:`SERIAL_TOLERANCE`), on any estimate.
-
-    All three thirds defined and ``min(E, L) / (1 + tau) <= M <= max(E, L) (1 + tau)``: the
-    Middle third lies between the two ends, widened by ``tau`` on each side. This admits
-    non-decreasing, non-increasing and flat profiles (``inf`` counts as a value: no
-    forgetting) and rejects a U (``M`` below both ends by more than ``tau``) or an inverted U.
+    """Monotone within ``tau`` (:data:`SERIAL_TOLERANCE`): all thirds defined and
+    ``min(E, L) / (1 + tau) <= M <= max(E, L) (1 + tau)``. Admits non-decreasing,
+    non-increasing and flat profiles (``inf``: no forgetting), rejects a U or an inverted U.
     """
     if early is None or middle is None or late is None:
         return False
@@ -206,12 +200,8 @@ def monotone(early: float | None, middle: float | None, late: float | None) -> b
 
 
 def u_depth(early: float | None, middle: float | None, late: float | None) -> float | None:
-    """How deep the Middle third dips below the nearer end: ``max(0, 1 - M / min(E, L))``.
-
-    0 for no dip (monotone, flat or an inverted U), 1 when the ends are never forgotten and
-    the middle is (``inf`` ends, finite ``M``); None when a third is undefined. The
-    ``scout-window`` rows require a depth below :data:`MAX_U_DEPTH`.
-    """
+    """How deep the Middle third dips below the nearer end: ``max(0, 1 - M / min(E, L))``;
+    0 for no dip, 1 for ``inf`` ends and a finite ``M``, None when a third is undefined."""
     if early is None or middle is None or late is None:
         return None
     ends = min(early, late)
@@ -240,11 +230,10 @@ def serial_checks(
     windows: Mapping[int, Sequence[Episode]],
     perfect: Sequence[Episode] = (),
 ) -> list[Check]:
-    """Serial position on the censoring-aware estimate (:func:`serial_position` ``mle_*``),
-    the paper's estimator reported beside it: ``scout-serial`` shows the U shape (E, L > M);
-    no ``scout-window`` shows a U (:func:`u_depth` below :data:`MAX_U_DEPTH`; whether it is
-    also :func:`monotone` is noted); with ``perfect`` episodes, a row on the paper's
-    estimator under perfect memory (its censoring bias)."""
+    """Serial position on the censoring-aware estimate (``mle_*``, the paper's beside it):
+    ``scout-serial`` shows the U (E, L > M); no ``scout-window`` does (:func:`u_depth` below
+    :data:`MAX_U_DEPTH`, :func:`monotone` noted); with ``perfect`` episodes, a row on the
+    paper's estimator under perfect memory (its censoring bias)."""
     spe = serial_position(serial)
     e, m, late = spe.mle_early, spe.mle_middle, spe.mle_late
     u_shape = e is not None and m is not None and late is not None and min(e, late) > m
