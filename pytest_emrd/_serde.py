@@ -169,13 +169,10 @@ def from_versioned_dict(
     remedy: str,
     older: Collection[int] = (),
 ) -> T:
-    """:func:`from_dict` after checking ``data["schema_version"]`` is ``version``.
-
-    ``older`` lists earlier schema versions that are still readable: every field they lack has
-    a default in ``cls``, and the object read is upgraded to ``version``. A stored file of any
-    other schema is a :class:`ProtocolError` that names ``what`` was read and ``remedy``, what
-    to do instead (recompute, rebuild, re-run).
-    """
+    """:func:`from_dict` after checking ``data["schema_version"]`` is ``version`` or one of the
+    still readable ``older`` ones (every field they lack has a default; the object read is
+    upgraded to ``version``); any other is a :class:`ProtocolError` naming ``what`` was read
+    and the ``remedy`` (recompute, rebuild, re-run)."""
     found = data.get("schema_version") if isinstance(data, dict) else None
     if found != version and (found not in older or isinstance(found, bool)):
         raise ProtocolError(f"{what} schema_version={found!r} is not {version}; {remedy}")

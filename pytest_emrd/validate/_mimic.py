@@ -65,13 +65,10 @@ def paired(trajectories: Sequence[Trajectory]) -> list[tuple[Trajectory, Episode
     return [(t, episode_metrics(t)) for t in trajectories]
 
 
-def _final_ids(traj: Trajectory) -> dict[str, list[str]]:
-    """Object id -> its labels (oldest first) in the agent's state after the last step."""
-    ids: dict[str, list[str]] = {}
-    for label, rec in read_state(traj.steps[-1].raw_reply)["map"].items():
-        if "id" in rec:
-            ids.setdefault(rec["id"], []).append(label)
-    return ids
+def _planted_ids(traj: Trajectory, step: int) -> dict[str, str]:
+    """Label -> planted object id in the agent's state after step index ``step``."""
+    entries = read_state(traj.steps[step].raw_reply)["map"]
+    return {label: rec["id"] for label, rec in entries.items() if "id" in rec}
 
 
 def rmse_from_pa(
@@ -203,12 +200,6 @@ def halluc_checks(halluc: Paired, clean: Paired, h: float) -> list[Check]:
     ]  # fmt: skip
 
 
-def _planted_ids(traj: Trajectory, step: int) -> dict[str, str]:
-    """Label -> planted object id in the agent's state after step index ``step``."""
-    entries = read_state(traj.steps[step].raw_reply)["map"]
-    return {label: rec["id"] for label, rec in entries.items() if "id" in rec}
-
-
 def _copied_during(traj: Trajectory, start: int, end: int) -> set[str]:
     """Objects the agent wrote a copy of between step indices ``start`` and ``end``: two or more
     labels after ``end``, one of them new since before ``start`` (as SIR's copies are new
@@ -240,9 +231,9 @@ def dup_checks(dup: Paired, clean: Paired, p: float) -> list[Check]:
     for (td, md), (tc, mc) in zip(dup, clean, strict=True):
         types = {o.object_id: o.object_type for o in td.ground_truth.objects}
         capacity = Counter(types.values())
-        mapped = Counter(types[o] for o in _final_ids(tc))
-        extra = Counter(types[o] for o, labels in _final_ids(td).items()
-                        for _ in labels[1:])  # fmt: skip
+        mapped = Counter(types[o] for o in set(_planted_ids(tc, -1).values()))
+        written = list(_planted_ids(td, -1).values())  # one id per label: copies repeat it
+        extra = Counter(types[o] for o in written) - Counter(types[o] for o in set(written))
         total = sum(capacity.values())
         predicted.append(sum(min(mapped[k] + extra[k], capacity[k]) for k in capacity) / total)
         recovered.append(md.aec)

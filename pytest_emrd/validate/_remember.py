@@ -182,10 +182,8 @@ def _profile(early: float | None, middle: float | None, late: float | None) -> s
 
 def _flat(values: Sequence[float | None]) -> bool:
     """All three thirds defined and within :data:`SERIAL_TOLERANCE` of each other."""
-    if any(v is None for v in values):
-        return False
-    low, high = min(v or 0.0 for v in values), max(v or 0.0 for v in values)
-    return high <= low * (1.0 + SERIAL_TOLERANCE)
+    defined = [v for v in values if v is not None]
+    return len(defined) == len(values) and max(defined) <= min(defined) * (1.0 + SERIAL_TOLERANCE)
 
 
 def monotone(early: float | None, middle: float | None, late: float | None) -> bool:
