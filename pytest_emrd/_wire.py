@@ -25,8 +25,7 @@ from typing import Any, Final
 
 from pytest_emrd._bounded import remember
 
-#: Fragments remembered (each holds a message's wire bytes, a frame's ~27 KB for a user turn;
-#: a window is 21 messages, so this serves ~48 episodes running at once).
+#: Fragments remembered (a window is 21 messages: this serves ~48 episodes at once).
 _FRAGMENTS: Final = 1024
 #: Sent bodies remembered until the redactor has seen them (a few per request in flight).
 _BODIES: Final = 64

@@ -1,8 +1,5 @@
-"""The ``emrd`` console script.
-
-Each subcommand lives in its own module under ``pytest_emrd.cli`` and exposes
-``register(subparsers)``; heavy imports happen inside the command, not at start-up.
-"""
+"""The ``emrd`` console script: one module per subcommand, each with ``register(subparsers)``;
+heavy imports happen inside the command, not at start-up."""
 
 from __future__ import annotations
 
