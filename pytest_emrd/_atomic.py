@@ -8,12 +8,9 @@ from pathlib import Path
 
 
 def write_bytes_atomic(path: Path, data: bytes, *, temp: Path | None = None) -> None:
-    """Write ``data`` to ``path`` via a temporary file and a rename.
-
-    The temporary file is ``<temp>.<random>.tmp`` (``temp`` on the same file system as
-    ``path``), by default ``.<name>.<random>.tmp`` beside ``path``. The file gets the usual
-    permissions (``0o666`` minus the umask), not ``mkstemp``'s 0600.
-    """
+    """Write ``data`` to ``path`` via ``<temp>.<random>.tmp`` (``temp`` on the same file
+    system; default ``.<name>`` beside ``path``) and a rename, with the usual permissions
+    (``0o666`` minus the umask), not ``mkstemp``'s 0600."""
     path.parent.mkdir(parents=True, exist_ok=True)
     temp = temp or path.with_name(f".{path.name}")
     fd, tmp = tempfile.mkstemp(prefix=f"{temp.name}.", suffix=".tmp", dir=temp.parent)

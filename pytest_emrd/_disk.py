@@ -1,7 +1,7 @@
 """One line for a file system failure: the path, what went wrong, and what to do (pure).
 
-A full disk, a read-only folder, or a path whose folder is a file end every ``emrd``
-command and every pytest test in one line built here, never in a traceback.
+A full disk, a read-only folder or a file where a folder belongs end every ``emrd`` command
+and pytest test in one line built here, never in a traceback.
 """
 
 from __future__ import annotations

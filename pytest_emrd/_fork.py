@@ -1,9 +1,8 @@
 """Forked worker processes for pure computations that can run beside the rest.
 
-Reports and gates are pure computation; on a machine with cores to spare some of it runs in
-worker processes forked from this one (they start with its modules imported and its data in
-memory), each part still computed once, by the same code, to the same result. Forking is used
-only where it is safe (Linux, no other thread alive); elsewhere everything runs here.
+On a machine with cores to spare, parts of reports and gates run in workers forked from this
+process (its modules imported, its data in memory), each part computed once by the same code.
+Forking is used only where it is safe (Linux, no other thread alive); elsewhere all runs here.
 """
 
 from __future__ import annotations

@@ -1,9 +1,8 @@
 """Lazy re-exports for a package ``__init__`` (PEP 562).
 
-A package names its public API and the private module defining each name; the module is
-imported on first use. Importing one light submodule (the model registry) then no longer
-imports its heavy siblings (the HTTP clients and httpx, the reference agents), which every
-pytest process would otherwise pay for at start-up.
+A package names its public API and the private module defining each name, imported on first
+use: a light submodule (the model registry) then no longer imports its heavy siblings (httpx,
+the reference agents) into every pytest process at start-up.
 """
 
 from __future__ import annotations

@@ -1,10 +1,8 @@
 """Names that become path components, and paths that must stay inside their root (pure).
 
-A model name is a cassette folder (``cassettes/<model>/...``) and part of every episode
-file name (``<run>/episodes/<model>-<condition>-<spawn>-epNN.json``). A name that is not a
-plain slug (``../../evil``, ``/tmp/x``, ``a/b``) would write outside those roots, so names
-are checked where they enter (the model registry, ``--emrd-model``) and every built path is
-checked against its root before anything is written (:func:`check_inside`).
+A model name is a cassette folder and part of every episode file name; a name that is not a
+plain slug (``../../evil``, ``/tmp/x``) would write outside those roots, so names are checked
+where they enter (registry, ``--emrd-model``) and every built path against its root.
 """
 
 from __future__ import annotations
@@ -22,15 +20,10 @@ SLUG: Final = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._-]{0,99}$")
 SLUG_RULE: Final = "use 1-100 letters, digits, '.', '_' or '-', starting with a letter or digit"
 
 
-def is_slug(name: object) -> bool:
-    """Whether ``name`` is a string matching :data:`SLUG`."""
-    return isinstance(name, str) and SLUG.match(name) is not None
-
-
 def check_slug(where: str, name: object, *, becomes: str) -> str:
     """``name`` if it is a slug, else a one-line :class:`ConfigError`: ``where`` names the
     file or option, ``becomes`` what the name is used as (``a cassette folder``)."""
-    if not is_slug(name):
+    if not isinstance(name, str) or SLUG.match(name) is None:
         raise ConfigError(f"{where}: name {name!r} is not a plain name ({becomes}); {SLUG_RULE}.")
     return str(name)
 

@@ -1,30 +1,17 @@
 """Removing credentials from everything pytest-emrd persists or prints (pure, no I/O).
 
-One scrubber for every exit: cassettes (request URIs, request and response bodies), the
-results store (errored episodes' error text, raw replies), reports, the GitHub step summary,
-and what pytest prints or writes to ``--junitxml`` (failure messages, captured output).
-It removes:
-
-* the literal value of every configured API key wherever it appears: the environment
-  variables named by the model registry's ``api_key_env`` (:func:`watch_env`) and any
-  variable whose name ends like a credential (``*_API_KEY``, ``*_TOKEN``, ``*_SECRET``...);
-* URL userinfo (``https://user:password@host`` -> ``https://<redacted>@host``);
-* credential-like query parameters (``key``, ``api_key``, ``token``, ``access_token``,
-  ``sig``...);
-* credential-like headers and fields written as text (``Authorization: Bearer ...``,
-  ``"x-api-key": "..."``) and bare ``Bearer`` tokens.
-
-A key value is also removed URL-encoded (``%2B``, ``+`` for a space) and base64-encoded (as a
-value of its own: a key inside a longer base64 text is not found there).
+One scrubber for every exit: cassettes, the results store, reports, the GitHub step summary,
+and what pytest prints or writes to ``--junitxml``. It removes the literal value of every
+configured API key (the variables named by the registry's ``api_key_env``, :func:`watch_env`,
+and any variable named like a credential: ``*_API_KEY``, ``*_TOKEN``, ``*_SECRET``...), also
+URL-encoded and base64-encoded (as a value of its own); URL userinfo; credential-like query
+parameters; credential-like headers and fields written as text, and bare ``Bearer`` tokens.
+Values shorter than :data:`MIN_SECRET_CHARS` are not keys (a variable set to ``1`` must not
+blank every digit of a report).
 
 Logs are scrubbed by :class:`ScrubFilter`, which :func:`install_log_scrub` attaches to the
-handlers of the root logger (pytest's live-log, capture and log-file handlers while they are
-installed) and to the ``httpx``, ``httpcore``, ``urllib3`` and ``vcr`` loggers and their
-children: ``pytest --log-cli-level=DEBUG`` prints httpx's request line with the query key
-and the userinfo already removed.
-
-Values shorter than :data:`MIN_SECRET_CHARS` are not treated as keys (a variable set to
-``1`` must not blank every digit of a report).
+root logger's handlers and to the ``httpx``, ``httpcore``, ``urllib3`` and ``vcr`` loggers:
+``pytest --log-cli-level=DEBUG`` prints httpx's request line already scrubbed.
 """
 
 from __future__ import annotations
@@ -39,40 +26,16 @@ from urllib.parse import parse_qsl, quote, quote_plus, urlencode, urlsplit, urlu
 
 REDACTED: Final = "<redacted>"
 #: Query parameters whose value is a credential (compared case-insensitively).
-SECRET_PARAMS: Final = frozenset(
-    {
-        "key",
-        "api_key",
-        "apikey",
-        "api-key",
-        "token",
-        "access_token",
-        "refresh_token",
-        "id_token",
-        "auth",
-        "sig",
-        "signature",
-        "secret",
-        "client_secret",
-        "password",
-        "x-goog-api-key",
-        "x-amz-signature",
-        "x-amz-security-token",
-    }
-)
+SECRET_PARAMS: Final = frozenset({
+    "key", "api_key", "apikey", "api-key", "token", "access_token", "refresh_token", "id_token",
+    "auth", "sig", "signature", "secret", "client_secret", "password", "x-goog-api-key",
+    "x-amz-signature", "x-amz-security-token",
+})  # fmt: skip
 #: Header (and JSON field) names whose value is a credential.
 SECRET_HEADERS: Final = (
-    "authorization",
-    "proxy-authorization",
-    "x-api-key",
-    "api-key",
-    "api_key",
-    "x-goog-api-key",
-    "cookie",
-    "set-cookie",
-    "access_token",
-    "client_secret",
-)
+    "authorization", "proxy-authorization", "x-api-key", "api-key", "api_key", "x-goog-api-key",
+    "cookie", "set-cookie", "access_token", "client_secret",
+)  # fmt: skip
 #: Environment variable names treated as credentials without being registered.
 SECRET_ENV: Final = re.compile(r"(?:^|_)(?:API_KEY|APIKEY|TOKEN|SECRET|SECRET_KEY|ACCESS_KEY)$")
 MIN_SECRET_CHARS: Final = 8
@@ -102,12 +65,9 @@ def watch_env(names: Iterable[str | None]) -> None:
 
 def secret_values(env: Mapping[str, str] | None = None) -> tuple[str, ...]:
     """The configured key values present in ``env`` (default: the process environment),
-    longest first so that a key containing another is removed whole.
-
-    For the process environment the answer is cached against a fingerprint of its raw
-    bytes (reading ``os.environ`` decodes every variable: 150 us for 40 of them, paid on
-    every request otherwise).
-    """
+    longest first so that a key containing another is removed whole. For the process
+    environment the answer is cached against a fingerprint of its raw bytes (decoding
+    ``os.environ`` costs 150 us for 40 variables, paid on every request otherwise)."""
     if env is not None:
         return _secret_values(env)
     raw = getattr(os.environ, "_data", None)
@@ -149,11 +109,8 @@ def scrub_secrets(text: str, secrets: Iterable[str] | None = None) -> str:
 
 
 def scrub(text: str, secrets: Iterable[str] | None = None) -> str:
-    """``text`` without key values, URL userinfo, secret query parameters or headers.
-
-    Each pattern runs only when a cheap substring test says it may match, so scrubbing a
-    stored episode (100 KB of replies) costs well under a millisecond.
-    """
+    """``text`` without key values, URL userinfo, secret query parameters or headers (each
+    pattern runs only when a cheap substring test says it may match)."""
     text = scrub_secrets(text, secrets)
     if "://" in text and "@" in text:
         text = _USERINFO.sub(rf"\g<scheme>{REDACTED}@", text)

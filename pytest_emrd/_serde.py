@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import operator
 import types
 import typing
 from collections.abc import Callable, Collection
@@ -26,92 +25,32 @@ def to_dict(obj: Any) -> Any:
 
     Dataclasses become dicts of their fields in declaration order, tuples and lists become
     lists, dict keys become ``str(key)``, sets become sorted lists; anything else (str, numbers
-    including ``-0.0``/``nan``/``inf``, None, enums, paths) is returned as it is. The writer of
-    each class is compiled once (:func:`_writer`), not re-derived for every value.
+    including ``-0.0``/``nan``/``inf``, None, enums, paths) is returned as it is.
     """
-    return _writer(type(obj))(obj)
-
-
-_Write = Callable[[Any], Any]
-
-
-@cache
-def _writer(cls: type) -> _Write:
-    """The function writing values whose class is ``cls``, dispatched on the runtime class so
-    a dataclass subclass writes its own fields."""
-    if dataclasses.is_dataclass(cls):
-        return _dataclass_writer(cls)
-    if issubclass(cls, tuple | list):
-        return _write_list
-    if issubclass(cls, dict):
-        return lambda obj: {str(k): _writer(type(v))(v) for k, v in obj.items()}
-    if issubclass(cls, frozenset | set):
-        return lambda obj: sorted(map(to_dict, obj))
-    return _same
-
-
-def _write_list(obj: Any) -> list[Any]:
-    return [_writer(type(v))(v) for v in obj]  # to_dict inlined: one call less per item
-
-
-def _dataclass_writer(cls: Any) -> _Write:
-    """Field names resolved once; fields whose type hint holds only JSON scalars copied as
-    they are, tuples of scalars copied into lists, every other field through :func:`to_dict`
-    (the writer of its value's own class). The hints are trusted for scalars: a field hinted
-    ``float`` that held a tuple would be copied, not listed (mypy keeps the fields to their
-    hints; ``tests/test_serde.py`` checks every package dataclass against the generic walk)."""
-    names = tuple(f.name for f in dataclasses.fields(cls))
-    try:
-        hints = typing.get_type_hints(cls)
-    except (NameError, TypeError):  # a hint naming a class out of reach: dispatch every field
-        hints = {}
-    writers = [(name, _field_writer(hints.get(name, Any)) or _same) for name in names]
-    if len(names) < 2:  # attrgetter of one name returns the value, not a 1-tuple
-        return lambda obj: {name: write(getattr(obj, name)) for name, write in writers}
-    values = operator.attrgetter(*names)
-    nested = tuple(
-        (i, name, write) for i, (name, write) in enumerate(writers) if write is not _same
-    )
-    if not nested:
-        return lambda obj: dict(zip(names, values(obj), strict=True))
-
-    def write(obj: Any) -> dict[str, Any]:
-        got = values(obj)
-        out = dict(zip(names, got, strict=True))
-        for i, name, write_field in nested:
-            out[name] = write_field(got[i])
-        return out
-
-    return write
-
-
-def _field_writer(hint: Any) -> _Write | None:
-    """How to write a field of type ``hint``: None when the value is copied as it is."""
-    if _is_scalar(hint):
-        return None
-    origin, args = typing.get_origin(hint), typing.get_args(hint)
-    if origin in (typing.Union, types.UnionType) and type(None) in args:
-        inner = [a for a in args if a is not type(None)]
-        if len(inner) == 1 and (write := _field_writer(inner[0])) is not None:
-            return lambda value: None if value is None else write(value)
-    if origin is tuple and args and all(_is_scalar(a) for a in args if a is not Ellipsis):
-        return list
-    return to_dict
+    if isinstance(obj, _SCALARS):
+        return obj
+    names = _field_names(type(obj))
+    if names is not None:
+        return {name: to_dict(getattr(obj, name)) for name in names}
+    if isinstance(obj, tuple | list):
+        return [to_dict(v) for v in obj]
+    if isinstance(obj, dict):
+        return {str(k): to_dict(v) for k, v in obj.items()}
+    if isinstance(obj, frozenset | set):
+        return sorted(map(to_dict, obj))
+    return obj
 
 
 #: The classes JSON writes as scalars; :func:`to_dict` returns their values unchanged.
-_SCALARS: Final = frozenset({str, int, float, bool, type(None)})
+_SCALARS: Final = (str, int, float, type(None))
 
 
-def _is_scalar(hint: Any) -> bool:
-    if hint in _SCALARS or hint is None:
-        return True
-    origin = typing.get_origin(hint)
-    if origin is typing.Literal:
-        return True
-    if origin in (typing.Union, types.UnionType):
-        return all(_is_scalar(a) for a in typing.get_args(hint))
-    return False
+@cache
+def _field_names(cls: type) -> tuple[str, ...] | None:
+    """The field names of dataclass ``cls`` (read once per class), else None."""
+    if dataclasses.is_dataclass(cls):
+        return tuple(f.name for f in dataclasses.fields(cls))
+    return None
 
 
 def from_dict(cls: type[T], data: Any) -> T:
@@ -125,13 +64,9 @@ def from_dict(cls: type[T], data: Any) -> T:
 class _Invalid(Exception):
     """A value that does not fit its type; ``path`` grows as the error climbs the tree."""
 
-    def __init__(self, message: str, path: str = "") -> None:
+    def __init__(self, message: str) -> None:
         super().__init__(message)
-        self.message, self.path = message, path
-
-    def under(self, step: str) -> _Invalid:
-        self.path = step + self.path
-        return self
+        self.message, self.path = message, ""
 
 
 _Build = Callable[[Any], Any]
@@ -143,6 +78,15 @@ def _same(data: Any) -> Any:
 
 def _as_float(data: Any) -> Any:
     return float(data) if isinstance(data, int) else data
+
+
+def _at(build: _Build, value: Any, step: str, key: object) -> Any:
+    """``build(value)``; a failure's path gains ``step`` formatted with ``key``."""
+    try:
+        return build(value)
+    except _Invalid as exc:
+        exc.path = step.format(key) + exc.path
+        raise exc from exc.__cause__
 
 
 @cache
@@ -167,17 +111,7 @@ def _builder(tp: Any) -> _Build:
         return lambda data: frozenset(map(item, data))
     if origin is dict:
         value = _builder(args[1])
-
-        def build_dict(data: Any) -> Any:
-            out = {}
-            for k, v in data.items():
-                try:
-                    out[k] = value(v)
-                except _Invalid as exc:
-                    raise exc.under(f"[{k!r}]") from exc.__cause__
-            return out
-
-        return build_dict
+        return lambda data: {k: _at(value, v, "[{!r}]", k) for k, v in data.items()}
     return _as_float if tp is float else _same
 
 
@@ -191,16 +125,10 @@ def _dataclass_builder(tp: Any) -> _Build:
             raise _Invalid(f"expected an object, got {type(data).__name__}")
         if not names.issuperset(data):
             raise _Invalid(f"unknown field(s) {sorted(set(data) - names)}")
-        kwargs = {}
-        for name, value in data.items():
-            build_field = fields[name]
-            if build_field is _same:
-                kwargs[name] = value
-                continue
-            try:
-                kwargs[name] = build_field(value)
-            except _Invalid as exc:
-                raise exc.under(f".{name}") from exc.__cause__
+        kwargs = {
+            name: value if (make := fields[name]) is _same else _at(make, value, ".{}", name)
+            for name, value in data.items()
+        }
         try:
             return tp(**kwargs)
         except TypeError as exc:
@@ -210,53 +138,26 @@ def _dataclass_builder(tp: Any) -> _Build:
 
 
 def _tuple_builder(args: tuple[Any, ...]) -> _Build:
-    if len(args) == 2 and args[1] is Ellipsis:
-        return _homogeneous(_builder(args[0]))
+    """The builder of ``tuple[X, ...]`` or of the fixed ``tuple[X, Y]``."""
+    homogeneous = len(args) == 2 and args[1] is Ellipsis
     items = [_builder(a) for a in args]
 
-    def build_fixed(data: Any) -> tuple[Any, ...]:
-        if _is_list(data) and len(data) != len(items):
+    def build(data: Any) -> tuple[Any, ...]:
+        if not isinstance(data, list | tuple):
+            raise _Invalid(f"expected a list, got {type(data).__name__}")
+        if homogeneous:
+            if items[0] is _same:
+                return tuple(data)
+            builders = items[:1] * len(data)
+        elif len(data) != len(items):
             side = "shorter" if len(data) < len(items) else "longer"
             raise _Invalid(f"zip() argument 2 is {side} than argument 1")
-        return _items(data, items)
-
-    return build_fixed
-
-
-def _homogeneous(item: _Build) -> _Build:
-    """The builder of ``tuple[X, ...]``: one comprehension over the items; on a bad item, the
-    item-by-item loop again, to say which item it was."""
-
-    def build(data: Any) -> tuple[Any, ...]:
-        if not _is_list(data):
-            raise _Invalid(f"expected a list, got {type(data).__name__}")
-        if item is _same:
-            return tuple(data)
-        try:
-            return tuple([item(v) for v in data])
-        except _Invalid:
-            return _items(data, [item] * len(data))
+        else:
+            builders = items
+        pairs = enumerate(zip(builders, data, strict=True))
+        return tuple(v if b is _same else _at(b, v, "[{}]", i) for i, (b, v) in pairs)
 
     return build
-
-
-def _is_list(data: Any) -> bool:
-    return isinstance(data, list | tuple)
-
-
-def _items(data: Any, builders: list[_Build]) -> tuple[Any, ...]:
-    if not _is_list(data):
-        raise _Invalid(f"expected a list, got {type(data).__name__}")
-    out = []
-    for i, (build, v) in enumerate(zip(builders, data, strict=False)):
-        if build is _same:
-            out.append(v)
-            continue
-        try:
-            out.append(build(v))
-        except _Invalid as exc:
-            raise exc.under(f"[{i}]") from exc.__cause__
-    return tuple(out)
 
 
 def from_versioned_dict(
@@ -268,13 +169,10 @@ def from_versioned_dict(
     remedy: str,
     older: Collection[int] = (),
 ) -> T:
-    """:func:`from_dict` after checking ``data["schema_version"]`` is ``version``.
-
-    ``older`` lists earlier schema versions that are still readable: every field they lack has
-    a default in ``cls``, and the object read is upgraded to ``version``. A stored file of any
-    other schema is a :class:`ProtocolError` that names ``what`` was read and ``remedy``, what
-    to do instead (recompute, rebuild, re-run).
-    """
+    """:func:`from_dict` after checking ``data["schema_version"]`` is ``version`` or one of the
+    still readable ``older`` ones (every field they lack has a default; the object read is
+    upgraded to ``version``); any other is a :class:`ProtocolError` naming ``what`` was read
+    and the ``remedy`` (recompute, rebuild, re-run)."""
     found = data.get("schema_version") if isinstance(data, dict) else None
     if found != version and (found not in older or isinstance(found, bool)):
         raise ProtocolError(f"{what} schema_version={found!r} is not {version}; {remedy}")

@@ -1,22 +1,15 @@
 """Request bodies encoded once per message, handed to the cassette redactor in-process.
 
-A model request carries the whole history window every step (system prompt + the last ten
-turns, a base64 JPEG in each user turn), so encoding the body, parsing it back to redact it
-and hashing every frame in it would handle each message up to ten times. Here each message
-is handled once:
+A request carries the whole history window every step (a base64 JPEG in each user turn), so
+encoding the body, parsing it back to redact it and hashing its frames would handle each
+message up to ten times. :func:`encode_body` gives the exact bytes ``httpx`` sends for
+``json=body``, joining the UTF-8 encoding of each item of the body's top-level lists, each
+computed once (a :class:`Fragment`), and remembers them (:func:`sent`), so the redactor
+builds the canonical body from the same fragments, each redacted once, instead of parsing.
 
-* :func:`encode_body` gives the exact bytes ``httpx`` would send for ``json=body`` (compact,
-  ``ensure_ascii=False``, no NaN), joining the UTF-8 encoding of each item of the body's
-  top-level lists (``messages``, ``contents``), computed once per item (a :class:`Fragment`);
-* it remembers which tree and fragments those bytes came from (:func:`sent`), so the redactor
-  builds the canonical body from the same fragments, each redacted once and kept on its
-  fragment, instead of parsing the body back.
-
-Items are treated as immutable once encoded (:class:`~pytest_emrd.agent.Conversation` builds
-each message once and never changes it). Both tables are bounded and thread-safe, hold a
-reference to what they key (so an ``id`` is never reused while remembered) and are checked
-by identity: a miss, or bytes this process did not build, only costs time (the redactor
-then parses the body as before).
+Items are immutable once encoded (:class:`~pytest_emrd.agent.Conversation` never changes a
+message). Both tables are bounded, thread-safe, hold a reference to what they key (an ``id``
+is never reused while remembered) and are checked by identity: a miss only costs time.
 """
 
 from __future__ import annotations
@@ -26,13 +19,13 @@ import json
 import threading
 from collections import OrderedDict
 from collections.abc import Callable
-from json.encoder import encode_basestring, encode_basestring_ascii
+from dataclasses import dataclass
+from json.encoder import encode_basestring
 from typing import Any, Final
 
 from pytest_emrd._bounded import remember
 
-#: Fragments remembered (each holds a message's wire bytes, a frame's ~27 KB for a user turn;
-#: a window is 21 messages, so this serves ~48 episodes running at once).
+#: Fragments remembered (a window is 21 messages: this serves ~48 episodes at once).
 _FRAGMENTS: Final = 1024
 #: Sent bodies remembered until the redactor has seen them (a few per request in flight).
 _BODIES: Final = 64
@@ -40,32 +33,24 @@ _BODIES: Final = 64
 
 @functools.cache
 def encoder(sort_keys: bool, ensure_ascii: bool, allow_nan: bool = True) -> Callable[[Any], str]:
-    """``json.dumps(..., separators=(",", ":"))`` with these options: the ``encode`` of the
-    encoder ``json.dumps`` would build for them on every call, built once."""
+    """``json.dumps(..., separators=(",", ":"))`` with these options, its encoder built once."""
     return json.JSONEncoder(
         separators=(",", ":"), sort_keys=sort_keys, ensure_ascii=ensure_ascii, allow_nan=allow_nan
     ).encode
-
-
-def key_json(key: str, *, ensure_ascii: bool) -> str:
-    """A string as ``json.dumps`` writes it (its own shortcut for a string)."""
-    return encode_basestring_ascii(key) if ensure_ascii else encode_basestring(key)
 
 
 #: ``httpx``'s encoding of ``json=``: the bytes a client would send without this module.
 wire_json: Final = encoder(sort_keys=False, ensure_ascii=False, allow_nan=False)
 
 
+@dataclass(slots=True, eq=False)
 class Fragment:
     """One item of a sent body's top-level list: the item, the UTF-8 bytes of its wire JSON,
     and its canonical (redacted) bytes once the redactor has computed them."""
 
-    __slots__ = ("canonical", "item", "wire")
-
-    def __init__(self, item: Any, wire: bytes) -> None:
-        self.item = item
-        self.wire = wire
-        self.canonical: bytes | None = None
+    item: Any
+    wire: bytes
+    canonical: bytes | None = None
 
 
 _lock = threading.Lock()
@@ -96,18 +81,15 @@ def splice(
     value: Callable[[Any], Any],
     item: Callable[[Any], Any],
     sort_keys: bool,
-    ensure_ascii: bool = False,
     binary: bool = False,
 ) -> Any:
-    """``tree`` as compact JSON, member by member exactly as ``json.dumps`` joins an object
-    (``separators=(",", ":")``), each top-level list from its items' texts ``item(x)`` and
-    every other member from ``value(v)``; the pieces are joined once (a window of frames is
-    copied once, not once per nesting level). ``binary``: the pieces and the result are UTF-8
-    bytes (``value`` and ``item`` return bytes), so nothing is encoded after the join."""
+    """``tree`` as compact JSON exactly as ``json.dumps`` joins an object (``ensure_ascii``
+    off), each top-level list from its items' texts ``item(x)``, every other member from
+    ``value(v)``, joined once. ``binary``: pieces and result are UTF-8 bytes."""
     comma, colon, left, right, opening, closing = _PUNCTUATION[binary]
     pieces = []
     for key in sorted(tree) if sort_keys else tree:
-        name = key_json(key, ensure_ascii=ensure_ascii)
+        name = encode_basestring(key)
         pieces += (comma, name.encode() if binary else name, colon)
         v = tree[key]
         if isinstance(v, list):

@@ -1,19 +1,11 @@
 """Reading the user's YAML files (thresholds, model registry): one-line errors, YAML 1.2 floats.
 
-Every failure is a :class:`~pytest_emrd.errors.ConfigError` of one line naming the file,
-the line where there is one, and what to do: a missing file, a directory passed as a file,
-an unreadable file, bytes that are not UTF-8, malformed YAML. ``pytest`` and ``emrd gate``
-print the same text.
-
-User files are bounded: a file larger than :data:`MAX_FILE_BYTES` is refused before it is
-parsed, and so is any YAML alias (``*name``): an alias repeats a whole subtree, so a few
-nested ones expand a small file into gigabytes (the "billion laughs"). Anchors without
-aliases are harmless and allowed. Collections nested deeper than :data:`MAX_DEPTH` are
-refused too.
-
-PyYAML resolves scalars by YAML 1.1, where ``1e9`` and ``5e-3`` are strings (1.1 floats
-need a dot and a signed exponent). :class:`Loader` adds the YAML 1.2 core-schema float, so
-every number a person writes reads as a number.
+Every failure (missing file, directory, unreadable, not UTF-8, malformed YAML) is a one-line
+:class:`~pytest_emrd.errors.ConfigError` naming the file, the line where there is one, and
+what to do. Files are bounded: larger than :data:`MAX_FILE_BYTES`, any YAML alias (a few
+nested ones expand a small file into gigabytes) and nesting deeper than :data:`MAX_DEPTH`
+are refused before anything is composed. :class:`Loader` adds the YAML 1.2 core-schema float
+(PyYAML's 1.1 reads ``1e9`` as a string), so every number a person writes reads as a number.
 """
 
 from __future__ import annotations
@@ -26,10 +18,10 @@ import yaml
 
 from pytest_emrd.errors import ConfigError
 
+#: Largest user YAML file read (a thresholds file or registry is a few kilobytes).
 MAX_FILE_BYTES: Final = 1_000_000
-"""Largest user YAML file read (a thresholds file or registry is a few kilobytes)."""
+#: Deepest nesting of collections accepted in a user YAML file.
 MAX_DEPTH: Final = 32
-"""Deepest nesting of collections accepted in a user YAML file."""
 
 _FLOAT_12 = re.compile(
     r"""^(?:[-+]?(?:\.[0-9]+|[0-9]+(?:\.[0-9]*)?)(?:[eE][-+]?[0-9]+)?
@@ -44,10 +36,9 @@ class Loader(yaml.SafeLoader):
 
 
 class _FastLoader(getattr(yaml, "CSafeLoader", yaml.SafeLoader)):  # type: ignore[misc]
-    """:class:`Loader` on libyaml's parser when PyYAML has it (15x faster on the thresholds
-    file, which every pytest process reads): the same resolvers, so the same nodes, marks
-    and values. A file it rejects is parsed again by :class:`Loader`, whose error message
-    (PyYAML's wording) is the one reported."""
+    """:class:`Loader` on libyaml when PyYAML has it (15x faster on the thresholds file every
+    pytest process reads); a file it rejects is parsed again by :class:`Loader`, whose
+    error message is the one reported."""
 
 
 for _loader in (Loader, _FastLoader):
@@ -99,11 +90,9 @@ def yaml_error(exc: yaml.YAMLError, source: str) -> ConfigError:
 
 
 def _check_bounds(text: str, source: str) -> None:
-    """A one-line :class:`ConfigError` at the first alias of ``text`` or at a collection
-    nested deeper than :data:`MAX_DEPTH` (libyaml's composer recurses in C: a file of
-    100,000 ``[`` crashes the interpreter). A streaming parse (libyaml's, a state machine
-    with its own stack) sees both before anything is composed; malformed YAML is left to the
-    parser, whose error is the one reported."""
+    """A one-line :class:`ConfigError` at the first alias of ``text`` or at a collection nested
+    deeper than :data:`MAX_DEPTH` (libyaml's composer recurses in C: 100,000 ``[`` crash
+    the interpreter), found by a streaming parse; malformed YAML is left to the parser."""
     depth = 0
     try:
         for event in yaml.parse(text, Loader=_FastLoader):

@@ -1,23 +1,16 @@
 """The episode loop: one :class:`EpisodeSpec` in, one :class:`Trajectory` out.
 
-The world of a spec comes from :func:`pytest_emrd.world.episode_world` (the paper's fixed
-office by default). Per step ``t`` (see :mod:`pytest_emrd.trajectory` for the timeline):
-the observation ``o_{t-1}`` is rendered into a user message (frame as a JPEG data URL in
-``vision`` and ``both``, "Step t of T", the engine feedback ending with the pose, and the
-symbolic list in ``text`` and ``both``), the windowed conversation is sent to the model,
-the reply is parsed, a ``Term`` room alias is resolved to the canonical room, and the world
-executes the action. ``Term(r)`` always ends the episode (status ``terminated``); ``r``
-outside the four rooms leaves ``chosen_room`` None (focal column X) with ``r`` kept verbatim
-in ``chosen_room_raw``. The step records the pose, room and visible ids of ``o_{t-1}``, the
-map ``M_t`` (the previous map when the reply could not be read), the action and its outcome.
+Per step ``t`` (timeline: :mod:`pytest_emrd.trajectory`) the observation ``o_{t-1}`` becomes a
+user message (frame in ``vision``/``both``, the symbolic list in ``text``/``both``), the
+windowed conversation goes to the model, the reply is parsed, a ``Term`` room alias is
+resolved and the world executes the action. ``Term(r)`` always ends the episode
+(``terminated``); ``r`` outside the four rooms leaves ``chosen_room`` None (focal column X),
+``r`` kept in ``chosen_room_raw``. An unreadable reply keeps the previous map.
 
-Nothing is lost: a transport failure or any crash inside the loop ends the episode as
-``errored`` with the cause, keeping every completed step. Misconfiguration found before
-the first step (unknown model, missing API key, bad spec) raises :class:`ConfigError`.
-
-The world comes from :func:`build_simulator` per episode, or from the caller: a simulator
-passed as ``simulator`` is reset for the episode and left open, so one AI2-THOR (Unity)
-process serves every episode of a worker.
+A transport failure or any crash inside the loop ends the episode as ``errored`` with the
+cause, keeping every completed step; misconfiguration found before the first step raises
+:class:`ConfigError`. A caller-owned ``simulator`` is reset per episode and left open, so
+one AI2-THOR process serves every episode of a worker.
 """
 
 from __future__ import annotations
@@ -64,18 +57,14 @@ from pytest_emrd.world._model import Observation, Simulator
 _TERM = re.compile(r"^\s*term\s*\(\s*(?P<room>.*?)\s*\)\s*\.?\s*$", re.IGNORECASE | re.DOTALL)
 
 
+#: Backends whose simulator :class:`SimulatorPool` keeps (a Unity process takes seconds to
+#: start); ``builtin`` is cheap, and a fresh one keeps its recorded traffic as it was.
 REUSED_BACKENDS: Final[frozenset[str]] = frozenset({"ai2thor"})
-"""Backends whose simulator :class:`SimulatorPool` keeps across episodes (a Unity process
-takes seconds to start). ``builtin`` is built per episode: it is cheap, and a fresh
-simulator keeps its recorded traffic exactly as it was."""
 
 
 def build_simulator(backend: str, options: Mapping[str, Any] | None = None) -> Simulator:
-    """A new simulator of ``backend`` built with ``options`` (``--emrd-backend-option``).
-
-    An option the backend does not take is a :class:`ConfigError` naming it; building an
-    ``ai2thor`` simulator is cheap (THOR starts on its first ``reset``).
-    """
+    """A new simulator of ``backend`` built with ``options`` (``--emrd-backend-option``); an
+    option the backend does not take is a :class:`ConfigError` naming it."""
     options = dict(options or {})
     try:
         return world.make_simulator(backend, **options)
@@ -106,10 +95,8 @@ def world_action(action: str, variant: str) -> tuple[str, str | None]:
 
 
 def capped_reply(text: str) -> str:
-    """The reply as kept in the trajectory and the history: whole up to
-    :data:`~pytest_emrd.agent._parse.MAX_REPLY_CHARS` (longer replies are parse failures), else its
-    first characters and a note of the full length, so a runaway generation costs bounded
-    memory and disk."""
+    """The reply as kept: whole up to :data:`~pytest_emrd.agent._parse.MAX_REPLY_CHARS` (longer
+    ones are parse failures), else its head and its full length (bounded memory and disk)."""
     if len(text) <= MAX_REPLY_CHARS:
         return text
     return text[:MAX_REPLY_CHARS] + f"\n[... truncated: the reply had {len(text)} characters]"
@@ -181,13 +168,8 @@ class _Run:
 
 
 def start_world(spec: EpisodeSpec, sim: Simulator) -> tuple[world.Layout, Observation]:
-    """The world of ``spec`` on ``sim``: its layout and the first observation ``o_0``.
-
-    The world comes from :func:`pytest_emrd.world.episode_world` (the paper's fixed office
-    unless ``spec.layouts`` is ``generated``); under ``vision`` the simulator names no object
-    id. The episode loop and the episode viewer (which re-renders the frames a model saw) both
-    start here.
-    """
+    """The world of ``spec`` on ``sim`` (:func:`pytest_emrd.world.episode_world`): its layout
+    and ``o_0``; under ``vision`` no object id is named. The loop and the viewer start here."""
     episode = world.episode_world(spec)
     obs = sim.reset(
         episode.layout,
@@ -211,14 +193,10 @@ def run_episode(
 ) -> Trajectory:
     """Run one episode of ``spec`` against its model and return the full trajectory.
 
-    ``client`` overrides the client built from the registry (the caller keeps ownership);
-    ``on_step`` is called with every completed step (progress lines, live plots).
-    ``simulator`` is a caller-owned simulator of ``spec.backend``: it is reset for this
-    episode and not closed. Without it one is built with
-    ``build_simulator(spec.backend, backend_options)`` and closed at the end; passing both
-    is a :class:`ConfigError` (the options belong where the simulator is built).
-    ``replay``: every request is answered by a cassette (nothing reaches a model), so frames
-    are sent as their pixel digests, the form the cassette stores, and never JPEG-encoded.
+    ``client`` overrides the registry's client (the caller keeps ownership); ``on_step`` sees
+    every completed step. ``simulator`` (caller-owned, not closed) or else one built from
+    ``backend_options`` and closed at the end; both at once is a :class:`ConfigError`.
+    ``replay``: a cassette answers every request, so frames travel as pixel digests.
     """
     _check_spec(spec)
     if simulator is not None and backend_options:
@@ -274,11 +252,10 @@ def run_episode(
 class SimulatorPool:
     """Simulators kept across episodes, one per backend of :data:`REUSED_BACKENDS`.
 
-    ``pool.run(spec, ...)`` is :func:`run_episode` on the pooled simulator of
-    ``spec.backend`` (built with ``options`` on first use), or on a fresh simulator for the
-    other backends. A simulator that saw an errored episode or an exception is closed and
-    rebuilt for the next episode, so a hung or dead Unity process costs one episode, not a
-    run. The owner calls :meth:`close` (or uses the pool as a context manager).
+    ``pool.run(spec, ...)`` is :func:`run_episode` on the pooled simulator (built with
+    ``options`` on first use) or a fresh one for other backends. A simulator that saw an
+    errored episode or an exception is rebuilt, so a dead Unity process costs one episode.
+    The owner calls :meth:`close` (or uses the pool as a context manager).
     """
 
     def __init__(self, options: Mapping[str, Any] | None = None) -> None:
@@ -331,14 +308,15 @@ class SimulatorPool:
 
 
 class AgentRunner:
-    """:func:`run_episode` with one client per model and key mode, kept
-    for the runner's lifetime: the connection pool and TLS context (tens of milliseconds
-    to build) serve every episode; the clients close when the runner is collected or at exit.
+    """:func:`run_episode` (or ``run``, same keywords, e.g. a :class:`SimulatorPool`'s) with
+    one client per model and key mode, kept for the runner's lifetime: the connection pool
+    and TLS context serve every episode; they close when the runner is collected or at exit.
+    A replay's client is built with ``require_key=False`` (recorded requests carry no key).
     """
 
-    def __init__(self, registry: Registry, run: Callable[..., Trajectory] | None) -> None:
+    def __init__(self, registry: Registry, *, run: Callable[..., Trajectory] | None = None) -> None:
         self._registry = registry
-        self._run = run
+        self._run = run or run_episode
         self._clients: dict[tuple[str, bool], ChatClient] = {}
         self._lock = threading.Lock()
         self._finalizer = weakref.finalize(self, _close_all, self._clients)
@@ -346,9 +324,10 @@ class AgentRunner:
     def __call__(
         self, spec: EpisodeSpec, *, live: bool, on_step: Callable[[Step], None] | None = None
     ) -> Trajectory:
-        run = self._run or run_episode
         client = self._client(spec.model, live)
-        return run(spec, registry=self._registry, client=client, on_step=on_step, replay=not live)
+        return self._run(
+            spec, registry=self._registry, client=client, on_step=on_step, replay=not live
+        )
 
     def close(self) -> None:
         """Close every client now (they are also closed when the runner is collected)."""
@@ -369,14 +348,5 @@ def _close_all(clients: dict[tuple[str, bool], ChatClient]) -> None:
     clients.clear()
 
 
-def agent_runner(
-    registry: Registry, *, run: Callable[..., Trajectory] | None = None
-) -> AgentRunner:
-    """The real runner: :func:`run_episode` with the model's client.
-
-    ``run`` replaces ``run_episode`` (same keywords ``registry`` and ``client``), e.g. a
-    :class:`SimulatorPool`'s ``run`` that keeps one AI2-THOR process per
-    worker. Replays need no API key (recorded requests carry none), so a replay's client is
-    built with ``require_key=False`` and a live episode's with ``require_key=True``.
-    """
-    return AgentRunner(registry, run)
+#: The real runner: ``agent_runner(registry, run=...)``.
+agent_runner = AgentRunner

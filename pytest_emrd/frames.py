@@ -1,17 +1,11 @@
 """In-process hand-over of frame identities from the world to the cassette redactor.
 
-A cassette must key a frame by a digest of its rendered *pixels*, never by JPEG bytes,
-so that a recording replays across machines and Pillow versions. The world computes the
-pixel digest; the agent registers the data-URL payload it sends together with that digest
-(:func:`register`); the redactor, seeing only the HTTP body, looks the payload up
-(:func:`pixel_digest_for`). Unknown payloads (a frame this process did not render) fall
-back to a digest of the payload itself, marked ``bytes:`` so the two kinds never collide.
-
-A replay (every request answered by a cassette) never encodes a frame at all: its requests
-carry :func:`by_digest` where a recording carries the JPEG data URL, the very string the
-redactor would have put there, so the canonical request, and what it matches, is the same.
-
-The table is bounded (oldest entries evicted first) and thread-safe.
+A cassette keys a frame by a digest of its rendered *pixels*, never by JPEG bytes, so that a
+recording replays across machines and Pillow versions. The agent registers each data-URL
+payload it sends with its pixel digest (:func:`register`); the redactor, seeing only the HTTP
+body, looks it up (:func:`pixel_digest_for`); an unknown payload falls back to a ``bytes:``
+digest of itself. A replay never encodes a frame: its requests carry :func:`by_digest`, the
+very string the redactor would have put there. The table is bounded and thread-safe.
 """
 
 from __future__ import annotations

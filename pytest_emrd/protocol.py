@@ -1,8 +1,7 @@
 """The protocol version: what cassettes and stored results are keyed by.
 
-Its own light module because every pytest process reads it (a resumed worker checks each
-stored episode against it) while few need the episode loop, the HTTP clients or the
-renderer that :mod:`pytest_emrd.episode` brings in.
+Its own light module: every pytest process reads it, few need what
+:mod:`pytest_emrd.episode` imports.
 """
 
 from __future__ import annotations

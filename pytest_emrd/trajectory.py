@@ -1,26 +1,23 @@
 """The record of one episode: what the episode loop writes and every metric reads.
 
-A :class:`Trajectory` is plain data. It crosses the boundary between the episode loop
-(world + agent) and the metrics, the results store, the gates and the reports, and is
-stored as JSON. Field names are the file format; bump :data:`SCHEMA_VERSION` on any
-incompatible change.
+A :class:`Trajectory` is plain data, stored as JSON; field names are the file format (bump
+:data:`SCHEMA_VERSION` on any incompatible change).
 
-Coordinates: every position in a trajectory is in the *spawn frame*, the frame the agent is
-told its pose in: origin at the spawn position, ``+z`` along the agent's initial heading,
-``+x`` to its right, metres. Headings are degrees clockwise from ``+z``. The model's own
-cognitive-map coordinates are whatever the model wrote (nominally the same frame); metrics
+Coordinates are in the *spawn frame*, the frame the agent is told its pose in: origin at the
+spawn position, ``+z`` along the initial heading, ``+x`` to its right, metres; headings are
+degrees clockwise from ``+z``. The model's map coordinates are whatever it wrote; metrics
 align them with Procrustes and never trust the frame.
 
-Timeline of step ``t`` (1-based): the agent is shown observation ``o_{t-1}`` (its pose,
-room and visible objects are recorded in the step), replies with cognitive map ``M_t``
-and action ``a_t``; the world executes ``a_t`` (``success``/``feedback``).
+Timeline of step ``t`` (1-based): the agent is shown ``o_{t-1}`` (its pose, room and visible
+objects are recorded in the step), replies with map ``M_t`` and action ``a_t``; the world
+executes ``a_t`` (``success``/``feedback``).
 """
 
 from __future__ import annotations
 
 import hashlib
 from dataclasses import dataclass, field
-from typing import Any, Final, Literal
+from typing import Any, Final
 
 from pytest_emrd._serde import from_versioned_dict, to_dict
 
@@ -28,38 +25,27 @@ SCHEMA_VERSION: Final = 2
 #: Schema versions still read (their missing fields take the defaults): 1 lacks ``Step.repairs``.
 OLDER_SCHEMAS: Final[tuple[int, ...]] = (1,)
 
-Condition = Literal["baseline", "low_light", "texture"]
 CONDITIONS: Final[tuple[str, ...]] = ("baseline", "low_light", "texture")
 VARIANTS: Final[tuple[str, ...]] = ("default", "B1", "B2", "B3", "B4", "neutral", "no_inventory")
 MODALITIES: Final[tuple[str, ...]] = ("vision", "text", "both")
+#: Which offices a run uses: ``paper`` (one fixed office, the paper's protocol) or
+#: ``generated`` (one generated office per spawn x episode, reported as its own cells).
 LAYOUTS: Final[tuple[str, ...]] = ("paper", "generated")
-#: How an episode is obtained: the cassette record modes (vcrpy's, ``none`` replays only) and
-#: how a replayed request is matched to its recording (``lenient`` ignores frame pixels).
+#: The cassette record modes (vcrpy's, ``none`` replays only) and how a replayed request is
+#: matched to its recording (``lenient`` ignores frame pixels).
 RECORD_MODES: Final[tuple[str, ...]] = ("none", "once", "new_episodes", "all")
 MATCHING_MODES: Final[tuple[str, ...]] = ("strict", "lenient")
-"""Which offices a run uses: ``paper`` (the paper's protocol, one fixed office for every
-episode) or ``generated`` (one procedurally generated office per spawn x episode, a
-generalisation study reported as its own cells)."""
 CATEGORIES: Final[tuple[str, ...]] = ("landmark", "salient", "clutter")
 MAX_STEPS: Final = 50
-
-Status = Literal["terminated", "budget", "errored"]
-
-
-def _stable_seed(*parts: object) -> int:
-    digest = hashlib.sha256("\x1f".join(map(str, parts)).encode()).digest()
-    return int.from_bytes(digest[:4], "big")
 
 
 @dataclass(frozen=True)
 class EpisodeSpec:
-    """Which episode to run. Everything about an episode follows from this.
+    """Which episode to run; everything about an episode follows from this.
 
-    The world seed depends on the spawn room and episode index only, so every model,
-    condition and prompt variant sees the same world (office, spawn pose) for the same
-    ``(spawn, episode)``; that pairing is what lets conditions be compared and ``G_base`` be
-    anchored. Under the default ``layouts="paper"`` the office is the same fixed office for
-    every episode and the seed picks the spawn pose (and the ``texture`` colours).
+    The world seed depends on spawn room and episode index only, so every model, condition
+    and variant sees the same world for the same ``(spawn, episode)``: that pairing lets
+    conditions be compared and ``G_base`` be anchored.
     """
 
     model: str
@@ -79,19 +65,19 @@ class EpisodeSpec:
     max_steps: int = MAX_STEPS
     """Action budget ``T_max``."""
     layouts: str = "paper"
-    """``paper`` (one fixed office, the paper's protocol) or ``generated`` (an office per
-    spawn x episode); see :data:`LAYOUTS`."""
+    """``paper`` or ``generated`` (:data:`LAYOUTS`)."""
 
     @property
     def seed(self) -> int:
         """Episode seed (spawn pose, texture colours, and the office under ``generated``),
         shared across models, conditions and variants."""
-        return _stable_seed("emrd-world", self.spawn, self.episode)
+        digest = hashlib.sha256(f"emrd-world\x1f{self.spawn}\x1f{self.episode}".encode()).digest()
+        return int.from_bytes(digest[:4], "big")
 
     @property
     def case_id(self) -> str:
-        """Readable test id: ``gemini-low_light-kitchen-ep07`` (variant inserted if not default,
-        then ``generated`` under generated layouts: ``gemini-baseline-generated-office-ep00``)."""
+        """Readable test id: ``gemini-low_light-kitchen-ep07``, with the variant if not default
+        and ``generated`` under generated layouts inserted before the spawn room."""
         parts = [self.model, self.condition]
         if self.variant != "default":
             parts.append(self.variant)
@@ -206,15 +192,12 @@ class Step:
     """The model's reply text, verbatim."""
     usage: Usage = field(default_factory=Usage)
     repairs: tuple[str, ...] | None = None
-    """Repairs the parser applied to read the reply, in this order: ``fence``, ``prose``,
-    ``comment``, ``trailing_comma``, ``python_literal`` (syntax only), ``position_list``,
-    ``unit``, ``decimal_comma`` (a position in another notation; see
-    :data:`pytest_emrd.agent.REPAIRS`); ``()`` for a reply read as written; None when
-    not recorded (schema 1 files, hand-built steps)."""
+    """Repairs the parser applied to read the reply, in the order of
+    :data:`pytest_emrd.agent.REPAIRS`; ``()`` for a reply read as written; None when not
+    recorded (schema 1 files, hand-built steps)."""
     latency_s: float | None = field(default=None, compare=False)
-    """Wall time of this step's request in seconds, retries included, as the model was
-    called; None when no model was (a cassette answered) or not recorded. Not compared: a
-    replay equals its recording."""
+    """Wall time of this step's request in seconds, retries included; None when a cassette
+    answered or not recorded. Not compared: a replay equals its recording."""
 
 
 @dataclass(frozen=True)
@@ -255,10 +238,8 @@ class Trajectory:
 
     @property
     def usage(self) -> Usage:
-        total = Usage()
-        for s in self.steps:
-            total = total + s.usage
-        return total
+        """Token usage summed over the steps."""
+        return sum((s.usage for s in self.steps), Usage())
 
     def to_dict(self) -> dict[str, Any]:
         return to_dict(self)

@@ -1,8 +1,5 @@
-"""The ``emrd`` console script.
-
-Each subcommand lives in its own module under ``pytest_emrd.cli`` and exposes
-``register(subparsers)``; heavy imports happen inside the command, not at start-up.
-"""
+"""The ``emrd`` console script: one module per subcommand, each with ``register(subparsers)``;
+heavy imports happen inside the command, not at start-up."""
 
 from __future__ import annotations
 
@@ -15,17 +12,9 @@ from pytest_emrd.errors import ConfigError, EmrdError
 
 #: Subcommand modules, in the order ``emrd --help`` lists them.
 COMMANDS: tuple[str, ...] = (
-    "models",
-    "check",
-    "render",
-    "serve",
-    "gate",
-    "report",
-    "view",
-    "cassettes",
-    "validate",
+    "models", "check", "render", "serve", "gate", "report", "view", "cassettes", "validate",
     "thor_smoke",
-)
+)  # fmt: skip
 
 
 def version_text() -> str:
@@ -57,13 +46,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--version", action=_Version)
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     for name in COMMANDS:
-        try:
-            module = importlib.import_module(f"pytest_emrd.cli.{name}")
-        except ModuleNotFoundError as exc:
-            if exc.name != f"pytest_emrd.cli.{name}":
-                raise
-            continue
-        module.register(sub)
+        importlib.import_module(f"pytest_emrd.cli.{name}").register(sub)
     return parser
 
 
@@ -84,12 +67,8 @@ def check_run_dirs(run_dirs: list[Path]) -> None:
         )
 
 
-#: The option that picks where each command writes, named in a file system error.
-_WRITES: dict[str, str] = {
-    "view": "--out DIR",
-    "report": "--out DIR",
-    "render": "--out DIR",
-}
+#: The commands whose ``--out DIR`` picks where they write, named in a file system error.
+_WRITES: frozenset[str] = frozenset({"view", "report", "render"})
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -107,6 +86,7 @@ def main(argv: list[str] | None = None) -> int:
         from pytest_emrd._disk import os_error_line
 
         doing = "read" if isinstance(exc, FileNotFoundError) else "write"
-        message = os_error_line(exc, doing=doing, option=_WRITES.get(args.command, ""))
+        option = "--out DIR" if args.command in _WRITES else ""
+        message = os_error_line(exc, doing=doing, option=option)
     print(f"emrd {args.command}: error: {scrub(message)}", file=sys.stderr)
     return 2

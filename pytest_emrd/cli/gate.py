@@ -1,11 +1,9 @@
 """``emrd gate RUN_DIR... [--thresholds FILE] [--models FILE]``: gates over run directories.
 
-Evaluates ``thresholds.yaml`` over the episodes of one or several run directories (for
-example the shards of a CI matrix, each written with ``--emrd-shard=K/N --emrd-results
-DIR``) with the same cells and verdicts as a single-machine ``pytest benchmarks`` run.
-Shards must form complete sets (each ``K/N`` once, as recorded in each run directory's
-``run.json``) unless ``--allow-partial`` is given. When ``$GITHUB_STEP_SUMMARY`` is set (a
-GitHub Actions step), the run's Markdown summary with the gate table is appended to it. Exit
+Evaluates ``thresholds.yaml`` over the episodes of one or several run directories (e.g. the
+shards of a CI matrix) with the same cells and verdicts as one ``pytest benchmarks`` run.
+Shards must form complete sets unless ``--allow-partial`` is given. Under GitHub Actions
+(``$GITHUB_STEP_SUMMARY``) the run's Markdown summary is appended to the step summary. Exit
 status: 0 when every gate passes, 1 when one is broken, 2 on a usage error.
 """
 

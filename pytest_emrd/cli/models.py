@@ -1,12 +1,8 @@
 """``emrd models [--models FILE] [--json]``: the model registry, and which keys are set.
 
-One row per registered model: provider, default modality, model id, endpoint, the API-key
-variable and whether it is set in this environment (``set``, ``missing`` when the model
-needs it, ``unset`` when it is optional; its value is never read out), and the
-registry's prices per million tokens. The endpoint is printed scrubbed
-(:func:`pytest_emrd._scrub.scrub`: a ``?key=`` or a key value read from the environment
-shows as ``<redacted>``). Parametric reference agents (``scout-decay-<m>``,
-``scout-window-<k>``) resolve from their name and are listed once as patterns.
+One row per registered model: provider, default modality, model id, endpoint (scrubbed), the
+API-key variable and whether it is set (:func:`key_state`; its value is never read out), and
+the prices per million tokens. Parametric reference agents are listed once as patterns.
 """
 
 from __future__ import annotations
@@ -43,8 +39,8 @@ def _price(value: float | None) -> str:
 
 
 def model_rows(registry: Any) -> list[dict[str, Any]]:
-    """One plain dict per registered model (no secret: only whether the key is set, and the
-    endpoint scrubbed)."""
+    """One plain dict per registered model (no secret: whether the key is set, the endpoint
+    scrubbed)."""
     rows = []
     for name in registry.names():
         config = registry.get(name)

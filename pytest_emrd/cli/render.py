@@ -1,10 +1,8 @@
 """``emrd render --spawn ROOM --episode N --condition C --out DIR``: look at the built-in world.
 
-The world is the one the benchmark episode of that spawn room and index runs in
-(:func:`pytest_emrd.world.episode_world`: the paper's fixed office, or with
-``--layouts generated`` the episode's generated office). Writes the spawn view and a sweep
-(the JPEG frames the model would be shown after ``Turn(Right)`` three times), and
-``map.png``, a top-down plan with the agent.
+The world of the benchmark episode of that spawn room and index
+(:func:`pytest_emrd.world.episode_world`). Writes the JPEG frames the model would be shown at
+spawn and after ``Turn(Right)`` three times, and ``map.png``, a top-down plan with the agent.
 """
 
 from __future__ import annotations

@@ -3,9 +3,9 @@
 ``emrd report RUN_DIR... --compare-models A B``: the paper's tables and figures from run
 directories, or a paired comparison of two runs or two models.
 
-Several run directories (shards) make one report. The gate section uses ``--thresholds``,
-or ``./thresholds.yaml`` when it exists. A comparison writes ``compare.*`` into ``--out``
-(or prints the Markdown when no ``--out`` is given). Exit status 0, or 2 on a usage error.
+Several run directories (shards) make one report; the gate section uses ``--thresholds`` or
+``./thresholds.yaml``. A comparison writes ``compare.*`` into ``--out`` (else prints the
+Markdown). Exit status 0, or 2 on a usage error.
 """
 
 from __future__ import annotations
@@ -76,6 +76,7 @@ def _run(args: argparse.Namespace) -> int:
 
 
 def _report(args: argparse.Namespace, formats: list[str]) -> int:
+    from pytest_emrd._fork import available_cores
     from pytest_emrd.agent import load_registry
     from pytest_emrd.cli import check_run_dirs
     from pytest_emrd.gate import evaluate_all, load_thresholds
@@ -96,12 +97,11 @@ def _report(args: argparse.Namespace, formats: list[str]) -> int:
         thresholds = load_thresholds(thresholds_path, registry=registry, metrics=GATE_METRICS)
         verdicts = evaluate_all(metrics, thresholds, GATE_METRICS)  # cells by each one's spec
         source = str(thresholds_path)
-    prices = {}
-    for model in {e.head.spec.model for e in episodes}:
-        if model in registry.names():
-            config = registry.get(model)
-            prices[model] = (config.price_per_mtok_in, config.price_per_mtok_out)
-    processes = _processes()
+    models = [m for m in {e.head.spec.model for e in episodes} if m in registry.names()]
+    configs = {m: registry.get(m) for m in models}
+    prices = {m: (c.price_per_mtok_in, c.price_per_mtok_out) for m, c in configs.items()}
+    # two processes where there are two cores: the map alignment beside the tables, then figures
+    processes = min(2, available_cores())
     report = build_report(
         episodes,
         verdicts=verdicts,
@@ -119,14 +119,6 @@ def _report(args: argparse.Namespace, formats: list[str]) -> int:
     for path in written:
         print(path)
     return 0
-
-
-def _processes() -> int:
-    """Processes computing the report: two where this process may run on two cores or more
-    (the map alignment beside the tables, then the figures), else one."""
-    from pytest_emrd._fork import available_cores
-
-    return min(2, available_cores())
 
 
 def _compare(args: argparse.Namespace, formats: list[str]) -> int:

@@ -1,13 +1,11 @@
 """``emrd thor-smoke``: confirm the ai2thor backend on a machine with a GPU and a THOR build.
 
-Runs one episode per condition (``baseline``, ``low_light``, ``texture``) with the scout
-reference agent (no model, no network) on AI2-THOR and on the builtin world, writes both
-trajectories as JSON, and prints how their shapes compare: status, steps, rooms visited,
-the room chosen, the first step where the actions part. The backends are built from the
-same layout and spawn, but THOR sees with its own renderer and asset sizes, so the shapes
-may part after a few steps; what must hold is that every THOR episode runs to the end
-without THOR refusing anything. Exit status: 0 when it does, 1 when not, 2 on a
-configuration error (no build, no Vulkan: the message names the fix).
+Runs one scout episode per condition (no model, no network) on AI2-THOR and on the builtin
+world, writes both trajectories as JSON, and prints how their shapes compare (status, steps,
+rooms visited, room chosen, the first step where the actions part). THOR renders with its
+own assets, so the shapes may part after a few steps; what must hold is that every THOR
+episode runs to the end without THOR refusing anything. Exit status: 0 when it does, 1 when
+not, 2 on a configuration error (no build, no Vulkan: the message names the fix).
 
     emrd thor-smoke --out smoke/ --local-executable-path ~/thor-CloudRendering-<commit>/...
     python -m pytest_emrd.cli thor-smoke --out smoke/         # the same
@@ -17,7 +15,7 @@ from __future__ import annotations
 
 import argparse
 import json
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -83,7 +81,6 @@ def run_smoke(
     layouts: str,
     out: Path,
     backend_options: Mapping[str, Any],
-    conditions: Sequence[str] = CONDITIONS,
 ) -> list[Comparison]:
     """One scout episode per condition on both backends; trajectories go to ``out``."""
     from pytest_emrd.episode import SimulatorPool, run_episode
@@ -91,7 +88,7 @@ def run_smoke(
     out.mkdir(parents=True, exist_ok=True)
     results = []
     with SimulatorPool(backend_options) as pool:
-        for condition in conditions:
+        for condition in CONDITIONS:
             runs = {}
             for backend in ("builtin", "ai2thor"):
                 spec = EpisodeSpec(

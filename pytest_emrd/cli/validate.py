@@ -1,15 +1,12 @@
 """``emrd validate [--episodes N] [--out DIR] [--jobs J] [--family F]``: do the metrics recover
 the truth?
 
-Runs the built-in reference agents with planted cognition (``scout``, ``scout-decay-<m>``,
-``scout-window-<k>``, ``scout-serial``, ``prior``, and ``mimic`` groups that each move one
-map-writing knob: frame, noise, duplicates, hallucinations, malformed replies) on the built-in
-world, checks that every metric recovers what was planted and that the statistics reproduce
-the paper's tables,
-prints the table and writes ``validation.md`` and ``validation.json`` under ``--out``.
-Episodes are cached under ``--out`` (a rerun only recomputes the checks).
-Exit status: 0 when no check fails (``finding`` rows do not fail), 1 when one fails,
-2 on a usage error.
+Runs the reference agents with planted cognition (the scout family and ``prior``; ``mimic``
+groups that each move one map-writing knob) on the built-in world, checks that every metric
+recovers what was planted and that the statistics reproduce the paper's tables, prints the
+table and writes ``validation.md`` and ``validation.json`` under ``--out``, where episodes
+are cached. Exit status: 0 when no check fails (``finding`` rows do not), 1 when one
+fails, 2 on a usage error.
 """
 
 from __future__ import annotations

@@ -1,10 +1,9 @@
 """``emrd view RUN_DIR [EPISODE...] [--out DIR] [--cassettes DIR] [--gif]``: episode pages.
 
-Writes ``<case_id>.html`` per episode (self-contained: frames, reply, map, metrics over
-time, a step slider; ``#step=N`` opens step N) and ``index.html``; with ``--gif`` also
-``<case_id>.gif``. EPISODE is a case id or a shell pattern (``'*-kitchen-ep0?'``); default
-every episode of the run. Frames are re-rendered and checked against the digests in the
-cassettes under ``--cassettes`` (default ``./cassettes`` when it exists).
+Writes a self-contained ``<case_id>.html`` per episode (``#step=N`` opens step N), and
+``index.html``; with ``--gif`` also ``<case_id>.gif``. EPISODE is a case id or a shell
+pattern (default: every episode). Frames are re-rendered and checked against the digests in
+the cassettes under ``--cassettes`` (default ``./cassettes`` when it exists).
 """
 
 from __future__ import annotations
@@ -14,7 +13,6 @@ import fnmatch
 from pathlib import Path
 
 from pytest_emrd.errors import ConfigError
-from pytest_emrd.trajectory import Trajectory
 
 _DEFAULT_CASSETTES = Path("cassettes")
 
@@ -46,11 +44,8 @@ def _run(args: argparse.Namespace) -> int:
     check_run_dirs([args.run_dir])
     trajectories = sorted(load_run_dirs([args.run_dir]), key=lambda t: t.spec.case_id)
     if args.episodes:
-
-        def wanted(t: Trajectory) -> bool:
-            return any(fnmatch.fnmatchcase(t.spec.case_id, p) for p in args.episodes)
-
-        chosen = [t for t in trajectories if wanted(t)]
+        match = fnmatch.fnmatchcase
+        chosen = [t for t in trajectories if any(match(t.spec.case_id, p) for p in args.episodes)]
         if not chosen:
             raise ConfigError(
                 f"episodes={args.episodes} match no episode of {args.run_dir} (it holds e.g. "

@@ -1,22 +1,28 @@
 """Preflight: before a live grid spends money or hours, check the model can run it.
 
-:func:`preflight` checks one model (key, endpoint, one real probe request carrying a full
-history window of real frames, context length, image limit) and estimates the tokens and
-cost of its live episodes. ``emrd check`` runs it from the command line; the pytest plugin
-runs it once per model before any episode is recorded and stops the session on a failure.
+:func:`preflight` checks one model (key, endpoint, a real probe request, context, image
+limit) and estimates its live episodes' tokens and cost; ``emrd check`` runs it, and the
+plugin runs it once per model before any episode is recorded.
 """
 
 from pytest_emrd.preflight._check import Check, PreflightReport, preflight
-from pytest_emrd.preflight._estimate import DEFAULT_COMPLETION_TOKENS, CostEstimate, Measured
-from pytest_emrd.preflight._refusals import Refusal, vllm_refusal
-from pytest_emrd.preflight._requests import (
+from pytest_emrd.preflight._estimate import (
+    DEFAULT_COMPLETION_TOKENS,
+    CostEstimate,
+    Measured,
     Sweep,
     count_images,
     request_tokens,
     sample_reply,
     sweep,
 )
-from pytest_emrd.preflight._server import ServerInfo, models_url, server_info
+from pytest_emrd.preflight._server import (
+    Refusal,
+    ServerInfo,
+    models_url,
+    server_info,
+    vllm_refusal,
+)
 from pytest_emrd.preflight._session import (
     SessionPreflight,
     live_grid,

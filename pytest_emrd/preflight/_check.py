@@ -1,18 +1,10 @@
-"""Preflight of one model: key, endpoint, one real probe call, context, images, cost.
-
-Checks, in order (each ``pass``, ``fail``, ``skip`` or ``info``):
-
-* ``key`` -- the registry's API-key variable is set (its value is never shown);
-* ``url`` -- the endpoint answers ``GET /models`` and, when it lists models, lists ours;
-* ``probe`` -- one real request of the episode loop (:mod:`._requests`: a full history
-  window, real 512x512 frames) is answered and the reply reads in our JSON protocol;
-* ``images`` -- the endpoint took as many frames in one request as the window sends;
-* ``context`` -- the context length the server reports holds the largest request plus
-  ``max_tokens`` (vLLM reports it; hosted APIs do not);
-* ``estimate`` -- tokens and cost of the requested live episodes (:mod:`._estimate`).
-
-A refusal vLLM explains (too many images, context too short) fails ``images`` or
-``context`` with the ``vllm serve`` flag that fixes it.
+"""Preflight of one model, checks in order: ``key`` (the registry's API-key variable is set;
+its value is never shown), ``url`` (``GET /models`` answers and, when it lists models, lists
+ours), ``probe`` (one real request of the episode loop, a full window of real frames, is
+answered in our JSON protocol), ``images`` (the endpoint took that many frames), ``context``
+(the context length the server reports holds the largest request plus ``max_tokens``) and
+``estimate`` (tokens and cost of the live episodes). A refusal vLLM explains fails
+``images`` or ``context`` with the ``vllm serve`` flag that fixes it.
 """
 
 from __future__ import annotations
@@ -20,7 +12,6 @@ from __future__ import annotations
 import os
 import shlex
 import time
-from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any, Final
 
@@ -36,19 +27,19 @@ from pytest_emrd.agent import (
     parse_reply,
 )
 from pytest_emrd.errors import EmrdError
-from pytest_emrd.preflight._estimate import CostEstimate, Measured, estimate_cost
-from pytest_emrd.preflight._refusals import vllm_refusal
-from pytest_emrd.preflight._requests import (
+from pytest_emrd.preflight._estimate import (
+    CostEstimate,
+    Measured,
     Sweep,
     count_images,
+    estimate_cost,
     request_tokens,
     sample_reply,
     sweep,
 )
-from pytest_emrd.preflight._server import models_url, server_info
+from pytest_emrd.preflight._server import Refusal, models_url, server_info, vllm_refusal
 from pytest_emrd.trajectory import EpisodeSpec
 
-STATUSES: Final = ("pass", "fail", "skip", "warn", "info")
 _EXCERPT: Final = 160
 
 
@@ -58,8 +49,8 @@ class Check:
 
     name: str
     status: str
-    """``pass``, ``fail``, ``skip`` (a prerequisite failed), ``warn`` (go ahead, but read
-    it) or ``info``."""
+    """``pass``, ``fail``, ``skip`` (a prerequisite failed), ``warn`` (go ahead, read it) or
+    ``info``."""
     detail: str
     fix: str = ""
     """What to do when it failed."""
@@ -115,7 +106,7 @@ class PreflightReport:
 def _key(config: ModelConfig) -> Check:
     if config.api_key_env is None:
         return Check("key", "pass", "no API key needed")
-    if os.environ.get(config.api_key_env, "").strip():
+    if _key_value(config):
         return Check("key", "pass", f"{config.api_key_env} is set")
     if not config.api_key_required:
         return Check("key", "pass", f"{config.api_key_env} is not set: no key is sent")
@@ -141,6 +132,10 @@ def _excerpt(text: str) -> str:
     return text[:_EXCERPT] + ("..." if len(text) > _EXCERPT else "")
 
 
+def _key_value(config: ModelConfig) -> str:
+    return os.environ.get(config.api_key_env or "", "").strip()
+
+
 @dataclass
 class _Probe:
     """Inputs and outcome of the probe call."""
@@ -151,9 +146,17 @@ class _Probe:
     estimated: int
     measured: Measured | None = None
 
+    def refusal(self, message: str, prompt_tokens: int | None = None) -> Refusal | None:
+        """The vLLM refusal in ``message`` for this probe's window."""
+        return vllm_refusal(
+            message,
+            images=self.images,
+            max_tokens=self.config.max_tokens,
+            prompt_tokens=self.estimated if prompt_tokens is None else prompt_tokens,
+        )
+
 
 def _send(probe: _Probe, client: ChatClient) -> list[Check]:
-    images = probe.images
     start = time.perf_counter()
     try:
         response = client.complete(probe.messages)
@@ -188,20 +191,14 @@ def _send(probe: _Probe, client: ChatClient) -> list[Check]:
             f"entries, {usage.prompt_tokens:,} prompt + {usage.completion_tokens:,} completion "
             "tokens",
         )
-    if images == 0:
+    if probe.images == 0:
         return [probe_check, Check("images", "info", "text modality: no frames are sent")]
-    return [probe_check, Check("images", "pass", f"took {images} frames in one request")]
+    return [probe_check, Check("images", "pass", f"took {probe.images} frames in one request")]
 
 
 def _refused(probe: _Probe, message: str) -> list[Check]:
-    config = probe.config
-    refusal = vllm_refusal(
-        message,
-        images=probe.images,
-        max_tokens=config.max_tokens,
-        prompt_tokens=probe.estimated,
-    )
-    said = _excerpt(message)
+    config, said = probe.config, _excerpt(message)
+    refusal = probe.refusal(message)
     if refusal is not None:
         return [
             Check("probe", "fail", f"the server refused the request: {refusal.said}", refusal.fix),
@@ -221,36 +218,29 @@ def _refused(probe: _Probe, message: str) -> list[Check]:
     return [Check("probe", "fail", said, "see the server's message above")]
 
 
-def _context(probe: _Probe, max_model_len: int | None, done: list[Check]) -> Check | None:
-    if any(c.name == "context" for c in done):
-        return None
+def _context(probe: _Probe, max_model_len: int | None) -> Check:
     if max_model_len is None:
         return Check("context", "info", "context length not reported by the server")
     prompt = probe.measured.prompt_tokens if probe.measured else probe.estimated
-    needed = prompt + probe.config.max_tokens
+    max_tokens = probe.config.max_tokens
     detail = (
         f"server context {max_model_len:,} tokens; a full window needs ~{prompt:,} + "
-        f"max_tokens {probe.config.max_tokens:,}"
+        f"max_tokens {max_tokens:,}"
     )
-    if needed <= max_model_len:
+    if prompt + max_tokens <= max_model_len:
         return Check("context", "pass", detail)
-    refusal = vllm_refusal(
-        f"maximum context length is {max_model_len} tokens",
-        images=probe.images,
-        max_tokens=probe.config.max_tokens,
-        prompt_tokens=prompt,
-    )
+    refusal = probe.refusal(f"maximum context length is {max_model_len} tokens", prompt)
     return Check("context", "fail", detail, refusal.fix if refusal else "")
 
 
 def _listing_headers(config: ModelConfig) -> dict[str, str]:
     """What the probe will send besides the body: the provider's headers and the key."""
-    probe = build_request(config, [{"role": "user", "content": "."}])
-    headers = dict(probe.headers)
-    key = os.environ.get(config.api_key_env or "", "").strip()
-    if key:
-        auth = "x-api-key" if config.provider == "anthropic" else "Authorization"
-        headers[auth] = key if config.provider == "anthropic" else f"Bearer {key}"
+    headers = dict(build_request(config, [{"role": "user", "content": "."}]).headers)
+    if key := _key_value(config):
+        if config.provider == "anthropic":
+            headers["x-api-key"] = key
+        else:
+            headers["Authorization"] = f"Bearer {key}"
     return headers
 
 
@@ -258,7 +248,7 @@ def _url(config: ModelConfig, base_url: str) -> tuple[Check, int | None]:
     url = models_url(config.provider, base_url)
     info = server_info(url, config.model_id, headers=_listing_headers(config))
     if info.refused:
-        sent = bool(os.environ.get(config.api_key_env or "", "").strip())
+        sent = bool(_key_value(config))
         detail = f"{info.url} answered HTTP {info.status}: " + (
             f"the key in {config.api_key_env} was refused"
             if sent
@@ -283,17 +273,12 @@ def _url(config: ModelConfig, base_url: str) -> tuple[Check, int | None]:
         )
         return Check("url", "fail", f"cannot reach {base_url} ({info.error})", fix), None
     if info.serves(config.model_id) is False:
-        served = ", ".join(info.served[:5])
-        return (
-            Check(
-                "url",
-                "fail",
-                f"{base_url} serves {served}, not {config.model_id}",
-                f"start vLLM with --served-model-name {config.model_id}, or set model_id in a "
-                "user registry",
-            ),
-            None,
+        detail = f"{base_url} serves {', '.join(info.served[:5])}, not {config.model_id}"
+        fix = (
+            f"start vLLM with --served-model-name {config.model_id}, or set model_id in a "
+            "user registry"
         )
+        return Check("url", "fail", detail, fix), None
     return Check("url", "pass", f"{info.url} answered HTTP {info.status}"), info.max_model_len
 
 
@@ -303,7 +288,6 @@ def preflight(
     *,
     episodes: int,
     probe: bool = True,
-    client_factory: Callable[[ModelConfig], ChatClient] = make_client,
     models_file: str | None = None,
 ) -> PreflightReport:
     """Check that ``config`` can run ``episodes`` live episodes like ``spec`` (its modality,
@@ -311,24 +295,18 @@ def preflight(
     ``models_file``: the user registry that defines it, for the check-again command."""
     window: Sweep = sweep(spec, single_image=config.single_image)
     messages = window.request(HISTORY_TURNS, sample_reply())
-    state = _Probe(
-        config,
-        messages,
-        count_images(messages),
-        request_tokens(messages, image_tokens=config.image_tokens),
-    )
+    tokens = request_tokens(messages, image_tokens=config.image_tokens)
+    state = _Probe(config, messages, count_images(messages), tokens)
     checks = [_key(config)]
     if probe:
-        base_url = _base_url(config)
-        url, max_model_len = _url(config, base_url)
+        url, max_model_len = _url(config, _base_url(config))
         checks.append(url)
         if checks[0].status == "fail" or url.status == "fail":
             checks.append(Check("probe", "skip", "needs the key and a reachable endpoint"))
         else:
-            checks += _send(state, client_factory(config))
-            context = _context(state, max_model_len, checks)
-            if context is not None:
-                checks.append(context)
+            checks += _send(state, make_client(config))
+            if all(c.name != "context" for c in checks):
+                checks.append(_context(state, max_model_len))
     estimate = estimate_cost(
         config, window, episodes=episodes, max_steps=spec.max_steps, measured=state.measured
     )

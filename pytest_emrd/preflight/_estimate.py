@@ -1,32 +1,109 @@
-"""What a live grid will cost: tokens from our own requests, dollars from registry prices.
+"""The requests a model will be sent, and what a live grid of them will cost.
 
-For each step ``t`` of an episode that uses its whole budget (an upper bound: real episodes
-often ``Term`` earlier), the request the episode loop would send is built
-(:class:`~pytest_emrd.preflight._requests.Sweep`) and its prompt tokens estimated as text
-characters / 4 plus the registry's ``image_tokens`` per frame. Replies are assumed to be
-:data:`DEFAULT_COMPLETION_TOKENS` long until a probe measured one.
+A *sweep* (:class:`Sweep`) is the first :data:`~pytest_emrd.agent.HISTORY_TURNS` steps of a
+real episode of the built-in world whose agent turns right every step: real 512x512 frames,
+real feedback, the real system prompt and sliding window. The preflight probe is its last
+request (a full window: as many images as an episode ever sends at once).
 
-When a probe call was answered, the provider's own count calibrates the estimate: every
-prompt figure is scaled by ``measured / estimated`` for the probe request (a full window,
-so the mix of text and images matches the steps that dominate the total), and the probe's
-reply gives the completion tokens per step and the size of the replies in the window.
-The server's count is not taken on trust: when it and our own count of the same request
-(text and images) differ by more than :data:`TRUSTED_RATIO` either way, the estimate keeps
-our count and says why (:attr:`CostEstimate.warning`); a server reporting 1 prompt token
-for a request of ten frames does not make a grid look free.
-
-Completion tokens are given twice: the expected total (the probe's reply length, or
-:data:`DEFAULT_COMPLETION_TOKENS`) and the bound the registry's ``max_tokens`` puts on every
-reply; the cost likewise (expected, and at most).
+For each step of an episode that uses its whole budget (an upper bound), the request the
+loop would send is built and its prompt tokens estimated as text characters / 4 plus the
+registry's ``image_tokens`` per frame; replies are :data:`DEFAULT_COMPLETION_TOKENS` long
+until a probe measured one. An answered probe calibrates the estimate: every prompt figure
+is scaled by ``measured / estimated`` for the probe request, and its reply gives the
+completion tokens per step and the replies in the window. The server's count is not taken
+on trust: when it and ours differ by more than :data:`TRUSTED_RATIO` either way, the
+estimate keeps ours and says why (:attr:`CostEstimate.warning`). Completion tokens and cost
+are given twice: expected, and the bound ``max_tokens`` puts on every reply.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import json
+import math
+from dataclasses import dataclass, replace
 from typing import Any, Final
 
-from pytest_emrd._serde import to_dict
-from pytest_emrd.preflight._requests import CHARS_PER_TOKEN, Sweep, request_tokens
+from pytest_emrd.agent import HISTORY_TURNS, Conversation, UserTurn, build_system_prompt
+from pytest_emrd.episode import build_simulator, start_world, user_turn
+from pytest_emrd.trajectory import EpisodeSpec
+
+SWEEP_ACTION: Final = "Turn(Right)"
+#: Characters per text token assumed for estimates (English prose and JSON).
+CHARS_PER_TOKEN: Final = 4
+
+
+def sample_reply() -> str:
+    """A reply in the protocol the system prompt asks for (the window's assistant turns)."""
+    return json.dumps(
+        {
+            "observation": "A desk and a chair ahead, a doorway on the right wall.",
+            "dedup_check": "Desk_1 and Chair_1 are new; Doorway_1 is already mapped.",
+            "cognitive_map": {
+                "Desk_1": {"type": "Desk", "room": "Office", "x": 1.2, "z": 2.5, "facing": "-z"},
+                "Chair_1": {"type": "Chair", "room": "Office", "x": 1.0, "z": 1.9, "facing": "+z"},
+                "Doorway_1": {"type": "Doorway", "room": "Office", "x": 3.1, "z": 0.4},
+            },
+            "action": SWEEP_ACTION,
+            "reasoning": "Sweep the room before leaving it.",
+        }
+    )
+
+
+@dataclass(frozen=True)
+class Sweep:
+    """System prompt and user turns of the first steps of a real episode."""
+
+    system: str
+    turns: tuple[UserTurn, ...]
+    single_image: bool
+
+    def request(self, step: int, reply: str) -> list[dict[str, Any]]:
+        """The messages of step ``step`` (1-based) when every earlier reply was ``reply``;
+        steps past the sweep reuse its turns in turn (same sizes, same number of images)."""
+        conversation = Conversation(self.system, single_image=self.single_image)
+        for t in range(max(1, step - HISTORY_TURNS + 1), step):
+            conversation.record(self._turn(t), reply)
+        return conversation.request(self._turn(step))
+
+    def _turn(self, step: int) -> UserTurn:
+        return replace(self.turns[(step - 1) % len(self.turns)], step=step)
+
+
+def sweep(spec: EpisodeSpec, *, single_image: bool) -> Sweep:
+    """The first :data:`~pytest_emrd.agent.HISTORY_TURNS` user turns of ``spec`` on the
+    built-in world, turning right."""
+    sim = build_simulator("builtin")
+    try:
+        layout, obs = start_world(spec, sim)
+        turns = []
+        for t in range(1, HISTORY_TURNS + 1):
+            turns.append(user_turn(spec, t, obs))
+            obs = sim.step(SWEEP_ACTION)
+    finally:
+        sim.close()
+    system = build_system_prompt(
+        layout.inventory(), spec.variant, modality=spec.modality, max_steps=spec.max_steps
+    )
+    return Sweep(system, tuple(turns), single_image)
+
+
+def _parts(message: dict[str, Any]) -> list[dict[str, Any]]:
+    content = message["content"]
+    return content if isinstance(content, list) else [{"type": "text", "text": content}]
+
+
+def count_images(messages: list[dict[str, Any]]) -> int:
+    """Image parts in OpenAI-format messages."""
+    return sum(part.get("type") == "image_url" for m in messages for part in _parts(m))
+
+
+def request_tokens(messages: list[dict[str, Any]], *, image_tokens: int) -> int:
+    """Estimated prompt tokens: text characters / :data:`CHARS_PER_TOKEN`, plus
+    ``image_tokens`` per image (the registry's figure for the provider)."""
+    texts = [p["text"] for m in messages for p in _parts(m) if p.get("type") == "text"]
+    chars = sum(map(len, texts))
+    return math.ceil(chars / CHARS_PER_TOKEN) + image_tokens * count_images(messages)
+
 
 #: Assumed completion tokens per step before a probe measured one: a 20-object cognitive
 #: map (about 75 characters an entry) and a few sentences, without hidden reasoning.
@@ -91,9 +168,6 @@ class CostEstimate:
             f"{_tokens(self.completion_bound)} at max_tokens {self.max_tokens:,}), {cost}{hours} "
             f"({self.basis} estimate; largest request ~{self.peak_request_tokens:,} tokens)"
         )
-
-    def to_dict(self) -> dict[str, Any]:
-        return to_dict(self)
 
 
 def _tokens(n: int) -> str:

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import re
 from collections.abc import Callable, Iterable, Mapping, Sequence
+from dataclasses import KW_ONLY, dataclass, field
 from pathlib import Path
 from typing import Any, Final
 
@@ -47,26 +48,18 @@ def preflight_live(
     ]
 
 
+@dataclass
 class SessionPreflight:
     """A session's preflights: each model at most once, only for episodes recorded live."""
 
-    def __init__(
-        self,
-        registry: Any,
-        *,
-        cassettes: Path,
-        record_mode: str,
-        holds: Callable[[EpisodeSpec], bool],
-        enabled: bool = True,
-        models_file: Path | None = None,
-    ) -> None:
-        self.registry = registry
-        self.models_file = models_file
-        self.enabled = enabled
-        self.cassettes = cassettes
-        self.record_mode = record_mode
-        self.holds = holds
-        self.checked: set[str] = set()
+    registry: Any
+    _: KW_ONLY
+    cassettes: Path
+    record_mode: str
+    holds: Callable[[EpisodeSpec], bool]
+    enabled: bool = True
+    models_file: Path | None = None
+    checked: set[str] = field(default_factory=set, init=False)
 
     def run(self, specs: Iterable[EpisodeSpec]) -> tuple[list[PreflightReport], int]:
         """Reports for the models not checked yet (none when disabled), and how many live
@@ -80,9 +73,8 @@ class SessionPreflight:
         )
         grid = {model: mine for model, mine in grid.items() if model not in self.checked}
         self.checked.update(grid)
-        # Reference agents run on the built-in server in this process: no key, URL or limit
-        # to get wrong, and a probe's made-up history is no conversation their scripted
-        # state accepts (mimic answers it 400).
+        # Reference agents run in this process (nothing to get wrong), and a probe's made-up
+        # history is no conversation their scripted state accepts (mimic answers it 400).
         remote = {
             model: mine
             for model, mine in grid.items()
@@ -112,6 +104,6 @@ def params_of_node_ids(ids: Iterable[str], by_id: Callable[[], Mapping[str, Any]
     for key in found:
         if key in table:
             params.append(table[key])
-            continue
-        params += [p for k, p in table.items() if f"-{key}-".find(f"-{k}-") >= 0]
+        else:
+            params += [p for k, p in table.items() if f"-{k}-" in f"-{key}-"]
     return params

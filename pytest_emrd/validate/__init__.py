@@ -1,11 +1,8 @@
 """Metric validity: reference agents with planted cognition in, the same numbers out.
 
-Each check is a row (planted value, recovered value, tolerance, verdict, note) computed by
-pure functions over trajectories with :mod:`pytest_emrd.metrics`; :func:`run_plan` runs and
-caches the episodes; ``emrd validate`` prints and writes the table.
-Names are imported on first use (:mod:`pytest_emrd._lazy`): ``emrd --help`` and every other
-``emrd`` command read the plan's constants without importing the checks, the metrics and the
-episode runner.
+Each check is a row (planted, recovered, tolerance, verdict, note) computed by pure functions
+over trajectories; :func:`run_plan` runs and caches the episodes. Names are imported on first
+use (:mod:`pytest_emrd._lazy`), so ``emrd --help`` reads the plan without the metrics.
 """
 
 from pytest_emrd._lazy import lazy_exports
@@ -13,9 +10,8 @@ from pytest_emrd._lazy import lazy_exports
 __getattr__, __dir__, __all__ = lazy_exports(
     __name__,
     {
-        "_check": ("VERDICTS", "Check", "ValidationReport"),
-        "_decide": ("prior_checks", "scout_decide_checks"),
-        "_explore": ("exploration_checks",),
+        "_check": ("VERDICTS", "Check", "ValidationReport", "markdown", "to_json"),
+        "_explore": ("exploration_checks", "prior_checks", "scout_decide_checks"),
         "_frame": ("FRAME_SEED", "FRAME_TOLERANCE", "frame_checks"),
         "_paper": ("statistics_checks",),
         "_plan": (
@@ -28,18 +24,17 @@ __getattr__, __dir__, __all__ = lazy_exports(
             "Group",
             "Plan",
         ),
-        "_points": ("r2_points_checks",),
         "_remember": (
             "decay_checks",
             "episodes_needed",
             "error_curve",
             "miller_checks",
             "monotone",
+            "r2_points_checks",
             "serial_checks",
             "u_depth",
             "window_fit_checks",
         ),
-        "_render": ("markdown", "to_json"),
         "_run": ("Progress", "run_plan"),
         "_suite": ("episode_checks", "validation_report"),
     },

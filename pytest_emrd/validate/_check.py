@@ -1,13 +1,17 @@
-"""One row of the validation table: what was planted, what the metric recovered, the verdict."""
+"""One row of the validation table (what was planted, what the metric recovered, the verdict),
+and the table as Markdown (printed and written) and JSON text."""
 
 from __future__ import annotations
 
+import json
 import math
+from collections import Counter
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any, Final
 
-from pytest_emrd._serde import from_dict, to_dict
-from pytest_emrd.errors import ProtocolError, check_choice
+from pytest_emrd._serde import from_versioned_dict, json_safe, to_dict
+from pytest_emrd.errors import check_choice
 from pytest_emrd.metrics import EpisodeMetrics
 from pytest_emrd.trajectory import Trajectory
 
@@ -75,12 +79,13 @@ class ValidationReport:
 
     @classmethod
     def from_dict(cls, data: dict[str, Any]) -> ValidationReport:
-        if data.get("schema_version") != SCHEMA_VERSION:
-            raise ProtocolError(
-                f"validation report schema_version={data.get('schema_version')!r} is not "
-                f"{SCHEMA_VERSION}; rerun emrd validate with this version of pytest-emrd."
-            )
-        return from_dict(cls, data)
+        return from_versioned_dict(
+            cls,
+            data,
+            version=SCHEMA_VERSION,
+            what="validation report",
+            remedy="rerun emrd validate with this version of pytest-emrd.",
+        )
 
 
 def judged(ok: bool) -> str:
@@ -97,6 +102,56 @@ def fmt(value: float | None, digits: int = 2) -> str:
     return f"{value:.{digits}f}"
 
 
+def max_gap(a: Sequence[float | None], b: Sequence[float | None]) -> float:
+    """Largest ``|a_i - b_i|``; ``inf`` when the two differ in length, in which are undefined,
+    or in an infinite value (equal infinities differ by 0)."""
+    if len(a) != len(b) or any((x is None) != (y is None) for x, y in zip(a, b, strict=True)):
+        return math.inf
+    pairs = [(x, y) for x, y in zip(a, b, strict=True) if x is not None and y is not None]
+    return max([0.0, *(_gap(x, y) for x, y in pairs)])
+
+
+def _gap(x: float, y: float) -> float:
+    if x == y:
+        return 0.0
+    return math.inf if math.isinf(x) or math.isinf(y) else abs(x - y)
+
+
 def pct(value: float | None) -> str:
     """A fraction in [0, 1] as a percentage with one decimal."""
     return "n/a" if value is None else f"{100.0 * value:.1f} %"
+
+
+_COLUMNS: Final = ("Check", "Planted", "Recovered", "Tolerance", "Verdict", "Note")
+
+
+def _cell(text: str) -> str:
+    return text.replace("|", "\\|").replace("\n", " ")
+
+
+def markdown(report: ValidationReport) -> str:
+    """One Markdown table per paper phase, then a one-line summary."""
+    lines: list[str] = []
+    section = None
+    for c in report.checks:
+        if c.section != section:
+            section = c.section
+            lines += ["", f"### {section}", "", "| " + " | ".join(_COLUMNS) + " |",
+                      "|" + "---|" * len(_COLUMNS)]  # fmt: skip
+        verdict = f"**{c.verdict}**" if c.verdict != "pass" else c.verdict
+        cells = (c.name, c.planted, c.recovered, c.tolerance, verdict, c.note)
+        lines.append("| " + " | ".join(_cell(x) for x in cells) + " |")
+    counts = Counter(c.verdict for c in report.checks)
+    summary = ", ".join(f"{counts[v]} {v}" for v in ("pass", "fail", "finding") if counts[v])
+    head = f"{len(report.checks)} checks: {summary}"
+    if report.episodes:
+        head += (
+            f" ({report.episodes} episodes per spawn room and agent, protocol {report.protocol})"
+        )
+    return "\n".join([head, *lines]) + "\n"
+
+
+def to_json(report: ValidationReport) -> str:
+    """The report as indented, strict JSON (:meth:`ValidationReport.to_dict`); unbounded and
+    undefined numbers (an EFC with no forgetting event) are the strings ``"inf"``/``"nan"``."""
+    return json.dumps(json_safe(report.to_dict()), indent=2, allow_nan=False) + "\n"

@@ -1,15 +1,15 @@
-"""Explore rows: the scout's coverage is what it was shown, and low light costs coverage and
-time for the same agent in the same offices (paired episodes).
+"""Explore and Decide rows.
 
-The scout has perfect memory and maps every object in its view, so its planted coverage is
-the share of ``E`` that was in view at some step: ``|union_t V_t| / |E|`` with ``V_t`` the
-step's ground-truth visible ids (the ids the text list reports: objects within the
-visibility distance, landmarks within the drawn distance, walls and furniture occluding).
-That is what Eq. AEC must recover, per episode, exactly. ``|G_base| / |E|`` (visible from
-*some* standing point of the layout) is not: it measures the office, not the tour. Since
-furniture occludes and objects count as visible within 3.3 m, a 50-step scout that leaves
-a room once it has seen a doorway on leaves parts of the open-plan Office unseen (on the
-paper office about 5 % of ``E``), which no metric can recover. The row reports it beside.
+Explore: the scout's coverage is what it was shown, and low light costs coverage and time
+for the same agent in the same offices (paired episodes). The scout has perfect memory and
+maps all it sees, so its planted coverage is ``|union_t V_t| / |E|`` (``V_t`` the step's
+ground-truth visible ids): what Eq. AEC must recover, per episode, exactly. ``|G_base| / |E|``
+(visible from *some* standing point) measures the office, not the tour: furniture occludes
+and objects count as visible within 3.3 m, so a 50-step scout leaves parts of the open-plan
+Office unseen (about 5 % of ``E``), which no metric can recover; the row reports it beside.
+
+Decide: Never-Visited, Any-Bias and FPSG recover the planted grounding of ``prior`` (a
+textual prior, no evidence) and ``scout`` (chooses where it mapped the most).
 """
 
 from __future__ import annotations
@@ -18,9 +18,9 @@ import math
 from collections.abc import Sequence
 from typing import Final
 
-from pytest_emrd.metrics import GATE_METRICS, Estimate, as_episode_metrics
+from pytest_emrd.metrics import GATE_METRICS, Estimate, as_episode_metrics, fpsg
 from pytest_emrd.trajectory import Trajectory
-from pytest_emrd.validate._check import Check, Episode, fmt, judged
+from pytest_emrd.validate._check import Check, Episode, fmt, judged, pct
 
 #: Per episode, the scout's AEC may differ from the fraction it was shown by at most this
 #: (numbers agree to 1e-9 across CPUs).
@@ -40,12 +40,8 @@ def shown_fraction(traj: Trajectory) -> float | None:
     step of ``traj`` (what a perfect-memory agent that maps all it sees covers). None when
     the ground truth lists no object."""
     ids = {o.object_id for o in traj.ground_truth.objects}
-    if not ids:
-        return None
-    seen: set[str] = set()
-    for step in traj.steps:
-        seen.update(step.visible_ids)
-    return len(seen & ids) / len(ids)
+    seen = {i for step in traj.steps for i in step.visible_ids}
+    return len(seen & ids) / len(ids) if ids else None
 
 
 def _mean(values: Sequence[float]) -> float:
@@ -86,4 +82,39 @@ def exploration_checks(baseline: Sequence[Trajectory], low_light: Sequence[Episo
               judged(_value(dark_te) > _value(base_te)),
               f"{dark_te.n} paired episodes; low_light {_ci(dark_te)}",
               {"te_low_light": dark_te.value, "te_baseline": base_te.value}),
+    ]  # fmt: skip
+
+
+#: ``FPSG_local`` of the perfect-memory scout's chosen room must be at least this.
+SCOUT_MIN_LOCAL: Final = 0.9
+
+
+def prior_checks(trajectories: Sequence[Episode]) -> list[Check]:
+    """``prior`` names a room it never entered, from the prompt alone: Never-Visited and
+    Any-Bias 100 %, FPSG 0."""
+    s = fpsg(trajectories)
+    note = f"{s.runs} episodes"
+    return [
+        Check("Decide", "Never-Visited, prior", "100 %", pct(s.never_visited), "exactly 100 %",
+              judged(s.never_visited == 1.0), note, {"never_visited": s.never_visited}),
+        Check("Decide", "Any-Bias, prior", "100 %", pct(s.any_bias), "exactly 100 %",
+              judged(s.any_bias == 1.0), note, {"any_bias": s.any_bias}),
+        Check("Decide", "FPSG global, prior", "0", fmt(s.global_mean, 3), "exactly 0",
+              judged(s.global_mean == 0.0), f"{note}; local {fmt(s.local_mean, 3)}",
+              {"fpsg_global": s.global_mean, "fpsg_local": s.local_mean}),
+    ]  # fmt: skip
+
+
+def scout_decide_checks(trajectories: Sequence[Episode]) -> list[Check]:
+    """``scout`` chooses a room it swept and remembers: Never-Visited 0 %, FPSG local ~ 1."""
+    s = fpsg(trajectories)
+    note = f"{s.runs} episodes"
+    return [
+        Check("Decide", "Never-Visited, scout", "0 %", pct(s.never_visited), "exactly 0 %",
+              judged(s.never_visited == 0.0), note, {"never_visited": s.never_visited}),
+        Check("Decide", "FPSG local, scout", "1 (near)", fmt(s.local_mean, 3),
+              f">= {SCOUT_MIN_LOCAL}",
+              judged(s.local_mean is not None and s.local_mean >= SCOUT_MIN_LOCAL),
+              f"{note}; sd {fmt(s.local_sd, 3)}, global {fmt(s.global_mean, 3)}",
+              {"fpsg_local": s.local_mean, "fpsg_global": s.global_mean}),
     ]  # fmt: skip

@@ -1,16 +1,13 @@
 """Map rows: no metric depends on the frame the model writes its coordinates in.
 
-Every trajectory of the run is re-expressed in a seeded random proper rigid frame (one
-rotation + translation per episode, :func:`pytest_emrd.metrics.random_reframe`) and every
-metric is computed again; each row reports the largest change of one metric over all
-episodes (per-episode scores) or all groups (pooled aggregates). The paper resolves
-"arbitrary egocentric origins" with a rigid-body Procrustes alignment, so the planted truth
-is a change of 0.
+Every trajectory is re-expressed in a seeded random proper rigid frame
+(:func:`pytest_emrd.metrics.random_reframe`) and every metric computed again; each row reports
+the largest change of one metric over all episodes or groups. The paper resolves "arbitrary
+egocentric origins" with a rigid Procrustes alignment, so the planted truth is a change of 0.
 """
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from typing import Final
 
@@ -24,7 +21,7 @@ from pytest_emrd.metrics import (
     random_reframe,
 )
 from pytest_emrd.trajectory import Trajectory
-from pytest_emrd.validate._check import Check, Episode, judged
+from pytest_emrd.validate._check import Check, Episode, judged, max_gap
 
 #: A metric may move by at most this much when only the model's frame changes.
 FRAME_TOLERANCE: Final = 1e-9
@@ -57,31 +54,13 @@ def _pooled(ems: Sequence[EpisodeMetrics]) -> dict[str, list[float | None]]:
     }
 
 
-def _delta(a: Sequence[float | None], b: Sequence[float | None]) -> float:
-    """Largest |a_i - b_i|; ``inf`` when the two differ in length or in which are undefined."""
-    if len(a) != len(b):
-        return math.inf
-    worst = 0.0
-    for x, y in zip(a, b, strict=True):
-        if x is None or y is None:
-            if x is not y:
-                return math.inf
-            continue
-        if math.isinf(x) or math.isinf(y):
-            if x != y:
-                return math.inf
-            continue
-        worst = max(worst, abs(x - y))
-    return worst
-
-
-def frame_checks(groups: Mapping[str, Sequence[Episode]], *, seed: int = FRAME_SEED) -> list[Check]:
+def frame_checks(groups: Mapping[str, Sequence[Episode]]) -> list[Check]:
     """One row per metric: max |change| when every trajectory's maps move to a random frame.
 
     Only trajectories can be re-expressed; metrics-only episodes are skipped (counted in the
     note). No trajectory at all: no row.
     """
-    rng = np.random.default_rng(seed)
+    rng = np.random.default_rng(FRAME_SEED)
     worst = dict.fromkeys([*EPISODE_METRICS, *_pooled([])], 0.0)
     n = skipped = 0
     for episodes in groups.values():
@@ -92,16 +71,16 @@ def frame_checks(groups: Mapping[str, Sequence[Episode]], *, seed: int = FRAME_S
         n += len(trajs)
         for a, b in zip(here, there, strict=True):
             for name, numbers in EPISODE_METRICS.items():
-                worst[name] = max(worst[name], _delta(list(numbers(a)), list(numbers(b))))
+                worst[name] = max(worst[name], max_gap(list(numbers(a)), list(numbers(b))))
         if trajs:
             before, after = _pooled(here), _pooled(there)
             for name in before:
-                worst[name] = max(worst[name], _delta(before[name], after[name]))
+                worst[name] = max(worst[name], max_gap(before[name], after[name]))
     if not n:
         return []
     note = (
         f"{n} trajectories of {len(groups)} groups, each in its own random proper rigid frame "
-        f"(seed {seed})"
+        f"(seed {FRAME_SEED})"
         + (f"; {skipped} errored or metrics-only episodes skipped" if skipped else "")
     )
     return [

@@ -1,27 +1,22 @@
 """Map, Explore, Remember and reply rows for the ``mimic`` family: the metrics recover what a
 VLM-like writer plants (:mod:`pytest_emrd.agent.reference._mimic`).
 
-Every group walks the same paths (the knobs do not touch navigation, and damaged replies and
+Every group walks the same paths (the knobs do not touch navigation; damaged replies and
 invalid actions are off except in the default group), so groups are compared episode by
-episode. The planted truth of an episode is read from the agent's own state, which travels in
-its replies: which object got a duplicate when.
+episode; the planted truth is read from the agent's own state, which travels in its replies.
 
-* **Frame.** PA of the mimic in its own frame equals PA of the same mimic in the spawn frame.
-  Both write coordinates to 0.01 m, so the own-frame map is a rigid image of the spawn-frame
-  map up to ``delta <= sqrt(2) * 0.01`` m per point (rounding in each frame). The optimal
-  Procrustes residual is 1-Lipschitz in the points (RMS norm), so ``|RMSE_own - RMSE_spawn|
-  <= delta`` and ``|PA_own - PA_spawn| <= delta / L_gt`` (coverage unchanged); that is the
-  bound per episode. AEC and SIR are counts of labels and identities: equal exactly.
+* **Frame.** Both frames write coordinates to 0.01 m, so the own-frame map is a rigid image
+  of the spawn-frame map up to ``delta <= sqrt(2) * 0.01`` m per point. The optimal
+  Procrustes residual is 1-Lipschitz in the points (RMS norm), so ``|PA_own - PA_spawn| <=
+  delta / L_gt`` per episode (coverage unchanged); AEC and SIR (counts) are equal exactly.
 * **Noise.** With ``n`` matched pairs, i.i.d. N(0, sigma^2) noise per coordinate and a proper
-  rigid fit (3 parameters), ``E[SSR] = SSR_0 + sigma^2 (2n - 3)``, where ``SSR = n RMSE^2``
-  and ``SSR_0`` is the residual of the paired noise-free episode (the scout's own placement
-  error). PA gives ``RMSE = -L_gt ln(PA / c)`` (``c`` its coverage factor), so
-  ``sigma_hat^2 = sum_i (SSR_i - SSR_0,i) / sum_i (2 n_i - 3)``, with a bootstrap CI over
-  episodes.
-* **Hallucinations** name no type of the layout: Eq. AEC's ``min`` cap and the matcher leave
-  them unmatched, so AEC, PA and SIR equal the clean episode's exactly, and the count of
-  unrecognised entries in the terminal map is Binomial(T, h): ``h_hat = sum unrecognised /
-  sum T`` with a Clopper-Pearson interval.
+  rigid fit (3 parameters), ``E[SSR] = SSR_0 + sigma^2 (2n - 3)`` (``SSR = n RMSE^2``,
+  ``SSR_0`` of the paired noise-free episode). PA gives ``RMSE = -L_gt ln(PA / c)`` (``c`` its
+  coverage factor), so ``sigma_hat^2 = sum_i (SSR_i - SSR_0,i) / sum_i (2 n_i - 3)``, with a
+  bootstrap CI over episodes.
+* **Hallucinations** name no type of the layout, so AEC, PA and SIR equal the clean
+  episode's exactly, and the unrecognised entries of the terminal map are Binomial(T, h):
+  ``h_hat = sum unrecognised / sum T`` with a Clopper-Pearson interval.
 * **Duplicates.** Eq. AEC per episode: ``AEC_p = sum_k min(|M_k| + D_k, |E_k|) / |E|`` with
   ``|M_k|`` the clean map's entries of type ``k`` and ``D_k`` the planted duplicates: AEC can
   only rise, and only where type ``k`` still has unmapped instances. SIR (Appendix B: objects
@@ -53,7 +48,7 @@ from pytest_emrd.metrics import (
 )
 from pytest_emrd.metrics._tracking import layout_scale, track_episode
 from pytest_emrd.trajectory import Trajectory
-from pytest_emrd.validate._check import Check, fmt, judged, pct
+from pytest_emrd.validate._check import Check, fmt, judged, max_gap, pct
 
 #: Coordinates are written to this many metres in every frame.
 WRITTEN_M: Final = 0.01
@@ -70,19 +65,10 @@ def paired(trajectories: Sequence[Trajectory]) -> list[tuple[Trajectory, Episode
     return [(t, episode_metrics(t)) for t in trajectories]
 
 
-def _final_ids(traj: Trajectory) -> dict[str, list[str]]:
-    """Object id -> its labels (oldest first) in the agent's state after the last step."""
-    ids: dict[str, list[str]] = {}
-    for label, rec in read_state(traj.steps[-1].raw_reply)["map"].items():
-        if "id" in rec:
-            ids.setdefault(rec["id"], []).append(label)
-    return ids
-
-
-def _max_gap(a: Sequence[float | None], b: Sequence[float | None]) -> float:
-    gaps = [abs(x - y) for x, y in zip(a, b, strict=True) if x is not None and y is not None]
-    undefined = sum((x is None) != (y is None) for x, y in zip(a, b, strict=True))
-    return math.inf if undefined else max(gaps, default=0.0)
+def _planted_ids(traj: Trajectory, step: int) -> dict[str, str]:
+    """Label -> planted object id in the agent's state after step index ``step``."""
+    entries = read_state(traj.steps[step].raw_reply)["map"]
+    return {label: rec["id"] for label, rec in entries.items() if "id" in rec}
 
 
 def rmse_from_pa(
@@ -137,9 +123,9 @@ def own_frame_checks(spawn: Paired, own: Paired) -> list[Check]:
         _, _, scale = _rmse(traj, s)
         bound = math.sqrt(2.0) * WRITTEN_M / scale if scale else 0.0
         excess.append(abs((o.pa or 0.0) - (s.pa or 0.0)) - bound)
-    pa_gap = _max_gap([m.pa for _, m in own], [m.pa for _, m in spawn])
-    aec_gap = _max_gap([m.aec for _, m in own], [m.aec for _, m in spawn])
-    sir_gap = _max_gap([m.sir for _, m in own], [m.sir for _, m in spawn])
+    pa_gap = max_gap([m.pa for _, m in own], [m.pa for _, m in spawn])
+    aec_gap = max_gap([m.aec for _, m in own], [m.aec for _, m in spawn])
+    sir_gap = max_gap([m.sir for _, m in own], [m.sir for _, m in spawn])
     same = all(o.matched == s.matched for (_, o), (_, s) in zip(own, spawn, strict=True))
     note = f"{len(own)} paired episodes; the own frame is a seeded rotation + translation"
     return [
@@ -193,7 +179,7 @@ def rate_check(section: str, name: str, planted: float, count: int, total: int,
 def halluc_checks(halluc: Paired, clean: Paired, h: float) -> list[Check]:
     """Hallucinations change no score and are counted as unrecognised, Binomial(T, h)."""
     gaps = {
-        name: _max_gap([getattr(m, name) for _, m in halluc], [getattr(m, name) for _, m in clean])
+        name: max_gap([getattr(m, name) for _, m in halluc], [getattr(m, name) for _, m in clean])
         for name in ("aec", "pa", "sir")
     }
 
@@ -212,12 +198,6 @@ def halluc_checks(halluc: Paired, clean: Paired, h: float) -> list[Check]:
         rate_check("Explore", f"Hallucinated entries per step, mimic-h{h:g}", h, count, total,
                     "unrecognised entries of the terminal map over steps"),
     ]  # fmt: skip
-
-
-def _planted_ids(traj: Trajectory, step: int) -> dict[str, str]:
-    """Label -> planted object id in the agent's state after step index ``step``."""
-    entries = read_state(traj.steps[step].raw_reply)["map"]
-    return {label: rec["id"] for label, rec in entries.items() if "id" in rec}
 
 
 def _copied_during(traj: Trajectory, start: int, end: int) -> set[str]:
@@ -251,14 +231,14 @@ def dup_checks(dup: Paired, clean: Paired, p: float) -> list[Check]:
     for (td, md), (tc, mc) in zip(dup, clean, strict=True):
         types = {o.object_id: o.object_type for o in td.ground_truth.objects}
         capacity = Counter(types.values())
-        mapped = Counter(types[o] for o in _final_ids(tc))
-        extra = Counter(types[o] for o, labels in _final_ids(td).items()
-                        for _ in labels[1:])  # fmt: skip
+        mapped = Counter(types[o] for o in set(_planted_ids(tc, -1).values()))
+        written = list(_planted_ids(td, -1).values())  # one id per label: copies repeat it
+        extra = Counter(types[o] for o in written) - Counter(types[o] for o in set(written))
         total = sum(capacity.values())
         predicted.append(sum(min(mapped[k] + extra[k], capacity[k]) for k in capacity) / total)
         recovered.append(md.aec)
         rises.append((md.aec or 0.0) - (mc.aec or 0.0))
-    gap = _max_gap(predicted, recovered)
+    gap = max_gap(predicted, recovered)
     planted, measured = [], []
     for td, md in dup:
         ratio = _sir_ratio_planted(td)
@@ -267,7 +247,7 @@ def dup_checks(dup: Paired, clean: Paired, p: float) -> list[Check]:
             measured.append(md.sir / md.aec)
     want = float(np.mean(planted)) if planted else math.nan
     got = float(np.mean(measured)) if measured else math.nan
-    sir_gap = _max_gap(planted, measured) if planted else math.inf
+    sir_gap = max_gap(planted, measured) if planted else math.inf
     return [
         Check("Explore", f"AEC with duplicates, mimic-p{p:g}: Eq. AEC", "sum_k min(|M_k| + D_k, "
               "|E_k|) / |E|", f"max |diff| {fmt(gap, 4)}; mean rise {fmt(np.mean(rises), 4)}",

@@ -193,10 +193,9 @@ def appendix_f_checks() -> list[Check]:
     chi = chi_square(list(APPENDIX_F.values()))
     mismatch = [
         f"{room} {got} vs {want}"
-        for room, got, want in zip(APPENDIX_F_COLUMNS, totals, (table[0], table[1], table[2],
-                                                                 table[3]), strict=True)
+        for room, got, want in zip(APPENDIX_F_COLUMNS, totals, table, strict=True)
         if got != want
-    ]  # fmt: skip
+    ]
     note = (
         f"the per-spawn breakdown sums to {n} episodes "
         f"(the Inventory-Free table prints {printed_n})"

@@ -1,7 +1,6 @@
 """Which episodes validation needs: one group of episodes per planted agent and condition.
 
-Pure data: the runner (:mod:`._run`) turns a :class:`Plan` into trajectories, the checks
-read them back by group name. Every group runs the same offices (``EpisodeSpec.seed``
+Pure data, read back by group name. Every group runs the same offices (``EpisodeSpec.seed``
 depends on spawn room and episode index only), so groups are paired episode by episode.
 """
 
@@ -22,10 +21,9 @@ WINDOW_SIZES: Final[tuple[int, ...]] = (5, 10, 20)
 MIMIC_SIGMA: Final = 0.3
 MIMIC_DUP: Final = 0.5
 MIMIC_HALLUC: Final = 0.1
-#: The mimic group of each role: the clean mimic in the spawn frame and in its own frame
-#: (free-form labels only), one knob moved at a time, and the shipped defaults. The knob
-#: groups walk back into the room they name (``b1``), so every episode re-enters a room:
-#: duplicates on re-entry happen and SIR is defined (the scout clears an office in one loop).
+#: The mimic group of each role: the clean mimic in the spawn frame and in its own frame, one
+#: knob moved at a time, and the shipped defaults. The knob groups walk back into the room
+#: they name (``b1``), so every episode re-enters a room and SIR is defined.
 MIMIC_MODELS: Final[dict[str, str]] = {
     "spawn": "mimic-spawn-s0-p0-h0-q0-r0-a0-b1",
     "own": "mimic-s0-p0-h0-q0-r0-a0-b1",
@@ -82,8 +80,7 @@ MIMIC_GROUPS: Final[tuple[Group, ...]] = tuple(
     Group(m, "baseline", "paper" if role == "default" else "generated")
     for role, m in MIMIC_MODELS.items()
 )
-#: Agent families ``emrd validate --family`` selects: the scout family (with ``prior``), whose
-#: rows check the memory, exploration and decision metrics, and the mimic family (map writing).
+#: Agent families ``emrd validate --family`` selects: scout (with ``prior``) and mimic.
 FAMILIES: Final[dict[str, tuple[Group, ...]]] = {"scout": SCOUT_GROUPS, "mimic": MIMIC_GROUPS}
 GROUPS: Final[tuple[Group, ...]] = SCOUT_GROUPS + MIMIC_GROUPS
 

@@ -1,7 +1,13 @@
 """Remember rows: Ebbinghaus memory strength, Miller's law and serial position recover what
 the reference agents plant (:mod:`pytest_emrd.agent.reference._memory`).
 
-Pure functions over trajectories; every number comes from :mod:`pytest_emrd.metrics`.
+Do the R^2 findings survive the choice of evaluation points? The paper compares the
+Ebbinghaus and Kaplan-Meier curves by R^2 without saying at which times; our default uses
+the KM timeline (``points="durations"``). :func:`r2_points_checks` recomputes the two R^2
+findings (planted decay fits, R^2 >= :data:`MIN_R2`; a hard window fits worse than the decay
+of matched mean, gap >= :data:`R2_GAP`) on every grid of
+:data:`~pytest_emrd.metrics.R2_POINTS`: a finding that fails an alternative grid is a
+``finding`` on that row.
 """
 
 from __future__ import annotations
@@ -11,6 +17,7 @@ from collections.abc import Mapping, Sequence
 from typing import Final
 
 from pytest_emrd.metrics import (
+    R2_POINTS,
     EbbinghausFit,
     SerialPosition,
     ebbinghaus,
@@ -47,11 +54,8 @@ def interleaved(trajectories: Sequence[Episode]) -> list[Episode]:
 
 
 def error_curve(trajectories: Sequence[Episode], planted: float) -> list[tuple[int, float]]:
-    """``(N, |EFC_N - planted| / planted)`` over spawn-balanced prefixes of N episodes.
-
-    N runs over multiples of 4 (one episode per spawn room) up to every episode; a prefix
-    whose EFC is undefined or unbounded has error ``inf``.
-    """
+    """``(N, |EFC_N - planted| / planted)`` over spawn-balanced prefixes of N = 4, 8, ...
+    episodes; a prefix whose EFC is undefined has error ``inf``."""
     ordered = interleaved(trajectories)
     curve = []
     for n in range(4, len(ordered) + 1, 4):
@@ -178,19 +182,14 @@ def _profile(early: float | None, middle: float | None, late: float | None) -> s
 
 def _flat(values: Sequence[float | None]) -> bool:
     """All three thirds defined and within :data:`SERIAL_TOLERANCE` of each other."""
-    if any(v is None for v in values):
-        return False
-    low, high = min(v or 0.0 for v in values), max(v or 0.0 for v in values)
-    return high <= low * (1.0 + SERIAL_TOLERANCE)
+    defined = [v for v in values if v is not None]
+    return len(defined) == len(values) and max(defined) <= min(defined) * (1.0 + SERIAL_TOLERANCE)
 
 
 def monotone(early: float | None, middle: float | None, late: float | None) -> bool:
-    """Monotone within tolerance ``tau`` (:data:`SERIAL_TOLERANCE`), on any estimate.
-
-    All three thirds defined and ``min(E, L) / (1 + tau) <= M <= max(E, L) (1 + tau)``: the
-    Middle third lies between the two ends, widened by ``tau`` on each side. This admits
-    non-decreasing, non-increasing and flat profiles (``inf`` counts as a value: no
-    forgetting) and rejects a U (``M`` below both ends by more than ``tau``) or an inverted U.
+    """Monotone within ``tau`` (:data:`SERIAL_TOLERANCE`): all thirds defined and
+    ``min(E, L) / (1 + tau) <= M <= max(E, L) (1 + tau)``. Admits non-decreasing,
+    non-increasing and flat profiles (``inf``: no forgetting), rejects a U or an inverted U.
     """
     if early is None or middle is None or late is None:
         return False
@@ -199,12 +198,8 @@ def monotone(early: float | None, middle: float | None, late: float | None) -> b
 
 
 def u_depth(early: float | None, middle: float | None, late: float | None) -> float | None:
-    """How deep the Middle third dips below the nearer end: ``max(0, 1 - M / min(E, L))``.
-
-    0 for no dip (monotone, flat or an inverted U), 1 when the ends are never forgotten and
-    the middle is (``inf`` ends, finite ``M``); None when a third is undefined. The
-    ``scout-window`` rows require a depth below :data:`MAX_U_DEPTH`.
-    """
+    """How deep the Middle third dips below the nearer end: ``max(0, 1 - M / min(E, L))``;
+    0 for no dip, 1 for ``inf`` ends and a finite ``M``, None when a third is undefined."""
     if early is None or middle is None or late is None:
         return None
     ends = min(early, late)
@@ -233,11 +228,10 @@ def serial_checks(
     windows: Mapping[int, Sequence[Episode]],
     perfect: Sequence[Episode] = (),
 ) -> list[Check]:
-    """Serial position on the censoring-aware estimate (:func:`serial_position` ``mle_*``),
-    the paper's estimator reported beside it: ``scout-serial`` shows the U shape (E, L > M);
-    no ``scout-window`` shows a U (:func:`u_depth` below :data:`MAX_U_DEPTH`; whether it is
-    also :func:`monotone` is noted); with ``perfect`` episodes, a row on the paper's
-    estimator under perfect memory (its censoring bias)."""
+    """Serial position on the censoring-aware estimate (``mle_*``, the paper's beside it):
+    ``scout-serial`` shows the U (E, L > M); no ``scout-window`` does (:func:`u_depth` below
+    :data:`MAX_U_DEPTH`, :func:`monotone` noted); with ``perfect`` episodes, a row on the
+    paper's estimator under perfect memory (its censoring bias)."""
     spe = serial_position(serial)
     e, m, late = spe.mle_early, spe.mle_middle, spe.mle_late
     u_shape = e is not None and m is not None and late is not None and min(e, late) > m
@@ -290,3 +284,46 @@ def _censoring_bias(spe: SerialPosition, episodes: int) -> Check:
         f"MLE inf in every third; paper flat within {SERIAL_TOLERANCE:.0%}", verdict, note,
         _data(spe),
     )  # fmt: skip
+
+
+def r2_points_checks(
+    decays: Mapping[float, Sequence[Episode]],
+    windows: Mapping[int, Sequence[Episode]],
+    serial: Sequence[Episode],
+) -> list[Check]:
+    """One row per grid of :data:`~pytest_emrd.metrics.R2_POINTS` (the default first)."""
+    rows = []
+    for points in R2_POINTS:
+        decay = {m: ebbinghaus(t, points=points).pooled for m, t in decays.items()}
+        window = {k: ebbinghaus(t, points=points).pooled for k, t in windows.items()}
+        r2_serial = ebbinghaus(serial, points=points).pooled.r2
+        exponential = all(f.r2 is not None and f.r2 >= MIN_R2 for f in decay.values())
+        gaps = []
+        finite = {m: f for m, f in decay.items() if f.efc and math.isfinite(f.efc)}
+        for fit in window.values():
+            if fit.efc is None or not math.isfinite(fit.efc) or not finite or fit.r2 is None:
+                gaps.append(-math.inf)
+                continue
+            gaps.append((finite[nearest_decay(fit.efc, finite)].r2 or 0.0) - fit.r2)
+        survives = exponential and all(g >= R2_GAP for g in gaps)
+        default = points == R2_POINTS[0]
+        verdict = "pass" if survives else ("fail" if default else "finding")
+        recovered = (
+            "decay " + " / ".join(fmt(f.r2, 2) for f in decay.values())
+            + "; window " + " / ".join(fmt(f.r2, 2) for f in window.values())
+            + f"; serial {fmt(r2_serial, 2)}"
+        )  # fmt: skip
+        rows.append(
+            Check("Remember", f"R^2 findings on evaluation points '{points}'"
+                  + (" (default)" if default else ""),
+                  f"decay R^2 >= {MIN_R2}; window gap >= {R2_GAP}", recovered,
+                  "both findings hold", verdict,
+                  f"decay {', '.join(f'{m:g}' for m in decay)}; window "
+                  f"{', '.join(str(k) for k in window)}; smallest gap "
+                  f"{fmt(min(gaps, default=math.nan), 2)}",
+                  {"points": points, "min_gap": min(gaps, default=math.nan),
+                   "serial_r2": r2_serial,
+                   **{f"r2_decay_{m:g}": f.r2 for m, f in decay.items()},
+                   **{f"r2_window_{k}": f.r2 for k, f in window.items()}})
+        )  # fmt: skip
+    return rows

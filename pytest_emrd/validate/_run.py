@@ -1,10 +1,8 @@
-"""The validation runner (I/O): run a plan's episodes in worker processes, cached on disk.
+"""The validation runner (I/O): a plan's episodes in spawned worker processes, cached on disk.
 
 Episodes go through the results store (:class:`~pytest_emrd.run.ResultsStore`) under
-``<out>/episodes/``: each is computed once, written atomically and reused by the next run
-with the same protocol, so a rerun only recomputes the checks. Workers are spawned
-processes (each starts its own reference server on demand); what crosses the process
-boundary is plain dicts.
+``<out>/episodes/``, reused by the next run with the same protocol, so a rerun only
+recomputes the checks. What crosses the process boundary is plain dicts.
 """
 
 from __future__ import annotations
@@ -61,10 +59,8 @@ def run_plan(
     jobs: int = 2,
     on_episode: Callable[[Progress], None] | None = None,
 ) -> dict[str, list[Trajectory]]:
-    """Trajectories of every group of ``plan`` (group name -> spawn-major list).
-
-    Cached episodes under ``out`` are reused; the rest run on ``jobs`` processes.
-    """
+    """Trajectories of every group of ``plan`` (group name -> spawn-major list); cached
+    episodes under ``out`` are reused, the rest run on ``jobs`` processes."""
     check_positive_int("jobs", jobs)
     specs = plan.specs()
     session = secrets.token_hex(6)

@@ -9,8 +9,7 @@ from pytest_emrd.errors import ConfigError
 from pytest_emrd.metrics import EpisodeMetrics, as_episode_metrics
 from pytest_emrd.trajectory import Trajectory
 from pytest_emrd.validate._check import Check, Episode, ValidationReport
-from pytest_emrd.validate._decide import prior_checks, scout_decide_checks
-from pytest_emrd.validate._explore import exploration_checks
+from pytest_emrd.validate._explore import exploration_checks, prior_checks, scout_decide_checks
 from pytest_emrd.validate._frame import frame_checks
 from pytest_emrd.validate._mimic import (
     dup_checks,
@@ -30,12 +29,11 @@ from pytest_emrd.validate._plan import (
     MIMIC_MODELS,
     MIMIC_SIGMA,
     WINDOW_SIZES,
-    Group,
 )
-from pytest_emrd.validate._points import r2_points_checks
 from pytest_emrd.validate._remember import (
     decay_checks,
     miller_checks,
+    r2_points_checks,
     serial_checks,
     window_fit_checks,
 )
@@ -53,9 +51,9 @@ def _episodes(groups: Groups, name: str) -> Sequence[Episode]:
     return trajs
 
 
-def _need(groups: Groups, group: Group) -> list[EpisodeMetrics]:
-    """The group's episodes as metrics, matched once and shared by every row."""
-    return as_episode_metrics(_episodes(groups, group.name))
+def _need(groups: Groups, name: str) -> list[EpisodeMetrics]:
+    """The episodes of group ``name`` as metrics, matched once and shared by every row."""
+    return as_episode_metrics(_episodes(groups, name))
 
 
 def _trajectories(groups: Groups, name: str) -> list[Trajectory]:
@@ -90,14 +88,12 @@ def episode_checks(groups: Groups) -> list[Check]:
 
 def scout_checks(groups: Groups) -> list[Check]:
     """Rows of the scout family (and ``prior``)."""
-    scout = _need(groups, Group("scout", "baseline"))
-    dark = _need(groups, Group("scout", "low_light"))
-    decays = {float(m): _need(groups, Group(f"scout-decay-{m}", "baseline")) for m in DECAY_MEANS}
-    windows = {k: _need(groups, Group(f"scout-window-{k}", "baseline")) for k in WINDOW_SIZES}
-    serial = _need(groups, Group("scout-serial", "baseline"))
-    prior = _need(groups, Group("prior", "baseline"))
+    scout, dark = _need(groups, "scout"), _need(groups, "scout@low_light")
+    decays = {float(m): _need(groups, f"scout-decay-{m}") for m in DECAY_MEANS}
+    windows = {k: _need(groups, f"scout-window-{k}") for k in WINDOW_SIZES}
+    serial, prior = _need(groups, "scout-serial"), _need(groups, "prior")
     return [
-        *exploration_checks(_trajectories(groups, Group("scout", "baseline").name), dark),
+        *exploration_checks(_trajectories(groups, "scout"), dark),
         *frame_checks(groups),
         *decay_checks(decays),
         *window_fit_checks(windows, decays),

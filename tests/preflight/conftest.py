@@ -4,7 +4,7 @@ It lists its model with ``max_model_len`` (vLLM's ``ModelCard``), counts the ima
 request against its image limit and the prompt against its context, and answers a refused
 request with HTTP 400 and vLLM's own error body (``{"error": {"message", "type":
 "BadRequestError", "param", "code": 400}}``) carrying vLLM's sentences (see
-``pytest_emrd/preflight/_refusals.py`` for where each comes from). Accepted requests get a
+``pytest_emrd/preflight/_server.py`` for where each comes from). Accepted requests get a
 reply in the EMRD protocol.
 """
 
