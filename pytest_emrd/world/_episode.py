@@ -1,16 +1,10 @@
 """The world of one episode: which office, which spawn room, which seed.
 
-The paper tests a single office ("robustness is limited by testing on a single office"),
-20 runs per spawn room. Under the default ``layouts="paper"`` every episode of every model,
-condition and prompt variant therefore runs in :func:`paper_office`; episodes differ only
-by the spawn pose inside the spawn room (and, under ``texture``, by the colours), both drawn
-from the episode seed. ``layouts="generated"`` is the generalisation option: each spawn x
-episode gets its own procedurally generated office (:func:`generate_layout` of the episode
-seed). The two are separate protocols and are never mixed (case ids, cassette paths,
-results and gate cells all carry the layouts).
-
-:func:`episode_world` is the one place that turns an :class:`EpisodeSpec` into a world; the
-episode loop, ``emrd render`` and any viewer call it.
+Under ``layouts="paper"`` every episode runs in :func:`paper_office` (the paper tests a
+single office) and episodes differ only by the spawn pose (and, under ``texture``, the
+colours), drawn from the episode seed; ``layouts="generated"`` gives each episode its own
+office, :func:`generate_layout` of its seed. :func:`episode_world` is the one place that
+turns an :class:`EpisodeSpec` into a world.
 """
 
 from __future__ import annotations
@@ -26,11 +20,8 @@ from pytest_emrd.world._layout import generate_layout
 from pytest_emrd.world._model import Layout
 
 PAPER_OFFICE_SEED: Final = 37
-"""Generator seed of the fixed office (the paper's Figure "Four-room office layout"): the
-first seed whose office holds every piece of the full furniture recipe: Office 4 desks with
-4 chairs and 3 laptops, 2 shelving units, 2 plants; Conference Room a 3.2 m conference table
-with 8 chairs and a television; Kitchen fridge, 2 counter tops, sink, coffee machine,
-microwave, stool; Entrance reception desk, 2 armchairs, a plant and the building exit."""
+"""Generator seed of the fixed office: the first seed whose office holds every piece of the
+full furniture recipe (4 desks, 3 laptops, 2 shelving units, a 3.2 m conference table)."""
 
 
 @cache
@@ -73,7 +64,6 @@ def _indices(spawn_room: str) -> dict[int, int]:
 
 
 def episode_index(spawn_room: str, seed: int) -> int | None:
-    """The index of the episode of ``spawn_room`` (canonical name) whose seed is ``seed``
-    (:attr:`EpisodeSpec.seed`, the same for every model, condition and variant), among the
-    first :data:`INDEXED_EPISODES`; None for any other seed."""
+    """The index of the episode of ``spawn_room`` (canonical name) whose seed is ``seed``,
+    among the first :data:`INDEXED_EPISODES`; None for any other seed."""
     return _indices(spawn_room).get(seed)

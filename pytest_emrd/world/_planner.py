@@ -1,12 +1,10 @@
 """Placing furniture without overlap: the occupancy bookkeeping behind the layout generator.
 
-A *unit* is a group of objects placed together (a desk with its chair and laptop, the
-conference table with its eight chairs, a counter with what stands on it) in the unit's
-own frame: ``u`` metres to the right, ``v`` metres forward (the unit's front faces the
-room). The planner keeps two lists of rectangles: ``solid`` floor footprints, and ``clear``
-zones that must stay walkable (doorway approaches, each unit's access zone). A candidate
-placement is accepted when its footprint overlaps neither, and its access zone overlaps no
-solid footprint and lies inside the room; candidates are checked all at once with numpy.
+A *unit* is a group of objects placed together (a desk with its chair and laptop) in its
+own frame: ``u`` metres to the right, ``v`` forward (the front faces the room). A candidate
+placement is accepted when its footprint overlaps neither a ``solid`` floor footprint nor a
+``clear`` zone (doorway approaches, each unit's access zone), and its access zone overlaps
+no solid footprint and lies inside the room.
 """
 
 from __future__ import annotations
@@ -31,10 +29,8 @@ from pytest_emrd.world._rng import StableRng
 WALL_GAP = 0.02
 """Distance between a wall and the back of furniture standing against it."""
 CANDIDATES = 96
-"""Placements tried per unit before it is given up."""
+"""Placements tried per unit before it is given up (in batches of :data:`BATCH`)."""
 BATCH = 8
-"""Candidates drawn and checked together."""
-
 #: Wall side -> rotation that makes a unit standing against it face into the room.
 SIDE_ROTATION = {"N": 180.0, "S": 0.0, "E": 270.0, "W": 90.0}
 
@@ -124,7 +120,7 @@ class Planner:
     def _search(
         self, room: Room, unit: Unit, candidate: Callable[[], tuple[float, float, float]]
     ) -> bool:
-        """Try candidates in batches (most units fit in the first batch) until one fits."""
+        """Try candidates in batches until one fits."""
         for _ in range(CANDIDATES // BATCH):
             if self._first_fit(room, unit, np.array([candidate() for _ in range(BATCH)])):
                 return True

@@ -1,15 +1,14 @@
 """Per-layout arrays shared by visibility, motion and the renderer (computed once per layout).
 
-A :class:`Scene` holds the walls, every object's footprint and visibility sample points,
-the boxes that draw each object converted to world coordinates, and the palette labels:
-``0`` ceiling, ``1`` skirting, then walls, floors and alternate floor tiles per room (in
-:data:`~pytest_emrd.rooms.ROOM_NAMES` order), then one label per ``(object, material)``.
+Palette labels: ``0`` ceiling, ``1`` skirting, then walls, floors and alternate floor tiles
+per room (in :data:`~pytest_emrd.rooms.ROOM_NAMES` order), then one per ``(object, material)``.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import lru_cache
+from typing import Any
 
 import numpy as np
 
@@ -18,6 +17,7 @@ from pytest_emrd.world._catalog import (
     CEILING_COLOR,
     COLORS_OF,
     FLOOR_COLORS,
+    OCCLUDER_TYPES,
     SKIRTING_COLOR,
     WALL_COLORS,
 )
@@ -72,6 +72,15 @@ class Scene:
     """``(nz, nx)`` room index of each 10 cm cell (0 outside any room), for the renderer."""
     floor_raster: np.ndarray
     """``(nz, nx)`` floor label of each cell: the room's floor, alternate tiles darker."""
+    occluders: np.ndarray
+    """``(K,)`` indices of the objects that hide what stands behind them: floor-standing
+    :data:`~pytest_emrd.world._catalog.OCCLUDER_TYPES`."""
+    tops: np.ndarray
+    """``(N,)`` every object's top above the floor (``elevation + height``)."""
+    landmarks: np.ndarray
+    """``(N,)`` bool: doorways and the exit (category ``landmark``)."""
+    sights: dict[Any, Any] = field(default_factory=dict, repr=False)
+    """The memo of :func:`pytest_emrd.world._visibility.sight`."""
 
     def crowded(self, x: np.ndarray, z: np.ndarray, radius: float = AGENT_RADIUS) -> np.ndarray:
         """Whether a disc of ``radius`` at each point would touch floor furniture
@@ -174,6 +183,12 @@ def scene_of(layout: Layout) -> Scene:
         index={o.object_id: i for i, o in enumerate(objs)},
         room_raster=(rooms := _raster(layout)),
         floor_raster=_floor(rooms),
+        occluders=np.array(
+            [i for i, o in enumerate(objs) if floor[i] and o.object_type in OCCLUDER_TYPES],
+            dtype=np.int64,
+        ),
+        tops=np.array([o.elevation + o.height for o in objs], dtype=float),
+        landmarks=np.array([o.category == "landmark" for o in objs], dtype=bool),
     )
 
 

@@ -1,12 +1,9 @@
 """Low-poly box compositions: how each kind of object looks to the ray-caster.
 
-Every object is drawn as a few axis-aligned boxes in its own frame (``u`` to the right,
-``v`` forward, ``y`` up from the object's base), each with a material role whose colour the
-palette supplies: a table is a top on legs, a chair a seat with a back, a fridge a tall pale
-body with handles, a laptop or television a thin dark screen, a plant a pot under a green
-crown, a doorway a frame around the gap, the exit a door with a push bar under a green sign.
-Boxes are listed bottom-up; a box marked ``facing`` (a screen, a handle, a sign) is only
-drawn when the viewer is on that side of the object.
+Every object is a few axis-aligned boxes in its own frame (``u`` right, ``v`` forward,
+``y`` up from its base), each with a material role whose colour the palette supplies,
+listed bottom-up; a box marked ``facing`` (a screen, a handle, a sign) is drawn only from
+that side.
 """
 
 from __future__ import annotations

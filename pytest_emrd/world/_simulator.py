@@ -14,9 +14,9 @@ import numpy as np
 from pytest_emrd._bounded import remember
 from pytest_emrd.errors import ConfigError, check_choice, check_range
 from pytest_emrd.rooms import ROOM_NAMES, SLUG_ROOMS
-from pytest_emrd.world._actions import Action
 from pytest_emrd.world._conditions import ConditionParams, condition_params
 from pytest_emrd.world._feedback import (
+    Action,
     SemanticStep,
     choose_target,
     goto_key,
@@ -25,7 +25,6 @@ from pytest_emrd.world._feedback import (
     not_visible,
     observed_pose,
     room_table,
-    term,
     turn_degrees,
     with_pose,
 )
@@ -38,11 +37,10 @@ from pytest_emrd.world._visibility import Sight, sight
 JPEG_QUALITY = 85
 FRAME_CACHE = 16
 """Frames kept per episode (least recently used dropped first)."""
-
-#: Views whose pixel digest this process knows (a few hundred bytes each).
 VIEW_DIGESTS = 1 << 16
-#: Shade tables kept (one per condition of a layout; under ``texture`` one per episode seed).
+"""Views whose pixel digest this process knows (a few hundred bytes each)."""
 SHADE_TABLES = 64
+"""Shade tables kept (one per condition of a layout; under ``texture`` one per seed)."""
 
 _lock = threading.Lock()
 #: (scene, table, pose) -> digest, keyed by the identities of a memoised scene and table
@@ -59,16 +57,14 @@ def _remember(table: OrderedDict[Any, Any], key: Any, value: Any, capacity: int)
 
 
 def forget_views() -> None:
-    """Forget every remembered view digest and shade table, as in a new process (cold
-    benchmarks, tests)."""
+    """Forget every remembered view digest and shade table, as in a new process."""
     with _lock:
         _digests.clear()
         _tables.clear()
 
 
 def _shades(scene: Scene, params: ConditionParams, seed: int) -> np.ndarray:
-    """The episode's shade table, one object per scene, condition and (``texture``) seed:
-    every episode of the paper office under one condition shares it."""
+    """The episode's shade table, one object per scene, condition and (``texture``) seed."""
     key = (id(scene), params, seed if params.randomize_palette else None)
     hit = _tables.get(key)
     if hit is not None and hit[0] is scene:
@@ -79,11 +75,10 @@ def _shades(scene: Scene, params: ConditionParams, seed: int) -> np.ndarray:
 
 
 class BuiltinSimulator(SemanticStep):
-    """Built-in office simulator: semantic actions, wall-occluded visibility, ray-cast frames.
+    """Built-in office simulator: semantic actions, occluded visibility, ray-cast frames.
 
-    ``room_aliases`` maps extra names ``Term`` accepts to canonical room names (for prompt
-    variants that rename the rooms, e.g. ``{"Room A": "Office"}``). ``frame_cache`` is how
-    many recent frames of an episode are kept for poses the agent returns to (0: none).
+    ``room_aliases`` maps extra names ``Term`` accepts to canonical room names (``{"Room A":
+    "Office"}``). ``frame_cache`` is how many recent frames of an episode are kept (0: none).
     """
 
     def __init__(
@@ -112,7 +107,6 @@ class BuiltinSimulator(SemanticStep):
         self._sight: Sight | None = None
         self._frames: OrderedDict[WorldPose, tuple[str, View]] = OrderedDict()
 
-    # -- protocol ---------------------------------------------------------------------
     def reset(
         self, layout: Layout, condition: str, spawn_room: str, seed: int, *, symbolic: bool = True
     ) -> Observation:
@@ -154,7 +148,6 @@ class BuiltinSimulator(SemanticStep):
         self._scene = None
         self._frames.clear()
 
-    # -- actions ----------------------------------------------------------------------
     def _goto(self, action: Action) -> str:
         scene = self._require()
         symbolic = self._symbolic
@@ -189,12 +182,6 @@ class BuiltinSimulator(SemanticStep):
         self._move(WorldPose(self._pose.x, self._pose.z, (self._pose.heading + delta) % 360))
         return ""
 
-    def _term(self, action: Action) -> str:
-        self._ended = True
-        self._terminal, note = term(self._rooms, action)
-        return note
-
-    # -- observation ------------------------------------------------------------------
     def _require(self) -> Scene:
         if self._scene is None:
             raise ConfigError("BuiltinSimulator used before reset(); call reset(...) first.")
@@ -214,15 +201,11 @@ class BuiltinSimulator(SemanticStep):
     def _render(self) -> tuple[str, View]:
         """Pixel digest and view of the current pose.
 
-        Agents often come back to a pose (a full sweep ends where it began), so the views of
-        recent poses of the episode are kept, pixels and JPEG included once made. And every
-        episode of the paper office under a condition looks at the same scene through the
-        same shade table: the Gotos of a grid land on the same few poses, so of ~6,600 views
-        of the committed grid ~1,900 differ. The process remembers each view's digest; a view
-        seen before is drawn again only if its pixels or JPEG are read (a recording, the
-        viewer), never for a replay, which needs the digest alone (not under ``texture``,
-        whose colours differ per episode). ``frame_cache=0`` turns both off (every view
-        drawn and hashed).
+        The views of recent poses of the episode are kept (a sweep ends where it began). And
+        every episode of the paper office under a condition shares one scene and shade table,
+        so the process remembers each view's digest (of ~6,600 views of the committed grid
+        ~1,900 differ): a view seen before is drawn only if its pixels or JPEG are read, never
+        for a replay (not under ``texture``). ``frame_cache=0`` turns both off.
         """
         pose, scene, table = self._pose, self._require(), self._table
         cached = self._frames.get(pose)
@@ -230,8 +213,7 @@ class BuiltinSimulator(SemanticStep):
             self._frames.move_to_end(pose)
             return cached
         view = View(functools.partial(render, scene, pose, self._params, table), self._quality)
-        # A texture episode's table is its own (colours drawn from its seed): no other
-        # episode can share its views, and remembering them would keep every such table.
+        # A texture episode's table is its own: no other episode can share its views.
         shared = self._cache_size > 0 and not self._params.randomize_palette
         key = (id(scene), id(table), pose)
         known = _digests.get(key) if shared else None

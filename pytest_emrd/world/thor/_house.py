@@ -1,25 +1,18 @@
 """EMRD layout -> ProcTHOR house dict (schema 1.0.0). Pure and deterministic.
 
-The house is what ``Controller(scene=house)`` / ``CreateHouse`` accept: ``rooms`` with
-``floorPolygon`` and a THOR ``roomType``; ``walls`` (one per boundary piece and room, plus
-one-sided ``wall|exterior|...`` faces); ``doors`` cut as ``holePolygon`` into a wall both
-rooms own, the hole measured along ``wall0`` from its first point; ``objects`` with an
-``assetId`` chosen by footprint and placed at its bounding-box height inside its room
-(:mod:`._placement`); ``proceduralParameters`` with lights and skybox; ``metadata`` with the
-schema, the agent's start in ``agentPoses`` (the only pose ``CreateHouse`` applies: ai2thor
-``ProceduralTools.cs``, ``setAgentPose``; ``agent`` repeats it, procthor's own convention)
-on THOR's grid, and our own ``emrd`` block (room names, the THOR-id -> EMRD-id table).
-
-Conditions: ``low_light`` multiplies every light's intensity by the condition's light
-factor and swaps the skybox, THOR's source of ambient light, for a dim one; ``texture``
-gives walls and floors seeded random colours (the simulator adds ``RandomizeMaterials`` +
-``RandomizeColors`` at reset). The same ``(layout, condition,
-seed)`` always yields the same dict.
+The house ``Controller(scene=house)`` accepts: ``rooms``, ``walls`` (one per boundary piece
+and room, plus one-sided exterior faces), ``doors`` cut as ``holePolygon`` into a wall both
+rooms own, ``objects`` with their assets (:mod:`._placement`), lights and skybox, and
+``metadata``: the agent's start in ``agentPoses`` (the only pose ``CreateHouse`` applies;
+``agent`` repeats it, procthor's convention) and our ``emrd`` block (room names, the
+THOR-id -> EMRD-id table). ``low_light`` scales the lights and dims the skybox; ``texture``
+gives walls and floors seeded colours. See ``docs/ai2thor.md``.
 """
 
 from __future__ import annotations
 
 from collections.abc import Mapping
+from dataclasses import dataclass, field
 from typing import Any
 
 from pytest_emrd.errors import ConfigError, check_choice
@@ -43,6 +36,43 @@ from pytest_emrd.world.thor._assets import (
 )
 from pytest_emrd.world.thor._placement import Placed, place, spawn_point
 from pytest_emrd.world.thor._walls import WallPiece, corners, wall_pieces
+
+
+@dataclass(frozen=True)
+class IdTable:
+    """Bidirectional map THOR objectId <-> EMRD object id, read from the table
+    :func:`build_house` writes to ``house["metadata"]["emrd"]["ids"]``. THOR objects the
+    layout never placed (walls, floors, children spawned by the build) have no EMRD id."""
+
+    to_emrd: Mapping[str, str]
+    to_thor: Mapping[str, str] = field(init=False, repr=False)
+
+    def __post_init__(self) -> None:
+        inverse = {ours: thor for thor, ours in self.to_emrd.items()}
+        if len(inverse) != len(self.to_emrd):
+            raise ConfigError("the THOR id table maps two THOR objects to one EMRD id.")
+        object.__setattr__(self, "to_thor", inverse)
+
+    @classmethod
+    def from_house(cls, house: Mapping[str, Any]) -> IdTable:
+        """The table of a house :func:`build_house` made (ConfigError for any other)."""
+        try:
+            table = house["metadata"]["emrd"]["ids"]
+        except (KeyError, TypeError):
+            raise ConfigError(
+                "house has no metadata.emrd.ids table; build it with "
+                "pytest_emrd.world.thor.build_house."
+            ) from None
+        return cls(dict(table))
+
+    def emrd(self, thor_id: str) -> str | None:
+        """The EMRD id of a THOR object, or None if the layout never placed it."""
+        return self.to_emrd.get(thor_id)
+
+    def thor(self, emrd_id: str) -> str:
+        """The THOR objectId of an EMRD object (KeyError if unknown)."""
+        return self.to_thor[emrd_id]
+
 
 AGENT_Y = 0.9009997
 """Agent body height THOR reports for the default agent (TeleportFull keeps it)."""

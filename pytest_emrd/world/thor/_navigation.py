@@ -1,11 +1,10 @@
 """Where THOR should put the agent for a semantic action, and what it sees. Pure maths.
 
 THOR moves on a grid of reachable positions (``GetReachablePositions``) and faces one of
-four headings (``rotateStepDegrees=90``). ``Goto`` is a teleport: to the reachable
-position nearest the target, inside the target's room, from which a grid heading looks
-at the target (:func:`viewpoint`); through a doorway, to the position in the next room
-nearest the gap, facing into that room (:func:`entry`). Headings are degrees clockwise
-from ``+z``, THOR's yaw, so the world frame and THOR's frame coincide.
+four headings. ``Goto`` is a teleport to a reachable position in the target's room from
+which a grid heading looks at the target (:func:`viewpoint`); through a doorway, to the
+position in the next room nearest the gap, facing into it (:func:`entry`). THOR's yaw is
+the world frame's heading.
 """
 
 from __future__ import annotations
@@ -17,7 +16,7 @@ from typing import Any
 import numpy as np
 
 from pytest_emrd.world._model import Doorway, Room, VisibleObject, WorldPose
-from pytest_emrd.world.thor._ids import IdTable
+from pytest_emrd.world.thor._house import IdTable
 
 HALF_FOV = 45.0
 """Half of THOR's ``fieldOfView=90``, degrees."""
@@ -70,8 +69,6 @@ def nearest_in_room(
     points: np.ndarray, x: float, z: float, room: Room
 ) -> tuple[float, float] | None:
     """The reachable position in ``room`` nearest ``(x, z)`` (None if the room has none)."""
-    if points.size == 0:
-        return None
     best = _pick(points, np.hypot(points[:, 0] - x, points[:, 1] - z), _in_room(points, room))
     return None if best is None else (float(points[best, 0]), float(points[best, 1]))
 
@@ -79,13 +76,10 @@ def nearest_in_room(
 def viewpoint(points: np.ndarray, x: float, z: float, room: Room) -> WorldPose | None:
     """Reachable spot in ``room`` nearest ``(x, z)`` with a grid heading that faces it.
 
-    Among spots at least :data:`CLEARANCE` away whose snapped heading leaves the target
-    within :data:`MAX_OFF_AXIS` of the view axis, ranks by distance plus
-    :data:`OFF_AXIS_COST` per degree off axis (square-on beats sideways); falls back to the
-    nearest spot in the room. None if no reachable position lies in the room.
+    Among spots at least :data:`CLEARANCE` away that leave the target within
+    :data:`MAX_OFF_AXIS` of the view axis, ranks by distance plus :data:`OFF_AXIS_COST` per
+    degree off axis; else the nearest spot in the room; None if the room has none.
     """
-    if points.size == 0:
-        return None
     dx, dz = x - points[:, 0], z - points[:, 1]
     dist = np.hypot(dx, dz)
     heading = np.degrees(np.arctan2(dx, dz)) % 360.0
@@ -104,8 +98,6 @@ def viewpoint(points: np.ndarray, x: float, z: float, room: Room) -> WorldPose |
 
 def entry(points: np.ndarray, doorway: Doorway, into: Room) -> WorldPose | None:
     """Reachable spot in ``into`` nearest the doorway, facing into the room, away from the gap."""
-    if points.size == 0:
-        return None
     if doorway.axis == "x":  # wall runs along x at z = doorway.z
         north = abs(into.z0 - doorway.z) < abs(into.z1 - doorway.z)
         heading, depth = (
@@ -148,17 +140,11 @@ def visible_objects(
 ) -> tuple[VisibleObject, ...]:
     """EMRD objects THOR reports ``visible``, sorted by id.
 
-    THOR sets ``visible`` when one of the object's visibility points lies in the view,
-    unoccluded, within ``visibilityDistance`` measured horizontally from the camera. The
-    controller runs with the condition's draw distance, as far as the builtin world counts
-    landmarks (``landmarks``: EMRD ids of doorways and the exit) visible; every other object
-    must also lie within ``visibility_distance`` of the agent, measured horizontally to the
-    nearest point of its axis-aligned bounding box (never to its pivot, which would drop large
-    objects THOR sees). ``distance`` is the horizontal distance from the agent to the object's
-    position.
-    ``types`` maps EMRD id -> EMRD object type (THOR's own ``objectType`` for a door is
-    ``Doorway``/``Doorframe`` and may differ from ours). Bearings are clipped to the field
-    of view: a large object can be visible while its centre lies just outside it.
+    THOR runs with the condition's draw distance, as far as ``landmarks`` (EMRD ids of
+    doorways and the exit) count visible; every other object must also lie within
+    ``visibility_distance``, measured horizontally to the nearest point of its bounding box.
+    ``distance`` is horizontal, to the object's position; ``types`` maps EMRD id -> EMRD
+    type; bearings are clipped to the field of view.
     """
     seen: dict[str, VisibleObject] = {}
     for obj in objects:

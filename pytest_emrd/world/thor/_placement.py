@@ -1,19 +1,12 @@
 """Where each layout object stands in THOR, and where the agent may start. Pure geometry.
 
-THOR centres an asset's bounding box on the house object's ``position``
-(``ProceduralTools.cs``, ``spawnHouseObject(..., positionBoundingBoxCenter: true)``), so an
-object stands on its support when ``position.y`` is the support's top plus half the
-*asset's* height. Floor objects stand at ``y = h / 2``; an item on a desk or counter stands
-on the top of the asset that desk or counter became. The asset's footprint may be larger
-than the EMRD one: :func:`place` shifts the object the least distance that keeps the
-asset's footprint inside its room (and moves the items standing on it by the same amount).
-
-The agent: ``CreateHouse`` puts it at ``metadata.agentPoses[agentMode]`` and nowhere else;
-``GetReachablePositions`` walks THOR's grid (``gridSize``) outward from where the agent
-stands, and ``TeleportFull`` refuses positions off the absolute grid (``isPositionOnGrid``
-in ``BaseFPSAgentController.cs``: ``x`` and ``z`` multiples of ``gridSize``). So the start
-is a grid point (:func:`spawn_point`), clear of every asset footprint and wall by
-:data:`CLEARANCE`, nearest to the builtin world's seeded spawn.
+THOR centres an asset's bounding box on the object's ``position``, so an object stands on
+its support at ``y = support top + asset height / 2``, the support top being 0 or the top
+of the desk or counter asset it stands on. :func:`place` shifts an object whose asset is
+larger than its footprint the least distance that keeps it inside its room (and what stands
+on it with it). The agent's start must be on THOR's absolute grid (``TeleportFull`` refuses
+other points, and ``GetReachablePositions`` walks the grid from the start): the grid point
+clear of every asset and wall nearest the builtin spawn (:func:`spawn_point`).
 """
 
 from __future__ import annotations

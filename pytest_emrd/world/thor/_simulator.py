@@ -1,31 +1,15 @@
 """``ThorSimulator``: the :class:`~pytest_emrd.world._model.Simulator` protocol on AI2-THOR.
 
-One ``ai2thor.controller.Controller`` per simulator, started on the first ``reset`` with
-``scene=<house>`` (agentMode default, CloudRendering, 512x512, fieldOfView 90,
-snapToGrid, rotateStepDegrees 90, the condition's visibilityDistance) and re-used with
-``controller.reset(scene=<house>)`` afterwards. Action texts are read with the world's
-grammar and answered with the world's feedback wording (:mod:`pytest_emrd.world._feedback`),
-so an agent cannot tell the backends apart by their text. Semantic actions map to THOR:
-
-* ``Goto(object)``  -> ``TeleportFull`` to :func:`~._navigation.viewpoint`;
-* ``Goto(Doorway)`` -> ``TeleportFull`` to :func:`~._navigation.entry` in the other room,
-  or, for a doorway seen from a third room, up to it on the near side (no room skipped);
-* ``Turn(Left|Right|Around)`` -> ``RotateLeft`` / ``RotateRight`` / ``RotateRight`` twice;
-* ``Term(room)`` -> no THOR call; ends the episode.
-
-The spawn pose is the builtin world's (:func:`pytest_emrd.world._motion.spawn_pose`: the
-seeded free point and heading), moved to the nearest free point of THOR's grid and written
-to the house's ``metadata.agentPoses`` (:func:`~._house.build_house`), so a spec starts at
-the same place in both backends, up to at most one grid step. Reset then checks each THOR
-answer it depends on: ``CreateHouse`` (run by ``Controller(scene=...)`` / ``reset``),
-``GetReachablePositions`` (the lattice THOR walks from that start), the condition's
-``RandomizeMaterials``/``RandomizeColors``, and the first ``TeleportFull`` (to the lattice
-point, at the height THOR returned for it). A refusal is one :class:`ConfigError` line
-carrying THOR's own ``errorMessage``.
-
-Every THOR call is bounded by the watchdog (``start_timeout``, ``step_timeout``); on a
-timeout the Unity process group is killed (:func:`._launch.kill_unity`) and the next reset
-starts a new controller.
+One ``Controller`` per simulator, started on the first ``reset`` with ``scene=<house>`` and
+:data:`DEFAULTS`, then re-used with ``controller.reset(scene=<house>)``. Actions are read
+and answered with the builtin world's grammar and wording (:mod:`pytest_emrd.world._feedback`).
+``Goto`` teleports (``TeleportFull``) to :func:`~._navigation.viewpoint`, through a doorway
+to :func:`~._navigation.entry`; ``Turn`` rotates by 90 degree steps; ``Term`` makes no THOR
+call. The spawn is the builtin world's, moved to the nearest free point of THOR's grid.
+Reset checks each THOR answer it depends on; a refusal is one :class:`ConfigError` line
+carrying THOR's ``errorMessage`` (``docs/ai2thor.md``). Every THOR call is bounded
+(``start_timeout``, ``step_timeout``); on a timeout the Unity process group is killed and
+the next reset starts a new controller.
 """
 
 from __future__ import annotations
@@ -38,9 +22,9 @@ import numpy as np
 
 from pytest_emrd.errors import ConfigError, TransportError, check_choice
 from pytest_emrd.rooms import ROOM_NAMES, SLUG_ROOMS
-from pytest_emrd.world._actions import Action
 from pytest_emrd.world._conditions import condition_params
 from pytest_emrd.world._feedback import (
+    Action,
     ActionFailed,
     SemanticStep,
     choose_target,
@@ -50,7 +34,6 @@ from pytest_emrd.world._feedback import (
     not_visible,
     observed_pose,
     room_table,
-    term,
     turn_degrees,
     with_pose,
 )
@@ -65,8 +48,7 @@ from pytest_emrd.world._model import (
 from pytest_emrd.world._motion import spawn_pose
 from pytest_emrd.world._scene import scene_of
 from pytest_emrd.world.thor import _launch
-from pytest_emrd.world.thor._house import build_house
-from pytest_emrd.world.thor._ids import IdTable
+from pytest_emrd.world.thor._house import IdTable, build_house
 from pytest_emrd.world.thor._navigation import (
     agent_pose,
     entry,
@@ -75,7 +57,6 @@ from pytest_emrd.world.thor._navigation import (
     viewpoint,
     visible_objects,
 )
-from pytest_emrd.world.thor._watchdog import bounded
 
 JPEG_QUALITY = 90
 DEFAULTS: Mapping[str, Any] = {
@@ -92,7 +73,7 @@ ROTATIONS: Mapping[float, tuple[str, ...]] = {
     90.0: ("RotateRight",),
     180.0: ("RotateRight", "RotateRight"),
 }
-"""Clockwise degrees of a ``Turn`` -> the THOR rotations (90 degrees each) that make it."""
+"""Clockwise degrees of a ``Turn`` -> the THOR rotations (90 degrees each)."""
 
 
 def _positive(name: str, value: float) -> float:
@@ -125,18 +106,11 @@ class ThorSimulator(SemanticStep):
     """The ai2thor backend. Construction is cheap; THOR starts on the first ``reset``.
 
     ``controller_options`` go to ``Controller(...)`` over :data:`DEFAULTS` (for example
-    ``local_executable_path``, ``gpu_device``, ``platform``); ``scene`` and
-    ``visibilityDistance`` come from the layout and condition. ``controller_factory``
+    ``local_executable_path``, ``gpu_device``, ``platform``). ``controller_factory``
     replaces ``ai2thor.controller.Controller`` (tests pass a fake). ``allow_download``
-    lets ai2thor fetch a missing build (under ``start_timeout``); by default a missing
-    build fails at once. ``room_aliases`` are extra names ``Term`` accepts, as for the
-    builtin simulator (``{"Room A": "Office"}``).
-
-    Frames are not bit-stable: THOR renders on the GPU, and the same pose gives different
-    pixels on another GPU, driver or build. ``frame_digest`` is the SHA-256 of the pixels
-    THOR returned on this machine, good for nothing more than reporting; recordings made
-    on THOR must be replayed with lenient matching (``--emrd-matching lenient``), which
-    reports frames that differ instead of matching on them.
+    lets ai2thor fetch a missing build (under ``start_timeout``). ``room_aliases`` are extra
+    names ``Term`` accepts. ``frame_digest`` is the SHA-256 of the pixels THOR returned on
+    this machine (not bit-stable across GPUs, drivers and builds).
     """
 
     def __init__(
@@ -209,7 +183,7 @@ class ThorSimulator(SemanticStep):
             )
 
         try:
-            return bounded(fn, seconds=self._step_timeout, on_timeout=on_timeout)
+            return _launch.bounded(fn, seconds=self._step_timeout, on_timeout=on_timeout)
         except TransportError:
             raise
         except Exception as exc:
@@ -352,11 +326,6 @@ class ThorSimulator(SemanticStep):
             if failure is not None:
                 raise failure
         return ""
-
-    def _term(self, action: Action) -> str:
-        self._ended = True
-        self._terminal, note = term(self._rooms, action)
-        return note
 
     def _door_pose(self, layout: Layout, doorway: Doorway) -> WorldPose | None:
         """Through the doorway from one of its rooms; up to it from a third room."""

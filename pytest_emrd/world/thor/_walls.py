@@ -1,10 +1,8 @@
 """Wall segments of a rectangular-room layout, split where neighbouring rooms meet.
 
 ProcTHOR wants one wall per straight boundary piece per room, and a door must sit on a
-piece that both of its rooms own (``wall0``/``wall1``). Rooms of the EMRD office are
-axis-aligned rectangles that may differ in size, so a room side is cut at every corner
-of another room lying on it; each piece then has exactly one neighbour (a room, or the
-outside). Pure geometry, no I/O.
+piece both its rooms own; so a room side is cut at every corner of another room lying on
+it, and each piece has exactly one neighbour (a room, or the outside).
 """
 
 from __future__ import annotations

@@ -8,7 +8,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from pytest_emrd.world._model import Doorway, Room, WorldPose
-from pytest_emrd.world.thor._ids import IdTable
+from pytest_emrd.world.thor import IdTable
 from pytest_emrd.world.thor._navigation import (
     CLEARANCE,
     MAX_OFF_AXIS,
