@@ -88,13 +88,9 @@ def execute(text: str, handlers: Mapping[str, Handler], *, over: bool) -> tuple[
 
 
 class SemanticStep:
-    """The ``step`` and ``Term`` of both backends: one action text -> the backend's ``_goto``
-    or ``_turn`` handler, or :meth:`_term` (via :func:`execute`) -> the backend's ``_observe``.
-
-    A subclass provides those, ``_require()`` (raises before ``reset``), the counter
-    ``_steps``, ``_ended`` (a Term was executed), ``_terminal`` (the canonical room it named,
-    or None for Other) and ``_rooms`` (:func:`room_table`).
-    """
+    """The ``step`` and ``Term`` of both backends: an action text -> the backend's ``_goto``
+    or ``_turn``, or :meth:`_term` (via :func:`execute`) -> the backend's ``_observe``; the
+    backend also provides ``_require()`` and the attributes below."""
 
     _steps: int
     _ended: bool
@@ -129,8 +125,7 @@ def turn_degrees(action: Action) -> float:
 
 
 def room_table(aliases: Mapping[str, str] | None = None) -> dict[str, str]:
-    """Matching key -> canonical room for ``Term``: the four rooms plus ``aliases``
-    (extra names for prompt variants that rename the rooms, e.g. ``{"Room A": "Office"}``)."""
+    """Matching key -> canonical room for ``Term``: the four rooms plus ``aliases``."""
     rooms = {normalise(r): r for r in ROOM_NAMES}
     for alias, room in (aliases or {}).items():
         check_choice(f"room_aliases[{alias!r}]", room, ROOM_NAMES)
@@ -188,8 +183,7 @@ def no_spot(object_id: str, object_type: str, *, symbolic: bool) -> ActionFailed
 
 
 def goto_note(key: str, object_id: str, *, symbolic: bool) -> str:
-    """Success note of a ``Goto``: names the instance when the target was a type (only when
-    ``symbolic``)."""
+    """Success note of a ``Goto``: the instance when the target was a type (if ``symbolic``)."""
     return "" if not symbolic or normalise(object_id) == key else f": moved to {object_id}"
 
 

@@ -88,12 +88,9 @@ def heading_in_spawn_frame(spawn_pose: WorldPose, heading: float) -> float:
 
 def rects_overlap(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """``(K, M)`` bool: does rect ``a[k]`` overlap rect ``b[m]`` with positive area."""
-    return (
-        (a[:, None, 0] < b[None, :, 2])
-        & (a[:, None, 2] > b[None, :, 0])
-        & (a[:, None, 1] < b[None, :, 3])
-        & (a[:, None, 3] > b[None, :, 1])
-    )
+    overlap_x = (a[:, None, 0] < b[None, :, 2]) & (a[:, None, 2] > b[None, :, 0])
+    overlap_z = (a[:, None, 1] < b[None, :, 3]) & (a[:, None, 3] > b[None, :, 1])
+    return overlap_x & overlap_z
 
 
 @dataclass(frozen=True, eq=False)

@@ -54,12 +54,11 @@ def generate_layout(seed: int) -> Layout:
     }
     doorways = _doorways(rng, rooms)
     planner = Planner(rng)
+    approach = (DOOR_WIDTH + 0.4, 2 * APPROACH_DEPTH)  # kept walkable before every door
     for d in doorways:
-        planner.reserve(rect_at(d.x, d.z, DOOR_WIDTH + 0.4, 2 * APPROACH_DEPTH, _rot(d.axis)))
+        planner.clear.append(rect_at(d.x, d.z, *approach, _rot(d.axis)))
     exit_door = _exit(rng, rooms[ENTRANCE])
-    planner.reserve(
-        rect_at(exit_door.x, exit_door.z, DOOR_WIDTH + 0.4, 2 * APPROACH_DEPTH, exit_door.rotation)
-    )
+    planner.clear.append(rect_at(exit_door.x, exit_door.z, *approach, exit_door.rotation))
     _office(planner, rooms[OFFICE])
     _conference(planner, rooms[CONFERENCE])
     _kitchen(planner, rooms[KITCHEN])
@@ -156,10 +155,7 @@ def _desk_unit(with_laptop: bool, laptop_u: float) -> Unit:
     desk, chair = KINDS["Desk"], KINDS["Chair"]
     depth = desk.depth + 0.05 + chair.depth
     desk_v = -depth / 2 + desk.depth / 2
-    members = [
-        Member("Desk", v=desk_v),
-        Member("Chair", v=depth / 2 - chair.depth / 2, turn=180.0),
-    ]
+    members = [Member("Desk", v=desk_v), Member("Chair", v=depth / 2 - chair.depth / 2, turn=180.0)]
     if with_laptop:
         members.append(Member("Laptop", u=laptop_u, v=round(desk_v + 0.1, 2)))
     return Unit(tuple(members), desk.width, round(depth, 2), 0.7)

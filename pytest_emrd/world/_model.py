@@ -177,12 +177,8 @@ class View:
 
 @dataclass(frozen=True)
 class Observation:
-    """What the world returns from ``reset`` and ``step``.
-
-    ``frame_digest`` is the SHA-256 of the raw pixel bytes: cassettes key frames by it, never
-    by JPEG bytes, so a recording replays across Pillow versions. ``frame`` and ``jpeg`` come
-    from ``view`` on first read.
-    """
+    """What the world returns from ``reset`` and ``step``. ``frame_digest`` is the SHA-256 of
+    the raw pixels: cassettes key frames by it, not by JPEG bytes (stable across Pillow)."""
 
     step: int
     """Actions executed so far (0 after reset)."""
@@ -218,11 +214,8 @@ class Simulator(Protocol):
     def reset(
         self, layout: Layout, condition: str, spawn_room: str, seed: int, *, symbolic: bool = True
     ) -> Observation:
-        """Place the agent in ``spawn_room`` and return the first observation.
-
-        ``symbolic=False`` is the ``vision`` modality: ``Goto`` takes object types only and no
-        feedback names an object id.
-        """
+        """Place the agent in ``spawn_room`` and return the first observation (``symbolic=False``:
+        the ``vision`` modality, no feedback names an object id)."""
         ...
 
     def step(self, action: str) -> Observation:

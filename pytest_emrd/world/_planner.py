@@ -80,10 +80,6 @@ class Planner:
         self.clear: list[Rect] = []
         self.placed: list[Placed] = []
 
-    def reserve(self, rect: Rect) -> None:
-        """Keep ``rect`` free of furniture (a doorway's approach zone)."""
-        self.clear.append(rect)
-
     def against_wall(self, room: Room, unit: Unit, sides: str = "NESW") -> bool:
         """Place ``unit`` with its back to one of ``sides`` of ``room``; False if no room."""
         off = WALL_GAP + unit.depth / 2
@@ -109,11 +105,8 @@ class Planner:
             rot = self.rng.choice(rotations)
             if spread is None:
                 return self.rng.uniform(room.x0, room.x1), self.rng.uniform(room.z0, room.z1), rot
-            return (
-                cx + self.rng.uniform(-spread, spread),
-                cz + self.rng.uniform(-spread, spread),
-                rot,
-            )
+            dx, dz = self.rng.uniform(-spread, spread), self.rng.uniform(-spread, spread)
+            return cx + dx, cz + dz, rot
 
         return self._search(room, unit, candidate)
 
@@ -165,9 +158,4 @@ class Planner:
 
 
 def _inside(rects: np.ndarray, room: np.ndarray) -> np.ndarray:
-    return (
-        (rects[:, 0] >= room[0])
-        & (rects[:, 1] >= room[1])
-        & (rects[:, 2] <= room[2])
-        & (rects[:, 3] <= room[3])
-    )
+    return ((rects[:, :2] >= room[:2]) & (rects[:, 2:] <= room[2:])).all(axis=1)

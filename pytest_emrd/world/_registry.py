@@ -39,13 +39,8 @@ def make_simulator(backend: str = "builtin", **options: Any) -> Simulator:
 
 
 def world_version(backend: str = "builtin") -> str:
-    """The world version a recording on ``backend`` depends on.
-
-    ``builtin``: :data:`~pytest_emrd.world.WORLD_VERSION`. ``ai2thor``: the thor backend's
-    own version joined with the builtin one, because THOR episodes are built from the builtin
-    layouts and spawn poses and answer with the builtin feedback wording; a change to either
-    invalidates them (``ai2thor-1+builtin-5``).
-    """
+    """The world version a recording on ``backend`` depends on: for ``ai2thor`` joined with the
+    builtin one, whose layouts, spawns and wording THOR episodes use (``ai2thor-2+builtin-5``)."""
     from pytest_emrd.world._version import WORLD_VERSION
 
     check_choice("backend", backend, BACKENDS)

@@ -52,14 +52,12 @@ def fog_weight(depth: np.ndarray, draw_distance: float, fog: float) -> np.ndarra
 
 
 def first_row(a: np.ndarray) -> np.ndarray:
-    """First image row whose pixel centre lies at or below the continuous row ``a``, in
-    ``[0, 512]`` (int64)."""
+    """First image row (in ``[0, 512]``) whose pixel centre lies at or below row ``a``."""
     return np.minimum(np.maximum(np.ceil(a - 0.5), 0.0), float(SIZE)).astype(np.int64)
 
 
 def _dist2(rects: np.ndarray, x: float, z: float) -> np.ndarray:
-    """Squared distance from ``(x, z)`` to the nearest point of each rectangle
-    ``x0, z0, x1, z1``."""
+    """Squared distance from ``(x, z)`` to the nearest point of each rectangle."""
     ddx = np.maximum(np.maximum(rects[:, 0] - x, x - rects[:, 2]), 0.0)
     ddz = np.maximum(np.maximum(rects[:, 1] - z, z - rects[:, 3]), 0.0)
     return ddx * ddx + ddz * ddz
@@ -167,18 +165,17 @@ def render(scene: Scene, pose: WorldPose, params: ConditionParams, table: np.nda
     return np.frombuffer(rgbx.tobytes("raw", "RGB"), dtype=np.uint8).reshape(SIZE, SIZE, 3)
 
 
+_View = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.float64, np.float64]
+"""Per column ``dx, dz, t_wall, along_x``, then the eye's ``x, z``."""
+
+
 def _cell(a: np.ndarray, size: int) -> np.ndarray:
-    """Raster index of coordinates scaled to cells, clipped to ``[0, size)`` (so truncation
-    is a floor)."""
+    """Raster index of coordinates scaled to cells, clipped to ``[0, size)``."""
     return np.minimum(np.maximum(a, 0.0), size - 1.0).astype(np.intp)
 
 
 def _background(
-    buf: np.ndarray,
-    scene: Scene,
-    params: ConditionParams,
-    table: np.ndarray,
-    view: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.float64, np.float64],
+    buf: np.ndarray, scene: Scene, params: ConditionParams, table: np.ndarray, view: _View
 ) -> None:
     """Ceiling, walls (their room's colour, shaded by orientation), skirting and floor.
 
@@ -218,7 +215,7 @@ def _floor(
     scene: Scene,
     params: ConditionParams,
     table: np.ndarray,
-    view: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.float64, np.float64],
+    view: _View,
     first: int,
 ) -> None:
     """Floor rows ``first`` (counted from the horizon) on, into ``out``: each pixel the

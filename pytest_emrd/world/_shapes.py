@@ -36,19 +36,8 @@ def _full(o: WorldObject, y0: float, y1: float, role: str) -> Box:
 
 def _legs(o: WorldObject, top: float, size: float, inset: float, role: str) -> list[Box]:
     hu, hv = o.width / 2 - inset, o.depth / 2 - inset
-    return [
-        Box(
-            su * hu - (size if su > 0 else 0),
-            su * hu + (0 if su > 0 else size),
-            sv * hv - (size if sv > 0 else 0),
-            sv * hv + (0 if sv > 0 else size),
-            0.0,
-            top,
-            role,
-        )
-        for su in (-1, 1)
-        for sv in (-1, 1)
-    ]
+    us, vs = ((-hu, -hu + size), (hu - size, hu)), ((-hv, -hv + size), (hv - size, hv))
+    return [Box(u0, u1, v0, v1, 0.0, top, role) for u0, u1 in us for v0, v1 in vs]
 
 
 def _desk(o: WorldObject) -> list[Box]:
@@ -71,17 +60,9 @@ def _desk(o: WorldObject) -> list[Box]:
 
 def _table(o: WorldObject) -> list[Box]:
     hw, hd, h = o.width / 2, o.depth / 2, o.height
+    u = hw - 0.45
     legs = [
-        Box(
-            s * (hw - 0.45) - 0.05,
-            s * (hw - 0.45) + 0.05,
-            -hd + 0.2,
-            hd - 0.2,
-            0.0,
-            h - 0.05,
-            "leg",
-        )
-        for s in (-1, 1)
+        Box(s * u - 0.05, s * u + 0.05, -hd + 0.2, hd - 0.2, 0.0, h - 0.05, "leg") for s in (-1, 1)
     ]
     return [*legs, _full(o, h - 0.05, h, "top")]
 

@@ -110,8 +110,7 @@ class BuiltinSimulator(SemanticStep):
     def reset(
         self, layout: Layout, condition: str, spawn_room: str, seed: int, *, symbolic: bool = True
     ) -> Observation:
-        """Start an episode in ``spawn_room`` (canonical name or slug) under ``condition``;
-        ``symbolic=False`` (``vision``): no feedback names an object id."""
+        """Start an episode in ``spawn_room`` (canonical name or slug) under ``condition``."""
         room = SLUG_ROOMS.get(spawn_room, spawn_room)
         check_choice("spawn_room", room, [*ROOM_NAMES, *SLUG_ROOMS])
         self._params = condition_params(condition)

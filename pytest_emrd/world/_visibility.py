@@ -17,6 +17,7 @@ from functools import cached_property, lru_cache
 
 import numpy as np
 
+from pytest_emrd._bounded import remember
 from pytest_emrd.errors import ConfigError
 from pytest_emrd.world._conditions import condition_params
 from pytest_emrd.world._geometry import right_of, unit
@@ -45,13 +46,11 @@ class Sight:
     def visible(self) -> tuple[VisibleObject, ...]:
         """The visible objects as the symbolic modality reports them, sorted by id."""
         out = [
-            VisibleObject(
-                object_id=self.objects[i].object_id,
-                object_type=self.objects[i].object_type,
-                bearing=round(float(self.bearing[i]), 1),
-                distance=round(float(self.distance[i]), 2),
+            VisibleObject(o.object_id, o.object_type, round(float(b), 1), round(float(d), 2))
+            for o, b, d, shown in zip(
+                self.objects, self.bearing, self.distance, self.mask, strict=True
             )
-            for i in np.flatnonzero(self.mask)
+            if shown
         ]
         return tuple(sorted(out, key=lambda v: v.object_id))
 
@@ -66,8 +65,7 @@ class Sight:
 
 
 SIGHT_MEMO = 512
-"""Sights kept per scene (oldest dropped first): agents come back to the same poses, within
-an episode and across the episodes of one office."""
+"""Sights kept per scene (oldest dropped first): agents come back to the same poses."""
 _LOCK = threading.Lock()
 
 
@@ -79,15 +77,12 @@ def sight(
     The last :data:`SIGHT_MEMO` sights of each scene are kept and returned again."""
     reach = visibility if landmarks is None else landmarks
     key = (pose, visibility, reach)
-    memo = scene.sights
     with _LOCK:
-        seen = memo.get(key)
+        seen = scene.sights.get(key)
     if seen is None:
         seen = _sight(scene, pose, visibility, reach)
         with _LOCK:
-            memo[key] = seen
-            while len(memo) > SIGHT_MEMO:
-                del memo[next(iter(memo))]
+            remember(scene.sights, key, seen, SIGHT_MEMO)
     return seen
 
 
@@ -178,12 +173,7 @@ def standing_points(scene: Scene) -> np.ndarray:
 @lru_cache(maxsize=256)
 def discoverable_ids(layout: Layout) -> tuple[str, ...]:
     """``G_base``: ids visible under the *baseline* condition from some standing point
-    (:func:`standing_points`), sorted; cached per layout.
-
-    From each point the four cardinal headings together cover every direction, so an object
-    counts when one of its sample points lies within the baseline visibility distance (a
-    landmark: the drawn distance) in the line of sight.
-    """
+    (:func:`standing_points`) under any heading, sorted; cached per layout."""
     scene = scene_of(layout)
     params = condition_params("baseline")
     vis, landmarks = params.visibility_distance, params.draw_distance

@@ -62,7 +62,8 @@ class Asset:
 
 
 @cache
-def _table() -> dict[str, Asset]:
+def assets() -> Mapping[str, Asset]:
+    """Every vendored asset, by id."""
     text = resources.files(__package__).joinpath("assets.json").read_text(encoding="utf-8")
     data = json.loads(text)["assets"]
     return {
@@ -72,17 +73,12 @@ def _table() -> dict[str, Asset]:
     }
 
 
-def assets() -> Mapping[str, Asset]:
-    """Every vendored asset, by id."""
-    return _table()
-
-
 @cache
 def candidates(object_type: str) -> tuple[Asset, ...]:
     """The vendored assets an EMRD object of ``object_type`` can be built from, by id."""
     wanted = ASSET_TYPES.get(object_type, object_type)
     found = tuple(
-        sorted((a for a in _table().values() if a.object_type == wanted), key=lambda a: a.asset_id)
+        sorted((a for a in assets().values() if a.object_type == wanted), key=lambda a: a.asset_id)
     )
     if not found:
         raise ConfigError(

@@ -88,10 +88,6 @@ def releases_dir() -> str:
     return os.path.join(os.path.expanduser("~"), ".ai2thor", "releases")
 
 
-def _platform_name(platform: Any) -> str:
-    return platform if isinstance(platform, str) else getattr(platform, "__name__", str(platform))
-
-
 def preflight(thor: ModuleType, options: Mapping[str, Any], *, allow_download: bool) -> None:
     """Cheap local checks before any Unity process is launched."""
     local = options.get("local_executable_path")
@@ -103,9 +99,18 @@ def preflight(thor: ModuleType, options: Mapping[str, Any], *, allow_download: b
             )
         return
     platform = options.get("platform")
-    if platform is None or _platform_name(platform) != "CloudRendering":
+    name = platform if isinstance(platform, str) else getattr(platform, "__name__", str(platform))
+    if platform is None or name != "CloudRendering":
         return
-    _check_vulkan(thor, options)
+    width, height = options.get("width", 300), options.get("height", 300)
+    problems = thor.platform.CloudRendering.validate(
+        thor.platform.Request("Linux", width, height, None, False)
+    )
+    if problems:
+        raise ConfigError(
+            f"AI2-THOR platform=CloudRendering cannot run here ({' '.join(problems)}). "
+            + VULKAN_HINT
+        )
     if allow_download:
         return
     commit = options.get("commit_id") or thor.build.COMMIT_ID
@@ -114,18 +119,6 @@ def preflight(thor: ModuleType, options: Mapping[str, Any], *, allow_download: b
         raise ConfigError(
             f"no AI2-THOR build {build.name} in {releases_dir()} (ai2thor "
             f"{thor.__version__} wants commit_id={commit}). {BUILD_HINT}"
-        )
-
-
-def _check_vulkan(thor: ModuleType, options: Mapping[str, Any]) -> None:
-    request = thor.platform.Request(
-        "Linux", options.get("width", 300), options.get("height", 300), None, False
-    )
-    problems = thor.platform.CloudRendering.validate(request)
-    if problems:
-        raise ConfigError(
-            f"AI2-THOR platform=CloudRendering cannot run here ({' '.join(problems)}). "
-            + VULKAN_HINT
         )
 
 

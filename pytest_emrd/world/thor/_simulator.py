@@ -37,14 +37,7 @@ from pytest_emrd.world._feedback import (
     turn_degrees,
     with_pose,
 )
-from pytest_emrd.world._model import (
-    Doorway,
-    Layout,
-    Observation,
-    View,
-    VisibleObject,
-    WorldPose,
-)
+from pytest_emrd.world._model import Doorway, Layout, Observation, View, VisibleObject, WorldPose
 from pytest_emrd.world._motion import spawn_pose
 from pytest_emrd.world._scene import scene_of
 from pytest_emrd.world.thor import _launch
@@ -93,13 +86,11 @@ def _check(event: Any, what: str) -> Any:
     )
 
 
-def _refused(event: Any) -> ActionFailed | None:
-    """The failure to report when THOR refused an action, else None."""
-    if event.metadata["lastActionSuccess"]:
-        return None
-    return ActionFailed(
-        f"AI2-THOR refused it ({event.metadata.get('errorMessage') or 'no reason'})"
-    )
+def _accepted(event: Any) -> None:
+    """Raise the failure to report when THOR refused an action."""
+    if not event.metadata["lastActionSuccess"]:
+        reason = event.metadata.get("errorMessage") or "no reason"
+        raise ActionFailed(f"AI2-THOR refused it ({reason})")
 
 
 class ThorSimulator(SemanticStep):
@@ -148,7 +139,6 @@ class ThorSimulator(SemanticStep):
         self._terminal: str | None = None
         self._symbolic = True
 
-    # -- THOR calls --------------------------------------------------------------------
     def _start(self, house: dict[str, Any]) -> None:
         options = {**DEFAULTS, **self._user_options}
         options.update(
@@ -210,12 +200,10 @@ class ThorSimulator(SemanticStep):
         self._points = grid(returned)
         self._heights = {(round(p["x"], 2), round(p["z"], 2)): float(p["y"]) for p in returned}
 
-    # -- Simulator protocol ------------------------------------------------------------
     def reset(
         self, layout: Layout, condition: str, spawn_room: str, seed: int, *, symbolic: bool = True
     ) -> Observation:
-        """Start an episode in ``spawn_room`` (canonical name or slug) under ``condition``;
-        ``symbolic=False`` (``vision``): no feedback names an object id."""
+        """Start an episode in ``spawn_room`` (canonical name or slug) under ``condition``."""
         name = SLUG_ROOMS.get(spawn_room, spawn_room)
         check_choice("spawn_room", name, [*ROOM_NAMES, *SLUG_ROOMS])
         self._condition = condition_params(condition)
@@ -236,14 +224,9 @@ class ThorSimulator(SemanticStep):
         _check(self._controller.last_event, f"CreateHouse of house {house['id']!r}")
         self._lattice()
         if self._condition.randomize_palette:
-            for action, args in (
-                (
-                    "RandomizeMaterials",
-                    {"useTrainMaterials": True, "useValMaterials": True, "useTestMaterials": True},
-                ),
-                ("RandomizeColors", {}),
-            ):
-                _check(self._act(action, **args), action)
+            every = {"useTrainMaterials": True, "useValMaterials": True, "useTestMaterials": True}
+            _check(self._act("RandomizeMaterials", **every), "RandomizeMaterials")
+            _check(self._act("RandomizeColors"), "RandomizeColors")
         start = house["metadata"]["agentPoses"][mode]["position"]
         spot = nearest_in_room(self._points, start["x"], start["z"], room)
         if spot is None:
@@ -295,7 +278,6 @@ class ThorSimulator(SemanticStep):
             finally:
                 _launch.kill_unity(controller)
 
-    # -- actions -----------------------------------------------------------------------
     def _goto(self, action: Action) -> str:
         layout = self._require()
         symbolic = self._symbolic
@@ -312,19 +294,19 @@ class ThorSimulator(SemanticStep):
             raise not_visible(action, [v.object_id for v in seen], symbolic=symbolic)
         target = seen[chosen].object_id
         doorway = next((d for d in layout.doorways if d.object_id == target), None)
-        pose = self._door_pose(layout, doorway) if doorway else self._object_pose(layout, target)
+        if doorway is None:
+            obj = next(o for o in layout.objects if o.object_id == target)
+            pose = viewpoint(self._points, obj.x, obj.z, layout.room(obj.room))
+        else:
+            pose = self._door_pose(layout, doorway)
         if pose is None:
             raise no_spot(target, seen[chosen].object_type, symbolic=symbolic)
-        failure = _refused(self._teleport(pose))
-        if failure is not None:
-            raise failure
+        _accepted(self._teleport(pose))
         return goto_note(key, target, symbolic=symbolic)
 
     def _turn(self, action: Action) -> str:
         for rotate in ROTATIONS[turn_degrees(action)]:
-            failure = _refused(self._act(rotate, degrees=90))
-            if failure is not None:
-                raise failure
+            _accepted(self._act(rotate, degrees=90))
         return ""
 
     def _door_pose(self, layout: Layout, doorway: Doorway) -> WorldPose | None:
@@ -340,11 +322,6 @@ class ThorSimulator(SemanticStep):
             near_a = (pose.x >= doorway.x) == ((a.x0 + a.x1) / 2 >= doorway.x)
         return viewpoint(self._points, doorway.x, doorway.z, a if near_a else b)
 
-    def _object_pose(self, layout: Layout, object_id: str) -> WorldPose | None:
-        obj = next(o for o in layout.objects if o.object_id == object_id)
-        return viewpoint(self._points, obj.x, obj.z, layout.room(obj.room))
-
-    # -- observation -------------------------------------------------------------------
     def _require(self) -> Layout:
         if self._layout is None:
             raise ConfigError("ThorSimulator used before reset(); call reset(layout, ...) first.")
