@@ -88,16 +88,20 @@ def execute(text: str, handlers: Mapping[str, Handler], *, over: bool) -> tuple[
 
 
 class SemanticStep:
-    """The ``step`` and ``Term`` of both backends: an action text -> the backend's ``_goto``
-    or ``_turn``, or :meth:`_term` (via :func:`execute`) -> the backend's ``_observe``; the
-    backend also provides ``_require()`` and the attributes below."""
+    """The ``step``, ``Goto`` and ``Term`` of both backends: an action text -> :meth:`_goto`,
+    the backend's ``_turn`` or :meth:`_term` (via :func:`execute`) -> the backend's
+    ``_observe``. The backend provides ``_in_view()`` (ids, types and distances of the objects
+    in view), ``_reach(object_id)`` (moves for ``Goto``; False: no spot to stand),
+    ``_require()`` and the attributes below."""
 
     _steps: int
     _ended: bool
     _terminal: str | None
+    _symbolic: bool
     _rooms: Mapping[str, str]
-    _goto: Handler
     _turn: Handler
+    _in_view: Callable[[], tuple[list[str], list[str], list[float]]]
+    _reach: Callable[[str], bool]
     _observe: Callable[[bool, str], Observation]
     _require: Callable[[], object]
 
@@ -107,6 +111,17 @@ class SemanticStep:
         self._steps += 1
         handlers = {"Goto": self._goto, "Turn": self._turn, "Term": self._term}
         return self._observe(*execute(action, handlers, over=self._ended))
+
+    def _goto(self, action: Action) -> str:
+        symbolic = self._symbolic
+        key = goto_key(action, symbolic=symbolic)
+        ids, types, distances = self._in_view()
+        chosen = choose_target(key, ids, types, distances, symbolic=symbolic)
+        if chosen is None:
+            raise not_visible(action, sorted(ids), symbolic=symbolic)
+        if not self._reach(ids[chosen]):
+            raise no_spot(ids[chosen], types[chosen], symbolic=symbolic)
+        return goto_note(key, ids[chosen], symbolic=symbolic)
 
     def _term(self, action: Action) -> str:
         self._ended = True

@@ -18,11 +18,6 @@ from pytest_emrd.world._conditions import ConditionParams, condition_params
 from pytest_emrd.world._feedback import (
     Action,
     SemanticStep,
-    choose_target,
-    goto_key,
-    goto_note,
-    no_spot,
-    not_visible,
     observed_pose,
     room_table,
     turn_degrees,
@@ -100,10 +95,7 @@ class BuiltinSimulator(SemanticStep):
         self._table = np.zeros((0, 3), dtype=np.uint8)
         self._pose = WorldPose(0.0, 0.0, 0.0)
         self._spawn = self._pose
-        self._steps = 0
-        self._ended = False
-        self._terminal: str | None = None
-        self._symbolic = True
+        self._steps, self._ended, self._terminal, self._symbolic = 0, False, None, True
         self._sight: Sight | None = None
         self._frames: OrderedDict[WorldPose, tuple[str, View]] = OrderedDict()
 
@@ -147,34 +139,27 @@ class BuiltinSimulator(SemanticStep):
         self._scene = None
         self._frames.clear()
 
-    def _goto(self, action: Action) -> str:
-        scene = self._require()
-        symbolic = self._symbolic
-        key = goto_key(action, symbolic=symbolic)
-        seen = self._current_sight()
-        visible = [int(i) for i in np.flatnonzero(seen.mask)]
-        objs = scene.layout.objects
-        chosen = choose_target(
-            key,
-            [objs[i].object_id for i in visible],
+    def _in_view(self) -> tuple[list[str], list[str], list[float]]:
+        seen, objs = self._current_sight(), self._require().layout.objects
+        visible = np.flatnonzero(seen.mask)
+        ids = [objs[i].object_id for i in visible]
+        return (
+            ids,
             [objs[i].object_type for i in visible],
             [float(seen.distance[i]) for i in visible],
-            symbolic=symbolic,
         )
-        if chosen is None:
-            listed = [v.object_id for v in seen.listing(scene)]
-            raise not_visible(action, listed, symbolic=symbolic)
-        index = visible[chosen]
-        target = objs[index]
-        if target.object_type == "Doorway":
-            doorway = next(d for d in scene.layout.doorways if d.object_id == target.object_id)
+
+    def _reach(self, object_id: str) -> bool:
+        scene = self._require()
+        index = scene.index[object_id]
+        if scene.layout.objects[index].object_type == "Doorway":
+            doorway = next(d for d in scene.layout.doorways if d.object_id == object_id)
             pose = through(scene, doorway, self._pose, self.current_room())
         else:
             pose = approach(scene, index, self._pose)
-        if pose is None:
-            raise no_spot(target.object_id, target.object_type, symbolic=symbolic)
-        self._move(pose)
-        return goto_note(key, target.object_id, symbolic=symbolic)
+        if pose is not None:
+            self._move(pose)
+        return pose is not None
 
     def _turn(self, action: Action) -> str:
         delta = turn_degrees(action)

@@ -9,7 +9,7 @@ from hypothesis import strategies as st
 
 from pytest_emrd.world._model import Doorway, Room, WorldPose
 from pytest_emrd.world.thor import IdTable
-from pytest_emrd.world.thor._navigation import (
+from pytest_emrd.world.thor._simulator import (
     CLEARANCE,
     MAX_OFF_AXIS,
     bearing,
