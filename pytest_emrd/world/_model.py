@@ -102,10 +102,8 @@ class Layout:
         """Room name -> object type -> count, doorways excluded (the prompt's room overview)."""
         table: dict[str, dict[str, int]] = {r.name: {} for r in self.rooms}
         for o in self.objects:
-            if o.object_type == "Doorway":
-                continue
-            counts = table[o.room]
-            counts[o.object_type] = counts.get(o.object_type, 0) + 1
+            if o.object_type != "Doorway":
+                table[o.room][o.object_type] = table[o.room].get(o.object_type, 0) + 1
         return table
 
     def to_dict(self) -> dict[str, Any]:

@@ -178,11 +178,7 @@ def _translate(exc: BaseException) -> ConfigError:
 
 
 def start(
-    factory: Callable[..., Any],
-    options: Mapping[str, Any],
-    *,
-    seconds: float,
-    started: list[Any] | None = None,
+    factory: Callable[..., Any], options: Mapping[str, Any], *, seconds: float, started: list[Any]
 ) -> Any:
     """``factory(**options)`` within ``seconds``, start-up failures turned into ConfigError.
 
@@ -191,7 +187,7 @@ def start(
     """
 
     def on_timeout() -> ConfigError:
-        for controller in started or ():
+        for controller in started:
             kill_unity(controller)
         return ConfigError(
             f"AI2-THOR did not start within start_timeout={seconds:g} s (no answer from the "
