@@ -35,9 +35,8 @@ __getattr__, __dir__, __all__ = lazy_exports(
             "WorldObject",
             "WorldPose",
         ),
-        "_registry": ("BACKENDS", "make_simulator", "world_version"),
+        "_registry": ("BACKENDS", "WORLD_VERSION", "make_simulator", "world_version"),
         "_simulator": ("BuiltinSimulator",),
-        "_version": ("WORLD_VERSION",),
         "_visibility": ("discoverable_ids",),
     },
 )

@@ -101,10 +101,8 @@ KINDS: Final[Mapping[str, Kind]] = {
     row[0]: Kind(*row[:6], colors=_COLORS[row[0]], elevation=row[6]) for row in _ROWS
 }
 
-#: Types whose bodies hide what stands behind them (:mod:`pytest_emrd.world._visibility`):
-#: every floor-standing kind with a solid body (cabinets, tops, screens, upholstery).
-#: Chairs, stools and plants are open frames or foliage and hide nothing; doorways and the
-#: exit are openings in the wall.
+#: Types whose solid bodies hide what stands behind them (chairs, stools and plants are open
+#: frames or foliage; doorways and the exit are openings in the wall).
 OCCLUDER_TYPES: Final = frozenset(
     {"Desk", "DiningTable", "ShelvingUnit", "Television", "Fridge", "CounterTop", "ArmChair"}
 )
@@ -112,9 +110,8 @@ OCCLUDER_TYPES: Final = frozenset(
 #: objectType -> category, for every type the built-in office uses.
 CATEGORY_OF: Final[Mapping[str, str]] = {k.object_type: k.category for k in KINDS.values()}
 
-#: objectType -> material role -> baseline colour, merged over the kinds of that type
-#: (the reception desk adds its front panel and counter to the office desk's materials;
-#: kinds of one type never give one role two colours).
+#: objectType -> material role -> baseline colour, merged over the kinds of that type (the
+#: reception desk adds its front panel and counter to the office desk's materials).
 COLORS_OF: Final[Mapping[str, Mapping[str, RGB]]] = {
     t: {role: c for k in KINDS.values() if k.object_type == t for role, c in k.colors.items()}
     for t in CATEGORY_OF

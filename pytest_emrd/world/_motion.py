@@ -82,9 +82,7 @@ def through(scene: Scene, doorway: Doorway, pose: WorldPose, current: str) -> Wo
     else:
         x, z = round(doorway.x + sign * THROUGH, 2), doorway.z
         heading = 90.0 if facing_plus else 270.0
-    if not is_free(scene, target, x, z):
-        return None
-    return WorldPose(x, z, heading)
+    return WorldPose(x, z, heading) if is_free(scene, target, x, z) else None
 
 
 def spawn_pose(scene: Scene, room: Room, seed: int) -> WorldPose:
