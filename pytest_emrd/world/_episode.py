@@ -1,16 +1,10 @@
-"""The world of one episode: which office, which spawn room, which seed.
+"""The world of one episode: which office, which spawn room, which seed; its ground truth.
 
-The paper tests a single office ("robustness is limited by testing on a single office"),
-20 runs per spawn room. Under the default ``layouts="paper"`` every episode of every model,
-condition and prompt variant therefore runs in :func:`paper_office`; episodes differ only
-by the spawn pose inside the spawn room (and, under ``texture``, by the colours), both drawn
-from the episode seed. ``layouts="generated"`` is the generalisation option: each spawn x
-episode gets its own procedurally generated office (:func:`generate_layout` of the episode
-seed). The two are separate protocols and are never mixed (case ids, cassette paths,
-results and gate cells all carry the layouts).
-
-:func:`episode_world` is the one place that turns an :class:`EpisodeSpec` into a world; the
-episode loop, ``emrd render`` and any viewer call it.
+Under ``layouts="paper"`` every episode runs in :func:`paper_office` (the paper tests a
+single office) and episodes differ only by the spawn pose (and, under ``texture``, the
+colours), drawn from the episode seed; ``layouts="generated"`` gives each episode its own
+office, :func:`generate_layout` of its seed. :func:`episode_world` is the one place that
+turns an :class:`EpisodeSpec` into a world.
 """
 
 from __future__ import annotations
@@ -21,16 +15,15 @@ from typing import Final
 
 from pytest_emrd.errors import check_choice
 from pytest_emrd.rooms import ROOM_SLUGS, SLUG_ROOMS
-from pytest_emrd.trajectory import LAYOUTS, EpisodeSpec
+from pytest_emrd.trajectory import LAYOUTS, EpisodeSpec, GroundTruth, GroundTruthObject, RoomOutline
+from pytest_emrd.world._geometry import to_spawn_frame
 from pytest_emrd.world._layout import generate_layout
-from pytest_emrd.world._model import Layout
+from pytest_emrd.world._model import Layout, Room, WorldPose
+from pytest_emrd.world._visibility import discoverable_ids
 
 PAPER_OFFICE_SEED: Final = 37
-"""Generator seed of the fixed office (the paper's Figure "Four-room office layout"): the
-first seed whose office holds every piece of the full furniture recipe: Office 4 desks with
-4 chairs and 3 laptops, 2 shelving units, 2 plants; Conference Room a 3.2 m conference table
-with 8 chairs and a television; Kitchen fridge, 2 counter tops, sink, coffee machine,
-microwave, stool; Entrance reception desk, 2 armchairs, a plant and the building exit."""
+"""Generator seed of the fixed office: the first seed whose office holds every piece of the
+full furniture recipe (4 desks, 3 laptops, 2 shelving units, a 3.2 m conference table)."""
 
 
 @cache
@@ -73,7 +66,38 @@ def _indices(spawn_room: str) -> dict[int, int]:
 
 
 def episode_index(spawn_room: str, seed: int) -> int | None:
-    """The index of the episode of ``spawn_room`` (canonical name) whose seed is ``seed``
-    (:attr:`EpisodeSpec.seed`, the same for every model, condition and variant), among the
-    first :data:`INDEXED_EPISODES`; None for any other seed."""
+    """The index (below :data:`INDEXED_EPISODES`) of the ``spawn_room`` episode of ``seed``."""
     return _indices(spawn_room).get(seed)
+
+
+def _point(spawn_pose: WorldPose, x: float, z: float) -> tuple[float, float]:
+    sx, sz = to_spawn_frame(spawn_pose, x, z)
+    return round(sx, 4) + 0.0, round(sz, 4) + 0.0
+
+
+def _corners(r: Room) -> tuple[tuple[float, float], ...]:
+    return ((r.x0, r.z0), (r.x1, r.z0), (r.x1, r.z1), (r.x0, r.z1))
+
+
+def ground_truth(layout: Layout, spawn_pose: WorldPose, spawn_room: str) -> GroundTruth:
+    """Every object and room outline of ``layout`` in the frame of ``spawn_pose``.
+
+    ``spawn_room`` may be a canonical name or a slug; ``discoverable_ids`` is ``G_base``
+    (:func:`~pytest_emrd.world.discoverable_ids`), the same for every condition.
+    """
+    objects = tuple(
+        GroundTruthObject(
+            o.object_id, o.object_type, o.room, o.category, *_point(spawn_pose, o.x, o.z)
+        )
+        for o in layout.objects
+    )
+    rooms = tuple(
+        RoomOutline(r.name, tuple(_point(spawn_pose, x, z) for x, z in _corners(r)))
+        for r in layout.rooms
+    )
+    return GroundTruth(
+        objects=objects,
+        rooms=rooms,
+        discoverable_ids=discoverable_ids(layout),
+        spawn_room=SLUG_ROOMS.get(spawn_room, spawn_room),
+    )

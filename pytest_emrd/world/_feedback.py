@@ -1,38 +1,63 @@
-"""What the agent is told after an action: one wording shared by every backend.
+"""The action grammar, and what the agent is told after an action: one wording shared by
+every backend.
 
-A simulator executes an action text with :func:`execute`, giving one handler per verb
-(``Goto``, ``Turn``, ``Term``). A step after the episode ended, text that does not follow
-the grammar, or a handler raising :class:`ActionFailed` yields ``"<Action> failed:
-<reason>."``; otherwise ``"<Action> succeeded<note>."``, where the handler returns the
-note (``""`` or ``": moved to Desk_2"``). :func:`with_pose` appends the odometry line
-``Pose: x=1.25 z=-0.50 heading=90.`` in the spawn frame (:func:`observed_pose`).
-
-The reasons both backends can give (unreadable text, bad turn, no Goto target, nothing
-visible matches, no spot to stand) and the Goto target choice are built here too, so the
-backends cannot drift apart. Recorded cassettes hold this text: any change to it must bump
-``WORLD_VERSION``.
-
-``Term(r)`` always ends the episode (the paper: "a trajectory concludes when the policy
-emits Term(r)"): :func:`term_room` gives the canonical room or None for anything outside
-the four rooms (the focal-point column X); it never fails, and its feedback names no room.
-
-Under the ``vision`` modality (``symbolic=False``) the agent has no object ids to read, so
-none is ever sent: ``Goto`` takes an object type and goes to the nearest visible object of
-that type (an instance suffix the model made up, ``Desk_2``, is ignored: ``Desk``), and no
-message names an instance id or lists what is visible. ``text`` and ``both`` keep ids.
+:func:`parse_action` reads ``Goto(target)``, ``Turn(Left|Right|Around)`` and ``Term(room)``,
+case-insensitive and whitespace tolerant, quotes around the argument and a trailing full
+stop accepted (``goto( "Desk_2" ).``).
+:func:`execute` runs an action text with one handler per verb: a step after the episode
+ended, unreadable text, or a handler raising :class:`ActionFailed` yields ``"<Action>
+failed: <reason>."``, else ``"<Action> succeeded<note>."``; :func:`with_pose` appends the
+odometry line in the spawn frame. The failure reasons and the Goto target choice live here
+too, so the backends cannot drift apart; recorded cassettes hold this text (any change
+bumps ``WORLD_VERSION``). ``Term(r)`` always ends the episode; ``r`` outside the four rooms
+is recorded as Other. Under ``vision`` (``symbolic=False``) no message names an object id:
+``Goto`` takes a type (an instance suffix such as ``Desk_2`` is ignored) and goes to the
+nearest visible object of that type.
 """
 
 from __future__ import annotations
 
 import re
 from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
 
 from pytest_emrd.errors import check_choice
 from pytest_emrd.rooms import ROOM_NAMES
 from pytest_emrd.trajectory import Pose
-from pytest_emrd.world._actions import GRAMMAR, TURNS, Action, normalise, parse_action
 from pytest_emrd.world._geometry import heading_in_spawn_frame, to_spawn_frame
 from pytest_emrd.world._model import Observation, WorldPose
+
+_ACTION = re.compile(r"^\s*(goto|turn|term)\s*\(\s*(.*?)\s*\)\s*\.?\s*$", re.IGNORECASE | re.DOTALL)
+_QUOTES = "\"'`"
+TURNS = {"left": -90.0, "right": 90.0, "around": 180.0}
+GRAMMAR = "Goto(target), Turn(Left|Right|Around) or Term(room)"
+
+
+@dataclass(frozen=True)
+class Action:
+    verb: str
+    """``Goto``, ``Turn`` or ``Term``."""
+    arg: str
+    """The argument as written, quotes and surrounding blanks removed."""
+
+    def __str__(self) -> str:
+        return f"{self.verb}({self.arg})"
+
+
+def parse_action(text: str) -> Action | None:
+    """The action in ``text``, or None when it does not follow the grammar."""
+    match = _ACTION.match(text)
+    if match is None:
+        return None
+    verb = match.group(1).capitalize()
+    arg = match.group(2).strip().strip(_QUOTES).strip()
+    return Action(verb, arg)
+
+
+def normalise(name: str) -> str:
+    """Matching key for ids, types and room names: case, blanks and underscores ignored."""
+    return re.sub(r"[\s_]+", "", name).lower()
+
 
 Handler = Callable[[Action], str]
 """Executes one parsed action; returns the success note or raises :class:`ActionFailed`."""
@@ -46,10 +71,8 @@ class ActionFailed(Exception):
 
 
 def execute(text: str, handlers: Mapping[str, Handler], *, over: bool) -> tuple[bool, str]:
-    """``(success, message)`` of executing action ``text``; never raises for a bad action.
-
-    ``over`` says the episode has already ended: every action then fails.
-    """
+    """``(success, message)`` of executing action ``text`` (every action fails when ``over``:
+    the episode has ended); never raises for a bad action."""
     parsed = parse_action(text)
     shown = str(parsed) if parsed else "Action"
     try:
@@ -65,20 +88,20 @@ def execute(text: str, handlers: Mapping[str, Handler], *, over: bool) -> tuple[
 
 
 class SemanticStep:
-    """The ``step`` of both backends: one action text -> the backend's ``_goto``, ``_turn``
-    or ``_term`` handler (via :func:`execute`) -> the backend's ``_observe``.
-
-    A subclass provides those handlers, ``_observe(success, message)``, ``_require()``
-    (raises before ``reset``), the counter ``_steps``, ``_ended`` (a Term was executed) and
-    ``_terminal`` (the canonical room it named, or None for Other).
-    """
+    """The ``step``, ``Goto`` and ``Term`` of both backends: an action text -> :meth:`_goto`,
+    the backend's ``_turn`` or :meth:`_term` (via :func:`execute`) -> the backend's
+    ``_observe``. The backend provides ``_in_view()`` (ids, types and distances of the objects
+    in view), ``_reach(object_id)`` (moves for ``Goto``; False: no spot to stand),
+    ``_require()`` and the attributes below."""
 
     _steps: int
     _ended: bool
     _terminal: str | None
-    _goto: Handler
+    _symbolic: bool
+    _rooms: Mapping[str, str]
     _turn: Handler
-    _term: Handler
+    _in_view: Callable[[], tuple[list[str], list[str], list[float]]]
+    _reach: Callable[[str], bool]
     _observe: Callable[[bool, str], Observation]
     _require: Callable[[], object]
 
@@ -88,6 +111,22 @@ class SemanticStep:
         self._steps += 1
         handlers = {"Goto": self._goto, "Turn": self._turn, "Term": self._term}
         return self._observe(*execute(action, handlers, over=self._ended))
+
+    def _goto(self, action: Action) -> str:
+        symbolic = self._symbolic
+        key = goto_key(action, symbolic=symbolic)
+        ids, types, distances = self._in_view()
+        chosen = choose_target(key, ids, types, distances, symbolic=symbolic)
+        if chosen is None:
+            raise not_visible(action, sorted(ids), symbolic=symbolic)
+        if not self._reach(ids[chosen]):
+            raise no_spot(ids[chosen], types[chosen], symbolic=symbolic)
+        return goto_note(key, ids[chosen], symbolic=symbolic)
+
+    def _term(self, action: Action) -> str:
+        self._ended = True
+        self._terminal, note = term(self._rooms, action)
+        return note
 
 
 def turn_degrees(action: Action) -> float:
@@ -101,8 +140,7 @@ def turn_degrees(action: Action) -> float:
 
 
 def room_table(aliases: Mapping[str, str] | None = None) -> dict[str, str]:
-    """Matching key -> canonical room for ``Term``: the four rooms plus ``aliases``
-    (extra names for prompt variants that rename the rooms, e.g. ``{"Room A": "Office"}``)."""
+    """Matching key -> canonical room for ``Term``: the four rooms plus ``aliases``."""
     rooms = {normalise(r): r for r in ROOM_NAMES}
     for alias, room in (aliases or {}).items():
         check_choice(f"room_aliases[{alias!r}]", room, ROOM_NAMES)
@@ -111,18 +149,15 @@ def room_table(aliases: Mapping[str, str] | None = None) -> dict[str, str]:
 
 
 def term(rooms: Mapping[str, str], action: Action) -> tuple[str | None, str]:
-    """``(room, note)`` of ``Term(r)``, which always ends the episode: ``room`` is the
-    canonical room ``r`` names (``rooms`` from :func:`room_table`), or None when ``r`` is
-    not one of the four rooms (focal-point column X; the note names no room)."""
+    """``(room, note)`` of ``Term(r)``: the canonical room ``r`` names (``rooms`` from
+    :func:`room_table`), or None when it is not one of the four rooms (column X, Other)."""
     room = rooms.get(normalise(action.arg))
     return room, TERM_NOTE if room else OTHER_NOTE.format(arg=action.arg)
 
 
 def goto_key(action: Action, *, symbolic: bool) -> str:
-    """The matching key of a ``Goto`` target (fails when the target is missing).
-
-    Without symbolic ids (``vision``) a trailing instance number is dropped: the key is a type.
-    """
+    """The matching key of a ``Goto`` target (fails when it is missing); without symbolic
+    ids a trailing instance number is dropped (the key is a type)."""
     if not action.arg:
         example = "an object id such as Desk_2 or a type" if symbolic else "an object type"
         raise ActionFailed(f"Goto needs a target: {example}, e.g. Goto(Desk)")
@@ -138,12 +173,9 @@ def choose_target(
     *,
     symbolic: bool,
 ) -> int | None:
-    """Index of the visible object ``Goto`` of ``key`` means, or None when none matches.
-
-    With ``symbolic`` ids an instance id wins; otherwise (and always under ``vision``) the
-    nearest object of that type (ties by id). The three sequences describe the objects in
-    view, one entry per object.
-    """
+    """Index of the object in view (one entry per object in each sequence) ``Goto`` of
+    ``key`` means, or None: with ``symbolic`` ids an instance id wins, else the nearest
+    object of that type (ties by id)."""
     for i, object_id in enumerate(ids if symbolic else ()):
         if normalise(object_id) == key:
             return i
@@ -152,8 +184,7 @@ def choose_target(
 
 
 def not_visible(action: Action, listed: Sequence[str], *, symbolic: bool) -> ActionFailed:
-    """The failure of a ``Goto`` whose target is not in view (``listed``: ids in view, named
-    only when ``symbolic``)."""
+    """The failure of a ``Goto`` whose target is not in view (``listed``: ids in view)."""
     if not symbolic:
         return ActionFailed(f"no object of type {action.arg!r} is visible")
     shown = ", ".join(listed) or "nothing"
@@ -167,8 +198,7 @@ def no_spot(object_id: str, object_type: str, *, symbolic: bool) -> ActionFailed
 
 
 def goto_note(key: str, object_id: str, *, symbolic: bool) -> str:
-    """Success note of a ``Goto``: names the instance when the target was a type (only when
-    ``symbolic``: under ``vision`` no id is ever shown)."""
+    """Success note of a ``Goto``: the instance when the target was a type (if ``symbolic``)."""
     return "" if not symbolic or normalise(object_id) == key else f": moved to {object_id}"
 
 

@@ -1,13 +1,9 @@
 """2-D geometry shared by the layout, visibility, motion and the renderer.
 
-World frame: metres, ``x`` east, ``z`` north, headings in degrees clockwise from north.
 Walls are zero-thickness axis-aligned segments on the room boundaries, with gaps at the
-doorways; visibility and the renderer use the same :class:`Walls`, so what the agent is
-told it sees and what the frame shows cannot disagree about occlusion.
-
-Headings the built-in world produces are multiples of 90 degrees, and :func:`unit` returns
-exact unit vectors for them, so ray directions and hit distances involve only ``+ - * /``
-(IEEE-exact on every machine): the rendered pixels are bit-stable.
+doorways; visibility and the renderer use the same :class:`Walls`, so they cannot disagree
+about occlusion. :func:`unit` is exact for multiples of 90 degrees, the only headings the
+built-in world produces, so rendered pixels are bit-stable.
 """
 
 from __future__ import annotations
@@ -77,7 +73,7 @@ def local_to_world(x: float, z: float, rotation: float, u: float, v: float) -> t
 
 def to_spawn_frame(spawn_pose: WorldPose, x: float, z: float) -> tuple[float, float]:
     """World ``(x, z)`` -> spawn frame: origin at the spawn position, ``+z`` along the spawn
-    heading, ``+x`` to the agent's right (a rigid motion, the one place it is defined)."""
+    heading, ``+x`` to the agent's right."""
     dx, dz = x - spawn_pose.x, z - spawn_pose.z
     fx, fz = unit(spawn_pose.heading)
     rx, rz = right_of(spawn_pose.heading)
@@ -92,12 +88,9 @@ def heading_in_spawn_frame(spawn_pose: WorldPose, heading: float) -> float:
 
 def rects_overlap(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """``(K, M)`` bool: does rect ``a[k]`` overlap rect ``b[m]`` with positive area."""
-    return (
-        (a[:, None, 0] < b[None, :, 2])
-        & (a[:, None, 2] > b[None, :, 0])
-        & (a[:, None, 1] < b[None, :, 3])
-        & (a[:, None, 3] > b[None, :, 1])
-    )
+    overlap_x = (a[:, None, 0] < b[None, :, 2]) & (a[:, None, 2] > b[None, :, 0])
+    overlap_z = (a[:, None, 1] < b[None, :, 3]) & (a[:, None, 3] > b[None, :, 1])
+    return overlap_x & overlap_z
 
 
 @dataclass(frozen=True, eq=False)
@@ -111,13 +104,8 @@ class Walls:
         self, ox: np.ndarray, oz: np.ndarray, dx: np.ndarray, dz: np.ndarray
     ) -> tuple[np.ndarray, np.ndarray]:
         """Ray parameter of the nearest wall hit along ``o + t d`` (``inf`` if none), and
-        whether that wall runs along x (True on a tie and when nothing is hit). All arguments
-        broadcast to one shape ``S``.
-
-        A wall ``across == c`` spanning ``[lo, hi]`` of the other coordinate is hit at
-        ``t = (c - across) / d_across`` when ``t > 1e-9`` and ``lo <= along + t * d_along
-        <= hi``. Plain numpy: a frame's 512 rays against the office's ~20 walls are a few
-        (walls x rays) arrays."""
+        whether that wall runs along x (True on a tie and when nothing is hit); the arguments
+        broadcast to one shape."""
         rays = np.broadcast_arrays(*(np.asarray(a, dtype=np.float64) for a in (ox, oz, dx, dz)))
         t_x = _nearest(rays[1], rays[0], rays[3], rays[2], self.along_x)
         t_z = _nearest(rays[0], rays[1], rays[2], rays[3], self.along_z)
@@ -136,8 +124,8 @@ def _nearest(
     d_along: np.ndarray,
     segs: np.ndarray,
 ) -> np.ndarray:
-    """Nearest ``t > 1e-9`` at which ``across + t * d_across`` meets a segment ``(c, lo, hi)``
-    (``across == c``, ``lo <= along + t * d_along <= hi``); ``inf`` where none is met."""
+    """Nearest ``t > 1e-9`` at which ``across + t * d_across == c`` with ``lo <= along + t *
+    d_along <= hi`` for a segment ``(c, lo, hi)``; ``inf`` where none is met."""
     if segs.size == 0:
         return np.full(across.shape, np.inf)
     lead = (-1,) + (1,) * across.ndim

@@ -1,36 +1,45 @@
 """The seeded procedural office (ProcTHOR-style): rooms, doorways, exit, furniture.
 
-Four rooms in a 2x2 arrangement (world frame: ``x`` east, ``z`` north): Office top-left,
-Conference Room top-right, Kitchen bottom-left, Entrance bottom-right. Per seed:
+Four rooms in a 2x2 arrangement: Office top-left, Conference Room top-right, Kitchen
+bottom-left, Entrance bottom-right, sizes drawn per seed on a 10 cm grid (positions on
+1 cm). A 1 m doorway joins each adjacent pair at a random point of the shared wall, at
+least 0.9 m from any corner: the four doorways form a cycle, so every room has exactly two
+(the B3 prompt suffix is true of every office). The exit ``Door_1`` sits on the Entrance's
+south or east outer wall. Furniture, big items first (an item that finds no free spot is
+left out): Office 3-4 desks against the walls, each with a chair, 2-3 with a laptop, 1-2
+shelving units, 2 plants; Conference Room a long table with four chairs down each side, a
+television at one end; Kitchen a fridge, two counters (sink and coffee machine on one,
+microwave on the other), a stool; Entrance a reception desk, two armchairs, a plant. Ids are
+``Type_N``, numbered per ``objectType`` in the order doorways, exit, Office, Conference
+Room, Kitchen, Entrance. Generation draws only from
+:class:`~pytest_emrd.world._rng.StableRng`: a seed gives the same layout bit for bit.
 
-* the top row is 4.8-6.2 m deep and the bottom row 4.2-5.6 m, so the building is
-  9-11.8 m deep; the Office is 5.2-7.0 m wide and the Conference Room 5.5-7.0 m, so the
-  building is 10.7-14 m wide; the Kitchen is 4.2-6.0 m wide and the Entrance takes the
-  rest (at least 4.7 m). All dimensions are on a 10 cm grid, every position on 1 cm.
-* a 1 m doorway joins each adjacent pair (Office-Conference, Office-Kitchen,
-  Conference-Entrance, Kitchen-Entrance) at a random point of the shared wall, at least
-  0.9 m from any corner. The four doorways form a cycle, so every room has exactly two
-  doorways to adjacent rooms in every layout: the B3 prompt suffix ("2 doorways connecting
-  to adjacent rooms") is true of every office this module builds.
-* the building exit ``Door_1`` sits on the Entrance's south or east outer wall.
-* furniture follows :mod:`pytest_emrd.world._furnish`.
-
-Ids are ``Type_N``, numbered per ``objectType`` across the layout in the order doorways,
-exit, then Office, Conference Room, Kitchen, Entrance. Generation draws only from
-:class:`~pytest_emrd.world._rng.StableRng`, so a seed gives the same layout bit for bit
-on every machine and Python/numpy version.
+Furniture is placed in *units*, groups of objects placed together (a desk with its chair
+and laptop) in their own frame: ``u`` metres to the right, ``v`` forward (the front faces
+the room). The :class:`Planner` accepts a candidate placement when its footprint overlaps
+neither a ``solid`` floor footprint nor a ``clear`` zone (doorway approaches, each unit's
+access zone), and its access zone overlaps no solid footprint and lies inside the room.
 """
 
 from __future__ import annotations
 
 from collections import Counter
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
 
 from pytest_emrd.rooms import CONFERENCE, ENTRANCE, KITCHEN, OFFICE
 from pytest_emrd.world._catalog import KINDS
-from pytest_emrd.world._furnish import furnish
-from pytest_emrd.world._geometry import rect_at
+from pytest_emrd.world._geometry import (
+    Rect,
+    headings_to_units,
+    local_to_world,
+    rect_at,
+    rects_at,
+    rects_overlap,
+)
 from pytest_emrd.world._model import Doorway, Layout, Room, WorldObject
-from pytest_emrd.world._planner import Placed, Planner
 from pytest_emrd.world._rng import StableRng
 
 DOOR_WIDTH = 1.0
@@ -61,14 +70,19 @@ def generate_layout(seed: int) -> Layout:
     }
     doorways = _doorways(rng, rooms)
     planner = Planner(rng)
+    approach = (DOOR_WIDTH + 0.4, 2 * APPROACH_DEPTH)  # kept walkable before every door
     for d in doorways:
-        planner.reserve(rect_at(d.x, d.z, DOOR_WIDTH + 0.4, 2 * APPROACH_DEPTH, _rot(d.axis)))
+        planner.clear.append(rect_at(d.x, d.z, *approach, _rot(d.axis)))
     exit_door = _exit(rng, rooms[ENTRANCE])
-    planner.reserve(
-        rect_at(exit_door.x, exit_door.z, DOOR_WIDTH + 0.4, 2 * APPROACH_DEPTH, exit_door.rotation)
-    )
-    furnish(planner, rooms)
-    objects = [*_doorway_objects(doorways), exit_door, *_number(planner.placed)]
+    planner.clear.append(rect_at(exit_door.x, exit_door.z, *approach, exit_door.rotation))
+    _office(planner, rooms[OFFICE])
+    _conference(planner, rooms[CONFERENCE])
+    _kitchen(planner, rooms[KITCHEN])
+    _entrance(planner, rooms[ENTRANCE])
+    doorway_objects = [
+        _object("Doorway", d.object_id, d.room_a, d.x, d.z, d.width, _rot(d.axis)) for d in doorways
+    ]
+    objects = [*doorway_objects, exit_door, *_number(planner.placed)]
     return Layout(
         seed=seed,
         width=width,
@@ -100,70 +114,261 @@ def _doorways(rng: StableRng, rooms: dict[str, Room]) -> tuple[Doorway, ...]:
     return tuple(out)
 
 
-def _doorway_objects(doorways: tuple[Doorway, ...]) -> list[WorldObject]:
-    kind = KINDS["Doorway"]
-    return [
-        WorldObject(
-            object_id=d.object_id,
-            object_type=kind.object_type,
-            room=d.room_a,
-            category=kind.category,
-            x=d.x,
-            z=d.z,
-            width=d.width,
-            depth=kind.depth,
-            height=kind.height,
-            rotation=_rot(d.axis),
-            color=kind.main_color,
-        )
-        for d in doorways
-    ]
+def _object(
+    kind_name: str, object_id: str, room: str, x: float, z: float, width: float, rotation: float
+) -> WorldObject:
+    kind = KINDS[kind_name]
+    return WorldObject(
+        object_id=object_id,
+        object_type=kind.object_type,
+        room=room,
+        category=kind.category,
+        x=x,
+        z=z,
+        width=width,
+        depth=kind.depth,
+        height=kind.height,
+        rotation=rotation,
+        color=kind.main_color,
+        elevation=kind.elevation,
+    )
 
 
 def _exit(rng: StableRng, room: Room) -> WorldObject:
-    kind = KINDS["Door"]
-    inset = kind.depth / 2
+    inset = KINDS["Door"].depth / 2
     if rng.random() < 0.5:  # south wall, facing north into the room
         x = round(rng.uniform(room.x0 + CORNER_CLEARANCE, room.x1 - CORNER_CLEARANCE), 2)
         z, rotation = room.z0 + inset, 0.0
     else:  # east wall, facing west
         z = round(rng.uniform(room.z0 + CORNER_CLEARANCE, room.z1 - CORNER_CLEARANCE), 2)
         x, rotation = room.x1 - inset, 270.0
-    return WorldObject(
-        object_id="Door_1",
-        object_type=kind.object_type,
-        room=room.name,
-        category=kind.category,
-        x=x,
-        z=z,
-        width=DOOR_WIDTH,
-        depth=kind.depth,
-        height=kind.height,
-        rotation=rotation,
-        color=kind.main_color,
-    )
+    return _object("Door", "Door_1", room.name, x, z, DOOR_WIDTH, rotation)
 
 
 def _number(placed: list[Placed]) -> list[WorldObject]:
     counts: Counter[str] = Counter({"Doorway": 0, "Door": 1})
     out = []
     for p in placed:
-        kind = KINDS[p.kind]
-        counts[kind.object_type] += 1
-        out.append(
-            WorldObject(
-                object_id=f"{kind.object_type}_{counts[kind.object_type]}",
-                object_type=kind.object_type,
-                room=p.room,
-                category=kind.category,
-                x=p.x,
-                z=p.z,
-                width=p.width,
-                depth=kind.depth,
-                height=kind.height,
-                rotation=p.rotation,
-                color=kind.main_color,
-                elevation=kind.elevation,
-            )
-        )
+        object_type = KINDS[p.kind].object_type
+        counts[object_type] += 1
+        object_id = f"{object_type}_{counts[object_type]}"
+        out.append(_object(p.kind, object_id, p.room, p.x, p.z, p.width, p.rotation))
     return out
+
+
+TABLE_LENGTHS = (3.2, 3.04, 2.8, 2.64)
+"""Conference table lengths tried, longest first (multiples of 0.08 m: chair slots stay on
+the centimetre grid)."""
+COUNTER_LENGTHS = (1.6, 1.8, 2.0, 2.2)
+
+
+def _single(kind: str, access: float, *, around: bool = False) -> Unit:
+    k = KINDS[kind]
+    return Unit((Member(kind),), k.width, k.depth, access, around)
+
+
+def _desk_unit(with_laptop: bool, laptop_u: float) -> Unit:
+    desk, chair = KINDS["Desk"], KINDS["Chair"]
+    depth = desk.depth + 0.05 + chair.depth
+    desk_v = -depth / 2 + desk.depth / 2
+    members = [Member("Desk", v=desk_v), Member("Chair", v=depth / 2 - chair.depth / 2, turn=180.0)]
+    if with_laptop:
+        members.append(Member("Laptop", u=laptop_u, v=round(desk_v + 0.1, 2)))
+    return Unit(tuple(members), desk.width, round(depth, 2), 0.7)
+
+
+def _office(p: Planner, room: Room) -> None:
+    rng = p.rng
+    for _ in range(rng.integer(1, 2)):
+        p.against_wall(room, _single("ShelvingUnit", 0.8))
+    n_desks = rng.integer(3, 4)
+    n_laptops = min(rng.integer(2, 3), n_desks)
+    laptops = set(rng.shuffled(range(n_desks))[:n_laptops])
+    for i in range(n_desks):
+        laptop_u = round(rng.uniform(-0.4, 0.4), 2)
+        p.against_wall(room, _desk_unit(i in laptops, laptop_u))
+    for _ in range(2):
+        p.against_wall(room, _single("HousePlant", 0.5))
+
+
+def _table_unit(length: float) -> Unit:
+    table, chair = KINDS["DiningTable"], KINDS["Chair"]
+    offset = table.depth / 2 + 0.05 + chair.depth / 2
+    members = [Member("DiningTable", width=length)]
+    for side, turn in ((offset, 180.0), (-offset, 0.0)):
+        for i in range(4):
+            u = round(-length / 2 + length / 8 + i * length / 4, 2)
+            members.append(Member("Chair", u=u, v=side, turn=turn))
+    return Unit(tuple(members), length, round(2 * offset + chair.depth, 2), 0.75, around=True)
+
+
+def _conference(p: Planner, room: Room) -> None:
+    along_x = (room.x1 - room.x0) >= (room.z1 - room.z0)
+    rotations = (0.0, 180.0) if along_x else (90.0, 270.0)
+    for length in TABLE_LENGTHS:
+        if p.free(room, _table_unit(length), rotations, spread=0.6):
+            break
+    p.against_wall(room, _single("Television", 1.0), "EW" if along_x else "NS")
+
+
+def _counter_unit(length: float, items: tuple[Member, ...]) -> Unit:
+    counter = KINDS["CounterTop"]
+    return Unit((Member("CounterTop", width=length), *items), length, counter.depth, 0.9)
+
+
+def _kitchen(p: Planner, room: Room) -> None:
+    rng = p.rng
+    p.against_wall(room, _single("Fridge", 0.9))
+    length = rng.choice(COUNTER_LENGTHS)
+    sink_side = rng.choice((-1.0, 1.0))
+    items = (
+        Member("Sink", u=sink_side * length / 4),
+        Member("CoffeeMachine", u=-sink_side * length / 4, v=0.1),
+    )
+    p.against_wall(room, _counter_unit(length, items))
+    length = rng.choice(COUNTER_LENGTHS)
+    micro_u = round(rng.uniform(-(length / 2 - 0.4), length / 2 - 0.4), 2)
+    p.against_wall(room, _counter_unit(length, (Member("Microwave", u=micro_u, v=0.05),)))
+    p.free(room, _single("Stool", 0.45, around=True), (0.0, 90.0, 180.0, 270.0))
+
+
+def _entrance(p: Planner, room: Room) -> None:
+    p.against_wall(room, _single("ReceptionDesk", 1.0))
+    for _ in range(2):
+        p.against_wall(room, _single("ArmChair", 0.7))
+    p.against_wall(room, _single("HousePlant", 0.5))
+
+
+WALL_GAP = 0.02
+"""Distance between a wall and the back of furniture standing against it."""
+CANDIDATES = 96
+"""Placements tried per unit before it is given up (in batches of :data:`BATCH`)."""
+BATCH = 8
+#: Wall side -> rotation that makes a unit standing against it face into the room.
+SIDE_ROTATION = {"N": 180.0, "S": 0.0, "E": 270.0, "W": 90.0}
+
+
+@dataclass(frozen=True)
+class Member:
+    """One object of a unit, in the unit frame."""
+
+    kind: str
+    u: float = 0.0
+    v: float = 0.0
+    turn: float = 0.0
+    """Extra rotation relative to the unit (180 = faces the unit's back)."""
+    width: float | None = None
+    """Width override (tables and counters vary in length)."""
+
+
+@dataclass(frozen=True)
+class Unit:
+    members: tuple[Member, ...]
+    width: float
+    depth: float
+    access: float
+    """Depth of the walkable zone kept free in front of the unit (or around it)."""
+    around: bool = False
+    """Keep the access zone on every side instead of the front only."""
+
+
+@dataclass(frozen=True)
+class Placed:
+    """An object the planner placed (ids are assigned later)."""
+
+    kind: str
+    room: str
+    x: float
+    z: float
+    rotation: float
+    width: float
+
+
+class Planner:
+    """Accumulates placements for one layout."""
+
+    def __init__(self, rng: StableRng) -> None:
+        self.rng = rng
+        self.solid: list[Rect] = []
+        self.clear: list[Rect] = []
+        self.placed: list[Placed] = []
+
+    def against_wall(self, room: Room, unit: Unit, sides: str = "NESW") -> bool:
+        """Place ``unit`` with its back to one of ``sides`` of ``room``; False if no room."""
+        off = WALL_GAP + unit.depth / 2
+        half = unit.width / 2
+
+        def candidate() -> tuple[float, float, float]:
+            side = self.rng.choice(sides)
+            if side in "NS":
+                along = self.rng.uniform(room.x0 + half, room.x1 - half)
+                return along, room.z1 - off if side == "N" else room.z0 + off, SIDE_ROTATION[side]
+            along = self.rng.uniform(room.z0 + half, room.z1 - half)
+            return room.x1 - off if side == "E" else room.x0 + off, along, SIDE_ROTATION[side]
+
+        return self._search(room, unit, candidate)
+
+    def free(
+        self, room: Room, unit: Unit, rotations: tuple[float, ...], *, spread: float | None = None
+    ) -> bool:
+        """Place ``unit`` anywhere in ``room`` (or within ``spread`` m of its centre)."""
+        cx, cz = (room.x0 + room.x1) / 2, (room.z0 + room.z1) / 2
+
+        def candidate() -> tuple[float, float, float]:
+            rot = self.rng.choice(rotations)
+            if spread is None:
+                return self.rng.uniform(room.x0, room.x1), self.rng.uniform(room.z0, room.z1), rot
+            dx, dz = self.rng.uniform(-spread, spread), self.rng.uniform(-spread, spread)
+            return cx + dx, cz + dz, rot
+
+        return self._search(room, unit, candidate)
+
+    def _search(
+        self, room: Room, unit: Unit, candidate: Callable[[], tuple[float, float, float]]
+    ) -> bool:
+        """Try candidates in batches until one fits."""
+        for _ in range(CANDIDATES // BATCH):
+            if self._first_fit(room, unit, np.array([candidate() for _ in range(BATCH)])):
+                return True
+        return False
+
+    def _first_fit(self, room: Room, unit: Unit, cands: np.ndarray) -> bool:
+        x, z = np.round(cands[:, 0], 2), np.round(cands[:, 1], 2)
+        rot = cands[:, 2]
+        body = rects_at(x, z, unit.width, unit.depth, rot)
+        if unit.around:
+            access = rects_at(x, z, unit.width + 2 * unit.access, unit.depth + 2 * unit.access, rot)
+        else:
+            fx, fz = headings_to_units(rot)
+            reach = (unit.depth + unit.access) / 2
+            access = rects_at(x + fx * reach, z + fz * reach, unit.width, unit.access, rot)
+        room_rect = np.array([room.x0, room.z0, room.x1, room.z1])
+        ok = _inside(body, room_rect) & _inside(access, room_rect)
+        if self.solid:
+            solid = np.array(self.solid)
+            ok &= ~rects_overlap(body, solid).any(axis=1)
+            ok &= ~rects_overlap(access, solid).any(axis=1)
+        if self.clear:
+            ok &= ~rects_overlap(body, np.array(self.clear)).any(axis=1)
+        hits = np.flatnonzero(ok)
+        if hits.size == 0:
+            return False
+        k = int(hits[0])
+        self._commit(room, unit, float(x[k]), float(z[k]), float(rot[k]), tuple(access[k]))
+        return True
+
+    def _commit(self, room: Room, unit: Unit, x: float, z: float, rot: float, access: Rect) -> None:
+        self.clear.append(access)
+        for m in unit.members:
+            kind = KINDS[m.kind]
+            mx, mz = local_to_world(x, z, rot, m.u, m.v)
+            mrot = (rot + m.turn) % 360
+            width = m.width if m.width is not None else kind.width
+            placed = Placed(m.kind, room.name, round(mx, 2), round(mz, 2), mrot, width)
+            self.placed.append(placed)
+            if kind.elevation == 0.0:
+                self.solid.append(rect_at(placed.x, placed.z, width, kind.depth, mrot))
+
+
+def _inside(rects: np.ndarray, room: np.ndarray) -> np.ndarray:
+    return ((rects[:, :2] >= room[:2]) & (rects[:, 2:] <= room[2:])).all(axis=1)

@@ -1,8 +1,7 @@
 """Data model of the world stage: the layout every backend builds, and what a step returns.
 
 World frame: metres, ``x`` east, ``z`` north, headings in degrees clockwise from north
-(``+z``), the AI2-THOR convention for yaw. The office spans ``[0, width] x [0, depth]``;
-the Office is top-left (small ``x``, large ``z``), the Entrance bottom-right.
+(``+z``, AI2-THOR's yaw). The office spans ``[0, width] x [0, depth]``.
 """
 
 from __future__ import annotations
@@ -41,7 +40,6 @@ class Doorway:
     room_a: str
     room_b: str
     x: float
-    """Centre of the gap."""
     z: float
     width: float
     axis: str
@@ -63,23 +61,20 @@ class WorldObject:
     """Centre of the footprint."""
     z: float
     width: float
-    """Footprint extent along the object's own x axis (before rotation)."""
+    """Extent along the object's own x axis (before rotation)."""
     depth: float
     height: float
     rotation: float = 0.0
     """Yaw in degrees; 0/90/180/270 only, so footprints stay axis-aligned."""
     color: tuple[int, int, int] = (128, 128, 128)
-    """Base RGB colour (baseline palette; the texture condition replaces it)."""
     elevation: float = 0.0
-    """Height of the base above the floor in metres (a laptop on a desk, a microwave on a
-    counter); 0 for everything standing on the floor. The object spans
-    ``[elevation, elevation + height]`` vertically."""
+    """Height of the base above the floor (a laptop on a desk); the object spans
+    ``[elevation, elevation + height]``."""
 
 
 @dataclass(frozen=True)
 class Layout:
-    """One office (the paper's fixed office or a generated one): the single source of truth
-    for every backend."""
+    """One office: the single source of truth for every backend."""
 
     seed: int
     width: float
@@ -107,10 +102,8 @@ class Layout:
         """Room name -> object type -> count, doorways excluded (the prompt's room overview)."""
         table: dict[str, dict[str, int]] = {r.name: {} for r in self.rooms}
         for o in self.objects:
-            if o.object_type == "Doorway":
-                continue
-            counts = table[o.room]
-            counts[o.object_type] = counts.get(o.object_type, 0) + 1
+            if o.object_type != "Doorway":
+                table[o.room][o.object_type] = table[o.room].get(o.object_type, 0) + 1
         return table
 
     def to_dict(self) -> dict[str, Any]:
@@ -143,9 +136,8 @@ class VisibleObject:
 
 
 class View:
-    """One view's RGB pixels and their JPEG, each made on first use and kept: a replay sends
-    frames by pixel digest, so it needs neither (two threads may both make one: the same
-    bytes). The pixels are read-only."""
+    """One view's read-only RGB pixels and their JPEG, each made on first use and kept (a
+    replay sends frames by digest and needs neither; two threads may both make one)."""
 
     __slots__ = ("_draw", "_jpeg", "_pixels", "_quality")
 
@@ -183,14 +175,8 @@ class View:
 
 @dataclass(frozen=True)
 class Observation:
-    """What the world returns from ``reset`` and ``step``.
-
-    ``frame`` is the rendered RGB image (``512 x 512 x 3`` uint8). ``frame_digest`` is the
-    SHA-256 of its raw pixel bytes: cassettes key frames by it, never by JPEG bytes, so a
-    recording replays across Pillow versions. ``jpeg`` is the encoded frame the model sees.
-    Both come from ``view`` on first read: a replay sends frames by digest and reads neither
-    (the JPEG is a quarter of a step; a view seen before in the process is not drawn at all).
-    """
+    """What the world returns from ``reset`` and ``step``. ``frame_digest`` is the SHA-256 of
+    the raw pixels: cassettes key frames by it, not by JPEG bytes (stable across Pillow)."""
 
     step: int
     """Actions executed so far (0 after reset)."""
@@ -207,17 +193,16 @@ class Observation:
     done: bool = False
     """True once a Term was executed (whatever room it named)."""
     terminal_room: str | None = None
-    """The canonical room the Term named, or None (no Term yet, or a name outside the four
-    rooms: focal-point column X)."""
+    """The canonical room the Term named, or None (no Term yet, or Other)."""
 
     @property
     def frame(self) -> np.ndarray:
-        """The rendered RGB frame (read-only)."""
+        """The ``512 x 512 x 3`` uint8 frame (read-only)."""
         return self.view.pixels
 
     @property
     def jpeg(self) -> bytes:
-        """The frame as the JPEG the model is sent (the same bytes on every read)."""
+        """The frame as the JPEG the model is sent."""
         return self.view.jpeg
 
 
@@ -227,18 +212,12 @@ class Simulator(Protocol):
     def reset(
         self, layout: Layout, condition: str, spawn_room: str, seed: int, *, symbolic: bool = True
     ) -> Observation:
-        """Place the agent in ``spawn_room`` and return the first observation.
-
-        ``symbolic=False`` is the ``vision`` modality: ``Goto`` takes object types only and no
-        feedback names an object id (the agent cannot read ids from a frame).
-        """
+        """Place the agent in ``spawn_room`` and return the first observation (``symbolic=False``:
+        the ``vision`` modality, no feedback names an object id)."""
         ...
 
     def step(self, action: str) -> Observation:
-        """Execute one action text (``Goto(Desk_1)``, ``Turn(Left)``, ``Term(Kitchen)``).
-
-        Invalid actions never raise: the step is consumed and the observation says why.
-        """
+        """Execute one action text; an invalid one is consumed and the observation says why."""
         ...
 
     @property

@@ -1,22 +1,16 @@
 """Semantic motion: where ``Goto`` puts the agent, and where an episode starts.
 
 * ``Goto(object)``: the agent stands 0.7 m (else 0.6 or 0.8 m) in front of a side of the
-  object's footprint (for an item on a desk or counter, of the desk or counter), facing
-  it. Sides facing the agent are tried first; along a side the midpoint first, then
-  points 0.4 and 0.8 m either way. The spot must lie in the object's room with the agent's
-  0.25 m radius clear of walls and floor furniture.
+  object's footprint (for an item on a desk or counter, of the desk or counter), facing it,
+  sides facing the agent first, along a side the midpoint first, then 0.4 and 0.8 m either
+  way; the spot must lie in the object's room with the agent's radius clear.
 * ``Goto(Doorway_N)``: from one of its rooms the agent passes through to 1 m inside the
-  other room, facing away from the doorway; a doorway seen through another doorway is
-  walked up to (1 m before it, facing it), so a single action never skips a room.
-* Spawn: the episodes of a spawn room stand on distinct points. The room's spawn points
-  are the free points of a 0.25 m grid with 0.6 m clear around them (the agent's radius
-  only if the room has none) within 1.0 m of its centre, widened to the
-  :data:`SPAWN_POSES` free points nearest the centre when fewer lie that close (a table
-  fills the Conference Room's centre), in an order shuffled once per room. Episode ``i``
-  of the room (recognised by its seed, :func:`pytest_emrd.world._episode.episode_index`)
-  stands on point ``i`` of that order, so the first :data:`SPAWN_POSES` episodes of a room
-  never share a position; its cardinal heading is drawn from the episode seed. A seed of
-  no episode (a benchmark's) picks a point by the seed.
+  other room, facing away from the doorway; a doorway seen from a third room is walked up
+  to (1 m before it, facing it), so a single action never skips a room.
+* Spawn: the episodes of a room stand on distinct points (``docs/interpretation/world.md``,
+  "Twenty distinct episodes per spawn room"): episode ``i`` on point ``i`` of
+  :func:`spawn_points`, its cardinal heading drawn from the episode seed; a seed of no
+  episode (a benchmark's) picks a point by the seed.
 """
 
 from __future__ import annotations
@@ -70,12 +64,7 @@ def approach(scene: Scene, index: int, pose: WorldPose) -> WorldPose | None:
 
 
 def through(scene: Scene, doorway: Doorway, pose: WorldPose, current: str) -> WorldPose | None:
-    """Where ``Goto(doorway)`` puts an agent at ``pose`` in room ``current`` (None: blocked).
-
-    From one of the doorway's rooms the agent passes through and faces into the other room.
-    A doorway seen from a third room (through another doorway) is walked up to: the agent
-    stops 1 m before it on the near side, facing it, so no room is skipped.
-    """
+    """Where ``Goto(doorway)`` puts an agent at ``pose`` in room ``current`` (None: blocked)."""
     a, b = scene.layout.room(doorway.room_a), scene.layout.room(doorway.room_b)
     along_x = doorway.axis == "x"  # the wall runs along x: the rooms lie north and south
     at = doorway.z if along_x else doorway.x
@@ -93,14 +82,11 @@ def through(scene: Scene, doorway: Doorway, pose: WorldPose, current: str) -> Wo
     else:
         x, z = round(doorway.x + sign * THROUGH, 2), doorway.z
         heading = 90.0 if facing_plus else 270.0
-    if not is_free(scene, target, x, z):
-        return None
-    return WorldPose(x, z, heading)
+    return WorldPose(x, z, heading) if is_free(scene, target, x, z) else None
 
 
 def spawn_pose(scene: Scene, room: Room, seed: int) -> WorldPose:
-    """The start pose in ``room`` of the episode with ``seed``: its own spawn point (see the
-    module docstring), with a cardinal heading drawn from the seed."""
+    """The start pose in ``room`` of the episode with ``seed`` (see the module docstring)."""
     from pytest_emrd.world._episode import episode_index
 
     points = spawn_points(scene, room)
@@ -111,34 +97,24 @@ def spawn_pose(scene: Scene, room: Room, seed: int) -> WorldPose:
 
 
 def spawn_points(scene: Scene, room: Room) -> list[tuple[float, float]]:
-    """The spawn points of ``room``, in the order episodes take them (shuffled per room)."""
-    gx, gz, d2, order = spawn_grid(room)
+    """The spawn points of ``room`` in the order episodes take them (shuffled once per room):
+    the free points of a 0.25 m grid with :data:`SPAWN_CLEARANCE` (else the agent's radius)
+    clear around them within :data:`SPAWN_RADIUS` of the room's centre, or the
+    :data:`SPAWN_POSES` free points nearest the centre when fewer lie that close."""
+    cx, cz = (room.x0 + room.x1) / 2, (room.z0 + room.z1) / 2
+    xs = np.arange(room.x0 + AGENT_RADIUS, room.x1 - AGENT_RADIUS + 1e-9, SPAWN_STEP)
+    zs = np.arange(room.z0 + AGENT_RADIUS, room.z1 - AGENT_RADIUS + 1e-9, SPAWN_STEP)
+    gx, gz = (np.round(g.ravel(), 2) for g in np.meshgrid(xs, zs))
+    d2 = (gx - cx) ** 2 + (gz - cz) ** 2
+    order = np.lexsort((gz, gx, d2))  # nearest the centre first, ties by position
     for clearance in (SPAWN_CLEARANCE, AGENT_RADIUS):
-        free = order[spawn_clear(scene, room, gx, gz, clearance)[order]]
+        ok = ~scene.crowded(gx, gz, clearance)
+        ok &= (gx >= room.x0 + clearance) & (gx <= room.x1 - clearance)
+        ok &= (gz >= room.z0 + clearance) & (gz <= room.z1 - clearance)
+        free = order[ok[order]]
         if free.size:
             near = free[d2[free] <= SPAWN_RADIUS**2]
             pool = near if near.size >= SPAWN_POSES else free[:SPAWN_POSES]
             points = [(float(gx[k]), float(gz[k])) for k in pool]
             return StableRng(f"emrd-spawn-points:{room.name}").shuffled(points)
     raise ConfigError(f"room={room.name!r} has no free spot for the agent; the layout is full.")
-
-
-def spawn_grid(room: Room) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Candidate spawn points of ``room`` on the 0.25 m grid: ``x``, ``z``, squared distance
-    to the room's centre, and their indices nearest the centre first (ties by position)."""
-    cx, cz = (room.x0 + room.x1) / 2, (room.z0 + room.z1) / 2
-    xs = np.arange(room.x0 + AGENT_RADIUS, room.x1 - AGENT_RADIUS + 1e-9, SPAWN_STEP)
-    zs = np.arange(room.z0 + AGENT_RADIUS, room.z1 - AGENT_RADIUS + 1e-9, SPAWN_STEP)
-    gx, gz = (np.round(g.ravel(), 2) for g in np.meshgrid(xs, zs))
-    d2 = (gx - cx) ** 2 + (gz - cz) ** 2
-    return gx, gz, d2, np.lexsort((gz, gx, d2))
-
-
-def spawn_clear(
-    scene: Scene, room: Room, gx: np.ndarray, gz: np.ndarray, clearance: float
-) -> np.ndarray:
-    """Which points keep ``clearance`` metres from the room's walls and floor furniture."""
-    ok = ~scene.crowded(gx, gz, clearance)
-    ok &= (gx >= room.x0 + clearance) & (gx <= room.x1 - clearance)
-    ok &= (gz >= room.z0 + clearance) & (gz <= room.z1 - clearance)
-    return ok

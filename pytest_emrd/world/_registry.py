@@ -1,4 +1,4 @@
-"""Simulator backends by name, imported lazily."""
+"""Simulator backends by name, imported lazily, and the world versions recordings are keyed by."""
 
 from __future__ import annotations
 
@@ -8,6 +8,12 @@ from typing import Any, Final
 
 from pytest_emrd.errors import check_choice, missing_extra
 from pytest_emrd.world._model import Simulator
+
+WORLD_VERSION: Final = "builtin-5"
+"""Bump whenever layouts, rendering, visibility or feedback text change: a recorded cassette
+holds frame digests and feedback strings. ``builtin-5``: furniture occludes; objects are
+visible within 3.3 m (low light 1.65 m), landmarks and the frame reach 7 m (3.5 m); the 20
+episodes of a spawn room start on 20 distinct points (``docs/interpretation/world.md``)."""
 
 
 def _builtin(**options: Any) -> Simulator:
@@ -39,15 +45,8 @@ def make_simulator(backend: str = "builtin", **options: Any) -> Simulator:
 
 
 def world_version(backend: str = "builtin") -> str:
-    """The world version a recording on ``backend`` depends on.
-
-    ``builtin``: :data:`~pytest_emrd.world.WORLD_VERSION`. ``ai2thor``: the thor backend's
-    own version joined with the builtin one, because THOR episodes are built from the builtin
-    layouts and spawn poses and answer with the builtin feedback wording; a change to either
-    invalidates them (``ai2thor-1+builtin-5``).
-    """
-    from pytest_emrd.world._version import WORLD_VERSION
-
+    """The world version a recording on ``backend`` depends on: for ``ai2thor`` joined with the
+    builtin one, whose layouts, spawns and wording THOR episodes use (``ai2thor-2+builtin-5``)."""
     check_choice("backend", backend, BACKENDS)
     if backend == "builtin":
         return WORLD_VERSION

@@ -1,33 +1,19 @@
 """The first-person frame: a ray-caster, one ray per image column.
 
-Camera: 512 x 512 pixels, 90 degree field of view horizontally and vertically, eye 1.5 m
-above the floor, looking level; column ``c`` casts the ray ``forward + right * u`` with
+Camera: 512 x 512 pixels, 90 degree field of view both ways, eye 1.5 m above the floor,
+looking level; column ``c`` casts the ray ``forward + right * u`` with
 ``u = (c + 0.5 - 256) / 256``, so its parameter ``t`` is the depth along the view axis.
-
-Drawing order: ceiling, floor (per-room colour, 0.5 m tiles) and walls (per-room colour,
-skirting board, shaded by orientation) fill the frame; then the boxes of every object
-within the visibility distance are painted back to front (objects by distance, items on
-a desk or counter right after it, boxes bottom-up), each only over the columns it covers
-and only where it is nearer than the wall. A box shows its front face, its top face when
-below the eye, its underside when above. Surfaces are shaded by orientation and the
-condition's light factor, then mixed with fog by depth (see
-:mod:`pytest_emrd.world._conditions`).
+Ceiling, floor (per-room colour, 0.5 m tiles) and walls (per-room colour, skirting) fill
+the frame; then the boxes of nearby objects (:func:`object_boxes`) are painted back to
+front, each where it is nearer than the wall, over the image columns it can cover (a
+conservative range from its extent in the camera frame). Surfaces are shaded by
+orientation and the condition's light factor, then mixed with fog by depth.
 
 Bit stability: headings are multiples of 90 degrees and positions centimetre values, so
 every geometric quantity comes from ``+ - * /``, comparisons, ``ceil`` and integer casts
-only (exactly rounded IEEE operations, no transcendental functions); colours come from a
-look-up table built with explicit rounding (``np.rint``) and indexed by integer codes
-(each pixel one ``(label * 4 + face) << 8 | fog`` code whose ``R, G, B`` bytes are copied
-from the table: no arithmetic on colours). The same scene therefore renders to identical
-bytes on every machine and numpy version.
-
-Division of labour: the rays are cast to the walls by
-:meth:`~pytest_emrd.world._geometry.Walls.first_hit` (shared with visibility), the boxes in
-view picked and ordered by :func:`~pytest_emrd.world._paint.object_boxes`; this module works
-out, per column, the rows where the wall, the skirting and each box begin and end and the
-shade-table code each shows, and fills a ``uint32`` frame of shade-table entries (ceiling,
-walls, skirting, the floor's raster look-up, then the boxes), all in plain numpy: a few
-milliseconds a frame, with nothing to compile.
+(exactly rounded IEEE operations); each pixel is one ``(label * 4 + face) << 8 | fog`` code
+whose bytes are copied from a table built with explicit rounding (``np.rint``). The same
+scene renders to identical bytes on every machine and numpy version.
 """
 
 from __future__ import annotations
@@ -43,37 +29,87 @@ from pytest_emrd.world._catalog import WALL_HEIGHT
 from pytest_emrd.world._conditions import ConditionParams
 from pytest_emrd.world._geometry import right_of, unit
 from pytest_emrd.world._model import WorldPose
-from pytest_emrd.world._paint import (
-    BOTTOM_FACE,
-    EYE,
-    FOCAL,
-    HORIZON,
-    NEAR,
-    SIZE,
-    TOP_FACE,
-    X_FACE,
-    Z_FACE,
-    first_row,
-    fog_weight,
-    object_boxes,
-)
 from pytest_emrd.world._rng import StableRng
-from pytest_emrd.world._scene import (
-    CEILING,
-    FLOOR0,
-    PART0,
-    RASTER,
-    SKIRTING,
-    TILE0,
-    WALL0,
-    Scene,
-)
+from pytest_emrd.world._scene import CEILING, FLOOR0, PART0, RASTER, SKIRTING, TILE0, WALL0, Scene
+
+SIZE = 512
+FOCAL = SIZE / 2
+HORIZON = SIZE // 2
+EYE = 1.5
+NEAR = 0.05
+
+#: Surface orientations: faces across x (east/west), across z (north/south), tops,
+#: undersides. A surface's code is ``(label * 4 + face) << 8 | fog``, its colour
+#: ``table[code]`` (:func:`shade_table`).
+X_FACE, Z_FACE, TOP_FACE, BOTTOM_FACE = 0, 1, 2, 3
+
+
+def fog_weight(depth: np.ndarray, draw_distance: float, fog: float) -> np.ndarray:
+    """Fog weight 0..255 (int64) of surfaces at ``depth``: ``rint(min(1, f * (d / v)^2) *
+    255)`` with ``v`` the drawn distance and ``f`` the fog at that distance."""
+    ratio = depth / draw_distance
+    return np.rint(np.minimum(1.0, fog * ratio * ratio) * 255.0).astype(np.int64)
+
+
+def first_row(a: np.ndarray) -> np.ndarray:
+    """First image row (in ``[0, 512]``) whose pixel centre lies at or below row ``a``."""
+    return np.minimum(np.maximum(np.ceil(a - 0.5), 0.0), float(SIZE)).astype(np.int64)
+
+
+def _dist2(rects: np.ndarray, x: float, z: float) -> np.ndarray:
+    """Squared distance from ``(x, z)`` to the nearest point of each rectangle."""
+    ddx = np.maximum(np.maximum(rects[:, 0] - x, x - rects[:, 2]), 0.0)
+    ddz = np.maximum(np.maximum(rects[:, 1] - z, z - rects[:, 3]), 0.0)
+    return ddx * ddx + ddz * ddz
+
+
+def object_boxes(scene: Scene, pose: WorldPose, params: ConditionParams) -> tuple[np.ndarray, ...]:
+    """The boxes of nearby objects as :func:`render` paints them.
+
+    A box is kept when its object lies within the drawn distance, it shows from the eye's
+    side, and it may cover some column. Boxes are ordered farthest first by the footprint of
+    the object their object stands on (an item on a desk takes its desk's), then lowest
+    first, then farthest first by their own footprint, ties in scene order.
+
+    Per box: ``(n, 4)`` planes ``x0, z0, x1, z1`` relative to the eye, ``(n, 2)``
+    ``focal * (y - eye)`` of its bottom and top, the first and one past the last column its
+    rays can hit, its label, and which extra face shows: 1 the top (below the eye), 2 the
+    underside (above the eye), 0 neither.
+    """
+    x, z = float(pose.x), float(pose.z)
+    parts, facing = scene.parts, scene.part_facing
+    centre = scene.centres[scene.part_object]
+    always = (facing[:, 0] == 0) & (facing[:, 1] == 0)
+    near = (_dist2(scene.rects, x, z) <= params.draw_distance**2)[scene.part_object]
+    side = (x - centre[:, 0]) * facing[:, 0] + (z - centre[:, 1]) * facing[:, 1]
+    fx, fz = unit(pose.heading)
+    rx, rz = right_of(pose.heading)
+    cx, cz = parts[:, [0, 0, 2, 2]] - x, parts[:, [1, 3, 1, 3]] - z
+    fwd, lat = cx * fx + cz * fz, cx * rx + cz * rz
+    out_of_view = (fwd <= NEAR).all(axis=1) | (lat > fwd).all(axis=1) | (lat < -fwd).all(axis=1)
+    sel = np.flatnonzero(near & (always | (side > facing[:, 2])) & ~out_of_view)
+    fwd, lat = fwd[sel], lat[sel]
+    f0, f1 = np.maximum(fwd.min(axis=1), NEAR), fwd.max(axis=1)
+    l0, l1 = lat.min(axis=1), lat.max(axis=1)
+    u0, u1 = np.minimum(l0 / f0, l0 / f1), np.maximum(l1 / f0, l1 / f1)
+    lo = np.clip(np.floor(u0 * FOCAL + (FOCAL - 0.5)) - 1, 0, SIZE).astype(np.int64)
+    hi = np.clip(np.ceil(u1 * FOCAL + (FOCAL - 0.5)) + 2, 0, SIZE).astype(np.int64)
+    wide = hi > lo
+    sel, lo, hi = sel[wide], lo[wide], hi[wide]
+    group = _dist2(scene.rects[scene.support[scene.part_object[sel]]], x, z)
+    order = np.lexsort((-_dist2(parts[sel, :4], x, z), parts[sel, 4], -group))
+    sel, lo, hi = sel[order], lo[order], hi[order]
+    p = parts[sel]
+    extra = np.where(p[:, 5] < EYE, 1, np.where(p[:, 4] > EYE, 2, 0))
+    rel = p[:, :4] - (x, z, x, z)
+    return rel, FOCAL * (p[:, 4:6] - EYE), lo, hi, scene.part_label[sel], extra
+
 
 SKIRTING_HEIGHT = 0.1
 WALL_BACK = 0.05
 """Metres before a wall hit where the wall's room is looked up (the side the eye is on)."""
 FACE_LIGHT = np.array([0.74, 0.9, 1.0, 0.5])
-"""Brightness of faces across x, across z, tops and undersides (``_paint.X_FACE`` ...)."""
+"""Brightness of faces across x, across z, tops and undersides (:data:`X_FACE` ...)."""
 
 _U = (np.arange(SIZE) + 0.5 - FOCAL) / FOCAL
 _ROWS = np.arange(SIZE, dtype=np.int64)
@@ -101,11 +137,9 @@ def palette(scene: Scene, params: ConditionParams, seed: int) -> np.ndarray:
 
 
 def shade_table(colors: np.ndarray, params: ConditionParams) -> np.ndarray:
-    """``(L * 4 * 256,)`` look-up table: final RGB of ``(label, face, fog weight)``, each
-    entry one ``uint32`` ``R | G << 8 | B << 16`` (one gather per pixel).
-
-    ``rgb = rint(colour * face_light * light_factor * (255 - fog) / 255 + fog_rgb * fog / 255)``
-    """
+    """``(L * 4 * 256,)`` look-up table: final RGB of ``(label, face, fog weight)`` as one
+    ``uint32`` ``R | G << 8 | B << 16``, ``rgb = rint(colour * face_light * light_factor *
+    (255 - fog) / 255 + fog_rgb * fog / 255)``."""
     weight = np.arange(256, dtype=np.float64)
     light = FACE_LIGHT * params.light_factor
     lit = np.asarray(colors)[:, None, None, :] * light[None, :, None, None]
@@ -131,28 +165,22 @@ def render(scene: Scene, pose: WorldPose, params: ConditionParams, table: np.nda
     return np.frombuffer(rgbx.tobytes("raw", "RGB"), dtype=np.uint8).reshape(SIZE, SIZE, 3)
 
 
+_View = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.float64, np.float64]
+"""Per column ``dx, dz, t_wall, along_x``, then the eye's ``x, z``."""
+
+
 def _cell(a: np.ndarray, size: int) -> np.ndarray:
-    """Raster index of coordinates already scaled to cells, clipped to ``[0, size)``
-    (clipping first makes the truncation a floor)."""
+    """Raster index of coordinates scaled to cells, clipped to ``[0, size)``."""
     return np.minimum(np.maximum(a, 0.0), size - 1.0).astype(np.intp)
 
 
 def _background(
-    buf: np.ndarray,
-    scene: Scene,
-    params: ConditionParams,
-    table: np.ndarray,
-    view: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.float64, np.float64],
+    buf: np.ndarray, scene: Scene, params: ConditionParams, table: np.ndarray, view: _View
 ) -> None:
     """Ceiling, walls (their room's colour, shaded by orientation), skirting and floor.
 
     Per column, rows ``[0, top)`` are ceiling, ``[top, skirt)`` wall, ``[skirt, bottom)``
-    skirting and the rest floor: every wall hit lies ahead (``0 < t_wall <= 1000``), the
-    wall's top above the eye and the skirting's below, so ``top <= horizon <= skirt <=
-    bottom``. Each ceiling and floor row lies at one depth; a floor pixel shows the raster
-    cell under ``o + depth * d``. When every ray has the same ``dz`` (``dx``), as at the
-    built-in world's headings, that coordinate's cell is the same along a row: it is worked
-    out once per row, with the colours of that raster row (column) at the row's fog.
+    skirting and the rest floor (``top <= horizon <= skirt <= bottom``).
     """
     dx, dz, t_wall, along_x, ox, oz = view
     fog = (params.draw_distance, params.fog)
@@ -187,11 +215,12 @@ def _floor(
     scene: Scene,
     params: ConditionParams,
     table: np.ndarray,
-    view: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.float64, np.float64],
+    view: _View,
     first: int,
 ) -> None:
     """Floor rows ``first`` (counted from the horizon) on, into ``out``: each pixel the
-    entry of the raster cell under ``o + depth * d`` at the row's fog."""
+    entry of the raster cell under ``o + depth * d`` at the row's fog. When every ray has
+    the same ``dz`` (``dx``), that coordinate's cell is worked out once per row."""
     dx, dz, _, _, ox, oz = view
     floor = scene.floor_raster
     nz, nx = floor.shape
@@ -225,18 +254,13 @@ def _boxes(
 ) -> None:
     """Paint the boxes back to front, each over the columns it can cover.
 
-    A column's ray is inside a box from ``tn`` to ``tf`` (the slab test on ``x0..x1`` and
-    ``z0..z1``); it hits the box when that interval lies between the near plane and the wall.
-    The hit column shows rows ``[start, end)``: from the higher of the top edge's rows at
-    ``tn`` and ``tf`` to the lower of the bottom edge's, in the underside's code when the box
-    is above the eye, else the front face's (the face of the slab entered last). Then rows
-    ``[start, over)`` are painted again: a box below the eye shows its top down to the top
-    edge's row at ``tn``, where the front begins; one above it shows its front down to the
-    bottom edge's row at ``tn``, where the underside begins.
-
-    The slab test, rows and codes run at once over every (box, column) pair, laid end to
-    end; the painting is one masked copy per face over each box's rectangle of rows and
-    columns.
+    A column's ray is inside a box from ``tn`` to ``tf`` (slab test); it hits the box when
+    that lies between the near plane and the wall. The hit column shows rows ``[start,
+    end)`` between the box's top and bottom edges, in the underside's code when the box is
+    above the eye, else the front face's; then rows ``[start, over)`` again: a box below the
+    eye shows its top down to the top edge's row at ``tn``, one above it its front down to
+    the bottom edge's row at ``tn``. All (box, column) pairs are computed at once, laid end
+    to end; the painting is one masked copy per face and box.
     """
     rel, y, lo, hi, label, extra = boxes
     if lo.size == 0:
@@ -289,8 +313,7 @@ def _boxes(
 
 @functools.lru_cache(maxsize=16)
 def _rays(heading: float) -> tuple[np.ndarray, np.ndarray]:
-    """Direction ``forward + right * u`` of each column's ray at ``heading`` (shared by every
-    frame at that heading; nothing writes to them)."""
+    """Direction ``forward + right * u`` of each column's ray at ``heading`` (shared)."""
     fx, fz = unit(heading)
     rx, rz = right_of(heading)
     return fx + rx * _U, fz + rz * _U
@@ -307,8 +330,7 @@ _LOCAL = threading.local()
 
 
 def _buffer() -> np.ndarray:
-    """This thread's uint32 scratch frame (a fresh megabyte per frame would cost page
-    faults; nothing in it outlives a call to :func:`render`)."""
+    """This thread's uint32 scratch frame (a fresh megabyte per frame costs page faults)."""
     buf: np.ndarray | None = getattr(_LOCAL, "buffer", None)
     if buf is None:
         buf = _LOCAL.buffer = np.empty((SIZE, SIZE), dtype=np.uint32)

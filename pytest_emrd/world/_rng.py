@@ -1,9 +1,9 @@
 """A seeded random source whose stream is stable across Python and numpy versions.
 
-Layouts must be identical bit for bit wherever they are generated, because cassettes key
-frames by their pixels. numpy's ``Generator`` methods may change their algorithms between
-releases (NEP 19) and so may :mod:`random`'s helpers; only ``random.Random.random()`` is
-guaranteed to repeat its sequence. Every draw here is derived from that one method.
+Layouts must be identical bit for bit wherever they are generated (cassettes key frames by
+their pixels). numpy's ``Generator`` methods and :mod:`random`'s helpers may change their
+algorithms between releases; only ``random.Random.random()`` is guaranteed to repeat its
+sequence, so every draw here is derived from that one method.
 """
 
 from __future__ import annotations
@@ -37,8 +37,7 @@ class StableRng:
         return low + min(int(self._random() * (high - low + 1)), high - low)
 
     def integers(self, low: int, high: int, shape: tuple[int, ...]) -> np.ndarray:
-        """An int64 array of ``shape`` filled in C order with what as many :meth:`integer`
-        calls would draw (the same ``random()`` values, the same arithmetic)."""
+        """An int64 array of ``shape`` filled in C order as :meth:`integer` calls would."""
         draws = np.array([self._random() for _ in range(math.prod(shape))], dtype=np.float64)
         span = high - low
         return low + np.minimum((draws * (span + 1)).astype(np.int64), span).reshape(shape)

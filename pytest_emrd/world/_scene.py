@@ -1,15 +1,15 @@
 """Per-layout arrays shared by visibility, motion and the renderer (computed once per layout).
 
-A :class:`Scene` holds the walls, every object's footprint and visibility sample points,
-the boxes that draw each object converted to world coordinates, and the palette labels:
-``0`` ceiling, ``1`` skirting, then walls, floors and alternate floor tiles per room (in
-:data:`~pytest_emrd.rooms.ROOM_NAMES` order), then one label per ``(object, material)``.
+Palette labels: ``0`` ceiling, ``1`` skirting, then walls, floors and alternate floor tiles
+per room (in :data:`~pytest_emrd.rooms.ROOM_NAMES` order), then one per ``(object, material)``.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from collections import OrderedDict
+from dataclasses import dataclass, field
 from functools import lru_cache
+from typing import Any
 
 import numpy as np
 
@@ -18,6 +18,7 @@ from pytest_emrd.world._catalog import (
     CEILING_COLOR,
     COLORS_OF,
     FLOOR_COLORS,
+    OCCLUDER_TYPES,
     SKIRTING_COLOR,
     WALL_COLORS,
 )
@@ -54,8 +55,7 @@ class Scene:
     samples: np.ndarray
     """``(N, SAMPLES, 2)`` visibility sample points."""
     floor: np.ndarray
-    """``(N,)`` bool: stands on the floor (blocks walking); False for doorways, the exit
-    and items on desks or counters."""
+    """``(N,)`` bool: stands on the floor (blocks walking; not doorways, the exit, items)."""
     support: np.ndarray
     """``(N,)`` index of the object an item stands on (its own index otherwise)."""
     parts: np.ndarray
@@ -72,18 +72,23 @@ class Scene:
     """``(nz, nx)`` room index of each 10 cm cell (0 outside any room), for the renderer."""
     floor_raster: np.ndarray
     """``(nz, nx)`` floor label of each cell: the room's floor, alternate tiles darker."""
+    occluders: np.ndarray
+    """``(K,)`` indices of the floor-standing :data:`~pytest_emrd.world._catalog.OCCLUDER_TYPES`."""
+    tops: np.ndarray
+    """``(N,)`` every object's top above the floor (``elevation + height``)."""
+    landmarks: np.ndarray
+    """``(N,)`` bool: doorways and the exit (category ``landmark``)."""
+    sights: OrderedDict[Any, Any] = field(default_factory=OrderedDict, repr=False)
+    """The memo of :func:`pytest_emrd.world._visibility.sight`."""
 
     def crowded(self, x: np.ndarray, z: np.ndarray, radius: float = AGENT_RADIUS) -> np.ndarray:
         """Whether a disc of ``radius`` at each point would touch floor furniture
         (footprints grown by the radius: slightly conservative at corners)."""
         f = self.rects[self.floor]
         px, pz = np.asarray(x, dtype=float)[..., None], np.asarray(z, dtype=float)[..., None]
-        return (
-            (px > f[:, 0] - radius)
-            & (px < f[:, 2] + radius)
-            & (pz > f[:, 1] - radius)
-            & (pz < f[:, 3] + radius)
-        ).any(axis=-1)
+        inside_x = (px > f[:, 0] - radius) & (px < f[:, 2] + radius)
+        inside_z = (pz > f[:, 1] - radius) & (pz < f[:, 3] + radius)
+        return (inside_x & inside_z).any(axis=-1)
 
 
 def _samples(obj: WorldObject) -> list[tuple[float, float]]:
@@ -103,13 +108,8 @@ def _support(layout: Layout, rects: np.ndarray, floor: np.ndarray) -> np.ndarray
     support = np.arange(len(layout.objects))
     for i, o in enumerate(layout.objects):
         if o.elevation > 0:
-            inside = (
-                floor
-                & (rects[:, 0] <= o.x)
-                & (rects[:, 2] >= o.x)
-                & (rects[:, 1] <= o.z)
-                & (rects[:, 3] >= o.z)
-            )
+            inside = floor & (rects[:, 0] <= o.x) & (rects[:, 2] >= o.x)
+            inside &= (rects[:, 1] <= o.z) & (rects[:, 3] >= o.z)
             if inside.any():
                 support[i] = int(np.flatnonzero(inside)[0])
     return support
@@ -135,16 +135,8 @@ def scene_of(layout: Layout) -> Scene:
                 local_to_world(o.x, o.z, o.rotation, b.u0, b.v0),
                 local_to_world(o.x, o.z, o.rotation, b.u1, b.v1),
             )
-            parts.append(
-                (
-                    min(ax, bx),
-                    min(az, bz),
-                    max(ax, bx),
-                    max(az, bz),
-                    o.elevation + b.y0,
-                    o.elevation + b.y1,
-                )
-            )
+            x0, x1, z0, z1 = min(ax, bx), max(ax, bx), min(az, bz), max(az, bz)
+            parts.append((x0, z0, x1, z1, o.elevation + b.y0, o.elevation + b.y1))
             if b.role == "wall":
                 room = layout.room_at((ax + bx) / 2, (az + bz) / 2) or o.room
                 label = WALL0 + room_pos.get(room, 0)
@@ -174,6 +166,12 @@ def scene_of(layout: Layout) -> Scene:
         index={o.object_id: i for i, o in enumerate(objs)},
         room_raster=(rooms := _raster(layout)),
         floor_raster=_floor(rooms),
+        occluders=np.array(
+            [i for i, o in enumerate(objs) if floor[i] and o.object_type in OCCLUDER_TYPES],
+            dtype=np.int64,
+        ),
+        tops=np.array([o.elevation + o.height for o in objs], dtype=float),
+        landmarks=np.array([o.category == "landmark" for o in objs], dtype=bool),
     )
 
 

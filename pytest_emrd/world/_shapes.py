@@ -1,12 +1,9 @@
 """Low-poly box compositions: how each kind of object looks to the ray-caster.
 
-Every object is drawn as a few axis-aligned boxes in its own frame (``u`` to the right,
-``v`` forward, ``y`` up from the object's base), each with a material role whose colour the
-palette supplies: a table is a top on legs, a chair a seat with a back, a fridge a tall pale
-body with handles, a laptop or television a thin dark screen, a plant a pot under a green
-crown, a doorway a frame around the gap, the exit a door with a push bar under a green sign.
-Boxes are listed bottom-up; a box marked ``facing`` (a screen, a handle, a sign) is only
-drawn when the viewer is on that side of the object.
+Every object is a few axis-aligned boxes in its own frame (``u`` right, ``v`` forward,
+``y`` up from its base), each with a material role whose colour the palette supplies,
+listed bottom-up; a box marked ``facing`` (a screen, a handle, a sign) is drawn only from
+that side.
 """
 
 from __future__ import annotations
@@ -39,19 +36,8 @@ def _full(o: WorldObject, y0: float, y1: float, role: str) -> Box:
 
 def _legs(o: WorldObject, top: float, size: float, inset: float, role: str) -> list[Box]:
     hu, hv = o.width / 2 - inset, o.depth / 2 - inset
-    return [
-        Box(
-            su * hu - (size if su > 0 else 0),
-            su * hu + (0 if su > 0 else size),
-            sv * hv - (size if sv > 0 else 0),
-            sv * hv + (0 if sv > 0 else size),
-            0.0,
-            top,
-            role,
-        )
-        for su in (-1, 1)
-        for sv in (-1, 1)
-    ]
+    us, vs = ((-hu, -hu + size), (hu - size, hu)), ((-hv, -hv + size), (hv - size, hv))
+    return [Box(u0, u1, v0, v1, 0.0, top, role) for u0, u1 in us for v0, v1 in vs]
 
 
 def _desk(o: WorldObject) -> list[Box]:
@@ -74,17 +60,9 @@ def _desk(o: WorldObject) -> list[Box]:
 
 def _table(o: WorldObject) -> list[Box]:
     hw, hd, h = o.width / 2, o.depth / 2, o.height
+    u = hw - 0.45
     legs = [
-        Box(
-            s * (hw - 0.45) - 0.05,
-            s * (hw - 0.45) + 0.05,
-            -hd + 0.2,
-            hd - 0.2,
-            0.0,
-            h - 0.05,
-            "leg",
-        )
-        for s in (-1, 1)
+        Box(s * u - 0.05, s * u + 0.05, -hd + 0.2, hd - 0.2, 0.0, h - 0.05, "leg") for s in (-1, 1)
     ]
     return [*legs, _full(o, h - 0.05, h, "top")]
 

@@ -14,18 +14,12 @@ import numpy as np
 from pytest_emrd._bounded import remember
 from pytest_emrd.errors import ConfigError, check_choice, check_range
 from pytest_emrd.rooms import ROOM_NAMES, SLUG_ROOMS
-from pytest_emrd.world._actions import Action
 from pytest_emrd.world._conditions import ConditionParams, condition_params
 from pytest_emrd.world._feedback import (
+    Action,
     SemanticStep,
-    choose_target,
-    goto_key,
-    goto_note,
-    no_spot,
-    not_visible,
     observed_pose,
     room_table,
-    term,
     turn_degrees,
     with_pose,
 )
@@ -38,11 +32,10 @@ from pytest_emrd.world._visibility import Sight, sight
 JPEG_QUALITY = 85
 FRAME_CACHE = 16
 """Frames kept per episode (least recently used dropped first)."""
-
-#: Views whose pixel digest this process knows (a few hundred bytes each).
 VIEW_DIGESTS = 1 << 16
-#: Shade tables kept (one per condition of a layout; under ``texture`` one per episode seed).
+"""Views whose pixel digest this process knows (a few hundred bytes each)."""
 SHADE_TABLES = 64
+"""Shade tables kept (one per condition of a layout; under ``texture`` one per seed)."""
 
 _lock = threading.Lock()
 #: (scene, table, pose) -> digest, keyed by the identities of a memoised scene and table
@@ -59,16 +52,14 @@ def _remember(table: OrderedDict[Any, Any], key: Any, value: Any, capacity: int)
 
 
 def forget_views() -> None:
-    """Forget every remembered view digest and shade table, as in a new process (cold
-    benchmarks, tests)."""
+    """Forget every remembered view digest and shade table, as in a new process."""
     with _lock:
         _digests.clear()
         _tables.clear()
 
 
 def _shades(scene: Scene, params: ConditionParams, seed: int) -> np.ndarray:
-    """The episode's shade table, one object per scene, condition and (``texture``) seed:
-    every episode of the paper office under one condition shares it."""
+    """The episode's shade table, one object per scene, condition and (``texture``) seed."""
     key = (id(scene), params, seed if params.randomize_palette else None)
     hit = _tables.get(key)
     if hit is not None and hit[0] is scene:
@@ -79,11 +70,10 @@ def _shades(scene: Scene, params: ConditionParams, seed: int) -> np.ndarray:
 
 
 class BuiltinSimulator(SemanticStep):
-    """Built-in office simulator: semantic actions, wall-occluded visibility, ray-cast frames.
+    """Built-in office simulator: semantic actions, occluded visibility, ray-cast frames.
 
-    ``room_aliases`` maps extra names ``Term`` accepts to canonical room names (for prompt
-    variants that rename the rooms, e.g. ``{"Room A": "Office"}``). ``frame_cache`` is how
-    many recent frames of an episode are kept for poses the agent returns to (0: none).
+    ``room_aliases`` maps extra names ``Term`` accepts to canonical room names (``{"Room A":
+    "Office"}``). ``frame_cache`` is how many recent frames of an episode are kept (0: none).
     """
 
     def __init__(
@@ -105,19 +95,14 @@ class BuiltinSimulator(SemanticStep):
         self._table = np.zeros((0, 3), dtype=np.uint8)
         self._pose = WorldPose(0.0, 0.0, 0.0)
         self._spawn = self._pose
-        self._steps = 0
-        self._ended = False
-        self._terminal: str | None = None
-        self._symbolic = True
+        self._steps, self._ended, self._terminal, self._symbolic = 0, False, None, True
         self._sight: Sight | None = None
         self._frames: OrderedDict[WorldPose, tuple[str, View]] = OrderedDict()
 
-    # -- protocol ---------------------------------------------------------------------
     def reset(
         self, layout: Layout, condition: str, spawn_room: str, seed: int, *, symbolic: bool = True
     ) -> Observation:
-        """Start an episode in ``spawn_room`` (canonical name or slug) under ``condition``;
-        ``symbolic=False`` (``vision``): no feedback names an object id."""
+        """Start an episode in ``spawn_room`` (canonical name or slug) under ``condition``."""
         room = SLUG_ROOMS.get(spawn_room, spawn_room)
         check_choice("spawn_room", room, [*ROOM_NAMES, *SLUG_ROOMS])
         self._params = condition_params(condition)
@@ -154,47 +139,33 @@ class BuiltinSimulator(SemanticStep):
         self._scene = None
         self._frames.clear()
 
-    # -- actions ----------------------------------------------------------------------
-    def _goto(self, action: Action) -> str:
-        scene = self._require()
-        symbolic = self._symbolic
-        key = goto_key(action, symbolic=symbolic)
-        seen = self._current_sight()
-        visible = [int(i) for i in np.flatnonzero(seen.mask)]
-        objs = scene.layout.objects
-        chosen = choose_target(
-            key,
-            [objs[i].object_id for i in visible],
+    def _in_view(self) -> tuple[list[str], list[str], list[float]]:
+        seen, objs = self._current_sight(), self._require().layout.objects
+        visible = np.flatnonzero(seen.mask)
+        ids = [objs[i].object_id for i in visible]
+        return (
+            ids,
             [objs[i].object_type for i in visible],
             [float(seen.distance[i]) for i in visible],
-            symbolic=symbolic,
         )
-        if chosen is None:
-            listed = [v.object_id for v in seen.listing(scene)]
-            raise not_visible(action, listed, symbolic=symbolic)
-        index = visible[chosen]
-        target = objs[index]
-        if target.object_type == "Doorway":
-            doorway = next(d for d in scene.layout.doorways if d.object_id == target.object_id)
+
+    def _reach(self, object_id: str) -> bool:
+        scene = self._require()
+        index = scene.index[object_id]
+        if scene.layout.objects[index].object_type == "Doorway":
+            doorway = next(d for d in scene.layout.doorways if d.object_id == object_id)
             pose = through(scene, doorway, self._pose, self.current_room())
         else:
             pose = approach(scene, index, self._pose)
-        if pose is None:
-            raise no_spot(target.object_id, target.object_type, symbolic=symbolic)
-        self._move(pose)
-        return goto_note(key, target.object_id, symbolic=symbolic)
+        if pose is not None:
+            self._move(pose)
+        return pose is not None
 
     def _turn(self, action: Action) -> str:
         delta = turn_degrees(action)
         self._move(WorldPose(self._pose.x, self._pose.z, (self._pose.heading + delta) % 360))
         return ""
 
-    def _term(self, action: Action) -> str:
-        self._ended = True
-        self._terminal, note = term(self._rooms, action)
-        return note
-
-    # -- observation ------------------------------------------------------------------
     def _require(self) -> Scene:
         if self._scene is None:
             raise ConfigError("BuiltinSimulator used before reset(); call reset(...) first.")
@@ -214,15 +185,11 @@ class BuiltinSimulator(SemanticStep):
     def _render(self) -> tuple[str, View]:
         """Pixel digest and view of the current pose.
 
-        Agents often come back to a pose (a full sweep ends where it began), so the views of
-        recent poses of the episode are kept, pixels and JPEG included once made. And every
-        episode of the paper office under a condition looks at the same scene through the
-        same shade table: the Gotos of a grid land on the same few poses, so of ~6,600 views
-        of the committed grid ~1,900 differ. The process remembers each view's digest; a view
-        seen before is drawn again only if its pixels or JPEG are read (a recording, the
-        viewer), never for a replay, which needs the digest alone (not under ``texture``,
-        whose colours differ per episode). ``frame_cache=0`` turns both off (every view
-        drawn and hashed).
+        The views of recent poses of the episode are kept (a sweep ends where it began). And
+        every episode of the paper office under a condition shares one scene and shade table,
+        so the process remembers each view's digest (of ~6,600 views of the committed grid
+        ~1,900 differ): a view seen before is drawn only if its pixels or JPEG are read, never
+        for a replay (not under ``texture``). ``frame_cache=0`` turns both off.
         """
         pose, scene, table = self._pose, self._require(), self._table
         cached = self._frames.get(pose)
@@ -230,8 +197,7 @@ class BuiltinSimulator(SemanticStep):
             self._frames.move_to_end(pose)
             return cached
         view = View(functools.partial(render, scene, pose, self._params, table), self._quality)
-        # A texture episode's table is its own (colours drawn from its seed): no other
-        # episode can share its views, and remembering them would keep every such table.
+        # A texture episode's table is its own: no other episode can share its views.
         shared = self._cache_size > 0 and not self._params.randomize_palette
         key = (id(scene), id(table), pose)
         known = _digests.get(key) if shared else None

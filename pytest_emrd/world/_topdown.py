@@ -2,22 +2,16 @@
 
 For people checking the world (``emrd render``), not for the agent. Objects are drawn as
 their footprints coloured by category (landmark green, salient blue, clutter orange) and
-labelled with their ids; the agent is an arrow with its field of view out to the
-condition's visibility distance.
+labelled with their ids; the agent is an arrow with its field of view out to ``visibility``.
 """
 
 from __future__ import annotations
 
 import io
 import math
-from types import ModuleType
-from typing import TYPE_CHECKING
 
 from pytest_emrd.world._geometry import footprint, walls_of
 from pytest_emrd.world._model import Layout, WorldPose
-
-if TYPE_CHECKING:
-    from matplotlib.axes import Axes
 
 CATEGORY_COLORS = {"landmark": "#2e9e4f", "salient": "#3b6fb6", "clutter": "#e08a2c"}
 ROOM_FILL = {
@@ -28,10 +22,8 @@ ROOM_FILL = {
 }
 
 
-def plan_png(
-    layout: Layout, pose: WorldPose | None = None, *, visibility: float = 7.0, dpi: int = 110
-) -> bytes:
-    """The plan of ``layout`` (with the agent at ``pose`` if given) as PNG bytes."""
+def plan_png(layout: Layout, pose: WorldPose, *, visibility: float) -> bytes:
+    """The plan of ``layout`` with the agent at ``pose`` as PNG bytes."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -40,14 +32,9 @@ def plan_png(
 
     fig, ax = plt.subplots(figsize=(layout.width * 0.75 + 1, layout.depth * 0.75 + 1))
     for r in layout.rooms:
+        fill = ROOM_FILL.get(r.name, "#eeeeee")
         ax.add_patch(
-            patches.Rectangle(
-                (r.x0, r.z0),
-                r.x1 - r.x0,
-                r.z1 - r.z0,
-                color=ROOM_FILL.get(r.name, "#eeeeee"),
-                zorder=0,
-            )
+            patches.Rectangle((r.x0, r.z0), r.x1 - r.x0, r.z1 - r.z0, color=fill, zorder=0)
         )
         ax.text(
             (r.x0 + r.x1) / 2,
@@ -68,13 +55,12 @@ def plan_png(
         ax.plot([x, x], [z0, z1], color="black", lw=3, solid_capstyle="butt", zorder=3)
     for o in layout.objects:
         x0, z0, x1, z1 = footprint(o)
-        color = CATEGORY_COLORS.get(o.category, "grey")
         ax.add_patch(
             patches.Rectangle(
                 (x0, z0),
                 x1 - x0,
                 z1 - z0,
-                facecolor=color,
+                facecolor=CATEGORY_COLORS.get(o.category, "grey"),
                 edgecolor="black",
                 lw=0.6,
                 alpha=0.55 if o.elevation else 0.85,
@@ -82,8 +68,15 @@ def plan_png(
             )
         )
         ax.text(o.x, o.z, o.object_id, ha="center", va="center", fontsize=5.5, zorder=6)
-    if pose is not None:
-        _agent(ax, patches, pose, visibility)
+    # matplotlib angles are counter-clockwise from +x; headings clockwise from +z
+    theta = 90.0 - pose.heading
+    wedge = (theta - 45, theta + 45)
+    ax.add_patch(
+        patches.Wedge((pose.x, pose.z), visibility, *wedge, color="#ffd84d", alpha=0.25, zorder=1)
+    )
+    dx, dz = math.cos(math.radians(theta)) * 0.6, math.sin(math.radians(theta)) * 0.6
+    ax.add_patch(patches.Circle((pose.x, pose.z), 0.25, color="#d62728", zorder=7))
+    ax.arrow(pose.x, pose.z, dx, dz, width=0.06, color="#d62728", zorder=7)
     ax.set_xlim(-0.3, layout.width + 0.3)
     ax.set_ylim(-0.3, layout.depth + 0.3)
     ax.set_aspect("equal")
@@ -91,25 +84,6 @@ def plan_png(
     ax.set_ylabel("z (m, north)")
     ax.set_title(f"EMRD office, seed {layout.seed}")
     buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=dpi, bbox_inches="tight")
+    fig.savefig(buf, format="png", dpi=110, bbox_inches="tight")
     plt.close(fig)
     return buf.getvalue()
-
-
-def _agent(ax: Axes, patches: ModuleType, pose: WorldPose, visibility: float) -> None:
-    # matplotlib angles are counter-clockwise from +x; headings clockwise from +z
-    theta = 90.0 - pose.heading
-    ax.add_patch(
-        patches.Wedge(
-            (pose.x, pose.z),
-            visibility,
-            theta - 45,
-            theta + 45,
-            color="#ffd84d",
-            alpha=0.25,
-            zorder=1,
-        )
-    )
-    dx, dz = math.cos(math.radians(theta)) * 0.6, math.sin(math.radians(theta)) * 0.6
-    ax.add_patch(patches.Circle((pose.x, pose.z), 0.25, color="#d62728", zorder=7))
-    ax.arrow(pose.x, pose.z, dx, dz, width=0.06, color="#d62728", zorder=7)

@@ -1,24 +1,12 @@
 """What the agent sees: field of view, distance limit, walls and furniture occlude.
 
-An object is visible from a pose when at least one of its sample points (centre, edge
-midpoints and corners of its footprint; points along the gap for a doorway) is
-
-* inside the 90 degree field of view (``|lateral| <= forward``),
-* no farther than the condition's visibility distance (baseline 3 m, low light 1.5 m:
-  :mod:`pytest_emrd.world._conditions`), and
-* in the line of sight: the segment from the agent to the point crosses no wall segment
-  (doorway gaps are open), and the line from the eye (1.5 m up) to the object's top above
-  that point passes through no occluding piece of furniture (a box from the floor to its
-  height over its footprint; :data:`~pytest_emrd.world._catalog.OCCLUDER_TYPES`: desks,
-  tables, shelving, television, fridge, counters, armchairs). An object never hides itself
-  nor the items standing on it.
-
-The frame draws the same boxes, so furniture hides in it what it hides here: a shelf or a
-fridge hides what stands behind it up to 1.8 / 1.9 m, a counter or a desk what is lower
-than the line over its top. A visible object's bearing is that of its centre, clipped to
-the field of view (``[-45, 45]``, negative to the left), and its distance is to its centre.
-Plain numpy: one sight is a few (sample points x walls) and (sample points x furniture)
-arrays.
+An object is visible from a pose when one of its sample points (centre, edge midpoints and
+corners of its footprint; points along the gap for a doorway) is inside the 90 degree field
+of view (``|lateral| <= forward``), within the condition's visibility distance
+(:mod:`pytest_emrd.world._conditions`), and in the line of sight (:func:`in_line_of_sight`).
+The frame draws the same boxes, so furniture hides in it what it hides here. A visible
+object's bearing is that of its centre, clipped to ``[-45, 45]`` (negative to the left),
+its distance to its centre.
 """
 
 from __future__ import annotations
@@ -26,12 +14,11 @@ from __future__ import annotations
 import threading
 from dataclasses import dataclass
 from functools import cached_property, lru_cache
-from weakref import WeakKeyDictionary
 
 import numpy as np
 
+from pytest_emrd._bounded import remember
 from pytest_emrd.errors import ConfigError
-from pytest_emrd.world._catalog import OCCLUDER_TYPES
 from pytest_emrd.world._conditions import condition_params
 from pytest_emrd.world._geometry import right_of, unit
 from pytest_emrd.world._model import Layout, VisibleObject, WorldObject, WorldPose
@@ -39,7 +26,7 @@ from pytest_emrd.world._scene import Scene, scene_of
 
 HALF_FOV = 45.0
 EYE = 1.5
-"""Eye height in metres (the camera's, :data:`pytest_emrd.world._paint.EYE`)."""
+"""Eye height in metres (the camera's, :data:`pytest_emrd.world._render.EYE`)."""
 STAND_SPACING = 0.75
 """Grid spacing of the standing points that define ``G_base``."""
 
@@ -59,13 +46,11 @@ class Sight:
     def visible(self) -> tuple[VisibleObject, ...]:
         """The visible objects as the symbolic modality reports them, sorted by id."""
         out = [
-            VisibleObject(
-                object_id=self.objects[i].object_id,
-                object_type=self.objects[i].object_type,
-                bearing=round(float(self.bearing[i]), 1),
-                distance=round(float(self.distance[i]), 2),
+            VisibleObject(o.object_id, o.object_type, round(float(b), 1), round(float(d), 2))
+            for o, b, d, shown in zip(
+                self.objects, self.bearing, self.distance, self.mask, strict=True
             )
-            for i in np.flatnonzero(self.mask)
+            if shown
         ]
         return tuple(sorted(out, key=lambda v: v.object_id))
 
@@ -80,9 +65,7 @@ class Sight:
 
 
 SIGHT_MEMO = 512
-"""Sights kept per scene (oldest dropped first): agents come back to the same poses, within
-an episode and across the episodes of one office."""
-_SIGHTS: WeakKeyDictionary[Scene, dict[tuple[WorldPose, float, float], Sight]] = WeakKeyDictionary()
+"""Sights kept per scene (oldest dropped first): agents come back to the same poses."""
 _LOCK = threading.Lock()
 
 
@@ -95,14 +78,11 @@ def sight(
     reach = visibility if landmarks is None else landmarks
     key = (pose, visibility, reach)
     with _LOCK:
-        memo = _SIGHTS.setdefault(scene, {})
-        seen = memo.get(key)
+        seen = scene.sights.get(key)
     if seen is None:
         seen = _sight(scene, pose, visibility, reach)
         with _LOCK:
-            memo[key] = seen
-            while len(memo) > SIGHT_MEMO:
-                del memo[next(iter(memo))]
+            remember(scene.sights, key, seen, SIGHT_MEMO)
     return seen
 
 
@@ -113,7 +93,7 @@ def _sight(scene: Scene, pose: WorldPose, visibility: float, landmarks: float) -
     dz = scene.samples[..., 1] - pose.z
     fwd = dx * fx + dz * fz
     lat = dx * rx + dz * rz
-    limit = np.where(occluders(scene).landmark, landmarks, visibility)[:, None]
+    limit = np.where(scene.landmarks, landmarks, visibility)[:, None]
     near = (fwd > 0) & (np.abs(lat) <= fwd) & (dx * dx + dz * dz <= limit * limit)
     obj, j = np.nonzero(near)
     clear = in_line_of_sight(scene, np.float64(pose.x), np.float64(pose.z), obj, j)
@@ -128,51 +108,14 @@ def _sight(scene: Scene, pose: WorldPose, visibility: float, landmarks: float) -
     return Sight(*arrays, scene.layout.objects)
 
 
-@dataclass(frozen=True, eq=False)
-class Occluders:
-    """Per scene: the furniture that hides what stands behind it, every object's top, and
-    which objects are landmarks (seen as far as the frame draws)."""
-
-    index: np.ndarray
-    """``(K,)`` object indices of the occluders."""
-    rects: np.ndarray
-    """``(K, 4)`` their footprints."""
-    height: np.ndarray
-    """``(K,)`` their tops above the floor."""
-    top: np.ndarray
-    """``(N,)`` every object's top above the floor (``elevation + height``)."""
-    landmark: np.ndarray
-    """``(N,)`` whether each object is a landmark (category ``landmark``)."""
-
-
-_OCCLUDERS: WeakKeyDictionary[Scene, Occluders] = WeakKeyDictionary()
-
-
-def occluders(scene: Scene) -> Occluders:
-    """The occluders of ``scene``: floor-standing objects of an :data:`OCCLUDER_TYPES` type."""
-    with _LOCK:
-        known = _OCCLUDERS.get(scene)
-    if known is None:
-        objs = scene.layout.objects
-        index = np.array(
-            [i for i, o in enumerate(objs) if scene.floor[i] and o.object_type in OCCLUDER_TYPES],
-            dtype=np.int64,
-        )
-        top = np.array([o.elevation + o.height for o in objs], dtype=float)
-        landmark = np.array([o.category == "landmark" for o in objs], dtype=bool)
-        known = Occluders(index, scene.rects[index].reshape(-1, 4), top[index], top, landmark)
-        with _LOCK:
-            _OCCLUDERS[scene] = known
-    return known
-
-
 def in_line_of_sight(
     scene: Scene, px: np.ndarray, pz: np.ndarray, obj: np.ndarray, j: np.ndarray
 ) -> np.ndarray:
     """Whether sample point ``j[m]`` of object ``obj[m]`` is in the line of sight from the
     eye at ``(px, pz)`` (scalars or arrays as long as ``obj``): no wall crosses the segment
-    to it, and the line from the eye to the object's top above it passes through no
-    occluder other than the object and the object it stands on.
+    to it, and the line from the eye (1.5 m up) to the object's top above it passes through
+    no occluder (:attr:`Scene.occluders`, a box from the floor to its top) other than the
+    object and the object it stands on.
 
     An occluder is crossed between the segment's parameters ``t_in < t_out`` (slab test on
     its footprint, clipped to ``[0, 1]``); the line's height ``EYE + (top - EYE) * t`` is
@@ -182,18 +125,19 @@ def in_line_of_sight(
     sx, sz = scene.samples[obj, j, 0], scene.samples[obj, j, 1]
     ddx, ddz = sx - px, sz - pz
     clear = ~scene.walls.blocks(px, pz, sx, sz)
-    occ = occluders(scene)
-    if not occ.index.size or not obj.size:
+    occ = scene.occluders
+    if not occ.size or not obj.size:
         return clear
+    rects, height = scene.rects[occ], scene.tops[occ]
     ox, oz = np.broadcast_to(px, obj.shape)[:, None], np.broadcast_to(pz, obj.shape)[:, None]
-    t_in, t_out = _slab(ox, ddx[:, None], occ.rects[:, 0], occ.rects[:, 2])
-    tz_in, tz_out = _slab(oz, ddz[:, None], occ.rects[:, 1], occ.rects[:, 3])
+    t_in, t_out = _slab(ox, ddx[:, None], rects[:, 0], rects[:, 2])
+    tz_in, tz_out = _slab(oz, ddz[:, None], rects[:, 1], rects[:, 3])
     t_in = np.maximum(np.maximum(t_in, tz_in), 0.0)
     t_out = np.minimum(np.minimum(t_out, tz_out), 1.0)
-    rise = (occ.top[obj] - EYE)[:, None]
+    rise = (scene.tops[obj] - EYE)[:, None]
     low = np.minimum(EYE + rise * t_in, EYE + rise * t_out)
-    own = (occ.index[None, :] == obj[:, None]) | (occ.index[None, :] == scene.support[obj][:, None])
-    hidden = (t_in < t_out) & (low < occ.height[None, :]) & ~own
+    own = (occ[None, :] == obj[:, None]) | (occ[None, :] == scene.support[obj][:, None])
+    hidden = (t_in < t_out) & (low < height[None, :]) & ~own
     return clear & ~hidden.any(axis=1)
 
 
@@ -228,20 +172,12 @@ def standing_points(scene: Scene) -> np.ndarray:
 
 @lru_cache(maxsize=256)
 def discoverable_ids(layout: Layout) -> tuple[str, ...]:
-    """``G_base``: ids visible under the *baseline* condition from some standing point.
-
-    Standing points are a 0.75 m grid of free points in every room plus the points 1 m
-    either side of each doorway; from each, the four cardinal headings together cover
-    every direction, so an object counts when one of its sample points lies within the
-    baseline visibility distance (a landmark: the drawn distance) in the line of sight
-    (walls and furniture, :func:`in_line_of_sight`). Sorted; cached per layout.
-    """
+    """``G_base``: ids visible under the *baseline* condition from some standing point
+    (:func:`standing_points`) under any heading, sorted; cached per layout."""
     scene = scene_of(layout)
     params = condition_params("baseline")
     vis, landmarks = params.visibility_distance, params.draw_distance
-    limit = np.where(occluders(scene).landmark, landmarks, vis)[:, None] + np.zeros(
-        scene.samples.shape[:2]
-    )
+    limit = np.where(scene.landmarks, landmarks, vis)[:, None] + np.zeros(scene.samples.shape[:2])
     stand = standing_points(scene)
     seen = np.zeros(len(layout.objects), dtype=bool)
     obj_all, j_all = np.indices(scene.samples.shape[:2]).reshape(2, -1)

@@ -8,8 +8,8 @@ from hypothesis import strategies as st
 
 from pytest_emrd.errors import ConfigError
 from pytest_emrd.trajectory import Pose
-from pytest_emrd.world._actions import Action
 from pytest_emrd.world._feedback import (
+    Action,
     ActionFailed,
     choose_target,
     execute,

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from pytest_emrd.world import Layout, WorldPose, condition_params
-from pytest_emrd.world._paint import SIZE, object_boxes
+from pytest_emrd.world._render import SIZE, object_boxes
 from pytest_emrd.world._scene import scene_of
 
 

@@ -6,8 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from pytest_emrd.world import condition_params
-from pytest_emrd.world._paint import first_row, fog_weight
-from pytest_emrd.world._render import shade_table
+from pytest_emrd.world._render import first_row, fog_weight, shade_table
 
 
 def test_fog_weight_and_first_row_worked_examples() -> None:

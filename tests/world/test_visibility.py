@@ -162,6 +162,6 @@ def test_sights_are_kept_per_scene_and_read_only(
     monkeypatch.setattr(_visibility, "SIGHT_MEMO", 3)
     for x in (1.0, 1.5, 2.0, 2.5):  # four new poses: the oldest kept ones are dropped
         sight(scene, WorldPose(x, 6.5, 180.0), BASELINE)
-    assert len(_visibility._SIGHTS[scene]) == 3
+    assert len(scene.sights) == 3
     assert sight(scene, pose, BASELINE) is not seen
     assert sight(scene, pose, BASELINE).listing(scene) == seen.listing(scene)

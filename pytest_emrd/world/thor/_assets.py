@@ -1,20 +1,12 @@
 """ProcTHOR assets for the EMRD office: which prefab stands in for which layout object.
 
-``assets.json`` (next to this module) holds every asset of the object types the office
-uses, with its bounding box, copied from allenai/procthor ``procthor/databases/
-asset-database.json`` at commit 53d5bd4c8c96a699e6a615dc390abb670cc9d353 (the file's
-last change: d4c4c6a9, 2022-07-25). THOR spawns a house object by its ``assetId`` and
-centres that asset's bounding box on the object's ``position`` (ai2thor
-``ProceduralTools.cs``, ``spawnHouseObject``: ``positionBoundingBoxCenter: true``); an id
-missing from the build's database is logged ("Asset not in Database") and skipped while
-``CreateHouse`` still succeeds. So an id this package emits must exist, and the object's
-size and height come from that asset, not from the EMRD catalogue.
-
-:func:`choose_asset` picks, per layout object, the asset of its type whose box is closest
-to the object's width, depth and height (oversize counts double: a bigger asset may cross
-a wall or a doorway's approach). The same layout always gets the same assets. Callers
-override the choice per type with ``asset_ids={"Desk": "Desk_204_1"}``; an id outside
-this table is refused at build time (:func:`asset_by_id`).
+``assets.json`` holds every asset of the office's object types with its bounding box,
+copied from allenai/procthor ``procthor/databases/asset-database.json`` at commit
+53d5bd4c8c96a699e6a615dc390abb670cc9d353. THOR skips an id missing from its database
+without failing ``CreateHouse``, so an id this package emits must exist, and the object's
+size comes from its asset. :func:`choose_asset` picks the asset of the object's type whose
+box is closest to the object's (oversize counts double: a bigger asset may cross a wall);
+``asset_ids={"Desk": "Desk_204_1"}`` overrides the choice per type (``docs/ai2thor.md``).
 """
 
 from __future__ import annotations
@@ -32,8 +24,7 @@ from pytest_emrd.rooms import CONFERENCE, ENTRANCE, KITCHEN, OFFICE
 SCHEMA: Final = "1.0.0"
 """ProcTHOR house schema version this package writes."""
 
-#: EMRD room -> the ProcTHOR ``roomType`` it is built as (THOR knows Kitchen, LivingRoom,
-#: Bedroom and Bathroom only; our own names are kept in the house metadata).
+#: EMRD room -> the ProcTHOR ``roomType`` it is built as (our names go in the metadata).
 THOR_ROOM_TYPES: Final[Mapping[str, str]] = {
     OFFICE: "LivingRoom",
     CONFERENCE: "LivingRoom",
@@ -41,8 +32,7 @@ THOR_ROOM_TYPES: Final[Mapping[str, str]] = {
     ENTRANCE: "LivingRoom",
 }
 
-#: EMRD ``objectType`` -> the asset-database type its assets come from, where they differ:
-#: the building exit is a wall hole filled with a doorway asset, like the inner doorways.
+#: EMRD ``objectType`` -> the asset-database type its assets come from, where they differ.
 ASSET_TYPES: Final[Mapping[str, str]] = {"Door": "Doorway"}
 
 DOOR_TYPES: Final[frozenset[str]] = frozenset({"Doorway", "Door"})
@@ -53,14 +43,9 @@ CEILING_MATERIAL: Final = "ps_mat"
 SKYBOX_ID: Final = "Sky1"
 """procthor ``skyboxes.json``: a ``Midday`` sky (the baseline's ambient light)."""
 DIM_SKYBOX_ID: Final = "Sky2Dusk"
-"""procthor ``skyboxes.json``: a ``BlueHour`` sky, the darkest procthor lights a house with
-(its ``Midnight`` skies are refused as "too dark to see all of the objects",
-``generation/skyboxes.py``). THOR takes the ambient light from the skybox
-(``RenderSettings.skybox`` then ``DynamicGI.UpdateEnvironment()`` in ``CreateHouse``), so
-``low_light`` dims the ambient and sky contribution by switching to it."""
-
+"""A ``BlueHour`` sky, the darkest procthor lights a house with: THOR takes the ambient
+light from the skybox, so ``low_light`` switches to it."""
 WALL_COLOR: Final[tuple[float, float, float]] = (0.93, 0.92, 0.89)
-"""Baseline wall albedo (warm white)."""
 
 
 @dataclass(frozen=True)
@@ -71,15 +56,14 @@ class Asset:
     object_type: str
     """Its type in the asset database (``Doorway`` for an EMRD ``Door``)."""
     width: float
-    """``boundingBox.x``: extent along the asset's own x axis."""
+    """``boundingBox.x``, then ``y`` and ``z``."""
     height: float
-    """``boundingBox.y``."""
     depth: float
-    """``boundingBox.z``."""
 
 
 @cache
-def _table() -> dict[str, Asset]:
+def assets() -> Mapping[str, Asset]:
+    """Every vendored asset, by id."""
     text = resources.files(__package__).joinpath("assets.json").read_text(encoding="utf-8")
     data = json.loads(text)["assets"]
     return {
@@ -89,17 +73,12 @@ def _table() -> dict[str, Asset]:
     }
 
 
-def assets() -> Mapping[str, Asset]:
-    """Every vendored asset, by id."""
-    return _table()
-
-
 @cache
 def candidates(object_type: str) -> tuple[Asset, ...]:
     """The vendored assets an EMRD object of ``object_type`` can be built from, by id."""
     wanted = ASSET_TYPES.get(object_type, object_type)
     found = tuple(
-        sorted((a for a in _table().values() if a.object_type == wanted), key=lambda a: a.asset_id)
+        sorted((a for a in assets().values() if a.object_type == wanted), key=lambda a: a.asset_id)
     )
     if not found:
         raise ConfigError(
@@ -137,10 +116,8 @@ def choose_asset(
     height: float,
     overrides: Mapping[str, str] | None = None,
 ) -> Asset:
-    """The asset for a layout object of this type and box (``overrides`` win per type).
-
-    Ties go to the smaller asset id, so the choice is stable.
-    """
+    """The asset for a layout object of this type and box (``overrides`` win per type);
+    ties go to the smaller asset id."""
     if overrides and object_type in overrides:
         return asset_by_id(overrides[object_type], object_type)
     return min(

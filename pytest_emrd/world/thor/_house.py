@@ -1,33 +1,39 @@
 """EMRD layout -> ProcTHOR house dict (schema 1.0.0). Pure and deterministic.
 
-The house is what ``Controller(scene=house)`` / ``CreateHouse`` accept: ``rooms`` with
-``floorPolygon`` and a THOR ``roomType``; ``walls`` (one per boundary piece and room, plus
-one-sided ``wall|exterior|...`` faces); ``doors`` cut as ``holePolygon`` into a wall both
-rooms own, the hole measured along ``wall0`` from its first point; ``objects`` with an
-``assetId`` chosen by footprint and placed at its bounding-box height inside its room
-(:mod:`._placement`); ``proceduralParameters`` with lights and skybox; ``metadata`` with the
-schema, the agent's start in ``agentPoses`` (the only pose ``CreateHouse`` applies: ai2thor
-``ProceduralTools.cs``, ``setAgentPose``; ``agent`` repeats it, procthor's own convention)
-on THOR's grid, and our own ``emrd`` block (room names, the THOR-id -> EMRD-id table).
+The house ``Controller(scene=house)`` accepts: ``rooms``; ``walls``, one per straight
+boundary piece per room (a room side is cut at every corner of another room lying on it, so
+each piece has one neighbour, a room or the outside) plus one-sided exterior faces;
+``doors`` cut as ``holePolygon`` into a wall both rooms own; ``objects``; lights and skybox;
+and ``metadata``: the agent's start in ``agentPoses`` (the only pose ``CreateHouse``
+applies; ``agent`` repeats it, procthor's convention) and our ``emrd`` block (room names,
+the THOR-id -> EMRD-id table). ``low_light`` scales the lights and dims the skybox;
+``texture`` gives walls and floors seeded colours.
 
-Conditions: ``low_light`` multiplies every light's intensity by the condition's light
-factor and swaps the skybox, THOR's source of ambient light, for a dim one; ``texture``
-gives walls and floors seeded random colours (the simulator adds ``RandomizeMaterials`` +
-``RandomizeColors`` at reset). The same ``(layout, condition,
-seed)`` always yields the same dict.
+THOR centres an asset's bounding box on the object's ``position``, so an object stands at
+``y = support top + asset height / 2``; :func:`place` shifts an object whose asset is larger
+than its footprint the least distance that keeps it inside its room (and what stands on it
+with it). The agent's start must be on THOR's absolute grid (``TeleportFull`` refuses other
+points): the grid point clear of every asset and wall nearest the builtin spawn
+(:func:`spawn_point`). See ``docs/ai2thor.md``.
 """
 
 from __future__ import annotations
 
+import itertools
+import math
 from collections.abc import Mapping
-from typing import Any
+from dataclasses import dataclass, field
+from typing import Any, Final
+
+import numpy as np
 
 from pytest_emrd.errors import ConfigError, check_choice
 from pytest_emrd.trajectory import CONDITIONS
 from pytest_emrd.world._catalog import DOOR_HEIGHT
 from pytest_emrd.world._catalog import WALL_HEIGHT as CEILING_HEIGHT
 from pytest_emrd.world._conditions import condition_params
-from pytest_emrd.world._model import Doorway, Layout, WorldObject, WorldPose
+from pytest_emrd.world._geometry import Rect, rect_at
+from pytest_emrd.world._model import Doorway, Layout, Room, WorldObject, WorldPose
 from pytest_emrd.world._rng import StableRng
 from pytest_emrd.world.thor._assets import (
     CEILING_MATERIAL,
@@ -38,11 +44,271 @@ from pytest_emrd.world.thor._assets import (
     SKYBOX_ID,
     THOR_ROOM_TYPES,
     WALL_COLOR,
+    Asset,
     asset_by_id,
     choose_asset,
 )
-from pytest_emrd.world.thor._placement import Placed, place, spawn_point
-from pytest_emrd.world.thor._walls import WallPiece, corners, wall_pieces
+
+EPS = 1e-6
+"""Tolerance in metres for "on the same line" and "same corner"."""
+
+
+@dataclass(frozen=True)
+class WallPiece:
+    """One straight wall piece of one room, in the room's winding order."""
+
+    room: int
+    """1-based index of the owning room (``room|<n>`` in the house)."""
+    x0: float
+    z0: float
+    x1: float
+    z1: float
+    neighbour: int | None
+    """Index of the room on the other side, or None for the outside."""
+
+    @property
+    def position_id(self) -> str:
+        """ProcTHOR's order-free wall key ``minx|minz|maxx|maxz`` (2 decimals)."""
+        return (
+            f"{min(self.x0, self.x1):.2f}|{min(self.z0, self.z1):.2f}|"
+            f"{max(self.x0, self.x1):.2f}|{max(self.z0, self.z1):.2f}"
+        )
+
+    @property
+    def wall_id(self) -> str:
+        return f"wall|{self.room}|{self.position_id}"
+
+    @property
+    def length(self) -> float:
+        return math.hypot(self.x1 - self.x0, self.z1 - self.z0)
+
+    @property
+    def axis(self) -> str:
+        """``"x"`` if the piece runs along x, ``"z"`` if along z."""
+        return "x" if abs(self.z1 - self.z0) < EPS else "z"
+
+    def offset_of(self, x: float, z: float) -> float | None:
+        """Distance along the piece from its start to ``(x, z)``, or None if off the piece."""
+        if self.axis == "x":
+            if abs(z - self.z0) > EPS:
+                return None
+            along = (x - self.x0) if self.x1 >= self.x0 else (self.x0 - x)
+        else:
+            if abs(x - self.x0) > EPS:
+                return None
+            along = (z - self.z0) if self.z1 >= self.z0 else (self.z0 - z)
+        return along if -EPS <= along <= self.length + EPS else None
+
+    def distance_to(self, x: float, z: float) -> float:
+        """Euclidean distance from ``(x, z)`` to the piece."""
+        dx, dz = self.x1 - self.x0, self.z1 - self.z0
+        t = ((x - self.x0) * dx + (z - self.z0) * dz) / (dx * dx + dz * dz)
+        t = min(1.0, max(0.0, t))
+        return math.hypot(x - (self.x0 + t * dx), z - (self.z0 + t * dz))
+
+
+def corners(room: Room) -> tuple[tuple[float, float], ...]:
+    """The floor polygon in ProcTHOR's winding: from the south-west corner, north first."""
+    return ((room.x0, room.z0), (room.x0, room.z1), (room.x1, room.z1), (room.x1, room.z0))
+
+
+def _covers(other: Room, x0: float, z0: float, x1: float, z1: float) -> bool:
+    """Whether ``other`` has a side containing the segment's midpoint on the same line."""
+    mx, mz = (x0 + x1) / 2, (z0 + z1) / 2
+    if abs(z1 - z0) < EPS:  # horizontal segment
+        on_line = abs(other.z0 - mz) < EPS or abs(other.z1 - mz) < EPS
+        return on_line and other.x0 + EPS < mx < other.x1 - EPS
+    on_line = abs(other.x0 - mx) < EPS or abs(other.x1 - mx) < EPS
+    return on_line and other.z0 + EPS < mz < other.z1 - EPS
+
+
+def _breaks(
+    rooms: tuple[Room, ...], a: tuple[float, float], b: tuple[float, float]
+) -> list[tuple[float, float]]:
+    """Points from ``a`` to ``b`` (ends included, in order) where other rooms' corners cut it."""
+    horizontal = abs(b[1] - a[1]) < EPS
+    axis = 0 if horizontal else 1
+    lo, hi = sorted((a[axis], b[axis]))
+    inner = {
+        c[axis]
+        for other in rooms
+        for c in corners(other)
+        if abs(c[1 - axis] - a[1 - axis]) < EPS and lo + EPS < c[axis] < hi - EPS
+    }
+    along = sorted(inner, reverse=b[axis] < a[axis])
+    cuts = [(v, a[1]) if horizontal else (a[0], v) for v in along]
+    return [a, *cuts, b]
+
+
+def wall_pieces(layout: Layout) -> tuple[WallPiece, ...]:
+    """Every wall piece of every room, rooms numbered from 1 in layout order."""
+    pieces: list[WallPiece] = []
+    for n, room in enumerate(layout.rooms, start=1):
+        others = tuple(r for r in layout.rooms if r is not room)
+        poly = corners(room)
+        for a, b in zip(poly, poly[1:] + poly[:1], strict=True):
+            for (px0, pz0), (px1, pz1) in itertools.pairwise(_breaks(others, a, b)):
+                neighbour = next(
+                    (
+                        i
+                        for i, other in enumerate(layout.rooms, start=1)
+                        if other is not room and _covers(other, px0, pz0, px1, pz1)
+                    ),
+                    None,
+                )
+                pieces.append(WallPiece(n, px0, pz0, px1, pz1, neighbour))
+    return tuple(pieces)
+
+
+GRID: Final = 0.25
+"""THOR's ``gridSize`` (the backend's default)."""
+CLEARANCE: Final = 0.3
+"""Metres a spawn point keeps from every asset footprint and wall: THOR's default agent
+capsule radius (0.2 m) plus slack for the capsule cast's skin."""
+SUPPORT_TOLERANCE: Final = 0.02
+"""How far (m) an item's elevation may differ from its support's EMRD height."""
+
+
+@dataclass(frozen=True)
+class Placed:
+    """One layout object as THOR builds it."""
+
+    asset: Asset
+    x: float
+    y: float
+    """Centre of the asset's bounding box: support top + asset height / 2."""
+    z: float
+    rotation: float
+    rect: Rect
+    """World-axis footprint of the asset at ``(x, z)``."""
+
+
+def _inside(rect: Rect, room: Room, margin: float) -> tuple[float, float]:
+    """The least ``(dx, dz)`` that moves ``rect`` into ``room`` shrunk by ``margin``."""
+    shifts = []
+    for lo, hi, room_lo, room_hi in (
+        (rect[0], rect[2], room.x0 + margin, room.x1 - margin),
+        (rect[1], rect[3], room.z0 + margin, room.z1 - margin),
+    ):
+        if hi - lo > room_hi - room_lo:
+            shifts.append((room_lo + room_hi) / 2 - (lo + hi) / 2)
+        elif lo < room_lo:
+            shifts.append(room_lo - lo)
+        elif hi > room_hi:
+            shifts.append(room_hi - hi)
+        else:
+            shifts.append(0.0)
+    return shifts[0], shifts[1]
+
+
+def _support(obj: WorldObject, floor: list[WorldObject]) -> WorldObject | None:
+    """The floor object ``obj`` stands on: same room, its footprint holds ``obj``'s centre
+    and its EMRD top is ``obj``'s elevation."""
+    for other in floor:
+        x0, z0, x1, z1 = rect_at(other.x, other.z, other.width, other.depth, other.rotation)
+        if (
+            other.room == obj.room
+            and abs(other.height - obj.elevation) <= SUPPORT_TOLERANCE
+            and x0 <= obj.x <= x1
+            and z0 <= obj.z <= z1
+        ):
+            return other
+    return None
+
+
+def place(layout: Layout, overrides: Mapping[str, str] | None = None) -> dict[str, Placed]:
+    """EMRD object id -> its THOR placement, for every object that is not a wall hole."""
+    margin = layout.wall_thickness / 2
+    rooms = {r.name: r for r in layout.rooms}
+    solid = [o for o in layout.objects if o.object_type not in DOOR_TYPES]
+    floor = [o for o in solid if o.elevation == 0]
+    placed: dict[str, Placed] = {}
+    shift: dict[str, tuple[float, float]] = {}
+    for obj in sorted(solid, key=lambda o: o.elevation > 0):
+        asset = choose_asset(obj.object_type, obj.width, obj.depth, obj.height, overrides)
+        base, dx, dz = obj.elevation, 0.0, 0.0
+        if obj.elevation > 0:
+            support = _support(obj, floor)
+            if support is not None:
+                base = placed[support.object_id].asset.height
+                dx, dz = shift[support.object_id]
+        x, z = obj.x + dx, obj.z + dz
+        rect = rect_at(x, z, asset.width, asset.depth, obj.rotation)
+        ex, ez = _inside(rect, rooms[obj.room], margin)
+        x, z = x + ex, z + ez
+        shift[obj.object_id] = (x - obj.x, z - obj.z)
+        rect = rect_at(x, z, asset.width, asset.depth, obj.rotation)
+        placed[obj.object_id] = Placed(
+            asset, x, base + asset.height / 2, z, obj.rotation % 360, rect
+        )
+    return placed
+
+
+def snap(value: float) -> float:
+    """``value`` on THOR's grid (nearest multiple of :data:`GRID`)."""
+    return round(round(value / GRID) * GRID, 4)
+
+
+def spawn_point(
+    room: Room, footprints: list[Rect], x: float, z: float
+) -> tuple[float, float] | None:
+    """The grid point in ``room`` nearest ``(x, z)`` at least :data:`CLEARANCE` from the
+    room's walls and every footprint (None if the room has none)."""
+    lo_x = math.ceil((room.x0 + CLEARANCE) / GRID) * GRID
+    lo_z = math.ceil((room.z0 + CLEARANCE) / GRID) * GRID
+    xs = np.arange(lo_x, room.x1 - CLEARANCE + 1e-9, GRID)
+    zs = np.arange(lo_z, room.z1 - CLEARANCE + 1e-9, GRID)
+    if xs.size == 0 or zs.size == 0:
+        return None
+    gx, gz = (a.ravel() for a in np.meshgrid(xs, zs))
+    free = np.ones(gx.shape, dtype=bool)
+    for x0, z0, x1, z1 in footprints:
+        dx = np.maximum(np.maximum(x0 - gx, gx - x1), 0.0)
+        dz = np.maximum(np.maximum(z0 - gz, gz - z1), 0.0)
+        free &= np.hypot(dx, dz) >= CLEARANCE
+    if not free.any():
+        return None
+    dist = np.round(np.hypot(gx - x, gz - z), 6)
+    idx = np.flatnonzero(free)
+    best = idx[np.lexsort((gz[idx], gx[idx], dist[idx]))[0]]
+    return snap(float(gx[best])), snap(float(gz[best]))
+
+
+@dataclass(frozen=True)
+class IdTable:
+    """Bidirectional map THOR objectId <-> EMRD object id, read from the table
+    :func:`build_house` writes to ``house["metadata"]["emrd"]["ids"]``. THOR objects the
+    layout never placed (walls, floors, children spawned by the build) have no EMRD id."""
+
+    to_emrd: Mapping[str, str]
+    to_thor: Mapping[str, str] = field(init=False, repr=False)
+
+    def __post_init__(self) -> None:
+        inverse = {ours: thor for thor, ours in self.to_emrd.items()}
+        if len(inverse) != len(self.to_emrd):
+            raise ConfigError("the THOR id table maps two THOR objects to one EMRD id.")
+        object.__setattr__(self, "to_thor", inverse)
+
+    @classmethod
+    def from_house(cls, house: Mapping[str, Any]) -> IdTable:
+        """The table of a house :func:`build_house` made (ConfigError for any other)."""
+        try:
+            table = house["metadata"]["emrd"]["ids"]
+        except (KeyError, TypeError):
+            raise ConfigError(
+                "house has no metadata.emrd.ids table; build it with "
+                "pytest_emrd.world.thor.build_house."
+            ) from None
+        return cls(dict(table))
+
+    def emrd(self, thor_id: str) -> str | None:
+        """The EMRD id of a THOR object, or None if the layout never placed it."""
+        return self.to_emrd.get(thor_id)
+
+    def thor(self, emrd_id: str) -> str:
+        """The THOR objectId of an EMRD object (KeyError if unknown)."""
+        return self.to_thor[emrd_id]
+
 
 AGENT_Y = 0.9009997
 """Agent body height THOR reports for the default agent (TeleportFull keeps it)."""
@@ -170,21 +436,18 @@ def _lights(layout: Layout, factor: float) -> list[dict[str, Any]]:
             "shadow": {**shadow, "resolution": "FromQualitySettings"},
         }
     ]
-    for n, room in enumerate(layout.rooms, start=1):
-        lights.append(
-            {
-                "id": f"light_{n}",
-                "type": "point",
-                "position": _xyz(
-                    (room.x0 + room.x1) / 2, CEILING_HEIGHT - 0.2, (room.z0 + room.z1) / 2
-                ),
-                "intensity": round(0.75 * factor, 4),
-                "range": 15,
-                "rgb": _rgb((1.0, 0.855, 0.722)),
-                "shadow": {**shadow, "resolution": "FromQualitySettings"},
-            }
-        )
-    return lights
+    return lights + [
+        {
+            "id": f"light_{n}",
+            "type": "point",
+            "position": _xyz((r.x0 + r.x1) / 2, CEILING_HEIGHT - 0.2, (r.z0 + r.z1) / 2),
+            "intensity": round(0.75 * factor, 4),
+            "range": 15,
+            "rgb": _rgb((1.0, 0.855, 0.722)),
+            "shadow": {**shadow, "resolution": "FromQualitySettings"},
+        }
+        for n, r in enumerate(layout.rooms, start=1)
+    ]
 
 
 def _object_dict(placed: Placed, thor_id: str) -> dict[str, Any]:
@@ -199,7 +462,7 @@ def _object_dict(placed: Placed, thor_id: str) -> dict[str, Any]:
 
 
 def _start(layout: Layout, placed: Mapping[str, Placed], agent: WorldPose | None) -> dict[str, Any]:
-    """The agent's start on THOR's grid, clear of every asset (see :mod:`._placement`)."""
+    """The agent's start on THOR's grid, clear of every asset (:func:`spawn_point`)."""
     first = layout.rooms[0]
     wanted = agent or WorldPose((first.x0 + first.x1) / 2, (first.z0 + first.z1) / 2, 0.0)
     name = layout.room_at(wanted.x, wanted.z)
@@ -228,14 +491,9 @@ def build_house(
     asset_ids: Mapping[str, str] | None = None,
     agent_mode: str = "default",
 ) -> dict[str, Any]:
-    """The ProcTHOR house (schema 1.0.0) for ``layout`` under ``condition``.
-
-    ``seed`` drives the ``texture`` colours; ``agent`` is where the agent should start
-    (default: centre of the first room, facing north), moved to the nearest free grid point
-    of its room and written to ``metadata.agentPoses[agent_mode]``; ``asset_ids`` picks the
-    asset per ``objectType`` (``{"Desk": "Desk_204_1"}``) instead of the footprint choice,
-    from the vendored asset table only (ConfigError otherwise).
-    """
+    """The ProcTHOR house for ``layout`` under ``condition``; ``seed`` drives the ``texture``
+    colours, ``agent`` is the start (default: centre of the first room, facing north) and
+    ``asset_ids`` picks vendored assets per ``objectType`` (``{"Desk": "Desk_204_1"}``)."""
     check_choice("condition", condition, CONDITIONS)
     assets = dict(asset_ids or {})
     for object_type, asset_id in assets.items():

@@ -1,32 +1,21 @@
-"""Starting AI2-THOR: the lazy import, cheap pre-flight checks, and a bounded start-up.
+"""Starting AI2-THOR: the lazy import, cheap pre-flight checks, and bounded calls.
 
-Everything here fails fast with a message that says what to install or set:
+Everything here fails fast with a message that says what to install or set (the extra,
+``local_executable_path``, ``libvulkan1``, a missing build). Two things ai2thor 5.0.0 does
+not do for us:
 
-* ``ai2thor`` not installed -> :func:`pytest_emrd.errors.missing_extra` (``thor`` extra);
-* ``local_executable_path`` missing or not executable;
-* ``platform=CloudRendering`` without a Vulkan loader -> install ``libvulkan1``;
-* no THOR build for this ai2thor commit under ``~/.ai2thor/releases`` (and downloads not
-  allowed) -> download once or pass ``local_executable_path``;
-* a Unity process that exits or never answers -> bounded by ``start_timeout``, after which
-  the Unity process and its process group are killed (:func:`kill_unity`).
+* ``local_executable_path`` on a headless machine: ai2thor runs it as a ``Linux64`` build
+  whose ``launch_env`` puts ``DISPLAY=None`` into the child's environment, which
+  ``subprocess.Popen`` rejects; a CloudRendering build never reads ``DISPLAY``, so
+  :func:`headless_options` passes ``x_display=":0"`` when no display is known.
+* Unity in its own process group: ``Controller.stop_unity`` kills only the one process it
+  started, and nothing when the constructor never returns. :func:`launcher` starts Unity
+  under ``setsid`` and remembers each controller as soon as it exists, so a timeout can
+  kill the whole group (:func:`kill_unity`).
 
-Two things ai2thor 5.0.0 does not do for us:
-
-* ``local_executable_path`` on a headless machine. ai2thor wraps a local executable as an
-  ``ExternalBuild`` whose platform is always ``Linux64`` (``ai2thor/build.py`` lines 73-77),
-  and ``Linux64.launch_env`` (``ai2thor/platform.py`` lines 78-83) puts ``DISPLAY=None``
-  into the child's environment when it finds no X display, which ``subprocess.Popen``
-  (``ai2thor/controller.py`` line 1132) rejects with a ``TypeError``. A CloudRendering build
-  renders through Vulkan and never reads ``DISPLAY``, so :func:`headless_options` passes
-  ``x_display=":0"`` when neither the caller nor the environment names a display.
-* Unity in its own process group. ``Controller.stop_unity`` kills the one process it
-  started (``controller.py`` lines 1452-1463), and nothing at all is killed when the
-  constructor never returns. :func:`launcher` starts Unity under ``setsid`` (a fresh
-  process group led by the Unity process itself) and remembers each controller as soon as
-  it exists, so a start-up or step timeout can kill the whole group.
-
-No pre-flight check touches the network; a build download happens only when the caller
-passes ``allow_download=True``, and then still under the start-up time limit.
+Every call into ``ai2thor`` runs in a daemon thread abandoned after its time limit
+(:func:`bounded`), so a Unity process that never answers costs the limit, never a hang.
+No pre-flight check touches the network.
 """
 
 from __future__ import annotations
@@ -35,12 +24,14 @@ import os
 import shutil
 import signal
 import subprocess
+import threading
 from collections.abc import Callable, Mapping
 from types import ModuleType
-from typing import Any, Final
+from typing import Any, Final, TypeVar
 
-from pytest_emrd.errors import ConfigError, missing_extra
-from pytest_emrd.world.thor._watchdog import bounded
+from pytest_emrd.errors import ConfigError, EmrdError, missing_extra
+
+T = TypeVar("T")
 
 VULKAN_HINT = (
     "CloudRendering renders headless through Vulkan and needs an NVIDIA GPU with its driver "
@@ -55,7 +46,29 @@ BUILD_HINT = (
 
 
 HEADLESS_DISPLAY: Final = ":0"
-"""The ``x_display`` a local build gets when there is no X display (see module docstring)."""
+"""The ``x_display`` a local build gets when there is no X display."""
+
+
+def bounded(fn: Callable[[], T], *, seconds: float, on_timeout: Callable[[], EmrdError]) -> T:
+    """``fn()``, or the error ``on_timeout()`` builds if it has not returned in ``seconds``;
+    exceptions raised by ``fn`` propagate unchanged."""
+    outcome: dict[str, Any] = {}
+
+    def target() -> None:
+        try:
+            outcome["value"] = fn()
+        except BaseException as exc:  # handed to the caller's thread below
+            outcome["error"] = exc
+
+    worker = threading.Thread(target=target, name="emrd-thor-call", daemon=True)
+    worker.start()
+    worker.join(seconds)
+    if worker.is_alive():
+        raise on_timeout()
+    if "error" in outcome:
+        raise outcome["error"]
+    value: T = outcome["value"]
+    return value
 
 
 def import_ai2thor() -> ModuleType:
@@ -75,12 +88,8 @@ def releases_dir() -> str:
     return os.path.join(os.path.expanduser("~"), ".ai2thor", "releases")
 
 
-def _platform_name(platform: Any) -> str:
-    return platform if isinstance(platform, str) else getattr(platform, "__name__", str(platform))
-
-
 def preflight(thor: ModuleType, options: Mapping[str, Any], *, allow_download: bool) -> None:
-    """Cheap local checks before any Unity process is launched (see module docstring)."""
+    """Cheap local checks before any Unity process is launched."""
     local = options.get("local_executable_path")
     if local:
         if not os.path.isfile(local) or not os.access(local, os.X_OK):
@@ -90,9 +99,18 @@ def preflight(thor: ModuleType, options: Mapping[str, Any], *, allow_download: b
             )
         return
     platform = options.get("platform")
-    if platform is None or _platform_name(platform) != "CloudRendering":
+    name = platform if isinstance(platform, str) else getattr(platform, "__name__", str(platform))
+    if platform is None or name != "CloudRendering":
         return
-    _check_vulkan(thor, options)
+    width, height = options.get("width", 300), options.get("height", 300)
+    problems = thor.platform.CloudRendering.validate(
+        thor.platform.Request("Linux", width, height, None, False)
+    )
+    if problems:
+        raise ConfigError(
+            f"AI2-THOR platform=CloudRendering cannot run here ({' '.join(problems)}). "
+            + VULKAN_HINT
+        )
     if allow_download:
         return
     commit = options.get("commit_id") or thor.build.COMMIT_ID
@@ -101,18 +119,6 @@ def preflight(thor: ModuleType, options: Mapping[str, Any], *, allow_download: b
         raise ConfigError(
             f"no AI2-THOR build {build.name} in {releases_dir()} (ai2thor "
             f"{thor.__version__} wants commit_id={commit}). {BUILD_HINT}"
-        )
-
-
-def _check_vulkan(thor: ModuleType, options: Mapping[str, Any]) -> None:
-    request = thor.platform.Request(
-        "Linux", options.get("width", 300), options.get("height", 300), None, False
-    )
-    problems = thor.platform.CloudRendering.validate(request)
-    if problems:
-        raise ConfigError(
-            f"AI2-THOR platform=CloudRendering cannot run here ({' '.join(problems)}). "
-            + VULKAN_HINT
         )
 
 
@@ -172,11 +178,7 @@ def _translate(exc: BaseException) -> ConfigError:
 
 
 def start(
-    factory: Callable[..., Any],
-    options: Mapping[str, Any],
-    *,
-    seconds: float,
-    started: list[Any] | None = None,
+    factory: Callable[..., Any], options: Mapping[str, Any], *, seconds: float, started: list[Any]
 ) -> Any:
     """``factory(**options)`` within ``seconds``, start-up failures turned into ConfigError.
 
@@ -185,7 +187,7 @@ def start(
     """
 
     def on_timeout() -> ConfigError:
-        for controller in started or ():
+        for controller in started:
             kill_unity(controller)
         return ConfigError(
             f"AI2-THOR did not start within start_timeout={seconds:g} s (no answer from the "

@@ -1,56 +1,37 @@
 """``ThorSimulator``: the :class:`~pytest_emrd.world._model.Simulator` protocol on AI2-THOR.
 
-One ``ai2thor.controller.Controller`` per simulator, started on the first ``reset`` with
-``scene=<house>`` (agentMode default, CloudRendering, 512x512, fieldOfView 90,
-snapToGrid, rotateStepDegrees 90, the condition's visibilityDistance) and re-used with
-``controller.reset(scene=<house>)`` afterwards. Action texts are read with the world's
-grammar and answered with the world's feedback wording (:mod:`pytest_emrd.world._feedback`),
-so an agent cannot tell the backends apart by their text. Semantic actions map to THOR:
-
-* ``Goto(object)``  -> ``TeleportFull`` to :func:`~._navigation.viewpoint`;
-* ``Goto(Doorway)`` -> ``TeleportFull`` to :func:`~._navigation.entry` in the other room,
-  or, for a doorway seen from a third room, up to it on the near side (no room skipped);
-* ``Turn(Left|Right|Around)`` -> ``RotateLeft`` / ``RotateRight`` / ``RotateRight`` twice;
-* ``Term(room)`` -> no THOR call; ends the episode.
-
-The spawn pose is the builtin world's (:func:`pytest_emrd.world._motion.spawn_pose`: the
-seeded free point and heading), moved to the nearest free point of THOR's grid and written
-to the house's ``metadata.agentPoses`` (:func:`~._house.build_house`), so a spec starts at
-the same place in both backends, up to at most one grid step. Reset then checks each THOR
-answer it depends on: ``CreateHouse`` (run by ``Controller(scene=...)`` / ``reset``),
-``GetReachablePositions`` (the lattice THOR walks from that start), the condition's
-``RandomizeMaterials``/``RandomizeColors``, and the first ``TeleportFull`` (to the lattice
-point, at the height THOR returned for it). A refusal is one :class:`ConfigError` line
-carrying THOR's own ``errorMessage``.
-
-Every THOR call is bounded by the watchdog (``start_timeout``, ``step_timeout``); on a
-timeout the Unity process group is killed (:func:`._launch.kill_unity`) and the next reset
-starts a new controller.
+One ``Controller`` per simulator, started on the first ``reset`` with ``scene=<house>`` and
+:data:`DEFAULTS`, then re-used with ``controller.reset(scene=<house>)``. Actions are read
+and answered with the builtin world's grammar and wording (:mod:`pytest_emrd.world._feedback`).
+``Goto`` teleports (``TeleportFull``) on THOR's grid of reachable positions to a spot in
+the target's room from which a grid heading faces it (:func:`viewpoint`), through a doorway
+to the spot in the next room nearest the gap, facing into it (:func:`entry`); ``Turn``
+rotates by 90 degree steps; ``Term`` makes no THOR call. THOR's yaw is the world heading.
+The spawn is the builtin world's, moved to the nearest free point of THOR's grid.
+Reset checks each THOR answer it depends on; a refusal is one :class:`ConfigError` line
+carrying THOR's ``errorMessage`` (``docs/ai2thor.md``). Every THOR call is bounded
+(``start_timeout``, ``step_timeout``); on a timeout the Unity process group is killed and
+the next reset starts a new controller.
 """
 
 from __future__ import annotations
 
 import hashlib
-from collections.abc import Callable, Mapping
+import math
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from typing import Any
 
 import numpy as np
 
 from pytest_emrd.errors import ConfigError, TransportError, check_choice
 from pytest_emrd.rooms import ROOM_NAMES, SLUG_ROOMS
-from pytest_emrd.world._actions import Action
 from pytest_emrd.world._conditions import condition_params
 from pytest_emrd.world._feedback import (
+    Action,
     ActionFailed,
     SemanticStep,
-    choose_target,
-    goto_key,
-    goto_note,
-    no_spot,
-    not_visible,
     observed_pose,
     room_table,
-    term,
     turn_degrees,
     with_pose,
 )
@@ -58,6 +39,7 @@ from pytest_emrd.world._model import (
     Doorway,
     Layout,
     Observation,
+    Room,
     View,
     VisibleObject,
     WorldPose,
@@ -65,17 +47,161 @@ from pytest_emrd.world._model import (
 from pytest_emrd.world._motion import spawn_pose
 from pytest_emrd.world._scene import scene_of
 from pytest_emrd.world.thor import _launch
-from pytest_emrd.world.thor._house import build_house
-from pytest_emrd.world.thor._ids import IdTable
-from pytest_emrd.world.thor._navigation import (
-    agent_pose,
-    entry,
-    grid,
-    nearest_in_room,
-    viewpoint,
-    visible_objects,
-)
-from pytest_emrd.world.thor._watchdog import bounded
+from pytest_emrd.world.thor._house import IdTable, build_house
+
+HALF_FOV = 45.0
+"""Half of THOR's ``fieldOfView=90``, degrees."""
+CLEARANCE = 0.5
+"""Minimum distance (m) from a target's centre, or from a doorway's wall, to stand at."""
+MAX_OFF_AXIS = 30.0
+"""How far (deg) off the view axis a Goto target may end up; beyond, a farther spot wins."""
+OFF_AXIS_COST = 0.02
+"""Metres of extra distance one degree off the view axis is worth when ranking spots."""
+ROOM_MARGIN = 0.05
+"""Reachable positions closer than this (m) to a room's edge count as in no room."""
+
+
+def wrap180(angle: float | np.ndarray) -> Any:
+    """Angle(s) wrapped to ``[-180, 180)``."""
+    return (np.asarray(angle) + 180.0) % 360.0 - 180.0
+
+
+def heading_to(x0: float, z0: float, x1: float, z1: float) -> float:
+    """Heading (deg clockwise from +z, in [0, 360)) from ``(x0, z0)`` towards ``(x1, z1)``."""
+    return math.degrees(math.atan2(x1 - x0, z1 - z0)) % 360.0
+
+
+def bearing(agent: WorldPose, x: float, z: float) -> float:
+    """Bearing of ``(x, z)`` relative to the agent's view axis, negative to the left."""
+    return float(wrap180(heading_to(agent.x, agent.z, x, z) - agent.heading))
+
+
+def grid(positions: Iterable[Mapping[str, float]]) -> np.ndarray:
+    """``(N, 2)`` array of ``(x, z)`` from THOR's reachable-position dicts."""
+    return np.array([(p["x"], p["z"]) for p in positions], dtype=float).reshape(-1, 2)
+
+
+def _in_room(points: np.ndarray, room: Room) -> np.ndarray:
+    x, z = points[:, 0], points[:, 1]
+    m = ROOM_MARGIN
+    return (x > room.x0 + m) & (x < room.x1 - m) & (z > room.z0 + m) & (z < room.z1 - m)
+
+
+def _pick(points: np.ndarray, score: np.ndarray, mask: np.ndarray) -> int | None:
+    """Index of the lowest score under ``mask``; ties broken by (x, z) so it is stable."""
+    idx = np.flatnonzero(mask)
+    if idx.size == 0:
+        return None
+    order = np.lexsort((points[idx, 1], points[idx, 0], np.round(score[idx], 6)))
+    return int(idx[order[0]])
+
+
+def nearest_in_room(
+    points: np.ndarray, x: float, z: float, room: Room
+) -> tuple[float, float] | None:
+    """The reachable position in ``room`` nearest ``(x, z)`` (None if the room has none)."""
+    best = _pick(points, np.hypot(points[:, 0] - x, points[:, 1] - z), _in_room(points, room))
+    return None if best is None else (float(points[best, 0]), float(points[best, 1]))
+
+
+def viewpoint(points: np.ndarray, x: float, z: float, room: Room) -> WorldPose | None:
+    """Reachable spot in ``room`` nearest ``(x, z)`` with a grid heading that faces it.
+
+    Among spots at least :data:`CLEARANCE` away that leave the target within
+    :data:`MAX_OFF_AXIS` of the view axis, ranks by distance plus :data:`OFF_AXIS_COST` per
+    degree off axis; else the nearest spot in the room; None if the room has none.
+    """
+    dx, dz = x - points[:, 0], z - points[:, 1]
+    dist = np.hypot(dx, dz)
+    heading = np.degrees(np.arctan2(dx, dz)) % 360.0
+    snapped = (np.round(heading / 90.0) * 90.0) % 360.0
+    off_axis = np.abs(wrap180(heading - snapped))
+    inside = _in_room(points, room)
+    score = dist + OFF_AXIS_COST * off_axis
+    best = _pick(points, score, inside & (dist >= CLEARANCE) & (off_axis <= MAX_OFF_AXIS))
+    if best is None:
+        best = _pick(points, dist, inside)
+    if best is None:
+        return None
+    px, pz = points[best]
+    return WorldPose(float(px), float(pz), float(snapped[best]))
+
+
+def entry(points: np.ndarray, doorway: Doorway, into: Room) -> WorldPose | None:
+    """Reachable spot in ``into`` nearest the doorway, facing into the room, away from the gap."""
+    if doorway.axis == "x":  # wall runs along x at z = doorway.z
+        north = abs(into.z0 - doorway.z) < abs(into.z1 - doorway.z)
+        heading, depth = (
+            (0.0, points[:, 1] - doorway.z) if north else (180.0, doorway.z - points[:, 1])
+        )
+    else:  # wall runs along z at x = doorway.x
+        east = abs(into.x0 - doorway.x) < abs(into.x1 - doorway.x)
+        heading, depth = (
+            (90.0, points[:, 0] - doorway.x) if east else (270.0, doorway.x - points[:, 0])
+        )
+    dist = np.hypot(points[:, 0] - doorway.x, points[:, 1] - doorway.z)
+    inside = _in_room(points, into)
+    best = _pick(points, dist, inside & (depth >= CLEARANCE))
+    if best is None:
+        best = _pick(points, dist, inside)
+    if best is None:
+        return None
+    px, pz = points[best]
+    return WorldPose(float(px), float(pz), heading)
+
+
+def agent_pose(metadata: Mapping[str, Any]) -> WorldPose:
+    """The agent's pose from an event's metadata."""
+    agent = metadata["agent"]
+    return WorldPose(
+        float(agent["position"]["x"]),
+        float(agent["position"]["z"]),
+        float(agent["rotation"]["y"]) % 360.0,
+    )
+
+
+def visible_objects(
+    objects: Sequence[Mapping[str, Any]],
+    agent: WorldPose,
+    *,
+    ids: IdTable,
+    types: Mapping[str, str],
+    landmarks: frozenset[str],
+    visibility_distance: float,
+) -> tuple[VisibleObject, ...]:
+    """EMRD objects THOR reports ``visible``, sorted by id.
+
+    THOR runs with the condition's draw distance, as far as ``landmarks`` (EMRD ids of
+    doorways and the exit) count visible; every other object must also lie within
+    ``visibility_distance``, measured horizontally to the nearest point of its bounding box.
+    ``distance`` is horizontal, to the object's position; ``types`` maps EMRD id -> EMRD
+    type; bearings are clipped to the field of view.
+    """
+    seen: dict[str, VisibleObject] = {}
+    for obj in objects:
+        if not obj.get("visible"):
+            continue
+        ours = ids.emrd(str(obj["objectId"]))
+        if ours is None:
+            continue
+        x, z = float(obj["position"]["x"]), float(obj["position"]["z"])
+        if ours not in landmarks and _box_distance(obj, agent) > visibility_distance:
+            continue
+        b = min(HALF_FOV, max(-HALF_FOV, bearing(agent, x, z)))
+        distance = round(math.hypot(x - agent.x, z - agent.z), 2)
+        seen[ours] = VisibleObject(ours, types[ours], round(b, 1), distance)
+    return tuple(seen[k] for k in sorted(seen))
+
+
+def _box_distance(obj: Mapping[str, Any], agent: WorldPose) -> float:
+    """Horizontal distance from the agent to the nearest point of ``obj``'s bounding box."""
+    box = obj["axisAlignedBoundingBox"]
+    cx, cz = float(box["center"]["x"]), float(box["center"]["z"])
+    hx, hz = float(box["size"]["x"]) / 2, float(box["size"]["z"]) / 2
+    dx = max(abs(agent.x - cx) - hx, 0.0)
+    dz = max(abs(agent.z - cz) - hz, 0.0)
+    return math.hypot(dx, dz)
+
 
 JPEG_QUALITY = 90
 DEFAULTS: Mapping[str, Any] = {
@@ -92,7 +218,7 @@ ROTATIONS: Mapping[float, tuple[str, ...]] = {
     90.0: ("RotateRight",),
     180.0: ("RotateRight", "RotateRight"),
 }
-"""Clockwise degrees of a ``Turn`` -> the THOR rotations (90 degrees each) that make it."""
+"""Clockwise degrees of a ``Turn`` -> the THOR rotations (90 degrees each)."""
 
 
 def _positive(name: str, value: float) -> float:
@@ -112,31 +238,22 @@ def _check(event: Any, what: str) -> Any:
     )
 
 
-def _refused(event: Any) -> ActionFailed | None:
-    """The failure to report when THOR refused an action, else None."""
-    if event.metadata["lastActionSuccess"]:
-        return None
-    return ActionFailed(
-        f"AI2-THOR refused it ({event.metadata.get('errorMessage') or 'no reason'})"
-    )
+def _accepted(event: Any) -> None:
+    """Raise the failure to report when THOR refused an action."""
+    if not event.metadata["lastActionSuccess"]:
+        reason = event.metadata.get("errorMessage") or "no reason"
+        raise ActionFailed(f"AI2-THOR refused it ({reason})")
 
 
 class ThorSimulator(SemanticStep):
     """The ai2thor backend. Construction is cheap; THOR starts on the first ``reset``.
 
     ``controller_options`` go to ``Controller(...)`` over :data:`DEFAULTS` (for example
-    ``local_executable_path``, ``gpu_device``, ``platform``); ``scene`` and
-    ``visibilityDistance`` come from the layout and condition. ``controller_factory``
+    ``local_executable_path``, ``gpu_device``, ``platform``). ``controller_factory``
     replaces ``ai2thor.controller.Controller`` (tests pass a fake). ``allow_download``
-    lets ai2thor fetch a missing build (under ``start_timeout``); by default a missing
-    build fails at once. ``room_aliases`` are extra names ``Term`` accepts, as for the
-    builtin simulator (``{"Room A": "Office"}``).
-
-    Frames are not bit-stable: THOR renders on the GPU, and the same pose gives different
-    pixels on another GPU, driver or build. ``frame_digest`` is the SHA-256 of the pixels
-    THOR returned on this machine, good for nothing more than reporting; recordings made
-    on THOR must be replayed with lenient matching (``--emrd-matching lenient``), which
-    reports frames that differ instead of matching on them.
+    lets ai2thor fetch a missing build (under ``start_timeout``). ``room_aliases`` are extra
+    names ``Term`` accepts. ``frame_digest`` is the SHA-256 of the pixels THOR returned on
+    this machine (not bit-stable across GPUs, drivers and builds).
     """
 
     def __init__(
@@ -169,12 +286,8 @@ class ThorSimulator(SemanticStep):
         self._heights: dict[tuple[float, float], float] = {}
         self._spawn = WorldPose(0.0, 0.0, 0.0)
         self._visible: tuple[VisibleObject, ...] = ()
-        self._steps = 0
-        self._ended = False
-        self._terminal: str | None = None
-        self._symbolic = True
+        self._steps, self._ended, self._terminal, self._symbolic = 0, False, None, True
 
-    # -- THOR calls --------------------------------------------------------------------
     def _start(self, house: dict[str, Any]) -> None:
         options = {**DEFAULTS, **self._user_options}
         options.update(
@@ -209,7 +322,7 @@ class ThorSimulator(SemanticStep):
             )
 
         try:
-            return bounded(fn, seconds=self._step_timeout, on_timeout=on_timeout)
+            return _launch.bounded(fn, seconds=self._step_timeout, on_timeout=on_timeout)
         except TransportError:
             raise
         except Exception as exc:
@@ -236,12 +349,10 @@ class ThorSimulator(SemanticStep):
         self._points = grid(returned)
         self._heights = {(round(p["x"], 2), round(p["z"], 2)): float(p["y"]) for p in returned}
 
-    # -- Simulator protocol ------------------------------------------------------------
     def reset(
         self, layout: Layout, condition: str, spawn_room: str, seed: int, *, symbolic: bool = True
     ) -> Observation:
-        """Start an episode in ``spawn_room`` (canonical name or slug) under ``condition``;
-        ``symbolic=False`` (``vision``): no feedback names an object id."""
+        """Start an episode in ``spawn_room`` (canonical name or slug) under ``condition``."""
         name = SLUG_ROOMS.get(spawn_room, spawn_room)
         check_choice("spawn_room", name, [*ROOM_NAMES, *SLUG_ROOMS])
         self._condition = condition_params(condition)
@@ -262,14 +373,9 @@ class ThorSimulator(SemanticStep):
         _check(self._controller.last_event, f"CreateHouse of house {house['id']!r}")
         self._lattice()
         if self._condition.randomize_palette:
-            for action, args in (
-                (
-                    "RandomizeMaterials",
-                    {"useTrainMaterials": True, "useValMaterials": True, "useTestMaterials": True},
-                ),
-                ("RandomizeColors", {}),
-            ):
-                _check(self._act(action, **args), action)
+            every = {"useTrainMaterials": True, "useValMaterials": True, "useTestMaterials": True}
+            _check(self._act("RandomizeMaterials", **every), "RandomizeMaterials")
+            _check(self._act("RandomizeColors"), "RandomizeColors")
         start = house["metadata"]["agentPoses"][mode]["position"]
         spot = nearest_in_room(self._points, start["x"], start["z"], room)
         if spot is None:
@@ -321,42 +427,30 @@ class ThorSimulator(SemanticStep):
             finally:
                 _launch.kill_unity(controller)
 
-    # -- actions -----------------------------------------------------------------------
-    def _goto(self, action: Action) -> str:
-        layout = self._require()
-        symbolic = self._symbolic
-        key = goto_key(action, symbolic=symbolic)
+    def _in_view(self) -> tuple[list[str], list[str], list[float]]:
         seen = self._visible
-        chosen = choose_target(
-            key,
+        return (
             [v.object_id for v in seen],
             [v.object_type for v in seen],
             [v.distance for v in seen],
-            symbolic=symbolic,
         )
-        if chosen is None:
-            raise not_visible(action, [v.object_id for v in seen], symbolic=symbolic)
-        target = seen[chosen].object_id
-        doorway = next((d for d in layout.doorways if d.object_id == target), None)
-        pose = self._door_pose(layout, doorway) if doorway else self._object_pose(layout, target)
-        if pose is None:
-            raise no_spot(target, seen[chosen].object_type, symbolic=symbolic)
-        failure = _refused(self._teleport(pose))
-        if failure is not None:
-            raise failure
-        return goto_note(key, target, symbolic=symbolic)
+
+    def _reach(self, object_id: str) -> bool:
+        layout = self._require()
+        doorway = next((d for d in layout.doorways if d.object_id == object_id), None)
+        if doorway is None:
+            obj = next(o for o in layout.objects if o.object_id == object_id)
+            pose = viewpoint(self._points, obj.x, obj.z, layout.room(obj.room))
+        else:
+            pose = self._door_pose(layout, doorway)
+        if pose is not None:
+            _accepted(self._teleport(pose))
+        return pose is not None
 
     def _turn(self, action: Action) -> str:
         for rotate in ROTATIONS[turn_degrees(action)]:
-            failure = _refused(self._act(rotate, degrees=90))
-            if failure is not None:
-                raise failure
+            _accepted(self._act(rotate, degrees=90))
         return ""
-
-    def _term(self, action: Action) -> str:
-        self._ended = True
-        self._terminal, note = term(self._rooms, action)
-        return note
 
     def _door_pose(self, layout: Layout, doorway: Doorway) -> WorldPose | None:
         """Through the doorway from one of its rooms; up to it from a third room."""
@@ -371,11 +465,6 @@ class ThorSimulator(SemanticStep):
             near_a = (pose.x >= doorway.x) == ((a.x0 + a.x1) / 2 >= doorway.x)
         return viewpoint(self._points, doorway.x, doorway.z, a if near_a else b)
 
-    def _object_pose(self, layout: Layout, object_id: str) -> WorldPose | None:
-        obj = next(o for o in layout.objects if o.object_id == object_id)
-        return viewpoint(self._points, obj.x, obj.z, layout.room(obj.room))
-
-    # -- observation -------------------------------------------------------------------
     def _require(self) -> Layout:
         if self._layout is None:
             raise ConfigError("ThorSimulator used before reset(); call reset(layout, ...) first.")

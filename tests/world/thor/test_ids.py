@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 
 from pytest_emrd.errors import ConfigError
-from pytest_emrd.world.thor._ids import IdTable
+from pytest_emrd.world.thor import IdTable
 
 
 def test_table_maps_both_ways() -> None:

@@ -8,8 +8,8 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from pytest_emrd.world._model import Doorway, Room, WorldPose
-from pytest_emrd.world.thor._ids import IdTable
-from pytest_emrd.world.thor._navigation import (
+from pytest_emrd.world.thor import IdTable
+from pytest_emrd.world.thor._simulator import (
     CLEARANCE,
     MAX_OFF_AXIS,
     bearing,

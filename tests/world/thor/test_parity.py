@@ -11,7 +11,7 @@ import pytest
 from pytest_emrd.rooms import ROOM_NAMES
 from pytest_emrd.world import BuiltinSimulator, generate_layout
 from pytest_emrd.world.thor import ThorSimulator
-from pytest_emrd.world.thor._navigation import grid, nearest_in_room
+from pytest_emrd.world.thor._simulator import grid, nearest_in_room
 
 SCRIPT = [
     "Turn(Right)",

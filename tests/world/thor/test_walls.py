@@ -9,7 +9,7 @@ from hypothesis import strategies as st
 
 from pytest_emrd.rooms import CONFERENCE, ENTRANCE, KITCHEN, OFFICE
 from pytest_emrd.world._model import Layout, Room
-from pytest_emrd.world.thor._walls import WallPiece, wall_pieces
+from pytest_emrd.world.thor._house import WallPiece, wall_pieces
 
 
 def _by_room(pieces: tuple[WallPiece, ...], n: int) -> list[WallPiece]:

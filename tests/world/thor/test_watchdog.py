@@ -8,7 +8,7 @@ import time
 import pytest
 
 from pytest_emrd.errors import ConfigError
-from pytest_emrd.world.thor._watchdog import bounded
+from pytest_emrd.world.thor._launch import bounded
 
 
 def _late() -> ConfigError:
