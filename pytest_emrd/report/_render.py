@@ -11,10 +11,8 @@ from pytest_emrd.errors import check_choice
 from pytest_emrd.gate import Verdict
 from pytest_emrd.metrics import EpisodeMetrics
 from pytest_emrd.report._build import build_report
-from pytest_emrd.report._compare import Comparison
-from pytest_emrd.report._compare_doc import compare_document
-from pytest_emrd.report._html import render_html
-from pytest_emrd.report._markdown import render_markdown
+from pytest_emrd.report._compare import Comparison, compare_document
+from pytest_emrd.report._document import render_html, render_markdown
 from pytest_emrd.report._model import Report
 from pytest_emrd.report._sections import report_document, summary_document
 from pytest_emrd.run import StoredEpisode
@@ -32,8 +30,9 @@ def check_formats(formats: Iterable[str]) -> list[str]:
     return wanted
 
 
-def report_json(report: Report) -> str:
-    """Every aggregate of the report as strict JSON (non-finite floats as strings)."""
+def report_json(report: Report | Comparison) -> str:
+    """Every aggregate of a report (or comparison) as strict JSON (non-finite floats as
+    strings)."""
     return json.dumps(json_safe(report.to_dict()), indent=1, allow_nan=False) + "\n"
 
 
@@ -94,6 +93,5 @@ def render_comparison(comparison: Comparison, formats: Iterable[str] = FORMATS) 
     if "html" in wanted:
         files["compare.html"] = render_html(doc, {}).encode()
     if "json" in wanted:
-        data = json_safe(comparison.to_dict())
-        files["compare.json"] = (json.dumps(data, indent=1, allow_nan=False) + "\n").encode()
+        files["compare.json"] = report_json(comparison).encode()
     return files

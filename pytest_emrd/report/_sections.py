@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from typing import Final, TypeVar
+from typing import Any, Final
 
 import numpy as np
 
@@ -22,11 +22,16 @@ from pytest_emrd.report._document import (
     pct,
     pval,
 )
-from pytest_emrd.report._model import InterventionTable, Report, row_label
-from pytest_emrd.report._style import CONDITION_NAMES, FIGURES, FigureSpec
+from pytest_emrd.report._model import (
+    CONDITION_NAMES,
+    FIGURES,
+    CellRow,
+    InterventionTable,
+    Report,
+    row_label,
+)
 from pytest_emrd.rooms import FOCAL_COLUMNS, ROOM_LETTERS, SLUG_ROOMS
 
-R = TypeVar("R")
 _LETTER_ROOMS = {letter: room for room, letter in ROOM_LETTERS.items()} | {"X": "Other"}
 
 
@@ -42,13 +47,12 @@ R2_MEANINGLESS: Final = 0.0
 
 
 def _pivot(
-    report: Report, rows: Sequence[R], fmt: Callable[[R], Sequence[str]], width: int
+    report: Report, rows: Sequence[CellRow], fmt: Callable[[Any], Sequence[str]], width: int
 ) -> list[tuple[Cell, ...]]:
     """One line per model row, ``width`` cells per condition of the run (blank when absent)."""
     table: dict[str, dict[str, Sequence[str]]] = {}
     for r in rows:
-        key = row_label(r.model, r.variant)  # type: ignore[attr-defined]
-        table.setdefault(key, {})[r.condition] = fmt(r)  # type: ignore[attr-defined]
+        table.setdefault(row_label(r.model, r.variant), {})[r.condition] = fmt(r)
     out = []
     for label, by_condition in table.items():
         cells = [Cell(label)]
@@ -210,18 +214,9 @@ def fpsg(report: Report) -> Section:
 
 def ebbinghaus(report: Report) -> Section:
     conditions = report.overview.conditions
-    table: dict[str, dict[str, tuple[str, str]]] = {}
-    for r in report.ebbinghaus:
-        p = r.fit.pooled
-        table.setdefault(row_label(r.model, r.variant), {})[r.condition] = (
-            num(p.efc, 1),
-            num(p.r2, 2),
-        )
-    rows = tuple(
-        (Cell(label), *(Cell(by.get(c, ("—", "—"))[0]) for c in conditions),
-         *(Cell(by.get(c, ("—", "—"))[1]) for c in conditions))
-        for label, by in table.items()
-    )  # fmt: skip
+    efc = _pivot(report, report.ebbinghaus, lambda r: (num(r.fit.pooled.efc, 1),), 1)
+    r2 = _pivot(report, report.ebbinghaus, lambda r: (num(r.fit.pooled.r2, 2),), 1)
+    rows = tuple((*a, *b[1:]) for a, b in zip(efc, r2, strict=True))
     header = ("Model", *(f"EFC {_cond(c)}" for c in conditions),
               *(f"R² {_cond(c)}" for c in conditions))  # fmt: skip
     caption = ("Ebbinghaus memory strength EFC (steps; inf: nothing forgotten) and R² of "
@@ -253,18 +248,12 @@ def ebbinghaus(report: Report) -> Section:
 
 def serial_position(report: Report) -> Section:
     """Both estimators: the paper's Eq. SPE and the censoring-aware MLE per third."""
-    paper = _pivot(
-        report,
-        report.serial_position,
-        lambda r: (num(r.spe.early, 1), num(r.spe.middle, 1), num(r.spe.late, 1)),
-        3,
-    )
-    mle = _pivot(
-        report,
-        report.serial_position,
-        lambda r: (num(r.spe.mle_early, 1), num(r.spe.mle_middle, 1), num(r.spe.mle_late, 1)),
-        3,
-    )
+
+    def thirds(*fields: str) -> list[tuple[Cell, ...]]:
+        return _pivot(report, report.serial_position,
+                      lambda r: [num(getattr(r.spe, f), 1) for f in fields], 3)  # fmt: skip
+
+    paper, mle = thirds("early", "middle", "late"), thirds("mle_early", "mle_middle", "mle_late")
     header = ("Model", *_per_condition(report, "E", "M", "L"))
     caption = ("Serial Position Effect (paper's Eq. SPE): mean observed TTF (steps) of Early / "
                "Middle / Late discoveries, episode-end censoring ignored")  # fmt: skip
@@ -343,14 +332,13 @@ def reasoning(report: Report) -> Section:
 
 def figures(report: Report, skipped: dict[str, str]) -> Section:
     """Every figure; the episode map's caption names its episode (``emrd report --episode``)."""
-    shown = report.episode_map.case_id if report.episode_map is not None else None
-
-    def caption(f: FigureSpec) -> str:
-        if f.name != "episode_map.png" or shown is None:
-            return f.caption
-        return f"{f.caption} Episode {shown} (choose another with --episode CASE_ID)."
-
-    refs = tuple(FigureRef(f.name, f.title, caption(f), skipped.get(f.name)) for f in FIGURES)
+    shown = report.episode_map and report.episode_map.case_id
+    named = f" Episode {shown} (choose another with --episode CASE_ID)." if shown else ""
+    refs = tuple(
+        FigureRef(f.name, f.title, f.caption + (named if f.name == "episode_map.png" else ""),
+                  skipped.get(f.name))
+        for f in FIGURES
+    )  # fmt: skip
     return Section("figures", "Figures", refs)
 
 

@@ -19,7 +19,6 @@ from pytest_emrd.agent import build_system_prompt
 from pytest_emrd.cassette import FormatError, decode, found_cassette
 from pytest_emrd.cassette._redact import DIGEST
 from pytest_emrd.episode import build_simulator, start_world, user_turn, world_action
-from pytest_emrd.errors import EmrdError
 from pytest_emrd.trajectory import Trajectory
 from pytest_emrd.world import WorldPose
 
@@ -123,11 +122,3 @@ def recorded_digests(traj: Trajectory, cassettes: Path | None) -> Recorded:
         note = (f"{path} holds {len(digests)} requests for {len(traj.steps)} steps: steps "
                 "are checked in order up to the shorter")  # fmt: skip
     return Recorded(tuple(digests), note)
-
-
-def frames_or_note(traj: Trajectory) -> tuple[Replay | None, str | None]:
-    """:func:`replay_frames`, or None and why (a backend this machine cannot run)."""
-    try:
-        return replay_frames(traj), None
-    except EmrdError as exc:
-        return None, f"frames not re-rendered: {exc}"
