@@ -1,11 +1,9 @@
 """Reports: the paper's tables and figures from any run.
 
-Compute (pure): :func:`build_report` turns trajectories (and gate verdicts) into a
-:class:`Report` holding the metrics library's results for every table and figure (its row
-types live in ``pytest_emrd.report._model``); :func:`compare_runs` compares two runs cell by
-cell. Render (pure): :func:`render_files` (Markdown + PNG, self-contained HTML, JSON),
-:func:`render_comparison`, :func:`step_summary_markdown`. Write (I/O): :func:`write_report`,
-:func:`write_files`.
+Compute (pure): :func:`build_report` (a :class:`Report` of the metrics library's results),
+:func:`compare_runs`. Render (pure): :func:`render_files` (Markdown + PNG, self-contained
+HTML, JSON), :func:`render_comparison`, :func:`step_summary_markdown`. Write (I/O):
+:func:`write_report`, :func:`write_files`.
 
 Typical use::
 

@@ -1,9 +1,5 @@
-"""Build a :class:`Report` from trajectories: grouping, every table and figure, what is missing.
-
-Pure: episodes (trajectories, or stored episodes read from their heads) and verdicts in, a
-report model out. Reading run directories and thresholds files, and writing files, is the
-caller's job (:mod:`._write`, the CLI).
-"""
+"""Build a :class:`Report` from episodes and verdicts: grouping, every table and figure, what
+is missing (pure: reading run directories and writing files is the caller's job)."""
 
 from __future__ import annotations
 
@@ -172,19 +168,14 @@ def build_report(
     episode: str | None = None,
     processes: int = 1,
 ) -> Report:
-    """Every table and figure of the paper for ``episodes`` (any models, conditions,
-    variants; errored episodes are excluded and reported). Stored episodes are read through
-    their heads: with ``episode_metrics`` given, only the map figure's episode is decoded.
-
-    ``verdicts`` are the gate verdicts (:func:`pytest_emrd.gate.evaluate_all`) of the file
-    ``thresholds_source``; ``embed`` replaces the ``nlp`` extra's sentence encoder for the
-    representative-reasoning table; ``prices`` adds estimated cost to the usage table;
-    ``with_reasoning=False`` leaves that table empty (no sentence encoder is loaded);
-    ``episode_metrics`` are the trajectories' metrics when the caller computed them already;
-    ``episode`` is the case id of the episode the map figure shows (default: the first
-    baseline episode with a non-empty map); ``processes`` > 1 aligns the map figure's
-    episode in a forked worker while the tables are computed (same result).
-    """
+    """Every table and figure of the paper for ``episodes`` (errored ones excluded and
+    reported); with ``episode_metrics`` (their metrics, measured already) only the map
+    figure's episode is decoded. ``verdicts``: the gate verdicts of the file
+    ``thresholds_source``; ``embed`` replaces the ``nlp`` extra's sentence encoder;
+    ``prices`` adds estimated cost to the usage table; ``with_reasoning=False`` leaves the
+    reasoning table empty (no encoder loaded); ``episode``: the case id the map figure shows
+    (default: the first baseline episode with a map); ``processes`` > 1 aligns that episode
+    in a forked worker while the tables are computed (same result)."""
     stored = [e if isinstance(e, StoredEpisode) else _wrap(e) for e in episodes]
     heads = [e.head for e in stored]
     overview = _overview(heads, prices)

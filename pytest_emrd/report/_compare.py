@@ -38,6 +38,7 @@ from pytest_emrd.report._document import (
     Cell,
     Document,
     Paragraph,
+    Row,
     Section,
     Table,
     num,
@@ -304,21 +305,15 @@ def compare_runs(
 _HEADER = ("Metric", "Better", "A", "B", "B - A", "95% CI", "p (Holm)", "Verdict", "Note")
 
 
-def _row(d: Difference) -> tuple[Cell, ...]:
+def _row(d: Difference) -> Row:
     note = d.reason or ""
     if d.unpaired:
         note = f"{d.unpaired} unpaired episode(s) left out. {note}".strip()
-    return (
-        Cell(d.metric),
-        Cell(GATE_METRICS[d.metric].better),
-        Cell(f"{num(d.a.value)} (n={d.a.n})"),
-        Cell(f"{num(d.b.value)} (n={d.b.n})"),
-        Cell(num(d.diff)),
-        Cell("n/a" if d.ci_low is None else f"[{num(d.ci_low)}, {num(d.ci_high)}]"),
-        Cell(pval(d.p_holm)),
-        Cell(d.verdict, bold=d.verdict in ("better", "worse", "inconclusive")),
-        Cell(note),
-    )
+    ci = "n/a" if d.ci_low is None else f"[{num(d.ci_low)}, {num(d.ci_high)}]"
+    return (d.metric, GATE_METRICS[d.metric].better, f"{num(d.a.value)} (n={d.a.n})",
+            f"{num(d.b.value)} (n={d.b.n})", num(d.diff), ci, pval(d.p_holm),
+            Cell(d.verdict, bold=d.verdict in ("better", "worse", "inconclusive")),
+            note)  # fmt: skip
 
 
 def compare_document(c: Comparison) -> Document:
@@ -345,15 +340,12 @@ def compare_document(c: Comparison) -> Document:
         blocks.append(Bullets(tuple(notes)))
     if not c.differences:
         blocks.append(Paragraph("The two sides share no model x prompt x condition cell."))
-    cells = list(dict.fromkeys((d.model, d.model_b, d.variant, d.condition)
-                               for d in c.differences))  # fmt: skip
-    for model, model_b, variant, condition in cells:
-        rows = tuple(
-            _row(d) for d in c.differences if (d.model, d.model_b, d.variant, d.condition)
-            == (model, model_b, variant, condition)
-        )  # fmt: skip
+    by_cell: dict[tuple[str, str, str, str], list[Row]] = {}
+    for d in c.differences:
+        by_cell.setdefault((d.model, d.model_b, d.variant, d.condition), []).append(_row(d))
+    for (model, model_b, variant, condition), rows in by_cell.items():
         who = model if model == model_b else f"{model} vs {model_b}"
         label = f"{row_label(who, variant)}, {CONDITION_NAMES.get(condition, condition)}"
         blocks.append(Table(f"compare-{model}-{model_b}-{variant}-{condition}", label, _HEADER,
-                            rows))  # fmt: skip
+                            tuple(rows)))  # fmt: skip
     return Document("EMRD comparison", (Section("compare", "Differences", tuple(blocks)),))

@@ -20,13 +20,17 @@ class Cell:
     bold: bool = False
 
 
+#: A table row: plain text or a :class:`Cell` per column.
+Row = tuple[Cell | str, ...]
+
+
 @dataclass(frozen=True)
 class Table:
     table_id: str
     """Stable id (HTML ``id``; tests look tables up by it)."""
     caption: str
     header: tuple[str, ...]
-    rows: tuple[tuple[Cell, ...], ...]
+    rows: tuple[Row, ...]
 
 
 @dataclass(frozen=True)
@@ -99,7 +103,8 @@ def mean_sd(mean: float | None, sd: float | None, *, scale: float = 1.0, digits:
     return f"{mean * scale:.{digits}f} ± {sd * scale:.{digits}f}"
 
 
-def _md_cell(c: Cell) -> str:
+def _md_cell(c: Cell | str) -> str:
+    c = Cell(c) if isinstance(c, str) else c
     text = c.text.replace("|", "\\|").replace("\n", " ")
     return f"**{text}**" if c.bold and text else text
 
@@ -165,7 +170,8 @@ def _inline(text: str) -> str:
 _NUMERIC = re.compile(r"^([-+]?[\d.$\[]|n/a$|—$|-?inf)")
 
 
-def _td(c: Cell) -> str:
+def _td(c: Cell | str) -> str:
+    c = Cell(c) if isinstance(c, str) else c
     classes = [] if _NUMERIC.match(c.text) else ["text"]
     if c.bold:
         classes.append("strong")

@@ -1,11 +1,8 @@
 """The report's figures as PNG bytes (matplotlib, Agg canvas, no pyplot global state).
 
-One colour per condition as in the paper (baseline blue, low light red, texture green) and,
-so that coinciding series stay visible, one line style, marker and hatch per condition
-(:data:`CONDITION_LINES`): markers are staggered along each line and the baseline is drawn
-on top. One panel per model row (``model`` or ``model [variant]``). Titles are wrapped to
-the width they have, so no text leaves the canvas. A figure without data is not drawn;
-:func:`render_figures` says why instead.
+One colour per condition as in the paper and, so that coinciding series stay visible, one
+line style, marker and hatch (:data:`CONDITION_LINES`), markers staggered, the baseline on
+top. One panel per model row. Titles are wrapped to their width, so no text leaves the canvas.
 """
 
 from __future__ import annotations
@@ -124,8 +121,8 @@ def _finish(
     fig: Figure, axes: dict[str, Axes], title: str, conditions: Sequence[str], *,
     bars: bool = False, grid: str = "both", **axis: Any,
 ) -> Figure:  # fmt: skip
-    """Every panel titled with its row label, ``axis`` properties set and a grid; the figure's
-    title and its legend of ``conditions``."""
+    """Every panel titled with its key, ``axis`` properties set and a grid; the figure's title
+    and its legend of ``conditions``."""
     for label, ax in axes.items():
         _axes_title(ax, label)
         ax.set(**axis)
@@ -218,16 +215,11 @@ def _km(report: Report) -> Figure | None:
             t = np.linspace(0, max(s.km.times), 100)
             ax.plot(t, s.km.coverage * np.exp(-t / efc), color=colour(s.condition), ls=(0, (2, 2)),
                     lw=1)  # fmt: skip
-    for i, label in enumerate(labels):
-        for j, category in enumerate(categories):
-            ax = grid[i][j]
-            _axes_title(ax, f"{label}: {category}")
-            ax.set(xlabel="steps out of view t", ylabel="S(t) (discovered & held)",
-                   ylim=(-0.02, 1.02))  # fmt: skip
-            ax.grid(alpha=0.3)
-    _title(fig, "Coverage-anchored Kaplan-Meier survival, 95 % band (thin dashed: Ebbinghaus fit)")
-    _legend(fig, _conditions(series))
-    return fig
+    panels = {f"{label}: {c}": grid[i][j] for i, label in enumerate(labels)
+              for j, c in enumerate(categories)}  # fmt: skip
+    title = "Coverage-anchored Kaplan-Meier survival, 95 % band (thin dashed: Ebbinghaus fit)"
+    return _finish(fig, panels, title, _conditions(series), xlabel="steps out of view t",
+                   ylabel="S(t) (discovered & held)", ylim=(-0.02, 1.02))  # fmt: skip
 
 
 def _sir(report: Report) -> Figure | None:
@@ -331,11 +323,8 @@ def render_figures(
     report: Report, *, processes: int = 1
 ) -> tuple[dict[str, bytes], dict[str, str]]:
     """PNG bytes per figure file name (in :data:`FIGURES` order), and for each figure not
-    drawn, why not.
-
-    ``processes`` > 1 draws the figures in that many forked worker processes (where forking
-    is safe, else here), each taking up the next one (costliest first) when it is free: every
-    figure is still drawn once, by the same code, to the same bytes."""
+    drawn, why not. ``processes`` > 1 draws them in that many forked workers where forking is
+    safe, each taking up the next (costliest first): the same code, the same bytes."""
     workers = pool(processes)
     if workers is not None:
         with workers:

@@ -1,9 +1,6 @@
-"""The data of the paper's tables and figures, from grouped episode metrics (pure).
-
-Each function calls the metrics library and wraps its results in report rows; the only
-arithmetic done here is the sample standard deviation shown next to a mean (``mean +- sd``)
-and the rigid alignment of the map figure.
-"""
+"""The data of the paper's tables and figures, from grouped episode metrics (pure): the
+metrics library's results in report rows; computed here are only the sample sd shown next to
+a mean and the rigid alignment of the map figure."""
 
 from __future__ import annotations
 

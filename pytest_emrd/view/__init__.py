@@ -1,9 +1,8 @@
 """The episode viewer: one self-contained HTML page per episode of a run (``emrd view``).
 
-:func:`render_episode` re-renders the frames a model saw (:func:`replay_frames`, through the
-episode loop's own :func:`~pytest_emrd.episode.start_world`), checks them against the
-cassette's digests (:func:`recorded_digests`) and returns the page, its index row and,
-optionally, a GIF. Writing files is the caller's job (:mod:`pytest_emrd.cli.view`).
+:func:`render_episode` re-renders the frames a model saw (:func:`replay_frames`), checks them
+against the cassette's digests (:func:`recorded_digests`) and returns the page, its index row
+and, optionally, a GIF. Writing files is the caller's job (:mod:`pytest_emrd.cli.view`).
 """
 
 from __future__ import annotations

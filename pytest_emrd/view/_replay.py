@@ -1,10 +1,9 @@
 """What the model saw, again: frames re-rendered from the spec and the actions (world I/O).
 
-Cassettes keep a frame's pixel digest, never its image, and a trajectory keeps neither. The
-viewer rebuilds the world of the spec through :func:`pytest_emrd.episode.start_world` (the
-episode loop's own entry point), replays the recorded actions exactly as the loop executed
-them (:func:`pytest_emrd.episode.world_action`), and compares the digest of each re-rendered
-frame with the digest the cassette recorded for that step.
+Cassettes keep a frame's pixel digest, never its image. The viewer rebuilds the spec's world
+through the episode loop's own :func:`~pytest_emrd.episode.start_world`, replays the recorded
+actions as the loop did (:func:`~pytest_emrd.episode.world_action`), and compares each
+re-rendered frame's digest with the one the cassette recorded for that step.
 """
 
 from __future__ import annotations
@@ -48,12 +47,9 @@ class Frame:
 
 
 def replay_frames(traj: Trajectory) -> Replay:
-    """The frame and user text shown at each step of ``traj`` (``len(traj.steps)`` frames),
-    the system prompt and the spawn pose.
-
-    Raises :class:`EmrdError` when the spec's backend cannot be built here (AI2-THOR without
-    its extra or a GPU).
-    """
+    """The frame and user text shown at each step of ``traj``, the system prompt and the spawn
+    pose; :class:`EmrdError` when the spec's backend cannot be built here (AI2-THOR without
+    its extra or a GPU)."""
     sim = build_simulator(traj.spec.backend)
     try:
         spec = traj.spec
