@@ -12,6 +12,7 @@ from pytest_emrd.gate import UsageRow, Verdict
 from pytest_emrd.metrics import EpisodeMetrics
 from pytest_emrd.report._model import (
     EbbinghausRow,
+    ExplorationRow,
     FocalTable,
     FPSGRow,
     Gates,
@@ -30,13 +31,13 @@ from pytest_emrd.report._tables import (
     Embed,
     anova_rows,
     episode_map,
-    exploration_rows,
     intervention_tables,
     km_series,
     pa_by_spawn,
     per_cell,
     pick_episode,
     reasoning,
+    sd_of,
 )
 from pytest_emrd.rooms import ROOM_SLUGS
 from pytest_emrd.run import EpisodeHead, StoredEpisode
@@ -195,10 +196,13 @@ def build_report(
     with beside(episode_map, chosen, fork=fork) as mapped:
         reasons = reasoning(by_label, embed) if with_reasoning else Reasoning(())
         ebbinghaus = per_cell(cells, EbbinghausRow, metrics.ebbinghaus)
+        aec, te = metrics.GATE_METRICS["aec"], metrics.GATE_METRICS["te"]
         return Report(
             overview=overview,
             missing=_missing(heads, overview, gates, reasons, stored),
-            exploration=exploration_rows(cells),
+            exploration=per_cell(
+                cells, ExplorationRow, aec.compute, sd_of("aec"), te.compute, sd_of("te")
+            ),
             focal=per_cell(cells, FocalTable, metrics.focal_distribution, metrics.consensus),
             fpsg=per_cell(cells, FPSGRow, metrics.fpsg),
             ebbinghaus=ebbinghaus,

@@ -8,6 +8,7 @@ of the library agree by construction. Fractions are in [0, 1]; renderers turn th
 
 Rows are keyed by ``model``, ``variant`` (prompt variant) and, where the paper splits by it,
 ``condition``. Field names are the JSON format; bump :data:`SCHEMA_VERSION` on any change.
+Also here, for every renderer: the conditions' names and the list of figures (:data:`FIGURES`).
 """
 
 from __future__ import annotations

@@ -17,7 +17,6 @@ from pytest_emrd.metrics import EpisodeMetrics
 from pytest_emrd.report._model import (
     AnovaRow,
     EpisodeMap,
-    ExplorationRow,
     InterventionTable,
     KMSeries,
     MapPoint,
@@ -46,24 +45,15 @@ def per_cell(cells: Cells, row: Callable[..., Any], *compute: Callable[[Any], An
     return tuple(row(*key, *(f(ems) for f in compute)) for key, ems in cells.items())
 
 
-def _sd(values: Sequence[float | int | None]) -> float | None:
-    clean = [float(v) for v in values if v is not None]
-    return statistics.stdev(clean) if len(clean) >= 2 else None
+def sd_of(field: str) -> Callable[[Sequence[EpisodeMetrics]], float | None]:
+    """The sample standard deviation of a per-episode metric over a cell's non-errored
+    episodes where it is defined (None with fewer than two values)."""
 
+    def sd(ems: Sequence[EpisodeMetrics]) -> float | None:
+        values = [float(v) for m in ems if not m.errored and (v := getattr(m, field)) is not None]
+        return statistics.stdev(values) if len(values) >= 2 else None
 
-def exploration_rows(cells: Cells) -> tuple[ExplorationRow, ...]:
-    """AEC and TE (mean, bootstrap CI, sd) per cell: ``GATE_METRICS['aec'|'te']``."""
-    aec, te = metrics.GATE_METRICS["aec"], metrics.GATE_METRICS["te"]
-    return tuple(
-        ExplorationRow(
-            *key,
-            aec.compute(ems),
-            _sd([m.aec for m in ems if not m.errored]),
-            te.compute(ems),
-            _sd([m.te for m in ems if not m.errored]),
-        )
-        for key, ems in cells.items()
-    )
+    return sd
 
 
 def anova_rows(cells: Cells) -> tuple[AnovaRow, ...]:
