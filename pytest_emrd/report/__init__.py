@@ -1,10 +1,9 @@
 """Reports: the paper's tables and figures from any run.
 
-Compute (pure): :func:`build_report` turns trajectories (and gate verdicts) into a
-:class:`Report` holding the metrics library's results for every table and figure;
-:func:`compare_runs` compares two runs cell by cell. Render (pure): :func:`render_files`
-(Markdown + PNG, self-contained HTML, JSON), :func:`render_comparison`,
-:func:`step_summary_markdown`. Write (I/O): :func:`write_report`, :func:`write_files`.
+Compute (pure): :func:`build_report` (a :class:`Report` of the metrics library's results),
+:func:`compare_runs`. Render (pure): :func:`render_files` (Markdown + PNG, self-contained
+HTML, JSON), :func:`render_comparison`, :func:`step_summary_markdown`. Write (I/O):
+:func:`write_report`, :func:`write_files`.
 
 Typical use::
 
@@ -14,30 +13,7 @@ Typical use::
 
 from pytest_emrd.report._build import build_report, group_cells
 from pytest_emrd.report._compare import COMPARED, Comparison, Difference, compare_runs
-from pytest_emrd.report._figdata import align_map
-from pytest_emrd.report._model import (
-    AnovaRow,
-    EbbinghausRow,
-    EpisodeMap,
-    ExplorationRow,
-    FocalTable,
-    FPSGRow,
-    Gates,
-    InterventionTable,
-    KMSeries,
-    MapPoint,
-    MillerSeries,
-    Overview,
-    PASpawn,
-    Reasoning,
-    ReasoningRow,
-    Report,
-    SerialRow,
-    SIRSeries,
-    TBSSeries,
-    VariantTest,
-    row_label,
-)
+from pytest_emrd.report._model import FIGURES, Report, row_label
 from pytest_emrd.report._render import (
     FORMATS,
     check_formats,
@@ -46,36 +22,16 @@ from pytest_emrd.report._render import (
     report_json,
     step_summary_markdown,
 )
-from pytest_emrd.report._style import CONDITION_COLOURS, FIGURES
+from pytest_emrd.report._tables import align_map
 from pytest_emrd.report._write import append_step_summary, write_files, write_report
 
 __all__ = [
     "COMPARED",
-    "CONDITION_COLOURS",
     "FIGURES",
     "FORMATS",
-    "AnovaRow",
     "Comparison",
     "Difference",
-    "EbbinghausRow",
-    "EpisodeMap",
-    "ExplorationRow",
-    "FPSGRow",
-    "FocalTable",
-    "Gates",
-    "InterventionTable",
-    "KMSeries",
-    "MapPoint",
-    "MillerSeries",
-    "Overview",
-    "PASpawn",
-    "Reasoning",
-    "ReasoningRow",
     "Report",
-    "SIRSeries",
-    "SerialRow",
-    "TBSSeries",
-    "VariantTest",
     "align_map",
     "append_step_summary",
     "build_report",

@@ -1,39 +1,43 @@
-"""Build a :class:`Report` from trajectories: grouping, every table and figure, what is missing.
-
-Pure: episodes (trajectories, or stored episodes read from their heads) and verdicts in, a
-report model out. Reading run directories and
-thresholds files, and writing files, is the caller's job (:mod:`._write`, the CLI).
-"""
+"""Build a :class:`Report` from episodes and verdicts: grouping, every table and figure, what
+is missing (pure: reading run directories and writing files is the caller's job)."""
 
 from __future__ import annotations
 
 from collections import Counter
 from collections.abc import Mapping, Sequence
 
+from pytest_emrd import metrics
 from pytest_emrd._fork import beside
 from pytest_emrd.gate import UsageRow, Verdict
-from pytest_emrd.metrics import EpisodeMetrics, as_episode_metrics
-from pytest_emrd.report._figdata import (
-    episode_map,
-    km_series,
-    miller_series,
-    pa_by_spawn,
-    pick_episode,
-    sir_series,
-    tbs_series,
+from pytest_emrd.metrics import EpisodeMetrics
+from pytest_emrd.report._model import (
+    EbbinghausRow,
+    ExplorationRow,
+    FocalTable,
+    FPSGRow,
+    Gates,
+    MillerSeries,
+    Overview,
+    Reasoning,
+    Report,
+    SerialRow,
+    SIRSeries,
+    TBSSeries,
+    rank,
+    row_label,
 )
-from pytest_emrd.report._model import EpisodeMap, Gates, Overview, Reasoning, Report, row_label
 from pytest_emrd.report._tables import (
     Cells,
     Embed,
     anova_rows,
-    ebbinghaus_rows,
-    exploration_rows,
-    focal_tables,
-    fpsg_rows,
+    episode_map,
     intervention_tables,
+    km_series,
+    pa_by_spawn,
+    per_cell,
+    pick_episode,
     reasoning,
-    serial_rows,
+    sd_of,
 )
 from pytest_emrd.rooms import ROOM_SLUGS
 from pytest_emrd.run import EpisodeHead, StoredEpisode
@@ -44,10 +48,7 @@ Prices = Mapping[str, tuple[float | None, float | None]]
 
 
 def _ordered(values: set[str], order: Sequence[str]) -> tuple[str, ...]:
-    return tuple(sorted(values, key=lambda v: (order.index(v) if v in order else len(order), v)))
-
-
-CellKey = tuple[str, str, str]
+    return tuple(sorted(values, key=lambda v: rank(v, order)))
 
 
 def cell_model(spec: EpisodeSpec) -> str:
@@ -57,23 +58,17 @@ def cell_model(spec: EpisodeSpec) -> str:
     return spec.model if spec.layouts == "paper" else f"{spec.model}@{spec.layouts}"
 
 
-def group_cells(metrics: Sequence[EpisodeMetrics]) -> dict[CellKey, list[EpisodeMetrics]]:
+def group_cells(
+    measured: Sequence[EpisodeMetrics],
+) -> dict[tuple[str, str, str], list[EpisodeMetrics]]:
     """Episodes by (model, variant, condition): models sorted (:func:`cell_model`, so generated
     layouts form cells of their own), variants and conditions in the paper's order, episodes in
     case-id order within a cell."""
     cells: dict[tuple[str, str, str], list[EpisodeMetrics]] = {}
-    for m in sorted(metrics, key=lambda m: m.spec.case_id):
+    for m in sorted(measured, key=lambda m: m.spec.case_id):
         cells.setdefault((cell_model(m.spec), m.spec.variant, m.spec.condition), []).append(m)
-
-    def key(k: tuple[str, str, str]) -> tuple[str, tuple[int, str], tuple[int, str]]:
-        model, variant, condition = k
-        return (model, _rank(variant, VARIANTS), _rank(condition, CONDITIONS))
-
-    return {k: cells[k] for k in sorted(cells, key=key)}
-
-
-def _rank(value: str, order: Sequence[str]) -> tuple[int, str]:
-    return (order.index(value) if value in order else len(order), value)
+    order = sorted(cells, key=lambda k: (k[0], rank(k[1], VARIANTS), rank(k[2], CONDITIONS)))
+    return {k: cells[k] for k in order}
 
 
 def _usage(heads: Sequence[EpisodeHead], prices: Prices | None) -> tuple[UsageRow, ...]:
@@ -174,27 +169,23 @@ def build_report(
     episode: str | None = None,
     processes: int = 1,
 ) -> Report:
-    """Every table and figure of the paper for ``episodes`` (any models, conditions,
-    variants; errored episodes are excluded and reported). Stored episodes are read through
-    their heads: with ``episode_metrics`` given, only the map figure's episode is decoded.
-
-    ``verdicts`` are the gate verdicts (:func:`pytest_emrd.gate.evaluate_all`) of the file
-    ``thresholds_source``; ``embed`` replaces the ``nlp`` extra's sentence encoder for the
-    representative-reasoning table; ``prices`` adds estimated cost to the usage table;
-    ``with_reasoning=False`` leaves that table empty (no sentence encoder is loaded);
-    ``episode_metrics`` are the trajectories' metrics when the caller computed them already;
-    ``episode`` is the case id of the episode the map figure shows (default: the first
-    baseline episode with a non-empty map); ``processes`` > 1 aligns the map figure's
-    episode in a forked worker while the tables are computed (same result).
-    """
+    """Every table and figure of the paper for ``episodes`` (errored ones excluded and
+    reported); with ``episode_metrics`` (their metrics, measured already) only the map
+    figure's episode is decoded. ``verdicts``: the gate verdicts of the file
+    ``thresholds_source``; ``embed`` replaces the ``nlp`` extra's sentence encoder;
+    ``prices`` adds estimated cost to the usage table; ``with_reasoning=False`` leaves the
+    reasoning table empty (no encoder loaded); ``episode``: the case id the map figure shows
+    (default: the first baseline episode with a map); ``processes`` > 1 aligns that episode
+    in a forked worker while the tables are computed (same result)."""
     stored = [e if isinstance(e, StoredEpisode) else _wrap(e) for e in episodes]
     heads = [e.head for e in stored]
     overview = _overview(heads, prices)
     gates = Gates(thresholds_source, tuple(verdicts or ()))
-    metrics = as_episode_metrics(
-        [e.trajectory for e in stored] if episode_metrics is None else episode_metrics
+    cells: Cells = group_cells(
+        metrics.as_episode_metrics(
+            [e.trajectory for e in stored] if episode_metrics is None else episode_metrics
+        )
     )
-    cells: Cells = group_cells(metrics)
     by_label: dict[str, list[EpisodeMetrics]] = {}
     for (model, variant, _), ems in cells.items():
         by_label.setdefault(row_label(model, variant), []).extend(ems)
@@ -202,33 +193,31 @@ def build_report(
     fork = processes > 1 and chosen is not None
     if fork:  # the alignment and lifelines both use it: imported once, before the fork
         import scipy.optimize  # noqa: F401
-    with beside(_episode_map, chosen, fork=fork) as mapped:
+    with beside(episode_map, chosen, fork=fork) as mapped:
         reasons = reasoning(by_label, embed) if with_reasoning else Reasoning(())
-        ebbinghaus = ebbinghaus_rows(cells)
+        ebbinghaus = per_cell(cells, EbbinghausRow, metrics.ebbinghaus)
+        aec, te = metrics.GATE_METRICS["aec"], metrics.GATE_METRICS["te"]
         return Report(
             overview=overview,
             missing=_missing(heads, overview, gates, reasons, stored),
-            exploration=exploration_rows(cells),
-            focal=focal_tables(cells),
-            fpsg=fpsg_rows(cells),
+            exploration=per_cell(
+                cells, ExplorationRow, aec.compute, sd_of("aec"), te.compute, sd_of("te")
+            ),
+            focal=per_cell(cells, FocalTable, metrics.focal_distribution, metrics.consensus),
+            fpsg=per_cell(cells, FPSGRow, metrics.fpsg),
             ebbinghaus=ebbinghaus,
-            serial_position=serial_rows(cells),
+            serial_position=per_cell(cells, SerialRow, metrics.serial_position),
             anova=anova_rows(cells),
             interventions=intervention_tables(cells),
             reasoning=reasons,
             gates=gates,
-            tbs=tbs_series(cells),
+            tbs=per_cell(cells, TBSSeries, metrics.tbs_curve),
             pa=pa_by_spawn(cells),
-            miller=miller_series(cells),
+            miller=per_cell(cells, MillerSeries, metrics.miller_curve),
             km=km_series(cells, {(r.model, r.variant, r.condition): r.fit for r in ebbinghaus}),
-            sir=sir_series(cells),
+            sir=per_cell(cells, SIRSeries, metrics.spatial_identity_resolution),
             episode_map=mapped(),
         )
-
-
-def _episode_map(chosen: StoredEpisode | None) -> EpisodeMap | None:
-    """The map figure's data of ``chosen`` (its trajectory decoded here), None without one."""
-    return None if chosen is None else episode_map(chosen.trajectory)
 
 
 def _wrap(trajectory: Trajectory) -> StoredEpisode:

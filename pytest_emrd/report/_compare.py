@@ -1,52 +1,28 @@
 """``emrd report --compare``: what a release changed, per metric and cell, paired (pure).
 
-Two sides are compared: two runs (same model names), or two model names (``--compare-models``,
-within one run or across two). Within a cell (model x variant x condition) an episode of side
-A is paired with the episode of side B that has the same spec up to the model: the same
-condition, spawn room and episode index, hence the same world seed. Episodes without a
-partner are counted (``unpaired``) and left out.
+Side A and side B are two runs (same model names) or two model names (``--compare-models``).
+Within a cell (model x variant x condition) an episode of A is paired with the episode of B of
+the same condition, spawn room and episode index (the same world); the others are counted
+(``unpaired``) and left out. Per compared gate metric (:data:`COMPARED`), over the pairs that
+define it: both values and ``B - A``; a seeded paired-bootstrap percentile 95 % CI; a
+two-sided paired sign-flip p, ``#{|d_swap| >= |d|} / 2^n`` over every pattern when
+``2^n <= R`` (exact), else ``(1 + #) / (R + 1)`` over ``R`` seeded random ones, where
+``R = max(N_RESAMPLES, ceil(10 m / ALPHA))`` for ``m`` tests keeps the smallest Holm p at or
+below ``ALPHA / 10`` (unlike a bootstrap p it is valid for a few pairs, and 1 for identical
+ones); Holm's correction across the whole comparison; and the smallest Holm p the pairs could
+reach, ``min(1, m * p_min(n))`` with ``p_min(n) = 2 / 2^n`` (exact) or ``1 / (R + 1)``.
 
-For every compared gate metric (:data:`COMPARED`) and cell:
-
-* the value on each side over the pairs both sides define (``GATE_METRICS[name].compute``),
-  and the difference ``B - A``;
-* a seeded **paired bootstrap** over pairs (the same resampled pair indices on both sides):
-  the percentile 95 % CI of ``B - A``;
-* a two-sided p-value for "no difference" from the **paired sign-flip (randomisation)
-  test**: under the null the two episodes of a pair are exchangeable, so each pair's sides
-  are swapped at random and the metric's ``B - A`` recomputed;
-  ``p = #{|d_swap| >= |d|} / 2^n`` over all ``2^n`` patterns when ``2^n <= R`` (exact),
-  else ``(1 + #) / (R + 1)`` over ``R`` seeded random patterns. Unlike a bootstrap p-value
-  it is valid for a handful of pairs (two pairs can never give p below 0.5, where a
-  bootstrap says 0.004) and it is exactly 1 for identical pairs.
-  ``R = max(N_RESAMPLES, ceil(10 m / ALPHA))`` for ``m`` tests, so the smallest
-  Holm-adjusted p stays at or below ``ALPHA / 10`` however many cells are compared;
-* the p-values of the whole comparison corrected together for multiple testing with Holm's
-  step-down method (:func:`statsmodels.stats.multitest.multipletests`, ``method="holm"``,
-  family-wise error ``ALPHA``);
-* the smallest Holm-adjusted p the test could reach with its ``n`` pairs, whatever the data:
-  ``min(1, m * p_min(n))`` for ``m`` tests, where ``p_min(n) = 2 / 2^n`` for the exact test
-  (only the observed sign pattern and its mirror image are as extreme) and ``1 / (R + 1)``
-  for ``R`` random patterns;
-* a verdict: ``better`` / ``worse`` when the Holm-adjusted p is below ``ALPHA`` (the direction
-  from ``GATE_METRICS[name].better``: ``higher`` or ``lower`` is better); ``inconclusive``
-  when it is not and could not have been (the reachable p above is ``ALPHA`` or more: eight
-  pairs that all moved the same way still give ``2 / 2^8 = 0.0078``, times ``m``); ``no
-  change`` when the test could have found a difference and did not, or when every resample
-  of ``B - A`` is exactly 0 (the same episodes on both sides); ``n/a`` when there is no
-  test (undefined or unbounded value, fewer than two pairs, unbounded bootstrap
-  distribution). The CI and the test can disagree for a few pairs; the verdict follows the
-  test.
-
-Pairing removes the between-world variance (spawn pose, layout) that an unpaired comparison
-counts as noise, and a pair whose episodes are identical contributes exactly 0: the same
-deterministic agent against itself gives ``B - A = 0``, p = 1 and ``no change`` everywhere.
+Verdict: ``better`` / ``worse`` when the Holm p < ``ALPHA`` (direction from
+``GATE_METRICS[name].better``); ``inconclusive`` when it is not and could not have been
+(reachable p >= ``ALPHA``); ``no change`` when the test could have found a difference and did
+not, or when every resample of ``B - A`` is 0; ``n/a`` without a test (undefined or unbounded
+value, fewer than two pairs, unbounded bootstrap). The verdict follows the test, not the CI.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from typing import Any, Final
 
@@ -56,33 +32,34 @@ from pytest_emrd._serde import from_dict, to_dict
 from pytest_emrd.metrics import GATE_METRICS, EpisodeMetrics, Estimate, as_episode_metrics
 from pytest_emrd.metrics._stats import N_RESAMPLES
 from pytest_emrd.report._build import group_cells
+from pytest_emrd.report._document import (
+    Block,
+    Bullets,
+    Cell,
+    Document,
+    Paragraph,
+    Row,
+    Section,
+    Table,
+    num,
+    pval,
+)
+from pytest_emrd.report._model import CONDITION_NAMES, row_label
 from pytest_emrd.trajectory import Trajectory
 
 #: Family-wise error rate of the Holm correction.
 ALPHA: Final = 0.05
 
-Value = Callable[[EpisodeMetrics], float | bool | None]
-
-#: Metrics averaged over episodes: name -> per-episode value (None: undefined, pair left out).
-_MEANS: Final[dict[str, Value]] = {
-    "aec": lambda m: m.aec,
-    "te": lambda m: m.te,
-    "pa": lambda m: m.pa,
-    "fpsg_local": lambda m: m.fpsg_local,
-    "fpsg_global": lambda m: m.fpsg_global,
-    "never_visited": lambda m: m.never_visited,
-    "any_bias": lambda m: m.any_bias,
-    "sir": lambda m: m.sir,
-}
-#: Pooled ratios: name -> (numerator, denominator) per episode.
-_RATIOS: Final[dict[str, tuple[Callable[[EpisodeMetrics], float], ...]]] = {
-    "memory_strength": (lambda m: m.retained_steps, lambda m: m.forget_events),
-    "parse_failure_rate": (lambda m: m.parse_failures, lambda m: m.steps),
+#: Metrics averaged over episodes, each the EpisodeMetrics field of the same name (None:
+#: undefined, pair left out).
+_MEANS: Final = ("aec", "te", "pa", "fpsg_local", "fpsg_global", "never_visited", "any_bias", "sir")
+#: Pooled ratios: name -> (numerator, denominator) EpisodeMetrics fields.
+_RATIOS: Final = {
+    "memory_strength": ("retained_steps", "forget_events"),
+    "parse_failure_rate": ("parse_failures", "steps"),
 }
 #: Compared metrics, in report order (every one a key of GATE_METRICS).
 COMPARED: Final[tuple[str, ...]] = (*_MEANS, *_RATIOS, "errored_rate")
-#: Verdicts, in the order the document explains them.
-VERDICTS: Final[tuple[str, ...]] = ("better", "worse", "no change", "inconclusive", "n/a")
 
 Pair = tuple[EpisodeMetrics, EpisodeMetrics]
 
@@ -164,8 +141,7 @@ def _used(name: str, pairs: list[Pair]) -> list[Pair]:
         return pairs
     kept = [(x, y) for x, y in pairs if not x.errored and not y.errored]
     if name in _MEANS:
-        get = _MEANS[name]
-        return [(x, y) for x, y in kept if get(x) is not None and get(y) is not None]
+        return [(x, y) for x, y in kept if None not in (getattr(x, name), getattr(y, name))]
     return kept
 
 
@@ -175,11 +151,9 @@ def _columns(name: str, pairs: list[Pair]) -> tuple[np.ndarray, np.ndarray]:
 
     def side(k: int) -> np.ndarray:
         if name in _RATIOS:
-            num, den = _RATIOS[name]
-            return np.array([[num(p[k]) for p in pairs], [den(p[k]) for p in pairs]], float)
-        get = _MEANS.get(name, lambda m: m.errored)
-        values = [float(get(p[k])) for p in pairs]  # type: ignore[arg-type]
-        return np.array([values, [1.0] * len(pairs)])
+            return np.array([[getattr(p[k], f) for p in pairs] for f in _RATIOS[name]], float)
+        field = name if name in _MEANS else "errored"
+        return np.array([[float(getattr(p[k], field)) for p in pairs], [1.0] * len(pairs)])
 
     return side(0), side(1)
 
@@ -255,16 +229,9 @@ def _why_no_pair(name: str, pairs: list[Pair]) -> str:
     clean = [(x, y) for x, y in pairs if not x.errored and not y.errored]
     if not clean:
         return "every pair holds an errored episode"
-    get = _MEANS.get(name)
-    undefined = [m for pair in clean for m in pair if get is not None and get(m) is None]
+    undefined = [m for pair in clean for m in pair if name in _MEANS and getattr(m, name) is None]
     why = dict.fromkeys(m.reasons.get(name, "undefined") for m in undefined)
     return f"undefined in every pair: {'; '.join(why) or 'no value'}"
-
-
-def smallest_p(n: int, resamples: int) -> float:
-    """The smallest two-sided sign-flip p that ``n`` pairs can give (module docstring):
-    ``2 / 2^n`` when every pattern is enumerated, ``1 / (R + 1)`` over ``R`` random ones."""
-    return 2.0 / 2**n if 2**n <= resamples else 1.0 / (resamples + 1)
 
 
 def _verdict(d: Difference, p_holm: float, reachable: float) -> Difference:
@@ -290,9 +257,9 @@ def holm(differences: Sequence[Difference], resamples: int = N_RESAMPLES) -> tup
         adjusted = multipletests([differences[i].p_value for i in tested], alpha=ALPHA,
                                  method="holm")[1]  # fmt: skip
         for i, p in zip(tested, adjusted, strict=True):
-            d = differences[i]
-            reachable = min(1.0, len(tested) * smallest_p(d.pairs, resamples))
-            out[i] = _verdict(d, float(p), reachable)
+            n = differences[i].pairs  # the smallest p its pairs can give: p_min(n)
+            p_min = 2.0 / 2**n if 2**n <= resamples else 1.0 / (resamples + 1)
+            out[i] = _verdict(differences[i], float(p), min(1.0, len(tested) * p_min))
     return tuple(out)
 
 
@@ -333,3 +300,52 @@ def compare_runs(
         tuple(cell(k, 1) for k in cells_b if k not in cells_a),
         rng_seed, resamples, models,
     )  # fmt: skip
+
+
+_HEADER = ("Metric", "Better", "A", "B", "B - A", "95% CI", "p (Holm)", "Verdict", "Note")
+
+
+def _row(d: Difference) -> Row:
+    note = d.reason or ""
+    if d.unpaired:
+        note = f"{d.unpaired} unpaired episode(s) left out. {note}".strip()
+    ci = "n/a" if d.ci_low is None else f"[{num(d.ci_low)}, {num(d.ci_high)}]"
+    return (d.metric, GATE_METRICS[d.metric].better, f"{num(d.a.value)} (n={d.a.n})",
+            f"{num(d.b.value)} (n={d.b.n})", num(d.diff), ci, pval(d.p_holm),
+            Cell(d.verdict, bold=d.verdict in ("better", "worse", "inconclusive")),
+            note)  # fmt: skip
+
+
+def compare_document(c: Comparison) -> Document:
+    """Per cell: metric, direction, value on each side, B - A, CI, Holm p and verdict."""
+    sides = f"A = {c.run_a}, B = {c.run_b}"
+    if c.models is not None:
+        sides = f"A = model {c.models[0]} of {c.run_a}, B = model {c.models[1]} of {c.run_b}"
+    blocks: list[Block] = [
+        Paragraph(
+            f"{sides}. Episodes are paired by condition, spawn room and episode index (same "
+            f"world). B - A over the pairs; 95% CI from a seeded (rng_seed={c.rng_seed}) paired "
+            f"bootstrap ({c.n_resamples} resamples); two-sided p from a paired sign-flip test "
+            f"(exact up to {c.n_resamples} patterns), Holm-corrected across all "
+            f"{sum(d.p_value is not None for d in c.differences)} tests. Verdict **better** / "
+            f"**worse** when the Holm p < {c.alpha} (direction: the Better column); "
+            "**inconclusive** when it is not and the pairs could not have made it so (the "
+            "Note gives the smallest Holm p they could reach): run more episodes before "
+            "reading it as no change; else no change; n/a without a test."
+        )
+    ]
+    if c.only_a or c.only_b:
+        notes = [f"only in A (not compared): {k}" for k in c.only_a]
+        notes += [f"only in B (not compared): {k}" for k in c.only_b]
+        blocks.append(Bullets(tuple(notes)))
+    if not c.differences:
+        blocks.append(Paragraph("The two sides share no model x prompt x condition cell."))
+    by_cell: dict[tuple[str, str, str, str], list[Row]] = {}
+    for d in c.differences:
+        by_cell.setdefault((d.model, d.model_b, d.variant, d.condition), []).append(_row(d))
+    for (model, model_b, variant, condition), rows in by_cell.items():
+        who = model if model == model_b else f"{model} vs {model_b}"
+        label = f"{row_label(who, variant)}, {CONDITION_NAMES.get(condition, condition)}"
+        blocks.append(Table(f"compare-{model}-{model_b}-{variant}-{condition}", label, _HEADER,
+                            tuple(rows)))  # fmt: skip
+    return Document("EMRD comparison", (Section("compare", "Differences", tuple(blocks)),))

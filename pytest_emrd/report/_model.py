@@ -8,33 +8,18 @@ of the library agree by construction. Fractions are in [0, 1]; renderers turn th
 
 Rows are keyed by ``model``, ``variant`` (prompt variant) and, where the paper splits by it,
 ``condition``. Field names are the JSON format; bump :data:`SCHEMA_VERSION` on any change.
+Also here, for every renderer: the conditions' names and the list of figures (:data:`FIGURES`).
 """
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any, Final
 
+from pytest_emrd import metrics
 from pytest_emrd._serde import from_versioned_dict, to_dict
 from pytest_emrd.gate import UsageRow, Verdict
-from pytest_emrd.metrics import (
-    AnchoredKM,
-    Anova,
-    ChiSquare,
-    Consensus,
-    Ebbinghaus,
-    EbbinghausFit,
-    Estimate,
-    FisherExact,
-    FocalDistribution,
-    FocalRow,
-    FPSGSummary,
-    MillerCurve,
-    Representative,
-    SerialPosition,
-    SpatialIdentityResolution,
-    TBSCurve,
-)
 from pytest_emrd.trajectory import GroundTruthObject, RoomOutline
 
 SCHEMA_VERSION: Final = 1
@@ -43,6 +28,19 @@ SCHEMA_VERSION: Final = 1
 def row_label(model: str, variant: str) -> str:
     """``gemini`` for the default prompt, ``gemini [B3]`` for a prompt variant."""
     return model if variant == "default" else f"{model} [{variant}]"
+
+
+#: The paper's names of the conditions.
+CONDITION_NAMES: Final[dict[str, str]] = {
+    "baseline": "Baseline",
+    "low_light": "Light & Vis.",
+    "texture": "Texture & Col.",
+}
+
+
+def rank(value: str, order: Sequence[str]) -> tuple[int, str]:
+    """Sort key: the place in the paper's ``order``; values it lacks after it, by name."""
+    return (order.index(value) if value in order else len(order), value)
 
 
 @dataclass(frozen=True)
@@ -62,53 +60,47 @@ class Overview:
 
 
 @dataclass(frozen=True)
-class ExplorationRow:
-    """Exploration Competence of one model x variant x condition (paper Table AEC/TE)."""
+class CellRow:
+    """A row of one report cell: model x prompt variant x condition."""
 
     model: str
     variant: str
     condition: str
-    aec: Estimate
+
+
+@dataclass(frozen=True)
+class ExplorationRow(CellRow):
+    """Exploration Competence of one cell (paper Table AEC/TE)."""
+
+    aec: metrics.Estimate
     """``GATE_METRICS['aec']`` over the cell (mean, bootstrap CI, n)."""
     aec_sd: float | None
     """Sample standard deviation of the per-episode AEC (None when n < 2)."""
-    te: Estimate
+    te: metrics.Estimate
     te_sd: float | None
 
 
 @dataclass(frozen=True)
-class FocalTable:
+class FocalTable(CellRow):
     """Chosen-room distribution by spawn of one model x variant x condition."""
 
-    model: str
-    variant: str
-    condition: str
-    distribution: FocalDistribution
-    consensus: Consensus
+    distribution: metrics.FocalDistribution
+    consensus: metrics.Consensus
 
 
 @dataclass(frozen=True)
-class FPSGRow:
-    model: str
-    variant: str
-    condition: str
-    summary: FPSGSummary
+class FPSGRow(CellRow):
+    summary: metrics.FPSGSummary
 
 
 @dataclass(frozen=True)
-class EbbinghausRow:
-    model: str
-    variant: str
-    condition: str
-    fit: Ebbinghaus
+class EbbinghausRow(CellRow):
+    fit: metrics.Ebbinghaus
 
 
 @dataclass(frozen=True)
-class SerialRow:
-    model: str
-    variant: str
-    condition: str
-    spe: SerialPosition
+class SerialRow(CellRow):
+    spe: metrics.SerialPosition
 
 
 @dataclass(frozen=True)
@@ -117,7 +109,7 @@ class AnovaRow:
 
     model: str
     variant: str
-    anova: Anova
+    anova: metrics.Anova
 
 
 @dataclass(frozen=True)
@@ -125,11 +117,11 @@ class VariantTest:
     """One prompt variant against the ``default`` prompt (same model and condition)."""
 
     variant: str
-    choices: FocalRow
+    choices: metrics.FocalRow
     """Chosen-room letters of the variant's episodes."""
-    fisher: FisherExact | None
+    fisher: metrics.FisherExact | None
     """Conference Room vs any other choice, variant vs default (None: a group is empty)."""
-    chi_square: ChiSquare
+    chi_square: metrics.ChiSquare
     """Pearson chi-square over the full C/O/K/E/X distribution, default vs variant."""
     cramers_v: float | None
 
@@ -140,10 +132,10 @@ class InterventionTable:
 
     model: str
     condition: str
-    reference: FocalRow
+    reference: metrics.FocalRow
     """Chosen-room letters under the ``default`` prompt."""
     variants: tuple[VariantTest, ...]
-    overall: ChiSquare | None
+    overall: metrics.ChiSquare | None
     """Conference vs other over ``default`` + the B1-B4 variants present (None: no B variant)."""
     overall_variants: tuple[str, ...]
     """Groups in ``overall``, ``default`` first."""
@@ -152,7 +144,7 @@ class InterventionTable:
 @dataclass(frozen=True)
 class ReasoningRow:
     model: str
-    representative: Representative
+    representative: metrics.Representative
 
 
 @dataclass(frozen=True)
@@ -174,51 +166,36 @@ class Gates:
 
 
 @dataclass(frozen=True)
-class TBSSeries:
-    model: str
-    variant: str
-    condition: str
-    curve: TBSCurve
+class TBSSeries(CellRow):
+    curve: metrics.TBSCurve
 
 
 @dataclass(frozen=True)
-class PASpawn:
+class PASpawn(CellRow):
     """Per-episode Positional Accuracy of one model x variant x condition x spawn room."""
 
-    model: str
-    variant: str
-    condition: str
     spawn: str
     values: tuple[float, ...]
     """``positional_accuracy`` of each episode where it is defined, in case-id order."""
 
 
 @dataclass(frozen=True)
-class MillerSeries:
-    model: str
-    variant: str
-    condition: str
-    curve: MillerCurve
+class MillerSeries(CellRow):
+    curve: metrics.MillerCurve
 
 
 @dataclass(frozen=True)
-class KMSeries:
+class KMSeries(CellRow):
     """Coverage-anchored KM of one category, with its Ebbinghaus fit."""
 
-    model: str
-    variant: str
-    condition: str
     category: str
-    km: AnchoredKM
-    fit: EbbinghausFit
+    km: metrics.AnchoredKM
+    fit: metrics.EbbinghausFit
 
 
 @dataclass(frozen=True)
-class SIRSeries:
-    model: str
-    variant: str
-    condition: str
-    sir: SpatialIdentityResolution
+class SIRSeries(CellRow):
+    sir: metrics.SpatialIdentityResolution
 
 
 @dataclass(frozen=True)
@@ -284,3 +261,28 @@ class Report:
             what="report",
             remedy="rebuild the report from the run directory with `emrd report`.",
         )
+
+
+@dataclass(frozen=True)
+class FigureSpec:
+    """A report figure: file name, title and what it shows."""
+
+    name: str
+    title: str
+    caption: str
+
+
+FIGURES: Final[tuple[FigureSpec, ...]] = (
+    FigureSpec("tbs.png", "Temporal Belief Stability",
+               "Mean TBS(t) per step (band: ± 1 sd across episodes; Eq. TBS)."),
+    FigureSpec("pa_by_spawn.png", "Positional Accuracy by spawn room and condition",
+               "Mean per-episode PA (Eq. PA) with ± 1 sd, per spawn room."),
+    FigureSpec("miller.png", "Miller's law: forgetting probability by load",
+               "Share of steps that lose at least one mapped object, by map size (bins of w)."),
+    FigureSpec("km.png", "Coverage-anchored Kaplan-Meier survival per category",
+               "Anchored KM (steps) with the Ebbinghaus curve C exp(-t / EFC) dashed."),
+    FigureSpec("sir.png", "Spatial Identity Resolution",
+               "Per-episode SIR on room re-entry (episodes with a re-entry)."),
+    FigureSpec("episode_map.png", "One episode, top down",
+               "Ground truth, the agent's path and its terminal map after rigid alignment."),
+)  # fmt: skip

@@ -1,11 +1,8 @@
 """The report's figures as PNG bytes (matplotlib, Agg canvas, no pyplot global state).
 
-One colour per condition as in the paper (baseline blue, low light red, texture green) and,
-so that coinciding series stay visible, one line style, marker and hatch per condition
-(:data:`CONDITION_LINES`): markers are staggered along each line and the baseline is drawn
-on top. One panel per model row (``model`` or ``model [variant]``). Titles are wrapped to
-the width they have, so no text leaves the canvas. A figure without data is not drawn;
-:func:`render_figures` says why instead.
+One colour per condition as in the paper and, so that coinciding series stay visible, one
+line style, marker and hatch (:data:`CONDITION_LINES`), markers staggered, the baseline on
+top. One panel per model row. Titles are wrapped to their width, so no text leaves the canvas.
 """
 
 from __future__ import annotations
@@ -26,16 +23,24 @@ from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
 from pytest_emrd._fork import pool
-from pytest_emrd.report._model import EpisodeMap, Report, row_label
-from pytest_emrd.report._style import (
-    CONDITION_COLOURS,
-    CONDITION_LINES,
-    CONDITION_NAMES,
-    FIGURES,
-)
+from pytest_emrd.report._model import CONDITION_NAMES, FIGURES, EpisodeMap, Report, rank, row_label
 from pytest_emrd.rooms import ROOM_SLUGS, SLUG_ROOMS
 from pytest_emrd.trajectory import CONDITIONS
 
+#: Colour per condition, as in the paper.
+CONDITION_COLOURS: Final[dict[str, str]] = {
+    "baseline": "#1f5fbf",
+    "low_light": "#d62728",
+    "texture": "#2ca02c",
+}
+#: Line style, marker and hatch per condition, so coinciding series stay distinguishable
+#: (and the figures read in grey scale): baseline solid with circles, low light dashed with
+#: squares, texture dash-dot with triangles.
+CONDITION_LINES: Final[dict[str, tuple[str, str, str]]] = {
+    "baseline": ("-", "o", ""),
+    "low_light": ("--", "s", "//"),
+    "texture": ("-.", "^", ".."),
+}
 _CATEGORY_MARKERS: Final[dict[str, str]] = {"landmark": "^", "salient": "s", "clutter": "o"}
 _DPI: Final = 100
 _OTHER_LINE: Final = (":", "D", "xx")
@@ -47,24 +52,20 @@ def colour(condition: str) -> str:
     return CONDITION_COLOURS.get(condition, "#7f7f7f")
 
 
-def _rank(condition: str) -> int:
-    return CONDITIONS.index(condition) if condition in CONDITIONS else len(CONDITIONS)
-
-
 def line_style(condition: str, n_points: int = 0) -> dict[str, Any]:
     """Colour, line style and marker of ``condition``'s series; with ``n_points``, markers
     every ~n/8 points, staggered per condition so coinciding lines all show theirs. The
     baseline is drawn above the others with the smallest, filled markers."""
     ls, marker, _ = CONDITION_LINES.get(condition, _OTHER_LINE)
-    rank = _rank(condition)
+    place = rank(condition, CONDITIONS)[0]
     # the baseline's small filled markers sit inside the larger hollow ones of the others
     style: dict[str, Any] = {
-        "color": colour(condition), "ls": ls, "marker": marker, "ms": 4.5 + 2.5 * rank,
-        "mfc": colour(condition) if rank == 0 else "none", "mew": 1.5, "zorder": 3 - 0.1 * rank,
+        "color": colour(condition), "ls": ls, "marker": marker, "ms": 4.5 + 2.5 * place,
+        "mfc": colour(condition) if place == 0 else "none", "mew": 1.5, "zorder": 3 - 0.1 * place,
     }  # fmt: skip
     if n_points:
         every = max(1, n_points // 8)
-        style["markevery"] = ((rank * max(1, every // 3)) % every, every)
+        style["markevery"] = ((place * max(1, every // 3)) % every, every)
     return style
 
 
@@ -82,11 +83,12 @@ def _axes_title(ax: Axes, text: str) -> None:
     ax.set_title(_wrap(text, width, 10.0), fontsize=10)
 
 
-def _panels(labels: Sequence[str], *, ncols: int = 3, size: tuple[float, float] = (5.0, 3.6)
-            ) -> tuple[Figure, dict[str, Axes]]:  # fmt: skip
-    cols = min(ncols, len(labels))
+def _panels(series: Sequence[Any]) -> tuple[Figure, dict[str, Axes]]:
+    """One panel per model row of ``series``, three to a line."""
+    labels = _labels(series)
+    cols = min(3, len(labels))
     rows = math.ceil(len(labels) / cols)
-    fig = Figure(figsize=(size[0] * cols, size[1] * rows + 0.6), layout="constrained")
+    fig = Figure(figsize=(5.0 * cols, 3.6 * rows + 0.6), layout="constrained")
     axes = fig.subplots(rows, cols, squeeze=False).ravel()
     for ax in axes[len(labels) :]:
         ax.set_axis_off()
@@ -115,6 +117,25 @@ def _legend(fig: Figure, conditions: Sequence[str], *, bars: bool = False) -> No
     fig.legend(handles=handles, loc="outside lower center", ncols=len(handles), frameon=False)
 
 
+def _finish(
+    fig: Figure, axes: dict[str, Axes], title: str, conditions: Sequence[str], *,
+    bars: bool = False, grid: str = "both", **axis: Any,
+) -> Figure:  # fmt: skip
+    """Every panel titled with its key, ``axis`` properties set and a grid; the figure's title
+    and its legend of ``conditions``."""
+    for label, ax in axes.items():
+        _axes_title(ax, label)
+        ax.set(**axis)
+        ax.grid(axis=grid, alpha=0.3)
+    _title(fig, title)
+    _legend(fig, conditions, bars=bars)
+    return fig
+
+
+def _conditions(series: Sequence[Any]) -> list[str]:
+    return list(dict.fromkeys(s.condition for s in series))
+
+
 def _labels(items: Sequence[Any]) -> list[str]:
     return list(dict.fromkeys(row_label(i.model, i.variant) for i in items))
 
@@ -123,27 +144,22 @@ def _tbs(report: Report) -> Figure | None:
     series = [s for s in report.tbs if s.curve.n]
     if not series:
         return None
-    fig, axes = _panels(_labels(series))
+    fig, axes = _panels(series)
     for s in series:
         ax = axes[row_label(s.model, s.variant)]
         t, mean, sd = np.array(s.curve.t), np.array(s.curve.mean), np.array(s.curve.sd)
         ax.plot(t, mean, lw=2, **line_style(s.condition, len(t)))
         ax.fill_between(t, mean - sd, mean + sd, color=colour(s.condition), alpha=0.12, lw=0)
-    for label, ax in axes.items():
-        _axes_title(ax, label)
-        ax.set(xlabel="step t", ylabel="TBS(t) (0-1)", ylim=(-0.02, 1.02))
-        ax.grid(alpha=0.3)
-    _title(fig, "Temporal Belief Stability (mean ± 1 sd)")
-    _legend(fig, list(dict.fromkeys(s.condition for s in series)))
-    return fig
+    return _finish(fig, axes, "Temporal Belief Stability (mean ± 1 sd)", _conditions(series),
+                   xlabel="step t", ylabel="TBS(t) (0-1)", ylim=(-0.02, 1.02))  # fmt: skip
 
 
 def _pa(report: Report) -> Figure | None:
     groups = [g for g in report.pa if g.values]
     if not groups:
         return None
-    fig, axes = _panels(_labels(groups))
-    conditions = list(dict.fromkeys(g.condition for g in groups))
+    fig, axes = _panels(groups)
+    conditions = _conditions(groups)
     spawns = [s for s in ROOM_SLUGS.values() if any(g.spawn == s for g in groups)]
     width = 0.8 / len(conditions)
     for g in groups:
@@ -154,21 +170,18 @@ def _pa(report: Report) -> Figure | None:
         hatch = CONDITION_LINES.get(g.condition, _OTHER_LINE)[2]
         ax.bar(x, float(np.mean(g.values)), width * 0.95, yerr=sd, capsize=3,
                color=colour(g.condition), alpha=0.85, hatch=hatch, edgecolor="white")  # fmt: skip
-    for label, ax in axes.items():
+    for ax in axes.values():
         ax.set_xticks(range(len(spawns)), [SLUG_ROOMS[s] for s in spawns])
-        _axes_title(ax, label)
-        ax.set(xlabel="spawn room", ylabel="Positional Accuracy (0-1)", ylim=(0, 1.05))
-        ax.grid(axis="y", alpha=0.3)
-    _title(fig, "Positional Accuracy by spawn room and condition (mean ± 1 sd)")
-    _legend(fig, conditions, bars=True)
-    return fig
+    return _finish(fig, axes, "Positional Accuracy by spawn room and condition (mean ± 1 sd)",
+                   conditions, bars=True, grid="y", xlabel="spawn room",
+                   ylabel="Positional Accuracy (0-1)", ylim=(0, 1.05))  # fmt: skip
 
 
 def _miller(report: Report) -> Figure | None:
     series = [s for s in report.miller if s.curve.bins]
     if not series:
         return None
-    fig, axes = _panels(_labels(series))
+    fig, axes = _panels(series)
     width = series[0].curve.width
     for s in series:
         ax = axes[row_label(s.model, s.variant)]
@@ -176,14 +189,10 @@ def _miller(report: Report) -> Figure | None:
         ax.plot(loads, s.curve.probabilities, lw=2, **line_style(s.condition, len(loads)))
         if s.curve.m_star is not None:
             ax.axvline(s.curve.m_star, color=colour(s.condition), ls=":", lw=1.2)
-    for label, ax in axes.items():
-        _axes_title(ax, label)
-        ax.set(xlabel=f"map size m (objects, bin upper edge, w={width})",
-               ylabel="P(forget >= 1 object)", ylim=(-0.02, 1.02))  # fmt: skip
-        ax.grid(alpha=0.3)
-    _title(fig, "Miller's law: forgetting probability by cognitive load (dotted: m*)")
-    _legend(fig, list(dict.fromkeys(s.condition for s in series)))
-    return fig
+    return _finish(fig, axes,
+                   "Miller's law: forgetting probability by cognitive load (dotted: m*)",
+                   _conditions(series), xlabel=f"map size m (objects, bin upper edge, w={width})",
+                   ylabel="P(forget >= 1 object)", ylim=(-0.02, 1.02))  # fmt: skip
 
 
 def _km(report: Report) -> Figure | None:
@@ -206,24 +215,19 @@ def _km(report: Report) -> Figure | None:
             t = np.linspace(0, max(s.km.times), 100)
             ax.plot(t, s.km.coverage * np.exp(-t / efc), color=colour(s.condition), ls=(0, (2, 2)),
                     lw=1)  # fmt: skip
-    for i, label in enumerate(labels):
-        for j, category in enumerate(categories):
-            ax = grid[i][j]
-            _axes_title(ax, f"{label}: {category}")
-            ax.set(xlabel="steps out of view t", ylabel="S(t) (discovered & held)",
-                   ylim=(-0.02, 1.02))  # fmt: skip
-            ax.grid(alpha=0.3)
-    _title(fig, "Coverage-anchored Kaplan-Meier survival, 95 % band (thin dashed: Ebbinghaus fit)")
-    _legend(fig, list(dict.fromkeys(s.condition for s in series)))
-    return fig
+    panels = {f"{label}: {c}": grid[i][j] for i, label in enumerate(labels)
+              for j, c in enumerate(categories)}  # fmt: skip
+    title = "Coverage-anchored Kaplan-Meier survival, 95 % band (thin dashed: Ebbinghaus fit)"
+    return _finish(fig, panels, title, _conditions(series), xlabel="steps out of view t",
+                   ylabel="S(t) (discovered & held)", ylim=(-0.02, 1.02))  # fmt: skip
 
 
 def _sir(report: Report) -> Figure | None:
     series = [s for s in report.sir if s.sir.values]
     if not series:
         return None
-    fig, axes = _panels(_labels(series))
-    conditions = list(dict.fromkeys(s.condition for s in series))
+    fig, axes = _panels(series)
+    conditions = _conditions(series)
     for s in series:
         ax = axes[row_label(s.model, s.variant)]
         pos = conditions.index(s.condition)
@@ -238,14 +242,11 @@ def _sir(report: Report) -> Figure | None:
         marker = CONDITION_LINES.get(s.condition, _OTHER_LINE)[1]
         ax.scatter(pos + jitter, values, s=14, marker=marker, color=colour(s.condition),
                    alpha=0.6)  # fmt: skip
-    for label, ax in axes.items():
+    for ax in axes.values():
         ax.set_xticks(range(len(conditions)), [CONDITION_NAMES.get(c, c) for c in conditions])
-        _axes_title(ax, label)
-        ax.set(xlabel="condition", ylabel="SIR (0-1)", ylim=(-0.02, 1.02))
-        ax.grid(axis="y", alpha=0.3)
-    _title(fig, "Coverage-anchored Spatial Identity Resolution per episode")
-    _legend(fig, conditions)
-    return fig
+    return _finish(fig, axes, "Coverage-anchored Spatial Identity Resolution per episode",
+                   conditions, grid="y", xlabel="condition", ylabel="SIR (0-1)",
+                   ylim=(-0.02, 1.02))  # fmt: skip
 
 
 def _episode_map(report: Report) -> Figure | None:
@@ -296,68 +297,39 @@ def _episode_map(report: Report) -> Figure | None:
     return fig
 
 
-_DRAW: Final[dict[str, Callable[[Report], Figure | None]]] = {
-    "tbs.png": _tbs,
-    "pa_by_spawn.png": _pa,
-    "miller.png": _miller,
-    "km.png": _km,
-    "sir.png": _sir,
-    "episode_map.png": _episode_map,
-}
-
-_WHY_NOT: Final[dict[str, str]] = {
-    "tbs.png": "no non-errored episode with steps and |G_base| > 0",
-    "pa_by_spawn.png": "Positional Accuracy is undefined in every episode",
-    "miller.png": "no step with a non-empty cognitive map",
-    "km.png": "no object category in the ground truth of a non-errored episode",
-    "sir.png": "no episode re-entered a room with mapped objects",
-    "episode_map.png": "no episode ended with a non-empty cognitive map",
+#: Figure file name -> how it is drawn and why it may not be, costliest to draw first (a
+#: 240-episode run of one model): the order in which worker processes take them up.
+_DRAW: Final[dict[str, tuple[Callable[[Report], Figure | None], str]]] = {
+    "km.png": (_km, "no object category in the ground truth of a non-errored episode"),
+    "episode_map.png": (_episode_map, "no episode ended with a non-empty cognitive map"),
+    "pa_by_spawn.png": (_pa, "Positional Accuracy is undefined in every episode"),
+    "sir.png": (_sir, "no episode re-entered a room with mapped objects"),
+    "miller.png": (_miller, "no step with a non-empty cognitive map"),
+    "tbs.png": (_tbs, "no non-errored episode with steps and |G_base| > 0"),
 }
 
 
-def draw_figures(report: Report) -> tuple[dict[str, Figure], dict[str, str]]:
-    """Every figure of the report by file name, and for each figure not drawn, why not."""
-    drawn: dict[str, Figure] = {}
-    skipped: dict[str, str] = {}
-    for spec in FIGURES:
-        fig = _DRAW[spec.name](report)
-        if fig is None:
-            skipped[spec.name] = _WHY_NOT[spec.name]
-        else:
-            drawn[spec.name] = fig
-    return drawn, skipped
-
-
-#: The figures from the costliest to draw to the cheapest (a 240-episode run of one model),
-#: the order in which worker processes take them up.
-_COSTLIEST_FIRST: Final = (
-    "km.png", "episode_map.png", "pa_by_spawn.png", "sir.png", "miller.png", "tbs.png",
-)  # fmt: skip
+def draw(report: Report, name: str) -> Figure | None:
+    """Figure ``name`` of the report; None when the report holds nothing to draw in it."""
+    return _DRAW[name][0](report)
 
 
 def _render(report: Report, name: str) -> bytes | None:
-    """The PNG of figure ``name``; None when the report holds nothing to draw in it."""
-    fig = _DRAW[name](report)
+    fig = draw(report, name)
     return None if fig is None else _png(fig)
 
 
 def render_figures(
     report: Report, *, processes: int = 1
 ) -> tuple[dict[str, bytes], dict[str, str]]:
-    """PNG bytes per figure file name, and for each figure not drawn, why not.
-
-    ``processes`` > 1 draws the figures in that many forked worker processes (where forking
-    is safe, else here), each taking up the next one (costliest first) when it is free: every
-    figure is still drawn once, by the same code, to the same bytes, in less wall time where
-    there are cores to spare."""
-    names = [spec.name for spec in FIGURES]
+    """PNG bytes per figure file name (in :data:`FIGURES` order), and for each figure not
+    drawn, why not. ``processes`` > 1 draws them in that many forked workers where forking is
+    safe, each taking up the next (costliest first): the same code, the same bytes."""
     workers = pool(processes)
     if workers is not None:
-        order = sorted(names, key=_COSTLIEST_FIRST.index)
         with workers:
-            done = dict(zip(order, workers.map(_render, [report] * len(order), order), strict=True))
-        pngs = [done[name] for name in names]
+            done = dict(zip(_DRAW, workers.map(_render, [report] * len(_DRAW), _DRAW), strict=True))
     else:
-        pngs = [_render(report, name) for name in names]
-    drawn = {name: png for name, png in zip(names, pngs, strict=True) if png is not None}
-    return drawn, {name: _WHY_NOT[name] for name in names if name not in drawn}
+        done = {name: _render(report, name) for name in _DRAW}
+    drawn = {f.name: png for f in FIGURES if (png := done[f.name]) is not None}
+    return drawn, {f.name: _DRAW[f.name][1] for f in FIGURES if f.name not in drawn}

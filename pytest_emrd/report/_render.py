@@ -11,10 +11,8 @@ from pytest_emrd.errors import check_choice
 from pytest_emrd.gate import Verdict
 from pytest_emrd.metrics import EpisodeMetrics
 from pytest_emrd.report._build import build_report
-from pytest_emrd.report._compare import Comparison
-from pytest_emrd.report._compare_doc import compare_document
-from pytest_emrd.report._html import render_html
-from pytest_emrd.report._markdown import render_markdown
+from pytest_emrd.report._compare import Comparison, compare_document
+from pytest_emrd.report._document import Document, render_html, render_markdown
 from pytest_emrd.report._model import Report
 from pytest_emrd.report._sections import report_document, summary_document
 from pytest_emrd.run import StoredEpisode
@@ -32,8 +30,9 @@ def check_formats(formats: Iterable[str]) -> list[str]:
     return wanted
 
 
-def report_json(report: Report) -> str:
-    """Every aggregate of the report as strict JSON (non-finite floats as strings)."""
+def report_json(report: Report | Comparison) -> str:
+    """Every aggregate of a report (or comparison) as strict JSON (non-finite floats as
+    strings)."""
     return json.dumps(json_safe(report.to_dict()), indent=1, allow_nan=False) + "\n"
 
 
@@ -43,19 +42,29 @@ def render_files(
     """File name -> content: ``report.md`` with its PNGs, ``report.html``, ``report.json``;
     ``processes`` > 1 draws the figures in that many worker processes (same bytes)."""
     wanted = check_formats(formats)
-    files: dict[str, bytes] = {}
+    doc: Document | None = None
+    pngs: dict[str, bytes] = {}
     if "md" in wanted or "html" in wanted:
         from pytest_emrd.report._plots import render_figures  # matplotlib: imported on use
 
         pngs, skipped = render_figures(report, processes=processes)
         doc = report_document(report, skipped)
-        if "md" in wanted:
-            files["report.md"] = render_markdown(doc).encode()
-            files.update(pngs)
-        if "html" in wanted:
-            files["report.html"] = render_html(doc, pngs).encode()
+    return _files("report", wanted, doc, pngs, report)
+
+
+def _files(
+    stem: str, wanted: list[str], doc: Document | None, pngs: dict[str, bytes],
+    data: Report | Comparison,
+) -> dict[str, bytes]:  # fmt: skip
+    """``<stem>.md`` with the PNGs, ``<stem>.html`` and ``<stem>.json``, as ``wanted``."""
+    files: dict[str, bytes] = {}
+    if doc is not None and "md" in wanted:
+        files[f"{stem}.md"] = render_markdown(doc).encode()
+        files.update(pngs)
+    if doc is not None and "html" in wanted:
+        files[f"{stem}.html"] = render_html(doc, pngs).encode()
     if "json" in wanted:
-        files["report.json"] = report_json(report).encode()
+        files[f"{stem}.json"] = report_json(data).encode()
     return files
 
 
@@ -67,12 +76,9 @@ def step_summary_markdown(
     episode_metrics: Sequence[EpisodeMetrics] | None = None,
 ) -> str:
     """Markdown for a PR comment or ``$GITHUB_STEP_SUMMARY``: run overview, what is missing,
-    the gate table, Exploration Competence and FPSG (no figures, no sentence encoder).
-
-    ``thresholds_source`` names the thresholds file in the gate section (default
-    ``thresholds`` when there are verdicts); ``episode_metrics``, the episodes' metrics when
-    the caller measured them already (as :func:`build_report` takes them).
-    """
+    the gate table, Exploration Competence and FPSG (no figures, no sentence encoder);
+    ``thresholds_source`` names the thresholds file (default ``thresholds`` when there are
+    verdicts), ``episode_metrics`` as :func:`build_report` takes them."""
     source = thresholds_source or ("thresholds" if verdicts else None)
     report = build_report(
         episodes,
@@ -86,14 +92,4 @@ def step_summary_markdown(
 
 def render_comparison(comparison: Comparison, formats: Iterable[str] = FORMATS) -> dict[str, bytes]:
     """File name -> content of a run comparison: ``compare.md``, ``.html``, ``.json``."""
-    wanted = check_formats(formats)
-    doc = compare_document(comparison)
-    files: dict[str, bytes] = {}
-    if "md" in wanted:
-        files["compare.md"] = render_markdown(doc).encode()
-    if "html" in wanted:
-        files["compare.html"] = render_html(doc, {}).encode()
-    if "json" in wanted:
-        data = json_safe(comparison.to_dict())
-        files["compare.json"] = (json.dumps(data, indent=1, allow_nan=False) + "\n").encode()
-    return files
+    return _files("compare", check_formats(formats), compare_document(comparison), {}, comparison)

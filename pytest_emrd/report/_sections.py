@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from typing import Final, TypeVar
+from typing import Any, Final
 
 import numpy as np
 
@@ -15,6 +15,7 @@ from pytest_emrd.report._document import (
     Document,
     FigureRef,
     Paragraph,
+    Row,
     Section,
     Table,
     mean_sd,
@@ -22,11 +23,16 @@ from pytest_emrd.report._document import (
     pct,
     pval,
 )
-from pytest_emrd.report._model import InterventionTable, Report, row_label
-from pytest_emrd.report._style import CONDITION_NAMES, FIGURES, FigureSpec
+from pytest_emrd.report._model import (
+    CONDITION_NAMES,
+    FIGURES,
+    CellRow,
+    InterventionTable,
+    Report,
+    row_label,
+)
 from pytest_emrd.rooms import FOCAL_COLUMNS, ROOM_LETTERS, SLUG_ROOMS
 
-R = TypeVar("R")
 _LETTER_ROOMS = {letter: room for room, letter in ROOM_LETTERS.items()} | {"X": "Other"}
 
 
@@ -42,18 +48,17 @@ R2_MEANINGLESS: Final = 0.0
 
 
 def _pivot(
-    report: Report, rows: Sequence[R], fmt: Callable[[R], Sequence[str]], width: int
-) -> list[tuple[Cell, ...]]:
+    report: Report, rows: Sequence[CellRow], fmt: Callable[[Any], Sequence[str]], width: int
+) -> list[Row]:
     """One line per model row, ``width`` cells per condition of the run (blank when absent)."""
     table: dict[str, dict[str, Sequence[str]]] = {}
     for r in rows:
-        key = row_label(r.model, r.variant)  # type: ignore[attr-defined]
-        table.setdefault(key, {})[r.condition] = fmt(r)  # type: ignore[attr-defined]
+        table.setdefault(row_label(r.model, r.variant), {})[r.condition] = fmt(r)
     out = []
     for label, by_condition in table.items():
-        cells = [Cell(label)]
+        cells = [label]
         for c in report.overview.conditions:
-            cells += [Cell(t) for t in by_condition.get(c, ["—"] * width)]
+            cells += [t for t in by_condition.get(c, ["—"] * width)]
         out.append(tuple(cells))
     return out
 
@@ -75,9 +80,8 @@ def overview(report: Report) -> Section:
     ]
     if o.usage:
         rows = tuple(
-            (Cell(u.model), Cell(str(u.episodes)), Cell(f"{u.prompt_tokens:,}"),
-             Cell(f"{u.completion_tokens:,}"),
-             Cell("n/a" if u.cost_usd is None else f"${u.cost_usd:,.2f}"))
+            (u.model, str(u.episodes), f"{u.prompt_tokens:,}", f"{u.completion_tokens:,}",
+             "n/a" if u.cost_usd is None else f"${u.cost_usd:,.2f}")
             for u in o.usage
         )  # fmt: skip
         header = ("Model", "Episodes", "Prompt tokens", "Completion tokens", "Est. cost")
@@ -102,11 +106,9 @@ def gates(report: Report) -> Section:
         return Section("gates", "Gates", (Paragraph(why),))
     passed = sum(v.passed for v in g.verdicts)
     rows = tuple(
-        (Cell(v.model if v.layouts == "paper" else f"{v.model}@{v.layouts}"),
-         Cell(_cond(v.condition)), Cell(v.variant), Cell(v.metric),
-         Cell(num(v.value)), Cell(f"[{num(v.ci_low)}, {num(v.ci_high)}]"), Cell(str(v.n)),
-         Cell(v.bound_text), Cell("PASS" if v.passed else "FAIL", bold=not v.passed),
-         Cell(v.reason))
+        (v.model if v.layouts == "paper" else f"{v.model}@{v.layouts}", _cond(v.condition),
+         v.variant, v.metric, num(v.value), f"[{num(v.ci_low)}, {num(v.ci_high)}]", str(v.n),
+         v.bound_text, Cell("PASS" if v.passed else "FAIL", bold=not v.passed), v.reason)
         for v in g.verdicts
     )  # fmt: skip
     header = ("Model", "Condition", "Prompt", "Metric", "Value", "95% CI", "n", "Bound",
@@ -137,9 +139,9 @@ def positional_accuracy(report: Report) -> Section:
         values = np.asarray(g.values, float)
         sd = float(np.std(values, ddof=1)) if len(values) > 1 else None
         mean = float(values.mean()) if len(values) else None
-        rows.append((Cell(row_label(g.model, g.variant)), Cell(_cond(g.condition)),
-                     Cell(SLUG_ROOMS.get(g.spawn, g.spawn)),
-                     Cell(f"{mean_sd(mean, sd, digits=3)} (n={len(values)})")))  # fmt: skip
+        room, shown = SLUG_ROOMS.get(g.spawn, g.spawn), mean_sd(mean, sd, digits=3)
+        rows.append((row_label(g.model, g.variant), _cond(g.condition), room,
+                     f"{shown} (n={len(values)})"))  # fmt: skip
     if not rows:
         text = "Positional Accuracy is undefined in every episode (|G_base| = 0)."
         return Section("pa", "Positional Accuracy", (Paragraph(text),))
@@ -151,14 +153,13 @@ def positional_accuracy(report: Report) -> Section:
     return Section("pa", "Positional Accuracy", (Table("pa", caption, header, tuple(rows)),))
 
 
-def _focal_cells(row: FocalRow) -> tuple[Cell, ...]:
+def _focal_cells(row: FocalRow) -> Row:
     return tuple(Cell(pct(row.fractions[c]), shade=row.fractions[c]) for c in FOCAL_COLUMNS)
 
 
-def _x_split(row: FocalRow) -> tuple[Cell, Cell, Cell]:
+def _x_split(row: FocalRow) -> Row:
     share = row.spawn_share
-    return (Cell(str(row.named_other)), Cell(str(row.no_term)),
-            Cell("n/a" if share is None else pct(share)))  # fmt: skip
+    return str(row.named_other), str(row.no_term), "n/a" if share is None else pct(share)
 
 
 def _spawn_order(item: tuple[str, FocalRow]) -> int:
@@ -174,15 +175,13 @@ def focal(report: Report) -> Section:
         rows = []
         for t in (t for t in report.focal if row_label(t.model, t.variant) == label):
             for spawn, row in sorted(t.distribution.by_spawn.items(), key=_spawn_order):
-                rows.append((Cell(_cond(t.condition)), Cell(SLUG_ROOMS.get(spawn, spawn)),
-                             Cell(str(row.n)), *_focal_cells(row), *_x_split(row),
-                             Cell("")))  # fmt: skip
+                rows.append((_cond(t.condition), SLUG_ROOMS.get(spawn, spawn), str(row.n),
+                             *_focal_cells(row), *_x_split(row), ""))  # fmt: skip
             c = t.consensus
             share = "n/a" if c.share is None else f"{c.letter or '—'} {pct(c.share)}%"
             overall = t.distribution.overall
-            rows.append((Cell(_cond(t.condition)), Cell("all spawns", bold=True),
-                         Cell(str(overall.n)), *_focal_cells(overall), *_x_split(overall),
-                         Cell(share)))  # fmt: skip
+            rows.append((_cond(t.condition), Cell("all spawns", bold=True), str(overall.n),
+                         *_focal_cells(overall), *_x_split(overall), share))  # fmt: skip
         header = ("Condition", "Start", "n", *FOCAL_COLUMNS, "X: other room", "X: no Term",
                   "Spawn room (%)", "Consensus")  # fmt: skip
         caption = (f"{label}: chosen focal point (%) by spawn room — C Conference, O Office, "
@@ -195,10 +194,9 @@ def focal(report: Report) -> Section:
 
 def fpsg(report: Report) -> Section:
     rows = tuple(
-        (Cell(_cond(r.condition)), Cell(row_label(r.model, r.variant)), Cell(str(s.runs)),
-         Cell(pct(s.never_visited)), Cell(pct(s.any_bias)),
-         Cell(mean_sd(s.local_mean, s.local_sd, digits=3)),
-         Cell(mean_sd(s.global_mean, s.global_sd, digits=3)))
+        (_cond(r.condition), row_label(r.model, r.variant), str(s.runs), pct(s.never_visited),
+         pct(s.any_bias), mean_sd(s.local_mean, s.local_sd, digits=3),
+         mean_sd(s.global_mean, s.global_sd, digits=3))
         for r in report.fpsg
         for s in (r.summary,)
     )  # fmt: skip
@@ -210,18 +208,9 @@ def fpsg(report: Report) -> Section:
 
 def ebbinghaus(report: Report) -> Section:
     conditions = report.overview.conditions
-    table: dict[str, dict[str, tuple[str, str]]] = {}
-    for r in report.ebbinghaus:
-        p = r.fit.pooled
-        table.setdefault(row_label(r.model, r.variant), {})[r.condition] = (
-            num(p.efc, 1),
-            num(p.r2, 2),
-        )
-    rows = tuple(
-        (Cell(label), *(Cell(by.get(c, ("—", "—"))[0]) for c in conditions),
-         *(Cell(by.get(c, ("—", "—"))[1]) for c in conditions))
-        for label, by in table.items()
-    )  # fmt: skip
+    efc = _pivot(report, report.ebbinghaus, lambda r: (num(r.fit.pooled.efc, 1),), 1)
+    r2 = _pivot(report, report.ebbinghaus, lambda r: (num(r.fit.pooled.r2, 2),), 1)
+    rows = tuple((*a, *b[1:]) for a, b in zip(efc, r2, strict=True))
     header = ("Model", *(f"EFC {_cond(c)}" for c in conditions),
               *(f"R² {_cond(c)}" for c in conditions))  # fmt: skip
     caption = ("Ebbinghaus memory strength EFC (steps; inf: nothing forgotten) and R² of "
@@ -239,10 +228,10 @@ def ebbinghaus(report: Report) -> Section:
             f"compared:** {'; '.join(poor)}."))  # fmt: skip
     if report.anova:
         anova_rows = tuple(
-            (Cell(row_label(a.model, a.variant)), Cell(num(a.anova.statistic, 2)),
-             Cell(f"{a.anova.df_between:g}, {a.anova.df_within:g}"), Cell(pval(a.anova.p_value)),
-             Cell(", ".join(f"{_cond(c)} {n}" for c, n in a.anova.groups.items()) or "—"),
-             Cell(a.anova.reason or ""))
+            (row_label(a.model, a.variant), num(a.anova.statistic, 2),
+             f"{a.anova.df_between:g}, {a.anova.df_within:g}", pval(a.anova.p_value),
+             ", ".join(f"{_cond(c)} {n}" for c, n in a.anova.groups.items()) or "—",
+             a.anova.reason or "")
             for a in report.anova
         )  # fmt: skip
         header = ("Model", "F", "df", "p", "Episodes used", "Note")
@@ -253,18 +242,12 @@ def ebbinghaus(report: Report) -> Section:
 
 def serial_position(report: Report) -> Section:
     """Both estimators: the paper's Eq. SPE and the censoring-aware MLE per third."""
-    paper = _pivot(
-        report,
-        report.serial_position,
-        lambda r: (num(r.spe.early, 1), num(r.spe.middle, 1), num(r.spe.late, 1)),
-        3,
-    )
-    mle = _pivot(
-        report,
-        report.serial_position,
-        lambda r: (num(r.spe.mle_early, 1), num(r.spe.mle_middle, 1), num(r.spe.mle_late, 1)),
-        3,
-    )
+
+    def thirds(*fields: str) -> list[Row]:
+        return _pivot(report, report.serial_position,
+                      lambda r: [num(getattr(r.spe, f), 1) for f in fields], 3)  # fmt: skip
+
+    paper, mle = thirds("early", "middle", "late"), thirds("mle_early", "mle_middle", "mle_late")
     header = ("Model", *_per_condition(report, "E", "M", "L"))
     caption = ("Serial Position Effect (paper's Eq. SPE): mean observed TTF (steps) of Early / "
                "Middle / Late discoveries, episode-end censoring ignored")  # fmt: skip
@@ -278,18 +261,17 @@ def serial_position(report: Report) -> Section:
 
 
 def _intervention(t: InterventionTable) -> list[Block]:
-    def shares(row: FocalRow) -> tuple[Cell, ...]:
+    def shares(row: FocalRow) -> Row:
         f = row.fractions
         other = None if not row.n else 1.0 - f["C"] - f["E"]
-        return (Cell(str(row.n)), Cell(pct(f["C"])), Cell(pct(f["E"])), Cell(pct(other)))
+        return (str(row.n), pct(f["C"]), pct(f["E"]), pct(other))
 
-    rows = [(Cell("default"), *shares(t.reference), *(Cell("—"),) * 4)]
+    rows = [("default", *shares(t.reference), *("—",) * 4)]
     for v in t.variants:
         chi = v.chi_square
-        rows.append((Cell(v.variant), *shares(v.choices),
-                     Cell(pval(v.fisher.p_value) if v.fisher else "n/a"),
-                     Cell(f"{num(chi.statistic, 2)} ({chi.dof})"), Cell(pval(chi.p_value)),
-                     Cell(num(v.cramers_v, 2))))  # fmt: skip
+        rows.append((v.variant, *shares(v.choices), pval(v.fisher.p_value) if v.fisher else "n/a",
+                     f"{num(chi.statistic, 2)} ({chi.dof})", pval(chi.p_value),
+                     num(v.cramers_v, 2)))  # fmt: skip
     header = ("Prompt", "n", "Conf. (%)", "Entr. (%)", "Other (%)", "p (Fisher, Conf. vs other)",
               "χ² (df), C/O/K/E/X", "p (χ²)", "Cramér's V")  # fmt: skip
     caption = f"{t.model}, {_cond(t.condition)}: prompt variants against the default prompt"
@@ -305,8 +287,8 @@ def _intervention(t: InterventionTable) -> list[Block]:
     if inventory is not None:
         with_, without = t.reference, inventory.choices
         inv_rows = tuple(
-            (Cell(_LETTER_ROOMS[c]), Cell(str(with_.counts[c])), Cell(pct(with_.fractions[c])),
-             Cell(str(without.counts[c])), Cell(pct(without.fractions[c])))
+            (_LETTER_ROOMS[c], str(with_.counts[c]), pct(with_.fractions[c]),
+             str(without.counts[c]), pct(without.fractions[c]))
             for c in ("C", "K", "E", "O", "X")
         )  # fmt: skip
         header = ("Chosen room", "n with inventory", "% with", "n without inventory",
@@ -330,9 +312,9 @@ def reasoning(report: Report) -> Section:
     if r.unavailable:
         return Section("reasoning", "Representative reasoning", (Paragraph(r.unavailable),))
     rows = tuple(
-        (Cell(x.model), Cell(num(x.representative.mean_cosine_distance, 2)),
-         Cell(f"{x.representative.n} ({x.representative.skipped} without)"),
-         Cell(x.representative.statement or "no terminal reasoning"))
+        (x.model, num(x.representative.mean_cosine_distance, 2),
+         f"{x.representative.n} ({x.representative.skipped} without)",
+         x.representative.statement or "no terminal reasoning")
         for x in r.rows
     )  # fmt: skip
     header = ("Model", "d̄ (cohesion)", "Rationales", "Most representative terminal reasoning")
@@ -343,14 +325,13 @@ def reasoning(report: Report) -> Section:
 
 def figures(report: Report, skipped: dict[str, str]) -> Section:
     """Every figure; the episode map's caption names its episode (``emrd report --episode``)."""
-    shown = report.episode_map.case_id if report.episode_map is not None else None
-
-    def caption(f: FigureSpec) -> str:
-        if f.name != "episode_map.png" or shown is None:
-            return f.caption
-        return f"{f.caption} Episode {shown} (choose another with --episode CASE_ID)."
-
-    refs = tuple(FigureRef(f.name, f.title, caption(f), skipped.get(f.name)) for f in FIGURES)
+    shown = report.episode_map and report.episode_map.case_id
+    named = f" Episode {shown} (choose another with --episode CASE_ID)." if shown else ""
+    refs = tuple(
+        FigureRef(f.name, f.title, f.caption + (named if f.name == "episode_map.png" else ""),
+                  skipped.get(f.name))
+        for f in FIGURES
+    )  # fmt: skip
     return Section("figures", "Figures", refs)
 
 

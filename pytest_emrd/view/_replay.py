@@ -1,10 +1,9 @@
 """What the model saw, again: frames re-rendered from the spec and the actions (world I/O).
 
-Cassettes keep a frame's pixel digest, never its image, and a trajectory keeps neither. The
-viewer rebuilds the world of the spec through :func:`pytest_emrd.episode.start_world` (the
-episode loop's own entry point), replays the recorded actions exactly as the loop executed
-them (:func:`pytest_emrd.episode.world_action`), and compares the digest of each re-rendered
-frame with the digest the cassette recorded for that step.
+Cassettes keep a frame's pixel digest, never its image. The viewer rebuilds the spec's world
+through the episode loop's own :func:`~pytest_emrd.episode.start_world`, replays the recorded
+actions as the loop did (:func:`~pytest_emrd.episode.world_action`), and compares each
+re-rendered frame's digest with the one the cassette recorded for that step.
 """
 
 from __future__ import annotations
@@ -19,7 +18,6 @@ from pytest_emrd.agent import build_system_prompt
 from pytest_emrd.cassette import FormatError, decode, found_cassette
 from pytest_emrd.cassette._redact import DIGEST
 from pytest_emrd.episode import build_simulator, start_world, user_turn, world_action
-from pytest_emrd.errors import EmrdError
 from pytest_emrd.trajectory import Trajectory
 from pytest_emrd.world import WorldPose
 
@@ -49,12 +47,9 @@ class Frame:
 
 
 def replay_frames(traj: Trajectory) -> Replay:
-    """The frame and user text shown at each step of ``traj`` (``len(traj.steps)`` frames),
-    the system prompt and the spawn pose.
-
-    Raises :class:`EmrdError` when the spec's backend cannot be built here (AI2-THOR without
-    its extra or a GPU).
-    """
+    """The frame and user text shown at each step of ``traj``, the system prompt and the spawn
+    pose; :class:`EmrdError` when the spec's backend cannot be built here (AI2-THOR without
+    its extra or a GPU)."""
     sim = build_simulator(traj.spec.backend)
     try:
         spec = traj.spec
@@ -123,11 +118,3 @@ def recorded_digests(traj: Trajectory, cassettes: Path | None) -> Recorded:
         note = (f"{path} holds {len(digests)} requests for {len(traj.steps)} steps: steps "
                 "are checked in order up to the shorter")  # fmt: skip
     return Recorded(tuple(digests), note)
-
-
-def frames_or_note(traj: Trajectory) -> tuple[Replay | None, str | None]:
-    """:func:`replay_frames`, or None and why (a backend this machine cannot run)."""
-    try:
-        return replay_frames(traj), None
-    except EmrdError as exc:
-        return None, f"frames not re-rendered: {exc}"

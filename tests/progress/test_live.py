@@ -11,17 +11,20 @@ from pytest_emrd.agent import load_registry
 from pytest_emrd.cassette import run_with_cassette
 from pytest_emrd.episode import agent_runner, protocol_version
 from pytest_emrd.progress import LiveBoard, StatusFile, read_statuses, render_line, watch_episode
-from pytest_emrd.progress._status import WorkerStatus
+from pytest_emrd.progress._live import WorkerStatus
 from pytest_emrd.trajectory import EpisodeSpec
 
 ROOT = Path(__file__).resolve().parents[2]
 
 
-def test_a_watched_live_episode_logs_steps_counts_retries_and_publishes(flaky, tmp_path, caplog):
+def test_a_watched_live_episode_logs_steps_counts_retries_and_publishes(
+    flaky, tmp_path, caplog, monkeypatch
+):
+    monkeypatch.setenv("PYTEST_XDIST_WORKER", "gw7")
     registry = load_registry(flaky.registry_file(tmp_path))
     spec = EpisodeSpec("flaky", "baseline", "office", 0, modality="both")
     runner = agent_runner(registry)
-    status = StatusFile(tmp_path / "run", worker="gw7")
+    status = StatusFile(tmp_path / "run")
 
     def run(on_step):
         return run_with_cassette(
@@ -113,7 +116,7 @@ def test_the_live_line_is_concise():
 def test_the_board_prints_retries_at_once_and_steps_at_most_every_interval(tmp_path):
     now = [0.0]
     board = LiveBoard(tmp_path, total=4, interval=10.0, clock=lambda: now[0])
-    status = StatusFile(tmp_path, worker="main")
+    status = StatusFile(tmp_path)
     assert board.poll() is None, "nothing published yet"
     status.update(case="scout-baseline-office-ep00", step=1, max_steps=50)
     assert board.poll().endswith("step 1/50")

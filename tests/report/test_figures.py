@@ -11,7 +11,7 @@ from matplotlib.lines import Line2D
 from matplotlib.text import Text
 
 from pytest_emrd.report import FIGURES, build_report
-from pytest_emrd.report._plots import draw_figures
+from pytest_emrd.report._plots import draw
 from pytest_emrd.trajectory import Trajectory
 
 
@@ -28,9 +28,9 @@ def figures(variant_grid: list[Trajectory]) -> dict[str, Figure]:
         variant_grid + _rename(variant_grid[:24], "scout-decay-8-with-a-long-name", "no_inventory"),
         with_reasoning=False,
     )
-    drawn = {f"one/{k}": v for k, v in draw_figures(one)[0].items()}
-    drawn.update({f"many/{k}": v for k, v in draw_figures(many)[0].items()})
-    return drawn
+    drawn = {f"{which}/{f.name}": draw(report, f.name)
+             for which, report in (("one", one), ("many", many)) for f in FIGURES}  # fmt: skip
+    return {name: fig for name, fig in drawn.items() if fig is not None}
 
 
 def test_every_figure_is_drawn(figures: dict[str, Figure]) -> None:
