@@ -1,16 +1,6 @@
-"""Explaining a replay that failed, keeping the cause: drift, modality, unreadable recording.
-
-Three causes, three messages, each ending with the command that fixes it:
-
-* **drift** — the episode now sends a request the cassette does not hold (the world, the
-  prompt or the agent changed): the first differing field, with a context window around
-  the first differing character of a text, and the re-record command;
-* **modality mismatch** — the run shows the model another modality (frames, symbolic list)
-  than the recording did: the two modalities and how to run with the recorded one;
-* **unreadable recorded response** — a recorded response was played and the client asked
-  for the same request again (a retry), so the recorded body is not a reply the client can
-  read: the response's position, status and the start of its body.
-"""
+"""Explaining a replay that failed, each cause with the command that fixes it: drift (the
+first differing field of a request the cassette does not hold), a modality mismatch, and
+an unreadable recorded response (one the client asked for again: a retry)."""
 
 from __future__ import annotations
 

@@ -76,25 +76,17 @@ def run_with_cassette(
     """Run ``run(spec, live=...)`` with the model traffic recorded to / replayed from its cassette.
 
     ``run`` must behave like :func:`pytest_emrd.episode.run_episode`: failures become an
-    ``errored`` trajectory, never an exception. An errored episode leaves no cassette behind;
-    its ``error`` is replaced by a precise cause when the cassette explains it (missing file
-    in ``none`` mode, drift, a modality other than the recorded one, a recorded response the
-    client could not read), each with the command that fixes it, built for ``invocation``
-    (the test paths and user registry of the run). The error text is scrubbed of secrets. A
-    corrupted, edited or stale cassette raises :class:`~pytest_emrd.errors.CassetteError`.
-    A recorded episode whose cassette cannot be written (a full disk, a read-only folder)
-    raises the :class:`OSError`; with ``keep_unsaved`` it raises nothing, and the run's
-    ``unsaved`` holds the cassette's bytes and the cause, for the caller to keep.
+    ``errored`` trajectory, never an exception. An errored episode leaves no cassette behind,
+    and its scrubbed ``error`` becomes the cause the cassette explains (missing file in
+    ``none`` mode, drift, another modality, an unreadable recorded response) with the command
+    that fixes it, built for ``invocation``. A corrupted, edited or stale cassette raises
+    :class:`~pytest_emrd.errors.CassetteError`; a cassette that cannot be written raises the
+    :class:`OSError`, or with ``keep_unsaved`` is handed back in the run's ``unsaved``.
 
-    The cassette of an episode in another modality than its model's default (``modality_of``)
-    has its own path (:func:`~._paths.cassette_path`). Under ``new_episodes`` an episode whose
-    replay drifts is stopped at the first request the cassette does not hold and recorded
-    again whole, as under ``all``: its cassette is replaced by the new run's interactions
-    only, never appended to.
-
-    An episode that may record holds its cassette's lock (:func:`~._persister.writer_lock`)
-    while it runs: a second run of the same episode waits, then replays what the first one
-    recorded (in ``once`` mode), or refuses after ``lock_timeout_s`` seconds.
+    Under ``new_episodes`` an episode whose replay drifts is stopped and recorded again whole,
+    as under ``all``. An episode that may record holds its cassette's lock
+    (:func:`~._persister.writer_lock`): a second run of it waits, then replays what the first
+    recorded, or refuses after ``lock_timeout_s`` seconds.
     """
     check_choice("record_mode", record_mode, RECORD_MODES)
     check_choice("matching", matching, MATCHING_MODES)

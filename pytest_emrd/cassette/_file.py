@@ -1,36 +1,9 @@
 """The cassette file: a vcrpy cassette in vcrpy's own JSON serializer, compressed with xz.
 
-``xz -dc ep00.json.xz`` (or ``emrd cassettes show ep00.json.xz``) prints a plain vcrpy
-cassette, which ``vcr.use_cassette(path, serializer="json")`` loads once decompressed
-(abridged here; keys are sorted, bodies are strings):
-
-.. code-block:: json
-
-    {
-        "interactions": [
-            {
-                "request": {
-                    "body": "{\"max_tokens\":4096,\"messages\":[...],\"model\":\"scout\"}",
-                    "headers": {"Content-Type": ["application/json"]},
-                    "method": "POST",
-                    "uri": "http://127.0.0.1:8123/v1/chat/completions"
-                },
-                "response": {
-                    "body": {"string": "{\"choices\":[...],\"usage\":{...}}"},
-                    "headers": {"content-type": ["application/json"]},
-                    "status": {"code": 200, "message": "OK"}
-                }
-            }
-        ],
-        "metadata": {"emrd": {"digest": "sha256:6f1c...", "protocol": "builtin-4+p2"}},
-        "version": 1
-    }
-
-Request bodies are stored redacted and canonical (:mod:`._redact`): frames travel as their
-pixel digests (``pixels:<sha256>``) and no credential reaches the file. ``metadata`` is
-vcrpy's own place for values stored beside the interactions; ``emrd.protocol`` is the world
-and prompt protocol the traffic was recorded under, and ``emrd.digest`` covers it and every
-interaction, so a file edited by hand is refused on load.
+``xz -dc ep00.json.xz`` prints a plain vcrpy cassette (fields: docs/cassettes.md). Request
+bodies are stored redacted and canonical (:mod:`._redact`). ``metadata.emrd.protocol`` is
+the world and prompt protocol the traffic was recorded under, and ``metadata.emrd.digest``
+covers it and every interaction, so a file edited by hand is refused on load.
 
 JSON rather than YAML: the same document loads ten times faster (a replayed grid loads
 every cassette). The same traffic always gives the same bytes: keys are sorted, and xz runs
@@ -225,16 +198,3 @@ def decode(blob: bytes) -> CassetteData:
     except (KeyError, TypeError) as exc:
         raise FormatError(f"malformed interaction ({type(exc).__name__}: {exc})") from exc
     return CassetteData(protocol, requests, responses, frozenset(emrd.get("raw", ())))
-
-
-def same_interactions(a: CassetteData, b: CassetteData) -> bool:
-    """Whether two cassettes hold the same protocol and interactions, byte for byte."""
-
-    def requests(data: CassetteData) -> list[tuple[Any, ...]]:
-        return [(r.method, r.uri, r.body, sorted(r.headers.items())) for r in data.requests]
-
-    return (
-        a.protocol == b.protocol
-        and requests(a) == requests(b)
-        and list(a.responses) == list(b.responses)
-    )

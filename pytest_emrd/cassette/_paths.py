@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import shlex
 from collections import Counter
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Final
@@ -25,19 +25,11 @@ ModalityOf = Callable[[str], str]
 
 def cassette_path(root: Path, spec: EpisodeSpec, *, modality_of: ModalityOf | None = None) -> Path:
     """``<root>/<model>/<condition>/<variant>/<spawn>/ep<NN>.json.xz`` on the builtin world
-    under the paper protocol, ``<root>/<backend>/<model>/...`` on any other backend
-    (``cassettes/ai2thor/gemini/...``), and ``.../layouts-generated/<model>/...`` under
-    generated layouts (``cassettes/layouts-generated/scout/...``).
-
-    The builtin paper-protocol path carries no prefix so the committed cassettes keep their
-    place; the other backends and generated layouts get their own trees, so a recording never
-    answers a run of another world (or the reverse) even when a model happens to be named
-    like a backend.
-
-    An episode in another modality than its model's default (``modality_of``, the registry)
-    lives in a ``<variant>+<modality>`` folder (``cassettes/scout/baseline/default+text/...``),
-    so recording it never replaces the default-modality cassette; the default modality keeps
-    the plain folder. Without ``modality_of``, ``spec.modality`` is taken as the default.
+    under the paper protocol; another backend and generated layouts get their own trees
+    (``<root>/<backend>/...``, ``.../layouts-generated/...``) so a recording never answers a
+    run of another world. An episode in another modality than its model's default
+    (``modality_of``, the registry; without it ``spec.modality`` is the default) lives in a
+    ``<variant>+<modality>`` folder. Layout and reasons: docs/cassettes.md.
     """
     base = root if spec.backend == "builtin" else root / spec.backend
     if spec.layouts != "paper":
@@ -98,7 +90,7 @@ def record_command(
     works verbatim for a model of a user registry; ``cassettes`` overrides the invocation's.
     """
     one = isinstance(specs, EpisodeSpec)
-    group = [specs] if isinstance(specs, EpisodeSpec) else list(specs)
+    group = [specs] if one else list(specs)
     how = invocation or Invocation()
     first = group[0]
     args = ["pytest", *how.paths]
@@ -113,8 +105,7 @@ def record_command(
     if first.layouts != "paper":
         args.append(f"--emrd-layouts={first.layouts}")
     args += [f"--emrd-backend-option={o}" for o in how.backend_options]
-    modalities = {s.modality for s in group}
-    if len(modalities) == 1:
+    if len({s.modality for s in group}) == 1:
         args.append(f"--emrd-modality={first.modality}")
     if how.models_file is not None:
         args.append(f"--emrd-models={how.models_file}")
@@ -151,9 +142,7 @@ def missing_summary(
     per_model = Counter(spec.model for spec in missing)
     models = ", ".join(f"{m} ({n})" for m, n in sorted(per_model.items()))
     command = record_command(missing, record_mode="once", cassettes=root, invocation=invocation)
-    old = sum(
-        any(_legacy_twins(cassette_path(root, spec, modality_of=modality_of))) for spec in missing
-    )
+    old = sum(_has_legacy_twin(cassette_path(root, s, modality_of=modality_of)) for s in missing)
     convert = (
         f" {old} of them have a cassette an older pytest-emrd wrote: convert those first with: "
         f"emrd cassettes upgrade {root}."
@@ -167,6 +156,6 @@ def missing_summary(
     )
 
 
-def _legacy_twins(path: Path) -> Iterator[bool]:
+def _has_legacy_twin(path: Path) -> bool:
     stem = path.name[: -len(SUFFIX)]
-    return (path.with_name(stem + suffix).is_file() for suffix in LEGACY_SUFFIXES)
+    return any(path.with_name(stem + suffix).is_file() for suffix in LEGACY_SUFFIXES)

@@ -38,18 +38,12 @@ class UnsavedCassette:
 class EpisodePersister:
     """Loads and saves one episode's cassette (:mod:`._file`) under the current protocol.
 
-    A missing file is "not found" (vcrpy records it when the mode allows). Each file that
-    cannot be replayed is a :class:`CassetteError` naming it and the fix, in one line: a file
-    that is not a cassette, one an older release wrote (convert it with ``emrd cassettes
-    upgrade``), one edited by hand (its digest no longer matches) and one recorded under
-    another protocol (re-record it). In ``all`` mode the old file is never read: it is
-    replaced when the episode finishes. A file is written to ``<root>/.emrd-tmp`` first and
-    renamed into place, so a write cut short leaves nothing in the cassette tree.
-
-    With ``keep_unsaved``, a write that fails (a full disk, a read-only folder, a file where
-    a folder belongs) raises nothing: the encoded cassette is kept in :attr:`unsaved` for the
-    caller to put elsewhere, and vcrpy closes the cassette as after a save. Without it, the
-    :class:`OSError` is raised.
+    A missing file is "not found" (vcrpy records it when the mode allows); in ``all`` mode
+    (``fresh``) the old file is never read. A file that cannot be replayed (not a cassette,
+    an older release's, edited by hand, another protocol) is a one-line
+    :class:`CassetteError` naming it and the fix. A file is written to ``<root>/.emrd-tmp``
+    first and renamed into place. With ``keep_unsaved``, a write that fails raises nothing:
+    the encoded cassette is kept in :attr:`unsaved` for the caller to put elsewhere.
     """
 
     def __init__(
@@ -65,7 +59,7 @@ class EpisodePersister:
         self.fresh = fresh
         self.rerecord_command = rerecord_command
         self.root = root
-        """The cassette folder (temporary files go to its ``.emrd-tmp``); ``None``: beside."""
+        """The cassette folder; ``None``: temporary files are written beside the file."""
         self.keep_unsaved = keep_unsaved
         self.unsaved: UnsavedCassette | None = None
         """The last cassette that could not be written (with ``keep_unsaved``), else None."""

@@ -1,23 +1,12 @@
 """What a request looks like once it is safe to store and ready to match.
 
-Redaction turns a model request into its *canonical* form:
-
-* every image payload becomes the digest of the frame's pixels (``pixels:<sha256>``, handed
-  over by the world through :mod:`pytest_emrd.frames`; ``bytes:<sha256>`` for a payload this
-  process did not render): OpenAI ``image_url`` data URLs, Anthropic ``source.data``, Gemini
-  ``inline_data``/``inlineData``;
-* the body is re-serialised as sorted-key compact JSON (a body that is not JSON is kept as
-  it is and gets no key: it never matches);
-* headers are reduced to ``Content-Type`` (so ``Authorization``, ``x-api-key``, ``api-key``,
-  ``x-goog-api-key`` and anything else a provider may carry never reach a file); URL userinfo
-  and credential-like query parameters are dropped and configured key values removed from
-  the URI and the body (:mod:`pytest_emrd._scrub`).
-
-vcrpy runs ``before_record_request`` several times for every request; the cassette keeps the
-redacted copy on the request, so each request is redacted once (see ``cassette._use``). The
-two match keys are computed once here: ``strict`` (method, path, canonical body) and
-``lenient`` (the same with every frame digest replaced by a placeholder, so only text, step
-index and image count are compared).
+Redaction turns a model request into its *canonical* form (docs/cassettes.md): every image
+payload becomes the digest of the frame's pixels (``pixels:<sha256>`` from
+:mod:`pytest_emrd.frames`; ``bytes:<sha256>`` for a payload this process did not render),
+the body is re-serialised as sorted-key compact JSON (a body that is not JSON is kept and
+never matches), headers are reduced to ``Content-Type`` and configured key values removed
+(:mod:`pytest_emrd._scrub`). The two match keys are ``strict`` (method, path, canonical
+body) and ``lenient`` (the same with every frame digest replaced by a placeholder).
 """
 
 from __future__ import annotations
@@ -44,12 +33,8 @@ _MIME_KEYS: Final = ("media_type", "mime_type", "mimeType")
 
 @dataclass(frozen=True)
 class Redacted:
-    """The canonical form of one request body.
-
-    Only the bytes are kept; the parsed tree and the image count are derived on first use
-    (only lenient keys, drift messages and tools need them), so a body read back from a
-    cassette, already canonical, is never parsed to be matched.
-    """
+    """The canonical form of one request body; the tree and the image count are derived on
+    first use, so a body read back from a cassette is never parsed to be matched."""
 
     body: bytes
     """Canonical body bytes (sorted-key compact JSON), or the original bytes if not JSON."""
@@ -69,10 +54,8 @@ class Redacted:
 
 @dataclass(frozen=True)
 class MatchKeys:
-    """The keys a request is matched on, each computed once on first use.
-
-    ``None`` for a body that is not JSON: it never matches.
-    """
+    """The keys a request is matched on, each computed on first use (``None`` for a body
+    that is not JSON: it never matches)."""
 
     head: str
     """``METHOD path`` line that starts both keys."""
@@ -80,9 +63,8 @@ class MatchKeys:
 
     @cached_property
     def strict(self) -> tuple[str, bytes] | None:
-        """``(head, canonical body)``, compared as it is: a body is tens of KB, and hashing it
-        cost more than the rest of matching it (equal lengths are rare, and ``==`` on bytes
-        of different lengths is immediate)."""
+        """``(head, canonical body)``, compared as it is (hashing a body of tens of KB costs
+        more than comparing it)."""
         if not self.redacted.parsed:
             return None
         return self.head, self.redacted.body

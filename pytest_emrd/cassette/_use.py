@@ -1,32 +1,55 @@
-"""One episode's vcrpy cassette: redaction, matching, record modes and drift detection."""
+"""One episode's vcrpy cassette: redaction, matching, record modes and drift detection.
+
+Episodes run concurrently in threads (``--emrd-concurrency``) share one process, and vcrpy's
+``use_cassette`` patches the HTTP libraries process-wide for one cassette. :func:`routing`
+patches them once, bound to a router that hands each call to the cassette the calling
+thread opened; loading, matching, recording and saving stay vcrpy's own, so a cassette
+written by concurrent episodes is byte for byte the one a lone episode writes.
+"""
 
 from __future__ import annotations
 
+import contextlib
 import copy
-import functools
+import importlib.util
+import threading
 from collections.abc import Callable, Iterator
-from contextlib import contextmanager
+from contextvars import ContextVar
 from pathlib import Path
 from typing import Any, Final
 
 from vcr import filters
 from vcr.cassette import Cassette
+from vcr.patch import CassettePatcherBuilder
 from vcr.record_mode import RecordMode
 from vcr.request import Request
 
 from pytest_emrd import _wire
-from pytest_emrd._scrub import scrub_bytes, scrub_uri, secret_values
-from pytest_emrd.cassette import _routing
-from pytest_emrd.cassette._drift import (
-    drift_message,
-    request_modality,
-    unreadable_message,
-)
+from pytest_emrd._scrub import scrub_bytes, scrub_uri
+from pytest_emrd.cassette._drift import drift_message, request_modality, unreadable_message
 from pytest_emrd.cassette._persister import EpisodePersister, UnsavedCassette
 from pytest_emrd.cassette._redact import MatchKeys, match_keys, redact_body, scrub_headers
+from pytest_emrd.errors import CassetteError
 
 #: Response headers kept in a cassette (the body is stored decoded, so no Content-Encoding).
 KEPT_RESPONSE_HEADERS: Final = frozenset({"content-type"})
+#: vcrpy's patcher groups whose library is not installed. vcrpy tries (and fails) to import
+#: each one again for every cassette it opens; skipping them patches exactly what it would.
+ABSENT_PATCHERS: Final = tuple(
+    group
+    for group, module in (
+        ("boto3", "botocore"),
+        ("httplib2", "httplib2"),
+        ("tornado", "tornado"),
+        ("aiohttp", "aiohttp"),
+        ("httpx2", "httpx2"),
+    )
+    if importlib.util.find_spec(module) is None
+)
+
+_current: ContextVar[Cassette | None] = ContextVar("emrd_cassette", default=None)
+_lock = threading.Lock()
+_depth = 0
 
 
 def clear_caches() -> None:
@@ -39,16 +62,9 @@ def _match_keys(request: Request) -> MatchKeys:
     return match_keys(request.method, request.path, redact_body(request.body))
 
 
-@functools.lru_cache(maxsize=64)
-def _scrubbed_uri(uri: str, secrets: tuple[str, ...]) -> str:
-    """:func:`scrub_uri` of ``uri``, once per URI and set of configured keys (``secrets`` is
-    the cache key: an episode posts every request to one URI)."""
-    return scrub_uri(uri)
-
-
 def redact_request(request: Request) -> Request:
     """vcrpy ``before_record_request``: canonical body, secrets dropped, match keys attached."""
-    uri = _scrubbed_uri(request.uri, secret_values())
+    uri = scrub_uri(request.uri)
     if uri != request.uri:  # vcrpy parses the URI again on every assignment
         request.uri = uri
     keys = _match_keys(request)
@@ -83,11 +99,8 @@ def _keys(request: Request) -> MatchKeys:
 
 
 def make_matcher(matching: str, frame_drift: set[tuple[Any, Any]]) -> Callable[..., bool]:
-    """The one vcrpy matcher: strict or lenient key equality (unparseable never matches).
-
-    In lenient mode a match whose frames differ adds the pair of strict keys to
-    ``frame_drift`` so the caller can warn about it.
-    """
+    """The one vcrpy matcher: strict or lenient key equality (unparseable never matches); a
+    lenient match whose frames differ adds its pair of strict keys to ``frame_drift``."""
 
     def emrd_body(new: Request, recorded: Request) -> bool:
         a, b = _keys(new), _keys(recorded)
@@ -99,10 +112,6 @@ def make_matcher(matching: str, frame_drift: set[tuple[Any, Any]]) -> Callable[.
         return same
 
     return emrd_body
-
-
-def _size(strict: tuple[str, bytes]) -> tuple[str, int]:
-    return strict[0], len(strict[1])
 
 
 class EpisodeCassette(Cassette):
@@ -120,15 +129,12 @@ class EpisodeCassette(Cassette):
         self.drift: str | None = None
         self.frame_drift: set[tuple[Any, Any]] = set()
         self.strict = False
-        """Matching is strict: recorded interactions are looked up by strict key."""
         self.rerecord_command = ""
         self.unreadable = False
         """The failure is a recorded response the client could not read (not drift)."""
         self.stop_on_drift = False
         """``new_episodes``: a request the recording does not hold stops the episode (it is
         then recorded again whole) instead of being appended to the recording."""
-        self._by_size: dict[tuple[str, int], list[int]] = {}
-        self._indexed = 0
         self._loading = False
         self._loaded = 0
 
@@ -143,12 +149,10 @@ class EpisodeCassette(Cassette):
     def append(self, request: Request, response: dict[str, Any]) -> None:
         """vcrpy's ``append``, keeping only the replies that counted.
 
-        A request recorded again right after itself is a retry: the client sends the same
-        bytes again only when it could not read the reply (an empty or invalid-JSON 200;
-        other failures are never recorded). The reply it could not read is replaced by the
-        new one, so a replay gets the good reply first: no retry, no backoff sleep. An
-        interaction read back from our own file is not deep-copied first (vcrpy protects a
-        live response that way; the decoder built this one for this cassette alone).
+        A request recorded again right after itself is a retry (the client could not read
+        the reply: an empty or invalid-JSON 200), so the new reply replaces the unreadable
+        one and a replay gets the good reply first: no retry, no backoff sleep. An
+        interaction read back from our own file is not deep-copied (nothing else holds it).
         """
         if not self._loading:
             response = copy.deepcopy(response)
@@ -168,26 +172,6 @@ class EpisodeCassette(Cassette):
             return False
         key = _keys(request).strict
         return key is not None and key == _keys(self.data[-1][0]).strict
-
-    def _responses(self, request: Request) -> Iterator[tuple[int, dict[str, Any]]]:
-        """vcrpy's lookup (every recorded request tried in turn, for each request made),
-        replaced under strict matching by an index on method, path and body length, whose
-        few candidates are compared whole: the same interactions, in the same order,
-        without a quadratic scan of the episode or a hash of every body."""
-        if not self.strict:
-            yield from super()._responses(request)
-            return
-        for index in range(self._indexed, len(self.data)):
-            key = _keys(self.data[index][0]).strict
-            if key is not None:
-                self._by_size.setdefault(_size(key), []).append(index)
-        self._indexed = len(self.data)
-        key = _keys(self._before_record_request(request)).strict
-        if key is None:
-            return
-        for index in self._by_size.get(_size(key), []):
-            if _keys(self.data[index][0]).strict == key:
-                yield index, self.data[index][1]
 
     @property
     def write_protected(self) -> bool:
@@ -250,25 +234,71 @@ class EpisodeCassette(Cassette):
 def _before_record_request(request: Request) -> Request:
     if getattr(request, "emrd_keys", None) is not None:
         return request  # read back from the cassette (already canonical) or redacted before
-    # vcrpy asks three or four times per request (can it play, is it in, play, record):
-    # the redacted copy is kept on the request, so each request is redacted once.
+    # vcrpy asks three or four times per request: the redacted copy is kept on the request.
+    # A shallow copy suffices: redaction assigns new attributes and never mutates shared ones.
     redacted: Request | None = request.__dict__.get("emrd_redacted")
     if redacted is None:
-        # A shallow copy suffices: redaction assigns new attributes and never mutates shared
-        # ones (vcrpy's own configuration deep-copies the request, frames included, every call).
         redacted = request.emrd_redacted = redact_request(copy.copy(request))  # type: ignore[attr-defined]
     return redacted
 
 
 def _before_record_response(response: dict[str, Any]) -> dict[str, Any] | None:
-    # decode_compressed_response: store bodies decoded, whatever the server compressed
-    # (vcrpy's decoder deep-copies the response first: only worth it when there is work).
+    # Bodies are stored decoded, whatever the server compressed (vcrpy's decoder copies).
     if any(name.lower() == "content-encoding" for name in response["headers"]):
         response = filters.decode_response(response)
     return keep_response(response)
 
 
-@contextmanager
+class _Router:
+    """Stands in for a cassette in vcrpy's patches; forwards to the thread's cassette."""
+
+    custom_patches = ()
+    skip_patchers = ABSENT_PATCHERS
+    _path = "<emrd: the cassette of the calling thread>"
+
+    def __getattr__(self, name: str) -> Any:
+        cassette = _current.get()
+        if cassette is None:
+            raise CassetteError(
+                "an HTTP request was made outside any episode while episodes run concurrently "
+                "(--emrd-concurrency); make model requests only inside an episode."
+            )
+        return getattr(cassette, name)
+
+
+@contextlib.contextmanager
+def routing() -> Iterator[None]:
+    """Patch the HTTP libraries once for the block, each request going to its thread's
+    cassette (re-entrant: nested blocks share the one patch)."""
+    global _depth
+    with contextlib.ExitStack() as stack:
+        with _lock:
+            if _depth == 0:
+                for patcher in CassettePatcherBuilder(_Router()).build():
+                    stack.enter_context(patcher)
+            _depth += 1
+        try:
+            yield
+        finally:
+            with _lock:
+                _depth -= 1
+                if _depth:
+                    stack.pop_all()  # an outer block still needs the patches
+
+
+@contextlib.contextmanager
+def _bound(cassette: Cassette) -> Iterator[Cassette]:
+    """Route this thread's requests to ``cassette``; save it when the block succeeds (as
+    vcrpy's ``use_cassette`` does with ``record_on_exception`` off)."""
+    token = _current.set(cassette)
+    try:
+        yield cassette
+    finally:
+        _current.reset(token)
+    cassette._save()
+
+
+@contextlib.contextmanager
 def episode_cassette(
     path: Path,
     *,
@@ -281,13 +311,9 @@ def episode_cassette(
 ) -> Iterator[EpisodeCassette]:
     """Patch httpx with the episode's cassette for the duration of the block.
 
-    vcrpy settings: ``allow_playback_repeats`` off, compressed responses stored decoded,
-    ``record_on_exception`` off (raise inside the block to discard a failed episode), and
-    in ``all`` mode the file is rebuilt from scratch. Inside :func:`~._routing.routing`
-    (concurrent episodes) the cassette is bound to this thread instead of patching httpx.
-    ``root`` is the cassette folder and ``keep_unsaved`` keeps a recording that cannot be
-    written in :attr:`EpisodeCassette.unsaved` instead of raising (see
-    :class:`~._persister.EpisodePersister`).
+    Raise inside the block to discard a failed episode (``record_on_exception`` off); in
+    ``all`` mode the file is rebuilt from scratch. ``root`` and ``keep_unsaved``: see
+    :class:`~._persister.EpisodePersister`.
     """
     frame_drift: set[tuple[Any, Any]] = set()
     settings: dict[str, Any] = dict(
@@ -305,10 +331,10 @@ def episode_cassette(
         before_record_response=_before_record_response,
         allow_playback_repeats=False,
         drop_unused_requests=record_mode == "all",
-        skip_patchers=_routing.ABSENT_PATCHERS,
+        skip_patchers=ABSENT_PATCHERS,
     )
-    if _routing.active():  # episodes run concurrently: one patch routes to each thread's
-        opened = _routing.bound(EpisodeCassette.load(**settings))
+    if _depth:  # inside routing(): bind the cassette to this thread instead of patching
+        opened = _bound(EpisodeCassette.load(**settings))
     else:
         opened = EpisodeCassette.use(**settings, record_on_exception=False)
     with opened as cassette:

@@ -8,13 +8,13 @@ same verdict whichever machine, worker or run directory they come from.
 from __future__ import annotations
 
 from collections import defaultdict
-from collections.abc import Callable, Iterable, Mapping, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any, Protocol, TypeVar
+from typing import Any, Protocol
 
 from pytest_emrd._serde import from_dict, to_dict
 from pytest_emrd.gate._thresholds import Bound, Thresholds
-from pytest_emrd.trajectory import EpisodeSpec, Trajectory
+from pytest_emrd.trajectory import Trajectory
 
 
 class EstimateLike(Protocol):
@@ -153,58 +153,30 @@ def judge(cell: GateCell, estimate: EstimateLike) -> Verdict:
 
 
 def evaluate_cell(
-    cell: GateCell,
-    trajectories: Iterable[Any],
-    metrics: Mapping[str, GateMetricLike],
-    *,
-    prepare: Callable[[Any], Any] | None = None,
+    cell: GateCell, trajectories: Iterable[Any], metrics: Mapping[str, GateMetricLike]
 ) -> Verdict:
     """The verdict of one gate over its episodes (any order in, sorted by case id).
 
     ``trajectories`` are trajectories or anything else with a ``spec`` that the metric's
-    ``compute`` accepts, e.g. :class:`~pytest_emrd.metrics.EpisodeMetrics` saved beside the
-    results store. ``prepare`` maps each one to what ``compute`` accepts, e.g. a cached
-    :func:`pytest_emrd.metrics.episode_metrics`, so several gates over the same episodes
-    match each episode's maps once.
+    ``compute`` accepts, e.g. each episode's :class:`~pytest_emrd.metrics.EpisodeMetrics`.
     """
     ordered = sorted(trajectories, key=lambda t: t.spec.case_id)
-    items = [prepare(t) for t in ordered] if prepare else ordered
-    estimate = metrics[cell.bound.metric].compute(items, rng_seed=0)
-    return judge(cell, estimate)
-
-
-class _Episode(Protocol):
-    @property
-    def spec(self) -> EpisodeSpec: ...
-
-
-E = TypeVar("E", bound=_Episode)
+    return judge(cell, metrics[cell.bound.metric].compute(ordered, rng_seed=0))
 
 
 def evaluate_all(
-    trajectories: Iterable[E],
-    thresholds: Thresholds,
-    metrics: Mapping[str, GateMetricLike],
-    *,
-    prepare: Callable[[E], Any] | None = None,
+    trajectories: Iterable[Any], thresholds: Thresholds, metrics: Mapping[str, GateMetricLike]
 ) -> list[Verdict]:
     """Every gate whose cell has episodes, grouped by model x condition x variant x layouts.
 
     Used by ``emrd gate RUN_DIR...``: the same cells and the same verdicts as the gate tests
-    of a single-machine run over the same episodes. ``trajectories`` may as well be each
-    episode's :class:`~pytest_emrd.metrics.EpisodeMetrics` (anything with a ``spec`` the
-    gate metrics accept).
+    of a single-machine run over the same episodes (as :func:`evaluate_cell` takes them).
     """
-    cells: dict[tuple[str, str, str, str], list[E]] = defaultdict(list)
+    cells: dict[tuple[str, str, str, str], list[Any]] = defaultdict(list)
     for t in trajectories:
         cells[(t.spec.model, t.spec.condition, t.spec.variant, t.spec.layouts)].append(t)
-    verdicts = []
-    for (model, condition, variant, layouts), episodes in sorted(cells.items()):
-        # Each episode prepared once for all the gates of its cell (the 23 gates of a cell
-        # would otherwise match every episode's maps 23 times).
-        ordered = sorted(episodes, key=lambda t: t.spec.case_id)
-        items = [prepare(t) for t in ordered] if prepare else ordered
-        for bound in thresholds.for_cell(model, condition, layouts):
-            estimate = metrics[bound.metric].compute(items, rng_seed=0)
-            verdicts.append(judge(GateCell(bound, variant), estimate))
-    return verdicts
+    return [
+        evaluate_cell(GateCell(bound, variant), episodes, metrics)
+        for (model, condition, variant, layouts), episodes in sorted(cells.items())
+        for bound in thresholds.for_cell(model, condition, layouts)
+    ]

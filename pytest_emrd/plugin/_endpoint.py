@@ -1,14 +1,11 @@
 """Fail fast on a dead endpoint: a model whose last :data:`DEAD_AFTER` computed episodes in a
 row ended on a connection failure or a timeout is not called again in this session.
 
-Its remaining episodes are skipped with one shared reason (pytest prints it once) and the
-end of the run names the endpoint and the command that resumes the run; every episode
-already recorded stays in the run directory and its cassette, and the errored ones are
-computed again by the resumed session (an errored episode is reused only by the session
-that produced it). The count lives beside the run directory's locks, outside it
-(:func:`~pytest_emrd.run.scratch_dir`), in ``endpoints/<model>.json`` under a file lock, so
-the xdist workers of one session share it; a resumed session starts from zero.
-"""
+Its remaining episodes are skipped with one shared reason, and the end of the run names
+the endpoint and the command that resumes the run (the errored episodes are computed again
+by the resumed session). The count lives in the run directory's scratch folder
+(:func:`~pytest_emrd.run.scratch_dir`), ``endpoints/<model>.json`` under a file lock, so
+the xdist workers of one session share it; a resumed session starts from zero."""
 
 from __future__ import annotations
 
@@ -93,15 +90,10 @@ class EndpointWatch:
     def resume_command(self) -> str:
         """This session's ``pytest`` command, resuming its run directory."""
         args, skip = [], False
-        for arg in self.args:
-            if skip:
-                skip = False
-                continue
-            if arg == "--emrd-results":
-                skip = True
-                continue
-            if not arg.startswith("--emrd-results="):
+        for arg in self.args:  # without the run directory given (it is added back)
+            if not (skip or arg == "--emrd-results" or arg.startswith("--emrd-results=")):
                 args.append(arg)
+            skip = not skip and arg == "--emrd-results"
         return shlex.join(["pytest", *args, f"--emrd-results={self.run_dir}"])
 
     def reason(self, stop: Stop) -> str:

@@ -1,12 +1,7 @@
-"""The ``emrd_*`` fixtures, built the way pytest-recording builds ``vcr``: overridable session
-fixtures (:func:`emrd_settings`, :func:`emrd_cassette_dir`, :func:`emrd_record_mode`) and
-the fixtures derived from them (the run, its store, episodes, trajectories and verdicts).
-
-A ``conftest.py`` that overrides one of the first three changes how every EMRD test of its
-directory runs its episodes. The grid itself (models, conditions, spawns, episodes, gates) is
-collected from the ``--emrd-*`` options before any fixture runs, so an override may change
-everything but that (see :meth:`~pytest_emrd.plugin._run.Run.adopt`).
-"""
+"""The ``emrd_*`` fixtures, built the way pytest-recording builds ``vcr``: three overridable
+session fixtures and the fixtures derived from them (docs/reference/fixtures.md). The grid
+is collected from the ``--emrd-*`` options before any fixture runs, so an override may
+change everything but that (see :meth:`~pytest_emrd.plugin._run.Run.adopt`)."""
 
 from __future__ import annotations
 

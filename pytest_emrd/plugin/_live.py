@@ -1,9 +1,6 @@
-"""Preflight and the live progress line (controller only: the only process, or xdist's).
-
-Once the controller knows which tests will run (its own collection, or each xdist node's),
-each model those tests will call live is preflighted once; a failure ends the session before
-any episode runs. Then a ticker prints the live line from the workers' status files.
-"""
+"""Preflight and the live progress line (controller only: the only process, or xdist's): each
+model the selected tests will call live is preflighted once, and a failure ends the session
+before any episode runs; then a ticker prints the live line from the workers' status files."""
 
 from __future__ import annotations
 

@@ -1,9 +1,6 @@
-"""Scrubbed logs: pytest's log handlers and the HTTP libraries' loggers get the scrub filter.
-
-pytest installs its live-log (``--log-cli-level``), log-file and capture handlers on the
-root logger only while a phase runs, so the filter is attached at the start of the session
-and of each test, when they are installed (:func:`pytest_emrd._scrub.install_log_scrub`).
-"""
+"""Scrubbed logs: pytest installs its log handlers on the root logger only while a phase runs,
+so the scrub filter (:func:`pytest_emrd._scrub.install_log_scrub`) is attached at the start
+of the session, of collection and of each test."""
 
 from __future__ import annotations
 

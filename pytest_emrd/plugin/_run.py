@@ -1,21 +1,17 @@
 """The per-process state of an EMRD run: registry, grid, results store, episodes, verdicts.
 
 One :class:`Run` per process (the only one, or each xdist worker), kept in
-``config.stash[RUN]``; everything heavy is built on first use, so a session that collects
-no EMRD test imports, starts and writes nothing.
+``config.stash[RUN]``; everything heavy is built on first use.
 
 Paid work is never lost to the disk. Before a live episode, the cassette folder must be
 writable (else the test fails in one line and nothing is sent to the model). If the
-cassette still cannot be saved when the episode ends (a full disk), the episode's result,
-with every reply, its token usage and its retries, goes to ``<run>/unsaved/<case_id>.json``
-and to the results store, the cassette itself (redacted, ready to move into place) to
-``<run>/unsaved/<case_id>.json.xz``, a :class:`CassetteNotSavedWarning` says where, and the
-episode is not run again by this run or by a resumed one. Any other file system failure is
-one line naming the path and the fix.
-"""
+cassette still cannot be saved when the episode ends, the episode's result goes to
+``<run>/unsaved/<case_id>.json`` and to the results store, the redacted cassette to
+``<run>/unsaved/<case_id>.json.xz``, and a :class:`CassetteNotSavedWarning` says where."""
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import os
 import shlex
@@ -53,22 +49,9 @@ UNSAVED = "unsaved"
 """Folder of a run directory holding live episodes whose cassette could not be written."""
 
 
-#: Settings the collected grid, the run directory and the store's identity were built from.
-COLLECTED = (
-    "models",
-    "conditions",
-    "cells",
-    "spawns",
-    "episodes",
-    "variant",
-    "layouts",
-    "backend",
-    "modality",
-    "results",
-    "thresholds",
-    "models_file",
-    "shard",
-)
+#: Settings the collected grid, the run directory and the store's identity were built from:
+#: all but these, which the ``emrd_*`` fixtures may change (:meth:`Run.adopt`).
+ADOPTABLE = ("backend_options", "record_mode", "matching", "cassettes", "concurrency", "preflight")
 
 
 class CassetteNotSavedWarning(UserWarning):
@@ -115,9 +98,10 @@ class Run:
         """Run the rest of the session with ``settings`` (the ``emrd_*`` fixtures, perhaps
         overridden in a ``conftest.py``); returns this run.
 
-        The fields of :data:`COLLECTED` shaped the test ids and the run directory before any
-        fixture ran: a :class:`ConfigError` names any the new settings change."""
-        changed = [f for f in COLLECTED if getattr(settings, f) != getattr(self.settings, f)]
+        The other fields shaped the test ids and the run directory before any fixture ran: a
+        :class:`ConfigError` names any the new settings change."""
+        names = [f.name for f in dataclasses.fields(settings) if f.name not in ADOPTABLE]
+        changed = [n for n in names if getattr(settings, n) != getattr(self.settings, n)]
         if changed:
             raise ConfigError(
                 f"the emrd_settings fixture changes {', '.join(changed)}, which the collected "

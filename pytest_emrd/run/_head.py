@@ -1,13 +1,6 @@
 """The head of a stored episode: what a run needs to know about it without decoding its
-trajectory (pure).
-
-An episode file holds every reply of the model verbatim (150-350 KB of JSON for 50 steps);
-reading one back into a :class:`~pytest_emrd.trajectory.Trajectory` costs about 8 ms, and a
-second run over a finished run directory (a resume) needs, of most episodes, only whether they
-may be reused, their status and their token counts. The head holds those facts, on the first
-line of the episode file itself (:mod:`pytest_emrd.run._store`), written with the trajectory
-in one atomic write: it cannot describe another file.
-"""
+trajectory (pure). It is the first line of the episode file (:mod:`pytest_emrd.run._store`),
+written with the trajectory in one atomic write: it cannot describe another file."""
 
 from __future__ import annotations
 

@@ -1,12 +1,8 @@
 """Which run a run directory belongs to: its grid and shard (``<run>/run.json``).
 
-Every run directory records the episode grid it was asked for (models, conditions, spawns,
-episodes, variant, backend, modality, protocol), a short id of that grid, and its shard
-``K/N`` (or none). ``emrd gate`` reads them to refuse a verdict over an incomplete or
-duplicated set of shards: gates over 2 of 4 shards would be gates over half the episodes,
-without a word. Run directories written before this file existed have no identity and are
-taken as they are.
-"""
+``emrd gate`` reads them to refuse a verdict over an incomplete or duplicated set of shards
+(gates over 2 of 4 shards would be gates over half the episodes). Run directories written
+before this file existed have no identity and are taken as they are."""
 
 from __future__ import annotations
 

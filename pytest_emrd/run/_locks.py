@@ -1,12 +1,8 @@
-"""What the processes of one run directory share while they run, kept outside it (file I/O).
-
-The xdist workers of a session, and shards started on one machine, coordinate through file
-locks (one per episode, one for ``run.json``) and through the per-session count of unreachable
-episodes (:mod:`pytest_emrd.plugin._endpoint`). None of it is a result: it lives in a folder
-of the OS temporary directory named after the run directory's resolved path (private to the
-user), so a run directory holds only ``run.json`` and ``episodes/``. Processes share a run
-directory's locks only on one machine, as pytest-xdist's workers do.
-"""
+"""What the processes of one run directory share while they run, kept outside it (file I/O):
+one file lock per episode and one for ``run.json``, and the per-session count of
+unreachable episodes (:mod:`pytest_emrd.plugin._endpoint`), in a private folder of the OS
+temporary directory named after the run directory. So a run directory holds only results,
+and its locks are shared on one machine only, as pytest-xdist's workers are."""
 
 from __future__ import annotations
 

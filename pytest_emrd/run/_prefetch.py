@@ -1,14 +1,10 @@
-"""Live episodes computed ahead, several at once, by one process (``--emrd-concurrency N``).
+"""Live episodes computed ahead, several at once, in threads of one process
+(``--emrd-concurrency N``): a live episode mostly waits for the model.
 
-A live episode spends most of its time waiting for the model, so one pytest-xdist worker per
-concurrent episode (a Python interpreter each, started on a small machine) is the wrong
-tool. A :class:`Prefetcher` runs up to ``N`` episodes at once in threads of the process, in
-the order given, through the results store: an episode stored already, or locked by another
-thread or process (another xdist worker prefetching the same list), is skipped, so every
-episode is still computed once. The tests then read their episodes from the store as usual
-(waiting on the lock of one still running). HTTP traffic is routed per thread to each
-episode's own cassette (:func:`pytest_emrd.cassette.routing`).
-"""
+Episodes go through the results store in the order given; one stored already or locked by
+another thread or process is skipped, so each is still computed once, and the tests read
+them from the store as usual. HTTP traffic is routed per thread to each episode's own
+cassette (:func:`pytest_emrd.cassette.routing`)."""
 
 from __future__ import annotations
 

@@ -1,14 +1,9 @@
 """The run's settings: every ``--emrd-*`` option, its ini twin and default, resolved once.
 
 Precedence is command line > ini file > default, decided in :func:`resolve_settings` and
-nowhere else. The option table :data:`OPTIONS` is what the plugin registers, so ``pytest
---help``, the ini keys and the resolution cannot drift apart.
-
-Defaults that depend on another setting are resolved here too: ``matching`` is ``lenient``
-on ``ai2thor`` (THOR frames are not bit-stable across GPUs, drivers and builds) and
-``strict`` otherwise; an explicit ``strict`` on ``ai2thor`` is allowed and warns
-(:class:`MatchingWarning`).
-"""
+nowhere else; :data:`OPTIONS` is what the plugin registers, so ``pytest --help``, the ini
+keys and the resolution cannot drift apart. ``matching`` defaults to ``lenient`` on
+``ai2thor`` (THOR frames are not bit-stable) and ``strict`` otherwise."""
 
 from __future__ import annotations
 
@@ -297,34 +292,22 @@ def resolve_settings(
     env = os.environ if env is None else env
     by_name = {o.name: o for o in OPTIONS}
     raw = {name: _pick(option, cli, ini) for name, option in by_name.items()}
-    for name in (
-        "variant",
-        "layouts",
-        "backend",
-        "modality",
-        "record_mode",
-        "matching",
-        "preflight",
-    ):
-        if raw[name] is not None:
-            check_choice(by_name[name].flag, raw[name], by_name[name].choices or ())
+    for option in OPTIONS:  # a repeatable option's items are checked by _listed
+        if option.choices and not option.repeatable and raw[option.name] is not None:
+            check_choice(option.flag, raw[option.name], option.choices)
     episodes = _episodes(raw["episodes"])
     default_mode = "none" if in_ci(env) else "once"
     backend = raw["backend"] or "builtin"
-    results = _path(raw["results"], rootdir) if raw["results"] else None
-    if results is not None and (blocker := _file_in_the_way(results)) is not None:
-        where = "is a file" if blocker == results else f"lies under the file {blocker}"
-        raise ConfigError(
-            f"--emrd-results={results} {where}; pass a directory (a new one, or a run "
-            "directory to resume)."
-        )
-    cassettes = _path(raw["cassettes"] or "cassettes", rootdir)
-    if (blocker := _file_in_the_way(cassettes)) is not None:
-        where = "is a file" if blocker == cassettes else f"lies under the file {blocker}"
-        raise ConfigError(
-            f"--emrd-cassettes={cassettes} {where}; pass the cassette folder (default: "
-            "<rootdir>/cassettes)."
-        )
+    results = raw["results"] and _folder(
+        "--emrd-results",
+        _path(raw["results"], rootdir),
+        "pass a directory (a new one, or a run directory to resume).",
+    )
+    cassettes = _folder(
+        "--emrd-cassettes",
+        _path(raw["cassettes"] or "cassettes", rootdir),
+        "pass the cassette folder (default: <rootdir>/cassettes).",
+    )
     concurrency = _count("--emrd-concurrency", raw["concurrency"])
     if concurrency is not None and concurrency > MAX_CONCURRENCY:
         raise ConfigError(
@@ -368,12 +351,15 @@ def resolve_settings(
     )
 
 
-def _file_in_the_way(folder: Path) -> Path | None:
-    """The file at ``folder`` or at its nearest existing ancestor, if that is not a folder."""
+def _folder(flag: str, folder: Path, fix: str) -> Path:
+    """``folder``, unless a file stands at it or at its nearest existing ancestor."""
     existing = folder
     while not existing.exists() and existing != existing.parent:
         existing = existing.parent
-    return None if existing.is_dir() else existing
+    if not existing.is_dir():
+        where = "is a file" if existing == folder else f"lies under the file {existing}"
+        raise ConfigError(f"{flag}={folder} {where}; {fix}")
+    return folder
 
 
 def _count(flag: str, value: Any) -> int | None:

@@ -1,30 +1,16 @@
 """The results store: one file per episode under a run directory (file I/O).
 
-Layout of a run directory::
+``<run>/run.json`` records the grid and shard the directory holds (:mod:`._identity`);
+``<run>/episodes/<case_id>.json`` is one JSON document whose first line holds the episode's
+head (:class:`EpisodeHead`: what reusing it needs) and whose second line holds the
+trajectory, so a resume decodes a trajectory only where something needs it. Files of the
+older layout (``store_schema`` 1: no head) are decoded in full.
 
-    <run>/run.json                  the grid and shard this directory holds (_identity)
-    <run>/episodes/<case_id>.json   one stored episode: its head, then its trajectory
-
-An episode file is one JSON document whose first line holds its head (what reusing it
-needs: spec, protocol, status, tokens, how it was obtained; :class:`EpisodeHead`) and whose
-second line holds the trajectory::
-
-    {"store_schema":2,"trajectory_schema":2,"head":{...},
-    "trajectory":{...}}
-
-A resume reads the first line of each finished episode and decodes a trajectory only where
-something needs it (a gate, a report). Files of an older layout (``store_schema`` 1: no head,
-with ``heads/``, ``metrics/``, ``locks/`` folders beside them) are decoded in full and the
-folders ignored.
-
-Any process (pytest-xdist workers, shards on one machine) may ask for any episode: the
-first takes the episode's lock (:mod:`pytest_emrd.run._locks`, outside the run directory),
-computes it and writes it atomically; everyone else waits for the lock and reads the file. An
-episode is reused when its spec and protocol match and it finished (an ``errored`` episode
-is reused only within the session that produced it, so rerunning a run directory retries
-failures). Stored files are scrubbed of secrets (:mod:`pytest_emrd._scrub`): an errored
-episode's error text may quote a URL or a body.
-"""
+Any process may ask for any episode: the first takes the episode's lock
+(:mod:`pytest_emrd.run._locks`), computes it and writes it atomically; everyone else waits
+and reads the file. An episode is reused when its spec and protocol match and it finished
+(an ``errored`` one only within the session that produced it, so a rerun retries
+failures). Stored files are scrubbed of secrets (:mod:`pytest_emrd._scrub`)."""
 
 from __future__ import annotations
 
@@ -287,9 +273,3 @@ def iter_run_episodes(run_dir: Path) -> Iterator[StoredEpisode]:
             yield read_episode(path)
         except (ValueError, KeyError, TypeError, ProtocolError) as exc:
             raise _unreadable(path, exc) from exc
-
-
-def iter_run_dir(run_dir: Path) -> Iterator[Trajectory]:
-    """Every readable trajectory of a run directory (sorted by file name)."""
-    for stored in iter_run_episodes(run_dir):
-        yield stored.trajectory
