@@ -3,10 +3,15 @@
 ``run_with_cassette`` is the entry point; the rest is exported for tools and tests.
 """
 
-from pytest_emrd.cassette._episode import EpisodeRun, FrameDriftWarning, is_live, run_with_cassette
+from pytest_emrd.cassette._episode import (
+    EpisodeRun,
+    FrameDriftWarning,
+    is_live,
+    network_blocked,
+    run_with_cassette,
+)
 from pytest_emrd.cassette._file import SUFFIX, CassetteData, FormatError, decode, decompress, encode
 from pytest_emrd.cassette._legacy import upgrade
-from pytest_emrd.cassette._network import network_blocked
 from pytest_emrd.cassette._paths import (
     SCRATCH,
     Invocation,

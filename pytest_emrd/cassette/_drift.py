@@ -120,14 +120,10 @@ def drift_message(
 def modality_message(
     *, cassette: Path, recorded: str, asked: str, home: Path, record: str, rerecord: str
 ) -> str:
-    """The failure text of a replay in another modality than the recording.
-
-    ``home`` is where an episode in the ``recorded`` modality keeps its cassette. When it is
-    free, the fix moves the file there (it then replays under ``--emrd-modality=<recorded>``)
-    and records the ``asked`` episode with ``record``; when ``home`` already holds one, this
-    file is a stray copy and ``rerecord`` replaces it in place. Never does the suggested
-    command overwrite a cassette of the ``recorded`` modality at its own path.
-    """
+    """The failure text of a replay in another modality than the recording. ``home`` is where an
+    episode in the ``recorded`` modality keeps its cassette: when it is free the fix moves the
+    file there, then records the ``asked`` episode with ``record``; when it holds one, this
+    file is a stray copy that ``rerecord`` replaces. No fix overwrites a ``recorded`` cassette."""
     head = (
         f"modality mismatch: cassette={str(cassette)!r} was recorded in modality {recorded!r} "
         f"and this run shows the model {asked!r}."

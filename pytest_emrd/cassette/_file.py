@@ -104,12 +104,9 @@ def _interaction(request: Request, response: dict[str, Any]) -> dict[str, Any]:
 
 
 def digest(protocol: str, interactions: Sequence[dict[str, Any]]) -> str:
-    """SHA-256 of the protocol and the interactions as stored.
-
-    Each part is hashed with its length in front: the protocol, then per interaction its
-    request and response without their bodies (sorted-key JSON) and each body's text (or
-    ``null``). Hashing a body's text as it is costs a fraction of serialising it again.
-    """
+    """SHA-256 of the protocol and the interactions as stored: each part hashed with its length
+    in front (the protocol; per interaction its request and response without bodies as
+    sorted-key JSON, then each body's text or ``null``; cheaper than serialising it again)."""
     h = hashlib.sha256()
 
     def part(text: str) -> None:
@@ -165,12 +162,9 @@ def decompress(blob: bytes) -> str:
 
 
 def decode(blob: bytes) -> CassetteData:
-    """Inverse of :func:`encode` (a gzip file is read too).
-
-    :class:`LegacyFormatError` for a file an older release wrote, :class:`IntegrityError`
-    when the interactions or the protocol no longer match their digest (edited by hand), and
-    :class:`FormatError` for anything else that is not a cassette.
-    """
+    """Inverse of :func:`encode` (a gzip file is read too): :class:`LegacyFormatError` for a file
+    an older release wrote, :class:`IntegrityError` when the interactions or the protocol no
+    longer match their digest, :class:`FormatError` for anything else that is not a cassette."""
     text = decompress(blob)
     if text.startswith(LEGACY_HEAD):
         raise LegacyFormatError(

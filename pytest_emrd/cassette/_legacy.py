@@ -1,15 +1,10 @@
 """``emrd cassettes upgrade``: convert the cassettes older releases wrote, once, verified.
 
-Formats ``emrd-cassette/1`` (``ep<NN>.yaml.gz``) and ``emrd-cassette/2`` (``ep<NN>.yaml.xz``)
-become vcrpy cassettes (``ep<NN>.json.xz``, :mod:`._file`); nothing replays them any more.
-Both are one JSON-compatible YAML document with a table of long strings, a table of
-messages (templates) and interactions whose bodies refer to both. Format 1 is gzip; format
-2 is xz and may store a string as an edit of a text that release shipped
-(``legacy_texts.json``, the system prompt it wrote into every cassette):
-``{from: <id>, edit: [start, length, "inserted text", ...]}``. Every request and response
-body is rebuilt byte for byte, and the new file is kept only if it reads back to exactly the
-same protocol and interactions; the old file is removed after that.
-"""
+Formats ``emrd-cassette/1`` (``ep<NN>.yaml.gz``) and ``/2`` (``ep<NN>.yaml.xz``, whose strings
+may be edits ``{from: <id>, edit: [start, length, "inserted", ...]}`` of a text that release
+shipped, ``legacy_texts.json``) hold tables of strings and messages that the interactions'
+bodies refer to. Every body is rebuilt byte for byte, and the new vcrpy cassette is kept only
+if it reads back to the same protocol and interactions; then the old file is removed."""
 
 from __future__ import annotations
 
@@ -140,20 +135,12 @@ class Upgraded:
     new_bytes: int
 
 
-def legacy_files(root: Path) -> list[Path]:
-    """The cassette files under ``root`` with an old release's name ending, sorted."""
-    found = (p for suffix in LEGACY_SUFFIXES for p in root.rglob(f"*{suffix}"))
-    return sorted(p for p in found if SCRATCH not in p.relative_to(root).parts)
-
-
 def upgrade(root: Path) -> Iterator[Upgraded]:
-    """Convert every old cassette under ``root``, one file at a time (each one is done or
-    not: an interrupted run leaves no half-written file, and running it again goes on).
-
-    :class:`CassetteError` names a file that is not an old cassette, or whose new twin
-    already exists (which one to keep is the user's call); files before it stay converted.
-    """
-    for old in legacy_files(root):
+    """Convert every old cassette under ``root`` (not in its scratch folder), one at a time: an
+    interrupted run leaves no half-written file, and running it again goes on. A
+    :class:`CassetteError` names a file that is not an old cassette or whose new twin exists."""
+    found = (p for suffix in LEGACY_SUFFIXES for p in root.rglob(f"*{suffix}"))
+    for old in sorted(p for p in found if SCRATCH not in p.relative_to(root).parts):
         new = old.with_name(old.name[: -len(".yaml.gz")] + SUFFIX)
         if new.exists():
             raise CassetteError(

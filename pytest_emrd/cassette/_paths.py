@@ -50,9 +50,8 @@ def found_cassette(root: Path, spec: EpisodeSpec) -> Path:
 
 
 def scratch_path(root: Path, path: Path, suffix: str) -> Path:
-    """Where the lock file (``.lock``) or an unfinished write (``.<random>.tmp``) of the
-    cassette ``path`` under ``root`` lives: the same relative path under ``<root>/.emrd-tmp``,
-    a folder that ignores itself in git (created here with its ``.gitignore``)."""
+    """Where the lock file (``.lock``) or an unfinished write of the cassette ``path`` lives:
+    the same relative path under :data:`SCRATCH` (created here, with its ``.gitignore``)."""
     scratch = root / SCRATCH
     target = scratch / path.relative_to(root)
     target.parent.mkdir(parents=True, exist_ok=True)
@@ -84,11 +83,8 @@ def record_command(
     invocation: Invocation | None = None,
 ) -> str:
     """The exact ``pytest`` command that records (``once``) or re-records (``all``) one
-    episode, or every episode of ``specs`` in one run (``once`` records only what is missing).
-
-    It carries the test paths, ``--emrd-models`` and ``--emrd-modality`` of the run, so it
-    works verbatim for a model of a user registry; ``cassettes`` overrides the invocation's.
-    """
+    episode, or every episode of ``specs`` in one run (``once`` records only what is missing),
+    working verbatim for this ``invocation`` (``cassettes`` overrides its folder)."""
     one = isinstance(specs, EpisodeSpec)
     group = [specs] if one else list(specs)
     how = invocation or Invocation()
@@ -98,12 +94,9 @@ def record_command(
     args += [f"--emrd-condition={c}" for c in _ordered(group, "condition", CONDITIONS)]
     args += [f"--emrd-spawn={r}" for r in _ordered(group, "spawn", tuple(SLUG_ROOMS))]
     args.append(f"--emrd-episodes={max(s.episode for s in group) + 1}")
-    if first.variant != "default":
-        args.append(f"--emrd-variant={first.variant}")
-    if first.backend != "builtin":
-        args.append(f"--emrd-backend={first.backend}")
-    if first.layouts != "paper":
-        args.append(f"--emrd-layouts={first.layouts}")
+    for name, default in (("variant", "default"), ("backend", "builtin"), ("layouts", "paper")):
+        if getattr(first, name) != default:
+            args.append(f"--emrd-{name}={getattr(first, name)}")
     args += [f"--emrd-backend-option={o}" for o in how.backend_options]
     if len({s.modality for s in group}) == 1:
         args.append(f"--emrd-modality={first.modality}")

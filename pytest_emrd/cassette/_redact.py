@@ -65,9 +65,7 @@ class MatchKeys:
     def strict(self) -> tuple[str, bytes] | None:
         """``(head, canonical body)``, compared as it is (hashing a body of tens of KB costs
         more than comparing it)."""
-        if not self.redacted.parsed:
-            return None
-        return self.head, self.redacted.body
+        return (self.head, self.redacted.body) if self.redacted.parsed else None
 
     @cached_property
     def lenient(self) -> str | None:
@@ -132,12 +130,8 @@ def _without_images(node: Any) -> Any:
     return node
 
 
-def _canonical_item(item: Any) -> str:
-    return canonical_json(_redact_tree(item))
-
-
 def _canonical_bytes(value: Any) -> bytes:
-    return _canonical_item(value).encode()
+    return canonical_json(_redact_tree(value)).encode()
 
 
 def _canonical_fragment(piece: _wire.Fragment) -> bytes:
@@ -170,8 +164,7 @@ def redact_body(body: bytes | str | None) -> Redacted:
         tree = json.loads(raw)
     except (ValueError, UnicodeDecodeError):
         return Redacted(body=scrub_bytes(raw, literal_only=True), parsed=False)
-    canonical = canonical_json(_redact_tree(tree)).encode()
-    return Redacted(body=scrub_bytes(canonical, literal_only=True), parsed=True)
+    return Redacted(body=scrub_bytes(_canonical_bytes(tree), literal_only=True), parsed=True)
 
 
 def match_keys(method: str, path: str, redacted: Redacted) -> MatchKeys:

@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import contextlib
 import copy
-import importlib.util
 import threading
 from collections.abc import Callable, Iterator
 from contextvars import ContextVar
@@ -33,20 +32,6 @@ from pytest_emrd.errors import CassetteError
 
 #: Response headers kept in a cassette (the body is stored decoded, so no Content-Encoding).
 KEPT_RESPONSE_HEADERS: Final = frozenset({"content-type"})
-#: vcrpy's patcher groups whose library is not installed. vcrpy tries (and fails) to import
-#: each one again for every cassette it opens; skipping them patches exactly what it would.
-ABSENT_PATCHERS: Final = tuple(
-    group
-    for group, module in (
-        ("boto3", "botocore"),
-        ("httplib2", "httplib2"),
-        ("tornado", "tornado"),
-        ("aiohttp", "aiohttp"),
-        ("httpx2", "httpx2"),
-    )
-    if importlib.util.find_spec(module) is None
-)
-
 _current: ContextVar[Cassette | None] = ContextVar("emrd_cassette", default=None)
 _lock = threading.Lock()
 _depth = 0
@@ -60,35 +45,6 @@ def clear_caches() -> None:
 
 def _match_keys(request: Request) -> MatchKeys:
     return match_keys(request.method, request.path, redact_body(request.body))
-
-
-def redact_request(request: Request) -> Request:
-    """vcrpy ``before_record_request``: canonical body, secrets dropped, match keys attached."""
-    uri = scrub_uri(request.uri)
-    if uri != request.uri:  # vcrpy parses the URI again on every assignment
-        request.uri = uri
-    keys = _match_keys(request)
-    request.body = keys.redacted.body
-    request.headers = scrub_headers(request.headers)
-    request.emrd_keys = keys  # type: ignore[attr-defined]
-    return request
-
-
-def keep_response(response: dict[str, Any]) -> dict[str, Any] | None:
-    """vcrpy ``before_record_response``: drop non-2xx responses and volatile headers, and
-    remove configured key values from the body."""
-    if not 200 <= int(response["status"]["code"]) < 300:
-        return None
-    response["headers"] = {
-        k: v for k, v in response["headers"].items() if k.lower() in KEPT_RESPONSE_HEADERS
-    }
-    body = response.get("body", {}).get("string")
-    if isinstance(body, bytes | str):
-        raw = body.encode() if isinstance(body, str) else body
-        clean = scrub_bytes(raw, literal_only=True)
-        if clean != raw:
-            response["body"]["string"] = clean
-    return response
 
 
 def _keys(request: Request) -> MatchKeys:
@@ -115,13 +71,10 @@ def make_matcher(matching: str, frame_drift: set[tuple[Any, Any]]) -> Callable[.
 
 
 class EpisodeCassette(Cassette):
-    """A vcrpy cassette that remembers why a replay failed (see :mod:`._drift`).
-
-    Requests are counted in the order they are made; the first one that cannot be played
-    while the cassette is write-protected is explained: as an unreadable recorded response
-    when it repeats a request whose response was already played (the client retried it),
-    otherwise as drift against the recorded request at the same position.
-    """
+    """A vcrpy cassette that remembers why a replay failed (see :mod:`._drift`): the first request
+    that cannot be played while write-protected is explained as an unreadable recorded response
+    when it repeats one already played (a retry), else as drift against the recorded request
+    at the same position."""
 
     def __init__(self, *args: Any, **kwargs: Any) -> None:
         super().__init__(*args, **kwargs)
@@ -147,13 +100,10 @@ class EpisodeCassette(Cassette):
             self._loaded = len(self.data)
 
     def append(self, request: Request, response: dict[str, Any]) -> None:
-        """vcrpy's ``append``, keeping only the replies that counted.
-
-        A request recorded again right after itself is a retry (the client could not read
-        the reply: an empty or invalid-JSON 200), so the new reply replaces the unreadable
-        one and a replay gets the good reply first: no retry, no backoff sleep. An
-        interaction read back from our own file is not deep-copied (nothing else holds it).
-        """
+        """vcrpy's ``append``, keeping only the replies that counted: a request recorded again right
+        after itself is a retry (the client could not read the reply), so the new reply replaces
+        the unreadable one and a replay gets the good reply first. An interaction read back from
+        our own file is not deep-copied (nothing else holds it)."""
         if not self._loading:
             response = copy.deepcopy(response)
         kept = self._before_record_request(request), self._before_record_response(response)
@@ -232,28 +182,49 @@ class EpisodeCassette(Cassette):
 
 
 def _before_record_request(request: Request) -> Request:
+    """vcrpy ``before_record_request``: canonical body, secrets dropped, match keys attached.
+
+    vcrpy asks three or four times per request, so the redacted copy is kept on the request
+    (a shallow copy: redaction assigns new attributes, never mutates shared ones)."""
     if getattr(request, "emrd_keys", None) is not None:
         return request  # read back from the cassette (already canonical) or redacted before
-    # vcrpy asks three or four times per request: the redacted copy is kept on the request.
-    # A shallow copy suffices: redaction assigns new attributes and never mutates shared ones.
     redacted: Request | None = request.__dict__.get("emrd_redacted")
     if redacted is None:
-        redacted = request.emrd_redacted = redact_request(copy.copy(request))  # type: ignore[attr-defined]
+        redacted = request.emrd_redacted = copy.copy(request)  # type: ignore[attr-defined]
+        uri = scrub_uri(request.uri)
+        if uri != request.uri:  # vcrpy parses the URI again on every assignment
+            redacted.uri = uri
+        keys = _match_keys(redacted)
+        redacted.body = keys.redacted.body
+        redacted.headers = scrub_headers(redacted.headers)
+        redacted.emrd_keys = keys  # type: ignore[attr-defined]
     return redacted
 
 
 def _before_record_response(response: dict[str, Any]) -> dict[str, Any] | None:
-    # Bodies are stored decoded, whatever the server compressed (vcrpy's decoder copies).
+    """vcrpy ``before_record_response``: drop non-2xx responses and volatile headers, store
+    the body decoded and without configured key values."""
     if any(name.lower() == "content-encoding" for name in response["headers"]):
-        response = filters.decode_response(response)
-    return keep_response(response)
+        response = filters.decode_response(response)  # a copy, decoded
+    if not 200 <= int(response["status"]["code"]) < 300:
+        return None
+    response["headers"] = {
+        k: v for k, v in response["headers"].items() if k.lower() in KEPT_RESPONSE_HEADERS
+    }
+    body = response.get("body", {}).get("string")
+    if isinstance(body, bytes | str):
+        raw = body.encode() if isinstance(body, str) else body
+        clean = scrub_bytes(raw, literal_only=True)
+        if clean != raw:
+            response["body"]["string"] = clean
+    return response
 
 
 class _Router:
     """Stands in for a cassette in vcrpy's patches; forwards to the thread's cassette."""
 
     custom_patches = ()
-    skip_patchers = ABSENT_PATCHERS
+    skip_patchers = ()
     _path = "<emrd: the cassette of the calling thread>"
 
     def __getattr__(self, name: str) -> Any:
@@ -309,12 +280,8 @@ def episode_cassette(
     root: Path | None = None,
     keep_unsaved: bool = False,
 ) -> Iterator[EpisodeCassette]:
-    """Patch httpx with the episode's cassette for the duration of the block.
-
-    Raise inside the block to discard a failed episode (``record_on_exception`` off); in
-    ``all`` mode the file is rebuilt from scratch. ``root`` and ``keep_unsaved``: see
-    :class:`~._persister.EpisodePersister`.
-    """
+    """Patch httpx with the episode's cassette for the block (raise inside it to discard a
+    failed episode); ``root`` and ``keep_unsaved``: :class:`~._persister.EpisodePersister`."""
     frame_drift: set[tuple[Any, Any]] = set()
     settings: dict[str, Any] = dict(
         path=str(path),
@@ -331,7 +298,6 @@ def episode_cassette(
         before_record_response=_before_record_response,
         allow_playback_repeats=False,
         drop_unused_requests=record_mode == "all",
-        skip_patchers=ABSENT_PATCHERS,
     )
     if _depth:  # inside routing(): bind the cassette to this thread instead of patching
         opened = _bound(EpisodeCassette.load(**settings))

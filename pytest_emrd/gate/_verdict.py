@@ -1,8 +1,8 @@
 """Gate verdicts: a metric's estimate over a cell's episodes, compared with its bound (pure).
 
-A cell is model x condition (x prompt variant x layouts); its episodes are sorted by case id before
-the metric runs, and the bootstrap is seeded (``rng_seed=0``), so the same episodes give the
-same verdict whichever machine, worker or run directory they come from.
+A cell is model x condition x prompt variant x layouts; its episodes are sorted by case id
+and the bootstrap is seeded (``rng_seed=0``), so the same episodes give the same verdict
+whichever machine, worker or run directory they come from.
 """
 
 from __future__ import annotations
@@ -53,12 +53,10 @@ class GateCell:
 
 
 def _gate_id(model: str, condition: str, variant: str, layouts: str, metric: str) -> str:
-    parts = [model, condition]
-    if variant != "default":
-        parts.append(variant)
-    if layouts != "paper":
-        parts.append(layouts)
-    return "-".join([*parts, metric])
+    named = [
+        name for name, default in ((variant, "default"), (layouts, "paper")) if name != default
+    ]
+    return "-".join([model, condition, *named, metric])
 
 
 @dataclass(frozen=True)
@@ -155,11 +153,8 @@ def judge(cell: GateCell, estimate: EstimateLike) -> Verdict:
 def evaluate_cell(
     cell: GateCell, trajectories: Iterable[Any], metrics: Mapping[str, GateMetricLike]
 ) -> Verdict:
-    """The verdict of one gate over its episodes (any order in, sorted by case id).
-
-    ``trajectories`` are trajectories or anything else with a ``spec`` that the metric's
-    ``compute`` accepts, e.g. each episode's :class:`~pytest_emrd.metrics.EpisodeMetrics`.
-    """
+    """The verdict of one gate over its episodes (any order in, sorted by case id): trajectories
+    or anything with a ``spec`` the metric accepts (such as ``EpisodeMetrics``)."""
     ordered = sorted(trajectories, key=lambda t: t.spec.case_id)
     return judge(cell, metrics[cell.bound.metric].compute(ordered, rng_seed=0))
 
@@ -167,11 +162,8 @@ def evaluate_cell(
 def evaluate_all(
     trajectories: Iterable[Any], thresholds: Thresholds, metrics: Mapping[str, GateMetricLike]
 ) -> list[Verdict]:
-    """Every gate whose cell has episodes, grouped by model x condition x variant x layouts.
-
-    Used by ``emrd gate RUN_DIR...``: the same cells and the same verdicts as the gate tests
-    of a single-machine run over the same episodes (as :func:`evaluate_cell` takes them).
-    """
+    """Every gate whose cell has episodes, grouped by model x condition x variant x layouts:
+    ``emrd gate RUN_DIR...`` gets the verdicts of the gate tests over the same episodes."""
     cells: dict[tuple[str, str, str, str], list[Any]] = defaultdict(list)
     for t in trajectories:
         cells[(t.spec.model, t.spec.condition, t.spec.variant, t.spec.layouts)].append(t)

@@ -70,22 +70,20 @@ class EndpointWatch:
             return None
         return Stop(model, data["endpoint"], data["consecutive"], data["error"])
 
-    def record(self, model: str, endpoint: str, status: str, error: str | None) -> Stop | None:
-        """Count one computed episode of ``model``; the stop when this one made it."""
+    def record(self, model: str, endpoint: str, status: str, error: str | None) -> None:
+        """Count one computed episode of ``model`` (a stopped model's count is final)."""
         from filelock import FileLock
 
         self.folder.mkdir(mode=0o700, parents=True, exist_ok=True)
         with FileLock(str(self.folder / f"{model}.lock")):
             data = self._read(model) or {"session": self.session, "consecutive": 0}
             if data.get("stopped"):
-                return None
+                return
             down = unreachable(status, error)
             data["consecutive"] = data["consecutive"] + 1 if down else 0
             if down and data["consecutive"] >= DEAD_AFTER:
                 data.update(stopped=True, endpoint=endpoint, error=error)
-            blob = json.dumps(data).encode()
-            write_bytes_atomic(self.folder / f"{model}.json", blob)
-        return self.stopped(model) if data.get("stopped") else None
+            write_bytes_atomic(self.folder / f"{model}.json", json.dumps(data).encode())
 
     def resume_command(self) -> str:
         """This session's ``pytest`` command, resuming its run directory."""

@@ -95,11 +95,8 @@ class Run:
         """Live episodes whose cassette could not be written: the line that says so."""
 
     def adopt(self, settings: RunSettings) -> Run:
-        """Run the rest of the session with ``settings`` (the ``emrd_*`` fixtures, perhaps
-        overridden in a ``conftest.py``); returns this run.
-
-        The other fields shaped the test ids and the run directory before any fixture ran: a
-        :class:`ConfigError` names any the new settings change."""
+        """Run the rest of the session with ``settings`` (the ``emrd_*`` fixtures); the fields that
+        shaped the collected tests may not change (a :class:`ConfigError` names them)."""
         names = [f.name for f in dataclasses.fields(settings) if f.name not in ADOPTABLE]
         changed = [n for n in names if getattr(settings, n) != getattr(self.settings, n)]
         if changed:
@@ -199,8 +196,8 @@ class Run:
             return None
         from pytest_emrd.cassette import missing_cassettes, missing_summary
 
-        root = self.settings.cassettes
-        missing = missing_cassettes(unstored, root, modality_of=self.modality_of)
+        root, modality_of = self.settings.cassettes, self.modality_of
+        missing = missing_cassettes(unstored, root, modality_of=modality_of)
         if not missing:
             return None
         return missing_summary(
@@ -208,7 +205,7 @@ class Run:
             total=len(needed),
             root=root,
             invocation=self.invocation,
-            modality_of=self.modality_of,
+            modality_of=modality_of,
         )
 
     @cached_property
@@ -226,15 +223,12 @@ class Run:
 
     @property
     def session_folder(self) -> Path:
-        """Where this session's processes share transient state (the live line's status
-        files): a folder of the run directory's scratch space, outside it
-        (:func:`~pytest_emrd.run.scratch_dir`)."""
+        """This session's folder of the run directory's scratch space (status files)."""
         return scratch_dir(self.run_dir) / self.session
 
     @cached_property
     def status_file(self) -> Any:
-        """This process's live status for the live line (``live/<worker>.json`` in
-        :attr:`session_folder`)."""
+        """This process's status file for the live line."""
         from pytest_emrd.progress import StatusFile
 
         return StatusFile(self.session_folder)
@@ -253,20 +247,13 @@ class Run:
         from pytest_emrd.progress import run_watched
         from pytest_emrd.run import episode_path
 
-        settings = self.settings
-        path = check_inside(
-            settings.cassettes,
-            cassette_path(settings.cassettes, spec, modality_of=self.modality_of),
-            what="cassette",
-        )
+        settings, cassettes, modality_of = self.settings, self.settings.cassettes, self.modality_of
+        path = cassette_path(cassettes, spec, modality_of=modality_of)
+        check_inside(cassettes, path, what="cassette")
         check_inside(self.run_dir, episode_path(self.run_dir, spec), what="episode file")
-        live = is_live(
-            spec,
-            cassettes=settings.cassettes,
-            record_mode=settings.record_mode,
-            modality_of=self.modality_of,
-        )
-        if live:
+        if is_live(
+            spec, cassettes=cassettes, record_mode=settings.record_mode, modality_of=modality_of
+        ):
             try:
                 _writable_folder(path.parent)
             except OSError as exc:
@@ -295,9 +282,8 @@ class Run:
         self, spec: EpisodeSpec, unsaved: UnsavedCassette, trajectory: Trajectory, *, retries: int
     ) -> None:
         """Write a live episode whose cassette could not be saved to the run directory's
-        :data:`UNSAVED` folder, and remember the line that says where: the cassette as it
-        would have been (``<case_id>.json.xz``, ready to move into place) and the result with
-        its retries (``<case_id>.json``)."""
+        :data:`UNSAVED` folder (the cassette, ready to move into place, and the result with its
+        retries), and remember the line that says where."""
         folder = self.run_dir / UNSAVED
         traffic, fallback = folder / f"{spec.case_id}.json.xz", folder / f"{spec.case_id}.json"
         cause = os_error_line(

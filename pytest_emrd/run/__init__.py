@@ -4,17 +4,16 @@
 ``gate`` and ``cassette``, never the reverse).
 """
 
-from pytest_emrd.run._files import load_run_dirs, load_run_episodes, measure_episodes
 from pytest_emrd.run._grid import cell_specs, episode_specs, gate_cells, shard
-from pytest_emrd.run._head import EpisodeHead
+from pytest_emrd.run._head import EpisodeHead, EpisodeSummary, usage_rows
 from pytest_emrd.run._identity import (
     RunIdentity,
     check_resume,
     check_shard_set,
     read_identity,
+    scratch_dir,
     write_identity,
 )
-from pytest_emrd.run._locks import scratch_dir
 from pytest_emrd.run._prefetch import Prefetcher, start_prefetch
 from pytest_emrd.run._settings import (
     BACKENDS,
@@ -28,10 +27,12 @@ from pytest_emrd.run._store import (
     ResultsStore,
     StoredEpisode,
     episode_path,
+    load_run_dirs,
+    load_run_episodes,
+    measure_episodes,
     new_run_dir,
     read_episode,
 )
-from pytest_emrd.run._summary import EpisodeSummary, usage_rows
 from pytest_emrd.trajectory import RECORD_MODES
 
 __all__ = [

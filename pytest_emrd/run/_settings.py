@@ -218,17 +218,6 @@ def in_ci(env: Mapping[str, str]) -> bool:
     return env.get("CI", "").strip().lower() not in _NOT_CI
 
 
-def _episodes(raw: Any) -> int | None:
-    episodes = _count("--emrd-episodes", raw)
-    if episodes is not None and episodes > MAX_EPISODES:
-        raise ConfigError(
-            f"--emrd-episodes={episodes} is more than {MAX_EPISODES} episodes per spawn room "
-            f"(the paper runs 20); pass at most {MAX_EPISODES}, or split a larger study over "
-            "several run directories."
-        )
-    return episodes
-
-
 def _matching(raw: Any, backend: str) -> str:
     if raw is None:
         return "lenient" if backend in LENIENT_BACKENDS else "strict"
@@ -246,11 +235,9 @@ def _matching(raw: Any, backend: str) -> str:
 
 def _pick(option: Option, cli: Mapping[str, Any], ini: Mapping[str, Any]) -> Any:
     value = cli.get(option.name)
-    if value is None or value == []:
+    if value in (None, []):
         value = ini.get(option.name)
-    if value is None or value in ("", []):
-        return None
-    return value
+    return None if value in (None, "", []) else value
 
 
 def _listed(option: Option, value: Any, default: Sequence[str]) -> tuple[str, ...]:
@@ -283,19 +270,22 @@ def resolve_settings(
     rootdir: Path,
     env: Mapping[str, str] | None = None,
 ) -> RunSettings:
-    """Apply command line > ini > default, validate, and freeze.
-
-    ``cli`` and ``ini`` map option names (``record_mode``) to raw values (``None``/empty
-    when not given). Relative paths are resolved against ``rootdir``. Warns
-    :class:`MatchingWarning` for an explicit ``strict`` on a backend that is not bit-stable.
-    """
+    """Apply command line > ini > default, validate, and freeze. ``cli`` and ``ini`` map option
+    names to raw values (``None``/empty when not given); relative paths are resolved against
+    ``rootdir``. Warns :class:`MatchingWarning` for ``strict`` on a backend not bit-stable."""
     env = os.environ if env is None else env
     by_name = {o.name: o for o in OPTIONS}
     raw = {name: _pick(option, cli, ini) for name, option in by_name.items()}
     for option in OPTIONS:  # a repeatable option's items are checked by _listed
         if option.choices and not option.repeatable and raw[option.name] is not None:
             check_choice(option.flag, raw[option.name], option.choices)
-    episodes = _episodes(raw["episodes"])
+    episodes = _count(
+        "--emrd-episodes",
+        raw["episodes"],
+        MAX_EPISODES,
+        "episodes per spawn room (the paper runs 20)",
+        "or split a larger study over several run directories.",
+    )
     default_mode = "none" if in_ci(env) else "once"
     backend = raw["backend"] or "builtin"
     results = raw["results"] and _folder(
@@ -308,12 +298,13 @@ def resolve_settings(
         _path(raw["cassettes"] or "cassettes", rootdir),
         "pass the cassette folder (default: <rootdir>/cassettes).",
     )
-    concurrency = _count("--emrd-concurrency", raw["concurrency"])
-    if concurrency is not None and concurrency > MAX_CONCURRENCY:
-        raise ConfigError(
-            f"--emrd-concurrency={concurrency} is more than {MAX_CONCURRENCY} threads per "
-            f"process; pass at most {MAX_CONCURRENCY}, and add processes with -n N for more."
-        )
+    concurrency = _count(
+        "--emrd-concurrency",
+        raw["concurrency"],
+        MAX_CONCURRENCY,
+        "threads per process",
+        "and add processes with -n N for more.",
+    )
     if (concurrency or 1) > 1 and backend != "builtin":
         raise ConfigError(
             f"--emrd-concurrency={concurrency} runs episodes in threads, which the {backend} "
@@ -362,9 +353,12 @@ def _folder(flag: str, folder: Path, fix: str) -> Path:
     return folder
 
 
-def _count(flag: str, value: Any) -> int | None:
-    """A whole number >= 1 given as text or int, or None when not given."""
+def _count(flag: str, value: Any, most: int, unit: str, more: str) -> int | None:
+    """A whole number from 1 to ``most`` given as text or int, or None when not given."""
     if value is None:
         return None
     text = str(value).strip()
-    return check_positive_int(flag, int(text) if text.isdigit() else text)
+    count = check_positive_int(flag, int(text) if text.isdigit() else text)
+    if count > most:
+        raise ConfigError(f"{flag}={count} is more than {most} {unit}; pass at most {most}, {more}")
+    return count

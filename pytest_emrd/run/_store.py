@@ -1,4 +1,5 @@
-"""The results store: one file per episode under a run directory (file I/O).
+"""The results store: one file per episode under a run directory (file I/O), and the
+episodes of several run directories (shards) read back and measured.
 
 ``<run>/run.json`` records the grid and shard the directory holds (:mod:`._identity`);
 ``<run>/episodes/<case_id>.json`` is one JSON document whose first line holds the episode's
@@ -6,35 +7,37 @@ head (:class:`EpisodeHead`: what reusing it needs) and whose second line holds t
 trajectory, so a resume decodes a trajectory only where something needs it. Files of the
 older layout (``store_schema`` 1: no head) are decoded in full.
 
-Any process may ask for any episode: the first takes the episode's lock
-(:mod:`pytest_emrd.run._locks`), computes it and writes it atomically; everyone else waits
-and reads the file. An episode is reused when its spec and protocol match and it finished
-(an ``errored`` one only within the session that produced it, so a rerun retries
+Any process may ask for any episode: the first takes the episode's lock (outside the run
+directory, :func:`~._identity.run_lock`), computes it and writes it atomically; everyone
+else waits and reads the file. An episode is reused when its spec and protocol match and it
+finished (an ``errored`` one only within the session that produced it, so a rerun retries
 failures). Stored files are scrubbed of secrets (:mod:`pytest_emrd._scrub`)."""
 
 from __future__ import annotations
 
 import json
+import os
 import secrets
 import time
-from collections.abc import Callable, Iterator
-from dataclasses import dataclass, field, replace
+from collections.abc import Callable, Iterator, Sequence
+from dataclasses import KW_ONLY, dataclass, field, replace
 from functools import cached_property
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Final
 
 from pytest_emrd._atomic import write_bytes_atomic
+from pytest_emrd._fork import available_cores, fork_map
 from pytest_emrd._scrub import scrub, scrub_bytes
-from pytest_emrd.errors import ProtocolError
+from pytest_emrd.errors import ConfigError, ProtocolError
 from pytest_emrd.run._head import EpisodeHead
-from pytest_emrd.run._identity import RunIdentity, write_identity
-from pytest_emrd.run._locks import run_lock
+from pytest_emrd.run._identity import RunIdentity, run_lock, write_identity
 from pytest_emrd.trajectory import OLDER_SCHEMAS, SCHEMA_VERSION, EpisodeSpec, Trajectory
 
 if TYPE_CHECKING:
     from filelock import FileLock
 
     from pytest_emrd.cassette import EpisodeRun
+    from pytest_emrd.metrics import EpisodeMetrics
 
 STORE_SCHEMA: Final = 2
 #: The layout before heads moved into the episode file (read, never written).
@@ -69,10 +72,9 @@ class StoredEpisode:
         return self.decode_trajectory()
 
     def decode_trajectory(self) -> Trajectory:
-        """The trajectory without keeping it: the one held, else decoded and validated from
-        the store's file (a file replaced since its head was read is a
-        :class:`ProtocolError`). A process that only measures an episode holds no decoded
-        copy (about 0.6 MB of objects per 50-step episode)."""
+        """The trajectory without keeping it (a process that only measures an episode holds no
+        decoded copy): the one held, else decoded from the store's file (replaced since its head
+        was read: :class:`ProtocolError`)."""
         if "trajectory" in self.__dict__:
             return self.trajectory
         if isinstance(self.source, Trajectory):
@@ -96,9 +98,8 @@ class StoredEpisode:
     retries = _from_head("retries")
 
     def to_json(self) -> bytes:
-        """The stored file (see the module): configured key values removed everywhere, and
-        URL credentials, secret parameters and headers removed from the error text (the only
-        place our own messages, which quote URLs and response bodies, enter a trajectory)."""
+        """The stored file (see the module), configured key values removed everywhere and the
+        error text (where our messages quote URLs and bodies) scrubbed of credentials."""
         trajectory = self.trajectory.to_dict()
         if trajectory.get("error"):
             trajectory["error"] = scrub(trajectory["error"])
@@ -156,22 +157,16 @@ def new_run_dir(parent: Path) -> Path:
     return parent / f"{time.strftime('%Y%m%d-%H%M%S')}-{secrets.token_hex(3)}"
 
 
+@dataclass(eq=False)
 class ResultsStore:
     """Episodes of one run directory, computed at most once across processes."""
 
-    def __init__(
-        self,
-        run_dir: Path,
-        *,
-        session: str,
-        protocol: str,
-        identity: RunIdentity | None = None,
-    ) -> None:
-        self.run_dir = run_dir
-        self.session = session
-        self.protocol = protocol
-        self.identity = identity
-        """Recorded in ``run.json`` before the first episode is computed."""
+    run_dir: Path
+    _: KW_ONLY
+    session: str
+    protocol: str
+    identity: RunIdentity | None = None
+    """Recorded in ``run.json`` before the first episode is computed."""
 
     def path_for(self, spec: EpisodeSpec) -> Path:
         return episode_path(self.run_dir, spec)
@@ -181,16 +176,12 @@ class ResultsStore:
         finished, or errored in this very session), else None (it needs computing)."""
         try:
             stored = read_episode(self.path_for(spec))
-        except FileNotFoundError:
-            return None
-        except (ValueError, KeyError, TypeError, ProtocolError):
-            return None  # unreadable leftovers are recomputed and overwritten
+        except (FileNotFoundError, ValueError, KeyError, TypeError, ProtocolError):
+            return None  # none yet, or unreadable leftovers (recomputed and overwritten)
         head = stored.head
-        if head.spec != spec or head.protocol != self.protocol:
-            return None
-        if head.status == "errored" and head.session != self.session:
-            return None
-        return stored
+        stale = head.spec != spec or head.protocol != self.protocol
+        retried = head.status == "errored" and head.session != self.session
+        return None if stale or retried else stored
 
     def holds(self, spec: EpisodeSpec) -> bool:
         """Whether the store already has a reusable episode for ``spec`` (no compute needed)."""
@@ -221,9 +212,8 @@ class ResultsStore:
     def get_or_compute(
         self, spec: EpisodeSpec, compute: Callable[[EpisodeSpec], EpisodeRun]
     ) -> StoredEpisode:
-        """The stored episode for ``spec``, computing and storing it if needed (waiting for
-        whoever computes it now). A reusable episode is read without taking its lock: files
-        are replaced atomically, and a reusable one is final."""
+        """The stored episode for ``spec``, computed and stored if needed (waiting for whoever
+        computes it now); a reusable one is final, so it is read without the lock."""
         stored = self.reusable(spec)
         if stored is not None:
             return stored
@@ -249,8 +239,7 @@ class ResultsStore:
 
 def read_episode(path: Path) -> StoredEpisode:
     """The episode stored in file ``path``: its head read from the first line, the trajectory
-    decoded on first use; a file of the older layout is decoded and validated in full.
-    Writes nothing."""
+    decoded on first use (a file of the older layout: decoded and validated in full)."""
     with path.open("rb") as file:
         first = file.readline()
         if first.endswith(b",\n"):
@@ -273,3 +262,40 @@ def iter_run_episodes(run_dir: Path) -> Iterator[StoredEpisode]:
             yield read_episode(path)
         except (ValueError, KeyError, TypeError, ProtocolError) as exc:
             raise _unreadable(path, exc) from exc
+
+
+def load_run_episodes(run_dirs: Sequence[Path]) -> list[StoredEpisode]:
+    """The episodes of several run directories (shards), read as :func:`read_episode` reads them
+    and sorted by case id; the first copy of a case wins."""
+    seen: dict[str, StoredEpisode] = {}
+    for run_dir in run_dirs:
+        if not (run_dir / "episodes").is_dir():
+            raise ConfigError(
+                f"run_dir={str(run_dir)!r} holds no episodes/ folder; pass the directories "
+                "that `pytest benchmarks --emrd-results DIR` wrote."
+            )
+        for stored in iter_run_episodes(run_dir):
+            seen.setdefault(stored.head.spec.case_id, stored)
+    return [seen[key] for key in sorted(seen)]
+
+
+def load_run_dirs(run_dirs: Sequence[Path]) -> list[Trajectory]:
+    """Trajectories of several run directories (shards); the first copy of a case wins."""
+    return [stored.trajectory for stored in load_run_episodes(run_dirs)]
+
+
+def measure_episodes(
+    episodes: Sequence[StoredEpisode], processes: int | None = None
+) -> list[EpisodeMetrics]:
+    """Each episode's :func:`~pytest_emrd.metrics.episode_metrics`, in order, decoded and
+    measured in ``processes`` forked workers (default: every available core; one inside an
+    xdist worker, whose siblings hold the other cores)."""
+    if processes is None:
+        processes = 1 if os.environ.get("PYTEST_XDIST_WORKER") else available_cores()
+    return fork_map(_measure, episodes, processes)
+
+
+def _measure(stored: StoredEpisode) -> EpisodeMetrics:
+    from pytest_emrd.metrics import episode_metrics
+
+    return episode_metrics(stored.decode_trajectory())
