@@ -1,7 +1,5 @@
-"""Cassettes: one redacted vcrpy cassette per episode, compressed with xz (see :mod:`._file`).
-
-``run_with_cassette`` is the entry point; the rest is exported for tools and tests.
-"""
+"""Cassettes: one redacted vcrpy cassette per episode, compressed with xz (see :mod:`._file`);
+``run_with_cassette`` is the entry point."""
 
 from pytest_emrd.cassette._episode import (
     EpisodeRun,

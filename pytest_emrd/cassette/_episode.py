@@ -14,8 +14,13 @@ from pathlib import Path
 from typing import Any
 
 from pytest_emrd._scrub import scrub
-from pytest_emrd.cassette._drift import modality_message
-from pytest_emrd.cassette._paths import Invocation, ModalityOf, cassette_path, record_command
+from pytest_emrd.cassette._paths import (
+    Invocation,
+    ModalityOf,
+    cassette_path,
+    modality_message,
+    record_command,
+)
 from pytest_emrd.cassette._persister import LOCK_TIMEOUT_S, UnsavedCassette, writer_lock
 from pytest_emrd.cassette._use import episode_cassette
 from pytest_emrd.errors import CassetteError, check_choice
@@ -36,8 +41,7 @@ class EpisodeRun:
     retries: int = 0
     """Model requests retried while it ran (set by whoever watched it)."""
     unsaved: UnsavedCassette | None = None
-    """The recording, when its cassette file could not be written (the episode is still
-    good: keep the recording elsewhere, or it is lost); None otherwise."""
+    """The recording, when its cassette file could not be written (keep it elsewhere)."""
 
 
 class FrameDriftWarning(UserWarning):
@@ -48,16 +52,14 @@ class _Discard(Exception):
     """Raised inside the cassette block so vcrpy does not save a failed episode."""
 
 
-#: Runs one episode; ``live`` says whether the model may really be called (an API key is
-#: needed) or every request will be replayed (frames then travel as their pixel digests).
+#: Runs one episode; ``live``: the model may really be called (else every request replays).
 EpisodeRunner = Callable[..., Trajectory]
 
 
 def is_live(
     spec: EpisodeSpec, *, cassettes: Path, record_mode: str, modality_of: ModalityOf | None = None
 ) -> bool:
-    """Whether running ``spec`` calls the model (records), rather than replaying only
-    (``modality_of``: the models' default modalities, see :func:`~._paths.cassette_path`)."""
+    """Whether running ``spec`` calls the model (records), rather than replaying only."""
     if record_mode in ("all", "new_episodes"):
         return True
     path = cassette_path(cassettes, spec, modality_of=modality_of)

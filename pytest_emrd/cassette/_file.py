@@ -35,7 +35,6 @@ _GZIP_MAGIC: Final = b"\x1f\x8b"
 _XZ_FILTERS: Final = (
     {"id": lzma.FILTER_LZMA2, "preset": 9 | lzma.PRESET_EXTREME, "dict_size": 1 << 20, "pb": 0},
 )
-_DIGEST_PREFIX: Final = "sha256:"
 #: How the document of a cassette an older release wrote (format 1 or 2) starts.
 LEGACY_HEAD: Final = '{"format":"emrd-cassette/'
 
@@ -60,8 +59,7 @@ class CassetteData:
     requests: tuple[Request, ...]
     responses: tuple[dict[str, Any], ...]
     raw: frozenset[int] = frozenset()
-    """Indices of the requests whose body is not canonical JSON: read back, they are keyed by
-    redacting them again rather than as they are (every recorded body is, nearly always)."""
+    """Indices of the requests whose body is not canonical JSON (keyed by redacting again)."""
 
 
 def _text(data: bytes | str | None) -> str | None:
@@ -121,7 +119,7 @@ def digest(protocol: str, interactions: Sequence[dict[str, Any]]) -> str:
         part(json.dumps([{**request, "body": 0}, {**response, "body": 0}], sort_keys=True))
         for body in bodies:
             part("null" if body is None else f"={body}")
-    return _DIGEST_PREFIX + h.hexdigest()
+    return "sha256:" + h.hexdigest()
 
 
 def document(data: CassetteData) -> dict[str, Any]:

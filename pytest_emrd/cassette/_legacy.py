@@ -163,11 +163,8 @@ def upgrade(root: Path) -> Iterator[Upgraded]:
 def same_interactions(a: CassetteData, b: CassetteData) -> bool:
     """Whether two cassettes hold the same protocol and interactions, byte for byte."""
 
-    def requests(data: CassetteData) -> list[tuple[Any, ...]]:
-        return [(r.method, r.uri, r.body, sorted(r.headers.items())) for r in data.requests]
+    def held(data: CassetteData) -> tuple[Any, ...]:
+        requests = [(r.method, r.uri, r.body, sorted(r.headers.items())) for r in data.requests]
+        return data.protocol, requests, list(data.responses)
 
-    return (
-        a.protocol == b.protocol
-        and requests(a) == requests(b)
-        and list(a.responses) == list(b.responses)
-    )
+    return held(a) == held(b)

@@ -25,7 +25,7 @@ from vcr.request import Request
 
 from pytest_emrd import _wire
 from pytest_emrd._scrub import scrub_bytes, scrub_uri
-from pytest_emrd.cassette._drift import drift_message, request_modality, unreadable_message
+from pytest_emrd.cassette._paths import drift_message, request_modality, unreadable_message
 from pytest_emrd.cassette._persister import EpisodePersister, UnsavedCassette
 from pytest_emrd.cassette._redact import MatchKeys, match_keys, redact_body, scrub_headers
 from pytest_emrd.errors import CassetteError
@@ -71,23 +71,25 @@ def make_matcher(matching: str, frame_drift: set[tuple[Any, Any]]) -> Callable[.
 
 
 class EpisodeCassette(Cassette):
-    """A vcrpy cassette that remembers why a replay failed (see :mod:`._drift`): the first request
+    """A vcrpy cassette that remembers why a replay failed (see :mod:`._paths`): the first request
     that cannot be played while write-protected is explained as an unreadable recorded response
     when it repeats one already played (a retry), else as drift against the recorded request
     at the same position."""
 
-    def __init__(self, *args: Any, **kwargs: Any) -> None:
-        super().__init__(*args, **kwargs)
+    def __init__(
+        self, *args: Any, matching: str = "strict", rerecord_command: str = "", **kwargs: Any
+    ) -> None:
+        self.frame_drift: set[tuple[Any, Any]] = set()
+        super().__init__(*args, match_on=(make_matcher(matching, self.frame_drift),), **kwargs)
         self.requests_made = 0
         self.drift: str | None = None
-        self.frame_drift: set[tuple[Any, Any]] = set()
-        self.strict = False
-        self.rerecord_command = ""
+        self.strict = matching == "strict"
+        self.rerecord_command = rerecord_command
         self.unreadable = False
         """The failure is a recorded response the client could not read (not drift)."""
-        self.stop_on_drift = False
-        """``new_episodes``: a request the recording does not hold stops the episode (it is
-        then recorded again whole) instead of being appended to the recording."""
+        self.stop_on_drift = self.record_mode == RecordMode.NEW_EPISODES
+        """A request the recording does not hold stops the episode (to be recorded again
+        whole)."""
         self._loading = False
         self._loaded = 0
 
@@ -116,8 +118,7 @@ class EpisodeCassette(Cassette):
         self.dirty = True
 
     def _retried(self, request: Request) -> bool:
-        """Whether ``request`` repeats the last interaction recorded live (not one read back
-        from the file, which a replay plays before any request is recorded)."""
+        """Whether ``request`` repeats the last interaction recorded live (not read back)."""
         if len(self.data) <= self._loaded:
             return False
         key = _keys(request).strict
@@ -170,8 +171,7 @@ class EpisodeCassette(Cassette):
 
     @property
     def unsaved(self) -> UnsavedCassette | None:
-        """The recording, once the block has closed, when its file could not be written
-        (see :class:`~._persister.EpisodePersister`); None when it was saved or not due."""
+        """The recording, once the block has closed, when its file could not be written."""
         persister = self._persister
         return persister.unsaved if isinstance(persister, EpisodePersister) else None
 
@@ -282,7 +282,6 @@ def episode_cassette(
 ) -> Iterator[EpisodeCassette]:
     """Patch httpx with the episode's cassette for the block (raise inside it to discard a
     failed episode); ``root`` and ``keep_unsaved``: :class:`~._persister.EpisodePersister`."""
-    frame_drift: set[tuple[Any, Any]] = set()
     settings: dict[str, Any] = dict(
         path=str(path),
         persister=EpisodePersister(
@@ -293,7 +292,8 @@ def episode_cassette(
             keep_unsaved=keep_unsaved,
         ),
         record_mode=RecordMode(record_mode),
-        match_on=(make_matcher(matching, frame_drift),),
+        matching=matching,
+        rerecord_command=rerecord_command,
         before_record_request=_before_record_request,
         before_record_response=_before_record_response,
         allow_playback_repeats=False,
@@ -304,8 +304,4 @@ def episode_cassette(
     else:
         opened = EpisodeCassette.use(**settings, record_on_exception=False)
     with opened as cassette:
-        cassette.frame_drift = frame_drift
-        cassette.strict = matching == "strict"
-        cassette.rerecord_command = rerecord_command
-        cassette.stop_on_drift = record_mode == "new_episodes"
         yield cassette

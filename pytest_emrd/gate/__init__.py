@@ -1,7 +1,4 @@
-"""Gates: the thresholds file, per-cell verdicts and the gate table (pure over metrics).
-
-The run that feeds them (settings, grid, results store, prefetch) is :mod:`pytest_emrd.run`.
-"""
+"""Gates: the thresholds file, per-cell verdicts and the gate table (pure over metrics)."""
 
 from pytest_emrd.gate._files import load_thresholds
 from pytest_emrd.gate._table import UsageRow, gate_tables, usage_table

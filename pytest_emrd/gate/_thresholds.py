@@ -75,8 +75,7 @@ class Bound:
     line: int = 0
     """1-based line of the metric in the thresholds file (0 when built in code)."""
     layouts: str = "paper"
-    """The cells it gates: ``paper`` (key ``baseline``) or ``generated``
-    (key ``baseline@generated``)."""
+    """The cells it gates: ``paper`` (key ``baseline``), ``generated`` (``baseline@generated``)."""
 
 
 @dataclass(frozen=True)

@@ -34,8 +34,7 @@ class GateMetricLike(Protocol):
 @dataclass(frozen=True)
 class GateCell:
     """One gate test: a bound applied to the episodes of model x condition x variant x layouts
-    (the layouts are the bound's: paper-protocol and generated-layout episodes never share a
-    cell)."""
+    (the bound's: paper-protocol and generated-layout episodes never share a cell)."""
 
     bound: Bound
     variant: str = "default"

@@ -43,7 +43,8 @@ def pytest_addoption(parser: pytest.Parser) -> None:
         choices = f" Choices: {', '.join(option.choices)}." if option.choices else ""
         kwargs = option.argparse_kwargs(option.ini)
         group.addoption(option.flag, **{**kwargs, "help": option.help + choices})
-        parser.addini(option.ini, f"{option.help} (ini twin of {option.flag})", option.ini_type)
+        kind = "args" if option.repeatable else "string"
+        parser.addini(option.ini, f"{option.help} (ini twin of {option.flag})", kind)
 
 
 def pytest_configure(config: pytest.Config) -> None:

@@ -1,11 +1,7 @@
 """What the controller (the only process, or xdist's) shows: preflight and the live line
-while the run goes, a progress line per recorded episode, the gate and token tables and
-``$GITHUB_STEP_SUMMARY`` at the end.
-
-Once the controller knows which tests will run (its own collection, or each xdist node's),
-each model those tests will call live is preflighted once, and a failure ends the session
-before any episode runs; then a ticker prints the live line from the workers' status files.
-"""
+while the run goes (each model the selected tests call live is preflighted once, and a
+failure ends the session before any episode runs), a progress line per recorded episode,
+the gate and token tables and ``$GITHUB_STEP_SUMMARY`` at the end."""
 
 from __future__ import annotations
 
@@ -118,11 +114,8 @@ class RunReport:
         summary = EpisodeSummary.from_dict(props["emrd_episode"])
         self.episodes[summary.case] = summary
         reporter = self.config.pluginmanager.get_plugin("terminalreporter")
-        if (
-            summary.head.recorded
-            and reporter is not None
-            and not hasattr(self.config, "workerinput")
-        ):
+        controller = not hasattr(self.config, "workerinput")
+        if summary.head.recorded and reporter is not None and controller:
             reporter.ensure_newline()
             reporter.write_line(summary.progress_line(len(self.episodes)))
 

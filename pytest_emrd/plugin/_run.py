@@ -59,8 +59,7 @@ class CassetteNotSavedWarning(UserWarning):
 
 
 def failure_line(exc: EmrdError | OSError, what: str = "pytest-emrd") -> str:
-    """The one scrubbed line an :class:`EmrdError` or a file system failure (most often in
-    the run directory) ends in: ``<what>: <message>``."""
+    """The one scrubbed line an :class:`EmrdError` or a file system failure ends in."""
     if isinstance(exc, OSError):
         return f"{what}: {scrub(os_error_line(exc, doing='write', option='--emrd-results DIR'))}"
     return f"{what}: {scrub(str(exc))}"
@@ -241,8 +240,7 @@ class Run:
         return EndpointWatch(self.run_dir, self.session, self.config.invocation_params.args)
 
     def compute(self, spec: EpisodeSpec) -> Any:
-        """Run ``spec`` through its cassette (see the module docstring for a cassette that
-        cannot be written)."""
+        """Run ``spec`` through its cassette (an unwritable one: see the module docstring)."""
         from pytest_emrd.cassette import cassette_path, is_live
         from pytest_emrd.progress import run_watched
         from pytest_emrd.run import episode_path

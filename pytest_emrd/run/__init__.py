@@ -1,8 +1,5 @@
-"""A run: its settings, the episode grid, the results store of its directory, prefetch.
-
-:mod:`pytest_emrd.gate` judges what a run measured; this package feeds it (it imports
-``gate`` and ``cassette``, never the reverse).
-"""
+"""A run: its settings, the episode grid, the results store of its directory, prefetch (it
+feeds :mod:`pytest_emrd.gate` and uses ``cassette``; neither imports it)."""
 
 from pytest_emrd.run._grid import cell_specs, episode_specs, gate_cells, shard
 from pytest_emrd.run._head import EpisodeHead, EpisodeSummary, usage_rows
@@ -14,7 +11,6 @@ from pytest_emrd.run._identity import (
     scratch_dir,
     write_identity,
 )
-from pytest_emrd.run._prefetch import Prefetcher, start_prefetch
 from pytest_emrd.run._settings import (
     BACKENDS,
     OPTIONS,
@@ -24,6 +20,7 @@ from pytest_emrd.run._settings import (
     resolve_settings,
 )
 from pytest_emrd.run._store import (
+    Prefetcher,
     ResultsStore,
     StoredEpisode,
     episode_path,
@@ -32,6 +29,7 @@ from pytest_emrd.run._store import (
     measure_episodes,
     new_run_dir,
     read_episode,
+    start_prefetch,
 )
 from pytest_emrd.trajectory import RECORD_MODES
 

@@ -94,8 +94,7 @@ class EpisodeHead:
 
 @dataclass(frozen=True)
 class EpisodeSummary:
-    """What travels from an xdist worker to the controller about an episode: its head and its
-    estimated cost."""
+    """What travels from an xdist worker to the controller: an episode's head and cost."""
 
     head: EpisodeHead
     cost_usd: float | None
@@ -134,8 +133,7 @@ class EpisodeSummary:
 
 
 def usage_rows(summaries: Iterable[EpisodeSummary]) -> list[UsageRow]:
-    """Tokens, cost, retries and errored episodes per model (cost ``None`` as soon as one
-    episode has no price)."""
+    """Tokens, cost (``None`` once an episode has no price), retries and errors per model."""
     rows: dict[str, UsageRow] = {}
     for s in summaries:
         head, model = s.head, s.head.spec.model

@@ -186,8 +186,7 @@ def scratch_dir(run_dir: Path) -> Path:
 
 
 def run_lock(run_dir: Path, name: str, *, timeout: float = -1) -> FileLock:
-    """The file lock ``name`` of ``run_dir`` (an episode's case id, or ``run.json``);
-    filelock is imported here, so a resume that takes no lock never loads it."""
+    """The file lock ``name`` of ``run_dir`` (imported here: a resume never loads filelock)."""
     from filelock import FileLock
 
     folder = scratch_dir(run_dir)

@@ -32,16 +32,11 @@ SPAWNS: Final[tuple[str, ...]] = tuple(ROOM_SLUGS.values())
 MAX_EPISODES: Final = 1000
 """Cap on ``--emrd-episodes`` (episodes per spawn room; the paper's setting is 20)."""
 MAX_CONCURRENCY: Final = 32
-"""Cap on ``--emrd-concurrency`` (threads per process; a provider's rate limit is reached
-long before, and each thread holds an episode's frames in memory)."""
+"""Cap on ``--emrd-concurrency`` (threads per process, each holding an episode's frames)."""
 _NOT_CI: Final = frozenset({"", "0", "false", "no", "off"})
-#: What ``pytest benchmarks`` covers with neither ``--emrd-model`` nor ``--emrd-condition``:
-#: the reference agents whose cassettes are committed, each under the conditions recorded
-#: and gated for it (``mimic``: the baseline grid only, to keep CI replay short).
-DEFAULT_CELLS: Final[tuple[tuple[str, tuple[str, ...]], ...]] = (
-    ("scout", CONDITIONS),
-    ("mimic", ("baseline",)),
-)
+#: What ``pytest benchmarks`` covers without ``--emrd-model``: the reference agents whose
+#: cassettes are committed, each under its recorded conditions (``mimic``: baseline only).
+DEFAULT_CELLS: Final = (("scout", CONDITIONS), ("mimic", ("baseline",)))
 LENIENT_BACKENDS: Final[frozenset[str]] = frozenset({"ai2thor"})
 """Backends whose frames are not bit-stable: their cassettes replay with lenient matching."""
 
@@ -67,10 +62,6 @@ class Option:
     @property
     def ini(self) -> str:
         return "emrd_" + self.name
-
-    @property
-    def ini_type(self) -> str:
-        return "args" if self.repeatable else "string"
 
     def argparse_kwargs(self, dest: str) -> dict[str, Any]:
         """``add_argument``/``addoption`` keyword arguments (pytest's parser and ``emrd``)."""
@@ -169,8 +160,7 @@ class RunSettings:
 
     @property
     def replays_only(self) -> bool:
-        """Record mode ``none``: no episode calls a model (nothing to preflight; an episode
-        without a cassette or a stored result is an error)."""
+        """Record mode ``none``: no episode calls a model (nothing to preflight)."""
         return self.record_mode == "none"
 
     @property

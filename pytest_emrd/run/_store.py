@@ -1,5 +1,5 @@
-"""The results store: one file per episode under a run directory (file I/O), and the
-episodes of several run directories (shards) read back and measured.
+"""The results store: one file per episode under a run directory (file I/O), live episodes
+computed ahead into it, and the episodes of several run directories read back and measured.
 
 ``<run>/run.json`` records the grid and shard the directory holds (:mod:`._identity`);
 ``<run>/episodes/<case_id>.json`` is one JSON document whose first line holds the episode's
@@ -11,15 +11,22 @@ Any process may ask for any episode: the first takes the episode's lock (outside
 directory, :func:`~._identity.run_lock`), computes it and writes it atomically; everyone
 else waits and reads the file. An episode is reused when its spec and protocol match and it
 finished (an ``errored`` one only within the session that produced it, so a rerun retries
-failures). Stored files are scrubbed of secrets (:mod:`pytest_emrd._scrub`)."""
+failures). Stored files are scrubbed of secrets (:mod:`pytest_emrd._scrub`).
+
+With ``--emrd-concurrency N`` a :class:`Prefetcher` computes live episodes ahead, up to
+``N`` at once in threads of the process (a live episode mostly waits for the model), through
+the store: one stored already or locked elsewhere is skipped, so each is computed once, and
+HTTP traffic is routed per thread to each episode's cassette (``cassette.routing``)."""
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import secrets
 import time
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Iterable, Iterator, Sequence
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import KW_ONLY, dataclass, field, replace
 from functools import cached_property
 from pathlib import Path
@@ -28,9 +35,10 @@ from typing import TYPE_CHECKING, Any, Final
 from pytest_emrd._atomic import write_bytes_atomic
 from pytest_emrd._fork import available_cores, fork_map
 from pytest_emrd._scrub import scrub, scrub_bytes
-from pytest_emrd.errors import ConfigError, ProtocolError
+from pytest_emrd.errors import ConfigError, EmrdError, ProtocolError
 from pytest_emrd.run._head import EpisodeHead
 from pytest_emrd.run._identity import RunIdentity, run_lock, write_identity
+from pytest_emrd.run._settings import RunSettings
 from pytest_emrd.trajectory import OLDER_SCHEMAS, SCHEMA_VERSION, EpisodeSpec, Trajectory
 
 if TYPE_CHECKING:
@@ -62,8 +70,7 @@ class StoredEpisode:
 
     @classmethod
     def of(cls, trajectory: Trajectory, **facts: Any) -> StoredEpisode:
-        """``trajectory`` with the store's ``facts`` about it (``session``, ``recorded``,
-        ``frame_drift``, ``seconds``, ``retries``; see :class:`EpisodeHead`)."""
+        """``trajectory`` with the store's ``facts`` about it (see :meth:`EpisodeHead.of`)."""
         return cls(EpisodeHead.of(trajectory, **facts), trajectory)
 
     @cached_property
@@ -108,18 +115,12 @@ class StoredEpisode:
             "trajectory_schema": trajectory["schema_version"],
             "head": self.head.to_dict(),
         }
-        blob = (
-            json.dumps(first, **_COMPACT)[:-1]
-            + ',\n"trajectory":'
-            + json.dumps(trajectory, **_COMPACT)
-            + "}\n"
-        )
-        return scrub_bytes(blob.encode(), literal_only=True)
+        head, body = json.dumps(first, **_COMPACT)[:-1], json.dumps(trajectory, **_COMPACT)
+        return scrub_bytes(f'{head},\n"trajectory":{body}}}\n'.encode(), literal_only=True)
 
     @classmethod
     def from_json(cls, blob: bytes) -> StoredEpisode:
-        """A stored file, decoded and validated in full (its head must describe its
-        trajectory)."""
+        """A stored file, decoded and validated in full (its head describes its trajectory)."""
         document: dict[str, Any] = json.loads(blob)
         schema = document.get("store_schema")
         trajectory = Trajectory.from_dict(document["trajectory"])
@@ -198,14 +199,8 @@ class ResultsStore:
         if self.identity is not None:
             write_identity(self.run_dir, self.identity)
         run = compute(spec)
-        stored = StoredEpisode.of(
-            run.trajectory,
-            session=self.session,
-            recorded=run.recorded,
-            frame_drift=run.frame_drift,
-            seconds=run.seconds,
-            retries=run.retries,
-        )
+        facts = {k: getattr(run, k) for k in ("recorded", "frame_drift", "seconds", "retries")}
+        stored = StoredEpisode.of(run.trajectory, session=self.session, **facts)
         write_bytes_atomic(self.path_for(spec), stored.to_json())
         return replace(stored, computed_now=True)
 
@@ -237,6 +232,69 @@ class ResultsStore:
             return False
 
 
+class Prefetcher:
+    """Computes ``specs`` ahead with ``workers`` threads until :meth:`close`."""
+
+    def __init__(
+        self,
+        store: ResultsStore,
+        compute: Callable[[EpisodeSpec], EpisodeRun],
+        specs: Iterable[EpisodeSpec],
+        *,
+        workers: int,
+    ) -> None:
+        from pytest_emrd.cassette import routing
+
+        self._store, self._compute = store, compute
+        self._exit = contextlib.ExitStack()
+        self._exit.enter_context(routing())
+        self._pool = ThreadPoolExecutor(workers, thread_name_prefix="emrd-episode")
+        self._futures = [self._pool.submit(self._one, spec) for spec in specs]
+
+    def _one(self, spec: EpisodeSpec) -> bool:
+        try:
+            return self._store.compute_if_free(spec, self._compute)
+        except EmrdError:
+            return False  # the test asking for this episode computes it and reports the error
+
+    def wait(self) -> None:
+        """Block until every episode was computed or skipped."""
+        for future in self._futures:
+            future.result()
+
+    def close(self) -> None:
+        """Drop the episodes not started, wait for the running ones, stop routing."""
+        self._pool.shutdown(wait=True, cancel_futures=True)
+        self._exit.close()
+
+
+def start_prefetch(
+    settings: RunSettings,
+    store: ResultsStore,
+    compute: Callable[[EpisodeSpec], EpisodeRun],
+    specs: Iterable[EpisodeSpec],
+    modality_of: Callable[[str], str] | None = None,
+) -> Prefetcher | None:
+    """A :class:`Prefetcher` of the live episodes among ``specs`` (those whose cassette will
+    be recorded), or None when ``--emrd-concurrency`` is 1 or every episode replays (then the
+    cassette stage is not even imported: a resumed run reads everything from the store)."""
+    if settings.concurrency <= 1 or settings.replays_only:
+        return None
+    from pytest_emrd.cassette import is_live
+
+    live = [
+        s
+        for s in specs
+        if is_live(
+            s,
+            cassettes=settings.cassettes,
+            record_mode=settings.record_mode,
+            modality_of=modality_of,
+        )
+    ]
+    return Prefetcher(store, compute, live, workers=settings.concurrency) if live else None
+
+
 def read_episode(path: Path) -> StoredEpisode:
     """The episode stored in file ``path``: its head read from the first line, the trajectory
     decoded on first use (a file of the older layout: decoded and validated in full)."""
@@ -244,19 +302,15 @@ def read_episode(path: Path) -> StoredEpisode:
         first = file.readline()
         if first.endswith(b",\n"):
             document = json.loads(first[:-2] + b"}")
-            readable = (SCHEMA_VERSION, *OLDER_SCHEMAS)
-            if (
-                document.get("store_schema") == STORE_SCHEMA
-                and document.get("trajectory_schema") in readable
-            ):
+            store, trajectory = document.get("store_schema"), document.get("trajectory_schema")
+            if store == STORE_SCHEMA and trajectory in (SCHEMA_VERSION, *OLDER_SCHEMAS):
                 return StoredEpisode(EpisodeHead.from_dict(document["head"]), path)
         blob = first + file.read()
     return StoredEpisode.from_json(blob)
 
 
 def iter_run_episodes(run_dir: Path) -> Iterator[StoredEpisode]:
-    """Every readable episode of a run directory (sorted by file name), read as
-    :func:`read_episode` reads them."""
+    """Every episode of a run directory (sorted by file name), as :func:`read_episode`."""
     for path in sorted((run_dir / "episodes").glob("*.json")):
         try:
             yield read_episode(path)
