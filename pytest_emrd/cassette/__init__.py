@@ -15,7 +15,6 @@ from pytest_emrd.cassette._paths import (
     Invocation,
     cassette_path,
     found_cassette,
-    missing_cassettes,
     missing_summary,
     record_command,
 )
@@ -43,7 +42,6 @@ __all__ = [
     "found_cassette",
     "is_live",
     "match_keys",
-    "missing_cassettes",
     "missing_summary",
     "network_blocked",
     "record_command",

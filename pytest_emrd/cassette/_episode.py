@@ -81,12 +81,11 @@ def run_with_cassette(
 ) -> EpisodeRun:
     """Run ``run(spec, live=...)`` with the model traffic recorded to / replayed from its cassette.
 
-    ``run`` turns failures into an ``errored`` trajectory (:func:`pytest_emrd.episode.run_episode`),
-    which leaves no cassette behind and whose scrubbed ``error`` becomes the cause the cassette
-    explains (missing file in ``none`` mode, drift, another modality, an unreadable recorded
-    response) with the command that fixes it for ``invocation``. A corrupted, edited or stale
-    cassette raises :class:`~pytest_emrd.errors.CassetteError`; an unwritable one the
-    :class:`OSError`, unless ``keep_unsaved`` hands it back in the run's ``unsaved``. Under
+    ``run`` turns failures into an ``errored`` trajectory, which leaves no cassette behind and
+    whose scrubbed ``error`` becomes the cause the cassette explains (missing file, drift,
+    another modality, an unreadable recorded response) with the command that fixes it for
+    ``invocation``. A corrupted, edited or stale cassette raises ``CassetteError``; an
+    unwritable one the ``OSError``, unless ``keep_unsaved`` hands it back in ``unsaved``. Under
     ``new_episodes`` a drifting replay is recorded again whole. An episode that may record holds
     its cassette's lock (:func:`~._persister.writer_lock`) up to ``lock_timeout_s`` seconds."""
     check_choice("record_mode", record_mode, RECORD_MODES)
@@ -178,8 +177,7 @@ class _Episode:
         return EpisodeRun(trajectory, recorded, frame_drift, seconds, unsaved=unsaved)
 
     def mismatch(self, recorded: str, rerecord: str) -> str:
-        """The modality-mismatch text, whose fix never overwrites the ``recorded`` recording:
-        the file is moved to where an episode in ``recorded`` lives, then this one recorded."""
+        """The modality-mismatch text (:func:`~._paths.modality_message`)."""
         owner = dataclasses.replace(self.spec, modality=recorded)
         return modality_message(
             cassette=self.path,

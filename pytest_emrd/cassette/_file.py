@@ -1,15 +1,11 @@
 """The cassette file: a vcrpy cassette in vcrpy's own JSON serializer, compressed with xz.
 
-``xz -dc ep00.json.xz`` prints a plain vcrpy cassette (fields: docs/cassettes.md). Request
-bodies are stored redacted and canonical (:mod:`._redact`). ``metadata.emrd.protocol`` is
-the world and prompt protocol the traffic was recorded under, and ``metadata.emrd.digest``
-covers it and every interaction, so a file edited by hand is refused on load.
-
-JSON rather than YAML: the same document loads ten times faster (a replayed grid loads
-every cassette). The same traffic always gives the same bytes: keys are sorted, and xz runs
-single-threaded with fixed settings (LZMA2, 1 MiB dictionary, CRC32 check, no timestamp).
-A gzip-compressed cassette is read too (told by its magic bytes); pytest-emrd writes xz.
-"""
+``xz -dc ep00.json.xz`` prints a plain vcrpy cassette (fields: docs/cassettes.md) whose
+request bodies are redacted and canonical (:mod:`._redact`); ``metadata.emrd.digest``
+covers the protocol and every interaction, so a file edited by hand is refused on load.
+JSON, not YAML: it loads ten times faster. The same traffic always gives the same bytes
+(sorted keys; xz single-threaded, LZMA2, 1 MiB dictionary, CRC32, no timestamp). A gzip
+cassette is read too (told by its magic bytes)."""
 
 from __future__ import annotations
 

@@ -1,10 +1,10 @@
 """``emrd cassettes upgrade``: convert the cassettes older releases wrote, once, verified.
 
-Formats ``emrd-cassette/1`` (``ep<NN>.yaml.gz``) and ``/2`` (``ep<NN>.yaml.xz``, whose strings
-may be edits ``{from: <id>, edit: [start, length, "inserted", ...]}`` of a text that release
-shipped, ``legacy_texts.json``) hold tables of strings and messages that the interactions'
-bodies refer to. Every body is rebuilt byte for byte, and the new vcrpy cassette is kept only
-if it reads back to the same protocol and interactions; then the old file is removed."""
+Formats ``emrd-cassette/1`` (``ep<NN>.yaml.gz``) and ``/2`` (``.yaml.xz``; a string may be an
+edit ``{from: <id>, edit: [start, length, "inserted", ...]}`` of a shipped text,
+``legacy_texts.json``) hold tables of strings and messages the bodies refer to. Each body is
+rebuilt byte for byte; the new file is kept only if it reads back to the same protocol and
+interactions, then the old one is removed."""
 
 from __future__ import annotations
 
@@ -109,13 +109,8 @@ def read_legacy(blob: bytes) -> CassetteData:
             requests.append(Request(req["method"], req["uri"], body, req["headers"]))
             if req["body"].get("mode") != "canonical":
                 raw.append(index)
-            responses.append(
-                {
-                    "status": resp["status"],
-                    "headers": resp["headers"],
-                    "body": {"string": _body(resp["body"], strings, templates)},
-                }
-            )
+            reply = {"string": _body(resp["body"], strings, templates)}
+            responses.append({"status": resp["status"], "headers": resp["headers"], "body": reply})
     except LegacyError:
         raise
     except (KeyError, IndexError, TypeError, ValueError, AttributeError) as exc:

@@ -34,13 +34,10 @@ ModalityOf = Callable[[str], str]
 
 
 def cassette_path(root: Path, spec: EpisodeSpec, *, modality_of: ModalityOf | None = None) -> Path:
-    """``<root>/<model>/<condition>/<variant>/<spawn>/ep<NN>.json.xz`` on the builtin world
-    under the paper protocol; another backend and generated layouts get their own trees
-    (``<root>/<backend>/...``, ``.../layouts-generated/...``) so a recording never answers a
-    run of another world. An episode in another modality than its model's default
-    (``modality_of``, the registry; without it ``spec.modality`` is the default) lives in a
-    ``<variant>+<modality>`` folder. Layout and reasons: docs/cassettes.md.
-    """
+    """``<root>/<model>/<condition>/<variant>/<spawn>/ep<NN>.json.xz`` on the builtin world under
+    the paper protocol; another backend or layouts get their own tree (``<root>/<backend>/``,
+    ``layouts-generated/``), another modality than the model's default (``modality_of``; else
+    ``spec.modality``) a ``<variant>+<modality>`` folder (docs/cassettes.md)."""
     base = root if spec.backend == "builtin" else root / spec.backend
     if spec.layouts != "paper":
         base = base / f"layouts-{spec.layouts}"
@@ -52,9 +49,8 @@ def cassette_path(root: Path, spec: EpisodeSpec, *, modality_of: ModalityOf | No
 
 
 def found_cassette(root: Path, spec: EpisodeSpec) -> Path:
-    """The cassette of ``spec`` where no registry tells its model's default modality (a
-    viewer of stored episodes): its ``<variant>+<modality>`` file when there is one (the
-    modality is not the default), else the plain one."""
+    """The cassette of ``spec`` where no registry tells the default modality (a viewer): its
+    ``<variant>+<modality>`` file when there is one, else the plain one."""
     own = cassette_path(root, spec, modality_of=lambda model: "")  # "": never the default
     return own if own.is_file() else cassette_path(root, spec)
 
@@ -125,33 +121,29 @@ def _ordered(group: Sequence[EpisodeSpec], field: str, order: Sequence[str]) -> 
     return [x for x in order if x in present] + sorted(present - set(order))
 
 
-def missing_cassettes(
-    specs: Sequence[EpisodeSpec], root: Path, *, modality_of: ModalityOf | None = None
-) -> list[EpisodeSpec]:
-    """The episodes of ``specs`` whose cassette file does not exist under ``root``."""
-    return [s for s in specs if not cassette_path(root, s, modality_of=modality_of).is_file()]
-
-
 def missing_summary(
-    missing: Sequence[EpisodeSpec],
+    specs: Sequence[EpisodeSpec],
     *,
     total: int,
     root: Path,
     invocation: Invocation,
     modality_of: ModalityOf | None = None,
-) -> str:
-    """The one message for a replay-only run with missing cassettes: how many, for which
-    models, and one command that records them all."""
+) -> str | None:
+    """The one message for a replay-only run where episodes of ``specs`` have no cassette
+    under ``root``: how many, for which models, and one command that records them all."""
+    missing = [s for s in specs if not cassette_path(root, s, modality_of=modality_of).is_file()]
+    if not missing:
+        return None
     per_model = Counter(spec.model for spec in missing)
     models = ", ".join(f"{m} ({n})" for m, n in sorted(per_model.items()))
     command = record_command(missing, record_mode="once", cassettes=root, invocation=invocation)
     old = sum(_has_legacy_twin(cassette_path(root, s, modality_of=modality_of)) for s in missing)
-    convert = (
-        f" {old} of them have a cassette an older pytest-emrd wrote: convert those first with: "
-        f"emrd cassettes upgrade {root}."
-        if old
-        else ""
-    )
+    convert = ""
+    if old:
+        convert = (
+            f" {old} of them have a cassette an older pytest-emrd wrote: convert those first "
+            f"with: emrd cassettes upgrade {root}."
+        )
     return (
         f"{len(missing)} of {total} episode(s) have no cassette under {root} and record mode "
         f"'none' replays only; missing for: {models}.{convert} Record them all "

@@ -37,13 +37,11 @@ class UnsavedCassette:
 
 @dataclass(kw_only=True)
 class EpisodePersister:
-    """Loads and saves one episode's cassette (:mod:`._file`) under the current protocol.
-
-    A missing file is "not found" (vcrpy records it when the mode allows); in ``all`` mode
-    (``fresh``) the old file is never read. A file that cannot be replayed is a one-line
-    :class:`CassetteError` naming it and the fix. A file is written to ``<root>/.emrd-tmp``
-    first and renamed into place; with ``keep_unsaved`` a failed write is kept in
-    :attr:`unsaved` instead of raising."""
+    """Loads and saves one episode's cassette (:mod:`._file`) under the current protocol: a
+    missing file is "not found" (in ``all`` mode, ``fresh``, the old one is never read), a file
+    that cannot be replayed a one-line :class:`CassetteError` naming it and the fix. A file is
+    written to ``<root>/.emrd-tmp`` first and renamed into place; with ``keep_unsaved`` a failed
+    write is kept in :attr:`unsaved` instead of raising."""
 
     protocol: str
     fresh: bool

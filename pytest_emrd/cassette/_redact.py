@@ -1,13 +1,10 @@
-"""What a request looks like once it is safe to store and ready to match.
+"""What a request looks like once it is safe to store and ready to match (docs/cassettes.md).
 
-Redaction turns a model request into its *canonical* form (docs/cassettes.md): every image
-payload becomes the digest of the frame's pixels (``pixels:<sha256>`` from
-:mod:`pytest_emrd.frames`; ``bytes:<sha256>`` for a payload this process did not render),
-the body is re-serialised as sorted-key compact JSON (a body that is not JSON is kept and
-never matches), headers are reduced to ``Content-Type`` and configured key values removed
-(:mod:`pytest_emrd._scrub`). The two match keys are ``strict`` (method, path, canonical
-body) and ``lenient`` (the same with every frame digest replaced by a placeholder).
-"""
+The *canonical* form: every image payload becomes the digest of the frame's pixels
+(``pixels:<sha256>`` from :mod:`pytest_emrd.frames`; ``bytes:<sha256>`` for one this process
+did not render), the body is sorted-key compact JSON (one that is not JSON never matches),
+headers are reduced to ``Content-Type`` and configured key values removed. The match keys:
+``strict`` (method, path, canonical body) and ``lenient`` (frame digests as placeholders)."""
 
 from __future__ import annotations
 

@@ -1,18 +1,15 @@
 """One episode's vcrpy cassette: redaction, matching, record modes and drift detection.
 
-Episodes run concurrently in threads (``--emrd-concurrency``) share one process, and vcrpy's
-``use_cassette`` patches the HTTP libraries process-wide for one cassette. :func:`routing`
-patches them once, bound to a router that hands each call to the cassette the calling
-thread opened; loading, matching, recording and saving stay vcrpy's own, so a cassette
-written by concurrent episodes is byte for byte the one a lone episode writes.
-"""
+Concurrent episodes (``--emrd-concurrency``, threads of one process) go through
+:func:`routing`: vcrpy's process-wide patches, bound once to a router that hands each call
+to the calling thread's cassette, so a cassette is byte for byte what a lone episode writes."""
 
 from __future__ import annotations
 
 import contextlib
 import copy
 import threading
-from collections.abc import Callable, Iterator
+from collections.abc import Iterator
 from contextvars import ContextVar
 from pathlib import Path
 from typing import Any, Final
@@ -54,22 +51,6 @@ def _keys(request: Request) -> MatchKeys:
     return keys
 
 
-def make_matcher(matching: str, frame_drift: set[tuple[Any, Any]]) -> Callable[..., bool]:
-    """The one vcrpy matcher: strict or lenient key equality (unparseable never matches); a
-    lenient match whose frames differ adds its pair of strict keys to ``frame_drift``."""
-
-    def emrd_body(new: Request, recorded: Request) -> bool:
-        a, b = _keys(new), _keys(recorded)
-        if matching == "strict":
-            return a.strict is not None and a.strict == b.strict
-        same = a.lenient is not None and a.lenient == b.lenient
-        if same and a.strict != b.strict:
-            frame_drift.add((a.strict, b.strict))
-        return same
-
-    return emrd_body
-
-
 class EpisodeCassette(Cassette):
     """A vcrpy cassette that remembers why a replay failed (see :mod:`._paths`): the first request
     that cannot be played while write-protected is explained as an unreadable recorded response
@@ -80,10 +61,10 @@ class EpisodeCassette(Cassette):
         self, *args: Any, matching: str = "strict", rerecord_command: str = "", **kwargs: Any
     ) -> None:
         self.frame_drift: set[tuple[Any, Any]] = set()
-        super().__init__(*args, match_on=(make_matcher(matching, self.frame_drift),), **kwargs)
+        self.strict = matching == "strict"
+        super().__init__(*args, match_on=(self.emrd_body,), **kwargs)
         self.requests_made = 0
         self.drift: str | None = None
-        self.strict = matching == "strict"
         self.rerecord_command = rerecord_command
         self.unreadable = False
         """The failure is a recorded response the client could not read (not drift)."""
@@ -92,6 +73,17 @@ class EpisodeCassette(Cassette):
         whole)."""
         self._loading = False
         self._loaded = 0
+
+    def emrd_body(self, new: Request, recorded: Request) -> bool:
+        """The one vcrpy matcher: strict or lenient key equality (unparseable never matches); a
+        lenient match whose frames differ adds its pair of strict keys to :attr:`frame_drift`."""
+        a, b = _keys(new), _keys(recorded)
+        if self.strict:
+            return a.strict is not None and a.strict == b.strict
+        same = a.lenient is not None and a.lenient == b.lenient
+        if same and a.strict != b.strict:
+            self.frame_drift.add((a.strict, b.strict))
+        return same
 
     def _load(self) -> None:
         self._loading = True
@@ -239,8 +231,7 @@ class _Router:
 
 @contextlib.contextmanager
 def routing() -> Iterator[None]:
-    """Patch the HTTP libraries once for the block, each request going to its thread's
-    cassette (re-entrant: nested blocks share the one patch)."""
+    """Patch the HTTP libraries once (re-entrant), each request to its thread's cassette."""
     global _depth
     with contextlib.ExitStack() as stack:
         with _lock:
@@ -259,8 +250,7 @@ def routing() -> Iterator[None]:
 
 @contextlib.contextmanager
 def _bound(cassette: Cassette) -> Iterator[Cassette]:
-    """Route this thread's requests to ``cassette``; save it when the block succeeds (as
-    vcrpy's ``use_cassette`` does with ``record_on_exception`` off)."""
+    """Route this thread's requests to ``cassette``, saved when the block succeeds."""
     token = _current.set(cassette)
     try:
         yield cassette

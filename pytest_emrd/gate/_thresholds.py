@@ -9,11 +9,9 @@ Schema::
           min: 0.8           # or max: 0.1 (exactly one of the two)
           ci: lower          # optional: compare the bootstrap CI's lower/upper end, not the mean
 
-Every mistake is a one-line :class:`~pytest_emrd.errors.ConfigError` naming the file, the
-line, the field and the allowed values. A bound must lie in its metric's :func:`domain`;
-numbers follow YAML 1.2 (:mod:`pytest_emrd._yaml`). A file that holds no gate is an error:
-a run given it would pass green with nothing checked (a run without gates has no file).
-"""
+Every mistake is a one-line ConfigError naming the file, line, field and allowed values; a
+bound lies in its metric's :func:`domain`. A file with no gate is an error (a run given it
+would pass green with nothing checked)."""
 
 from __future__ import annotations
 
@@ -36,8 +34,7 @@ BUDGET_METRICS: Final = frozenset({"te"})
 
 @dataclass(frozen=True)
 class Domain:
-    """The values a metric can take (``text``: as a message says it); a bound outside it can
-    never (or always) pass."""
+    """The values a metric can take (``text``: in words); a bound outside never/always passes."""
 
     low: float
     high: float
@@ -90,9 +87,9 @@ class Thresholds:
         return tuple(b for b in self.bounds if (b.model, b.condition, b.layouts) == cell)
 
 
+@dataclass(frozen=True)
 class _Reader:
-    def __init__(self, source: str) -> None:
-        self.source = source
+    source: str
 
     def fail(self, node: yaml.Node | None, message: str) -> ConfigError:
         line = f", line {node.start_mark.line + 1}" if node is not None else ""

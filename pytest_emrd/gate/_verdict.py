@@ -1,9 +1,6 @@
-"""Gate verdicts: a metric's estimate over a cell's episodes, compared with its bound (pure).
-
-A cell is model x condition x prompt variant x layouts; its episodes are sorted by case id
-and the bootstrap is seeded (``rng_seed=0``), so the same episodes give the same verdict
-whichever machine, worker or run directory they come from.
-"""
+"""Gate verdicts: a metric's estimate over a cell's episodes (model x condition x prompt
+variant x layouts), compared with its bound (pure). Episodes are sorted by case id and the
+bootstrap is seeded (``rng_seed=0``): the same episodes give the same verdict anywhere."""
 
 from __future__ import annotations
 
@@ -161,8 +158,7 @@ def evaluate_cell(
 def evaluate_all(
     trajectories: Iterable[Any], thresholds: Thresholds, metrics: Mapping[str, GateMetricLike]
 ) -> list[Verdict]:
-    """Every gate whose cell has episodes, grouped by model x condition x variant x layouts:
-    ``emrd gate RUN_DIR...`` gets the verdicts of the gate tests over the same episodes."""
+    """Every gate whose cell has episodes: the gate tests' verdicts, for ``emrd gate``."""
     cells: dict[tuple[str, str, str, str], list[Any]] = defaultdict(list)
     for t in trajectories:
         cells[(t.spec.model, t.spec.condition, t.spec.variant, t.spec.layouts)].append(t)

@@ -1,13 +1,10 @@
 """pytest glue for pytest-emrd: the ``pytest11`` entry point (``emrd = "pytest_emrd.plugin"``).
 
 A test that requests ``emrd_spec`` is parametrised over the run's episodes, one that requests
-``emrd_gate`` over its gates; sessions that collect neither start and write nothing. The
-controller picks the run directory and the session id and hands them to xdist workers.
-
-This module is the wiring, in order: options and configuration, collection, the scrub filter
-on pytest's log handlers, then the ``emrd_*`` fixtures, built as pytest-recording builds
-``vcr`` (docs/reference/fixtures.md). ``_run`` holds the per-process run state, ``_report``
-what the controller shows, ``_endpoint`` the stop of a dead endpoint."""
+``emrd_gate`` over its gates; sessions that collect neither start and write nothing. This
+module is the wiring, in order: options and configuration (the controller hands the run
+directory and session to xdist workers), collection, the log scrub, then the ``emrd_*``
+fixtures, built as pytest-recording builds ``vcr`` (docs/reference/fixtures.md)."""
 
 from __future__ import annotations
 
@@ -95,8 +92,8 @@ def pytest_generate_tests(metafunc: pytest.Metafunc) -> None:
 def pytest_collection_modifyitems(
     session: pytest.Session, config: pytest.Config, items: list[pytest.Item]
 ) -> None:
-    """Drop the placeholder items of an empty grid (a shard's gates, a model without gates);
-    stop a replay-only run with missing cassettes with one summary (after ``-k``)."""
+    """Drop the placeholder items of an empty grid; stop a replay-only run with missing
+    cassettes with one summary (after ``-k``)."""
     empty = [item for item in items if _is_empty_emrd_item(item)]
     if empty:
         config.hook.pytest_deselected(items=empty)
@@ -160,8 +157,7 @@ def emrd_settings(pytestconfig: pytest.Config) -> RunSettings:
 
 @pytest.fixture(scope="session")
 def emrd_cassette_dir(emrd_settings: RunSettings) -> Path:
-    """The cassette folder episodes replay from and record into (``emrd_settings.cassettes``
-    unless overridden)."""
+    """The cassette folder episodes replay from and record into (default: the settings')."""
     return emrd_settings.cassettes
 
 
@@ -209,8 +205,7 @@ def emrd_trajectory(emrd_episode: StoredEpisode) -> Trajectory:
 
 @pytest.fixture(scope="session")
 def emrd_trajectories(_emrd_run: Run) -> Callable[[str, str], list[Trajectory]]:
-    """``emrd_trajectories(model, condition)``: the trajectories of that cell of the run's grid
-    (for custom gates), each computed through the results store if needed."""
+    """``emrd_trajectories(model, condition)``: the trajectories of that cell (custom gates)."""
 
     def cell(model: str, condition: str) -> list[Trajectory]:
         cell_specs = _emrd_run.call(lambda r: r.cell_specs_of(model, condition))

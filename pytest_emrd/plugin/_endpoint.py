@@ -1,11 +1,8 @@
 """Fail fast on a dead endpoint: a model whose last :data:`DEAD_AFTER` computed episodes in a
-row ended on a connection failure or a timeout is not called again in this session.
-
-Its remaining episodes are skipped with one shared reason, and the end of the run names
-the endpoint and the command that resumes the run (the errored episodes are computed again
-by the resumed session). The count lives in the run directory's scratch folder
-(:func:`~pytest_emrd.run.scratch_dir`), ``endpoints/<model>.json`` under a file lock, so
-the xdist workers of one session share it; a resumed session starts from zero."""
+row ended on a connection failure or a timeout is not called again in this session. Its
+remaining episodes are skipped with one reason, and the end of the run names the endpoint
+and the command that resumes the run. The count is shared by the session's xdist workers
+(``endpoints/<model>.json`` in :func:`~pytest_emrd.run.scratch_dir`, under a file lock)."""
 
 from __future__ import annotations
 

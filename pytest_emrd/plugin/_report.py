@@ -68,8 +68,7 @@ class RunReport:
         )
 
     def preflight(self, params: list[Any]) -> None:
-        """Preflight each model the selected tests will call live; a failure ends the session
-        before any episode runs. Then start the live line."""
+        """Preflight each model the selected tests will call live, then start the live line."""
         run = self.run
         if not params or run.settings.replays_only:  # nobody called: nothing to check or show
             return
@@ -92,8 +91,7 @@ class RunReport:
             self._ticker = Ticker(board, self.write_line).start()
 
     def write_line(self, line: str) -> None:
-        """A line on the terminal, also from the live line's thread while a test runs (with
-        capture suspended, as pytest's own live logging does)."""
+        """A line on the terminal, also from the live line's thread (capture suspended)."""
         reporter = self.config.pluginmanager.get_plugin("terminalreporter")
         capture = self.config.pluginmanager.get_plugin("capturemanager")
         if reporter is None:
@@ -120,8 +118,7 @@ class RunReport:
             reporter.write_line(summary.progress_line(len(self.episodes)))
 
     def pytest_sessionfinish(self) -> None:
-        """Append the run's Markdown to ``$GITHUB_STEP_SUMMARY`` (controller only), then stop
-        the live line."""
+        """Append the run's Markdown to ``$GITHUB_STEP_SUMMARY``, then stop the live line."""
         self._step_summary()
         if self._ticker is not None:
             self._ticker.stop()

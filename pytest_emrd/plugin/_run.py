@@ -1,13 +1,10 @@
-"""The per-process state of an EMRD run: registry, grid, results store, episodes, verdicts.
+"""The per-process state of an EMRD run (one :class:`Run` in ``config.stash[RUN]`` per process:
+registry, grid, results store, episodes, verdicts), everything heavy built on first use.
 
-One :class:`Run` per process (the only one, or each xdist worker), kept in
-``config.stash[RUN]``; everything heavy is built on first use.
-
-Paid work is never lost to the disk. Before a live episode, the cassette folder must be
-writable (else the test fails in one line and nothing is sent to the model). If the
-cassette still cannot be saved when the episode ends, the episode's result goes to
-``<run>/unsaved/<case_id>.json`` and to the results store, the redacted cassette to
-``<run>/unsaved/<case_id>.json.xz``, and a :class:`CassetteNotSavedWarning` says where."""
+Paid work is never lost to the disk: before a live episode the cassette folder must be
+writable (else one line, and nothing is sent to the model); a cassette that still cannot be
+saved goes with the episode's result to ``<run>/unsaved/`` (the result also to the store),
+and a :class:`CassetteNotSavedWarning` says where."""
 
 from __future__ import annotations
 
@@ -66,8 +63,7 @@ def failure_line(exc: EmrdError | OSError, what: str = "pytest-emrd") -> str:
 
 
 def _writable_folder(folder: Path) -> None:
-    """Raise the :class:`OSError` writing into ``folder`` would meet, judged from its
-    nearest existing ancestor (nothing is created)."""
+    """Raise the :class:`OSError` writing into ``folder`` would meet (nothing is created)."""
     existing = folder
     while not existing.exists() and existing != existing.parent:
         existing = existing.parent
@@ -107,8 +103,7 @@ class Run:
         return self
 
     def call(self, fn: Any, what: str = "pytest-emrd") -> Any:
-        """``fn(self)``, turning an :class:`EmrdError` into one clean failure line (scrubbed,
-        raised outside the ``except``: no "During handling" chain)."""
+        """``fn(self)``, an :class:`EmrdError` turned into one clean failure line (no chain)."""
         try:
             return fn(self)
         except (EmrdError, OSError) as exc:
@@ -179,8 +174,8 @@ class Run:
         )
 
     def missing_summary(self, items: list[pytest.Item]) -> str | None:
-        """In record mode ``none``: one message for the episodes the selected items need
-        that have neither a stored result nor a cassette, or ``None``."""
+        """In record mode ``none``: one message for the episodes the selected items need but
+        neither store nor cassette holds, or ``None``."""
         if not self.settings.replays_only:
             return None
         needed: dict[EpisodeSpec, None] = {}
@@ -193,18 +188,14 @@ class Run:
         unstored = [spec for spec in needed if not episode_path(self.run_dir, spec).is_file()]
         if not unstored:  # a resumed run: the cassette stage is not even imported
             return None
-        from pytest_emrd.cassette import missing_cassettes, missing_summary
+        from pytest_emrd.cassette import missing_summary
 
-        root, modality_of = self.settings.cassettes, self.modality_of
-        missing = missing_cassettes(unstored, root, modality_of=modality_of)
-        if not missing:
-            return None
         return missing_summary(
-            missing,
+            unstored,
             total=len(needed),
-            root=root,
+            root=self.settings.cassettes,
             invocation=self.invocation,
-            modality_of=modality_of,
+            modality_of=self.modality_of,
         )
 
     @cached_property

@@ -21,8 +21,7 @@ HEAD_SCHEMA: Final = 1
 
 @dataclass(frozen=True)
 class EpisodeHead:
-    """The facts about a stored episode that its store, the terminal summary and the gates'
-    bookkeeping read; field names are the episode file's format."""
+    """The facts about a stored episode a run reads; field names are the file's format."""
 
     spec: EpisodeSpec
     protocol: str
@@ -76,8 +75,7 @@ class EpisodeHead:
         )
 
     def describes(self, trajectory: Trajectory) -> bool:
-        """Whether this head states what ``trajectory`` holds (the facts about how it was
-        obtained, and the error text as scrubbed when it was stored, are the head's own)."""
+        """Whether this head states what ``trajectory`` holds (how it was obtained aside)."""
         facts = {k: getattr(self, k) for k in ("session", "recorded", "frame_drift", "retries")}
         head = EpisodeHead.of(trajectory, seconds=self.seconds, **facts)
         return replace(head, error=self.error) == self

@@ -1,13 +1,9 @@
-"""Which run a run directory belongs to (``<run>/run.json``), and what its processes share.
-
-``run.json`` records the grid and shard; ``emrd gate`` reads them to refuse a verdict over
-an incomplete or duplicated set of shards (gates over 2 of 4 shards would be gates over half
-the episodes). Run directories written before this file existed are taken as they are.
-
-The processes share one file lock per episode and one for ``run.json``, and the per-session
-count of unreachable episodes (:mod:`pytest_emrd.plugin._endpoint`), in a private folder of
-the OS temporary directory named after the run directory (:func:`scratch_dir`): a run
-directory holds only results, and its locks are shared on one machine, as xdist's workers."""
+"""Which run a run directory belongs to (``<run>/run.json``: its grid and shard, so ``emrd
+gate`` refuses an incomplete or duplicated set of shards), and what its processes share:
+one file lock per episode and one for ``run.json``, and the per-session count of unreachable
+episodes (:mod:`pytest_emrd.plugin._endpoint`), in a private folder of the OS temporary
+directory (:func:`scratch_dir`), so a run directory holds only results. Run directories
+written before ``run.json`` existed are taken as they are."""
 
 from __future__ import annotations
 
@@ -30,6 +26,7 @@ if TYPE_CHECKING:
 
 RUN_FILE: Final = "run.json"
 IDENTITY_SCHEMA: Final = 1
+_GRID_LISTS: Final = ("models", "conditions", "spawns")
 
 
 @dataclass(frozen=True)
@@ -72,17 +69,9 @@ class RunIdentity:
 
     @classmethod
     def of(cls, settings: RunSettings, protocol: str) -> RunIdentity:
-        grid = {
-            "models": sorted(settings.models),
-            "conditions": sorted(settings.conditions),
-            "spawns": sorted(settings.spawns),
-            "episodes": settings.episodes,
-            "variant": settings.variant,
-            "backend": settings.backend,
-            "modality": settings.modality,
-            "protocol": protocol,
-        }
-        return cls(grid=grid, shard=settings.shard)
+        grid: dict[str, Any] = {k: sorted(getattr(settings, k)) for k in _GRID_LISTS}
+        grid |= {k: getattr(settings, k) for k in ("episodes", "variant", "backend", "modality")}
+        return cls(grid={**grid, "protocol": protocol}, shard=settings.shard)
 
 
 def read_identity(run_dir: Path) -> RunIdentity | None:
@@ -112,8 +101,7 @@ def check_resume(run_dir: Path, shard: tuple[int, int] | None) -> None:
 
 
 def write_identity(run_dir: Path, identity: RunIdentity) -> None:
-    """Record ``identity`` in ``run_dir`` (atomic; rewritten only when it changes) under the
-    directory's lock, refusing a directory that holds another shard (:func:`check_resume`)."""
+    """Record ``identity`` in ``run_dir`` under its lock, refusing another shard's directory."""
     path = run_dir / RUN_FILE
     blob = json.dumps(identity.to_dict(), sort_keys=True, indent=1).encode()
     with run_lock(run_dir, RUN_FILE):

@@ -1,9 +1,6 @@
-"""The run's settings: every ``--emrd-*`` option, its ini twin and default, resolved once.
-
-Precedence is command line > ini file > default, decided in :func:`resolve_settings` and
-nowhere else; :data:`OPTIONS` is what the plugin registers, so ``pytest --help``, the ini
-keys and the resolution cannot drift apart. ``matching`` defaults to ``lenient`` on
-``ai2thor`` (THOR frames are not bit-stable) and ``strict`` otherwise."""
+"""The run's settings: every ``--emrd-*`` option, its ini twin and default, resolved once, in
+:func:`resolve_settings` (command line > ini file > default); :data:`OPTIONS` is what the
+plugin registers, so ``pytest --help``, the ini keys and the resolution cannot drift apart."""
 
 from __future__ import annotations
 
@@ -143,7 +140,7 @@ class RunSettings:
     """``None``: each model's registry default."""
     record_mode: str
     matching: str
-    """``strict`` or ``lenient``; the default depends on the backend (module docstring)."""
+    """``strict``, or ``lenient`` (the default on backends whose frames are not bit-stable)."""
     results: Path | None
     """Run directory to resume, or ``None`` for a fresh one."""
     thresholds: Path | None

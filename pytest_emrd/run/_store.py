@@ -1,22 +1,18 @@
 """The results store: one file per episode under a run directory (file I/O), live episodes
 computed ahead into it, and the episodes of several run directories read back and measured.
 
-``<run>/run.json`` records the grid and shard the directory holds (:mod:`._identity`);
-``<run>/episodes/<case_id>.json`` is one JSON document whose first line holds the episode's
-head (:class:`EpisodeHead`: what reusing it needs) and whose second line holds the
-trajectory, so a resume decodes a trajectory only where something needs it. Files of the
-older layout (``store_schema`` 1: no head) are decoded in full.
+``<run>/run.json`` records the grid and shard (:mod:`._identity`); an episode file,
+``<run>/episodes/<case_id>.json``, holds the episode's head (:class:`EpisodeHead`) on its
+first line and the trajectory on its second, so a resume decodes a trajectory only where
+something needs it (a file of the older layout, ``store_schema`` 1, is decoded in full).
+Any process may ask for any episode: the first takes the episode's lock, computes it and
+writes it atomically; the others wait and read the file. An episode is reused when its spec
+and protocol match and it finished (an ``errored`` one only within its own session, so a
+rerun retries failures). Stored files are scrubbed of secrets (:mod:`pytest_emrd._scrub`).
 
-Any process may ask for any episode: the first takes the episode's lock (outside the run
-directory, :func:`~._identity.run_lock`), computes it and writes it atomically; everyone
-else waits and reads the file. An episode is reused when its spec and protocol match and it
-finished (an ``errored`` one only within the session that produced it, so a rerun retries
-failures). Stored files are scrubbed of secrets (:mod:`pytest_emrd._scrub`).
-
-With ``--emrd-concurrency N`` a :class:`Prefetcher` computes live episodes ahead, up to
-``N`` at once in threads of the process (a live episode mostly waits for the model), through
-the store: one stored already or locked elsewhere is skipped, so each is computed once, and
-HTTP traffic is routed per thread to each episode's cassette (``cassette.routing``)."""
+With ``--emrd-concurrency N`` a :class:`Prefetcher` computes live episodes ahead, ``N`` at
+once in threads (a live episode mostly waits for the model), skipping one stored already or
+locked elsewhere; HTTP traffic is routed per thread to each episode's cassette."""
 
 from __future__ import annotations
 
@@ -79,9 +75,8 @@ class StoredEpisode:
         return self.decode_trajectory()
 
     def decode_trajectory(self) -> Trajectory:
-        """The trajectory without keeping it (a process that only measures an episode holds no
-        decoded copy): the one held, else decoded from the store's file (replaced since its head
-        was read: :class:`ProtocolError`)."""
+        """The trajectory without keeping it (for a process that only measures the episode):
+        the one held, else decoded from the file (:class:`ProtocolError` if it was replaced)."""
         if "trajectory" in self.__dict__:
             return self.trajectory
         if isinstance(self.source, Trajectory):
@@ -173,8 +168,8 @@ class ResultsStore:
         return episode_path(self.run_dir, spec)
 
     def reusable(self, spec: EpisodeSpec) -> StoredEpisode | None:
-        """``spec``'s stored episode when it may be reused as it is (spec and protocol match;
-        finished, or errored in this very session), else None (it needs computing)."""
+        """``spec``'s stored episode if reusable (same spec and protocol; finished, or errored
+        in this session), else None."""
         try:
             stored = read_episode(self.path_for(spec))
         except (FileNotFoundError, ValueError, KeyError, TypeError, ProtocolError):
@@ -207,8 +202,7 @@ class ResultsStore:
     def get_or_compute(
         self, spec: EpisodeSpec, compute: Callable[[EpisodeSpec], EpisodeRun]
     ) -> StoredEpisode:
-        """The stored episode for ``spec``, computed and stored if needed (waiting for whoever
-        computes it now); a reusable one is final, so it is read without the lock."""
+        """The stored episode for ``spec``, computed if needed (a reusable one is final)."""
         stored = self.reusable(spec)
         if stored is not None:
             return stored
@@ -218,8 +212,7 @@ class ResultsStore:
     def compute_if_free(
         self, spec: EpisodeSpec, compute: Callable[[EpisodeSpec], EpisodeRun]
     ) -> bool:
-        """Compute and store ``spec`` unless it is stored or being computed by another thread
-        or process (never waits); whether this call computed it."""
+        """Whether this call computed ``spec`` (never waits: stored or locked is skipped)."""
         from filelock import Timeout
 
         try:
