@@ -23,7 +23,7 @@ import secrets
 import time
 from collections.abc import Callable, Iterable, Iterator, Sequence
 from concurrent.futures import ThreadPoolExecutor
-from dataclasses import KW_ONLY, dataclass, field, replace
+from dataclasses import dataclass, field, replace
 from functools import cached_property
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Final
@@ -153,16 +153,15 @@ def new_run_dir(parent: Path) -> Path:
     return parent / f"{time.strftime('%Y%m%d-%H%M%S')}-{secrets.token_hex(3)}"
 
 
-@dataclass(eq=False)
 class ResultsStore:
     """Episodes of one run directory, computed at most once across processes."""
 
-    run_dir: Path
-    _: KW_ONLY
-    session: str
-    protocol: str
-    identity: RunIdentity | None = None
-    """Recorded in ``run.json`` before the first episode is computed."""
+    def __init__(
+        self, run_dir: Path, *, session: str, protocol: str, identity: RunIdentity | None = None
+    ) -> None:
+        self.run_dir, self.session, self.protocol = run_dir, session, protocol
+        self.identity = identity
+        """Recorded in ``run.json`` before the first episode is computed."""
 
     def path_for(self, spec: EpisodeSpec) -> Path:
         return episode_path(self.run_dir, spec)
