@@ -1,20 +1,29 @@
-"""Running one episode inside its cassette: replay, record, and explain failures."""
+"""Running one episode inside its cassette: replay, record, explain failures, and block the
+network while replaying (only loopback connections may be opened)."""
 
 from __future__ import annotations
 
 import dataclasses
+import ipaddress
+import socket
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 from pytest_emrd._scrub import scrub
-from pytest_emrd.cassette._drift import modality_message
-from pytest_emrd.cassette._network import network_blocked
-from pytest_emrd.cassette._paths import Invocation, ModalityOf, cassette_path, record_command
+from pytest_emrd.cassette._paths import (
+    Invocation,
+    ModalityOf,
+    cassette_path,
+    modality_message,
+    record_command,
+)
 from pytest_emrd.cassette._persister import LOCK_TIMEOUT_S, UnsavedCassette, writer_lock
 from pytest_emrd.cassette._use import episode_cassette
-from pytest_emrd.errors import check_choice
+from pytest_emrd.errors import CassetteError, check_choice
 from pytest_emrd.trajectory import MATCHING_MODES, RECORD_MODES, EpisodeSpec, Trajectory
 
 
@@ -32,8 +41,7 @@ class EpisodeRun:
     retries: int = 0
     """Model requests retried while it ran (set by whoever watched it)."""
     unsaved: UnsavedCassette | None = None
-    """The recording, when its cassette file could not be written (the episode is still
-    good: keep the recording elsewhere, or it is lost); None otherwise."""
+    """The recording, when its cassette file could not be written (keep it elsewhere)."""
 
 
 class FrameDriftWarning(UserWarning):
@@ -44,16 +52,14 @@ class _Discard(Exception):
     """Raised inside the cassette block so vcrpy does not save a failed episode."""
 
 
-#: Runs one episode; ``live`` says whether the model may really be called (an API key is
-#: needed) or every request will be replayed (frames then travel as their pixel digests).
+#: Runs one episode; ``live``: the model may really be called (else every request replays).
 EpisodeRunner = Callable[..., Trajectory]
 
 
 def is_live(
     spec: EpisodeSpec, *, cassettes: Path, record_mode: str, modality_of: ModalityOf | None = None
 ) -> bool:
-    """Whether running ``spec`` calls the model (records), rather than replaying only
-    (``modality_of``: the models' default modalities, see :func:`~._paths.cassette_path`)."""
+    """Whether running ``spec`` calls the model (records), rather than replaying only."""
     if record_mode in ("all", "new_episodes"):
         return True
     path = cassette_path(cassettes, spec, modality_of=modality_of)
@@ -75,138 +81,150 @@ def run_with_cassette(
 ) -> EpisodeRun:
     """Run ``run(spec, live=...)`` with the model traffic recorded to / replayed from its cassette.
 
-    ``run`` must behave like :func:`pytest_emrd.episode.run_episode`: failures become an
-    ``errored`` trajectory, never an exception. An errored episode leaves no cassette behind;
-    its ``error`` is replaced by a precise cause when the cassette explains it (missing file
-    in ``none`` mode, drift, a modality other than the recorded one, a recorded response the
-    client could not read), each with the command that fixes it, built for ``invocation``
-    (the test paths and user registry of the run). The error text is scrubbed of secrets. A
-    corrupted, edited or stale cassette raises :class:`~pytest_emrd.errors.CassetteError`.
-    A recorded episode whose cassette cannot be written (a full disk, a read-only folder)
-    raises the :class:`OSError`; with ``keep_unsaved`` it raises nothing, and the run's
-    ``unsaved`` holds the cassette's bytes and the cause, for the caller to keep.
-
-    The cassette of an episode in another modality than its model's default (``modality_of``)
-    has its own path (:func:`~._paths.cassette_path`). Under ``new_episodes`` an episode whose
-    replay drifts is stopped at the first request the cassette does not hold and recorded
-    again whole, as under ``all``: its cassette is replaced by the new run's interactions
-    only, never appended to.
-
-    An episode that may record holds its cassette's lock (:func:`~._persister.writer_lock`)
-    while it runs: a second run of the same episode waits, then replays what the first one
-    recorded (in ``once`` mode), or refuses after ``lock_timeout_s`` seconds.
-    """
+    ``run`` turns failures into an ``errored`` trajectory, which leaves no cassette behind and
+    whose scrubbed ``error`` becomes the cause the cassette explains (missing file, drift,
+    another modality, an unreadable recorded response) with the command that fixes it for
+    ``invocation``. A corrupted, edited or stale cassette raises ``CassetteError``; an
+    unwritable one the ``OSError``, unless ``keep_unsaved`` hands it back in ``unsaved``. Under
+    ``new_episodes`` a drifting replay is recorded again whole. An episode that may record holds
+    its cassette's lock (:func:`~._persister.writer_lock`) up to ``lock_timeout_s`` seconds."""
     check_choice("record_mode", record_mode, RECORD_MODES)
     check_choice("matching", matching, MATCHING_MODES)
-    where = _Where(cassettes, cassette_path(cassettes, spec, modality_of=modality_of), modality_of)
-    modes = _Modes(protocol, record_mode, matching, keep_unsaved)
+    path = cassette_path(cassettes, spec, modality_of=modality_of)
+    episode = _Episode(
+        spec, run, cassettes, path, modality_of, protocol, matching, keep_unsaved, invocation
+    )
     if not is_live(spec, cassettes=cassettes, record_mode=record_mode, modality_of=modality_of):
-        return _run(spec, run, where, modes, invocation)
-    with writer_lock(cassettes, where.path, timeout=lock_timeout_s):
+        return episode.run(record_mode)
+    with writer_lock(cassettes, path, timeout=lock_timeout_s):
         start = time.perf_counter()
         try:
-            return _run(spec, run, where, modes, invocation)
+            return episode.run(record_mode)
         except _Redo:  # drift under new_episodes: the whole episode again, from scratch
-            again = dataclasses.replace(modes, record_mode="all")
-            done = _run(spec, run, where, again, invocation)
+            done = episode.run("all")
             return dataclasses.replace(done, seconds=time.perf_counter() - start)
-
-
-@dataclass(frozen=True)
-class _Where:
-    """Where an episode's cassette lives: the cassette folder, the file, the defaults."""
-
-    root: Path
-    path: Path
-    modality_of: ModalityOf | None
-
-
-@dataclass(frozen=True)
-class _Modes:
-    """How an episode's cassette is used (see :func:`run_with_cassette`)."""
-
-    protocol: str
-    record_mode: str
-    matching: str
-    keep_unsaved: bool
 
 
 class _Redo(Exception):
     """The episode drifted under ``new_episodes``: it must be recorded again whole."""
 
 
-def _run(
-    spec: EpisodeSpec,
-    run: EpisodeRunner,
-    where: _Where,
-    modes: _Modes,
-    invocation: Invocation | None,
-) -> EpisodeRun:
-    cassettes, path = where.root, where.path
-    record_mode, matching = modes.record_mode, modes.matching
-    missing = record_mode == "none" and not path.is_file()
-    live = is_live(
-        spec, cassettes=cassettes, record_mode=record_mode, modality_of=where.modality_of
-    )
-    rerecord = record_command(spec, record_mode="all", cassettes=cassettes, invocation=invocation)
-    start = time.perf_counter()
-    unsaved = None
+@dataclass(frozen=True)
+class _Episode:
+    """One episode and how its cassette is used (see :func:`run_with_cassette`)."""
+
+    spec: EpisodeSpec
+    runner: EpisodeRunner
+    root: Path
+    path: Path
+    modality_of: ModalityOf | None
+    protocol: str
+    matching: str
+    keep_unsaved: bool
+    invocation: Invocation | None
+
+    def command(self, record_mode: str) -> str:
+        return record_command(
+            self.spec, record_mode=record_mode, cassettes=self.root, invocation=self.invocation
+        )
+
+    def run(self, record_mode: str) -> EpisodeRun:
+        spec, path = self.spec, self.path
+        missing = record_mode == "none" and not path.is_file()
+        live = is_live(
+            spec, cassettes=self.root, record_mode=record_mode, modality_of=self.modality_of
+        )
+        rerecord = self.command("all")
+        start = time.perf_counter()
+        unsaved = None
+        try:
+            with (
+                network_blocked(record_mode == "none"),
+                episode_cassette(
+                    path,
+                    protocol=self.protocol,
+                    record_mode=record_mode,
+                    matching=self.matching,
+                    rerecord_command=rerecord,
+                    root=self.root,
+                    keep_unsaved=self.keep_unsaved,
+                ) as cassette,
+            ):
+                trajectory = self.runner(spec, live=live)
+                recorded, drift = cassette.dirty, cassette.drift
+                frame_drift = len(cassette.frame_drift)
+                redo = record_mode == "new_episodes" and drift is not None
+                if trajectory.status == "errored" or redo:
+                    raise _Discard
+            unsaved = cassette.unsaved  # the cassette was saved (or not) as the block closed
+        except _Discard:
+            if redo:
+                raise _Redo from None
+            recorded = False
+            cause = trajectory.error or ""
+            if missing:
+                cause = (
+                    f"cassette missing: {path} does not exist and record mode 'none' replays "
+                    f"only. Record it with: {self.command('once')}"
+                )
+            elif drift is not None:
+                cause = drift
+                modality = cassette.recorded_modality
+                if not cassette.unreadable and modality not in (None, spec.modality):
+                    cause = self.mismatch(modality, rerecord)
+            trajectory = dataclasses.replace(trajectory, error=scrub(cause))
+        seconds = time.perf_counter() - start
+        return EpisodeRun(trajectory, recorded, frame_drift, seconds, unsaved=unsaved)
+
+    def mismatch(self, recorded: str, rerecord: str) -> str:
+        """The modality-mismatch text (:func:`~._paths.modality_message`)."""
+        owner = dataclasses.replace(self.spec, modality=recorded)
+        return modality_message(
+            cassette=self.path,
+            recorded=recorded,
+            asked=self.spec.modality,
+            home=cassette_path(self.root, owner, modality_of=self.modality_of),
+            record=self.command("once"),
+            rerecord=rerecord,
+        )
+
+
+def _is_loopback(sock: socket.socket, address: Any) -> bool:
+    if sock.family not in (socket.AF_INET, socket.AF_INET6):
+        return True
+    host = str(address[0])
+    if host == "localhost":
+        return True
     try:
-        with (
-            network_blocked(record_mode == "none"),
-            episode_cassette(
-                path,
-                protocol=modes.protocol,
-                record_mode=record_mode,
-                matching=matching,
-                rerecord_command=rerecord,
-                root=cassettes,
-                keep_unsaved=modes.keep_unsaved,
-            ) as cassette,
-        ):
-            trajectory = run(spec, live=live)
-            recorded, drift = cassette.dirty, cassette.drift
-            frame_drift = len(cassette.frame_drift)
-            redo = record_mode == "new_episodes" and drift is not None
-            if trajectory.status == "errored" or redo:
-                raise _Discard
-        unsaved = cassette.unsaved  # the cassette was saved (or not) as the block closed
-    except _Discard:
-        if redo:
-            raise _Redo from None
-        recorded = False
-        cause = trajectory.error or ""
-        if missing:
-            command = record_command(
-                spec, record_mode="once", cassettes=cassettes, invocation=invocation
-            )
-            cause = (
-                f"cassette missing: {path} does not exist and record mode 'none' replays only. "
-                f"Record it with: {command}"
-            )
-        elif drift is not None:
-            cause = drift
-            modality = cassette.recorded_modality
-            if not cassette.unreadable and modality not in (None, spec.modality):
-                cause = _mismatch(spec, where, modality, rerecord, invocation)
-        trajectory = dataclasses.replace(trajectory, error=scrub(cause))
-    seconds = time.perf_counter() - start
-    return EpisodeRun(trajectory, recorded, frame_drift, seconds, unsaved=unsaved)
+        return ipaddress.ip_address(host.split("%", 1)[0]).is_loopback
+    except ValueError:
+        return False
 
 
-def _mismatch(
-    spec: EpisodeSpec, where: _Where, recorded: str, rerecord: str, invocation: Invocation | None
-) -> str:
-    """The modality-mismatch text, whose fix never overwrites the ``recorded`` recording: the
-    file is moved to where an episode in ``recorded`` lives, then the asked one is recorded."""
-    owner = dataclasses.replace(spec, modality=recorded)
-    home = cassette_path(where.root, owner, modality_of=where.modality_of)
-    record = record_command(spec, record_mode="once", cassettes=where.root, invocation=invocation)
-    return modality_message(
-        cassette=where.path,
-        recorded=recorded,
-        asked=spec.modality,
-        home=home,
-        record=record,
-        rerecord=rerecord,
-    )
+@contextmanager
+def network_blocked(active: bool = True) -> Iterator[None]:
+    """While active, a connection to anything but loopback raises :class:`CassetteError`."""
+    if not active:
+        yield
+        return
+    connect, connect_ex = socket.socket.connect, socket.socket.connect_ex
+
+    def guarded(original: Callable[..., Any]) -> Callable[..., Any]:
+        def guard(sock: socket.socket, address: Any) -> Any:
+            if not _is_loopback(sock, address):
+                raise CassetteError(
+                    f"address={address!r}: the network is blocked in record mode 'none' "
+                    "(replay only); only loopback is reachable. Record with "
+                    "--emrd-record-mode=once to allow live requests."
+                )
+            return original(sock, address)
+
+        return guard
+
+    socket.socket.connect = guarded(connect)  # type: ignore[method-assign]
+    socket.socket.connect_ex = guarded(connect_ex)  # type: ignore[method-assign]
+    try:
+        yield
+    finally:
+        socket.socket.connect = connect  # type: ignore[method-assign]
+        socket.socket.connect_ex = connect_ex  # type: ignore[method-assign]

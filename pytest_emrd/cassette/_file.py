@@ -1,42 +1,11 @@
 """The cassette file: a vcrpy cassette in vcrpy's own JSON serializer, compressed with xz.
 
-``xz -dc ep00.json.xz`` (or ``emrd cassettes show ep00.json.xz``) prints a plain vcrpy
-cassette, which ``vcr.use_cassette(path, serializer="json")`` loads once decompressed
-(abridged here; keys are sorted, bodies are strings):
-
-.. code-block:: json
-
-    {
-        "interactions": [
-            {
-                "request": {
-                    "body": "{\"max_tokens\":4096,\"messages\":[...],\"model\":\"scout\"}",
-                    "headers": {"Content-Type": ["application/json"]},
-                    "method": "POST",
-                    "uri": "http://127.0.0.1:8123/v1/chat/completions"
-                },
-                "response": {
-                    "body": {"string": "{\"choices\":[...],\"usage\":{...}}"},
-                    "headers": {"content-type": ["application/json"]},
-                    "status": {"code": 200, "message": "OK"}
-                }
-            }
-        ],
-        "metadata": {"emrd": {"digest": "sha256:6f1c...", "protocol": "builtin-4+p2"}},
-        "version": 1
-    }
-
-Request bodies are stored redacted and canonical (:mod:`._redact`): frames travel as their
-pixel digests (``pixels:<sha256>``) and no credential reaches the file. ``metadata`` is
-vcrpy's own place for values stored beside the interactions; ``emrd.protocol`` is the world
-and prompt protocol the traffic was recorded under, and ``emrd.digest`` covers it and every
-interaction, so a file edited by hand is refused on load.
-
-JSON rather than YAML: the same document loads ten times faster (a replayed grid loads
-every cassette). The same traffic always gives the same bytes: keys are sorted, and xz runs
-single-threaded with fixed settings (LZMA2, 1 MiB dictionary, CRC32 check, no timestamp).
-A gzip-compressed cassette is read too (told by its magic bytes); pytest-emrd writes xz.
-"""
+``xz -dc ep00.json.xz`` prints a plain vcrpy cassette (fields: docs/cassettes.md) whose
+request bodies are redacted and canonical (:mod:`._redact`); ``metadata.emrd.digest``
+covers the protocol and every interaction, so a file edited by hand is refused on load.
+JSON, not YAML: it loads ten times faster. The same traffic always gives the same bytes
+(sorted keys; xz single-threaded, LZMA2, 1 MiB dictionary, CRC32, no timestamp). A gzip
+cassette is read too (told by its magic bytes)."""
 
 from __future__ import annotations
 
@@ -62,7 +31,6 @@ _GZIP_MAGIC: Final = b"\x1f\x8b"
 _XZ_FILTERS: Final = (
     {"id": lzma.FILTER_LZMA2, "preset": 9 | lzma.PRESET_EXTREME, "dict_size": 1 << 20, "pb": 0},
 )
-_DIGEST_PREFIX: Final = "sha256:"
 #: How the document of a cassette an older release wrote (format 1 or 2) starts.
 LEGACY_HEAD: Final = '{"format":"emrd-cassette/'
 
@@ -87,8 +55,7 @@ class CassetteData:
     requests: tuple[Request, ...]
     responses: tuple[dict[str, Any], ...]
     raw: frozenset[int] = frozenset()
-    """Indices of the requests whose body is not canonical JSON: read back, they are keyed by
-    redacting them again rather than as they are (every recorded body is, nearly always)."""
+    """Indices of the requests whose body is not canonical JSON (keyed by redacting again)."""
 
 
 def _text(data: bytes | str | None) -> str | None:
@@ -131,12 +98,9 @@ def _interaction(request: Request, response: dict[str, Any]) -> dict[str, Any]:
 
 
 def digest(protocol: str, interactions: Sequence[dict[str, Any]]) -> str:
-    """SHA-256 of the protocol and the interactions as stored.
-
-    Each part is hashed with its length in front: the protocol, then per interaction its
-    request and response without their bodies (sorted-key JSON) and each body's text (or
-    ``null``). Hashing a body's text as it is costs a fraction of serialising it again.
-    """
+    """SHA-256 of the protocol and the interactions as stored: each part hashed with its length
+    in front (the protocol; per interaction its request and response without bodies as
+    sorted-key JSON, then each body's text or ``null``; cheaper than serialising it again)."""
     h = hashlib.sha256()
 
     def part(text: str) -> None:
@@ -151,7 +115,7 @@ def digest(protocol: str, interactions: Sequence[dict[str, Any]]) -> str:
         part(json.dumps([{**request, "body": 0}, {**response, "body": 0}], sort_keys=True))
         for body in bodies:
             part("null" if body is None else f"={body}")
-    return _DIGEST_PREFIX + h.hexdigest()
+    return "sha256:" + h.hexdigest()
 
 
 def document(data: CassetteData) -> dict[str, Any]:
@@ -192,12 +156,9 @@ def decompress(blob: bytes) -> str:
 
 
 def decode(blob: bytes) -> CassetteData:
-    """Inverse of :func:`encode` (a gzip file is read too).
-
-    :class:`LegacyFormatError` for a file an older release wrote, :class:`IntegrityError`
-    when the interactions or the protocol no longer match their digest (edited by hand), and
-    :class:`FormatError` for anything else that is not a cassette.
-    """
+    """Inverse of :func:`encode` (a gzip file is read too): :class:`LegacyFormatError` for a file
+    an older release wrote, :class:`IntegrityError` when the interactions or the protocol no
+    longer match their digest, :class:`FormatError` for anything else that is not a cassette."""
     text = decompress(blob)
     if text.startswith(LEGACY_HEAD):
         raise LegacyFormatError(
@@ -225,16 +186,3 @@ def decode(blob: bytes) -> CassetteData:
     except (KeyError, TypeError) as exc:
         raise FormatError(f"malformed interaction ({type(exc).__name__}: {exc})") from exc
     return CassetteData(protocol, requests, responses, frozenset(emrd.get("raw", ())))
-
-
-def same_interactions(a: CassetteData, b: CassetteData) -> bool:
-    """Whether two cassettes hold the same protocol and interactions, byte for byte."""
-
-    def requests(data: CassetteData) -> list[tuple[Any, ...]]:
-        return [(r.method, r.uri, r.body, sorted(r.headers.items())) for r in data.requests]
-
-    return (
-        a.protocol == b.protocol
-        and requests(a) == requests(b)
-        and list(a.responses) == list(b.responses)
-    )

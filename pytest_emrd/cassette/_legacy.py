@@ -1,29 +1,29 @@
-"""Read the cassettes older releases wrote (formats ``emrd-cassette/1`` and ``/2``), for
-``emrd cassettes upgrade`` only: nothing replays them any more.
+"""``emrd cassettes upgrade``: convert the cassettes older releases wrote, once, verified.
 
-Both formats are one JSON-compatible YAML document with a table of long strings, a table of
-messages (templates) and interactions whose bodies refer to both. Format 1 is gzip; format
-2 is xz and may store a string as an edit of a text that release shipped
-(``legacy_texts.json``, the system prompt it wrote into every cassette):
-``{from: <id>, edit: [start, length, "inserted text", ...]}``. This module rebuilds every
-request and response body byte for byte; :func:`pytest_emrd.cassette.upgrade` checks that
-the converted file holds exactly the same interactions.
-"""
+Formats ``emrd-cassette/1`` (``ep<NN>.yaml.gz``) and ``/2`` (``.yaml.xz``; a string may be an
+edit ``{from: <id>, edit: [start, length, "inserted", ...]}`` of a shipped text,
+``legacy_texts.json``) hold tables of strings and messages the bodies refer to. Each body is
+rebuilt byte for byte; the new file is kept only if it reads back to the same protocol and
+interactions, then the old one is removed."""
 
 from __future__ import annotations
 
 import base64
 import functools
 import json
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Final
 
 from vcr.request import Request
 
+from pytest_emrd._atomic import write_bytes_atomic
 from pytest_emrd._wire import encoder
-from pytest_emrd.cassette._file import CassetteData, decompress
+from pytest_emrd.cassette._file import SUFFIX, CassetteData, decode, decompress, encode
+from pytest_emrd.cassette._paths import LEGACY_SUFFIXES, SCRATCH, scratch_path
 from pytest_emrd.cassette._redact import canonical_json
+from pytest_emrd.errors import CassetteError
 
 FORMATS: Final = ("emrd-cassette/1", "emrd-cassette/2")  # see _file.LEGACY_HEAD
 _TEXTS: Final = Path(__file__).with_name("legacy_texts.json")
@@ -109,13 +109,8 @@ def read_legacy(blob: bytes) -> CassetteData:
             requests.append(Request(req["method"], req["uri"], body, req["headers"]))
             if req["body"].get("mode") != "canonical":
                 raw.append(index)
-            responses.append(
-                {
-                    "status": resp["status"],
-                    "headers": resp["headers"],
-                    "body": {"string": _body(resp["body"], strings, templates)},
-                }
-            )
+            reply = {"string": _body(resp["body"], strings, templates)}
+            responses.append({"status": resp["status"], "headers": resp["headers"], "body": reply})
     except LegacyError:
         raise
     except (KeyError, IndexError, TypeError, ValueError, AttributeError) as exc:
@@ -123,3 +118,48 @@ def read_legacy(blob: bytes) -> CassetteData:
     return CassetteData(
         str(document["protocol"]), tuple(requests), tuple(responses), frozenset(raw)
     )
+
+
+@dataclass(frozen=True)
+class Upgraded:
+    """One cassette converted: where it was and is, and its size before and after."""
+
+    old: Path
+    new: Path
+    old_bytes: int
+    new_bytes: int
+
+
+def upgrade(root: Path) -> Iterator[Upgraded]:
+    """Convert every old cassette under ``root`` (not in its scratch folder), one at a time: an
+    interrupted run leaves no half-written file, and running it again goes on. A
+    :class:`CassetteError` names a file that is not an old cassette or whose new twin exists."""
+    found = (p for suffix in LEGACY_SUFFIXES for p in root.rglob(f"*{suffix}"))
+    for old in sorted(p for p in found if SCRATCH not in p.relative_to(root).parts):
+        new = old.with_name(old.name[: -len(".yaml.gz")] + SUFFIX)
+        if new.exists():
+            raise CassetteError(
+                f"cassette={str(old)!r} has a twin {new.name} already, which replays instead; "
+                "delete the one you do not want and run the upgrade again"
+            )
+        blob = old.read_bytes()
+        try:
+            data = read_legacy(blob)
+        except LegacyError as exc:
+            raise CassetteError(f"cassette={str(old)!r} is not an old cassette: {exc}") from None
+        rewritten = encode(data)
+        if not same_interactions(decode(rewritten), data):  # a bug must never lose traffic
+            raise CassetteError(f"cassette={str(old)!r} did not survive conversion; kept as is")
+        write_bytes_atomic(new, rewritten, temp=scratch_path(root, new, ""))
+        old.unlink()
+        yield Upgraded(old, new, len(blob), len(rewritten))
+
+
+def same_interactions(a: CassetteData, b: CassetteData) -> bool:
+    """Whether two cassettes hold the same protocol and interactions, byte for byte."""
+
+    def held(data: CassetteData) -> tuple[Any, ...]:
+        requests = [(r.method, r.uri, r.body, sorted(r.headers.items())) for r in data.requests]
+        return data.protocol, requests, list(data.responses)
+
+    return held(a) == held(b)

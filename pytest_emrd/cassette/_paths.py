@@ -1,15 +1,21 @@
-"""Where an episode's cassette lives, and the commands that (re-)record episodes."""
+"""Where an episode's cassette lives, the commands that (re-)record episodes, and what a
+failed replay says, each cause with the command that fixes it: drift (the first differing
+field of a request the cassette does not hold), a modality mismatch, and an unreadable
+recorded response (one the client asked for again: a retry)."""
 
 from __future__ import annotations
 
 import shlex
 from collections import Counter
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Final
+from typing import Any, Final
 
+from pytest_emrd._scrub import scrub
+from pytest_emrd.agent._prompt import VISIBLE_HEADING
 from pytest_emrd.cassette._file import SUFFIX
+from pytest_emrd.cassette._redact import Redacted
 from pytest_emrd.rooms import SLUG_ROOMS
 from pytest_emrd.trajectory import CONDITIONS, EpisodeSpec
 
@@ -18,27 +24,20 @@ from pytest_emrd.trajectory import CONDITIONS, EpisodeSpec
 SCRATCH: Final = ".emrd-tmp"
 #: The file name endings older releases wrote (``emrd cassettes upgrade`` converts them).
 LEGACY_SUFFIXES: Final = (".yaml.gz", ".yaml.xz")
+_PREVIEW: Final = 80
+_CONTEXT: Final = 40
+_BODY_EXCERPT: Final = 160
+_MISSING: Final = "<absent>"
 
 #: A model's registry default modality (``Registry.get(model).modality``), by model name.
 ModalityOf = Callable[[str], str]
 
 
 def cassette_path(root: Path, spec: EpisodeSpec, *, modality_of: ModalityOf | None = None) -> Path:
-    """``<root>/<model>/<condition>/<variant>/<spawn>/ep<NN>.json.xz`` on the builtin world
-    under the paper protocol, ``<root>/<backend>/<model>/...`` on any other backend
-    (``cassettes/ai2thor/gemini/...``), and ``.../layouts-generated/<model>/...`` under
-    generated layouts (``cassettes/layouts-generated/scout/...``).
-
-    The builtin paper-protocol path carries no prefix so the committed cassettes keep their
-    place; the other backends and generated layouts get their own trees, so a recording never
-    answers a run of another world (or the reverse) even when a model happens to be named
-    like a backend.
-
-    An episode in another modality than its model's default (``modality_of``, the registry)
-    lives in a ``<variant>+<modality>`` folder (``cassettes/scout/baseline/default+text/...``),
-    so recording it never replaces the default-modality cassette; the default modality keeps
-    the plain folder. Without ``modality_of``, ``spec.modality`` is taken as the default.
-    """
+    """``<root>/<model>/<condition>/<variant>/<spawn>/ep<NN>.json.xz`` on the builtin world under
+    the paper protocol; another backend or layouts get their own tree (``<root>/<backend>/``,
+    ``layouts-generated/``), another modality than the model's default (``modality_of``; else
+    ``spec.modality``) a ``<variant>+<modality>`` folder (docs/cassettes.md)."""
     base = root if spec.backend == "builtin" else root / spec.backend
     if spec.layouts != "paper":
         base = base / f"layouts-{spec.layouts}"
@@ -50,17 +49,15 @@ def cassette_path(root: Path, spec: EpisodeSpec, *, modality_of: ModalityOf | No
 
 
 def found_cassette(root: Path, spec: EpisodeSpec) -> Path:
-    """The cassette of ``spec`` where no registry tells its model's default modality (a
-    viewer of stored episodes): its ``<variant>+<modality>`` file when there is one (the
-    modality is not the default), else the plain one."""
+    """The cassette of ``spec`` where no registry tells the default modality (a viewer): its
+    ``<variant>+<modality>`` file when there is one, else the plain one."""
     own = cassette_path(root, spec, modality_of=lambda model: "")  # "": never the default
     return own if own.is_file() else cassette_path(root, spec)
 
 
 def scratch_path(root: Path, path: Path, suffix: str) -> Path:
-    """Where the lock file (``.lock``) or an unfinished write (``.<random>.tmp``) of the
-    cassette ``path`` under ``root`` lives: the same relative path under ``<root>/.emrd-tmp``,
-    a folder that ignores itself in git (created here with its ``.gitignore``)."""
+    """Where the lock file (``.lock``) or an unfinished write of the cassette ``path`` lives:
+    the same relative path under :data:`SCRATCH` (created here, with its ``.gitignore``)."""
     scratch = root / SCRATCH
     target = scratch / path.relative_to(root)
     target.parent.mkdir(parents=True, exist_ok=True)
@@ -92,13 +89,10 @@ def record_command(
     invocation: Invocation | None = None,
 ) -> str:
     """The exact ``pytest`` command that records (``once``) or re-records (``all``) one
-    episode, or every episode of ``specs`` in one run (``once`` records only what is missing).
-
-    It carries the test paths, ``--emrd-models`` and ``--emrd-modality`` of the run, so it
-    works verbatim for a model of a user registry; ``cassettes`` overrides the invocation's.
-    """
+    episode, or every episode of ``specs`` in one run (``once`` records only what is missing),
+    working verbatim for this ``invocation`` (``cassettes`` overrides its folder)."""
     one = isinstance(specs, EpisodeSpec)
-    group = [specs] if isinstance(specs, EpisodeSpec) else list(specs)
+    group = [specs] if one else list(specs)
     how = invocation or Invocation()
     first = group[0]
     args = ["pytest", *how.paths]
@@ -106,15 +100,11 @@ def record_command(
     args += [f"--emrd-condition={c}" for c in _ordered(group, "condition", CONDITIONS)]
     args += [f"--emrd-spawn={r}" for r in _ordered(group, "spawn", tuple(SLUG_ROOMS))]
     args.append(f"--emrd-episodes={max(s.episode for s in group) + 1}")
-    if first.variant != "default":
-        args.append(f"--emrd-variant={first.variant}")
-    if first.backend != "builtin":
-        args.append(f"--emrd-backend={first.backend}")
-    if first.layouts != "paper":
-        args.append(f"--emrd-layouts={first.layouts}")
+    for name, default in (("variant", "default"), ("backend", "builtin"), ("layouts", "paper")):
+        if getattr(first, name) != default:
+            args.append(f"--emrd-{name}={getattr(first, name)}")
     args += [f"--emrd-backend-option={o}" for o in how.backend_options]
-    modalities = {s.modality for s in group}
-    if len(modalities) == 1:
+    if len({s.modality for s in group}) == 1:
         args.append(f"--emrd-modality={first.modality}")
     if how.models_file is not None:
         args.append(f"--emrd-models={how.models_file}")
@@ -131,35 +121,29 @@ def _ordered(group: Sequence[EpisodeSpec], field: str, order: Sequence[str]) -> 
     return [x for x in order if x in present] + sorted(present - set(order))
 
 
-def missing_cassettes(
-    specs: Sequence[EpisodeSpec], root: Path, *, modality_of: ModalityOf | None = None
-) -> list[EpisodeSpec]:
-    """The episodes of ``specs`` whose cassette file does not exist under ``root``."""
-    return [s for s in specs if not cassette_path(root, s, modality_of=modality_of).is_file()]
-
-
 def missing_summary(
-    missing: Sequence[EpisodeSpec],
+    specs: Sequence[EpisodeSpec],
     *,
     total: int,
     root: Path,
     invocation: Invocation,
     modality_of: ModalityOf | None = None,
-) -> str:
-    """The one message for a replay-only run with missing cassettes: how many, for which
-    models, and one command that records them all."""
+) -> str | None:
+    """The one message for a replay-only run where episodes of ``specs`` have no cassette
+    under ``root``: how many, for which models, and one command that records them all."""
+    missing = [s for s in specs if not cassette_path(root, s, modality_of=modality_of).is_file()]
+    if not missing:
+        return None
     per_model = Counter(spec.model for spec in missing)
     models = ", ".join(f"{m} ({n})" for m, n in sorted(per_model.items()))
     command = record_command(missing, record_mode="once", cassettes=root, invocation=invocation)
-    old = sum(
-        any(_legacy_twins(cassette_path(root, spec, modality_of=modality_of))) for spec in missing
-    )
-    convert = (
-        f" {old} of them have a cassette an older pytest-emrd wrote: convert those first with: "
-        f"emrd cassettes upgrade {root}."
-        if old
-        else ""
-    )
+    old = sum(_has_legacy_twin(cassette_path(root, s, modality_of=modality_of)) for s in missing)
+    convert = ""
+    if old:
+        convert = (
+            f" {old} of them have a cassette an older pytest-emrd wrote: convert those first "
+            f"with: emrd cassettes upgrade {root}."
+        )
     return (
         f"{len(missing)} of {total} episode(s) have no cassette under {root} and record mode "
         f"'none' replays only; missing for: {models}.{convert} Record them all "
@@ -167,6 +151,150 @@ def missing_summary(
     )
 
 
-def _legacy_twins(path: Path) -> Iterator[bool]:
+def _has_legacy_twin(path: Path) -> bool:
     stem = path.name[: -len(SUFFIX)]
-    return (path.with_name(stem + suffix).is_file() for suffix in LEGACY_SUFFIXES)
+    return any(path.with_name(stem + suffix).is_file() for suffix in LEGACY_SUFFIXES)
+
+
+def _preview(value: Any) -> str:
+    text = repr(value)
+    return text if len(text) <= _PREVIEW else text[: _PREVIEW - 3] + "..."
+
+
+def first_difference(new: Any, recorded: Any, where: str = "body") -> tuple[str, Any, Any] | None:
+    """``(path, new value, recorded value)`` of the first difference, depth first, or None.
+
+    Dict keys are visited in sorted order (the canonical order), list items by index; a key
+    or item present on one side only is reported with ``<absent>`` on the other.
+    """
+    if isinstance(new, dict) and isinstance(recorded, dict):
+        for key in sorted(set(new) | set(recorded)):
+            if key not in new or key not in recorded:
+                return f"{where}.{key}", new.get(key, _MISSING), recorded.get(key, _MISSING)
+            found = first_difference(new[key], recorded[key], f"{where}.{key}")
+            if found:
+                return found
+        return None
+    if isinstance(new, list) and isinstance(recorded, list):
+        for i in range(max(len(new), len(recorded))):
+            if i >= len(new) or i >= len(recorded):
+                a = new[i] if i < len(new) else _MISSING
+                b = recorded[i] if i < len(recorded) else _MISSING
+                return f"{where}[{i}]", a, b
+            found = first_difference(new[i], recorded[i], f"{where}[{i}]")
+            if found:
+                return found
+        return None
+    if new != recorded or type(new) is not type(recorded):
+        return where, new, recorded
+    return None
+
+
+def text_context(now: str, then: str, width: int = _CONTEXT) -> str:
+    """Where two texts first differ, with ``width`` characters of context on each side."""
+    pairs = enumerate(zip(now, then, strict=False))
+    at = next((i for i, (a, b) in pairs if a != b), min(len(now), len(then)))
+    start = max(0, at - width)
+    lead = "..." if start else ""
+
+    def window(text: str) -> str:
+        tail = "..." if len(text) > at + width else ""
+        return repr(text[start : at + width]) + tail
+
+    return (
+        f"at character {at} (of {len(now)} now, {len(then)} recorded): "
+        f"now {lead}{window(now)}, recorded {lead}{window(then)}"
+    )
+
+
+def request_modality(redacted: Redacted) -> str | None:
+    """The modality a recorded request was made in: frames and a symbolic list (``both``),
+    frames only (``vision``), the list only (``text``); ``None`` when the body is not JSON."""
+    if not redacted.parsed:
+        return None
+    listed = VISIBLE_HEADING in redacted.body.decode(errors="replace")
+    if redacted.images:
+        return "both" if listed else "vision"
+    return "text"
+
+
+def drift_message(
+    *,
+    cassette: str,
+    request_index: int,
+    new_tree: Any,
+    recorded_tree: Any | None,
+    recorded: int,
+    command: str = "",
+) -> str:
+    """The failure text of a request that matches nothing in the cassette."""
+    head = (
+        f"environment or prompt drift: request {request_index + 1} of the episode matches "
+        f"nothing in cassette={cassette!r}"
+    )
+    fix = f" If the change is intended, re-record it: {command}" if command else ""
+    if new_tree is None:
+        return f"{head}; its body is not JSON, and a body that cannot be parsed never matches."
+    if recorded_tree is None:
+        return (
+            f"{head}; the cassette holds only {recorded} request(s), so the episode now makes "
+            f"more requests than when it was recorded (the world or the agent behaves "
+            f"differently).{fix}"
+        )
+    found = first_difference(new_tree, recorded_tree)
+    if found is None:
+        return (
+            f"{head}; the body equals recorded request {request_index + 1}, "
+            f"which was already played.{fix}"
+        )
+    where, now, then = found
+    if isinstance(now, str) and isinstance(then, str):
+        detail = text_context(now, then)
+    else:
+        detail = f"now {_preview(now)}, recorded {_preview(then)}"
+    return f"{head}; first differing field {where} {detail}.{fix}"
+
+
+def modality_message(
+    *, cassette: Path, recorded: str, asked: str, home: Path, record: str, rerecord: str
+) -> str:
+    """The failure text of a replay in another modality than the recording. ``home`` is where an
+    episode in the ``recorded`` modality keeps its cassette: when it is free the fix moves the
+    file there, then records the ``asked`` episode with ``record``; when it holds one, this
+    file is a stray copy that ``rerecord`` replaces. No fix overwrites a ``recorded`` cassette."""
+    head = (
+        f"modality mismatch: cassette={str(cassette)!r} was recorded in modality {recorded!r} "
+        f"and this run shows the model {asked!r}."
+    )
+    if home == cassette:  # no registry to tell the modalities' paths apart
+        return (
+            f"{head} Replay it with --emrd-modality={recorded}, or replace it by the {asked!r} "
+            f"episode (the {recorded!r} recording is lost): {rerecord}"
+        )
+    if home.is_file():
+        return (
+            f"{head} The {recorded!r} episode has its own cassette, {home} (replay it with "
+            f"--emrd-modality={recorded}); re-record this one in {asked!r}: {rerecord}"
+        )
+    folder = shlex.join(["mkdir", "-p", str(home.parent)])
+    move = f"{folder} && {shlex.join(['mv', str(cassette), str(home)])}"
+    return (
+        f"{head} A {recorded!r} episode belongs at {home}: move it there ({move}; it then "
+        f"replays with --emrd-modality={recorded}), then record the {asked!r} episode: {record}"
+    )
+
+
+def unreadable_message(
+    *, cassette: str, response_index: int, response: dict[str, Any], command: str
+) -> str:
+    """The failure text of a recorded response the client could not read."""
+    status = response.get("status", {}).get("code", "?")
+    body = response.get("body", {}).get("string", b"")
+    text = body.decode(errors="replace") if isinstance(body, bytes) else str(body)
+    excerpt = " ".join(text.split())[:_BODY_EXCERPT]
+    return (
+        f"unreadable recorded response: response {response_index + 1} of cassette="
+        f"{cassette!r} (HTTP {status}) was replayed and the client could not read it as a "
+        f"reply (it asked for the same request again); the body starts {scrub(excerpt)!r}. "
+        f"The file is damaged or was recorded from another endpoint; re-record it: {command}"
+    )

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from collections.abc import Iterator
 from contextlib import contextmanager
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -35,40 +35,22 @@ class UnsavedCassette:
     blob: bytes
 
 
+@dataclass(kw_only=True)
 class EpisodePersister:
-    """Loads and saves one episode's cassette (:mod:`._file`) under the current protocol.
+    """Loads and saves one episode's cassette (:mod:`._file`) under the current protocol: a
+    missing file is "not found" (in ``all`` mode, ``fresh``, the old one is never read), a file
+    that cannot be replayed a one-line :class:`CassetteError` naming it and the fix. A file is
+    written to ``<root>/.emrd-tmp`` first and renamed into place; with ``keep_unsaved`` a failed
+    write is kept in :attr:`unsaved` instead of raising."""
 
-    A missing file is "not found" (vcrpy records it when the mode allows). Each file that
-    cannot be replayed is a :class:`CassetteError` naming it and the fix, in one line: a file
-    that is not a cassette, one an older release wrote (convert it with ``emrd cassettes
-    upgrade``), one edited by hand (its digest no longer matches) and one recorded under
-    another protocol (re-record it). In ``all`` mode the old file is never read: it is
-    replaced when the episode finishes. A file is written to ``<root>/.emrd-tmp`` first and
-    renamed into place, so a write cut short leaves nothing in the cassette tree.
-
-    With ``keep_unsaved``, a write that fails (a full disk, a read-only folder, a file where
-    a folder belongs) raises nothing: the encoded cassette is kept in :attr:`unsaved` for the
-    caller to put elsewhere, and vcrpy closes the cassette as after a save. Without it, the
-    :class:`OSError` is raised.
-    """
-
-    def __init__(
-        self,
-        *,
-        protocol: str,
-        fresh: bool,
-        rerecord_command: str,
-        root: Path | None = None,
-        keep_unsaved: bool = False,
-    ) -> None:
-        self.protocol = protocol
-        self.fresh = fresh
-        self.rerecord_command = rerecord_command
-        self.root = root
-        """The cassette folder (temporary files go to its ``.emrd-tmp``); ``None``: beside."""
-        self.keep_unsaved = keep_unsaved
-        self.unsaved: UnsavedCassette | None = None
-        """The last cassette that could not be written (with ``keep_unsaved``), else None."""
+    protocol: str
+    fresh: bool
+    rerecord_command: str
+    root: Path | None = None
+    """The cassette folder; ``None``: temporary files are written beside the file."""
+    keep_unsaved: bool = False
+    unsaved: UnsavedCassette | None = field(default=None, init=False)
+    """The last cassette that could not be written (with ``keep_unsaved``), else None."""
 
     def load_cassette(self, cassette_path: str | Path, serializer: Any = None) -> tuple[list, list]:
         path = Path(cassette_path)
@@ -130,12 +112,9 @@ LOCK_TIMEOUT_S = 1800.0
 
 @contextmanager
 def writer_lock(root: Path, path: Path, *, timeout: float = LOCK_TIMEOUT_S) -> Iterator[None]:
-    """Hold the lock of the cassette ``path`` (one writer per cassette across processes),
-    then remove what an earlier writer of it left unfinished (a killed run's temporary file).
-
-    A run that waits longer than ``timeout`` seconds gets a :class:`CassetteError` in one
-    line. The lock is an OS file lock: it is released when its holder ends, killed or not.
-    """
+    """Hold the lock of the cassette ``path`` (one writer per cassette across processes; an OS
+    file lock, released when its holder ends), then remove what an earlier writer left
+    unfinished. Waiting longer than ``timeout`` seconds is a one-line :class:`CassetteError`."""
     from filelock import FileLock, Timeout
 
     lock_file = scratch_path(root, path, ".lock")

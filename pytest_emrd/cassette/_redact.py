@@ -1,24 +1,10 @@
-"""What a request looks like once it is safe to store and ready to match.
+"""What a request looks like once it is safe to store and ready to match (docs/cassettes.md).
 
-Redaction turns a model request into its *canonical* form:
-
-* every image payload becomes the digest of the frame's pixels (``pixels:<sha256>``, handed
-  over by the world through :mod:`pytest_emrd.frames`; ``bytes:<sha256>`` for a payload this
-  process did not render): OpenAI ``image_url`` data URLs, Anthropic ``source.data``, Gemini
-  ``inline_data``/``inlineData``;
-* the body is re-serialised as sorted-key compact JSON (a body that is not JSON is kept as
-  it is and gets no key: it never matches);
-* headers are reduced to ``Content-Type`` (so ``Authorization``, ``x-api-key``, ``api-key``,
-  ``x-goog-api-key`` and anything else a provider may carry never reach a file); URL userinfo
-  and credential-like query parameters are dropped and configured key values removed from
-  the URI and the body (:mod:`pytest_emrd._scrub`).
-
-vcrpy runs ``before_record_request`` several times for every request; the cassette keeps the
-redacted copy on the request, so each request is redacted once (see ``cassette._use``). The
-two match keys are computed once here: ``strict`` (method, path, canonical body) and
-``lenient`` (the same with every frame digest replaced by a placeholder, so only text, step
-index and image count are compared).
-"""
+The *canonical* form: every image payload becomes the digest of the frame's pixels
+(``pixels:<sha256>`` from :mod:`pytest_emrd.frames`; ``bytes:<sha256>`` for one this process
+did not render), the body is sorted-key compact JSON (one that is not JSON never matches),
+headers are reduced to ``Content-Type`` and configured key values removed. The match keys:
+``strict`` (method, path, canonical body) and ``lenient`` (frame digests as placeholders)."""
 
 from __future__ import annotations
 
@@ -44,12 +30,8 @@ _MIME_KEYS: Final = ("media_type", "mime_type", "mimeType")
 
 @dataclass(frozen=True)
 class Redacted:
-    """The canonical form of one request body.
-
-    Only the bytes are kept; the parsed tree and the image count are derived on first use
-    (only lenient keys, drift messages and tools need them), so a body read back from a
-    cassette, already canonical, is never parsed to be matched.
-    """
+    """The canonical form of one request body; the tree and the image count are derived on
+    first use, so a body read back from a cassette is never parsed to be matched."""
 
     body: bytes
     """Canonical body bytes (sorted-key compact JSON), or the original bytes if not JSON."""
@@ -69,10 +51,8 @@ class Redacted:
 
 @dataclass(frozen=True)
 class MatchKeys:
-    """The keys a request is matched on, each computed once on first use.
-
-    ``None`` for a body that is not JSON: it never matches.
-    """
+    """The keys a request is matched on, each computed on first use (``None`` for a body
+    that is not JSON: it never matches)."""
 
     head: str
     """``METHOD path`` line that starts both keys."""
@@ -80,12 +60,9 @@ class MatchKeys:
 
     @cached_property
     def strict(self) -> tuple[str, bytes] | None:
-        """``(head, canonical body)``, compared as it is: a body is tens of KB, and hashing it
-        cost more than the rest of matching it (equal lengths are rare, and ``==`` on bytes
-        of different lengths is immediate)."""
-        if not self.redacted.parsed:
-            return None
-        return self.head, self.redacted.body
+        """``(head, canonical body)``, compared as it is (hashing a body of tens of KB costs
+        more than comparing it)."""
+        return (self.head, self.redacted.body) if self.redacted.parsed else None
 
     @cached_property
     def lenient(self) -> str | None:
@@ -150,12 +127,8 @@ def _without_images(node: Any) -> Any:
     return node
 
 
-def _canonical_item(item: Any) -> str:
-    return canonical_json(_redact_tree(item))
-
-
 def _canonical_bytes(value: Any) -> bytes:
-    return _canonical_item(value).encode()
+    return canonical_json(_redact_tree(value)).encode()
 
 
 def _canonical_fragment(piece: _wire.Fragment) -> bytes:
@@ -188,8 +161,7 @@ def redact_body(body: bytes | str | None) -> Redacted:
         tree = json.loads(raw)
     except (ValueError, UnicodeDecodeError):
         return Redacted(body=scrub_bytes(raw, literal_only=True), parsed=False)
-    canonical = canonical_json(_redact_tree(tree)).encode()
-    return Redacted(body=scrub_bytes(canonical, literal_only=True), parsed=True)
+    return Redacted(body=scrub_bytes(_canonical_bytes(tree), literal_only=True), parsed=True)
 
 
 def match_keys(method: str, path: str, redacted: Redacted) -> MatchKeys:

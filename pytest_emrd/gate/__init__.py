@@ -1,15 +1,11 @@
-"""Gates: the thresholds file, per-cell verdicts and the gate table (pure over metrics).
+"""Gates: the thresholds file, per-cell verdicts and the gate table (pure over metrics)."""
 
-The run that feeds them (settings, grid, results store, prefetch) is :mod:`pytest_emrd.run`.
-"""
-
-from pytest_emrd.gate._files import REGISTER_MODEL_HINT, load_thresholds
+from pytest_emrd.gate._files import load_thresholds
 from pytest_emrd.gate._table import UsageRow, gate_tables, usage_table
 from pytest_emrd.gate._thresholds import Bound, Thresholds, parse_thresholds
 from pytest_emrd.gate._verdict import GateCell, Verdict, evaluate_all, evaluate_cell, judge
 
 __all__ = [
-    "REGISTER_MODEL_HINT",
     "Bound",
     "GateCell",
     "Thresholds",

@@ -25,11 +25,8 @@ class RegistryLike(Protocol):
 
 
 def load_thresholds(path: Path, *, registry: RegistryLike, metrics: Collection[str]) -> Thresholds:
-    """Read and validate a thresholds file against a model registry and metric names.
-
-    Model names are checked with ``registry.get`` (so parametric names such as
-    ``scout-decay-8`` are accepted); a missing file is a :class:`ConfigError`.
-    """
+    """Read and validate a thresholds file against a model registry (``registry.get``: parametric
+    names such as ``scout-decay-8`` pass) and metric names; a missing file is a ConfigError."""
 
     def is_model(name: str) -> bool:
         try:

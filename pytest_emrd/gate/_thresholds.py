@@ -9,15 +9,9 @@ Schema::
           min: 0.8           # or max: 0.1 (exactly one of the two)
           ci: lower          # optional: compare the bootstrap CI's lower/upper end, not the mean
 
-Every mistake is a :class:`~pytest_emrd.errors.ConfigError` of one line naming the file,
-the line, the field and the allowed values. A bound must lie in its metric's domain
-(:func:`domain`: fractions in [0, 1], ``te`` in [0, max_steps], R² at most 1, never NaN or
-infinite); numbers follow YAML 1.2, so ``1e9`` is a number (:mod:`pytest_emrd._yaml`).
-
-A file that holds no gate (empty, only comments, or models without metrics) is an error:
-a run given such a file would pass green with nothing checked. A run without gates is one
-given no thresholds file.
-"""
+Every mistake is a one-line ConfigError naming the file, line, field and allowed values; a
+bound lies in its metric's :func:`domain`. A file with no gate is an error (a run given it
+would pass green with nothing checked)."""
 
 from __future__ import annotations
 
@@ -40,12 +34,11 @@ BUDGET_METRICS: Final = frozenset({"te"})
 
 @dataclass(frozen=True)
 class Domain:
-    """The values a metric can take; a bound outside it can never (or always) pass."""
+    """The values a metric can take (``text``: in words); a bound outside never/always passes."""
 
     low: float
     high: float
     text: str
-    """How the domain reads in a message (``a fraction in [0, 1]``)."""
 
     def __contains__(self, value: float) -> bool:
         return self.low <= value <= self.high
@@ -79,8 +72,7 @@ class Bound:
     line: int = 0
     """1-based line of the metric in the thresholds file (0 when built in code)."""
     layouts: str = "paper"
-    """The cells it gates: ``paper`` (key ``baseline``) or ``generated``
-    (key ``baseline@generated``)."""
+    """The cells it gates: ``paper`` (key ``baseline``), ``generated`` (``baseline@generated``)."""
 
 
 @dataclass(frozen=True)
@@ -91,19 +83,13 @@ class Thresholds:
     bounds: tuple[Bound, ...]
 
     def for_cell(self, model: str, condition: str, layouts: str = "paper") -> tuple[Bound, ...]:
-        return tuple(
-            b
-            for b in self.bounds
-            if b.model == model and b.condition == condition and b.layouts == layouts
-        )
-
-    def models(self) -> tuple[str, ...]:
-        return tuple(dict.fromkeys(b.model for b in self.bounds))
+        cell = (model, condition, layouts)
+        return tuple(b for b in self.bounds if (b.model, b.condition, b.layouts) == cell)
 
 
+@dataclass(frozen=True)
 class _Reader:
-    def __init__(self, source: str) -> None:
-        self.source = source
+    source: str
 
     def fail(self, node: yaml.Node | None, message: str) -> ConfigError:
         line = f", line {node.start_mark.line + 1}" if node is not None else ""
@@ -136,18 +122,12 @@ class _Reader:
             )
         return value
 
-
-def _choice(
-    reader: _Reader,
-    node: yaml.Node,
-    what: str,
-    value: str,
-    allowed: Collection[str],
-    hint: str = "",
-) -> None:
-    if value not in allowed:
-        listed = ", ".join(sorted(allowed))
-        raise reader.fail(node, f"unknown {what} {value!r}; allowed: {listed}.{hint}")
+    def choice(
+        self, node: yaml.Node, what: str, value: str, allowed: Collection[str], hint: str = ""
+    ) -> None:
+        if value not in allowed:
+            listed = ", ".join(sorted(allowed))
+            raise self.fail(node, f"unknown {what} {value!r}; allowed: {listed}.{hint}")
 
 
 def parse_thresholds(
@@ -159,13 +139,9 @@ def parse_thresholds(
     metrics: Collection[str],
     unknown_model_hint: str = "",
 ) -> Thresholds:
-    """Parse and validate thresholds YAML text (``source`` names the file in messages).
-
-    ``metrics`` names the gate metrics; when it maps names to objects with a ``unit``
-    (:data:`~pytest_emrd.metrics.GATE_METRICS`), each bound is checked against the metric's
-    :func:`domain`. ``unknown_model_hint`` ends the message of an unknown model (how to
-    register one).
-    """
+    """Parse and validate thresholds YAML text (``source`` names the file in messages). When
+    ``metrics`` maps names to objects with a ``unit`` (``GATE_METRICS``), each bound is checked
+    against its :func:`domain`; ``unknown_model_hint`` ends an unknown model's message."""
     reader = _Reader(source)
     root = _yaml.compose(text, source)
     bounds: list[Bound] = []
@@ -173,14 +149,14 @@ def parse_thresholds(
         reader.mapping(root, "the top level (models)") if root else ()
     ):
         if not is_model(model):
-            _choice(reader, model_key, "model", model, model_names, unknown_model_hint)
+            reader.choice(model_key, "model", model, model_names, unknown_model_hint)
         for key, cond_key, metric_map in reader.mapping(conditions, f"model {model!r}"):
             condition, at, layouts = key.partition("@")
-            _choice(reader, cond_key, "condition", condition, CONDITIONS)
+            reader.choice(cond_key, "condition", condition, CONDITIONS)
             if at:  # the paper protocol is the bare condition; only other layouts are named
-                _choice(reader, cond_key, "layouts after '@'", layouts, LAYOUTS[1:])
+                reader.choice(cond_key, "layouts after '@'", layouts, LAYOUTS[1:])
             for metric, metric_key, spec in reader.mapping(metric_map, f"{model}.{key}"):
-                _choice(reader, metric_key, "metric", metric, metrics)
+                reader.choice(metric_key, "metric", metric, metrics)
                 allowed = domain(metric, _unit(metrics, metric))
                 bound = _bound(reader, model, condition, metric, metric_key, spec, allowed)
                 bounds.append(replace(bound, layouts=layouts or "paper"))
@@ -209,7 +185,7 @@ def _bound(
     where = f"{model}.{condition}.{metric}"
     fields = {name: (k, v) for name, k, v in reader.mapping(spec, where)}
     for name, (k, _) in fields.items():
-        _choice(reader, k, f"key in {where}", name, (*BOUND_KINDS, "ci"))
+        reader.choice(k, f"key in {where}", name, (*BOUND_KINDS, "ci"))
     kinds = [k for k in BOUND_KINDS if k in fields]
     if len(kinds) != 1:
         raise reader.fail(key, f"{where} needs exactly one of min or max, got {kinds or 'none'}.")
@@ -221,5 +197,5 @@ def _bound(
         if not isinstance(ci_node, yaml.ScalarNode):
             raise reader.fail(ci_node, f"{where}.ci must be one of lower, upper.")
         ci = str(ci_node.value)
-        _choice(reader, ci_node, f"ci side in {where}", ci, CI_SIDES)
+        reader.choice(ci_node, f"ci side in {where}", ci, CI_SIDES)
     return Bound(model, condition, metric, kind, value, ci, key.start_mark.line + 1)

@@ -1,20 +1,17 @@
-"""Gate verdicts: a metric's estimate over a cell's episodes, compared with its bound (pure).
-
-A cell is model x condition (x prompt variant x layouts); its episodes are sorted by case id before
-the metric runs, and the bootstrap is seeded (``rng_seed=0``), so the same episodes give the
-same verdict whichever machine, worker or run directory they come from.
-"""
+"""Gate verdicts: a metric's estimate over a cell's episodes (model x condition x prompt
+variant x layouts), compared with its bound (pure). Episodes are sorted by case id and the
+bootstrap is seeded (``rng_seed=0``): the same episodes give the same verdict anywhere."""
 
 from __future__ import annotations
 
 from collections import defaultdict
-from collections.abc import Callable, Iterable, Mapping, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any, Protocol, TypeVar
+from typing import Any, Protocol
 
 from pytest_emrd._serde import from_dict, to_dict
 from pytest_emrd.gate._thresholds import Bound, Thresholds
-from pytest_emrd.trajectory import EpisodeSpec, Trajectory
+from pytest_emrd.trajectory import Trajectory
 
 
 class EstimateLike(Protocol):
@@ -34,8 +31,7 @@ class GateMetricLike(Protocol):
 @dataclass(frozen=True)
 class GateCell:
     """One gate test: a bound applied to the episodes of model x condition x variant x layouts
-    (the layouts are the bound's: paper-protocol and generated-layout episodes never share a
-    cell)."""
+    (the bound's: paper-protocol and generated-layout episodes never share a cell)."""
 
     bound: Bound
     variant: str = "default"
@@ -53,12 +49,10 @@ class GateCell:
 
 
 def _gate_id(model: str, condition: str, variant: str, layouts: str, metric: str) -> str:
-    parts = [model, condition]
-    if variant != "default":
-        parts.append(variant)
-    if layouts != "paper":
-        parts.append(layouts)
-    return "-".join([*parts, metric])
+    named = [
+        name for name, default in ((variant, "default"), (layouts, "paper")) if name != default
+    ]
+    return "-".join([model, condition, *named, metric])
 
 
 @dataclass(frozen=True)
@@ -153,58 +147,23 @@ def judge(cell: GateCell, estimate: EstimateLike) -> Verdict:
 
 
 def evaluate_cell(
-    cell: GateCell,
-    trajectories: Iterable[Any],
-    metrics: Mapping[str, GateMetricLike],
-    *,
-    prepare: Callable[[Any], Any] | None = None,
+    cell: GateCell, trajectories: Iterable[Any], metrics: Mapping[str, GateMetricLike]
 ) -> Verdict:
-    """The verdict of one gate over its episodes (any order in, sorted by case id).
-
-    ``trajectories`` are trajectories or anything else with a ``spec`` that the metric's
-    ``compute`` accepts, e.g. :class:`~pytest_emrd.metrics.EpisodeMetrics` saved beside the
-    results store. ``prepare`` maps each one to what ``compute`` accepts, e.g. a cached
-    :func:`pytest_emrd.metrics.episode_metrics`, so several gates over the same episodes
-    match each episode's maps once.
-    """
+    """The verdict of one gate over its episodes (any order in, sorted by case id): trajectories
+    or anything with a ``spec`` the metric accepts (such as ``EpisodeMetrics``)."""
     ordered = sorted(trajectories, key=lambda t: t.spec.case_id)
-    items = [prepare(t) for t in ordered] if prepare else ordered
-    estimate = metrics[cell.bound.metric].compute(items, rng_seed=0)
-    return judge(cell, estimate)
-
-
-class _Episode(Protocol):
-    @property
-    def spec(self) -> EpisodeSpec: ...
-
-
-E = TypeVar("E", bound=_Episode)
+    return judge(cell, metrics[cell.bound.metric].compute(ordered, rng_seed=0))
 
 
 def evaluate_all(
-    trajectories: Iterable[E],
-    thresholds: Thresholds,
-    metrics: Mapping[str, GateMetricLike],
-    *,
-    prepare: Callable[[E], Any] | None = None,
+    trajectories: Iterable[Any], thresholds: Thresholds, metrics: Mapping[str, GateMetricLike]
 ) -> list[Verdict]:
-    """Every gate whose cell has episodes, grouped by model x condition x variant x layouts.
-
-    Used by ``emrd gate RUN_DIR...``: the same cells and the same verdicts as the gate tests
-    of a single-machine run over the same episodes. ``trajectories`` may as well be each
-    episode's :class:`~pytest_emrd.metrics.EpisodeMetrics` (anything with a ``spec`` the
-    gate metrics accept).
-    """
-    cells: dict[tuple[str, str, str, str], list[E]] = defaultdict(list)
+    """Every gate whose cell has episodes: the gate tests' verdicts, for ``emrd gate``."""
+    cells: dict[tuple[str, str, str, str], list[Any]] = defaultdict(list)
     for t in trajectories:
         cells[(t.spec.model, t.spec.condition, t.spec.variant, t.spec.layouts)].append(t)
-    verdicts = []
-    for (model, condition, variant, layouts), episodes in sorted(cells.items()):
-        # Each episode prepared once for all the gates of its cell (the 23 gates of a cell
-        # would otherwise match every episode's maps 23 times).
-        ordered = sorted(episodes, key=lambda t: t.spec.case_id)
-        items = [prepare(t) for t in ordered] if prepare else ordered
-        for bound in thresholds.for_cell(model, condition, layouts):
-            estimate = metrics[bound.metric].compute(items, rng_seed=0)
-            verdicts.append(judge(GateCell(bound, variant), estimate))
-    return verdicts
+    return [
+        evaluate_cell(GateCell(bound, variant), episodes, metrics)
+        for (model, condition, variant, layouts), episodes in sorted(cells.items())
+        for bound in thresholds.for_cell(model, condition, layouts)
+    ]

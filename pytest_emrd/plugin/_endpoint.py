@@ -1,14 +1,8 @@
 """Fail fast on a dead endpoint: a model whose last :data:`DEAD_AFTER` computed episodes in a
-row ended on a connection failure or a timeout is not called again in this session.
-
-Its remaining episodes are skipped with one shared reason (pytest prints it once) and the
-end of the run names the endpoint and the command that resumes the run; every episode
-already recorded stays in the run directory and its cassette, and the errored ones are
-computed again by the resumed session (an errored episode is reused only by the session
-that produced it). The count lives beside the run directory's locks, outside it
-(:func:`~pytest_emrd.run.scratch_dir`), in ``endpoints/<model>.json`` under a file lock, so
-the xdist workers of one session share it; a resumed session starts from zero.
-"""
+row ended on a connection failure or a timeout is not called again in this session. Its
+remaining episodes are skipped with one reason, and the end of the run names the endpoint
+and the command that resumes the run. The count is shared by the session's xdist workers
+(``endpoints/<model>.json`` in :func:`~pytest_emrd.run.scratch_dir`, under a file lock)."""
 
 from __future__ import annotations
 
@@ -73,35 +67,28 @@ class EndpointWatch:
             return None
         return Stop(model, data["endpoint"], data["consecutive"], data["error"])
 
-    def record(self, model: str, endpoint: str, status: str, error: str | None) -> Stop | None:
-        """Count one computed episode of ``model``; the stop when this one made it."""
+    def record(self, model: str, endpoint: str, status: str, error: str | None) -> None:
+        """Count one computed episode of ``model`` (a stopped model's count is final)."""
         from filelock import FileLock
 
         self.folder.mkdir(mode=0o700, parents=True, exist_ok=True)
         with FileLock(str(self.folder / f"{model}.lock")):
             data = self._read(model) or {"session": self.session, "consecutive": 0}
             if data.get("stopped"):
-                return None
+                return
             down = unreachable(status, error)
             data["consecutive"] = data["consecutive"] + 1 if down else 0
             if down and data["consecutive"] >= DEAD_AFTER:
                 data.update(stopped=True, endpoint=endpoint, error=error)
-            blob = json.dumps(data).encode()
-            write_bytes_atomic(self.folder / f"{model}.json", blob)
-        return self.stopped(model) if data.get("stopped") else None
+            write_bytes_atomic(self.folder / f"{model}.json", json.dumps(data).encode())
 
     def resume_command(self) -> str:
         """This session's ``pytest`` command, resuming its run directory."""
         args, skip = [], False
-        for arg in self.args:
-            if skip:
-                skip = False
-                continue
-            if arg == "--emrd-results":
-                skip = True
-                continue
-            if not arg.startswith("--emrd-results="):
+        for arg in self.args:  # without the run directory given (it is added back)
+            if not (skip or arg == "--emrd-results" or arg.startswith("--emrd-results=")):
                 args.append(arg)
+            skip = not skip and arg == "--emrd-results"
         return shlex.join(["pytest", *args, f"--emrd-results={self.run_dir}"])
 
     def reason(self, stop: Stop) -> str:

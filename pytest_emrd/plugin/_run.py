@@ -1,21 +1,14 @@
-"""The per-process state of an EMRD run: registry, grid, results store, episodes, verdicts.
+"""The per-process state of an EMRD run (one :class:`Run` in ``config.stash[RUN]`` per process:
+registry, grid, results store, episodes, verdicts), everything heavy built on first use.
 
-One :class:`Run` per process (the only one, or each xdist worker), kept in
-``config.stash[RUN]``; everything heavy is built on first use, so a session that collects
-no EMRD test imports, starts and writes nothing.
-
-Paid work is never lost to the disk. Before a live episode, the cassette folder must be
-writable (else the test fails in one line and nothing is sent to the model). If the
-cassette still cannot be saved when the episode ends (a full disk), the episode's result,
-with every reply, its token usage and its retries, goes to ``<run>/unsaved/<case_id>.json``
-and to the results store, the cassette itself (redacted, ready to move into place) to
-``<run>/unsaved/<case_id>.json.xz``, a :class:`CassetteNotSavedWarning` says where, and the
-episode is not run again by this run or by a resumed one. Any other file system failure is
-one line naming the path and the fix.
-"""
+Paid work is never lost to the disk: before a live episode the cassette folder must be
+writable (else one line, and nothing is sent to the model); a cassette that still cannot be
+saved goes with the episode's result to ``<run>/unsaved/`` (the result also to the store),
+and a :class:`CassetteNotSavedWarning` says where."""
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import os
 import shlex
@@ -53,22 +46,9 @@ UNSAVED = "unsaved"
 """Folder of a run directory holding live episodes whose cassette could not be written."""
 
 
-#: Settings the collected grid, the run directory and the store's identity were built from.
-COLLECTED = (
-    "models",
-    "conditions",
-    "cells",
-    "spawns",
-    "episodes",
-    "variant",
-    "layouts",
-    "backend",
-    "modality",
-    "results",
-    "thresholds",
-    "models_file",
-    "shard",
-)
+#: Settings the collected grid, the run directory and the store's identity were built from:
+#: all but these, which the ``emrd_*`` fixtures may change (:meth:`Run.adopt`).
+ADOPTABLE = ("backend_options", "record_mode", "matching", "cassettes", "concurrency", "preflight")
 
 
 class CassetteNotSavedWarning(UserWarning):
@@ -76,16 +56,14 @@ class CassetteNotSavedWarning(UserWarning):
 
 
 def failure_line(exc: EmrdError | OSError, what: str = "pytest-emrd") -> str:
-    """The one scrubbed line an :class:`EmrdError` or a file system failure (most often in
-    the run directory) ends in: ``<what>: <message>``."""
+    """The one scrubbed line an :class:`EmrdError` or a file system failure ends in."""
     if isinstance(exc, OSError):
         return f"{what}: {scrub(os_error_line(exc, doing='write', option='--emrd-results DIR'))}"
     return f"{what}: {scrub(str(exc))}"
 
 
 def _writable_folder(folder: Path) -> None:
-    """Raise the :class:`OSError` writing into ``folder`` would meet, judged from its
-    nearest existing ancestor (nothing is created)."""
+    """Raise the :class:`OSError` writing into ``folder`` would meet (nothing is created)."""
     existing = folder
     while not existing.exists() and existing != existing.parent:
         existing = existing.parent
@@ -112,12 +90,10 @@ class Run:
         """Live episodes whose cassette could not be written: the line that says so."""
 
     def adopt(self, settings: RunSettings) -> Run:
-        """Run the rest of the session with ``settings`` (the ``emrd_*`` fixtures, perhaps
-        overridden in a ``conftest.py``); returns this run.
-
-        The fields of :data:`COLLECTED` shaped the test ids and the run directory before any
-        fixture ran: a :class:`ConfigError` names any the new settings change."""
-        changed = [f for f in COLLECTED if getattr(settings, f) != getattr(self.settings, f)]
+        """Run the rest of the session with ``settings`` (the ``emrd_*`` fixtures); the fields that
+        shaped the collected tests may not change (a :class:`ConfigError` names them)."""
+        names = [f.name for f in dataclasses.fields(settings) if f.name not in ADOPTABLE]
+        changed = [n for n in names if getattr(settings, n) != getattr(self.settings, n)]
         if changed:
             raise ConfigError(
                 f"the emrd_settings fixture changes {', '.join(changed)}, which the collected "
@@ -127,8 +103,7 @@ class Run:
         return self
 
     def call(self, fn: Any, what: str = "pytest-emrd") -> Any:
-        """``fn(self)``, turning an :class:`EmrdError` into one clean failure line (scrubbed,
-        raised outside the ``except``: no "During handling" chain)."""
+        """``fn(self)``, an :class:`EmrdError` turned into one clean failure line (no chain)."""
         try:
             return fn(self)
         except (EmrdError, OSError) as exc:
@@ -199,8 +174,8 @@ class Run:
         )
 
     def missing_summary(self, items: list[pytest.Item]) -> str | None:
-        """In record mode ``none``: one message for the episodes the selected items need
-        that have neither a stored result nor a cassette, or ``None``."""
+        """In record mode ``none``: one message for the episodes the selected items need but
+        neither store nor cassette holds, or ``None``."""
         if not self.settings.replays_only:
             return None
         needed: dict[EpisodeSpec, None] = {}
@@ -213,16 +188,12 @@ class Run:
         unstored = [spec for spec in needed if not episode_path(self.run_dir, spec).is_file()]
         if not unstored:  # a resumed run: the cassette stage is not even imported
             return None
-        from pytest_emrd.cassette import missing_cassettes, missing_summary
+        from pytest_emrd.cassette import missing_summary
 
-        root = self.settings.cassettes
-        missing = missing_cassettes(unstored, root, modality_of=self.modality_of)
-        if not missing:
-            return None
         return missing_summary(
-            missing,
+            unstored,
             total=len(needed),
-            root=root,
+            root=self.settings.cassettes,
             invocation=self.invocation,
             modality_of=self.modality_of,
         )
@@ -242,15 +213,12 @@ class Run:
 
     @property
     def session_folder(self) -> Path:
-        """Where this session's processes share transient state (the live line's status
-        files): a folder of the run directory's scratch space, outside it
-        (:func:`~pytest_emrd.run.scratch_dir`)."""
+        """This session's folder of the run directory's scratch space (status files)."""
         return scratch_dir(self.run_dir) / self.session
 
     @cached_property
     def status_file(self) -> Any:
-        """This process's live status for the live line (``live/<worker>.json`` in
-        :attr:`session_folder`)."""
+        """This process's status file for the live line."""
         from pytest_emrd.progress import StatusFile
 
         return StatusFile(self.session_folder)
@@ -263,26 +231,18 @@ class Run:
         return EndpointWatch(self.run_dir, self.session, self.config.invocation_params.args)
 
     def compute(self, spec: EpisodeSpec) -> Any:
-        """Run ``spec`` through its cassette (see the module docstring for a cassette that
-        cannot be written)."""
+        """Run ``spec`` through its cassette (an unwritable one: see the module docstring)."""
         from pytest_emrd.cassette import cassette_path, is_live
         from pytest_emrd.progress import run_watched
         from pytest_emrd.run import episode_path
 
-        settings = self.settings
-        path = check_inside(
-            settings.cassettes,
-            cassette_path(settings.cassettes, spec, modality_of=self.modality_of),
-            what="cassette",
-        )
+        settings, cassettes, modality_of = self.settings, self.settings.cassettes, self.modality_of
+        path = cassette_path(cassettes, spec, modality_of=modality_of)
+        check_inside(cassettes, path, what="cassette")
         check_inside(self.run_dir, episode_path(self.run_dir, spec), what="episode file")
-        live = is_live(
-            spec,
-            cassettes=settings.cassettes,
-            record_mode=settings.record_mode,
-            modality_of=self.modality_of,
-        )
-        if live:
+        if is_live(
+            spec, cassettes=cassettes, record_mode=settings.record_mode, modality_of=modality_of
+        ):
             try:
                 _writable_folder(path.parent)
             except OSError as exc:
@@ -311,9 +271,8 @@ class Run:
         self, spec: EpisodeSpec, unsaved: UnsavedCassette, trajectory: Trajectory, *, retries: int
     ) -> None:
         """Write a live episode whose cassette could not be saved to the run directory's
-        :data:`UNSAVED` folder, and remember the line that says where: the cassette as it
-        would have been (``<case_id>.json.xz``, ready to move into place) and the result with
-        its retries (``<case_id>.json``)."""
+        :data:`UNSAVED` folder (the cassette, ready to move into place, and the result with its
+        retries), and remember the line that says where."""
         folder = self.run_dir / UNSAVED
         traffic, fallback = folder / f"{spec.case_id}.json.xz", folder / f"{spec.case_id}.json"
         cause = os_error_line(

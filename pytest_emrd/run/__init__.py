@@ -1,52 +1,42 @@
-"""A run: its settings, the episode grid, the results store of its directory, prefetch.
+"""A run: its settings, the episode grid, the results store of its directory, prefetch (it
+feeds :mod:`pytest_emrd.gate` and uses ``cassette``; neither imports it)."""
 
-:mod:`pytest_emrd.gate` judges what a run measured; this package feeds it (it imports
-``gate`` and ``cassette``, never the reverse).
-"""
-
-from pytest_emrd.run._files import load_run_dirs, load_run_episodes, measure_episodes
 from pytest_emrd.run._grid import cell_specs, episode_specs, gate_cells, shard
-from pytest_emrd.run._head import EpisodeHead
+from pytest_emrd.run._head import EpisodeHead, EpisodeSummary, usage_rows
 from pytest_emrd.run._identity import (
     RunIdentity,
     check_resume,
     check_shard_set,
     read_identity,
+    scratch_dir,
     write_identity,
 )
-from pytest_emrd.run._locks import scratch_dir
-from pytest_emrd.run._prefetch import Prefetcher, start_prefetch
 from pytest_emrd.run._settings import (
     BACKENDS,
-    LENIENT_BACKENDS,
     OPTIONS,
-    SPAWNS,
     MatchingWarning,
     Option,
     RunSettings,
-    parse_backend_option,
-    parse_shard,
     resolve_settings,
 )
 from pytest_emrd.run._store import (
+    Prefetcher,
     ResultsStore,
     StoredEpisode,
     episode_path,
-    iter_run_dir,
-    iter_run_episodes,
+    load_run_dirs,
+    load_run_episodes,
+    measure_episodes,
     new_run_dir,
     read_episode,
+    start_prefetch,
 )
-from pytest_emrd.run._summary import EpisodeSummary, usage_rows
-from pytest_emrd.trajectory import MATCHING_MODES, RECORD_MODES
+from pytest_emrd.trajectory import RECORD_MODES
 
 __all__ = [
     "BACKENDS",
-    "LENIENT_BACKENDS",
-    "MATCHING_MODES",
     "OPTIONS",
     "RECORD_MODES",
-    "SPAWNS",
     "EpisodeHead",
     "EpisodeSummary",
     "MatchingWarning",
@@ -62,14 +52,10 @@ __all__ = [
     "episode_path",
     "episode_specs",
     "gate_cells",
-    "iter_run_dir",
-    "iter_run_episodes",
     "load_run_dirs",
     "load_run_episodes",
     "measure_episodes",
     "new_run_dir",
-    "parse_backend_option",
-    "parse_shard",
     "read_episode",
     "read_identity",
     "resolve_settings",

@@ -17,18 +17,14 @@ def cell_specs(
     settings: RunSettings, model: str, condition: str, modality_of: ModalityOf
 ) -> list[EpisodeSpec]:
     """The episodes of one model x condition cell: spawns x episodes, in grid order."""
-    modality = settings.modality or modality_of(model)
+    shared = {
+        "variant": settings.variant,
+        "modality": settings.modality or modality_of(model),
+        "backend": settings.backend,
+        "layouts": settings.layouts,
+    }
     return [
-        EpisodeSpec(
-            model=model,
-            condition=condition,
-            spawn=spawn,
-            episode=episode,
-            variant=settings.variant,
-            modality=modality,
-            backend=settings.backend,
-            layouts=settings.layouts,
-        )
+        EpisodeSpec(model, condition, spawn, episode, **shared)
         for spawn in sorted(settings.spawns, key=SPAWNS.index)
         for episode in range(settings.episodes)
     ]

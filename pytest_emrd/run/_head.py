@@ -1,30 +1,27 @@
-"""The head of a stored episode: what a run needs to know about it without decoding its
-trajectory (pure).
-
-An episode file holds every reply of the model verbatim (150-350 KB of JSON for 50 steps);
-reading one back into a :class:`~pytest_emrd.trajectory.Trajectory` costs about 8 ms, and a
-second run over a finished run directory (a resume) needs, of most episodes, only whether they
-may be reused, their status and their token counts. The head holds those facts, on the first
-line of the episode file itself (:mod:`pytest_emrd.run._store`), written with the trajectory
-in one atomic write: it cannot describe another file.
-"""
+"""What a run knows about an episode without decoding its trajectory (pure): its head, the
+first line of the episode file (:mod:`pytest_emrd.run._store`, written with the trajectory
+in one atomic write: it cannot describe another file), and what the terminal reports."""
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import dataclass, replace
-from typing import Any, Final
+from typing import TYPE_CHECKING, Any, Final
 
 from pytest_emrd._scrub import scrub
-from pytest_emrd._serde import from_versioned_dict, to_dict
+from pytest_emrd._serde import from_dict, from_versioned_dict, to_dict
+from pytest_emrd.gate._table import UsageRow
 from pytest_emrd.trajectory import EpisodeSpec, Trajectory, Usage
+
+if TYPE_CHECKING:
+    from pytest_emrd.run._store import StoredEpisode
 
 HEAD_SCHEMA: Final = 1
 
 
 @dataclass(frozen=True)
 class EpisodeHead:
-    """The facts about a stored episode that its store, the terminal summary and the gates'
-    bookkeeping read; field names are the episode file's format."""
+    """The facts about a stored episode a run reads; field names are the file's format."""
 
     spec: EpisodeSpec
     protocol: str
@@ -78,8 +75,7 @@ class EpisodeHead:
         )
 
     def describes(self, trajectory: Trajectory) -> bool:
-        """Whether this head states what ``trajectory`` holds (the facts about how it was
-        obtained, and the error text as scrubbed when it was stored, are the head's own)."""
+        """Whether this head states what ``trajectory`` holds (how it was obtained aside)."""
         facts = {k: getattr(self, k) for k in ("session", "recorded", "frame_drift", "retries")}
         head = EpisodeHead.of(trajectory, seconds=self.seconds, **facts)
         return replace(head, error=self.error) == self
@@ -92,3 +88,62 @@ class EpisodeHead:
         return from_versioned_dict(
             cls, data, version=HEAD_SCHEMA, what="episode head", remedy="it is recomputed."
         )
+
+
+@dataclass(frozen=True)
+class EpisodeSummary:
+    """What travels from an xdist worker to the controller: an episode's head and cost."""
+
+    head: EpisodeHead
+    cost_usd: float | None
+    """Estimated from the registry's prices per million tokens; ``None`` without prices."""
+
+    @classmethod
+    def of(
+        cls, stored: StoredEpisode, *, price_in: float | None, price_out: float | None
+    ) -> EpisodeSummary:
+        usage, cost = stored.head.usage, None
+        if price_in is not None and price_out is not None:
+            cost = (usage.prompt_tokens * price_in + usage.completion_tokens * price_out) / 1e6
+        return cls(stored.head, cost)
+
+    @property
+    def case(self) -> str:
+        return self.head.spec.case_id
+
+    def progress_line(self, done: int) -> str:
+        """``emrd [12] scout-baseline-office-ep03: terminated after 23 steps, ...``."""
+        head = self.head
+        tokens = head.usage.prompt_tokens + head.usage.completion_tokens
+        cost = "" if self.cost_usd is None else f", ${self.cost_usd:.3f}"
+        retries = f", {head.retries} retr{'y' if head.retries == 1 else 'ies'}" * (head.retries > 0)
+        return (
+            f"emrd [{done}] {self.case}: {head.status} after {head.steps} steps, chose "
+            f"{head.chosen_room or '-'}, {tokens:,} tokens{cost}{retries}, {head.seconds:.1f} s"
+        )
+
+    def to_dict(self) -> dict[str, Any]:
+        return to_dict(self)
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> EpisodeSummary:
+        return from_dict(cls, data)
+
+
+def usage_rows(summaries: Iterable[EpisodeSummary]) -> list[UsageRow]:
+    """Tokens, cost (``None`` once an episode has no price), retries and errors per model."""
+    rows: dict[str, UsageRow] = {}
+    for s in summaries:
+        head, model = s.head, s.head.spec.model
+        row = rows.get(model) or UsageRow(model, 0, 0, 0, 0.0)
+        known = row.cost_usd is not None and s.cost_usd is not None
+        rows[model] = UsageRow(
+            model,
+            row.episodes + 1,
+            row.prompt_tokens + head.usage.prompt_tokens,
+            row.completion_tokens + head.usage.completion_tokens,
+            (row.cost_usd or 0.0) + (s.cost_usd or 0.0) if known else None,
+            retries=row.retries + head.retries,
+            errors=row.errors + (head.status == "errored"),
+        )
+    return [rows[m] for m in sorted(rows)]

@@ -1,30 +1,32 @@
-"""Which run a run directory belongs to: its grid and shard (``<run>/run.json``).
-
-Every run directory records the episode grid it was asked for (models, conditions, spawns,
-episodes, variant, backend, modality, protocol), a short id of that grid, and its shard
-``K/N`` (or none). ``emrd gate`` reads them to refuse a verdict over an incomplete or
-duplicated set of shards: gates over 2 of 4 shards would be gates over half the episodes,
-without a word. Run directories written before this file existed have no identity and are
-taken as they are.
-"""
+"""Which run a run directory belongs to (``<run>/run.json``: its grid and shard, so ``emrd
+gate`` refuses an incomplete or duplicated set of shards), and what its processes share:
+one file lock per episode and one for ``run.json``, and the per-session count of unreachable
+episodes (:mod:`pytest_emrd.plugin._endpoint`), in a private folder of the OS temporary
+directory (:func:`scratch_dir`), so a run directory holds only results. Run directories
+written before ``run.json`` existed are taken as they are."""
 
 from __future__ import annotations
 
 import hashlib
 import json
+import os
+import tempfile
 from collections import defaultdict
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass
 from pathlib import Path
-from typing import Any, Final
+from typing import TYPE_CHECKING, Any, Final
 
 from pytest_emrd._atomic import write_bytes_atomic
 from pytest_emrd.errors import ConfigError
-from pytest_emrd.run._locks import run_lock
 from pytest_emrd.run._settings import RunSettings
+
+if TYPE_CHECKING:
+    from filelock import FileLock
 
 RUN_FILE: Final = "run.json"
 IDENTITY_SCHEMA: Final = 1
+_GRID_LISTS: Final = ("models", "conditions", "spawns")
 
 
 @dataclass(frozen=True)
@@ -43,10 +45,6 @@ class RunIdentity:
         """12 hex digits identifying the grid: shards of one CI matrix share it."""
         text = json.dumps(self.grid, sort_keys=True, separators=(",", ":"))
         return hashlib.sha256(text.encode()).hexdigest()[:12]
-
-    @property
-    def shard_text(self) -> str:
-        return f"{self.shard[0]}/{self.shard[1]}" if self.shard else "whole grid"
 
     def describe(self) -> str:
         """The grid in words for messages (``models gpt, 3 conditions, 4 spawns x 20``)."""
@@ -71,17 +69,9 @@ class RunIdentity:
 
     @classmethod
     def of(cls, settings: RunSettings, protocol: str) -> RunIdentity:
-        grid = {
-            "models": sorted(settings.models),
-            "conditions": sorted(settings.conditions),
-            "spawns": sorted(settings.spawns),
-            "episodes": settings.episodes,
-            "variant": settings.variant,
-            "backend": settings.backend,
-            "modality": settings.modality,
-            "protocol": protocol,
-        }
-        return cls(grid=grid, shard=settings.shard)
+        grid: dict[str, Any] = {k: sorted(getattr(settings, k)) for k in _GRID_LISTS}
+        grid |= {k: getattr(settings, k) for k in ("episodes", "variant", "backend", "modality")}
+        return cls(grid={**grid, "protocol": protocol}, shard=settings.shard)
 
 
 def read_identity(run_dir: Path) -> RunIdentity | None:
@@ -103,36 +93,26 @@ def check_resume(run_dir: Path, shard: tuple[int, int] | None) -> None:
     found = read_identity(run_dir)
     if found is not None and found.shard != shard:
         wanted = f"{shard[0]}/{shard[1]}" if shard else "the whole grid"
+        held = f"{found.shard[0]}/{found.shard[1]}" if found.shard else "whole grid"
         raise ConfigError(
-            f"--emrd-results={run_dir} holds shard {found.shard_text} of {found.describe()}; "
+            f"--emrd-results={run_dir} holds shard {held} of {found.describe()}; "
             f"this run is {wanted}. Give each shard its own run directory."
         )
 
 
 def write_identity(run_dir: Path, identity: RunIdentity) -> None:
-    """Record ``identity`` in ``run_dir`` (atomic; rewritten only when it changes), refusing
-    a directory that holds another shard (:func:`check_resume`). Checked and written under
-    the directory's lock: of two runs of different shards started at once on one directory,
-    the first to compute an episode claims it and the other is refused."""
+    """Record ``identity`` in ``run_dir`` under its lock, refusing another shard's directory."""
     path = run_dir / RUN_FILE
     blob = json.dumps(identity.to_dict(), sort_keys=True, indent=1).encode()
     with run_lock(run_dir, RUN_FILE):
         check_resume(run_dir, identity.shard)
-        try:
-            if path.read_bytes() == blob:
-                return
-        except FileNotFoundError:
-            pass
-        write_bytes_atomic(path, blob)
+        if not path.is_file() or path.read_bytes() != blob:
+            write_bytes_atomic(path, blob)
 
 
 def check_shard_set(run_dirs: Sequence[Path], *, allow_partial: bool = False) -> list[str]:
-    """Check that ``run_dirs`` hold complete shard sets, each shard once.
-
-    Returns the problems as lines (empty when the set is complete). Unless
-    ``allow_partial``, a problem is a :class:`ConfigError` naming the missing or repeated
-    shards and their directories.
-    """
+    """The problems of ``run_dirs`` as shard sets (missing or repeated shards and their
+    directories; empty when complete), a :class:`ConfigError` unless ``allow_partial``."""
     problems: list[str] = []
     seen: dict[Path, Path] = {}
     groups: dict[str, list[tuple[Path, RunIdentity]]] = defaultdict(list)
@@ -183,3 +163,20 @@ def _group_problems(members: list[tuple[Path, RunIdentity]]) -> list[str]:
                 f"{', '.join(missing)}"
             )
     return problems
+
+
+def scratch_dir(run_dir: Path) -> Path:
+    """The folder of ``run_dir``'s locks and session state, not created here (create it with
+    mode 0700): ``<OS temp dir>/pytest-emrd-<uid>/<SHA-256 of the resolved run_dir, 16 hex>``."""
+    mine = f"pytest-emrd-{os.getuid()}" if hasattr(os, "getuid") else "pytest-emrd"  # Windows:
+    key = hashlib.sha256(str(run_dir.resolve()).encode()).hexdigest()[:16]  # a per-user TEMP
+    return Path(tempfile.gettempdir()) / mine / key
+
+
+def run_lock(run_dir: Path, name: str, *, timeout: float = -1) -> FileLock:
+    """The file lock ``name`` of ``run_dir`` (imported here: a resume never loads filelock)."""
+    from filelock import FileLock
+
+    folder = scratch_dir(run_dir)
+    folder.mkdir(mode=0o700, parents=True, exist_ok=True)
+    return FileLock(folder / f"{name}.lock", timeout=timeout)

@@ -1,14 +1,6 @@
-"""The run's settings: every ``--emrd-*`` option, its ini twin and default, resolved once.
-
-Precedence is command line > ini file > default, decided in :func:`resolve_settings` and
-nowhere else. The option table :data:`OPTIONS` is what the plugin registers, so ``pytest
---help``, the ini keys and the resolution cannot drift apart.
-
-Defaults that depend on another setting are resolved here too: ``matching`` is ``lenient``
-on ``ai2thor`` (THOR frames are not bit-stable across GPUs, drivers and builds) and
-``strict`` otherwise; an explicit ``strict`` on ``ai2thor`` is allowed and warns
-(:class:`MatchingWarning`).
-"""
+"""The run's settings: every ``--emrd-*`` option, its ini twin and default, resolved once, in
+:func:`resolve_settings` (command line > ini file > default); :data:`OPTIONS` is what the
+plugin registers, so ``pytest --help``, the ini keys and the resolution cannot drift apart."""
 
 from __future__ import annotations
 
@@ -37,16 +29,11 @@ SPAWNS: Final[tuple[str, ...]] = tuple(ROOM_SLUGS.values())
 MAX_EPISODES: Final = 1000
 """Cap on ``--emrd-episodes`` (episodes per spawn room; the paper's setting is 20)."""
 MAX_CONCURRENCY: Final = 32
-"""Cap on ``--emrd-concurrency`` (threads per process; a provider's rate limit is reached
-long before, and each thread holds an episode's frames in memory)."""
+"""Cap on ``--emrd-concurrency`` (threads per process, each holding an episode's frames)."""
 _NOT_CI: Final = frozenset({"", "0", "false", "no", "off"})
-#: What ``pytest benchmarks`` covers with neither ``--emrd-model`` nor ``--emrd-condition``:
-#: the reference agents whose cassettes are committed, each under the conditions recorded
-#: and gated for it (``mimic``: the baseline grid only, to keep CI replay short).
-DEFAULT_CELLS: Final[tuple[tuple[str, tuple[str, ...]], ...]] = (
-    ("scout", CONDITIONS),
-    ("mimic", ("baseline",)),
-)
+#: What ``pytest benchmarks`` covers without ``--emrd-model``: the reference agents whose
+#: cassettes are committed, each under its recorded conditions (``mimic``: baseline only).
+DEFAULT_CELLS: Final = (("scout", CONDITIONS), ("mimic", ("baseline",)))
 LENIENT_BACKENDS: Final[frozenset[str]] = frozenset({"ai2thor"})
 """Backends whose frames are not bit-stable: their cassettes replay with lenient matching."""
 
@@ -72,10 +59,6 @@ class Option:
     @property
     def ini(self) -> str:
         return "emrd_" + self.name
-
-    @property
-    def ini_type(self) -> str:
-        return "args" if self.repeatable else "string"
 
     def argparse_kwargs(self, dest: str) -> dict[str, Any]:
         """``add_argument``/``addoption`` keyword arguments (pytest's parser and ``emrd``)."""
@@ -157,7 +140,7 @@ class RunSettings:
     """``None``: each model's registry default."""
     record_mode: str
     matching: str
-    """``strict`` or ``lenient``; the default depends on the backend (module docstring)."""
+    """``strict``, or ``lenient`` (the default on backends whose frames are not bit-stable)."""
     results: Path | None
     """Run directory to resume, or ``None`` for a fresh one."""
     thresholds: Path | None
@@ -174,8 +157,7 @@ class RunSettings:
 
     @property
     def replays_only(self) -> bool:
-        """Record mode ``none``: no episode calls a model (nothing to preflight; an episode
-        without a cassette or a stored result is an error)."""
+        """Record mode ``none``: no episode calls a model (nothing to preflight)."""
         return self.record_mode == "none"
 
     @property
@@ -223,17 +205,6 @@ def in_ci(env: Mapping[str, str]) -> bool:
     return env.get("CI", "").strip().lower() not in _NOT_CI
 
 
-def _episodes(raw: Any) -> int | None:
-    episodes = _count("--emrd-episodes", raw)
-    if episodes is not None and episodes > MAX_EPISODES:
-        raise ConfigError(
-            f"--emrd-episodes={episodes} is more than {MAX_EPISODES} episodes per spawn room "
-            f"(the paper runs 20); pass at most {MAX_EPISODES}, or split a larger study over "
-            "several run directories."
-        )
-    return episodes
-
-
 def _matching(raw: Any, backend: str) -> str:
     if raw is None:
         return "lenient" if backend in LENIENT_BACKENDS else "strict"
@@ -251,11 +222,9 @@ def _matching(raw: Any, backend: str) -> str:
 
 def _pick(option: Option, cli: Mapping[str, Any], ini: Mapping[str, Any]) -> Any:
     value = cli.get(option.name)
-    if value is None or value == []:
+    if value in (None, []):
         value = ini.get(option.name)
-    if value is None or value in ("", []):
-        return None
-    return value
+    return None if value in (None, "", []) else value
 
 
 def _listed(option: Option, value: Any, default: Sequence[str]) -> tuple[str, ...]:
@@ -288,49 +257,41 @@ def resolve_settings(
     rootdir: Path,
     env: Mapping[str, str] | None = None,
 ) -> RunSettings:
-    """Apply command line > ini > default, validate, and freeze.
-
-    ``cli`` and ``ini`` map option names (``record_mode``) to raw values (``None``/empty
-    when not given). Relative paths are resolved against ``rootdir``. Warns
-    :class:`MatchingWarning` for an explicit ``strict`` on a backend that is not bit-stable.
-    """
+    """Apply command line > ini > default, validate, and freeze. ``cli`` and ``ini`` map option
+    names to raw values (``None``/empty when not given); relative paths are resolved against
+    ``rootdir``. Warns :class:`MatchingWarning` for ``strict`` on a backend not bit-stable."""
     env = os.environ if env is None else env
     by_name = {o.name: o for o in OPTIONS}
     raw = {name: _pick(option, cli, ini) for name, option in by_name.items()}
-    for name in (
-        "variant",
-        "layouts",
-        "backend",
-        "modality",
-        "record_mode",
-        "matching",
-        "preflight",
-    ):
-        if raw[name] is not None:
-            check_choice(by_name[name].flag, raw[name], by_name[name].choices or ())
-    episodes = _episodes(raw["episodes"])
+    for option in OPTIONS:  # a repeatable option's items are checked by _listed
+        if option.choices and not option.repeatable and raw[option.name] is not None:
+            check_choice(option.flag, raw[option.name], option.choices)
+    episodes = _count(
+        "--emrd-episodes",
+        raw["episodes"],
+        MAX_EPISODES,
+        "episodes per spawn room (the paper runs 20)",
+        "or split a larger study over several run directories.",
+    )
     default_mode = "none" if in_ci(env) else "once"
     backend = raw["backend"] or "builtin"
-    results = _path(raw["results"], rootdir) if raw["results"] else None
-    if results is not None and (blocker := _file_in_the_way(results)) is not None:
-        where = "is a file" if blocker == results else f"lies under the file {blocker}"
-        raise ConfigError(
-            f"--emrd-results={results} {where}; pass a directory (a new one, or a run "
-            "directory to resume)."
-        )
-    cassettes = _path(raw["cassettes"] or "cassettes", rootdir)
-    if (blocker := _file_in_the_way(cassettes)) is not None:
-        where = "is a file" if blocker == cassettes else f"lies under the file {blocker}"
-        raise ConfigError(
-            f"--emrd-cassettes={cassettes} {where}; pass the cassette folder (default: "
-            "<rootdir>/cassettes)."
-        )
-    concurrency = _count("--emrd-concurrency", raw["concurrency"])
-    if concurrency is not None and concurrency > MAX_CONCURRENCY:
-        raise ConfigError(
-            f"--emrd-concurrency={concurrency} is more than {MAX_CONCURRENCY} threads per "
-            f"process; pass at most {MAX_CONCURRENCY}, and add processes with -n N for more."
-        )
+    results = raw["results"] and _folder(
+        "--emrd-results",
+        _path(raw["results"], rootdir),
+        "pass a directory (a new one, or a run directory to resume).",
+    )
+    cassettes = _folder(
+        "--emrd-cassettes",
+        _path(raw["cassettes"] or "cassettes", rootdir),
+        "pass the cassette folder (default: <rootdir>/cassettes).",
+    )
+    concurrency = _count(
+        "--emrd-concurrency",
+        raw["concurrency"],
+        MAX_CONCURRENCY,
+        "threads per process",
+        "and add processes with -n N for more.",
+    )
     if (concurrency or 1) > 1 and backend != "builtin":
         raise ConfigError(
             f"--emrd-concurrency={concurrency} runs episodes in threads, which the {backend} "
@@ -368,17 +329,23 @@ def resolve_settings(
     )
 
 
-def _file_in_the_way(folder: Path) -> Path | None:
-    """The file at ``folder`` or at its nearest existing ancestor, if that is not a folder."""
+def _folder(flag: str, folder: Path, fix: str) -> Path:
+    """``folder``, unless a file stands at it or at its nearest existing ancestor."""
     existing = folder
     while not existing.exists() and existing != existing.parent:
         existing = existing.parent
-    return None if existing.is_dir() else existing
+    if not existing.is_dir():
+        where = "is a file" if existing == folder else f"lies under the file {existing}"
+        raise ConfigError(f"{flag}={folder} {where}; {fix}")
+    return folder
 
 
-def _count(flag: str, value: Any) -> int | None:
-    """A whole number >= 1 given as text or int, or None when not given."""
+def _count(flag: str, value: Any, most: int, unit: str, more: str) -> int | None:
+    """A whole number from 1 to ``most`` given as text or int, or None when not given."""
     if value is None:
         return None
     text = str(value).strip()
-    return check_positive_int(flag, int(text) if text.isdigit() else text)
+    count = check_positive_int(flag, int(text) if text.isdigit() else text)
+    if count > most:
+        raise ConfigError(f"{flag}={count} is more than {most} {unit}; pass at most {most}, {more}")
+    return count

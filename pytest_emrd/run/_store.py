@@ -1,54 +1,47 @@
-"""The results store: one file per episode under a run directory (file I/O).
+"""The results store: one file per episode under a run directory (file I/O), live episodes
+computed ahead into it, and the episodes of several run directories read back and measured.
 
-Layout of a run directory::
+``<run>/run.json`` records the grid and shard (:mod:`._identity`); an episode file,
+``<run>/episodes/<case_id>.json``, holds the episode's head (:class:`EpisodeHead`) on its
+first line and the trajectory on its second, so a resume decodes a trajectory only where
+something needs it (a file of the older layout, ``store_schema`` 1, is decoded in full).
+Any process may ask for any episode: the first takes the episode's lock, computes it and
+writes it atomically; the others wait and read the file. An episode is reused when its spec
+and protocol match and it finished (an ``errored`` one only within its own session, so a
+rerun retries failures). Stored files are scrubbed of secrets (:mod:`pytest_emrd._scrub`).
 
-    <run>/run.json                  the grid and shard this directory holds (_identity)
-    <run>/episodes/<case_id>.json   one stored episode: its head, then its trajectory
-
-An episode file is one JSON document whose first line holds its head (what reusing it
-needs: spec, protocol, status, tokens, how it was obtained; :class:`EpisodeHead`) and whose
-second line holds the trajectory::
-
-    {"store_schema":2,"trajectory_schema":2,"head":{...},
-    "trajectory":{...}}
-
-A resume reads the first line of each finished episode and decodes a trajectory only where
-something needs it (a gate, a report). Files of an older layout (``store_schema`` 1: no head,
-with ``heads/``, ``metrics/``, ``locks/`` folders beside them) are decoded in full and the
-folders ignored.
-
-Any process (pytest-xdist workers, shards on one machine) may ask for any episode: the
-first takes the episode's lock (:mod:`pytest_emrd.run._locks`, outside the run directory),
-computes it and writes it atomically; everyone else waits for the lock and reads the file. An
-episode is reused when its spec and protocol match and it finished (an ``errored`` episode
-is reused only within the session that produced it, so rerunning a run directory retries
-failures). Stored files are scrubbed of secrets (:mod:`pytest_emrd._scrub`): an errored
-episode's error text may quote a URL or a body.
-"""
+With ``--emrd-concurrency N`` a :class:`Prefetcher` computes live episodes ahead, ``N`` at
+once in threads (a live episode mostly waits for the model), skipping one stored already or
+locked elsewhere; HTTP traffic is routed per thread to each episode's cassette."""
 
 from __future__ import annotations
 
+import contextlib
 import json
+import os
 import secrets
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterable, Iterator, Sequence
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field, replace
 from functools import cached_property
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Final
 
 from pytest_emrd._atomic import write_bytes_atomic
+from pytest_emrd._fork import available_cores, fork_map
 from pytest_emrd._scrub import scrub, scrub_bytes
-from pytest_emrd.errors import ProtocolError
+from pytest_emrd.errors import ConfigError, EmrdError, ProtocolError
 from pytest_emrd.run._head import EpisodeHead
-from pytest_emrd.run._identity import RunIdentity, write_identity
-from pytest_emrd.run._locks import run_lock
+from pytest_emrd.run._identity import RunIdentity, run_lock, write_identity
+from pytest_emrd.run._settings import RunSettings
 from pytest_emrd.trajectory import OLDER_SCHEMAS, SCHEMA_VERSION, EpisodeSpec, Trajectory
 
 if TYPE_CHECKING:
     from filelock import FileLock
 
     from pytest_emrd.cassette import EpisodeRun
+    from pytest_emrd.metrics import EpisodeMetrics
 
 STORE_SCHEMA: Final = 2
 #: The layout before heads moved into the episode file (read, never written).
@@ -73,8 +66,7 @@ class StoredEpisode:
 
     @classmethod
     def of(cls, trajectory: Trajectory, **facts: Any) -> StoredEpisode:
-        """``trajectory`` with the store's ``facts`` about it (``session``, ``recorded``,
-        ``frame_drift``, ``seconds``, ``retries``; see :class:`EpisodeHead`)."""
+        """``trajectory`` with the store's ``facts`` about it (see :meth:`EpisodeHead.of`)."""
         return cls(EpisodeHead.of(trajectory, **facts), trajectory)
 
     @cached_property
@@ -83,10 +75,8 @@ class StoredEpisode:
         return self.decode_trajectory()
 
     def decode_trajectory(self) -> Trajectory:
-        """The trajectory without keeping it: the one held, else decoded and validated from
-        the store's file (a file replaced since its head was read is a
-        :class:`ProtocolError`). A process that only measures an episode holds no decoded
-        copy (about 0.6 MB of objects per 50-step episode)."""
+        """The trajectory without keeping it (for a process that only measures the episode):
+        the one held, else decoded from the file (:class:`ProtocolError` if it was replaced)."""
         if "trajectory" in self.__dict__:
             return self.trajectory
         if isinstance(self.source, Trajectory):
@@ -110,9 +100,8 @@ class StoredEpisode:
     retries = _from_head("retries")
 
     def to_json(self) -> bytes:
-        """The stored file (see the module): configured key values removed everywhere, and
-        URL credentials, secret parameters and headers removed from the error text (the only
-        place our own messages, which quote URLs and response bodies, enter a trajectory)."""
+        """The stored file (see the module), configured key values removed everywhere and the
+        error text (where our messages quote URLs and bodies) scrubbed of credentials."""
         trajectory = self.trajectory.to_dict()
         if trajectory.get("error"):
             trajectory["error"] = scrub(trajectory["error"])
@@ -121,18 +110,12 @@ class StoredEpisode:
             "trajectory_schema": trajectory["schema_version"],
             "head": self.head.to_dict(),
         }
-        blob = (
-            json.dumps(first, **_COMPACT)[:-1]
-            + ',\n"trajectory":'
-            + json.dumps(trajectory, **_COMPACT)
-            + "}\n"
-        )
-        return scrub_bytes(blob.encode(), literal_only=True)
+        head, body = json.dumps(first, **_COMPACT)[:-1], json.dumps(trajectory, **_COMPACT)
+        return scrub_bytes(f'{head},\n"trajectory":{body}}}\n'.encode(), literal_only=True)
 
     @classmethod
     def from_json(cls, blob: bytes) -> StoredEpisode:
-        """A stored file, decoded and validated in full (its head must describe its
-        trajectory)."""
+        """A stored file, decoded and validated in full (its head describes its trajectory)."""
         document: dict[str, Any] = json.loads(blob)
         schema = document.get("store_schema")
         trajectory = Trajectory.from_dict(document["trajectory"])
@@ -174,16 +157,9 @@ class ResultsStore:
     """Episodes of one run directory, computed at most once across processes."""
 
     def __init__(
-        self,
-        run_dir: Path,
-        *,
-        session: str,
-        protocol: str,
-        identity: RunIdentity | None = None,
+        self, run_dir: Path, *, session: str, protocol: str, identity: RunIdentity | None = None
     ) -> None:
-        self.run_dir = run_dir
-        self.session = session
-        self.protocol = protocol
+        self.run_dir, self.session, self.protocol = run_dir, session, protocol
         self.identity = identity
         """Recorded in ``run.json`` before the first episode is computed."""
 
@@ -191,20 +167,16 @@ class ResultsStore:
         return episode_path(self.run_dir, spec)
 
     def reusable(self, spec: EpisodeSpec) -> StoredEpisode | None:
-        """``spec``'s stored episode when it may be reused as it is (spec and protocol match;
-        finished, or errored in this very session), else None (it needs computing)."""
+        """``spec``'s stored episode if reusable (same spec and protocol; finished, or errored
+        in this session), else None."""
         try:
             stored = read_episode(self.path_for(spec))
-        except FileNotFoundError:
-            return None
-        except (ValueError, KeyError, TypeError, ProtocolError):
-            return None  # unreadable leftovers are recomputed and overwritten
+        except (FileNotFoundError, ValueError, KeyError, TypeError, ProtocolError):
+            return None  # none yet, or unreadable leftovers (recomputed and overwritten)
         head = stored.head
-        if head.spec != spec or head.protocol != self.protocol:
-            return None
-        if head.status == "errored" and head.session != self.session:
-            return None
-        return stored
+        stale = head.spec != spec or head.protocol != self.protocol
+        retried = head.status == "errored" and head.session != self.session
+        return None if stale or retried else stored
 
     def holds(self, spec: EpisodeSpec) -> bool:
         """Whether the store already has a reusable episode for ``spec`` (no compute needed)."""
@@ -221,23 +193,15 @@ class ResultsStore:
         if self.identity is not None:
             write_identity(self.run_dir, self.identity)
         run = compute(spec)
-        stored = StoredEpisode.of(
-            run.trajectory,
-            session=self.session,
-            recorded=run.recorded,
-            frame_drift=run.frame_drift,
-            seconds=run.seconds,
-            retries=run.retries,
-        )
+        facts = {k: getattr(run, k) for k in ("recorded", "frame_drift", "seconds", "retries")}
+        stored = StoredEpisode.of(run.trajectory, session=self.session, **facts)
         write_bytes_atomic(self.path_for(spec), stored.to_json())
         return replace(stored, computed_now=True)
 
     def get_or_compute(
         self, spec: EpisodeSpec, compute: Callable[[EpisodeSpec], EpisodeRun]
     ) -> StoredEpisode:
-        """The stored episode for ``spec``, computing and storing it if needed (waiting for
-        whoever computes it now). A reusable episode is read without taking its lock: files
-        are replaced atomically, and a reusable one is final."""
+        """The stored episode for ``spec``, computed if needed (a reusable one is final)."""
         stored = self.reusable(spec)
         if stored is not None:
             return stored
@@ -247,8 +211,7 @@ class ResultsStore:
     def compute_if_free(
         self, spec: EpisodeSpec, compute: Callable[[EpisodeSpec], EpisodeRun]
     ) -> bool:
-        """Compute and store ``spec`` unless it is stored or being computed by another thread
-        or process (never waits); whether this call computed it."""
+        """Whether this call computed ``spec`` (never waits: stored or locked is skipped)."""
         from filelock import Timeout
 
         try:
@@ -261,27 +224,85 @@ class ResultsStore:
             return False
 
 
+class Prefetcher:
+    """Computes ``specs`` ahead with ``workers`` threads until :meth:`close`."""
+
+    def __init__(
+        self,
+        store: ResultsStore,
+        compute: Callable[[EpisodeSpec], EpisodeRun],
+        specs: Iterable[EpisodeSpec],
+        *,
+        workers: int,
+    ) -> None:
+        from pytest_emrd.cassette import routing
+
+        self._store, self._compute = store, compute
+        self._exit = contextlib.ExitStack()
+        self._exit.enter_context(routing())
+        self._pool = ThreadPoolExecutor(workers, thread_name_prefix="emrd-episode")
+        self._futures = [self._pool.submit(self._one, spec) for spec in specs]
+
+    def _one(self, spec: EpisodeSpec) -> bool:
+        try:
+            return self._store.compute_if_free(spec, self._compute)
+        except EmrdError:
+            return False  # the test asking for this episode computes it and reports the error
+
+    def wait(self) -> None:
+        """Block until every episode was computed or skipped."""
+        for future in self._futures:
+            future.result()
+
+    def close(self) -> None:
+        """Drop the episodes not started, wait for the running ones, stop routing."""
+        self._pool.shutdown(wait=True, cancel_futures=True)
+        self._exit.close()
+
+
+def start_prefetch(
+    settings: RunSettings,
+    store: ResultsStore,
+    compute: Callable[[EpisodeSpec], EpisodeRun],
+    specs: Iterable[EpisodeSpec],
+    modality_of: Callable[[str], str] | None = None,
+) -> Prefetcher | None:
+    """A :class:`Prefetcher` of the live episodes among ``specs`` (those whose cassette will
+    be recorded), or None when ``--emrd-concurrency`` is 1 or every episode replays (then the
+    cassette stage is not even imported: a resumed run reads everything from the store)."""
+    if settings.concurrency <= 1 or settings.replays_only:
+        return None
+    from pytest_emrd.cassette import is_live
+
+    live = [
+        s
+        for s in specs
+        if is_live(
+            s,
+            cassettes=settings.cassettes,
+            record_mode=settings.record_mode,
+            modality_of=modality_of,
+        )
+    ]
+    return Prefetcher(store, compute, live, workers=settings.concurrency) if live else None
+
+
 def read_episode(path: Path) -> StoredEpisode:
     """The episode stored in file ``path``: its head read from the first line, the trajectory
-    decoded on first use; a file of the older layout is decoded and validated in full.
-    Writes nothing."""
+    decoded on first use (a file of the older layout: decoded and validated in full)."""
     with path.open("rb") as file:
         first = file.readline()
         if first.endswith(b",\n"):
             document = json.loads(first[:-2] + b"}")
-            readable = (SCHEMA_VERSION, *OLDER_SCHEMAS)
-            if (
-                document.get("store_schema") == STORE_SCHEMA
-                and document.get("trajectory_schema") in readable
-            ):
+            store, trajectory = document.get("store_schema"), document.get("trajectory_schema")
+            if store == STORE_SCHEMA and trajectory in (SCHEMA_VERSION, *OLDER_SCHEMAS):
                 return StoredEpisode(EpisodeHead.from_dict(document["head"]), path)
         blob = first + file.read()
     return StoredEpisode.from_json(blob)
 
 
 def iter_run_episodes(run_dir: Path) -> Iterator[StoredEpisode]:
-    """Every readable episode of a run directory (sorted by file name), read as
-    :func:`read_episode` reads them."""
+    """Every episode of a run directory (sorted by file name), as :func:`read_episode`."""
     for path in sorted((run_dir / "episodes").glob("*.json")):
         try:
             yield read_episode(path)
@@ -289,7 +310,38 @@ def iter_run_episodes(run_dir: Path) -> Iterator[StoredEpisode]:
             raise _unreadable(path, exc) from exc
 
 
-def iter_run_dir(run_dir: Path) -> Iterator[Trajectory]:
-    """Every readable trajectory of a run directory (sorted by file name)."""
-    for stored in iter_run_episodes(run_dir):
-        yield stored.trajectory
+def load_run_episodes(run_dirs: Sequence[Path]) -> list[StoredEpisode]:
+    """The episodes of several run directories (shards), read as :func:`read_episode` reads them
+    and sorted by case id; the first copy of a case wins."""
+    seen: dict[str, StoredEpisode] = {}
+    for run_dir in run_dirs:
+        if not (run_dir / "episodes").is_dir():
+            raise ConfigError(
+                f"run_dir={str(run_dir)!r} holds no episodes/ folder; pass the directories "
+                "that `pytest benchmarks --emrd-results DIR` wrote."
+            )
+        for stored in iter_run_episodes(run_dir):
+            seen.setdefault(stored.head.spec.case_id, stored)
+    return [seen[key] for key in sorted(seen)]
+
+
+def load_run_dirs(run_dirs: Sequence[Path]) -> list[Trajectory]:
+    """Trajectories of several run directories (shards); the first copy of a case wins."""
+    return [stored.trajectory for stored in load_run_episodes(run_dirs)]
+
+
+def measure_episodes(
+    episodes: Sequence[StoredEpisode], processes: int | None = None
+) -> list[EpisodeMetrics]:
+    """Each episode's :func:`~pytest_emrd.metrics.episode_metrics`, in order, decoded and
+    measured in ``processes`` forked workers (default: every available core; one inside an
+    xdist worker, whose siblings hold the other cores)."""
+    if processes is None:
+        processes = 1 if os.environ.get("PYTEST_XDIST_WORKER") else available_cores()
+    return fork_map(_measure, episodes, processes)
+
+
+def _measure(stored: StoredEpisode) -> EpisodeMetrics:
+    from pytest_emrd.metrics import episode_metrics
+
+    return episode_metrics(stored.decode_trajectory())

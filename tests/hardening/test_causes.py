@@ -12,7 +12,7 @@ import pytest
 
 from pytest_emrd.agent import load_registry
 from pytest_emrd.cassette import Invocation, cassette_path, decode, encode, run_with_cassette
-from pytest_emrd.cassette._drift import text_context
+from pytest_emrd.cassette._paths import text_context
 from pytest_emrd.episode import agent_runner, protocol_version
 from pytest_emrd.trajectory import EpisodeSpec
 

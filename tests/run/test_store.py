@@ -6,7 +6,7 @@ import threading
 import time
 
 from pytest_emrd.cassette import EpisodeRun
-from pytest_emrd.run import ResultsStore, iter_run_dir, load_run_dirs
+from pytest_emrd.run import ResultsStore, load_run_dirs
 from pytest_emrd.trajectory import EpisodeSpec
 
 from .conftest import make_trajectory
@@ -74,7 +74,7 @@ def test_unreadable_leftovers_are_recomputed(tmp_path):
     store.path_for(SPEC).write_text("{half a file")
     compute = Counter()
     store.get_or_compute(SPEC, compute)
-    assert compute.calls == 1 and [t.spec for t in iter_run_dir(tmp_path)] == [SPEC]
+    assert compute.calls == 1 and [t.spec for t in load_run_dirs([tmp_path])] == [SPEC]
 
 
 def test_several_run_dirs_merge_by_case(tmp_path):
