@@ -52,18 +52,12 @@ def build_parser() -> argparse.ArgumentParser:
 
 def check_run_dirs(run_dirs: list[Path]) -> None:
     """A one-line :class:`ConfigError` for a RUN_DIR argument that is not a folder."""
-    for run_dir in run_dirs:
-        if run_dir.is_dir():
-            continue
-        if run_dir.exists():
-            raise ConfigError(
-                f"RUN_DIR {run_dir} is a file, not a run directory; pass the folder a pytest "
-                "run wrote (--emrd-results DIR, or one under .emrd/runs); a thresholds file "
-                "goes after --thresholds."
-            )
+    for run_dir in (d for d in run_dirs if not d.is_dir()):
+        file = run_dir.exists()
         raise ConfigError(
-            f"RUN_DIR {run_dir} does not exist; pass the folder a pytest run wrote "
-            "(--emrd-results DIR, or one under .emrd/runs)."
+            f"RUN_DIR {run_dir} {'is a file, not a run directory' if file else 'does not exist'}"
+            "; pass the folder a pytest run wrote (--emrd-results DIR, or one under .emrd/runs)"
+            + ("; a thresholds file goes after --thresholds." if file else ".")
         )
 
 

@@ -27,9 +27,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         help="preflight a model before a live run: key, endpoint, probe, context, cost",
         description=__doc__.split("\n\n")[1],
     )
-    for option in OPTIONS:
-        if option.name not in GRID_OPTIONS:
-            continue
+    for option in (o for o in OPTIONS if o.name in GRID_OPTIONS):
         p.add_argument(option.flag, **option.argparse_kwargs(option.name))
     p.add_argument("--no-probe", action="store_true", help="no network: key and estimate only")
     p.add_argument("--json", action="store_true", help="print the reports as one JSON list")
