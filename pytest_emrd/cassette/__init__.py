@@ -9,7 +9,6 @@ from pytest_emrd.cassette._episode import (
     run_with_cassette,
 )
 from pytest_emrd.cassette._file import SUFFIX, CassetteData, FormatError, decode, decompress, encode
-from pytest_emrd.cassette._legacy import upgrade
 from pytest_emrd.cassette._paths import (
     SCRATCH,
     Invocation,
@@ -48,6 +47,5 @@ __all__ = [
     "redact_body",
     "routing",
     "run_with_cassette",
-    "upgrade",
     "writer_lock",
 ]

@@ -162,8 +162,8 @@ def decode(blob: bytes) -> CassetteData:
     text = decompress(blob)
     if text.startswith(LEGACY_HEAD):
         raise LegacyFormatError(
-            "it is in the format an older pytest-emrd wrote; convert it once with: "
-            "emrd cassettes upgrade DIR"
+            "it is in a format an older pytest-emrd wrote (emrd-cassette/1 or /2), under an "
+            "earlier protocol; it cannot replay with this release"
         )
     try:
         loaded = jsonserializer.deserialize(text)

@@ -22,7 +22,7 @@ from pytest_emrd.trajectory import CONDITIONS, EpisodeSpec
 #: The folder, inside the cassette folder, that holds lock files and unfinished writes. It
 #: holds a ``.gitignore`` of ``*``, so ``git add cassettes`` never commits what is in it.
 SCRATCH: Final = ".emrd-tmp"
-#: The file name endings older releases wrote (``emrd cassettes upgrade`` converts them).
+#: The file name endings older releases wrote, all under protocols before this release's.
 LEGACY_SUFFIXES: Final = (".yaml.gz", ".yaml.xz")
 _PREVIEW: Final = 80
 _CONTEXT: Final = 40
@@ -141,8 +141,9 @@ def missing_summary(
     convert = ""
     if old:
         convert = (
-            f" {old} of them have a cassette an older pytest-emrd wrote: convert those first "
-            f"with: emrd cassettes upgrade {root}."
+            f" {old} of them have a cassette an older pytest-emrd wrote (*.yaml.gz, *.yaml.xz), "
+            "under an earlier protocol: those cannot replay with this release, and the "
+            "command below records them again (delete the old files afterwards)."
         )
     return (
         f"{len(missing)} of {total} episode(s) have no cassette under {root} and record mode "

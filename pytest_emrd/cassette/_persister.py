@@ -60,8 +60,9 @@ class EpisodePersister:
             data = decode(path.read_bytes())
         except LegacyFormatError:
             raise CassetteError(
-                f"cassette={str(path)!r} is in the format an older pytest-emrd wrote; convert "
-                f"it once with: emrd cassettes upgrade {self.root or path.parent}"
+                f"cassette={str(path)!r} was written by an older pytest-emrd, under an earlier "
+                f"protocol than {self.protocol}, and cannot replay with this release; delete it "
+                f"and record it again: {self.rerecord_command}"
             ) from None
         except IntegrityError as exc:
             raise CassetteError(

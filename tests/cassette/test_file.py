@@ -124,16 +124,22 @@ def test_a_gzip_cassette_replays(recorded: Path, server: FakeServer, spec, tmp_p
     assert _replay(spec, server, tmp_path).trajectory.status == "budget"
 
 
-def test_a_cassette_of_an_older_release_asks_for_the_upgrade(server: FakeServer, spec, tmp_path):
-    legacy = Path(__file__).with_name("legacy") / "scout/baseline/default/office/ep01.yaml.xz"
+@pytest.mark.parametrize("old_name", ["ep00.yaml.gz", "ep01.yaml.xz"])
+def test_a_cassette_of_an_older_release_is_refused_with_the_rerecord_command(
+    old_name: str, server: FakeServer, spec, tmp_path: Path
+) -> None:
+    # Formats 1 (gzip) and 2 (xz) were written under protocols before this release's, so
+    # their requests could never match today's: they are recorded again, not converted.
+    legacy = Path(__file__).with_name("legacy") / "scout/baseline/default/office" / old_name
     target = cassette_path(tmp_path, spec)
     target.parent.mkdir(parents=True)
     shutil.copy(legacy, target)
     with pytest.raises(CassetteError) as info:
         _replay(spec, server, tmp_path)
-    assert f"older pytest-emrd wrote; convert it once with: emrd cassettes upgrade {tmp_path}" in (
-        str(info.value)
-    )
+    message = str(info.value)
+    assert f"cassette={str(target)!r} was written by an older pytest-emrd" in message
+    assert f"earlier protocol than {PROTOCOL}" in message
+    assert "record it again: pytest" in message and "--emrd-record-mode=all" in message
 
 
 def test_show_prints_what_xz_prints(recorded: Path, capsys: pytest.CaptureFixture[str]) -> None:
