@@ -40,14 +40,8 @@ REPAIRS: Final[tuple[str, ...]] = (
     "decimal_comma",
 )
 _FENCE = re.compile(r"```[A-Za-z0-9_-]*[ \t]*\n?(.*?)```", re.DOTALL)
-_LITERAL_NAMES: Final[dict[str, Any]] = {
-    "true": True,
-    "false": False,
-    "null": None,
-    "True": True,
-    "False": False,
-    "None": None,
-}
+#: JSON's names, which Python reads as names (its own ``True``/``None`` parse as constants).
+_JSON_NAMES: Final = ("true", "false", "null")
 
 
 @dataclass(frozen=True)
@@ -144,8 +138,8 @@ def _literal(node: ast.AST) -> Any:
     """Evaluate a JSON-like Python expression (dicts, lists, constants, signed numbers)."""
     if isinstance(node, ast.Constant) and isinstance(node.value, str | int | float | type(None)):
         return node.value
-    if isinstance(node, ast.Name) and node.id in _LITERAL_NAMES:
-        return _LITERAL_NAMES[node.id]
+    if isinstance(node, ast.Name) and node.id in _JSON_NAMES:
+        return json.loads(node.id)
     if isinstance(node, ast.Dict):
         if any(k is None for k in node.keys):
             raise ValueError("dict unpacking is not JSON")

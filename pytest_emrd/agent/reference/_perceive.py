@@ -16,7 +16,8 @@ from collections.abc import Callable, Mapping
 from typing import Any, Final
 
 from pytest_emrd.agent.reference._memory import apply_memory, merge_view
-from pytest_emrd.agent.reference._read import Briefing, Percept, Seen
+from pytest_emrd.agent.reference._read import Briefing, Percept
+from pytest_emrd.world._model import VisibleObject
 
 DOORWAY: Final = "Doorway"
 #: A sweep: the view on arrival plus this many ``Turn(Right)``, 360 degrees in all.
@@ -72,7 +73,7 @@ def fresh_plan() -> dict[str, Any]:
     }
 
 
-def _place(percept: Percept, seen: Seen) -> tuple[float, float]:
+def _place(percept: Percept, seen: VisibleObject) -> tuple[float, float]:
     angle = math.radians(percept.pose.heading + seen.bearing)
     x = percept.pose.x + seen.distance * math.sin(angle)
     z = percept.pose.z + seen.distance * math.cos(angle)
@@ -85,11 +86,11 @@ def room_guess(plan: Mapping[str, Any]) -> str:
     return max(votes, key=lambda r: (votes[r], -list(votes).index(r)), default="")
 
 
-def _inside(visible: tuple[Seen, ...]) -> tuple[Seen, ...]:
+def _inside(visible: tuple[VisibleObject, ...]) -> tuple[VisibleObject, ...]:
     """Objects in view that are not seen through a doorway (those lie in the next room)."""
     doors = [s for s in visible if s.object_type == DOORWAY]
 
-    def behind(seen: Seen) -> bool:
+    def behind(seen: VisibleObject) -> bool:
         return any(
             seen.distance > d.distance
             and abs(seen.bearing - d.bearing)
@@ -101,7 +102,7 @@ def _inside(visible: tuple[Seen, ...]) -> tuple[Seen, ...]:
     return tuple(s for s in visible if not behind(s))
 
 
-def _vote(plan: dict[str, Any], briefing: Briefing, visible: tuple[Seen, ...]) -> None:
+def _vote(plan: dict[str, Any], briefing: Briefing, visible: tuple[VisibleObject, ...]) -> None:
     holders: dict[str, list[str]] = {}
     for room, counts in briefing.inventory.items():
         for t in counts:
