@@ -188,18 +188,20 @@ class _HttpClient:
                 pattern: None if mounted is None else DeadlineTransport(mounted, config.timeout_s)
                 for pattern, mounted in self._http._mounts.items()
             }
-        self._urls: dict[str, str] = {}
+        self._urls: dict[str, tuple[httpx.URL, str]] = {}
 
     def complete(self, messages: list[dict[str, Any]]) -> ChatResponse:
         """Send :func:`build_request` for ``messages`` (plus the key) and read the reply."""
         request = build_request(self.config, messages)
         name, prefix = self._key_header
         headers = request.headers | {name: prefix + self._key} if self._key else request.headers
-        if request.path not in self._urls:
-            self._urls[request.path] = endpoint_url(self.base_url, request.path)
+        if request.path not in self._urls:  # parsed once; logged without userinfo or query
+            url = httpx.URL(endpoint_url(self.base_url, request.path))
+            shown = str(url.copy_with(userinfo=b"", query=None, fragment=None))
+            self._urls[request.path] = url, shown
         return post_json(
             self._http,
-            self._urls[request.path],
+            *self._urls[request.path],
             body=request.body,
             headers=headers,
             policy=self.policy,

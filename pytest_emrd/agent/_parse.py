@@ -20,7 +20,6 @@ import ast
 import json
 import math
 import re
-from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any, Final
 
@@ -63,8 +62,10 @@ _COMMENT = r"//[^\n]*|/\*.*?(?:\*/|\Z)"
 #: Inside an object: a string (skipped whole), a comment (skipped) or a brace.
 _INSIDE = re.compile(rf"{_STRING}|{_COMMENT}|[{{}}]", re.DOTALL)
 _DECODER = json.JSONDecoder()
-_COMMENTS = re.compile(rf"({_STRING})|{_COMMENT}", re.DOTALL)
-_TRAILING_COMMAS = re.compile(rf"({_STRING})|,(?=\s*[}}\]])", re.DOTALL)
+#: A string (kept), a comment, or a trailing comma (before ``}``/``]``, comments between).
+_CLEANED = re.compile(
+    rf"({_STRING})|(?P<comment>{_COMMENT})|,(?=(?:\s|(?>{_COMMENT}))*[}}\]])", re.DOTALL
+)
 #: A coordinate written as text: a number (decimal point or comma), then maybe a metric unit.
 _WRITTEN_NUMBER = re.compile(
     r"(?P<number>[+-]?(?:\d+(?:[.,]\d+)?|[.,]\d+)(?:[eE][+-]?\d+)?)\s*"
@@ -118,20 +119,16 @@ def _balanced_objects(text: str) -> list[tuple[int, int]]:
 
 def _strip_comments_and_commas(text: str) -> tuple[str, tuple[str, ...]]:
     """``text`` without comments and trailing commas outside strings, and which were found."""
-    found: list[str] = []
+    found: set[str] = set()
 
-    def drop(kind: str, replacement: str) -> Callable[[re.Match[str]], str]:
-        def sub(match: re.Match[str]) -> str:
-            if match.group(1) is not None:
-                return match.group(1)
-            found.append(kind)
-            return replacement
+    def drop(match: re.Match[str]) -> str:
+        if match.group(1) is not None:
+            return match.group(1)
+        comment = match.group("comment") is not None
+        found.add("comment" if comment else "trailing_comma")
+        return " " if comment else ""
 
-        return sub
-
-    text = _COMMENTS.sub(drop("comment", " "), text)
-    text = _TRAILING_COMMAS.sub(drop("trailing_comma", ""), text)
-    return text, tuple(r for r in REPAIRS if r in found)
+    return _CLEANED.sub(drop, text), tuple(r for r in REPAIRS if r in found)
 
 
 def _literal(node: ast.AST) -> Any:

@@ -57,13 +57,10 @@ def fresh_state(key: str, planted: Mapping[str, Any]) -> dict[str, Any]:
     counter; ``map`` the written entries by label (``id``, first ``visit``; frozen entries
     carry their ``x``/``z``, hallucinations a ``type``); ``seen`` each object's last step."""
     draw = _episode_draw(key)
-    own = planted.get("frame", "own") == "own"
-    frame = (
-        [round(360.0 * draw("theta"), 4)]
-        + [round(FRAME_SHIFT_M * (2.0 * draw(axis) - 1.0), 4) for axis in ("tx", "tz")]
-        if own
-        else [0.0, 0.0, 0.0]
-    )
+    frame = [0.0, 0.0, 0.0]
+    if planted.get("frame", "own") == "own":
+        frame = [round(360.0 * draw("theta"), 4)]
+        frame += [round(FRAME_SHIFT_M * (2.0 * draw(axis) - 1.0), 4) for axis in ("tx", "tz")]
     return {
         "key": key,
         "frame": frame,
@@ -94,8 +91,7 @@ class _Writer:
         self.map: dict[str, dict[str, Any]] = state["map"]
 
     def live_label(self, object_id: str) -> str | None:
-        labels = [lb for lb, rec in self.map.items() if rec.get("id") == object_id]
-        live = [lb for lb in labels if "x" not in self.map[lb]]
+        live = [lb for lb, rec in self.map.items() if rec.get("id") == object_id and "x" not in rec]
         return live[-1] if live else None
 
     def _new_label(self, object_type: str, name: str) -> str:
