@@ -52,10 +52,7 @@ def _normal(draw: Draw, name: str) -> tuple[float, float]:
 
 
 def fresh_state(key: str, planted: Mapping[str, Any]) -> dict[str, Any]:
-    """The state before the first step of the episode keyed ``key`` (hex): ``frame``
-    ``[theta_deg, tx, tz]``; ``nav`` the scout's ``plan``, ``memory`` and room ``visit``
-    counter; ``map`` the written entries by label (``id``, first ``visit``; frozen entries
-    carry their ``x``/``z``, hallucinations a ``type``); ``seen`` each object's last step."""
+    """The state before the first step of the episode keyed ``key`` (hex)."""
     draw = _episode_draw(key)
     frame = [0.0, 0.0, 0.0]
     if planted.get("frame", "own") == "own":
@@ -63,11 +60,12 @@ def fresh_state(key: str, planted: Mapping[str, Any]) -> dict[str, Any]:
         frame += [round(FRAME_SHIFT_M * (2.0 * draw(axis) - 1.0), 4) for axis in ("tx", "tz")]
     return {
         "key": key,
-        "frame": frame,
+        "frame": frame,  # [theta_deg, tx, tz]
         "style": pick(NUMBERING, draw("style")),
-        "nav": {"plan": fresh_plan(), "memory": {}, "visit": 0},
+        "nav": {"plan": fresh_plan(), "memory": {}, "visit": 0},  # the scout's, room visits
+        # written entries by label: id, first visit; frozen ones carry x and z, phantoms a type
         "map": {},
-        "seen": {},
+        "seen": {},  # object id -> last step in view
     }
 
 
