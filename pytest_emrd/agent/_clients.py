@@ -125,11 +125,10 @@ class DeadlineTransport(httpx.BaseTransport):
         except httpx.TransportError:
             if not deadline.expired:
                 raise
-            raw = None
         finally:
             request.extensions = given
             deadline.cancel()
-        if deadline.expired or raw is None:
+        if deadline.expired:
             raise httpx.ReadTimeout(
                 f"no complete reply within timeout_s={self.seconds:g} s", request=request
             )
