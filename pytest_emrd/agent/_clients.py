@@ -56,18 +56,6 @@ class ChatClient(Protocol):
     def close(self) -> None: ...
 
 
-def _api_key(config: ModelConfig, *, required: bool) -> str | None:
-    if config.api_key_env is None:
-        return None
-    key = os.environ.get(config.api_key_env, "").strip()
-    if not key and required and config.api_key_required:
-        raise ConfigError(
-            f"model {config.name!r} needs an API key in the environment variable "
-            f"{config.api_key_env}; set it, or replay the recorded cassettes (record mode none)."
-        )
-    return key or None
-
-
 def endpoint_url(base_url: str, path: str) -> str:
     """``base_url`` with ``path`` appended to its path, query and fragment kept
     (``https://x.azure.com/v1?api-version=1`` -> ``.../v1/chat/completions?api-version=1``)."""
@@ -137,11 +125,10 @@ class DeadlineTransport(httpx.BaseTransport):
         except httpx.TransportError:
             if not deadline.expired:
                 raise
-            raw = None
         finally:
             request.extensions = given
             deadline.cancel()
-        if deadline.expired or raw is None:
+        if deadline.expired:
             raise httpx.ReadTimeout(
                 f"no complete reply within timeout_s={self.seconds:g} s", request=request
             )
@@ -156,27 +143,16 @@ class DeadlineTransport(httpx.BaseTransport):
         self.inner.close()
 
 
-def _http_client(timeout_s: float, transport: httpx.BaseTransport | None) -> httpx.Client:
-    """The httpx client of a model: ``transport`` as given, else httpx's transports (proxies
-    included) under :class:`DeadlineTransport`, without keep-alive so that each attempt's
-    connection is its own and can be shut at its deadline."""
-    timeout = httpx.Timeout(timeout_s)
-    if transport is not None:
-        return httpx.Client(timeout=timeout, transport=transport)
-    client = httpx.Client(timeout=timeout, limits=httpx.Limits(max_keepalive_connections=0))
-    client._transport = DeadlineTransport(client._transport, timeout_s)
-    client._mounts = {
-        pattern: None if mounted is None else DeadlineTransport(mounted, timeout_s)
-        for pattern, mounted in client._mounts.items()
-    }
-    return client
-
-
 class _HttpClient:
-    """One httpx client, a retry policy and the API key; a subclass gives ``_auth`` (the key's
-    header) and ``_read`` (reply text and usage from the decoded response)."""
+    """One httpx client, a retry policy and the API key; a subclass gives ``_key_header`` (the
+    key's header and the prefix of its value) and ``_read`` (reply text and usage from the
+    decoded response).
 
-    _auth: Callable[[str], dict[str, str]]
+    Without a ``transport``, httpx's transports (proxies included) go under
+    :class:`DeadlineTransport`, without keep-alive so that each attempt's connection is its
+    own and can be shut at its deadline."""
+
+    _key_header: tuple[str, str]
     _read: Callable[[Any], ChatResponse]
 
     def __init__(
@@ -191,19 +167,40 @@ class _HttpClient:
         self.config = config
         self.base_url = base_url
         self.policy = policy or RetryPolicy(max_retries=config.max_retries)
-        self._key = _api_key(config, required=require_key)
-        self._http = _http_client(config.timeout_s, transport)
-        self._urls: dict[str, str] = {}
+        key = os.environ.get(config.api_key_env, "").strip() if config.api_key_env else ""
+        if not key and config.api_key_env and require_key and config.api_key_required:
+            raise ConfigError(
+                f"model {config.name!r} needs an API key in the environment variable "
+                f"{config.api_key_env}; set it, or replay the recorded cassettes "
+                "(record mode none)."
+            )
+        self._key = key or None
+        timeout = httpx.Timeout(config.timeout_s)
+        if transport is not None:
+            self._http = httpx.Client(timeout=timeout, transport=transport)
+        else:
+            self._http = httpx.Client(
+                timeout=timeout, limits=httpx.Limits(max_keepalive_connections=0)
+            )
+            self._http._transport = DeadlineTransport(self._http._transport, config.timeout_s)
+            self._http._mounts = {
+                pattern: None if mounted is None else DeadlineTransport(mounted, config.timeout_s)
+                for pattern, mounted in self._http._mounts.items()
+            }
+        self._urls: dict[str, tuple[httpx.URL, str]] = {}
 
     def complete(self, messages: list[dict[str, Any]]) -> ChatResponse:
         """Send :func:`build_request` for ``messages`` (plus the key) and read the reply."""
         request = build_request(self.config, messages)
-        headers = request.headers | self._auth(self._key) if self._key else request.headers
-        if request.path not in self._urls:
-            self._urls[request.path] = endpoint_url(self.base_url, request.path)
+        name, prefix = self._key_header
+        headers = request.headers | {name: prefix + self._key} if self._key else request.headers
+        if request.path not in self._urls:  # parsed once; logged without userinfo or query
+            url = httpx.URL(endpoint_url(self.base_url, request.path))
+            shown = str(url.copy_with(userinfo=b"", query=None, fragment=None))
+            self._urls[request.path] = url, shown
         return post_json(
             self._http,
-            self._urls[request.path],
+            *self._urls[request.path],
             body=request.body,
             headers=headers,
             policy=self.policy,
@@ -221,28 +218,24 @@ class _HttpClient:
         self.close()
 
 
-def _read_openai(data: Any) -> ChatResponse:
-    message = data["choices"][0]["message"]
-    content = message.get("content")
-    if isinstance(content, list):  # some servers return content parts
-        content = "".join(p.get("text", "") for p in content if isinstance(p, dict))
-    if not isinstance(content, str):
-        raise TypeError(f"choices[0].message.content is {type(content).__name__}")
-    usage = data.get("usage") or {}
-    return ChatResponse(
-        content,
-        Usage(int(usage.get("prompt_tokens") or 0), int(usage.get("completion_tokens") or 0)),
-    )
-
-
 class OpenAICompatibleClient(_HttpClient):
     """``POST {base_url}/chat/completions``: vLLM, OpenAI, Gemini, the reference server."""
 
-    _read = staticmethod(_read_openai)
+    _key_header = ("Authorization", "Bearer ")
 
     @staticmethod
-    def _auth(key: str) -> dict[str, str]:
-        return {"Authorization": f"Bearer {key}"}
+    def _read(data: Any) -> ChatResponse:
+        message = data["choices"][0]["message"]
+        content = message.get("content")
+        if isinstance(content, list):  # some servers return content parts
+            content = "".join(p.get("text", "") for p in content if isinstance(p, dict))
+        if not isinstance(content, str):
+            raise TypeError(f"choices[0].message.content is {type(content).__name__}")
+        usage = data.get("usage") or {}
+        return ChatResponse(
+            content,
+            Usage(int(usage.get("prompt_tokens") or 0), int(usage.get("completion_tokens") or 0)),
+        )
 
 
 def _anthropic_part(part: dict[str, Any]) -> dict[str, Any]:
@@ -271,25 +264,21 @@ def to_anthropic(messages: list[dict[str, Any]]) -> tuple[str, list[dict[str, An
     return system, converted
 
 
-def _read_anthropic(data: Any) -> ChatResponse:
-    blocks = data["content"]
-    text = "".join(b["text"] for b in blocks if b.get("type") == "text")
-    if not any(b.get("type") == "text" for b in blocks):
-        raise ValueError("no text block in content")
-    usage = data.get("usage") or {}
-    return ChatResponse(
-        text, Usage(int(usage.get("input_tokens") or 0), int(usage.get("output_tokens") or 0))
-    )
-
-
 class AnthropicClient(_HttpClient):
     """``POST {base_url}/v1/messages`` (Anthropic Messages API)."""
 
-    _read = staticmethod(_read_anthropic)
+    _key_header = ("x-api-key", "")
 
     @staticmethod
-    def _auth(key: str) -> dict[str, str]:
-        return {"x-api-key": key}
+    def _read(data: Any) -> ChatResponse:
+        blocks = data["content"]
+        text = "".join(b["text"] for b in blocks if b.get("type") == "text")
+        if not any(b.get("type") == "text" for b in blocks):
+            raise ValueError("no text block in content")
+        usage = data.get("usage") or {}
+        return ChatResponse(
+            text, Usage(int(usage.get("input_tokens") or 0), int(usage.get("output_tokens") or 0))
+        )
 
 
 def _sampling(config: ModelConfig) -> dict[str, Any]:

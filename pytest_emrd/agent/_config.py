@@ -42,9 +42,8 @@ REASONING_EFFORTS: Final = ("none", "minimal", "low", "medium", "high", "xhigh",
 OpenAPI spec, github:openai/openai-openapi commit f85dbe2, 2026-08-21)."""
 VERBOSITIES: Final = ("low", "medium", "high")
 MAX_TOKENS_PARAMS: Final[tuple[str, ...]] = ("max_tokens", "max_completion_tokens")
-_CLIENT_BODY_KEYS: Final = frozenset(
-    {"model", "messages", "system", "max_tokens", "max_completion_tokens", "stream", "top_k"}
-)
+#: Body keys the client writes itself.
+_CLIENT_KEYS: Final = {"model", "messages", "system", "stream", "top_k", *MAX_TOKENS_PARAMS}
 _CREDENTIAL_HEADERS: Final = frozenset({"authorization", "x-api-key", "api-key", "x-goog-api-key"})
 _CREDENTIAL_FIELD: Final = re.compile(
     r"api[_-]?key|secret|passw(?:or)?d|credential|private[_-]?key|access[_-]?key"
@@ -180,7 +179,7 @@ def _check_extras(config: ModelConfig, where: str) -> None:
             raise ConfigError(
                 f"{where}: {name} must be a mapping of name -> value, got {type(value).__name__}."
             )
-    owned = sorted(set(config.extra_body) & (_CLIENT_BODY_KEYS | set(SAMPLING_FIELDS)))
+    owned = sorted(set(config.extra_body) & (_CLIENT_KEYS | set(SAMPLING_FIELDS)))
     if owned:
         raise ConfigError(
             f"{where}: extra_body may not set {owned[0]!r}: the client writes it "

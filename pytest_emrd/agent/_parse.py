@@ -20,7 +20,6 @@ import ast
 import json
 import math
 import re
-from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any, Final
 
@@ -40,14 +39,8 @@ REPAIRS: Final[tuple[str, ...]] = (
     "decimal_comma",
 )
 _FENCE = re.compile(r"```[A-Za-z0-9_-]*[ \t]*\n?(.*?)```", re.DOTALL)
-_LITERAL_NAMES: Final[dict[str, Any]] = {
-    "true": True,
-    "false": False,
-    "null": None,
-    "True": True,
-    "False": False,
-    "None": None,
-}
+#: JSON's names, which Python reads as names (its own ``True``/``None`` parse as constants).
+_JSON_NAMES: Final = ("true", "false", "null")
 
 
 @dataclass(frozen=True)
@@ -69,8 +62,10 @@ _COMMENT = r"//[^\n]*|/\*.*?(?:\*/|\Z)"
 #: Inside an object: a string (skipped whole), a comment (skipped) or a brace.
 _INSIDE = re.compile(rf"{_STRING}|{_COMMENT}|[{{}}]", re.DOTALL)
 _DECODER = json.JSONDecoder()
-_COMMENTS = re.compile(rf"({_STRING})|{_COMMENT}", re.DOTALL)
-_TRAILING_COMMAS = re.compile(rf"({_STRING})|,(?=\s*[}}\]])", re.DOTALL)
+#: A string (kept), a comment, or a trailing comma (before ``}``/``]``, comments between).
+_CLEANED = re.compile(
+    rf"({_STRING})|(?P<comment>{_COMMENT})|,(?=(?:\s|(?>{_COMMENT}))*[}}\]])", re.DOTALL
+)
 #: A coordinate written as text: a number (decimal point or comma), then maybe a metric unit.
 _WRITTEN_NUMBER = re.compile(
     r"(?P<number>[+-]?(?:\d+(?:[.,]\d+)?|[.,]\d+)(?:[eE][+-]?\d+)?)\s*"
@@ -122,30 +117,26 @@ def _balanced_objects(text: str) -> list[tuple[int, int]]:
     return spans
 
 
-def _strip_comments_and_commas(text: str) -> tuple[str, tuple[str, ...]]:
+def _strip_comments_and_commas(text: str) -> tuple[str, set[str]]:
     """``text`` without comments and trailing commas outside strings, and which were found."""
-    found: list[str] = []
+    found: set[str] = set()
 
-    def drop(kind: str, replacement: str) -> Callable[[re.Match[str]], str]:
-        def sub(match: re.Match[str]) -> str:
-            if match.group(1) is not None:
-                return match.group(1)
-            found.append(kind)
-            return replacement
+    def drop(match: re.Match[str]) -> str:
+        if match.group(1) is not None:
+            return match.group(1)
+        comment = match.group("comment") is not None
+        found.add("comment" if comment else "trailing_comma")
+        return " " if comment else ""
 
-        return sub
-
-    text = _COMMENTS.sub(drop("comment", " "), text)
-    text = _TRAILING_COMMAS.sub(drop("trailing_comma", ""), text)
-    return text, tuple(r for r in REPAIRS if r in found)
+    return _CLEANED.sub(drop, text), found
 
 
 def _literal(node: ast.AST) -> Any:
     """Evaluate a JSON-like Python expression (dicts, lists, constants, signed numbers)."""
     if isinstance(node, ast.Constant) and isinstance(node.value, str | int | float | type(None)):
         return node.value
-    if isinstance(node, ast.Name) and node.id in _LITERAL_NAMES:
-        return _LITERAL_NAMES[node.id]
+    if isinstance(node, ast.Name) and node.id in _JSON_NAMES:
+        return json.loads(node.id)
     if isinstance(node, ast.Dict):
         if any(k is None for k in node.keys):
             raise ValueError("dict unpacking is not JSON")
@@ -159,11 +150,11 @@ def _literal(node: ast.AST) -> Any:
     raise ValueError(f"not a JSON value: {type(node).__name__}")
 
 
-def _load(candidate: str) -> tuple[Any, tuple[str, ...]]:
+def _load(candidate: str) -> tuple[Any, set[str]]:
     """(value, repairs): JSON as written, else JSON without comments and trailing commas,
-    else a JSON-like Python literal; ``(None, ())`` when none of them reads."""
+    else a JSON-like Python literal; ``(None, set())`` when none of them reads."""
     try:
-        return json.loads(candidate), ()
+        return json.loads(candidate), set()
     except (ValueError, RecursionError):
         pass
     cleaned, repairs = _strip_comments_and_commas(candidate)
@@ -175,8 +166,8 @@ def _load(candidate: str) -> tuple[Any, tuple[str, ...]]:
     try:
         value = _literal(ast.parse(cleaned.strip(), mode="eval").body)
     except (SyntaxError, ValueError, TypeError, RecursionError, MemoryError):
-        return None, ()
-    return value, (*repairs, "python_literal")
+        return None, set()
+    return value, repairs | {"python_literal"}
 
 
 def _wrapping(text: str, start: int, end: int) -> tuple[str, ...]:
@@ -189,7 +180,7 @@ def _wrapping(text: str, start: int, end: int) -> tuple[str, ...]:
     return ("prose",) if (text[:start] + text[end:]).strip() else ()
 
 
-def _find_object(text: str) -> tuple[dict[str, Any] | None, tuple[str, ...]]:
+def _find_object(text: str) -> tuple[dict[str, Any] | None, set[str]]:
     """(object, repairs): among every balanced ``{...}`` span (of the whole reply and of each
     fenced block) that reads as an object, the last one with an ``action``, else the last."""
     stripped = text.strip()
@@ -199,7 +190,7 @@ def _find_object(text: str) -> tuple[dict[str, Any] | None, tuple[str, ...]]:
         except (ValueError, RecursionError):
             whole = None
         if isinstance(whole, dict) and "action" in whole:
-            return whole, ()
+            return whole, set()
     spans = set(_balanced_objects(text))
     for block in _FENCE.finditer(text):
         offset = block.start(1)
@@ -210,43 +201,37 @@ def _find_object(text: str) -> tuple[dict[str, Any] | None, tuple[str, ...]]:
         if isinstance(value, dict):
             found.append((value, start, end, repairs))
     if not found:
-        return None, ()
+        return None, set()
     with_action = [f for f in found if "action" in f[0]]
     obj, start, end, repairs = (with_action or found)[-1]
-    applied = {*_wrapping(text, start, end), *repairs}
-    return obj, tuple(r for r in REPAIRS if r in applied)
+    return obj, repairs.union(_wrapping(text, start, end))
 
 
-def _coordinate(value: Any) -> tuple[float, tuple[str, ...]] | None:
+def _coordinate(value: Any) -> tuple[float, set[str]] | None:
     """One coordinate in metres and the repairs that read it (``unit``, ``decimal_comma``);
     None when it is no finite number, written or as a string."""
     if isinstance(value, bool):
         return None
     if isinstance(value, int | float):
-        return (float(value), ()) if math.isfinite(value) else None
+        return (float(value), set()) if math.isfinite(value) else None
     if not isinstance(value, str):
         return None
     written = _WRITTEN_NUMBER.fullmatch(value.strip())
     if written is None:
         return None
     number, unit = written.group("number"), (written.group("unit") or "").lower()
-    repairs = []
-    if "," in number:
-        number = number.replace(",", ".")
-        repairs.append("decimal_comma")
-    metres = float(number)
+    repairs = {"decimal_comma"} if "," in number else set()
+    metres = float(number.replace(",", "."))
     if unit:
         metres *= _METRES_PER_UNIT[unit]
-        repairs.append("unit")
-    if not math.isfinite(metres):
-        return None
-    return metres, tuple(r for r in REPAIRS if r in repairs)
+        repairs.add("unit")
+    return (metres, repairs) if math.isfinite(metres) else None
 
 
-def _position(fields: Any) -> tuple[float, float, tuple[str, ...]] | str:
+def _position(fields: Any) -> tuple[float, float, set[str]] | str:
     """``(x, z, repairs)`` of an entry (``x``/``z`` keys, else a list ``[x, z]``: the entry
     itself or under :data:`_POSITION_KEYS`), or why it has none."""
-    repairs: tuple[str, ...] = ()
+    repairs: set[str] = set()
     if isinstance(fields, dict) and ("x" in fields or "z" in fields):
         x, z = fields.get("x"), fields.get("z")
     else:
@@ -256,13 +241,12 @@ def _position(fields: Any) -> tuple[float, float, tuple[str, ...]] | str:
         if not isinstance(pair, list) or len(pair) != 2:
             written = json.dumps(fields, sort_keys=True)[:80]
             return f"has no x and z (nor a [x, z] list): {written}"
-        (x, z), repairs = pair, ("position_list",)
+        (x, z), repairs = pair, {"position_list"}
     read_x, read_z = _coordinate(x), _coordinate(z)
     if read_x is None or read_z is None:
         bad = ("x", x) if read_x is None else ("z", z)
         return f"has no number of metres as {bad[0]}: {json.dumps(bad[1])[:80]}"
-    found = {*repairs, *read_x[1], *read_z[1]}
-    return read_x[0], read_z[0], tuple(r for r in REPAIRS if r in found)
+    return read_x[0], read_z[0], repairs | read_x[1] | read_z[1]
 
 
 def _text(value: Any) -> str:
@@ -271,7 +255,7 @@ def _text(value: Any) -> str:
     return value if isinstance(value, str) else json.dumps(value, sort_keys=True)
 
 
-def _entry(label: str, fields: Any) -> tuple[MapEntry, tuple[str, ...]] | str:
+def _entry(label: str, fields: Any) -> tuple[MapEntry, set[str]] | str:
     """The entry ``label`` and the repairs that read its position, or why it cannot be read."""
     position = _position(fields)
     if isinstance(position, str):
@@ -289,7 +273,7 @@ def _entry(label: str, fields: Any) -> tuple[MapEntry, tuple[str, ...]] | str:
     return entry, repairs
 
 
-def _cognitive_map(raw: Any) -> tuple[tuple[MapEntry, ...], tuple[str, ...]] | str:
+def _cognitive_map(raw: Any) -> tuple[tuple[MapEntry, ...], set[str]] | str:
     """The parsed map and the repairs that read its positions, or why it cannot be read."""
     if isinstance(raw, list):
         items = []
@@ -311,7 +295,7 @@ def _cognitive_map(raw: Any) -> tuple[tuple[MapEntry, ...], tuple[str, ...]] | s
             return read
         entries.append(read[0])
         repairs.update(read[1])
-    return tuple(entries), tuple(r for r in REPAIRS if r in repairs)
+    return tuple(entries), repairs
 
 
 def parse_reply(text: str) -> Reply:
@@ -330,7 +314,7 @@ def parse_reply(text: str) -> Reply:
         "dedup_check": _text(obj.get("dedup_check")),
         "action": action,
         "reasoning": reasoning,
-        "repairs": repairs,
+        "repairs": tuple(r for r in REPAIRS if r in repairs),
     }
     if not action:
         return Reply(**common, error="reply has no action")
@@ -340,6 +324,5 @@ def parse_reply(text: str) -> Reply:
     if isinstance(parsed, str):
         return Reply(**common, error=parsed)
     entries, read_with = parsed
-    if read_with:
-        common["repairs"] = tuple(r for r in REPAIRS if r in {*repairs, *read_with})
+    common["repairs"] = tuple(r for r in REPAIRS if r in repairs | read_with)
     return Reply(**common, cognitive_map=entries)

@@ -46,29 +46,28 @@ NEUTRAL_NAMES: Final[dict[str, str]] = {
     "Room D": rooms.KITCHEN,
 }
 
-#: Engine type -> (singular, plural) description in a room's furniture profile, in the order
-#: items are listed. A table type followed by chairs reads as the paper's "table + 8 chairs".
-FURNITURE: Final[dict[str, tuple[str, str]]] = {
-    "DiningTable": ("large conference table", "large conference tables"),
-    "Desk": ("desk", "desks"),
-    "Chair": ("chair", "chairs"),
-    "ArmChair": ("armchair", "armchairs"),
-    "Laptop": ("laptop", "laptops"),
-    "Television": ("wall-mounted television", "wall-mounted televisions"),
-    "ShelvingUnit": ("shelving unit", "shelving units"),
-    "Fridge": ("fridge", "fridges"),
-    "CounterTop": ("counter top", "counter tops"),
-    "Sink": ("sink", "sinks"),
-    "CoffeeMachine": ("coffee machine", "coffee machines"),
-    "Microwave": ("microwave", "microwaves"),
-    "Stool": ("stool", "stools"),
-    "HousePlant": ("potted plant", "potted plants"),
-    "Door": ("building exit door", "building exit doors"),
+#: Engine type -> description in a room's furniture profile (plural: with an ``s``; unknown
+#: types: the type name, unchanged), in the order items are listed. A table type followed by
+#: chairs reads as the paper's "table + 8 chairs".
+FURNITURE: Final[dict[str, str]] = {
+    "DiningTable": "large conference table",
+    "Desk": "desk",
+    "Chair": "chair",
+    "ArmChair": "armchair",
+    "Laptop": "laptop",
+    "Television": "wall-mounted television",
+    "ShelvingUnit": "shelving unit",
+    "Fridge": "fridge",
+    "CounterTop": "counter top",
+    "Sink": "sink",
+    "CoffeeMachine": "coffee machine",
+    "Microwave": "microwave",
+    "Stool": "stool",
+    "HousePlant": "potted plant",
+    "Door": "building exit door",
 }
 #: Descriptions that depend on the room (the Entrance's desk is the reception desk).
-ROOM_FURNITURE: Final[dict[tuple[str, str], tuple[str, str]]] = {
-    (rooms.ENTRANCE, "Desk"): ("reception desk", "reception desks")
-}
+ROOM_FURNITURE: Final[dict[tuple[str, str], str]] = {(rooms.ENTRANCE, "Desk"): "reception desk"}
 _TABLES: Final = ("DiningTable", "Desk")
 _ITEM = re.compile(r"^(?:an?|(?P<n>\d+)) [^()]+ \((?P<type>[A-Za-z]+)\)$")
 
@@ -165,9 +164,8 @@ def furniture_profile(room: str, counts: Mapping[str, int]) -> str:
     items: dict[str, str] = {}
     for object_type in sorted((t for t, n in counts.items() if n > 0), key=_type_order):
         words = ROOM_FURNITURE.get((room, object_type)) or FURNITURE.get(object_type)
-        items[object_type] = _count(
-            counts[object_type], *(words or (object_type, object_type)), object_type
-        )
+        singular, plural = (words, f"{words}s") if words else (object_type, object_type)
+        items[object_type] = _count(counts[object_type], singular, plural, object_type)
     table = next((t for t in _TABLES if t in items), None)
     if table is not None and "Chair" in items:
         items[table] += f" + {items.pop('Chair')}"

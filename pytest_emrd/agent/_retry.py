@@ -10,7 +10,6 @@ on ``pytest_emrd.agent.retry`` at WARNING (docs/user-guide/recording.md) with th
 from __future__ import annotations
 
 import email.utils
-import functools
 import logging
 import random
 import time
@@ -88,14 +87,6 @@ def _excerpt(response: httpx.Response) -> str:
     return text[:_BODY_EXCERPT] + ("..." if len(text) > _BODY_EXCERPT else "")
 
 
-@functools.lru_cache(maxsize=64)
-def _parsed(url: str) -> tuple[httpx.URL, str]:
-    """``url`` parsed once (a client posts to one or two URLs), and as logged: without
-    userinfo or query, either of which may carry a credential."""
-    parsed = httpx.URL(url)
-    return parsed, str(parsed.copy_with(userinfo=b"", query=None, fragment=None))
-
-
 def _attempt(http: httpx.Client, request: httpx.Request, url: str, read: Callable[[Any], Any]):
     """One POST: the read result, :class:`_Retryable`, or a non-retried TransportError."""
     try:
@@ -121,7 +112,8 @@ def _attempt(http: httpx.Client, request: httpx.Request, url: str, read: Callabl
 
 def post_json(
     http: httpx.Client,
-    url: str,
+    url: httpx.URL,
+    shown: str,
     *,
     body: dict[str, Any],
     headers: dict[str, str],
@@ -129,15 +121,15 @@ def post_json(
     read: Callable[[Any], Any],
     secrets: Iterable[str | None] = (),
 ) -> Any:
-    """POST ``body`` and return ``read(json)`` (which raises on a garbage body), retrying per
-    ``policy``; exhausted retries or a non-retryable status raise :class:`TransportError`
-    naming the URL, the attempts and the last cause, with ``secrets`` masked."""
+    """POST ``body`` to ``url`` and return ``read(json)`` (which raises on a garbage body),
+    retrying per ``policy``; exhausted retries or a non-retryable status raise
+    :class:`TransportError` naming the URL as ``shown`` (logged), the attempts and the last
+    cause, with ``secrets`` masked."""
     given = {name.lower() for name in headers}
     defaults = {k: v for k, v in _DEFAULT_HEADERS.items() if k.lower() not in given}
-    target, shown = _parsed(url)
     request = httpx.Request(
         "POST",
-        target,
+        url,
         content=encode_body(body),
         headers=defaults | headers,
         extensions={"timeout": http.timeout.as_dict()},
@@ -150,16 +142,13 @@ def post_json(
         return text
 
     attempts = policy.max_retries + 1
-    attempt = 1
-    while True:
+    for attempt in range(1, attempts + 1):
         try:
             return _attempt(http, request, shown, read)
         except _Retryable as failure:
             cause = mask(str(failure))
             if attempt == attempts:
-                raise TransportError(
-                    f"POST {shown} failed after {attempts} attempt(s); last cause: {cause}"
-                ) from None
+                break
             wait = policy.backoff(attempt - 1, failure.retry_after)
             logger.warning(
                 "POST %s attempt %d/%d failed; retrying in %.2f s. Cause: %s",
@@ -171,6 +160,6 @@ def post_json(
                 extra={RETRY_ATTR: attempt},
             )
             policy.sleep(wait)
-            attempt += 1
         except TransportError as exc:
             raise TransportError(mask(str(exc))) from None
+    raise TransportError(f"POST {shown} failed after {attempts} attempt(s); last cause: {cause}")

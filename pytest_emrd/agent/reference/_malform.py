@@ -19,8 +19,7 @@ from pytest_emrd.errors import ProtocolError
 
 REPAIRABLE: Final[tuple[str, ...]] = ("fence", "prose", "comment", "trailing_comma")
 FAILING: Final[tuple[str, ...]] = ("truncated", "missing_comma", "ellipsis")
-STATE_KEY: Final = "state"
-_STATE_LEAD: Final = f'"{STATE_KEY}": '
+_STATE_LEAD: Final = '"state": '
 
 
 def render(state: dict[str, Any], body: dict[str, Any]) -> str:

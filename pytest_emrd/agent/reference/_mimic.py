@@ -52,25 +52,20 @@ def _normal(draw: Draw, name: str) -> tuple[float, float]:
 
 
 def fresh_state(key: str, planted: Mapping[str, Any]) -> dict[str, Any]:
-    """The state before the first step of the episode keyed ``key`` (hex): ``frame``
-    ``[theta_deg, tx, tz]``; ``nav`` the scout's ``plan``, ``memory`` and room ``visit``
-    counter; ``map`` the written entries by label (``id``, first ``visit``; frozen entries
-    carry their ``x``/``z``, hallucinations a ``type``); ``seen`` each object's last step."""
+    """The state before the first step of the episode keyed ``key`` (hex)."""
     draw = _episode_draw(key)
-    own = planted.get("frame", "own") == "own"
-    frame = (
-        [round(360.0 * draw("theta"), 4)]
-        + [round(FRAME_SHIFT_M * (2.0 * draw(axis) - 1.0), 4) for axis in ("tx", "tz")]
-        if own
-        else [0.0, 0.0, 0.0]
-    )
+    frame = [0.0, 0.0, 0.0]
+    if planted.get("frame", "own") == "own":
+        frame = [round(360.0 * draw("theta"), 4)]
+        frame += [round(FRAME_SHIFT_M * (2.0 * draw(axis) - 1.0), 4) for axis in ("tx", "tz")]
     return {
         "key": key,
-        "frame": frame,
+        "frame": frame,  # [theta_deg, tx, tz]
         "style": pick(NUMBERING, draw("style")),
-        "nav": {"plan": fresh_plan(), "memory": {}, "visit": 0},
+        "nav": {"plan": fresh_plan(), "memory": {}, "visit": 0},  # the scout's, room visits
+        # written entries by label: id, first visit; frozen ones carry x and z, phantoms a type
         "map": {},
-        "seen": {},
+        "seen": {},  # object id -> last step in view
     }
 
 
@@ -94,8 +89,7 @@ class _Writer:
         self.map: dict[str, dict[str, Any]] = state["map"]
 
     def live_label(self, object_id: str) -> str | None:
-        labels = [lb for lb, rec in self.map.items() if rec.get("id") == object_id]
-        live = [lb for lb in labels if "x" not in self.map[lb]]
+        live = [lb for lb, rec in self.map.items() if rec.get("id") == object_id and "x" not in rec]
         return live[-1] if live else None
 
     def _new_label(self, object_type: str, name: str) -> str:

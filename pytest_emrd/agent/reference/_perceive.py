@@ -16,7 +16,8 @@ from collections.abc import Callable, Mapping
 from typing import Any, Final
 
 from pytest_emrd.agent.reference._memory import apply_memory, merge_view
-from pytest_emrd.agent.reference._read import Briefing, Percept, Seen
+from pytest_emrd.agent.reference._read import Briefing, Percept
+from pytest_emrd.world._model import VisibleObject
 
 DOORWAY: Final = "Doorway"
 #: A sweep: the view on arrival plus this many ``Turn(Right)``, 360 degrees in all.
@@ -30,49 +31,39 @@ GAP_HALF_WIDTH_M: Final = 1.0
 
 
 def fresh_plan() -> dict[str, Any]:
-    """Navigation state at the first step, carried in the ``plan`` key of every reply.
-
-    ``phase``: ``sweep`` (turning in place), ``decide``, ``face`` (turning towards
-    ``target``), ``cross`` / ``walk`` (just sent ``Goto`` through a doorway / to an object).
-    Per room visit: room ``votes``, doorways seen ``here`` (-> distance), objects ``found``,
-    ``spots`` (id -> [x, z, type]), ``near`` (ids of the current sweep), ``sweeps`` (where
-    they began), ``moves``/``clears`` made, spots ``tried``, doorways ``blocked``. Whole
-    episode: ``visited`` rooms, ``used`` doorways (least recent first), ``doors`` (id ->
-    [x, z]), ``door_rooms`` (id -> rooms it was seen inside), discovery ``order``,
-    ``rough`` (placed at the edge of view), ``sizes`` (room -> objects), ``acted``, the
-    ``reach`` of the farthest doorway seen, the ``target``/``goal``/face ``tries`` and the
-    pose ``at`` the last step.
-    """
+    """Navigation state at the first step, carried in the ``plan`` key of every reply."""
     return {
+        # sweep (turning in place), decide, face (turning towards the target), cross / walk
+        # (just sent Goto through a doorway / to an object)
         "phase": "sweep",
-        "turns": 0,
-        "votes": {},
-        "here": {},
-        "found": 0,
-        "spots": {},
-        "near": [],
-        "sweeps": [],
-        "moves": 0,
-        "clears": 0,
-        "acted": 0,
-        "reach": 0.0,
-        "tried": [],
-        "blocked": [],
-        "visited": [],
-        "used": [],
-        "doors": {},
-        "door_rooms": {},
-        "order": [],
-        "rough": [],
-        "sizes": {},
-        "target": "",
-        "goal": "",
-        "tries": 0,
-        "at": [0.0, 0.0],
+        "turns": 0,  # Turn(Right) of this sweep
+        "votes": {},  # this visit: room -> vote
+        "here": {},  # this visit: doorway seen -> distance
+        "found": 0,  # this visit: objects discovered
+        "spots": {},  # this visit: object id -> [x, z, type]
+        "near": [],  # ids of the current sweep
+        "sweeps": [],  # this visit: where each sweep began
+        "moves": 0,  # this visit: repositions made
+        "clears": 0,  # this visit: clearing moves made
+        "acted": 0,  # actions of the episode
+        "reach": 0.0,  # distance of the farthest doorway seen
+        "tried": [],  # this visit: spots tried
+        "blocked": [],  # this visit: doorways given up
+        "visited": [],  # rooms
+        "used": [],  # doorways crossed, least recent first
+        "doors": {},  # doorway id -> [x, z]
+        "door_rooms": {},  # doorway id -> rooms it was seen inside
+        "order": [],  # object ids in order of discovery
+        "rough": [],  # object ids placed at the edge of view
+        "sizes": {},  # room -> objects discovered in it
+        "target": "",  # what to face and Goto
+        "goal": "",  # door or spot
+        "tries": 0,  # turns made to face the target
+        "at": [0.0, 0.0],  # pose at the last step
     }
 
 
-def _place(percept: Percept, seen: Seen) -> tuple[float, float]:
+def _place(percept: Percept, seen: VisibleObject) -> tuple[float, float]:
     angle = math.radians(percept.pose.heading + seen.bearing)
     x = percept.pose.x + seen.distance * math.sin(angle)
     z = percept.pose.z + seen.distance * math.cos(angle)
@@ -85,11 +76,11 @@ def room_guess(plan: Mapping[str, Any]) -> str:
     return max(votes, key=lambda r: (votes[r], -list(votes).index(r)), default="")
 
 
-def _inside(visible: tuple[Seen, ...]) -> tuple[Seen, ...]:
+def _inside(visible: tuple[VisibleObject, ...]) -> tuple[VisibleObject, ...]:
     """Objects in view that are not seen through a doorway (those lie in the next room)."""
     doors = [s for s in visible if s.object_type == DOORWAY]
 
-    def behind(seen: Seen) -> bool:
+    def behind(seen: VisibleObject) -> bool:
         return any(
             seen.distance > d.distance
             and abs(seen.bearing - d.bearing)
@@ -101,7 +92,7 @@ def _inside(visible: tuple[Seen, ...]) -> tuple[Seen, ...]:
     return tuple(s for s in visible if not behind(s))
 
 
-def _vote(plan: dict[str, Any], briefing: Briefing, visible: tuple[Seen, ...]) -> None:
+def _vote(plan: dict[str, Any], briefing: Briefing, visible: tuple[VisibleObject, ...]) -> None:
     holders: dict[str, list[str]] = {}
     for room, counts in briefing.inventory.items():
         for t in counts:

@@ -12,6 +12,7 @@ from typing import Any, Final
 from pytest_emrd.agent._prompt import OVERVIEW_HEADING, VISIBLE_HEADING, read_profile
 from pytest_emrd.errors import ProtocolError
 from pytest_emrd.trajectory import Pose
+from pytest_emrd.world._model import VisibleObject
 
 _ROOMS_LINE = re.compile(r"^The building has four rooms: (?P<names>.+)\.$", re.MULTILINE)
 _ROOM_LINE = re.compile(r"^- (?P<room>[^:]+): (?P<items>.*?)\.(?: .*)?$")
@@ -30,16 +31,6 @@ NOT_SYMBOLIC: Final = (
 
 
 @dataclass(frozen=True)
-class Seen:
-    """One visible object as the symbolic list gives it."""
-
-    object_id: str
-    object_type: str
-    bearing: float
-    distance: float
-
-
-@dataclass(frozen=True)
 class Briefing:
     """What the system prompt tells the agent about the building."""
 
@@ -55,7 +46,7 @@ class Percept:
     step: int
     max_steps: int
     pose: Pose
-    visible: tuple[Seen, ...]
+    visible: tuple[VisibleObject, ...]
 
 
 def read_briefing(system: str) -> Briefing:
@@ -84,7 +75,7 @@ def read_percept(text: str) -> Percept:
         raise ProtocolError(NOT_SYMBOLIC)
     listing = text.split(VISIBLE_HEADING, 1)[1]
     visible = tuple(
-        Seen(m["id"], m["type"], float(m["b"]), float(m["d"]))
+        VisibleObject(m["id"], m["type"], float(m["b"]), float(m["d"]))
         for line in listing.splitlines()
         if (m := _VISIBLE.match(line))
     )

@@ -63,18 +63,6 @@ def _close_room(plan: dict[str, Any]) -> None:
     plan["found"] = 0
 
 
-def _unused_here(plan: Mapping[str, Any]) -> str:
-    here: dict[str, float] = plan["here"]
-    options = [d for d in here if d not in plan["blocked"] and d not in plan["used"]]
-    return min(options, key=lambda d: (here[d], d), default="")
-
-
-def _used_here(plan: Mapping[str, Any]) -> str:
-    used: list[str] = plan["used"]
-    options = [d for d in plan["here"] if d not in plan["blocked"] and d in used]
-    return min(options, key=used.index, default="")
-
-
 def _complete(plan: Mapping[str, Any], briefing: Briefing) -> bool:
     """A doorway and every object of the room's inventory line seen during this visit."""
     counts = briefing.inventory.get(room_guess(plan))
@@ -128,18 +116,15 @@ def _clear(plan: dict[str, Any], briefing: Briefing, percept: Percept) -> bool:
     if plan["clears"] >= MAX_CLEARS or _complete(plan, briefing):
         return False
     doors = [xz for d, xz in plan["doors"].items() if d not in plan["blocked"]]
-    spot = _spot(plan, [], doors) if _affordable(plan, briefing, percept) else ""
+    # PER_ROOM actions kept per unvisited room, counting the scout's own actions (``acted``):
+    # a wasted step (a planted invalid action) changes nothing.
+    left = percept.max_steps - plan["acted"] - RESERVE
+    affordable = left > PER_ROOM * (len(briefing.rooms) - len(plan["visited"]))
+    spot = _spot(plan, [], doors) if affordable else ""
     if spot:
         plan["tried"].append(spot)
         plan.update(target=spot, goal="spot", clears=plan["clears"] + 1, phase="face", tries=0)
     return bool(spot)
-
-
-def _affordable(plan: Mapping[str, Any], briefing: Briefing, percept: Percept) -> bool:
-    """Whether a reposition leaves :data:`PER_ROOM` actions per unvisited room, counting the
-    scout's own actions (``acted``): a wasted step (a planted invalid action) changes nothing."""
-    left = percept.max_steps - plan["acted"] - RESERVE
-    return left > PER_ROOM * (len(briefing.rooms) - len(plan["visited"]))
 
 
 def _choose(plan: dict[str, Any], briefing: Briefing, percept: Percept) -> None:
@@ -147,7 +132,10 @@ def _choose(plan: dict[str, Any], briefing: Briefing, percept: Percept) -> None:
     plan.update(phase="face", tries=0)
     if _clear(plan, briefing, percept):
         return
-    door = _unused_here(plan)
+    here: dict[str, float] = plan["here"]
+    used: list[str] = plan["used"]
+    open_here = [d for d in here if d not in plan["blocked"]]
+    door = min((d for d in open_here if d not in used), key=lambda d: (here[d], d), default="")
     if door:
         plan.update(target=door, goal="door")
         return
@@ -160,8 +148,8 @@ def _choose(plan: dict[str, Any], briefing: Briefing, percept: Percept) -> None:
     unvisited = len(plan["visited"]) < len(briefing.rooms)
     if unvisited and not _complete(plan, briefing) and _reposition(plan, doors):
         return
-    explored = not set(plan["doors"]) - set(plan["used"])
-    door = "" if explored else _used_here(plan)
+    explored = not set(plan["doors"]) - set(used)
+    door = "" if explored else min((d for d in open_here if d in used), key=used.index, default="")
     plan.update(target=door, goal="door" if door else "")
 
 

@@ -14,18 +14,17 @@ from typing import Final
 from pytest_emrd.errors import ConfigError
 
 REFERENCE_VERSION: Final = "ref-4"
-_SEP: Final = "@"
 
 
 def versioned_id(name: str) -> str:
     """The ``model`` field for reference agent ``name``: ``name@REFERENCE_VERSION``."""
-    return f"{name}{_SEP}{REFERENCE_VERSION}"
+    return f"{name}@{REFERENCE_VERSION}"
 
 
 def agent_name(model: str) -> str:
     """The registry name in a requested ``model`` field (``scout@ref-3`` -> ``scout``); a bare
     name is the current version, another version a :class:`ConfigError` naming both."""
-    name, sep, version = model.partition(_SEP)
+    name, sep, version = model.partition("@")
     if sep and version != REFERENCE_VERSION:
         raise ConfigError(
             f"model={model!r} asks for reference agents version {version!r}, but this "
