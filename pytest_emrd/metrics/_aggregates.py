@@ -39,11 +39,8 @@ from pytest_emrd.rooms import FOCAL_COLUMNS, OTHER_LETTER, ROOM_LETTERS, SLUG_RO
 
 
 def positional_accuracy(items: Iterable[EpisodeLike]) -> tuple[float | None, ...]:
-    """Positional Accuracy (Eq. PA) of each episode, in input order.
-
-    None for an errored episode or when ``|G_base| = 0`` (see
-    :func:`positional_accuracy_score` for the formula and every edge case).
-    """
+    """Positional Accuracy (Eq. PA) of each episode, in input order: None for an errored
+    episode or ``|G_base| = 0`` (formula and edge cases: :func:`positional_accuracy_score`)."""
     return tuple(m.pa for m in as_episode_metrics(items))
 
 

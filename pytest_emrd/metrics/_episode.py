@@ -1,10 +1,8 @@
 """The per-episode scores (the inner terms of the paper's equations) and their result.
 
-:class:`EpisodeMetrics` holds every EMRD score of one trajectory as plain data: what the
-results store may save beside each trajectory and what every aggregate and gate reads, so an
-episode's steps are matched once however many metrics are asked for. Aggregates accept
-trajectories or ``EpisodeMetrics`` interchangeably. All functions are pure; "undefined" is
-``None`` together with a reason, never a silent 0.0.
+:class:`EpisodeMetrics` holds every EMRD score of one trajectory as plain data, what every
+aggregate and gate reads, so an episode's steps are matched once however many metrics are
+asked for. "Undefined" is ``None`` together with a reason, never a silent 0.0.
 """
 
 from __future__ import annotations
@@ -511,9 +509,7 @@ def as_episode_metrics(items: Iterable[EpisodeLike]) -> list[EpisodeMetrics]:
     return [i if isinstance(i, EpisodeMetrics) else episode_metrics(i) for i in items]
 
 
-def split_errored(
-    items: Iterable[EpisodeLike],
-) -> tuple[list[EpisodeMetrics], int]:
+def split_errored(items: Iterable[EpisodeLike]) -> tuple[list[EpisodeMetrics], int]:
     """The non-errored episode metrics, and how many errored episodes were excluded."""
     all_metrics = as_episode_metrics(items)
     kept = [m for m in all_metrics if not m.errored]

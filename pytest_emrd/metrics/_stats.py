@@ -1,12 +1,10 @@
 """Statistics of the paper: bootstrap CIs, chi-square, Fisher, Cramer's V, ANOVA, survival.
 
-scipy, statsmodels and lifelines are the engines (imported on first use, so importing the
-metrics package stays cheap for the plugin); this module fixes the conventions (no continuity
-correction, two-sided tests, seeded percentile bootstrap) and turns degenerate input into a
-result with a reason instead of a warning or a NaN. Survival inputs are durations (steps an
-object was retained out of view) with event flags (True: dropped; False: right-censored, seen
-again or the episode ended while still held); censoring is assumed non-informative, as
-Kaplan-Meier and the exponential MLE require.
+scipy, statsmodels and lifelines are the engines (imported on first use); this module fixes
+the conventions (no continuity correction, two-sided tests, seeded percentile bootstrap) and
+turns degenerate input into a result with a reason instead of a warning or a NaN. Survival
+inputs are durations (steps retained out of view) with event flags (True: dropped; False:
+right-censored); censoring is assumed non-informative, as Kaplan-Meier and the MLE require.
 """
 
 from __future__ import annotations
@@ -74,11 +72,8 @@ def bootstrap_ci(
     arr = np.asarray(data, dtype=float)
     if len(arr) < 2:
         return None, None
-    idx = resample_rows(rng_seed, len(arr), n_resamples)
     fn = statistic if statistic is not None else (lambda a: a.mean(axis=1))
-    with np.errstate(divide="ignore", invalid="ignore"):
-        values = np.asarray(fn(arr[idx]), dtype=float)
-    return _percentiles(values)
+    return _percentiles(fn, arr[resample_rows(rng_seed, len(arr), n_resamples)])
 
 
 def draw_counts(idx: np.ndarray) -> np.ndarray:
@@ -86,8 +81,7 @@ def draw_counts(idx: np.ndarray) -> np.ndarray:
     indices): the ``n_resamples x n`` counts as read-only floats, ready to multiply data."""
     n_resamples, n = idx.shape
     flat = (idx + n * np.arange(n_resamples)[:, None]).ravel()  # row r counts into r*n ..
-    counts = np.bincount(flat, minlength=n_resamples * n).reshape(n_resamples, n)
-    counts = counts.astype(float)
+    counts = np.bincount(flat, minlength=n_resamples * n).reshape(n_resamples, n).astype(float)
     counts.flags.writeable = False
     return counts
 
@@ -110,23 +104,24 @@ def bootstrap_sums_ci(
     arr = np.asarray(data, dtype=float)
     if len(arr) < 2:
         return None, None
-    sums = draw_counts(resample_rows(rng_seed, len(arr), n_resamples)) @ arr
-    with np.errstate(divide="ignore", invalid="ignore"):
-        values = np.asarray(statistic(sums), dtype=float)
-    return _percentiles(values)
-
-
-def _percentiles(values: np.ndarray) -> tuple[float | None, float | None]:
-    """The 95 % percentile interval of the resampled statistic (NaN resamples dropped)."""
-    values = values[~np.isnan(values)]
-    if not len(values):
-        return None, None
-    alpha = (1.0 - CONFIDENCE) / 2.0
-    with np.errstate(invalid="ignore"):  # inf - inf while interpolating between inf values
-        low, high = np.quantile(values, [alpha, 1.0 - alpha], method="linear")
-    return float(low) if not np.isnan(low) else math.inf, (
-        float(high) if not np.isnan(high) else math.inf
+    return _percentiles(
+        statistic, draw_counts(resample_rows(rng_seed, len(arr), n_resamples)) @ arr
     )
+
+
+def _percentiles(
+    statistic: Callable[[np.ndarray], np.ndarray], resampled: np.ndarray
+) -> tuple[float | None, float | None]:
+    """The 95 % percentile interval of ``statistic`` of the resamples (NaN values dropped)."""
+    with np.errstate(divide="ignore", invalid="ignore"):  # also inf - inf between inf values
+        values = np.asarray(statistic(resampled), dtype=float)
+        values = values[~np.isnan(values)]
+        if not len(values):
+            return None, None
+        alpha = (1.0 - CONFIDENCE) / 2.0
+        ends = np.quantile(values, [alpha, 1.0 - alpha], method="linear")
+    low, high = np.where(np.isnan(ends), math.inf, ends).tolist()
+    return low, high
 
 
 @dataclass(frozen=True)
