@@ -154,7 +154,7 @@ def hallucination_score(matching: Matching) -> float | None:
 
 @dataclass(frozen=True)
 class Grounding:
-    """Decide-phase scores of one episode (Appendix B, FPSG)."""
+    """Decide-phase scores of one episode (Appendix B, FPSG), as in :class:`EpisodeMetrics`."""
 
     fpsg_local: float | None
     fpsg_global: float | None
@@ -162,9 +162,7 @@ class Grounding:
     any_bias: bool | None
     reasons: dict[str, str]
     fpsg_local_ex_doorways: float | None = None
-    """``fpsg_local`` with doorways left out of ``O_F`` (our variant, reported beside)."""
     fpsg_global_ex_doorways: float | None = None
-    """``fpsg_global`` with doorways left out of ``O_F``."""
 
 
 def grounding_scores(traj: Trajectory, final: Matching) -> Grounding:

@@ -73,7 +73,16 @@ def bootstrap_ci(
     if len(arr) < 2:
         return None, None
     fn = statistic if statistic is not None else (lambda a: a.mean(axis=1))
-    return _percentiles(fn, arr[resample_rows(rng_seed, len(arr), n_resamples)])
+    idx = resample_rows(rng_seed, len(arr), n_resamples)
+    with np.errstate(divide="ignore", invalid="ignore"):  # also inf - inf between inf values
+        values = np.asarray(fn(arr[idx]), dtype=float)
+        values = values[~np.isnan(values)]
+        if not len(values):
+            return None, None
+        alpha = (1.0 - CONFIDENCE) / 2.0
+        ends = np.quantile(values, [alpha, 1.0 - alpha], method="linear")
+    low, high = np.where(np.isnan(ends), math.inf, ends).tolist()
+    return low, high
 
 
 def draw_counts(idx: np.ndarray) -> np.ndarray:
@@ -84,44 +93,6 @@ def draw_counts(idx: np.ndarray) -> np.ndarray:
     counts = np.bincount(flat, minlength=n_resamples * n).reshape(n_resamples, n).astype(float)
     counts.flags.writeable = False
     return counts
-
-
-def bootstrap_sums_ci(
-    data: np.ndarray,
-    statistic: Callable[[np.ndarray], np.ndarray],
-    *,
-    rng_seed: int = 0,
-    n_resamples: int = N_RESAMPLES,
-) -> tuple[float | None, float | None]:
-    r""":func:`bootstrap_ci` of a statistic of the resampled column sums of whole-number
-    ``data`` (n x k counts: events, steps, one-hot choices).
-
-    ``statistic`` maps the ``(n_resamples, k)`` sums ``data[rows].sum(axis=1)`` to
-    ``n_resamples`` values. The sums are resample counts (:func:`draw_counts`) times
-    ``data``: exact for whole numbers below ``2**53``, so the row resampling's interval bit for
-    bit, without gathering ``n_resamples x n`` rows. Edge cases as :func:`bootstrap_ci`.
-    """
-    arr = np.asarray(data, dtype=float)
-    if len(arr) < 2:
-        return None, None
-    return _percentiles(
-        statistic, draw_counts(resample_rows(rng_seed, len(arr), n_resamples)) @ arr
-    )
-
-
-def _percentiles(
-    statistic: Callable[[np.ndarray], np.ndarray], resampled: np.ndarray
-) -> tuple[float | None, float | None]:
-    """The 95 % percentile interval of ``statistic`` of the resamples (NaN values dropped)."""
-    with np.errstate(divide="ignore", invalid="ignore"):  # also inf - inf between inf values
-        values = np.asarray(statistic(resampled), dtype=float)
-        values = values[~np.isnan(values)]
-        if not len(values):
-            return None, None
-        alpha = (1.0 - CONFIDENCE) / 2.0
-        ends = np.quantile(values, [alpha, 1.0 - alpha], method="linear")
-    low, high = np.where(np.isnan(ends), math.inf, ends).tolist()
-    return low, high
 
 
 @dataclass(frozen=True)
@@ -407,15 +378,6 @@ class EbbinghausFit:
     """Evaluation points of ``r2`` (one of :data:`R2_POINTS`)."""
 
 
-def r2_grid(km: AnchoredKM, points: str) -> np.ndarray:
-    """The times at which :func:`ebbinghaus_fit` compares the two curves (see there)."""
-    if points == "events":
-        return np.asarray(km.event_times)
-    if points == "durations":
-        return np.asarray(km.times[1:])
-    return np.arange(0.0, math.floor(km.times[-1]) + 1.0)
-
-
 def ebbinghaus_fit(
     durations: Sequence[float] | np.ndarray,
     observed: Sequence[bool] | np.ndarray,
@@ -450,7 +412,12 @@ def ebbinghaus_fit(
         why = "no spells: nothing left view mapped"
         return EbbinghausFit(coverage, None, None, 0, 0, why, points)
     km = anchored_km(t, e, coverage=coverage)
-    grid = r2_grid(km, points)
+    if points == "events":
+        grid = np.asarray(km.event_times)
+    elif points == "durations":
+        grid = np.asarray(km.times[1:])
+    else:
+        grid = np.arange(0.0, math.floor(km.times[-1]) + 1.0)
     s_hat = np.array([km.at(x) for x in grid])
     reason = None if n_events else "no forgetting event: memory strength is unbounded"
     ss_tot = float(np.sum((s_hat - s_hat.mean()) ** 2)) if len(s_hat) else 0.0
