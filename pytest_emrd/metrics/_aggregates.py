@@ -203,9 +203,8 @@ class SerialPosition:
     """Episodes contributing to each bin of the paper's estimator."""
     excluded: int
     mle_early: float | None = None
-    """Our addition: exponential MLE of the mean TTF of the Early third pooled over episodes,
-    ``sum t_j / d`` (:func:`efc`), steps; ``inf`` with no forgetting event, None with no
-    spell. Likewise ``mle_middle`` and ``mle_late``."""
+    """Our censoring-aware estimate of the Early third (steps; see :func:`serial_position`).
+    Likewise ``mle_middle`` and ``mle_late``."""
     mle_middle: float | None = None
     mle_late: float | None = None
     spells: tuple[int, int, int] = (0, 0, 0)
@@ -274,8 +273,7 @@ class MillerCurve:
     events: tuple[int, ...]
     """Steps with a forgetting event per bin (the numerator)."""
     b_star: int | None
-    """Inflection bin: the largest rise between consecutive eligible bins, the first eligible
-    bin's rise measured from the anchor ``ML(0) = 0``."""
+    """Inflection bin (see :func:`miller_curve`)."""
     m_star: int | None
     """Effective capacity ``m* = b* w``."""
     reason: str | None = None

@@ -382,16 +382,9 @@ class Matcher:
             return None
         before = set(previous.key)
         held = previous.identity
-        identity: dict[str, int] = {}
-        changed: list[tuple[str, int, float, float]] = []
-        kept: set[str] = set()
-        for entry in key:
-            if entry not in before:
-                changed.append(entry)
-            else:
-                kept.add(entry[0])
-                if entry[0] in held:
-                    identity[entry[0]] = held[entry[0]]
+        changed = [e for e in key if e not in before]
+        kept = {e[0] for e in key if e in before}
+        identity = {e[0]: held[e[0]] for e in key if e in before and e[0] in held}
         unmatched = tuple(lb for lb in previous.unmatched if lb in kept)
         cols_of = self._layout.cols_of
         taken = set(identity.values())
