@@ -84,11 +84,7 @@ def tbs_curve(items: Iterable[EpisodeLike], *, t_max: int | None = None) -> TBSC
     horizon = t_max if t_max is not None else max((m.spec.max_steps for m in usable), default=0)
     if not usable or horizon < 1:
         return TBSCurve((), (), (), 0, excluded)
-    grid = np.empty((len(usable), horizon))
-    for i, m in enumerate(usable):
-        series = np.asarray(m.tbs[:horizon], dtype=float)
-        grid[i, : len(series)] = series
-        grid[i, len(series) :] = series[-1]
+    grid = np.array([(m.tbs + m.tbs[-1:] * horizon)[:horizon] for m in usable], dtype=float)
     mean, sd = tuple(grid.mean(axis=0).tolist()), tuple(grid.std(axis=0).tolist())
     return TBSCurve(tuple(range(1, horizon + 1)), mean, sd, len(usable), excluded)
 

@@ -133,9 +133,8 @@ def track_episode(traj: Trajectory) -> Track:
     for step in traj.steps:
         found = matcher.step(step.cognitive_map, found)
         entries = found.entries  # label -> its first entry, in the model's order
-        for lb in entries.keys() - first_pos.keys():
-            e = entries[lb]
-            first_pos[lb] = (e.x, e.z)
+        for lb, e in entries.items():
+            first_pos.setdefault(lb, (e.x, e.z))
         if matches and matches[-1].entries:  # Miller: m = |M_{t-1}| labels, M_{t-1} \ M_t
             loads.append(len(matches[-1].entries))
             forgets.append(not matches[-1].entries.keys() <= entries.keys())
