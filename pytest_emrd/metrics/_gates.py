@@ -150,9 +150,8 @@ def _r2(items: Sequence[EpisodeLike], *, rng_seed: int = 0) -> Estimate:
 
 @functools.lru_cache(maxsize=4)
 def _histogram_weights(rng_seed: int, n: int) -> np.ndarray:
-    """How often each of ``n`` episodes is drawn in each of :data:`N_RESAMPLES` resamples of
-    :func:`_r2`'s bootstrap, one ``default_rng(rng_seed).integers(0, n, n)`` per resample
-    (computed once, shared read-only)."""
+    """Draw counts of ``n`` episodes in :func:`_r2`'s resamples (read-only, computed once),
+    one ``default_rng(rng_seed).integers(0, n, n)`` per resample."""
     rng = np.random.default_rng(rng_seed)
     return draw_counts(np.stack([rng.integers(0, n, n) for _ in range(N_RESAMPLES)]))
 

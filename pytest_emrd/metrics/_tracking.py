@@ -142,7 +142,8 @@ def track_episode(traj: Trajectory) -> Track:
         held.append(matcher.held(found))
         if g_base:
             tbs.append(_tbs_value(found, first_pos, scale, g_base))
-    discovery = _discovery(held, [m.entries for m in matches])
+    when = discovered(held, [m.entries for m in matches])
+    discovery = {oid: rank for rank, oid in enumerate(sorted(when, key=when.__getitem__), 1)}
     final = matcher.match(traj.steps[-1].cognitive_map) if traj.steps else EMPTY_MATCHING
     kind_of = {o.object_id: matcher.types.index[o.object_type] for o in gt.objects}
     spells = _spells(traj, held, matches, kind_of, category, discovery)
@@ -151,18 +152,11 @@ def track_episode(traj: Trajectory) -> Track:
                  visits, matcher)  # fmt: skip
 
 
-def _discovery(held: list[dict[str, str]], written: list[dict[str, MapEntry]]) -> dict[str, int]:
-    """Object id -> discovery rank (1-based), ranked by :func:`discovered`."""
-    when = discovered(held, written)
-    ranked = sorted(when, key=when.__getitem__)
-    return {oid: rank for rank, oid in enumerate(ranked, start=1)}
-
-
 def discovered(
     held: list[dict[str, str]], written: list[dict[str, MapEntry]]
 ) -> dict[str, tuple[int, int, bool]]:
     """Object id -> ``(discovery step (0-based), position of its entry in that step's map,
-    discovered by a withdrawn pairing only)``, the key :func:`_discovery` ranks by."""
+    discovered by a withdrawn pairing only)``: the key discovery ranks are ordered by."""
     kept = _kept_pairings(held, written)
 
     def at(t: int, label: str) -> int:
