@@ -39,11 +39,8 @@ from pytest_emrd.rooms import FOCAL_COLUMNS, OTHER_LETTER, ROOM_LETTERS, SLUG_RO
 
 
 def positional_accuracy(items: Iterable[EpisodeLike]) -> tuple[float | None, ...]:
-    """Positional Accuracy (Eq. PA) of each episode, in input order.
-
-    None for an errored episode or when ``|G_base| = 0`` (see
-    :func:`positional_accuracy_score` for the formula and every edge case).
-    """
+    """Positional Accuracy (Eq. PA) of each episode, in input order: None for an errored
+    episode or ``|G_base| = 0`` (formula and edge cases: :func:`positional_accuracy_score`)."""
     return tuple(m.pa for m in as_episode_metrics(items))
 
 
@@ -87,11 +84,7 @@ def tbs_curve(items: Iterable[EpisodeLike], *, t_max: int | None = None) -> TBSC
     horizon = t_max if t_max is not None else max((m.spec.max_steps for m in usable), default=0)
     if not usable or horizon < 1:
         return TBSCurve((), (), (), 0, excluded)
-    grid = np.empty((len(usable), horizon))
-    for i, m in enumerate(usable):
-        series = np.asarray(m.tbs[:horizon], dtype=float)
-        grid[i, : len(series)] = series
-        grid[i, len(series) :] = series[-1]
+    grid = np.array([(m.tbs + m.tbs[-1:] * horizon)[:horizon] for m in usable], dtype=float)
     mean, sd = tuple(grid.mean(axis=0).tolist()), tuple(grid.std(axis=0).tolist())
     return TBSCurve(tuple(range(1, horizon + 1)), mean, sd, len(usable), excluded)
 
@@ -206,9 +199,8 @@ class SerialPosition:
     """Episodes contributing to each bin of the paper's estimator."""
     excluded: int
     mle_early: float | None = None
-    """Our addition: exponential MLE of the mean TTF of the Early third pooled over episodes,
-    ``sum t_j / d`` (:func:`efc`), steps; ``inf`` with no forgetting event, None with no
-    spell. Likewise ``mle_middle`` and ``mle_late``."""
+    """Our censoring-aware estimate of the Early third (steps; see :func:`serial_position`).
+    Likewise ``mle_middle`` and ``mle_late``."""
     mle_middle: float | None = None
     mle_late: float | None = None
     spells: tuple[int, int, int] = (0, 0, 0)
@@ -277,8 +269,7 @@ class MillerCurve:
     events: tuple[int, ...]
     """Steps with a forgetting event per bin (the numerator)."""
     b_star: int | None
-    """Inflection bin: the largest rise between consecutive eligible bins, the first eligible
-    bin's rise measured from the anchor ``ML(0) = 0``."""
+    """Inflection bin (see :func:`miller_curve`)."""
     m_star: int | None
     """Effective capacity ``m* = b* w``."""
     reason: str | None = None

@@ -1,10 +1,8 @@
 """The per-episode scores (the inner terms of the paper's equations) and their result.
 
-:class:`EpisodeMetrics` holds every EMRD score of one trajectory as plain data: what the
-results store may save beside each trajectory and what every aggregate and gate reads, so an
-episode's steps are matched once however many metrics are asked for. Aggregates accept
-trajectories or ``EpisodeMetrics`` interchangeably. All functions are pure; "undefined" is
-``None`` together with a reason, never a silent 0.0.
+:class:`EpisodeMetrics` holds every EMRD score of one trajectory as plain data, what every
+aggregate and gate reads, so an episode's steps are matched once however many metrics are
+asked for. "Undefined" is ``None`` together with a reason, never a silent 0.0.
 """
 
 from __future__ import annotations
@@ -156,7 +154,7 @@ def hallucination_score(matching: Matching) -> float | None:
 
 @dataclass(frozen=True)
 class Grounding:
-    """Decide-phase scores of one episode (Appendix B, FPSG)."""
+    """Decide-phase scores of one episode (Appendix B, FPSG), as in :class:`EpisodeMetrics`."""
 
     fpsg_local: float | None
     fpsg_global: float | None
@@ -164,9 +162,7 @@ class Grounding:
     any_bias: bool | None
     reasons: dict[str, str]
     fpsg_local_ex_doorways: float | None = None
-    """``fpsg_local`` with doorways left out of ``O_F`` (our variant, reported beside)."""
     fpsg_global_ex_doorways: float | None = None
-    """``fpsg_global`` with doorways left out of ``O_F``."""
 
 
 def grounding_scores(traj: Trajectory, final: Matching) -> Grounding:
@@ -511,9 +507,7 @@ def as_episode_metrics(items: Iterable[EpisodeLike]) -> list[EpisodeMetrics]:
     return [i if isinstance(i, EpisodeMetrics) else episode_metrics(i) for i in items]
 
 
-def split_errored(
-    items: Iterable[EpisodeLike],
-) -> tuple[list[EpisodeMetrics], int]:
+def split_errored(items: Iterable[EpisodeLike]) -> tuple[list[EpisodeMetrics], int]:
     """The non-errored episode metrics, and how many errored episodes were excluded."""
     all_metrics = as_episode_metrics(items)
     kept = [m for m in all_metrics if not m.errored]

@@ -31,7 +31,6 @@ from pytest_emrd.metrics._stats import (
     N_RESAMPLES,
     Estimate,
     bootstrap_ci,
-    bootstrap_sums_ci,
     draw_counts,
 )
 from pytest_emrd.rooms import FOCAL_COLUMNS, OTHER_LETTER
@@ -89,10 +88,11 @@ def _ratio_of(name: str, num: str, den: str) -> Compute:
             why = kept[0].reasons.get(name) or f"{name} has an empty denominator"
             return Estimate(None, None, None, len(kept), why, errored)
 
-        def ratio(sums: np.ndarray) -> np.ndarray:
+        def ratio(rows: np.ndarray) -> np.ndarray:  # exact sums: the counts are whole numbers
+            sums = rows.sum(axis=1)
             return np.divide(sums[:, 0], sums[:, 1])
 
-        low, high = bootstrap_sums_ci(pairs, ratio, rng_seed=rng_seed)
+        low, high = bootstrap_ci(pairs, ratio, rng_seed=rng_seed)
         value = math.inf if total_den == 0 else float(total_num / total_den)
         reason = None
         if math.isinf(value):
@@ -112,10 +112,10 @@ def _consensus(items: Sequence[EpisodeLike], *, rng_seed: int = 0) -> Estimate:
     onehot[np.arange(len(kept)), [FOCAL_COLUMNS.index(m.chosen_letter) for m in kept]] = 1.0
     rooms = [FOCAL_COLUMNS.index(c) for c in FOCAL_COLUMNS if c != OTHER_LETTER]
 
-    def share(sums: np.ndarray) -> np.ndarray:
-        return sums[:, rooms].max(axis=1) / len(kept)
+    def share(rows: np.ndarray) -> np.ndarray:
+        return rows.sum(axis=1)[:, rooms].max(axis=1) / len(kept)
 
-    low, high = bootstrap_sums_ci(onehot, share, rng_seed=rng_seed)
+    low, high = bootstrap_ci(onehot, share, rng_seed=rng_seed)
     return Estimate(result.share, low, high, len(kept), None, errored)
 
 
@@ -150,9 +150,8 @@ def _r2(items: Sequence[EpisodeLike], *, rng_seed: int = 0) -> Estimate:
 
 @functools.lru_cache(maxsize=4)
 def _histogram_weights(rng_seed: int, n: int) -> np.ndarray:
-    """How often each of ``n`` episodes is drawn in each of :data:`N_RESAMPLES` resamples of
-    :func:`_r2`'s bootstrap, one ``default_rng(rng_seed).integers(0, n, n)`` per resample
-    (computed once, shared read-only)."""
+    """Draw counts of ``n`` episodes in :func:`_r2`'s resamples (read-only, computed once),
+    one ``default_rng(rng_seed).integers(0, n, n)`` per resample."""
     rng = np.random.default_rng(rng_seed)
     return draw_counts(np.stack([rng.integers(0, n, n) for _ in range(N_RESAMPLES)]))
 

@@ -1,49 +1,30 @@
 """Label-to-ground-truth matching: the one procedure every metric uses.
 
 A model writes its cognitive map as ``{label: {type, x, z, room}}`` with labels and types of
-its own, in a frame of its own (the paper's "arbitrary egocentric origins", resolved "using an
-optimal rigid-body Procrustes alignment"). :func:`match_map` decides which object each entry
-of one map stands for, from that map alone:
+its own, in a frame of its own. :func:`match_map` decides which object each entry of one map
+stands for, from that map alone:
 
-1. **Labels.** A label is one recorded instance; a repeated label keeps its first entry.
+1. **Labels.** A repeated label keeps its first entry.
 2. **Types** (:mod:`._vocab`): the entry's ``object_type``, else its label, restricted to the
-   layout's types; an entry of no such type is *unrecognised* (a hallucination) and takes no
-   part in the frame or the matching.
-3. **Frame** (:func:`_solve`), robust to hallucinated entries. *Hypotheses*: the entries with
-   the fewest candidate objects (then farthest from the written centroid, then by label; at
-   most :data:`BASE_ENTRIES`) are paired, and every pair of distinct candidate objects whose
-   distance agrees with the written one within ``2 * GATE_M`` gives the proper rigid motion
-   carrying the two entries onto them. *Score* (truncated least squares, MSAC): each entry
-   costs its squared distance to the nearest object of its type, capped at ``GATE_M ** 2``,
-   so an outlier cannot pull the frame. The lowest score wins, the first on equal scores (a
-   symmetric layout), the Procrustes fit of labels that are object ids (``Chair_3``) first.
-   *Refit*: assign (step 4), fit Procrustes (:func:`rigid_fit`) on the matched pairs only,
-   assign again, until the pairs repeat (at most :data:`MAX_ROUNDS`).
-4. **Assignment with a gate.** An entry may match an object of its type only within
-   :data:`GATE_M` metres after alignment; the one-to-one assignment with the most pairs, then
-   the least summed squared distance, is taken (:func:`scipy.optimize.linear_sum_assignment`).
-   **Tie rule**: squared distances are rounded to :data:`TIE_M2` first, so differences at
-   floating tolerance (another CPU, BLAS or library version) cannot flip a pair.
+   layout's types; an entry of no such type is *unrecognised* and takes no part below.
+3. **Frame** (:func:`_solve`): hypotheses are the rigid motions carrying two base entries
+   (:data:`BASE_ENTRIES`, fewest candidate objects first) onto two objects of their types
+   whose distance agrees within ``2 * GATE_M``, plus the Procrustes fit of labels that are
+   object ids (``Chair_3``). Each is scored by truncated least squares (MSAC: an entry costs
+   its squared distance to the nearest object of its type, capped at ``GATE_M ** 2``); the
+   lowest score wins, the first on equal scores. Then assignment and Procrustes refit
+   (:func:`rigid_fit`) on the matched pairs alternate until the pairs repeat.
+4. **Assignment with a gate** (:data:`GATE_M`): the one-to-one assignment with the most pairs,
+   then the least summed squared distance, rounded to :data:`TIE_M2` first (the tie rule).
 
-Recognised entries left without a pair are *unmatched*: Eq. PA's charge, and what map
-precision leaves out. Only distances are compared, so the matching is **invariant under any
-proper rigid motion** of the map; **reflections are not forgiven** (a mirrored map keeps its
-residual and loses pairs at the gate).
-
-**Across steps** (:meth:`Matcher.step`: TBS, spells, SIR) two uses of history. (a) The
-previous frame and pairs are extended to the entries written or moved since when they explain
-them all (each within the gate of a free object of its type, no object freed that an
-unmatched entry could take); otherwise, and when a frame found on fewer than :data:`SETTLED`
-entries has grown by :data:`REVISIT`, the full search runs with the previous frame as one more
-hypothesis. Only a frame whose rotation the map determined (from a pair of entries, or a fit
-of two or more distinct points) is carried: one entry's identity rotation is the model
-frame's own. (b) A label keeps its previous object on exact ties (its rounded cost is lowered
-by half a unit); a carried pairing the geometry contradicts is dropped. The terminal scores
-(AEC, PA, precision, FPSG) use :func:`match_map` of the terminal map alone.
-
-:func:`reframe` moves every map entry of an episode by one rigid motion (or a mirror), leaving
-ground truth and poses alone, so a caller can check that each metric is unchanged (``emrd
-validate`` and the property tests do).
+Recognised entries left without a pair are *unmatched* (Eq. PA's charge). The matching is
+invariant under proper rigid motions; reflections are not forgiven. **Across steps**
+(:meth:`Matcher.step`: TBS, spells, SIR) the previous frame and pairs are extended to new or
+moved entries when they explain them all, otherwise the full search runs with the previous
+frame as one more hypothesis (also when a frame found on fewer than :data:`SETTLED` entries
+has grown by :data:`REVISIT`); a label keeps its previous object on exact ties. The docs page
+"Map and memory metrics a model cannot fool" gives each rule's reason and measured effect.
+:func:`reframe` moves every map entry of an episode by one rigid motion (or a mirror).
 """
 
 from __future__ import annotations
@@ -183,12 +164,9 @@ class _Problem:
     def __init__(self, labels: list[str], kinds: list[int], pred: np.ndarray, layout: _Layout):
         self.labels, self.kinds, self.pred, self.layout = labels, kinds, pred, layout
         self.same = np.asarray(kinds, dtype=int)[:, None] == layout.kinds[None, :]
-        """(n x m): object ``j`` is of entry ``i``'s type."""
         rows, cols = np.nonzero(self.same)
-        self.candidates = rows, cols
-        """Every (entry, object of its type), by entry."""
-        self.starts = np.searchsorted(rows, np.arange(len(kinds)))
-        """Where each entry's candidates start in ``candidates``."""
+        self.candidates = rows, cols  # every (entry, object of its type), by entry
+        self.starts = np.searchsorted(rows, np.arange(len(kinds)))  # each entry's first one
 
 
 @dataclass(frozen=True)
@@ -247,9 +225,8 @@ def _assign(problem: _Problem, motion: Motion, prefer: np.ndarray | None = None)
 
 
 def _refit(problem: _Problem, pairs: Pairs, motion: Motion) -> tuple[Motion, bool]:
-    """Procrustes on the pairs (two or more points not all coincident); with fewer, the
-    current rotation with the translation that puts the first pair's entry on its object.
-    The flag: the rotation was read from the pairs (Procrustes)."""
+    """Procrustes on the pairs (flag True), or with fewer than two distinct points the current
+    rotation, translated to put the first pair's entry on its object."""
     p = problem.pred[[i for i, _ in pairs]]
     q = problem.layout.true[[j for _, j in pairs]]
     if len(pairs) >= 2 and np.ptp(p, axis=0).max() > COINCIDENT_M:
@@ -263,9 +240,8 @@ def _refit(problem: _Problem, pairs: Pairs, motion: Motion) -> tuple[Motion, boo
 def _refine(
     problem: _Problem, motion: Motion, prefer: np.ndarray | None, read: bool
 ) -> tuple[Pairs, Motion, bool]:
-    """Alternate assignment and refit on the inliers from ``motion`` until the pairs repeat.
-    ``read``: the rotation of ``motion`` was read from the map (returned updated: true when
-    it was, or when a refit read it from the pairs)."""
+    """Alternate assignment and refit until the pairs repeat; ``read`` (returned updated):
+    the rotation was read from the map."""
     pairs = _assign(problem, motion, prefer)
     for _ in range(MAX_ROUNDS):
         if not pairs:
@@ -280,11 +256,8 @@ def _refine(
 
 
 def _hypotheses(problem: _Problem) -> tuple[np.ndarray, bool]:
-    """Frame hypotheses from base pairs of entries (module docstring, step 3), as rows
-    ``(c, s, tx, tz)``: the motion taking entry ``a`` onto object ``o_a`` and ``b`` onto ``o_b``
-    in direction, with the midpoints matched. The flag is False when no pair gives a
-    direction: the rows are then translations with the identity rotation *of the model's
-    frame*, a rotation the map does not determine."""
+    """Frame hypotheses (step 3) as rows ``(c, s, tx, tz)``; the flag is False when no pair
+    of entries gives a direction (translations only, the model frame's own rotation)."""
     layout, pred = problem.layout, problem.pred
     kinds, labels = problem.kinds, problem.labels
     spread = _units(np.sum((pred - pred.mean(axis=0)) ** 2, axis=1)).tolist()
@@ -329,9 +302,8 @@ def _scores(problem: _Problem, motions: np.ndarray) -> np.ndarray:
 def _solve(
     problem: _Problem, seeds: Sequence[Motion] = (), prefer: np.ndarray | None = None
 ) -> tuple[Pairs, Motion, bool]:
-    """Step 3: the best of ``seeds`` and the hypotheses (the first on equal scores), refined.
-    ``seeds`` are motions whose rotation was read from a map; the flag: so is the result's
-    (False: the map fixes no direction, the rotation is the model frame's own)."""
+    """Step 3: the best of ``seeds`` and the hypotheses (the first on equal scores), refined;
+    the flag: the result's rotation was read from a map."""
     motions, read = _hypotheses(problem)
     if seeds:
         motions = np.concatenate([np.asarray(seeds, dtype=float), motions])
@@ -359,7 +331,6 @@ class StepMatch(NamedTuple):
     """The frame found (None: no recognised entry, or a frame whose rotation the map does
     not determine: one point, or points giving no direction; such a frame is not carried)."""
     key: Key
-    """The recognised entries."""
     solved: int = 0
     """Recognised entries when the frame was last searched for (:meth:`Matcher._match`)."""
 
@@ -401,10 +372,9 @@ class Matcher:
         return found._replace(**extra)
 
     def _extend(self, previous: StepMatch, key: Key) -> StepMatch | None:
-        """The previous step's matching extended to the entries written or moved since, in
-        its frame, when that explains them all: every new or moved entry has a free object of
-        its type within the gate, no two want the same one, and no object was freed that an
-        unmatched entry might take. None otherwise (the caller matches afresh)."""
+        """The previous matching extended to the entries written or moved since, when each
+        has a free object of its type within the gate and no freed object could take an
+        unmatched entry; None otherwise."""
         motion = previous.motion
         if motion is None or len(previous.identity) < 3:
             return None
@@ -412,16 +382,9 @@ class Matcher:
             return None
         before = set(previous.key)
         held = previous.identity
-        identity: dict[str, int] = {}
-        changed: list[tuple[str, int, float, float]] = []
-        kept: set[str] = set()
-        for entry in key:
-            if entry not in before:
-                changed.append(entry)
-            else:
-                kept.add(entry[0])
-                if entry[0] in held:
-                    identity[entry[0]] = held[entry[0]]
+        changed = [e for e in key if e not in before]
+        kept = {e[0] for e in key if e in before}
+        identity = {e[0]: held[e[0]] for e in key if e in before and e[0] in held}
         unmatched = tuple(lb for lb in previous.unmatched if lb in kept)
         cols_of = self._layout.cols_of
         taken = set(identity.values())
@@ -439,9 +402,8 @@ class Matcher:
         return StepMatch({}, {}, identity, unmatched, (), (), motion, key, previous.solved)
 
     def _nearest(self, motion: Motion, x: float, z: float, cols: list[int]) -> int:
-        """The object of ``cols`` nearest to written point ``(x, z)`` after ``motion`` within
-        the gate, -1 when none is. Tie rule: a later object replaces the best so far only when
-        nearer by more than :data:`TIE_M2`, so the first (lowest id) wins near-ties."""
+        """The object of ``cols`` nearest to ``(x, z)`` after ``motion`` within the gate (-1:
+        none); the first wins unless a later one is nearer by more than :data:`TIE_M2`."""
         c, s, tx, tz = motion
         px, pz = c * x - s * z + tx, s * x + c * z + tz
         best, least = -1, GATE_M**2 + TIE_M2

@@ -1,12 +1,10 @@
 """Statistics of the paper: bootstrap CIs, chi-square, Fisher, Cramer's V, ANOVA, survival.
 
-scipy, statsmodels and lifelines are the engines (imported on first use, so importing the
-metrics package stays cheap for the plugin); this module fixes the conventions (no continuity
-correction, two-sided tests, seeded percentile bootstrap) and turns degenerate input into a
-result with a reason instead of a warning or a NaN. Survival inputs are durations (steps an
-object was retained out of view) with event flags (True: dropped; False: right-censored, seen
-again or the episode ended while still held); censoring is assumed non-informative, as
-Kaplan-Meier and the exponential MLE require.
+scipy, statsmodels and lifelines are the engines (imported on first use); this module fixes
+the conventions (no continuity correction, two-sided tests, seeded percentile bootstrap) and
+turns degenerate input into a result with a reason instead of a warning or a NaN. Survival
+inputs are durations (steps retained out of view) with event flags (True: dropped; False:
+right-censored); censoring is assumed non-informative, as Kaplan-Meier and the MLE require.
 """
 
 from __future__ import annotations
@@ -74,11 +72,17 @@ def bootstrap_ci(
     arr = np.asarray(data, dtype=float)
     if len(arr) < 2:
         return None, None
-    idx = resample_rows(rng_seed, len(arr), n_resamples)
     fn = statistic if statistic is not None else (lambda a: a.mean(axis=1))
-    with np.errstate(divide="ignore", invalid="ignore"):
+    idx = resample_rows(rng_seed, len(arr), n_resamples)
+    with np.errstate(divide="ignore", invalid="ignore"):  # also inf - inf between inf values
         values = np.asarray(fn(arr[idx]), dtype=float)
-    return _percentiles(values)
+        values = values[~np.isnan(values)]
+        if not len(values):
+            return None, None
+        alpha = (1.0 - CONFIDENCE) / 2.0
+        ends = np.quantile(values, [alpha, 1.0 - alpha], method="linear")
+    low, high = np.where(np.isnan(ends), math.inf, ends).tolist()
+    return low, high
 
 
 def draw_counts(idx: np.ndarray) -> np.ndarray:
@@ -86,47 +90,9 @@ def draw_counts(idx: np.ndarray) -> np.ndarray:
     indices): the ``n_resamples x n`` counts as read-only floats, ready to multiply data."""
     n_resamples, n = idx.shape
     flat = (idx + n * np.arange(n_resamples)[:, None]).ravel()  # row r counts into r*n ..
-    counts = np.bincount(flat, minlength=n_resamples * n).reshape(n_resamples, n)
-    counts = counts.astype(float)
+    counts = np.bincount(flat, minlength=n_resamples * n).reshape(n_resamples, n).astype(float)
     counts.flags.writeable = False
     return counts
-
-
-def bootstrap_sums_ci(
-    data: np.ndarray,
-    statistic: Callable[[np.ndarray], np.ndarray],
-    *,
-    rng_seed: int = 0,
-    n_resamples: int = N_RESAMPLES,
-) -> tuple[float | None, float | None]:
-    r""":func:`bootstrap_ci` of a statistic of the resampled column sums of whole-number
-    ``data`` (n x k counts: events, steps, one-hot choices).
-
-    ``statistic`` maps the ``(n_resamples, k)`` sums ``data[rows].sum(axis=1)`` to
-    ``n_resamples`` values. The sums are resample counts (:func:`draw_counts`) times
-    ``data``: exact for whole numbers below ``2**53``, so the row resampling's interval bit for
-    bit, without gathering ``n_resamples x n`` rows. Edge cases as :func:`bootstrap_ci`.
-    """
-    arr = np.asarray(data, dtype=float)
-    if len(arr) < 2:
-        return None, None
-    sums = draw_counts(resample_rows(rng_seed, len(arr), n_resamples)) @ arr
-    with np.errstate(divide="ignore", invalid="ignore"):
-        values = np.asarray(statistic(sums), dtype=float)
-    return _percentiles(values)
-
-
-def _percentiles(values: np.ndarray) -> tuple[float | None, float | None]:
-    """The 95 % percentile interval of the resampled statistic (NaN resamples dropped)."""
-    values = values[~np.isnan(values)]
-    if not len(values):
-        return None, None
-    alpha = (1.0 - CONFIDENCE) / 2.0
-    with np.errstate(invalid="ignore"):  # inf - inf while interpolating between inf values
-        low, high = np.quantile(values, [alpha, 1.0 - alpha], method="linear")
-    return float(low) if not np.isnan(low) else math.inf, (
-        float(high) if not np.isnan(high) else math.inf
-    )
 
 
 @dataclass(frozen=True)
@@ -412,15 +378,6 @@ class EbbinghausFit:
     """Evaluation points of ``r2`` (one of :data:`R2_POINTS`)."""
 
 
-def r2_grid(km: AnchoredKM, points: str) -> np.ndarray:
-    """The times at which :func:`ebbinghaus_fit` compares the two curves (see there)."""
-    if points == "events":
-        return np.asarray(km.event_times)
-    if points == "durations":
-        return np.asarray(km.times[1:])
-    return np.arange(0.0, math.floor(km.times[-1]) + 1.0)
-
-
 def ebbinghaus_fit(
     durations: Sequence[float] | np.ndarray,
     observed: Sequence[bool] | np.ndarray,
@@ -455,7 +412,12 @@ def ebbinghaus_fit(
         why = "no spells: nothing left view mapped"
         return EbbinghausFit(coverage, None, None, 0, 0, why, points)
     km = anchored_km(t, e, coverage=coverage)
-    grid = r2_grid(km, points)
+    if points == "events":
+        grid = np.asarray(km.event_times)
+    elif points == "durations":
+        grid = np.asarray(km.times[1:])
+    else:
+        grid = np.arange(0.0, math.floor(km.times[-1]) + 1.0)
     s_hat = np.array([km.at(x) for x in grid])
     reason = None if n_events else "no forgetting event: memory strength is unbounded"
     ss_tot = float(np.sum((s_hat - s_hat.mean()) ** 2)) if len(s_hat) else 0.0

@@ -1,35 +1,27 @@
 """One pass over an episode's steps: what the map holds, when, and for how long.
 
 Every temporal metric (TBS, spells and time-to-forget, Kaplan-Meier, Ebbinghaus, serial
-position, Miller's law, SIR) reads the :class:`Track` built here, so an episode's steps are
-matched once. Definitions (step ``t`` is 1-based; :mod:`pytest_emrd.trajectory` has the
-timeline):
+position, Miller's law, SIR) reads the :class:`Track` built here. Step ``t`` is 1-based
+(:mod:`pytest_emrd.trajectory` has the timeline); the docs page "Map and memory metrics a
+model cannot fool" gives the reason and measured effect of each choice:
 
 * ``held(o, t)``: the matching of ``M_t`` (:meth:`._match.Matcher.step`) pairs one of its
-  entries with ground-truth object ``o``; that entry's label is ``o``'s *holder* at ``t``.
-  The terminal scores (AEC, PA, precision, FPSG) use :func:`._match.match_map` of the
-  terminal map alone, not this history. ``in_view(o, t)``: ``o`` is in ``visible_ids``.
-* **Spell** (out-of-view interval): starts at step ``s`` when ``o`` was in view and held at
-  ``s-1`` and is out of view at ``s``; it follows the holder ``l`` at ``s-1``. **Forgetting
-  is what the model did** (Appendix B: "only considered forgotten if the agent explicitly
-  drops it from its JSON working memory"): the first out-of-view step ``t`` at which ``l`` is
-  gone from ``M_t``, or relabelled away (its type no longer resolves to ``o``'s), is a
-  *forgetting event* of duration ``t - s + 1`` (the paper's KM example counts ``tau = 1`` as
-  the first step after leaving view). The spell is *right-censored* at ``t - s`` when ``o``
-  comes back into view at ``t`` with ``l`` still written, and at ``T - s + 1`` when the
-  episode ends at ``T``. Which object the matcher pairs ``l`` with meanwhile does not matter.
-  An object mapped while out of view opens no spell.
-* **Discovery** of ``o`` is also what the model did: the step at which the model wrote, as
-  it still stands, an entry whose label holds ``o`` for good (at that step's matching and at
-  every later step that writes the label). A pairing the matcher later withdraws does not
-  discover ``o``, and a late pairing of an entry written unchanged earlier counts from when
-  it was written (on a sparse early map a hallucinated entry can fit the layout as well as
-  the real ones until later entries fix the frame). An object no label holds for good is
-  discovered at the first step it is held. Discovery rank orders objects by that step, then
-  by the order the model wrote their entries in that step's map (never by id string, which
-  would put ``Chair_10`` before ``Chair_2``).
-* Miller's law and TBS follow the paper in tracking *labels* across steps ("objects are
-  matched across time steps exclusively using the string labels", Appendix B).
+  entries with object ``o``; that entry's label is ``o``'s *holder* at ``t``. The terminal
+  scores use :func:`._match.match_map` of the terminal map alone. ``in_view(o, t)``: ``o`` is
+  in ``visible_ids``.
+* **Spell**: starts at step ``s`` when ``o`` was in view and held at ``s-1`` and is out of
+  view at ``s``; it follows the holder ``l`` at ``s-1``. The first out-of-view step ``t`` at
+  which ``l`` is gone from ``M_t``, or relabelled away (its type no longer resolves to
+  ``o``'s), is a *forgetting event* of duration ``t - s + 1`` (the paper's KM example counts
+  ``tau = 1`` as the first step after leaving view). The spell is *right-censored* at
+  ``t - s`` when ``o`` comes back into view at ``t`` with ``l`` still written, and at
+  ``T - s + 1`` when the episode ends at ``T``. An object mapped out of view opens no spell.
+* **Discovery** of ``o``: the step at which the model wrote, as it still stands, an entry
+  whose label holds ``o`` for good (at that step's matching and at every later step that
+  writes the label); an object no label holds for good is discovered at the first step it is
+  held. Discovery rank orders objects by that step, then by the order of their entries in
+  that step's map (never by id string, which would put ``Chair_10`` before ``Chair_2``).
+* Miller's law and TBS track *labels* across steps, as the paper does (Appendix B).
 """
 
 from __future__ import annotations
@@ -141,9 +133,8 @@ def track_episode(traj: Trajectory) -> Track:
     for step in traj.steps:
         found = matcher.step(step.cognitive_map, found)
         entries = found.entries  # label -> its first entry, in the model's order
-        for lb in entries.keys() - first_pos.keys():
-            e = entries[lb]
-            first_pos[lb] = (e.x, e.z)
+        for lb, e in entries.items():
+            first_pos.setdefault(lb, (e.x, e.z))
         if matches and matches[-1].entries:  # Miller: m = |M_{t-1}| labels, M_{t-1} \ M_t
             loads.append(len(matches[-1].entries))
             forgets.append(not matches[-1].entries.keys() <= entries.keys())
@@ -151,7 +142,8 @@ def track_episode(traj: Trajectory) -> Track:
         held.append(matcher.held(found))
         if g_base:
             tbs.append(_tbs_value(found, first_pos, scale, g_base))
-    discovery = _discovery(held, [m.entries for m in matches])
+    when = discovered(held, [m.entries for m in matches])
+    discovery = {oid: rank for rank, oid in enumerate(sorted(when, key=when.__getitem__), 1)}
     final = matcher.match(traj.steps[-1].cognitive_map) if traj.steps else EMPTY_MATCHING
     kind_of = {o.object_id: matcher.types.index[o.object_type] for o in gt.objects}
     spells = _spells(traj, held, matches, kind_of, category, discovery)
@@ -160,20 +152,11 @@ def track_episode(traj: Trajectory) -> Track:
                  visits, matcher)  # fmt: skip
 
 
-def _discovery(held: list[dict[str, str]], written: list[dict[str, MapEntry]]) -> dict[str, int]:
-    """Object id -> discovery rank: by discovery step (module docstring), then by entry order
-    in that step's map (``written[t]``: the labels of ``M_t`` in the order the model wrote
-    them)."""
-    when = discovered(held, written)
-    ranked = sorted(when, key=when.__getitem__)
-    return {oid: rank for rank, oid in enumerate(ranked, start=1)}
-
-
 def discovered(
     held: list[dict[str, str]], written: list[dict[str, MapEntry]]
 ) -> dict[str, tuple[int, int, bool]]:
     """Object id -> ``(discovery step (0-based), position of its entry in that step's map,
-    discovered by a withdrawn pairing only)``, the key :func:`_discovery` ranks by."""
+    discovered by a withdrawn pairing only)``: the key discovery ranks are ordered by."""
     kept = _kept_pairings(held, written)
 
     def at(t: int, label: str) -> int:
@@ -216,10 +199,8 @@ _WITHDRAWN = ""
 def _kept_pairings(
     held: list[dict[str, str]], written: list[dict[str, MapEntry]]
 ) -> list[set[tuple[str, str]]]:
-    """For every step, the ``(object, label)`` pairs the label keeps: at every later step at
-    which the label is written it still holds that object. Walked backwards, remembering for
-    each label the object it holds at all later steps that write it (:data:`_WITHDRAWN` when
-    those differ, or when one leaves it unmatched)."""
+    """For every step, the ``(object, label)`` pairs the label keeps at every later step that
+    writes it (walked backwards; :data:`_WITHDRAWN` marks a label whose later objects differ)."""
     later: dict[str, str] = {}
     kept: list[set[tuple[str, str]]] = [set() for _ in held]
     for t in range(len(held) - 1, -1, -1):

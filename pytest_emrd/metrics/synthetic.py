@@ -85,12 +85,8 @@ _SPELLINGS: Final[dict[str, tuple[str, ...]]] = {
     "CounterTop": ("CounterTop", "counter"),
 }
 _VISIBILITY: Final[dict[str, float]] = {"baseline": 0.5, "low_light": 0.3, "texture": 0.45}
-_CHOICES: Final[tuple[tuple[str | None, float], ...]] = (
-    (CONFERENCE, 0.6),
-    (ENTRANCE, 0.3),
-    (KITCHEN, 0.05),
-    (OFFICE, 0.05),
-)
+_CHOICES: Final = (CONFERENCE, ENTRANCE, KITCHEN, OFFICE)
+_CHOICE_P: Final = (0.6, 0.3, 0.05, 0.05)
 _RATIONALES: Final[dict[str, str]] = {
     CONFERENCE: "The conference room is the safest gathering point: large, open and central.",
     ENTRANCE: "The entrance is closest to the building exit, so it is the safest gathering point.",
@@ -204,10 +200,7 @@ def synthetic_trajectory(
                  success=not failed, feedback="could not read the reply" if failed else "ok",
                  parse_error="no JSON object in the reply" if failed else None)
         )  # fmt: skip
-    chosen: str | None = None
-    if terminate:
-        names = [c for c, _ in _CHOICES]
-        chosen = names[int(rng.choice(len(names), p=[p for _, p in _CHOICES]))]
+    chosen = _CHOICES[int(rng.choice(len(_CHOICES), p=_CHOICE_P))] if terminate else None
     return Trajectory(
         spec=spec, protocol="synthetic-1", ground_truth=truth, steps=tuple(steps),
         status="terminated" if terminate else "budget", final_room=room, chosen_room=chosen,

@@ -17,7 +17,7 @@ from pytest_emrd.metrics import (
     cramers_v,
     fisher_exact_2x2,
 )
-from pytest_emrd.metrics._stats import bootstrap_sums_ci, draw_counts, resample_rows
+from pytest_emrd.metrics._stats import draw_counts, resample_rows
 
 #: Appendix F / Table "Inventory-Free": rows Conference, Kitchen, Entrance, Office;
 #: columns with inventory (n = 79), without inventory (n = 80).
@@ -157,28 +157,6 @@ def test_bootstrap_is_seeded_and_brackets_the_mean() -> None:
 )
 def test_bootstrap_edge_cases(data: list[float], expected: tuple[float | None, ...]) -> None:
     assert bootstrap_ci(data) == expected
-
-
-whole = st.integers(0, 60).map(float)
-columns = st.integers(1, 5).flatmap(
-    lambda k: st.lists(st.lists(whole, min_size=k, max_size=k), max_size=40).map(
-        lambda rows: np.array(rows, dtype=float).reshape(len(rows), k)
-    )
-)
-
-
-@given(columns, st.integers(0, 3))
-def test_bootstrap_of_sums_is_the_bootstrap_of_the_summed_resamples(
-    data: np.ndarray, seed: int
-) -> None:
-    # counts times whole-number data: the interval of the resampled rows, bitwise
-
-    def statistic(sums: np.ndarray) -> np.ndarray:
-        return sums.max(axis=1) / np.maximum(sums[:, 0], 1.0)
-
-    want = bootstrap_ci(data, lambda a: statistic(a.sum(axis=1)), rng_seed=seed, n_resamples=300)
-    got = bootstrap_sums_ci(data, statistic, rng_seed=seed, n_resamples=300)
-    assert got == want
 
 
 def test_draw_counts_count_the_resampled_rows() -> None:
