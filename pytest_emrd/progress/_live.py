@@ -1,16 +1,12 @@
 """Live progress: each step and retry of a running episode, as it happens (observation only:
 what the model is sent, and every trajectory, stay the same).
 
-:class:`EpisodeWatch`, around one episode, logs each step on the ``pytest_emrd.episode``
-logger (INFO live, DEBUG on replay; ``pytest --log-cli-level=INFO`` shows them) and counts the
-retry records (:data:`~pytest_emrd._logging.RETRY_ATTR`) the ``pytest_emrd`` logger receives.
-A live episode publishes its state to its process's :class:`StatusFile`,
-``<folder>/live/<worker>.json`` (the session's folder), rewritten atomically; replays are
-too fast to watch and stay as cheap as they are. On the controller :class:`LiveBoard` makes
-one line of them (``emrd live 3/96 recorded, 2 retries | gw0 <case> step 12/50 | gw1 <case>
-step 9/50, retry 2: HTTP 429: ...``), printed at once after a new retry or error, else at most
-every ``interval`` seconds when something moved; :class:`Ticker` polls it from a daemon
-thread (workers cannot write to the controller's terminal).
+:class:`EpisodeWatch` logs each step on the ``pytest_emrd.episode`` logger and counts retries;
+a live episode publishes its state to a :class:`StatusFile` (replays are too fast to watch and
+stay as cheap as they are). On the controller, :class:`LiveBoard` makes one line of them
+(``emrd live 3/96 recorded, 2 retries | gw0 <case> step 12/50, retry 2: HTTP 429: ...``) and
+:class:`Ticker` prints it from a daemon thread (workers cannot write to the controller's
+terminal).
 """
 
 from __future__ import annotations
@@ -19,13 +15,13 @@ import dataclasses
 import functools
 import json
 import logging
+import math
 import os
 import threading
 import time
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, replace
+from dataclasses import KW_ONLY, dataclass, field, replace
 from pathlib import Path
-from types import TracebackType
 from typing import TYPE_CHECKING, Any, Final
 
 from pytest_emrd._atomic import write_bytes_atomic
@@ -136,24 +132,19 @@ def render_line(statuses: Sequence[WorkerStatus], total: int) -> str:
     return " | ".join(parts)
 
 
+@dataclass
 class LiveBoard:
-    """Decides which live lines to print for one run directory."""
+    """Decides which live lines to print for one run directory: at once after a new retry or
+    error, else at most every ``interval`` seconds when the line changed."""
 
-    def __init__(
-        self,
-        run_dir: Path,
-        *,
-        total: int,
-        interval: float = INTERVAL_S,
-        clock: Callable[[], float] = time.monotonic,
-    ) -> None:
-        self.run_dir = run_dir
-        self.total = total
-        self.interval = interval
-        self.clock = clock
-        self._last_line = ""
-        self._last_time = -float("inf")
-        self._urgent_seen = (0, 0)
+    run_dir: Path
+    _: KW_ONLY
+    total: int
+    interval: float = INTERVAL_S
+    clock: Callable[[], float] = time.monotonic
+    _last_line: str = field(default="", init=False)
+    _last_time: float = field(default=-math.inf, init=False)
+    _urgent_seen: tuple[int, int] = field(default=(0, 0), init=False)
 
     def poll(self) -> str | None:
         """The line to print now, or ``None``."""
@@ -252,9 +243,7 @@ class EpisodeWatch(logging.Handler):
                                errored=totals.errored + (trajectory.status == "errored"),
                                retries_total=totals.retries_total + self.retries)  # fmt: skip
 
-    def __exit__(
-        self, kind: type[BaseException] | None, exc: BaseException | None, tb: TracebackType | None
-    ) -> None:
+    def __exit__(self, *exc: object) -> None:
         logging.getLogger(ROOT_LOGGER).removeHandler(self)
 
     def _publish(self, **changes: object) -> None:

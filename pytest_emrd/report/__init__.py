@@ -11,19 +11,20 @@ Typical use::
     write_report(build_report(trajectories), Path("results/run1/report"))
 """
 
-from pytest_emrd.report._build import build_report, group_cells
+from pytest_emrd.report._build import align_map, build_report, group_cells
 from pytest_emrd.report._compare import COMPARED, Comparison, Difference, compare_runs
 from pytest_emrd.report._model import FIGURES, Report, row_label
 from pytest_emrd.report._render import (
     FORMATS,
+    append_step_summary,
     check_formats,
     render_comparison,
     render_files,
     report_json,
     step_summary_markdown,
+    write_files,
+    write_report,
 )
-from pytest_emrd.report._tables import align_map
-from pytest_emrd.report._write import append_step_summary, write_files, write_report
 
 __all__ = [
     "COMPARED",

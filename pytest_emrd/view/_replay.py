@@ -69,11 +69,8 @@ def replay_frames(traj: Trajectory) -> Replay:
 
 
 def _digests(node: Any) -> Iterator[str]:
-    if isinstance(node, dict):
-        for value in node.values():
-            yield from _digests(value)
-    elif isinstance(node, list):
-        for value in node:
+    if isinstance(node, dict | list):
+        for value in node.values() if isinstance(node, dict) else node:
             yield from _digests(value)
     elif isinstance(node, str) and DIGEST.match(node):
         yield node
