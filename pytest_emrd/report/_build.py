@@ -94,30 +94,24 @@ def intervention_tables(cells: Cells) -> tuple[InterventionTable, ...]:
     5 x 2 table). Errored episodes are excluded, as in every focal-point count.
     """
     by_cell: dict[tuple[str, str], dict[str, Sequence[EpisodeMetrics]]] = {}
-    for (model, variant, condition), ems in cells.items():
+    for (model, variant, condition), ems in cells.items():  # variants in the paper's order
         by_cell.setdefault((model, condition), {})[variant] = ems
     tables = []
     for (model, condition), variants in by_cell.items():
         if "default" not in variants or len(variants) < 2:
             continue
-        reference = metrics.focal_distribution(variants["default"]).overall
-        ref_counts = [reference.counts[c] for c in FOCAL_COLUMNS]
+        reference = metrics.focal_distribution(variants.pop("default")).overall
         tests = []
-        for variant in sorted(
-            (v for v in variants if v != "default"), key=lambda v: rank(v, VARIANTS)
-        ):
-            row = metrics.focal_distribution(variants[variant]).overall
-            table = [ref_counts, [row.counts[c] for c in FOCAL_COLUMNS]]
+        for variant, ems in variants.items():
+            row = metrics.focal_distribution(ems).overall
+            table = [[r.counts[c] for c in FOCAL_COLUMNS] for r in (reference, row)]
             split = [_conference_split(reference.counts), _conference_split(row.counts)]
             fisher = metrics.fisher_exact_2x2(split) if reference.n and row.n else None
             chi, v = metrics.chi_square(table), metrics.cramers_v(table)
             tests.append(VariantTest(variant, row, fisher, chi, v))
         body = [t for t in tests if t.variant in _BODY_VARIANTS]
-        overall = None
-        if body:
-            rows = [_conference_split(reference.counts)]
-            rows += [_conference_split(t.choices.counts) for t in body]
-            overall = metrics.chi_square(rows)
+        splits = [_conference_split(r.counts) for r in (reference, *(t.choices for t in body))]
+        overall = metrics.chi_square(splits) if body else None
         names = ("default", *(t.variant for t in body)) if body else ()
         tables.append(InterventionTable(model, condition, reference, tuple(tests), overall, names))
     return tuple(tables)
@@ -165,10 +159,8 @@ def pa_by_spawn(cells: Cells) -> tuple[PASpawn, ...]:
     """Per-episode Positional Accuracy grouped by spawn room (``positional_accuracy``)."""
     out = []
     for key, ems in cells.items():
-        by_spawn: dict[str, list[EpisodeMetrics]] = {}
-        for m in ems:
-            by_spawn.setdefault(m.spec.spawn, []).append(m)
-        for spawn, group in by_spawn.items():
+        for spawn in dict.fromkeys(m.spec.spawn for m in ems):
+            group = [m for m in ems if m.spec.spawn == spawn]
             values = tuple(v for v in metrics.positional_accuracy(group) if v is not None)
             out.append(PASpawn(*key, spawn, values))
     return tuple(out)
@@ -216,7 +208,7 @@ def align_map(
     """A cognitive map moved by :func:`rigid_fit` of its matched pairs onto the ground truth
     (unmatched entries move with it; a repeated label is shown once): the points, the fit's
     rotation in degrees and the RMS residual of the pairs (None without pairs)."""
-    matched = {p.label: p for p in matching.pairs}
+    matched = {p.label: p.object_id for p in matching.pairs}
     rot, shift = np.eye(2), np.zeros(2)
     rmse = None
     if matching.pairs:
@@ -228,10 +220,7 @@ def align_map(
     for e in entries:
         if e.label not in points:
             x, z = np.array([e.x, e.z]) @ rot.T + shift
-            pair = matched.get(e.label)
-            points[e.label] = MapPoint(
-                e.label, float(x), float(z), pair.object_id if pair else None
-            )
+            points[e.label] = MapPoint(e.label, float(x), float(z), matched.get(e.label))
     return tuple(points.values()), math.degrees(math.atan2(rot[1, 0], rot[0, 0])), rmse
 
 

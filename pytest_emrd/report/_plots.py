@@ -73,10 +73,6 @@ def _wrap(text: str, width_in: float, size_pt: float) -> str:
     return textwrap.fill(text, max(12, int(width_in * 72 / (_GLYPH * size_pt))))
 
 
-def _title(fig: Figure, text: str) -> None:
-    fig.suptitle(_wrap(text, fig.get_figwidth() - 0.2, 12.0), fontsize=12)
-
-
 def _axes_title(ax: Axes, text: str) -> None:
     width = ax.get_position().width * ax.get_figure().get_figwidth()
     ax.set_title(_wrap(text, width, 10.0), fontsize=10)
@@ -126,7 +122,7 @@ def _finish(
         _axes_title(ax, label)
         ax.set(**axis)
         ax.grid(axis=grid, alpha=0.3)
-    _title(fig, title)
+    fig.suptitle(_wrap(title, fig.get_figwidth() - 0.2, 12.0), fontsize=12)
     _legend(fig, conditions, bars=bars)
     return fig
 
