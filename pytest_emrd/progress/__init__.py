@@ -11,7 +11,6 @@ terminal).
 
 from __future__ import annotations
 
-import dataclasses
 import functools
 import json
 import logging
@@ -82,8 +81,7 @@ class StatusFile:
         ident = threading.get_ident()
         with self._lock:
             if ident not in self._by_thread:
-                n = len(self._by_thread)
-                name = self.name if ident == self._main else f"{self.name}-t{n}"
+                name = self.name if ident == self._main else f"{self.name}-t{len(self._by_thread)}"
                 self._by_thread[ident] = WorkerStatus(name, None, 0, 0, 0, None, 0, 0, 0)
             return self._by_thread[ident]
 
@@ -259,7 +257,7 @@ def watch_episode(
     with EpisodeWatch(spec, live=live, status=status) as watch:
         run = compute(watch.on_step)
         watch.finish(run.trajectory)
-    return dataclasses.replace(run, retries=watch.retries)
+    return replace(run, retries=watch.retries)
 
 
 def run_watched(

@@ -147,12 +147,10 @@ def render_episode(traj: Trajectory, *, cassettes: Path | None, gif: bool = Fals
     """Re-render, check and lay out one episode (see the module docstring); a backend this
     machine cannot run leaves the frames out and says why."""
     try:
-        replay, note = replay_frames(traj), None
+        replay = replay_frames(traj)
+        frames, spawn, system, note = replay.frames, replay.spawn, replay.system, None
     except EmrdError as exc:
-        replay, note = None, f"frames not re-rendered: {exc}"
-    frames = replay.frames if replay else ()
-    spawn = replay.spawn if replay else None
-    system = replay.system if replay else None
+        frames, spawn, system, note = (), None, None, f"frames not re-rendered: {exc}"
     data, check = episode_data(traj, frames, recorded_digests(traj, cassettes), note, spawn, system)
     last = data["steps"][-1] if data["steps"] else {"coverage": None, "pa": None}
     chosen = traj.chosen_room or (traj.chosen_room_raw and f"{traj.chosen_room_raw!r}") or "-"
