@@ -11,19 +11,33 @@ Typical use::
     write_report(build_report(trajectories), Path("results/run1/report"))
 """
 
-from pytest_emrd.report._build import build_report, group_cells
-from pytest_emrd.report._compare import COMPARED, Comparison, Difference, compare_runs
-from pytest_emrd.report._model import FIGURES, Report, row_label
-from pytest_emrd.report._render import (
-    FORMATS,
-    check_formats,
-    render_comparison,
-    render_files,
-    report_json,
-    step_summary_markdown,
+from __future__ import annotations
+
+import json
+import os
+from collections.abc import Iterable, Mapping, Sequence
+from pathlib import Path
+from typing import Final
+
+from pytest_emrd._atomic import write_bytes_atomic
+from pytest_emrd._scrub import scrub, scrub_bytes
+from pytest_emrd._serde import json_safe
+from pytest_emrd.errors import check_choice
+from pytest_emrd.gate import Verdict
+from pytest_emrd.metrics import EpisodeMetrics
+from pytest_emrd.report._build import align_map, build_report, group_cells
+from pytest_emrd.report._compare import (
+    COMPARED,
+    Comparison,
+    Difference,
+    compare_document,
+    compare_runs,
 )
-from pytest_emrd.report._tables import align_map
-from pytest_emrd.report._write import append_step_summary, write_files, write_report
+from pytest_emrd.report._document import Document, render_html, render_markdown
+from pytest_emrd.report._model import FIGURES, Report, row_label
+from pytest_emrd.report._sections import report_document, summary_document
+from pytest_emrd.run import StoredEpisode
+from pytest_emrd.trajectory import Trajectory
 
 __all__ = [
     "COMPARED",
@@ -46,3 +60,114 @@ __all__ = [
     "write_files",
     "write_report",
 ]
+
+
+#: Output formats of ``emrd report --format``.
+FORMATS: Final[tuple[str, ...]] = ("md", "html", "json")
+#: Files scrubbed before they are written (figures are pixels).
+TEXT_SUFFIXES: Final = frozenset({".md", ".html", ".json", ".txt", ".csv"})
+
+
+def check_formats(formats: Iterable[str]) -> list[str]:
+    """The requested formats, deduplicated; ConfigError naming an unknown one."""
+    wanted = list(dict.fromkeys(formats))
+    for f in wanted:
+        check_choice("format", f, FORMATS, hint="Use a comma-separated list such as md,html.")
+    return wanted
+
+
+def report_json(report: Report | Comparison) -> str:
+    """Every aggregate of a report (or comparison) as strict JSON (non-finite floats as
+    strings)."""
+    return json.dumps(json_safe(report.to_dict()), indent=1, allow_nan=False) + "\n"
+
+
+def render_files(
+    report: Report, formats: Iterable[str] = FORMATS, *, processes: int = 1
+) -> dict[str, bytes]:
+    """File name -> content: ``report.md`` with its PNGs, ``report.html``, ``report.json``;
+    ``processes`` > 1 draws the figures in that many worker processes (same bytes)."""
+    wanted = check_formats(formats)
+    doc: Document | None = None
+    pngs: dict[str, bytes] = {}
+    if "md" in wanted or "html" in wanted:
+        from pytest_emrd.report._plots import render_figures  # matplotlib: imported on use
+
+        pngs, skipped = render_figures(report, processes=processes)
+        doc = report_document(report, skipped)
+    return _files("report", wanted, doc, pngs, report)
+
+
+def _files(
+    stem: str, wanted: list[str], doc: Document | None, pngs: dict[str, bytes],
+    data: Report | Comparison,
+) -> dict[str, bytes]:  # fmt: skip
+    """``<stem>.md`` with the PNGs, ``<stem>.html`` and ``<stem>.json``, as ``wanted``."""
+    files: dict[str, bytes] = {}
+    if doc is not None and "md" in wanted:
+        files[f"{stem}.md"] = render_markdown(doc).encode()
+        files.update(pngs)
+    if doc is not None and "html" in wanted:
+        files[f"{stem}.html"] = render_html(doc, pngs).encode()
+    if "json" in wanted:
+        files[f"{stem}.json"] = report_json(data).encode()
+    return files
+
+
+def step_summary_markdown(
+    episodes: Sequence[Trajectory | StoredEpisode],
+    verdicts: Sequence[Verdict],
+    *,
+    thresholds_source: str | None = None,
+    episode_metrics: Sequence[EpisodeMetrics] | None = None,
+) -> str:
+    """Markdown for a PR comment or ``$GITHUB_STEP_SUMMARY``: run overview, what is missing,
+    the gate table, Exploration Competence and FPSG (no figures, no sentence encoder);
+    ``thresholds_source`` names the thresholds file (default ``thresholds`` when there are
+    verdicts), ``episode_metrics`` as :func:`build_report` takes them."""
+    source = thresholds_source or ("thresholds" if verdicts else None)
+    report = build_report(
+        episodes,
+        verdicts=verdicts,
+        thresholds_source=source,
+        with_reasoning=False,
+        episode_metrics=episode_metrics,
+    )
+    return render_markdown(summary_document(report))
+
+
+def render_comparison(comparison: Comparison, formats: Iterable[str] = FORMATS) -> dict[str, bytes]:
+    """File name -> content of a run comparison: ``compare.md``, ``.html``, ``.json``."""
+    return _files("compare", check_formats(formats), compare_document(comparison), {}, comparison)
+
+
+def write_files(files: Mapping[str, bytes], out_dir: Path) -> list[Path]:
+    """Write each ``name -> content`` into ``out_dir`` (created if needed), atomically; text
+    files are scrubbed of secrets first (a report quotes errored episodes' causes)."""
+    written = []
+    for name, content in files.items():
+        path = out_dir / name
+        text = path.suffix in TEXT_SUFFIXES
+        write_bytes_atomic(path, scrub_bytes(content) if text else content)
+        written.append(path)
+    return written
+
+
+def append_step_summary(text: str) -> bool:
+    """Append ``text`` (Markdown, scrubbed of secrets) to ``$GITHUB_STEP_SUMMARY``; ``False``
+    when it is not set."""
+    target = os.environ.get("GITHUB_STEP_SUMMARY")
+    if not target:
+        return False
+    text = scrub(text)
+    with open(target, "a", encoding="utf-8") as summary:
+        summary.write(text if text.endswith("\n") else text + "\n")
+    return True
+
+
+def write_report(
+    report: Report, out_dir: Path, formats: Iterable[str] = FORMATS, *, processes: int = 1
+) -> list[Path]:
+    """Render ``report`` in ``formats`` (figures drawn in ``processes`` processes) and write it
+    into ``out_dir``; the paths written."""
+    return write_files(render_files(report, formats, processes=processes), out_dir)

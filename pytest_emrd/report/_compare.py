@@ -225,13 +225,13 @@ def _difference(
 
 
 def _why_no_pair(name: str, pairs: list[Pair]) -> str:
-    """Why no pair defines ``name``: errored episodes, or the metric's own reason."""
-    clean = [(x, y) for x, y in pairs if not x.errored and not y.errored]
+    """Why no pair defines ``name`` (a mean: a pooled ratio is defined on every clean pair):
+    errored episodes, or the metric's own reason."""
+    clean = [m for x, y in pairs if not x.errored and not y.errored for m in (x, y)]
     if not clean:
         return "every pair holds an errored episode"
-    undefined = [m for pair in clean for m in pair if name in _MEANS and getattr(m, name) is None]
-    why = dict.fromkeys(m.reasons.get(name, "undefined") for m in undefined)
-    return f"undefined in every pair: {'; '.join(why) or 'no value'}"
+    why = dict.fromkeys(m.reasons.get(name, "undefined") for m in clean if getattr(m, name) is None)
+    return f"undefined in every pair: {'; '.join(why)}"
 
 
 def _verdict(d: Difference, p_holm: float, reachable: float) -> Difference:
@@ -282,9 +282,9 @@ def compare_runs(
     if models is not None:
         cells_a = {(models[0], *k[1:]): v for k, v in cells_a.items() if k[0] == models[0]}
         cells_b = {(models[0], *k[1:]): v for k, v in cells_b.items() if k[0] == models[1]}
-    model_b = (lambda k: models[1]) if models is not None else (lambda k: k[0])
     shared = [k for k in cells_a if k in cells_b]
     resamples = max(N_RESAMPLES, math.ceil(10 * len(shared) * len(COMPARED) / ALPHA))
+    model_b = (lambda k: models[1]) if models is not None else (lambda k: k[0])
     diffs = tuple(
         _difference(k, model_b(k), name, cells_a[k], cells_b[k], rng_seed, resamples)
         for k in shared

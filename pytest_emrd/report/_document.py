@@ -89,18 +89,15 @@ def pval(p: float | None) -> str:
     """p-values: three decimals, or ``< 0.001`` / scientific below that."""
     if p is None:
         return "n/a"
-    if p < 1e-3:
-        return f"{p:.1e}"
-    return f"{p:.3f}"
+    return f"{p:.1e}" if p < 1e-3 else f"{p:.3f}"
 
 
 def mean_sd(mean: float | None, sd: float | None, *, scale: float = 1.0, digits: int = 1) -> str:
     """``59.4 ± 23.9`` (``scale=100`` for fractions shown in %); sd omitted when None."""
     if mean is None:
         return "n/a"
-    if sd is None:
-        return f"{mean * scale:.{digits}f}"
-    return f"{mean * scale:.{digits}f} ± {sd * scale:.{digits}f}"
+    shown = f"{mean * scale:.{digits}f}"
+    return shown if sd is None else f"{shown} ± {sd * scale:.{digits}f}"
 
 
 def _md_cell(c: Cell | str) -> str:

@@ -27,36 +27,35 @@ from pytest_emrd.report._model import CONDITION_NAMES, FIGURES, EpisodeMap, Repo
 from pytest_emrd.rooms import ROOM_SLUGS, SLUG_ROOMS
 from pytest_emrd.trajectory import CONDITIONS
 
-#: Colour per condition, as in the paper.
-CONDITION_COLOURS: Final[dict[str, str]] = {
-    "baseline": "#1f5fbf",
-    "low_light": "#d62728",
-    "texture": "#2ca02c",
-}
-#: Line style, marker and hatch per condition, so coinciding series stay distinguishable
-#: (and the figures read in grey scale): baseline solid with circles, low light dashed with
-#: squares, texture dash-dot with triangles.
-CONDITION_LINES: Final[dict[str, tuple[str, str, str]]] = {
-    "baseline": ("-", "o", ""),
-    "low_light": ("--", "s", "//"),
-    "texture": ("-.", "^", ".."),
+#: Colour (as in the paper), line style, marker and hatch per condition, so coinciding series
+#: stay distinguishable (and the figures read in grey scale): baseline solid with circles, low
+#: light dashed with squares, texture dash-dot with triangles.
+CONDITION_STYLES: Final[dict[str, tuple[str, str, str, str]]] = {
+    "baseline": ("#1f5fbf", "-", "o", ""),
+    "low_light": ("#d62728", "--", "s", "//"),
+    "texture": ("#2ca02c", "-.", "^", ".."),
 }
 _CATEGORY_MARKERS: Final[dict[str, str]] = {"landmark": "^", "salient": "s", "clutter": "o"}
 _DPI: Final = 100
-_OTHER_LINE: Final = (":", "D", "xx")
+_OTHER_STYLE: Final = ("#7f7f7f", ":", "D", "xx")
 #: Average glyph width of the default font, in units of its size (for wrapping titles).
 _GLYPH: Final = 0.62
 
 
+def _style(condition: str) -> tuple[str, str, str, str]:
+    """Colour, line style, marker and hatch of ``condition`` (:data:`CONDITION_STYLES`)."""
+    return CONDITION_STYLES.get(condition, _OTHER_STYLE)
+
+
 def colour(condition: str) -> str:
-    return CONDITION_COLOURS.get(condition, "#7f7f7f")
+    return _style(condition)[0]
 
 
 def line_style(condition: str, n_points: int = 0) -> dict[str, Any]:
     """Colour, line style and marker of ``condition``'s series; with ``n_points``, markers
     every ~n/8 points, staggered per condition so coinciding lines all show theirs. The
     baseline is drawn above the others with the smallest, filled markers."""
-    ls, marker, _ = CONDITION_LINES.get(condition, _OTHER_LINE)
+    _, ls, marker, _ = _style(condition)
     place = rank(condition, CONDITIONS)[0]
     # the baseline's small filled markers sit inside the larger hollow ones of the others
     style: dict[str, Any] = {
@@ -72,10 +71,6 @@ def line_style(condition: str, n_points: int = 0) -> dict[str, Any]:
 def _wrap(text: str, width_in: float, size_pt: float) -> str:
     """``text`` broken into lines that fit ``width_in`` inches at ``size_pt`` points."""
     return textwrap.fill(text, max(12, int(width_in * 72 / (_GLYPH * size_pt))))
-
-
-def _title(fig: Figure, text: str) -> None:
-    fig.suptitle(_wrap(text, fig.get_figwidth() - 0.2, 12.0), fontsize=12)
 
 
 def _axes_title(ax: Axes, text: str) -> None:
@@ -109,7 +104,7 @@ def _png(fig: Figure) -> bytes:
 
 def _legend(fig: Figure, conditions: Sequence[str], *, bars: bool = False) -> None:
     handles: list[Artist] = [
-        Patch(facecolor=colour(c), hatch=CONDITION_LINES.get(c, _OTHER_LINE)[2],
+        Patch(facecolor=colour(c), hatch=_style(c)[3],
               edgecolor="white", label=CONDITION_NAMES.get(c, c))
         if bars else Line2D([], [], lw=2, label=CONDITION_NAMES.get(c, c), **line_style(c))
         for c in conditions
@@ -127,7 +122,7 @@ def _finish(
         _axes_title(ax, label)
         ax.set(**axis)
         ax.grid(axis=grid, alpha=0.3)
-    _title(fig, title)
+    fig.suptitle(_wrap(title, fig.get_figwidth() - 0.2, 12.0), fontsize=12)
     _legend(fig, conditions, bars=bars)
     return fig
 
@@ -167,9 +162,9 @@ def _pa(report: Report) -> Figure | None:
         offset = conditions.index(g.condition) - (len(conditions) - 1) / 2
         x = spawns.index(g.spawn) + offset * width
         sd = float(np.std(g.values, ddof=1)) if len(g.values) > 1 else 0.0
-        hatch = CONDITION_LINES.get(g.condition, _OTHER_LINE)[2]
-        ax.bar(x, float(np.mean(g.values)), width * 0.95, yerr=sd, capsize=3,
-               color=colour(g.condition), alpha=0.85, hatch=hatch, edgecolor="white")  # fmt: skip
+        hue, _, _, hatch = _style(g.condition)
+        ax.bar(x, float(np.mean(g.values)), width * 0.95, yerr=sd, capsize=3, color=hue,
+               alpha=0.85, hatch=hatch, edgecolor="white")  # fmt: skip
     for ax in axes.values():
         ax.set_xticks(range(len(spawns)), [SLUG_ROOMS[s] for s in spawns])
     return _finish(fig, axes, "Positional Accuracy by spawn room and condition (mean ± 1 sd)",
@@ -239,9 +234,8 @@ def _sir(report: Report) -> Figure | None:
             for key in ("cmeans", "cmins", "cmaxes", "cbars"):
                 body[key].set(color=colour(s.condition))
         jitter = np.linspace(-0.08, 0.08, len(values)) if len(values) > 1 else np.zeros(1)
-        marker = CONDITION_LINES.get(s.condition, _OTHER_LINE)[1]
-        ax.scatter(pos + jitter, values, s=14, marker=marker, color=colour(s.condition),
-                   alpha=0.6)  # fmt: skip
+        ax.scatter(pos + jitter, values, s=14, marker=_style(s.condition)[2],
+                   color=colour(s.condition), alpha=0.6)  # fmt: skip
     for ax in axes.values():
         ax.set_xticks(range(len(conditions)), [CONDITION_NAMES.get(c, c) for c in conditions])
     return _finish(fig, axes, "Coverage-anchored Spatial Identity Resolution per episode",
@@ -315,8 +309,7 @@ def draw(report: Report, name: str) -> Figure | None:
 
 
 def _render(report: Report, name: str) -> bytes | None:
-    fig = draw(report, name)
-    return None if fig is None else _png(fig)
+    return None if (fig := draw(report, name)) is None else _png(fig)
 
 
 def render_figures(

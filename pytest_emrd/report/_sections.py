@@ -54,13 +54,12 @@ def _pivot(
     table: dict[str, dict[str, Sequence[str]]] = {}
     for r in rows:
         table.setdefault(row_label(r.model, r.variant), {})[r.condition] = fmt(r)
-    out = []
-    for label, by_condition in table.items():
-        cells = [label]
-        for c in report.overview.conditions:
-            cells += [t for t in by_condition.get(c, ["—"] * width)]
-        out.append(tuple(cells))
-    return out
+    blank = ("—",) * width
+    conditions = report.overview.conditions
+    return [
+        (label, *(t for c in conditions for t in by_c.get(c, blank)))
+        for label, by_c in table.items()
+    ]
 
 
 def _per_condition(report: Report, *names: str) -> tuple[str, ...]:

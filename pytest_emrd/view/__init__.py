@@ -3,17 +3,29 @@
 :func:`render_episode` re-renders the frames a model saw (:func:`replay_frames`), checks them
 against the cassette's digests (:func:`recorded_digests`) and returns the page, its index row
 and, optionally, a GIF. Writing files is the caller's job (:mod:`pytest_emrd.cli.view`).
+
+Cassettes keep a frame's pixel digest, never its image. The viewer rebuilds the spec's world
+through the episode loop's own :func:`~pytest_emrd.episode.start_world`, replays the recorded
+actions as the loop did (:func:`~pytest_emrd.episode.world_action`), and compares each
+re-rendered frame's digest with the one the cassette recorded for that step.
 """
 
 from __future__ import annotations
 
+import json
+from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
+from pytest_emrd.agent import build_system_prompt
+from pytest_emrd.cassette import FormatError, decode, found_cassette
+from pytest_emrd.cassette._redact import DIGEST
+from pytest_emrd.episode import build_simulator, start_world, user_turn, world_action
 from pytest_emrd.errors import EmrdError
 from pytest_emrd.trajectory import Trajectory
 from pytest_emrd.view._page import IndexRow, episode_data, episode_gif, episode_page, index_page
-from pytest_emrd.view._replay import Recorded, recorded_digests, replay_frames
+from pytest_emrd.world import WorldPose
 
 __all__ = [
     "EpisodeView",
@@ -25,6 +37,101 @@ __all__ = [
     "render_episode",
     "replay_frames",
 ]
+
+
+@dataclass(frozen=True)
+class Replay:
+    """The frames of an episode re-rendered, and where it started in the office."""
+
+    frames: tuple[Frame, ...]
+    """The frame shown at each step."""
+    spawn: WorldPose
+    """The spawn pose in the office's own frame (the page draws the plan in it, north up)."""
+    system: str = ""
+    """The system prompt the episode loop sends for this spec (the same for every step)."""
+
+
+@dataclass(frozen=True)
+class Frame:
+    """One re-rendered observation ``o_{t-1}``, the frame shown at step ``t``."""
+
+    jpeg: bytes
+    digest: str
+    """Pixel digest the world computed (``pixels:`` + SHA-256), as a cassette records it."""
+    text: str = ""
+    """The user turn's text shown with this frame (feedback of the previous action, pose,
+    step counter, and under ``text``/``both`` the symbolic list), as the loop built it."""
+
+
+def replay_frames(traj: Trajectory) -> Replay:
+    """The frame and user text shown at each step of ``traj``, the system prompt and the spawn
+    pose; :class:`EmrdError` when the spec's backend cannot be built here (AI2-THOR without
+    its extra or a GPU)."""
+    sim = build_simulator(traj.spec.backend)
+    try:
+        spec = traj.spec
+        layout, obs = start_world(spec, sim)
+        spawn = sim.spawn_pose
+        system = build_system_prompt(
+            layout.inventory(), spec.variant, modality=spec.modality, max_steps=spec.max_steps
+        )
+        frames = []
+        for step in traj.steps:
+            text = user_turn(spec, step.index, obs, replay=True).text
+            frames.append(Frame(obs.jpeg, f"pixels:{obs.frame_digest}", text))
+            obs = sim.step(world_action(step.action, spec.variant)[0])
+        return Replay(tuple(frames), spawn, system)
+    finally:
+        sim.close()
+
+
+def _digests(node: Any) -> Iterator[str]:
+    if isinstance(node, dict | list):
+        for value in node.values() if isinstance(node, dict) else node:
+            yield from _digests(value)
+    elif isinstance(node, str) and DIGEST.match(node):
+        yield node
+
+
+@dataclass(frozen=True)
+class Recorded:
+    """The frame digests a cassette holds for one episode, or why there are none."""
+
+    digests: tuple[str | None, ...]
+    """Per request (= per step), the digest of the newest image it carries (None: none)."""
+    note: str | None = None
+
+
+def recorded_digests(traj: Trajectory, cassettes: Path | None) -> Recorded:
+    """Frame digests of ``traj``'s cassette under ``cassettes``: the newest image of each
+    request is the frame of that step (a history window carries older ones before it)."""
+    if traj.spec.modality == "text":
+        return Recorded((), "text modality: the model was shown no frame; the frames are what "
+                        "its camera would have shown")  # fmt: skip
+    if cassettes is None:
+        return Recorded((), "no cassette folder given (--cassettes): frames not checked")
+    path = found_cassette(cassettes, traj.spec)
+    try:
+        data = decode(path.read_bytes())
+    except FileNotFoundError:
+        return Recorded((), f"no cassette at {path}: frames not checked")
+    except FormatError as exc:
+        return Recorded((), f"{path} is not a readable cassette ({exc}): frames not checked")
+    if data.protocol != traj.protocol:
+        return Recorded((), f"{path} was recorded under protocol {data.protocol}, the episode "
+                        f"ran under {traj.protocol}: frames not checked")  # fmt: skip
+    digests = []
+    for request in data.requests:
+        try:
+            found = list(_digests(json.loads(request.body or b"null")))
+        except ValueError:
+            found = []
+        digests.append(found[-1] if found else None)
+    note = None
+    if len(digests) != len(traj.steps):
+        note = (f"{path} holds {len(digests)} requests for {len(traj.steps)} steps: steps "
+                "are checked in order up to the shorter")  # fmt: skip
+    return Recorded(tuple(digests), note)
 
 
 @dataclass(frozen=True)
@@ -40,12 +147,10 @@ def render_episode(traj: Trajectory, *, cassettes: Path | None, gif: bool = Fals
     """Re-render, check and lay out one episode (see the module docstring); a backend this
     machine cannot run leaves the frames out and says why."""
     try:
-        replay, note = replay_frames(traj), None
+        replay = replay_frames(traj)
+        frames, spawn, system, note = replay.frames, replay.spawn, replay.system, None
     except EmrdError as exc:
-        replay, note = None, f"frames not re-rendered: {exc}"
-    frames = replay.frames if replay else ()
-    spawn = replay.spawn if replay else None
-    system = replay.system if replay else None
+        frames, spawn, system, note = (), None, None, f"frames not re-rendered: {exc}"
     data, check = episode_data(traj, frames, recorded_digests(traj, cassettes), note, spawn, system)
     last = data["steps"][-1] if data["steps"] else {"coverage": None, "pa": None}
     chosen = traj.chosen_room or (traj.chosen_room_raw and f"{traj.chosen_room_raw!r}") or "-"

@@ -20,7 +20,8 @@ import json
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from importlib import resources
-from typing import Any
+from itertools import chain, repeat
+from typing import TYPE_CHECKING, Any
 
 from PIL import Image, ImageDraw, ImageFont
 
@@ -33,8 +34,10 @@ from pytest_emrd.metrics import (
 )
 from pytest_emrd.report import align_map
 from pytest_emrd.trajectory import Trajectory
-from pytest_emrd.view._replay import Frame, Recorded
 from pytest_emrd.world import WorldPose, local_to_world
+
+if TYPE_CHECKING:
+    from pytest_emrd.view import Frame, Recorded
 
 
 @dataclass(frozen=True)
@@ -52,10 +55,8 @@ def check_frames(
     frames: Sequence[Frame], recorded: Recorded
 ) -> tuple[list[bool | None], FrameCheck]:
     """Per step: True (digest equal), False (mismatch) or None (not checked)."""
-    status: list[bool | None] = []
-    for i, frame in enumerate(frames):
-        digest = recorded.digests[i] if i < len(recorded.digests) else None
-        status.append(None if digest is None else digest == frame.digest)
+    digests = chain(recorded.digests, repeat(None))
+    status = [None if d is None else d == f.digest for f, d in zip(frames, digests, strict=False)]
     bad = tuple(i + 1 for i, s in enumerate(status) if s is False)
     return status, FrameCheck(sum(s is not None for s in status), bad, recorded.note)
 

@@ -10,8 +10,14 @@ import pytest
 from pytest_emrd.agent import load_registry
 from pytest_emrd.cassette import run_with_cassette
 from pytest_emrd.episode import agent_runner, protocol_version
-from pytest_emrd.progress import LiveBoard, StatusFile, read_statuses, render_line, watch_episode
-from pytest_emrd.progress._live import WorkerStatus
+from pytest_emrd.progress import (
+    LiveBoard,
+    StatusFile,
+    WorkerStatus,
+    read_statuses,
+    render_line,
+    watch_episode,
+)
 from pytest_emrd.trajectory import EpisodeSpec
 
 ROOT = Path(__file__).resolve().parents[2]
