@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import itertools
 import math
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any, Final
 
@@ -305,10 +305,6 @@ class IdTable:
         """The EMRD id of a THOR object, or None if the layout never placed it."""
         return self.to_emrd.get(thor_id)
 
-    def thor(self, emrd_id: str) -> str:
-        """The THOR objectId of an EMRD object (KeyError if unknown)."""
-        return self.to_thor[emrd_id]
-
 
 AGENT_Y = 0.9009997
 """Agent body height THOR reports for the default agent (TeleportFull keeps it)."""
@@ -318,13 +314,13 @@ def _xyz(x: float, y: float, z: float) -> dict[str, float]:
     return {"x": round(float(x), 4), "y": round(float(y), 4), "z": round(float(z), 4)}
 
 
-def _rgb(rgb: tuple[float, float, float]) -> dict[str, float]:
+def _rgb(rgb: Sequence[float]) -> dict[str, float]:
     r, g, b = (round(float(c), 4) for c in rgb)
     return {"r": r, "g": g, "b": b, "a": 1.0}
 
 
-def _random_color(rng: StableRng) -> tuple[float, float, float]:
-    return (rng.uniform(0.05, 0.95), rng.uniform(0.05, 0.95), rng.uniform(0.05, 0.95))
+def _random_color(rng: StableRng) -> list[float]:
+    return [rng.uniform(0.05, 0.95) for _ in range(3)]
 
 
 def _wall_dict(piece: WallPiece, room_id: str, color: dict[str, float]) -> dict[str, Any]:
@@ -424,6 +420,7 @@ def _exterior_door(
 
 def _lights(layout: Layout, factor: float) -> list[dict[str, Any]]:
     shadow = {"type": "Soft", "strength": 1, "normalBias": 0, "bias": 0.05, "nearPlane": 0.2}
+    shadow["resolution"] = "FromQualitySettings"
     lights: list[dict[str, Any]] = [
         {
             "id": "DirectionalLight",
@@ -433,7 +430,7 @@ def _lights(layout: Layout, factor: float) -> list[dict[str, Any]]:
             "intensity": round(0.35 * factor, 4),
             "indirectMultiplier": 1.0,
             "rgb": _rgb((1.0, 1.0, 1.0)),
-            "shadow": {**shadow, "resolution": "FromQualitySettings"},
+            "shadow": shadow,
         }
     ]
     return lights + [
@@ -444,7 +441,7 @@ def _lights(layout: Layout, factor: float) -> list[dict[str, Any]]:
             "intensity": round(0.75 * factor, 4),
             "range": 15,
             "rgb": _rgb((1.0, 0.855, 0.722)),
-            "shadow": {**shadow, "resolution": "FromQualitySettings"},
+            "shadow": shadow,
         }
         for n, r in enumerate(layout.rooms, start=1)
     ]

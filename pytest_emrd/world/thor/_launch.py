@@ -27,7 +27,7 @@ import subprocess
 import threading
 from collections.abc import Callable, Mapping
 from types import ModuleType
-from typing import Any, Final, TypeVar
+from typing import Any, TypeVar
 
 from pytest_emrd.errors import ConfigError, EmrdError, missing_extra
 
@@ -43,10 +43,6 @@ BUILD_HINT = (
     'Controller(platform=CloudRendering, download_only=True)" (or pass allow_download=True), '
     "or pass local_executable_path='/path/to/thor-<platform>-<commit>/thor-<platform>-<commit>'."
 )
-
-
-HEADLESS_DISPLAY: Final = ":0"
-"""The ``x_display`` a local build gets when there is no X display."""
 
 
 def bounded(fn: Callable[[], T], *, seconds: float, on_timeout: Callable[[], EmrdError]) -> T:
@@ -127,7 +123,7 @@ def headless_options(options: Mapping[str, Any]) -> dict[str, Any]:
     out = dict(options)
     local = out.get("local_executable_path")
     if local and not out.get("x_display") and not os.environ.get("DISPLAY"):
-        out["x_display"] = HEADLESS_DISPLAY
+        out["x_display"] = ":0"
     return out
 
 

@@ -213,12 +213,6 @@ DEFAULTS: Mapping[str, Any] = {
     "gridSize": 0.25,
     "rotateStepDegrees": 90,
 }
-ROTATIONS: Mapping[float, tuple[str, ...]] = {
-    -90.0: ("RotateLeft",),
-    90.0: ("RotateRight",),
-    180.0: ("RotateRight", "RotateRight"),
-}
-"""Clockwise degrees of a ``Turn`` -> the THOR rotations (90 degrees each)."""
 
 
 def _positive(name: str, value: float) -> float:
@@ -448,8 +442,9 @@ class ThorSimulator(SemanticStep):
         return pose is not None
 
     def _turn(self, action: Action) -> str:
-        for rotate in ROTATIONS[turn_degrees(action)]:
-            _accepted(self._act(rotate, degrees=90))
+        degrees = turn_degrees(action)  # -90, 90 or 180: RotateLeft, or 90-degree RotateRights
+        for _ in range(int(abs(degrees)) // 90):
+            _accepted(self._act("RotateLeft" if degrees < 0 else "RotateRight", degrees=90))
         return ""
 
     def _door_pose(self, layout: Layout, doorway: Doorway) -> WorldPose | None:
