@@ -31,14 +31,8 @@ import numpy as np
 
 from pytest_emrd.rooms import CONFERENCE, ENTRANCE, KITCHEN, OFFICE
 from pytest_emrd.world._catalog import KINDS
-from pytest_emrd.world._geometry import (
-    Rect,
-    headings_to_units,
-    local_to_world,
-    rect_at,
-    rects_at,
-    rects_overlap,
-)
+from pytest_emrd.world._geometry import Rect, local_to_world, rect_at, rects_at, rects_overlap
+from pytest_emrd.world._geometry import unit as unit_vector
 from pytest_emrd.world._model import Doorway, Layout, Room, WorldObject
 from pytest_emrd.world._rng import StableRng
 
@@ -339,7 +333,7 @@ class Planner:
         if unit.around:
             access = rects_at(x, z, unit.width + 2 * unit.access, unit.depth + 2 * unit.access, rot)
         else:
-            fx, fz = headings_to_units(rot)
+            fx, fz = np.array([unit_vector(r) for r in rot]).T
             reach = (unit.depth + unit.access) / 2
             access = rects_at(x + fx * reach, z + fz * reach, unit.width, unit.access, rot)
         room_rect = np.array([room.x0, room.z0, room.x1, room.z1])

@@ -119,11 +119,6 @@ class BuiltinSimulator(SemanticStep):
         self._require()
         return self._pose
 
-    @property
-    def spawn_pose(self) -> WorldPose:
-        self._require()
-        return self._spawn
-
     def current_room(self) -> str:
         scene = self._require()
         room = scene.layout.room_at(self._pose.x, self._pose.z)

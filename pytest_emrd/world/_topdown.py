@@ -31,23 +31,14 @@ def plan_png(layout: Layout, pose: WorldPose, *, visibility: float) -> bytes:
     from matplotlib import pyplot as plt
 
     fig, ax = plt.subplots(figsize=(layout.width * 0.75 + 1, layout.depth * 0.75 + 1))
+    centred = {"ha": "center", "va": "center"}
+    label = {"fontsize": 13, "weight": "bold", "color": "#444444", "alpha": 0.6, "zorder": 5}
     for r in layout.rooms:
         fill = ROOM_FILL.get(r.name, "#eeeeee")
         ax.add_patch(
             patches.Rectangle((r.x0, r.z0), r.x1 - r.x0, r.z1 - r.z0, color=fill, zorder=0)
         )
-        ax.text(
-            (r.x0 + r.x1) / 2,
-            (r.z0 + r.z1) / 2,
-            r.name,
-            ha="center",
-            va="center",
-            fontsize=13,
-            weight="bold",
-            color="#444444",
-            alpha=0.6,
-            zorder=5,
-        )
+        ax.text((r.x0 + r.x1) / 2, (r.z0 + r.z1) / 2, r.name, **centred, **label)
     walls = walls_of(layout)
     for z, x0, x1 in walls.along_x:
         ax.plot([x0, x1], [z, z], color="black", lw=3, solid_capstyle="butt", zorder=3)
@@ -67,7 +58,7 @@ def plan_png(layout: Layout, pose: WorldPose, *, visibility: float) -> bytes:
                 zorder=4 if o.elevation else 2,
             )
         )
-        ax.text(o.x, o.z, o.object_id, ha="center", va="center", fontsize=5.5, zorder=6)
+        ax.text(o.x, o.z, o.object_id, **centred, fontsize=5.5, zorder=6)
     # matplotlib angles are counter-clockwise from +x; headings clockwise from +z
     theta = 90.0 - pose.heading
     wedge = (theta - 45, theta + 45)

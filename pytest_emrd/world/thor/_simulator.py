@@ -87,13 +87,15 @@ def _in_room(points: np.ndarray, room: Room) -> np.ndarray:
     return (x > room.x0 + m) & (x < room.x1 - m) & (z > room.z0 + m) & (z < room.z1 - m)
 
 
-def _pick(points: np.ndarray, score: np.ndarray, mask: np.ndarray) -> int | None:
-    """Index of the lowest score under ``mask``; ties broken by (x, z) so it is stable."""
-    idx = np.flatnonzero(mask)
-    if idx.size == 0:
-        return None
-    order = np.lexsort((points[idx, 1], points[idx, 0], np.round(score[idx], 6)))
-    return int(idx[order[0]])
+def _pick(points: np.ndarray, score: np.ndarray, *masks: np.ndarray) -> int | None:
+    """Index of the lowest score under the first of ``masks`` any point passes; ties broken
+    by (x, z) so it is stable."""
+    for mask in masks:
+        idx = np.flatnonzero(mask)
+        if idx.size:
+            order = np.lexsort((points[idx, 1], points[idx, 0], np.round(score[idx], 6)))
+            return int(idx[order[0]])
+    return None
 
 
 def nearest_in_room(
@@ -141,9 +143,7 @@ def entry(points: np.ndarray, doorway: Doorway, into: Room) -> WorldPose | None:
         )
     dist = np.hypot(points[:, 0] - doorway.x, points[:, 1] - doorway.z)
     inside = _in_room(points, into)
-    best = _pick(points, dist, inside & (depth >= CLEARANCE))
-    if best is None:
-        best = _pick(points, dist, inside)
+    best = _pick(points, dist, inside & (depth >= CLEARANCE), inside)
     if best is None:
         return None
     px, pz = points[best]
@@ -389,11 +389,6 @@ class ThorSimulator(SemanticStep):
     def agent_pose(self) -> WorldPose:
         self._require()
         return agent_pose(self._controller.last_event.metadata)
-
-    @property
-    def spawn_pose(self) -> WorldPose:
-        self._require()
-        return self._spawn
 
     @property
     def house(self) -> Mapping[str, Any]:
