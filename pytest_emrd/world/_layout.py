@@ -123,7 +123,7 @@ def _object(
         depth=kind.depth,
         height=kind.height,
         rotation=rotation,
-        color=kind.main_color,
+        color=next(iter(kind.colors.values())),
         elevation=kind.elevation,
     )
 

@@ -136,13 +136,9 @@ class BuiltinSimulator(SemanticStep):
 
     def _in_view(self) -> tuple[list[str], list[str], list[float]]:
         seen, objs = self._current_sight(), self._require().layout.objects
-        visible = np.flatnonzero(seen.mask)
-        ids = [objs[i].object_id for i in visible]
-        return (
-            ids,
-            [objs[i].object_type for i in visible],
-            [float(seen.distance[i]) for i in visible],
-        )
+        shown = np.flatnonzero(seen.mask)
+        ids = [objs[i].object_id for i in shown]
+        return ids, [objs[i].object_type for i in shown], [float(seen.distance[i]) for i in shown]
 
     def _reach(self, object_id: str) -> bool:
         scene = self._require()

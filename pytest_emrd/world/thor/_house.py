@@ -4,17 +4,10 @@ The house ``Controller(scene=house)`` accepts: ``rooms``; ``walls``, one per str
 boundary piece per room (a room side is cut at every corner of another room lying on it, so
 each piece has one neighbour, a room or the outside) plus one-sided exterior faces;
 ``doors`` cut as ``holePolygon`` into a wall both rooms own; ``objects``; lights and skybox;
-and ``metadata``: the agent's start in ``agentPoses`` (the only pose ``CreateHouse``
-applies; ``agent`` repeats it, procthor's convention) and our ``emrd`` block (room names,
-the THOR-id -> EMRD-id table). ``low_light`` scales the lights and dims the skybox;
-``texture`` gives walls and floors seeded colours.
-
-THOR centres an asset's bounding box on the object's ``position``, so an object stands at
-``y = support top + asset height / 2``; :func:`place` shifts an object whose asset is larger
-than its footprint the least distance that keeps it inside its room (and what stands on it
-with it). The agent's start must be on THOR's absolute grid (``TeleportFull`` refuses other
-points): the grid point clear of every asset and wall nearest the builtin spawn
-(:func:`spawn_point`). See ``docs/ai2thor.md``.
+and ``metadata``: the agent's start in ``agentPoses`` (``agent`` repeats it) and our
+``emrd`` block (room names, the THOR-id -> EMRD-id table). Why objects stand at
+``y = support top + asset height / 2`` (:func:`place`), why the start is a grid point
+(:func:`spawn_point`) and what the conditions change: ``docs/ai2thor.md``.
 """
 
 from __future__ import annotations
@@ -463,9 +456,8 @@ def _start(layout: Layout, placed: Mapping[str, Placed], agent: WorldPose | None
     first = layout.rooms[0]
     wanted = agent or WorldPose((first.x0 + first.x1) / 2, (first.z0 + first.z1) / 2, 0.0)
     name = layout.room_at(wanted.x, wanted.z)
-    spot = None
-    if name is not None:
-        spot = spawn_point(layout.room(name), [p.rect for p in placed.values()], wanted.x, wanted.z)
+    footprints = [p.rect for p in placed.values()]
+    spot = None if name is None else spawn_point(layout.room(name), footprints, wanted.x, wanted.z)
     if spot is None:
         raise ConfigError(
             f"agent pose x={wanted.x}, z={wanted.z} has no free THOR grid point in its room "

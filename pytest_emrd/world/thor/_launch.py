@@ -1,21 +1,12 @@
 """Starting AI2-THOR: the lazy import, cheap pre-flight checks, and bounded calls.
 
 Everything here fails fast with a message that says what to install or set (the extra,
-``local_executable_path``, ``libvulkan1``, a missing build). Two things ai2thor 5.0.0 does
-not do for us:
-
-* ``local_executable_path`` on a headless machine: ai2thor runs it as a ``Linux64`` build
-  whose ``launch_env`` puts ``DISPLAY=None`` into the child's environment, which
-  ``subprocess.Popen`` rejects; a CloudRendering build never reads ``DISPLAY``, so
-  :func:`headless_options` passes ``x_display=":0"`` when no display is known.
-* Unity in its own process group: ``Controller.stop_unity`` kills only the one process it
-  started, and nothing when the constructor never returns. :func:`launcher` starts Unity
-  under ``setsid`` and remembers each controller as soon as it exists, so a timeout can
-  kill the whole group (:func:`kill_unity`).
-
-Every call into ``ai2thor`` runs in a daemon thread abandoned after its time limit
-(:func:`bounded`), so a Unity process that never answers costs the limit, never a hang.
-No pre-flight check touches the network.
+``local_executable_path``, ``libvulkan1``, a missing build); no pre-flight check touches the
+network. What ai2thor 5.0.0 does not do for us (``docs/ai2thor.md``): :func:`headless_options`
+gives a local build a display; ``Controller.stop_unity`` kills only the one process it
+started, and nothing when the constructor never returns, so :func:`launcher` starts Unity
+under ``setsid`` and a timeout kills the whole group (:func:`kill_unity`). Every call into
+``ai2thor`` runs in a daemon thread abandoned after its time limit (:func:`bounded`).
 """
 
 from __future__ import annotations

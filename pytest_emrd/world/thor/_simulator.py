@@ -1,17 +1,12 @@
 """``ThorSimulator``: the :class:`~pytest_emrd.world._model.Simulator` protocol on AI2-THOR.
 
-One ``Controller`` per simulator, started on the first ``reset`` with ``scene=<house>`` and
-:data:`DEFAULTS`, then re-used with ``controller.reset(scene=<house>)``. Actions are read
-and answered with the builtin world's grammar and wording (:mod:`pytest_emrd.world._feedback`).
-``Goto`` teleports (``TeleportFull``) on THOR's grid of reachable positions to a spot in
-the target's room from which a grid heading faces it (:func:`viewpoint`), through a doorway
-to the spot in the next room nearest the gap, facing into it (:func:`entry`); ``Turn``
-rotates by 90 degree steps; ``Term`` makes no THOR call. THOR's yaw is the world heading.
-The spawn is the builtin world's, moved to the nearest free point of THOR's grid.
-Reset checks each THOR answer it depends on; a refusal is one :class:`ConfigError` line
-carrying THOR's ``errorMessage`` (``docs/ai2thor.md``). Every THOR call is bounded
-(``start_timeout``, ``step_timeout``); on a timeout the Unity process group is killed and
-the next reset starts a new controller.
+One ``Controller`` per simulator, started on the first ``reset``, then re-used with
+``controller.reset(scene=<house>)``. Actions take the builtin world's grammar and wording.
+``Goto`` teleports on THOR's grid of reachable positions (:func:`viewpoint`, through a
+doorway :func:`entry`); ``Turn`` rotates by 90 degree steps; ``Term`` makes no THOR call.
+Every THOR call is bounded (``start_timeout``, ``step_timeout``); on a timeout the Unity
+process group is killed and the next reset starts a new controller. Reset's checks and
+THOR's refusals: ``docs/ai2thor.md``.
 """
 
 from __future__ import annotations
@@ -169,14 +164,9 @@ def visible_objects(
     landmarks: frozenset[str],
     visibility_distance: float,
 ) -> tuple[VisibleObject, ...]:
-    """EMRD objects THOR reports ``visible``, sorted by id.
-
-    THOR runs with the condition's draw distance, as far as ``landmarks`` (EMRD ids of
-    doorways and the exit) count visible; every other object must also lie within
-    ``visibility_distance``, measured horizontally to the nearest point of its bounding box.
-    ``distance`` is horizontal, to the object's position; ``types`` maps EMRD id -> EMRD
-    type; bearings are clipped to the field of view.
-    """
+    """EMRD objects THOR reports ``visible``, sorted by id: ``landmarks`` (EMRD ids) as THOR
+    says, every other object only within ``visibility_distance`` of its bounding box
+    (``docs/ai2thor.md``); ``types`` maps EMRD id -> EMRD type."""
     seen: dict[str, VisibleObject] = {}
     for obj in objects:
         if not obj.get("visible"):
@@ -417,12 +407,8 @@ class ThorSimulator(SemanticStep):
                 _launch.kill_unity(controller)
 
     def _in_view(self) -> tuple[list[str], list[str], list[float]]:
-        seen = self._visible
-        return (
-            [v.object_id for v in seen],
-            [v.object_type for v in seen],
-            [v.distance for v in seen],
-        )
+        ids = [v.object_id for v in self._visible]
+        return ids, [v.object_type for v in self._visible], [v.distance for v in self._visible]
 
     def _reach(self, object_id: str) -> bool:
         layout = self._require()
