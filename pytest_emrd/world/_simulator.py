@@ -174,14 +174,10 @@ class BuiltinSimulator(SemanticStep):
         return self._sight
 
     def _render(self) -> tuple[str, View]:
-        """Pixel digest and view of the current pose.
-
-        The views of recent poses of the episode are kept (a sweep ends where it began). And
-        every episode of the paper office under a condition shares one scene and shade table,
-        so the process remembers each view's digest (of ~6,600 views of the committed grid
-        ~1,900 differ): a view seen before is drawn only if its pixels or JPEG are read, never
-        for a replay (not under ``texture``). ``frame_cache=0`` turns both off.
-        """
+        """Pixel digest and view of the current pose. The views of recent poses are kept (a
+        sweep ends where it began); the process remembers each view's digest per shared scene
+        and shade table, so a view seen before is drawn only if its pixels or JPEG are read
+        (not under ``texture``). ``frame_cache=0`` turns both off."""
         pose, scene, table = self._pose, self._require(), self._table
         cached = self._frames.get(pose)
         if cached is not None:

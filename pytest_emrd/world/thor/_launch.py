@@ -17,6 +17,7 @@ import signal
 import subprocess
 import threading
 from collections.abc import Callable, Mapping
+from concurrent.futures import Future, wait
 from types import ModuleType
 from typing import Any, TypeVar
 
@@ -39,23 +40,18 @@ BUILD_HINT = (
 def bounded(fn: Callable[[], T], *, seconds: float, on_timeout: Callable[[], EmrdError]) -> T:
     """``fn()``, or the error ``on_timeout()`` builds if it has not returned in ``seconds``;
     exceptions raised by ``fn`` propagate unchanged."""
-    outcome: dict[str, Any] = {}
+    future: Future[T] = Future()
 
     def target() -> None:
         try:
-            outcome["value"] = fn()
-        except BaseException as exc:  # handed to the caller's thread below
-            outcome["error"] = exc
+            future.set_result(fn())
+        except BaseException as exc:  # handed to the caller's thread by result()
+            future.set_exception(exc)
 
-    worker = threading.Thread(target=target, name="emrd-thor-call", daemon=True)
-    worker.start()
-    worker.join(seconds)
-    if worker.is_alive():
+    threading.Thread(target=target, name="emrd-thor-call", daemon=True).start()
+    if not wait([future], timeout=seconds).done:
         raise on_timeout()
-    if "error" in outcome:
-        raise outcome["error"]
-    value: T = outcome["value"]
-    return value
+    return future.result()
 
 
 def import_ai2thor() -> ModuleType:
