@@ -25,7 +25,7 @@ from pytest_emrd.errors import check_choice
 from pytest_emrd.rooms import ROOM_NAMES
 from pytest_emrd.trajectory import Pose
 from pytest_emrd.world._geometry import heading_in_spawn_frame, to_spawn_frame
-from pytest_emrd.world._model import Observation, WorldPose
+from pytest_emrd.world._model import Observation, View, VisibleObject, WorldPose
 
 _ACTION = re.compile(r"^\s*(goto|turn|term)\s*\(\s*(.*?)\s*\)\s*\.?\s*$", re.IGNORECASE | re.DOTALL)
 _QUOTES = "\"'`"
@@ -89,10 +89,10 @@ def execute(text: str, handlers: Mapping[str, Handler], *, over: bool) -> tuple[
 
 class SemanticStep:
     """The ``step``, ``Goto`` and ``Term`` of both backends: an action text -> :meth:`_goto`,
-    the backend's ``_turn`` or :meth:`_term` (via :func:`execute`) -> the backend's
-    ``_observe``. The backend provides ``_in_view()`` (ids, types and distances of the objects
-    in view), ``_reach(object_id)`` (moves for ``Goto``; False: no spot to stand),
-    ``_require()`` and the attributes below."""
+    the backend's ``_turn`` or :meth:`_term` (via :func:`execute`) -> :meth:`_observe`. The
+    backend provides ``_in_view()`` (ids, types and distances of the objects in view),
+    ``_reach(object_id)`` (moves for ``Goto``; False: no spot to stand), ``_view()`` (world
+    pose, objects in view, frame digest and view), ``_require()`` and the attributes below."""
 
     _steps: int
     _ended: bool
@@ -103,7 +103,7 @@ class SemanticStep:
     _turn: Handler
     _in_view: Callable[[], tuple[list[str], list[str], list[float]]]
     _reach: Callable[[str], bool]
-    _observe: Callable[[bool, str], Observation]
+    _view: Callable[[], tuple[WorldPose, tuple[VisibleObject, ...], str, View]]
     _require: Callable[[], object]
 
     def step(self, action: str) -> Observation:
@@ -140,6 +140,21 @@ class SemanticStep:
         """Where the episode started, world frame."""
         self._require()
         return self._spawn
+
+    def _observe(self, success: bool, message: str) -> Observation:
+        world, visible, digest, view = self._view()
+        pose = observed_pose(self._spawn, world)
+        return Observation(
+            step=self._steps,
+            pose=pose,
+            success=success,
+            feedback=with_pose(message, pose),
+            visible=visible,
+            frame_digest=digest,
+            view=view,
+            done=self._ended,
+            terminal_room=self._terminal,
+        )
 
     def _term(self, action: Action) -> str:
         self._ended = True

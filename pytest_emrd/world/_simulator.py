@@ -18,12 +18,10 @@ from pytest_emrd.world._conditions import ConditionParams, condition_params
 from pytest_emrd.world._feedback import (
     Action,
     SemanticStep,
-    observed_pose,
     room_table,
     turn_degrees,
-    with_pose,
 )
-from pytest_emrd.world._model import Layout, Observation, View, WorldPose
+from pytest_emrd.world._model import Layout, Observation, View, VisibleObject, WorldPose
 from pytest_emrd.world._motion import approach, spawn_pose, through
 from pytest_emrd.world._render import palette, render, shade_table
 from pytest_emrd.world._scene import Scene, scene_of
@@ -199,18 +197,6 @@ class BuiltinSimulator(SemanticStep):
             self._frames.popitem(last=False)
         return entry
 
-    def _observe(self, success: bool, message: str) -> Observation:
-        scene = self._require()
-        pose = observed_pose(self._spawn, self._pose)
+    def _view(self) -> tuple[WorldPose, tuple[VisibleObject, ...], str, View]:
         digest, view = self._render()
-        return Observation(
-            step=self._steps,
-            pose=pose,
-            success=success,
-            feedback=with_pose(message, pose),
-            visible=self._current_sight().listing(scene),
-            frame_digest=digest,
-            view=view,
-            done=self._ended,
-            terminal_room=self._terminal,
-        )
+        return self._pose, self._current_sight().listing(self._require()), digest, view

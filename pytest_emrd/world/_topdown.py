@@ -46,18 +46,10 @@ def plan_png(layout: Layout, pose: WorldPose, *, visibility: float) -> bytes:
         ax.plot([x, x], [z0, z1], color="black", lw=3, solid_capstyle="butt", zorder=3)
     for o in layout.objects:
         x0, z0, x1, z1 = footprint(o)
-        ax.add_patch(
-            patches.Rectangle(
-                (x0, z0),
-                x1 - x0,
-                z1 - z0,
-                facecolor=CATEGORY_COLORS.get(o.category, "grey"),
-                edgecolor="black",
-                lw=0.6,
-                alpha=0.55 if o.elevation else 0.85,
-                zorder=4 if o.elevation else 2,
-            )
-        )
+        fill = CATEGORY_COLORS.get(o.category, "grey")
+        layer = {"alpha": 0.55, "zorder": 4} if o.elevation else {"alpha": 0.85, "zorder": 2}
+        edges = {"facecolor": fill, "edgecolor": "black", "lw": 0.6}
+        ax.add_patch(patches.Rectangle((x0, z0), x1 - x0, z1 - z0, **edges, **layer))
         ax.text(o.x, o.z, o.object_id, **centred, fontsize=5.5, zorder=6)
     # matplotlib angles are counter-clockwise from +x; headings clockwise from +z
     theta = 90.0 - pose.heading

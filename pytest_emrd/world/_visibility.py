@@ -42,11 +42,10 @@ class Sight:
     @cached_property
     def visible(self) -> tuple[VisibleObject, ...]:
         """The visible objects as the symbolic modality reports them, sorted by id."""
+        rows = zip(self.objects, self.bearing, self.distance, self.mask, strict=True)
         out = [
             VisibleObject(o.object_id, o.object_type, round(float(b), 1), round(float(d), 2))
-            for o, b, d, shown in zip(
-                self.objects, self.bearing, self.distance, self.mask, strict=True
-            )
+            for o, b, d, shown in rows
             if shown
         ]
         return tuple(sorted(out, key=lambda v: v.object_id))

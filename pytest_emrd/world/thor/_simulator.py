@@ -25,10 +25,8 @@ from pytest_emrd.world._feedback import (
     Action,
     ActionFailed,
     SemanticStep,
-    observed_pose,
     room_table,
     turn_degrees,
-    with_pose,
 )
 from pytest_emrd.world._model import (
     Doorway,
@@ -446,7 +444,7 @@ class ThorSimulator(SemanticStep):
             raise ConfigError("ThorSimulator used before reset(); call reset(layout, ...) first.")
         return self._layout
 
-    def _observe(self, success: bool, message: str) -> Observation:
+    def _view(self) -> tuple[WorldPose, tuple[VisibleObject, ...], str, View]:
         event = self._controller.last_event
         world = agent_pose(event.metadata)
         self._visible = visible_objects(
@@ -460,15 +458,5 @@ class ThorSimulator(SemanticStep):
         frame = np.ascontiguousarray(event.frame, dtype=np.uint8)
         if frame.ndim != 3 or frame.shape[2] != 3:
             raise TransportError(f"AI2-THOR returned a frame of shape {frame.shape}, not HxWx3.")
-        pose = observed_pose(self._spawn, world)
-        return Observation(
-            step=self._steps,
-            pose=pose,
-            success=success,
-            feedback=with_pose(message, pose),
-            visible=self._visible,
-            frame_digest=hashlib.sha256(frame.tobytes()).hexdigest(),
-            view=View.of(frame, JPEG_QUALITY),
-            done=self._ended,
-            terminal_room=self._terminal,
-        )
+        digest = hashlib.sha256(frame.tobytes()).hexdigest()
+        return world, self._visible, digest, View.of(frame, JPEG_QUALITY)
