@@ -137,19 +137,13 @@ def wall_pieces(layout: Layout) -> tuple[WallPiece, ...]:
     """Every wall piece of every room, rooms numbered from 1 in layout order."""
     pieces: list[WallPiece] = []
     for n, room in enumerate(layout.rooms, start=1):
-        others = tuple(r for r in layout.rooms if r is not room)
+        others = [(i, r) for i, r in enumerate(layout.rooms, start=1) if r is not room]
         poly = corners(room)
         for a, b in zip(poly, poly[1:] + poly[:1], strict=True):
-            for (px0, pz0), (px1, pz1) in itertools.pairwise(_breaks(others, a, b)):
-                neighbour = next(
-                    (
-                        i
-                        for i, other in enumerate(layout.rooms, start=1)
-                        if other is not room and _covers(other, px0, pz0, px1, pz1)
-                    ),
-                    None,
-                )
-                pieces.append(WallPiece(n, px0, pz0, px1, pz1, neighbour))
+            cuts = _breaks(tuple(r for _, r in others), a, b)
+            for (px0, pz0), (px1, pz1) in itertools.pairwise(cuts):
+                covering = (i for i, other in others if _covers(other, px0, pz0, px1, pz1))
+                pieces.append(WallPiece(n, px0, pz0, px1, pz1, next(covering, None)))
     return tuple(pieces)
 
 
@@ -359,14 +353,8 @@ def _interior_door(
     assets: Mapping[str, str],
 ) -> dict[str, Any]:
     a, b = numbers[doorway.room_a], numbers[doorway.room_b]
-    wall0 = next(
-        (
-            p
-            for p in pieces
-            if p.room == a and p.neighbour == b and p.offset_of(doorway.x, doorway.z) is not None
-        ),
-        None,
-    )
+    shared = [p for p in pieces if p.room == a and p.neighbour == b]
+    wall0 = next((p for p in shared if p.offset_of(doorway.x, doorway.z) is not None), None)
     if wall0 is None or wall0.axis != doorway.axis:
         raise ConfigError(
             f"doorway {doorway.object_id} at x={doorway.x}, z={doorway.z} (axis={doorway.axis!r})"
