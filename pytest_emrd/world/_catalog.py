@@ -32,10 +32,6 @@ class Kind:
     elevation: float = 0.0
     """Height of the base above the floor (items standing on a desk or counter)."""
 
-    @property
-    def main_color(self) -> RGB:
-        return next(iter(self.colors.values()))
-
 
 DESK_HEIGHT: Final = 0.76
 COUNTER_HEIGHT: Final = 0.92

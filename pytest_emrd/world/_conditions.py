@@ -1,11 +1,8 @@
 """The environmental conditions: what ``baseline``, ``low_light`` and ``texture`` change.
 
-The one table both backends read. Two distances, as in AI2-THOR's ``visibilityDistance``:
-the *visibility distance* decides what is reported visible (the ``text`` list, ``G_base``,
-``Goto`` targets), except landmarks (doorways, the exit), visible as far as the frame draws;
-the *drawn distance* decides what the frame draws, and scales the fog: a surface at distance
-``d`` is mixed with the fog colour in proportion ``min(1, fog * (d / drawn)^2)``. Why 3.3 m,
-and what low light costs: ``docs/interpretation/world.md`` ("Visibility").
+The one table both backends read. A surface at distance ``d`` is mixed with the fog colour
+in proportion ``min(1, fog * (d / drawn)^2)``. Why two distances, why 3.3 m, and what low
+light costs: ``docs/interpretation/world.md`` ("Visibility").
 """
 
 from __future__ import annotations

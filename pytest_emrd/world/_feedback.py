@@ -25,7 +25,7 @@ from pytest_emrd.errors import check_choice
 from pytest_emrd.rooms import ROOM_NAMES
 from pytest_emrd.trajectory import Pose
 from pytest_emrd.world._geometry import heading_in_spawn_frame, to_spawn_frame
-from pytest_emrd.world._model import Observation, WorldPose
+from pytest_emrd.world._model import Observation, View, VisibleObject, WorldPose
 
 _ACTION = re.compile(r"^\s*(goto|turn|term)\s*\(\s*(.*?)\s*\)\s*\.?\s*$", re.IGNORECASE | re.DOTALL)
 _QUOTES = "\"'`"
@@ -89,20 +89,21 @@ def execute(text: str, handlers: Mapping[str, Handler], *, over: bool) -> tuple[
 
 class SemanticStep:
     """The ``step``, ``Goto`` and ``Term`` of both backends: an action text -> :meth:`_goto`,
-    the backend's ``_turn`` or :meth:`_term` (via :func:`execute`) -> the backend's
-    ``_observe``. The backend provides ``_in_view()`` (ids, types and distances of the objects
-    in view), ``_reach(object_id)`` (moves for ``Goto``; False: no spot to stand),
-    ``_require()`` and the attributes below."""
+    the backend's ``_turn`` or :meth:`_term` (via :func:`execute`) -> :meth:`_observe`. The
+    backend provides ``_in_view()`` (ids, types and distances of the objects in view),
+    ``_reach(object_id)`` (moves for ``Goto``; False: no spot to stand), ``_view()`` (world
+    pose, objects in view, frame digest and view), ``_require()`` and the attributes below."""
 
     _steps: int
     _ended: bool
     _terminal: str | None
     _symbolic: bool
+    _spawn: WorldPose
     _rooms: Mapping[str, str]
     _turn: Handler
     _in_view: Callable[[], tuple[list[str], list[str], list[float]]]
     _reach: Callable[[str], bool]
-    _observe: Callable[[bool, str], Observation]
+    _view: Callable[[], tuple[WorldPose, tuple[VisibleObject, ...], str, View]]
     _require: Callable[[], object]
 
     def step(self, action: str) -> Observation:
@@ -113,15 +114,47 @@ class SemanticStep:
         return self._observe(*execute(action, handlers, over=self._ended))
 
     def _goto(self, action: Action) -> str:
+        """Without symbolic ids the target is a type (an instance number is dropped) and no
+        message names an id; with them the success note names the instance a type chose."""
         symbolic = self._symbolic
-        key = goto_key(action, symbolic=symbolic)
+        if not action.arg:
+            example = "an object id such as Desk_2 or a type" if symbolic else "an object type"
+            raise ActionFailed(f"Goto needs a target: {example}, e.g. Goto(Desk)")
+        key = normalise(action.arg)
+        key = key if symbolic else _INSTANCE.sub("", key)
         ids, types, distances = self._in_view()
         chosen = choose_target(key, ids, types, distances, symbolic=symbolic)
+        if chosen is None and not symbolic:
+            raise ActionFailed(f"no object of type {action.arg!r} is visible")
         if chosen is None:
-            raise not_visible(action, sorted(ids), symbolic=symbolic)
-        if not self._reach(ids[chosen]):
-            raise no_spot(ids[chosen], types[chosen], symbolic=symbolic)
-        return goto_note(key, ids[chosen], symbolic=symbolic)
+            shown = ", ".join(sorted(ids)) or "nothing"
+            raise ActionFailed(f"no visible object matches {action.arg!r}. Visible: {shown}")
+        target = ids[chosen]
+        if not self._reach(target):
+            where = target if symbolic else f"the nearest {types[chosen]}"
+            raise ActionFailed(f"there is no free spot to stand at {where}")
+        return "" if not symbolic or normalise(target) == key else f": moved to {target}"
+
+    @property
+    def spawn_pose(self) -> WorldPose:
+        """Where the episode started, world frame."""
+        self._require()
+        return self._spawn
+
+    def _observe(self, success: bool, message: str) -> Observation:
+        world, visible, digest, view = self._view()
+        pose = observed_pose(self._spawn, world)
+        return Observation(
+            step=self._steps,
+            pose=pose,
+            success=success,
+            feedback=with_pose(message, pose),
+            visible=visible,
+            frame_digest=digest,
+            view=view,
+            done=self._ended,
+            terminal_room=self._terminal,
+        )
 
     def _term(self, action: Action) -> str:
         self._ended = True
@@ -155,16 +188,6 @@ def term(rooms: Mapping[str, str], action: Action) -> tuple[str | None, str]:
     return room, TERM_NOTE if room else OTHER_NOTE.format(arg=action.arg)
 
 
-def goto_key(action: Action, *, symbolic: bool) -> str:
-    """The matching key of a ``Goto`` target (fails when it is missing); without symbolic
-    ids a trailing instance number is dropped (the key is a type)."""
-    if not action.arg:
-        example = "an object id such as Desk_2 or a type" if symbolic else "an object type"
-        raise ActionFailed(f"Goto needs a target: {example}, e.g. Goto(Desk)")
-    key = normalise(action.arg)
-    return key if symbolic else _INSTANCE.sub("", key)
-
-
 def choose_target(
     key: str,
     ids: Sequence[str],
@@ -181,25 +204,6 @@ def choose_target(
             return i
     typed = [i for i, t in enumerate(types) if normalise(t) == key]
     return min(typed, key=lambda i: (distances[i], ids[i])) if typed else None
-
-
-def not_visible(action: Action, listed: Sequence[str], *, symbolic: bool) -> ActionFailed:
-    """The failure of a ``Goto`` whose target is not in view (``listed``: ids in view)."""
-    if not symbolic:
-        return ActionFailed(f"no object of type {action.arg!r} is visible")
-    shown = ", ".join(listed) or "nothing"
-    return ActionFailed(f"no visible object matches {action.arg!r}. Visible: {shown}")
-
-
-def no_spot(object_id: str, object_type: str, *, symbolic: bool) -> ActionFailed:
-    """The failure of a ``Goto`` that finds no free place to stand at the target."""
-    where = object_id if symbolic else f"the nearest {object_type}"
-    return ActionFailed(f"there is no free spot to stand at {where}")
-
-
-def goto_note(key: str, object_id: str, *, symbolic: bool) -> str:
-    """Success note of a ``Goto``: the instance when the target was a type (if ``symbolic``)."""
-    return "" if not symbolic or normalise(object_id) == key else f": moved to {object_id}"
 
 
 def observed_pose(spawn: WorldPose, pose: WorldPose) -> Pose:

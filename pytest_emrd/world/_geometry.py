@@ -58,12 +58,6 @@ def rects_at(
     return np.stack([x - hw, z - hd, x + hw, z + hd], axis=1)
 
 
-def headings_to_units(heading: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Exact unit vectors ``(x, z)`` of cardinal headings (multiples of 90 degrees)."""
-    quarter = np.round(heading / 90).astype(np.int64) % 4
-    return np.array([0.0, 1.0, 0.0, -1.0])[quarter], np.array([1.0, 0.0, -1.0, 0.0])[quarter]
-
-
 def local_to_world(x: float, z: float, rotation: float, u: float, v: float) -> tuple[float, float]:
     """World point at ``u`` metres right and ``v`` metres forward of a frame at ``(x, z)``."""
     fx, fz = unit(rotation)

@@ -6,13 +6,10 @@ bottom-left, Entrance bottom-right, sizes drawn per seed on a 10 cm grid (positi
 least 0.9 m from any corner: the four doorways form a cycle, so every room has exactly two
 (the B3 prompt suffix is true of every office). The exit ``Door_1`` sits on the Entrance's
 south or east outer wall. Furniture, big items first (an item that finds no free spot is
-left out): Office 3-4 desks against the walls, each with a chair, 2-3 with a laptop, 1-2
-shelving units, 2 plants; Conference Room a long table with four chairs down each side, a
-television at one end; Kitchen a fridge, two counters (sink and coffee machine on one,
-microwave on the other), a stool; Entrance a reception desk, two armchairs, a plant. Ids are
-``Type_N``, numbered per ``objectType`` in the order doorways, exit, Office, Conference
-Room, Kitchen, Entrance. Generation draws only from
-:class:`~pytest_emrd.world._rng.StableRng`: a seed gives the same layout bit for bit.
+left out), is each room's recipe (:func:`_office` ... :func:`_entrance`). Ids are ``Type_N``,
+numbered per ``objectType`` in the order doorways, exit, Office, Conference Room, Kitchen,
+Entrance. Generation draws only from :class:`~pytest_emrd.world._rng.StableRng`: a seed
+gives the same layout bit for bit.
 
 Furniture is placed in *units*, groups of objects placed together (a desk with its chair
 and laptop) in their own frame: ``u`` metres to the right, ``v`` forward (the front faces
@@ -31,14 +28,8 @@ import numpy as np
 
 from pytest_emrd.rooms import CONFERENCE, ENTRANCE, KITCHEN, OFFICE
 from pytest_emrd.world._catalog import KINDS
-from pytest_emrd.world._geometry import (
-    Rect,
-    headings_to_units,
-    local_to_world,
-    rect_at,
-    rects_at,
-    rects_overlap,
-)
+from pytest_emrd.world._geometry import Rect, local_to_world, rect_at, rects_at, rects_overlap
+from pytest_emrd.world._geometry import unit as unit_vector
 from pytest_emrd.world._model import Doorway, Layout, Room, WorldObject
 from pytest_emrd.world._rng import StableRng
 
@@ -129,7 +120,7 @@ def _object(
         depth=kind.depth,
         height=kind.height,
         rotation=rotation,
-        color=kind.main_color,
+        color=next(iter(kind.colors.values())),
         elevation=kind.elevation,
     )
 
@@ -339,7 +330,7 @@ class Planner:
         if unit.around:
             access = rects_at(x, z, unit.width + 2 * unit.access, unit.depth + 2 * unit.access, rot)
         else:
-            fx, fz = headings_to_units(rot)
+            fx, fz = np.array([unit_vector(r) for r in rot]).T
             reach = (unit.depth + unit.access) / 2
             access = rects_at(x + fx * reach, z + fz * reach, unit.width, unit.access, rot)
         room_rect = np.array([room.x0, room.z0, room.x1, room.z1])

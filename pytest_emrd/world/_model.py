@@ -8,11 +8,10 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any, Protocol
+from typing import Protocol
 
 import numpy as np
 
-from pytest_emrd._serde import from_dict, to_dict
 from pytest_emrd.trajectory import Pose
 
 
@@ -105,13 +104,6 @@ class Layout:
             if o.object_type != "Doorway":
                 table[o.room][o.object_type] = table[o.room].get(o.object_type, 0) + 1
         return table
-
-    def to_dict(self) -> dict[str, Any]:
-        return to_dict(self)
-
-    @classmethod
-    def from_dict(cls, data: dict[str, Any]) -> Layout:
-        return from_dict(cls, data)
 
 
 @dataclass(frozen=True)

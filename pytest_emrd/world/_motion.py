@@ -7,10 +7,8 @@
 * ``Goto(Doorway_N)``: from one of its rooms the agent passes through to 1 m inside the
   other room, facing away from the doorway; a doorway seen from a third room is walked up
   to (1 m before it, facing it), so a single action never skips a room.
-* Spawn: the episodes of a room stand on distinct points (``docs/interpretation/world.md``,
-  "Twenty distinct episodes per spawn room"): episode ``i`` on point ``i`` of
-  :func:`spawn_points`, its cardinal heading drawn from the episode seed; a seed of no
-  episode (a benchmark's) picks a point by the seed.
+* Spawn: the episodes of a room stand on distinct points, :func:`spawn_points`
+  (``docs/interpretation/world.md``, "Twenty distinct episodes per spawn room").
 """
 
 from __future__ import annotations
@@ -98,9 +96,8 @@ def spawn_pose(scene: Scene, room: Room, seed: int) -> WorldPose:
 
 def spawn_points(scene: Scene, room: Room) -> list[tuple[float, float]]:
     """The spawn points of ``room`` in the order episodes take them (shuffled once per room):
-    the free points of a 0.25 m grid with :data:`SPAWN_CLEARANCE` (else the agent's radius)
-    clear around them within :data:`SPAWN_RADIUS` of the room's centre, or the
-    :data:`SPAWN_POSES` free points nearest the centre when fewer lie that close."""
+    episode ``i`` stands on point ``i``, its cardinal heading drawn from the episode seed; a
+    seed of no episode (a benchmark's) picks a point by the seed."""
     cx, cz = (room.x0 + room.x1) / 2, (room.z0 + room.z1) / 2
     xs = np.arange(room.x0 + AGENT_RADIUS, room.x1 - AGENT_RADIUS + 1e-9, SPAWN_STEP)
     zs = np.arange(room.z0 + AGENT_RADIUS, room.z1 - AGENT_RADIUS + 1e-9, SPAWN_STEP)

@@ -131,7 +131,8 @@ def palette(scene: Scene, params: ConditionParams, seed: int) -> np.ndarray:
     if not params.randomize_palette:
         return colors
     labels = [label for label in range(WALL0, len(colors)) if not TILE0 <= label < PART0]
-    colors[labels] = StableRng(seed * 7919 + 17).integers(20, 235, (len(labels), 3))
+    rng = StableRng(seed * 7919 + 17)
+    colors[labels] = [[rng.integer(20, 235) for _ in range(3)] for _ in labels]
     colors[TILE0:PART0] = np.maximum(colors[FLOOR0:TILE0] - 12, 0)
     return colors
 

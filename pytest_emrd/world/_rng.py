@@ -8,12 +8,9 @@ sequence, so every draw here is derived from that one method.
 
 from __future__ import annotations
 
-import math
 import random
 from collections.abc import Sequence
 from typing import TypeVar
-
-import numpy as np
 
 T = TypeVar("T")
 
@@ -35,12 +32,6 @@ class StableRng:
     def integer(self, low: int, high: int) -> int:
         """An int in ``[low, high]`` (both ends included)."""
         return low + min(int(self._random() * (high - low + 1)), high - low)
-
-    def integers(self, low: int, high: int, shape: tuple[int, ...]) -> np.ndarray:
-        """An int64 array of ``shape`` filled in C order as :meth:`integer` calls would."""
-        draws = np.array([self._random() for _ in range(math.prod(shape))], dtype=np.float64)
-        span = high - low
-        return low + np.minimum((draws * (span + 1)).astype(np.int64), span).reshape(shape)
 
     def choice(self, items: Sequence[T]) -> T:
         """One element of a non-empty sequence."""

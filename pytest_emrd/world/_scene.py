@@ -26,8 +26,6 @@ from pytest_emrd.world._geometry import Walls, footprint, local_to_world, unit, 
 from pytest_emrd.world._model import Layout, WorldObject
 from pytest_emrd.world._shapes import boxes_of
 
-SAMPLES = 9
-"""Visibility sample points per object (centre, edge midpoints, corners, inset 10 %)."""
 CEILING, SKIRTING, WALL0 = 0, 1, 2
 FLOOR0 = WALL0 + len(ROOM_NAMES)
 TILE0 = FLOOR0 + len(ROOM_NAMES)
@@ -53,7 +51,7 @@ class Scene:
     centres: np.ndarray
     """``(N, 2)``."""
     samples: np.ndarray
-    """``(N, SAMPLES, 2)`` visibility sample points."""
+    """``(N, 9, 2)`` visibility sample points (centre, edge midpoints, corners, inset 10 %)."""
     floor: np.ndarray
     """``(N,)`` bool: stands on the floor (blocks walking; not doorways, the exit, items)."""
     support: np.ndarray

@@ -18,12 +18,10 @@ from pytest_emrd.world._conditions import ConditionParams, condition_params
 from pytest_emrd.world._feedback import (
     Action,
     SemanticStep,
-    observed_pose,
     room_table,
     turn_degrees,
-    with_pose,
 )
-from pytest_emrd.world._model import Layout, Observation, View, WorldPose
+from pytest_emrd.world._model import Layout, Observation, View, VisibleObject, WorldPose
 from pytest_emrd.world._motion import approach, spawn_pose, through
 from pytest_emrd.world._render import palette, render, shade_table
 from pytest_emrd.world._scene import Scene, scene_of
@@ -119,11 +117,6 @@ class BuiltinSimulator(SemanticStep):
         self._require()
         return self._pose
 
-    @property
-    def spawn_pose(self) -> WorldPose:
-        self._require()
-        return self._spawn
-
     def current_room(self) -> str:
         scene = self._require()
         room = scene.layout.room_at(self._pose.x, self._pose.z)
@@ -141,13 +134,9 @@ class BuiltinSimulator(SemanticStep):
 
     def _in_view(self) -> tuple[list[str], list[str], list[float]]:
         seen, objs = self._current_sight(), self._require().layout.objects
-        visible = np.flatnonzero(seen.mask)
-        ids = [objs[i].object_id for i in visible]
-        return (
-            ids,
-            [objs[i].object_type for i in visible],
-            [float(seen.distance[i]) for i in visible],
-        )
+        shown = np.flatnonzero(seen.mask)
+        ids = [objs[i].object_id for i in shown]
+        return ids, [objs[i].object_type for i in shown], [float(seen.distance[i]) for i in shown]
 
     def _reach(self, object_id: str) -> bool:
         scene = self._require()
@@ -183,14 +172,10 @@ class BuiltinSimulator(SemanticStep):
         return self._sight
 
     def _render(self) -> tuple[str, View]:
-        """Pixel digest and view of the current pose.
-
-        The views of recent poses of the episode are kept (a sweep ends where it began). And
-        every episode of the paper office under a condition shares one scene and shade table,
-        so the process remembers each view's digest (of ~6,600 views of the committed grid
-        ~1,900 differ): a view seen before is drawn only if its pixels or JPEG are read, never
-        for a replay (not under ``texture``). ``frame_cache=0`` turns both off.
-        """
+        """Pixel digest and view of the current pose. The views of recent poses are kept (a
+        sweep ends where it began); the process remembers each view's digest per shared scene
+        and shade table, so a view seen before is drawn only if its pixels or JPEG are read
+        (not under ``texture``). ``frame_cache=0`` turns both off."""
         pose, scene, table = self._pose, self._require(), self._table
         cached = self._frames.get(pose)
         if cached is not None:
@@ -212,18 +197,6 @@ class BuiltinSimulator(SemanticStep):
             self._frames.popitem(last=False)
         return entry
 
-    def _observe(self, success: bool, message: str) -> Observation:
-        scene = self._require()
-        pose = observed_pose(self._spawn, self._pose)
+    def _view(self) -> tuple[WorldPose, tuple[VisibleObject, ...], str, View]:
         digest, view = self._render()
-        return Observation(
-            step=self._steps,
-            pose=pose,
-            success=success,
-            feedback=with_pose(message, pose),
-            visible=self._current_sight().listing(scene),
-            frame_digest=digest,
-            view=view,
-            done=self._ended,
-            terminal_room=self._terminal,
-        )
+        return self._pose, self._current_sight().listing(self._require()), digest, view

@@ -31,23 +31,14 @@ def plan_png(layout: Layout, pose: WorldPose, *, visibility: float) -> bytes:
     from matplotlib import pyplot as plt
 
     fig, ax = plt.subplots(figsize=(layout.width * 0.75 + 1, layout.depth * 0.75 + 1))
+    centred = {"ha": "center", "va": "center"}
+    label = {"fontsize": 13, "weight": "bold", "color": "#444444", "alpha": 0.6, "zorder": 5}
     for r in layout.rooms:
         fill = ROOM_FILL.get(r.name, "#eeeeee")
         ax.add_patch(
             patches.Rectangle((r.x0, r.z0), r.x1 - r.x0, r.z1 - r.z0, color=fill, zorder=0)
         )
-        ax.text(
-            (r.x0 + r.x1) / 2,
-            (r.z0 + r.z1) / 2,
-            r.name,
-            ha="center",
-            va="center",
-            fontsize=13,
-            weight="bold",
-            color="#444444",
-            alpha=0.6,
-            zorder=5,
-        )
+        ax.text((r.x0 + r.x1) / 2, (r.z0 + r.z1) / 2, r.name, **centred, **label)
     walls = walls_of(layout)
     for z, x0, x1 in walls.along_x:
         ax.plot([x0, x1], [z, z], color="black", lw=3, solid_capstyle="butt", zorder=3)
@@ -55,19 +46,11 @@ def plan_png(layout: Layout, pose: WorldPose, *, visibility: float) -> bytes:
         ax.plot([x, x], [z0, z1], color="black", lw=3, solid_capstyle="butt", zorder=3)
     for o in layout.objects:
         x0, z0, x1, z1 = footprint(o)
-        ax.add_patch(
-            patches.Rectangle(
-                (x0, z0),
-                x1 - x0,
-                z1 - z0,
-                facecolor=CATEGORY_COLORS.get(o.category, "grey"),
-                edgecolor="black",
-                lw=0.6,
-                alpha=0.55 if o.elevation else 0.85,
-                zorder=4 if o.elevation else 2,
-            )
-        )
-        ax.text(o.x, o.z, o.object_id, ha="center", va="center", fontsize=5.5, zorder=6)
+        fill = CATEGORY_COLORS.get(o.category, "grey")
+        layer = {"alpha": 0.55, "zorder": 4} if o.elevation else {"alpha": 0.85, "zorder": 2}
+        edges = {"facecolor": fill, "edgecolor": "black", "lw": 0.6}
+        ax.add_patch(patches.Rectangle((x0, z0), x1 - x0, z1 - z0, **edges, **layer))
+        ax.text(o.x, o.z, o.object_id, **centred, fontsize=5.5, zorder=6)
     # matplotlib angles are counter-clockwise from +x; headings clockwise from +z
     theta = 90.0 - pose.heading
     wedge = (theta - 45, theta + 45)

@@ -1,12 +1,9 @@
 """What the agent sees: field of view, distance limit, walls and furniture occlude.
 
-An object is visible from a pose when one of its sample points (centre, edge midpoints and
-corners of its footprint; points along the gap for a doorway) is inside the 90 degree field
-of view (``|lateral| <= forward``), within the condition's visibility distance
-(:mod:`pytest_emrd.world._conditions`), and in the line of sight (:func:`in_line_of_sight`).
-The frame draws the same boxes, so furniture hides in it what it hides here. A visible
-object's bearing is that of its centre, clipped to ``[-45, 45]`` (negative to the left),
-its distance to its centre.
+An object is visible from a pose when one of its sample points is inside the 90 degree field
+of view (``|lateral| <= forward``), within the condition's visibility distance, and in the
+line of sight (:func:`in_line_of_sight`; why: ``docs/interpretation/world.md``). A visible
+object's bearing is that of its centre, clipped to ``[-45, 45]``, its distance to its centre.
 """
 
 from __future__ import annotations
@@ -45,11 +42,10 @@ class Sight:
     @cached_property
     def visible(self) -> tuple[VisibleObject, ...]:
         """The visible objects as the symbolic modality reports them, sorted by id."""
+        rows = zip(self.objects, self.bearing, self.distance, self.mask, strict=True)
         out = [
             VisibleObject(o.object_id, o.object_type, round(float(b), 1), round(float(d), 2))
-            for o, b, d, shown in zip(
-                self.objects, self.bearing, self.distance, self.mask, strict=True
-            )
+            for o, b, d, shown in rows
             if shown
         ]
         return tuple(sorted(out, key=lambda v: v.object_id))

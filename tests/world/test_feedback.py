@@ -11,12 +11,9 @@ from pytest_emrd.trajectory import Pose
 from pytest_emrd.world._feedback import (
     Action,
     ActionFailed,
+    SemanticStep,
     choose_target,
     execute,
-    goto_key,
-    goto_note,
-    no_spot,
-    not_visible,
     observed_pose,
     room_table,
     term,
@@ -74,26 +71,67 @@ def test_goto_prefers_the_instance_then_the_nearest_of_the_type() -> None:
     assert choose_target("fridge", ids, types, [1.0, 1.0, 1.0], symbolic=True) is None
 
 
+class _Backend(SemanticStep):
+    """The shared Goto over a fixed view: ``Desk_1`` (1 m), ``Desk_2`` (3 m), ``Chair_1``."""
+
+    def __init__(self, *, symbolic: bool, reachable: bool = True) -> None:
+        self._steps, self._ended, self._symbolic = 0, False, symbolic
+        self._rooms, self._reachable, self.reached = room_table(), reachable, ""
+
+    def _in_view(self) -> tuple[list[str], list[str], list[float]]:
+        return ["Desk_1", "Desk_2", "Chair_1"], ["Desk", "Desk", "Chair"], [1.0, 3.0, 2.0]
+
+    def _reach(self, object_id: str) -> bool:
+        self.reached = object_id
+        return self._reachable
+
+    def _turn(self, action: Action) -> str:
+        return ""
+
+    def _require(self) -> None:
+        return None
+
+    def _observe(self, success: bool, message: str) -> tuple[bool, str]:  # type: ignore[override]
+        return success, message
+
+
 def test_vision_goto_reads_types_only() -> None:
+    backend = _Backend(symbolic=False)
+    assert backend.step("Goto(Desk_2)") == (True, "Goto(Desk_2) succeeded.")
+    assert backend.reached == "Desk_1"
     ids, types = ["Desk_1", "Desk_2", "Chair_1"], ["Desk", "Desk", "Chair"]
-    key = goto_key(Action("Goto", "Desk_2"), symbolic=False)
-    assert key == "desk"
-    assert choose_target(key, ids, types, [1.0, 3.0, 2.0], symbolic=False) == 0
     assert choose_target("desk2", ids, types, [1.0, 3.0, 2.0], symbolic=False) is None
+    symbolic = _Backend(symbolic=True)
+    assert symbolic.step("Goto(Desk_2)") == (True, "Goto(Desk_2) succeeded.")
+    assert symbolic.reached == "Desk_2"
+    assert symbolic.step("Goto(Desk)") == (True, "Goto(Desk) succeeded: moved to Desk_1.")
 
 
 @pytest.mark.parametrize("symbolic", [True, False], ids=["symbolic", "vision"])
 def test_goto_wording_names_ids_only_when_symbolic(symbolic: bool) -> None:
-    action = Action("Goto", "Sofa")
     texts = [
-        str(not_visible(action, ["Desk_1"], symbolic=symbolic)),
-        str(no_spot("Desk_1", "Desk", symbolic=symbolic)),
-        goto_note("desk", "Desk_1", symbolic=symbolic),
+        _Backend(symbolic=symbolic).step("Goto(Sofa)")[1],
+        _Backend(symbolic=symbolic, reachable=False).step("Goto(Desk)")[1],
+        _Backend(symbolic=symbolic).step("Goto(Desk)")[1],
+        _Backend(symbolic=symbolic).step("Goto()")[1],
     ]
-    with pytest.raises(ActionFailed) as missing:
-        goto_key(Action("Goto", ""), symbolic=symbolic)
-    texts.append(str(missing.value))
     assert any("_1" in t for t in texts) is symbolic
+    assert texts[3].startswith("Goto() failed: Goto needs a target: ")
+
+
+def test_goto_failures_are_worded_for_the_agent() -> None:
+    assert _Backend(symbolic=True).step("Goto(Sofa)") == (
+        False,
+        "Goto(Sofa) failed: no visible object matches 'Sofa'. Visible: Chair_1, Desk_1, Desk_2.",
+    )
+    assert _Backend(symbolic=False).step("Goto(Sofa)") == (
+        False,
+        "Goto(Sofa) failed: no object of type 'Sofa' is visible.",
+    )
+    assert _Backend(symbolic=False, reachable=False).step("Goto(Desk)") == (
+        False,
+        "Goto(Desk) failed: there is no free spot to stand at the nearest Desk.",
+    )
 
 
 @given(

@@ -14,6 +14,7 @@ import json
 
 import pytest
 
+from pytest_emrd._serde import to_dict
 from pytest_emrd.world import WORLD_VERSION, Layout, make_simulator, paper_office
 
 GOLDEN = {
@@ -43,13 +44,13 @@ def _pinned() -> dict:
 
 
 def test_layout_of_seed_7_is_pinned(office: Layout) -> None:
-    text = json.dumps(office.to_dict(), sort_keys=True).encode()
+    text = json.dumps(to_dict(office), sort_keys=True).encode()
     assert hashlib.sha256(text).hexdigest() == _pinned()["layout"]
 
 
 def test_paper_office_is_pinned() -> None:
     """The fixed office every paper-protocol episode runs in."""
-    text = json.dumps(paper_office().to_dict(), sort_keys=True).encode()
+    text = json.dumps(to_dict(paper_office()), sort_keys=True).encode()
     assert hashlib.sha256(text).hexdigest() == _pinned()["paper_office"]
 
 

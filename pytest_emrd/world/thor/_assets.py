@@ -3,10 +3,8 @@
 ``assets.json`` holds every asset of the office's object types with its bounding box,
 copied from allenai/procthor ``procthor/databases/asset-database.json`` at commit
 53d5bd4c8c96a699e6a615dc390abb670cc9d353. THOR skips an id missing from its database
-without failing ``CreateHouse``, so an id this package emits must exist, and the object's
-size comes from its asset. :func:`choose_asset` picks the asset of the object's type whose
-box is closest to the object's (oversize counts double: a bigger asset may cross a wall);
-``asset_ids={"Desk": "Desk_204_1"}`` overrides the choice per type (``docs/ai2thor.md``).
+silently, so an id this package emits must exist. How :func:`choose_asset` picks:
+``docs/ai2thor.md``.
 """
 
 from __future__ import annotations

@@ -4,24 +4,17 @@ The house ``Controller(scene=house)`` accepts: ``rooms``; ``walls``, one per str
 boundary piece per room (a room side is cut at every corner of another room lying on it, so
 each piece has one neighbour, a room or the outside) plus one-sided exterior faces;
 ``doors`` cut as ``holePolygon`` into a wall both rooms own; ``objects``; lights and skybox;
-and ``metadata``: the agent's start in ``agentPoses`` (the only pose ``CreateHouse``
-applies; ``agent`` repeats it, procthor's convention) and our ``emrd`` block (room names,
-the THOR-id -> EMRD-id table). ``low_light`` scales the lights and dims the skybox;
-``texture`` gives walls and floors seeded colours.
-
-THOR centres an asset's bounding box on the object's ``position``, so an object stands at
-``y = support top + asset height / 2``; :func:`place` shifts an object whose asset is larger
-than its footprint the least distance that keeps it inside its room (and what stands on it
-with it). The agent's start must be on THOR's absolute grid (``TeleportFull`` refuses other
-points): the grid point clear of every asset and wall nearest the builtin spawn
-(:func:`spawn_point`). See ``docs/ai2thor.md``.
+and ``metadata``: the agent's start in ``agentPoses`` (``agent`` repeats it) and our
+``emrd`` block (room names, the THOR-id -> EMRD-id table). Why objects stand at
+``y = support top + asset height / 2`` (:func:`place`), why the start is a grid point
+(:func:`spawn_point`) and what the conditions change: ``docs/ai2thor.md``.
 """
 
 from __future__ import annotations
 
 import itertools
 import math
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any, Final
 
@@ -144,19 +137,13 @@ def wall_pieces(layout: Layout) -> tuple[WallPiece, ...]:
     """Every wall piece of every room, rooms numbered from 1 in layout order."""
     pieces: list[WallPiece] = []
     for n, room in enumerate(layout.rooms, start=1):
-        others = tuple(r for r in layout.rooms if r is not room)
+        others = [(i, r) for i, r in enumerate(layout.rooms, start=1) if r is not room]
         poly = corners(room)
         for a, b in zip(poly, poly[1:] + poly[:1], strict=True):
-            for (px0, pz0), (px1, pz1) in itertools.pairwise(_breaks(others, a, b)):
-                neighbour = next(
-                    (
-                        i
-                        for i, other in enumerate(layout.rooms, start=1)
-                        if other is not room and _covers(other, px0, pz0, px1, pz1)
-                    ),
-                    None,
-                )
-                pieces.append(WallPiece(n, px0, pz0, px1, pz1, neighbour))
+            cuts = _breaks(tuple(r for _, r in others), a, b)
+            for (px0, pz0), (px1, pz1) in itertools.pairwise(cuts):
+                covering = (i for i, other in others if _covers(other, px0, pz0, px1, pz1))
+                pieces.append(WallPiece(n, px0, pz0, px1, pz1, next(covering, None)))
     return tuple(pieces)
 
 
@@ -305,10 +292,6 @@ class IdTable:
         """The EMRD id of a THOR object, or None if the layout never placed it."""
         return self.to_emrd.get(thor_id)
 
-    def thor(self, emrd_id: str) -> str:
-        """The THOR objectId of an EMRD object (KeyError if unknown)."""
-        return self.to_thor[emrd_id]
-
 
 AGENT_Y = 0.9009997
 """Agent body height THOR reports for the default agent (TeleportFull keeps it)."""
@@ -318,13 +301,13 @@ def _xyz(x: float, y: float, z: float) -> dict[str, float]:
     return {"x": round(float(x), 4), "y": round(float(y), 4), "z": round(float(z), 4)}
 
 
-def _rgb(rgb: tuple[float, float, float]) -> dict[str, float]:
+def _rgb(rgb: Sequence[float]) -> dict[str, float]:
     r, g, b = (round(float(c), 4) for c in rgb)
     return {"r": r, "g": g, "b": b, "a": 1.0}
 
 
-def _random_color(rng: StableRng) -> tuple[float, float, float]:
-    return (rng.uniform(0.05, 0.95), rng.uniform(0.05, 0.95), rng.uniform(0.05, 0.95))
+def _random_color(rng: StableRng) -> list[float]:
+    return [rng.uniform(0.05, 0.95) for _ in range(3)]
 
 
 def _wall_dict(piece: WallPiece, room_id: str, color: dict[str, float]) -> dict[str, Any]:
@@ -370,14 +353,8 @@ def _interior_door(
     assets: Mapping[str, str],
 ) -> dict[str, Any]:
     a, b = numbers[doorway.room_a], numbers[doorway.room_b]
-    wall0 = next(
-        (
-            p
-            for p in pieces
-            if p.room == a and p.neighbour == b and p.offset_of(doorway.x, doorway.z) is not None
-        ),
-        None,
-    )
+    shared = [p for p in pieces if p.room == a and p.neighbour == b]
+    wall0 = next((p for p in shared if p.offset_of(doorway.x, doorway.z) is not None), None)
     if wall0 is None or wall0.axis != doorway.axis:
         raise ConfigError(
             f"doorway {doorway.object_id} at x={doorway.x}, z={doorway.z} (axis={doorway.axis!r})"
@@ -424,6 +401,7 @@ def _exterior_door(
 
 def _lights(layout: Layout, factor: float) -> list[dict[str, Any]]:
     shadow = {"type": "Soft", "strength": 1, "normalBias": 0, "bias": 0.05, "nearPlane": 0.2}
+    shadow["resolution"] = "FromQualitySettings"
     lights: list[dict[str, Any]] = [
         {
             "id": "DirectionalLight",
@@ -433,7 +411,7 @@ def _lights(layout: Layout, factor: float) -> list[dict[str, Any]]:
             "intensity": round(0.35 * factor, 4),
             "indirectMultiplier": 1.0,
             "rgb": _rgb((1.0, 1.0, 1.0)),
-            "shadow": {**shadow, "resolution": "FromQualitySettings"},
+            "shadow": shadow,
         }
     ]
     return lights + [
@@ -444,7 +422,7 @@ def _lights(layout: Layout, factor: float) -> list[dict[str, Any]]:
             "intensity": round(0.75 * factor, 4),
             "range": 15,
             "rgb": _rgb((1.0, 0.855, 0.722)),
-            "shadow": {**shadow, "resolution": "FromQualitySettings"},
+            "shadow": shadow,
         }
         for n, r in enumerate(layout.rooms, start=1)
     ]
@@ -466,9 +444,8 @@ def _start(layout: Layout, placed: Mapping[str, Placed], agent: WorldPose | None
     first = layout.rooms[0]
     wanted = agent or WorldPose((first.x0 + first.x1) / 2, (first.z0 + first.z1) / 2, 0.0)
     name = layout.room_at(wanted.x, wanted.z)
-    spot = None
-    if name is not None:
-        spot = spawn_point(layout.room(name), [p.rect for p in placed.values()], wanted.x, wanted.z)
+    footprints = [p.rect for p in placed.values()]
+    spot = None if name is None else spawn_point(layout.room(name), footprints, wanted.x, wanted.z)
     if spot is None:
         raise ConfigError(
             f"agent pose x={wanted.x}, z={wanted.z} has no free THOR grid point in its room "

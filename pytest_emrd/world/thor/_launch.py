@@ -1,21 +1,12 @@
 """Starting AI2-THOR: the lazy import, cheap pre-flight checks, and bounded calls.
 
 Everything here fails fast with a message that says what to install or set (the extra,
-``local_executable_path``, ``libvulkan1``, a missing build). Two things ai2thor 5.0.0 does
-not do for us:
-
-* ``local_executable_path`` on a headless machine: ai2thor runs it as a ``Linux64`` build
-  whose ``launch_env`` puts ``DISPLAY=None`` into the child's environment, which
-  ``subprocess.Popen`` rejects; a CloudRendering build never reads ``DISPLAY``, so
-  :func:`headless_options` passes ``x_display=":0"`` when no display is known.
-* Unity in its own process group: ``Controller.stop_unity`` kills only the one process it
-  started, and nothing when the constructor never returns. :func:`launcher` starts Unity
-  under ``setsid`` and remembers each controller as soon as it exists, so a timeout can
-  kill the whole group (:func:`kill_unity`).
-
-Every call into ``ai2thor`` runs in a daemon thread abandoned after its time limit
-(:func:`bounded`), so a Unity process that never answers costs the limit, never a hang.
-No pre-flight check touches the network.
+``local_executable_path``, ``libvulkan1``, a missing build); no pre-flight check touches the
+network. What ai2thor 5.0.0 does not do for us (``docs/ai2thor.md``): :func:`headless_options`
+gives a local build a display; ``Controller.stop_unity`` kills only the one process it
+started, and nothing when the constructor never returns, so :func:`launcher` starts Unity
+under ``setsid`` and a timeout kills the whole group (:func:`kill_unity`). Every call into
+``ai2thor`` runs in a daemon thread abandoned after its time limit (:func:`bounded`).
 """
 
 from __future__ import annotations
@@ -26,8 +17,9 @@ import signal
 import subprocess
 import threading
 from collections.abc import Callable, Mapping
+from concurrent.futures import Future, wait
 from types import ModuleType
-from typing import Any, Final, TypeVar
+from typing import Any, TypeVar
 
 from pytest_emrd.errors import ConfigError, EmrdError, missing_extra
 
@@ -45,30 +37,21 @@ BUILD_HINT = (
 )
 
 
-HEADLESS_DISPLAY: Final = ":0"
-"""The ``x_display`` a local build gets when there is no X display."""
-
-
 def bounded(fn: Callable[[], T], *, seconds: float, on_timeout: Callable[[], EmrdError]) -> T:
     """``fn()``, or the error ``on_timeout()`` builds if it has not returned in ``seconds``;
     exceptions raised by ``fn`` propagate unchanged."""
-    outcome: dict[str, Any] = {}
+    future: Future[T] = Future()
 
     def target() -> None:
         try:
-            outcome["value"] = fn()
-        except BaseException as exc:  # handed to the caller's thread below
-            outcome["error"] = exc
+            future.set_result(fn())
+        except BaseException as exc:  # handed to the caller's thread by result()
+            future.set_exception(exc)
 
-    worker = threading.Thread(target=target, name="emrd-thor-call", daemon=True)
-    worker.start()
-    worker.join(seconds)
-    if worker.is_alive():
+    threading.Thread(target=target, name="emrd-thor-call", daemon=True).start()
+    if not wait([future], timeout=seconds).done:
         raise on_timeout()
-    if "error" in outcome:
-        raise outcome["error"]
-    value: T = outcome["value"]
-    return value
+    return future.result()
 
 
 def import_ai2thor() -> ModuleType:
@@ -127,7 +110,7 @@ def headless_options(options: Mapping[str, Any]) -> dict[str, Any]:
     out = dict(options)
     local = out.get("local_executable_path")
     if local and not out.get("x_display") and not os.environ.get("DISPLAY"):
-        out["x_display"] = HEADLESS_DISPLAY
+        out["x_display"] = ":0"
     return out
 
 

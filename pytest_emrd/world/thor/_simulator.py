@@ -1,17 +1,12 @@
 """``ThorSimulator``: the :class:`~pytest_emrd.world._model.Simulator` protocol on AI2-THOR.
 
-One ``Controller`` per simulator, started on the first ``reset`` with ``scene=<house>`` and
-:data:`DEFAULTS`, then re-used with ``controller.reset(scene=<house>)``. Actions are read
-and answered with the builtin world's grammar and wording (:mod:`pytest_emrd.world._feedback`).
-``Goto`` teleports (``TeleportFull``) on THOR's grid of reachable positions to a spot in
-the target's room from which a grid heading faces it (:func:`viewpoint`), through a doorway
-to the spot in the next room nearest the gap, facing into it (:func:`entry`); ``Turn``
-rotates by 90 degree steps; ``Term`` makes no THOR call. THOR's yaw is the world heading.
-The spawn is the builtin world's, moved to the nearest free point of THOR's grid.
-Reset checks each THOR answer it depends on; a refusal is one :class:`ConfigError` line
-carrying THOR's ``errorMessage`` (``docs/ai2thor.md``). Every THOR call is bounded
-(``start_timeout``, ``step_timeout``); on a timeout the Unity process group is killed and
-the next reset starts a new controller.
+One ``Controller`` per simulator, started on the first ``reset``, then re-used with
+``controller.reset(scene=<house>)``. Actions take the builtin world's grammar and wording.
+``Goto`` teleports on THOR's grid of reachable positions (:func:`viewpoint`, through a
+doorway :func:`entry`); ``Turn`` rotates by 90 degree steps; ``Term`` makes no THOR call.
+Every THOR call is bounded (``start_timeout``, ``step_timeout``); on a timeout the Unity
+process group is killed and the next reset starts a new controller. Reset's checks and
+THOR's refusals: ``docs/ai2thor.md``.
 """
 
 from __future__ import annotations
@@ -30,10 +25,8 @@ from pytest_emrd.world._feedback import (
     Action,
     ActionFailed,
     SemanticStep,
-    observed_pose,
     room_table,
     turn_degrees,
-    with_pose,
 )
 from pytest_emrd.world._model import (
     Doorway,
@@ -87,13 +80,15 @@ def _in_room(points: np.ndarray, room: Room) -> np.ndarray:
     return (x > room.x0 + m) & (x < room.x1 - m) & (z > room.z0 + m) & (z < room.z1 - m)
 
 
-def _pick(points: np.ndarray, score: np.ndarray, mask: np.ndarray) -> int | None:
-    """Index of the lowest score under ``mask``; ties broken by (x, z) so it is stable."""
-    idx = np.flatnonzero(mask)
-    if idx.size == 0:
-        return None
-    order = np.lexsort((points[idx, 1], points[idx, 0], np.round(score[idx], 6)))
-    return int(idx[order[0]])
+def _pick(points: np.ndarray, score: np.ndarray, *masks: np.ndarray) -> int | None:
+    """Index of the lowest score under the first of ``masks`` any point passes; ties broken
+    by (x, z) so it is stable."""
+    for mask in masks:
+        idx = np.flatnonzero(mask)
+        if idx.size:
+            order = np.lexsort((points[idx, 1], points[idx, 0], np.round(score[idx], 6)))
+            return int(idx[order[0]])
+    return None
 
 
 def nearest_in_room(
@@ -141,9 +136,7 @@ def entry(points: np.ndarray, doorway: Doorway, into: Room) -> WorldPose | None:
         )
     dist = np.hypot(points[:, 0] - doorway.x, points[:, 1] - doorway.z)
     inside = _in_room(points, into)
-    best = _pick(points, dist, inside & (depth >= CLEARANCE))
-    if best is None:
-        best = _pick(points, dist, inside)
+    best = _pick(points, dist, inside & (depth >= CLEARANCE), inside)
     if best is None:
         return None
     px, pz = points[best]
@@ -169,14 +162,9 @@ def visible_objects(
     landmarks: frozenset[str],
     visibility_distance: float,
 ) -> tuple[VisibleObject, ...]:
-    """EMRD objects THOR reports ``visible``, sorted by id.
-
-    THOR runs with the condition's draw distance, as far as ``landmarks`` (EMRD ids of
-    doorways and the exit) count visible; every other object must also lie within
-    ``visibility_distance``, measured horizontally to the nearest point of its bounding box.
-    ``distance`` is horizontal, to the object's position; ``types`` maps EMRD id -> EMRD
-    type; bearings are clipped to the field of view.
-    """
+    """EMRD objects THOR reports ``visible``, sorted by id: ``landmarks`` (EMRD ids) as THOR
+    says, every other object only within ``visibility_distance`` of its bounding box
+    (``docs/ai2thor.md``); ``types`` maps EMRD id -> EMRD type."""
     seen: dict[str, VisibleObject] = {}
     for obj in objects:
         if not obj.get("visible"):
@@ -213,12 +201,6 @@ DEFAULTS: Mapping[str, Any] = {
     "gridSize": 0.25,
     "rotateStepDegrees": 90,
 }
-ROTATIONS: Mapping[float, tuple[str, ...]] = {
-    -90.0: ("RotateLeft",),
-    90.0: ("RotateRight",),
-    180.0: ("RotateRight", "RotateRight"),
-}
-"""Clockwise degrees of a ``Turn`` -> the THOR rotations (90 degrees each)."""
 
 
 def _positive(name: str, value: float) -> float:
@@ -397,11 +379,6 @@ class ThorSimulator(SemanticStep):
         return agent_pose(self._controller.last_event.metadata)
 
     @property
-    def spawn_pose(self) -> WorldPose:
-        self._require()
-        return self._spawn
-
-    @property
     def house(self) -> Mapping[str, Any]:
         """The ProcTHOR house of the current episode."""
         return self._house
@@ -428,12 +405,8 @@ class ThorSimulator(SemanticStep):
                 _launch.kill_unity(controller)
 
     def _in_view(self) -> tuple[list[str], list[str], list[float]]:
-        seen = self._visible
-        return (
-            [v.object_id for v in seen],
-            [v.object_type for v in seen],
-            [v.distance for v in seen],
-        )
+        ids = [v.object_id for v in self._visible]
+        return ids, [v.object_type for v in self._visible], [v.distance for v in self._visible]
 
     def _reach(self, object_id: str) -> bool:
         layout = self._require()
@@ -448,8 +421,9 @@ class ThorSimulator(SemanticStep):
         return pose is not None
 
     def _turn(self, action: Action) -> str:
-        for rotate in ROTATIONS[turn_degrees(action)]:
-            _accepted(self._act(rotate, degrees=90))
+        degrees = turn_degrees(action)  # -90, 90 or 180: RotateLeft, or 90-degree RotateRights
+        for _ in range(int(abs(degrees)) // 90):
+            _accepted(self._act("RotateLeft" if degrees < 0 else "RotateRight", degrees=90))
         return ""
 
     def _door_pose(self, layout: Layout, doorway: Doorway) -> WorldPose | None:
@@ -470,7 +444,7 @@ class ThorSimulator(SemanticStep):
             raise ConfigError("ThorSimulator used before reset(); call reset(layout, ...) first.")
         return self._layout
 
-    def _observe(self, success: bool, message: str) -> Observation:
+    def _view(self) -> tuple[WorldPose, tuple[VisibleObject, ...], str, View]:
         event = self._controller.last_event
         world = agent_pose(event.metadata)
         self._visible = visible_objects(
@@ -484,15 +458,5 @@ class ThorSimulator(SemanticStep):
         frame = np.ascontiguousarray(event.frame, dtype=np.uint8)
         if frame.ndim != 3 or frame.shape[2] != 3:
             raise TransportError(f"AI2-THOR returned a frame of shape {frame.shape}, not HxWx3.")
-        pose = observed_pose(self._spawn, world)
-        return Observation(
-            step=self._steps,
-            pose=pose,
-            success=success,
-            feedback=with_pose(message, pose),
-            visible=self._visible,
-            frame_digest=hashlib.sha256(frame.tobytes()).hexdigest(),
-            view=View.of(frame, JPEG_QUALITY),
-            done=self._ended,
-            terminal_room=self._terminal,
-        )
+        digest = hashlib.sha256(frame.tobytes()).hexdigest()
+        return world, self._visible, digest, View.of(frame, JPEG_QUALITY)

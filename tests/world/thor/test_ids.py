@@ -11,7 +11,7 @@ from pytest_emrd.world.thor import IdTable
 def test_table_maps_both_ways() -> None:
     table = IdTable({"Desk|1|0": "Desk_1", "door|1|2": "Doorway_1"})
     assert table.emrd("door|1|2") == "Doorway_1"
-    assert table.thor("Desk_1") == "Desk|1|0"
+    assert table.to_thor["Desk_1"] == "Desk|1|0"
     assert table.emrd("Floor|1") is None
 
 
