@@ -305,12 +305,12 @@ class Run:
         self._stored[spec] = stored
         if spec in self._unsaved:
             warnings.warn(CassetteNotSavedWarning(scrub(self._unsaved.pop(spec))), stacklevel=2)
-        if stored.frame_drift and stored.computed_now:
+        if stored.head.frame_drift and stored.computed_now:
             from pytest_emrd.cassette import FrameDriftWarning
 
             warnings.warn(
                 FrameDriftWarning(
-                    f"{spec.case_id}: {stored.frame_drift} request(s) matched on text while "
+                    f"{spec.case_id}: {stored.head.frame_drift} request(s) matched on text while "
                     "their frames differ from the recording (lenient matching)."
                 ),
                 stacklevel=2,

@@ -49,10 +49,6 @@ LEGACY_STORE_SCHEMA: Final = 1
 _COMPACT: Final = {"separators": (",", ":")}
 
 
-def _from_head(name: str) -> Any:
-    return property(lambda self: getattr(self.head, name), doc=f"``head.{name}``.")
-
-
 @dataclass(frozen=True)
 class StoredEpisode:
     """An episode as the store holds it: its :class:`EpisodeHead` and its trajectory, which
@@ -92,12 +88,6 @@ class StoredEpisode:
                 "the run directory."
             )
         return stored.trajectory
-
-    session = _from_head("session")
-    recorded = _from_head("recorded")
-    frame_drift = _from_head("frame_drift")
-    seconds = _from_head("seconds")
-    retries = _from_head("retries")
 
     def to_json(self) -> bytes:
         """The stored file (see the module), configured key values removed everywhere and the
@@ -163,14 +153,11 @@ class ResultsStore:
         self.identity = identity
         """Recorded in ``run.json`` before the first episode is computed."""
 
-    def path_for(self, spec: EpisodeSpec) -> Path:
-        return episode_path(self.run_dir, spec)
-
     def reusable(self, spec: EpisodeSpec) -> StoredEpisode | None:
         """``spec``'s stored episode if reusable (same spec and protocol; finished, or errored
         in this session), else None."""
         try:
-            stored = read_episode(self.path_for(spec))
+            stored = read_episode(episode_path(self.run_dir, spec))
         except (FileNotFoundError, ValueError, KeyError, TypeError, ProtocolError):
             return None  # none yet, or unreadable leftovers (recomputed and overwritten)
         head = stored.head
@@ -183,19 +170,18 @@ class ResultsStore:
         return self.reusable(spec) is not None
 
     def _lock(self, spec: EpisodeSpec, *, timeout: float = -1) -> FileLock:
-        """``spec``'s file lock (a resume reads finished episodes without taking it)."""
         return run_lock(self.run_dir, spec.case_id, timeout=timeout)
 
     def _compute(
         self, spec: EpisodeSpec, compute: Callable[[EpisodeSpec], EpisodeRun]
     ) -> StoredEpisode:
-        """Compute and store ``spec`` (the caller holds its lock)."""
+        # the caller holds ``spec``'s lock
         if self.identity is not None:
             write_identity(self.run_dir, self.identity)
         run = compute(spec)
         facts = {k: getattr(run, k) for k in ("recorded", "frame_drift", "seconds", "retries")}
         stored = StoredEpisode.of(run.trajectory, session=self.session, **facts)
-        write_bytes_atomic(self.path_for(spec), stored.to_json())
+        write_bytes_atomic(episode_path(self.run_dir, spec), stored.to_json())
         return replace(stored, computed_now=True)
 
     def get_or_compute(
@@ -274,16 +260,8 @@ def start_prefetch(
         return None
     from pytest_emrd.cassette import is_live
 
-    live = [
-        s
-        for s in specs
-        if is_live(
-            s,
-            cassettes=settings.cassettes,
-            record_mode=settings.record_mode,
-            modality_of=modality_of,
-        )
-    ]
+    how = {"cassettes": settings.cassettes, "record_mode": settings.record_mode}
+    live = [s for s in specs if is_live(s, **how, modality_of=modality_of)]
     return Prefetcher(store, compute, live, workers=settings.concurrency) if live else None
 
 
