@@ -64,7 +64,6 @@ class Verdict:
     variant: str
     metric: str
     kind: str
-    """``min`` or ``max``."""
     bound: float
     ci: str | None
     """Which end of the CI was compared (``None``: the point value)."""
@@ -76,7 +75,6 @@ class Verdict:
     reason: str
     """Why it passed or failed, in one sentence."""
     layouts: str = "paper"
-    """``paper`` (the paper's fixed office) or ``generated`` (an office per episode)."""
 
     @property
     def gate_id(self) -> str:

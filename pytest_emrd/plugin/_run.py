@@ -86,8 +86,7 @@ class Run:
         self._stored: dict[EpisodeSpec, StoredEpisode] = {}
         self._metrics: dict[EpisodeSpec, Any] = {}
         self._prefetch_started, self._prefetcher = False, None
-        self._unsaved: dict[EpisodeSpec, str] = {}
-        """Live episodes whose cassette could not be written: the line that says so."""
+        self._unsaved: dict[EpisodeSpec, str] = {}  # a live episode's cassette not written
 
     def adopt(self, settings: RunSettings) -> Run:
         """Run the rest of the session with ``settings`` (the ``emrd_*`` fixtures); the fields that
@@ -213,15 +212,8 @@ class Run:
 
     @property
     def session_folder(self) -> Path:
-        """This session's folder of the run directory's scratch space (status files)."""
+        """This session's folder of the run's scratch space (the live line's status files)."""
         return scratch_dir(self.run_dir) / self.session
-
-    @cached_property
-    def status_file(self) -> Any:
-        """This process's status file for the live line."""
-        from pytest_emrd.progress import StatusFile
-
-        return StatusFile(self.session_folder)
 
     @cached_property
     def endpoints(self) -> Any:
@@ -230,11 +222,16 @@ class Run:
 
         return EndpointWatch(self.run_dir, self.session, self.config.invocation_params.args)
 
+    @cached_property
+    def status_file(self) -> Any:
+        from pytest_emrd.progress import StatusFile
+
+        return StatusFile(self.session_folder)
+
     def compute(self, spec: EpisodeSpec) -> Any:
         """Run ``spec`` through its cassette (an unwritable one: see the module docstring)."""
         from pytest_emrd.cassette import cassette_path, is_live
         from pytest_emrd.progress import run_watched
-        from pytest_emrd.run import episode_path
 
         settings, cassettes, modality_of = self.settings, self.settings.cassettes, self.modality_of
         path = cassette_path(cassettes, spec, modality_of=modality_of)

@@ -29,22 +29,18 @@ class EpisodeHead:
     status: str
     """``terminated``, ``budget`` or ``errored``."""
     steps: int
-    """Decision cycles recorded."""
     chosen_room: str | None
     final_map_entries: int
     """Entries of the terminal cognitive map (0: the map figure cannot show this episode)."""
     usage: Usage
-    """Token usage summed over the steps."""
     error: str | None
     """The stored (scrubbed) error text of an errored episode."""
     session: str
-    """Id of the pytest session that computed it."""
     recorded: bool
     """New model traffic was recorded for it (a live episode)."""
     frame_drift: int
     seconds: float
     retries: int
-    """Model requests retried while it was computed."""
     schema_version: int = HEAD_SCHEMA
 
     @classmethod

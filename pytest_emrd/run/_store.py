@@ -1,18 +1,9 @@
-"""The results store: one file per episode under a run directory (file I/O), live episodes
-computed ahead into it, and the episodes of several run directories read back and measured.
-
-``<run>/run.json`` records the grid and shard (:mod:`._identity`); an episode file,
-``<run>/episodes/<case_id>.json``, holds the episode's head (:class:`EpisodeHead`) on its
-first line and the trajectory on its second, so a resume decodes a trajectory only where
-something needs it (a file of the older layout, ``store_schema`` 1, is decoded in full).
-Any process may ask for any episode: the first takes the episode's lock, computes it and
-writes it atomically; the others wait and read the file. An episode is reused when its spec
-and protocol match and it finished (an ``errored`` one only within its own session, so a
-rerun retries failures). Stored files are scrubbed of secrets (:mod:`pytest_emrd._scrub`).
-
-With ``--emrd-concurrency N`` a :class:`Prefetcher` computes live episodes ahead, ``N`` at
-once in threads (a live episode mostly waits for the model), skipping one stored already or
-locked elsewhere; HTTP traffic is routed per thread to each episode's cassette."""
+"""The results store: one file per episode under a run directory (layout and locking:
+docs/user-guide/running.md), computed at most once across processes and scrubbed of secrets.
+An episode is reused when its spec and protocol match and it finished (an ``errored`` one
+only within its own session, so a rerun retries failures). With ``--emrd-concurrency N`` a
+:class:`Prefetcher` computes live episodes ahead, ``N`` at once in threads (a live episode
+mostly waits for the model); HTTP traffic is routed per thread to each episode's cassette."""
 
 from __future__ import annotations
 
@@ -58,16 +49,14 @@ class StoredEpisode:
     source: Trajectory | Path = field(repr=False, compare=False)
     """The trajectory itself, or the episode file holding it."""
     computed_now: bool = False
-    """Computed by this call (as opposed to read from the store)."""
 
     @classmethod
     def of(cls, trajectory: Trajectory, **facts: Any) -> StoredEpisode:
-        """``trajectory`` with the store's ``facts`` about it (see :meth:`EpisodeHead.of`)."""
+        """``trajectory`` with the store's ``facts`` about it (:meth:`EpisodeHead.of`)."""
         return cls(EpisodeHead.of(trajectory, **facts), trajectory)
 
     @cached_property
     def trajectory(self) -> Trajectory:
-        """The trajectory, decoded on first use (:meth:`decode_trajectory`) and kept."""
         return self.decode_trajectory()
 
     def decode_trajectory(self) -> Trajectory:
@@ -90,8 +79,8 @@ class StoredEpisode:
         return stored.trajectory
 
     def to_json(self) -> bytes:
-        """The stored file (see the module), configured key values removed everywhere and the
-        error text (where our messages quote URLs and bodies) scrubbed of credentials."""
+        """The stored file, configured key values removed everywhere and the error text (where
+        our messages quote URLs and bodies) scrubbed of credentials."""
         trajectory = self.trajectory.to_dict()
         if trajectory.get("error"):
             trajectory["error"] = scrub(trajectory["error"])
@@ -150,8 +139,7 @@ class ResultsStore:
         self, run_dir: Path, *, session: str, protocol: str, identity: RunIdentity | None = None
     ) -> None:
         self.run_dir, self.session, self.protocol = run_dir, session, protocol
-        self.identity = identity
-        """Recorded in ``run.json`` before the first episode is computed."""
+        self.identity = identity  # recorded in run.json before the first episode is computed
 
     def reusable(self, spec: EpisodeSpec) -> StoredEpisode | None:
         """``spec``'s stored episode if reusable (same spec and protocol; finished, or errored
@@ -166,7 +154,7 @@ class ResultsStore:
         return None if stale or retried else stored
 
     def holds(self, spec: EpisodeSpec) -> bool:
-        """Whether the store already has a reusable episode for ``spec`` (no compute needed)."""
+        """Whether the store has a reusable episode for ``spec``."""
         return self.reusable(spec) is not None
 
     def _lock(self, spec: EpisodeSpec, *, timeout: float = -1) -> FileLock:
