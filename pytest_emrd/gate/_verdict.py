@@ -5,27 +5,15 @@ bootstrap is seeded (``rng_seed=0``): the same episodes give the same verdict an
 from __future__ import annotations
 
 from collections import defaultdict
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
-from typing import Any, Protocol
+from typing import TYPE_CHECKING, Any
 
 from pytest_emrd._serde import from_dict, to_dict
 from pytest_emrd.gate._thresholds import Bound, Thresholds
-from pytest_emrd.trajectory import Trajectory
 
-
-class EstimateLike(Protocol):
-    value: float | None
-    ci_low: float | None
-    ci_high: float | None
-    n: int
-    reason: str | None
-
-
-class GateMetricLike(Protocol):
-    name: str
-
-    def compute(self, trajectories: Sequence[Trajectory], *, rng_seed: int = 0) -> Any: ...
+if TYPE_CHECKING:
+    from pytest_emrd.metrics import Estimate, GateMetric
 
 
 @dataclass(frozen=True)
@@ -114,7 +102,7 @@ def format_number(x: float | None) -> str:
     return "n/a" if x is None else f"{x:.4g}"
 
 
-def judge(cell: GateCell, estimate: EstimateLike) -> Verdict:
+def judge(cell: GateCell, estimate: Estimate) -> Verdict:
     """Compare an estimate with the cell's bound."""
     b = cell.bound
     compared = {None: estimate.value, "lower": estimate.ci_low, "upper": estimate.ci_high}[b.ci]
@@ -145,7 +133,7 @@ def judge(cell: GateCell, estimate: EstimateLike) -> Verdict:
 
 
 def evaluate_cell(
-    cell: GateCell, trajectories: Iterable[Any], metrics: Mapping[str, GateMetricLike]
+    cell: GateCell, trajectories: Iterable[Any], metrics: Mapping[str, GateMetric]
 ) -> Verdict:
     """The verdict of one gate over its episodes (any order in, sorted by case id): trajectories
     or anything with a ``spec`` the metric accepts (such as ``EpisodeMetrics``)."""
@@ -154,7 +142,7 @@ def evaluate_cell(
 
 
 def evaluate_all(
-    trajectories: Iterable[Any], thresholds: Thresholds, metrics: Mapping[str, GateMetricLike]
+    trajectories: Iterable[Any], thresholds: Thresholds, metrics: Mapping[str, GateMetric]
 ) -> list[Verdict]:
     """Every gate whose cell has episodes: the gate tests' verdicts, for ``emrd gate``."""
     cells: dict[tuple[str, str, str, str], list[Any]] = defaultdict(list)

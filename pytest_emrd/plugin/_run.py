@@ -1,10 +1,7 @@
-"""The per-process state of an EMRD run (one :class:`Run` in ``config.stash[RUN]`` per process:
-registry, grid, results store, episodes, verdicts), everything heavy built on first use.
-
-Paid work is never lost to the disk: before a live episode the cassette folder must be
-writable (else one line, and nothing is sent to the model); a cassette that still cannot be
-saved goes with the episode's result to ``<run>/unsaved/`` (the result also to the store),
-and a :class:`CassetteNotSavedWarning` says where."""
+"""The per-process state of an EMRD run (one :class:`Run` in ``config.stash[RUN]`` per process),
+everything heavy built on first use. Paid work is never lost to the disk (docs/security.md):
+a live episode needs a writable cassette folder (else nothing is sent to the model), and a
+cassette that still cannot be saved goes with the episode's result to ``<run>/unsaved/``."""
 
 from __future__ import annotations
 
