@@ -12,7 +12,7 @@ import json
 import os
 import secrets
 import time
-from collections.abc import Callable, Iterable, Iterator, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field, replace
 from functools import cached_property
@@ -267,15 +267,6 @@ def read_episode(path: Path) -> StoredEpisode:
     return StoredEpisode.from_json(blob)
 
 
-def iter_run_episodes(run_dir: Path) -> Iterator[StoredEpisode]:
-    """Every episode of a run directory (sorted by file name), as :func:`read_episode`."""
-    for path in sorted((run_dir / "episodes").glob("*.json")):
-        try:
-            yield read_episode(path)
-        except (ValueError, KeyError, TypeError, ProtocolError) as exc:
-            raise _unreadable(path, exc) from exc
-
-
 def load_run_episodes(run_dirs: Sequence[Path]) -> list[StoredEpisode]:
     """The episodes of several run directories (shards), read as :func:`read_episode` reads them
     and sorted by case id; the first copy of a case wins."""
@@ -286,7 +277,11 @@ def load_run_episodes(run_dirs: Sequence[Path]) -> list[StoredEpisode]:
                 f"run_dir={str(run_dir)!r} holds no episodes/ folder; pass the directories "
                 "that `pytest benchmarks --emrd-results DIR` wrote."
             )
-        for stored in iter_run_episodes(run_dir):
+        for path in sorted((run_dir / "episodes").glob("*.json")):
+            try:
+                stored = read_episode(path)
+            except (ValueError, KeyError, TypeError, ProtocolError) as exc:
+                raise _unreadable(path, exc) from exc
             seen.setdefault(stored.head.spec.case_id, stored)
     return [seen[key] for key in sorted(seen)]
 
