@@ -37,7 +37,6 @@ class EpisodeRun:
     frame_drift: int
     """Requests matched leniently whose frames differ from the recording."""
     seconds: float
-    """Wall time of the episode."""
     retries: int = 0
     """Model requests retried while it ran (set by whoever watched it)."""
     unsaved: UnsavedCassette | None = None
@@ -111,8 +110,6 @@ class _Redo(Exception):
 
 @dataclass(frozen=True)
 class _Episode:
-    """One episode and how its cassette is used (see :func:`run_with_cassette`)."""
-
     spec: EpisodeSpec
     runner: EpisodeRunner
     root: Path

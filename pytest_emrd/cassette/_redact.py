@@ -83,7 +83,6 @@ def _image_mime(node: dict[str, Any]) -> bool:
 
 
 def _redact_tree(node: Any) -> Any:
-    """``node`` with every image payload replaced by its frame digest."""
     if isinstance(node, str):
         if node.startswith(_DATA_URL):
             _, sep, payload = node.partition(";base64,")

@@ -41,7 +41,6 @@ def clear_caches() -> None:
 
 
 def _keys(request: Request) -> MatchKeys:
-    """``request``'s match keys, computed (body redacted) on first use and kept on it."""
     keys = getattr(request, "emrd_keys", None)
     if keys is None:
         keys = match_keys(request.method, request.path, redact_body(request.body))

@@ -25,15 +25,10 @@ class GateCell:
     variant: str = "default"
 
     @property
-    def layouts(self) -> str:
-        return self.bound.layouts
-
-    @property
     def gate_id(self) -> str:
         """``scout-baseline-aec`` (variant, then ``generated``, inserted when not default)."""
-        return _gate_id(
-            self.bound.model, self.bound.condition, self.variant, self.layouts, self.bound.metric
-        )
+        b = self.bound
+        return _gate_id(b.model, b.condition, self.variant, b.layouts, b.metric)
 
 
 def _gate_id(model: str, condition: str, variant: str, layouts: str, metric: str) -> str:

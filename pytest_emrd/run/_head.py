@@ -103,10 +103,6 @@ class EpisodeSummary:
             cost = (usage.prompt_tokens * price_in + usage.completion_tokens * price_out) / 1e6
         return cls(stored.head, cost)
 
-    @property
-    def case(self) -> str:
-        return self.head.spec.case_id
-
     def progress_line(self, done: int) -> str:
         """``emrd [12] scout-baseline-office-ep03: terminated after 23 steps, ...``."""
         head = self.head
@@ -114,7 +110,7 @@ class EpisodeSummary:
         cost = "" if self.cost_usd is None else f", ${self.cost_usd:.3f}"
         retries = f", {head.retries} retr{'y' if head.retries == 1 else 'ies'}" * (head.retries > 0)
         return (
-            f"emrd [{done}] {self.case}: {head.status} after {head.steps} steps, chose "
+            f"emrd [{done}] {head.spec.case_id}: {head.status} after {head.steps} steps, chose "
             f"{head.chosen_room or '-'}, {tokens:,} tokens{cost}{retries}, {head.seconds:.1f} s"
         )
 
