@@ -8,7 +8,7 @@ import ipaddress
 import socket
 import time
 from collections.abc import Callable, Iterator
-from contextlib import contextmanager
+from contextlib import contextmanager, nullcontext
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -37,7 +37,6 @@ class EpisodeRun:
     frame_drift: int
     """Requests matched leniently whose frames differ from the recording."""
     seconds: float
-    """Wall time of the episode."""
     retries: int = 0
     """Model requests retried while it ran (set by whoever watched it)."""
     unsaved: UnsavedCassette | None = None
@@ -111,8 +110,6 @@ class _Redo(Exception):
 
 @dataclass(frozen=True)
 class _Episode:
-    """One episode and how its cassette is used (see :func:`run_with_cassette`)."""
-
     spec: EpisodeSpec
     runner: EpisodeRunner
     root: Path
@@ -139,7 +136,7 @@ class _Episode:
         unsaved = None
         try:
             with (
-                network_blocked(record_mode == "none"),
+                network_blocked() if record_mode == "none" else nullcontext(),
                 episode_cassette(
                     path,
                     protocol=self.protocol,
@@ -202,11 +199,8 @@ def _is_loopback(sock: socket.socket, address: Any) -> bool:
 
 
 @contextmanager
-def network_blocked(active: bool = True) -> Iterator[None]:
-    """While active, a connection to anything but loopback raises :class:`CassetteError`."""
-    if not active:
-        yield
-        return
+def network_blocked() -> Iterator[None]:
+    """In the block, a connection to anything but loopback raises :class:`CassetteError`."""
     connect, connect_ex = socket.socket.connect, socket.socket.connect_ex
 
     def guarded(original: Callable[..., Any]) -> Callable[..., Any]:

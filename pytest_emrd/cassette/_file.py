@@ -1,11 +1,8 @@
-"""The cassette file: a vcrpy cassette in vcrpy's own JSON serializer, compressed with xz.
-
-``xz -dc ep00.json.xz`` prints a plain vcrpy cassette (fields: docs/cassettes.md) whose
-request bodies are redacted and canonical (:mod:`._redact`); ``metadata.emrd.digest``
-covers the protocol and every interaction, so a file edited by hand is refused on load.
-JSON, not YAML: it loads ten times faster. The same traffic always gives the same bytes
-(sorted keys; xz single-threaded, LZMA2, 1 MiB dictionary, CRC32, no timestamp). A gzip
-cassette is read too (told by its magic bytes)."""
+"""The cassette file: a vcrpy cassette in vcrpy's own JSON serializer, compressed with xz
+(fields: docs/cassettes.md); ``metadata.emrd.digest`` covers the protocol and every
+interaction, so a file edited by hand is refused on load. JSON, not YAML: it loads ten times
+faster. The same traffic always gives the same bytes (sorted keys; xz single-threaded,
+LZMA2, 1 MiB dictionary, CRC32, no timestamp). A gzip cassette is read too."""
 
 from __future__ import annotations
 

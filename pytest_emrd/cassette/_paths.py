@@ -9,6 +9,7 @@ import shlex
 from collections import Counter
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from itertools import zip_longest
 from pathlib import Path
 from typing import Any, Final
 
@@ -28,6 +29,7 @@ _PREVIEW: Final = 80
 _CONTEXT: Final = 40
 _BODY_EXCERPT: Final = 160
 _MISSING: Final = "<absent>"
+_ABSENT: Final = object()
 
 #: A model's registry default modality (``Registry.get(model).modality``), by model name.
 ModalityOf = Callable[[str], str]
@@ -169,25 +171,18 @@ def first_difference(new: Any, recorded: Any, where: str = "body") -> tuple[str,
     or item present on one side only is reported with ``<absent>`` on the other.
     """
     if isinstance(new, dict) and isinstance(recorded, dict):
-        for key in sorted(set(new) | set(recorded)):
-            if key not in new or key not in recorded:
-                return f"{where}.{key}", new.get(key, _MISSING), recorded.get(key, _MISSING)
-            found = first_difference(new[key], recorded[key], f"{where}.{key}")
-            if found:
-                return found
-        return None
-    if isinstance(new, list) and isinstance(recorded, list):
-        for i in range(max(len(new), len(recorded))):
-            if i >= len(new) or i >= len(recorded):
-                a = new[i] if i < len(new) else _MISSING
-                b = recorded[i] if i < len(recorded) else _MISSING
-                return f"{where}[{i}]", a, b
-            found = first_difference(new[i], recorded[i], f"{where}[{i}]")
-            if found:
-                return found
-        return None
-    if new != recorded or type(new) is not type(recorded):
-        return where, new, recorded
+        keys = sorted(set(new) | set(recorded))
+        pairs = [(f"{where}.{k}", new.get(k, _ABSENT), recorded.get(k, _ABSENT)) for k in keys]
+    elif isinstance(new, list) and isinstance(recorded, list):
+        items = enumerate(zip_longest(new, recorded, fillvalue=_ABSENT))
+        pairs = [(f"{where}[{i}]", a, b) for i, (a, b) in items]
+    else:
+        return None if new == recorded and type(new) is type(recorded) else (where, new, recorded)
+    for path, a, b in pairs:
+        if a is _ABSENT or b is _ABSENT:
+            return path, _MISSING if a is _ABSENT else a, _MISSING if b is _ABSENT else b
+        if found := first_difference(a, b, path):
+            return found
     return None
 
 

@@ -102,7 +102,6 @@ class EpisodePersister:
 
 
 def _canonical(request: Any) -> bool:
-    """Whether ``request``'s body is canonical JSON (it was redacted, or read back as such)."""
     keys = getattr(request, "emrd_keys", None)
     return keys is not None and keys.redacted.parsed
 

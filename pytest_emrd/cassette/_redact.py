@@ -1,10 +1,8 @@
-"""What a request looks like once it is safe to store and ready to match (docs/cassettes.md).
-
-The *canonical* form: every image payload becomes the digest of the frame's pixels
-(``pixels:<sha256>`` from :mod:`pytest_emrd.frames`; ``bytes:<sha256>`` for one this process
-did not render), the body is sorted-key compact JSON (one that is not JSON never matches),
-headers are reduced to ``Content-Type`` and configured key values removed. The match keys:
-``strict`` (method, path, canonical body) and ``lenient`` (frame digests as placeholders)."""
+"""What a request looks like once it is safe to store and ready to match (docs/cassettes.md):
+its *canonical* form (image payloads as frame digests, ``bytes:<sha256>`` for a frame this
+process did not render; sorted-key compact JSON; configured key values removed) and its
+match keys, ``strict`` (method, path, canonical body) and ``lenient`` (frames as
+placeholders); a body that is not JSON never matches."""
 
 from __future__ import annotations
 
@@ -85,7 +83,6 @@ def _image_mime(node: dict[str, Any]) -> bool:
 
 
 def _redact_tree(node: Any) -> Any:
-    """``node`` with every image payload replaced by its frame digest."""
     if isinstance(node, str):
         if node.startswith(_DATA_URL):
             _, sep, payload = node.partition(";base64,")

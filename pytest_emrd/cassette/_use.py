@@ -40,14 +40,11 @@ def clear_caches() -> None:
     _wire.clear()
 
 
-def _match_keys(request: Request) -> MatchKeys:
-    return match_keys(request.method, request.path, redact_body(request.body))
-
-
 def _keys(request: Request) -> MatchKeys:
     keys = getattr(request, "emrd_keys", None)
     if keys is None:
-        keys = request.emrd_keys = _match_keys(request)  # type: ignore[attr-defined]
+        keys = match_keys(request.method, request.path, redact_body(request.body))
+        request.emrd_keys = keys  # type: ignore[attr-defined]
     return keys
 
 
@@ -186,10 +183,8 @@ def _before_record_request(request: Request) -> Request:
         uri = scrub_uri(request.uri)
         if uri != request.uri:  # vcrpy parses the URI again on every assignment
             redacted.uri = uri
-        keys = _match_keys(redacted)
-        redacted.body = keys.redacted.body
+        redacted.body = _keys(redacted).redacted.body
         redacted.headers = scrub_headers(redacted.headers)
-        redacted.emrd_keys = keys  # type: ignore[attr-defined]
     return redacted
 
 

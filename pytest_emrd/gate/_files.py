@@ -4,11 +4,14 @@ from __future__ import annotations
 
 from collections.abc import Collection
 from pathlib import Path
-from typing import Any, Final, Protocol
+from typing import TYPE_CHECKING, Final
 
 from pytest_emrd._yaml import read_text
 from pytest_emrd.errors import EmrdError
 from pytest_emrd.gate._thresholds import Thresholds, parse_thresholds
+
+if TYPE_CHECKING:
+    from pytest_emrd.agent import Registry
 
 #: How to make a model of one's own registry known to every run (ends unknown-model errors).
 REGISTER_MODEL_HINT: Final = (
@@ -18,13 +21,7 @@ REGISTER_MODEL_HINT: Final = (
 )
 
 
-class RegistryLike(Protocol):
-    def get(self, name: str) -> Any: ...
-
-    def names(self) -> tuple[str, ...]: ...
-
-
-def load_thresholds(path: Path, *, registry: RegistryLike, metrics: Collection[str]) -> Thresholds:
+def load_thresholds(path: Path, *, registry: Registry, metrics: Collection[str]) -> Thresholds:
     """Read and validate a thresholds file against a model registry (``registry.get``: parametric
     names such as ``scout-decay-8`` pass) and metric names; a missing file is a ConfigError."""
 

@@ -19,7 +19,6 @@ class UsageRow:
     cost_usd: float | None
     """Estimated cost from the registry's prices, ``None`` when it has none."""
     retries: int = 0
-    """Model requests retried over these episodes."""
     errors: int = 0
     """Episodes that ended ``errored``."""
 
@@ -73,13 +72,6 @@ def usage_table(rows: Sequence[UsageRow]) -> list[str]:
         ]
         for r in sorted(rows, key=lambda r: r.model)
     ]
-    header = [
-        "model",
-        "episodes",
-        "prompt tokens",
-        "completion tokens",
-        "est. cost",
-        "retries",
-        "errored",
-    ]
+    header = ["model", "episodes", "prompt tokens", "completion tokens", "est. cost"]
+    header += ["retries", "errored"]
     return ["  " + r for r in render_table(header, body)]

@@ -1,17 +1,9 @@
-"""``thresholds.yaml``: the release gates, parsed and validated with line numbers (pure).
-
-Schema::
-
-    <model>:                 # a model registry name (scout, gemini, scout-decay-8 ...)
-      <condition>:           # baseline | low_light | texture (the paper protocol), or
-                             # baseline@generated ... (--emrd-layouts=generated cells)
-        <metric>:            # a name of pytest_emrd.metrics.GATE_METRICS
-          min: 0.8           # or max: 0.1 (exactly one of the two)
-          ci: lower          # optional: compare the bootstrap CI's lower/upper end, not the mean
-
-Every mistake is a one-line ConfigError naming the file, line, field and allowed values; a
-bound lies in its metric's :func:`domain`. A file with no gate is an error (a run given it
-would pass green with nothing checked)."""
+"""``thresholds.yaml``: the release gates (schema: docs/user-guide/ci.md), parsed and validated
+with line numbers (pure). A condition key is the bare condition for the paper protocol and
+``<condition>@generated`` for ``--emrd-layouts=generated`` cells. Every mistake is a one-line
+ConfigError naming the file, line, field and allowed values; a bound lies in its metric's
+:func:`domain`. A file with no gate is an error (a run given it would pass with nothing
+checked)."""
 
 from __future__ import annotations
 

@@ -5,27 +5,15 @@ bootstrap is seeded (``rng_seed=0``): the same episodes give the same verdict an
 from __future__ import annotations
 
 from collections import defaultdict
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
-from typing import Any, Protocol
+from typing import TYPE_CHECKING, Any
 
 from pytest_emrd._serde import from_dict, to_dict
 from pytest_emrd.gate._thresholds import Bound, Thresholds
-from pytest_emrd.trajectory import Trajectory
 
-
-class EstimateLike(Protocol):
-    value: float | None
-    ci_low: float | None
-    ci_high: float | None
-    n: int
-    reason: str | None
-
-
-class GateMetricLike(Protocol):
-    name: str
-
-    def compute(self, trajectories: Sequence[Trajectory], *, rng_seed: int = 0) -> Any: ...
+if TYPE_CHECKING:
+    from pytest_emrd.metrics import Estimate, GateMetric
 
 
 @dataclass(frozen=True)
@@ -37,15 +25,10 @@ class GateCell:
     variant: str = "default"
 
     @property
-    def layouts(self) -> str:
-        return self.bound.layouts
-
-    @property
     def gate_id(self) -> str:
         """``scout-baseline-aec`` (variant, then ``generated``, inserted when not default)."""
-        return _gate_id(
-            self.bound.model, self.bound.condition, self.variant, self.layouts, self.bound.metric
-        )
+        b = self.bound
+        return _gate_id(b.model, b.condition, self.variant, b.layouts, b.metric)
 
 
 def _gate_id(model: str, condition: str, variant: str, layouts: str, metric: str) -> str:
@@ -64,7 +47,6 @@ class Verdict:
     variant: str
     metric: str
     kind: str
-    """``min`` or ``max``."""
     bound: float
     ci: str | None
     """Which end of the CI was compared (``None``: the point value)."""
@@ -76,7 +58,6 @@ class Verdict:
     reason: str
     """Why it passed or failed, in one sentence."""
     layouts: str = "paper"
-    """``paper`` (the paper's fixed office) or ``generated`` (an office per episode)."""
 
     @property
     def gate_id(self) -> str:
@@ -116,7 +97,7 @@ def format_number(x: float | None) -> str:
     return "n/a" if x is None else f"{x:.4g}"
 
 
-def judge(cell: GateCell, estimate: EstimateLike) -> Verdict:
+def judge(cell: GateCell, estimate: Estimate) -> Verdict:
     """Compare an estimate with the cell's bound."""
     b = cell.bound
     compared = {None: estimate.value, "lower": estimate.ci_low, "upper": estimate.ci_high}[b.ci]
@@ -147,7 +128,7 @@ def judge(cell: GateCell, estimate: EstimateLike) -> Verdict:
 
 
 def evaluate_cell(
-    cell: GateCell, trajectories: Iterable[Any], metrics: Mapping[str, GateMetricLike]
+    cell: GateCell, trajectories: Iterable[Any], metrics: Mapping[str, GateMetric]
 ) -> Verdict:
     """The verdict of one gate over its episodes (any order in, sorted by case id): trajectories
     or anything with a ``spec`` the metric accepts (such as ``EpisodeMetrics``)."""
@@ -156,7 +137,7 @@ def evaluate_cell(
 
 
 def evaluate_all(
-    trajectories: Iterable[Any], thresholds: Thresholds, metrics: Mapping[str, GateMetricLike]
+    trajectories: Iterable[Any], thresholds: Thresholds, metrics: Mapping[str, GateMetric]
 ) -> list[Verdict]:
     """Every gate whose cell has episodes: the gate tests' verdicts, for ``emrd gate``."""
     cells: dict[tuple[str, str, str, str], list[Any]] = defaultdict(list)

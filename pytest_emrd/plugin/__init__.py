@@ -1,10 +1,9 @@
 """pytest glue for pytest-emrd: the ``pytest11`` entry point (``emrd = "pytest_emrd.plugin"``).
 
 A test that requests ``emrd_spec`` is parametrised over the run's episodes, one that requests
-``emrd_gate`` over its gates; sessions that collect neither start and write nothing. This
-module is the wiring, in order: options and configuration (the controller hands the run
-directory and session to xdist workers), collection, the log scrub, then the ``emrd_*``
-fixtures, built as pytest-recording builds ``vcr`` (docs/reference/fixtures.md)."""
+``emrd_gate`` over its gates; sessions that collect neither start and write nothing. The
+controller hands the run directory and session to xdist workers; the ``emrd_*`` fixtures are
+built as pytest-recording builds ``vcr`` (docs/reference/fixtures.md)."""
 
 from __future__ import annotations
 

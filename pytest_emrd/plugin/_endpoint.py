@@ -10,7 +10,6 @@ import json
 import re
 import shlex
 from collections.abc import Sequence
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Final
 
@@ -34,17 +33,6 @@ def unreachable(status: str, error: str | None) -> bool:
     return status == "errored" and error is not None and bool(_UNREACHABLE.search(error))
 
 
-@dataclass(frozen=True)
-class Stop:
-    """A model this session stopped calling."""
-
-    model: str
-    endpoint: str
-    failed: int
-    """Consecutive unreachable episodes that stopped it."""
-    error: str
-
-
 class EndpointWatch:
     """Per model, the consecutive unreachable episodes of this session (shared by workers)."""
 
@@ -59,13 +47,6 @@ class EndpointWatch:
         except (OSError, ValueError):
             return {}
         return data if isinstance(data, dict) and data.get("session") == self.session else {}
-
-    def stopped(self, model: str) -> Stop | None:
-        """The stop of ``model`` in this session, if any."""
-        data = self._read(model)
-        if not data.get("stopped"):
-            return None
-        return Stop(model, data["endpoint"], data["consecutive"], data["error"])
 
     def record(self, model: str, endpoint: str, status: str, error: str | None) -> None:
         """Count one computed episode of ``model`` (a stopped model's count is final)."""
@@ -91,25 +72,29 @@ class EndpointWatch:
             skip = not skip and arg == "--emrd-results"
         return shlex.join(["pytest", *args, f"--emrd-results={self.run_dir}"])
 
-    def reason(self, stop: Stop) -> str:
-        """The one message of a stop: what happened, the endpoint, how to resume."""
+    def stop_reason(self, model: str) -> str | None:
+        """The one message of ``model``'s stop in this session (what happened, the endpoint,
+        how to resume), or ``None`` while it is called."""
+        data = self._read(model)
+        if not data.get("stopped"):
+            return None
         return scrub(
-            f"pytest-emrd: stopped calling model {stop.model!r}: {stop.failed} episodes in a "
-            f"row could not reach {stop.endpoint} (last: {stop.error}). Its remaining episodes "
-            "were not attempted; every recorded episode is kept. When the endpoint answers "
-            f"again, resume with: {self.resume_command()}"
+            f"pytest-emrd: stopped calling model {model!r}: {data['consecutive']} episodes in a "
+            f"row could not reach {data['endpoint']} (last: {data['error']}). Its remaining "
+            "episodes were not attempted; every recorded episode is kept. When the endpoint "
+            f"answers again, resume with: {self.resume_command()}"
         )
 
     def skip_if_stopped(self, model: str) -> None:
         """Skip the calling test when ``model`` was stopped (one reason for all of them)."""
-        stop = self.stopped(model)
-        if stop is not None:
-            pytest.skip(self.reason(stop))
+        reason = self.stop_reason(model)
+        if reason is not None:
+            pytest.skip(reason)
 
     def pytest_terminal_summary(self, terminalreporter: Any) -> None:
         if not self.folder.is_dir():
             return
         for path in sorted(self.folder.glob("*.json")):
-            stop = self.stopped(path.stem)
-            if stop is not None:
-                terminalreporter.write_line(self.reason(stop), red=True)
+            reason = self.stop_reason(path.stem)
+            if reason is not None:
+                terminalreporter.write_line(reason, red=True)

@@ -110,7 +110,7 @@ class RunReport:
         if "emrd_episode" not in props:
             return
         summary = EpisodeSummary.from_dict(props["emrd_episode"])
-        self.episodes[summary.case] = summary
+        self.episodes[summary.head.spec.case_id] = summary
         reporter = self.config.pluginmanager.get_plugin("terminalreporter")
         controller = not hasattr(self.config, "workerinput")
         if summary.head.recorded and reporter is not None and controller:

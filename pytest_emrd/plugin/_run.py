@@ -1,10 +1,7 @@
-"""The per-process state of an EMRD run (one :class:`Run` in ``config.stash[RUN]`` per process:
-registry, grid, results store, episodes, verdicts), everything heavy built on first use.
-
-Paid work is never lost to the disk: before a live episode the cassette folder must be
-writable (else one line, and nothing is sent to the model); a cassette that still cannot be
-saved goes with the episode's result to ``<run>/unsaved/`` (the result also to the store),
-and a :class:`CassetteNotSavedWarning` says where."""
+"""The per-process state of an EMRD run (one :class:`Run` in ``config.stash[RUN]`` per process),
+everything heavy built on first use. Paid work is never lost to the disk (docs/security.md):
+a live episode needs a writable cassette folder (else nothing is sent to the model), and a
+cassette that still cannot be saved goes with the episode's result to ``<run>/unsaved/``."""
 
 from __future__ import annotations
 
@@ -86,8 +83,7 @@ class Run:
         self._stored: dict[EpisodeSpec, StoredEpisode] = {}
         self._metrics: dict[EpisodeSpec, Any] = {}
         self._prefetch_started, self._prefetcher = False, None
-        self._unsaved: dict[EpisodeSpec, str] = {}
-        """Live episodes whose cassette could not be written: the line that says so."""
+        self._unsaved: dict[EpisodeSpec, str] = {}  # a live episode's cassette not written
 
     def adopt(self, settings: RunSettings) -> Run:
         """Run the rest of the session with ``settings`` (the ``emrd_*`` fixtures); the fields that
@@ -213,15 +209,8 @@ class Run:
 
     @property
     def session_folder(self) -> Path:
-        """This session's folder of the run directory's scratch space (status files)."""
+        """This session's folder of the run's scratch space (the live line's status files)."""
         return scratch_dir(self.run_dir) / self.session
-
-    @cached_property
-    def status_file(self) -> Any:
-        """This process's status file for the live line."""
-        from pytest_emrd.progress import StatusFile
-
-        return StatusFile(self.session_folder)
 
     @cached_property
     def endpoints(self) -> Any:
@@ -230,11 +219,16 @@ class Run:
 
         return EndpointWatch(self.run_dir, self.session, self.config.invocation_params.args)
 
+    @cached_property
+    def status_file(self) -> Any:
+        from pytest_emrd.progress import StatusFile
+
+        return StatusFile(self.session_folder)
+
     def compute(self, spec: EpisodeSpec) -> Any:
         """Run ``spec`` through its cassette (an unwritable one: see the module docstring)."""
         from pytest_emrd.cassette import cassette_path, is_live
         from pytest_emrd.progress import run_watched
-        from pytest_emrd.run import episode_path
 
         settings, cassettes, modality_of = self.settings, self.settings.cassettes, self.modality_of
         path = cassette_path(cassettes, spec, modality_of=modality_of)
@@ -305,12 +299,12 @@ class Run:
         self._stored[spec] = stored
         if spec in self._unsaved:
             warnings.warn(CassetteNotSavedWarning(scrub(self._unsaved.pop(spec))), stacklevel=2)
-        if stored.frame_drift and stored.computed_now:
+        if stored.head.frame_drift and stored.computed_now:
             from pytest_emrd.cassette import FrameDriftWarning
 
             warnings.warn(
                 FrameDriftWarning(
-                    f"{spec.case_id}: {stored.frame_drift} request(s) matched on text while "
+                    f"{spec.case_id}: {stored.head.frame_drift} request(s) matched on text while "
                     "their frames differ from the recording (lenient matching)."
                 ),
                 stacklevel=2,

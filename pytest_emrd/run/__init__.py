@@ -12,10 +12,8 @@ from pytest_emrd.run._identity import (
     write_identity,
 )
 from pytest_emrd.run._settings import (
-    BACKENDS,
     OPTIONS,
     MatchingWarning,
-    Option,
     RunSettings,
     resolve_settings,
 )
@@ -34,13 +32,11 @@ from pytest_emrd.run._store import (
 from pytest_emrd.trajectory import RECORD_MODES
 
 __all__ = [
-    "BACKENDS",
     "OPTIONS",
     "RECORD_MODES",
     "EpisodeHead",
     "EpisodeSummary",
     "MatchingWarning",
-    "Option",
     "Prefetcher",
     "ResultsStore",
     "RunIdentity",

@@ -31,7 +31,6 @@ def cell_specs(
 
 
 def _cells(settings: RunSettings) -> list[tuple[str, str]]:
-    """The run's ``(model, condition)`` cells, sorted by model, then condition."""
     return sorted(settings.cells, key=lambda mc: (mc[0], CONDITIONS.index(mc[1])))
 
 

@@ -29,22 +29,18 @@ class EpisodeHead:
     status: str
     """``terminated``, ``budget`` or ``errored``."""
     steps: int
-    """Decision cycles recorded."""
     chosen_room: str | None
     final_map_entries: int
     """Entries of the terminal cognitive map (0: the map figure cannot show this episode)."""
     usage: Usage
-    """Token usage summed over the steps."""
     error: str | None
     """The stored (scrubbed) error text of an errored episode."""
     session: str
-    """Id of the pytest session that computed it."""
     recorded: bool
     """New model traffic was recorded for it (a live episode)."""
     frame_drift: int
     seconds: float
     retries: int
-    """Model requests retried while it was computed."""
     schema_version: int = HEAD_SCHEMA
 
     @classmethod
@@ -107,10 +103,6 @@ class EpisodeSummary:
             cost = (usage.prompt_tokens * price_in + usage.completion_tokens * price_out) / 1e6
         return cls(stored.head, cost)
 
-    @property
-    def case(self) -> str:
-        return self.head.spec.case_id
-
     def progress_line(self, done: int) -> str:
         """``emrd [12] scout-baseline-office-ep03: terminated after 23 steps, ...``."""
         head = self.head
@@ -118,7 +110,7 @@ class EpisodeSummary:
         cost = "" if self.cost_usd is None else f", ${self.cost_usd:.3f}"
         retries = f", {head.retries} retr{'y' if head.retries == 1 else 'ies'}" * (head.retries > 0)
         return (
-            f"emrd [{done}] {self.case}: {head.status} after {head.steps} steps, chose "
+            f"emrd [{done}] {head.spec.case_id}: {head.status} after {head.steps} steps, chose "
             f"{head.chosen_room or '-'}, {tokens:,} tokens{cost}{retries}, {head.seconds:.1f} s"
         )
 

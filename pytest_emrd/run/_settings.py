@@ -132,7 +132,6 @@ class RunSettings:
     episodes: int
     variant: str
     layouts: str
-    """``paper`` (one fixed office) or ``generated`` (an office per spawn x episode)."""
     backend: str
     backend_options: tuple[tuple[str, Any], ...]
     """``(key, value)`` pairs handed to the backend's simulator, in the order given."""
@@ -140,20 +139,16 @@ class RunSettings:
     """``None``: each model's registry default."""
     record_mode: str
     matching: str
-    """``strict``, or ``lenient`` (the default on backends whose frames are not bit-stable)."""
     results: Path | None
     """Run directory to resume, or ``None`` for a fresh one."""
     thresholds: Path | None
-    """Release gates file; ``None`` when none was given and ``<rootdir>/thresholds.yaml`` does
-    not exist (a run without gates: episodes only)."""
+    """``None``: a run without gates (none given, no ``<rootdir>/thresholds.yaml``)."""
     models_file: Path | None
     cassettes: Path
     shard: tuple[int, int] | None
     """``(k, n)``: this run covers the k-th of n slices (1-based)."""
     concurrency: int = 1
-    """Live episodes one process records at once (threads; replays run one at a time)."""
     preflight: bool = True
-    """Preflight each model before its first live recording (``--emrd-preflight=off``: no)."""
 
     @property
     def replays_only(self) -> bool:
@@ -242,14 +237,6 @@ def _path(value: Any, base: Path) -> Path:
     return path if path.is_absolute() else base / path
 
 
-def _thresholds(value: Any, rootdir: Path) -> Path | None:
-    """The given file (it must exist, checked on load), else ``thresholds.yaml`` if present."""
-    if value is not None:
-        return _path(value, rootdir)
-    default = rootdir / "thresholds.yaml"
-    return default if default.is_file() else None
-
-
 def resolve_settings(
     cli: Mapping[str, Any],
     ini: Mapping[str, Any],
@@ -273,7 +260,6 @@ def resolve_settings(
         "episodes per spawn room (the paper runs 20)",
         "or split a larger study over several run directories.",
     )
-    default_mode = "none" if in_ci(env) else "once"
     backend = raw["backend"] or "builtin"
     results = raw["results"] and _folder(
         "--emrd-results",
@@ -297,6 +283,9 @@ def resolve_settings(
             f"--emrd-concurrency={concurrency} runs episodes in threads, which the {backend} "
             "backend (one simulator process per worker) does not support; use -n N instead."
         )
+    thresholds = rootdir / "thresholds.yaml"  # the default, used if it exists
+    if raw["thresholds"] is not None:
+        thresholds = _path(raw["thresholds"], rootdir)
     conditions = _listed(by_name["condition"], raw["condition"], CONDITIONS)
     if raw["model"] is None:
         cells = tuple((m, c) for m, cs in DEFAULT_CELLS for c in cs if c in conditions)
@@ -317,10 +306,10 @@ def resolve_settings(
         backend=backend,
         backend_options=tuple(parse_backend_option(str(o)) for o in raw["backend_option"] or ()),
         modality=raw["modality"],
-        record_mode=raw["record_mode"] or default_mode,
+        record_mode=raw["record_mode"] or ("none" if in_ci(env) else "once"),
         matching=_matching(raw["matching"], backend),
         results=results,
-        thresholds=_thresholds(raw["thresholds"], rootdir),
+        thresholds=thresholds if raw["thresholds"] or thresholds.is_file() else None,
         models_file=_path(raw["models"], rootdir) if raw["models"] else None,
         cassettes=cassettes,
         shard=parse_shard(str(raw["shard"])) if raw["shard"] else None,

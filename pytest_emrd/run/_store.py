@@ -1,18 +1,9 @@
-"""The results store: one file per episode under a run directory (file I/O), live episodes
-computed ahead into it, and the episodes of several run directories read back and measured.
-
-``<run>/run.json`` records the grid and shard (:mod:`._identity`); an episode file,
-``<run>/episodes/<case_id>.json``, holds the episode's head (:class:`EpisodeHead`) on its
-first line and the trajectory on its second, so a resume decodes a trajectory only where
-something needs it (a file of the older layout, ``store_schema`` 1, is decoded in full).
-Any process may ask for any episode: the first takes the episode's lock, computes it and
-writes it atomically; the others wait and read the file. An episode is reused when its spec
-and protocol match and it finished (an ``errored`` one only within its own session, so a
-rerun retries failures). Stored files are scrubbed of secrets (:mod:`pytest_emrd._scrub`).
-
-With ``--emrd-concurrency N`` a :class:`Prefetcher` computes live episodes ahead, ``N`` at
-once in threads (a live episode mostly waits for the model), skipping one stored already or
-locked elsewhere; HTTP traffic is routed per thread to each episode's cassette."""
+"""The results store: one file per episode under a run directory (layout and locking:
+docs/user-guide/running.md), computed at most once across processes and scrubbed of secrets.
+An episode is reused when its spec and protocol match and it finished (an ``errored`` one
+only within its own session, so a rerun retries failures). With ``--emrd-concurrency N`` a
+:class:`Prefetcher` computes live episodes ahead, ``N`` at once in threads (a live episode
+mostly waits for the model); HTTP traffic is routed per thread to each episode's cassette."""
 
 from __future__ import annotations
 
@@ -21,7 +12,7 @@ import json
 import os
 import secrets
 import time
-from collections.abc import Callable, Iterable, Iterator, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field, replace
 from functools import cached_property
@@ -49,10 +40,6 @@ LEGACY_STORE_SCHEMA: Final = 1
 _COMPACT: Final = {"separators": (",", ":")}
 
 
-def _from_head(name: str) -> Any:
-    return property(lambda self: getattr(self.head, name), doc=f"``head.{name}``.")
-
-
 @dataclass(frozen=True)
 class StoredEpisode:
     """An episode as the store holds it: its :class:`EpisodeHead` and its trajectory, which
@@ -62,16 +49,14 @@ class StoredEpisode:
     source: Trajectory | Path = field(repr=False, compare=False)
     """The trajectory itself, or the episode file holding it."""
     computed_now: bool = False
-    """Computed by this call (as opposed to read from the store)."""
 
     @classmethod
     def of(cls, trajectory: Trajectory, **facts: Any) -> StoredEpisode:
-        """``trajectory`` with the store's ``facts`` about it (see :meth:`EpisodeHead.of`)."""
+        """``trajectory`` with the store's ``facts`` about it (:meth:`EpisodeHead.of`)."""
         return cls(EpisodeHead.of(trajectory, **facts), trajectory)
 
     @cached_property
     def trajectory(self) -> Trajectory:
-        """The trajectory, decoded on first use (:meth:`decode_trajectory`) and kept."""
         return self.decode_trajectory()
 
     def decode_trajectory(self) -> Trajectory:
@@ -93,15 +78,9 @@ class StoredEpisode:
             )
         return stored.trajectory
 
-    session = _from_head("session")
-    recorded = _from_head("recorded")
-    frame_drift = _from_head("frame_drift")
-    seconds = _from_head("seconds")
-    retries = _from_head("retries")
-
     def to_json(self) -> bytes:
-        """The stored file (see the module), configured key values removed everywhere and the
-        error text (where our messages quote URLs and bodies) scrubbed of credentials."""
+        """The stored file, configured key values removed everywhere and the error text (where
+        our messages quote URLs and bodies) scrubbed of credentials."""
         trajectory = self.trajectory.to_dict()
         if trajectory.get("error"):
             trajectory["error"] = scrub(trajectory["error"])
@@ -160,17 +139,13 @@ class ResultsStore:
         self, run_dir: Path, *, session: str, protocol: str, identity: RunIdentity | None = None
     ) -> None:
         self.run_dir, self.session, self.protocol = run_dir, session, protocol
-        self.identity = identity
-        """Recorded in ``run.json`` before the first episode is computed."""
-
-    def path_for(self, spec: EpisodeSpec) -> Path:
-        return episode_path(self.run_dir, spec)
+        self.identity = identity  # recorded in run.json before the first episode is computed
 
     def reusable(self, spec: EpisodeSpec) -> StoredEpisode | None:
         """``spec``'s stored episode if reusable (same spec and protocol; finished, or errored
         in this session), else None."""
         try:
-            stored = read_episode(self.path_for(spec))
+            stored = read_episode(episode_path(self.run_dir, spec))
         except (FileNotFoundError, ValueError, KeyError, TypeError, ProtocolError):
             return None  # none yet, or unreadable leftovers (recomputed and overwritten)
         head = stored.head
@@ -179,23 +154,22 @@ class ResultsStore:
         return None if stale or retried else stored
 
     def holds(self, spec: EpisodeSpec) -> bool:
-        """Whether the store already has a reusable episode for ``spec`` (no compute needed)."""
+        """Whether the store has a reusable episode for ``spec``."""
         return self.reusable(spec) is not None
 
     def _lock(self, spec: EpisodeSpec, *, timeout: float = -1) -> FileLock:
-        """``spec``'s file lock (a resume reads finished episodes without taking it)."""
         return run_lock(self.run_dir, spec.case_id, timeout=timeout)
 
     def _compute(
         self, spec: EpisodeSpec, compute: Callable[[EpisodeSpec], EpisodeRun]
     ) -> StoredEpisode:
-        """Compute and store ``spec`` (the caller holds its lock)."""
+        # the caller holds ``spec``'s lock
         if self.identity is not None:
             write_identity(self.run_dir, self.identity)
         run = compute(spec)
         facts = {k: getattr(run, k) for k in ("recorded", "frame_drift", "seconds", "retries")}
         stored = StoredEpisode.of(run.trajectory, session=self.session, **facts)
-        write_bytes_atomic(self.path_for(spec), stored.to_json())
+        write_bytes_atomic(episode_path(self.run_dir, spec), stored.to_json())
         return replace(stored, computed_now=True)
 
     def get_or_compute(
@@ -274,16 +248,8 @@ def start_prefetch(
         return None
     from pytest_emrd.cassette import is_live
 
-    live = [
-        s
-        for s in specs
-        if is_live(
-            s,
-            cassettes=settings.cassettes,
-            record_mode=settings.record_mode,
-            modality_of=modality_of,
-        )
-    ]
+    how = {"cassettes": settings.cassettes, "record_mode": settings.record_mode}
+    live = [s for s in specs if is_live(s, **how, modality_of=modality_of)]
     return Prefetcher(store, compute, live, workers=settings.concurrency) if live else None
 
 
@@ -301,15 +267,6 @@ def read_episode(path: Path) -> StoredEpisode:
     return StoredEpisode.from_json(blob)
 
 
-def iter_run_episodes(run_dir: Path) -> Iterator[StoredEpisode]:
-    """Every episode of a run directory (sorted by file name), as :func:`read_episode`."""
-    for path in sorted((run_dir / "episodes").glob("*.json")):
-        try:
-            yield read_episode(path)
-        except (ValueError, KeyError, TypeError, ProtocolError) as exc:
-            raise _unreadable(path, exc) from exc
-
-
 def load_run_episodes(run_dirs: Sequence[Path]) -> list[StoredEpisode]:
     """The episodes of several run directories (shards), read as :func:`read_episode` reads them
     and sorted by case id; the first copy of a case wins."""
@@ -320,7 +277,11 @@ def load_run_episodes(run_dirs: Sequence[Path]) -> list[StoredEpisode]:
                 f"run_dir={str(run_dir)!r} holds no episodes/ folder; pass the directories "
                 "that `pytest benchmarks --emrd-results DIR` wrote."
             )
-        for stored in iter_run_episodes(run_dir):
+        for path in sorted((run_dir / "episodes").glob("*.json")):
+            try:
+                stored = read_episode(path)
+            except (ValueError, KeyError, TypeError, ProtocolError) as exc:
+                raise _unreadable(path, exc) from exc
             seen.setdefault(stored.head.spec.case_id, stored)
     return [seen[key] for key in sorted(seen)]
 

@@ -127,7 +127,7 @@ def test_a_cassette_folder_that_breaks_mid_episode_loses_nothing(
     data = decode(kept_cassette.read_bytes())
     assert len(data.requests) == steps  # the reply that could not be read is not kept
     assert all(json.loads(r["body"]["string"])["choices"] for r in data.responses)
-    assert read_episode(run_dir / f"episodes/{CASE}.json").retries == 1
+    assert read_episode(run_dir / f"episodes/{CASE}.json").head.retries == 1
     assert leaks(sandbox.path, skip=(registry,)) == []
     assert text_leaks(_output(first)) == []
 
@@ -146,4 +146,4 @@ def test_a_cassette_folder_that_breaks_mid_episode_loses_nothing(
     replayed = read_episode(replay_dir / f"episodes/{CASE}.json")
     original = read_episode(run_dir / f"episodes/{CASE}.json")
     assert replayed.trajectory == original.trajectory
-    assert replayed.retries == 0 and not replayed.recorded
+    assert replayed.head.retries == 0 and not replayed.head.recorded

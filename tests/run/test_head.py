@@ -16,6 +16,7 @@ from pytest_emrd.run import (
     ResultsStore,
     RunIdentity,
     StoredEpisode,
+    episode_path,
     load_run_episodes,
     read_episode,
 )
@@ -53,7 +54,7 @@ def test_a_run_directory_holds_run_json_and_one_file_per_episode(tmp_path):
 
 def test_an_episode_file_is_one_json_document_whose_first_line_is_its_head(tmp_path):
     computed = _computed(tmp_path)
-    blob = _store(tmp_path).path_for(SPEC).read_bytes()
+    blob = episode_path(tmp_path, SPEC).read_bytes()
     document = json.loads(blob)
     assert document["store_schema"] == 2
     assert EpisodeHead.from_dict(document["head"]) == computed.head
@@ -92,7 +93,7 @@ def test_a_resume_reads_the_head_and_decodes_the_trajectory_on_first_use(tmp_pat
 def test_an_episode_file_replaced_after_its_head_was_read_is_refused(tmp_path):
     _computed(tmp_path)
     resumed = _store(tmp_path, "s2").get_or_compute(SPEC, _never)
-    path = _store(tmp_path).path_for(SPEC)
+    path = episode_path(tmp_path, SPEC)
     path.write_bytes(path.read_bytes().replace(b'"seconds":0.25', b'"seconds":0.26'))
     with pytest.raises(ProtocolError, match="changed while this run was reading it"):
         _ = resumed.trajectory
@@ -100,7 +101,7 @@ def test_an_episode_file_replaced_after_its_head_was_read_is_refused(tmp_path):
 
 def test_a_head_that_does_not_describe_its_trajectory_is_refused(tmp_path):
     _computed(tmp_path)
-    path = _store(tmp_path).path_for(SPEC)
+    path = episode_path(tmp_path, SPEC)
     path.write_bytes(path.read_bytes().replace(b'"status":"budget"', b'"status":"terminated"', 1))
     stored = read_episode(path)
     assert stored.head.status == "terminated"
@@ -110,7 +111,7 @@ def test_a_head_that_does_not_describe_its_trajectory_is_refused(tmp_path):
 
 def test_a_trajectory_of_an_unknown_schema_is_recomputed(tmp_path):
     _computed(tmp_path)
-    path = _store(tmp_path).path_for(SPEC)
+    path = episode_path(tmp_path, SPEC)
     blob = path.read_bytes().replace(b'"trajectory_schema":2', b'"trajectory_schema":99')
     path.write_bytes(blob.replace(b'"schema_version":2}}', b'"schema_version":99}}'))
     assert _store(tmp_path, "s2").reusable(SPEC) is None
@@ -129,7 +130,8 @@ def test_an_old_layout_run_directory_is_read_and_resumed_ignoring_its_other_fold
         (tmp_path / folder).mkdir()
         (tmp_path / folder / "leftover.json").write_text("{}")
     (stored,) = load_run_episodes([tmp_path])
-    assert stored.trajectory == trajectory and stored.session == "old" and stored.seconds == 1.5
+    assert stored.trajectory == trajectory
+    assert stored.head.session == "old" and stored.head.seconds == 1.5
     resumed = _store(tmp_path, "s2").get_or_compute(SPEC, _never)
     assert resumed.head == stored.head
     assert json.loads(path.read_bytes())["store_schema"] == 1  # reading never rewrites it
@@ -149,7 +151,7 @@ def test_a_stored_episode_round_trips_through_its_file():
 
 def test_an_episode_file_of_an_unknown_layout_is_one_line_naming_it(tmp_path):
     _computed(tmp_path)
-    path = _store(tmp_path).path_for(SPEC)
+    path = episode_path(tmp_path, SPEC)
     path.write_bytes(path.read_bytes().replace(b'"store_schema":2', b'"store_schema":3'))
     message = r"episode file=.*cannot be read \(store_schema=3 is not 2\); delete it and rerun"
     with pytest.raises(ProtocolError, match=message):

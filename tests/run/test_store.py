@@ -6,7 +6,7 @@ import threading
 import time
 
 from pytest_emrd.cassette import EpisodeRun
-from pytest_emrd.run import ResultsStore, load_run_dirs
+from pytest_emrd.run import ResultsStore, episode_path, load_run_dirs
 from pytest_emrd.trajectory import EpisodeSpec
 
 from .conftest import make_trajectory
@@ -52,7 +52,7 @@ def test_resume_reuses_finished_episodes_of_the_same_protocol(tmp_path):
     ResultsStore(tmp_path, session="s1", protocol="p1").get_or_compute(SPEC, Counter())
     again = Counter()
     stored = ResultsStore(tmp_path, session="s2", protocol="p1").get_or_compute(SPEC, again)
-    assert again.calls == 0 and stored.session == "s1" and not stored.computed_now
+    assert again.calls == 0 and stored.head.session == "s1" and not stored.computed_now
 
 
 def test_resume_recomputes_stale_protocol_and_errored_episodes(tmp_path):
@@ -70,8 +70,8 @@ def test_resume_recomputes_stale_protocol_and_errored_episodes(tmp_path):
 
 def test_unreadable_leftovers_are_recomputed(tmp_path):
     store = ResultsStore(tmp_path, session="s1", protocol="p1")
-    store.path_for(SPEC).parent.mkdir(parents=True)
-    store.path_for(SPEC).write_text("{half a file")
+    episode_path(tmp_path, SPEC).parent.mkdir(parents=True)
+    episode_path(tmp_path, SPEC).write_text("{half a file")
     compute = Counter()
     store.get_or_compute(SPEC, compute)
     assert compute.calls == 1 and [t.spec for t in load_run_dirs([tmp_path])] == [SPEC]
