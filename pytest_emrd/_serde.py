@@ -180,7 +180,8 @@ def from_versioned_dict(
 
 
 class Schema(NamedTuple):
-    """How a :class:`JsonRecord` with a ``schema_version`` is read (:func:`from_versioned_dict`)."""
+    """How a :class:`JsonRecord` with a ``schema_version`` is read: the keyword arguments
+    of :func:`from_versioned_dict`."""
 
     version: int
     what: str
@@ -198,17 +199,14 @@ class JsonRecord:
 
     def to_dict(self) -> dict[str, Any]:
         """The record as plain JSON-able data (:func:`to_dict`)."""
-        return to_dict(self)  # type: ignore[no-any-return]
+        return to_dict(self)
 
     @classmethod
     def from_dict(cls, data: dict[str, Any]) -> Self:
         """The record from :meth:`to_dict` output; :class:`ProtocolError` if it does not fit."""
         if cls.schema is None:
             return from_dict(cls, data)
-        version, what, remedy, older = cls.schema
-        return from_versioned_dict(
-            cls, data, version=version, what=what, remedy=remedy, older=older
-        )
+        return from_versioned_dict(cls, data, **cls.schema._asdict())
 
 
 def json_safe(data: Any) -> Any:
