@@ -13,7 +13,7 @@ import types
 import typing
 from collections.abc import Callable, Collection
 from functools import cache
-from typing import Any, Final, TypeVar
+from typing import Any, ClassVar, Final, NamedTuple, Self, TypeVar
 
 from pytest_emrd.errors import ProtocolError
 
@@ -177,6 +177,36 @@ def from_versioned_dict(
     if found != version and (found not in older or isinstance(found, bool)):
         raise ProtocolError(f"{what} schema_version={found!r} is not {version}; {remedy}")
     return from_dict(cls, {**data, "schema_version": version})
+
+
+class Schema(NamedTuple):
+    """How a :class:`JsonRecord` with a ``schema_version`` is read: the keyword arguments
+    of :func:`from_versioned_dict`."""
+
+    version: int
+    what: str
+    remedy: str
+    older: Collection[int] = ()
+
+
+class JsonRecord:
+    """Base of a frozen dataclass stored as JSON: ``to_dict``/``from_dict`` for it.
+
+    A record with a ``schema_version`` field sets ``schema`` to check it when read."""
+
+    __slots__ = ()
+    schema: ClassVar[Schema | None] = None
+
+    def to_dict(self) -> dict[str, Any]:
+        """The record as plain JSON-able data (:func:`to_dict`)."""
+        return to_dict(self)
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> Self:
+        """The record from :meth:`to_dict` output; :class:`ProtocolError` if it does not fit."""
+        if cls.schema is None:
+            return from_dict(cls, data)
+        return from_versioned_dict(cls, data, **cls.schema._asdict())
 
 
 def json_safe(data: Any) -> Any:

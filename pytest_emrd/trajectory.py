@@ -17,9 +17,9 @@ from __future__ import annotations
 
 import hashlib
 from dataclasses import dataclass, field
-from typing import Any, Final
+from typing import Final
 
-from pytest_emrd._serde import from_versioned_dict, to_dict
+from pytest_emrd._serde import JsonRecord, Schema
 
 SCHEMA_VERSION: Final = 2
 #: Schema versions still read (their missing fields take the defaults): 1 lacks ``Step.repairs``.
@@ -201,8 +201,15 @@ class Step:
 
 
 @dataclass(frozen=True)
-class Trajectory:
+class Trajectory(JsonRecord):
     """Everything the metrics need from one episode."""
+
+    schema = Schema(
+        SCHEMA_VERSION,
+        "trajectory",
+        "re-run the episode with this version of pytest-emrd.",
+        OLDER_SCHEMAS,
+    )
 
     spec: EpisodeSpec
     protocol: str
@@ -240,17 +247,3 @@ class Trajectory:
     def usage(self) -> Usage:
         """Token usage summed over the steps."""
         return sum((s.usage for s in self.steps), Usage())
-
-    def to_dict(self) -> dict[str, Any]:
-        return to_dict(self)
-
-    @classmethod
-    def from_dict(cls, data: dict[str, Any]) -> Trajectory:
-        return from_versioned_dict(
-            cls,
-            data,
-            version=SCHEMA_VERSION,
-            what="trajectory",
-            remedy="re-run the episode with this version of pytest-emrd.",
-            older=OLDER_SCHEMAS,
-        )

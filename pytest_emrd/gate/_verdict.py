@@ -9,7 +9,7 @@ from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
-from pytest_emrd._serde import from_dict, to_dict
+from pytest_emrd._serde import JsonRecord
 from pytest_emrd.gate._thresholds import Bound, Thresholds
 
 if TYPE_CHECKING:
@@ -39,7 +39,7 @@ def _gate_id(model: str, condition: str, variant: str, layouts: str, metric: str
 
 
 @dataclass(frozen=True)
-class Verdict:
+class Verdict(JsonRecord):
     """The outcome of one gate."""
 
     model: str
@@ -83,13 +83,6 @@ class Verdict:
             f" n={self.n}, bound {self.bound_text}: {'PASS' if self.passed else 'FAIL'}"
             f" ({self.reason})"
         )
-
-    def to_dict(self) -> dict[str, Any]:
-        return to_dict(self)
-
-    @classmethod
-    def from_dict(cls, data: dict[str, Any]) -> Verdict:
-        return from_dict(cls, data)
 
 
 def format_number(x: float | None) -> str:

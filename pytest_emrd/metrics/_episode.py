@@ -12,11 +12,11 @@ from collections import Counter
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 from functools import cached_property
-from typing import Any, Final
+from typing import Final
 
 import numpy as np
 
-from pytest_emrd._serde import from_versioned_dict, to_dict
+from pytest_emrd._serde import JsonRecord, Schema
 from pytest_emrd.metrics._match import (
     COINCIDENT_M,
     TIE_M2,
@@ -332,8 +332,14 @@ SCHEMA_VERSION: Final = 2
 
 
 @dataclass(frozen=True)
-class EpisodeMetrics:
+class EpisodeMetrics(JsonRecord):
     """Every per-episode EMRD score of one trajectory. Fractions are in [0, 1]."""
+
+    schema = Schema(
+        SCHEMA_VERSION,
+        "episode metrics",
+        "recompute them from the trajectory with episode_metrics().",
+    )
 
     spec: EpisodeSpec
     status: str
@@ -417,19 +423,6 @@ class EpisodeMetrics:
             return None
         d = self.forget_events
         return self.retained_steps / d if d else math.inf
-
-    def to_dict(self) -> dict[str, Any]:
-        return to_dict(self)
-
-    @classmethod
-    def from_dict(cls, data: dict[str, Any]) -> EpisodeMetrics:
-        return from_versioned_dict(
-            cls,
-            data,
-            version=SCHEMA_VERSION,
-            what="episode metrics",
-            remedy="recompute them from the trajectory with episode_metrics().",
-        )
 
 
 def episode_metrics(traj: Trajectory) -> EpisodeMetrics:

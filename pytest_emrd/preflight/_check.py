@@ -17,7 +17,7 @@ from typing import Any, Final
 
 import httpx
 
-from pytest_emrd._serde import to_dict
+from pytest_emrd._serde import JsonRecord
 from pytest_emrd.agent import (
     HISTORY_TURNS,
     ChatClient,
@@ -57,7 +57,7 @@ class Check:
 
 
 @dataclass(frozen=True)
-class PreflightReport:
+class PreflightReport(JsonRecord):
     """Every check of one model, and the cost estimate of its live episodes."""
 
     model: str
@@ -98,9 +98,6 @@ class PreflightReport:
         """``emrd check`` for this model, with the registry that defines it."""
         registry = f" --emrd-models={shlex.quote(self.models_file)}" if self.models_file else ""
         return f"emrd check --emrd-model={shlex.quote(self.model)}{registry}"
-
-    def to_dict(self) -> dict[str, Any]:
-        return to_dict(self)
 
 
 def _key(config: ModelConfig) -> Check:

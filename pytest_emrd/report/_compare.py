@@ -24,11 +24,11 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
-from typing import Any, Final
+from typing import Final
 
 import numpy as np
 
-from pytest_emrd._serde import from_dict, to_dict
+from pytest_emrd._serde import JsonRecord
 from pytest_emrd.metrics import GATE_METRICS, EpisodeMetrics, Estimate, as_episode_metrics
 from pytest_emrd.metrics._stats import N_RESAMPLES
 from pytest_emrd.report._build import group_cells
@@ -105,7 +105,7 @@ class Difference:
 
 
 @dataclass(frozen=True)
-class Comparison:
+class Comparison(JsonRecord):
     """Every :class:`Difference` of a comparison and what could not be compared."""
 
     run_a: str
@@ -119,13 +119,6 @@ class Comparison:
     models: tuple[str, str] | None = None
     """``(model A, model B)`` when two model names are compared, else None."""
     alpha: float = ALPHA
-
-    def to_dict(self) -> dict[str, Any]:
-        return to_dict(self)
-
-    @classmethod
-    def from_dict(cls, data: dict[str, Any]) -> Comparison:
-        return from_dict(cls, data)
 
 
 def _pairs(a: Sequence[EpisodeMetrics], b: Sequence[EpisodeMetrics]) -> tuple[list[Pair], int]:

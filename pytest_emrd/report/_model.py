@@ -15,10 +15,10 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any, Final
+from typing import Final
 
 from pytest_emrd import metrics
-from pytest_emrd._serde import from_versioned_dict, to_dict
+from pytest_emrd._serde import JsonRecord, Schema
 from pytest_emrd.gate import UsageRow, Verdict
 from pytest_emrd.trajectory import GroundTruthObject, RoomOutline
 
@@ -226,8 +226,14 @@ class EpisodeMap:
 
 
 @dataclass(frozen=True)
-class Report:
+class Report(JsonRecord):
     """Every table and figure of one report."""
+
+    schema = Schema(
+        SCHEMA_VERSION,
+        "report",
+        "rebuild the report from the run directory with `emrd report`.",
+    )
 
     overview: Overview
     missing: tuple[str, ...]
@@ -248,19 +254,6 @@ class Report:
     sir: tuple[SIRSeries, ...]
     episode_map: EpisodeMap | None
     schema_version: int = SCHEMA_VERSION
-
-    def to_dict(self) -> dict[str, Any]:
-        return to_dict(self)
-
-    @classmethod
-    def from_dict(cls, data: dict[str, Any]) -> Report:
-        return from_versioned_dict(
-            cls,
-            data,
-            version=SCHEMA_VERSION,
-            what="report",
-            remedy="rebuild the report from the run directory with `emrd report`.",
-        )
 
 
 @dataclass(frozen=True)

@@ -6,10 +6,10 @@ from __future__ import annotations
 
 from collections.abc import Iterable
 from dataclasses import dataclass, replace
-from typing import TYPE_CHECKING, Any, Final
+from typing import TYPE_CHECKING, Final
 
 from pytest_emrd._scrub import scrub
-from pytest_emrd._serde import from_dict, from_versioned_dict, to_dict
+from pytest_emrd._serde import JsonRecord, Schema
 from pytest_emrd.gate._table import UsageRow
 from pytest_emrd.trajectory import EpisodeSpec, Trajectory, Usage
 
@@ -20,8 +20,10 @@ HEAD_SCHEMA: Final = 1
 
 
 @dataclass(frozen=True)
-class EpisodeHead:
+class EpisodeHead(JsonRecord):
     """The facts about a stored episode a run reads; field names are the file's format."""
+
+    schema = Schema(HEAD_SCHEMA, "episode head", "it is recomputed.")
 
     spec: EpisodeSpec
     protocol: str
@@ -76,18 +78,9 @@ class EpisodeHead:
         head = EpisodeHead.of(trajectory, seconds=self.seconds, **facts)
         return replace(head, error=self.error) == self
 
-    def to_dict(self) -> dict[str, Any]:
-        return to_dict(self)
-
-    @classmethod
-    def from_dict(cls, data: dict[str, Any]) -> EpisodeHead:
-        return from_versioned_dict(
-            cls, data, version=HEAD_SCHEMA, what="episode head", remedy="it is recomputed."
-        )
-
 
 @dataclass(frozen=True)
-class EpisodeSummary:
+class EpisodeSummary(JsonRecord):
     """What travels from an xdist worker to the controller: an episode's head and cost."""
 
     head: EpisodeHead
@@ -113,13 +106,6 @@ class EpisodeSummary:
             f"emrd [{done}] {head.spec.case_id}: {head.status} after {head.steps} steps, chose "
             f"{head.chosen_room or '-'}, {tokens:,} tokens{cost}{retries}, {head.seconds:.1f} s"
         )
-
-    def to_dict(self) -> dict[str, Any]:
-        return to_dict(self)
-
-    @classmethod
-    def from_dict(cls, data: dict[str, Any]) -> EpisodeSummary:
-        return from_dict(cls, data)
 
 
 def usage_rows(summaries: Iterable[EpisodeSummary]) -> list[UsageRow]:
