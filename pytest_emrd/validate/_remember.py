@@ -107,9 +107,14 @@ def decay_checks(groups: Mapping[float, Sequence[Episode]]) -> list[Check]:
     return rows
 
 
-def nearest_decay(efc: float, fits: Mapping[float, EbbinghausFit]) -> float:
-    """The planted mean whose decay fit has the EFC nearest ``efc`` (on a log scale)."""
-    return min(fits, key=lambda m: abs(math.log(fits[m].efc or 1.0) - math.log(efc)))
+def nearest_decay(fit: EbbinghausFit, decays: Mapping[float, EbbinghausFit]) -> float | None:
+    """The planted mean whose decay fit has the finite EFC nearest ``fit``'s (on a log scale);
+    None when ``fit`` or every decay has no finite EFC."""
+    finite = [m for m, f in decays.items() if f.efc and math.isfinite(f.efc)]
+    if fit.efc is None or not math.isfinite(fit.efc) or not finite:
+        return None
+    efc = fit.efc
+    return min(finite, key=lambda m: abs(math.log(decays[m].efc or 1.0) - math.log(efc)))
 
 
 def window_fit_checks(
@@ -121,8 +126,8 @@ def window_fit_checks(
     rows = []
     for k, trajs in windows.items():
         fit = ebbinghaus(trajs).pooled
-        finite = {m: f for m, f in decay_fits.items() if f.efc and math.isfinite(f.efc)}
-        if fit.efc is None or not math.isfinite(fit.efc) or not finite:
+        m = nearest_decay(fit, decay_fits)
+        if m is None:
             rows.append(
                 Check("Remember", f"Exponential fit, scout-window-{k} vs scout-decay",
                       "worse fit", "n/a", f"R^2 gap >= {R2_GAP}", "fail",
@@ -130,8 +135,7 @@ def window_fit_checks(
             )  # fmt: skip
             continue
         efc = fit.efc
-        m = nearest_decay(efc, finite)
-        match = finite[m]
+        match = decay_fits[m]
         gap = (match.r2 or 0.0) - fit.r2 if fit.r2 is not None else math.inf
         rows.append(
             Check("Remember", f"Exponential fit, scout-window-{k} vs scout-decay-{m:g}",
@@ -299,12 +303,9 @@ def r2_points_checks(
         r2_serial = ebbinghaus(serial, points=points).pooled.r2
         exponential = all(f.r2 is not None and f.r2 >= MIN_R2 for f in decay.values())
         gaps = []
-        finite = {m: f for m, f in decay.items() if f.efc and math.isfinite(f.efc)}
         for fit in window.values():
-            if fit.efc is None or not math.isfinite(fit.efc) or not finite or fit.r2 is None:
-                gaps.append(-math.inf)
-                continue
-            gaps.append((finite[nearest_decay(fit.efc, finite)].r2 or 0.0) - fit.r2)
+            m = nearest_decay(fit, decay)
+            gaps.append(-math.inf if m is None or fit.r2 is None else (decay[m].r2 or 0.0) - fit.r2)
         survives = exponential and all(g >= R2_GAP for g in gaps)
         default = points == R2_POINTS[0]
         verdict = "pass" if survives else ("fail" if default else "finding")
