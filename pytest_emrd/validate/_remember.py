@@ -48,15 +48,10 @@ MAX_U_DEPTH: Final = 0.5
 _SPAWN_ORDER: Final = {slug: i for i, slug in enumerate(ROOM_SLUGS.values())}
 
 
-def interleaved(trajectories: Sequence[Episode]) -> list[Episode]:
-    """Episodes ordered so that every prefix of 4 covers the four spawn rooms equally."""
-    return sorted(trajectories, key=lambda t: (t.spec.episode, _SPAWN_ORDER[t.spec.spawn]))
-
-
 def error_curve(trajectories: Sequence[Episode], planted: float) -> list[tuple[int, float]]:
     """``(N, |EFC_N - planted| / planted)`` over spawn-balanced prefixes of N = 4, 8, ...
     episodes; a prefix whose EFC is undefined has error ``inf``."""
-    ordered = interleaved(trajectories)
+    ordered = sorted(trajectories, key=lambda t: (t.spec.episode, _SPAWN_ORDER[t.spec.spawn]))
     curve = []
     for n in range(4, len(ordered) + 1, 4):
         efc = ebbinghaus(ordered[:n]).pooled.efc
@@ -227,6 +222,12 @@ def _data(spe: SerialPosition) -> dict[str, Value]:
     return {**mle, **paper}
 
 
+_LRU_SHAPE: Final = (
+    "no: an LRU window drops an object once k others are seen after it, so its retention "
+    "follows how densely the path shows new objects, not discovery rank"
+)
+
+
 def serial_checks(
     serial: Sequence[Episode],
     windows: Mapping[int, Sequence[Episode]],
@@ -249,14 +250,7 @@ def serial_checks(
         spe = serial_position(trajs)
         values = (spe.mle_early, spe.mle_middle, spe.mle_late)
         depth = u_depth(*values)
-        shape = (
-            "yes"
-            if monotone(*values)
-            else (
-                "no: an LRU window drops an object once k others are seen after it, so its "
-                "retention follows how densely the path shows new objects, not discovery rank"
-            )
-        )
+        shape = "yes" if monotone(*values) else _LRU_SHAPE
         rows.append(
             Check("Remember", f"Serial position, scout-window-{k}", "no U (LRU plants none)",
                   f"MLE {_profile(*values)}; U depth {fmt(depth)}",

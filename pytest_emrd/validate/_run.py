@@ -50,11 +50,7 @@ def _episode(spec: dict[str, Any], run_dir: str, session: str) -> dict[str, Any]
 
 
 def run_plan(
-    plan: Plan,
-    out: Path,
-    *,
-    jobs: int = 2,
-    on_episode: Callable[[Progress], None] | None = None,
+    plan: Plan, out: Path, *, jobs: int = 2, on_episode: Callable[[Progress], None]
 ) -> dict[str, list[Trajectory]]:
     """Trajectories of every group of ``plan`` (group name -> spawn-major list); cached
     episodes under ``out`` are reused, the rest run on ``jobs`` processes."""
@@ -69,7 +65,6 @@ def run_plan(
         for done, future in enumerate(as_completed(futures), start=1):
             trajectory = Trajectory.from_dict(future.result())
             by_case[futures[future]] = trajectory
-            if on_episode is not None:
-                elapsed = time.perf_counter() - start
-                on_episode(Progress(done, len(specs), futures[future], trajectory.status, elapsed))
+            elapsed = time.perf_counter() - start
+            on_episode(Progress(done, len(specs), futures[future], trajectory.status, elapsed))
     return {g.name: [by_case[s.case_id] for s in g.specs(plan.episodes)] for g in plan.groups}
