@@ -87,18 +87,16 @@ def decay_checks(groups: Mapping[float, Sequence[Episode]]) -> list[Check]:
         data: dict[str, Value] = {"efc": fit.efc, "r2": fit.r2, "error": error,
                                   "episodes_needed": needed}  # fmt: skip
         data.update({f"error_n{n}": e for n, e in curve})
-        rows.append(
+        rows += [
             Check("Remember", f"Ebbinghaus EFC, scout-decay-{mean:g}", f"{mean:g} steps",
                   f"{fmt(fit.efc)} steps ({100 * error:.0f} % off)", "within 25 %",
-                  judged(error <= EFC_TOLERANCE), note, data)
-        )  # fmt: skip
-        rows.append(
+                  judged(error <= EFC_TOLERANCE), note, data),
             Check("Remember", f"Ebbinghaus R^2, scout-decay-{mean:g}", "exponential",
                   f"R^2 = {fmt(fit.r2, 3)}", f">= {MIN_R2}",
                   judged(fit.r2 is not None and fit.r2 >= MIN_R2),
                   f"{len(trajs)} episodes; R^2 of C exp(-t/EFC) against the anchored KM",
-                  {"r2": fit.r2})
-        )  # fmt: skip
+                  {"r2": fit.r2}),
+        ]  # fmt: skip
     return rows
 
 
@@ -180,7 +178,6 @@ def _profile(early: float | None, middle: float | None, late: float | None) -> s
 
 
 def _flat(values: Sequence[float | None]) -> bool:
-    """All three thirds defined and within :data:`SERIAL_TOLERANCE` of each other."""
     defined = [v for v in values if v is not None]
     return len(defined) == len(values) and max(defined) <= min(defined) * (1.0 + SERIAL_TOLERANCE)
 
