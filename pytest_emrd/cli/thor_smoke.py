@@ -75,12 +75,7 @@ class Comparison:
 
 
 def run_smoke(
-    *,
-    spawn: str,
-    episode: int,
-    layouts: str,
-    out: Path,
-    backend_options: Mapping[str, Any],
+    *, spawn: str, episode: int, layouts: str, out: Path, backend_options: Mapping[str, Any]
 ) -> list[Comparison]:
     """One scout episode per condition on both backends; trajectories go to ``out``."""
     from pytest_emrd.episode import SimulatorPool, run_episode

@@ -52,9 +52,8 @@ def register(sub: argparse._SubParsersAction) -> None:
 def _run(args: argparse.Namespace) -> int:
     from pytest_emrd._atomic import write_bytes_atomic
     from pytest_emrd.protocol import protocol_version
-    from pytest_emrd.validate import Plan, Progress, markdown, run_plan, to_json
+    from pytest_emrd.validate import FAMILIES, Plan, Progress, markdown, run_plan, to_json
     from pytest_emrd.validate import validation_report as build
-    from pytest_emrd.validate._plan import FAMILIES
 
     check_positive_int("--episodes", args.episodes)
     check_positive_int("--jobs", args.jobs)

@@ -40,7 +40,6 @@ class Check:
     planted: str
     """The known truth (planted parameter, or the value the paper prints)."""
     recovered: str
-    """What the metric gave."""
     tolerance: str
     """The acceptance rule, in words (``within 25 %``, ``printed precision``)."""
     verdict: str

@@ -103,7 +103,7 @@ def _from_percentages() -> _Counts:
     return _Counts(tuple(_count(n, pc) for n, pc in rows), tuple(n for n, _ in rows))
 
 
-def _reproducing(printed: _Counts) -> _Counts | None:
+def _reproducing(printed: _Counts) -> _Counts:
     """Counts within :data:`SEARCH_RADIUS` of ``printed`` that give every printed Fisher p
     (3 dp) and the printed chi-square (2 dp); the one closest to ``printed``."""
     spans = [range(c - SEARCH_RADIUS, c + SEARCH_RADIUS + 1) for c in printed.conference]
@@ -119,7 +119,7 @@ def _reproducing(printed: _Counts) -> _Counts | None:
             stat = chi_square(counts.table()).statistic
             if stat is not None and round(stat, 2) == APPENDIX_E_CHI2[0]:
                 matches.append(counts)
-    return min(matches, key=lambda c: _distance(c, printed), default=None)
+    return min(matches, key=lambda c: _distance(c, printed))
 
 
 def _distance(a: _Counts, b: _Counts) -> int:
@@ -139,16 +139,11 @@ def appendix_e_checks() -> list[Check]:
     printed = _from_percentages()
     fit = _reproducing(printed)
     source = f"counts from the printed %: {_describe(printed, names)}"
-    if fit is None:
-        why = f"no counts within {SEARCH_RADIUS} of the printed percentages reproduce it"
-    else:
-        diff = [
-            n for n, a, b in zip(names, printed.conference, fit.conference, strict=True) if a != b
-        ]
-        why = (
-            f"all printed statistics are reproduced by {_describe(fit, names)}, which differ "
-            f"from the printed percentages in {', '.join(diff) or 'no row'}"
-        )
+    diff = [n for n, a, b in zip(names, printed.conference, fit.conference, strict=True) if a != b]
+    why = (
+        f"all printed statistics are reproduced by {_describe(fit, names)}, which differ "
+        f"from the printed percentages in {', '.join(diff) or 'no row'}"
+    )
     chi = chi_square(printed.table())
     rows = [
         _row("Appendix E chi-square (5 x 2)", "17.81", chi.statistic,
@@ -163,7 +158,7 @@ def appendix_e_checks() -> list[Check]:
             f"Conference vs other: Baseline {printed.conference[0]}/{printed.n[0]} vs "
             f"{name} {printed.conference[i]}/{n}"
         )
-        if round(p, 3) != target and fit is not None:
+        if round(p, 3) != target:
             note += (
                 f"; the printed p needs Baseline {fit.conference[0]}/{fit.n[0]} vs "
                 f"{name} {fit.conference[i]}/{n}"
@@ -174,7 +169,7 @@ def appendix_e_checks() -> list[Check]:
     neutral = _Counts((printed.conference[0], _count(n, pc)), (printed.n[0], n))
     p = neutral.fisher(1)
     note = f"Room A chosen {neutral.conference[1]}/{n} vs Baseline {neutral.conference[0]}/79"
-    if round(p, 3) != target and fit is not None:
+    if round(p, 3) != target:
         fixed = _Counts((fit.conference[0], neutral.conference[1]), neutral.n).fisher(1)
         note += f"; with Baseline {fit.conference[0]}/79 it is {fixed:.3f}"
     rows.append(_row(f"Appendix E Fisher p, {label}", f"{target}", p, _at_precision(target, 3),

@@ -48,15 +48,10 @@ MAX_U_DEPTH: Final = 0.5
 _SPAWN_ORDER: Final = {slug: i for i, slug in enumerate(ROOM_SLUGS.values())}
 
 
-def interleaved(trajectories: Sequence[Episode]) -> list[Episode]:
-    """Episodes ordered so that every prefix of 4 covers the four spawn rooms equally."""
-    return sorted(trajectories, key=lambda t: (t.spec.episode, _SPAWN_ORDER[t.spec.spawn]))
-
-
 def error_curve(trajectories: Sequence[Episode], planted: float) -> list[tuple[int, float]]:
     """``(N, |EFC_N - planted| / planted)`` over spawn-balanced prefixes of N = 4, 8, ...
     episodes; a prefix whose EFC is undefined has error ``inf``."""
-    ordered = interleaved(trajectories)
+    ordered = sorted(trajectories, key=lambda t: (t.spec.episode, _SPAWN_ORDER[t.spec.spawn]))
     curve = []
     for n in range(4, len(ordered) + 1, 4):
         efc = ebbinghaus(ordered[:n]).pooled.efc
@@ -92,24 +87,27 @@ def decay_checks(groups: Mapping[float, Sequence[Episode]]) -> list[Check]:
         data: dict[str, Value] = {"efc": fit.efc, "r2": fit.r2, "error": error,
                                   "episodes_needed": needed}  # fmt: skip
         data.update({f"error_n{n}": e for n, e in curve})
-        rows.append(
+        rows += [
             Check("Remember", f"Ebbinghaus EFC, scout-decay-{mean:g}", f"{mean:g} steps",
                   f"{fmt(fit.efc)} steps ({100 * error:.0f} % off)", "within 25 %",
-                  judged(error <= EFC_TOLERANCE), note, data)
-        )  # fmt: skip
-        rows.append(
+                  judged(error <= EFC_TOLERANCE), note, data),
             Check("Remember", f"Ebbinghaus R^2, scout-decay-{mean:g}", "exponential",
                   f"R^2 = {fmt(fit.r2, 3)}", f">= {MIN_R2}",
                   judged(fit.r2 is not None and fit.r2 >= MIN_R2),
                   f"{len(trajs)} episodes; R^2 of C exp(-t/EFC) against the anchored KM",
-                  {"r2": fit.r2})
-        )  # fmt: skip
+                  {"r2": fit.r2}),
+        ]  # fmt: skip
     return rows
 
 
-def nearest_decay(efc: float, fits: Mapping[float, EbbinghausFit]) -> float:
-    """The planted mean whose decay fit has the EFC nearest ``efc`` (on a log scale)."""
-    return min(fits, key=lambda m: abs(math.log(fits[m].efc or 1.0) - math.log(efc)))
+def nearest_decay(fit: EbbinghausFit, decays: Mapping[float, EbbinghausFit]) -> float | None:
+    """The planted mean whose decay fit has the finite EFC nearest ``fit``'s (on a log scale);
+    None when ``fit`` or every decay has no finite EFC."""
+    finite = [m for m, f in decays.items() if f.efc and math.isfinite(f.efc)]
+    if fit.efc is None or not math.isfinite(fit.efc) or not finite:
+        return None
+    efc = fit.efc
+    return min(finite, key=lambda m: abs(math.log(decays[m].efc or 1.0) - math.log(efc)))
 
 
 def window_fit_checks(
@@ -121,8 +119,8 @@ def window_fit_checks(
     rows = []
     for k, trajs in windows.items():
         fit = ebbinghaus(trajs).pooled
-        finite = {m: f for m, f in decay_fits.items() if f.efc and math.isfinite(f.efc)}
-        if fit.efc is None or not math.isfinite(fit.efc) or not finite:
+        m = nearest_decay(fit, decay_fits)
+        if m is None:
             rows.append(
                 Check("Remember", f"Exponential fit, scout-window-{k} vs scout-decay",
                       "worse fit", "n/a", f"R^2 gap >= {R2_GAP}", "fail",
@@ -130,8 +128,7 @@ def window_fit_checks(
             )  # fmt: skip
             continue
         efc = fit.efc
-        m = nearest_decay(efc, finite)
-        match = finite[m]
+        match = decay_fits[m]
         gap = (match.r2 or 0.0) - fit.r2 if fit.r2 is not None else math.inf
         rows.append(
             Check("Remember", f"Exponential fit, scout-window-{k} vs scout-decay-{m:g}",
@@ -181,7 +178,6 @@ def _profile(early: float | None, middle: float | None, late: float | None) -> s
 
 
 def _flat(values: Sequence[float | None]) -> bool:
-    """All three thirds defined and within :data:`SERIAL_TOLERANCE` of each other."""
     defined = [v for v in values if v is not None]
     return len(defined) == len(values) and max(defined) <= min(defined) * (1.0 + SERIAL_TOLERANCE)
 
@@ -223,6 +219,12 @@ def _data(spe: SerialPosition) -> dict[str, Value]:
     return {**mle, **paper}
 
 
+_LRU_SHAPE: Final = (
+    "no: an LRU window drops an object once k others are seen after it, so its retention "
+    "follows how densely the path shows new objects, not discovery rank"
+)
+
+
 def serial_checks(
     serial: Sequence[Episode],
     windows: Mapping[int, Sequence[Episode]],
@@ -245,14 +247,7 @@ def serial_checks(
         spe = serial_position(trajs)
         values = (spe.mle_early, spe.mle_middle, spe.mle_late)
         depth = u_depth(*values)
-        shape = (
-            "yes"
-            if monotone(*values)
-            else (
-                "no: an LRU window drops an object once k others are seen after it, so its "
-                "retention follows how densely the path shows new objects, not discovery rank"
-            )
-        )
+        shape = "yes" if monotone(*values) else _LRU_SHAPE
         rows.append(
             Check("Remember", f"Serial position, scout-window-{k}", "no U (LRU plants none)",
                   f"MLE {_profile(*values)}; U depth {fmt(depth)}",
@@ -299,12 +294,9 @@ def r2_points_checks(
         r2_serial = ebbinghaus(serial, points=points).pooled.r2
         exponential = all(f.r2 is not None and f.r2 >= MIN_R2 for f in decay.values())
         gaps = []
-        finite = {m: f for m, f in decay.items() if f.efc and math.isfinite(f.efc)}
         for fit in window.values():
-            if fit.efc is None or not math.isfinite(fit.efc) or not finite or fit.r2 is None:
-                gaps.append(-math.inf)
-                continue
-            gaps.append((finite[nearest_decay(fit.efc, finite)].r2 or 0.0) - fit.r2)
+            m = nearest_decay(fit, decay)
+            gaps.append(-math.inf if m is None or fit.r2 is None else (decay[m].r2 or 0.0) - fit.r2)
         survives = exponential and all(g >= R2_GAP for g in gaps)
         default = points == R2_POINTS[0]
         verdict = "pass" if survives else ("fail" if default else "finding")

@@ -30,12 +30,10 @@ class Progress:
     total: int
     case_id: str
     status: str
-    computed: bool
-    """Run now (as opposed to read from the cache)."""
     seconds: float
 
 
-def _episode(spec: dict[str, Any], run_dir: str, session: str) -> tuple[dict[str, Any], bool]:
+def _episode(spec: dict[str, Any], run_dir: str, session: str) -> dict[str, Any]:
     """Worker: the stored or freshly computed trajectory of ``spec`` (plain data)."""
     from pytest_emrd.cassette import EpisodeRun
     from pytest_emrd.episode import protocol_version, run_episode
@@ -48,16 +46,11 @@ def _episode(spec: dict[str, Any], run_dir: str, session: str) -> tuple[dict[str
 
     episode = EpisodeSpec(**spec)
     store = ResultsStore(Path(run_dir), session=session, protocol=protocol_version(episode.backend))
-    stored = store.get_or_compute(episode, compute)
-    return stored.trajectory.to_dict(), stored.computed_now
+    return store.get_or_compute(episode, compute).trajectory.to_dict()
 
 
 def run_plan(
-    plan: Plan,
-    out: Path,
-    *,
-    jobs: int = 2,
-    on_episode: Callable[[Progress], None] | None = None,
+    plan: Plan, out: Path, *, jobs: int = 2, on_episode: Callable[[Progress], None]
 ) -> dict[str, list[Trajectory]]:
     """Trajectories of every group of ``plan`` (group name -> spawn-major list); cached
     episodes under ``out`` are reused, the rest run on ``jobs`` processes."""
@@ -70,13 +63,8 @@ def run_plan(
     with ProcessPoolExecutor(max_workers=jobs, mp_context=context) as pool:
         futures = {pool.submit(_episode, to_dict(s), str(out), session): s.case_id for s in specs}
         for done, future in enumerate(as_completed(futures), start=1):
-            data, computed = future.result()
-            trajectory = Trajectory.from_dict(data)
+            trajectory = Trajectory.from_dict(future.result())
             by_case[futures[future]] = trajectory
-            if on_episode is not None:
-                elapsed = time.perf_counter() - start
-                on_episode(
-                    Progress(done, len(specs), futures[future], trajectory.status, computed,
-                             elapsed)
-                )  # fmt: skip
+            elapsed = time.perf_counter() - start
+            on_episode(Progress(done, len(specs), futures[future], trajectory.status, elapsed))
     return {g.name: [by_case[s.case_id] for s in g.specs(plan.episodes)] for g in plan.groups}

@@ -8,35 +8,11 @@ from pytest_emrd.agent import load_registry
 from pytest_emrd.errors import ConfigError
 from pytest_emrd.metrics import EpisodeMetrics, as_episode_metrics
 from pytest_emrd.trajectory import Trajectory
+from pytest_emrd.validate import _mimic, _plan, _remember
 from pytest_emrd.validate._check import Check, Episode, ValidationReport
 from pytest_emrd.validate._explore import exploration_checks, prior_checks, scout_decide_checks
 from pytest_emrd.validate._frame import frame_checks
-from pytest_emrd.validate._mimic import (
-    dup_checks,
-    halluc_checks,
-    own_frame_checks,
-    paired,
-    reply_checks,
-    sigma_check,
-)
 from pytest_emrd.validate._paper import statistics_checks
-from pytest_emrd.validate._plan import (
-    DECAY_MEANS,
-    GROUPS,
-    MIMIC_DUP,
-    MIMIC_GROUPS,
-    MIMIC_HALLUC,
-    MIMIC_MODELS,
-    MIMIC_SIGMA,
-    WINDOW_SIZES,
-)
-from pytest_emrd.validate._remember import (
-    decay_checks,
-    miller_checks,
-    r2_points_checks,
-    serial_checks,
-    window_fit_checks,
-)
 
 Groups = Mapping[str, Sequence[Episode]]
 
@@ -46,7 +22,7 @@ def _episodes(groups: Groups, name: str) -> Sequence[Episode]:
     if not trajs:
         raise ConfigError(
             f"group={name!r} has no trajectories; run every group of the plan "
-            f"({', '.join(g.name for g in GROUPS)})."
+            f"({', '.join(g.name for g in _plan.GROUPS)})."
         )
     return trajs
 
@@ -66,16 +42,16 @@ def _trajectories(groups: Groups, name: str) -> list[Trajectory]:
 def mimic_checks(groups: Groups) -> list[Check]:
     """Frame, noise, hallucination, duplicate and reply rows of the mimic groups."""
     role = {
-        r: _trajectories(groups, next(g.name for g in MIMIC_GROUPS if g.model == m))
-        for r, m in MIMIC_MODELS.items()
+        r: _trajectories(groups, next(g.name for g in _plan.MIMIC_GROUPS if g.model == m))
+        for r, m in _plan.MIMIC_MODELS.items()
     }
-    clean = paired(role["own"])
+    clean = _mimic.paired(role["own"])
     return [
-        *own_frame_checks(paired(role["spawn"]), clean),
-        sigma_check(paired(role["sigma"]), clean, MIMIC_SIGMA),
-        *halluc_checks(paired(role["halluc"]), clean, MIMIC_HALLUC),
-        *dup_checks(paired(role["dup"]), clean, MIMIC_DUP),
-        *reply_checks(role["default"], role["own"], load_registry().get("mimic").planted),
+        *_mimic.own_frame_checks(_mimic.paired(role["spawn"]), clean),
+        _mimic.sigma_check(_mimic.paired(role["sigma"]), clean, _plan.MIMIC_SIGMA),
+        *_mimic.halluc_checks(_mimic.paired(role["halluc"]), clean, _plan.MIMIC_HALLUC),
+        *_mimic.dup_checks(_mimic.paired(role["dup"]), clean, _plan.MIMIC_DUP),
+        *_mimic.reply_checks(role["default"], role["own"], load_registry().get("mimic").planted),
     ]
 
 
@@ -89,17 +65,17 @@ def episode_checks(groups: Groups) -> list[Check]:
 def scout_checks(groups: Groups) -> list[Check]:
     """Rows of the scout family (and ``prior``)."""
     scout, dark = _need(groups, "scout"), _need(groups, "scout@low_light")
-    decays = {float(m): _need(groups, f"scout-decay-{m}") for m in DECAY_MEANS}
-    windows = {k: _need(groups, f"scout-window-{k}") for k in WINDOW_SIZES}
+    decays = {float(m): _need(groups, f"scout-decay-{m}") for m in _plan.DECAY_MEANS}
+    windows = {k: _need(groups, f"scout-window-{k}") for k in _plan.WINDOW_SIZES}
     serial, prior = _need(groups, "scout-serial"), _need(groups, "prior")
     return [
         *exploration_checks(_trajectories(groups, "scout"), dark),
         *frame_checks(groups),
-        *decay_checks(decays),
-        *window_fit_checks(windows, decays),
-        *r2_points_checks(decays, windows, serial),
-        *miller_checks(windows, scout),
-        *serial_checks(serial, windows, scout),
+        *_remember.decay_checks(decays),
+        *_remember.window_fit_checks(windows, decays),
+        *_remember.r2_points_checks(decays, windows, serial),
+        *_remember.miller_checks(windows, scout),
+        *_remember.serial_checks(serial, windows, scout),
         *scout_decide_checks(scout),
         *prior_checks(prior),
     ]
