@@ -8,9 +8,9 @@ import math
 from collections import Counter
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Any, Final
+from typing import Final
 
-from pytest_emrd._serde import from_versioned_dict, json_safe, to_dict
+from pytest_emrd._serde import JsonRecord, Schema, json_safe
 from pytest_emrd.errors import check_choice
 from pytest_emrd.metrics import EpisodeMetrics
 from pytest_emrd.trajectory import Trajectory
@@ -59,8 +59,14 @@ class Check:
 
 
 @dataclass(frozen=True)
-class ValidationReport:
+class ValidationReport(JsonRecord):
     """Every check of one validation run."""
+
+    schema = Schema(
+        SCHEMA_VERSION,
+        "validation report",
+        "rerun emrd validate with this version of pytest-emrd.",
+    )
 
     checks: tuple[Check, ...]
     episodes: int
@@ -72,19 +78,6 @@ class ValidationReport:
     @property
     def failed(self) -> tuple[Check, ...]:
         return tuple(c for c in self.checks if c.failed)
-
-    def to_dict(self) -> dict[str, Any]:
-        return to_dict(self)
-
-    @classmethod
-    def from_dict(cls, data: dict[str, Any]) -> ValidationReport:
-        return from_versioned_dict(
-            cls,
-            data,
-            version=SCHEMA_VERSION,
-            what="validation report",
-            remedy="rerun emrd validate with this version of pytest-emrd.",
-        )
 
 
 def judged(ok: bool) -> str:
