@@ -97,7 +97,5 @@ class Conversation:
 def _summarised(turn: UserTurn, reply: str) -> dict[str, Any]:
     """``turn``'s message with its frame replaced by the summary (single-image mode)."""
     observation = " ".join(parse_reply(reply).observation.split())
-    if not observation:
-        return {"role": "user", "content": turn.text}
     summary = FRAME_SUMMARY.format(step=turn.step, observation=observation)
-    return {"role": "user", "content": f"{turn.text}\n{summary}"}
+    return {"role": "user", "content": f"{turn.text}\n{summary}" if observation else turn.text}

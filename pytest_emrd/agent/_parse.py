@@ -261,15 +261,11 @@ def _entry(label: str, fields: Any) -> tuple[MapEntry, set[str]] | str:
     if isinstance(position, str):
         return f"cognitive_map entry {label!r} {position}"
     x, z, repairs = position
-    get = fields.get if isinstance(fields, dict) else {}.get
-    entry = MapEntry(
-        label,
-        _text(get("type")).strip(),
-        x,
-        z,
-        _text(get("room")).strip() or None,
-        _text(get("facing")).strip() or None,
-    )
+
+    def text(key: str) -> str:
+        return _text(fields.get(key) if isinstance(fields, dict) else None).strip()
+
+    entry = MapEntry(label, text("type"), x, z, text("room") or None, text("facing") or None)
     return entry, repairs
 
 

@@ -99,13 +99,8 @@ def reply_text(model: str, planted: dict[str, Any], messages: list[dict[str, Any
         raise RequestError("request needs a system message and a user message.")
     briefing, percept = read_briefing(system), read_percept(user)
     if planted.get("writer") == "vlm":
-        return mimic_reply(
-            planted,
-            briefing,
-            percept,
-            request=request_seed(system, user),
-            previous=last_reply_text(messages),
-        )
+        seed, last = request_seed(system, user), last_reply_text(messages)
+        return mimic_reply(planted, briefing, percept, request=seed, previous=last)
     previous = previous_reply(messages) or {}
     plan = copy.deepcopy(previous.get("plan")) or fresh_plan()
     memory = dict(previous.get("cognitive_map") or {})
