@@ -73,9 +73,7 @@ class Conversation:
 
     def request(self, current: UserTurn) -> list[dict[str, Any]]:
         """System prompt, the answered turns still in the window, then ``current``."""
-        messages: list[dict[str, Any]] = [self._system]
-        for user, reply in self._answered:
-            messages += (user, reply)
+        messages = [self._system, *(message for turn in self._answered for message in turn)]
         if self._pending is None or self._pending[0] is not current:
             self._pending = (current, _user_message(current, image=True))
         messages.append(self._pending[1])

@@ -17,6 +17,7 @@ repair would guess, and dropping the entry would look like forgetting the object
 from __future__ import annotations
 
 import ast
+import contextlib
 import json
 import math
 import re
@@ -153,16 +154,12 @@ def _literal(node: ast.AST) -> Any:
 def _load(candidate: str) -> tuple[Any, set[str]]:
     """(value, repairs): JSON as written, else JSON without comments and trailing commas,
     else a JSON-like Python literal; ``(None, set())`` when none of them reads."""
-    try:
+    with contextlib.suppress(ValueError, RecursionError):
         return json.loads(candidate), set()
-    except (ValueError, RecursionError):
-        pass
     cleaned, repairs = _strip_comments_and_commas(candidate)
     if repairs:
-        try:
+        with contextlib.suppress(ValueError, RecursionError):
             return json.loads(cleaned), repairs
-        except (ValueError, RecursionError):
-            pass
     try:
         value = _literal(ast.parse(cleaned.strip(), mode="eval").body)
     except (SyntaxError, ValueError, TypeError, RecursionError, MemoryError):

@@ -85,8 +85,10 @@ class ReferenceServer(ThreadingHTTPServer):
     ) -> None:
         self.registry = registry or _config.load_registry()
         self.latency_s = check_range("latency_s", latency_s, 0, 60)
-        self._thread: threading.Thread | None = None
         super().__init__((host, port), _Handler)
+        self._thread = threading.Thread(
+            target=self.serve_forever, args=(_POLL_S,), name="emrd-reference-server", daemon=True
+        )
 
     @property
     def base_url(self) -> str:
@@ -94,21 +96,13 @@ class ReferenceServer(ThreadingHTTPServer):
         return f"http://{host}:{port}/v1"
 
     def start(self) -> ReferenceServer:
-        if self._thread is None:
-            self._thread = threading.Thread(
-                target=self.serve_forever,
-                args=(_POLL_S,),
-                name="emrd-reference-server",
-                daemon=True,
-            )
-            self._thread.start()
+        self._thread.start()
         return self
 
     def close(self) -> None:
-        if self._thread is not None:
+        if self._thread.is_alive():
             self.shutdown()
             self._thread.join()
-            self._thread = None
         self.server_close()
 
     def __enter__(self) -> ReferenceServer:
