@@ -4,8 +4,7 @@ The registry ships as ``models.yaml`` next to this module and may be extended or
 by a user file, field by field (docs/reference/registry.md). Reference agents with planted
 parameters resolve from their name, without a YAML entry each (``scout-decay-<mean steps>``,
 ``scout-window-<k>``, ``mimic-<knobs>``); a reference agent's ``model_id`` carries the
-behaviour version, ``scout@ref-3`` (:mod:`pytest_emrd.agent.reference._version`), so
-cassettes of older behaviour fail as drift.
+behaviour version (:mod:`pytest_emrd.agent.reference._version`).
 """
 
 from __future__ import annotations

@@ -49,13 +49,8 @@ class UserTurn:
 def _user_message(turn: UserTurn, *, image: bool) -> dict[str, Any]:
     if turn.image_url is None or not image:
         return {"role": "user", "content": turn.text}
-    return {
-        "role": "user",
-        "content": [
-            {"type": "text", "text": turn.text},
-            {"type": "image_url", "image_url": {"url": turn.image_url}},
-        ],
-    }
+    frame = {"type": "image_url", "image_url": {"url": turn.image_url}}
+    return {"role": "user", "content": [{"type": "text", "text": turn.text}, frame]}
 
 
 class Conversation:

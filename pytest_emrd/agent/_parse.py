@@ -207,13 +207,9 @@ def _find_object(text: str) -> tuple[dict[str, Any] | None, set[str]]:
 def _coordinate(value: Any) -> tuple[float, set[str]] | None:
     """One coordinate in metres and the repairs that read it (``unit``, ``decimal_comma``);
     None when it is no finite number, written or as a string."""
-    if isinstance(value, bool):
-        return None
-    if isinstance(value, int | float):
+    if isinstance(value, int | float) and not isinstance(value, bool):
         return (float(value), set()) if math.isfinite(value) else None
-    if not isinstance(value, str):
-        return None
-    written = _WRITTEN_NUMBER.fullmatch(value.strip())
+    written = _WRITTEN_NUMBER.fullmatch(value.strip()) if isinstance(value, str) else None
     if written is None:
         return None
     number, unit = written.group("number"), (written.group("unit") or "").lower()

@@ -175,9 +175,8 @@ def perceive(
     new = [label for label, _ in reversed(view) if label not in plan["order"]]
     plan["order"] += new
     plan["found"] += len(new)
-    merged = merge_view(memory, view)
     kept = apply_memory(
-        merged,
+        merge_view(memory, view),
         in_view=frozenset(label for label, _ in view),
         planted=planted,
         discovery=plan["order"],
