@@ -245,10 +245,8 @@ def _anthropic_part(part: dict[str, Any]) -> dict[str, Any]:
         if not url.startswith((JPEG_DATA_URL, frames.PIXELS)):
             raise ConfigError(f"image url {url[:40]!r}... is not a base64 JPEG data URL.")
         data = url.removeprefix(JPEG_DATA_URL)
-        return {
-            "type": "image",
-            "source": {"type": "base64", "media_type": "image/jpeg", "data": data},
-        }
+        source = {"type": "base64", "media_type": "image/jpeg", "data": data}
+        return {"type": "image", "source": source}
     return {"type": "text", "text": part["text"]}
 
 

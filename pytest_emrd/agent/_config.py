@@ -4,8 +4,7 @@ The registry ships as ``models.yaml`` next to this module and may be extended or
 by a user file, field by field (docs/reference/registry.md). Reference agents with planted
 parameters resolve from their name, without a YAML entry each (``scout-decay-<mean steps>``,
 ``scout-window-<k>``, ``mimic-<knobs>``); a reference agent's ``model_id`` carries the
-behaviour version, ``scout@ref-3`` (:mod:`pytest_emrd.agent.reference._version`), so
-cassettes of older behaviour fail as drift.
+behaviour version (:mod:`pytest_emrd.agent.reference._version`).
 """
 
 from __future__ import annotations
@@ -253,17 +252,14 @@ _FIELD_IN_ERROR: Final = re.compile(r"^model '[^']*': ([a-z_]+)")
 
 
 def _at(source: str, lines: Lines, name: str, field_name: str | None = None) -> str:
-    """``source, line N`` for the key of ``field_name`` of model ``name`` (else the model's)."""
     line = lines.get((name, field_name)) or lines.get((name, None))
     return f"{source}, line {line}" if line else source
 
 
 def _build(name: str, entry: dict[str, Any], source: str, lines: Lines) -> ModelConfig:
-    check_slug(
-        _at(source, lines, name),
-        name,
-        becomes="a model name is a cassette folder and part of every episode file name",
-    )
+    at = _at(source, lines, name)
+    becomes = "a model name is a cassette folder and part of every episode file name"
+    check_slug(at, name, becomes=becomes)
     unknown = sorted(set(entry) - _FIELDS)
     if unknown:
         raise ConfigError(
@@ -283,7 +279,7 @@ def _build(name: str, entry: dict[str, Any], source: str, lines: Lines) -> Model
     try:
         return ModelConfig(**values)
     except TypeError as exc:
-        raise ConfigError(f"{_at(source, lines, name)}: model {name!r}: {exc}") from None
+        raise ConfigError(f"{at}: model {name!r}: {exc}") from None
     except ConfigError as exc:
         named = _FIELD_IN_ERROR.match(str(exc))
         where = _at(source, lines, name, named.group(1) if named else None)
@@ -360,10 +356,10 @@ def _parametric(name: str) -> tuple[str, dict[str, Any]] | None:
 
 def load_registry(user_file: Path | None = None) -> Registry:
     """The shipped registry, updated by ``user_file`` (entries merged field by field)."""
-    shipped_text = resources.files("pytest_emrd.agent").joinpath("models.yaml").read_text()
-    entries, lines = _read_yaml(shipped_text, "pytest_emrd/agent/models.yaml")
-    merged: dict[str, dict[str, Any]] = {k: dict(v) for k, v in entries.items()}
     source = "pytest_emrd/agent/models.yaml"
+    shipped_text = resources.files("pytest_emrd.agent").joinpath("models.yaml").read_text()
+    entries, lines = _read_yaml(shipped_text, source)
+    merged: dict[str, dict[str, Any]] = {k: dict(v) for k, v in entries.items()}
     if user_file is not None:
         source = str(user_file)
         user_text = _yaml.read_text(

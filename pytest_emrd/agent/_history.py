@@ -49,13 +49,8 @@ class UserTurn:
 def _user_message(turn: UserTurn, *, image: bool) -> dict[str, Any]:
     if turn.image_url is None or not image:
         return {"role": "user", "content": turn.text}
-    return {
-        "role": "user",
-        "content": [
-            {"type": "text", "text": turn.text},
-            {"type": "image_url", "image_url": {"url": turn.image_url}},
-        ],
-    }
+    frame = {"type": "image_url", "image_url": {"url": turn.image_url}}
+    return {"role": "user", "content": [{"type": "text", "text": turn.text}, frame]}
 
 
 class Conversation:
@@ -73,9 +68,7 @@ class Conversation:
 
     def request(self, current: UserTurn) -> list[dict[str, Any]]:
         """System prompt, the answered turns still in the window, then ``current``."""
-        messages: list[dict[str, Any]] = [self._system]
-        for user, reply in self._answered:
-            messages += (user, reply)
+        messages = [self._system, *(message for turn in self._answered for message in turn)]
         if self._pending is None or self._pending[0] is not current:
             self._pending = (current, _user_message(current, image=True))
         messages.append(self._pending[1])
@@ -97,7 +90,5 @@ class Conversation:
 def _summarised(turn: UserTurn, reply: str) -> dict[str, Any]:
     """``turn``'s message with its frame replaced by the summary (single-image mode)."""
     observation = " ".join(parse_reply(reply).observation.split())
-    if not observation:
-        return {"role": "user", "content": turn.text}
     summary = FRAME_SUMMARY.format(step=turn.step, observation=observation)
-    return {"role": "user", "content": f"{turn.text}\n{summary}"}
+    return {"role": "user", "content": f"{turn.text}\n{summary}" if observation else turn.text}

@@ -17,6 +17,7 @@ repair would guess, and dropping the entry would look like forgetting the object
 from __future__ import annotations
 
 import ast
+import contextlib
 import json
 import math
 import re
@@ -153,16 +154,12 @@ def _literal(node: ast.AST) -> Any:
 def _load(candidate: str) -> tuple[Any, set[str]]:
     """(value, repairs): JSON as written, else JSON without comments and trailing commas,
     else a JSON-like Python literal; ``(None, set())`` when none of them reads."""
-    try:
+    with contextlib.suppress(ValueError, RecursionError):
         return json.loads(candidate), set()
-    except (ValueError, RecursionError):
-        pass
     cleaned, repairs = _strip_comments_and_commas(candidate)
     if repairs:
-        try:
+        with contextlib.suppress(ValueError, RecursionError):
             return json.loads(cleaned), repairs
-        except (ValueError, RecursionError):
-            pass
     try:
         value = _literal(ast.parse(cleaned.strip(), mode="eval").body)
     except (SyntaxError, ValueError, TypeError, RecursionError, MemoryError):
@@ -210,13 +207,9 @@ def _find_object(text: str) -> tuple[dict[str, Any] | None, set[str]]:
 def _coordinate(value: Any) -> tuple[float, set[str]] | None:
     """One coordinate in metres and the repairs that read it (``unit``, ``decimal_comma``);
     None when it is no finite number, written or as a string."""
-    if isinstance(value, bool):
-        return None
-    if isinstance(value, int | float):
+    if isinstance(value, int | float) and not isinstance(value, bool):
         return (float(value), set()) if math.isfinite(value) else None
-    if not isinstance(value, str):
-        return None
-    written = _WRITTEN_NUMBER.fullmatch(value.strip())
+    written = _WRITTEN_NUMBER.fullmatch(value.strip()) if isinstance(value, str) else None
     if written is None:
         return None
     number, unit = written.group("number"), (written.group("unit") or "").lower()
@@ -261,15 +254,11 @@ def _entry(label: str, fields: Any) -> tuple[MapEntry, set[str]] | str:
     if isinstance(position, str):
         return f"cognitive_map entry {label!r} {position}"
     x, z, repairs = position
-    get = fields.get if isinstance(fields, dict) else {}.get
-    entry = MapEntry(
-        label,
-        _text(get("type")).strip(),
-        x,
-        z,
-        _text(get("room")).strip() or None,
-        _text(get("facing")).strip() or None,
-    )
+
+    def text(key: str) -> str:
+        return _text(fields.get(key) if isinstance(fields, dict) else None).strip()
+
+    entry = MapEntry(label, text("type"), x, z, text("room") or None, text("facing") or None)
     return entry, repairs
 
 

@@ -9,6 +9,7 @@ on ``pytest_emrd.agent.retry`` at WARNING (docs/user-guide/recording.md) with th
 
 from __future__ import annotations
 
+import contextlib
 import email.utils
 import logging
 import random
@@ -71,10 +72,8 @@ def retry_after_seconds(value: str | None) -> float | None:
     if not value:
         return None
     value = value.strip()
-    try:
+    with contextlib.suppress(ValueError):
         return max(0.0, float(value))
-    except ValueError:
-        pass
     try:
         when = email.utils.parsedate_to_datetime(value)
     except (TypeError, ValueError):

@@ -84,11 +84,9 @@ def _usage(messages: list[dict[str, Any]], reply: str) -> dict[str, int]:
     images = sum(p.get("type") == "image_url" for p in parts)
     prompt = chars // CHARS_PER_TOKEN + TOKENS_PER_IMAGE * images
     completion = len(reply) // CHARS_PER_TOKEN
-    return {
-        "prompt_tokens": prompt,
-        "completion_tokens": completion,
-        "total_tokens": prompt + completion,
-    }
+    return dict(
+        prompt_tokens=prompt, completion_tokens=completion, total_tokens=prompt + completion
+    )
 
 
 def reply_text(model: str, planted: dict[str, Any], messages: list[dict[str, Any]]) -> str:
@@ -99,13 +97,8 @@ def reply_text(model: str, planted: dict[str, Any], messages: list[dict[str, Any
         raise RequestError("request needs a system message and a user message.")
     briefing, percept = read_briefing(system), read_percept(user)
     if planted.get("writer") == "vlm":
-        return mimic_reply(
-            planted,
-            briefing,
-            percept,
-            request=request_seed(system, user),
-            previous=last_reply_text(messages),
-        )
+        seed, last = request_seed(system, user), last_reply_text(messages)
+        return mimic_reply(planted, briefing, percept, request=seed, previous=last)
     previous = previous_reply(messages) or {}
     plan = copy.deepcopy(previous.get("plan")) or fresh_plan()
     memory = dict(previous.get("cognitive_map") or {})
@@ -162,9 +155,5 @@ def complete(body: Any, registry: Registry) -> dict[str, Any]:
 def model_list(registry: Registry) -> dict[str, Any]:
     """The ``/v1/models`` listing: every registered reference agent, by versioned id."""
     names = [versioned_id(n) for n in registry.names() if registry.get(n).provider == "reference"]
-    return {
-        "object": "list",
-        "data": [
-            {"id": n, "object": "model", "created": 0, "owned_by": "pytest-emrd"} for n in names
-        ],
-    }
+    data = [{"id": n, "object": "model", "created": 0, "owned_by": "pytest-emrd"} for n in names]
+    return {"object": "list", "data": data}

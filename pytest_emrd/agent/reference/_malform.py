@@ -64,10 +64,8 @@ def malform(text: str, kind: str, u: float) -> str:
 def read_state(text: str) -> dict[str, Any]:
     """The ``state`` object of one of the agent's own replies, however it was malformed."""
     at = text.find(_STATE_LEAD)
-    if at < 0:
-        raise ProtocolError("previous assistant message carries no mimic state.")
     try:
-        state, _ = json.JSONDecoder().raw_decode(text, at + len(_STATE_LEAD))
+        state = json.JSONDecoder().raw_decode(text, at + len(_STATE_LEAD))[0] if at >= 0 else None
     except (ValueError, IndexError) as exc:
         raise ProtocolError(f"previous assistant message carries no mimic state: {exc}") from exc
     if not isinstance(state, dict):

@@ -79,8 +79,7 @@ def apply_memory(
     if kind == "none":
         return {}
     if kind == "window":
-        k = int(planted["k"])
-        return dict(list(memory.items())[-k:])
+        return dict(list(memory.items())[-int(planted["k"]) :])
     if kind not in ("decay", "serial"):
         raise ConfigError(f"planted memory={kind!r} is not one of {', '.join(MEMORIES)}.")
     p = drop_probability(float(planted["mean_steps"]))

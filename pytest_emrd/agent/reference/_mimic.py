@@ -191,8 +191,7 @@ def mimic_reply(
     writer = _Writer(state, planted)
     room, visit = room_guess(plan), nav["visit"]
     writer.label_new(memory, visit)
-    for seen in percept.visible:
-        state["seen"][seen.object_id] = percept.step
+    state["seen"].update(dict.fromkeys((s.object_id for s in percept.visible), percept.step))
     for seen in percept.visible:
         writer.duplicate(seen.object_id, memory[seen.object_id], room, visit)
     writer.hallucinate(percept, room, step)

@@ -77,7 +77,6 @@ def room_guess(plan: Mapping[str, Any]) -> str:
 
 
 def _inside(visible: tuple[VisibleObject, ...]) -> tuple[VisibleObject, ...]:
-    """Objects in view that are not seen through a doorway (those lie in the next room)."""
     doors = [s for s in visible if s.object_type == DOORWAY]
 
     def behind(seen: VisibleObject) -> bool:
@@ -106,7 +105,6 @@ def _vote(plan: dict[str, Any], briefing: Briefing, visible: tuple[VisibleObject
 
 
 def _enter_room(plan: dict[str, Any]) -> None:
-    """Reset per-visit bookkeeping after walking through a doorway."""
     plan.update(phase="sweep", turns=0, votes={}, here={}, found=0, tries=0, moves=0, clears=0)
     plan.update(spots={}, near=[], sweeps=[], tried=[], blocked=[])
     plan["used"] = [d for d in plan["used"] if d != plan["target"]] + [plan["target"]]
@@ -177,9 +175,8 @@ def perceive(
     new = [label for label, _ in reversed(view) if label not in plan["order"]]
     plan["order"] += new
     plan["found"] += len(new)
-    merged = merge_view(memory, view)
     kept = apply_memory(
-        merged,
+        merge_view(memory, view),
         in_view=frozenset(label for label, _ in view),
         planted=planted,
         discovery=plan["order"],

@@ -79,12 +79,8 @@ def read_percept(text: str) -> Percept:
         for line in listing.splitlines()
         if (m := _VISIBLE.match(line))
     )
-    return Percept(
-        int(step["k"]),
-        int(step["n"]),
-        Pose(float(pose["x"]), float(pose["z"]), float(pose["h"])),
-        visible,
-    )
+    at = Pose(float(pose["x"]), float(pose["z"]), float(pose["h"]))
+    return Percept(int(step["k"]), int(step["n"]), at, visible)
 
 
 def message_text(message: dict[str, Any]) -> str:
@@ -99,10 +95,8 @@ def message_text(message: dict[str, Any]) -> str:
 
 def last_reply_text(messages: list[dict[str, Any]]) -> str | None:
     """The text of the agent's own last reply, or None at the first step."""
-    for message in reversed(messages):
-        if message.get("role") == "assistant":
-            return message_text(message)
-    return None
+    replies = (m for m in reversed(messages) if m.get("role") == "assistant")
+    return next((message_text(m) for m in replies), None)
 
 
 def previous_reply(messages: list[dict[str, Any]]) -> dict[str, Any] | None:

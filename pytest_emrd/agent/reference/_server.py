@@ -15,7 +15,7 @@ from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 from typing import Any, Final
 
 from pytest_emrd.agent import _config  # the module: _config imports this package's version
-from pytest_emrd.agent.reference._agents import complete, model_list
+from pytest_emrd.agent.reference._agents import RequestError, complete, model_list
 from pytest_emrd.errors import ProtocolError, check_range
 
 MAX_BODY_BYTES: Final = 64 * 1024 * 1024
@@ -49,19 +49,16 @@ class _Handler(BaseHTTPRequestHandler):
 
     def do_POST(self) -> None:
         length = int(self.headers.get("Content-Length") or 0)
-        if length > MAX_BODY_BYTES:
-            self._error(HTTPStatus.REQUEST_ENTITY_TOO_LARGE, f"body of {length} bytes")
-            return
-        raw = self.rfile.read(length)
-        if self.path.rstrip("/") not in ("/v1/chat/completions", "/chat/completions"):
-            self._error(HTTPStatus.NOT_FOUND, f"no route POST {self.path}")
-            return
         try:
-            body = json.loads(raw)
-        except ValueError as exc:
-            self._error(HTTPStatus.BAD_REQUEST, f"body is not JSON: {exc}")
-            return
-        try:
+            if length > MAX_BODY_BYTES:
+                raise RequestError(f"body of {length} bytes", HTTPStatus.REQUEST_ENTITY_TOO_LARGE)
+            raw = self.rfile.read(length)
+            if self.path.rstrip("/") not in ("/v1/chat/completions", "/chat/completions"):
+                raise RequestError(f"no route POST {self.path}", HTTPStatus.NOT_FOUND)
+            try:
+                body = json.loads(raw)
+            except ValueError as exc:
+                raise RequestError(f"body is not JSON: {exc}") from None
             payload = complete(body, self.server.registry)
         except ProtocolError as exc:
             self._error(getattr(exc, "status", HTTPStatus.BAD_REQUEST), str(exc))
@@ -88,8 +85,10 @@ class ReferenceServer(ThreadingHTTPServer):
     ) -> None:
         self.registry = registry or _config.load_registry()
         self.latency_s = check_range("latency_s", latency_s, 0, 60)
-        self._thread: threading.Thread | None = None
         super().__init__((host, port), _Handler)
+        self._thread = threading.Thread(
+            target=self.serve_forever, args=(_POLL_S,), name="emrd-reference-server", daemon=True
+        )
 
     @property
     def base_url(self) -> str:
@@ -97,21 +96,13 @@ class ReferenceServer(ThreadingHTTPServer):
         return f"http://{host}:{port}/v1"
 
     def start(self) -> ReferenceServer:
-        if self._thread is None:
-            self._thread = threading.Thread(
-                target=self.serve_forever,
-                args=(_POLL_S,),
-                name="emrd-reference-server",
-                daemon=True,
-            )
-            self._thread.start()
+        self._thread.start()
         return self
 
     def close(self) -> None:
-        if self._thread is not None:
+        if self._thread.is_alive():
             self.shutdown()
             self._thread.join()
-            self._thread = None
         self.server_close()
 
     def __enter__(self) -> ReferenceServer:
