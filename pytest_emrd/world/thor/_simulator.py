@@ -210,7 +210,6 @@ def _positive(name: str, value: float) -> float:
 
 
 def _check(event: Any, what: str) -> Any:
-    """``event`` if THOR reports success, else ConfigError with THOR's own message."""
     metadata = event.metadata
     if metadata["lastActionSuccess"]:
         return event
@@ -221,7 +220,6 @@ def _check(event: Any, what: str) -> Any:
 
 
 def _accepted(event: Any) -> None:
-    """Raise the failure to report when THOR refused an action."""
     if not event.metadata["lastActionSuccess"]:
         reason = event.metadata.get("errorMessage") or "no reason"
         raise ActionFailed(f"AI2-THOR refused it ({reason})")
