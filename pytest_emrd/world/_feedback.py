@@ -94,10 +94,10 @@ class SemanticStep:
     ``_reach(object_id)`` (moves for ``Goto``; False: no spot to stand), ``_view()`` (world
     pose, objects in view, frame digest and view), ``_require()`` and the attributes below."""
 
-    _steps: int
-    _ended: bool
-    _terminal: str | None
-    _symbolic: bool
+    _steps: int = 0
+    _ended: bool = False
+    _terminal: str | None = None
+    _symbolic: bool = True
     _spawn: WorldPose
     _rooms: Mapping[str, str]
     _turn: Handler

@@ -4,9 +4,7 @@ One ``Controller`` per simulator, started on the first ``reset``, then re-used w
 ``controller.reset(scene=<house>)``. Actions take the builtin world's grammar and wording.
 ``Goto`` teleports on THOR's grid of reachable positions (:func:`viewpoint`, through a
 doorway :func:`entry`); ``Turn`` rotates by 90 degree steps; ``Term`` makes no THOR call.
-Every THOR call is bounded (``start_timeout``, ``step_timeout``); on a timeout the Unity
-process group is killed and the next reset starts a new controller. Reset's checks and
-THOR's refusals: ``docs/ai2thor.md``.
+Timeouts, reset's checks and THOR's refusals: ``docs/ai2thor.md``.
 """
 
 from __future__ import annotations
@@ -266,7 +264,6 @@ class ThorSimulator(SemanticStep):
         self._heights: dict[tuple[float, float], float] = {}
         self._spawn = WorldPose(0.0, 0.0, 0.0)
         self._visible: tuple[VisibleObject, ...] = ()
-        self._steps, self._ended, self._terminal, self._symbolic = 0, False, None, True
 
     def _start(self, house: dict[str, Any]) -> None:
         options = {**DEFAULTS, **self._user_options}
@@ -394,8 +391,7 @@ class ThorSimulator(SemanticStep):
         return tuple(v.object_id for v in self._visible)
 
     def close(self) -> None:
-        controller, self._controller = self._controller, None
-        self._layout = None
+        controller, self._controller, self._layout = self._controller, None, None
         if controller is not None:
             try:
                 self._call("stop", controller.stop)
