@@ -78,10 +78,10 @@ def _in_room(points: np.ndarray, room: Room) -> np.ndarray:
     return (x > room.x0 + m) & (x < room.x1 - m) & (z > room.z0 + m) & (z < room.z1 - m)
 
 
-def _pick(points: np.ndarray, score: np.ndarray, *masks: np.ndarray) -> int | None:
-    """Index of the lowest score under the first of ``masks`` any point passes; ties broken
-    by (x, z) so it is stable."""
-    for mask in masks:
+def _pick(points: np.ndarray, *choices: tuple[np.ndarray, np.ndarray]) -> int | None:
+    """Index of the lowest score under the first ``(score, mask)`` of ``choices`` any point
+    passes; ties broken by (x, z) so it is stable."""
+    for score, mask in choices:
         idx = np.flatnonzero(mask)
         if idx.size:
             order = np.lexsort((points[idx, 1], points[idx, 0], np.round(score[idx], 6)))
@@ -93,7 +93,7 @@ def nearest_in_room(
     points: np.ndarray, x: float, z: float, room: Room
 ) -> tuple[float, float] | None:
     """The reachable position in ``room`` nearest ``(x, z)`` (None if the room has none)."""
-    best = _pick(points, np.hypot(points[:, 0] - x, points[:, 1] - z), _in_room(points, room))
+    best = _pick(points, (np.hypot(points[:, 0] - x, points[:, 1] - z), _in_room(points, room)))
     return None if best is None else (float(points[best, 0]), float(points[best, 1]))
 
 
@@ -110,10 +110,8 @@ def viewpoint(points: np.ndarray, x: float, z: float, room: Room) -> WorldPose |
     snapped = (np.round(heading / 90.0) * 90.0) % 360.0
     off_axis = np.abs(wrap180(heading - snapped))
     inside = _in_room(points, room)
-    score = dist + OFF_AXIS_COST * off_axis
-    best = _pick(points, score, inside & (dist >= CLEARANCE) & (off_axis <= MAX_OFF_AXIS))
-    if best is None:
-        best = _pick(points, dist, inside)
+    facing = inside & (dist >= CLEARANCE) & (off_axis <= MAX_OFF_AXIS)
+    best = _pick(points, (dist + OFF_AXIS_COST * off_axis, facing), (dist, inside))
     if best is None:
         return None
     px, pz = points[best]
@@ -134,7 +132,7 @@ def entry(points: np.ndarray, doorway: Doorway, into: Room) -> WorldPose | None:
         )
     dist = np.hypot(points[:, 0] - doorway.x, points[:, 1] - doorway.z)
     inside = _in_room(points, into)
-    best = _pick(points, dist, inside & (depth >= CLEARANCE), inside)
+    best = _pick(points, (dist, inside & (depth >= CLEARANCE)), (dist, inside))
     if best is None:
         return None
     px, pz = points[best]
