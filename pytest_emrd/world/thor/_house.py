@@ -466,8 +466,7 @@ def build_house(
     textured = condition == "texture"
 
     rooms, walls = [], []
-    for room in layout.rooms:
-        n = numbers[room.name]
+    for n, room in enumerate(layout.rooms, start=1):
         floor: dict[str, Any] = {"name": FLOOR_MATERIAL}
         wall_color = _rgb(_random_color(rng) if textured else WALL_COLOR)
         if textured:
