@@ -9,9 +9,8 @@ ended, unreadable text, or a handler raising :class:`ActionFailed` yields ``"<Ac
 failed: <reason>."``, else ``"<Action> succeeded<note>."``; :func:`with_pose` appends the
 odometry line in the spawn frame. The failure reasons and the Goto target choice live here
 too, so the backends cannot drift apart; recorded cassettes hold this text (any change
-bumps ``WORLD_VERSION``). ``Term(r)`` always ends the episode; ``r`` outside the four rooms
-is recorded as Other. Under ``vision`` (``symbolic=False``) no message names an object id:
-``Goto`` takes a type (an instance suffix such as ``Desk_2`` is ignored) and goes to the
+bumps ``WORLD_VERSION``). Under ``vision`` (``symbolic=False``) no message names an object
+id: ``Goto`` takes a type (an instance suffix such as ``Desk_2`` is ignored) and goes to the
 nearest visible object of that type.
 """
 
@@ -94,10 +93,10 @@ class SemanticStep:
     ``_reach(object_id)`` (moves for ``Goto``; False: no spot to stand), ``_view()`` (world
     pose, objects in view, frame digest and view), ``_require()`` and the attributes below."""
 
-    _steps: int
-    _ended: bool
-    _terminal: str | None
-    _symbolic: bool
+    _steps: int = 0
+    _ended: bool = False
+    _terminal: str | None = None
+    _symbolic: bool = True
     _spawn: WorldPose
     _rooms: Mapping[str, str]
     _turn: Handler

@@ -92,10 +92,7 @@ class Layout:
         raise KeyError(name)
 
     def room_at(self, x: float, z: float) -> str | None:
-        for r in self.rooms:
-            if r.contains(x, z):
-                return r.name
-        return None
+        return next((r.name for r in self.rooms if r.contains(x, z)), None)
 
     def inventory(self) -> dict[str, dict[str, int]]:
         """Room name -> object type -> count, doorways excluded (the prompt's room overview)."""

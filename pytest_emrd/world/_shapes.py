@@ -237,7 +237,5 @@ _BUILDERS: dict[str, Callable[[WorldObject], list[Box]]] = {
 
 def boxes_of(obj: WorldObject) -> list[Box]:
     """The boxes that draw ``obj``, in its own frame; a plain box for an unknown type."""
-    builder = _BUILDERS.get(obj.object_type)
-    if builder is None:
-        return [_full(obj, 0.0, obj.height, "main")]
+    builder = _BUILDERS.get(obj.object_type, lambda o: [_full(o, 0.0, o.height, "main")])
     return builder(obj)

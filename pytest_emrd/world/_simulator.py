@@ -93,7 +93,6 @@ class BuiltinSimulator(SemanticStep):
         self._table = np.zeros((0, 3), dtype=np.uint8)
         self._pose = WorldPose(0.0, 0.0, 0.0)
         self._spawn = self._pose
-        self._steps, self._ended, self._terminal, self._symbolic = 0, False, None, True
         self._sight: Sight | None = None
         self._frames: OrderedDict[WorldPose, tuple[str, View]] = OrderedDict()
 

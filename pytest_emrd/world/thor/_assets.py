@@ -101,10 +101,8 @@ def asset_by_id(asset_id: str, object_type: str) -> Asset:
 
 def _misfit(asset: Asset, width: float, depth: float, height: float) -> float:
     """Metres by which ``asset`` misses the wanted box; oversize counts double."""
-    total = 0.0
-    for have, want in ((asset.width, width), (asset.depth, depth), (asset.height, height)):
-        total += 2.0 * (have - want) if have > want else want - have
-    return total
+    pairs = ((asset.width, width), (asset.depth, depth), (asset.height, height))
+    return sum(2.0 * (have - want) if have > want else want - have for have, want in pairs)
 
 
 def choose_asset(

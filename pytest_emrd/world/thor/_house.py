@@ -15,7 +15,7 @@ from __future__ import annotations
 import itertools
 import math
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any, Final
 
 import numpy as np
@@ -82,14 +82,11 @@ class WallPiece:
 
     def offset_of(self, x: float, z: float) -> float | None:
         """Distance along the piece from its start to ``(x, z)``, or None if off the piece."""
-        if self.axis == "x":
-            if abs(z - self.z0) > EPS:
-                return None
-            along = (x - self.x0) if self.x1 >= self.x0 else (self.x0 - x)
-        else:
-            if abs(x - self.x0) > EPS:
-                return None
-            along = (z - self.z0) if self.z1 >= self.z0 else (self.z0 - z)
+        i = 0 if self.axis == "x" else 1  # the coordinate the piece runs along
+        start, end, point = (self.x0, self.z0), (self.x1, self.z1), (x, z)
+        if abs(point[1 - i] - start[1 - i]) > EPS:
+            return None
+        along = point[i] - start[i] if end[i] >= start[i] else start[i] - point[i]
         return along if -EPS <= along <= self.length + EPS else None
 
     def distance_to(self, x: float, z: float) -> float:
@@ -105,14 +102,14 @@ def corners(room: Room) -> tuple[tuple[float, float], ...]:
     return ((room.x0, room.z0), (room.x0, room.z1), (room.x1, room.z1), (room.x1, room.z0))
 
 
-def _covers(other: Room, x0: float, z0: float, x1: float, z1: float) -> bool:
+def _covers(other: Room, a: tuple[float, float], b: tuple[float, float]) -> bool:
     """Whether ``other`` has a side containing the segment's midpoint on the same line."""
-    mx, mz = (x0 + x1) / 2, (z0 + z1) / 2
-    if abs(z1 - z0) < EPS:  # horizontal segment
-        on_line = abs(other.z0 - mz) < EPS or abs(other.z1 - mz) < EPS
-        return on_line and other.x0 + EPS < mx < other.x1 - EPS
-    on_line = abs(other.x0 - mx) < EPS or abs(other.x1 - mx) < EPS
-    return on_line and other.z0 + EPS < mz < other.z1 - EPS
+    mid = ((a[0] + b[0]) / 2, (a[1] + b[1]) / 2)
+    axis = 0 if abs(b[1] - a[1]) < EPS else 1  # the coordinate the segment runs along
+    spans = ((other.x0, other.x1), (other.z0, other.z1))
+    lo, hi = spans[axis]
+    on_line = any(abs(side - mid[1 - axis]) < EPS for side in spans[1 - axis])
+    return on_line and lo + EPS < mid[axis] < hi - EPS
 
 
 def _breaks(
@@ -141,9 +138,9 @@ def wall_pieces(layout: Layout) -> tuple[WallPiece, ...]:
         poly = corners(room)
         for a, b in zip(poly, poly[1:] + poly[:1], strict=True):
             cuts = _breaks(tuple(r for _, r in others), a, b)
-            for (px0, pz0), (px1, pz1) in itertools.pairwise(cuts):
-                covering = (i for i, other in others if _covers(other, px0, pz0, px1, pz1))
-                pieces.append(WallPiece(n, px0, pz0, px1, pz1, next(covering, None)))
+            for start, end in itertools.pairwise(cuts):
+                covering = (i for i, other in others if _covers(other, start, end))
+                pieces.append(WallPiece(n, *start, *end, next(covering, None)))
     return tuple(pieces)
 
 
@@ -170,22 +167,11 @@ class Placed:
     """World-axis footprint of the asset at ``(x, z)``."""
 
 
-def _inside(rect: Rect, room: Room, margin: float) -> tuple[float, float]:
-    """The least ``(dx, dz)`` that moves ``rect`` into ``room`` shrunk by ``margin``."""
-    shifts = []
-    for lo, hi, room_lo, room_hi in (
-        (rect[0], rect[2], room.x0 + margin, room.x1 - margin),
-        (rect[1], rect[3], room.z0 + margin, room.z1 - margin),
-    ):
-        if hi - lo > room_hi - room_lo:
-            shifts.append((room_lo + room_hi) / 2 - (lo + hi) / 2)
-        elif lo < room_lo:
-            shifts.append(room_lo - lo)
-        elif hi > room_hi:
-            shifts.append(room_hi - hi)
-        else:
-            shifts.append(0.0)
-    return shifts[0], shifts[1]
+def _shift(lo: float, hi: float, room_lo: float, room_hi: float) -> float:
+    """The least move of ``[lo, hi]`` into ``[room_lo, room_hi]`` (centred when too long)."""
+    if hi - lo > room_hi - room_lo:
+        return (room_lo + room_hi) / 2 - (lo + hi) / 2
+    return room_lo - lo if lo < room_lo else min(room_hi - hi, 0.0)
 
 
 def _support(obj: WorldObject, floor: list[WorldObject]) -> WorldObject | None:
@@ -220,9 +206,10 @@ def place(layout: Layout, overrides: Mapping[str, str] | None = None) -> dict[st
                 base = placed[support.object_id].asset.height
                 dx, dz = shift[support.object_id]
         x, z = obj.x + dx, obj.z + dz
-        rect = rect_at(x, z, asset.width, asset.depth, obj.rotation)
-        ex, ez = _inside(rect, rooms[obj.room], margin)
-        x, z = x + ex, z + ez
+        x0, z0, x1, z1 = rect_at(x, z, asset.width, asset.depth, obj.rotation)
+        room = rooms[obj.room]
+        x += _shift(x0, x1, room.x0 + margin, room.x1 - margin)
+        z += _shift(z0, z1, room.z0 + margin, room.z1 - margin)
         shift[obj.object_id] = (x - obj.x, z - obj.z)
         rect = rect_at(x, z, asset.width, asset.depth, obj.rotation)
         placed[obj.object_id] = Placed(
@@ -263,18 +250,15 @@ def spawn_point(
 
 @dataclass(frozen=True)
 class IdTable:
-    """Bidirectional map THOR objectId <-> EMRD object id, read from the table
+    """Map THOR objectId -> EMRD object id (one to one), read from the table
     :func:`build_house` writes to ``house["metadata"]["emrd"]["ids"]``. THOR objects the
     layout never placed (walls, floors, children spawned by the build) have no EMRD id."""
 
     to_emrd: Mapping[str, str]
-    to_thor: Mapping[str, str] = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
-        inverse = {ours: thor for thor, ours in self.to_emrd.items()}
-        if len(inverse) != len(self.to_emrd):
+        if len(set(self.to_emrd.values())) != len(self.to_emrd):
             raise ConfigError("the THOR id table maps two THOR objects to one EMRD id.")
-        object.__setattr__(self, "to_thor", inverse)
 
     @classmethod
     def from_house(cls, house: Mapping[str, Any]) -> IdTable:
@@ -482,8 +466,7 @@ def build_house(
     textured = condition == "texture"
 
     rooms, walls = [], []
-    for room in layout.rooms:
-        n = numbers[room.name]
+    for n, room in enumerate(layout.rooms, start=1):
         floor: dict[str, Any] = {"name": FLOOR_MATERIAL}
         wall_color = _rgb(_random_color(rng) if textured else WALL_COLOR)
         if textured:

@@ -1,12 +1,8 @@
 """Starting AI2-THOR: the lazy import, cheap pre-flight checks, and bounded calls.
 
-Everything here fails fast with a message that says what to install or set (the extra,
-``local_executable_path``, ``libvulkan1``, a missing build); no pre-flight check touches the
-network. What ai2thor 5.0.0 does not do for us (``docs/ai2thor.md``): :func:`headless_options`
-gives a local build a display; ``Controller.stop_unity`` kills only the one process it
-started, and nothing when the constructor never returns, so :func:`launcher` starts Unity
-under ``setsid`` and a timeout kills the whole group (:func:`kill_unity`). Every call into
-``ai2thor`` runs in a daemon thread abandoned after its time limit (:func:`bounded`).
+Everything here fails fast with a message that says what to install or set; no pre-flight
+check touches the network. ``Controller.stop_unity`` kills only the one process it started,
+and nothing when the constructor never returns: hence ``setsid`` (``docs/ai2thor.md``).
 """
 
 from __future__ import annotations

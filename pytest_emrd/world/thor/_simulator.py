@@ -4,9 +4,7 @@ One ``Controller`` per simulator, started on the first ``reset``, then re-used w
 ``controller.reset(scene=<house>)``. Actions take the builtin world's grammar and wording.
 ``Goto`` teleports on THOR's grid of reachable positions (:func:`viewpoint`, through a
 doorway :func:`entry`); ``Turn`` rotates by 90 degree steps; ``Term`` makes no THOR call.
-Every THOR call is bounded (``start_timeout``, ``step_timeout``); on a timeout the Unity
-process group is killed and the next reset starts a new controller. Reset's checks and
-THOR's refusals: ``docs/ai2thor.md``.
+Timeouts, reset's checks and THOR's refusals: ``docs/ai2thor.md``.
 """
 
 from __future__ import annotations
@@ -80,10 +78,10 @@ def _in_room(points: np.ndarray, room: Room) -> np.ndarray:
     return (x > room.x0 + m) & (x < room.x1 - m) & (z > room.z0 + m) & (z < room.z1 - m)
 
 
-def _pick(points: np.ndarray, score: np.ndarray, *masks: np.ndarray) -> int | None:
-    """Index of the lowest score under the first of ``masks`` any point passes; ties broken
-    by (x, z) so it is stable."""
-    for mask in masks:
+def _pick(points: np.ndarray, *choices: tuple[np.ndarray, np.ndarray]) -> int | None:
+    """Index of the lowest score under the first ``(score, mask)`` of ``choices`` any point
+    passes; ties broken by (x, z) so it is stable."""
+    for score, mask in choices:
         idx = np.flatnonzero(mask)
         if idx.size:
             order = np.lexsort((points[idx, 1], points[idx, 0], np.round(score[idx], 6)))
@@ -95,7 +93,7 @@ def nearest_in_room(
     points: np.ndarray, x: float, z: float, room: Room
 ) -> tuple[float, float] | None:
     """The reachable position in ``room`` nearest ``(x, z)`` (None if the room has none)."""
-    best = _pick(points, np.hypot(points[:, 0] - x, points[:, 1] - z), _in_room(points, room))
+    best = _pick(points, (np.hypot(points[:, 0] - x, points[:, 1] - z), _in_room(points, room)))
     return None if best is None else (float(points[best, 0]), float(points[best, 1]))
 
 
@@ -112,10 +110,8 @@ def viewpoint(points: np.ndarray, x: float, z: float, room: Room) -> WorldPose |
     snapped = (np.round(heading / 90.0) * 90.0) % 360.0
     off_axis = np.abs(wrap180(heading - snapped))
     inside = _in_room(points, room)
-    score = dist + OFF_AXIS_COST * off_axis
-    best = _pick(points, score, inside & (dist >= CLEARANCE) & (off_axis <= MAX_OFF_AXIS))
-    if best is None:
-        best = _pick(points, dist, inside)
+    facing = inside & (dist >= CLEARANCE) & (off_axis <= MAX_OFF_AXIS)
+    best = _pick(points, (dist + OFF_AXIS_COST * off_axis, facing), (dist, inside))
     if best is None:
         return None
     px, pz = points[best]
@@ -136,7 +132,7 @@ def entry(points: np.ndarray, doorway: Doorway, into: Room) -> WorldPose | None:
         )
     dist = np.hypot(points[:, 0] - doorway.x, points[:, 1] - doorway.z)
     inside = _in_room(points, into)
-    best = _pick(points, dist, inside & (depth >= CLEARANCE), inside)
+    best = _pick(points, (dist, inside & (depth >= CLEARANCE)), (dist, inside))
     if best is None:
         return None
     px, pz = points[best]
@@ -210,7 +206,6 @@ def _positive(name: str, value: float) -> float:
 
 
 def _check(event: Any, what: str) -> Any:
-    """``event`` if THOR reports success, else ConfigError with THOR's own message."""
     metadata = event.metadata
     if metadata["lastActionSuccess"]:
         return event
@@ -221,7 +216,6 @@ def _check(event: Any, what: str) -> Any:
 
 
 def _accepted(event: Any) -> None:
-    """Raise the failure to report when THOR refused an action."""
     if not event.metadata["lastActionSuccess"]:
         reason = event.metadata.get("errorMessage") or "no reason"
         raise ActionFailed(f"AI2-THOR refused it ({reason})")
@@ -268,7 +262,6 @@ class ThorSimulator(SemanticStep):
         self._heights: dict[tuple[float, float], float] = {}
         self._spawn = WorldPose(0.0, 0.0, 0.0)
         self._visible: tuple[VisibleObject, ...] = ()
-        self._steps, self._ended, self._terminal, self._symbolic = 0, False, None, True
 
     def _start(self, house: dict[str, Any]) -> None:
         options = {**DEFAULTS, **self._user_options}
@@ -396,8 +389,7 @@ class ThorSimulator(SemanticStep):
         return tuple(v.object_id for v in self._visible)
 
     def close(self) -> None:
-        controller, self._controller = self._controller, None
-        self._layout = None
+        controller, self._controller, self._layout = self._controller, None, None
         if controller is not None:
             try:
                 self._call("stop", controller.stop)

@@ -8,10 +8,10 @@ from pytest_emrd.errors import ConfigError
 from pytest_emrd.world.thor import IdTable
 
 
-def test_table_maps_both_ways() -> None:
+def test_table_maps_thor_ids_to_ours() -> None:
     table = IdTable({"Desk|1|0": "Desk_1", "door|1|2": "Doorway_1"})
     assert table.emrd("door|1|2") == "Doorway_1"
-    assert table.to_thor["Desk_1"] == "Desk|1|0"
+    assert table.emrd("Desk|1|0") == "Desk_1"
     assert table.emrd("Floor|1") is None
 
 
