@@ -133,11 +133,8 @@ def reasoning(by_label: Mapping[str, Sequence[EpisodeMetrics]], embed: Embed | N
 
 
 def _unique(embed: Embed | None) -> Embed:
-    """``embed`` (default: the ``nlp`` extra's encoder) evaluated once per distinct text.
-
-    Identical rationales get identical vectors either way; scripted agents repeat theirs, so
-    this saves most of the encoder's time without changing the result.
-    """
+    """``embed`` (default: the ``nlp`` extra's encoder) evaluated once per distinct text: the
+    same vectors, and scripted agents repeat their rationales, so most of the encoder's time."""
 
     def run(texts: Sequence[str]) -> np.ndarray:
         encoder = embed

@@ -206,12 +206,10 @@ def fpsg(report: Report) -> Section:
 
 
 def ebbinghaus(report: Report) -> Section:
-    conditions = report.overview.conditions
     efc = _pivot(report, report.ebbinghaus, lambda r: (num(r.fit.pooled.efc, 1),), 1)
     r2 = _pivot(report, report.ebbinghaus, lambda r: (num(r.fit.pooled.r2, 2),), 1)
     rows = tuple((*a, *b[1:]) for a, b in zip(efc, r2, strict=True))
-    header = ("Model", *(f"EFC {_cond(c)}" for c in conditions),
-              *(f"R² {_cond(c)}" for c in conditions))  # fmt: skip
+    header = ("Model", *_per_condition(report, "EFC"), *_per_condition(report, "R²"))
     caption = ("Ebbinghaus memory strength EFC (steps; inf: nothing forgotten) and R² of "
                "C exp(-t/EFC) against the anchored KM")  # fmt: skip
     blocks: list[Block] = [Table("ebbinghaus", caption, header, rows)]

@@ -17,7 +17,7 @@ import base64
 import html
 import io
 import json
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
 from importlib import resources
 from itertools import chain, repeat
@@ -61,20 +61,8 @@ def check_frames(
     return status, FrameCheck(sum(s is not None for s in status), bad, recorded.note)
 
 
-def _round(x: float | None, digits: int = 3) -> float | None:
-    return None if x is None else round(x, digits)
-
-
-def _office(spawn: WorldPose | None) -> Callable[[float, float], tuple[float, float]]:
-    """Spawn frame -> the office's own frame (north up, the same for every spawn), rounded to
-    the millimetre; the identity when the spawn pose is unknown (frames not re-rendered)."""
-
-    def place(x: float, z: float) -> tuple[float, float]:
-        if spawn is not None:
-            x, z = local_to_world(spawn.x, spawn.z, spawn.heading, x, z)
-        return round(x, 3), round(z, 3)
-
-    return place
+def _round(x: float | None) -> float | None:
+    return None if x is None else round(x, 3)
 
 
 def episode_data(
@@ -92,7 +80,14 @@ def episode_data(
     up; the pose line keeps the spawn-frame odometry the model was shown. ``system`` is the
     system prompt of the episode (None: not rebuilt).
     """
-    place, turn = _office(spawn), spawn.heading if spawn else 0.0
+
+    def place(x: float, z: float) -> tuple[float, float]:
+        """Spawn frame -> the office's frame (the identity without ``spawn``), to the mm."""
+        if spawn is not None:
+            x, z = local_to_world(spawn.x, spawn.z, spawn.heading, x, z)
+        return round(x, 3), round(z, 3)
+
+    turn = spawn.heading if spawn else 0.0
     truth = traj.ground_truth
     g_base = len(truth.discoverable_ids)
     tbs = episode_metrics(traj).tbs
