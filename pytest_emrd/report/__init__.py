@@ -131,13 +131,10 @@ def render_comparison(comparison: Comparison, formats: Iterable[str] = FORMATS) 
 def write_files(files: Mapping[str, bytes], out_dir: Path) -> list[Path]:
     """Write each ``name -> content`` into ``out_dir`` (created if needed), atomically; text
     files are scrubbed of secrets first (a report quotes errored episodes' causes)."""
-    written = []
     for name, content in files.items():
-        path = out_dir / name
-        text = path.suffix in TEXT_SUFFIXES
-        write_bytes_atomic(path, scrub_bytes(content) if text else content)
-        written.append(path)
-    return written
+        text = Path(name).suffix in TEXT_SUFFIXES
+        write_bytes_atomic(out_dir / name, scrub_bytes(content) if text else content)
+    return [out_dir / name for name in files]
 
 
 def append_step_summary(text: str) -> bool:

@@ -20,7 +20,6 @@ class Cell:
     bold: bool = False
 
 
-#: A table row: plain text or a :class:`Cell` per column.
 Row = tuple[Cell | str, ...]
 
 

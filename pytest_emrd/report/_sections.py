@@ -55,9 +55,8 @@ def _pivot(
     for r in rows:
         table.setdefault(row_label(r.model, r.variant), {})[r.condition] = fmt(r)
     blank = ("—",) * width
-    conditions = report.overview.conditions
     return [
-        (label, *(t for c in conditions for t in by_c.get(c, blank)))
+        (label, *(t for c in report.overview.conditions for t in by_c.get(c, blank)))
         for label, by_c in table.items()
     ]
 

@@ -51,16 +51,6 @@ class FrameCheck:
     """Why some or all steps are not checked."""
 
 
-def check_frames(
-    frames: Sequence[Frame], recorded: Recorded
-) -> tuple[list[bool | None], FrameCheck]:
-    """Per step: True (digest equal), False (mismatch) or None (not checked)."""
-    digests = chain(recorded.digests, repeat(None))
-    status = [None if d is None else d == f.digest for f, d in zip(frames, digests, strict=False)]
-    bad = tuple(i + 1 for i, s in enumerate(status) if s is False)
-    return status, FrameCheck(sum(s is not None for s in status), bad, recorded.note)
-
-
 def _round(x: float | None) -> float | None:
     return None if x is None else round(x, 3)
 
@@ -89,9 +79,12 @@ def episode_data(
 
     turn = spawn.heading if spawn else 0.0
     truth = traj.ground_truth
-    g_base = len(truth.discoverable_ids)
     tbs = episode_metrics(traj).tbs
-    status, check = check_frames(frames, recorded)
+    # per step: True (digest equal), False (mismatch) or None (not checked)
+    digests = chain(recorded.digests, repeat(None))
+    status = [None if d is None else d == f.digest for f, d in zip(frames, digests, strict=False)]
+    bad = tuple(i + 1 for i, s in enumerate(status) if s is False)
+    check = FrameCheck(sum(s is not None for s in status), bad, recorded.note)
     steps = []
     matchings = step_matchings([s.cognitive_map for s in traj.steps], truth.objects)
     for i, (s, matching) in enumerate(zip(traj.steps, matchings, strict=True)):
@@ -108,7 +101,7 @@ def episode_data(
             "map": [[p.label, *place(p.x, p.z), p.object_id] for p in points],
             "rotation": round(rotation, 1), "rmse": _round(rmse),
             "coverage": _round(aec_score(matching, len(truth.objects))),
-            "pa": _round(positional_accuracy_score(matching, g_base)),
+            "pa": _round(positional_accuracy_score(matching, len(truth.discoverable_ids))),
             "tbs": _round(tbs[i]) if i < len(tbs) else None,
             "frame": i if i < len(frames) else None,
             "frame_ok": status[i] if i < len(status) else None,
