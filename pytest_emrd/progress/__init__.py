@@ -43,7 +43,6 @@ class WorkerStatus:
     """One process's live episode, and its totals so far."""
 
     worker: str
-    """``gw0``... under pytest-xdist, ``main`` otherwise."""
     case: str | None
     """Episode running now (``None`` between episodes)."""
     step: int
@@ -185,26 +184,22 @@ log = logging.getLogger(f"{ROOT_LOGGER}.episode")
 
 
 class EpisodeWatch(logging.Handler):
-    """Progress of one episode: step logging, retry counting, optional status publishing."""
+    """Progress of one episode, started on the calling thread: step logging, retry counting
+    (once added to the package's logger), optional status publishing."""
 
     def __init__(self, spec: EpisodeSpec, *, live: bool, status: StatusFile | None = None):
         super().__init__(level=logging.DEBUG)
         self.spec = spec
-        self.live = live
         self.status = status if live else None
         self.retries = 0
         self.level_of_steps = logging.INFO if live else logging.DEBUG
-
-    def __enter__(self) -> EpisodeWatch:
         vcr = logging.getLogger("vcr")
         if vcr.level == logging.NOTSET:  # it logs whole HTTP bodies at INFO: not progress
             vcr.setLevel(logging.WARNING)
         self._thread = threading.get_ident()
-        logging.getLogger(ROOT_LOGGER).addHandler(self)
-        how = "recording live" if self.live else "replaying"
-        log.log(self.level_of_steps, "%s: %s", self.spec.case_id, how)
-        self._publish(case=self.spec.case_id, step=0, retries=0, last_retry=None)
-        return self
+        how = "recording live" if live else "replaying"
+        log.log(self.level_of_steps, "%s: %s", spec.case_id, how)
+        self._publish(case=spec.case_id, step=0, retries=0, last_retry=None)
 
     def on_step(self, step: Step) -> None:
         """The episode loop's ``on_step``: one log line, and the live status."""
@@ -238,9 +233,6 @@ class EpisodeWatch(logging.Handler):
                                errored=totals.errored + (trajectory.status == "errored"),
                                retries_total=totals.retries_total + self.retries)  # fmt: skip
 
-    def __exit__(self, *exc: object) -> None:
-        logging.getLogger(ROOT_LOGGER).removeHandler(self)
-
     def _publish(self, **changes: object) -> None:
         if self.status is not None:
             self.status.update(max_steps=self.spec.max_steps, **changes)
@@ -254,9 +246,14 @@ def watch_episode(
     status: StatusFile | None = None,
 ) -> EpisodeRun:
     """``compute(on_step)`` under an :class:`EpisodeWatch`; the run with its retries."""
-    with EpisodeWatch(spec, live=live, status=status) as watch:
+    watch = EpisodeWatch(spec, live=live, status=status)
+    root = logging.getLogger(ROOT_LOGGER)
+    root.addHandler(watch)
+    try:
         run = compute(watch.on_step)
         watch.finish(run.trajectory)
+    finally:
+        root.removeHandler(watch)
     return replace(run, retries=watch.retries)
 
 

@@ -26,13 +26,7 @@ from pytest_emrd.errors import check_choice
 from pytest_emrd.gate import Verdict
 from pytest_emrd.metrics import EpisodeMetrics
 from pytest_emrd.report._build import align_map, build_report, group_cells
-from pytest_emrd.report._compare import (
-    COMPARED,
-    Comparison,
-    Difference,
-    compare_document,
-    compare_runs,
-)
+from pytest_emrd.report._compare import COMPARED, Comparison, compare_document, compare_runs
 from pytest_emrd.report._document import Document, render_html, render_markdown
 from pytest_emrd.report._model import FIGURES, Report, row_label
 from pytest_emrd.report._sections import report_document, summary_document
@@ -42,9 +36,7 @@ from pytest_emrd.trajectory import Trajectory
 __all__ = [
     "COMPARED",
     "FIGURES",
-    "FORMATS",
     "Comparison",
-    "Difference",
     "Report",
     "align_map",
     "append_step_summary",
@@ -54,7 +46,6 @@ __all__ = [
     "group_cells",
     "render_comparison",
     "render_files",
-    "report_json",
     "row_label",
     "step_summary_markdown",
     "write_files",
@@ -74,12 +65,6 @@ def check_formats(formats: Iterable[str]) -> list[str]:
     for f in wanted:
         check_choice("format", f, FORMATS, hint="Use a comma-separated list such as md,html.")
     return wanted
-
-
-def report_json(report: Report | Comparison) -> str:
-    """Every aggregate of a report (or comparison) as strict JSON (non-finite floats as
-    strings)."""
-    return json.dumps(json_safe(report.to_dict()), indent=1, allow_nan=False) + "\n"
 
 
 def render_files(
@@ -102,7 +87,8 @@ def _files(
     stem: str, wanted: list[str], doc: Document | None, pngs: dict[str, bytes],
     data: Report | Comparison,
 ) -> dict[str, bytes]:  # fmt: skip
-    """``<stem>.md`` with the PNGs, ``<stem>.html`` and ``<stem>.json``, as ``wanted``."""
+    """``<stem>.md`` with the PNGs, ``<stem>.html`` and ``<stem>.json`` (every aggregate as
+    strict JSON, non-finite floats as strings), as ``wanted``."""
     files: dict[str, bytes] = {}
     if doc is not None and "md" in wanted:
         files[f"{stem}.md"] = render_markdown(doc).encode()
@@ -110,7 +96,8 @@ def _files(
     if doc is not None and "html" in wanted:
         files[f"{stem}.html"] = render_html(doc, pngs).encode()
     if "json" in wanted:
-        files[f"{stem}.json"] = report_json(data).encode()
+        text = json.dumps(json_safe(data.to_dict()), indent=1, allow_nan=False) + "\n"
+        files[f"{stem}.json"] = text.encode()
     return files
 
 
@@ -144,13 +131,10 @@ def render_comparison(comparison: Comparison, formats: Iterable[str] = FORMATS) 
 def write_files(files: Mapping[str, bytes], out_dir: Path) -> list[Path]:
     """Write each ``name -> content`` into ``out_dir`` (created if needed), atomically; text
     files are scrubbed of secrets first (a report quotes errored episodes' causes)."""
-    written = []
     for name, content in files.items():
-        path = out_dir / name
-        text = path.suffix in TEXT_SUFFIXES
-        write_bytes_atomic(path, scrub_bytes(content) if text else content)
-        written.append(path)
-    return written
+        text = Path(name).suffix in TEXT_SUFFIXES
+        write_bytes_atomic(out_dir / name, scrub_bytes(content) if text else content)
+    return [out_dir / name for name in files]
 
 
 def append_step_summary(text: str) -> bool:

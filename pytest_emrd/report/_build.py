@@ -120,12 +120,11 @@ def intervention_tables(cells: Cells) -> tuple[InterventionTable, ...]:
 def reasoning(by_label: Mapping[str, Sequence[EpisodeMetrics]], embed: Embed | None) -> Reasoning:
     """Representative terminal reasoning per model row (all its conditions pooled, as the
     paper); without the ``nlp`` extra, why not."""
-    unique = _unique(embed)
     rows = []
     for label, ems in by_label.items():
         rationales = [m.rationale for m in ems if not m.errored]
         try:
-            rep = metrics.representative_reasoning(rationales, embed=unique)
+            rep = metrics.representative_reasoning(rationales, embed=_unique(embed))
         except MissingExtraError as exc:
             return Reasoning((), str(exc))
         rows.append(ReasoningRow(label, rep))
@@ -133,18 +132,13 @@ def reasoning(by_label: Mapping[str, Sequence[EpisodeMetrics]], embed: Embed | N
 
 
 def _unique(embed: Embed | None) -> Embed:
-    """``embed`` (default: the ``nlp`` extra's encoder) evaluated once per distinct text.
-
-    Identical rationales get identical vectors either way; scripted agents repeat theirs, so
-    this saves most of the encoder's time without changing the result.
-    """
+    """``embed`` (default: the ``nlp`` extra's encoder) evaluated once per distinct text: the
+    same vectors, and scripted agents repeat their rationales, so most of the encoder's time."""
 
     def run(texts: Sequence[str]) -> np.ndarray:
-        encoder = embed
-        if encoder is None:
-            from pytest_emrd.metrics._embedding import minilm_embed
+        from pytest_emrd.metrics._embedding import minilm_embed
 
-            encoder = minilm_embed
+        encoder = embed or minilm_embed
         distinct = list(dict.fromkeys(texts))
         where = {t: i for i, t in enumerate(distinct)}
         vectors = np.asarray(encoder(distinct), dtype=float)
@@ -293,12 +287,9 @@ def _overview(heads: Sequence[EpisodeHead], prices: Prices | None) -> Overview:
 
 
 def _missing(
-    heads: Sequence[EpisodeHead],
-    overview: Overview,
-    gates: Gates,
-    reasons: Reasoning,
-    stored: Sequence[StoredEpisode],
+    stored: Sequence[StoredEpisode], overview: Overview, gates: Gates, reasons: Reasoning
 ) -> tuple[str, ...]:
+    heads = [e.head for e in stored]
     if not heads:
         return (
             "The run holds no episode, so there is nothing to tabulate or plot: run "
@@ -375,11 +366,8 @@ def build_report(
     heads = [e.head for e in stored]
     overview = _overview(heads, prices)
     gates = Gates(thresholds_source, tuple(verdicts or ()))
-    cells: Cells = group_cells(
-        metrics.as_episode_metrics(
-            [e.trajectory for e in stored] if episode_metrics is None else episode_metrics
-        )
-    )
+    measured = [e.trajectory for e in stored] if episode_metrics is None else episode_metrics
+    cells: Cells = group_cells(metrics.as_episode_metrics(measured))
     by_label: dict[str, list[EpisodeMetrics]] = {}
     for (model, variant, _), ems in cells.items():
         by_label.setdefault(row_label(model, variant), []).extend(ems)
@@ -393,7 +381,7 @@ def build_report(
         aec, te = metrics.GATE_METRICS["aec"], metrics.GATE_METRICS["te"]
         return Report(
             overview=overview,
-            missing=_missing(heads, overview, gates, reasons, stored),
+            missing=_missing(stored, overview, gates, reasons),
             exploration=per_cell(
                 cells, ExplorationRow, aec.compute, sd_of("aec"), te.compute, sd_of("te")
             ),

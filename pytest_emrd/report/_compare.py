@@ -91,8 +91,7 @@ class Difference:
     unpaired: int = 0
     """Episodes of the cell on either side without a partner (left out)."""
     reason: str | None = None
-    """Why there is no test (``verdict == 'n/a'``), or why it could not decide
-    (``inconclusive``)."""
+    """Why there is no test (``n/a``), or why it could not decide (``inconclusive``)."""
     pairs: int = 0
     """Pairs the metric is compared on (both episodes define it)."""
     p_reachable: float | None = None
@@ -277,20 +276,19 @@ def compare_runs(
         cells_b = {(models[0], *k[1:]): v for k, v in cells_b.items() if k[0] == models[1]}
     shared = [k for k in cells_a if k in cells_b]
     resamples = max(N_RESAMPLES, math.ceil(10 * len(shared) * len(COMPARED) / ALPHA))
-    model_b = (lambda k: models[1]) if models is not None else (lambda k: k[0])
+
+    def model(k: tuple[str, str, str], side: int) -> str:
+        return models[side] if models else k[0]
+
     diffs = tuple(
-        _difference(k, model_b(k), name, cells_a[k], cells_b[k], rng_seed, resamples)
+        _difference(k, model(k, 1), name, cells_a[k], cells_b[k], rng_seed, resamples)
         for k in shared
         for name in COMPARED
     )
-
-    def cell(k: tuple[str, str, str], side: int) -> str:
-        return "/".join((models[side] if models else k[0], *k[1:]))
-
     return Comparison(
         names[0], names[1], holm(diffs, resamples),
-        tuple(cell(k, 0) for k in cells_a if k not in cells_b),
-        tuple(cell(k, 1) for k in cells_b if k not in cells_a),
+        tuple("/".join((model(k, 0), *k[1:])) for k in cells_a if k not in cells_b),
+        tuple("/".join((model(k, 1), *k[1:])) for k in cells_b if k not in cells_a),
         rng_seed, resamples, models,
     )  # fmt: skip
 

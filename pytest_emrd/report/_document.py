@@ -20,7 +20,6 @@ class Cell:
     bold: bool = False
 
 
-#: A table row: plain text or a :class:`Cell` per column.
 Row = tuple[Cell | str, ...]
 
 
@@ -116,12 +115,6 @@ def _md_table(t: Table) -> list[str]:
     return lines
 
 
-def _md_figure(f: FigureRef) -> list[str]:
-    if f.missing is not None:
-        return [f"**{f.title}**: not drawn ({f.missing})."]
-    return [f"![{f.title}]({f.name})", "", f"*{f.title}.* {f.caption}"]
-
-
 def render_markdown(doc: Document) -> str:
     """Markdown of ``doc``; figures link to their PNG file names (same folder)."""
     lines = [f"# {doc.title}", ""]
@@ -134,8 +127,11 @@ def render_markdown(doc: Document) -> str:
                 lines += [f"- {item}" for item in block.items]
             elif isinstance(block, Table):
                 lines += _md_table(block)
+            elif block.missing is not None:
+                lines.append(f"**{block.title}**: not drawn ({block.missing}).")
             else:
-                lines += _md_figure(block)
+                lines += [f"![{block.title}]({block.name})", ""]
+                lines.append(f"*{block.title}.* {block.caption}")
             lines.append("")
     return "\n".join(lines).rstrip() + "\n"
 

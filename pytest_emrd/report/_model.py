@@ -1,14 +1,11 @@
-"""The report model: every table and figure of a report as plain, JSON-able data.
+"""The report model: every table and figure of a report as plain, JSON-able data, and for every
+renderer the conditions' names and the list of figures (:data:`FIGURES`).
 
-Computed by :func:`~pytest_emrd.report.build_report` from trajectories (pure) and rendered to
-Markdown, HTML, JSON and PNG by the rendering modules. The numbers inside are the metrics
-library's own result objects (:class:`~pytest_emrd.metrics.Estimate`,
-:class:`~pytest_emrd.metrics.FPSGSummary`, ...), never re-derived, so a report and a direct call
-of the library agree by construction. Fractions are in [0, 1]; renderers turn them into %.
-
-Rows are keyed by ``model``, ``variant`` (prompt variant) and, where the paper splits by it,
+The numbers inside are the metrics library's own result objects
+(:class:`~pytest_emrd.metrics.Estimate`, ...), never re-derived, so a report and a direct call
+of the library agree by construction. Fractions are in [0, 1]; renderers turn them into %. Rows
+are keyed by ``model``, ``variant`` (prompt variant) and, where the paper splits by it,
 ``condition``. Field names are the JSON format; bump :data:`SCHEMA_VERSION` on any change.
-Also here, for every renderer: the conditions' names and the list of figures (:data:`FIGURES`).
 """
 
 from __future__ import annotations
@@ -230,9 +227,7 @@ class Report(JsonRecord):
     """Every table and figure of one report."""
 
     schema = Schema(
-        SCHEMA_VERSION,
-        "report",
-        "rebuild the report from the run directory with `emrd report`.",
+        SCHEMA_VERSION, "report", "rebuild the report from the run directory with `emrd report`."
     )
 
     overview: Overview

@@ -1,7 +1,8 @@
 """The report's figures as PNG bytes (matplotlib, Agg canvas, no pyplot global state).
 
 One colour per condition as in the paper and, so that coinciding series stay visible, one
-line style, marker and hatch (:data:`CONDITION_LINES`), markers staggered, the baseline on
+line style, marker and hatch (:data:`CONDITION_STYLES`: the figures read in grey scale too),
+markers staggered, the baseline on
 top. One panel per model row. Titles are wrapped to their width, so no text leaves the canvas.
 """
 
@@ -27,9 +28,6 @@ from pytest_emrd.report._model import CONDITION_NAMES, FIGURES, EpisodeMap, Repo
 from pytest_emrd.rooms import ROOM_SLUGS, SLUG_ROOMS
 from pytest_emrd.trajectory import CONDITIONS
 
-#: Colour (as in the paper), line style, marker and hatch per condition, so coinciding series
-#: stay distinguishable (and the figures read in grey scale): baseline solid with circles, low
-#: light dashed with squares, texture dash-dot with triangles.
 CONDITION_STYLES: Final[dict[str, tuple[str, str, str, str]]] = {
     "baseline": ("#1f5fbf", "-", "o", ""),
     "low_light": ("#d62728", "--", "s", "//"),
@@ -43,7 +41,6 @@ _GLYPH: Final = 0.62
 
 
 def _style(condition: str) -> tuple[str, str, str, str]:
-    """Colour, line style, marker and hatch of ``condition`` (:data:`CONDITION_STYLES`)."""
     return CONDITION_STYLES.get(condition, _OTHER_STYLE)
 
 
@@ -57,7 +54,6 @@ def line_style(condition: str, n_points: int = 0) -> dict[str, Any]:
     baseline is drawn above the others with the smallest, filled markers."""
     _, ls, marker, _ = _style(condition)
     place = rank(condition, CONDITIONS)[0]
-    # the baseline's small filled markers sit inside the larger hollow ones of the others
     style: dict[str, Any] = {
         "color": colour(condition), "ls": ls, "marker": marker, "ms": 4.5 + 2.5 * place,
         "mfc": colour(condition) if place == 0 else "none", "mew": 1.5, "zorder": 3 - 0.1 * place,
@@ -102,7 +98,17 @@ def _png(fig: Figure) -> bytes:
     return buffer.getvalue()
 
 
-def _legend(fig: Figure, conditions: Sequence[str], *, bars: bool = False) -> None:
+def _finish(
+    fig: Figure, axes: dict[str, Axes], title: str, conditions: Sequence[str], *,
+    bars: bool = False, grid: str = "both", **axis: Any,
+) -> Figure:  # fmt: skip
+    """Every panel titled with its key, ``axis`` properties set and a grid; the figure's title
+    and its legend of ``conditions`` (patches with ``bars``, else lines)."""
+    for label, ax in axes.items():
+        _axes_title(ax, label)
+        ax.set(**axis)
+        ax.grid(axis=grid, alpha=0.3)
+    fig.suptitle(_wrap(title, fig.get_figwidth() - 0.2, 12.0), fontsize=12)
     handles: list[Artist] = [
         Patch(facecolor=colour(c), hatch=_style(c)[3],
               edgecolor="white", label=CONDITION_NAMES.get(c, c))
@@ -110,20 +116,6 @@ def _legend(fig: Figure, conditions: Sequence[str], *, bars: bool = False) -> No
         for c in conditions
     ]  # fmt: skip
     fig.legend(handles=handles, loc="outside lower center", ncols=len(handles), frameon=False)
-
-
-def _finish(
-    fig: Figure, axes: dict[str, Axes], title: str, conditions: Sequence[str], *,
-    bars: bool = False, grid: str = "both", **axis: Any,
-) -> Figure:  # fmt: skip
-    """Every panel titled with its key, ``axis`` properties set and a grid; the figure's title
-    and its legend of ``conditions``."""
-    for label, ax in axes.items():
-        _axes_title(ax, label)
-        ax.set(**axis)
-        ax.grid(axis=grid, alpha=0.3)
-    fig.suptitle(_wrap(title, fig.get_figwidth() - 0.2, 12.0), fontsize=12)
-    _legend(fig, conditions, bars=bars)
     return fig
 
 

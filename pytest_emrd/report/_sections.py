@@ -55,9 +55,8 @@ def _pivot(
     for r in rows:
         table.setdefault(row_label(r.model, r.variant), {})[r.condition] = fmt(r)
     blank = ("—",) * width
-    conditions = report.overview.conditions
     return [
-        (label, *(t for c in conditions for t in by_c.get(c, blank)))
+        (label, *(t for c in report.overview.conditions for t in by_c.get(c, blank)))
         for label, by_c in table.items()
     ]
 
@@ -206,12 +205,10 @@ def fpsg(report: Report) -> Section:
 
 
 def ebbinghaus(report: Report) -> Section:
-    conditions = report.overview.conditions
     efc = _pivot(report, report.ebbinghaus, lambda r: (num(r.fit.pooled.efc, 1),), 1)
     r2 = _pivot(report, report.ebbinghaus, lambda r: (num(r.fit.pooled.r2, 2),), 1)
     rows = tuple((*a, *b[1:]) for a, b in zip(efc, r2, strict=True))
-    header = ("Model", *(f"EFC {_cond(c)}" for c in conditions),
-              *(f"R² {_cond(c)}" for c in conditions))  # fmt: skip
+    header = ("Model", *_per_condition(report, "EFC"), *_per_condition(report, "R²"))
     caption = ("Ebbinghaus memory strength EFC (steps; inf: nothing forgotten) and R² of "
                "C exp(-t/EFC) against the anchored KM")  # fmt: skip
     blocks: list[Block] = [Table("ebbinghaus", caption, header, rows)]

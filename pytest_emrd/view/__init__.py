@@ -44,7 +44,6 @@ class Replay:
     """The frames of an episode re-rendered, and where it started in the office."""
 
     frames: tuple[Frame, ...]
-    """The frame shown at each step."""
     spawn: WorldPose
     """The spawn pose in the office's own frame (the page draws the plan in it, north up)."""
     system: str = ""

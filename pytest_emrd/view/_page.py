@@ -17,7 +17,7 @@ import base64
 import html
 import io
 import json
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
 from importlib import resources
 from itertools import chain, repeat
@@ -51,30 +51,8 @@ class FrameCheck:
     """Why some or all steps are not checked."""
 
 
-def check_frames(
-    frames: Sequence[Frame], recorded: Recorded
-) -> tuple[list[bool | None], FrameCheck]:
-    """Per step: True (digest equal), False (mismatch) or None (not checked)."""
-    digests = chain(recorded.digests, repeat(None))
-    status = [None if d is None else d == f.digest for f, d in zip(frames, digests, strict=False)]
-    bad = tuple(i + 1 for i, s in enumerate(status) if s is False)
-    return status, FrameCheck(sum(s is not None for s in status), bad, recorded.note)
-
-
-def _round(x: float | None, digits: int = 3) -> float | None:
-    return None if x is None else round(x, digits)
-
-
-def _office(spawn: WorldPose | None) -> Callable[[float, float], tuple[float, float]]:
-    """Spawn frame -> the office's own frame (north up, the same for every spawn), rounded to
-    the millimetre; the identity when the spawn pose is unknown (frames not re-rendered)."""
-
-    def place(x: float, z: float) -> tuple[float, float]:
-        if spawn is not None:
-            x, z = local_to_world(spawn.x, spawn.z, spawn.heading, x, z)
-        return round(x, 3), round(z, 3)
-
-    return place
+def _round(x: float | None) -> float | None:
+    return None if x is None else round(x, 3)
 
 
 def episode_data(
@@ -92,11 +70,21 @@ def episode_data(
     up; the pose line keeps the spawn-frame odometry the model was shown. ``system`` is the
     system prompt of the episode (None: not rebuilt).
     """
-    place, turn = _office(spawn), spawn.heading if spawn else 0.0
+
+    def place(x: float, z: float) -> tuple[float, float]:
+        """Spawn frame -> the office's frame (the identity without ``spawn``), to the mm."""
+        if spawn is not None:
+            x, z = local_to_world(spawn.x, spawn.z, spawn.heading, x, z)
+        return round(x, 3), round(z, 3)
+
+    turn = spawn.heading if spawn else 0.0
     truth = traj.ground_truth
-    g_base = len(truth.discoverable_ids)
     tbs = episode_metrics(traj).tbs
-    status, check = check_frames(frames, recorded)
+    # per step: True (digest equal), False (mismatch) or None (not checked)
+    digests = chain(recorded.digests, repeat(None))
+    status = [None if d is None else d == f.digest for f, d in zip(frames, digests, strict=False)]
+    bad = tuple(i + 1 for i, s in enumerate(status) if s is False)
+    check = FrameCheck(sum(s is not None for s in status), bad, recorded.note)
     steps = []
     matchings = step_matchings([s.cognitive_map for s in traj.steps], truth.objects)
     for i, (s, matching) in enumerate(zip(traj.steps, matchings, strict=True)):
@@ -113,7 +101,7 @@ def episode_data(
             "map": [[p.label, *place(p.x, p.z), p.object_id] for p in points],
             "rotation": round(rotation, 1), "rmse": _round(rmse),
             "coverage": _round(aec_score(matching, len(truth.objects))),
-            "pa": _round(positional_accuracy_score(matching, g_base)),
+            "pa": _round(positional_accuracy_score(matching, len(truth.discoverable_ids))),
             "tbs": _round(tbs[i]) if i < len(tbs) else None,
             "frame": i if i < len(frames) else None,
             "frame_ok": status[i] if i < len(status) else None,
