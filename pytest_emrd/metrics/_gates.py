@@ -27,12 +27,7 @@ from pytest_emrd.metrics._episode import (
     as_episode_metrics,
     split_errored,
 )
-from pytest_emrd.metrics._stats import (
-    N_RESAMPLES,
-    Estimate,
-    bootstrap_ci,
-    draw_counts,
-)
+from pytest_emrd.metrics._stats import N_RESAMPLES, Estimate, bootstrap_ci, draw_counts
 from pytest_emrd.rooms import FOCAL_COLUMNS, OTHER_LETTER
 
 

@@ -11,12 +11,7 @@ from pytest_emrd.run._identity import (
     scratch_dir,
     write_identity,
 )
-from pytest_emrd.run._settings import (
-    OPTIONS,
-    MatchingWarning,
-    RunSettings,
-    resolve_settings,
-)
+from pytest_emrd.run._settings import OPTIONS, MatchingWarning, RunSettings, resolve_settings
 from pytest_emrd.run._store import (
     Prefetcher,
     ResultsStore,

@@ -15,12 +15,7 @@ from pytest_emrd._bounded import remember
 from pytest_emrd.errors import ConfigError, check_choice, check_range
 from pytest_emrd.rooms import ROOM_NAMES, SLUG_ROOMS
 from pytest_emrd.world._conditions import ConditionParams, condition_params
-from pytest_emrd.world._feedback import (
-    Action,
-    SemanticStep,
-    room_table,
-    turn_degrees,
-)
+from pytest_emrd.world._feedback import Action, SemanticStep, room_table, turn_degrees
 from pytest_emrd.world._model import Layout, Observation, View, VisibleObject, WorldPose
 from pytest_emrd.world._motion import approach, spawn_pose, through
 from pytest_emrd.world._render import palette, render, shade_table

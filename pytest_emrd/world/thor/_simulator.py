@@ -19,13 +19,7 @@ import numpy as np
 from pytest_emrd.errors import ConfigError, TransportError, check_choice
 from pytest_emrd.rooms import ROOM_NAMES, SLUG_ROOMS
 from pytest_emrd.world._conditions import condition_params
-from pytest_emrd.world._feedback import (
-    Action,
-    ActionFailed,
-    SemanticStep,
-    room_table,
-    turn_degrees,
-)
+from pytest_emrd.world._feedback import Action, ActionFailed, SemanticStep, room_table, turn_degrees
 from pytest_emrd.world._model import (
     Doorway,
     Layout,
