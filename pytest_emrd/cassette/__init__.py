@@ -19,7 +19,7 @@ from pytest_emrd.cassette._paths import (
 )
 from pytest_emrd.cassette._persister import EpisodePersister, UnsavedCassette, writer_lock
 from pytest_emrd.cassette._redact import canonical_json, match_keys, redact_body
-from pytest_emrd.cassette._use import clear_caches, episode_cassette, routing
+from pytest_emrd.cassette._use import clear_caches, episode_cassette
 
 __all__ = [
     "SCRATCH",
@@ -45,7 +45,6 @@ __all__ = [
     "network_blocked",
     "record_command",
     "redact_body",
-    "routing",
     "run_with_cassette",
     "writer_lock",
 ]

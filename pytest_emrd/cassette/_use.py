@@ -1,8 +1,8 @@
 """One episode's vcrpy cassette: redaction, matching, record modes and drift detection.
 
-Concurrent episodes (``--emrd-concurrency``, threads of one process) go through
-:func:`routing`: vcrpy's process-wide patches, bound once to a router that hands each call
-to the calling thread's cassette, so a cassette is byte for byte what a lone episode writes."""
+Every episode, alone or concurrent (``--emrd-concurrency``, threads of one process), goes
+through :func:`_routing`: vcrpy's process-wide patches, bound once to a router that hands each
+call to the calling thread's cassette."""
 
 from __future__ import annotations
 
@@ -31,7 +31,8 @@ from pytest_emrd.errors import CassetteError
 KEPT_RESPONSE_HEADERS: Final = frozenset({"content-type"})
 _current: ContextVar[Cassette | None] = ContextVar("emrd_cassette", default=None)
 _lock = threading.Lock()
-_depth = 0
+_patches = contextlib.ExitStack()
+_users = 0
 
 
 def clear_caches() -> None:
@@ -212,35 +213,43 @@ class _Router:
 
     custom_patches = ()
     skip_patchers = ()
-    _path = "<emrd: the cassette of the calling thread>"
 
     def __getattr__(self, name: str) -> Any:
         cassette = _current.get()
         if cassette is None:
+            if name == "_path":  # vcrpy logs it when patching, before any cassette is bound
+                return "<emrd: the cassette of the calling thread>"
             raise CassetteError(
-                "an HTTP request was made outside any episode while episodes run concurrently "
-                "(--emrd-concurrency); make model requests only inside an episode."
+                "an HTTP request was made outside any episode's thread while an episode runs; "
+                "make model requests only inside an episode, on the thread that runs it."
             )
         return getattr(cassette, name)
 
+    def __len__(self) -> int:  # vcrpy's CannotOverwriteExistingCassetteException counts them
+        return len(self.__getattr__("data"))
+
 
 @contextlib.contextmanager
-def routing() -> Iterator[None]:
-    """Patch the HTTP libraries once (re-entrant), each request to its thread's cassette."""
-    global _depth
-    with contextlib.ExitStack() as stack:
+def _routing() -> Iterator[None]:
+    """Keep vcrpy's patches on the HTTP libraries while any block is open (re-entrant, from any
+    thread, closed in any order), each request handed to its thread's cassette.
+
+    Every episode goes through here: two cassettes patching httpx themselves would restore
+    each other's originals when their blocks overlap in time, and the later one would record
+    nothing."""
+    global _users
+    with _lock:
+        if _users == 0:
+            for patcher in CassettePatcherBuilder(_Router()).build():
+                _patches.enter_context(patcher)
+        _users += 1
+    try:
+        yield
+    finally:
         with _lock:
-            if _depth == 0:
-                for patcher in CassettePatcherBuilder(_Router()).build():
-                    stack.enter_context(patcher)
-            _depth += 1
-        try:
-            yield
-        finally:
-            with _lock:
-                _depth -= 1
-                if _depth:
-                    stack.pop_all()  # an outer block still needs the patches
+            _users -= 1
+            if _users == 0:
+                _patches.close()
 
 
 @contextlib.contextmanager
@@ -284,9 +293,5 @@ def episode_cassette(
         allow_playback_repeats=False,
         drop_unused_requests=record_mode == "all",
     )
-    if _depth:  # inside routing(): bind the cassette to this thread instead of patching
-        opened = _bound(EpisodeCassette.load(**settings))
-    else:
-        opened = EpisodeCassette.use(**settings, record_on_exception=False)
-    with opened as cassette:
+    with _routing(), _bound(EpisodeCassette.load(**settings)) as cassette:
         yield cassette

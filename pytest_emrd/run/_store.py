@@ -7,7 +7,6 @@ mostly waits for the model); HTTP traffic is routed per thread to each episode's
 
 from __future__ import annotations
 
-import contextlib
 import json
 import os
 import secrets
@@ -209,11 +208,7 @@ class Prefetcher:
         *,
         workers: int,
     ) -> None:
-        from pytest_emrd.cassette import routing
-
         self._store, self._compute = store, compute
-        self._exit = contextlib.ExitStack()
-        self._exit.enter_context(routing())
         self._pool = ThreadPoolExecutor(workers, thread_name_prefix="emrd-episode")
         self._futures = [self._pool.submit(self._one, spec) for spec in specs]
 
@@ -229,9 +224,8 @@ class Prefetcher:
             future.result()
 
     def close(self) -> None:
-        """Drop the episodes not started, wait for the running ones, stop routing."""
+        """Drop the episodes not started, wait for the running ones."""
         self._pool.shutdown(wait=True, cancel_futures=True)
-        self._exit.close()
 
 
 def start_prefetch(

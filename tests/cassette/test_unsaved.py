@@ -20,7 +20,6 @@ from pytest_emrd.cassette import (
     EpisodeRun,
     cassette_path,
     decode,
-    routing,
     run_with_cassette,
 )
 from pytest_emrd.trajectory import EpisodeSpec, Trajectory
@@ -113,17 +112,6 @@ def test_the_unsaved_cassette_moved_into_place_replays_with_no_request(
 
     assert again.trajectory == run.trajectory and not again.recorded
     assert again.unsaved is None and len(server.seen_headers) == sent
-
-
-def test_episodes_run_concurrently_keep_an_unsaved_cassette_too(
-    server: FakeServer, spec: EpisodeSpec, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
-) -> None:
-    path = cassette_path(tmp_path, spec)
-    runner = SabotagedRunner(server.url, lambda: _folder_in_the_way(path, monkeypatch))
-    with routing():  # --emrd-concurrency: the cassette is bound to its thread
-        run = _record(spec, runner, tmp_path)
-    assert run.unsaved is not None and run.unsaved.path == path
-    assert len(decode(run.unsaved.blob).requests) == runner.steps
 
 
 def test_http_is_unpatched_after_a_cassette_that_could_not_be_written(

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import os
 import signal
 import subprocess
@@ -9,11 +10,12 @@ import sys
 import textwrap
 import threading
 import time
+from collections.abc import Callable
 from pathlib import Path
 
 import pytest
 
-from pytest_emrd.cassette import SCRATCH, cassette_path, run_with_cassette
+from pytest_emrd.cassette import SCRATCH, EpisodeRun, cassette_path, decode, run_with_cassette
 from pytest_emrd.errors import CassetteError
 from pytest_emrd.trajectory import EpisodeSpec, Trajectory
 
@@ -73,6 +75,47 @@ def test_a_second_run_waits_for_the_writer_and_replays_its_recording(
     assert two.trajectory.error is None, two.trajectory.error  # type: ignore[attr-defined]
     assert one.trajectory == two.trajectory  # type: ignore[attr-defined]
     assert len(server.seen_headers) == 4  # the episode's four requests, recorded once
+
+
+class _Halves(FakeRunner):
+    """``first`` requests, then ``halfway()``, then ``second`` more."""
+
+    def __init__(self, base_url: str, first: int, second: int, halfway: Callable[[], None]) -> None:
+        super().__init__(base_url)
+        self.first, self.second, self.halfway = first, second, halfway
+
+    def __call__(self, spec: EpisodeSpec, *, live: bool) -> Trajectory:
+        self.steps = self.first
+        super().__call__(spec, live=live)
+        self.halfway()
+        self.steps = self.second
+        return super().__call__(spec, live=live)
+
+
+def test_episodes_that_overlap_in_time_each_record_only_their_own_requests(
+    server: FakeServer, spec: EpisodeSpec, tmp_path: Path
+) -> None:
+    """The first episode ends while the second is halfway: neither loses a request or takes
+    one of the other's (as two cassettes each patching httpx would)."""
+    halfway, go = threading.Event(), threading.Event()
+    first_spec, second_spec = spec, dataclasses.replace(spec, episode=spec.episode + 1)
+    first = _Halves(server.url, 2, 3, lambda: (halfway.set(), go.wait(10)))
+    results: dict[str, EpisodeRun] = {}
+
+    def run(name: str, episode: EpisodeSpec, runner: FakeRunner) -> None:
+        results[name] = run_with_cassette(episode, runner, cassettes=tmp_path, protocol=PROTOCOL)
+
+    thread = threading.Thread(target=run, args=("first", first_spec, first))
+    thread.start()
+    assert halfway.wait(10)
+    second = _Halves(server.url, 2, 4, lambda: (go.set(), thread.join(10)))
+    run("second", second_spec, second)
+    assert not thread.is_alive()
+    for name, episode, requests in (("first", first_spec, 5), ("second", second_spec, 6)):
+        assert results[name].recorded, name
+        recording = decode(cassette_path(tmp_path, episode).read_bytes())
+        assert len(recording.requests) == requests, name
+    assert len(server.seen_headers) == 11
 
 
 def test_a_run_that_cannot_wait_longer_is_refused_in_one_line(
