@@ -76,11 +76,12 @@ def _checked(cmd: list[str], cwd: Path, env: dict[str, str], ok: tuple[int, ...]
     return done, wall, cpu
 
 
-def _gate_figures(tmp: Path, repeat: int) -> list[Figure]:
+def _gate_figures(tmp: Path, repeat: int, episodes: int) -> list[Figure]:
     root = ROOT
     run_dir = tmp / "run"
     replay = [sys.executable, "-m", "pytest", str(root / "benchmarks"), "-q", "-p",
-              "no:cacheprovider", f"--emrd-results={run_dir}", f"--rootdir={root}"]  # fmt: skip
+              "no:cacheprovider", f"--emrd-results={run_dir}", f"--rootdir={root}",
+              f"--emrd-episodes={episodes}"]  # fmt: skip
     _checked(replay, root, python_env(bytecode=True))
     gate = [sys.executable, "-m", "pytest_emrd.cli", "gate", str(run_dir),
             "--thresholds", str(root / "thresholds.yaml")]  # fmt: skip
@@ -100,17 +101,18 @@ def _gate_figures(tmp: Path, repeat: int) -> list[Figure]:
     ]
 
 
-def run(*, repeat: int, warmup: int) -> list[Figure]:
+def run(*, repeat: int, warmup: int, episodes: int = 20) -> list[Figure]:
     """The figures above; in the harness's own cold stage (a fresh copy, :data:`COLD_ENV`)
-    only ``metrics.grid_240_s``, which the harness names ``..._cold``."""
+    only ``metrics.grid_240_s``, which the harness names ``..._cold``. ``episodes`` per spawn
+    room below the paper's 20 shrinks both workloads (the harness's own tests)."""
     from pytest_emrd.metrics.synthetic import synthetic_grid
 
-    grid = synthetic_grid()
+    grid = synthetic_grid(episodes=episodes)
     warm = median_seconds(lambda: all_metrics(grid), repeat=repeat, warmup=warmup)
     figures = [Figure("metrics.grid_240_s", warm, "s", TARGET_GRID_240_S, repeat)]
     if os.environ.get(COLD_ENV):
         return figures
     with tempfile.TemporaryDirectory() as name:
         tmp = Path(name)
-        figures += _gate_figures(tmp, repeat)
+        figures += _gate_figures(tmp, repeat, episodes)
     return figures

@@ -20,7 +20,7 @@ def test_all_metrics_computes_every_gate_and_aggregate() -> None:
 
 @pytest.mark.slow
 def test_run_reports_warm_and_cold_figures_against_their_targets() -> None:
-    figures = {f.figure: f for f in run(repeat=1, warmup=1)}
+    figures = {f.figure: f for f in run(repeat=1, warmup=1, episodes=2)}
     targets = {name: f.target for name, f in figures.items()}
     assert targets == {
         "metrics.grid_240_s": 3.0,
