@@ -8,7 +8,7 @@ import sys
 from pytest_emrd.agent import PROMPT_VERSION
 from pytest_emrd.protocol import protocol_version
 from pytest_emrd.world import WORLD_VERSION
-from pytest_emrd.world.thor._version import THOR_VERSION
+from pytest_emrd.world.thor import THOR_VERSION
 
 
 def test_the_protocol_joins_the_world_and_prompt_versions() -> None:

@@ -22,8 +22,8 @@ from pytest_emrd.agent._prompt import FURNITURE, furniture_profile, read_profile
 from pytest_emrd.errors import ConfigError
 from pytest_emrd.rooms import ROOM_NAMES
 from pytest_emrd.trajectory import VARIANTS, Pose
+from pytest_emrd.world import VisibleObject
 from pytest_emrd.world._feedback import with_pose
-from pytest_emrd.world._model import VisibleObject
 
 SNAPSHOTS = Path(__file__).parent / "snapshots"
 

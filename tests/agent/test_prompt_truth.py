@@ -16,8 +16,7 @@ from hypothesis import strategies as st
 
 from pytest_emrd.agent import ROOM_SUFFIXES, build_system_prompt, room_aliases
 from pytest_emrd.agent._prompt import GOTO_TYPES_LEAD, OVERVIEW_HEADING, read_profile
-from pytest_emrd.metrics import aec_score
-from pytest_emrd.metrics._match import match_map
+from pytest_emrd.metrics import aec_score, match_map
 from pytest_emrd.rooms import ROOM_NAMES
 from pytest_emrd.trajectory import MODALITIES, VARIANTS, MapEntry
 from pytest_emrd.world import Layout, WorldPose, generate_layout, ground_truth, paper_office

@@ -20,7 +20,7 @@ from pytest_emrd.metrics import (
 )
 from pytest_emrd.metrics._vocab import FUZZY_MIN_LENGTH, REAL_WORDS, TypeResolver
 from pytest_emrd.trajectory import GroundTruthObject, MapEntry
-from pytest_emrd.world._catalog import KINDS
+from pytest_emrd.world import KINDS
 
 #: The types the built-in office holds.
 OFFICE_TYPES = frozenset(kind.object_type for kind in KINDS.values())

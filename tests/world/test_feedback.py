@@ -8,6 +8,7 @@ from hypothesis import strategies as st
 
 from pytest_emrd.errors import ConfigError
 from pytest_emrd.trajectory import Pose
+from pytest_emrd.world import WorldPose
 from pytest_emrd.world._feedback import (
     Action,
     ActionFailed,
@@ -19,7 +20,6 @@ from pytest_emrd.world._feedback import (
     term,
     with_pose,
 )
-from pytest_emrd.world._model import WorldPose
 
 
 def _refuse(action: Action) -> str:

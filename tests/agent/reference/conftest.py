@@ -12,8 +12,8 @@ import pytest
 from pytest_emrd.agent import build_system_prompt, load_registry, step_text
 from pytest_emrd.agent.reference import reply_text
 from pytest_emrd.trajectory import Pose
+from pytest_emrd.world import VisibleObject
 from pytest_emrd.world._feedback import with_pose
-from pytest_emrd.world._model import VisibleObject
 
 #: (id, type, bearing, distance) as the symbolic list gives them.
 View = Sequence[tuple[str, str, float, float]]

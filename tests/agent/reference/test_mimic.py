@@ -24,7 +24,7 @@ from pytest_emrd.episode import run_episode
 from pytest_emrd.errors import ConfigError, ProtocolError
 from pytest_emrd.metrics import canonical_type, rigid_fit
 from pytest_emrd.trajectory import EpisodeSpec, Trajectory
-from pytest_emrd.world._catalog import KINDS
+from pytest_emrd.world import KINDS
 
 CLEAN = "mimic-spawn-s0-p0-h0-q0-r0-a0-b0"
 PLANTED_INVALID = re.compile(r"^(MoveAhead|Turn\(Back\)|Goto\(the .*\)|Goto\(nearest exit\))$")

@@ -13,8 +13,8 @@ from pytest_emrd.agent.reference._read import (
 from pytest_emrd.errors import ProtocolError
 from pytest_emrd.rooms import ROOM_NAMES
 from pytest_emrd.trajectory import VARIANTS, Pose
+from pytest_emrd.world import VisibleObject
 from pytest_emrd.world._feedback import with_pose
-from pytest_emrd.world._model import VisibleObject
 
 
 @pytest.mark.parametrize("variant", [v for v in VARIANTS if v not in ("neutral", "no_inventory")])

@@ -69,7 +69,7 @@ import pytest
 
 from pytest_emrd.errors import ConfigError
 from pytest_emrd.rooms import CONFERENCE, ENTRANCE, KITCHEN, OFFICE
-from pytest_emrd.world._model import Doorway, Layout, Room, WorldObject
+from pytest_emrd.world import Doorway, Layout, Room, WorldObject
 
 ASSET_DB: dict[str, list[Any]] = json.loads(
     (Path(__file__).parent / "data" / "asset_database.json").read_text(encoding="utf-8")

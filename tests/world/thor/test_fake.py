@@ -9,7 +9,7 @@ from typing import Any
 import ai2thor.server
 import pytest
 
-from pytest_emrd.world._model import Layout, WorldPose
+from pytest_emrd.world import Layout, WorldPose
 from pytest_emrd.world.thor import build_house
 
 from .conftest import AGENT_KEYS, AGENT_Y, EMPTY_START, EVENT_KEYS, OBJECT_KEYS

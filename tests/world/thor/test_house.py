@@ -14,10 +14,14 @@ from hypothesis import strategies as st
 
 from pytest_emrd.errors import ConfigError
 from pytest_emrd.trajectory import CONDITIONS
-from pytest_emrd.world._conditions import condition_params
-from pytest_emrd.world._episode import PAPER_OFFICE_SEED
-from pytest_emrd.world._layout import generate_layout
-from pytest_emrd.world._model import Doorway, Layout, WorldPose
+from pytest_emrd.world import (
+    PAPER_OFFICE_SEED,
+    Doorway,
+    Layout,
+    WorldPose,
+    condition_params,
+    generate_layout,
+)
 from pytest_emrd.world.thor import SCHEMA, IdTable, assets, build_house, choose_asset
 
 

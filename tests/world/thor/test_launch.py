@@ -16,7 +16,7 @@ from typing import Any
 import pytest
 
 from pytest_emrd.errors import ConfigError, MissingExtraError, TransportError
-from pytest_emrd.world._model import Layout
+from pytest_emrd.world import Layout
 from pytest_emrd.world.thor import ThorSimulator
 from pytest_emrd.world.thor._launch import import_ai2thor
 

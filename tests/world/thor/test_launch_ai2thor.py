@@ -16,7 +16,7 @@ import ai2thor.controller
 import pytest
 
 from pytest_emrd.errors import ConfigError
-from pytest_emrd.world._model import Layout
+from pytest_emrd.world import Layout
 from pytest_emrd.world.thor import ThorSimulator
 from pytest_emrd.world.thor._launch import import_ai2thor, preflight, releases_dir
 

@@ -7,7 +7,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from pytest_emrd.world._model import Doorway, Room, WorldPose
+from pytest_emrd.world import Doorway, Room, WorldPose
 from pytest_emrd.world.thor import IdTable
 from pytest_emrd.world.thor._simulator import (
     CLEARANCE,

@@ -9,8 +9,7 @@ import pytest
 
 from pytest_emrd.errors import ConfigError
 from pytest_emrd.rooms import ROOM_NAMES
-from pytest_emrd.world import generate_layout, paper_office
-from pytest_emrd.world._model import Layout
+from pytest_emrd.world import Layout, generate_layout, paper_office
 from pytest_emrd.world.thor import ThorSimulator
 
 SEEDS = range(12)

@@ -11,8 +11,7 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from pytest_emrd.world._conditions import condition_params
-from pytest_emrd.world._model import Layout, Observation
+from pytest_emrd.world import Layout, Observation, condition_params
 from pytest_emrd.world.thor import ThorSimulator
 
 

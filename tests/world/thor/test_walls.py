@@ -8,7 +8,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from pytest_emrd.rooms import CONFERENCE, ENTRANCE, KITCHEN, OFFICE
-from pytest_emrd.world._model import Layout, Room
+from pytest_emrd.world import Layout, Room
 from pytest_emrd.world.thor._house import WallPiece, wall_pieces
 
 
