@@ -217,7 +217,7 @@ class _Router:
     def __getattr__(self, name: str) -> Any:
         cassette = _current.get()
         if cassette is None:
-            if name == "_path":  # vcrpy logs it when patching, before any cassette is bound
+            if name == "_path":  # vcrpy names its patched classes after it, before any binding
                 return "<emrd: the cassette of the calling thread>"
             raise CassetteError(
                 "an HTTP request was made outside any episode's thread while an episode runs; "
@@ -253,17 +253,6 @@ def _routing() -> Iterator[None]:
 
 
 @contextlib.contextmanager
-def _bound(cassette: Cassette) -> Iterator[Cassette]:
-    """Route this thread's requests to ``cassette``, saved when the block succeeds."""
-    token = _current.set(cassette)
-    try:
-        yield cassette
-    finally:
-        _current.reset(token)
-    cassette._save()
-
-
-@contextlib.contextmanager
 def episode_cassette(
     path: Path,
     *,
@@ -274,9 +263,9 @@ def episode_cassette(
     root: Path | None = None,
     keep_unsaved: bool = False,
 ) -> Iterator[EpisodeCassette]:
-    """Patch httpx with the episode's cassette for the block (raise inside it to discard a
+    """Route httpx to the episode's cassette for the block (raise inside it to discard a
     failed episode); ``root`` and ``keep_unsaved``: :class:`~._persister.EpisodePersister`."""
-    settings: dict[str, Any] = dict(
+    cassette = EpisodeCassette.load(
         path=str(path),
         persister=EpisodePersister(
             protocol=protocol,
@@ -293,5 +282,10 @@ def episode_cassette(
         allow_playback_repeats=False,
         drop_unused_requests=record_mode == "all",
     )
-    with _routing(), _bound(EpisodeCassette.load(**settings)) as cassette:
-        yield cassette
+    with _routing():
+        token = _current.set(cassette)  # this thread's requests go to this cassette
+        try:
+            yield cassette
+        finally:
+            _current.reset(token)
+    cassette._save()  # only when the block succeeded, as vcrpy's record_on_exception=False
