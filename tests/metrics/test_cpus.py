@@ -1,12 +1,15 @@
 """The metrics agree to 1e-9 whichever BLAS kernel OpenBLAS picks for the CPU.
 
 Each core type runs in a fresh process (OpenBLAS reads ``OPENBLAS_CORETYPE`` once, at load).
+A kernel whose instructions the CPU lacks dies with SIGILL, so only the kernels this CPU can
+execute are forced; the others are skipped with the flags they need.
 """
 
 from __future__ import annotations
 
 import json
 import os
+import platform
 import subprocess
 import sys
 from pathlib import Path
@@ -26,6 +29,26 @@ for m in as_episode_metrics(synthetic_grid(episodes=1)):
 print(json.dumps([None if v is None or not math.isfinite(v) else v for v in values]))
 """
 
+#: The CPU flags each forced OpenBLAS kernel executes (OpenBLAS ``driver/others/dynamic.c``).
+#: ``Prescott`` (SSE3) runs on every x86-64 CPU and is the reference the others must agree with.
+KERNEL_FLAGS = {
+    "Haswell": {"avx2", "fma"},
+    "Zen": {"avx2", "fma"},
+    "SkylakeX": {"avx512f", "avx512cd", "avx512bw", "avx512dq", "avx512vl"},
+}
+
+
+def _cpu_flags() -> set[str] | None:
+    """The CPU's instruction-set flags from ``/proc/cpuinfo``, or None where it cannot be read."""
+    try:
+        text = Path("/proc/cpuinfo").read_text()
+    except OSError:
+        return None
+    for line in text.splitlines():
+        if line.startswith("flags"):
+            return set(line.partition(":")[2].split())
+    return None
+
 
 def _values(coretype: str) -> list[float | None]:
     env = {**os.environ, "OPENBLAS_CORETYPE": coretype}
@@ -38,10 +61,26 @@ def _values(coretype: str) -> list[float | None]:
 
 
 @pytest.mark.slow
-def test_haswell_and_skylakex_kernels_give_the_same_metrics_to_1e_9() -> None:
-    haswell, skylakex = _values("Haswell"), _values("SkylakeX")
-    assert len(haswell) == len(skylakex) > 100
-    for a, b in zip(haswell, skylakex, strict=True):
+@pytest.mark.parametrize("coretype", sorted(KERNEL_FLAGS))
+def test_each_kernel_the_cpu_runs_gives_the_reference_metrics_to_1e_9(coretype: str) -> None:
+    if platform.machine().lower() not in {"x86_64", "amd64"}:
+        pytest.skip(f"OpenBLAS core types are x86-64 kernels; this CPU is {platform.machine()}")
+    flags = _cpu_flags()
+    if flags is None:
+        pytest.skip("/proc/cpuinfo is unreadable, so the kernels this CPU can run are unknown")
+    missing = KERNEL_FLAGS[coretype] - flags
+    if missing:
+        pytest.skip(f"{coretype} needs {', '.join(sorted(missing))}, which this CPU lacks")
+    reference, forced = _values("Prescott"), _values(coretype)
+    assert len(reference) == len(forced) > 100
+    for a, b in zip(reference, forced, strict=True):
         assert (a is None) == (b is None)
         if a is not None and b is not None:
             assert a == pytest.approx(b, rel=1e-9, abs=1e-9)
+
+
+def test_the_cpu_flag_reader_finds_the_baseline_instruction_sets() -> None:
+    flags = _cpu_flags()
+    if flags is None or platform.machine().lower() not in {"x86_64", "amd64"}:
+        pytest.skip("no x86-64 /proc/cpuinfo to read")
+    assert {"sse2", "sse3"} <= flags or "pni" in flags
