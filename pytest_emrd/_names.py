@@ -29,14 +29,21 @@ def check_slug(where: str, name: object, *, becomes: str) -> str:
 
 
 def check_inside(root: Path, path: Path, *, what: str) -> Path:
-    """``path`` if, once ``..`` and ``.`` are resolved lexically, it lies inside ``root``;
-    else a one-line :class:`ConfigError` (symbolic links inside ``root`` are the user's own
-    and are not followed)."""
+    """``path`` if, once ``..`` and ``.`` are resolved lexically, it lies inside ``root`` and
+    no part of it below ``root`` is a symbolic link (its real path is ``root``'s real path
+    joined with the rest); else a one-line :class:`ConfigError`."""
     base = Path(os.path.normpath(os.path.abspath(root)))
     full = Path(os.path.normpath(os.path.abspath(path)))
     if full != base and base not in full.parents:
         raise ConfigError(
             f"{what} {path} lies outside {root}; model and file names must be plain names "
             f"({SLUG_RULE})."
+        )
+    real = Path(os.path.realpath(full))
+    if real != Path(os.path.realpath(base)) / full.relative_to(base):
+        raise ConfigError(
+            f"{what} {path} is or lies under a symbolic link (to {real}); it is refused, never "
+            f"opened, so that nothing is read or written outside {root}: replace the link with "
+            "the real file or folder."
         )
     return path

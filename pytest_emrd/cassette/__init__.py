@@ -17,7 +17,12 @@ from pytest_emrd.cassette._paths import (
     missing_summary,
     record_command,
 )
-from pytest_emrd.cassette._persister import EpisodePersister, UnsavedCassette, writer_lock
+from pytest_emrd.cassette._persister import (
+    EpisodePersister,
+    UnsavedCassette,
+    read_cassette,
+    writer_lock,
+)
 from pytest_emrd.cassette._redact import canonical_json, match_keys, redact_body
 from pytest_emrd.cassette._use import clear_caches, episode_cassette
 
@@ -43,6 +48,7 @@ __all__ = [
     "match_keys",
     "missing_summary",
     "network_blocked",
+    "read_cassette",
     "record_command",
     "redact_body",
     "run_with_cassette",

@@ -1,19 +1,20 @@
 """The cassette file: a vcrpy cassette in vcrpy's own JSON serializer, compressed with xz
-(fields: docs/cassettes.md); ``metadata.emrd.digest`` covers the protocol and every
-interaction, so a file edited by hand is refused on load. JSON, not YAML: it loads ten times
+(fields: docs/cassettes.md); ``metadata.emrd.digest`` covers the whole file (metadata
+included), so a file changed by accident is refused on load (a digest anyone can recompute
+detects accidents, not forgery: docs/security.md). A file is inflated up to a cap and checked
+against a small schema before any field is used. JSON, not YAML: it loads ten times
 faster. The same traffic always gives the same bytes (sorted keys; xz single-threaded,
 LZMA2, 1 MiB dictionary, CRC32, no timestamp). A gzip cassette is read too."""
 
 from __future__ import annotations
 
-import gzip
 import hashlib
+import io
 import json
 import lzma
 import zlib
-from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any, Final
+from typing import Any, BinaryIO, Final
 
 from vcr.request import Request
 from vcr.serialize import CASSETTE_FORMAT_VERSION
@@ -23,6 +24,14 @@ from vcr.serializers import compat, jsonserializer
 SUFFIX: Final = ".json.xz"
 _XZ_MAGIC: Final = b"\xfd7zXZ\x00"
 _GZIP_MAGIC: Final = b"\x1f\x8b"
+#: Most text a cassette file may inflate to (a 50-step episode is a few MB; a bomb is cut here).
+MAX_TEXT_BYTES: Final = 64 << 20
+_CHUNK: Final = 1 << 16
+#: How the digest of the whole file starts; an older release's digest (of the interactions
+#: only) starts ``sha256:``.
+DIGEST_PREFIX: Final = "sha256-file:"
+#: The digest while the document is hashed: the file is hashed with its digest reading this.
+_UNSET: Final = DIGEST_PREFIX + "0" * 64
 #: LZMA2 at its strongest setting with no 4-byte alignment assumed (``pb=0``: the document is
 #: text); a 1 MiB dictionary holds a whole episode's repeated history windows.
 _XZ_FILTERS: Final = (
@@ -94,34 +103,14 @@ def _interaction(request: Request, response: dict[str, Any]) -> dict[str, Any]:
     }
 
 
-def digest(protocol: str, interactions: Sequence[dict[str, Any]]) -> str:
-    """SHA-256 of the protocol and the interactions as stored: each part hashed with its length
-    in front (the protocol; per interaction its request and response without bodies as
-    sorted-key JSON, then each body's text or ``null``; cheaper than serialising it again)."""
-    h = hashlib.sha256()
-
-    def part(text: str) -> None:
-        data = text.encode(errors="surrogatepass")  # a hand-edited "\ud800" is hashed too
-        h.update(b"%d:" % len(data))
-        h.update(data)
-
-    part(protocol)
-    for item in interactions:
-        request, response = item["request"], item["response"]
-        bodies = (request["body"], response["body"]["string"])
-        part(json.dumps([{**request, "body": 0}, {**response, "body": 0}], sort_keys=True))
-        for body in bodies:
-            part("null" if body is None else f"={body}")
-    return "sha256:" + h.hexdigest()
-
-
 def document(data: CassetteData) -> dict[str, Any]:
-    """The vcrpy cassette document of ``data`` (what :func:`encode` serialises)."""
+    """The vcrpy cassette document of ``data`` (what :func:`encode` serialises), its digest
+    still :data:`_UNSET`."""
     interactions = [
         _interaction(request, response)
         for request, response in zip(data.requests, data.responses, strict=True)
     ]
-    emrd: dict[str, Any] = {"digest": digest(data.protocol, interactions)}
+    emrd: dict[str, Any] = {"digest": _UNSET}
     if data.raw:
         emrd["raw"] = sorted(data.raw)
     emrd["protocol"] = data.protocol
@@ -132,31 +121,123 @@ def document(data: CassetteData) -> dict[str, Any]:
     }
 
 
+def _digest(text: str, recorded: str) -> str:
+    """SHA-256 of the whole document ``text`` with its last ``recorded`` (the digest, in
+    ``metadata``, which sorts after ``interactions``) read as :data:`_UNSET`."""
+    head, found, tail = text.rpartition(recorded)
+    whole = head + _UNSET + tail if found else text
+    return DIGEST_PREFIX + hashlib.sha256(whole.encode(errors="surrogatepass")).hexdigest()
+
+
 def encode(data: CassetteData) -> bytes:
     """The xz-compressed vcrpy JSON cassette of ``data`` (deterministic)."""
     text = jsonserializer.serialize(document(data))
+    head, _, tail = text.rpartition(_UNSET)
+    text = head + _digest(text, _UNSET) + tail
     return lzma.compress(
         text.encode(), format=lzma.FORMAT_XZ, check=lzma.CHECK_CRC32, filters=_XZ_FILTERS
     )
 
 
-def decompress(blob: bytes) -> str:
-    """The text inside ``blob``, xz or gzip (told by the magic bytes)."""
+def decompress(source: bytes | BinaryIO, *, cap: int = MAX_TEXT_BYTES) -> str:
+    """The text inside ``source`` (bytes or a binary file), xz or gzip (told by the magic
+    bytes), inflated a chunk at a time: more than ``cap`` bytes of text is a
+    :class:`FormatError` before any more is inflated."""
+    stream = io.BytesIO(source) if isinstance(source, bytes) else source
+    pending = stream.read(_CHUNK)
+    if pending.startswith(_XZ_MAGIC):
+        inflater: Any = lzma.LZMADecompressor(lzma.FORMAT_XZ)
+    elif pending.startswith(_GZIP_MAGIC):
+        inflater = zlib.decompressobj(wbits=31)
+    else:
+        raise FormatError(f"not an xz- or gzip-compressed file (it starts {pending[:8]!r})")
+    pieces: list[bytes] = []
+    size = 0
     try:
-        if blob.startswith(_XZ_MAGIC):
-            return lzma.decompress(blob, format=lzma.FORMAT_XZ).decode()
-        if blob.startswith(_GZIP_MAGIC):
-            return gzip.decompress(blob).decode()
-    except (OSError, EOFError, zlib.error, lzma.LZMAError, UnicodeDecodeError) as exc:
+        while not inflater.eof:
+            piece = inflater.decompress(pending, cap + 1 - size)
+            pieces.append(piece)
+            size += len(piece)
+            if size > cap:
+                raise FormatError(
+                    f"it inflates to more than {cap >> 20} MiB of text, more than a cassette "
+                    "holds (a 50-step episode is a few MB); it is not a recording"
+                )
+            pending = getattr(inflater, "unconsumed_tail", b"")
+            if not (pending or inflater.eof) and getattr(inflater, "needs_input", True):
+                pending = stream.read(_CHUNK)
+                if not (pending or piece):
+                    raise EOFError("the compressed data ends early")
+        return b"".join(pieces).decode()
+    except (EOFError, zlib.error, lzma.LZMAError, UnicodeDecodeError) as exc:
         raise FormatError(f"not a readable xz or gzip file ({exc})") from exc
-    raise FormatError(f"not an xz- or gzip-compressed file (it starts {blob[:8]!r})")
+
+
+def _field(at: str, value: Any, shape: Any) -> None:
+    """:class:`FormatError` naming the first field of ``value`` that is not of ``shape``: a
+    type or tuple of types, ``[shape]`` (a list of it), or a mapping of field -> shape (a
+    name ending ``?`` is optional, ``*`` is every value; other fields are left open)."""
+    if isinstance(shape, list):
+        ok = isinstance(value, list)
+    elif isinstance(shape, dict):
+        ok = isinstance(value, dict)
+    else:
+        ok = isinstance(value, shape) and not isinstance(value, bool)
+    if not ok:
+        wanted = getattr(shape, "__name__", None) or type(shape).__name__
+        raise FormatError(f"{at}={_brief(value)} is not {_NAMES.get(wanted, wanted)}")
+    if isinstance(shape, list):
+        for index, item in enumerate(value):
+            _field(f"{at}[{index}]", item, shape[0])
+    for name, inner in shape.items() if isinstance(shape, dict) else ():
+        if name == "*":
+            for key, item in value.items():
+                _field(f"{at}.{key}", item, inner)
+        elif name.rstrip("?") in value:
+            _field(f"{at}.{name.rstrip('?')}", value[name.rstrip("?")], inner)
+        elif not name.endswith("?"):
+            raise FormatError(f"{at}.{name} is missing")
+
+
+def _brief(value: Any) -> str:
+    text = json.dumps(value) if isinstance(value, str | int | float | None) else None
+    return text if text is not None and len(text) <= 40 else f"<{type(value).__name__}>"
+
+
+_NAMES: Final = {
+    "dict": "a mapping",
+    "list": "a list",
+    "str": "text",
+    "int": "a whole number",
+    "tuple": "text or null",
+}
+_TEXT: Final = (str, type(None))
+#: What :func:`decode` needs of a document before it uses it (open to fields it does not read).
+_SCHEMA: Final = {
+    "interactions": [
+        {
+            "request": {"body": _TEXT, "headers": {"*": [str]}, "method": str, "uri": str},
+            "response": {
+                "body": {"string": _TEXT},
+                "headers": {"*": [str]},
+                "status": {"code": int, "message": str},
+            },
+        }
+    ],
+    "metadata": {"emrd": {"digest": str, "protocol": str, "raw?": [int]}},
+}
 
 
 def decode(blob: bytes) -> CassetteData:
-    """Inverse of :func:`encode` (a gzip file is read too): :class:`LegacyFormatError` for a file
-    an older release wrote, :class:`IntegrityError` when the interactions or the protocol no
-    longer match their digest, :class:`FormatError` for anything else that is not a cassette."""
-    text = decompress(blob)
+    """:func:`parse` of the text :func:`decompress` finds in ``blob``."""
+    return parse(decompress(blob))
+
+
+def parse(text: str) -> CassetteData:
+    """Inverse of :func:`encode` (after :func:`decompress`): :class:`LegacyFormatError` for a
+    file an older release wrote, :class:`IntegrityError` when the file no longer matches its
+    digest, :class:`FormatError` for anything else that is not a cassette (checked against
+    :data:`_SCHEMA` before use)."""
     if text.startswith(LEGACY_HEAD):
         raise LegacyFormatError(
             "it is in a format an older pytest-emrd wrote (emrd-cassette/1 or /2), under an "
@@ -164,22 +245,20 @@ def decode(blob: bytes) -> CassetteData:
         )
     try:
         loaded = jsonserializer.deserialize(text)
-    except ValueError as exc:
-        raise FormatError(f"not valid JSON ({exc})") from exc
-    try:
-        emrd = loaded["metadata"]["emrd"]
-        interactions = loaded["interactions"]
-        protocol = str(emrd["protocol"])
-        found = digest(protocol, interactions)
-    except (KeyError, TypeError) as exc:
-        raise FormatError(
-            f"not a pytest-emrd vcrpy cassette (no {exc} in interactions or metadata.emrd)"
-        ) from exc
-    if found != emrd.get("digest"):
-        raise IntegrityError("its interactions do not match the digest recorded with them")
-    try:
-        requests = tuple(Request(**item["request"]) for item in interactions)
-        responses = tuple(compat.convert_to_bytes(item["response"]) for item in interactions)
-    except (KeyError, TypeError) as exc:
-        raise FormatError(f"malformed interaction ({type(exc).__name__}: {exc})") from exc
-    return CassetteData(protocol, requests, responses, frozenset(emrd.get("raw", ())))
+    except (ValueError, RecursionError) as exc:
+        raise FormatError(f"not valid JSON ({str(exc)[:80]})") from None
+    _field("cassette", loaded, _SCHEMA)
+    emrd, interactions = loaded["metadata"]["emrd"], loaded["interactions"]
+    if not emrd["digest"].startswith(DIGEST_PREFIX):
+        raise LegacyFormatError(
+            "its digest covers its interactions only, as an older pytest-emrd wrote it; it "
+            "cannot replay with this release"
+        )
+    if _digest(text, emrd["digest"]) != emrd["digest"]:
+        raise IntegrityError("its bytes do not match the digest recorded with them")
+    requests = tuple(
+        Request(r["method"], r["uri"], r["body"], r["headers"])
+        for r in (item["request"] for item in interactions)
+    )
+    responses = tuple(compat.convert_to_bytes(item["response"]) for item in interactions)
+    return CassetteData(emrd["protocol"], requests, responses, frozenset(emrd.get("raw", ())))

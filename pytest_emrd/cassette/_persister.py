@@ -11,17 +11,29 @@ from typing import Any
 from vcr.persisters.filesystem import CassetteNotFoundError
 
 from pytest_emrd._atomic import write_bytes_atomic
+from pytest_emrd._names import check_inside
 from pytest_emrd.cassette._file import (
     CassetteData,
     FormatError,
     IntegrityError,
     LegacyFormatError,
-    decode,
+    decompress,
     encode,
+    parse,
 )
 from pytest_emrd.cassette._paths import scratch_path
 from pytest_emrd.cassette._redact import canonical_keys
 from pytest_emrd.errors import CassetteError
+
+
+def read_cassette(path: Path, *, root: Path | None = None) -> tuple[CassetteData, str]:
+    """The cassette at ``path`` and its text (bounded, schema-checked, digest-checked: see
+    :mod:`._file`); ``path`` must lie inside ``root`` (default: its own folder) with no
+    symbolic link on the way, else a one-line ConfigError before it is opened."""
+    check_inside(path.parent if root is None else root, path, what="cassette")
+    with path.open("rb") as handle:
+        text = decompress(handle)
+    return parse(text), text
 
 
 @dataclass(frozen=True)
@@ -57,7 +69,7 @@ class EpisodePersister:
         if self.fresh or not path.is_file():
             raise CassetteNotFoundError(str(path))
         try:
-            data = decode(path.read_bytes())
+            data, _ = read_cassette(path, root=self.root)
         except LegacyFormatError:
             raise CassetteError(
                 f"cassette={str(path)!r} was written by an older pytest-emrd, under an earlier "
@@ -92,6 +104,7 @@ class EpisodePersister:
         raw = frozenset(i for i, request in enumerate(requests) if not _canonical(request))
         data = CassetteData(self.protocol, requests, tuple(cassette_dict["responses"]), raw)
         path, blob = Path(cassette_path), encode(data)
+        check_inside(path.parent if self.root is None else self.root, path, what="cassette")
         try:
             temp = scratch_path(self.root, path, "") if self.root is not None else None
             write_bytes_atomic(path, blob, temp=temp)

@@ -1,7 +1,8 @@
 """``emrd cassettes show FILE``.
 
 ``show`` prints a cassette as the plain vcrpy JSON cassette it holds (what ``xz -dc FILE``
-prints), after checking its digest. Exit status: 0 on success, 2 on an error.
+prints), after checking it (bounded, schema and digest: docs/security.md). Exit status: 0
+on success, 2 on an error.
 """
 
 from __future__ import annotations
@@ -24,17 +25,16 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def _show(args: argparse.Namespace) -> int:
-    from pytest_emrd.cassette import FormatError, decode, decompress
+    from pytest_emrd.cassette import FormatError, read_cassette
     from pytest_emrd.errors import CassetteError, ConfigError
 
     try:
-        blob = args.file.read_bytes()
-        decode(blob)  # the digest is checked: what is shown is what replays
+        _, text = read_cassette(args.file)  # the digest is checked: what is shown is what replays
     except OSError as exc:
         raise ConfigError(f"file={str(args.file)!r} cannot be read: {exc.strerror}") from None
     except FormatError as exc:
         raise CassetteError(
             f"file={str(args.file)!r} is not a replayable cassette: {exc}"
         ) from None
-    sys.stdout.write(decompress(blob))
+    sys.stdout.write(text)
     return 0

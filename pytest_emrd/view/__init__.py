@@ -19,10 +19,10 @@ from pathlib import Path
 from typing import Any
 
 from pytest_emrd.agent import build_system_prompt
-from pytest_emrd.cassette import FormatError, decode, found_cassette
+from pytest_emrd.cassette import FormatError, found_cassette, read_cassette
 from pytest_emrd.cassette._redact import DIGEST
 from pytest_emrd.episode import build_simulator, start_world, user_turn, world_action
-from pytest_emrd.errors import EmrdError
+from pytest_emrd.errors import ConfigError, EmrdError
 from pytest_emrd.trajectory import Trajectory
 from pytest_emrd.view._page import IndexRow, episode_data, episode_gif, episode_page, index_page
 from pytest_emrd.world import WorldPose
@@ -111,10 +111,10 @@ def recorded_digests(traj: Trajectory, cassettes: Path | None) -> Recorded:
         return Recorded((), "no cassette folder given (--cassettes): frames not checked")
     path = found_cassette(cassettes, traj.spec)
     try:
-        data = decode(path.read_bytes())
+        data, _ = read_cassette(path, root=cassettes)
     except FileNotFoundError:
         return Recorded((), f"no cassette at {path}: frames not checked")
-    except FormatError as exc:
+    except (FormatError, ConfigError) as exc:
         return Recorded((), f"{path} is not a readable cassette ({exc}): frames not checked")
     if data.protocol != traj.protocol:
         return Recorded((), f"{path} was recorded under protocol {data.protocol}, the episode "

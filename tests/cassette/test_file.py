@@ -51,7 +51,7 @@ def test_decompressed_it_is_a_vcrpy_cassette_that_vcrpy_loads(recorded: Path) ->
     requests, responses, metadata = deserialize(text, jsonserializer)
     assert [r.method for r in requests] == ["POST"] * 4
     assert b"pixels:" in requests[0].body and b"reply" in responses[0]["body"]["string"]
-    assert metadata["emrd"]["digest"].startswith("sha256:")
+    assert metadata["emrd"]["digest"].startswith("sha256-file:")
 
 
 def test_vcrpy_replays_it_through_the_persister(recorded: Path, server: FakeServer) -> None:
