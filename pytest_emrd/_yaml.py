@@ -2,10 +2,11 @@
 
 Every failure (missing file, directory, unreadable, not UTF-8, malformed YAML) is a one-line
 :class:`~pytest_emrd.errors.ConfigError` naming the file, the line where there is one, and
-what to do. Files are bounded: larger than :data:`MAX_FILE_BYTES`, any YAML alias (a few
-nested ones expand a small file into gigabytes) and nesting deeper than :data:`MAX_DEPTH`
-are refused before anything is composed. :class:`Loader` adds the YAML 1.2 core-schema float
-(PyYAML's 1.1 reads ``1e9`` as a string), so every number a person writes reads as a number.
+what to do. Files are bounded and plain: larger than :data:`MAX_FILE_BYTES`, any YAML alias
+(a few nested ones expand a small file into gigabytes), any explicit tag, a duplicate key and
+nesting deeper than :data:`MAX_DEPTH` are refused before anything is composed.
+:class:`Loader` adds the YAML 1.2 core-schema float (PyYAML's 1.1 reads ``1e9`` as a
+string), so every number a person writes reads as a number.
 """
 
 from __future__ import annotations
@@ -22,6 +23,7 @@ from pytest_emrd.errors import ConfigError
 MAX_FILE_BYTES: Final = 1_000_000
 #: Deepest nesting of collections accepted in a user YAML file.
 MAX_DEPTH: Final = 32
+_STD: Final = "tag:yaml.org,2002:"
 
 _FLOAT_12 = re.compile(
     r"""^(?:[-+]?(?:\.[0-9]+|[0-9]+(?:\.[0-9]*)?)(?:[eE][-+]?[0-9]+)?
@@ -90,30 +92,55 @@ def yaml_error(exc: yaml.YAMLError, source: str) -> ConfigError:
 
 
 def _check_bounds(text: str, source: str) -> None:
-    """A one-line :class:`ConfigError` at the first alias of ``text`` or at a collection nested
-    deeper than :data:`MAX_DEPTH` (libyaml's composer recurses in C: 100,000 ``[`` crash
-    the interpreter), found by a streaming parse; malformed YAML is left to the parser."""
-    depth = 0
+    """A one-line :class:`ConfigError` at the first alias, explicit tag (``!foo``,
+    ``!!python/object/apply``, ``!!binary``: a file holds plain data), duplicate key, or
+    collection nested deeper than :data:`MAX_DEPTH` of ``text`` (libyaml's composer recurses
+    in C: 100,000 ``[`` crash the interpreter), found by a streaming parse; malformed YAML is
+    left to the parser."""
+    open_: list[list[Any]] = []  # per open collection: [keys seen (None: a list), nodes]
     try:
         for event in yaml.parse(text, Loader=_FastLoader):
-            if isinstance(event, yaml.CollectionStartEvent):
-                depth += 1
-                if depth > MAX_DEPTH:
-                    raise _too_deep(source, event.start_mark.line + 1)
-            elif isinstance(event, yaml.CollectionEndEvent):
-                depth -= 1
-            elif isinstance(event, yaml.AliasEvent):
+            line = event.start_mark.line + 1
+            if isinstance(event, yaml.NodeEvent) and open_ and open_[-1][0] is not None:
+                keys, open_[-1][1] = open_[-1][0], open_[-1][1] + 1
+                value = getattr(event, "value", None)
+                if open_[-1][1] % 2 and isinstance(value, str):
+                    if value in keys:
+                        raise ConfigError(
+                            f"{source}, line {line}: key {value!r} appears twice in one mapping "
+                            "(the last would win unseen); keep one."
+                        )
+                    keys.add(value)
+            if isinstance(event, yaml.AliasEvent):
                 raise ConfigError(
-                    f"{source}, line {event.start_mark.line + 1}: YAML alias *{event.anchor} "
+                    f"{source}, line {line}: YAML alias *{event.anchor} "
                     "is not allowed in this file (aliases can expand a small file without "
                     "bound); write the value out in full."
                 )
+            if getattr(event, "tag", None) is not None and not _implicit(event):
+                raise ConfigError(
+                    f"{source}, line {line}: YAML tag {event.tag.replace(_STD, '!!')} is not "
+                    "allowed in this file (it holds plain data); remove the tag and write the "
+                    "value itself."
+                )
+            if isinstance(event, yaml.CollectionStartEvent):
+                open_.append([set() if isinstance(event, yaml.MappingStartEvent) else None, 0])
+                if len(open_) > MAX_DEPTH:
+                    raise _too_deep(source, line)
+            elif isinstance(event, yaml.CollectionEndEvent):
+                open_.pop()
     except yaml.YAMLError as exc:
         # libyaml >= 0.2.6 stops at its own nesting limit before our count reaches it
         if "nesting depth" in str(exc):
             mark = getattr(exc, "problem_mark", None)
             raise _too_deep(source, mark.line + 1 if mark else None) from None
         return
+
+
+def _implicit(event: Any) -> bool:
+    """Whether the tag of ``event`` is one the parser resolved itself, not one written out."""
+    implicit = getattr(event, "implicit", False)
+    return any(implicit) if isinstance(implicit, tuple) else bool(implicit)
 
 
 def _too_deep(source: str, line: int | None) -> ConfigError:

@@ -9,6 +9,7 @@ behaviour version (:mod:`pytest_emrd.agent.reference._version`).
 
 from __future__ import annotations
 
+import json
 import os
 import re
 from dataclasses import dataclass, field, fields, replace
@@ -52,6 +53,12 @@ _CREDENTIAL_FIELD: Final = re.compile(
 """``extra_body`` field names that look like credentials (``api_key``, ``access_token``,
 ``client_secret``): their value must be an environment variable reference, ``${VAR}``."""
 
+_CREDENTIAL_HEADER: Final = re.compile(
+    r"auth|token|key|cookie|secret|session|signature|password", re.IGNORECASE
+)
+"""``extra_headers`` names that look like credentials: their value must be a declared ``${VAR}``."""
+_CONTROL: Final = re.compile(r"[\x00-\x1f\x7f]")
+_ENV_NAME: Final = re.compile(r"[A-Z_][A-Z0-9_]*")
 _ENV_REF = re.compile(r"\$\{(?P<var>[A-Z_][A-Z0-9_]*)(?::-(?P<default>[^}]*))?\}")
 _DECAY = re.compile(r"^scout-decay-(?P<mean>\d+(?:\.\d+)?)$")
 _WINDOW = re.compile(r"^scout-window-(?P<k>\d+)$")
@@ -82,9 +89,20 @@ class ModelConfig:
     extra_body: dict[str, Any] = field(default_factory=dict)
     extra_headers: dict[str, str] = field(default_factory=dict)
     planted: dict[str, Any] = field(default_factory=dict)
+    env: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
         where = f"model {self.name!r}"
+        texts = {f.name: getattr(self, f.name) for f in fields(self)}
+        texts.update({f"extra_headers.{k}": v for k, v in self.extra_headers.items()})
+        for name, text in texts.items():
+            bad = _CONTROL.search(text) if isinstance(text, str) else None
+            if bad is not None:  # the value may hold a secret: only the character is named
+                raise ConfigError(
+                    f"{where}: {name} holds the control character {bad.group()!r} at offset "
+                    f"{bad.start()}; remove it (a line break or NUL in a URL, header or id "
+                    "would split the request or garble the terminal)."
+                )
         check_choice(f"{where}: provider", self.provider, PROVIDERS)
         check_choice(f"{where}: modality", self.modality, MODALITIES)
         _check_extras(self, where)
@@ -189,6 +207,13 @@ def _check_extras(config: ModelConfig, where: str) -> None:
     for key, allowed in checked.items() if config.provider == "openai" else ():
         if key in config.extra_body:
             check_choice(f"{where}: extra_body.{key}", config.extra_body[key], allowed)
+    try:
+        json.dumps(config.extra_body, allow_nan=False)
+    except (TypeError, ValueError) as exc:
+        raise ConfigError(
+            f"{where}: extra_body is not JSON ({exc}); write numbers, text, true/false, null, "
+            "lists and mappings only (quote a date: '2026-01-01')."
+        ) from None
     for header, value in config.extra_headers.items():
         if header.lower() in _CREDENTIAL_HEADERS:
             raise ConfigError(
@@ -205,18 +230,26 @@ def _check_extras(config: ModelConfig, where: str) -> None:
 _FIELDS: Final = {f.name for f in fields(ModelConfig)}
 
 
-def _expand_env(value: Any, where: str, field_name: str) -> Any:
+def _expand_env(value: Any, where: str, field_name: str, declared: frozenset[str]) -> Any:
     """``${VAR}`` / ``${VAR:-default}`` in a registry string (or in those of a mapping or list),
-    resolved from the environment."""
+    resolved from the environment; only ``declared`` variables (``api_key_env`` and ``env``),
+    each then a secret (:func:`~pytest_emrd._scrub.watch_env`)."""
     if isinstance(value, dict):
-        return {k: _expand_env(v, where, f"{field_name}.{k}") for k, v in value.items()}
+        return {k: _expand_env(v, where, f"{field_name}.{k}", declared) for k, v in value.items()}
     if isinstance(value, list):
-        return [_expand_env(v, where, field_name) for v in value]
+        return [_expand_env(v, where, field_name, declared) for v in value]
     if not isinstance(value, str):
         return value
 
     def sub(match: re.Match[str]) -> str:
         var, default = match.group("var"), match.group("default")
+        if var not in declared:
+            raise ConfigError(
+                f"{where}: {field_name} uses ${{{var}}}, which the model does not declare; add "
+                f"env: [{var}] to the model (an entry reads only the variables it declares, "
+                "and their values are then removed from every file and log)."
+            )
+        watch_env([var])
         found = os.environ.get(var)
         if found:
             return found
@@ -230,6 +263,26 @@ def _expand_env(value: Any, where: str, field_name: str) -> Any:
     return _ENV_REF.sub(sub, value)
 
 
+def _check_header_credentials(entry: dict[str, Any], where: str) -> None:
+    """Credential-like ``extra_headers`` take only a ``${VAR}`` reference, never a value."""
+    headers = entry.get("extra_headers")
+    for header, value in headers.items() if isinstance(headers, dict) else ():
+        if (
+            not isinstance(header, str)
+            or header.lower() in _CREDENTIAL_HEADERS
+            or not _CREDENTIAL_HEADER.search(header)
+        ):
+            continue  # (the four key headers are refused with or without a reference)
+        ref = _ENV_REF.fullmatch(value) if isinstance(value, str) else None
+        if ref is None or ref.group("default") is not None:
+            raise ConfigError(
+                f"{where}: extra_headers.{header} looks like a credential and is written out; "
+                "write it as a reference to a declared variable, ${MY_SECRET} with "
+                "env: [MY_SECRET], and export MY_SECRET (its value is then removed from every "
+                "file and log)."
+            )
+
+
 def _check_body_credentials(entry: dict[str, Any], where: str) -> None:
     """Credential-like ``extra_body`` fields must be ``${VAR}`` references (then watched)."""
     for at, value in _credential_fields(entry.get("extra_body") or {}):
@@ -241,7 +294,6 @@ def _check_body_credentials(entry: dict[str, Any], where: str) -> None:
                 "reference, ${MY_SECRET}, and export MY_SECRET (its value is then removed "
                 "from every file and log)."
             )
-        watch_env([ref.group("var")])
 
 
 Lines = dict[tuple[str, str | None], int]
@@ -267,10 +319,22 @@ def _build(name: str, entry: dict[str, Any], source: str, lines: Lines) -> Model
             f"{unknown}; known fields: {', '.join(sorted(_FIELDS - {'name'}))}."
         )
     _check_body_credentials(entry, f"{_at(source, lines, name, 'extra_body')}: model {name!r}")
+    _check_header_credentials(entry, f"{_at(source, lines, name, 'extra_headers')}: model {name!r}")
+    env = entry.get("env") or []
+    if not isinstance(env, list) or not all(
+        isinstance(v, str) and _ENV_NAME.fullmatch(v) for v in env
+    ):
+        raise ConfigError(
+            f"{_at(source, lines, name, 'env')}: model {name!r}: env={env!r} must be a list of "
+            "environment variable names (env: [MY_BASE_URL, MY_TOKEN])."
+        )
+    declared = frozenset((*env, entry.get("api_key_env") or ""))
+    watch_env(declared)
     values = {
-        k: _expand_env(v, f"{_at(source, lines, name, k)}: model {name!r}", k)
+        k: _expand_env(v, f"{_at(source, lines, name, k)}: model {name!r}", k, declared)
         for k, v in entry.items()
     }
+    values["env"] = tuple(env)
     values["name"] = name
     if values.get("provider") == "anthropic":
         values.setdefault("temperature", None)  # Appendix C: Claude at the provider default

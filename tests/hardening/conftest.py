@@ -112,6 +112,7 @@ def leaky_registry(path: Path, provider: Provider, **routes: str) -> Path:
             "base_url": provider.base_url(route),
             "api_key_env": KEY_ENV,
             "extra_body": {"client_secret": "${" + BODY_ENV + "}"},
+            "env": [BODY_ENV],
             "modality": "text",
             "max_retries": 0,
             "timeout_s": 60,
