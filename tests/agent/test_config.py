@@ -138,7 +138,8 @@ def test_unknown_model_lists_known_names() -> None:
         ),
         ("models: {a: {provider: openai, base_url: 'http://x'}}", "model_id"),
         (
-            "models: {a: {provider: openai, model_id: m, base_url: '${EMRD_UNSET_FOR_TEST}', env: [EMRD_UNSET_FOR_TEST]}}",
+            "models: {a: {provider: openai, model_id: m, base_url: '${EMRD_UNSET_FOR_TEST}', "
+            "env: [EMRD_UNSET_FOR_TEST]}}",
             "needs the environment variable EMRD_UNSET_FOR_TEST",
         ),
         (

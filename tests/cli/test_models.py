@@ -50,7 +50,8 @@ def test_models_prints_endpoints_without_their_keys(capsys, monkeypatch, tmp_pat
     user.write_text(
         "models:\n"
         "  google: {provider: openai, model_id: g, base_url: 'https://g.example/v1?key=AIzaQUERY1'}\n"
-        "  azure: {provider: openai, model_id: a, base_url: '${MY_VLM_HOST}', env: [MY_VLM_HOST]}\n",
+        "  azure: {provider: openai, model_id: a, base_url: '${MY_VLM_HOST}',"
+        " env: [MY_VLM_HOST]}\n",
         encoding="utf-8",
     )
     assert main(["models", "--models", str(user), *(["--json"] if as_json else [])]) == 0

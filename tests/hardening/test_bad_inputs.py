@@ -87,7 +87,8 @@ REGISTRY_PROBES = [
         id="extra-body-secret-in-list",
     ),
     pytest.param(
-        "models:\n  m: {provider: openai, model_id: x, base_url: '${EMRD_UNSET_BASE}/v1', env: [EMRD_UNSET_BASE]}\n",
+        "models:\n  m: {provider: openai, model_id: x, base_url: '${EMRD_UNSET_BASE}/v1', "
+        "env: [EMRD_UNSET_BASE]}\n",
         "line 2: model 'm': base_url needs the environment variable EMRD_UNSET_BASE, which is "
         "not set; export EMRD_UNSET_BASE=..., or write ${EMRD_UNSET_BASE:-default} for a "
         "fallback.",
@@ -164,7 +165,8 @@ def test_a_credential_in_extra_body_is_accepted_as_a_reference_and_then_watched(
     monkeypatch.setenv("EMRD_BODY_REF", "body-secret-value-77")
     path = tmp_path / "models.yaml"
     path.write_text(
-        f"models:\n  m: {{{OK}, extra_body: {{api_key: '${{EMRD_BODY_REF}}'}}, env: [EMRD_BODY_REF]}}\n"
+        f"models:\n  m: {{{OK}, extra_body: {{api_key: '${{EMRD_BODY_REF}}'}}, "
+        "env: [EMRD_BODY_REF]}\n"
     )
     assert load_registry(path).get("m").extra_body == {"api_key": "body-secret-value-77"}
     assert scrub("sent body-secret-value-77") == "sent <redacted>"
