@@ -19,7 +19,7 @@ import threading
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any, Protocol
+from typing import Any, Final, Protocol
 
 import httpx
 
@@ -231,10 +231,8 @@ class OpenAICompatibleClient(_HttpClient):
             content = "".join(p.get("text", "") for p in content if isinstance(p, dict))
         if not isinstance(content, str):
             raise TypeError(f"choices[0].message.content is {type(content).__name__}")
-        usage = data.get("usage") or {}
         return ChatResponse(
-            content,
-            Usage(int(usage.get("prompt_tokens") or 0), int(usage.get("completion_tokens") or 0)),
+            content, _usage(data.get("usage"), "prompt_tokens", "completion_tokens")
         )
 
 
@@ -273,10 +271,21 @@ class AnthropicClient(_HttpClient):
         text = "".join(b["text"] for b in blocks if b.get("type") == "text")
         if not any(b.get("type") == "text" for b in blocks):
             raise ValueError("no text block in content")
-        usage = data.get("usage") or {}
-        return ChatResponse(
-            text, Usage(int(usage.get("input_tokens") or 0), int(usage.get("output_tokens") or 0))
-        )
+        return ChatResponse(text, _usage(data.get("usage"), "input_tokens", "output_tokens"))
+
+
+#: Most tokens one reply may report per field (a bound far above any context window).
+MAX_USAGE_TOKENS: Final = 100_000_000
+
+
+def _usage(usage: Any, *names: str) -> Usage:
+    """The provider's token counts (absent: 0); a count that is not a whole number in
+    [0, :data:`MAX_USAGE_TOKENS`] makes the reply unreadable (ValueError: retried)."""
+    counts = [(usage or {}).get(name) or 0 for name in names]
+    for name, value in zip(names, counts, strict=True):
+        if type(value) is not int or not 0 <= value <= MAX_USAGE_TOKENS:
+            raise ValueError(f"usage.{name}={str(value)[:20]} is not a whole number in [0, 1e8]")
+    return Usage(*counts)
 
 
 def _sampling(config: ModelConfig) -> dict[str, Any]:
