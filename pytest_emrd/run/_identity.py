@@ -17,6 +17,7 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Final
 
+from pytest_emrd import __version__
 from pytest_emrd._atomic import write_bytes_atomic
 from pytest_emrd.errors import ConfigError
 from pytest_emrd.run._settings import RunSettings
@@ -78,7 +79,7 @@ def read_identity(run_dir: Path) -> RunIdentity | None:
     """The identity recorded in ``run_dir``, or ``None`` when it has none."""
     path = run_dir / RUN_FILE
     try:
-        return RunIdentity.from_dict(json.loads(path.read_bytes()))
+        identity = RunIdentity.from_dict(json.loads(path.read_bytes()))
     except FileNotFoundError:
         return None
     except (OSError, ValueError, KeyError, TypeError, IndexError) as exc:
@@ -86,6 +87,13 @@ def read_identity(run_dir: Path) -> RunIdentity | None:
             f"{path} cannot be read ({type(exc).__name__}); it records the run's shard. "
             "Delete it only if you know which shard the directory holds."
         ) from None
+    if identity.schema_version != IDENTITY_SCHEMA:
+        raise ConfigError(
+            f"{path} has schema_version={identity.schema_version}, but pytest-emrd "
+            f"{__version__} reads schema_version {IDENTITY_SCHEMA}; read this run directory "
+            "with the release that wrote it, or give this run another --emrd-results."
+        )
+    return identity
 
 
 def check_resume(run_dir: Path, shard: tuple[int, int] | None) -> None:

@@ -18,6 +18,7 @@ from functools import cached_property
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Final
 
+from pytest_emrd import __version__
 from pytest_emrd._atomic import write_bytes_atomic
 from pytest_emrd._fork import available_cores, fork_map
 from pytest_emrd._scrub import scrub, scrub_bytes
@@ -96,6 +97,11 @@ class StoredEpisode:
         """A stored file, decoded and validated in full (its head describes its trajectory)."""
         document: dict[str, Any] = json.loads(blob)
         schema = document.get("store_schema")
+        if schema not in (LEGACY_STORE_SCHEMA, STORE_SCHEMA) or isinstance(schema, bool):
+            raise ProtocolError(
+                f"store_schema={schema!r} is not one pytest-emrd {__version__} reads "
+                f"({LEGACY_STORE_SCHEMA} or {STORE_SCHEMA})"
+            )
         trajectory = Trajectory.from_dict(document["trajectory"])
         if schema == LEGACY_STORE_SCHEMA:
             return cls.of(
@@ -106,8 +112,6 @@ class StoredEpisode:
                 seconds=float(document["seconds"]),
                 retries=int(document.get("retries", 0)),
             )
-        if schema != STORE_SCHEMA:
-            raise ProtocolError(f"store_schema={schema!r} is not {STORE_SCHEMA}")
         head = EpisodeHead.from_dict(document["head"])
         if not head.describes(trajectory):
             raise ProtocolError("its head does not describe its trajectory")
