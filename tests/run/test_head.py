@@ -153,7 +153,7 @@ def test_an_episode_file_of_an_unknown_layout_is_one_line_naming_it(tmp_path):
     _computed(tmp_path)
     path = episode_path(tmp_path, SPEC)
     path.write_bytes(path.read_bytes().replace(b'"store_schema":2', b'"store_schema":3'))
-    message = r"episode file=.*cannot be read \(store_schema=3 is not one pytest-emrd .* reads \(1 or 2\)\); delete it"
+    message = r"file=.*read \(store_schema=3 is not one pytest-emrd .* reads \(1 or 2\)\); delete"
     with pytest.raises(ProtocolError, match=message):
         load_run_episodes([tmp_path])
     assert _store(tmp_path, "s2").reusable(SPEC) is None  # recomputed by a resume
