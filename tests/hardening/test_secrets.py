@@ -28,6 +28,7 @@ from pytest_emrd.trajectory import EpisodeSpec
 from .conftest import (
     HUGE_CHARS,
     KEY_ENV,
+    PLANTED_HEADER,
     PLANTED_KEY,
     PLANTED_PASSWORD,
     PLANTED_QUERY,
@@ -51,7 +52,7 @@ def test_a_recorded_run_leaks_no_planted_credential(
     sandbox.makepyfile(test_emrd=(ROOT / "benchmarks" / "test_emrd.py").read_text())
     sandbox.makefile(".yaml", thresholds="leaky:\n  baseline:\n    errored_rate: {max: 0.0}\n")
     registry = sandbox.path / "user-models.yaml"
-    leaky_registry(registry, provider, leaky="ok", denied="deny", rejected="deny")
+    leaky_registry(registry, provider, leaky="ok", denied="deny", rejected="fail")
     models = f"--emrd-models={registry}"
 
     # Replay only, nothing recorded: one summary and one command, which works verbatim.
@@ -93,11 +94,12 @@ def test_a_recorded_run_leaks_no_planted_credential(
         "denied-baseline-office-ep00",
         "rejected-baseline-office-ep00",
     ]
-    for name in ("denied", "rejected"):
+    for name, status in (("denied", 401), ("rejected", 500)):
         stored = (sandbox.path / f"run/episodes/{name}-baseline-office-ep00.json").read_text()
-        assert "HTTP 401" in stored and f"key={REDACTED}" in stored
+        assert f"HTTP {status}" in stored and "token <redacted>" in stored
     on_the_wire = "\n".join(provider.seen)
     assert f"Bearer {PLANTED_KEY}" in on_the_wire and f"key={PLANTED_QUERY}" in on_the_wire
+    assert PLANTED_HEADER in on_the_wire
     assert "Basic " not in on_the_wire  # no userinfo: the Bearer key is what is sent
     assert "HTTP Request: POST http://127.0.0.1" in _outputs(recorded)  # httpx logged, scrubbed
 
