@@ -246,7 +246,7 @@ def parse(text: str) -> CassetteData:
     try:
         loaded = jsonserializer.deserialize(text)
     except (ValueError, RecursionError) as exc:
-        raise FormatError(f"not valid JSON ({str(exc)[:80]})") from None
+        raise FormatError(f"not valid JSON ({exc})") from None
     _field("cassette", loaded, _SCHEMA)
     emrd, interactions = loaded["metadata"]["emrd"], loaded["interactions"]
     if not emrd["digest"].startswith(DIGEST_PREFIX):
