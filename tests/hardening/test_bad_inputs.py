@@ -24,6 +24,21 @@ from .conftest import KEY_ENV, PLANTED_FORMS, PLANTED_KEY, PLANTED_PASSWORD, PLA
 OK = "provider: openai, model_id: x, base_url: 'http://h.example/v1'"
 BOMB = "models:\n  m:\n    provider: reference\n    planted: &a [1, 1]\n    x: &b [*a, *a]\n"
 
+#: Credential headers a registry once accepted with a literal value.
+CREDENTIAL_HEADERS = (
+    "Cookie",
+    "Proxy-Authorization",
+    "X-Auth-Token",
+    "X-API-Token",
+    "Ocp-Apim-Subscription-Key",
+    "X-Amz-Security-Token",
+)
+YAML_TAGS = [
+    ("local", "!foo", "!foo"),
+    ("python-object", "!!python/object/apply:os.system", "!!python/object/apply:os.system"),
+    ("binary", "!!binary", "!!binary"),
+]
+
 REGISTRY_PROBES = [
     pytest.param(
         f"models:\n  m: {{provider: openai, model_id: x, "
@@ -128,6 +143,56 @@ REGISTRY_PROBES = [
         f"YAML nested more than {MAX_DEPTH} levels deep",
         id="crash-deep-nesting",
     ),
+    *(
+        pytest.param(
+            f"models:\n  m: {{{OK}, extra_headers: {{{header}: '{PLANTED_KEY}'}}}}\n",
+            f"line 2: model 'm': extra_headers.{header} looks like a credential and is written "
+            "out; write it as a reference to a declared variable, ${MY_SECRET} with "
+            "env: [MY_SECRET], and export MY_SECRET (its value is then removed from every "
+            "file and log).",
+            id=f"literal-header-{header}",
+        )
+        for header in CREDENTIAL_HEADERS
+    ),
+    pytest.param(
+        f"models:\n  m: {{{OK}, extra_headers: {{X-Exfil: '${{{KEY_ENV}}}'}}}}\n",
+        f"line 2: model 'm': extra_headers.X-Exfil uses ${{{KEY_ENV}}}, which the model does not "
+        f"declare; add env: [{KEY_ENV}] to the model (an entry reads only the variables it "
+        "declares, and their values are then removed from every file and log).",
+        id="undeclared-variable",
+    ),
+    *(
+        pytest.param(
+            f"models:\n  m:\n    provider: openai\n    model_id: x\n    timeout_s: {tag} 3\n",
+            f"line 5: YAML tag {shown} is not allowed in this file (it holds plain data); "
+            "remove the tag and write the value itself.",
+            id=f"tag-{ident}",
+        )
+        for ident, tag, shown in YAML_TAGS
+    ),
+    pytest.param(
+        'models:\n  m: {provider: openai, model_id: x, base_url: "http://h.example/v1\\r\\nX"}\n',
+        "line 2: model 'm': base_url holds the control character '\\r' at offset 19; remove it",
+        id="crlf-in-base-url",
+    ),
+    *(
+        pytest.param(
+            f'models:\n  m: {{provider: openai, base_url: "http://h", model_id: "gpt{char}x"}}\n',
+            f"line 2: model 'm': model_id holds the control character {shown} at offset 3",
+            id=f"control-in-model-id-{ident}",
+        )
+        for ident, char, shown in [("nul", "\\0", "'\\x00'"), ("esc", "\\e", "'\\x1b'")]
+    ),
+    pytest.param(
+        f"models:\n  m: {{{OK}}}\n  m: {{{OK}, model_id: y}}\n",
+        "line 3: key 'm' appears twice in one mapping (the last would win unseen); keep one.",
+        id="duplicate-model",
+    ),
+    pytest.param(
+        f"models:\n  m: {{{OK}, extra_body: {{since: 2026-01-01}}}}\n",
+        "line 2: model 'm': extra_body is not JSON (Object of type date is not JSON serializable)",
+        id="extra-body-date",
+    ),
     pytest.param(
         "# " + "x" * MAX_FILE_BYTES + "\n",
         "is larger than 1000 KB, more than such a file ever needs; pass the right file with "
@@ -179,6 +244,19 @@ THRESHOLD_PROBES = [
         "scout: &s\n  baseline:\n    aec: {min: 0.5}\nmimic: *s\n",
         "line 4: YAML alias *s is not allowed",
         id="alias",
+    ),
+    *(
+        pytest.param(
+            f"scout:\n  baseline:\n    aec: {{min: {tag} 0.5}}\n",
+            f"line 3: YAML tag {shown} is not allowed in this file",
+            id=f"tag-{ident}",
+        )
+        for ident, tag, shown in YAML_TAGS
+    ),
+    pytest.param(
+        "scout:\n  baseline:\n    aec: {min: 0.5}\n  baseline:\n    aec: {min: 0.1}\n",
+        "line 4: key 'baseline' appears twice in one mapping",
+        id="duplicate-condition",
     ),
     pytest.param(
         "scout:\n  baseline:\n    aec: {min: 0.5}\n" + "#" * (50 * MAX_FILE_BYTES),
