@@ -239,10 +239,7 @@ def parse(text: str) -> CassetteData:
     digest, :class:`FormatError` for anything else that is not a cassette (checked against
     :data:`_SCHEMA` before use)."""
     if text.startswith(LEGACY_HEAD):
-        raise LegacyFormatError(
-            "it is in a format an older pytest-emrd wrote (emrd-cassette/1 or /2), under an "
-            "earlier protocol; it cannot replay with this release"
-        )
+        raise LegacyFormatError("its format is emrd-cassette/1 or /2")
     try:
         loaded = jsonserializer.deserialize(text)
     except (ValueError, RecursionError) as exc:
@@ -250,10 +247,7 @@ def parse(text: str) -> CassetteData:
     _field("cassette", loaded, _SCHEMA)
     emrd, interactions = loaded["metadata"]["emrd"], loaded["interactions"]
     if not emrd["digest"].startswith(DIGEST_PREFIX):
-        raise LegacyFormatError(
-            "its digest covers its interactions only, as an older pytest-emrd wrote it; it "
-            "cannot replay with this release"
-        )
+        raise LegacyFormatError("its digest covers its interactions only")
     if _digest(text, emrd["digest"]) != emrd["digest"]:
         raise IntegrityError("its bytes do not match the digest recorded with them")
     requests = tuple(

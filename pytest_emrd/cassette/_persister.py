@@ -70,11 +70,11 @@ class EpisodePersister:
             raise CassetteNotFoundError(str(path))
         try:
             data, _ = read_cassette(path, root=self.root)
-        except LegacyFormatError:
+        except LegacyFormatError as exc:
             raise CassetteError(
-                f"cassette={str(path)!r} was written by an older pytest-emrd, under an earlier "
-                f"protocol than {self.protocol}, and cannot replay with this release; delete it "
-                f"and record it again: {self.rerecord_command}"
+                f"cassette={str(path)!r} was written by an older pytest-emrd ({exc}), under an "
+                f"earlier protocol than {self.protocol}, and cannot replay with this release; "
+                f"delete it and record it again: {self.rerecord_command}"
             ) from None
         except IntegrityError as exc:
             raise CassetteError(

@@ -158,3 +158,26 @@ def test_show_refuses_an_edited_cassette_in_one_line(
     assert main(["cassettes", "show", str(recorded)]) == 2
     err = capsys.readouterr().err.strip()
     assert "\n" not in err and "do not match the digest" in err
+
+
+def test_a_cassette_whose_digest_covers_its_interactions_only_is_refused(
+    recorded: Path, server: FakeServer, spec, tmp_path: Path
+) -> None:
+    """Written before the digest covered the whole file (``sha256:``): recorded again."""
+    _rewrite(recorded, lambda d: d["metadata"]["emrd"].update(digest="sha256:" + "0" * 64))
+    with pytest.raises(CassetteError) as info:
+        _replay(spec, server, tmp_path)
+    assert "its digest covers its interactions only" in str(info.value)
+    assert "--emrd-record-mode=all" in str(info.value)
+
+
+def test_an_edited_metadata_field_is_refused(
+    recorded: Path, server: FakeServer, spec, tmp_path: Path
+) -> None:
+    """The digest covers the whole file: ``metadata.emrd.raw`` too."""
+    document = json.loads(lzma.decompress(recorded.read_bytes()))
+    document["metadata"]["emrd"]["raw"] = [0]
+    text = jsonserializer.serialize(document)
+    recorded.write_bytes(lzma.compress(text.encode()))
+    with pytest.raises(CassetteError, match="changed after it was recorded"):
+        _replay(spec, server, tmp_path)
