@@ -126,7 +126,7 @@ def _digest(text: str, recorded: str) -> str:
     ``metadata``, which sorts after ``interactions``) read as :data:`_UNSET`."""
     head, found, tail = text.rpartition(recorded)
     whole = head + _UNSET + tail if found else text
-    return DIGEST_PREFIX + hashlib.sha256(whole.encode(errors="surrogatepass")).hexdigest()
+    return DIGEST_PREFIX + hashlib.sha256(whole.encode()).hexdigest()
 
 
 def encode(data: CassetteData) -> bytes:
@@ -177,25 +177,21 @@ def _field(at: str, value: Any, shape: Any) -> None:
     """:class:`FormatError` naming the first field of ``value`` that is not of ``shape``: a
     type or tuple of types, ``[shape]`` (a list of it), or a mapping of field -> shape (a
     name ending ``?`` is optional, ``*`` is every value; other fields are left open)."""
-    if isinstance(shape, list):
-        ok = isinstance(value, list)
-    elif isinstance(shape, dict):
-        ok = isinstance(value, dict)
-    else:
-        ok = isinstance(value, shape) and not isinstance(value, bool)
-    if not ok:
-        wanted = getattr(shape, "__name__", None) or type(shape).__name__
-        raise FormatError(f"{at}={_brief(value)} is not {_NAMES.get(wanted, wanted)}")
+    kind = type(shape) if isinstance(shape, list | dict) else shape
+    if not isinstance(value, kind) or isinstance(value, bool):
+        wanted = _NAMES[getattr(kind, "__name__", "tuple")]
+        raise FormatError(f"{at}={_brief(value)} is not {wanted}")
     if isinstance(shape, list):
         for index, item in enumerate(value):
             _field(f"{at}[{index}]", item, shape[0])
     for name, inner in shape.items() if isinstance(shape, dict) else ():
+        key = name.rstrip("?")
         if name == "*":
-            for key, item in value.items():
-                _field(f"{at}.{key}", item, inner)
-        elif name.rstrip("?") in value:
-            _field(f"{at}.{name.rstrip('?')}", value[name.rstrip("?")], inner)
-        elif not name.endswith("?"):
+            for each, item in value.items():
+                _field(f"{at}.{each}", item, inner)
+        elif key in value:
+            _field(f"{at}.{key}", value[key], inner)
+        elif key == name:
             raise FormatError(f"{at}.{name} is missing")
 
 
