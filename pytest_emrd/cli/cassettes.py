@@ -8,6 +8,7 @@ on success, 2 on an error.
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 from pathlib import Path
 
@@ -28,8 +29,10 @@ def _show(args: argparse.Namespace) -> int:
     from pytest_emrd.cassette import FormatError, read_cassette
     from pytest_emrd.errors import CassetteError, ConfigError
 
+    here = Path.cwd()  # under it, no folder on the way may be a symbolic link either
+    root = here if here in Path(os.path.abspath(args.file)).parents else None
     try:
-        _, text = read_cassette(args.file)  # the digest is checked: what is shown is what replays
+        _, text = read_cassette(args.file, root=root)  # checked: what is shown is what replays
     except OSError as exc:
         raise ConfigError(f"file={str(args.file)!r} cannot be read: {exc.strerror}") from None
     except FormatError as exc:

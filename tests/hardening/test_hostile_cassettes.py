@@ -88,6 +88,17 @@ def test_a_symlinked_cassette_is_refused_unopened(tmp_path, capsys):
     assert "PATH=" not in err
 
 
+def test_a_cassette_under_a_symlinked_folder_is_refused_unopened(tmp_path, capsys, monkeypatch):
+    (tmp_path / "outside").mkdir()
+    (tmp_path / "outside" / "ep00.json.xz").write_bytes(GOOD.read_bytes())
+    (tmp_path / "repo").mkdir()
+    (tmp_path / "repo" / "scout").symlink_to(tmp_path / "outside", target_is_directory=True)
+    monkeypatch.chdir(tmp_path / "repo")
+    assert emrd(["cassettes", "show", "scout/ep00.json.xz"]) == 2
+    out, err = capsys.readouterr()
+    assert out == "" and err.count("\n") == 1 and "is or lies under a symbolic link" in err
+
+
 def _limited() -> None:
     resource.setrlimit(resource.RLIMIT_AS, (1536 << 20, 1536 << 20))
 
