@@ -107,7 +107,7 @@ def _check_bounds(text: str, source: str) -> None:
                 if open_[-1][1] % 2 and isinstance(value, str):
                     if value in keys:
                         raise ConfigError(
-                            f"{source}, line {line}: key {value!r} appears twice in one mapping "
+                            f"{source}, line {line}: {value!r} appears twice in one mapping "
                             "(the last would win unseen); keep one."
                         )
                     keys.add(value)

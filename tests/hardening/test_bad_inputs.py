@@ -185,7 +185,7 @@ REGISTRY_PROBES = [
     ),
     pytest.param(
         f"models:\n  m: {{{OK}}}\n  m: {{{OK}, model_id: y}}\n",
-        "line 3: key 'm' appears twice in one mapping (the last would win unseen); keep one.",
+        "line 3: 'm' appears twice in one mapping (the last would win unseen); keep one.",
         id="duplicate-model",
     ),
     pytest.param(
@@ -255,7 +255,7 @@ THRESHOLD_PROBES = [
     ),
     pytest.param(
         "scout:\n  baseline:\n    aec: {min: 0.5}\n  baseline:\n    aec: {min: 0.1}\n",
-        "line 4: key 'baseline' appears twice in one mapping",
+        "line 4: 'baseline' appears twice in one mapping",
         id="duplicate-condition",
     ),
     pytest.param(
