@@ -192,6 +192,7 @@ class Run:
             root=self.settings.cassettes,
             invocation=self.invocation,
             modality_of=self.modality_of,
+            episodes=self.settings.episodes,
         )
 
     @cached_property
