@@ -120,7 +120,7 @@ def _report(args: argparse.Namespace, formats: list[str]) -> int:
 
 
 def _compare(args: argparse.Namespace, formats: list[str]) -> int:
-    from pytest_emrd.report import compare_runs, render_comparison, write_files
+    from pytest_emrd.report import compare_lines, compare_runs, render_comparison, write_files
     from pytest_emrd.run import load_run_dirs
 
     if args.compare:
@@ -140,6 +140,7 @@ def _compare(args: argparse.Namespace, formats: list[str]) -> int:
     if args.out is None:
         sys.stdout.write(render_comparison(comparison, ["md"])["compare.md"].decode())
         return 0
+    print(*compare_lines(comparison), sep="\n")
     for path in write_files(render_comparison(comparison, formats), args.out):
         print(path)
     return 0

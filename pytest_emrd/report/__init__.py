@@ -27,7 +27,13 @@ from pytest_emrd.errors import check_choice
 from pytest_emrd.gate import Verdict
 from pytest_emrd.metrics import EpisodeMetrics
 from pytest_emrd.report._build import Prices, align_map, build_report, group_cells
-from pytest_emrd.report._compare import COMPARED, Comparison, compare_document, compare_runs
+from pytest_emrd.report._compare import (
+    COMPARED,
+    Comparison,
+    compare_document,
+    compare_lines,
+    compare_runs,
+)
 from pytest_emrd.report._document import Document, render_html, render_markdown
 from pytest_emrd.report._model import FIGURES, Report, row_label
 from pytest_emrd.report._sections import START_GATES, report_document, summary_document
@@ -47,6 +53,7 @@ __all__ = [
     "append_step_summary",
     "build_report",
     "check_formats",
+    "compare_lines",
     "compare_runs",
     "group_cells",
     "registry_prices",

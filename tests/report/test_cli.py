@@ -68,6 +68,8 @@ def test_compare_prints_markdown_or_writes_files(make_run_dir, tmp_path: Path, c
     out = tmp_path / "cmp"
     assert main(["report", "--compare", str(a), str(b), "--out", str(out)]) == 0
     assert {p.name for p in out.iterdir()} == {"compare.md", "compare.html", "compare.json"}
+    said = capsys.readouterr().out  # the verdicts in the terminal, then the files
+    assert "scout baseline memory_strength: " in said and said.rstrip().endswith("compare.json")
 
 
 def test_compare_models_within_one_run(make_run_dir, capsys) -> None:
