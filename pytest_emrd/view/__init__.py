@@ -24,11 +24,20 @@ from pytest_emrd.cassette._redact import DIGEST
 from pytest_emrd.episode import build_simulator, start_world, user_turn, world_action
 from pytest_emrd.errors import EmrdError
 from pytest_emrd.trajectory import Trajectory
-from pytest_emrd.view._page import IndexRow, episode_data, episode_gif, episode_page, index_page
+from pytest_emrd.view._page import (
+    FrameCheck,
+    IndexRow,
+    episode_data,
+    episode_gif,
+    episode_page,
+    index_page,
+)
 from pytest_emrd.world import WorldPose
 
 __all__ = [
     "EpisodeView",
+    "FrameCheck",
+    "IndexRow",
     "Recorded",
     "episode_data",
     "episode_page",
@@ -151,8 +160,17 @@ def render_episode(traj: Trajectory, *, cassettes: Path | None, gif: bool = Fals
     except EmrdError as exc:
         frames, spawn, system, note = (), None, None, f"frames not re-rendered: {exc}"
     data, check = episode_data(traj, frames, recorded_digests(traj, cassettes), note, spawn, system)
-    last = data["steps"][-1] if data["steps"] else {"coverage": None, "pa": None}
     chosen = traj.chosen_room or (traj.chosen_room_raw and f"{traj.chosen_room_raw!r}") or "-"
-    row = IndexRow(traj.spec.case_id, traj.status, len(traj.steps), chosen,
-                   last["coverage"], last["pa"], check)  # fmt: skip
+    row = IndexRow(
+        traj.spec.case_id,
+        traj.status,
+        len(traj.steps),
+        chosen,
+        data["metrics"],
+        check,
+        parse_failures=sum(s.parse_error is not None for s in traj.steps),
+        failed_actions=sum(not s.success for s in traj.steps),
+        tokens=sum(s.usage.prompt_tokens + s.usage.completion_tokens for s in traj.steps),
+        error=traj.error or "",
+    )
     return EpisodeView(episode_page(data, frames), episode_gif(data, frames) if gif else None, row)
