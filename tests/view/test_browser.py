@@ -96,6 +96,9 @@ def test_the_hash_opens_a_step_and_everything_is_drawn(chromium, pages, episode)
     entries = len(episode.steps[4].cognitive_map)
     assert plan.count("<title>") >= len(episode.ground_truth.objects) + entries
     assert dom.count("<polyline") >= 4  # path + three metric curves
+    # the map is the one after step 5's action: the agent stands where that action took it
+    after = episode_data(episode, [], Recorded(()))[0]["steps"][5]["at"]
+    assert f'<circle cx="{after[0]}" cy="{-after[1]}"' in plan
 
 
 def test_a_changed_frame_shows_a_warning_on_its_step(chromium, pages) -> None:
