@@ -19,7 +19,7 @@ from pathlib import Path
 from typing import Any
 
 from pytest_emrd.agent import build_system_prompt
-from pytest_emrd.cassette import FormatError, decode, found_cassette
+from pytest_emrd.cassette import LATENCY, FormatError, decode, found_cassette
 from pytest_emrd.cassette._redact import DIGEST
 from pytest_emrd.episode import build_simulator, start_world, user_turn, world_action
 from pytest_emrd.errors import EmrdError
@@ -93,12 +93,19 @@ def replay_frames(traj: Trajectory) -> Replay:
         sim.close()
 
 
-def _digests(node: Any) -> Iterator[str]:
+def _strings(node: Any) -> Iterator[str]:
     if isinstance(node, dict | list):
         for value in node.values() if isinstance(node, dict) else node:
-            yield from _digests(value)
-    elif isinstance(node, str) and DIGEST.match(node):
+            yield from _strings(value)
+    elif isinstance(node, str):
         yield node
+
+
+def _json(body: Any) -> Any:
+    try:
+        return json.loads(body or b"null")
+    except ValueError:
+        return None
 
 
 @dataclass(frozen=True)
@@ -108,6 +115,8 @@ class Recorded:
     digests: tuple[str | None, ...]
     """Per request (= per step), the digest of the newest image it carries (None: none)."""
     note: str | None = None
+    latencies: tuple[float | None, ...] = ()
+    """Per request, the seconds the live request took when it was recorded (None: unknown)."""
 
 
 def recorded_digests(traj: Trajectory, cassettes: Path | None) -> Recorded:
@@ -128,18 +137,26 @@ def recorded_digests(traj: Trajectory, cassettes: Path | None) -> Recorded:
     if data.protocol != traj.protocol:
         return Recorded((), f"{path} was recorded under protocol {data.protocol}, the episode "
                         f"ran under {traj.protocol}: frames not checked")  # fmt: skip
+    replies = [set(_strings(_json(r["body"]["string"]))) for r in data.responses]
+    pairs = zip(traj.steps, replies, strict=False)
+    changed = [s.index for s, r in pairs if s.raw_reply and s.raw_reply not in r]
+    if changed:
+        again = (
+            f"{path} was recorded again after this episode ran (its reply to step {changed[0]} "
+            "is another): frames not checked against it; view the run that recorded it, or "
+            "replay this episode again"
+        )
+        return Recorded((), again)
     digests = []
     for request in data.requests:
-        try:
-            found = list(_digests(json.loads(request.body or b"null")))
-        except ValueError:
-            found = []
+        found = [d for d in _strings(_json(request.body)) if DIGEST.match(d)]
         digests.append(found[-1] if found else None)
     note = None
     if len(digests) != len(traj.steps):
         note = (f"{path} holds {len(digests)} requests for {len(traj.steps)} steps: steps "
                 "are checked in order up to the shorter")  # fmt: skip
-    return Recorded(tuple(digests), note)
+    latencies = tuple(r.get(LATENCY) for r in data.responses)
+    return Recorded(tuple(digests), note, latencies)
 
 
 @dataclass(frozen=True)

@@ -110,6 +110,7 @@ def episode_data(
             "window": [j for j in range(max(0, i - HISTORY_TURNS + 1), i + 1) if j < len(frames)],
             "tokens": [s.usage.prompt_tokens, s.usage.completion_tokens],
             "latency": s.latency_s,
+            "recorded_latency": recorded.latencies[i] if i < len(recorded.latencies) else None,
             "after": (f"{after.room} (x={after.pose.x:.2f} z={after.pose.z:.2f} "
                       f"heading={after.pose.heading:.0f}°)" if after else traj.final_room),
         })  # fmt: skip

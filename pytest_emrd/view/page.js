@@ -107,8 +107,9 @@
     $("action").textContent = st.action || "(none)";
     $("tokens").textContent = `${st.tokens[0].toLocaleString()} prompt + ` +
       `${st.tokens[1].toLocaleString()} completion`;
-    $("latency").textContent = st.latency === null
-      ? "not recorded (a cassette answered this request)" : `${st.latency.toFixed(2)} s`;
+    $("latency").textContent = st.latency !== null ? `${st.latency.toFixed(2)} s`
+      : st.recorded_latency != null ? `${st.recorded_latency.toFixed(2)} s (when recorded)`
+      : "not recorded (a cassette answered this request)";
     // result: the engine's feedback on the action, after it
     $("outcome").textContent = st.success ? "executed" : "not executed";
     $("outcome").className = st.success ? "ok" : "warn";
