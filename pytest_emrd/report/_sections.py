@@ -104,8 +104,8 @@ def overview(report: Report) -> Section:
 def gates(report: Report) -> Section:
     g = report.gates
     if not g.verdicts:
-        why = g.note or (f"No gate of {g.source} applies to this run." if g.source else
-               f"No thresholds file was given or found, so no gate ran. {START_GATES}")  # fmt: skip
+        started = f"No thresholds file was given or found, so no gate ran. {START_GATES}"
+        why = g.note or (f"No gate of {g.source} applies to this run." if g.source else started)
         return Section("gates", "Gates", (Paragraph(why),))
     passed = sum(v.passed for v in g.verdicts)
     rows = tuple(
