@@ -173,7 +173,8 @@ class RunReport:
             for line in usage_table(usage_rows(self.episodes.values())):
                 tr.write_line(line)
         if self.run.settings.thresholds is None:
-            tr.write_line(f"no gate ran: no thresholds file. {START_GATES}")
+            start = START_GATES.replace("RUN_DIR", str(run_dir))
+            tr.write_line(f"no gate ran: no thresholds file. {start}")
         tr.write_line(
             f"results: {run_dir} (resume: --emrd-results {run_dir}; "
             f"gates over shards: emrd gate {run_dir} ...)"
