@@ -1,19 +1,28 @@
 """examples/ci/emrd.yml: what a model team's own repository needs from its workflow.
 
-The workflow's commands are run, in order, in such a repository (installed from a built
-wheel) by tests/test_wheel.py; this module checks what a local run cannot see: permissions,
+The workflow runs, job by job, in a temporary team repository with a grid smaller than the
+paper's (2 recorded episodes per spawn room, a registry with prices, no network on replay):
+the team's day from the first red build to the fix. tests/test_wheel.py runs it again from a
+built wheel; the rest of this module checks what a local run cannot see: permissions,
 concurrency, time limits, the pip cache, the registry on every command that reads
 thresholds.yaml, and the action versions.
 """
 
 from __future__ import annotations
 
+import os
 import re
+import shutil
+import subprocess
+import sys
 from pathlib import Path
 from typing import Any
 
 import pytest
 import yaml
+
+from pytest_emrd.agent.reference import REFERENCE_VERSION
+from tests._workflow import LocalRunner
 
 ROOT = Path(__file__).resolve().parents[1]
 WORKFLOW = ROOT / "examples" / "ci" / "emrd.yml"
@@ -81,3 +90,110 @@ def test_current_major_versions_of_the_actions(workflow) -> None:
         action, _, version = use.partition("@")
         assert re.fullmatch(r"v\d+", version), use
         assert int(version[1:]) == MAJORS[action], use
+
+
+MODEL = "my-vlm"
+#: The team's registry: the built-in scout's requests under the team's name, priced, served
+#: at an address nothing answers (a replay that went to the network would fail).
+MODELS_YAML = f"""\
+models:
+  {MODEL}:
+    provider: openai
+    base_url: "http://127.0.0.1:9/v1"
+    model_id: scout@{REFERENCE_VERSION}
+    api_key_env: MY_VLM_API_KEY
+    api_key_required: false
+    modality: both
+    price_per_mtok_in: 1.0
+    price_per_mtok_out: 4.0
+"""
+
+
+@pytest.fixture(scope="module")
+def team(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, dict[str, str]]:
+    """The team's repository (2 recorded episodes per spawn room, the workflow with
+    ``EMRD_EPISODES`` edited to match) and the shell its jobs run in."""
+    repo = tmp_path_factory.mktemp("team") / "repo"
+    for path in (ROOT / "cassettes" / "scout").glob("*/default/*/ep0[01].json.xz"):
+        target = repo / "cassettes" / MODEL / path.relative_to(ROOT / "cassettes" / "scout")
+        target.parent.mkdir(parents=True, exist_ok=True)
+        shutil.copyfile(path, target)
+    (repo / "models.yaml").write_text(MODELS_YAML, encoding="utf-8")
+    text = WORKFLOW.read_text(encoding="utf-8")
+    assert 'EMRD_EPISODES: "20"' in text
+    workflows = repo / ".github" / "workflows"
+    workflows.mkdir(parents=True)
+    (workflows / "emrd.yml").write_text(text.replace('EMRD_EPISODES: "20"', 'EMRD_EPISODES: "2"'))
+    env = {k: v for k, v in os.environ.items() if k not in {"PYTHONPATH", "GITHUB_STEP_SUMMARY"}}
+    env.update(CI="true", PATH=f"{Path(sys.executable).parent}{os.pathsep}{env['PATH']}")
+    return repo, env
+
+
+def _jobs(repo: Path) -> tuple[dict[str, Any], dict[str, str]]:
+    workflow = yaml.safe_load((repo / ".github/workflows/emrd.yml").read_text(encoding="utf-8"))
+    # this checkout is installed already (editable): the install step finds it satisfied
+    return workflow, {**workflow["env"], "EMRD_PACKAGE": "pytest-emrd"}
+
+
+def _shards(runner: LocalRunner, workflow: dict[str, Any], values: dict[str, str]) -> None:
+    for shard in workflow["jobs"]["shard"]["strategy"]["matrix"]["shard"]:
+        context = {"matrix": {"model": MODEL, "shard": shard}, "env": values}
+        rc = runner.job(workflow["jobs"]["shard"], context)
+        assert rc == 0, runner.last.stdout[-3000:] + runner.last.stderr[-2000:]
+
+
+@pytest.mark.slow
+def test_the_day_after_the_first_red_build(team, tmp_path: Path) -> None:
+    repo, env = team
+    summary = tmp_path / "step_summary.md"
+    runner = LocalRunner(repo, tmp_path / "artifacts", {**env, "GITHUB_STEP_SUMMARY": str(summary)})
+    workflow, values = _jobs(repo)
+    _shards(runner, workflow, values)
+    shard_summary = summary.read_text(encoding="utf-8")
+    assert "$" in shard_summary and "Est. cost n/a" not in shard_summary, shard_summary
+    assert "no gate ran" in shard_summary and "emrd thresholds" in shard_summary
+    assert "no gate ran: no thresholds file" in runner.last.stdout
+
+    runs = sorted(runner.store.iterdir())
+    starter = subprocess.run(
+        ["emrd", "thresholds", *map(str, runs), "--out", str(repo / "thresholds.yaml")],
+        env=env,
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    assert starter.returncode == 0, starter.stderr
+    assert f"{MODEL}:\n  baseline:\n    aec: {{min: " in (repo / "thresholds.yaml").read_text()
+    summary.write_text("", encoding="utf-8")
+    assert runner.job(workflow["jobs"]["gate"], {"env": values}) == 0, runner.last.stdout
+    assert "FAIL" not in runner.last.stdout and "$" in runner.last.stdout
+    assert "$" in summary.read_text(encoding="utf-8")
+
+    (runner.repo / "thresholds.yaml").write_text(
+        f"{MODEL}:\n  baseline:\n    aec: {{min: 0.99}}\n", encoding="utf-8"
+    )
+    assert runner.job(workflow["jobs"]["gate"], {"env": values}) == 1, runner.last.stdout
+    out = runner.last.stdout
+    assert f"FAIL {MODEL}-baseline-aec" in out and "open them: `emrd view runs/emrd-run-" in out
+    assert "open them: `emrd view runs/emrd-run-" in summary.read_text(encoding="utf-8")
+
+    summary.write_text("", encoding="utf-8")
+    shutil.rmtree(runs[0])  # its artifact is uploaded again
+    context = {"matrix": {"model": MODEL, "shard": 1}, "env": values}
+    assert runner.job(workflow["jobs"]["shard"], context) == 0
+    assert "gates of thresholds.yaml run over all shards in `emrd gate`" in summary.read_text()
+
+    context["env"] = {**values, "EMRD_EPISODES": "20"}  # the workflow as shipped
+    assert runner.job(workflow["jobs"]["shard"], context) != 0
+    said = runner.last.stdout + runner.last.stderr
+    assert "the cassettes hold 2" in said and "EMRD_EPISODES" in said, said[-3000:]
+
+    compare = subprocess.run(
+        ["emrd", "report", "--compare", str(runs[0]), str(runs[0]), "--out", str(tmp_path / "c")],
+        env=env,
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    assert compare.returncode == 0, compare.stderr
+    assert f"{MODEL} baseline aec: " in compare.stdout and ": no change" in compare.stdout

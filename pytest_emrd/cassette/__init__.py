@@ -24,9 +24,10 @@ from pytest_emrd.cassette._persister import (
     writer_lock,
 )
 from pytest_emrd.cassette._redact import canonical_json, match_keys, redact_body
-from pytest_emrd.cassette._use import clear_caches, episode_cassette
+from pytest_emrd.cassette._use import LATENCY, clear_caches, episode_cassette
 
 __all__ = [
+    "LATENCY",
     "SCRATCH",
     "SUFFIX",
     "CassetteData",

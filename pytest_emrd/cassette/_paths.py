@@ -89,10 +89,12 @@ def record_command(
     record_mode: str,
     cassettes: Path | None = None,
     invocation: Invocation | None = None,
+    episodes: int | None = None,
 ) -> str:
     """The exact ``pytest`` command that records (``once``) or re-records (``all``) one
     episode, or every episode of ``specs`` in one run (``once`` records only what is missing),
-    working verbatim for this ``invocation`` (``cassettes`` overrides its folder)."""
+    working verbatim for this ``invocation`` (``cassettes`` overrides its folder; ``episodes``
+    the run's ``--emrd-episodes``, else the highest episode of ``specs`` + 1)."""
     one = isinstance(specs, EpisodeSpec)
     group = [specs] if one else list(specs)
     how = invocation or Invocation()
@@ -101,7 +103,7 @@ def record_command(
     args += [f"--emrd-model={m}" for m in sorted({s.model for s in group})]
     args += [f"--emrd-condition={c}" for c in _ordered(group, "condition", CONDITIONS)]
     args += [f"--emrd-spawn={r}" for r in _ordered(group, "spawn", tuple(SLUG_ROOMS))]
-    args.append(f"--emrd-episodes={max(s.episode for s in group) + 1}")
+    args.append(f"--emrd-episodes={episodes or max(s.episode for s in group) + 1}")
     for name, default in (("variant", "default"), ("backend", "builtin"), ("layouts", "paper")):
         if getattr(first, name) != default:
             args.append(f"--emrd-{name}={getattr(first, name)}")
@@ -130,15 +132,31 @@ def missing_summary(
     root: Path,
     invocation: Invocation,
     modality_of: ModalityOf | None = None,
+    episodes: int | None = None,
 ) -> str | None:
     """The one message for a replay-only run where episodes of ``specs`` have no cassette
-    under ``root``: how many, for which models, and one command that records them all."""
-    missing = [s for s in specs if not cassette_path(root, s, modality_of=modality_of).is_file()]
+    under ``root``: how many, for which models, and one command that records them all; when
+    the run asks for more ``episodes`` per spawn room than every missing one's folder holds,
+    how many are recorded and the setting to change."""
+    paths = {s: cassette_path(root, s, modality_of=modality_of) for s in specs}
+    missing = [s for s in specs if not paths[s].is_file()]
     if not missing:
         return None
     per_model = Counter(spec.model for spec in missing)
     models = ", ".join(f"{m} ({n})" for m, n in sorted(per_model.items()))
-    command = record_command(missing, record_mode="once", cassettes=root, invocation=invocation)
+    command = record_command(
+        missing, record_mode="once", cassettes=root, invocation=invocation, episodes=episodes
+    )
+    recorded = {_recorded(paths[s].parent) for s in missing}
+    fewer = ""
+    fewest = min(recorded)
+    if episodes and fewest and all(s.episode >= _recorded(paths[s].parent) for s in missing):
+        fewer = (
+            f" This run asks for {episodes} episode(s) per spawn room (--emrd-episodes, "
+            f"EMRD_EPISODES in the CI example) and the cassettes hold {fewest}"
+            f"{'' if len(recorded) == 1 else ' or more'}: set --emrd-episodes={fewest} to "
+            "replay what is recorded, or record the rest."
+        )
     old = sum(_has_legacy_twin(cassette_path(root, s, modality_of=modality_of)) for s in missing)
     convert = ""
     if old:
@@ -149,9 +167,14 @@ def missing_summary(
         )
     return (
         f"{len(missing)} of {total} episode(s) have no cassette under {root} and record mode "
-        f"'none' replays only; missing for: {models}.{convert} Record them all "
+        f"'none' replays only; missing for: {models}.{fewer}{convert} Record them all "
         f"with: {command}"
     )
+
+
+def _recorded(folder: Path) -> int:
+    """How many episodes ``folder`` holds from ``ep00`` on without a gap."""
+    return next(n for n in range(1000) if not (folder / f"ep{n:02d}{SUFFIX}").is_file())
 
 
 def _has_legacy_twin(path: Path) -> bool:

@@ -9,6 +9,7 @@ from __future__ import annotations
 import contextlib
 import copy
 import threading
+import time
 from collections.abc import Iterator
 from contextvars import ContextVar
 from pathlib import Path
@@ -71,6 +72,7 @@ class EpisodeCassette(Cassette):
         whole)."""
         self._loading = False
         self._loaded = 0
+        self._asked = 0.0
 
     def emrd_body(self, new: Request, recorded: Request) -> bool:
         """The one vcrpy matcher: strict or lenient key equality (unparseable never matches); a
@@ -95,9 +97,11 @@ class EpisodeCassette(Cassette):
         """vcrpy's ``append``, keeping only the replies that counted: a request recorded again right
         after itself is a retry (the client could not read the reply), so the new reply replaces
         the unreadable one and a replay gets the good reply first. An interaction read back from
-        our own file is not deep-copied (nothing else holds it)."""
+        our own file is not deep-copied (nothing else holds it). A live reply keeps how long it
+        took in :data:`LATENCY` (seconds since the request was looked up)."""
         if not self._loading:
             response = copy.deepcopy(response)
+            response[LATENCY] = round(time.perf_counter() - self._asked, 3)
         kept = self._before_record_request(request), self._before_record_response(response)
         if not kept[0] or kept[1] is None:
             return
@@ -125,6 +129,7 @@ class EpisodeCassette(Cassette):
         if not playable and replaying and self.drift is None:
             self.drift = self._explain(_keys(self._before_record_request(request)))
         self.requests_made += 1
+        self._asked = time.perf_counter()
         return playable
 
     def _explain(self, new: MatchKeys) -> str:
@@ -187,6 +192,10 @@ def _before_record_request(request: Request) -> Request:
         redacted.body = _keys(redacted).redacted.body
         redacted.headers = scrub_headers(redacted.headers)
     return redacted
+
+
+#: The optional field of a recorded response holding the seconds the live request took.
+LATENCY: Final = "emrd_latency_s"
 
 
 def _before_record_response(response: dict[str, Any]) -> dict[str, Any] | None:

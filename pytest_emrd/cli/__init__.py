@@ -12,8 +12,8 @@ from pytest_emrd.errors import ConfigError, EmrdError
 
 #: Subcommand modules, in the order ``emrd --help`` lists them.
 COMMANDS: tuple[str, ...] = (
-    "models", "check", "render", "serve", "gate", "report", "view", "cassettes", "validate",
-    "thor_smoke",
+    "models", "check", "render", "serve", "gate", "thresholds", "report", "view", "cassettes",
+    "validate", "thor_smoke",
 )  # fmt: skip
 
 

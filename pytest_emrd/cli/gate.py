@@ -45,10 +45,17 @@ def register(sub: argparse._SubParsersAction) -> None:
 def _run(args: argparse.Namespace) -> int:
     from pytest_emrd.agent import load_registry
     from pytest_emrd.cli import check_run_dirs
-    from pytest_emrd.errors import check_positive_int
-    from pytest_emrd.gate import evaluate_all, gate_tables, load_thresholds
+    from pytest_emrd.errors import ConfigError, check_positive_int
+    from pytest_emrd.gate import evaluate_all, gate_tables, load_thresholds, usage_table
     from pytest_emrd.metrics import GATE_METRICS
-    from pytest_emrd.run import check_shard_set, load_run_episodes, measure_episodes
+    from pytest_emrd.report import registry_prices
+    from pytest_emrd.run import (
+        EpisodeSummary,
+        check_shard_set,
+        load_run_episodes,
+        measure_episodes,
+        usage_rows,
+    )
 
     if args.jobs is not None:
         check_positive_int("--jobs", args.jobs)
@@ -56,20 +63,37 @@ def _run(args: argparse.Namespace) -> int:
     for problem in check_shard_set(args.run_dirs, allow_partial=args.allow_partial):
         print(f"emrd gate: warning: partial shard set: {problem}", file=sys.stderr)
     registry = load_registry(args.models)
+    if not args.thresholds.exists():
+        runs = " ".join(map(str, args.run_dirs))
+        raise ConfigError(
+            f"--thresholds {args.thresholds} does not exist, so no gate ran; start one from "
+            f"these runs: emrd thresholds {runs} --out {args.thresholds}"
+        )
     thresholds = load_thresholds(args.thresholds, registry=registry, metrics=GATE_METRICS)
     stored = load_run_episodes(args.run_dirs)
     metrics = measure_episodes(stored, args.jobs)
-    verdicts = evaluate_all(metrics, thresholds, GATE_METRICS)
+    run_dirs = {s.head.spec.case_id: str(Path(s.source).parent.parent) for s in stored}
+    verdicts = evaluate_all(metrics, thresholds, GATE_METRICS, run_dir_of=run_dirs.__getitem__)
+    prices = registry_prices(registry, {s.head.spec.model for s in stored})
     if os.environ.get("GITHUB_STEP_SUMMARY"):
         from pytest_emrd.report import append_step_summary, step_summary_markdown
 
         summary = step_summary_markdown(
-            stored, verdicts, thresholds_source=str(args.thresholds), episode_metrics=metrics
+            stored,
+            verdicts,
+            thresholds_source=str(args.thresholds),
+            episode_metrics=metrics,
+            prices=prices,
         )
         append_step_summary(summary)
     if args.json:
         print(json.dumps([v.to_dict() for v in verdicts]))
-    else:
-        print(f"{len(stored)} episodes from {len(args.run_dirs)} run director(ies)")
-        print("\n".join(gate_tables(verdicts)) or "no gate applies to these episodes")
+        return 0 if all(v.passed for v in verdicts) else 1
+    print(f"{len(stored)} episodes from {len(args.run_dirs)} run director(ies)")
+    print("\n".join(gate_tables(verdicts)) or "no gate applies to these episodes")
+    priced = ((s, prices.get(s.head.spec.model, (None, None))) for s in stored)
+    summaries = [
+        EpisodeSummary.of(s, price_in=p_in, price_out=p_out) for s, (p_in, p_out) in priced
+    ]
+    print("tokens per model:", *usage_table(usage_rows(summaries)), sep="\n")
     return 0 if all(v.passed for v in verdicts) else 1

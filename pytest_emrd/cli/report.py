@@ -81,7 +81,7 @@ def _report(args: argparse.Namespace, formats: list[str]) -> int:
     from pytest_emrd.cli import check_run_dirs
     from pytest_emrd.gate import evaluate_all, load_thresholds
     from pytest_emrd.metrics import GATE_METRICS
-    from pytest_emrd.report import build_report, write_report
+    from pytest_emrd.report import build_report, registry_prices, write_report
     from pytest_emrd.run import load_run_episodes, measure_episodes
 
     check_run_dirs(args.run_dirs)
@@ -97,9 +97,7 @@ def _report(args: argparse.Namespace, formats: list[str]) -> int:
         thresholds = load_thresholds(thresholds_path, registry=registry, metrics=GATE_METRICS)
         verdicts = evaluate_all(metrics, thresholds, GATE_METRICS)  # cells by each one's spec
         source = str(thresholds_path)
-    models = [m for m in {e.head.spec.model for e in episodes} if m in registry.names()]
-    configs = {m: registry.get(m) for m in models}
-    prices = {m: (c.price_per_mtok_in, c.price_per_mtok_out) for m, c in configs.items()}
+    prices = registry_prices(registry, {e.head.spec.model for e in episodes})
     # two processes where there are two cores: the map alignment beside the tables, then figures
     processes = min(2, available_cores())
     report = build_report(
@@ -122,7 +120,7 @@ def _report(args: argparse.Namespace, formats: list[str]) -> int:
 
 
 def _compare(args: argparse.Namespace, formats: list[str]) -> int:
-    from pytest_emrd.report import compare_runs, render_comparison, write_files
+    from pytest_emrd.report import compare_lines, compare_runs, render_comparison, write_files
     from pytest_emrd.run import load_run_dirs
 
     if args.compare:
@@ -142,6 +140,7 @@ def _compare(args: argparse.Namespace, formats: list[str]) -> int:
     if args.out is None:
         sys.stdout.write(render_comparison(comparison, ["md"])["compare.md"].decode())
         return 0
+    print(*compare_lines(comparison), sep="\n")
     for path in write_files(render_comparison(comparison, formats), args.out):
         print(path)
     return 0

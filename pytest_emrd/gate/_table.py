@@ -54,7 +54,8 @@ def gate_tables(verdicts: Sequence[Verdict]) -> list[str]:
         ]
         header = ["condition", "metric", "value", "95% CI", "n", "bound", "result"]
         lines += ["  " + r for r in render_table(header, rows)]
-        lines += [f"  FAIL {v.gate_id}: {v.reason}" for v in mine if not v.passed]
+        for v in (v for v in mine if not v.passed):
+            lines += [f"  FAIL {v.gate_id}: {v.reason}", *(f"    {e}" for e in v.evidence())]
     return lines
 
 

@@ -4,10 +4,12 @@ bootstrap is seeded (``rng_seed=0``): the same episodes give the same verdict an
 
 from __future__ import annotations
 
+import math
+import shlex
 from collections import defaultdict
-from collections.abc import Iterable, Mapping
-from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from collections.abc import Callable, Iterable, Mapping
+from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING, Any, Final
 
 from pytest_emrd._serde import JsonRecord
 from pytest_emrd.gate._thresholds import Bound, Thresholds
@@ -58,6 +60,10 @@ class Verdict(JsonRecord):
     reason: str
     """Why it passed or failed, in one sentence."""
     layouts: str = "paper"
+    worst: tuple[tuple[str, float], ...] = ()
+    """A failed gate's worst episodes (case id, the metric's value there), worst first."""
+    view: str = ""
+    """The ``emrd view`` command that opens :attr:`worst` (empty when none is known)."""
 
     @property
     def gate_id(self) -> str:
@@ -74,6 +80,13 @@ class Verdict(JsonRecord):
         op = ">=" if self.kind == "min" else "<="
         side = f" (CI {self.ci})" if self.ci else ""
         return f"{op} {self.bound:g}{side}"
+
+    def evidence(self) -> list[str]:
+        """A failed gate's worst episodes and the command that opens them (none when passed)."""
+        if self.passed or not self.worst:
+            return []
+        listed = ", ".join(f"{case} ({value:.4g})" for case, value in self.worst)
+        return [f"worst episodes by {self.metric}: {listed}", f"open them: `{self.view}`"]
 
     def explain(self) -> str:
         """``scout-baseline-aec: value 0.912 [0.88, 0.94] n=80, bound >= 0.8: PASS (...)``."""
@@ -101,7 +114,11 @@ def judge(cell: GateCell, estimate: Estimate) -> Verdict:
     else:
         passed = compared >= b.value if b.kind == "min" else compared <= b.value
         op = (">=" if passed else "<") if b.kind == "min" else ("<=" if passed else ">")
-        reason = f"{what} {compared:.4g} {op} {b.value:g}"
+        reason = f"{what} {compared:.4g} {op} {b.value:g}" + (
+            "" if passed else _underpowered(b, estimate.value, compared, estimate.n)
+        )
+    if b.ci and estimate.value is not None and estimate.n == 1:
+        reason += "; one episode has no CI: a CI bound needs at least 2 episodes in the cell"
     return Verdict(
         model=b.model,
         condition=b.condition,
@@ -120,24 +137,80 @@ def judge(cell: GateCell, estimate: Estimate) -> Verdict:
     )
 
 
+def _underpowered(b: Bound, value: float | None, compared: float, n: int) -> str:
+    """When the point value passes and only the CI end fails: the cell's episodes are too few
+    for the CI to clear the bound; about how many would at this spread (the CI half-width
+    shrinks as 1/sqrt(n))."""
+    if b.ci is None or value is None:
+        return ""
+    margin = value - b.value if b.kind == "min" else b.value - value
+    if margin <= 0:
+        return ""
+    needed = math.ceil(n * ((value - compared) / margin) ** 2)
+    return (
+        f"; underpowered: the value {value:.4g} passes but {n} episode(s) give too wide a CI,"
+        f" at this spread the bound needs about {needed} episodes in the cell"
+        " (raise --emrd-episodes / EMRD_EPISODES, or gate the value without `ci`)"
+    )
+
+
+#: Per-episode values of the gate metrics that are not a per-episode field of their own.
+_PER_EPISODE: Final[Mapping[str, Callable[[Any], float | None]]] = {
+    "parse_failure_rate": lambda m: m.parse_failures / m.steps if m.steps else None,
+    "errored_rate": lambda m: float(m.errored),
+}
+#: How many of a failed gate's worst episodes it lists.
+WORST: Final = 5
+
+
+def worst_episodes(
+    verdict: Verdict, items: Iterable[Any], better: str, run_dir_of: Callable[[str], str]
+) -> Verdict:
+    """``verdict`` with its worst episodes and their ``emrd view`` command when it failed and
+    the metric has per-episode values (``EpisodeMetrics``); ``run_dir_of`` maps a case id to
+    the run directory holding it."""
+    get = _PER_EPISODE.get(verdict.metric, lambda m: getattr(m, verdict.metric, None))
+    values = [(m.spec.case_id, get(m)) for m in items] if not verdict.passed else []
+    scored = [(case, float(v)) for case, v in values if isinstance(v, int | float)]
+    if not scored:
+        return verdict
+    worst = tuple(sorted(scored, key=lambda cv: cv[1] if better == "higher" else -cv[1])[:WORST])
+    by_dir: dict[str, list[str]] = defaultdict(list)
+    for case, _ in worst:
+        by_dir[run_dir_of(case)].append(case)
+    view = " ; ".join(shlex.join(["emrd", "view", d, *cases]) for d, cases in by_dir.items())
+    return replace(verdict, worst=worst, view=view)
+
+
 def evaluate_cell(
-    cell: GateCell, trajectories: Iterable[Any], metrics: Mapping[str, GateMetric]
+    cell: GateCell,
+    trajectories: Iterable[Any],
+    metrics: Mapping[str, GateMetric],
+    *,
+    run_dir_of: Callable[[str], str] = lambda case: "RUN_DIR",
 ) -> Verdict:
     """The verdict of one gate over its episodes (any order in, sorted by case id): trajectories
-    or anything with a ``spec`` the metric accepts (such as ``EpisodeMetrics``)."""
+    or anything with a ``spec`` the metric accepts (such as ``EpisodeMetrics``); a failed one
+    names its worst episodes (:func:`worst_episodes`)."""
     ordered = sorted(trajectories, key=lambda t: t.spec.case_id)
-    return judge(cell, metrics[cell.bound.metric].compute(ordered, rng_seed=0))
+    metric = metrics[cell.bound.metric]
+    verdict = judge(cell, metric.compute(ordered, rng_seed=0))
+    return worst_episodes(verdict, ordered, metric.better, run_dir_of)
 
 
 def evaluate_all(
-    trajectories: Iterable[Any], thresholds: Thresholds, metrics: Mapping[str, GateMetric]
+    trajectories: Iterable[Any],
+    thresholds: Thresholds,
+    metrics: Mapping[str, GateMetric],
+    *,
+    run_dir_of: Callable[[str], str] = lambda case: "RUN_DIR",
 ) -> list[Verdict]:
     """Every gate whose cell has episodes: the gate tests' verdicts, for ``emrd gate``."""
     cells: dict[tuple[str, str, str, str], list[Any]] = defaultdict(list)
     for t in trajectories:
         cells[(t.spec.model, t.spec.condition, t.spec.variant, t.spec.layouts)].append(t)
     return [
-        evaluate_cell(GateCell(bound, variant), episodes, metrics)
+        evaluate_cell(GateCell(bound, variant), episodes, metrics, run_dir_of=run_dir_of)
         for (model, condition, variant, layouts), episodes in sorted(cells.items())
         for bound in thresholds.for_cell(model, condition, layouts)
     ]

@@ -130,10 +130,11 @@ class RunReport:
             return
         if not (self.episodes or self.verdicts) or not (run_dir / "episodes").is_dir():
             return
-        from pytest_emrd.report import append_step_summary, step_summary_markdown
+        from pytest_emrd.report import append_step_summary, registry_prices, step_summary_markdown
         from pytest_emrd.run import load_run_episodes, measure_episodes
 
-        source = self.run.settings.thresholds
+        settings = self.run.settings
+        source = settings.thresholds
         if source is not None and source.is_relative_to(self.config.rootpath):
             source = source.relative_to(self.config.rootpath)
         try:
@@ -142,17 +143,23 @@ class RunReport:
         except EmrdError as exc:
             warnings.warn(f"pytest-emrd wrote no step summary: {exc}", stacklevel=1)
             return
+        note = None
+        if settings.shard and source is not None:
+            note = f"A shard: the gates of {source} run over all shards in `emrd gate`."
         append_step_summary(
             step_summary_markdown(
                 stored,
                 self.verdicts,
                 thresholds_source=source and str(source),
                 episode_metrics=metrics,
+                prices=registry_prices(self.run.registry, {s.head.spec.model for s in stored}),
+                gates_note=note,
             )
         )
 
     def pytest_terminal_summary(self, terminalreporter: Any) -> None:
         from pytest_emrd.gate import gate_tables, usage_table
+        from pytest_emrd.report import START_GATES
         from pytest_emrd.run import usage_rows
 
         if not (self.episodes or self.verdicts):
@@ -165,6 +172,9 @@ class RunReport:
             tr.write_line("tokens per model:")
             for line in usage_table(usage_rows(self.episodes.values())):
                 tr.write_line(line)
+        if self.run.settings.thresholds is None:
+            start = START_GATES.replace("RUN_DIR", str(run_dir))
+            tr.write_line(f"no gate ran: no thresholds file. {start}")
         tr.write_line(
             f"results: {run_dir} (resume: --emrd-results {run_dir}; "
             f"gates over shards: emrd gate {run_dir} ...)"

@@ -192,6 +192,7 @@ class Run:
             root=self.settings.cassettes,
             invocation=self.invocation,
             modality_of=self.modality_of,
+            episodes=self.settings.episodes,
         )
 
     @cached_property
@@ -332,7 +333,9 @@ class Run:
         missing = [spec for spec in specs if spec not in self._metrics]
         stored = [self.episode(spec) for spec in missing]  # computed here, if at all
         self._metrics.update(zip(missing, measure_episodes(stored), strict=True))
-        return evaluate_cell(cell, [self._metrics[spec] for spec in specs], GATE_METRICS)
+        episodes = [self._metrics[spec] for spec in specs]
+        run_dir = str(self.run_dir)
+        return evaluate_cell(cell, episodes, GATE_METRICS, run_dir_of=lambda case: run_dir)
 
     def summary(self, stored: StoredEpisode) -> EpisodeSummary:
         config = self.registry.get(stored.head.spec.model)

@@ -23,6 +23,7 @@ from pytest_emrd.agent import (
     ChatClient,
     ModelConfig,
     build_request,
+    load_registry,
     make_client,
     parse_reply,
 )
@@ -262,12 +263,19 @@ def _url(config: ModelConfig, base_url: str) -> tuple[Check, int | None]:
         return Check("url", "fail", detail, fix), None
     if not info.reachable:
         local = httpx.URL(base_url).host in ("localhost", "127.0.0.1", "::1")
-        fix = (
-            "start the server (docs/user-guide/vllm.md: the vllm serve command of each model) "
-            "or point the model's base_url at it (its EMRD_*_BASE_URL variable, or a user registry)"
-            if local
-            else "check this machine's network access to it, or the model's base_url"
-        )
+        fix = "check this machine's network access to it, or the model's base_url"
+        if local and config.name in load_registry(None).names():
+            fix = (
+                "start the server (the `vllm serve` command of each model: docs/user-guide/"
+                "vllm.md in the pytest-emrd repository) or point the model's base_url at it "
+                "(its EMRD_*_BASE_URL variable, or a user registry)"
+            )
+        elif local:  # a model of the user's own registry
+            fix = (
+                f"start the server that serves model_id={config.model_id!r} there, or set "
+                f"base_url of {config.name!r} in your registry (--emrd-models FILE) to its "
+                "address"
+            )
         return Check("url", "fail", f"cannot reach {base_url} ({info.error})", fix), None
     if info.serves(config.model_id) is False:
         detail = f"{base_url} serves {', '.join(info.served[:5])}, not {config.model_id}"

@@ -13,11 +13,12 @@ Typical use::
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import os
 from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
-from typing import Final
+from typing import TYPE_CHECKING, Final
 
 from pytest_emrd._atomic import write_bytes_atomic
 from pytest_emrd._scrub import scrub, scrub_bytes
@@ -25,25 +26,37 @@ from pytest_emrd._serde import json_safe
 from pytest_emrd.errors import check_choice
 from pytest_emrd.gate import Verdict
 from pytest_emrd.metrics import EpisodeMetrics
-from pytest_emrd.report._build import align_map, build_report, group_cells
-from pytest_emrd.report._compare import COMPARED, Comparison, compare_document, compare_runs
+from pytest_emrd.report._build import Prices, align_map, build_report, group_cells
+from pytest_emrd.report._compare import (
+    COMPARED,
+    Comparison,
+    compare_document,
+    compare_lines,
+    compare_runs,
+)
 from pytest_emrd.report._document import Document, render_html, render_markdown
 from pytest_emrd.report._model import FIGURES, Report, row_label
-from pytest_emrd.report._sections import report_document, summary_document
+from pytest_emrd.report._sections import START_GATES, report_document, summary_document
 from pytest_emrd.run import StoredEpisode
 from pytest_emrd.trajectory import Trajectory
+
+if TYPE_CHECKING:
+    from pytest_emrd.agent import Registry
 
 __all__ = [
     "COMPARED",
     "FIGURES",
+    "START_GATES",
     "Comparison",
     "Report",
     "align_map",
     "append_step_summary",
     "build_report",
     "check_formats",
+    "compare_lines",
     "compare_runs",
     "group_cells",
+    "registry_prices",
     "render_comparison",
     "render_files",
     "row_label",
@@ -107,11 +120,14 @@ def step_summary_markdown(
     *,
     thresholds_source: str | None = None,
     episode_metrics: Sequence[EpisodeMetrics] | None = None,
+    prices: Prices | None = None,
+    gates_note: str | None = None,
 ) -> str:
     """Markdown for a PR comment or ``$GITHUB_STEP_SUMMARY``: run overview, what is missing,
     the gate table, Exploration Competence and FPSG (no figures, no sentence encoder);
     ``thresholds_source`` names the thresholds file (default ``thresholds`` when there are
-    verdicts), ``episode_metrics`` as :func:`build_report` takes them."""
+    verdicts); ``episode_metrics`` and ``prices`` as :func:`build_report` takes them;
+    ``gates_note`` says why no gate ran (a shard)."""
     source = thresholds_source or ("thresholds" if verdicts else None)
     report = build_report(
         episodes,
@@ -119,8 +135,17 @@ def step_summary_markdown(
         thresholds_source=source,
         with_reasoning=False,
         episode_metrics=episode_metrics,
+        prices=prices,
     )
+    report = dataclasses.replace(report, gates=dataclasses.replace(report.gates, note=gates_note))
     return render_markdown(summary_document(report))
+
+
+def registry_prices(registry: Registry, models: Iterable[str]) -> Prices:
+    """Model -> (USD per million input tokens, per million output) of each model ``registry``
+    knows (a model it does not know has no price)."""
+    configs = {m: registry.get(m) for m in models if m in registry.names()}
+    return {m: (c.price_per_mtok_in, c.price_per_mtok_out) for m, c in configs.items()}
 
 
 def render_comparison(comparison: Comparison, formats: Iterable[str] = FORMATS) -> dict[str, bytes]:

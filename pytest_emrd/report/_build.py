@@ -393,13 +393,19 @@ def build_report(
             interventions=intervention_tables(cells),
             reasoning=reasons,
             gates=gates,
-            tbs=per_cell(cells, TBSSeries, metrics.tbs_curve),
+            tbs=per_cell(cells, TBSSeries, _tbs_to_last_step),
             pa=pa_by_spawn(cells),
             miller=per_cell(cells, MillerSeries, metrics.miller_curve),
             km=km_series(cells, {(r.model, r.variant, r.condition): r.fit for r in ebbinghaus}),
             sir=per_cell(cells, SIRSeries, metrics.spatial_identity_resolution),
             episode_map=mapped(),
         )
+
+
+def _tbs_to_last_step(ems: Sequence[EpisodeMetrics]) -> metrics.TBSCurve:
+    """The cell's TBS curve up to the last step its longest episode reached (not the budget:
+    a cell whose episodes all ended at step 4 is drawn to step 4)."""
+    return metrics.tbs_curve(ems, t_max=max((len(m.tbs) for m in ems), default=0))
 
 
 def _wrap(trajectory: Trajectory) -> StoredEpisode:

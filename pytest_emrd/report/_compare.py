@@ -17,6 +17,8 @@ Verdict: ``better`` / ``worse`` when the Holm p < ``ALPHA`` (direction from
 (reachable p >= ``ALPHA``); ``no change`` when the test could have found a difference and did
 not, or when every resample of ``B - A`` is 0; ``n/a`` without a test (undefined or unbounded
 value, fewer than two pairs, unbounded bootstrap). The verdict follows the test, not the CI.
+TE is read alongside AEC (the paper): a TE ``better`` in a cell whose AEC fell is ``flagged``
+(the run quit earlier and covered less).
 """
 
 from __future__ import annotations
@@ -86,7 +88,8 @@ class Difference:
     p_holm: float | None
     """``p_value`` after Holm's correction across every test of the comparison."""
     verdict: str
-    """``better``, ``worse``, ``no change``, ``inconclusive`` or ``n/a`` (module docstring)."""
+    """``better``, ``worse``, ``no change``, ``inconclusive``, ``flagged`` or ``n/a`` (module
+    docstring)."""
     model_b: str
     unpaired: int = 0
     """Episodes of the cell on either side without a partner (left out)."""
@@ -255,6 +258,35 @@ def holm(differences: Sequence[Difference], resamples: int = N_RESAMPLES) -> tup
     return tuple(out)
 
 
+def _te_with_aec(diffs: tuple[Difference, ...]) -> tuple[Difference, ...]:
+    """A TE that improved (fewer actions) read with the cell's AEC, as the paper reads TE: when
+    coverage fell too, the run quit earlier and saw less, ``flagged`` rather than ``better``."""
+    aec = {(d.model, d.variant, d.condition): d.diff for d in diffs if d.metric == "aec"}
+    out = list(diffs)
+    for i, d in enumerate(diffs):
+        drop = aec.get((d.model, d.variant, d.condition))
+        if d.metric == "te" and d.verdict == "better" and drop is not None and drop < 0:
+            why = f"fewer actions but AEC fell by {-drop:.3g}: it quit earlier and covered less"
+            out[i] = replace(d, verdict="flagged", reason=f"{why}; TE is read alongside AEC")
+    return tuple(out)
+
+
+def compare_lines(c: Comparison) -> list[str]:
+    """One terminal line per metric and cell: both values, ``B - A`` with its CI, the Holm p
+    and the verdict (and why, when there is a reason)."""
+    lines = []
+    for d in c.differences:
+        who = d.model if d.model == d.model_b else f"{d.model} vs {d.model_b}"
+        ci = "" if d.ci_low is None else f" [{num(d.ci_low)}, {num(d.ci_high)}]"
+        why = f" ({d.reason})" if d.reason and d.verdict != "no change" else ""
+        lines.append(
+            f"{row_label(who, d.variant)} {d.condition} {d.metric}: {num(d.a.value)} -> "
+            f"{num(d.b.value)}, B - A {num(d.diff)}{ci}, Holm p {pval(d.p_holm)}: "
+            f"{d.verdict}{why}"
+        )
+    return lines
+
+
 def compare_runs(
     run_a: Sequence[Trajectory],
     run_b: Sequence[Trajectory],
@@ -286,7 +318,7 @@ def compare_runs(
         for name in COMPARED
     )
     return Comparison(
-        names[0], names[1], holm(diffs, resamples),
+        names[0], names[1], _te_with_aec(holm(diffs, resamples)),
         tuple("/".join((model(k, 0), *k[1:])) for k in cells_a if k not in cells_b),
         tuple("/".join((model(k, 1), *k[1:])) for k in cells_b if k not in cells_a),
         rng_seed, resamples, models,
@@ -303,7 +335,7 @@ def _row(d: Difference) -> Row:
     ci = "n/a" if d.ci_low is None else f"[{num(d.ci_low)}, {num(d.ci_high)}]"
     return (d.metric, GATE_METRICS[d.metric].better, f"{num(d.a.value)} (n={d.a.n})",
             f"{num(d.b.value)} (n={d.b.n})", num(d.diff), ci, pval(d.p_holm),
-            Cell(d.verdict, bold=d.verdict in ("better", "worse", "inconclusive")),
+            Cell(d.verdict, bold=d.verdict != "no change"),
             note)  # fmt: skip
 
 

@@ -149,6 +149,9 @@ th { background: #f0f3f8; }
 td:first-child, th:first-child { text-align: left; }
 td.strong { font-weight: bold; }
 td.text { text-align: left; }
+#figures { display: grid; grid-template-columns: repeat(auto-fill, minmax(540px, 1fr));
+           gap: 0 1.5rem; align-items: start; }
+#figures h2 { grid-column: 1 / -1; }
 figure { margin: 1rem 0 2rem; }
 figure img { max-width: 100%; border: 1px solid #eee; }
 figcaption { font-size: .9rem; color: #555; }

@@ -160,6 +160,8 @@ class Gates:
     source: str | None
     """The thresholds file, or None when no file was given or found."""
     verdicts: tuple[Verdict, ...]
+    note: str | None = None
+    """Why no gate ran, where the caller knows (a shard's gates run in ``emrd gate``)."""
 
 
 @dataclass(frozen=True)

@@ -176,6 +176,9 @@ def _miller(report: Report) -> Figure | None:
         ax.plot(loads, s.curve.probabilities, lw=2, **line_style(s.condition, len(loads)))
         if s.curve.m_star is not None:
             ax.axvline(s.curve.m_star, color=colour(s.condition), ls=":", lw=1.2)
+    loads = [b * width for s in series for b in s.curve.bins]
+    for ax in axes.values():  # a bin of margin each side, never an axis around one point
+        ax.set_xlim(max(0, min(loads) - width), max(loads) + width)
     return _finish(fig, axes,
                    "Miller's law: forgetting probability by cognitive load (dotted: m*)",
                    _conditions(series), xlabel=f"map size m (objects, bin upper edge, w={width})",

@@ -43,6 +43,11 @@ def _cond(condition: str) -> str:
     return name if name.lower() == condition else f"{name} ({condition})"
 
 
+#: How to start gating, where no gate ran for want of a thresholds file.
+START_GATES: Final = (
+    "Start one from this run: `emrd thresholds RUN_DIR --out thresholds.yaml` "
+    "(docs/user-guide/ci.md)."
+)
 #: Below this R² the exponential explains less of the KM curve than its own mean does.
 R2_MEANINGLESS: Final = 0.0
 
@@ -99,8 +104,8 @@ def overview(report: Report) -> Section:
 def gates(report: Report) -> Section:
     g = report.gates
     if not g.verdicts:
-        why = "No thresholds file was given or found." if g.source is None else (
-            f"No gate of {g.source} applies to this run.")  # fmt: skip
+        started = f"No thresholds file was given or found, so no gate ran. {START_GATES}"
+        why = g.note or (f"No gate of {g.source} applies to this run." if g.source else started)
         return Section("gates", "Gates", (Paragraph(why),))
     passed = sum(v.passed for v in g.verdicts)
     rows = tuple(
@@ -117,6 +122,8 @@ def gates(report: Report) -> Section:
                   "(0.9), which the tables below print as percentages (90.0)."),
         Table("gates", "Every threshold: value, bootstrap 95% CI, n, bound, verdict", header,
               rows),
+        *(Bullets(tuple(f"{v.gate_id}: {e}" for e in v.evidence())) for v in g.verdicts
+          if v.evidence()),
     ))  # fmt: skip
 
 

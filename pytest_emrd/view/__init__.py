@@ -19,16 +19,25 @@ from pathlib import Path
 from typing import Any
 
 from pytest_emrd.agent import build_system_prompt
-from pytest_emrd.cassette import FormatError, found_cassette, read_cassette
+from pytest_emrd.cassette import LATENCY, FormatError, found_cassette, read_cassette
 from pytest_emrd.cassette._redact import DIGEST
 from pytest_emrd.episode import build_simulator, start_world, user_turn, world_action
 from pytest_emrd.errors import ConfigError, EmrdError
 from pytest_emrd.trajectory import Trajectory
-from pytest_emrd.view._page import IndexRow, episode_data, episode_gif, episode_page, index_page
+from pytest_emrd.view._page import (
+    FrameCheck,
+    IndexRow,
+    episode_data,
+    episode_gif,
+    episode_page,
+    index_page,
+)
 from pytest_emrd.world import WorldPose
 
 __all__ = [
     "EpisodeView",
+    "FrameCheck",
+    "IndexRow",
     "Recorded",
     "episode_data",
     "episode_page",
@@ -84,12 +93,19 @@ def replay_frames(traj: Trajectory) -> Replay:
         sim.close()
 
 
-def _digests(node: Any) -> Iterator[str]:
+def _strings(node: Any) -> Iterator[str]:
     if isinstance(node, dict | list):
         for value in node.values() if isinstance(node, dict) else node:
-            yield from _digests(value)
-    elif isinstance(node, str) and DIGEST.match(node):
+            yield from _strings(value)
+    elif isinstance(node, str):
         yield node
+
+
+def _json(body: Any) -> Any:
+    try:
+        return json.loads(body or b"null")
+    except ValueError:
+        return None
 
 
 @dataclass(frozen=True)
@@ -99,6 +115,8 @@ class Recorded:
     digests: tuple[str | None, ...]
     """Per request (= per step), the digest of the newest image it carries (None: none)."""
     note: str | None = None
+    latencies: tuple[float | None, ...] = ()
+    """Per request, the seconds the live request took when it was recorded (None: unknown)."""
 
 
 def recorded_digests(traj: Trajectory, cassettes: Path | None) -> Recorded:
@@ -119,18 +137,26 @@ def recorded_digests(traj: Trajectory, cassettes: Path | None) -> Recorded:
     if data.protocol != traj.protocol:
         return Recorded((), f"{path} was recorded under protocol {data.protocol}, the episode "
                         f"ran under {traj.protocol}: frames not checked")  # fmt: skip
+    replies = [set(_strings(_json(r["body"]["string"]))) for r in data.responses]
+    pairs = zip(traj.steps, replies, strict=False)
+    changed = [s.index for s, r in pairs if s.raw_reply and s.raw_reply not in r]
+    if changed:
+        again = (
+            f"{path} was recorded again after this episode ran (its reply to step {changed[0]} "
+            "is another): frames not checked against it; view the run that recorded it, or "
+            "replay this episode again"
+        )
+        return Recorded((), again)
     digests = []
     for request in data.requests:
-        try:
-            found = list(_digests(json.loads(request.body or b"null")))
-        except ValueError:
-            found = []
+        found = [d for d in _strings(_json(request.body)) if DIGEST.match(d)]
         digests.append(found[-1] if found else None)
     note = None
     if len(digests) != len(traj.steps):
         note = (f"{path} holds {len(digests)} requests for {len(traj.steps)} steps: steps "
                 "are checked in order up to the shorter")  # fmt: skip
-    return Recorded(tuple(digests), note)
+    latencies = tuple(r.get(LATENCY) for r in data.responses)
+    return Recorded(tuple(digests), note, latencies)
 
 
 @dataclass(frozen=True)
@@ -151,8 +177,17 @@ def render_episode(traj: Trajectory, *, cassettes: Path | None, gif: bool = Fals
     except EmrdError as exc:
         frames, spawn, system, note = (), None, None, f"frames not re-rendered: {exc}"
     data, check = episode_data(traj, frames, recorded_digests(traj, cassettes), note, spawn, system)
-    last = data["steps"][-1] if data["steps"] else {"coverage": None, "pa": None}
     chosen = traj.chosen_room or (traj.chosen_room_raw and f"{traj.chosen_room_raw!r}") or "-"
-    row = IndexRow(traj.spec.case_id, traj.status, len(traj.steps), chosen,
-                   last["coverage"], last["pa"], check)  # fmt: skip
+    row = IndexRow(
+        traj.spec.case_id,
+        traj.status,
+        len(traj.steps),
+        chosen,
+        data["metrics"],
+        check,
+        parse_failures=sum(s.parse_error is not None for s in traj.steps),
+        failed_actions=sum(not s.success for s in traj.steps),
+        tokens=sum(s.usage.prompt_tokens + s.usage.completion_tokens for s in traj.steps),
+        error=traj.error or "",
+    )
     return EpisodeView(episode_page(data, frames), episode_gif(data, frames) if gif else None, row)

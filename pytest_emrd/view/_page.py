@@ -21,7 +21,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from importlib import resources
 from itertools import chain, repeat
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Final
 
 from PIL import Image, ImageDraw, ImageFont
 
@@ -79,7 +79,8 @@ def episode_data(
 
     turn = spawn.heading if spawn else 0.0
     truth = traj.ground_truth
-    tbs = episode_metrics(traj).tbs
+    measured = episode_metrics(traj)
+    tbs = measured.tbs
     # per step: True (digest equal), False (mismatch) or None (not checked)
     digests = chain(recorded.digests, repeat(None))
     status = [None if d is None else d == f.digest for f, d in zip(frames, digests, strict=False)]
@@ -109,6 +110,7 @@ def episode_data(
             "window": [j for j in range(max(0, i - HISTORY_TURNS + 1), i + 1) if j < len(frames)],
             "tokens": [s.usage.prompt_tokens, s.usage.completion_tokens],
             "latency": s.latency_s,
+            "recorded_latency": recorded.latencies[i] if i < len(recorded.latencies) else None,
             "after": (f"{after.room} (x={after.pose.x:.2f} z={after.pose.z:.2f} "
                       f"heading={after.pose.heading:.0f}°)" if after else traj.final_room),
         })  # fmt: skip
@@ -130,6 +132,7 @@ def episode_data(
         "objects": [[o.object_id, o.object_type, o.category, *place(o.x, o.z)]
                     for o in truth.objects],
         "steps": steps,
+        "metrics": {name: getattr(measured, name) for name in INDEX_METRICS},
     }  # fmt: skip
     return data, check
 
@@ -213,6 +216,10 @@ const FRAMES = {_script_json(encoded)};
 """
 
 
+#: The gate metrics the index shows per episode (``EpisodeMetrics`` fields), in its order.
+INDEX_METRICS: Final = ("aec", "te", "pa", "precision", "fpsg_local", "never_visited")
+
+
 @dataclass(frozen=True)
 class IndexRow:
     """One episode on the index page."""
@@ -221,9 +228,16 @@ class IndexRow:
     status: str
     steps: int
     chosen: str
-    coverage: float | None
-    pa: float | None
+    metrics: dict[str, float | None]
+    """:data:`INDEX_METRICS` of the episode (None: undefined)."""
     check: FrameCheck
+    parse_failures: int = 0
+    failed_actions: int = 0
+    """Steps whose action the engine refused (not visible, unknown room, unparseable)."""
+    tokens: int = 0
+    """Prompt + completion tokens of the episode."""
+    error: str = ""
+    """Why an errored episode ended."""
 
 
 def _check_text(c: FrameCheck) -> str:
@@ -234,21 +248,36 @@ def _check_text(c: FrameCheck) -> str:
     return "not checked"
 
 
+def _cell(value: Any) -> str:
+    """A cell sorted by ``data-v`` (numbers as numbers; n/a last either way)."""
+    if value is None:
+        return '<td data-v="">n/a</td>'
+    if isinstance(value, bool):
+        return f'<td data-v="{int(value)}">{"yes" if value else "no"}</td>'
+    if isinstance(value, int | float):
+        shown = f"{value:.3g}" if isinstance(value, float) else f"{value:,}"
+        return f'<td data-v="{value}">{shown}</td>'
+    return f"<td>{html.escape(str(value))}</td>"
+
+
 def index_page(rows: Sequence[IndexRow]) -> str:
-    """The index of every episode page written."""
+    """The index of every episode page written; a click on a column header sorts by it."""
     e = html.escape
-    num = lambda v: "n/a" if v is None else f"{v:.3f}"  # noqa: E731
-    body = "".join(
-        f'<tr><td><a href="{e(r.case_id)}.html">{e(r.case_id)}</a></td><td>{e(r.status)}</td>'
-        f"<td>{r.steps}</td><td>{e(r.chosen)}</td><td>{num(r.coverage)}</td><td>{num(r.pa)}</td>"
-        f"<td>{e(_check_text(r.check))}</td></tr>"
-        for r in rows
-    )
+    header = ["episode", "status", "steps", "chosen room", *INDEX_METRICS]
+    header += ["parse failures", "failed actions", "tokens", "error", "frames vs cassette"]
+    body = ""
+    for r in rows:
+        cells = [r.status, r.steps, r.chosen, *(r.metrics.get(m) for m in INDEX_METRICS)]
+        cells += [r.parse_failures, r.failed_actions, r.tokens, r.error, _check_text(r.check)]
+        link = f'<td><a href="{e(r.case_id)}.html">{e(r.case_id)}</a></td>'
+        body += f"<tr>{link}{''.join(map(_cell, cells))}</tr>"
+    heads = "".join(f'<th title="sort">{e(h)}</th>' for h in header)
     return f"""<!DOCTYPE html>
 <html lang="en"><head><meta charset="utf-8"><title>EMRD episodes</title>
 <style>{_asset("page.css")}</style></head><body><h1>EMRD episodes</h1>
-<table><tr><th>episode</th><th>status</th><th>steps</th><th>chosen room</th>
-<th>coverage</th><th>PA</th><th>frames vs cassette</th></tr>{body}</table></body></html>
+<p class="cap">Click a column to sort by it (again: the other way).</p>
+<table id="index"><thead><tr>{heads}</tr></thead><tbody>{body}</tbody></table>
+<script>{_asset("index.js")}</script></body></html>
 """
 
 

@@ -107,8 +107,9 @@
     $("action").textContent = st.action || "(none)";
     $("tokens").textContent = `${st.tokens[0].toLocaleString()} prompt + ` +
       `${st.tokens[1].toLocaleString()} completion`;
-    $("latency").textContent = st.latency === null
-      ? "not recorded (a cassette answered this request)" : `${st.latency.toFixed(2)} s`;
+    $("latency").textContent = st.latency !== null ? `${st.latency.toFixed(2)} s`
+      : st.recorded_latency != null ? `${st.recorded_latency.toFixed(2)} s (when recorded)`
+      : "not recorded (a cassette answered this request)";
     // result: the engine's feedback on the action, after it
     $("outcome").textContent = st.success ? "executed" : "not executed";
     $("outcome").className = st.success ? "ok" : "warn";
@@ -123,8 +124,9 @@
     $("raw").textContent = st.raw;
     $("scores").textContent = `coverage ${fmt(st.coverage)} · PA ${fmt(st.pa)} · TBS ${fmt(st.tbs)} · ` +
       `${st.map.length} entries, aligned by ${st.rotation}° (RMSE ${st.rmse === null ? "n/a" : st.rmse + " m"})`;
-    // plan
-    path.setAttribute("points", steps.slice(0, i + 1).map((p) => `${p.at[0]},${-p.at[1]}`).join(" "));
+    // plan, after this step: the path and the agent end at the pose after the action (the next
+    // step's pose; the last step's own when there is none)
+    path.setAttribute("points", steps.slice(0, i + 2).map((p) => `${p.at[0]},${-p.at[1]}`).join(" "));
     links.replaceChildren(); marks.replaceChildren(); agent.replaceChildren();
     st.visible.forEach((id) => {
       const o = truth[id];
@@ -142,7 +144,7 @@
       el("line", { x1: x - d, y1: -z + d, x2: x + d, y2: -z - d }, g);
       el("title", {}, g, `${label} → ${id || "unmatched"}`);
     });
-    const [ax, az, h] = st.at, rad = (h * Math.PI) / 180, r = s * 7;
+    const [ax, az, h] = (steps[i + 1] || st).at, rad = (h * Math.PI) / 180, r = s * 7;
     const left = rad - Math.PI / 4, right = rad + Math.PI / 4;
     el("path", { d: `M${ax},${-az} L${ax + r * Math.sin(left)},${-(az + r * Math.cos(left))} ` +
       `L${ax + r * Math.sin(right)},${-(az + r * Math.cos(right))} Z`, fill: "#1f5fbf",

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from pytest_emrd.cassette import cassette_path, run_with_cassette
+from pytest_emrd.cassette import LATENCY, cassette_path, decode, run_with_cassette
 from pytest_emrd.errors import CassetteError
 
 from .conftest import FAKE_KEY, PROTOCOL, FakeRunner, FakeServer
@@ -29,6 +29,13 @@ def test_record_then_replay_offline_gives_the_same_trajectory(server: FakeServer
     assert len(server.seen_headers) == requests_live  # nothing reached the server
     assert not again.recorded
     assert again.trajectory == first.trajectory
+
+
+def test_each_recorded_reply_keeps_its_latency(server: FakeServer, spec, tmp_path):
+    _run(spec, FakeRunner(server.url), tmp_path, "once")
+    data = decode(cassette_path(tmp_path, spec).read_bytes())
+    latencies = [r[LATENCY] for r in data.responses]
+    assert latencies and all(isinstance(s, float) and 0 <= s < 60 for s in latencies)
 
 
 def test_secrets_never_reach_the_file(server: FakeServer, spec, tmp_path):

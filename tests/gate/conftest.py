@@ -24,6 +24,7 @@ class StepsMetric:
     """Mean number of steps, with a crude order-sensitive "CI" to expose ordering bugs."""
 
     name: str = "steps"
+    better: str = "lower"
 
     def compute(self, trajectories: Sequence[Trajectory], *, rng_seed: int = 0) -> Estimate:
         if not trajectories:

@@ -31,7 +31,7 @@ def _cell(kind: str, value: float, ci: str | None = None, variant: str = "defaul
     [
         (_cell("min", 0.8), Estimate(0.9, 0.7, 0.95, 80), True, "value 0.9 >= 0.8"),
         (_cell("min", 0.8), Estimate(0.8, 0.7, 0.95, 80), True, "value 0.8 >= 0.8"),
-        (_cell("min", 0.8, "lower"), Estimate(0.9, 0.7, 0.95, 80), False, "CI lower end 0.7 < 0.8"),
+        (_cell("min", 0.8, "lower"), Estimate(0.75, 0.7, 0.9, 80), False, "CI lower end 0.7 < 0.8"),
         (_cell("max", 0.1), Estimate(0.2, 0.1, 0.3, 80), False, "value 0.2 > 0.1"),
         (
             _cell("max", 0.1, "upper"),

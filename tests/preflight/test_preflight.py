@@ -106,6 +106,22 @@ def test_a_down_server_fails_fast_without_a_probe(registry_for, unused_port):
     assert "start the server" in report.failed.fix
 
 
+def test_a_down_server_of_ones_own_model_names_its_registry_not_ours(tmp_path, unused_port):
+    path = tmp_path / "models.yaml"
+    url = f"http://127.0.0.1:{unused_port}/v1"
+    entry = {
+        "provider": "openai",
+        "model_id": "org/mine",
+        "api_key_required": False,
+        "base_url": url,
+    }
+    path.write_text(json.dumps({"models": {"my-vlm": entry}}), encoding="utf-8")
+    report = preflight(load_registry(path).get("my-vlm"), _spec("my-vlm"), episodes=1)
+    fix = report.failed.fix
+    assert "model_id='org/mine'" in fix and "base_url of 'my-vlm' in your registry" in fix
+    assert "EMRD_" not in fix and "vllm.md" not in fix
+
+
 def test_a_missing_key_is_named_and_nothing_is_sent(fake_vllm, registry_for, monkeypatch):
     monkeypatch.delenv("EMRD_TEST_VLM_KEY", raising=False)
     path = registry_for(fake_vllm.base_url, api_key_env="EMRD_TEST_VLM_KEY", api_key_required=True)

@@ -68,6 +68,8 @@ def test_compare_prints_markdown_or_writes_files(make_run_dir, tmp_path: Path, c
     out = tmp_path / "cmp"
     assert main(["report", "--compare", str(a), str(b), "--out", str(out)]) == 0
     assert {p.name for p in out.iterdir()} == {"compare.md", "compare.html", "compare.json"}
+    said = capsys.readouterr().out  # the verdicts in the terminal, then the files
+    assert "scout baseline memory_strength: " in said and said.rstrip().endswith("compare.json")
 
 
 def test_compare_models_within_one_run(make_run_dir, capsys) -> None:
@@ -163,3 +165,14 @@ def test_an_old_layout_run_directory_is_reported(grid: list[Trajectory], tmp_pat
     out = tmp_path / "out"
     assert main(["report", str(run), "--out", str(out), "--format", "json"]) == 0
     assert json.loads((out / "report.json").read_text())["overview"]["episodes"] == len(grid)
+
+
+def test_the_command_prints_it_or_writes_a_new_file(make_run_dir, tmp_path, capsys) -> None:
+    run = make_run_dir("run", synthetic_grid(model="scout", episodes=2, max_steps=26))
+    assert main(["thresholds", str(run)]) == 0
+    assert "scout:\n  baseline:\n" in capsys.readouterr().out
+    out = tmp_path / "thresholds.yaml"
+    assert main(["thresholds", str(run), "--out", str(out)]) == 0
+    assert f"check them: emrd gate {run} --thresholds {out}" in capsys.readouterr().out
+    assert main(["thresholds", str(run), "--out", str(out)]) == 2
+    assert "never overwrites" in capsys.readouterr().err

@@ -9,7 +9,13 @@ from statsmodels.stats.multitest import multipletests
 
 from pytest_emrd.metrics import GATE_METRICS
 from pytest_emrd.metrics.synthetic import synthetic_grid
-from pytest_emrd.report import COMPARED, Comparison, compare_runs, render_comparison
+from pytest_emrd.report import (
+    COMPARED,
+    Comparison,
+    compare_lines,
+    compare_runs,
+    render_comparison,
+)
 from pytest_emrd.report._document import num
 from pytest_emrd.trajectory import Trajectory
 
@@ -239,3 +245,20 @@ def test_comparison_renders_and_round_trips(base, forgetful) -> None:
     assert "**worse**" in md and "-0.000" not in md
     assert "Holm-corrected across all" in md
     assert set(files) == {"compare.md", "compare.html", "compare.json"}
+
+
+def test_faster_but_covering_less_is_flagged_not_better(base) -> None:
+    quit_early = [dataclasses.replace(t, steps=t.steps[:4]) for t in base]
+    lines = compare_lines(compare_runs(base, quit_early))
+    te = next(line for line in lines if line.startswith("syn baseline te:"))
+    aec = next(line for line in lines if line.startswith("syn baseline aec:"))
+    assert aec.endswith(": worse")
+    assert ": flagged (fewer actions but AEC fell by" in te
+
+
+def test_one_terminal_line_per_metric_and_cell(base, forgetful) -> None:
+    comparison = compare_runs(base, forgetful)
+    lines = compare_lines(comparison)
+    assert len(lines) == len(comparison.differences)
+    strength = next(line for line in lines if line.startswith("syn baseline memory_strength:"))
+    assert strength.endswith(": worse") and "B - A -" in strength and "Holm p" in strength

@@ -125,3 +125,27 @@ def test_no_curve_lies_on_an_axis(figures, name: str) -> None:
                 y = y[np.isfinite(y)]
                 if y.size and line.get_visible():
                     assert low < y.min() and y.max() < high, (key, line.get_label(), low, high)
+
+
+def test_tbs_is_drawn_to_the_last_step_an_episode_reached(grid: list[Trajectory]) -> None:
+    quit_early = [dataclasses.replace(t, steps=t.steps[:4]) for t in grid[:8]]
+    (series,) = [s for s in build_report(quit_early, with_reasoning=False).tbs if s.curve.n]
+    assert series.curve.t == (1, 2, 3, 4)
+
+
+def test_miller_axis_keeps_a_bin_each_side_of_one_point(grid: list[Trajectory]) -> None:
+    report = build_report(grid[:8], with_reasoning=False)
+    series = report.miller[0]
+    c = series.curve
+    one = dataclasses.replace(
+        c,
+        bins=c.bins[:1],
+        probabilities=c.probabilities[:1],
+        steps=c.steps[:1],
+        events=c.events[:1],
+        b_star=None,
+        m_star=None,
+    )
+    one_bin = dataclasses.replace(report, miller=(dataclasses.replace(series, curve=one),))
+    low, high = draw(one_bin, "miller.png").axes[0].get_xlim()
+    assert high - low >= 2 * c.width

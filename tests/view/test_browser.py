@@ -21,7 +21,16 @@ import pytest
 from PIL import Image
 
 from pytest_emrd.trajectory import Trajectory
-from pytest_emrd.view import Recorded, episode_data, episode_page, recorded_digests, replay_frames
+from pytest_emrd.view import (
+    FrameCheck,
+    IndexRow,
+    Recorded,
+    episode_data,
+    episode_page,
+    index_page,
+    recorded_digests,
+    replay_frames,
+)
 
 FLAGS = (
     "--headless",
@@ -87,6 +96,9 @@ def test_the_hash_opens_a_step_and_everything_is_drawn(chromium, pages, episode)
     entries = len(episode.steps[4].cognitive_map)
     assert plan.count("<title>") >= len(episode.ground_truth.objects) + entries
     assert dom.count("<polyline") >= 4  # path + three metric curves
+    # the map is the one after step 5's action: the agent stands where that action took it
+    after = episode_data(episode, [], Recorded(()))[0]["steps"][5]["at"]
+    assert f'<circle cx="{after[0]}" cy="{-after[1]}"' in plan
 
 
 def test_a_changed_frame_shows_a_warning_on_its_step(chromium, pages) -> None:
@@ -130,3 +142,38 @@ def test_the_step_reads_in_order_with_request_tokens_latency_and_result(
     shot = tmp_path / "step.png"
     browse(chromium, page, 12, f"--screenshot={shot}", "--window-size=1280,2200")
     assert Image.open(shot).size == (1280, 2200)
+
+
+def test_the_index_has_the_new_columns_and_sorts_by_a_click(chromium, tmp_path: Path) -> None:
+    def row(case: str, aec: float | None, parse: int) -> IndexRow:
+        metrics = {"aec": aec, "te": 9, "pa": None, "precision": 1.0, "never_visited": False}
+        check = FrameCheck(0, (), None)
+        return IndexRow(case, "terminated", 10, "Office", metrics, check, parse, tokens=12345)
+
+    page = tmp_path / "index.html"
+    page.write_text(index_page([row("a", 0.5, 2), row("b", None, 0), row("c", 0.2, 7)]))
+    # a click on the aec header, as a user would, before the DOM is dumped
+    script = tmp_path / "click.html"
+    script.write_text(
+        page.read_text().replace(
+            "</body>", "<script>document.querySelectorAll('th')[4].click()</script></body>"
+        )
+    )
+    dom = browse(chromium, script, 0, "--dump-dom").stdout
+    for head in (
+        "aec",
+        "te",
+        "pa",
+        "precision",
+        "parse failures",
+        "failed actions",
+        "tokens",
+        "error",
+    ):
+        assert re.search(f"<th[^>]*>{head}</th>", dom), head
+    cases = re.findall(r'<a href="(\w)\.html">', dom)
+    assert cases == ["c", "a", "b"]  # ascending by aec, n/a last
+    assert "12,345" in dom
+    shot = tmp_path / "index.png"
+    browse(chromium, page, 0, f"--screenshot={shot}", "--window-size=1400,400")
+    assert Image.open(shot).size == (1400, 400)

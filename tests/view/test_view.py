@@ -11,6 +11,7 @@ import pytest
 from PIL import Image
 
 from pytest_emrd.cli import main
+from pytest_emrd.episode import run_episode
 from pytest_emrd.metrics import episode_metrics
 from pytest_emrd.run import StoredEpisode
 from pytest_emrd.trajectory import Trajectory
@@ -174,3 +175,21 @@ def test_latency_is_recorded_live_and_not_compared() -> None:
     from pytest_emrd.trajectory import Trajectory as T
 
     assert T.from_dict(live.to_dict()).steps[0].latency_s == live.steps[0].latency_s
+
+
+def test_a_replayed_step_shows_the_latency_recorded_with_its_reply(episode) -> None:
+    replayed = [dataclasses.replace(s, latency_s=None) for s in episode.steps]
+    replay = dataclasses.replace(episode, steps=tuple(replayed))
+    steps = episode_data(replay, [], Recorded((), latencies=(1.25, None)))[0]["steps"]
+    assert steps[0]["latency"] is None and steps[0]["recorded_latency"] == 1.25
+    assert steps[1]["recorded_latency"] is None and steps[2]["recorded_latency"] is None
+
+
+def test_a_cassette_recorded_again_is_not_called_a_world_change(episode, cassettes) -> None:
+    """ep00's cassette against the trajectory of another episode under ep00's name: its replies
+    differ, so the cassette was recorded again after this run; the frames are not checked."""
+    other = run_episode(dataclasses.replace(episode.spec, episode=1))
+    rerun = dataclasses.replace(other, spec=episode.spec)
+    recorded = recorded_digests(rerun, cassettes)
+    assert recorded.digests == () and "was recorded again after this episode ran" in recorded.note
+    assert recorded_digests(episode, cassettes).note is None
