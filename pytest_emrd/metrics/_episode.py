@@ -23,6 +23,7 @@ from pytest_emrd.metrics._match import (
     Matcher,
     Matching,
     assign_rows,
+    keyed,
     rigid_fit,
 )
 from pytest_emrd.metrics._tracking import (
@@ -126,30 +127,56 @@ def precision_score(matching: Matching) -> float | None:
     .. math::
         P^{(i)} = \frac{|K^{(i)}|}{|M_T^{(i)}|}
 
-    ``M_T`` counts the map's distinct labels, recognised or not; ``K`` the entries matched
-    within the gate (:func:`match_map`). Duplicates, entries beyond a type's count or far from
-    every object of their type, and hallucinated types all lower it. Empty map: None. Worked
-    example: 41 correct entries and one "exit sign": ``41 / 42 = 0.976``.
+    ``M_T`` are the map's entries, recognised or not, every same-label copy included (a map
+    given as a list may repeat a label); ``K`` the entries matched within the gate
+    (:func:`match_map`). Copies, entries beyond a type's count or far from every object of
+    their type, and hallucinated types all lower it.
+
+    Parameters
+    ----------
+    matching
+        The terminal map's :class:`Matching`.
+
+    Returns
+    -------
+    float or None
+        A fraction in [0, 1]; None for an empty map. Worked example: 41 correct entries and
+        one "exit sign": ``41 / 42 = 0.976``; 41 correct entries each followed by a copy of
+        its label written far from every object of its type: ``41 / 82 = 0.5``.
     """
-    if not matching.labels:
+    if not matching.entries:
         return None
-    return len(matching.pairs) / matching.labels
+    return len(matching.pairs) / matching.entries
 
 
 def hallucination_score(matching: Matching) -> float | None:
-    r"""Hallucination rate of one terminal map: the share of entries of a type the office
-    does not hold.
+    r"""Hallucination rate of one terminal map: the share of its entries that stand for no
+    object.
 
     .. math::
-        H^{(i)} = \frac{|M_T^{(i)} \setminus M_{rec}^{(i)}|}{|M_T^{(i)}|}
+        H^{(i)} = \frac{|M_T^{(i)} \setminus K^{(i)}|}{|M_T^{(i)}|} = 1 - P^{(i)}
 
-    ``M_rec`` are the entries whose type resolves to a ground-truth type (the rest are
-    :attr:`Matching.unrecognised`). ``H <= 1 - P``. Empty map: None. Worked example: 40
-    chairs and desks of the office and 2 sofas it lacks: ``2 / 42``.
+    ``M_T`` are the map's entries (same-label copies included), ``K`` those matched to an
+    object. An entry stands for nothing when its type is one the office does not hold
+    (:attr:`Matching.unrecognised`) *or* when it is of a type the office holds and no object
+    of that type takes it (:attr:`Matching.unmatched`: an invented instance, beyond the
+    type's count or far from every object of its type). So ``H = 1 - P``.
+
+    Parameters
+    ----------
+    matching
+        The terminal map's :class:`Matching`.
+
+    Returns
+    -------
+    float or None
+        A fraction in [0, 1]; None for an empty map. Worked example: 40 chairs and desks of
+        the office, 2 sofas it lacks and 2 chairs 6 m from every chair: ``4 / 44``; a grid of
+        every type over the office is nearly all hallucination.
     """
-    if not matching.labels:
+    if not matching.entries:
         return None
-    return len(matching.unrecognised) / matching.labels
+    return (matching.entries - len(matching.pairs)) / matching.entries
 
 
 @dataclass(frozen=True)
@@ -263,11 +290,11 @@ def reentry_copies(
     label holds ``o``. Unrecognised entries copy nothing. Edge case: fewer than two matched
     entries at distinct positions leave the rotation undetermined: no copy is found.
     """
-    entries = {e.label: e for e in reversed(traj.steps[end].cognitive_map)}
-    before = {e.label for e in traj.steps[start - 1].cognitive_map} if start > 0 else set()
+    entries = keyed(traj.steps[end].cognitive_map)
+    before = set(keyed(traj.steps[start - 1].cognitive_map)) if start > 0 else set()
     by_type: dict[int, list[str]] = {}
     for lb in sorted(entries.keys() - before):
-        k = matcher.types.resolve(entries[lb].object_type, lb)
+        k = matcher.types.resolve(entries[lb].object_type, entries[lb].label)
         if k >= 0:
             by_type.setdefault(k, []).append(lb)
     label_of = held[end]
@@ -365,7 +392,7 @@ class EpisodeMetrics(JsonRecord):
     precision: float | None
     """Map precision: share of the terminal map's entries standing for a real object."""
     hallucination_rate: float | None
-    """Share of the terminal map's entries of a type the office does not hold."""
+    """Share of the terminal map's entries that stand for no object (``1 - precision``)."""
     tbs: tuple[float, ...]
     """Temporal Belief Stability ``TBS(t)`` for ``t = 1..steps`` (Eq. TBS)."""
     fpsg_local: float | None

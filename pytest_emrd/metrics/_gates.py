@@ -195,7 +195,7 @@ GATE_METRICS: Mapping[str, GateMetric] = MappingProxyType({m.name: m for m in (
                _mean_of("pa")),
     GateMetric("precision", "Map precision: share of terminal-map entries standing for an object",
                "higher", "fraction", _mean_of("precision")),
-    GateMetric("hallucination_rate", "Share of terminal-map entries of a type the office lacks",
+    GateMetric("hallucination_rate", "Share of terminal-map entries standing for no object",
                "lower", "fraction", _mean_of("hallucination_rate")),
     GateMetric("fpsg_local", "Focal-Point Spatial Grounding, local to the chosen room",
                "higher", "fraction", _mean_of("fpsg_local")),

@@ -4,7 +4,8 @@ A model writes its cognitive map as ``{label: {type, x, z, room}}`` with labels 
 its own, in a frame of its own. :func:`match_map` decides which object each entry of one map
 stands for, from that map alone:
 
-1. **Labels.** A repeated label keeps its first entry.
+1. **Entries.** Every entry counts: a label written again (a map given as a list) is one
+   more entry, keyed ``"<label> #<n>"`` (the ``n``-th time it is written; the first free key).
 2. **Types** (:mod:`._vocab`): the entry's ``object_type``, else its label, restricted to the
    layout's types; an entry of no such type is *unrecognised* and takes no part below.
 3. **Frame** (:func:`_solve`): hypotheses are the rigid motions carrying two base entries
@@ -87,9 +88,10 @@ class Matching:
     unrecognised: tuple[str, ...]
     """Labels whose type resolves to no ground-truth type (sorted)."""
     duplicates: tuple[str, ...]
-    """Labels that appeared more than once; only their first entry was used."""
+    """Labels written more than once; each later copy is an entry of its own (``label #n``)."""
     covered: int
-    """``sum_k min(|M_k|, |E_k|)`` over the layout's types: Eq. AEC's numerator."""
+    """``sum_k min(|M_k|, |E_k|)`` over the layout's types, ``|M_k|`` the distinct labels of
+    type ``k``: Eq. AEC's numerator."""
 
     @property
     def object_ids(self) -> frozenset[str]:
@@ -101,8 +103,8 @@ class Matching:
         return {p.object_id: p.label for p in self.pairs}
 
     @property
-    def labels(self) -> int:
-        """Distinct labels of the map: matched, unmatched and unrecognised."""
+    def entries(self) -> int:
+        """Entries of the map, same-label copies included: matched, unmatched, unrecognised."""
         return len(self.pairs) + len(self.unmatched) + len(self.unrecognised)
 
 
@@ -319,9 +321,10 @@ class StepMatch(NamedTuple):
     """One map matched (what :meth:`Matcher.step` returns and takes back)."""
 
     entries: dict[str, MapEntry]
-    """Label -> its first entry, in the model's order."""
+    """Entry key (the label; ``label #n`` for its ``n``-th copy) -> entry, in the model's
+    order."""
     kind_of: dict[str, int]
-    """Label -> type index (-1: unrecognised)."""
+    """Entry key -> type index (-1: unrecognised)."""
     identity: dict[str, int]
     """Label -> object index (objects sorted by id) of the object it stands for."""
     unmatched: tuple[str, ...]
@@ -333,6 +336,31 @@ class StepMatch(NamedTuple):
     key: Key
     solved: int = 0
     """Recognised entries when the frame was last searched for (:meth:`Matcher._match`)."""
+
+
+def keyed(entries: Sequence[MapEntry]) -> dict[str, MapEntry]:
+    """Every entry of a map under a key of its own (step 1 of the module docstring).
+
+    Parameters
+    ----------
+    entries
+        The map as written, in the model's order.
+
+    Returns
+    -------
+    dict[str, MapEntry]
+        The label for its first entry, ``"<label> #<n>"`` for the ``n``-th (the next free
+        key when a label already is that text), in the model's order.
+    """
+    out: dict[str, MapEntry] = {}
+    counts: Counter[str] = Counter()
+    for e in entries:
+        counts[e.label] += 1
+        key, n = e.label, counts[e.label]
+        while key in out:
+            key, n = f"{e.label} #{n}", n + 1
+        out[key] = e
+    return out
 
 
 class Matcher:
@@ -353,12 +381,10 @@ class Matcher:
     def step(self, entries: Sequence[MapEntry], previous: StepMatch | None = None) -> StepMatch:
         """Match one step's map; ``previous`` (the step before) seeds the frame and breaks
         exact ties in favour of the labels' previous objects (module docstring)."""
-        seen: dict[str, MapEntry] = {}
-        for e in entries:
-            seen.setdefault(e.label, e)
+        seen = keyed(entries)
         counts = Counter(e.label for e in entries)
         duplicates = tuple(sorted(lb for lb, n in counts.items() if n > 1))
-        kind_of = {lb: self.types.resolve(e.object_type, lb) for lb, e in seen.items()}
+        kind_of = {lb: self.types.resolve(e.object_type, e.label) for lb, e in seen.items()}
         key = tuple(sorted((lb, k, float(seen[lb].x), float(seen[lb].z))
                            for lb, k in kind_of.items() if k >= 0))  # fmt: skip
         unrecognised = tuple(sorted(lb for lb, k in kind_of.items() if k < 0))
@@ -456,7 +482,10 @@ class Matcher:
              for lb, j in found.identity.items()),
             key=lambda p: p.object_id,
         )  # fmt: skip
-        per_type = Counter(k for k in found.kind_of.values() if k >= 0)
+        first_kind: dict[str, int] = {}  # Eq. AEC counts distinct labels: a label's first entry
+        for lb, k in found.kind_of.items():
+            first_kind.setdefault(found.entries[lb].label, k)
+        per_type = Counter(k for k in first_kind.values() if k >= 0)
         capacity = self._layout.cols_of
         covered = sum(min(n, len(capacity[k])) for k, n in per_type.items())
         return Matching(
