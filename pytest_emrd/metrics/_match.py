@@ -186,8 +186,9 @@ class _Layout:
         ``(o_a, o_b)`` order) and their distances."""
         found = self._pairs.get((ka, kb))
         if found is None:
-            pairs = np.array([(i, j) for i in self.cols_of[ka] for j in self.cols_of[kb]
-                              if i != j], dtype=int).reshape(-1, 2)  # fmt: skip
+            pairs = np.array(
+                [(i, j) for i in self.cols_of[ka] for j in self.cols_of[kb] if i != j], dtype=int
+            ).reshape(-1, 2)
             v = self.true[pairs[:, 1]] - self.true[pairs[:, 0]]
             found = self._pairs[(ka, kb)] = (pairs, np.hypot(v[:, 0], v[:, 1]))
         return found
@@ -210,8 +211,9 @@ def assign_rows(cost: np.ndarray, allowed: np.ndarray) -> list[tuple[int, int]]:
     cols = np.flatnonzero(allowed[rows].any(axis=0))
     block = np.where(allowed[np.ix_(rows, cols)], cost[np.ix_(rows, cols)], _FORBIDDEN)
     r, c = linear_sum_assignment(block)
-    return [(int(rows[i]), int(cols[j])) for i, j in zip(r, c, strict=True)
-            if allowed[rows[i], cols[j]]]  # fmt: skip
+    return [
+        (int(rows[i]), int(cols[j])) for i, j in zip(r, c, strict=True) if allowed[rows[i], cols[j]]
+    ]
 
 
 def _assign(problem: _Problem, motion: Motion, prefer: np.ndarray | None = None) -> Pairs:
@@ -263,12 +265,15 @@ def _hypotheses(problem: _Problem) -> tuple[np.ndarray, bool]:
     layout, pred = problem.layout, problem.pred
     kinds, labels = problem.kinds, problem.labels
     spread = _units(np.sum((pred - pred.mean(axis=0)) ** 2, axis=1)).tolist()
-    base = sorted(range(len(kinds)),
-                  key=lambda i: (len(layout.cols_of[kinds[i]]), -spread[i], labels[i]))  # fmt: skip
+    base = sorted(
+        range(len(kinds)), key=lambda i: (len(layout.cols_of[kinds[i]]), -spread[i], labels[i])
+    )
     base = base[:BASE_ENTRIES]
-    found = [(a, b, dist, *layout.pairs_of(kinds[a], kinds[b]))
-             for a, b in combinations(base, 2)
-             if (dist := math.dist(pred[a], pred[b])) > COINCIDENT_M]  # fmt: skip
+    found = [
+        (a, b, dist, *layout.pairs_of(kinds[a], kinds[b]))
+        for a, b in combinations(base, 2)
+        if (dist := math.dist(pred[a], pred[b])) > COINCIDENT_M
+    ]
     true = layout.true
     if found:
         sizes = [len(pairs) for *_, pairs, _ in found]
@@ -285,8 +290,9 @@ def _hypotheses(problem: _Problem) -> tuple[np.ndarray, bool]:
     theta = np.arctan2(u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0], np.sum(u * v, axis=1))
     c, s = np.cos(theta), np.sin(theta)
     m, n = (pa + pb) / 2, (qa + qb) / 2
-    return np.column_stack([c, s, n[:, 0] - (c * m[:, 0] - s * m[:, 1]),
-                            n[:, 1] - (s * m[:, 0] + c * m[:, 1])]), True  # fmt: skip
+    return np.column_stack(
+        [c, s, n[:, 0] - (c * m[:, 0] - s * m[:, 1]), n[:, 1] - (s * m[:, 0] + c * m[:, 1])]
+    ), True
 
 
 def _scores(problem: _Problem, motions: np.ndarray) -> np.ndarray:
@@ -371,8 +377,10 @@ class Matcher:
         self.objects = ordered
         self.types = TypeResolver(o.object_type for o in ordered)
         kinds = [self.types.index[o.object_type] for o in ordered]
-        cols_of = {k: tuple(j for j, kj in enumerate(kinds) if kj == k)
-                   for k in range(len(self.types.names))}  # fmt: skip
+        cols_of = {
+            k: tuple(j for j, kj in enumerate(kinds) if kj == k)
+            for k in range(len(self.types.names))
+        }
         true = np.array([(o.x, o.z) for o in ordered], dtype=float).reshape(-1, 2)
         self._layout = _Layout(true, np.array(kinds, dtype=int), cols_of)
         self._points: list[tuple[float, float]] = [(o.x, o.z) for o in ordered]
@@ -385,11 +393,18 @@ class Matcher:
         counts = Counter(e.label for e in entries)
         duplicates = tuple(sorted(lb for lb, n in counts.items() if n > 1))
         kind_of = {lb: self.types.resolve(e.object_type, e.label) for lb, e in seen.items()}
-        key = tuple(sorted((lb, k, float(seen[lb].x), float(seen[lb].z))
-                           for lb, k in kind_of.items() if k >= 0))  # fmt: skip
+        key = tuple(
+            sorted(
+                (lb, k, float(seen[lb].x), float(seen[lb].z)) for lb, k in kind_of.items() if k >= 0
+            )
+        )
         unrecognised = tuple(sorted(lb for lb, k in kind_of.items() if k < 0))
-        extra = {"entries": seen, "kind_of": kind_of, "unrecognised": unrecognised,
-                 "duplicates": duplicates}  # fmt: skip
+        extra = {
+            "entries": seen,
+            "kind_of": kind_of,
+            "unrecognised": unrecognised,
+            "duplicates": duplicates,
+        }
         if previous is not None and previous.key == key:
             return previous._replace(**extra)
         found = None if previous is None else self._extend(previous, key)
@@ -447,9 +462,11 @@ class Matcher:
         if not labels:
             return StepMatch({}, {}, {}, (), (), (), None, key)
         problem = _Problem(
-            labels, [k for _, k, _, _ in key],
-            np.array([(x, z) for _, _, x, z in key], dtype=float), self._layout,
-        )  # fmt: skip
+            labels,
+            [k for _, k, _, _ in key],
+            np.array([(x, z) for _, _, x, z in key], dtype=float),
+            self._layout,
+        )
         prefer = None
         if previous is not None and previous.identity:
             prefer = np.zeros(problem.same.shape)
@@ -458,8 +475,11 @@ class Matcher:
                 if j is not None and problem.same[i, j]:
                     prefer[i, j] = 1.0
         seeds = [] if previous is None or previous.motion is None else [previous.motion]
-        named = [(i, self._index[lb]) for i, lb in enumerate(labels)
-                 if lb in self._index and problem.same[i, self._index[lb]]]  # fmt: skip
+        named = [
+            (i, self._index[lb])
+            for i, lb in enumerate(labels)
+            if lb in self._index and problem.same[i, self._index[lb]]
+        ]
         if len(named) >= 2:
             p = problem.pred[[i for i, _ in named]]
             if np.ptp(p, axis=0).max() > COINCIDENT_M:
@@ -476,12 +496,20 @@ class Matcher:
         """The :class:`Matching` of one matched map."""
         true = self._layout.true
         pairs = sorted(
-            (MatchedPair(lb, self.objects[j].object_id, self.objects[j].object_type,
-                         float(found.entries[lb].x), float(found.entries[lb].z),
-                         float(true[j, 0]), float(true[j, 1]))
-             for lb, j in found.identity.items()),
+            (
+                MatchedPair(
+                    lb,
+                    self.objects[j].object_id,
+                    self.objects[j].object_type,
+                    float(found.entries[lb].x),
+                    float(found.entries[lb].z),
+                    float(true[j, 0]),
+                    float(true[j, 1]),
+                )
+                for lb, j in found.identity.items()
+            ),
             key=lambda p: p.object_id,
-        )  # fmt: skip
+        )
         first_kind: dict[str, int] = {}  # Eq. AEC counts distinct labels: a label's first entry
         for lb, k in found.kind_of.items():
             first_kind.setdefault(found.entries[lb].label, k)
