@@ -25,14 +25,13 @@ from pytest_emrd.metrics._match import (
     Matching,
     assign_rows,
     keyed,
+    pa_value,
     rigid_fit,
 )
 from pytest_emrd.metrics._tracking import (
     Spell,
     Track,
-    exp_ratio,
     first_spells,
-    layout_scale,
     track_episode,
 )
 from pytest_emrd.rooms import room_letter
@@ -40,9 +39,6 @@ from pytest_emrd.trajectory import CATEGORIES, EpisodeSpec, Trajectory
 
 #: Ground-truth type of doorways (left out of ``O_F`` by FPSG's doorway-free variant).
 DOORWAY_TYPE: Final = "Doorway"
-#: Share of a map's recognised entries that may stay unmatched at no cost to PA (one stray
-#: entry in a full office map of 41 costs nothing; spraying guesses does).
-FREE_UNMATCHED: Final = 0.05
 
 
 def aec_score(matching: Matching, n_objects: int) -> float | None:
@@ -73,24 +69,6 @@ def te_score(traj: Trajectory) -> int:
     return len(traj.steps) - terminal
 
 
-def pa_coverage(matched: int, unmatched: int, g_base: int) -> float:
-    r"""The coverage factor of Eq. PA with our charge for unmatched entries.
-
-    .. math::
-        c = \frac{\max\left(0,\ \min(|K|, |G_{base}|) - u\right)}{|G_{base}|},\qquad
-        u = \max\left(0,\ |U| - \lfloor 0.05\,(|K| + |U|) \rfloor\right)
-
-    ``U`` are the recognised entries left unmatched (:attr:`Matching.unmatched`): each one
-    beyond :data:`FREE_UNMATCHED` of the recognised entries cancels one matched object, so a
-    guess pays only if more than half of such guesses land within the gate of a free object.
-    Without unmatched entries this is the paper's factor. ``g_base = 0``: 0.0.
-    """
-    if g_base == 0:
-        return 0.0
-    charged = max(0, unmatched - math.floor(FREE_UNMATCHED * (matched + unmatched)))
-    return max(0, min(matched, g_base) - charged) / g_base
-
-
 def positional_accuracy_score(matching: Matching, g_base: int) -> float | None:
     r"""Positional Accuracy of one terminal map (inner term of Eq. PA).
 
@@ -109,17 +87,9 @@ def positional_accuracy_score(matching: Matching, g_base: int) -> float | None:
     """
     if g_base == 0:
         return None
-    if not matching.pairs:
-        return 0.0
     pred = np.array([(p.pred_x, p.pred_z) for p in matching.pairs], dtype=float)
     true = np.array([(p.true_x, p.true_z) for p in matching.pairs], dtype=float)
-    rot, shift = rigid_fit(pred, true)
-    residual = pred @ rot.T + shift - true
-    rmse = float(np.sqrt(np.mean(np.sum(residual**2, axis=1))))
-    if rmse < 1e-9 * max(1.0, float(np.abs(true).max())):
-        rmse = 0.0
-    coverage = pa_coverage(len(matching.pairs), len(matching.unmatched), g_base)
-    return exp_ratio(rmse, layout_scale(true)) * coverage
+    return pa_value(pred.reshape(-1, 2), true.reshape(-1, 2), len(matching.unmatched), g_base)
 
 
 def precision_score(matching: Matching) -> float | None:

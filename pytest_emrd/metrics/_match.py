@@ -9,12 +9,16 @@ stands for, from that map alone:
 2. **Types** (:mod:`._vocab`): the entry's ``object_type``, else its label, restricted to the
    layout's types; an entry of no such type is *unrecognised* and takes no part below.
 3. **Frame** (:func:`_solve`): hypotheses are the rigid motions carrying two base entries
-   (:data:`BASE_ENTRIES`, fewest candidate objects first) onto two objects of their types
-   whose distance agrees within ``2 * GATE_M``, plus the Procrustes fit of labels that are
-   object ids (``Chair_3``). Each is scored by truncated least squares (MSAC: an entry costs
-   its squared distance to the nearest object of its type, capped at ``GATE_M ** 2``); the
-   lowest score wins, the first on equal scores. Then assignment and Procrustes refit
-   (:func:`rigid_fit`) on the matched pairs alternate until the pairs repeat.
+   (:data:`BASE_ENTRIES`, fewest candidate objects first, one entry of each type in turn)
+   onto two objects of their types
+   whose distance agrees within ``2 * GATE_M``. The :data:`CANDIDATES` with the least
+   truncated least-squares score (MSAC: an entry costs its squared distance to the nearest
+   object of its type, capped at ``GATE_M ** 2``), and across steps the previous frame, are
+   each refined: assignment and Procrustes refit (:func:`rigid_fit`) on the matched pairs
+   alternate until the pairs repeat. **The matching PA scores highest is kept** (Eq. PA,
+   :func:`pa_value`, with the episode's ``|G_base|``), then the one with most pairs, then the
+   first: the frame is chosen by the quantity PA reports. Entries are ordered by type and
+   position, never by label, so what an entry is called beyond its type changes nothing.
 4. **Assignment with a gate** (:data:`GATE_M`): the one-to-one assignment with the most pairs,
    then the least summed squared distance, rounded to :data:`TIE_M2` first (the tie rule).
 
@@ -57,6 +61,15 @@ MAX_ROUNDS: Final = 10
 #: revisited as the map grows).
 REVISIT: Final = 1.5
 SETTLED: Final = 12
+
+#: Frame hypotheses (least MSAC score first) refined into matchings; the one PA scores
+#: highest is kept (step 3).
+CANDIDATES: Final = 6
+#: Share of a map's recognised entries that may stay unmatched at no cost to PA (one stray
+#: entry in a full office map of 41 costs nothing; spraying guesses does).
+FREE_UNMATCHED: Final = 0.05
+#: PA values closer than this are equal (the first candidate wins): the tie rule of step 3.
+TIE_PA: Final = 1e-12
 
 _UNITS_GATE: Final = round(GATE_M**2 / TIE_M2)
 _FORBIDDEN: Final = 1e15  # cost of a pair outside the gate: more than any sum of allowed ones
@@ -146,6 +159,81 @@ def rigid_fit(pred: np.ndarray, true: np.ndarray) -> tuple[np.ndarray, np.ndarra
     return np.array([[m.c, -m.s], [m.s, m.c]]), np.array([m.tx, m.tz])
 
 
+def layout_scale(xy: np.ndarray) -> float:
+    """RMS distance of points from their centroid (``L_gt``); 0.0 for fewer than 2 points."""
+    if len(xy) < 2:
+        return 0.0
+    return float(np.sqrt(np.mean(np.sum((xy - xy.mean(axis=0)) ** 2, axis=1))))
+
+
+def exp_ratio(error: float, scale: float) -> float:
+    """``exp(-error / scale)`` with ``0/0 := 0`` (perfect) and ``x/0 := inf`` (score 0)."""
+    if error <= 0.0:
+        return 1.0
+    if scale <= 0.0:
+        return 0.0
+    return math.exp(-error / scale)
+
+
+def pa_coverage(matched: int, unmatched: int, g_base: int) -> float:
+    r"""The coverage factor of Eq. PA with our charge for unmatched entries.
+
+    .. math::
+        c = \frac{\max\left(0,\ \min(|K|, |G_{base}|) - u\right)}{|G_{base}|},\qquad
+        u = \max\left(0,\ |U| - \lfloor 0.05\,(|K| + |U|) \rfloor\right)
+
+    ``U`` are the recognised entries left unmatched (:attr:`Matching.unmatched`, every
+    same-label copy included): each one beyond :data:`FREE_UNMATCHED` of the recognised
+    entries cancels one matched object, so a guess pays only if more than half of such
+    guesses land within the gate of a free object. Without unmatched entries this is the
+    paper's factor.
+
+    Parameters
+    ----------
+    matched, unmatched
+        ``|K|`` and ``|U|``.
+    g_base
+        ``|G_base|``, the objects discoverable under the baseline.
+
+    Returns
+    -------
+    float
+        ``c`` in [0, 1]; 0.0 when ``g_base = 0``.
+    """
+    if g_base == 0:
+        return 0.0
+    charged = max(0, unmatched - math.floor(FREE_UNMATCHED * (matched + unmatched)))
+    return max(0, min(matched, g_base) - charged) / g_base
+
+
+def pa_value(pred: np.ndarray, true: np.ndarray, unmatched: int, g_base: int) -> float:
+    """Eq. PA of matched points ``pred`` -> ``true`` (k x 2): what
+    :func:`~pytest_emrd.metrics.positional_accuracy_score` reports and step 3 maximises.
+
+    Parameters
+    ----------
+    pred, true
+        The matched entries as written and their objects, row by row.
+    unmatched
+        ``|U|``, recognised entries left without an object.
+    g_base
+        ``|G_base|``.
+
+    Returns
+    -------
+    float
+        ``exp(-RMSE / L_gt) * c`` in [0, 1]; 0.0 without pairs or with ``g_base = 0``.
+    """
+    if not len(pred) or g_base == 0:
+        return 0.0
+    m = _procrustes(pred, true)
+    residual = _moved(pred, m) - true
+    rmse = float(np.sqrt(np.mean(np.sum(residual**2, axis=1))))
+    if rmse < 1e-9 * max(1.0, float(np.abs(true).max())):
+        rmse = 0.0
+    return exp_ratio(rmse, layout_scale(true)) * pa_coverage(len(pred), unmatched, g_base)
+
+
 def _moved(points: np.ndarray, m: Motion) -> np.ndarray:
     x, z = points[:, 0], points[:, 1]
     return np.stack([m.c * x - m.s * z + m.tx, m.s * x + m.c * z + m.tz], axis=1)
@@ -179,6 +267,8 @@ class _Layout:
     """Type index of each object."""
     cols_of: dict[int, tuple[int, ...]]
     """Type index -> its objects, ascending."""
+    g_base: int
+    """``|G_base|`` of Eq. PA, the quantity step 3 maximises."""
     _pairs: dict[tuple[int, int], tuple[np.ndarray, np.ndarray]] = field(default_factory=dict)
 
     def pairs_of(self, ka: int, kb: int) -> tuple[np.ndarray, np.ndarray]:
@@ -263,12 +353,15 @@ def _hypotheses(problem: _Problem) -> tuple[np.ndarray, bool]:
     """Frame hypotheses (step 3) as rows ``(c, s, tx, tz)``; the flag is False when no pair
     of entries gives a direction (translations only, the model frame's own rotation)."""
     layout, pred = problem.layout, problem.pred
-    kinds, labels = problem.kinds, problem.labels
+    kinds = problem.kinds
     spread = _units(np.sum((pred - pred.mean(axis=0)) ** 2, axis=1)).tolist()
-    base = sorted(
-        range(len(kinds)), key=lambda i: (len(layout.cols_of[kinds[i]]), -spread[i], labels[i])
-    )
-    base = base[:BASE_ENTRIES]
+    order = sorted(range(len(kinds)), key=lambda i: (len(layout.cols_of[kinds[i]]), -spread[i], i))
+    taken: Counter[int] = Counter()  # one entry of each type in turn: copies of a type
+    turn = []  # cannot crowd the others out
+    for i in order:
+        taken[kinds[i]] += 1
+        turn.append(taken[kinds[i]])
+    base = [order[p] for p in sorted(range(len(order)), key=turn.__getitem__)][:BASE_ENTRIES]
     found = [
         (a, b, dist, *layout.pairs_of(kinds[a], kinds[b]))
         for a, b in combinations(base, 2)
@@ -313,14 +406,33 @@ def _solve(
     """Step 3: the best of ``seeds`` and the hypotheses (the first on equal scores), refined;
     the flag: the result's rotation was read from a map."""
     motions, read = _hypotheses(problem)
-    if seeds:
-        motions = np.concatenate([np.asarray(seeds, dtype=float), motions])
-    best = int(np.argmin(_scores(problem, motions))) if len(motions) > 1 else 0
-    return _refine(problem, Motion(*motions[best].tolist()), prefer, read or best < len(seeds))
+    order = np.argsort(_scores(problem, motions), kind="stable")[:CANDIDATES]
+    starts = [(m, True) for m in seeds] + [(Motion(*motions[i].tolist()), read) for i in order]
+    best: tuple[tuple[float, int], Pairs, Motion, bool] | None = None
+    tried: set[Pairs] = set()
+    for motion, was_read in starts:
+        pairs, motion, was_read = _refine(problem, motion, prefer, was_read)
+        if pairs in tried:
+            continue
+        tried.add(pairs)
+        rows, cols = [i for i, _ in pairs], [j for _, j in pairs]
+        value = pa_value(
+            problem.pred[rows],
+            problem.layout.true[cols],
+            len(problem.kinds) - len(pairs),
+            problem.layout.g_base,
+        )
+        rank = (round(value / TIE_PA), len(pairs))
+        if best is None or rank > best[0]:
+            best = (rank, pairs, motion, was_read)
+    assert best is not None
+    return best[1], best[2], best[3]
 
 
 Key = tuple[tuple[str, int, float, float], ...]
-"""A map's recognised entries as ``(label, type index, x, z)``, sorted by label."""
+"""A map's recognised entries as ``(label, type index, x, z)``, sorted by type, position and
+label (labels break ties only between entries of one type at one point: no score depends on
+what an entry is called beyond its type)."""
 
 
 class StepMatch(NamedTuple):
@@ -372,7 +484,7 @@ def keyed(entries: Sequence[MapEntry]) -> dict[str, MapEntry]:
 class Matcher:
     """:func:`match_map` bound to one episode's ground truth, reusable across its steps."""
 
-    def __init__(self, objects: Sequence[GroundTruthObject]) -> None:
+    def __init__(self, objects: Sequence[GroundTruthObject], g_base: int | None = None) -> None:
         ordered = sorted(objects, key=lambda o: o.object_id)
         self.objects = ordered
         self.types = TypeResolver(o.object_type for o in ordered)
@@ -382,7 +494,8 @@ class Matcher:
             for k in range(len(self.types.names))
         }
         true = np.array([(o.x, o.z) for o in ordered], dtype=float).reshape(-1, 2)
-        self._layout = _Layout(true, np.array(kinds, dtype=int), cols_of)
+        g = len(ordered) if g_base is None else g_base
+        self._layout = _Layout(true, np.array(kinds, dtype=int), cols_of, g)
         self._points: list[tuple[float, float]] = [(o.x, o.z) for o in ordered]
         self._index = {o.object_id: j for j, o in enumerate(ordered)}
 
@@ -395,7 +508,12 @@ class Matcher:
         kind_of = {lb: self.types.resolve(e.object_type, e.label) for lb, e in seen.items()}
         key = tuple(
             sorted(
-                (lb, k, float(seen[lb].x), float(seen[lb].z)) for lb, k in kind_of.items() if k >= 0
+                (
+                    (lb, k, float(seen[lb].x), float(seen[lb].z))
+                    for lb, k in kind_of.items()
+                    if k >= 0
+                ),
+                key=lambda e: (e[1], e[2], e[3], e[0]),
             )
         )
         unrecognised = tuple(sorted(lb for lb, k in kind_of.items() if k < 0))
@@ -475,18 +593,9 @@ class Matcher:
                 if j is not None and problem.same[i, j]:
                     prefer[i, j] = 1.0
         seeds = [] if previous is None or previous.motion is None else [previous.motion]
-        named = [
-            (i, self._index[lb])
-            for i, lb in enumerate(labels)
-            if lb in self._index and problem.same[i, self._index[lb]]
-        ]
-        if len(named) >= 2:
-            p = problem.pred[[i for i, _ in named]]
-            if np.ptp(p, axis=0).max() > COINCIDENT_M:
-                seeds.append(_procrustes(p, self._layout.true[[j for _, j in named]]))
         pairs, motion, read = _solve(problem, seeds, prefer)
         identity = {labels[i]: j for i, j in pairs}
-        unmatched = tuple(lb for lb in labels if lb not in identity)
+        unmatched = tuple(sorted(lb for lb in labels if lb not in identity))
         # A rotation the map did not determine is the model frame's own: carried to the next
         # step as a seed it would make that step's matching depend on the frame.
         kept = motion if read else None
@@ -543,7 +652,9 @@ def step_matchings(
     return tuple(out)
 
 
-def match_map(entries: Sequence[MapEntry], objects: Sequence[GroundTruthObject]) -> Matching:
+def match_map(
+    entries: Sequence[MapEntry], objects: Sequence[GroundTruthObject], *, g_base: int | None = None
+) -> Matching:
     """Match a cognitive map to ground truth: THE procedure of every EMRD metric.
 
     See the module docstring of :mod:`pytest_emrd.metrics._match` for the steps, the gate,
@@ -561,7 +672,7 @@ def match_map(entries: Sequence[MapEntry], objects: Sequence[GroundTruthObject])
     them: the desks are matched (``d1`` -> ``Desk_1``), the sign is ``unmatched`` (no motion
     puts it within :data:`GATE_M` of the door while keeping the desks).
     """
-    return Matcher(objects).match(entries)
+    return Matcher(objects, g_base).match(entries)
 
 
 def reframe(
