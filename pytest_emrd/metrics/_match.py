@@ -17,8 +17,9 @@ stands for, from that map alone:
    each refined: assignment and Procrustes refit (:func:`rigid_fit`) on the matched pairs
    alternate until the pairs repeat. **The matching PA scores highest is kept** (Eq. PA,
    :func:`pa_value`, with the episode's ``|G_base|``), then the one with most pairs, then the
-   first: the frame is chosen by the quantity PA reports. Entries are ordered by type and
-   position, never by label, so what an entry is called beyond its type changes nothing.
+   first: the frame is chosen by the quantity PA reports. Entries keep the model's order
+   (ties go to the earlier entry), never a label's or a position's, so neither what an entry
+   is called beyond its type nor the frame it is written in changes a score.
 4. **Assignment with a gate** (:data:`GATE_M`): the one-to-one assignment with the most pairs,
    then the least summed squared distance, rounded to :data:`TIE_M2` first (the tie rule).
 
@@ -430,9 +431,8 @@ def _solve(
 
 
 Key = tuple[tuple[str, int, float, float], ...]
-"""A map's recognised entries as ``(label, type index, x, z)``, sorted by type, position and
-label (labels break ties only between entries of one type at one point: no score depends on
-what an entry is called beyond its type)."""
+"""A map's recognised entries as ``(label, type index, x, z)`` in the model's order: neither
+what an entry is called beyond its type nor the frame it is written in orders anything."""
 
 
 class StepMatch(NamedTuple):
@@ -507,14 +507,7 @@ class Matcher:
         duplicates = tuple(sorted(lb for lb, n in counts.items() if n > 1))
         kind_of = {lb: self.types.resolve(e.object_type, e.label) for lb, e in seen.items()}
         key = tuple(
-            sorted(
-                (
-                    (lb, k, float(seen[lb].x), float(seen[lb].z))
-                    for lb, k in kind_of.items()
-                    if k >= 0
-                ),
-                key=lambda e: (e[1], e[2], e[3], e[0]),
-            )
+            (lb, k, float(seen[lb].x), float(seen[lb].z)) for lb, k in kind_of.items() if k >= 0
         )
         unrecognised = tuple(sorted(lb for lb, k in kind_of.items() if k < 0))
         extra = {
