@@ -10,16 +10,17 @@ stands for, from that map alone:
    layout's types; an entry of no such type is *unrecognised* and takes no part below.
 3. **Frame** (:func:`_solve`): hypotheses are the rigid motions carrying two base entries
    (:data:`BASE_ENTRIES`, fewest candidate objects first, one entry of each type in turn)
-   onto two objects of their types
-   whose distance agrees within ``2 * GATE_M``. The :data:`CANDIDATES` with the least
-   truncated least-squares score (MSAC: an entry costs its squared distance to the nearest
-   object of its type, capped at ``GATE_M ** 2``), and across steps the previous frame, are
-   each refined: assignment and Procrustes refit (:func:`rigid_fit`) on the matched pairs
+   onto two objects of their types whose distance agrees within ``2 * GATE_M``. The
+   :data:`CANDIDATES` with the least truncated least-squares score (MSAC: an entry costs its
+   squared distance to the nearest object of its type, capped at ``GATE_M ** 2``), the fit of
+   labels that are object ids (``Chair_3``) and, across steps, the previous frame are each
+   refined: assignment and Procrustes refit (:func:`rigid_fit`) on the matched pairs
    alternate until the pairs repeat. **The matching PA scores highest is kept** (Eq. PA,
-   :func:`pa_value`, with the episode's ``|G_base|``), then the one with most pairs, then the
-   first: the frame is chosen by the quantity PA reports. Entries keep the model's order
-   (ties go to the earlier entry), never a label's or a position's, so neither what an entry
-   is called beyond its type nor the frame it is written in changes a score.
+   :func:`pa_value`, with the episode's ``|G_base|``), then the one with most pairs, then
+   with most id labels on their own object, then the first: the frame is chosen by the
+   quantity PA reports. Entries are ordered by type and distance from their centroid
+   (:data:`Key`), so that neither the frame, the order of the entries nor a synonym moves a
+   score.
 4. **Assignment with a gate** (:data:`GATE_M`): the one-to-one assignment with the most pairs,
    then the least summed squared distance, rounded to :data:`TIE_M2` first (the tie rule).
 
@@ -402,14 +403,18 @@ def _scores(problem: _Problem, motions: np.ndarray) -> np.ndarray:
 
 
 def _solve(
-    problem: _Problem, seeds: Sequence[Motion] = (), prefer: np.ndarray | None = None
+    problem: _Problem,
+    seeds: Sequence[Motion] = (),
+    prefer: np.ndarray | None = None,
+    named: frozenset[tuple[int, int]] = frozenset(),
 ) -> tuple[Pairs, Motion, bool]:
-    """Step 3: the best of ``seeds`` and the hypotheses (the first on equal scores), refined;
-    the flag: the result's rotation was read from a map."""
+    """Step 3: of ``seeds`` and the best-scored hypotheses, refined, the matching PA scores
+    highest, then with most pairs, then with most ``named`` pairs (labels that are the
+    object's id), then the first; the flag: the result's rotation was read from a map."""
     motions, read = _hypotheses(problem)
     order = np.argsort(_scores(problem, motions), kind="stable")[:CANDIDATES]
     starts = [(m, True) for m in seeds] + [(Motion(*motions[i].tolist()), read) for i in order]
-    best: tuple[tuple[float, int], Pairs, Motion, bool] | None = None
+    best: tuple[tuple[float, int, int], Pairs, Motion, bool] | None = None
     tried: set[Pairs] = set()
     for motion, was_read in starts:
         pairs, motion, was_read = _refine(problem, motion, prefer, was_read)
@@ -423,7 +428,7 @@ def _solve(
             len(problem.kinds) - len(pairs),
             problem.layout.g_base,
         )
-        rank = (round(value / TIE_PA), len(pairs))
+        rank = (round(value / TIE_PA), len(pairs), len(named.intersection(pairs)))
         if best is None or rank > best[0]:
             best = (rank, pairs, motion, was_read)
     assert best is not None
@@ -431,8 +436,10 @@ def _solve(
 
 
 Key = tuple[tuple[str, int, float, float], ...]
-"""A map's recognised entries as ``(label, type index, x, z)`` in the model's order: neither
-what an entry is called beyond its type nor the frame it is written in orders anything."""
+"""A map's recognised entries as ``(label, type index, x, z)``, ordered by type, then distance
+from the entries' centroid (rounded to :data:`TIE_M2`), then label: an order that neither the
+model's frame, nor the order it writes entries in, nor (but for entries of one type equally far
+from the centroid) what it calls them changes."""
 
 
 class StepMatch(NamedTuple):
@@ -506,9 +513,13 @@ class Matcher:
         counts = Counter(e.label for e in entries)
         duplicates = tuple(sorted(lb for lb, n in counts.items() if n > 1))
         kind_of = {lb: self.types.resolve(e.object_type, e.label) for lb, e in seen.items()}
-        key = tuple(
+        rows = [
             (lb, k, float(seen[lb].x), float(seen[lb].z)) for lb, k in kind_of.items() if k >= 0
-        )
+        ]
+        xz = np.array([r[2:] for r in rows], dtype=float).reshape(-1, 2)
+        spread = _units(np.sum((xz - xz.mean(axis=0)) ** 2, axis=1)).tolist() if rows else []
+        order = sorted(range(len(rows)), key=lambda i: (rows[i][1], spread[i], rows[i][0]))
+        key = tuple(rows[i] for i in order)
         unrecognised = tuple(sorted(lb for lb, k in kind_of.items() if k < 0))
         extra = {
             "entries": seen,
@@ -586,7 +597,12 @@ class Matcher:
                 if j is not None and problem.same[i, j]:
                     prefer[i, j] = 1.0
         seeds = [] if previous is None or previous.motion is None else [previous.motion]
-        pairs, motion, read = _solve(problem, seeds, prefer)
+        named = [(i, self._index[lb]) for i, lb in enumerate(labels) if lb in self._index]
+        named = [(i, j) for i, j in named if problem.same[i, j]]
+        p = problem.pred[[i for i, _ in named]]
+        if len(named) >= 2 and np.ptp(p, axis=0).max() > COINCIDENT_M:
+            seeds.append(_procrustes(p, self._layout.true[[j for _, j in named]]))
+        pairs, motion, read = _solve(problem, seeds, prefer, frozenset(named))
         identity = {labels[i]: j for i, j in pairs}
         unmatched = tuple(sorted(lb for lb in labels if lb not in identity))
         # A rotation the map did not determine is the model frame's own: carried to the next

@@ -10,7 +10,7 @@ import math
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
 from pytest_emrd.metrics import (
@@ -89,6 +89,13 @@ def _pa(entries: list[MapEntry]) -> float:
     return positional_accuracy_score(match_map(entries, OFFICE), len(OFFICE))
 
 
+def _credits_a_stray(*maps: list[MapEntry]) -> bool:
+    """A stray entry is matched: it landed within the gate of a free object of its type."""
+    return any(
+        lb.startswith("stray") for m in maps for lb in match_map(m, OFFICE).label_of.values()
+    )
+
+
 def _scores(entries: list[MapEntry]) -> np.ndarray:
     m = match_map(entries, OFFICE)
     return np.array(
@@ -110,6 +117,8 @@ def test_an_exactly_correct_entry_never_lowers_pa(case: Case, data: st.DataObjec
     held = mapped | match_map(entries, OFFICE).object_ids
     o = data.draw(st.sampled_from([o for o in OFFICE if o.object_id not in held]))
     exact = _at(_label(o, ids, 99, rng), *_move(np.array([o.x, o.z]), motion))
+    # a stray credited by luck may be exposed by the correct entry (and rightly charged)
+    assume(not _credits_a_stray(entries, [*entries, exact]))
     assert _pa([*entries, exact]) >= _pa(entries) - EPS
 
 
@@ -127,6 +136,7 @@ def test_an_entry_6_m_from_every_object_of_its_type_never_raises_pa(
         point = point + 0.5 * step
     point = point + (distance - 6.0) * step
     far = MapEntry("far", object_type, *_move(point, motion))
+    assume(not _credits_a_stray(entries, [*entries, far]))
     assert _pa([*entries, far]) <= _pa(entries) + EPS
 
 
