@@ -12,15 +12,15 @@ stands for, from that map alone:
    (:data:`BASE_ENTRIES`, fewest candidate objects first, one entry of each type in turn)
    onto two objects of their types whose distance agrees within ``2 * GATE_M``. The
    :data:`CANDIDATES` with the least truncated least-squares score (MSAC: an entry costs its
-   squared distance to the nearest object of its type, capped at ``GATE_M ** 2``), the fit of
-   labels that are object ids (``Chair_3``) and, across steps, the previous frame are each
-   refined: assignment and Procrustes refit (:func:`rigid_fit`) on the matched pairs
-   alternate until the pairs repeat. **The matching PA scores highest is kept** (Eq. PA,
-   :func:`pa_value`, with the episode's ``|G_base|``), then the one with most pairs, then
-   with most id labels on their own object, then the first: the frame is chosen by the
-   quantity PA reports. Entries are ordered by type and distance from their centroid
-   (:data:`Key`), so that neither the frame, the order of the entries nor a synonym moves a
-   score.
+   squared distance to the nearest object of its type, capped at ``GATE_M ** 2``; on equal
+   scores, the most labels that are object ids, ``Chair_3``, within the gate of their
+   object) and, across steps, the previous frame are each refined: assignment and
+   Procrustes refit (:func:`rigid_fit`) on the matched pairs alternate until the pairs
+   repeat. **The matching PA scores highest is kept** (Eq. PA, :func:`pa_value`, with the
+   episode's ``|G_base|``), then the one with most pairs, then with most id labels on their
+   own object, then the first: the frame is chosen by the quantity PA reports. Entries are
+   ordered by type and distance from their centroid (:data:`Key`), so that neither the
+   frame, the order of the entries nor a synonym moves a score.
 4. **Assignment with a gate** (:data:`GATE_M`): the one-to-one assignment with the most pairs,
    then the least summed squared distance, rounded to :data:`TIE_M2` first (the tie rule).
 
@@ -412,7 +412,11 @@ def _solve(
     highest, then with most pairs, then with most ``named`` pairs (labels that are the
     object's id), then the first; the flag: the result's rotation was read from a map."""
     motions, read = _hypotheses(problem)
-    order = np.argsort(_scores(problem, motions), kind="stable")[:CANDIDATES]
+    agree = np.zeros(len(motions))  # named entries within the gate of their object: a tie rule
+    for i, j in named:
+        d2 = (_moved(problem.pred[[i]], Motion(*motions.T)) - problem.layout.true[j]) ** 2
+        agree -= _units(d2.sum(axis=1)) <= _UNITS_GATE
+    order = np.lexsort((agree, _scores(problem, motions)))[:CANDIDATES]
     starts = [(m, True) for m in seeds] + [(Motion(*motions[i].tolist()), read) for i in order]
     best: tuple[tuple[float, int, int], Pairs, Motion, bool] | None = None
     tried: set[Pairs] = set()
@@ -599,9 +603,6 @@ class Matcher:
         seeds = [] if previous is None or previous.motion is None else [previous.motion]
         named = [(i, self._index[lb]) for i, lb in enumerate(labels) if lb in self._index]
         named = [(i, j) for i, j in named if problem.same[i, j]]
-        p = problem.pred[[i for i, _ in named]]
-        if len(named) >= 2 and np.ptp(p, axis=0).max() > COINCIDENT_M:
-            seeds.append(_procrustes(p, self._layout.true[[j for _, j in named]]))
         pairs, motion, read = _solve(problem, seeds, prefer, frozenset(named))
         identity = {labels[i]: j for i, j in pairs}
         unmatched = tuple(sorted(lb for lb in labels if lb not in identity))
