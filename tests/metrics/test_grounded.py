@@ -103,3 +103,11 @@ def test_grounded_aec_never_exceeds_aec_and_the_rate_is_a_share(
     assert m.grounded_aec <= m.aec
     assert 0.0 <= m.ungrounded_rate <= 1.0
     assert m.ungrounded_rate == pytest.approx(len(set(written) - set(shown)) / len(written))
+
+
+@pytest.mark.slow
+def test_the_committed_scout_maps_only_what_it_was_shown(committed: list[Trajectory]) -> None:
+    for traj in committed:
+        m = episode_metrics(traj)
+        assert m.ungrounded_rate == 0.0
+        assert m.grounded_aec == m.aec
