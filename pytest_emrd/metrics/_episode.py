@@ -20,17 +20,18 @@ from pytest_emrd._serde import JsonRecord, Schema
 from pytest_emrd.metrics._match import (
     COINCIDENT_M,
     TIE_M2,
+    MatchedPair,
     Matcher,
     Matching,
     assign_rows,
+    keyed,
+    pa_value,
     rigid_fit,
 )
 from pytest_emrd.metrics._tracking import (
     Spell,
     Track,
-    exp_ratio,
     first_spells,
-    layout_scale,
     track_episode,
 )
 from pytest_emrd.rooms import room_letter
@@ -38,9 +39,6 @@ from pytest_emrd.trajectory import CATEGORIES, EpisodeSpec, Trajectory
 
 #: Ground-truth type of doorways (left out of ``O_F`` by FPSG's doorway-free variant).
 DOORWAY_TYPE: Final = "Doorway"
-#: Share of a map's recognised entries that may stay unmatched at no cost to PA (one stray
-#: entry in a full office map of 41 costs nothing; spraying guesses does).
-FREE_UNMATCHED: Final = 0.05
 
 
 def aec_score(matching: Matching, n_objects: int) -> float | None:
@@ -71,24 +69,6 @@ def te_score(traj: Trajectory) -> int:
     return len(traj.steps) - terminal
 
 
-def pa_coverage(matched: int, unmatched: int, g_base: int) -> float:
-    r"""The coverage factor of Eq. PA with our charge for unmatched entries.
-
-    .. math::
-        c = \frac{\max\left(0,\ \min(|K|, |G_{base}|) - u\right)}{|G_{base}|},\qquad
-        u = \max\left(0,\ |U| - \lfloor 0.05\,(|K| + |U|) \rfloor\right)
-
-    ``U`` are the recognised entries left unmatched (:attr:`Matching.unmatched`): each one
-    beyond :data:`FREE_UNMATCHED` of the recognised entries cancels one matched object, so a
-    guess pays only if more than half of such guesses land within the gate of a free object.
-    Without unmatched entries this is the paper's factor. ``g_base = 0``: 0.0.
-    """
-    if g_base == 0:
-        return 0.0
-    charged = max(0, unmatched - math.floor(FREE_UNMATCHED * (matched + unmatched)))
-    return max(0, min(matched, g_base) - charged) / g_base
-
-
 def positional_accuracy_score(matching: Matching, g_base: int) -> float | None:
     r"""Positional Accuracy of one terminal map (inner term of Eq. PA).
 
@@ -107,17 +87,9 @@ def positional_accuracy_score(matching: Matching, g_base: int) -> float | None:
     """
     if g_base == 0:
         return None
-    if not matching.pairs:
-        return 0.0
     pred = np.array([(p.pred_x, p.pred_z) for p in matching.pairs], dtype=float)
     true = np.array([(p.true_x, p.true_z) for p in matching.pairs], dtype=float)
-    rot, shift = rigid_fit(pred, true)
-    residual = pred @ rot.T + shift - true
-    rmse = float(np.sqrt(np.mean(np.sum(residual**2, axis=1))))
-    if rmse < 1e-9 * max(1.0, float(np.abs(true).max())):
-        rmse = 0.0
-    coverage = pa_coverage(len(matching.pairs), len(matching.unmatched), g_base)
-    return exp_ratio(rmse, layout_scale(true)) * coverage
+    return pa_value(pred.reshape(-1, 2), true.reshape(-1, 2), len(matching.unmatched), g_base)
 
 
 def precision_score(matching: Matching) -> float | None:
@@ -126,30 +98,138 @@ def precision_score(matching: Matching) -> float | None:
     .. math::
         P^{(i)} = \frac{|K^{(i)}|}{|M_T^{(i)}|}
 
-    ``M_T`` counts the map's distinct labels, recognised or not; ``K`` the entries matched
-    within the gate (:func:`match_map`). Duplicates, entries beyond a type's count or far from
-    every object of their type, and hallucinated types all lower it. Empty map: None. Worked
-    example: 41 correct entries and one "exit sign": ``41 / 42 = 0.976``.
+    ``M_T`` are the map's entries, recognised or not, every same-label copy included (a map
+    given as a list may repeat a label); ``K`` the entries matched within the gate
+    (:func:`match_map`). Copies, entries beyond a type's count or far from every object of
+    their type, and hallucinated types all lower it.
+
+    Parameters
+    ----------
+    matching
+        The terminal map's :class:`Matching`.
+
+    Returns
+    -------
+    float or None
+        A fraction in [0, 1]; None for an empty map. Worked example: 41 correct entries and
+        one "exit sign": ``41 / 42 = 0.976``; 41 correct entries each followed by a copy of
+        its label written far from every object of its type: ``41 / 82 = 0.5``.
     """
-    if not matching.labels:
+    if not matching.entries:
         return None
-    return len(matching.pairs) / matching.labels
+    return len(matching.pairs) / matching.entries
 
 
 def hallucination_score(matching: Matching) -> float | None:
-    r"""Hallucination rate of one terminal map: the share of entries of a type the office
-    does not hold.
+    r"""Hallucination rate of one terminal map: the share of its entries that stand for no
+    object.
 
     .. math::
-        H^{(i)} = \frac{|M_T^{(i)} \setminus M_{rec}^{(i)}|}{|M_T^{(i)}|}
+        H^{(i)} = \frac{|M_T^{(i)} \setminus K^{(i)}|}{|M_T^{(i)}|} = 1 - P^{(i)}
 
-    ``M_rec`` are the entries whose type resolves to a ground-truth type (the rest are
-    :attr:`Matching.unrecognised`). ``H <= 1 - P``. Empty map: None. Worked example: 40
-    chairs and desks of the office and 2 sofas it lacks: ``2 / 42``.
+    ``M_T`` are the map's entries (same-label copies included), ``K`` those matched to an
+    object. An entry stands for nothing when its type is one the office does not hold
+    (:attr:`Matching.unrecognised`) *or* when it is of a type the office holds and no object
+    of that type takes it (:attr:`Matching.unmatched`: an invented instance, beyond the
+    type's count or far from every object of its type). So ``H = 1 - P``.
+
+    Parameters
+    ----------
+    matching
+        The terminal map's :class:`Matching`.
+
+    Returns
+    -------
+    float or None
+        A fraction in [0, 1]; None for an empty map. Worked example: 40 chairs and desks of
+        the office, 2 sofas it lacks and 2 chairs 6 m from every chair: ``4 / 44``; a grid of
+        every type over the office is nearly all hallucination.
     """
-    if not matching.labels:
+    if not matching.entries:
         return None
-    return len(matching.unrecognised) / matching.labels
+    return (matching.entries - len(matching.pairs)) / matching.entries
+
+
+def ungrounded_pairs(traj: Trajectory, final: Matching) -> tuple[MatchedPair, ...]:
+    r"""The terminal map's matched entries standing for an object the model was never shown
+    before it wrote them.
+
+    An entry (a label, or its ``n``-th copy ``label #n``) first appears at the first step
+    ``t_e`` whose map holds it; object ``o`` is first shown at the first step ``s_o`` whose
+    ``visible_ids`` hold it (the frame showed it legibly). A pair ``(e, o)`` of ``K`` is
+    *ungrounded* when ``s_o > t_e`` or ``o`` was never shown: nothing the model saw up to then
+    puts ``o`` there, so the entry came from elsewhere (the office's published layout, a
+    prompt's inventory, a guess).
+
+    Parameters
+    ----------
+    traj
+        The episode: every step's map and ``visible_ids``.
+    final
+        The matching of its terminal map (:func:`match_map`).
+
+    Returns
+    -------
+    tuple[MatchedPair, ...]
+        The ungrounded pairs, in ``final.pairs`` order; empty when every pair is grounded.
+    """
+    first: dict[str, int] = {}
+    shown: dict[str, int] = {}
+    for t, step in enumerate(traj.steps):
+        for key in keyed(step.cognitive_map):
+            first.setdefault(key, t)
+        for oid in step.visible_ids:
+            shown.setdefault(oid, t)
+    never = len(traj.steps)
+    return tuple(p for p in final.pairs if shown.get(p.object_id, never) > first[p.label])
+
+
+def grounded_scores(
+    traj: Trajectory, final: Matching
+) -> tuple[float | None, float | None, dict[str, str]]:
+    r"""Grounded coverage and the ungrounded share of one terminal map (ours, beside Eq. AEC).
+
+    .. math::
+        AEC_g^{(i)} = \frac{1}{|E|} \sum_{k \in \mathcal{T}} \min(|M_{g,k}^{(i)}|, |E_k|),
+        \qquad
+        UR^{(i)} = \frac{|K_u^{(i)}|}{|K^{(i)}|}
+
+    ``K`` are the terminal map's matched entries, ``K_u`` the ungrounded ones
+    (:func:`ungrounded_pairs`), ``M_{g,k}`` the distinct labels of type ``k`` among ``K \ K_u``:
+    the paper's AEC counting only entries matched to an object the frames had shown by the
+    step the entry first appeared. ``AEC_g <= AEC``, with equality when every recognised entry
+    is matched and grounded. A map of the whole office written after two steps scores
+    ``AEC_g`` at most the share of objects those two frames showed, and ``UR`` the share it
+    did not see; a model that explores and maps what it sees scores ``UR = 0``.
+
+    Parameters
+    ----------
+    traj
+        The episode.
+    final
+        The matching of its terminal map.
+
+    Returns
+    -------
+    tuple
+        ``(grounded_aec, ungrounded_rate, reasons)``: fractions in [0, 1].
+        ``grounded_aec`` is None when ``|E| = 0``; ``ungrounded_rate`` is None when no entry
+        is matched (``|K| = 0``); ``reasons`` says why for each None.
+    """
+    reasons: dict[str, str] = {}
+    ungrounded = ungrounded_pairs(traj, final)
+    if final.pairs:
+        rate: float | None = len(ungrounded) / len(final.pairs)
+    else:
+        rate = None
+        reasons["ungrounded_rate"] = "no entry of the terminal map is matched (|K| = 0)"
+    n_objects = len(traj.ground_truth.objects)
+    if not n_objects:
+        reasons["grounded_aec"] = "the ground truth lists no object (|E| = 0)"
+        return None, rate, reasons
+    written = keyed(traj.steps[-1].cognitive_map) if traj.steps else {}
+    labels = {(p.object_type, written[p.label].label) for p in final.pairs if p not in ungrounded}
+    return len(labels) / n_objects, rate, reasons
 
 
 @dataclass(frozen=True)
@@ -237,8 +317,9 @@ def sir_score(traj: Trajectory, track: Track, aec: float | None) -> tuple[float 
         if first and v.return_end is not None and v.return_start is not None:
             room_by_label = {lb: room_of[o] for o, lb in held[v.return_end].items()}
             copies = reentry_copies(traj, track.matcher, held, v.return_start, v.return_end)
-            kept = sum(room_by_label.get(lb) == v.room and o not in copies
-                       for o, lb in first.items())  # fmt: skip
+            kept = sum(
+                room_by_label.get(lb) == v.room and o not in copies for o, lb in first.items()
+            )
             ratios.append(kept / len(first))
     if not reentered:
         return None, "no room was re-entered"
@@ -263,11 +344,11 @@ def reentry_copies(
     label holds ``o``. Unrecognised entries copy nothing. Edge case: fewer than two matched
     entries at distinct positions leave the rotation undetermined: no copy is found.
     """
-    entries = {e.label: e for e in reversed(traj.steps[end].cognitive_map)}
-    before = {e.label for e in traj.steps[start - 1].cognitive_map} if start > 0 else set()
+    entries = keyed(traj.steps[end].cognitive_map)
+    before = set(keyed(traj.steps[start - 1].cognitive_map)) if start > 0 else set()
     by_type: dict[int, list[str]] = {}
     for lb in sorted(entries.keys() - before):
-        k = matcher.types.resolve(entries[lb].object_type, lb)
+        k = matcher.types.resolve(entries[lb].object_type, entries[lb].label)
         if k >= 0:
             by_type.setdefault(k, []).append(lb)
     label_of = held[end]
@@ -328,7 +409,7 @@ def serial_position_bins(
     return out[0], out[1], out[2]
 
 
-SCHEMA_VERSION: Final = 2
+SCHEMA_VERSION: Final = 3
 
 
 @dataclass(frozen=True)
@@ -365,7 +446,11 @@ class EpisodeMetrics(JsonRecord):
     precision: float | None
     """Map precision: share of the terminal map's entries standing for a real object."""
     hallucination_rate: float | None
-    """Share of the terminal map's entries of a type the office does not hold."""
+    """Share of the terminal map's entries that stand for no object (``1 - precision``)."""
+    grounded_aec: float | None
+    """AEC over entries matched to an object shown by the step they first appeared."""
+    ungrounded_rate: float | None
+    """Share of the terminal map's matched entries whose object was not shown by then."""
     tbs: tuple[float, ...]
     """Temporal Belief Stability ``TBS(t)`` for ``t = 1..steps`` (Eq. TBS)."""
     fpsg_local: float | None
@@ -440,6 +525,8 @@ def episode_metrics(traj: Trajectory) -> EpisodeMetrics:
         reasons["aec"] = "the ground truth lists no object (|E| = 0)"
     if pa is None:
         reasons["pa"] = "no object is discoverable under the baseline (|G_base| = 0)"
+    grounded_aec, ungrounded_rate, why_ungrounded = grounded_scores(traj, final)
+    reasons.update(why_ungrounded)
     precision = precision_score(final)
     hallucination = hallucination_score(final)
     if precision is None:
@@ -459,37 +546,91 @@ def episode_metrics(traj: Trajectory) -> EpisodeMetrics:
     ttf = {s.object_id: float(s.duration) for s in first_spells(track.spells)}
     by_rank = sorted(track.discovery, key=track.discovery.__getitem__)
     return EpisodeMetrics(
-        spec=traj.spec, status=traj.status, errored=False, steps=len(traj.steps),
-        parse_failures=sum(s.parse_error is not None for s in traj.steps), te=te_score(traj),
-        aec=aec, pa=pa, matched=len(final.pairs), g_base=g_base, unmatched=len(final.unmatched),
-        precision=precision, hallucination_rate=hallucination, tbs=track.tbs,
-        fpsg_local=grounding.fpsg_local, fpsg_global=grounding.fpsg_global,
-        never_visited=grounding.never_visited, any_bias=grounding.any_bias,
-        chosen_letter=room_letter(traj.chosen_room), sir=sir, spells=track.spells,
+        spec=traj.spec,
+        status=traj.status,
+        errored=False,
+        steps=len(traj.steps),
+        parse_failures=sum(s.parse_error is not None for s in traj.steps),
+        te=te_score(traj),
+        aec=aec,
+        pa=pa,
+        matched=len(final.pairs),
+        g_base=g_base,
+        unmatched=len(final.unmatched),
+        precision=precision,
+        hallucination_rate=hallucination,
+        grounded_aec=grounded_aec,
+        ungrounded_rate=ungrounded_rate,
+        tbs=track.tbs,
+        fpsg_local=grounding.fpsg_local,
+        fpsg_global=grounding.fpsg_global,
+        never_visited=grounding.never_visited,
+        any_bias=grounding.any_bias,
+        chosen_letter=room_letter(traj.chosen_room),
+        sir=sir,
+        spells=track.spells,
         mapped_by_category=dict(Counter(category[o] for o in track.discovery)),
         objects_by_category=objects_by_category,
         serial_position=serial_position_bins([ttf.get(o) for o in by_rank]),
-        miller_loads=track.miller_loads, miller_forgets=track.miller_forgets,
-        rationale=traj.rationale, reasons=reasons,
+        miller_loads=track.miller_loads,
+        miller_forgets=track.miller_forgets,
+        rationale=traj.rationale,
+        reasons=reasons,
         fpsg_local_ex_doorways=grounding.fpsg_local_ex_doorways,
         fpsg_global_ex_doorways=grounding.fpsg_global_ex_doorways,
-    )  # fmt: skip
+    )
 
 
 def _errored(traj: Trajectory, objects_by_category: dict[str, int], g_base: int) -> EpisodeMetrics:
     why = f"episode errored: {traj.error or 'no cause recorded'}"
-    names = ("te", "aec", "pa", "precision", "hallucination_rate", "tbs", "fpsg_local",
-             "fpsg_global", "never_visited", "any_bias", "sir", "memory_strength")  # fmt: skip
+    names = (
+        "te",
+        "aec",
+        "pa",
+        "precision",
+        "hallucination_rate",
+        "grounded_aec",
+        "ungrounded_rate",
+        "tbs",
+        "fpsg_local",
+        "fpsg_global",
+        "never_visited",
+        "any_bias",
+        "sir",
+        "memory_strength",
+    )
     return EpisodeMetrics(
-        spec=traj.spec, status=traj.status, errored=True, steps=len(traj.steps),
-        parse_failures=sum(s.parse_error is not None for s in traj.steps), te=None, aec=None,
-        pa=None, matched=0, g_base=g_base, unmatched=0, precision=None,
-        hallucination_rate=None, tbs=(), fpsg_local=None, fpsg_global=None,
-        never_visited=None, any_bias=None, chosen_letter=room_letter(None), sir=None, spells=(),
-        mapped_by_category={}, objects_by_category=objects_by_category,
-        serial_position=(None, None, None), miller_loads=(), miller_forgets=(),
-        rationale=traj.rationale, reasons=dict.fromkeys(names, why),
-    )  # fmt: skip
+        spec=traj.spec,
+        status=traj.status,
+        errored=True,
+        steps=len(traj.steps),
+        parse_failures=sum(s.parse_error is not None for s in traj.steps),
+        te=None,
+        aec=None,
+        pa=None,
+        matched=0,
+        g_base=g_base,
+        unmatched=0,
+        precision=None,
+        hallucination_rate=None,
+        grounded_aec=None,
+        ungrounded_rate=None,
+        tbs=(),
+        fpsg_local=None,
+        fpsg_global=None,
+        never_visited=None,
+        any_bias=None,
+        chosen_letter=room_letter(None),
+        sir=None,
+        spells=(),
+        mapped_by_category={},
+        objects_by_category=objects_by_category,
+        serial_position=(None, None, None),
+        miller_loads=(),
+        miller_forgets=(),
+        rationale=traj.rationale,
+        reasons=dict.fromkeys(names, why),
+    )
 
 
 EpisodeLike = Trajectory | EpisodeMetrics

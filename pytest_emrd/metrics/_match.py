@@ -4,16 +4,23 @@ A model writes its cognitive map as ``{label: {type, x, z, room}}`` with labels 
 its own, in a frame of its own. :func:`match_map` decides which object each entry of one map
 stands for, from that map alone:
 
-1. **Labels.** A repeated label keeps its first entry.
+1. **Entries.** Every entry counts: a label written again (a map given as a list) is one
+   more entry, keyed ``"<label> #<n>"`` (the ``n``-th time it is written; the first free key).
 2. **Types** (:mod:`._vocab`): the entry's ``object_type``, else its label, restricted to the
    layout's types; an entry of no such type is *unrecognised* and takes no part below.
 3. **Frame** (:func:`_solve`): hypotheses are the rigid motions carrying two base entries
-   (:data:`BASE_ENTRIES`, fewest candidate objects first) onto two objects of their types
-   whose distance agrees within ``2 * GATE_M``, plus the Procrustes fit of labels that are
-   object ids (``Chair_3``). Each is scored by truncated least squares (MSAC: an entry costs
-   its squared distance to the nearest object of its type, capped at ``GATE_M ** 2``); the
-   lowest score wins, the first on equal scores. Then assignment and Procrustes refit
-   (:func:`rigid_fit`) on the matched pairs alternate until the pairs repeat.
+   (:data:`BASE_ENTRIES`, fewest candidate objects first, one entry of each type in turn)
+   onto two objects of their types whose distance agrees within ``2 * GATE_M``. The
+   :data:`CANDIDATES` with the least truncated least-squares score (MSAC: an entry costs its
+   squared distance to the nearest object of its type, capped at ``GATE_M ** 2``; on equal
+   scores, the most labels that are object ids, ``Chair_3``, within the gate of their
+   object) and, across steps, the previous frame are each refined: assignment and
+   Procrustes refit (:func:`rigid_fit`) on the matched pairs alternate until the pairs
+   repeat. **The matching PA scores highest is kept** (Eq. PA, :func:`pa_value`, with the
+   episode's ``|G_base|``), then the one with most pairs, then with most id labels on their
+   own object, then the first: the frame is chosen by the quantity PA reports. Entries are
+   ordered by type and distance from their centroid (:data:`Key`), so that neither the
+   frame, the order of the entries nor a synonym moves a score.
 4. **Assignment with a gate** (:data:`GATE_M`): the one-to-one assignment with the most pairs,
    then the least summed squared distance, rounded to :data:`TIE_M2` first (the tie rule).
 
@@ -57,6 +64,15 @@ MAX_ROUNDS: Final = 10
 REVISIT: Final = 1.5
 SETTLED: Final = 12
 
+#: Frame hypotheses (least MSAC score first) refined into matchings; the one PA scores
+#: highest is kept (step 3).
+CANDIDATES: Final = 6
+#: Share of a map's recognised entries that may stay unmatched at no cost to PA (one stray
+#: entry in a full office map of 41 costs nothing; spraying guesses does).
+FREE_UNMATCHED: Final = 0.05
+#: PA values closer than this are equal (the first candidate wins): the tie rule of step 3.
+TIE_PA: Final = 1e-12
+
 _UNITS_GATE: Final = round(GATE_M**2 / TIE_M2)
 _FORBIDDEN: Final = 1e15  # cost of a pair outside the gate: more than any sum of allowed ones
 
@@ -87,9 +103,10 @@ class Matching:
     unrecognised: tuple[str, ...]
     """Labels whose type resolves to no ground-truth type (sorted)."""
     duplicates: tuple[str, ...]
-    """Labels that appeared more than once; only their first entry was used."""
+    """Labels written more than once; each later copy is an entry of its own (``label #n``)."""
     covered: int
-    """``sum_k min(|M_k|, |E_k|)`` over the layout's types: Eq. AEC's numerator."""
+    """``sum_k min(|M_k|, |E_k|)`` over the layout's types, ``|M_k|`` the distinct labels of
+    type ``k``: Eq. AEC's numerator."""
 
     @property
     def object_ids(self) -> frozenset[str]:
@@ -101,8 +118,8 @@ class Matching:
         return {p.object_id: p.label for p in self.pairs}
 
     @property
-    def labels(self) -> int:
-        """Distinct labels of the map: matched, unmatched and unrecognised."""
+    def entries(self) -> int:
+        """Entries of the map, same-label copies included: matched, unmatched, unrecognised."""
         return len(self.pairs) + len(self.unmatched) + len(self.unrecognised)
 
 
@@ -144,6 +161,81 @@ def rigid_fit(pred: np.ndarray, true: np.ndarray) -> tuple[np.ndarray, np.ndarra
     return np.array([[m.c, -m.s], [m.s, m.c]]), np.array([m.tx, m.tz])
 
 
+def layout_scale(xy: np.ndarray) -> float:
+    """RMS distance of points from their centroid (``L_gt``); 0.0 for fewer than 2 points."""
+    if len(xy) < 2:
+        return 0.0
+    return float(np.sqrt(np.mean(np.sum((xy - xy.mean(axis=0)) ** 2, axis=1))))
+
+
+def exp_ratio(error: float, scale: float) -> float:
+    """``exp(-error / scale)`` with ``0/0 := 0`` (perfect) and ``x/0 := inf`` (score 0)."""
+    if error <= 0.0:
+        return 1.0
+    if scale <= 0.0:
+        return 0.0
+    return math.exp(-error / scale)
+
+
+def pa_coverage(matched: int, unmatched: int, g_base: int) -> float:
+    r"""The coverage factor of Eq. PA with our charge for unmatched entries.
+
+    .. math::
+        c = \frac{\max\left(0,\ \min(|K|, |G_{base}|) - u\right)}{|G_{base}|},\qquad
+        u = \max\left(0,\ |U| - \lfloor 0.05\,(|K| + |U|) \rfloor\right)
+
+    ``U`` are the recognised entries left unmatched (:attr:`Matching.unmatched`, every
+    same-label copy included): each one beyond :data:`FREE_UNMATCHED` of the recognised
+    entries cancels one matched object, so a guess pays only if more than half of such
+    guesses land within the gate of a free object. Without unmatched entries this is the
+    paper's factor.
+
+    Parameters
+    ----------
+    matched, unmatched
+        ``|K|`` and ``|U|``.
+    g_base
+        ``|G_base|``, the objects discoverable under the baseline.
+
+    Returns
+    -------
+    float
+        ``c`` in [0, 1]; 0.0 when ``g_base = 0``.
+    """
+    if g_base == 0:
+        return 0.0
+    charged = max(0, unmatched - math.floor(FREE_UNMATCHED * (matched + unmatched)))
+    return max(0, min(matched, g_base) - charged) / g_base
+
+
+def pa_value(pred: np.ndarray, true: np.ndarray, unmatched: int, g_base: int) -> float:
+    """Eq. PA of matched points ``pred`` -> ``true`` (k x 2): what
+    :func:`~pytest_emrd.metrics.positional_accuracy_score` reports and step 3 maximises.
+
+    Parameters
+    ----------
+    pred, true
+        The matched entries as written and their objects, row by row.
+    unmatched
+        ``|U|``, recognised entries left without an object.
+    g_base
+        ``|G_base|``.
+
+    Returns
+    -------
+    float
+        ``exp(-RMSE / L_gt) * c`` in [0, 1]; 0.0 without pairs or with ``g_base = 0``.
+    """
+    if not len(pred) or g_base == 0:
+        return 0.0
+    m = _procrustes(pred, true)
+    residual = _moved(pred, m) - true
+    rmse = float(np.sqrt(np.mean(np.sum(residual**2, axis=1))))
+    if rmse < 1e-9 * max(1.0, float(np.abs(true).max())):
+        rmse = 0.0
+    return exp_ratio(rmse, layout_scale(true)) * pa_coverage(len(pred), unmatched, g_base)
+
+
 def _moved(points: np.ndarray, m: Motion) -> np.ndarray:
     x, z = points[:, 0], points[:, 1]
     return np.stack([m.c * x - m.s * z + m.tx, m.s * x + m.c * z + m.tz], axis=1)
@@ -177,6 +269,8 @@ class _Layout:
     """Type index of each object."""
     cols_of: dict[int, tuple[int, ...]]
     """Type index -> its objects, ascending."""
+    g_base: int
+    """``|G_base|`` of Eq. PA, the quantity step 3 maximises."""
     _pairs: dict[tuple[int, int], tuple[np.ndarray, np.ndarray]] = field(default_factory=dict)
 
     def pairs_of(self, ka: int, kb: int) -> tuple[np.ndarray, np.ndarray]:
@@ -184,8 +278,9 @@ class _Layout:
         ``(o_a, o_b)`` order) and their distances."""
         found = self._pairs.get((ka, kb))
         if found is None:
-            pairs = np.array([(i, j) for i in self.cols_of[ka] for j in self.cols_of[kb]
-                              if i != j], dtype=int).reshape(-1, 2)  # fmt: skip
+            pairs = np.array(
+                [(i, j) for i in self.cols_of[ka] for j in self.cols_of[kb] if i != j], dtype=int
+            ).reshape(-1, 2)
             v = self.true[pairs[:, 1]] - self.true[pairs[:, 0]]
             found = self._pairs[(ka, kb)] = (pairs, np.hypot(v[:, 0], v[:, 1]))
         return found
@@ -208,8 +303,9 @@ def assign_rows(cost: np.ndarray, allowed: np.ndarray) -> list[tuple[int, int]]:
     cols = np.flatnonzero(allowed[rows].any(axis=0))
     block = np.where(allowed[np.ix_(rows, cols)], cost[np.ix_(rows, cols)], _FORBIDDEN)
     r, c = linear_sum_assignment(block)
-    return [(int(rows[i]), int(cols[j])) for i, j in zip(r, c, strict=True)
-            if allowed[rows[i], cols[j]]]  # fmt: skip
+    return [
+        (int(rows[i]), int(cols[j])) for i, j in zip(r, c, strict=True) if allowed[rows[i], cols[j]]
+    ]
 
 
 def _assign(problem: _Problem, motion: Motion, prefer: np.ndarray | None = None) -> Pairs:
@@ -259,14 +355,20 @@ def _hypotheses(problem: _Problem) -> tuple[np.ndarray, bool]:
     """Frame hypotheses (step 3) as rows ``(c, s, tx, tz)``; the flag is False when no pair
     of entries gives a direction (translations only, the model frame's own rotation)."""
     layout, pred = problem.layout, problem.pred
-    kinds, labels = problem.kinds, problem.labels
+    kinds = problem.kinds
     spread = _units(np.sum((pred - pred.mean(axis=0)) ** 2, axis=1)).tolist()
-    base = sorted(range(len(kinds)),
-                  key=lambda i: (len(layout.cols_of[kinds[i]]), -spread[i], labels[i]))  # fmt: skip
-    base = base[:BASE_ENTRIES]
-    found = [(a, b, dist, *layout.pairs_of(kinds[a], kinds[b]))
-             for a, b in combinations(base, 2)
-             if (dist := math.dist(pred[a], pred[b])) > COINCIDENT_M]  # fmt: skip
+    order = sorted(range(len(kinds)), key=lambda i: (len(layout.cols_of[kinds[i]]), -spread[i], i))
+    taken: Counter[int] = Counter()  # one entry of each type in turn: copies of a type
+    turn = []  # cannot crowd the others out
+    for i in order:
+        taken[kinds[i]] += 1
+        turn.append(taken[kinds[i]])
+    base = [order[p] for p in sorted(range(len(order)), key=turn.__getitem__)][:BASE_ENTRIES]
+    found = [
+        (a, b, dist, *layout.pairs_of(kinds[a], kinds[b]))
+        for a, b in combinations(base, 2)
+        if (dist := math.dist(pred[a], pred[b])) > COINCIDENT_M
+    ]
     true = layout.true
     if found:
         sizes = [len(pairs) for *_, pairs, _ in found]
@@ -283,8 +385,9 @@ def _hypotheses(problem: _Problem) -> tuple[np.ndarray, bool]:
     theta = np.arctan2(u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0], np.sum(u * v, axis=1))
     c, s = np.cos(theta), np.sin(theta)
     m, n = (pa + pb) / 2, (qa + qb) / 2
-    return np.column_stack([c, s, n[:, 0] - (c * m[:, 0] - s * m[:, 1]),
-                            n[:, 1] - (s * m[:, 0] + c * m[:, 1])]), True  # fmt: skip
+    return np.column_stack(
+        [c, s, n[:, 0] - (c * m[:, 0] - s * m[:, 1]), n[:, 1] - (s * m[:, 0] + c * m[:, 1])]
+    ), True
 
 
 def _scores(problem: _Problem, motions: np.ndarray) -> np.ndarray:
@@ -300,28 +403,57 @@ def _scores(problem: _Problem, motions: np.ndarray) -> np.ndarray:
 
 
 def _solve(
-    problem: _Problem, seeds: Sequence[Motion] = (), prefer: np.ndarray | None = None
+    problem: _Problem,
+    seeds: Sequence[Motion] = (),
+    prefer: np.ndarray | None = None,
+    named: frozenset[tuple[int, int]] = frozenset(),
 ) -> tuple[Pairs, Motion, bool]:
-    """Step 3: the best of ``seeds`` and the hypotheses (the first on equal scores), refined;
-    the flag: the result's rotation was read from a map."""
+    """Step 3: of ``seeds`` and the best-scored hypotheses, refined, the matching PA scores
+    highest, then with most pairs, then with most ``named`` pairs (labels that are the
+    object's id), then the first; the flag: the result's rotation was read from a map."""
     motions, read = _hypotheses(problem)
-    if seeds:
-        motions = np.concatenate([np.asarray(seeds, dtype=float), motions])
-    best = int(np.argmin(_scores(problem, motions))) if len(motions) > 1 else 0
-    return _refine(problem, Motion(*motions[best].tolist()), prefer, read or best < len(seeds))
+    agree = np.zeros(len(motions))  # named entries within the gate of their object: a tie rule
+    for i, j in named:
+        d2 = (_moved(problem.pred[[i]], Motion(*motions.T)) - problem.layout.true[j]) ** 2
+        agree -= _units(d2.sum(axis=1)) <= _UNITS_GATE
+    order = np.lexsort((agree, _scores(problem, motions)))[:CANDIDATES]
+    starts = [(m, True) for m in seeds] + [(Motion(*motions[i].tolist()), read) for i in order]
+    best: tuple[tuple[float, int, int], Pairs, Motion, bool] | None = None
+    tried: set[Pairs] = set()
+    for motion, was_read in starts:
+        pairs, motion, was_read = _refine(problem, motion, prefer, was_read)
+        if pairs in tried:
+            continue
+        tried.add(pairs)
+        rows, cols = [i for i, _ in pairs], [j for _, j in pairs]
+        value = pa_value(
+            problem.pred[rows],
+            problem.layout.true[cols],
+            len(problem.kinds) - len(pairs),
+            problem.layout.g_base,
+        )
+        rank = (round(value / TIE_PA), len(pairs), len(named.intersection(pairs)))
+        if best is None or rank > best[0]:
+            best = (rank, pairs, motion, was_read)
+    assert best is not None
+    return best[1], best[2], best[3]
 
 
 Key = tuple[tuple[str, int, float, float], ...]
-"""A map's recognised entries as ``(label, type index, x, z)``, sorted by label."""
+"""A map's recognised entries as ``(label, type index, x, z)``, ordered by type, then distance
+from the entries' centroid (rounded to :data:`TIE_M2`), then label: an order that neither the
+model's frame, nor the order it writes entries in, nor (but for entries of one type equally far
+from the centroid) what it calls them changes."""
 
 
 class StepMatch(NamedTuple):
     """One map matched (what :meth:`Matcher.step` returns and takes back)."""
 
     entries: dict[str, MapEntry]
-    """Label -> its first entry, in the model's order."""
+    """Entry key (the label; ``label #n`` for its ``n``-th copy) -> entry, in the model's
+    order."""
     kind_of: dict[str, int]
-    """Label -> type index (-1: unrecognised)."""
+    """Entry key -> type index (-1: unrecognised)."""
     identity: dict[str, int]
     """Label -> object index (objects sorted by id) of the object it stands for."""
     unmatched: tuple[str, ...]
@@ -335,35 +467,70 @@ class StepMatch(NamedTuple):
     """Recognised entries when the frame was last searched for (:meth:`Matcher._match`)."""
 
 
+def keyed(entries: Sequence[MapEntry]) -> dict[str, MapEntry]:
+    """Every entry of a map under a key of its own (step 1 of the module docstring).
+
+    Parameters
+    ----------
+    entries
+        The map as written, in the model's order.
+
+    Returns
+    -------
+    dict[str, MapEntry]
+        The label for its first entry, ``"<label> #<n>"`` for the ``n``-th (the next free
+        key when a label already is that text), in the model's order.
+    """
+    out: dict[str, MapEntry] = {}
+    counts: Counter[str] = Counter()
+    for e in entries:
+        counts[e.label] += 1
+        key, n = e.label, counts[e.label]
+        while key in out:
+            key, n = f"{e.label} #{n}", n + 1
+        out[key] = e
+    return out
+
+
 class Matcher:
     """:func:`match_map` bound to one episode's ground truth, reusable across its steps."""
 
-    def __init__(self, objects: Sequence[GroundTruthObject]) -> None:
+    def __init__(self, objects: Sequence[GroundTruthObject], g_base: int | None = None) -> None:
         ordered = sorted(objects, key=lambda o: o.object_id)
         self.objects = ordered
         self.types = TypeResolver(o.object_type for o in ordered)
         kinds = [self.types.index[o.object_type] for o in ordered]
-        cols_of = {k: tuple(j for j, kj in enumerate(kinds) if kj == k)
-                   for k in range(len(self.types.names))}  # fmt: skip
+        cols_of = {
+            k: tuple(j for j, kj in enumerate(kinds) if kj == k)
+            for k in range(len(self.types.names))
+        }
         true = np.array([(o.x, o.z) for o in ordered], dtype=float).reshape(-1, 2)
-        self._layout = _Layout(true, np.array(kinds, dtype=int), cols_of)
+        g = len(ordered) if g_base is None else g_base
+        self._layout = _Layout(true, np.array(kinds, dtype=int), cols_of, g)
         self._points: list[tuple[float, float]] = [(o.x, o.z) for o in ordered]
         self._index = {o.object_id: j for j, o in enumerate(ordered)}
 
     def step(self, entries: Sequence[MapEntry], previous: StepMatch | None = None) -> StepMatch:
         """Match one step's map; ``previous`` (the step before) seeds the frame and breaks
         exact ties in favour of the labels' previous objects (module docstring)."""
-        seen: dict[str, MapEntry] = {}
-        for e in entries:
-            seen.setdefault(e.label, e)
+        seen = keyed(entries)
         counts = Counter(e.label for e in entries)
         duplicates = tuple(sorted(lb for lb, n in counts.items() if n > 1))
-        kind_of = {lb: self.types.resolve(e.object_type, lb) for lb, e in seen.items()}
-        key = tuple(sorted((lb, k, float(seen[lb].x), float(seen[lb].z))
-                           for lb, k in kind_of.items() if k >= 0))  # fmt: skip
+        kind_of = {lb: self.types.resolve(e.object_type, e.label) for lb, e in seen.items()}
+        rows = [
+            (lb, k, float(seen[lb].x), float(seen[lb].z)) for lb, k in kind_of.items() if k >= 0
+        ]
+        xz = np.array([r[2:] for r in rows], dtype=float).reshape(-1, 2)
+        spread = _units(np.sum((xz - xz.mean(axis=0)) ** 2, axis=1)).tolist() if rows else []
+        order = sorted(range(len(rows)), key=lambda i: (rows[i][1], spread[i], rows[i][0]))
+        key = tuple(rows[i] for i in order)
         unrecognised = tuple(sorted(lb for lb, k in kind_of.items() if k < 0))
-        extra = {"entries": seen, "kind_of": kind_of, "unrecognised": unrecognised,
-                 "duplicates": duplicates}  # fmt: skip
+        extra = {
+            "entries": seen,
+            "kind_of": kind_of,
+            "unrecognised": unrecognised,
+            "duplicates": duplicates,
+        }
         if previous is not None and previous.key == key:
             return previous._replace(**extra)
         found = None if previous is None else self._extend(previous, key)
@@ -421,9 +588,11 @@ class Matcher:
         if not labels:
             return StepMatch({}, {}, {}, (), (), (), None, key)
         problem = _Problem(
-            labels, [k for _, k, _, _ in key],
-            np.array([(x, z) for _, _, x, z in key], dtype=float), self._layout,
-        )  # fmt: skip
+            labels,
+            [k for _, k, _, _ in key],
+            np.array([(x, z) for _, _, x, z in key], dtype=float),
+            self._layout,
+        )
         prefer = None
         if previous is not None and previous.identity:
             prefer = np.zeros(problem.same.shape)
@@ -432,15 +601,11 @@ class Matcher:
                 if j is not None and problem.same[i, j]:
                     prefer[i, j] = 1.0
         seeds = [] if previous is None or previous.motion is None else [previous.motion]
-        named = [(i, self._index[lb]) for i, lb in enumerate(labels)
-                 if lb in self._index and problem.same[i, self._index[lb]]]  # fmt: skip
-        if len(named) >= 2:
-            p = problem.pred[[i for i, _ in named]]
-            if np.ptp(p, axis=0).max() > COINCIDENT_M:
-                seeds.append(_procrustes(p, self._layout.true[[j for _, j in named]]))
-        pairs, motion, read = _solve(problem, seeds, prefer)
+        named = [(i, self._index[lb]) for i, lb in enumerate(labels) if lb in self._index]
+        named = [(i, j) for i, j in named if problem.same[i, j]]
+        pairs, motion, read = _solve(problem, seeds, prefer, frozenset(named))
         identity = {labels[i]: j for i, j in pairs}
-        unmatched = tuple(lb for lb in labels if lb not in identity)
+        unmatched = tuple(sorted(lb for lb in labels if lb not in identity))
         # A rotation the map did not determine is the model frame's own: carried to the next
         # step as a seed it would make that step's matching depend on the frame.
         kept = motion if read else None
@@ -450,13 +615,24 @@ class Matcher:
         """The :class:`Matching` of one matched map."""
         true = self._layout.true
         pairs = sorted(
-            (MatchedPair(lb, self.objects[j].object_id, self.objects[j].object_type,
-                         float(found.entries[lb].x), float(found.entries[lb].z),
-                         float(true[j, 0]), float(true[j, 1]))
-             for lb, j in found.identity.items()),
+            (
+                MatchedPair(
+                    lb,
+                    self.objects[j].object_id,
+                    self.objects[j].object_type,
+                    float(found.entries[lb].x),
+                    float(found.entries[lb].z),
+                    float(true[j, 0]),
+                    float(true[j, 1]),
+                )
+                for lb, j in found.identity.items()
+            ),
             key=lambda p: p.object_id,
-        )  # fmt: skip
-        per_type = Counter(k for k in found.kind_of.values() if k >= 0)
+        )
+        first_kind: dict[str, int] = {}  # Eq. AEC counts distinct labels: a label's first entry
+        for lb, k in found.kind_of.items():
+            first_kind.setdefault(found.entries[lb].label, k)
+        per_type = Counter(k for k in first_kind.values() if k >= 0)
         capacity = self._layout.cols_of
         covered = sum(min(n, len(capacity[k])) for k, n in per_type.items())
         return Matching(
@@ -486,7 +662,9 @@ def step_matchings(
     return tuple(out)
 
 
-def match_map(entries: Sequence[MapEntry], objects: Sequence[GroundTruthObject]) -> Matching:
+def match_map(
+    entries: Sequence[MapEntry], objects: Sequence[GroundTruthObject], *, g_base: int | None = None
+) -> Matching:
     """Match a cognitive map to ground truth: THE procedure of every EMRD metric.
 
     See the module docstring of :mod:`pytest_emrd.metrics._match` for the steps, the gate,
@@ -504,7 +682,7 @@ def match_map(entries: Sequence[MapEntry], objects: Sequence[GroundTruthObject])
     them: the desks are matched (``d1`` -> ``Desk_1``), the sign is ``unmatched`` (no motion
     puts it within :data:`GATE_M` of the door while keeping the desks).
     """
-    return Matcher(objects).match(entries)
+    return Matcher(objects, g_base).match(entries)
 
 
 def reframe(

@@ -32,7 +32,14 @@ from itertools import groupby
 
 import numpy as np
 
-from pytest_emrd.metrics._match import EMPTY_MATCHING, Matcher, Matching, StepMatch
+from pytest_emrd.metrics._match import (
+    EMPTY_MATCHING,
+    Matcher,
+    Matching,
+    StepMatch,
+    exp_ratio,
+    layout_scale,
+)
 from pytest_emrd.trajectory import MapEntry, Trajectory
 
 
@@ -100,26 +107,10 @@ def first_spells(spells: tuple[Spell, ...]) -> tuple[Spell, ...]:
     return tuple(sorted(first.values(), key=lambda s: s.discovery_rank))
 
 
-def layout_scale(xy: np.ndarray) -> float:
-    """RMS distance of points from their centroid (``L_gt``); 0.0 for fewer than 2 points."""
-    if len(xy) < 2:
-        return 0.0
-    return float(np.sqrt(np.mean(np.sum((xy - xy.mean(axis=0)) ** 2, axis=1))))
-
-
-def exp_ratio(error: float, scale: float) -> float:
-    """``exp(-error / scale)`` with ``0/0 := 0`` (perfect) and ``x/0 := inf`` (score 0)."""
-    if error <= 0.0:
-        return 1.0
-    if scale <= 0.0:
-        return 0.0
-    return math.exp(-error / scale)
-
-
 def track_episode(traj: Trajectory) -> Track:
     """Walk the steps once (see the module docstring for every definition)."""
     gt = traj.ground_truth
-    matcher = Matcher(gt.objects)
+    matcher = Matcher(gt.objects, len(gt.discoverable_ids))
     category = {o.object_id: o.category for o in gt.objects}
     scale = layout_scale(np.array([(o.x, o.z) for o in gt.objects], dtype=float).reshape(-1, 2))
     g_base = len(gt.discoverable_ids)

@@ -101,7 +101,8 @@ _NAMED: Final[dict[tuple[str, ...], str]] = {
     ("CellPhone",): "phone smartphone iphone mobilephone",
     ("RemoteControl",): "remote",
     ("Doorway",): "doorway opening passage passageway archway doorframe entryway",
-    ("Doorway", "Door"): "door entrance",
+    ("Door", "Doorway"): "door",
+    ("Doorway", "Door"): "entrance",
     ("Door",): "exit exitdoor frontdoor maindoor entrancedoor emergencyexit fireexit buildingexit",
 }
 #: Word VLMs use -> the engine types it names, most likely first (from ``_NAMED``). Engine

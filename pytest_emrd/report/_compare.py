@@ -54,7 +54,18 @@ ALPHA: Final = 0.05
 
 #: Metrics averaged over episodes, each the EpisodeMetrics field of the same name (None:
 #: undefined, pair left out).
-_MEANS: Final = ("aec", "te", "pa", "fpsg_local", "fpsg_global", "never_visited", "any_bias", "sir")
+_MEANS: Final = (
+    "aec",
+    "grounded_aec",
+    "ungrounded_rate",
+    "te",
+    "pa",
+    "fpsg_local",
+    "fpsg_global",
+    "never_visited",
+    "any_bias",
+    "sir",
+)
 #: Pooled ratios: name -> (numerator, denominator) EpisodeMetrics fields.
 _RATIOS: Final = {
     "memory_strength": ("retained_steps", "forget_events"),

@@ -46,7 +46,8 @@ from pytest_emrd.metrics import (
     match_map,
     pa_coverage,
 )
-from pytest_emrd.metrics._tracking import layout_scale, track_episode
+from pytest_emrd.metrics._match import layout_scale
+from pytest_emrd.metrics._tracking import track_episode
 from pytest_emrd.trajectory import Trajectory
 from pytest_emrd.validate._check import Check, fmt, judged, max_gap, pct
 

@@ -133,10 +133,11 @@ def test_an_entry_whose_type_is_all_held_by_carried_labels_matches_nothing(
     assert len(after.object_ids) == len(after.pairs) == 4
 
 
-def test_repeated_label_uses_its_first_entry(make_obj: MakeObj) -> None:
+def test_a_repeated_label_is_one_more_entry(make_obj: MakeObj) -> None:
     entries = [MapEntry("x", "Chair", 1, 2), MapEntry("x", "Chair", 9, 9)]
     m = match_map(entries, [make_obj("Chair_1")])
     assert m.duplicates == ("x",)
+    assert m.entries == 2 and m.unmatched == ("x #2",)
     assert (m.pairs[0].pred_x, m.pairs[0].pred_z) == (1, 2)
 
 
@@ -148,7 +149,7 @@ def test_a_lone_entry_matches_wherever_it_is_written(make_obj: MakeObj) -> None:
 
 def test_an_entry_beyond_the_gate_after_alignment_stands_for_nothing(make_obj: MakeObj) -> None:
     truth = [make_obj("Fridge_1", x=0), make_obj("Television_1", x=6), make_obj("Sink_1", z=4)]
-    far = GATE_M + 0.5
+    far = 4 * GATE_M  # no frame puts it within the gate and keeps the others there
     entries = [MapEntry("f", "Fridge", 0, 0), MapEntry("tv", "Television", 6, 0),
                MapEntry("sink", "Sink", 0, 4 + far)]  # fmt: skip
     m = match_map(entries, truth)
@@ -199,7 +200,7 @@ def test_covered_is_the_aec_numerator_and_bounds_the_pairs(
     )
     assert m.covered == expected
     assert len(m.object_ids) == len(m.pairs) <= expected
-    assert len(m.pairs) + len(m.unmatched) + len(m.unrecognised) == m.labels
+    assert len(m.pairs) + len(m.unmatched) + len(m.unrecognised) == m.entries
 
 
 @given(maps_and_truth(), st.sampled_from(["duplicate", "absent-type", "type-at-cap"]))

@@ -251,7 +251,7 @@ def test_a_real_looking_vlm_map_is_read_like_the_engine_ids() -> None:
         MapEntry("TV", "TV", 5.0, 3.0),
         MapEntry("fridge", "refrigerator", -4.0, -3.0),
         MapEntry("plant (2)", "Potted plant", 3.0, -2.0),
-        MapEntry("door to the kitchen", "door", 6.0, 0.0),
+        MapEntry("doorway to the kitchen", "opening", 6.0, 0.0),
         MapEntry("exit", "Exit door", 8.0, -4.0),
         MapEntry("the red armchair", "sofa", 7.0, -3.0),
         MapEntry("fire extinguisher", "extinguisher", 6.5, -4.0),
@@ -263,7 +263,7 @@ def test_a_real_looking_vlm_map_is_read_like_the_engine_ids() -> None:
     assert len(m.pairs) == len(truth)
     assert m.label_of["Chair_2"] == "chair near the window"
     assert m.label_of["Door_1"] == "exit"
-    assert m.label_of["Doorway_1"] == "door to the kitchen"
+    assert m.label_of["Doorway_1"] == "doorway to the kitchen"
     # type "sofa" names no type of this layout; the label "the red armchair" does
     assert m.label_of["ArmChair_1"] == "the red armchair"
     assert aec_score(m, len(truth)) == 1.0
@@ -271,3 +271,55 @@ def test_a_real_looking_vlm_map_is_read_like_the_engine_ids() -> None:
     # the same (the min cap of Eq. AEC)
     clean = match_map(written[:-2], truth)
     assert aec_score(clean, len(truth)) == 1.0
+
+
+EXIT_TYPES = ("Doorway", "Door", "Desk")
+
+
+@pytest.mark.parametrize(
+    ("object_type", "label", "expected"),
+    [
+        ("door", "d", "Door"),
+        ("exit", "e", "Door"),
+        ("exit door", "e", "Door"),
+        ("front door", "e", "Door"),
+        ("", "Door_1", "Door"),
+        ("", "door (open)", "Door"),
+        ("doorway", "d", "Doorway"),
+        ("opening", "d", "Doorway"),
+        ("archway", "d", "Doorway"),
+        ("", "Doorway_2", "Doorway"),
+    ],
+    ids=repr,
+)
+def test_the_exit_is_the_exit(object_type: str, label: str, expected: str) -> None:
+    resolver = TypeResolver(EXIT_TYPES)
+    assert resolver.names[resolver.resolve(object_type, label)] == expected
+
+
+def test_door_is_a_doorway_only_where_the_layout_has_no_exit() -> None:
+    assert canonical_type("door", present=("Doorway", "Desk")) == "Doorway"
+
+
+def test_a_perfect_map_whose_exit_is_typed_door_matches_the_exit() -> None:
+    truth = [
+        _obj("Doorway_1", 0, 0),
+        _obj("Doorway_2", 4, 0),
+        _obj("Door_1", 8, -4),
+        _obj("Desk_1", 2, 3),
+    ]
+    written = [
+        MapEntry("doorway", "doorway", 0, 0),
+        MapEntry("opening", "", 4, 0),
+        MapEntry("exit", "door", 8, -4),
+        MapEntry("Door_1", "", 8, -4.2),
+        MapEntry("desk", "desk", 2, 3),
+    ]
+    m = match_map(written[:3] + written[4:], truth)
+    assert m.label_of == {
+        "Doorway_1": "doorway",
+        "Doorway_2": "opening",
+        "Door_1": "exit",
+        "Desk_1": "desk",
+    }
+    assert match_map(written[3:], truth).label_of["Door_1"] == "Door_1"
