@@ -27,6 +27,7 @@ from typing import Any, Final
 from pytest_emrd import frames, world
 from pytest_emrd.agent import (
     JPEG_DATA_URL,
+    MAX_REPLY_CHARS,
     ChatClient,
     Conversation,
     Registry,
@@ -38,7 +39,6 @@ from pytest_emrd.agent import (
     resolve_room,
     step_text,
 )
-from pytest_emrd.agent._parse import MAX_REPLY_CHARS
 from pytest_emrd.errors import ConfigError, EmrdError, check_choice, check_positive_int
 from pytest_emrd.protocol import protocol_version
 from pytest_emrd.rooms import SLUG_ROOMS
@@ -52,7 +52,7 @@ from pytest_emrd.trajectory import (
     Step,
     Trajectory,
 )
-from pytest_emrd.world._model import Observation, Simulator
+from pytest_emrd.world import Observation, Simulator
 
 _TERM = re.compile(r"^\s*term\s*\(\s*(?P<room>.*?)\s*\)\s*\.?\s*$", re.IGNORECASE | re.DOTALL)
 

@@ -18,10 +18,11 @@ from pytest_emrd.cassette._paths import (
     record_command,
 )
 from pytest_emrd.cassette._persister import EpisodePersister, UnsavedCassette, writer_lock
-from pytest_emrd.cassette._redact import canonical_json, match_keys, redact_body
+from pytest_emrd.cassette._redact import DIGEST, canonical_json, match_keys, redact_body
 from pytest_emrd.cassette._use import clear_caches, episode_cassette
 
 __all__ = [
+    "DIGEST",
     "SCRATCH",
     "SUFFIX",
     "CassetteData",

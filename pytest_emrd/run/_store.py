@@ -21,11 +21,11 @@ from typing import TYPE_CHECKING, Any, Final
 from pytest_emrd._atomic import write_bytes_atomic
 from pytest_emrd._fork import available_cores, fork_map
 from pytest_emrd._scrub import scrub, scrub_bytes
+from pytest_emrd._serde import JsonRecord, Schema
 from pytest_emrd.errors import ConfigError, EmrdError, ProtocolError
-from pytest_emrd.run._head import EpisodeHead
 from pytest_emrd.run._identity import RunIdentity, run_lock, write_identity
 from pytest_emrd.run._settings import RunSettings
-from pytest_emrd.trajectory import OLDER_SCHEMAS, SCHEMA_VERSION, EpisodeSpec, Trajectory
+from pytest_emrd.trajectory import OLDER_SCHEMAS, SCHEMA_VERSION, EpisodeSpec, Trajectory, Usage
 
 if TYPE_CHECKING:
     from filelock import FileLock
@@ -37,6 +37,71 @@ STORE_SCHEMA: Final = 2
 #: The layout before heads moved into the episode file (read, never written).
 LEGACY_STORE_SCHEMA: Final = 1
 _COMPACT: Final = {"separators": (",", ":")}
+
+
+HEAD_SCHEMA: Final = 1
+
+
+@dataclass(frozen=True)
+class EpisodeHead(JsonRecord):
+    """The facts about a stored episode a run reads without decoding its trajectory: the first
+    line of the episode file, written with the trajectory in one atomic write (it cannot
+    describe another file); field names are the file's format."""
+
+    schema = Schema(HEAD_SCHEMA, "episode head", "it is recomputed.")
+
+    spec: EpisodeSpec
+    protocol: str
+    """World + prompt protocol version the episode ran under."""
+    status: str
+    """``terminated``, ``budget`` or ``errored``."""
+    steps: int
+    chosen_room: str | None
+    final_map_entries: int
+    """Entries of the terminal cognitive map (0: the map figure cannot show this episode)."""
+    usage: Usage
+    error: str | None
+    """The stored (scrubbed) error text of an errored episode."""
+    session: str
+    recorded: bool
+    """New model traffic was recorded for it (a live episode)."""
+    frame_drift: int
+    seconds: float
+    retries: int
+    schema_version: int = HEAD_SCHEMA
+
+    @classmethod
+    def of(
+        cls,
+        trajectory: Trajectory,
+        *,
+        session: str,
+        recorded: bool,
+        frame_drift: int,
+        seconds: float,
+        retries: int = 0,
+    ) -> EpisodeHead:
+        return cls(
+            spec=trajectory.spec,
+            protocol=trajectory.protocol,
+            status=trajectory.status,
+            steps=len(trajectory.steps),
+            chosen_room=trajectory.chosen_room,
+            final_map_entries=len(trajectory.final_map),
+            usage=trajectory.usage,
+            error=scrub(trajectory.error) if trajectory.error else trajectory.error,
+            session=session,
+            recorded=recorded,
+            frame_drift=frame_drift,
+            seconds=round(seconds, 3),
+            retries=retries,
+        )
+
+    def describes(self, trajectory: Trajectory) -> bool:
+        """Whether this head states what ``trajectory`` holds (how it was obtained aside)."""
+        facts = {k: getattr(self, k) for k in ("session", "recorded", "frame_drift", "retries")}
+        head = EpisodeHead.of(trajectory, seconds=self.seconds, **facts)
+        return replace(head, error=self.error) == self
 
 
 @dataclass(frozen=True)

@@ -19,12 +19,19 @@ from pathlib import Path
 from typing import Any
 
 from pytest_emrd.agent import build_system_prompt
-from pytest_emrd.cassette import FormatError, decode, found_cassette
-from pytest_emrd.cassette._redact import DIGEST
+from pytest_emrd.cassette import DIGEST, FormatError, decode, found_cassette
 from pytest_emrd.episode import build_simulator, start_world, user_turn, world_action
 from pytest_emrd.errors import EmrdError
 from pytest_emrd.trajectory import Trajectory
-from pytest_emrd.view._page import IndexRow, episode_data, episode_gif, episode_page, index_page
+from pytest_emrd.view._page import (
+    Frame,
+    IndexRow,
+    Recorded,
+    episode_data,
+    episode_gif,
+    episode_page,
+    index_page,
+)
 from pytest_emrd.world import WorldPose
 
 __all__ = [
@@ -48,18 +55,6 @@ class Replay:
     """The spawn pose in the office's own frame (the page draws the plan in it, north up)."""
     system: str = ""
     """The system prompt the episode loop sends for this spec (the same for every step)."""
-
-
-@dataclass(frozen=True)
-class Frame:
-    """One re-rendered observation ``o_{t-1}``, the frame shown at step ``t``."""
-
-    jpeg: bytes
-    digest: str
-    """Pixel digest the world computed (``pixels:`` + SHA-256), as a cassette records it."""
-    text: str = ""
-    """The user turn's text shown with this frame (feedback of the previous action, pose,
-    step counter, and under ``text``/``both`` the symbolic list), as the loop built it."""
 
 
 def replay_frames(traj: Trajectory) -> Replay:
@@ -90,15 +85,6 @@ def _digests(node: Any) -> Iterator[str]:
             yield from _digests(value)
     elif isinstance(node, str) and DIGEST.match(node):
         yield node
-
-
-@dataclass(frozen=True)
-class Recorded:
-    """The frame digests a cassette holds for one episode, or why there are none."""
-
-    digests: tuple[str | None, ...]
-    """Per request (= per step), the digest of the newest image it carries (None: none)."""
-    note: str | None = None
 
 
 def recorded_digests(traj: Trajectory, cassettes: Path | None) -> Recorded:

@@ -77,7 +77,7 @@ def test_a_replay_sends_frames_by_digest_and_matches_as_the_recording_sent_them(
     episode replayed with real JPEG frames, as a recording sends them, matches the same
     cassette interaction by interaction and gives the same trajectory."""
     from pytest_emrd.episode import run_episode
-    from pytest_emrd.world import _render
+    from pytest_emrd.world import _jpeg
 
     def as_recorded(spec: EpisodeSpec, **kwargs: object):
         return run_episode(spec, **{**kwargs, "replay": False})  # type: ignore[arg-type]
@@ -93,7 +93,7 @@ def test_a_replay_sends_frames_by_digest_and_matches_as_the_recording_sent_them(
     def never(frame: object, quality: int) -> bytes:
         raise AssertionError("a replay encoded a JPEG")
 
-    monkeypatch.setattr(_render, "encode_jpeg", never)
+    monkeypatch.setattr(_jpeg, "encode_jpeg", never)
     by_digest = _replay(SPEC, ROOT)
     assert by_digest.trajectory.status == "terminated"
     assert by_digest.trajectory == sent_as_jpeg.trajectory
