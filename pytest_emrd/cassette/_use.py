@@ -71,6 +71,7 @@ class EpisodeCassette(Cassette):
         whole)."""
         self._loading = False
         self._loaded = 0
+        self._index: dict[str, list[int]] | None = None
 
     def emrd_body(self, new: Request, recorded: Request) -> bool:
         """The one vcrpy matcher: strict or lenient key equality (unparseable never matches); a
@@ -82,6 +83,24 @@ class EpisodeCassette(Cassette):
         if same and a.strict != b.strict:
             self.frame_drift.add((a.strict, b.strict))
         return same
+
+    def _responses(self, request: Request) -> Iterator[tuple[int, dict[str, Any]]]:
+        """vcrpy's lookup of the interactions :meth:`emrd_body` matches, in order, found by key
+        in an index instead of by running the matcher on every interaction for every request
+        (vcrpy scans three times per request: a replay's cost would grow with its length)."""
+        new = _keys(self._before_record_request(request))
+        key = new.strict if self.strict else new.lenient
+        if self._index is None:
+            self._index = {}
+            for index, (stored, _) in enumerate(self.data):
+                old = _keys(stored)
+                if (found := old.strict if self.strict else old.lenient) is not None:
+                    self._index.setdefault(found, []).append(index)
+        for index in self._index.get(key, ()) if key is not None else ():
+            stored, response = self.data[index]
+            if not self.strict and (old_strict := _keys(stored).strict) != new.strict:
+                self.frame_drift.add((new.strict, old_strict))
+            yield index, response
 
     def _load(self) -> None:
         self._loading = True
@@ -105,7 +124,7 @@ class EpisodeCassette(Cassette):
             self.data[-1] = kept
         else:
             self.data.append(kept)
-        self.dirty = True
+        self.dirty, self._index = True, None
 
     def _retried(self, request: Request) -> bool:
         """Whether ``request`` repeats the last interaction recorded live (not read back)."""
