@@ -15,16 +15,19 @@ one AI2-THOR process serves every episode of a worker.
 
 from __future__ import annotations
 
+import os
 import re
 import threading
 import time
 import warnings
 import weakref
 from collections.abc import Callable, Mapping
+from pathlib import Path
 from types import TracebackType
 from typing import Any, Final
 
 from pytest_emrd import frames, world
+from pytest_emrd._disk import os_error_line
 from pytest_emrd.agent import (
     JPEG_DATA_URL,
     MAX_REPLY_CHARS,
@@ -39,7 +42,14 @@ from pytest_emrd.agent import (
     resolve_room,
     step_text,
 )
-from pytest_emrd.errors import ConfigError, EmrdError, check_choice, check_positive_int
+from pytest_emrd.cassette import EpisodeRun, Tape
+from pytest_emrd.errors import (
+    CassetteError,
+    ConfigError,
+    EmrdError,
+    check_choice,
+    check_positive_int,
+)
 from pytest_emrd.protocol import protocol_version
 from pytest_emrd.rooms import SLUG_ROOMS
 from pytest_emrd.trajectory import (
@@ -307,46 +317,82 @@ class SimulatorPool:
         self.close()
 
 
-class AgentRunner:
-    """:func:`run_episode` (or ``run``, same keywords, e.g. a :class:`SimulatorPool`'s) with
-    one client per model and key mode, kept for the runner's lifetime: the connection pool
-    and TLS context serve every episode; they close when the runner is collected or at exit.
-    A replay's client is built with ``require_key=False`` (recorded requests carry no key).
-    """
+class Executor:
+    """Runs the episodes of one process: :meth:`tape` decides live or replay, :meth:`run` opens
+    the cassette, runs the loop and hands back the run; ``on_step`` sees every step.
 
-    def __init__(self, registry: Registry, *, run: Callable[..., Trajectory] | None = None) -> None:
-        self._registry = registry
-        self._run = run or run_episode
+    One model client per model and key mode (a replay's without a key: recorded requests carry
+    none) and the :class:`SimulatorPool` serve every episode until :meth:`close` (or until the
+    executor is collected, or at exit). ``cassettes``, ``record_mode`` ... are the
+    :meth:`~pytest_emrd.cassette.Tape.of` options of every episode."""
+
+    def __init__(
+        self,
+        registry: Registry,
+        *,
+        backend_options: Mapping[str, Any] | None = None,
+        **cassettes: Any,
+    ) -> None:
+        self.registry = registry
+        self.simulators = SimulatorPool(backend_options)
+        self._cassettes = cassettes
         self._clients: dict[tuple[str, bool], ChatClient] = {}
         self._lock = threading.Lock()
         self._finalizer = weakref.finalize(self, _close_all, self._clients)
 
-    def __call__(
-        self, spec: EpisodeSpec, *, live: bool, on_step: Callable[[Step], None] | None = None
-    ) -> Trajectory:
-        client = self._client(spec.model, live)
-        return self._run(
-            spec, registry=self._registry, client=client, on_step=on_step, replay=not live
-        )
+    def tape(self, spec: EpisodeSpec) -> Tape:
+        """``spec``'s cassette, and whether running it calls the model (decided here, once)."""
+        return Tape.of(spec, **self._cassettes)
+
+    def run(self, tape: Tape, *, on_step: Callable[[Step], None] | None = None) -> EpisodeRun:
+        """The episode of ``tape`` run through its cassette. Live, its cassette folder must be
+        writable first (else nothing is sent to the model: a :class:`CassetteError`)."""
+        spec = tape.spec
+        if tape.live:
+            _check_writable(tape.path)
+        client = self._client(spec.model, tape.live)
+        for take in tape.takes():
+            with take:
+                take.trajectory = self.simulators.run(
+                    spec,
+                    registry=self.registry,
+                    client=client,
+                    on_step=on_step,
+                    replay=not tape.live,
+                )
+        assert take.result is not None
+        return take.result
 
     def close(self) -> None:
-        """Close every client now (they are also closed when the runner is collected)."""
+        """Close every client and simulator now."""
         self._finalizer()
+        self.simulators.close()
 
     def _client(self, model: str, live: bool) -> ChatClient:
         with self._lock:
             client = self._clients.get((model, live))
             if client is None:
-                config = self._registry.get(model)
+                config = self.registry.get(model)
                 client = self._clients[(model, live)] = make_client(config, require_key=live)
         return client
+
+
+def _check_writable(path: Path) -> None:
+    """Raise the :class:`CassetteError` writing ``path`` would meet (nothing is created)."""
+    existing = path.parent
+    while not existing.exists() and existing != existing.parent:
+        existing = existing.parent
+    error: OSError | None = None
+    if not existing.is_dir():
+        error = NotADirectoryError(20, "Not a directory", str(existing))
+    elif not os.access(existing, os.W_OK | os.X_OK):
+        error = PermissionError(13, "Permission denied", str(existing))
+    if error is not None:
+        line = os_error_line(error, doing="write", path=path, option="--emrd-cassettes DIR")
+        raise CassetteError(f"the cassette {line} Nothing was sent to the model.")
 
 
 def _close_all(clients: dict[tuple[str, bool], ChatClient]) -> None:
     for client in clients.values():
         client.close()
     clients.clear()
-
-
-#: The real runner: ``agent_runner(registry, run=...)``.
-agent_runner = AgentRunner

@@ -1,9 +1,11 @@
 """Cassettes: one redacted vcrpy cassette per episode, compressed with xz (see :mod:`._file`);
-``run_with_cassette`` is the entry point."""
+``Tape.of(spec, ...)`` is the entry point: the episode runs in each of its takes."""
 
 from pytest_emrd.cassette._episode import (
     EpisodeRun,
     FrameDriftWarning,
+    Take,
+    Tape,
     is_live,
     network_blocked,
     run_with_cassette,
@@ -31,6 +33,8 @@ __all__ = [
     "FormatError",
     "FrameDriftWarning",
     "Invocation",
+    "Take",
+    "Tape",
     "UnsavedCassette",
     "canonical_json",
     "cassette_path",

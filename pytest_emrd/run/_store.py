@@ -221,16 +221,15 @@ class ResultsStore:
         """Whether the store has a reusable episode for ``spec``."""
         return self.reusable(spec) is not None
 
-    def _lock(self, spec: EpisodeSpec, *, timeout: float = -1) -> FileLock:
-        return run_lock(self.run_dir, spec.case_id, timeout=timeout)
-
-    def _compute(
-        self, spec: EpisodeSpec, compute: Callable[[EpisodeSpec], EpisodeRun]
-    ) -> StoredEpisode:
-        # the caller holds ``spec``'s lock
+    def lock(self, spec: EpisodeSpec, *, timeout: float = -1) -> FileLock:
+        """``spec``'s lock across processes, held while it is computed and saved (the run's
+        identity is recorded in ``run.json`` before any episode is)."""
         if self.identity is not None:
             write_identity(self.run_dir, self.identity)
-        run = compute(spec)
+        return run_lock(self.run_dir, spec.case_id, timeout=timeout)
+
+    def save(self, spec: EpisodeSpec, run: EpisodeRun) -> StoredEpisode:
+        """Store ``run``, the episode of ``spec`` computed under its :meth:`lock`."""
         facts = {k: getattr(run, k) for k in ("recorded", "frame_drift", "seconds", "retries")}
         stored = StoredEpisode.of(run.trajectory, session=self.session, **facts)
         write_bytes_atomic(episode_path(self.run_dir, spec), stored.to_json())
@@ -243,8 +242,8 @@ class ResultsStore:
         stored = self.reusable(spec)
         if stored is not None:
             return stored
-        with self._lock(spec):
-            return self.reusable(spec) or self._compute(spec, compute)
+        with self.lock(spec):
+            return self.reusable(spec) or self.save(spec, compute(spec))
 
     def compute_if_free(
         self, spec: EpisodeSpec, compute: Callable[[EpisodeSpec], EpisodeRun]
@@ -253,10 +252,10 @@ class ResultsStore:
         from filelock import Timeout
 
         try:
-            with self._lock(spec, timeout=0):
+            with self.lock(spec, timeout=0):
                 if self.reusable(spec) is not None:
                     return False
-                self._compute(spec, compute)
+                self.save(spec, compute(spec))
                 return True
         except Timeout:
             return False
