@@ -20,7 +20,6 @@ import re
 import threading
 import time
 import warnings
-import weakref
 from collections.abc import Callable, Mapping
 from pathlib import Path
 from types import TracebackType
@@ -322,9 +321,9 @@ class Executor:
     the cassette, runs the loop and hands back the run; ``on_step`` sees every step.
 
     One model client per model and key mode (a replay's without a key: recorded requests carry
-    none) and the :class:`SimulatorPool` serve every episode until :meth:`close` (or until the
-    executor is collected, or at exit). ``cassettes``, ``record_mode`` ... are the
-    :meth:`~pytest_emrd.cassette.Tape.of` options of every episode."""
+    none) and the :class:`SimulatorPool` serve every episode until :meth:`close`.
+    ``cassettes``, ``record_mode`` ... are the :class:`~pytest_emrd.cassette.Tape` options of
+    every episode."""
 
     def __init__(
         self,
@@ -338,11 +337,10 @@ class Executor:
         self._cassettes = cassettes
         self._clients: dict[tuple[str, bool], ChatClient] = {}
         self._lock = threading.Lock()
-        self._finalizer = weakref.finalize(self, _close_all, self._clients)
 
     def tape(self, spec: EpisodeSpec) -> Tape:
         """``spec``'s cassette, and whether running it calls the model (decided here, once)."""
-        return Tape.of(spec, **self._cassettes)
+        return Tape(spec, **self._cassettes)
 
     def run(self, tape: Tape, *, on_step: Callable[[Step], None] | None = None) -> EpisodeRun:
         """The episode of ``tape`` run through its cassette. Live, its cassette folder must be
@@ -365,7 +363,9 @@ class Executor:
 
     def close(self) -> None:
         """Close every client and simulator now."""
-        self._finalizer()
+        for client in self._clients.values():
+            client.close()
+        self._clients.clear()
         self.simulators.close()
 
     def _client(self, model: str, live: bool) -> ChatClient:
@@ -379,20 +379,14 @@ class Executor:
 
 def _check_writable(path: Path) -> None:
     """Raise the :class:`CassetteError` writing ``path`` would meet (nothing is created)."""
-    existing = path.parent
-    while not existing.exists() and existing != existing.parent:
-        existing = existing.parent
-    error: OSError | None = None
-    if not existing.is_dir():
-        error = NotADirectoryError(20, "Not a directory", str(existing))
-    elif not os.access(existing, os.W_OK | os.X_OK):
-        error = PermissionError(13, "Permission denied", str(existing))
-    if error is not None:
-        line = os_error_line(error, doing="write", path=path, option="--emrd-cassettes DIR")
-        raise CassetteError(f"the cassette {line} Nothing was sent to the model.")
-
-
-def _close_all(clients: dict[tuple[str, bool], ChatClient]) -> None:
-    for client in clients.values():
-        client.close()
-    clients.clear()
+    folder = path.parent
+    while not folder.exists() and folder != folder.parent:
+        folder = folder.parent
+    if not folder.is_dir():
+        error: OSError = NotADirectoryError(20, "Not a directory", str(folder))
+    elif not os.access(folder, os.W_OK | os.X_OK):
+        error = PermissionError(13, "Permission denied", str(folder))
+    else:
+        return
+    line = os_error_line(error, doing="write", path=path, option="--emrd-cassettes DIR")
+    raise CassetteError(f"the cassette {line} Nothing was sent to the model.")

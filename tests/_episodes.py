@@ -1,5 +1,7 @@
-"""The episode loop as tests hand it to ``run_with_cassette``: ``runner(spec, live=...)``, one
-model client per model and key mode (a replay's without a key), as the executor keeps them."""
+"""Episodes run the way tests need them: :func:`run_with_cassette` runs a loop of the test's
+own in the product's cassette handling; :func:`agent_runner` is the real loop as such a
+``runner(spec, live=...)``, one model client per model and key mode (a replay's without a
+key), as the executor keeps them."""
 
 from __future__ import annotations
 
@@ -7,8 +9,9 @@ from collections.abc import Callable
 from typing import Any
 
 from pytest_emrd.agent import ChatClient, Registry, make_client
+from pytest_emrd.cassette import EpisodeRun, Tape
 from pytest_emrd.episode import run_episode
-from pytest_emrd.trajectory import Trajectory
+from pytest_emrd.trajectory import EpisodeSpec, Trajectory
 
 
 class AgentRunner:
@@ -35,3 +38,14 @@ def agent_runner(
     registry: Registry, *, run: Callable[..., Trajectory] = run_episode
 ) -> AgentRunner:
     return AgentRunner(registry, run)
+
+
+def run_with_cassette(spec: EpisodeSpec, run: Callable[..., Trajectory], **tape: Any) -> EpisodeRun:
+    """``run(spec, live=...)`` in each take of ``spec``'s :class:`~pytest_emrd.cassette.Tape`
+    (built with ``tape``): a loop of one's own with the product's cassette handling."""
+    taken = Tape(spec, **tape)
+    for take in taken.takes():
+        with take:
+            take.trajectory = run(spec, live=taken.live)
+    assert take.result is not None
+    return take.result

@@ -1,5 +1,5 @@
 """Cassettes: one redacted vcrpy cassette per episode, compressed with xz (see :mod:`._file`);
-``Tape.of(spec, ...)`` is the entry point: the episode runs in each of its takes."""
+``Tape(spec, ...)`` is the entry point: the episode runs in each of its takes."""
 
 from pytest_emrd.cassette._episode import (
     EpisodeRun,
@@ -8,7 +8,6 @@ from pytest_emrd.cassette._episode import (
     Tape,
     is_live,
     network_blocked,
-    run_with_cassette,
 )
 from pytest_emrd.cassette._file import SUFFIX, CassetteData, FormatError, decode, decompress, encode
 from pytest_emrd.cassette._paths import (
@@ -50,6 +49,5 @@ __all__ = [
     "network_blocked",
     "record_command",
     "redact_body",
-    "run_with_cassette",
     "writer_lock",
 ]

@@ -51,10 +51,6 @@ class _Discard(Exception):
     """Raised inside the cassette block so vcrpy does not save a failed episode."""
 
 
-#: Runs one episode; ``live``: the model may really be called (else every request replays).
-EpisodeRunner = Callable[..., Trajectory]
-
-
 def is_live(
     spec: EpisodeSpec, *, cassettes: Path, record_mode: str, modality_of: ModalityOf | None = None
 ) -> bool:
@@ -65,7 +61,6 @@ def is_live(
     return record_mode == "once" and not path.is_file()
 
 
-@dataclass(frozen=True)
 class Tape:
     """One episode's cassette: where its traffic is recorded or replayed, whether running it
     calls the model (:attr:`live`, decided once, here) and how a failure is explained.
@@ -80,21 +75,8 @@ class Tape:
     episode that may record holds its cassette's lock (:func:`~._persister.writer_lock`) up to
     ``lock_timeout_s`` seconds."""
 
-    spec: EpisodeSpec
-    root: Path
-    path: Path
-    live: bool
-    protocol: str
-    record_mode: str
-    matching: str
-    invocation: Invocation | None
-    modality_of: ModalityOf | None
-    keep_unsaved: bool
-    lock_timeout_s: float
-
-    @classmethod
-    def of(
-        cls,
+    def __init__(
+        self,
         spec: EpisodeSpec,
         *,
         cassettes: Path,
@@ -105,23 +87,15 @@ class Tape:
         modality_of: ModalityOf | None = None,
         keep_unsaved: bool = False,
         lock_timeout_s: float = LOCK_TIMEOUT_S,
-    ) -> Tape:
+    ) -> None:
         check_choice("record_mode", record_mode, RECORD_MODES)
         check_choice("matching", matching, MATCHING_MODES)
-        live = is_live(spec, cassettes=cassettes, record_mode=record_mode, modality_of=modality_of)
-        path = cassette_path(cassettes, spec, modality_of=modality_of)
-        return cls(
-            spec,
-            cassettes,
-            path,
-            live,
-            protocol,
-            record_mode,
-            matching,
-            invocation,
-            modality_of,
-            keep_unsaved,
-            lock_timeout_s,
+        self.spec, self.root, self.protocol, self.invocation = spec, cassettes, protocol, invocation
+        self.record_mode, self.matching, self.modality_of = record_mode, matching, modality_of
+        self.keep_unsaved, self.lock_timeout_s = keep_unsaved, lock_timeout_s
+        self.path = cassette_path(cassettes, spec, modality_of=modality_of)
+        self.live = is_live(
+            spec, cassettes=cassettes, record_mode=record_mode, modality_of=modality_of
         )
 
     def takes(self) -> Iterator[Take]:
@@ -141,37 +115,25 @@ class Tape:
             self.spec, record_mode=record_mode, cassettes=self.root, invocation=self.invocation
         )
 
-    def mismatch(self, recorded: str, rerecord: str) -> str:
-        """The modality-mismatch text (:func:`~._paths.modality_message`)."""
-        owner = dataclasses.replace(self.spec, modality=recorded)
-        return modality_message(
-            cassette=self.path,
-            recorded=recorded,
-            asked=self.spec.modality,
-            home=cassette_path(self.root, owner, modality_of=self.modality_of),
-            record=self.command("once"),
-            rerecord=rerecord,
-        )
 
-
-class Take:
+class Take(ExitStack):
     """One attempt at an episode inside its cassette (a ``with`` block, see :class:`Tape`):
     the network blocked when replaying only, the episode's HTTP traffic routed to its
     cassette. Set :attr:`trajectory` in the block; :attr:`result` is there after it."""
 
     def __init__(self, tape: Tape, record_mode: str, start: float | None = None) -> None:
+        super().__init__()
         self.tape, self.record_mode = tape, record_mode
         self.start = time.perf_counter() if start is None else start
         self.trajectory: Trajectory | None = None
         self.result: EpisodeRun | None = None
         self.redo = False
-        self._block = ExitStack()
 
     def __enter__(self) -> Take:
-        tape, block = self.tape, self._block
+        tape = self.tape
         if self.record_mode == "none":
-            block.enter_context(network_blocked())
-        self.cassette = block.enter_context(
+            self.enter_context(network_blocked())
+        self.cassette = self.enter_context(
             episode_cassette(
                 tape.path,
                 protocol=tape.protocol,
@@ -184,50 +146,39 @@ class Take:
         )
         return self
 
-    def __exit__(
-        self, kind: type[BaseException] | None, exc: BaseException | None, tb: Any
-    ) -> None:
+    def __exit__(self, kind: Any, exc: Any, tb: Any) -> bool:
         if kind is not None or self.trajectory is None:
-            self._block.__exit__(kind, exc, tb)
-            return
+            return super().__exit__(kind, exc, tb)
         tape, cassette, trajectory = self.tape, self.cassette, self.trajectory
-        recorded, drift = cassette.dirty, cassette.drift
-        frame_drift = len(cassette.frame_drift)
+        recorded, drift, frame_drift = cassette.dirty, cassette.drift, len(cassette.frame_drift)
         self.redo = self.record_mode == "new_episodes" and drift is not None
         if trajectory.status != "errored" and not self.redo:
-            self._block.__exit__(None, None, None)  # saves the cassette (or keeps it unsaved)
-            self._finish(trajectory, recorded, frame_drift, cassette.unsaved)
-            return
-        self._block.__exit__(_Discard, _Discard(), None)  # vcrpy saves nothing
-        cause = trajectory.error or ""
-        if self.record_mode == "none" and not tape.path.is_file():
-            cause = (
-                f"cassette missing: {tape.path} does not exist and record mode 'none' replays "
-                f"only. Record it with: {tape.command('once')}"
-            )
-        elif drift is not None:
-            cause = drift
-            modality = cassette.recorded_modality
-            if not cassette.unreadable and modality not in (None, tape.spec.modality):
-                cause = tape.mismatch(modality, tape.command("all"))
-        self._finish(dataclasses.replace(trajectory, error=scrub(cause)), False, frame_drift, None)
-
-    def _finish(
-        self, trajectory: Trajectory, recorded: bool, drift: int, unsaved: UnsavedCassette | None
-    ) -> None:
+            super().__exit__(None, None, None)  # saves the cassette (or keeps it unsaved)
+            unsaved = cassette.unsaved
+        else:
+            super().__exit__(_Discard, _Discard(), None)  # vcrpy saves nothing
+            recorded, unsaved, cause = False, None, trajectory.error or ""
+            if self.record_mode == "none" and not tape.path.is_file():
+                cause = (
+                    f"cassette missing: {tape.path} does not exist and record mode 'none' "
+                    f"replays only. Record it with: {tape.command('once')}"
+                )
+            elif drift is not None:
+                cause, modality = drift, cassette.recorded_modality
+                if not cassette.unreadable and modality not in (None, tape.spec.modality):
+                    owner = dataclasses.replace(tape.spec, modality=modality)
+                    cause = modality_message(
+                        cassette=tape.path,
+                        recorded=modality,
+                        asked=tape.spec.modality,
+                        home=cassette_path(tape.root, owner, modality_of=tape.modality_of),
+                        record=tape.command("once"),
+                        rerecord=tape.command("all"),
+                    )
+            trajectory = dataclasses.replace(trajectory, error=scrub(cause))
         seconds = time.perf_counter() - self.start
-        self.result = EpisodeRun(trajectory, recorded, drift, seconds, unsaved=unsaved)
-
-
-def run_with_cassette(spec: EpisodeSpec, run: EpisodeRunner, **tape: Any) -> EpisodeRun:
-    """``run(spec, live=...)`` in each take of ``spec``'s :class:`Tape` (built with ``tape``):
-    an episode loop of one's own (tests, benchmarks) with the product's cassette handling."""
-    taken = Tape.of(spec, **tape)
-    for take in taken.takes():
-        with take:
-            take.trajectory = run(spec, live=taken.live)
-    assert take.result is not None
-    return take.result
+        self.result = EpisodeRun(trajectory, recorded, frame_drift, seconds, unsaved=unsaved)
+        return False
 
 
 def _is_loopback(sock: socket.socket, address: Any) -> bool:

@@ -20,8 +20,9 @@ from pytest_emrd._atomic import write_bytes_atomic
 from pytest_emrd._disk import os_error_line
 from pytest_emrd._names import check_inside
 from pytest_emrd._scrub import scrub, scrub_bytes, watch_env
-from pytest_emrd.errors import ConfigError, EmrdError
-from pytest_emrd.gate import GateCell, Verdict
+from pytest_emrd.errors import ConfigError, EmrdError, check_choice
+from pytest_emrd.gate import GateCell, Verdict, evaluate_cell, load_thresholds
+from pytest_emrd.plugin._endpoint import EndpointWatch
 from pytest_emrd.progress import EpisodeWatch, StatusFile
 from pytest_emrd.run import (
     EpisodeSummary,
@@ -29,11 +30,16 @@ from pytest_emrd.run import (
     RunIdentity,
     RunSettings,
     StoredEpisode,
+    cell_specs,
     episode_path,
+    episode_specs,
+    gate_cells,
+    measure_episodes,
     scratch_dir,
+    shard,
     start_prefetch,
 )
-from pytest_emrd.trajectory import EpisodeSpec, Trajectory
+from pytest_emrd.trajectory import CONDITIONS, EpisodeSpec, Trajectory
 
 if TYPE_CHECKING:
     from pytest_emrd.cassette import EpisodeRun, UnsavedCassette
@@ -86,8 +92,6 @@ class Run:
                 "tests were built from; set them with --emrd-* options or ini keys instead."
             )
         self.settings = settings
-        if "executor" in self.__dict__:  # built with the settings before
-            self.__dict__.pop("executor").close()
         return self
 
     def call(self, fn: Any, what: str = "pytest-emrd") -> Any:
@@ -110,7 +114,7 @@ class Run:
 
     @cached_property
     def protocol(self) -> str:
-        from pytest_emrd.protocol import protocol_version
+        from pytest_emrd.protocol import protocol_version  # numpy, via the world
 
         return protocol_version(self.settings.backend)
 
@@ -119,16 +123,12 @@ class Run:
 
     @cached_property
     def episode_specs(self) -> list[EpisodeSpec]:
-        from pytest_emrd.run import episode_specs, shard
-
         specs = episode_specs(self.settings, self.modality_of)
         return shard(specs, *self.settings.shard) if self.settings.shard else specs
 
     @cached_property
     def gate_cells(self) -> list[GateCell]:
-        from pytest_emrd.gate import load_thresholds
         from pytest_emrd.metrics import GATE_METRICS
-        from pytest_emrd.run import gate_cells
 
         if self.settings.shard or self.settings.thresholds is None:
             return []
@@ -210,10 +210,8 @@ class Run:
         return scratch_dir(self.run_dir) / self.session
 
     @cached_property
-    def endpoints(self) -> Any:
+    def endpoints(self) -> EndpointWatch:
         """Consecutive unreachable episodes per model: a dead endpoint stops its model."""
-        from pytest_emrd.plugin._endpoint import EndpointWatch
-
         return EndpointWatch(self.run_dir, self.session, self.config.invocation_params.args)
 
     @cached_property
@@ -299,18 +297,13 @@ class Run:
         return self.cell_specs_of(cell.bound.model, cell.bound.condition)
 
     def cell_specs_of(self, model: str, condition: str) -> list[EpisodeSpec]:
-        from pytest_emrd.errors import check_choice
-        from pytest_emrd.run import cell_specs
-        from pytest_emrd.trajectory import CONDITIONS
 
         self.registry.get(model)
         check_choice("condition", condition, CONDITIONS)
         return cell_specs(self.settings, model, condition, self.modality_of)
 
     def verdict(self, cell: GateCell) -> Verdict:
-        from pytest_emrd.gate import evaluate_cell
         from pytest_emrd.metrics import GATE_METRICS
-        from pytest_emrd.run import measure_episodes
 
         specs = self.cell_specs(cell)
         missing = [spec for spec in specs if spec not in self._metrics]

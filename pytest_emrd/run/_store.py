@@ -245,21 +245,6 @@ class ResultsStore:
         with self.lock(spec):
             return self.reusable(spec) or self.save(spec, compute(spec))
 
-    def compute_if_free(
-        self, spec: EpisodeSpec, compute: Callable[[EpisodeSpec], EpisodeRun]
-    ) -> bool:
-        """Whether this call computed ``spec`` (never waits: stored or locked is skipped)."""
-        from filelock import Timeout
-
-        try:
-            with self.lock(spec, timeout=0):
-                if self.reusable(spec) is not None:
-                    return False
-                self.save(spec, compute(spec))
-                return True
-        except Timeout:
-            return False
-
 
 class Prefetcher:
     """Computes ``specs`` ahead with ``workers`` threads until :meth:`close`."""
@@ -277,10 +262,17 @@ class Prefetcher:
         self._futures = [self._pool.submit(self._one, spec) for spec in specs]
 
     def _one(self, spec: EpisodeSpec) -> bool:
+        """Whether this call computed ``spec`` (never waits: stored or locked is skipped)."""
+        from filelock import Timeout
+
         try:
-            return self._store.compute_if_free(spec, self._compute)
-        except EmrdError:
-            return False  # the test asking for this episode computes it and reports the error
+            with self._store.lock(spec, timeout=0):
+                if self._store.reusable(spec) is not None:
+                    return False
+                self._store.save(spec, self._compute(spec))
+                return True
+        except (Timeout, EmrdError):
+            return False  # an error: the test asking for this episode computes it and reports it
 
     def wait(self) -> None:
         """Block until every episode was computed or skipped."""

@@ -15,11 +15,11 @@ from pathlib import Path
 import pytest
 
 from pytest_emrd.agent import load_registry
-from pytest_emrd.cassette import cassette_path, decode, encode, run_with_cassette
+from pytest_emrd.cassette import cassette_path, decode, encode
 from pytest_emrd.episode import protocol_version
 from pytest_emrd.errors import CassetteError
 from pytest_emrd.trajectory import EpisodeSpec
-from tests._episodes import agent_runner
+from tests._episodes import agent_runner, run_with_cassette
 
 ROOT = Path(__file__).resolve().parents[2] / "cassettes"
 SPEC = EpisodeSpec("scout", "baseline", "kitchen", 4, modality="both")

@@ -1,8 +1,7 @@
-"""The executor keeps one client per model and key mode, and closes them with itself."""
+"""The executor keeps one client per model and key mode, and closes them when it closes."""
 
 from __future__ import annotations
 
-import gc
 from pathlib import Path
 
 import pytest
@@ -40,9 +39,8 @@ def test_one_client_per_model_and_key_mode_serves_every_episode(built):
     assert [(c.name, c.require_key) for c in built] == [("scout", False), ("scout", True)]
 
 
-def test_clients_close_when_the_executor_is_collected(built):
+def test_clients_close_with_the_executor(built):
     runner = Executor(load_registry(), cassettes=Path("cassettes"), protocol="p")
     runner._client("scout", False)
-    del runner
-    gc.collect()
+    runner.close()
     assert [c.closed for c in built] == [True]
