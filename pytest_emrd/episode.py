@@ -22,7 +22,6 @@ import time
 import warnings
 from collections.abc import Callable, Mapping
 from pathlib import Path
-from types import TracebackType
 from typing import Any, Final
 
 from pytest_emrd import frames, world
@@ -264,7 +263,7 @@ class SimulatorPool:
     ``pool.run(spec, ...)`` is :func:`run_episode` on the pooled simulator (built with
     ``options`` on first use) or a fresh one for other backends. A simulator that saw an
     errored episode or an exception is rebuilt, so a dead Unity process costs one episode.
-    The owner calls :meth:`close` (or uses the pool as a context manager).
+    The owner calls :meth:`close`.
     """
 
     def __init__(self, options: Mapping[str, Any] | None = None) -> None:
@@ -287,11 +286,6 @@ class SimulatorPool:
             self.discard(spec.backend)
         return trajectory
 
-    @property
-    def backends(self) -> tuple[str, ...]:
-        """Backends with a simulator alive now."""
-        return tuple(self._live)
-
     def discard(self, backend: str) -> None:
         """Close and forget the simulator of ``backend`` (a failing close only warns)."""
         sim = self._live.pop(backend, None)
@@ -306,14 +300,6 @@ class SimulatorPool:
         """Close every pooled simulator."""
         for backend in list(self._live):
             self.discard(backend)
-
-    def __enter__(self) -> SimulatorPool:
-        return self
-
-    def __exit__(
-        self, kind: type[BaseException] | None, exc: BaseException | None, tb: TracebackType | None
-    ) -> None:
-        self.close()
 
 
 class Executor:
@@ -358,7 +344,6 @@ class Executor:
                     on_step=on_step,
                     replay=not tape.live,
                 )
-        assert take.result is not None
         return take.result
 
     def close(self) -> None:

@@ -104,7 +104,7 @@ class Tape:
         lock = writer_lock(self.root, self.path, timeout=self.lock_timeout_s)
         with lock if self.live else nullcontext():
             start = time.perf_counter()
-            take = Take(self, self.record_mode)
+            take = Take(self, self.record_mode, start)
             yield take
             if take.redo:
                 take = Take(self, "all", start)
@@ -121,13 +121,12 @@ class Take(ExitStack):
     the network blocked when replaying only, the episode's HTTP traffic routed to its
     cassette. Set :attr:`trajectory` in the block; :attr:`result` is there after it."""
 
-    def __init__(self, tape: Tape, record_mode: str, start: float | None = None) -> None:
+    trajectory: Trajectory
+    result: EpisodeRun
+
+    def __init__(self, tape: Tape, record_mode: str, start: float) -> None:
         super().__init__()
-        self.tape, self.record_mode = tape, record_mode
-        self.start = time.perf_counter() if start is None else start
-        self.trajectory: Trajectory | None = None
-        self.result: EpisodeRun | None = None
-        self.redo = False
+        self.tape, self.record_mode, self.start, self.redo = tape, record_mode, start, False
 
     def __enter__(self) -> Take:
         tape = self.tape
@@ -147,7 +146,7 @@ class Take(ExitStack):
         return self
 
     def __exit__(self, kind: Any, exc: Any, tb: Any) -> bool:
-        if kind is not None or self.trajectory is None:
+        if kind is not None:
             return super().__exit__(kind, exc, tb)
         tape, cassette, trajectory = self.tape, self.cassette, self.trajectory
         recorded, drift, frame_drift = cassette.dirty, cassette.drift, len(cassette.frame_drift)
