@@ -55,7 +55,7 @@ class ServerInfo:
 def models_url(provider: str, base_url: str) -> str:
     """The model listing of an endpoint (Anthropic's lives under ``/v1``), joined as the
     clients join their endpoints: after the base path, the base query kept."""
-    from pytest_emrd.agent._clients import endpoint_url
+    from pytest_emrd.agent import endpoint_url
 
     return endpoint_url(base_url, "/v1/models" if provider == "anthropic" else "/models")
 

@@ -20,9 +20,9 @@ from pytest_emrd.cassette import (
     EpisodeRun,
     cassette_path,
     decode,
-    run_with_cassette,
 )
 from pytest_emrd.trajectory import EpisodeSpec, Trajectory
+from tests._episodes import run_with_cassette
 
 from .conftest import FAKE_KEY, PROTOCOL, FakeRunner, FakeServer, traffic
 
