@@ -5,11 +5,12 @@ key), as the executor keeps them."""
 
 from __future__ import annotations
 
+import json
 from collections.abc import Callable
 from typing import Any
 
 from pytest_emrd.agent import ChatClient, Registry, make_client
-from pytest_emrd.cassette import EpisodeRun, Tape
+from pytest_emrd.cassette import LATENCY, EpisodeRun, Tape, decompress
 from pytest_emrd.episode import run_episode
 from pytest_emrd.trajectory import EpisodeSpec, Trajectory
 
@@ -48,3 +49,12 @@ def run_with_cassette(spec: EpisodeSpec, run: Callable[..., Trajectory], **tape:
         with take:
             take.trajectory = run(spec, live=taken.live)
     return take.result
+
+
+def traffic(blob: bytes) -> tuple[str, list[dict[str, Any]]]:
+    """A cassette's protocol and interactions without the latencies a live recording measured
+    (which differ between two recordings of the same traffic)."""
+    document = json.loads(decompress(blob))
+    for interaction in document["interactions"]:
+        interaction["response"].pop(LATENCY)
+    return document["metadata"]["emrd"]["protocol"], document["interactions"]
