@@ -19,15 +19,18 @@ def test_fog_weight_and_first_row_worked_examples() -> None:
 
 def test_shade_table_worked_example() -> None:
     """White under baseline light: a lit top at fog 0 is white, an x face 74 % of it
-    (188.7 -> 189), and at full fog every face is the fog colour. Object 7's label owns its
-    pixels up to the condition's fog (0.85 * 255 = 216.75 -> 217), the room's never."""
+    (188.7 -> 189), and at full fog every face is the fog colour. A black object owns its
+    pixels up to the condition's fog (0.85 * 255 = 216.75 -> 217); a white one only while it
+    differs from the pale fog by 24 levels; the room's labels own nothing."""
     params = condition_params("baseline")
-    table = shade_table(np.array([[255, 255, 255]] * 2), params, np.array([0, 8]))
-    rgb, owner = (table & 0xFFFFFF).reshape(2, 4, 256), (table >> 24).reshape(2, 4, 256)
+    colors = np.array([[255, 255, 255], [0, 0, 0], [255, 255, 255]])
+    table = shade_table(colors, params, np.array([0, 8, 9]))
+    rgb, owner = (table & 0xFFFFFF).reshape(3, 4, 256), (table >> 24).reshape(3, 4, 256)
     assert table.dtype == np.uint32
-    assert rgb[1, 2, 0] == 0xFFFFFF
-    assert rgb[1, 0, 0] == 189 | 189 << 8 | 189 << 16
+    assert rgb[0, 2, 0] == 0xFFFFFF
+    assert rgb[0, 0, 0] == 189 | 189 << 8 | 189 << 16
     r, g, b = params.fog_color
     assert (rgb[:, :, 255] == r | g << 8 | b << 16).all()
     assert (owner[0] == 0).all()
     assert (owner[1, :, :218] == 8).all() and (owner[1, :, 218:] == 0).all()
+    assert owner[2, 2, 0] == 9 and owner[2, 2, 217] == 0
