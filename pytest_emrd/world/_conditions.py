@@ -39,7 +39,7 @@ class ConditionParams:
 
 _TABLE: Final[Mapping[str, ConditionParams]] = {
     "baseline": ConditionParams("baseline", 3.1, 7.0, 1.0, 0.85, (214, 216, 220), False),
-    "low_light": ConditionParams("low_light", 2.7, 5.0, 0.5, 0.5, (56, 56, 60), False),
+    "low_light": ConditionParams("low_light", 2.9, 7.0, 0.5, 0.5, (56, 56, 60), False),
     "texture": ConditionParams("texture", 3.1, 7.0, 1.0, 0.85, (214, 216, 220), True),
 }
 

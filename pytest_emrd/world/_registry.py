@@ -12,8 +12,8 @@ from pytest_emrd.world._model import Simulator
 WORLD_VERSION: Final = "builtin-6"
 """Bump whenever layouts, rendering, visibility or feedback text change: a recorded cassette
 holds frame digests and feedback strings. ``builtin-6``: an object is visible when the frame
-shows it legibly; fog hides objects beyond 3.1 m (low light 2.7 m), landmarks beyond 7 m
-(5 m) (``docs/interpretation/world.md``)."""
+shows it legibly; fog hides objects beyond 3.1 m (low light 2.9 m), landmarks beyond 7 m
+(``docs/interpretation/world.md``)."""
 
 
 def _builtin(**options: Any) -> Simulator:
