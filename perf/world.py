@@ -83,7 +83,7 @@ def _frames() -> list[Frame]:
     frames: list[Frame] = []
     for condition in CONDITIONS:
         params = condition_params(condition)
-        table = shade_table(palette(scene, params, layout.seed), params)
+        table = shade_table(palette(scene, params, layout.seed), params, scene.owners)
         walker = _Explorer(make_simulator("builtin", frame_cache=0), layout, condition)
         for _ in range(STEPS_PER_REPEAT):
             frames.append((scene, walker.sim.agent_pose, params, table))

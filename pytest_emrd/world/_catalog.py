@@ -97,12 +97,6 @@ KINDS: Final[Mapping[str, Kind]] = {
     row[0]: Kind(*row[:6], colors=_COLORS[row[0]], elevation=row[6]) for row in _ROWS
 }
 
-#: Types whose solid bodies hide what stands behind them (chairs, stools and plants are open
-#: frames or foliage; doorways and the exit are openings in the wall).
-OCCLUDER_TYPES: Final = frozenset(
-    {"Desk", "DiningTable", "ShelvingUnit", "Television", "Fridge", "CounterTop", "ArmChair"}
-)
-
 #: objectType -> category, for every type the built-in office uses.
 CATEGORY_OF: Final[Mapping[str, str]] = {k.object_type: k.category for k in KINDS.values()}
 

@@ -9,11 +9,11 @@ from typing import Any, Final
 from pytest_emrd.errors import check_choice, missing_extra
 from pytest_emrd.world._model import Simulator
 
-WORLD_VERSION: Final = "builtin-5"
+WORLD_VERSION: Final = "builtin-6"
 """Bump whenever layouts, rendering, visibility or feedback text change: a recorded cassette
-holds frame digests and feedback strings. ``builtin-5``: furniture occludes; objects are
-visible within 3.3 m (low light 1.65 m), landmarks and the frame reach 7 m (3.5 m); the 20
-episodes of a spawn room start on 20 distinct points (``docs/interpretation/world.md``)."""
+holds frame digests and feedback strings. ``builtin-6``: an object is visible when the frame
+shows it legibly; fog hides objects beyond 3.1 m (low light 2.9 m), landmarks beyond 7 m
+(``docs/interpretation/world.md``)."""
 
 
 def _builtin(**options: Any) -> Simulator:
@@ -46,7 +46,7 @@ def make_simulator(backend: str = "builtin", **options: Any) -> Simulator:
 
 def world_version(backend: str = "builtin") -> str:
     """The world version a recording on ``backend`` depends on: for ``ai2thor`` joined with the
-    builtin one, whose layouts, spawns and wording THOR episodes use (``ai2thor-2+builtin-5``)."""
+    builtin one, whose layouts, spawns and wording THOR episodes use (``ai2thor-2+builtin-6``)."""
     check_choice("backend", backend, BACKENDS)
     if backend == "builtin":
         return WORLD_VERSION

@@ -7,7 +7,13 @@ Ceiling, floor (per-room colour, 0.5 m tiles) and walls (per-room colour, skirti
 the frame; then the boxes of nearby objects (:func:`object_boxes`) are painted back to
 front, each where it is nearer than the wall, over the image columns it can cover (a
 conservative range from its extent in the camera frame). Surfaces are shaded by
-orientation and the condition's light factor, then mixed with fog by depth.
+orientation and the condition's light factor, then mixed with fog by depth: on the scale
+of the visibility distance, landmarks (doorway frames, the exit) on the drawn distance's.
+
+Each pixel's unused fourth byte holds ``1 +`` the index of the object it shows when that
+object is *legible* there (fog weight at most the condition's ``fog``: the pixel lies
+within the object's reach), else 0; :func:`render` counts them per object, and
+:mod:`~pytest_emrd.world._visibility` reads visibility from the counts.
 
 Bit stability: headings are multiples of 90 degrees and positions centimetre values, so
 every geometric quantity comes from ``+ - * /``, comparisons, ``ceil`` and integer casts
@@ -37,17 +43,23 @@ HORIZON = SIZE // 2
 EYE = 1.5
 NEAR = 0.05
 
+MIN_CONTRAST = 24
+"""Levels a legible pixel differs from the fog (or darkness) in some channel: the change
+a person reads as an edge, and the legibility test's counterfactual threshold."""
+
 #: Surface orientations: faces across x (east/west), across z (north/south), tops,
 #: undersides. A surface's code is ``(label * 4 + face) << 8 | fog``, its colour
 #: ``table[code]`` (:func:`shade_table`).
 X_FACE, Z_FACE, TOP_FACE, BOTTOM_FACE = 0, 1, 2, 3
 
 
-def fog_weight(depth: np.ndarray, draw_distance: float, fog: float) -> np.ndarray:
-    """Fog weight 0..255 (int64) of surfaces at ``depth``: ``rint(min(1, f * (d / v)^2) *
-    255)`` with ``v`` the drawn distance and ``f`` the fog at that distance."""
-    ratio = depth / draw_distance
-    return np.rint(np.minimum(1.0, fog * ratio * ratio) * 255.0).astype(np.int64)
+def fog_weight(depth: np.ndarray, reach: float | np.ndarray, fog: float) -> np.ndarray:
+    """Fog weight 0..255 (int64) of surfaces at ``depth``: ``rint(min(1, f * (d / r)^4) *
+    255)`` with ``r`` the surface's reach and ``f`` the fog at that distance: clear near,
+    thick within a few tenths of ``r`` beyond it."""
+    ratio = depth / reach
+    square = ratio * ratio
+    return np.rint(np.minimum(1.0, fog * square * square) * 255.0).astype(np.int64)
 
 
 def first_row(a: np.ndarray) -> np.ndarray:
@@ -73,7 +85,7 @@ def object_boxes(scene: Scene, pose: WorldPose, params: ConditionParams) -> tupl
     Per box: ``(n, 4)`` planes ``x0, z0, x1, z1`` relative to the eye, ``(n, 2)``
     ``focal * (y - eye)`` of its bottom and top, the first and one past the last column its
     rays can hit, its label, and which extra face shows: 1 the top (below the eye), 2 the
-    underside (above the eye), 0 neither.
+    underside (above the eye), 0 neither; its fog's reach (:func:`fog_weight`).
     """
     x, z = float(pose.x), float(pose.z)
     parts, facing = scene.parts, scene.part_facing
@@ -101,7 +113,10 @@ def object_boxes(scene: Scene, pose: WorldPose, params: ConditionParams) -> tupl
     p = parts[sel]
     extra = np.where(p[:, 5] < EYE, 1, np.where(p[:, 4] > EYE, 2, 0))
     rel = p[:, :4] - (x, z, x, z)
-    return rel, FOCAL * (p[:, 4:6] - EYE), lo, hi, scene.part_label[sel], extra
+    reach = np.where(
+        scene.landmarks[scene.part_object[sel]], params.draw_distance, params.visibility_distance
+    )
+    return rel, FOCAL * (p[:, 4:6] - EYE), lo, hi, scene.part_label[sel], extra, reach
 
 
 SKIRTING_HEIGHT = 0.1
@@ -136,21 +151,31 @@ def palette(scene: Scene, params: ConditionParams, seed: int) -> np.ndarray:
     return colors
 
 
-def shade_table(colors: np.ndarray, params: ConditionParams) -> np.ndarray:
+def shade_table(colors: np.ndarray, params: ConditionParams, owners: np.ndarray) -> np.ndarray:
     """``(L * 4 * 256,)`` look-up table: final RGB of ``(label, face, fog weight)`` as one
-    ``uint32`` ``R | G << 8 | B << 16``, ``rgb = rint(colour * face_light * light_factor *
-    (255 - fog) / 255 + fog_rgb * fog / 255)``."""
+    ``uint32`` ``R | G << 8 | B << 16 | owner << 24``, ``rgb = rint(colour * face_light *
+    light_factor * (255 - fog) / 255 + fog_rgb * fog / 255)``; ``owner`` is ``owners[label]``
+    (``1 +`` its object's index, 0 for the room) where the pixel is legible: it lies within
+    its reach (fog weight at most ``rint(fog * 255)``) and differs from the fog colour by at
+    least :data:`MIN_CONTRAST` levels in some channel; else 0."""
     weight = np.arange(256, dtype=np.float64)
     light = FACE_LIGHT * params.light_factor
     lit = np.asarray(colors)[:, None, None, :] * light[None, :, None, None]
     mix = lit * ((255.0 - weight) / 255.0)[None, None, :, None]
     mix = mix + np.array(params.fog_color, dtype=np.float64) * (weight / 255.0)[:, None]
-    rgb = np.clip(np.rint(mix), 0, 255).astype(np.uint32).reshape(-1, 3)
-    return rgb[:, 0] | rgb[:, 1] << 8 | rgb[:, 2] << 16
+    rgb = np.clip(np.rint(mix), 0, 255)
+    contrast = np.abs(rgb - np.array(params.fog_color, dtype=np.float64)).max(axis=-1)
+    legible = (weight <= np.rint(params.fog * 255.0)) & (contrast >= MIN_CONTRAST)
+    owner = (np.asarray(owners, dtype=np.uint32)[:, None, None] * legible).ravel()
+    rgb = rgb.astype(np.uint32).reshape(-1, 3)
+    return rgb[:, 0] | rgb[:, 1] << 8 | rgb[:, 2] << 16 | owner << 24
 
 
-def render(scene: Scene, pose: WorldPose, params: ConditionParams, table: np.ndarray) -> np.ndarray:
-    """The ``(512, 512, 3)`` uint8 frame seen from ``pose`` (``table`` from :func:`shade_table`)."""
+def render(
+    scene: Scene, pose: WorldPose, params: ConditionParams, table: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """The ``(512, 512, 3)`` uint8 frame seen from ``pose`` (``table`` from :func:`shade_table`)
+    and, per object of the scene, how many of its pixels are legible."""
     dx, dz = _rays(pose.heading)
     ox, oz = np.float64(pose.x), np.float64(pose.z)
     t_wall, along_x = scene.walls.first_hit(ox, oz, dx, dz)
@@ -158,11 +183,12 @@ def render(scene: Scene, pose: WorldPose, params: ConditionParams, table: np.nda
     buf = _buffer()
     _background(buf, scene, params, table, (dx, dz, t_wall, along_x, ox, oz))
     _boxes(buf, table, (dx, dz, t_wall), object_boxes(scene, pose, params), params)
-    # R, G, B, 0 per pixel; Pillow reads the buffer in place and packs R, G, B.
-    rgbx = Image.frombuffer(
-        "RGBX", (SIZE, SIZE), buf.astype("<u4", copy=False), "raw", "RGBX", 0, 1
-    )
-    return np.frombuffer(rgbx.tobytes("raw", "RGB"), dtype=np.uint8).reshape(SIZE, SIZE, 3)
+    # R, G, B, owner per pixel; Pillow reads the buffer in place and packs R, G, B.
+    rgbx = buf.astype("<u4", copy=False)
+    image = Image.frombuffer("RGBX", (SIZE, SIZE), rgbx, "raw", "RGBX", 0, 1)
+    frame = np.frombuffer(image.tobytes("raw", "RGB"), dtype=np.uint8).reshape(SIZE, SIZE, 3)
+    owner = rgbx.view(np.uint8)[:, 3::4].ravel()
+    return frame, np.bincount(owner, minlength=len(scene.centres) + 1)[1:]
 
 
 _View = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.float64, np.float64]
@@ -183,7 +209,7 @@ def _background(
     skirting and the rest floor (``top <= horizon <= skirt <= bottom``).
     """
     dx, dz, t_wall, along_x, ox, oz = view
-    fog = (params.draw_distance, params.fog)
+    fog = (params.visibility_distance, params.fog)
     room = scene.room_raster
     nz, nx = room.shape
     top = first_row(HORIZON - _K_TOP / t_wall)
@@ -226,7 +252,7 @@ def _floor(
     nz, nx = floor.shape
     depth = _FLOOR_DEPTH[first:]
     codes = ((floor * 4 + Z_FACE) << 8).ravel()
-    row_fog = fog_weight(depth, params.draw_distance, params.fog)[:, None]
+    row_fog = fog_weight(depth, params.visibility_distance, params.fog)[:, None]
     depth = depth[:, None]
     if (dz == dz[0]).all():  # facing north or south: a row's floor lies on one raster row
         z = _cell((depth * dz[0] + oz) * RASTER, nz)
@@ -262,7 +288,7 @@ def _boxes(
     the bottom edge's row at ``tn``. All (box, column) pairs are computed at once, laid end
     to end; the painting is one masked copy per face and box.
     """
-    rel, y, lo, hi, label, extra = boxes
+    rel, y, lo, hi, label, extra, reach = boxes
     if lo.size == 0:
         return
     dx, dz, t_wall = rays
@@ -287,7 +313,7 @@ def _boxes(
         first_row(HORIZON - y1 / tn),
         np.where(kind == 2, first_row(HORIZON - y0 / tn), start),
     )
-    lit = ((label[k] * 4) << 8) | fog_weight(tn, params.draw_distance, params.fog)
+    lit = ((label[k] * 4) << 8) | fog_weight(tn, reach[k], params.fog)
     front = lit + (np.where(near_x > near_z, X_FACE, Z_FACE) << 8)
     first = table[np.where(kind == 2, lit + (BOTTOM_FACE << 8), front)]
     second = table[np.where(kind == 1, lit + (TOP_FACE << 8), front)]

@@ -6,24 +6,22 @@ per room (in :data:`~pytest_emrd.rooms.ROOM_NAMES` order), then one per ``(objec
 
 from __future__ import annotations
 
-from collections import OrderedDict
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from functools import lru_cache
-from typing import Any
 
 import numpy as np
 
+from pytest_emrd.errors import ConfigError
 from pytest_emrd.rooms import ROOM_NAMES
 from pytest_emrd.world._catalog import (
     CEILING_COLOR,
     COLORS_OF,
     FLOOR_COLORS,
-    OCCLUDER_TYPES,
     SKIRTING_COLOR,
     WALL_COLORS,
 )
 from pytest_emrd.world._geometry import Walls, footprint, local_to_world, unit, walls_of
-from pytest_emrd.world._model import Layout, WorldObject
+from pytest_emrd.world._model import Layout
 from pytest_emrd.world._shapes import boxes_of
 
 CEILING, SKIRTING, WALL0 = 0, 1, 2
@@ -36,6 +34,8 @@ RASTER = 10
 """Cells per metre of :attr:`Scene.room_raster` (room bounds lie on a 10 cm grid)."""
 TILE_CELLS = 5
 """Floor tile edge in raster cells (0.5 m)."""
+MAX_OBJECTS = 255
+"""Objects a frame tells apart: a pixel's fourth byte holds ``1 +`` its object's index."""
 _TILE_SHIFT = 12
 """How much darker the alternate floor tiles are (of 255)."""
 
@@ -50,8 +50,6 @@ class Scene:
     """``(N, 4)`` object footprints."""
     centres: np.ndarray
     """``(N, 2)``."""
-    samples: np.ndarray
-    """``(N, 9, 2)`` visibility sample points (centre, edge midpoints, corners, inset 10 %)."""
     floor: np.ndarray
     """``(N,)`` bool: stands on the floor (blocks walking; not doorways, the exit, items)."""
     support: np.ndarray
@@ -64,20 +62,16 @@ class Scene:
     """``(P, 3)``: facing normal ``(nx, nz)`` and the box's face offset; normal 0 = always."""
     colors: np.ndarray
     """``(L, 3)`` uint8 baseline palette."""
+    owners: np.ndarray
+    """``(L,)`` ``1 +`` the index of the object a label paints, 0 for the room's labels."""
     index: dict[str, int]
     """object id -> index."""
     room_raster: np.ndarray
     """``(nz, nx)`` room index of each 10 cm cell (0 outside any room), for the renderer."""
     floor_raster: np.ndarray
     """``(nz, nx)`` floor label of each cell: the room's floor, alternate tiles darker."""
-    occluders: np.ndarray
-    """``(K,)`` indices of the floor-standing :data:`~pytest_emrd.world._catalog.OCCLUDER_TYPES`."""
-    tops: np.ndarray
-    """``(N,)`` every object's top above the floor (``elevation + height``)."""
     landmarks: np.ndarray
     """``(N,)`` bool: doorways and the exit (category ``landmark``)."""
-    sights: OrderedDict[Any, Any] = field(default_factory=OrderedDict, repr=False)
-    """The memo of :func:`pytest_emrd.world._visibility.sight`."""
 
     def crowded(self, x: np.ndarray, z: np.ndarray, radius: float = AGENT_RADIUS) -> np.ndarray:
         """Whether a disc of ``radius`` at each point would touch floor furniture
@@ -87,19 +81,6 @@ class Scene:
         inside_x = (px > f[:, 0] - radius) & (px < f[:, 2] + radius)
         inside_z = (pz > f[:, 1] - radius) & (pz < f[:, 3] + radius)
         return (inside_x & inside_z).any(axis=-1)
-
-
-def _samples(obj: WorldObject) -> list[tuple[float, float]]:
-    if obj.object_type == "Doorway":  # points along the gap, on the wall line
-        return [
-            local_to_world(obj.x, obj.z, obj.rotation, f * obj.width, 0.0)
-            for f in (0.0, -0.35, 0.35, -0.2, 0.2, -0.1, 0.1, -0.3, 0.3)
-        ]
-    hu, hv = 0.4 * obj.width, 0.4 * obj.depth
-    return [
-        local_to_world(obj.x, obj.z, obj.rotation, su * hu, sv * hv)
-        for su, sv in ((0, 0), (-1, 0), (1, 0), (0, -1), (0, 1), (-1, -1), (-1, 1), (1, -1), (1, 1))
-    ]
 
 
 def _support(layout: Layout, rects: np.ndarray, floor: np.ndarray) -> np.ndarray:
@@ -117,6 +98,10 @@ def _support(layout: Layout, rects: np.ndarray, floor: np.ndarray) -> np.ndarray
 def scene_of(layout: Layout) -> Scene:
     """The scene arrays of ``layout`` (cached)."""
     objs = layout.objects
+    if len(objs) > MAX_OBJECTS:
+        raise ConfigError(
+            f"layout with {len(objs)} objects; the renderer tells at most {MAX_OBJECTS} apart."
+        )
     rects = np.array([footprint(o) for o in objs], dtype=float)
     floor = np.array([o.elevation == 0 and o.object_type not in ("Doorway", "Door") for o in objs])
     room_pos = {name: i for i, name in enumerate(ROOM_NAMES)}
@@ -153,7 +138,6 @@ def scene_of(layout: Layout) -> Scene:
         rooms=np.array([[r.x0, r.z0, r.x1, r.z1] for r in layout.rooms], dtype=float),
         rects=rects,
         centres=np.array([[o.x, o.z] for o in objs], dtype=float),
-        samples=np.array([_samples(o) for o in objs], dtype=float),
         floor=floor,
         support=_support(layout, rects, floor),
         parts=np.array(parts, dtype=float).reshape(-1, 6),
@@ -161,16 +145,19 @@ def scene_of(layout: Layout) -> Scene:
         part_label=np.array(part_label, dtype=np.int64),
         part_facing=np.array(facing, dtype=float).reshape(-1, 3),
         colors=np.array(colors, dtype=np.uint8),
+        owners=_owners(len(colors), labels),
         index={o.object_id: i for i, o in enumerate(objs)},
         room_raster=(rooms := _raster(layout)),
         floor_raster=_floor(rooms),
-        occluders=np.array(
-            [i for i, o in enumerate(objs) if floor[i] and o.object_type in OCCLUDER_TYPES],
-            dtype=np.int64,
-        ),
-        tops=np.array([o.elevation + o.height for o in objs], dtype=float),
         landmarks=np.array([o.category == "landmark" for o in objs], dtype=bool),
     )
+
+
+def _owners(size: int, labels: dict[tuple[int, str], int]) -> np.ndarray:
+    owners = np.zeros(size, dtype=np.int64)
+    for (i, _), label in labels.items():
+        owners[label] = i + 1
+    return owners
 
 
 def _floor(rooms: np.ndarray) -> np.ndarray:

@@ -20,7 +20,7 @@ from pytest_emrd.world._model import Layout, Observation, View, VisibleObject, W
 from pytest_emrd.world._motion import approach, spawn_pose, through
 from pytest_emrd.world._render import palette, render, shade_table
 from pytest_emrd.world._scene import Scene, scene_of
-from pytest_emrd.world._visibility import Sight, sight
+from pytest_emrd.world._visibility import in_view
 
 JPEG_QUALITY = 85
 FRAME_CACHE = 16
@@ -31,9 +31,11 @@ SHADE_TABLES = 64
 """Shade tables kept (one per condition of a layout; under ``texture`` one per seed)."""
 
 _lock = threading.Lock()
-#: (scene, table, pose) -> digest, keyed by the identities of a memoised scene and table
-#: (each entry holds them, so an id is not reused while the entry lives).
-_digests: OrderedDict[tuple[int, int, WorldPose], tuple[Scene, np.ndarray, str]] = OrderedDict()
+_Seen = tuple[str, tuple[VisibleObject, ...]]
+"""A view's pixel digest and the objects it shows legibly."""
+#: (scene, table, pose) -> digest and visible objects, keyed by the identities of a memoised
+#: scene and table (each entry holds them, so an id is not reused while the entry lives).
+_digests: OrderedDict[tuple[int, int, WorldPose], tuple[Scene, np.ndarray, _Seen]] = OrderedDict()
 _tables: OrderedDict[tuple[int, ConditionParams, int | None], tuple[Scene, np.ndarray]] = (
     OrderedDict()
 )
@@ -57,16 +59,17 @@ def _shades(scene: Scene, params: ConditionParams, seed: int) -> np.ndarray:
     hit = _tables.get(key)
     if hit is not None and hit[0] is scene:
         return hit[1]
-    table = shade_table(palette(scene, params, seed), params)
+    table = shade_table(palette(scene, params, seed), params, scene.owners)
     _remember(_tables, key, (scene, table), SHADE_TABLES)
     return table
 
 
 class BuiltinSimulator(SemanticStep):
-    """Built-in office simulator: semantic actions, occluded visibility, ray-cast frames.
+    """Built-in office simulator: semantic actions, ray-cast frames, visibility read off them.
 
     ``room_aliases`` maps extra names ``Term`` accepts to canonical room names (``{"Room A":
-    "Office"}``). ``frame_cache`` is how many recent frames of an episode are kept (0: none).
+    "Office"}``). ``frame_cache`` is how many recent frames of an episode are kept (0: only
+    the current one).
     """
 
     def __init__(
@@ -88,8 +91,7 @@ class BuiltinSimulator(SemanticStep):
         self._table = np.zeros((0, 3), dtype=np.uint8)
         self._pose = WorldPose(0.0, 0.0, 0.0)
         self._spawn = self._pose
-        self._sight: Sight | None = None
-        self._frames: OrderedDict[WorldPose, tuple[str, View]] = OrderedDict()
+        self._frames: OrderedDict[WorldPose, tuple[_Seen, View]] = OrderedDict()
 
     def reset(
         self, layout: Layout, condition: str, spawn_room: str, seed: int, *, symbolic: bool = True
@@ -102,7 +104,6 @@ class BuiltinSimulator(SemanticStep):
         self._table = _shades(self._scene, self._params, seed)
         self._spawn = self._pose = spawn_pose(self._scene, layout.room(room), seed)
         self._steps, self._ended, self._terminal, self._symbolic = 0, False, None, symbolic
-        self._sight = None
         self._frames.clear()
         return self._observe(True, "Episode started.")
 
@@ -119,18 +120,19 @@ class BuiltinSimulator(SemanticStep):
         return room
 
     def visible_ids(self) -> tuple[str, ...]:
-        scene = self._require()
-        return tuple(v.object_id for v in self._current_sight().listing(scene))
+        return tuple(v.object_id for v in self._render()[0][1])
 
     def close(self) -> None:
         self._scene = None
         self._frames.clear()
 
     def _in_view(self) -> tuple[list[str], list[str], list[float]]:
-        seen, objs = self._current_sight(), self._require().layout.objects
-        shown = np.flatnonzero(seen.mask)
-        ids = [objs[i].object_id for i in shown]
-        return ids, [objs[i].object_type for i in shown], [float(seen.distance[i]) for i in shown]
+        seen = self._render()[0][1]
+        return (
+            [v.object_id for v in seen],
+            [v.object_type for v in seen],
+            [v.distance for v in seen],
+        )
 
     def _reach(self, object_id: str) -> bool:
         scene = self._require()
@@ -156,41 +158,36 @@ class BuiltinSimulator(SemanticStep):
 
     def _move(self, pose: WorldPose) -> None:
         self._pose = pose
-        self._sight = None
 
-    def _current_sight(self) -> Sight:
-        if self._sight is None:
-            params = self._params
-            scene, pose = self._require(), self._pose
-            self._sight = sight(scene, pose, params.visibility_distance, params.draw_distance)
-        return self._sight
-
-    def _render(self) -> tuple[str, View]:
-        """Pixel digest and view of the current pose. The views of recent poses are kept (a
-        sweep ends where it began); the process remembers each view's digest per shared scene
-        and shade table, so a view seen before is drawn only if its pixels or JPEG are read
-        (not under ``texture``). ``frame_cache=0`` turns both off."""
+    def _render(self) -> tuple[_Seen, View]:
+        """Pixel digest, visible objects and view of the current pose. The views of recent
+        poses are kept (a sweep ends where it began); the process remembers each view's
+        digest and visible objects per shared scene and shade table, so a view seen before is
+        drawn only if its pixels or JPEG are read (not under ``texture``). ``frame_cache=0``
+        turns both off."""
         pose, scene, table = self._pose, self._require(), self._table
         cached = self._frames.get(pose)
         if cached is not None:
             self._frames.move_to_end(pose)
             return cached
-        view = View(functools.partial(render, scene, pose, self._params, table), self._quality)
+        draw = functools.partial(render, scene, pose, self._params, table)
         # A texture episode's table is its own: no other episode can share its views.
         shared = self._cache_size > 0 and not self._params.randomize_palette
         key = (id(scene), id(table), pose)
         known = _digests.get(key) if shared else None
         if known is not None and known[0] is scene and known[1] is table:
-            entry = known[2], view
+            entry = known[2], View(lambda: draw()[0], self._quality)
         else:
-            entry = hashlib.sha256(view.pixels.data).hexdigest(), view
+            pixels, legible = draw()
+            seen = hashlib.sha256(pixels.data).hexdigest(), in_view(scene, pose, legible)
+            entry = seen, View.of(pixels, self._quality)
             if shared:
-                _remember(_digests, key, (scene, table, entry[0]), VIEW_DIGESTS)
+                _remember(_digests, key, (scene, table, seen), VIEW_DIGESTS)
         self._frames[pose] = entry
-        while len(self._frames) > self._cache_size:
+        while len(self._frames) > max(self._cache_size, 1):  # the current view, at least
             self._frames.popitem(last=False)
         return entry
 
     def _view(self) -> tuple[WorldPose, tuple[VisibleObject, ...], str, View]:
-        digest, view = self._render()
-        return self._pose, self._current_sight().listing(self._require()), digest, view
+        (digest, visible), view = self._render()
+        return self._pose, visible, digest, view

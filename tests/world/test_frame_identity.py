@@ -91,8 +91,8 @@ def _key(key: tuple[str, str, int]) -> str:
 def _sweep(layout_name: str, condition: str, seed: int) -> list[str]:
     layout = LAYOUTS[layout_name]()
     scene, params = scene_of(layout), condition_params(condition)
-    table = shade_table(palette(scene, params, seed), params)
-    return [_short(render(scene, pose, params, table)) for pose in _poses(layout)]
+    table = shade_table(palette(scene, params, seed), params, scene.owners)
+    return [_short(render(scene, pose, params, table)[0]) for pose in _poses(layout)]
 
 
 def _episode(entry: dict[str, Any]) -> list[str]:
@@ -142,8 +142,8 @@ def test_a_frame_does_not_depend_on_the_frames_drawn_before_it(
         layout_name, condition, seed = key
         layout = LAYOUTS[layout_name]()
         scene, params = scene_of(layout), condition_params(condition)
-        table = shade_table(palette(scene, params, seed), params)
-        frame = render(scene, _poses(layout)[i], params, table)
+        table = shade_table(palette(scene, params, seed), params, scene.owners)
+        frame = render(scene, _poses(layout)[i], params, table)[0]
         assert _short(frame) == _data()["sweep"][_key(key)][i]
 
 

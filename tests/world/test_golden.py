@@ -18,20 +18,20 @@ from pytest_emrd._serde import to_dict
 from pytest_emrd.world import WORLD_VERSION, Layout, make_simulator, paper_office
 
 GOLDEN = {
-    "builtin-5": {
+    "builtin-6": {
         "layout": "522fa1ecba82114fe61e836f680c8efdd62cdca36f37b052d1831c06ff7e0957",
         "paper_office": "2407f20637b377faf8accafb8689803cb37456ab7903a39c0629ad0963ebb162",
         "baseline": (
-            "4e8abdd888a1e1dd9f9b8741ff103574faf79e8e954bc6dff7fa74775dd765f3",
-            "2357834e5fe8afb49f8ec089e8af42d906b977f37eedd4b051c868d1ec000a1c",
+            "234adc7b59f3d09a12fcd275e665bd7a0c76669544b83c41030ae53da6ca6175",
+            "c45974e824a01e979cfe3e672222e91fcfef7bcc4eb289c2b82d747461ba0cab",
         ),
         "low_light": (
-            "21fcdd968f030489559cbe2310aab09e49157dbeb1f960159cfdb25a7ca8ceb9",
-            "844adada60487252336a557edcc2d7e48b64b3325f7c5e6f55c4d185c20f2c4b",
+            "b03c1cf40be77df28d21b86f32008a003d0660e1a4f5245dd1ea60e187fe7e98",
+            "799525d768a97e674136e27a97e4853434cc3f90ef81cc488e7290a389cae745",
         ),
         "texture": (
-            "0d1cac1bbb979d09a5f61a8712fb99f51abcda1f21f3a2a9a476178b88c12de6",
-            "338c96c79ff974ab6565ae2336dac889ffe0752763984054c6c449036fc4e92f",
+            "d09db01aee28ff895f9ed0f69e8898b897115ec7977bb4a48e192f8d008e622f",
+            "a4bcb5957de1699bddba82562889f724566c6065a7b80d023a0780b4e8bdee6a",
         ),
     }
 }

@@ -18,8 +18,8 @@ decides, in this order:
 7. otherwise ``Term``.
 
 A target still out of view after :data:`MAX_FACE_TRIES` turns is given up (a doorway is
-first approached from the nearest object of the last sweep). Objects are visible within
-3.3 m and furniture occludes, so rules 2 and 4 walk the scout into a room's far parts, and
+first approached from the nearest object of the last sweep). Objects are legible within
+about 3 m and furniture occludes, so rules 2 and 4 walk the scout into a room's far parts, and
 darkness costs coverage *and* time, as the paper reports for real models. Term rule: the
 room where it discovered the most objects (ties: prompt order; none identified: the first).
 
