@@ -10,6 +10,8 @@ from pathlib import Path
 
 from pytest_emrd.errors import ConfigError, EmrdError
 
+__all__ = ["COMMANDS", "build_parser", "check_run_dirs", "main", "version_text"]
+
 #: Subcommand modules, in the order ``emrd --help`` lists them.
 COMMANDS: tuple[str, ...] = (
     "models", "check", "render", "serve", "gate", "thresholds", "report", "view", "cassettes",

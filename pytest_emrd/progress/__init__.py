@@ -31,6 +31,21 @@ from pytest_emrd.trajectory import EpisodeSpec, Step, Trajectory
 if TYPE_CHECKING:
     from pytest_emrd.cassette import EpisodeRun
 
+__all__ = [
+    "INTERVAL_S",
+    "LIVE_FOLDER",
+    "POLL_S",
+    "EpisodeWatch",
+    "LiveBoard",
+    "StatusFile",
+    "Ticker",
+    "WorkerStatus",
+    "read_statuses",
+    "render_line",
+    "run_watched",
+    "watch_episode",
+]
+
 LIVE_FOLDER: Final = "live"
 #: Seconds between two lines when nothing urgent happened.
 INTERVAL_S: Final = 10.0
