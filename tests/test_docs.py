@@ -151,3 +151,42 @@ def test_the_interpretation_script_imports_what_it_measures_with() -> None:
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
     assert callable(module.main) and callable(module.serial_ties)
+
+
+def _docstring_style() -> str:
+    text = (ROOT / "mkdocs.yml").read_text()
+    return re.search(r"^\s+docstring_style: (\w+)$", text, re.MULTILINE).group(1)  # type: ignore[union-attr]
+
+
+def test_every_public_metric_documents_its_parameters_and_returns() -> None:
+    """Habit 13, in the style the site renders: every parameter named, and what comes back."""
+    import griffe
+
+    import pytest_emrd.metrics as metrics
+
+    package = griffe.load("pytest_emrd.metrics", search_paths=[str(ROOT)], docstring_parser=None)
+    style = _docstring_style()
+    gaps = {}
+    for name in metrics.__all__:
+        obj = package[name]
+        if not obj.is_function:
+            continue
+        sections = obj.docstring.parse(style) if obj.docstring else []
+        kinds = {s.kind.value for s in sections}
+        named = {p.name for s in sections if s.kind.value == "parameters" for p in s.value}
+        wanted = {p.name for p in obj.parameters if p.name not in ("self", "cls")}
+        missing = sorted(wanted - named) + ([] if "returns" in kinds else ["(returns)"])
+        if missing:
+            gaps[name] = missing
+    assert gaps == {}
+
+
+def test_every_package_face_declares_all() -> None:
+    import importlib
+
+    names = sorted(p.parent.name for p in (ROOT / "pytest_emrd").glob("*/__init__.py"))
+    faces = {n: importlib.import_module(f"pytest_emrd.{n}") for n in names}
+    assert [n for n, face in faces.items() if not hasattr(face, "__all__")] == []
+    assert {n: [a for a in f.__all__ if not hasattr(f, a)] for n, f in faces.items()} == {
+        n: [] for n in faces
+    }
