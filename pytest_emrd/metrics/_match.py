@@ -151,8 +151,8 @@ def rigid_fit(pred: np.ndarray, true: np.ndarray) -> tuple[np.ndarray, np.ndarra
 
     2-D orthogonal Procrustes without scaling or reflection (Kabsch with ``det R = +1``):
     for centred points ``a_j``, ``b_j`` the rotation maximising ``sum_j b_j . R a_j`` has
-    angle ``atan2(sum a x b, sum a . b)``, and ``t = mean(b) - R mean(a)``. One point, or all points coincident:
-    the identity rotation and the translation between centroids.
+    angle ``atan2(sum a x b, sum a . b)``, and ``t = mean(b) - R mean(a)``. One point, or all
+    points coincident: the identity rotation and the translation between centroids.
 
     :param pred: The matched entries' positions, k x 2.
     :param true: Their objects' positions, row by row.
