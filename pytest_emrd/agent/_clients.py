@@ -294,7 +294,12 @@ def _sampling(config: ModelConfig) -> dict[str, Any]:
 
 def build_request(config: ModelConfig, messages: list[dict[str, Any]]) -> ProviderRequest:
     """The path, headers (no key) and JSON body ``config``'s provider is sent for ``messages``;
-    key order is fixed: cassettes match on the body."""
+    key order is fixed: cassettes match on the body.
+
+    :param config: The model's registry entry (provider, model name, sampling settings).
+    :param messages: The chat messages, OpenAI-style.
+    :returns: The :class:`ProviderRequest` to send.
+    """
     if config.provider == "anthropic":
         system, converted = to_anthropic(messages)
         body = {"model": config.model_id, "system": system, "messages": converted}
@@ -312,7 +317,13 @@ def make_client(
     config: ModelConfig, *, policy: RetryPolicy | None = None, require_key: bool = True
 ) -> ChatClient:
     """The client for ``config`` (reference agents: the built-in server, started on demand);
-    :class:`ConfigError` when the API-key variable is unset, unless ``require_key=False``."""
+    :class:`ConfigError` when the API-key variable is unset, unless ``require_key=False``.
+
+    :param config: The model's registry entry.
+    :param policy: Retries and timeouts; None for the default policy.
+    :param require_key: Raise when the API-key variable is unset.
+    :returns: A :class:`ChatClient` ready to send.
+    """
     client = AnthropicClient if config.provider == "anthropic" else OpenAICompatibleClient
     base_url = config.base_url
     if base_url is None:  # a reference agent (every other provider has one)

@@ -31,7 +31,11 @@ def render_table(header: Sequence[str], rows: Sequence[Sequence[str]]) -> list[s
 
 
 def gate_tables(verdicts: Sequence[Verdict]) -> list[str]:
-    """One table per model: condition x metric, value, CI, n, bound, PASS/FAIL."""
+    """One table per model: condition x metric, value, CI, n, bound, PASS/FAIL.
+
+    :param verdicts: The verdicts to print.
+    :returns: The tables' lines, Markdown.
+    """
     lines: list[str] = []
     for model in sorted({v.model for v in verdicts}):
         mine = sorted(
@@ -60,7 +64,11 @@ def gate_tables(verdicts: Sequence[Verdict]) -> list[str]:
 
 
 def usage_table(rows: Sequence[UsageRow]) -> list[str]:
-    """Tokens, estimated cost where known, retries and errored episodes per model."""
+    """Tokens, estimated cost where known, retries and errored episodes per model.
+
+    :param rows: One :class:`UsageRow` per model.
+    :returns: The table's lines, Markdown.
+    """
     body = [
         [
             r.model,

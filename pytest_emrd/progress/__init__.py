@@ -108,7 +108,11 @@ class StatusFile:
 
 
 def read_statuses(folder: Path) -> list[WorkerStatus]:
-    """Every readable status file under ``folder``, by worker name."""
+    """Every readable status file under ``folder``, by worker name.
+
+    :param folder: The session's live folder.
+    :returns: The :class:`WorkerStatus` of each worker; unreadable files skipped.
+    """
     statuses = []
     for path in sorted((folder / LIVE_FOLDER).glob("*.json")):
         try:
@@ -123,7 +127,12 @@ def _retries(statuses: Sequence[WorkerStatus]) -> int:
 
 
 def render_line(statuses: Sequence[WorkerStatus], total: int) -> str:
-    """The live line for ``statuses`` (``total`` live episodes planned in this session)."""
+    """The live line for ``statuses`` (``total`` live episodes planned in this session).
+
+    :param statuses: Every worker's status.
+    :param total: Live episodes planned this session.
+    :returns: The one-line summary.
+    """
     finished = sum(s.finished for s in statuses)
     errored = sum(s.errored for s in statuses)
     retries = _retries(statuses)
@@ -260,7 +269,14 @@ def watch_episode(
     live: bool,
     status: StatusFile | None = None,
 ) -> EpisodeRun:
-    """``compute(on_step)`` under an :class:`EpisodeWatch`; the run with its retries."""
+    """``compute(on_step)`` under an :class:`EpisodeWatch`; the run with its retries.
+
+    :param spec: The episode, named in the log.
+    :param compute: Runs the episode, calling its argument after each step.
+    :param live: Whether the episode asks the model (only a live one publishes its status).
+    :param status: Where to publish; None for nowhere.
+    :returns: The :class:`EpisodeRun`, retries counted.
+    """
     watch = EpisodeWatch(spec, live=live, status=status)
     root = logging.getLogger(ROOT_LOGGER)
     root.addHandler(watch)
@@ -282,7 +298,16 @@ def run_watched(
     **cassette: Any,
 ) -> EpisodeRun:
     """:func:`~pytest_emrd.cassette.run_with_cassette` of ``spec`` with ``runner`` (which
-    takes ``on_step``), watched: live when the cassette asks for the model."""
+    takes ``on_step``), watched: live when the cassette asks for the model.
+
+    :param spec: The episode.
+    :param runner: Runs the episode; takes ``on_step``.
+    :param status: Where a live episode publishes its state; None for nowhere.
+    :param cassettes: The cassette folder.
+    :param record_mode: The run's record mode.
+    :param cassette: Further keyword arguments of :func:`~pytest_emrd.cassette.run_with_cassette`.
+    :returns: The :class:`EpisodeRun`.
+    """
     from pytest_emrd.cassette import is_live, run_with_cassette
 
     def compute(on_step: Callable[[Step], None]) -> EpisodeRun:
