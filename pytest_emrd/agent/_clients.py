@@ -219,7 +219,14 @@ class _HttpClient:
 
 
 class OpenAICompatibleClient(_HttpClient):
-    """``POST {base_url}/chat/completions``: vLLM, OpenAI, Gemini, the reference server."""
+    """``POST {base_url}/chat/completions``: vLLM, OpenAI, Gemini, the reference server.
+
+    :param config: The model's registry entry.
+    :param base_url: The endpoint, without ``/chat/completions``.
+    :param policy: Retries and timeouts; None for ``config.max_retries`` with the defaults.
+    :param transport: An httpx transport to use instead of the network (tests).
+    :param require_key: Raise :class:`ConfigError` when the key's variable is unset.
+    """
 
     _key_header = ("Authorization", "Bearer ")
 
@@ -261,7 +268,14 @@ def to_anthropic(messages: list[dict[str, Any]]) -> tuple[str, list[dict[str, An
 
 
 class AnthropicClient(_HttpClient):
-    """``POST {base_url}/v1/messages`` (Anthropic Messages API)."""
+    """``POST {base_url}/v1/messages`` (Anthropic Messages API).
+
+    :param config: The Anthropic model's registry entry.
+    :param base_url: The endpoint, without ``/v1/messages``.
+    :param policy: Retries and timeouts, as for :class:`OpenAICompatibleClient`.
+    :param transport: A transport replacing the network.
+    :param require_key: Whether an unset key is an error.
+    """
 
     _key_header = ("x-api-key", "")
 

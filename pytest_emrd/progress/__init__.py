@@ -80,6 +80,8 @@ class StatusFile:
 
     Episodes computed ahead in threads (``--emrd-concurrency``) each get their own file,
     ``<worker>-t<n>.json``: one status per running episode.
+
+    :param folder: The session folder; the files go to its ``live`` subfolder.
     """
 
     def __init__(self, folder: Path) -> None:
@@ -181,7 +183,12 @@ class LiveBoard:
 
 
 class Ticker:
-    """Polls a :class:`LiveBoard` from a daemon thread and hands each line to ``write``."""
+    """Polls a :class:`LiveBoard` from a daemon thread and hands each line to ``write``.
+
+    :param board: The board to poll.
+    :param write: Prints a line on the controller's terminal.
+    :param poll: Seconds between polls.
+    """
 
     def __init__(self, board: LiveBoard, write: Callable[[str], None], *, poll: float = POLL_S):
         self.board, self.write, self.poll = board, write, poll
@@ -209,7 +216,12 @@ log = logging.getLogger(f"{ROOT_LOGGER}.episode")
 
 class EpisodeWatch(logging.Handler):
     """Progress of one episode, started on the calling thread: step logging, retry counting
-    (once added to the package's logger), optional status publishing."""
+    (once added to the package's logger), optional status publishing.
+
+    :param spec: The episode.
+    :param live: Whether it asks the model (steps then log at INFO and the status is published).
+    :param status: Where to publish; None for nowhere.
+    """
 
     def __init__(self, spec: EpisodeSpec, *, live: bool, status: StatusFile | None = None):
         super().__init__(level=logging.DEBUG)

@@ -145,7 +145,13 @@ def new_run_dir(parent: Path) -> Path:
 
 
 class ResultsStore:
-    """Episodes of one run directory, computed at most once across processes."""
+    """Episodes of one run directory, computed at most once across processes.
+
+    :param run_dir: The run directory.
+    :param session: This pytest session's id (an episode errored in another session is retried).
+    :param protocol: The protocol version a reusable episode must carry.
+    :param identity: The grid and shard recorded before the first episode; None to record none.
+    """
 
     def __init__(
         self, run_dir: Path, *, session: str, protocol: str, identity: RunIdentity | None = None
@@ -211,7 +217,13 @@ class ResultsStore:
 
 
 class Prefetcher:
-    """Computes ``specs`` ahead with ``workers`` threads until :meth:`close`."""
+    """Computes ``specs`` ahead with ``workers`` threads until :meth:`close`.
+
+    :param store: The store the episodes are computed into.
+    :param compute: Runs one episode.
+    :param specs: The episodes to compute ahead.
+    :param workers: Threads.
+    """
 
     def __init__(
         self,
