@@ -67,6 +67,17 @@ def test_the_performance_page_holds_the_generated_table(site: Path) -> None:
     assert "<code>metrics.grid_240_s</code>" in page
 
 
+@pytest.mark.slow
+def test_the_catalogue_page_lists_every_kind_of_object(site: Path) -> None:
+    from pytest_emrd.world import KINDS
+
+    page = (site / "reference" / "catalogue" / "index.html").read_text()
+    assert "<!-- emrd-catalogue -->" not in page
+    rows = re.findall(r"<tr>\s*<td>(\w+)</td>", page)
+    assert rows == list(KINDS)
+    assert "<td>Office (4)</td>" in page  # the paper office's four desks
+
+
 def test_every_pytest_option_is_in_the_options_reference() -> None:
     done = subprocess.run(
         [sys.executable, "-m", "pytest", "--help", "-p", "no:cacheprovider"],
