@@ -38,6 +38,7 @@ import time
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import asdict, dataclass
 from pathlib import Path
+from typing import Any
 
 from pytest_emrd.errors import check_choice
 
@@ -254,3 +255,15 @@ def format_table(figures: list[Figure]) -> str:
         target = "" if f.target is None else f"{f.target:g}"
         lines.append(f"{f.figure:<40} {f.value:>12.4g} {f.unit:<6} {target:>10} {f.n:>4}  {ok}")
     return "\n".join(lines)
+
+
+def run_with_cassette(spec: Any, run: Callable[..., Any], **tape: Any) -> Any:
+    """``run(spec, live=...)`` in each take of ``spec``'s :class:`~pytest_emrd.cassette.Tape`
+    (built with ``tape``): a loop of one's own with the product's cassette handling."""
+    from pytest_emrd.cassette import Tape
+
+    taken = Tape(spec, **tape)
+    for take in taken.takes():
+        with take:
+            take.trajectory = run(spec, live=taken.live)
+    return take.result

@@ -17,7 +17,7 @@ import time
 from pathlib import Path
 from typing import Any
 
-from perf import Figure
+from perf import Figure, run_with_cassette
 from pytest_emrd.trajectory import CONDITIONS, EpisodeSpec
 
 LATENCY_S = 0.5
@@ -36,7 +36,6 @@ def _record_all(root: Path) -> float:
     """Wall time / latency floor of recording :data:`SPECS` under ``root``."""
     from pytest_emrd.agent import OpenAICompatibleClient, load_registry
     from pytest_emrd.agent.reference import ReferenceServer
-    from pytest_emrd.cassette import run_with_cassette
     from pytest_emrd.episode import protocol_version, run_episode
     from pytest_emrd.run import Prefetcher, ResultsStore
 

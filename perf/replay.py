@@ -60,14 +60,21 @@ from typing import Any
 import httpx
 import numpy as np
 
-from perf import ROOT, Figure, median_seconds, paired_ratio, python_env, run_timed
+from perf import (
+    ROOT,
+    Figure,
+    median_seconds,
+    paired_ratio,
+    python_env,
+    run_timed,
+    run_with_cassette,
+)
 from pytest_emrd.cassette import (
     SUFFIX,
     cassette_path,
     clear_caches,
     decode,
     episode_cassette,
-    run_with_cassette,
 )
 from pytest_emrd.trajectory import CONDITIONS, EpisodeSpec, Trajectory
 from pytest_emrd.world._simulator import forget_views

@@ -15,18 +15,20 @@ one AI2-THOR process serves every episode of a worker.
 
 from __future__ import annotations
 
+import os
 import re
 import threading
 import time
 import warnings
-import weakref
 from collections.abc import Callable, Mapping
-from types import TracebackType
+from pathlib import Path
 from typing import Any, Final
 
 from pytest_emrd import frames, world
+from pytest_emrd._disk import os_error_line
 from pytest_emrd.agent import (
     JPEG_DATA_URL,
+    MAX_REPLY_CHARS,
     ChatClient,
     Conversation,
     Registry,
@@ -38,8 +40,14 @@ from pytest_emrd.agent import (
     resolve_room,
     step_text,
 )
-from pytest_emrd.agent._parse import MAX_REPLY_CHARS
-from pytest_emrd.errors import ConfigError, EmrdError, check_choice, check_positive_int
+from pytest_emrd.cassette import EpisodeRun, Tape
+from pytest_emrd.errors import (
+    CassetteError,
+    ConfigError,
+    EmrdError,
+    check_choice,
+    check_positive_int,
+)
 from pytest_emrd.protocol import protocol_version
 from pytest_emrd.rooms import SLUG_ROOMS
 from pytest_emrd.trajectory import (
@@ -52,7 +60,7 @@ from pytest_emrd.trajectory import (
     Step,
     Trajectory,
 )
-from pytest_emrd.world._model import Observation, Simulator
+from pytest_emrd.world import Observation, Simulator
 
 _TERM = re.compile(r"^\s*term\s*\(\s*(?P<room>.*?)\s*\)\s*\.?\s*$", re.IGNORECASE | re.DOTALL)
 
@@ -255,7 +263,7 @@ class SimulatorPool:
     ``pool.run(spec, ...)`` is :func:`run_episode` on the pooled simulator (built with
     ``options`` on first use) or a fresh one for other backends. A simulator that saw an
     errored episode or an exception is rebuilt, so a dead Unity process costs one episode.
-    The owner calls :meth:`close` (or uses the pool as a context manager).
+    The owner calls :meth:`close`.
     """
 
     def __init__(self, options: Mapping[str, Any] | None = None) -> None:
@@ -278,11 +286,6 @@ class SimulatorPool:
             self.discard(spec.backend)
         return trajectory
 
-    @property
-    def backends(self) -> tuple[str, ...]:
-        """Backends with a simulator alive now."""
-        return tuple(self._live)
-
     def discard(self, backend: str) -> None:
         """Close and forget the simulator of ``backend`` (a failing close only warns)."""
         sim = self._live.pop(backend, None)
@@ -298,55 +301,77 @@ class SimulatorPool:
         for backend in list(self._live):
             self.discard(backend)
 
-    def __enter__(self) -> SimulatorPool:
-        return self
 
-    def __exit__(
-        self, kind: type[BaseException] | None, exc: BaseException | None, tb: TracebackType | None
+class Executor:
+    """Runs the episodes of one process: :meth:`tape` decides live or replay, :meth:`run` opens
+    the cassette, runs the loop and hands back the run; ``on_step`` sees every step.
+
+    One model client per model and key mode (a replay's without a key: recorded requests carry
+    none) and the :class:`SimulatorPool` serve every episode until :meth:`close`.
+    ``cassettes``, ``record_mode`` ... are the :class:`~pytest_emrd.cassette.Tape` options of
+    every episode."""
+
+    def __init__(
+        self,
+        registry: Registry,
+        *,
+        backend_options: Mapping[str, Any] | None = None,
+        **cassettes: Any,
     ) -> None:
-        self.close()
-
-
-class AgentRunner:
-    """:func:`run_episode` (or ``run``, same keywords, e.g. a :class:`SimulatorPool`'s) with
-    one client per model and key mode, kept for the runner's lifetime: the connection pool
-    and TLS context serve every episode; they close when the runner is collected or at exit.
-    A replay's client is built with ``require_key=False`` (recorded requests carry no key).
-    """
-
-    def __init__(self, registry: Registry, *, run: Callable[..., Trajectory] | None = None) -> None:
-        self._registry = registry
-        self._run = run or run_episode
+        self.registry = registry
+        self.simulators = SimulatorPool(backend_options)
+        self._cassettes = cassettes
         self._clients: dict[tuple[str, bool], ChatClient] = {}
         self._lock = threading.Lock()
-        self._finalizer = weakref.finalize(self, _close_all, self._clients)
 
-    def __call__(
-        self, spec: EpisodeSpec, *, live: bool, on_step: Callable[[Step], None] | None = None
-    ) -> Trajectory:
-        client = self._client(spec.model, live)
-        return self._run(
-            spec, registry=self._registry, client=client, on_step=on_step, replay=not live
-        )
+    def tape(self, spec: EpisodeSpec) -> Tape:
+        """``spec``'s cassette, and whether running it calls the model (decided here, once)."""
+        return Tape(spec, **self._cassettes)
+
+    def run(self, tape: Tape, *, on_step: Callable[[Step], None] | None = None) -> EpisodeRun:
+        """The episode of ``tape`` run through its cassette. Live, its cassette folder must be
+        writable first (else nothing is sent to the model: a :class:`CassetteError`)."""
+        spec = tape.spec
+        if tape.live:
+            _check_writable(tape.path)
+        client = self._client(spec.model, tape.live)
+        for take in tape.takes():
+            with take:
+                take.trajectory = self.simulators.run(
+                    spec,
+                    registry=self.registry,
+                    client=client,
+                    on_step=on_step,
+                    replay=not tape.live,
+                )
+        return take.result
 
     def close(self) -> None:
-        """Close every client now (they are also closed when the runner is collected)."""
-        self._finalizer()
+        """Close every client and simulator now."""
+        for client in self._clients.values():
+            client.close()
+        self._clients.clear()
+        self.simulators.close()
 
     def _client(self, model: str, live: bool) -> ChatClient:
         with self._lock:
             client = self._clients.get((model, live))
             if client is None:
-                config = self._registry.get(model)
+                config = self.registry.get(model)
                 client = self._clients[(model, live)] = make_client(config, require_key=live)
         return client
 
 
-def _close_all(clients: dict[tuple[str, bool], ChatClient]) -> None:
-    for client in clients.values():
-        client.close()
-    clients.clear()
-
-
-#: The real runner: ``agent_runner(registry, run=...)``.
-agent_runner = AgentRunner
+def _check_writable(path: Path) -> None:
+    """Raise the :class:`CassetteError` writing ``path`` would meet (nothing is created)."""
+    folder = path.parent
+    while not folder.exists() and folder != folder.parent:
+        folder = folder.parent
+    if not folder.is_dir():
+        error: OSError = NotADirectoryError(20, "Not a directory", str(folder))
+    elif not os.access(folder, os.W_OK | os.X_OK):
+        error = PermissionError(13, "Permission denied", str(folder))
+    else:
+        return
+    line = os_error_line(error, doing="write", path=path, option="--emrd-cassettes DIR")
+    raise CassetteError(f"the cassette {line} Nothing was sent to the model.")

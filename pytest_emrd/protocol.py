@@ -6,8 +6,8 @@ Its own light module: every pytest process reads it, few need what
 
 from __future__ import annotations
 
-from pytest_emrd.agent._prompt import PROMPT_VERSION
-from pytest_emrd.world._registry import world_version
+from pytest_emrd.agent import PROMPT_VERSION
+from pytest_emrd.world import world_version
 
 
 def protocol_version(backend: str = "builtin") -> str:

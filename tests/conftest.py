@@ -2,7 +2,9 @@
 tests start, the order of the slow tests, a loopback JSON server.
 
 ``ci`` (the default here) is derandomized with no deadline so CI results are
-reproducible and immune to a slow shared machine; ``dev`` explores more.
+reproducible and immune to a slow shared machine; ``dev`` explores more; ``explore`` (the
+scheduled job of examples/ci/emrd.yml) draws new random inputs every run, many more of them,
+and prints the blob that reproduces a failure.
 """
 
 from __future__ import annotations
@@ -35,6 +37,13 @@ settings.register_profile(
     print_blob=True,
 )
 settings.register_profile("dev", deadline=None, max_examples=500)
+settings.register_profile(
+    "explore",
+    deadline=None,
+    max_examples=2000,
+    suppress_health_check=[HealthCheck.too_slow],
+    print_blob=True,
+)
 settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "ci"))
 
 

@@ -331,10 +331,10 @@ def test_a_replayed_committed_episode_is_written_as_the_generic_recursion_wrote_
 ) -> None:
     """A committed episode (mimic's replies are the malformed ones), its metrics and head."""
     from pytest_emrd.agent import load_registry
-    from pytest_emrd.cassette import run_with_cassette
-    from pytest_emrd.episode import agent_runner, protocol_version
+    from pytest_emrd.episode import protocol_version
     from pytest_emrd.metrics import episode_metrics
     from pytest_emrd.run import EpisodeHead
+    from tests._episodes import agent_runner, run_with_cassette
 
     spec = EpisodeSpec(model, "baseline", "office", 3, modality="both")
     run = run_with_cassette(

@@ -58,7 +58,12 @@ class ChatClient(Protocol):
 
 def endpoint_url(base_url: str, path: str) -> str:
     """``base_url`` with ``path`` appended to its path, query and fragment kept
-    (``https://x.azure.com/v1?api-version=1`` -> ``.../v1/chat/completions?api-version=1``)."""
+    (``https://x.azure.com/v1?api-version=1`` -> ``.../v1/chat/completions?api-version=1``).
+
+    :param base_url: The endpoint, perhaps with a query.
+    :param path: The path to append (``/chat/completions``).
+    :returns: The joined URL.
+    """
     base = httpx.URL(base_url)
     return str(base.copy_with(path=base.path.rstrip("/") + path))
 

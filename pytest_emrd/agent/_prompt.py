@@ -26,7 +26,7 @@ from pytest_emrd.errors import check_choice
 from pytest_emrd.trajectory import MAX_STEPS, MODALITIES, VARIANTS
 
 if TYPE_CHECKING:
-    from pytest_emrd.world._model import VisibleObject
+    from pytest_emrd.world import VisibleObject
 
 PROMPT_VERSION: Final = "p3"
 

@@ -1,12 +1,13 @@
 """Cassettes: one redacted vcrpy cassette per episode, compressed with xz (see :mod:`._file`);
-``run_with_cassette`` is the entry point."""
+``Tape(spec, ...)`` is the entry point: the episode runs in each of its takes."""
 
 from pytest_emrd.cassette._episode import (
     EpisodeRun,
     FrameDriftWarning,
+    Take,
+    Tape,
     is_live,
     network_blocked,
-    run_with_cassette,
 )
 from pytest_emrd.cassette._file import SUFFIX, CassetteData, FormatError, decode, decompress, encode
 from pytest_emrd.cassette._paths import (
@@ -23,10 +24,11 @@ from pytest_emrd.cassette._persister import (
     read_cassette,
     writer_lock,
 )
-from pytest_emrd.cassette._redact import canonical_json, match_keys, redact_body
+from pytest_emrd.cassette._redact import DIGEST, canonical_json, match_keys, redact_body
 from pytest_emrd.cassette._use import LATENCY, clear_caches, episode_cassette
 
 __all__ = [
+    "DIGEST",
     "LATENCY",
     "SCRATCH",
     "SUFFIX",
@@ -36,6 +38,8 @@ __all__ = [
     "FormatError",
     "FrameDriftWarning",
     "Invocation",
+    "Take",
+    "Tape",
     "UnsavedCassette",
     "canonical_json",
     "cassette_path",
@@ -52,6 +56,5 @@ __all__ = [
     "read_cassette",
     "record_command",
     "redact_body",
-    "run_with_cassette",
     "writer_lock",
 ]

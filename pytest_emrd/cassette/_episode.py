@@ -8,7 +8,7 @@ import ipaddress
 import socket
 import time
 from collections.abc import Callable, Iterator
-from contextlib import contextmanager, nullcontext
+from contextlib import ExitStack, contextmanager, nullcontext
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -51,10 +51,6 @@ class _Discard(Exception):
     """Raised inside the cassette block so vcrpy does not save a failed episode."""
 
 
-#: Runs one episode; ``live``: the model may really be called (else every request replays).
-EpisodeRunner = Callable[..., Trajectory]
-
-
 def is_live(
     spec: EpisodeSpec, *, cassettes: Path, record_mode: str, modality_of: ModalityOf | None = None
 ) -> bool:
@@ -72,138 +68,123 @@ def is_live(
     return record_mode == "once" and not path.is_file()
 
 
-def run_with_cassette(
-    spec: EpisodeSpec,
-    run: EpisodeRunner,
-    *,
-    cassettes: Path,
-    protocol: str,
-    record_mode: str = "once",
-    matching: str = "strict",
-    invocation: Invocation | None = None,
-    lock_timeout_s: float = LOCK_TIMEOUT_S,
-    modality_of: ModalityOf | None = None,
-    keep_unsaved: bool = False,
-) -> EpisodeRun:
-    """Run ``run(spec, live=...)`` with the model traffic recorded to / replayed from its cassette.
+class Tape:
+    """One episode's cassette: where its traffic is recorded or replayed, whether running it
+    calls the model (:attr:`live`, decided once, here) and how a failure is explained.
 
-    ``run`` turns failures into an ``errored`` trajectory, which leaves no cassette behind and
-    whose scrubbed ``error`` becomes the cause the cassette explains (missing file, drift,
-    another modality, an unreadable recorded response) with the command that fixes it for
-    ``invocation``. A corrupted, edited or stale cassette raises ``CassetteError``; an
-    unwritable one the ``OSError``, unless ``keep_unsaved`` hands it back in ``unsaved``. Under
-    ``new_episodes`` a drifting replay is recorded again whole. An episode that may record holds
-    its cassette's lock (:func:`~._persister.writer_lock`) up to ``lock_timeout_s`` seconds.
+    The caller runs the episode in each of :meth:`takes` (``with take: take.trajectory =
+    ...``) and keeps the last take's :attr:`Take.result`. A failed episode (an ``errored``
+    trajectory) leaves no cassette behind; its scrubbed ``error`` becomes the cause the
+    cassette explains (missing file, drift, another modality, an unreadable recorded response)
+    with the command that fixes it for ``invocation``. A corrupted, edited or stale cassette
+    raises ``CassetteError``; an unwritable one the ``OSError``, unless ``keep_unsaved`` hands
+    it back in ``unsaved``. Under ``new_episodes`` a drifting replay is recorded again whole. An
+    episode that may record holds its cassette's lock (:func:`~._persister.writer_lock`) up to
+    ``lock_timeout_s`` seconds."""
 
-    :param spec: The episode.
-    :param run: Runs the episode, live or replayed (``run(spec, live=...)``).
-    :param cassettes: The cassette folder.
-    :param protocol: The protocol version recorded and checked.
-    :param record_mode: ``none``, ``once``, ``new_episodes`` or ``all``.
-    :param matching: ``strict`` or ``lenient`` request matching.
-    :param invocation: The pytest invocation the fix commands repeat.
-    :param lock_timeout_s: Seconds to wait for another writer of the same cassette.
-    :param modality_of: Default modality per model (:func:`cassette_path`).
-    :param keep_unsaved: Return an unwritable recording in ``unsaved`` instead of raising.
-    :returns: The :class:`EpisodeRun`: trajectory, whether live, and what was recorded.
-    """
-    check_choice("record_mode", record_mode, RECORD_MODES)
-    check_choice("matching", matching, MATCHING_MODES)
-    path = cassette_path(cassettes, spec, modality_of=modality_of)
-    episode = _Episode(
-        spec, run, cassettes, path, modality_of, protocol, matching, keep_unsaved, invocation
-    )
-    if not is_live(spec, cassettes=cassettes, record_mode=record_mode, modality_of=modality_of):
-        return episode.run(record_mode)
-    with writer_lock(cassettes, path, timeout=lock_timeout_s):
-        start = time.perf_counter()
-        try:
-            return episode.run(record_mode)
-        except _Redo:  # drift under new_episodes: the whole episode again, from scratch
-            done = episode.run("all")
-            return dataclasses.replace(done, seconds=time.perf_counter() - start)
+    def __init__(
+        self,
+        spec: EpisodeSpec,
+        *,
+        cassettes: Path,
+        protocol: str,
+        record_mode: str = "once",
+        matching: str = "strict",
+        invocation: Invocation | None = None,
+        modality_of: ModalityOf | None = None,
+        keep_unsaved: bool = False,
+        lock_timeout_s: float = LOCK_TIMEOUT_S,
+    ) -> None:
+        check_choice("record_mode", record_mode, RECORD_MODES)
+        check_choice("matching", matching, MATCHING_MODES)
+        self.spec, self.root, self.protocol, self.invocation = spec, cassettes, protocol, invocation
+        self.record_mode, self.matching, self.modality_of = record_mode, matching, modality_of
+        self.keep_unsaved, self.lock_timeout_s = keep_unsaved, lock_timeout_s
+        self.path = cassette_path(cassettes, spec, modality_of=modality_of)
+        self.live = is_live(
+            spec, cassettes=cassettes, record_mode=record_mode, modality_of=modality_of
+        )
 
-
-class _Redo(Exception):
-    """The episode drifted under ``new_episodes``: it must be recorded again whole."""
-
-
-@dataclass(frozen=True)
-class _Episode:
-    spec: EpisodeSpec
-    runner: EpisodeRunner
-    root: Path
-    path: Path
-    modality_of: ModalityOf | None
-    protocol: str
-    matching: str
-    keep_unsaved: bool
-    invocation: Invocation | None
+    def takes(self) -> Iterator[Take]:
+        """The attempts at the episode: one, and under ``new_episodes`` after a drifting
+        replay a second, recorded whole from scratch (record mode ``all``)."""
+        lock = writer_lock(self.root, self.path, timeout=self.lock_timeout_s)
+        with lock if self.live else nullcontext():
+            start = time.perf_counter()
+            take = Take(self, self.record_mode, start)
+            yield take
+            if take.redo:
+                take = Take(self, "all", start)
+                yield take
 
     def command(self, record_mode: str) -> str:
         return record_command(
             self.spec, record_mode=record_mode, cassettes=self.root, invocation=self.invocation
         )
 
-    def run(self, record_mode: str) -> EpisodeRun:
-        spec, path = self.spec, self.path
-        missing = record_mode == "none" and not path.is_file()
-        live = is_live(
-            spec, cassettes=self.root, record_mode=record_mode, modality_of=self.modality_of
+
+class Take(ExitStack):
+    """One attempt at an episode inside its cassette (a ``with`` block, see :class:`Tape`):
+    the network blocked when replaying only, the episode's HTTP traffic routed to its
+    cassette. Set :attr:`trajectory` in the block; :attr:`result` is there after it."""
+
+    trajectory: Trajectory
+    result: EpisodeRun
+
+    def __init__(self, tape: Tape, record_mode: str, start: float) -> None:
+        super().__init__()
+        self.tape, self.record_mode, self.start, self.redo = tape, record_mode, start, False
+
+    def __enter__(self) -> Take:
+        tape = self.tape
+        if self.record_mode == "none":
+            self.enter_context(network_blocked())
+        self.cassette = self.enter_context(
+            episode_cassette(
+                tape.path,
+                protocol=tape.protocol,
+                record_mode=self.record_mode,
+                matching=tape.matching,
+                rerecord_command=tape.command("all"),
+                root=tape.root,
+                keep_unsaved=tape.keep_unsaved,
+            )
         )
-        rerecord = self.command("all")
-        start = time.perf_counter()
-        unsaved = None
-        try:
-            with (
-                network_blocked() if record_mode == "none" else nullcontext(),
-                episode_cassette(
-                    path,
-                    protocol=self.protocol,
-                    record_mode=record_mode,
-                    matching=self.matching,
-                    rerecord_command=rerecord,
-                    root=self.root,
-                    keep_unsaved=self.keep_unsaved,
-                ) as cassette,
-            ):
-                trajectory = self.runner(spec, live=live)
-                recorded, drift = cassette.dirty, cassette.drift
-                frame_drift = len(cassette.frame_drift)
-                redo = record_mode == "new_episodes" and drift is not None
-                if trajectory.status == "errored" or redo:
-                    raise _Discard
-            unsaved = cassette.unsaved  # the cassette was saved (or not) as the block closed
-        except _Discard:
-            if redo:
-                raise _Redo from None
-            recorded = False
-            cause = trajectory.error or ""
-            if missing:
+        return self
+
+    def __exit__(self, kind: Any, exc: Any, tb: Any) -> bool:
+        if kind is not None:
+            return super().__exit__(kind, exc, tb)
+        tape, cassette, trajectory = self.tape, self.cassette, self.trajectory
+        recorded, drift, frame_drift = cassette.dirty, cassette.drift, len(cassette.frame_drift)
+        self.redo = self.record_mode == "new_episodes" and drift is not None
+        if trajectory.status != "errored" and not self.redo:
+            super().__exit__(None, None, None)  # saves the cassette (or keeps it unsaved)
+            unsaved = cassette.unsaved
+        else:
+            super().__exit__(_Discard, _Discard(), None)  # vcrpy saves nothing
+            recorded, unsaved, cause = False, None, trajectory.error or ""
+            if self.record_mode == "none" and not tape.path.is_file():
                 cause = (
-                    f"cassette missing: {path} does not exist and record mode 'none' replays "
-                    f"only. Record it with: {self.command('once')}"
+                    f"cassette missing: {tape.path} does not exist and record mode 'none' "
+                    f"replays only. Record it with: {tape.command('once')}"
                 )
             elif drift is not None:
-                cause = drift
-                modality = cassette.recorded_modality
-                if not cassette.unreadable and modality not in (None, spec.modality):
-                    cause = self.mismatch(modality, rerecord)
+                cause, modality = drift, cassette.recorded_modality
+                if not cassette.unreadable and modality not in (None, tape.spec.modality):
+                    owner = dataclasses.replace(tape.spec, modality=modality)
+                    cause = modality_message(
+                        cassette=tape.path,
+                        recorded=modality,
+                        asked=tape.spec.modality,
+                        home=cassette_path(tape.root, owner, modality_of=tape.modality_of),
+                        record=tape.command("once"),
+                        rerecord=tape.command("all"),
+                    )
             trajectory = dataclasses.replace(trajectory, error=scrub(cause))
-        seconds = time.perf_counter() - start
-        return EpisodeRun(trajectory, recorded, frame_drift, seconds, unsaved=unsaved)
-
-    def mismatch(self, recorded: str, rerecord: str) -> str:
-        """The modality-mismatch text (:func:`~._paths.modality_message`)."""
-        owner = dataclasses.replace(self.spec, modality=recorded)
-        return modality_message(
-            cassette=self.path,
-            recorded=recorded,
-            asked=self.spec.modality,
-            home=cassette_path(self.root, owner, modality_of=self.modality_of),
-            record=self.command("once"),
-            rerecord=rerecord,
-        )
+        seconds = time.perf_counter() - self.start
+        self.result = EpisodeRun(trajectory, recorded, frame_drift, seconds, unsaved=unsaved)
+        return False
 
 
 def _is_loopback(sock: socket.socket, address: Any) -> bool:

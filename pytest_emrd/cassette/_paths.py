@@ -14,7 +14,7 @@ from pathlib import Path
 from typing import Any, Final
 
 from pytest_emrd._scrub import scrub
-from pytest_emrd.agent._prompt import VISIBLE_HEADING
+from pytest_emrd.agent import VISIBLE_HEADING
 from pytest_emrd.cassette._file import SUFFIX
 from pytest_emrd.cassette._redact import Redacted
 from pytest_emrd.rooms import SLUG_ROOMS

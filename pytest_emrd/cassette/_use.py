@@ -76,17 +76,31 @@ class EpisodeCassette(Cassette):
         self._loading = False
         self._loaded = 0
         self._asked = 0.0
+        self._index: dict[str, list[int]] | None = None
+
+    def key(self, request: Request) -> str | None:
+        """The key ``request`` is matched by: strict or lenient (``None``: unparseable)."""
+        keys = _keys(request)
+        return keys.strict if self.strict else keys.lenient
 
     def emrd_body(self, new: Request, recorded: Request) -> bool:
-        """The one vcrpy matcher: strict or lenient key equality (unparseable never matches); a
-        lenient match whose frames differ adds its pair of strict keys to :attr:`frame_drift`."""
-        a, b = _keys(new), _keys(recorded)
-        if self.strict:
-            return a.strict is not None and a.strict == b.strict
-        same = a.lenient is not None and a.lenient == b.lenient
-        if same and a.strict != b.strict:
-            self.frame_drift.add((a.strict, b.strict))
-        return same
+        """The one vcrpy matcher: key equality (unparseable never matches)."""
+        return self.key(new) is not None and self.key(new) == self.key(recorded)
+
+    def _responses(self, request: Request) -> Iterator[tuple[int, dict[str, Any]]]:
+        """vcrpy's lookup of the interactions :meth:`emrd_body` matches, in order, from an index
+        by key (vcrpy runs the matcher on every interaction, three times per request); a lenient
+        match whose frames differ adds its pair of strict keys to :attr:`frame_drift`."""
+        new = self._before_record_request(request)
+        if self._index is None:
+            self._index = {}
+            for index, (stored, _) in enumerate(self.data):
+                self._index.setdefault(self.key(stored), []).append(index)
+        for index in self._index.get(self.key(new), []) if self.key(new) is not None else []:
+            stored, response = self.data[index]
+            if (pair := (_keys(new).strict, _keys(stored).strict))[0] != pair[1]:
+                self.frame_drift.add(pair)
+            yield index, response
 
     def _load(self) -> None:
         self._loading = True
@@ -112,7 +126,7 @@ class EpisodeCassette(Cassette):
             self.data[-1] = kept
         else:
             self.data.append(kept)
-        self.dirty = True
+        self.dirty, self._index = True, None
 
     def _retried(self, request: Request) -> bool:
         """Whether ``request`` repeats the last interaction recorded live (not read back)."""
@@ -130,12 +144,12 @@ class EpisodeCassette(Cassette):
         playable = bool(super().can_play_response_for(request))
         replaying = self.write_protected or (self.stop_on_drift and self._loaded > 0)
         if not playable and replaying and self.drift is None:
-            self.drift = self._explain(_keys(self._before_record_request(request)))
+            self.drift = self._explain(self._before_record_request(request))
         self.requests_made += 1
         self._asked = time.perf_counter()
         return playable
 
-    def _explain(self, new: MatchKeys) -> str:
+    def _explain(self, new: Request) -> str:
         played = self._played(new)
         if played is not None:
             self.unreadable = True
@@ -150,22 +164,17 @@ class EpisodeCassette(Cassette):
         return drift_message(
             cassette=str(self._path),
             request_index=index,
-            new_tree=new.redacted.tree,
+            new_tree=_keys(new).redacted.tree,
             recorded_tree=_keys(recorded).redacted.tree if recorded else None,
             recorded=len(self.data),
             command=self.rerecord_command,
         )
 
-    def _played(self, new: MatchKeys) -> int | None:
+    def _played(self, new: Request) -> int | None:
         """The index of an already played interaction whose request equals ``new``."""
-        key = new.strict if self.strict else new.lenient
-        if key is None:
-            return None
-        for index, count in self.play_counts.items():
-            old = _keys(self.data[index][0])
-            if count and (old.strict if self.strict else old.lenient) == key:
-                return index
-        return None
+        key = self.key(new)
+        played = [i for i, n in self.play_counts.items() if n and self.key(self.data[i][0]) == key]
+        return played[0] if played and key is not None else None
 
     @property
     def unsaved(self) -> UnsavedCassette | None:

@@ -64,7 +64,7 @@ def model_rows(registry: Any) -> list[dict[str, Any]]:
 
 def _run(args: argparse.Namespace) -> int:
     from pytest_emrd.agent import load_registry
-    from pytest_emrd.gate._table import render_table
+    from pytest_emrd.gate import render_table
 
     rows = model_rows(load_registry(args.models))
     if args.json:

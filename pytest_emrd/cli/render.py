@@ -32,8 +32,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def _run(args: argparse.Namespace) -> int:
-    from pytest_emrd.world import condition_params, episode_world, make_simulator
-    from pytest_emrd.world._topdown import plan_png
+    from pytest_emrd.world import condition_params, episode_world, make_simulator, plan_png
 
     spec = EpisodeSpec(
         model="-", condition=args.condition, spawn=args.spawn, episode=args.episode,

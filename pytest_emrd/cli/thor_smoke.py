@@ -78,11 +78,13 @@ def run_smoke(
     *, spawn: str, episode: int, layouts: str, out: Path, backend_options: Mapping[str, Any]
 ) -> list[Comparison]:
     """One scout episode per condition on both backends; trajectories go to ``out``."""
+    from contextlib import closing
+
     from pytest_emrd.episode import SimulatorPool, run_episode
 
     out.mkdir(parents=True, exist_ok=True)
     results = []
-    with SimulatorPool(backend_options) as pool:
+    with closing(SimulatorPool(backend_options)) as pool:
         for condition in CONDITIONS:
             runs = {}
             for backend in ("builtin", "ai2thor"):

@@ -19,7 +19,7 @@ from pytest_emrd.errors import check_positive_int
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    from pytest_emrd.validate._plan import FAMILIES, FULL_EPISODES
+    from pytest_emrd.validate import FAMILIES, FULL_EPISODES
 
     p = sub.add_parser(
         "validate", help="check that the metrics recover the reference agents' planted cognition"

@@ -2,7 +2,7 @@
 
 from pytest_emrd.gate._files import load_thresholds
 from pytest_emrd.gate._starter import starter_thresholds
-from pytest_emrd.gate._table import UsageRow, gate_tables, usage_table
+from pytest_emrd.gate._table import UsageRow, gate_tables, render_table, usage_table
 from pytest_emrd.gate._thresholds import Bound, Thresholds, parse_thresholds
 from pytest_emrd.gate._verdict import GateCell, Verdict, evaluate_all, evaluate_cell, judge
 
@@ -18,6 +18,7 @@ __all__ = [
     "judge",
     "load_thresholds",
     "parse_thresholds",
+    "render_table",
     "starter_thresholds",
     "usage_table",
 ]

@@ -24,7 +24,12 @@ class UsageRow:
 
 
 def render_table(header: Sequence[str], rows: Sequence[Sequence[str]]) -> list[str]:
-    """Left-aligned columns two spaces apart, header first (trailing spaces stripped)."""
+    """Left-aligned columns two spaces apart, header first (trailing spaces stripped).
+
+    :param header: The column titles.
+    :param rows: The cells, row by row.
+    :returns: The table's lines.
+    """
     widths = [max(len(r[i]) for r in [header, *rows]) for i in range(len(header))]
     line = "  ".join(f"{{:<{w}}}" for w in widths)
     return [line.format(*header).rstrip(), *(line.format(*r).rstrip() for r in rows)]

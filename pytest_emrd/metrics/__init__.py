@@ -30,6 +30,7 @@ from pytest_emrd.metrics._aggregates import (
     tbs_curve,
     time_to_forget,
 )
+from pytest_emrd.metrics._embedding import minilm_embed
 from pytest_emrd.metrics._episode import (
     EpisodeMetrics,
     Grounding,
@@ -52,6 +53,7 @@ from pytest_emrd.metrics._match import (
     GATE_M,
     MatchedPair,
     Matching,
+    layout_scale,
     match_map,
     pa_coverage,
     random_reframe,
@@ -61,6 +63,7 @@ from pytest_emrd.metrics._match import (
 )
 from pytest_emrd.metrics._reasoning import Representative, representative_reasoning
 from pytest_emrd.metrics._stats import (
+    N_RESAMPLES,
     R2_POINTS,
     AnchoredKM,
     Anova,
@@ -77,13 +80,14 @@ from pytest_emrd.metrics._stats import (
     efc,
     fisher_exact_2x2,
 )
-from pytest_emrd.metrics._tracking import Spell
+from pytest_emrd.metrics._tracking import Spell, track_episode
 from pytest_emrd.metrics._vocab import ENGINE_TYPES, SYNONYMS, candidate_types, canonical_type
 
 __all__ = [
     "ENGINE_TYPES",
     "GATE_M",
     "GATE_METRICS",
+    "N_RESAMPLES",
     "R2_POINTS",
     "SYNONYMS",
     "AnchoredKM",
@@ -134,8 +138,10 @@ __all__ = [
     "grounding_scores",
     "hallucination_score",
     "kaplan_meier_anchored",
+    "layout_scale",
     "match_map",
     "miller_curve",
+    "minilm_embed",
     "pa_coverage",
     "positional_accuracy",
     "positional_accuracy_score",
@@ -152,5 +158,6 @@ __all__ = [
     "tbs_curve",
     "te_score",
     "time_to_forget",
+    "track_episode",
     "ungrounded_pairs",
 ]

@@ -165,7 +165,11 @@ def rigid_fit(pred: np.ndarray, true: np.ndarray) -> tuple[np.ndarray, np.ndarra
 
 
 def layout_scale(xy: np.ndarray) -> float:
-    """RMS distance of points from their centroid (``L_gt``); 0.0 for fewer than 2 points."""
+    """RMS distance of points from their centroid (``L_gt``); 0.0 for fewer than 2 points.
+
+    :param xy: Points, k x 2.
+    :returns: ``L_gt`` in metres.
+    """
     if len(xy) < 2:
         return 0.0
     return float(np.sqrt(np.mean(np.sum((xy - xy.mean(axis=0)) ** 2, axis=1))))

@@ -7,7 +7,6 @@ from __future__ import annotations
 
 import dataclasses
 import json
-import os
 import shlex
 import warnings
 from dataclasses import dataclass
@@ -21,22 +20,30 @@ from pytest_emrd._atomic import write_bytes_atomic
 from pytest_emrd._disk import os_error_line
 from pytest_emrd._names import check_inside
 from pytest_emrd._scrub import scrub, scrub_bytes, watch_env
-from pytest_emrd.errors import CassetteError, ConfigError, EmrdError
-from pytest_emrd.gate import GateCell, Verdict
+from pytest_emrd.errors import ConfigError, EmrdError, check_choice
+from pytest_emrd.gate import GateCell, Verdict, evaluate_cell, load_thresholds
+from pytest_emrd.plugin._endpoint import EndpointWatch
+from pytest_emrd.progress import EpisodeWatch, StatusFile
 from pytest_emrd.run import (
     EpisodeSummary,
     ResultsStore,
     RunIdentity,
     RunSettings,
     StoredEpisode,
+    cell_specs,
     episode_path,
+    episode_specs,
+    gate_cells,
+    measure_episodes,
     scratch_dir,
+    shard,
     start_prefetch,
 )
-from pytest_emrd.trajectory import EpisodeSpec, Trajectory
+from pytest_emrd.trajectory import CONDITIONS, EpisodeSpec, Trajectory
 
 if TYPE_CHECKING:
-    from pytest_emrd.cassette import UnsavedCassette
+    from pytest_emrd.cassette import EpisodeRun, UnsavedCassette
+    from pytest_emrd.episode import Executor
 
 RUN = pytest.StashKey["Run"]()
 UNSAVED = "unsaved"
@@ -57,17 +64,6 @@ def failure_line(exc: EmrdError | OSError, what: str = "pytest-emrd") -> str:
     if isinstance(exc, OSError):
         return f"{what}: {scrub(os_error_line(exc, doing='write', option='--emrd-results DIR'))}"
     return f"{what}: {scrub(str(exc))}"
-
-
-def _writable_folder(folder: Path) -> None:
-    """Raise the :class:`OSError` writing into ``folder`` would meet (nothing is created)."""
-    existing = folder
-    while not existing.exists() and existing != existing.parent:
-        existing = existing.parent
-    if not existing.is_dir():
-        raise NotADirectoryError(20, "Not a directory", str(existing))
-    if not os.access(existing, os.W_OK | os.X_OK):
-        raise PermissionError(13, "Permission denied", str(existing))
 
 
 @dataclass(eq=False)
@@ -118,7 +114,7 @@ class Run:
 
     @cached_property
     def protocol(self) -> str:
-        from pytest_emrd.protocol import protocol_version
+        from pytest_emrd.protocol import protocol_version  # numpy, via the world
 
         return protocol_version(self.settings.backend)
 
@@ -127,16 +123,12 @@ class Run:
 
     @cached_property
     def episode_specs(self) -> list[EpisodeSpec]:
-        from pytest_emrd.run import episode_specs, shard
-
         specs = episode_specs(self.settings, self.modality_of)
         return shard(specs, *self.settings.shard) if self.settings.shard else specs
 
     @cached_property
     def gate_cells(self) -> list[GateCell]:
-        from pytest_emrd.gate import load_thresholds
         from pytest_emrd.metrics import GATE_METRICS
-        from pytest_emrd.run import gate_cells
 
         if self.settings.shard or self.settings.thresholds is None:
             return []
@@ -196,58 +188,14 @@ class Run:
         )
 
     @cached_property
-    def simulators(self) -> Any:
-        from pytest_emrd.episode import SimulatorPool
+    def executor(self) -> Executor:
+        """Runs this process's episodes (:class:`pytest_emrd.episode.Executor`)."""
+        from pytest_emrd.episode import Executor
 
-        return SimulatorPool(self.settings.backend_kwargs)
-
-    @cached_property
-    def runner(self) -> Any:
-        """Runs an episode on this process's simulator pool, one model client per key mode."""
-        from pytest_emrd.episode import agent_runner
-
-        return agent_runner(self.registry, run=self.simulators.run)
-
-    @property
-    def session_folder(self) -> Path:
-        """This session's folder of the run's scratch space (the live line's status files)."""
-        return scratch_dir(self.run_dir) / self.session
-
-    @cached_property
-    def endpoints(self) -> Any:
-        """Consecutive unreachable episodes per model: a dead endpoint stops its model."""
-        from pytest_emrd.plugin._endpoint import EndpointWatch
-
-        return EndpointWatch(self.run_dir, self.session, self.config.invocation_params.args)
-
-    @cached_property
-    def status_file(self) -> Any:
-        from pytest_emrd.progress import StatusFile
-
-        return StatusFile(self.session_folder)
-
-    def compute(self, spec: EpisodeSpec) -> Any:
-        """Run ``spec`` through its cassette (an unwritable one: see the module docstring)."""
-        from pytest_emrd.cassette import cassette_path, is_live
-        from pytest_emrd.progress import run_watched
-
-        settings, cassettes, modality_of = self.settings, self.settings.cassettes, self.modality_of
-        path = cassette_path(cassettes, spec, modality_of=modality_of)
-        check_inside(cassettes, path, what="cassette")
-        check_inside(self.run_dir, episode_path(self.run_dir, spec), what="episode file")
-        if is_live(
-            spec, cassettes=cassettes, record_mode=settings.record_mode, modality_of=modality_of
-        ):
-            try:
-                _writable_folder(path.parent)
-            except OSError as exc:
-                line = os_error_line(exc, doing="write", path=path, option="--emrd-cassettes DIR")
-                raise CassetteError(f"the cassette {line} Nothing was sent to the model.") from None
-        self.endpoints.skip_if_stopped(spec.model)
-        done = run_watched(
-            spec,
-            self.runner,
-            status=self.status_file,
+        settings = self.settings
+        return Executor(
+            self.registry,
+            backend_options=settings.backend_kwargs,
             cassettes=settings.cassettes,
             protocol=self.protocol,
             record_mode=settings.record_mode,
@@ -256,6 +204,32 @@ class Run:
             modality_of=self.modality_of,
             keep_unsaved=True,
         )
+
+    @property
+    def session_folder(self) -> Path:
+        """This session's folder of the run's scratch space (the live line's status files)."""
+        return scratch_dir(self.run_dir) / self.session
+
+    @cached_property
+    def endpoints(self) -> EndpointWatch:
+        """Consecutive unreachable episodes per model: a dead endpoint stops its model."""
+        return EndpointWatch(self.run_dir, self.session, self.config.invocation_params.args)
+
+    @cached_property
+    def status_file(self) -> StatusFile:
+        return StatusFile(self.session_folder)
+
+    def compute(self, spec: EpisodeSpec) -> EpisodeRun:
+        """Run ``spec`` through the executor, watched (an unwritable cassette: see the module
+        docstring)."""
+        check_inside(self.run_dir, episode_path(self.run_dir, spec), what="episode file")
+        tape = self.executor.tape(spec)
+        check_inside(self.settings.cassettes, tape.path, what="cassette")
+        self.endpoints.skip_if_stopped(spec.model)
+        with EpisodeWatch(spec, live=tape.live, status=self.status_file) as watch:
+            done = self.executor.run(tape, on_step=watch.on_step)
+            watch.finish(done.trajectory)
+        done = dataclasses.replace(done, retries=watch.retries)
         if done.unsaved is not None:
             self.keep_unsaved(spec, done.unsaved, done.trajectory, retries=done.retries)
         endpoint = self.registry.get(spec.model).base_url or "the built-in reference server"
@@ -296,7 +270,7 @@ class Run:
             self._prefetcher = start_prefetch(
                 self.settings, self.store, self.compute, self.episode_specs, self.modality_of
             )
-        stored = self.call(lambda run: run.store.get_or_compute(spec, run.compute), spec.case_id)
+        stored = self.call(lambda run: run.store_episode(spec), spec.case_id)
         self._stored[spec] = stored
         if spec in self._unsaved:
             warnings.warn(CassetteNotSavedWarning(scrub(self._unsaved.pop(spec))), stacklevel=2)
@@ -312,22 +286,25 @@ class Run:
             )
         return stored
 
+    def store_episode(self, spec: EpisodeSpec) -> StoredEpisode:
+        """``spec``'s episode from the store, else computed and stored (once across processes)."""
+        stored = self.store.reusable(spec)
+        if stored is None:
+            with self.store.lock(spec):
+                stored = self.store.reusable(spec) or self.store.save(spec, self.compute(spec))
+        return stored
+
     def cell_specs(self, cell: GateCell) -> list[EpisodeSpec]:
         return self.cell_specs_of(cell.bound.model, cell.bound.condition)
 
     def cell_specs_of(self, model: str, condition: str) -> list[EpisodeSpec]:
-        from pytest_emrd.errors import check_choice
-        from pytest_emrd.run import cell_specs
-        from pytest_emrd.trajectory import CONDITIONS
 
         self.registry.get(model)
         check_choice("condition", condition, CONDITIONS)
         return cell_specs(self.settings, model, condition, self.modality_of)
 
     def verdict(self, cell: GateCell) -> Verdict:
-        from pytest_emrd.gate import evaluate_cell
         from pytest_emrd.metrics import GATE_METRICS
-        from pytest_emrd.run import measure_episodes
 
         specs = self.cell_specs(cell)
         missing = [spec for spec in specs if spec not in self._metrics]
@@ -348,13 +325,11 @@ class Run:
         # An ai2thor simulator owns a Unity process. Closed here, a worker stops it before it
         # tells the controller it has finished (xdist sends that after this hook): at
         # unconfigure, the controller's exit timeout may already kill the worker mid-stop.
-        if "simulators" in self.__dict__:
-            self.simulators.close()
+        if "executor" in self.__dict__:
+            self.executor.simulators.close()
 
     def pytest_unconfigure(self) -> None:
-        if "simulators" in self.__dict__:
-            self.simulators.close()  # sessionfinish never ran (an interrupted start-up)
         if self._prefetcher is not None:
             self._prefetcher.close()
-        if "runner" in self.__dict__:
-            self.runner.close()
+        if "executor" in self.__dict__:
+            self.executor.close()  # sessionfinish may not have run (an interrupted start-up)

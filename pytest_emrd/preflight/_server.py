@@ -60,7 +60,7 @@ def models_url(provider: str, base_url: str) -> str:
     :param base_url: The endpoint's base URL.
     :returns: The listing's URL.
     """
-    from pytest_emrd.agent._clients import endpoint_url
+    from pytest_emrd.agent import endpoint_url
 
     return endpoint_url(base_url, "/v1/models" if provider == "anthropic" else "/models")
 

@@ -11,7 +11,6 @@ terminal).
 
 from __future__ import annotations
 
-import functools
 import json
 import logging
 import math
@@ -21,15 +20,12 @@ import time
 from collections.abc import Callable, Sequence
 from dataclasses import KW_ONLY, dataclass, field, replace
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Final
+from typing import Any, Final
 
 from pytest_emrd._atomic import write_bytes_atomic
 from pytest_emrd._logging import RETRY_ATTR, ROOT_LOGGER
 from pytest_emrd._serde import from_dict, to_dict
 from pytest_emrd.trajectory import EpisodeSpec, Step, Trajectory
-
-if TYPE_CHECKING:
-    from pytest_emrd.cassette import EpisodeRun
 
 __all__ = [
     "INTERVAL_S",
@@ -42,8 +38,6 @@ __all__ = [
     "WorkerStatus",
     "read_statuses",
     "render_line",
-    "run_watched",
-    "watch_episode",
 ]
 
 LIVE_FOLDER: Final = "live"
@@ -215,8 +209,9 @@ log = logging.getLogger(f"{ROOT_LOGGER}.episode")
 
 
 class EpisodeWatch(logging.Handler):
-    """Progress of one episode, started on the calling thread: step logging, retry counting
-    (once added to the package's logger), optional status publishing.
+    """Progress of one episode, started on the calling thread: step logging (its
+    :meth:`on_step` is the loop's ``on_step``), retry counting (in a ``with`` block: added to
+    the package's logger), optional status publishing.
 
     :param spec: The episode.
     :param live: Whether it asks the model (steps then log at INFO and the status is published).
@@ -236,6 +231,13 @@ class EpisodeWatch(logging.Handler):
         how = "recording live" if live else "replaying"
         log.log(self.level_of_steps, "%s: %s", spec.case_id, how)
         self._publish(case=spec.case_id, step=0, retries=0, last_retry=None)
+
+    def __enter__(self) -> EpisodeWatch:
+        logging.getLogger(ROOT_LOGGER).addHandler(self)
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        logging.getLogger(ROOT_LOGGER).removeHandler(self)
 
     def on_step(self, step: Step) -> None:
         """The episode loop's ``on_step``: one log line, and the live status."""
@@ -272,62 +274,3 @@ class EpisodeWatch(logging.Handler):
     def _publish(self, **changes: object) -> None:
         if self.status is not None:
             self.status.update(max_steps=self.spec.max_steps, **changes)
-
-
-def watch_episode(
-    spec: EpisodeSpec,
-    compute: Callable[[Callable[[Step], None]], EpisodeRun],
-    *,
-    live: bool,
-    status: StatusFile | None = None,
-) -> EpisodeRun:
-    """``compute(on_step)`` under an :class:`EpisodeWatch`; the run with its retries.
-
-    :param spec: The episode, named in the log.
-    :param compute: Runs the episode, calling its argument after each step.
-    :param live: Whether the episode asks the model (only a live one publishes its status).
-    :param status: Where to publish; None for nowhere.
-    :returns: The :class:`EpisodeRun`, retries counted.
-    """
-    watch = EpisodeWatch(spec, live=live, status=status)
-    root = logging.getLogger(ROOT_LOGGER)
-    root.addHandler(watch)
-    try:
-        run = compute(watch.on_step)
-        watch.finish(run.trajectory)
-    finally:
-        root.removeHandler(watch)
-    return replace(run, retries=watch.retries)
-
-
-def run_watched(
-    spec: EpisodeSpec,
-    runner: Callable[..., Trajectory],
-    *,
-    status: StatusFile | None,
-    cassettes: Path,
-    record_mode: str,
-    **cassette: Any,
-) -> EpisodeRun:
-    """:func:`~pytest_emrd.cassette.run_with_cassette` of ``spec`` with ``runner`` (which
-    takes ``on_step``), watched: live when the cassette asks for the model.
-
-    :param spec: The episode.
-    :param runner: Runs the episode; takes ``on_step``.
-    :param status: Where a live episode publishes its state; None for nowhere.
-    :param cassettes: The cassette folder.
-    :param record_mode: The run's record mode.
-    :param cassette: Further keyword arguments of :func:`~pytest_emrd.cassette.run_with_cassette`.
-    :returns: The :class:`EpisodeRun`.
-    """
-    from pytest_emrd.cassette import is_live, run_with_cassette
-
-    def compute(on_step: Callable[[Step], None]) -> EpisodeRun:
-        run = functools.partial(runner, on_step=on_step)
-        return run_with_cassette(
-            spec, run, cassettes=cassettes, record_mode=record_mode, **cassette
-        )
-
-    modality_of = cassette.get("modality_of")
-    live = is_live(spec, cassettes=cassettes, record_mode=record_mode, modality_of=modality_of)
-    return watch_episode(spec, compute, live=live, status=status)

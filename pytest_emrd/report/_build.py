@@ -136,7 +136,7 @@ def _unique(embed: Embed | None) -> Embed:
     same vectors, and scripted agents repeat their rationales, so most of the encoder's time."""
 
     def run(texts: Sequence[str]) -> np.ndarray:
-        from pytest_emrd.metrics._embedding import minilm_embed
+        from pytest_emrd.metrics import minilm_embed
 
         encoder = embed or minilm_embed
         distinct = list(dict.fromkeys(texts))

@@ -31,8 +31,13 @@ from typing import Final
 import numpy as np
 
 from pytest_emrd._serde import JsonRecord
-from pytest_emrd.metrics import GATE_METRICS, EpisodeMetrics, Estimate, as_episode_metrics
-from pytest_emrd.metrics._stats import N_RESAMPLES
+from pytest_emrd.metrics import (
+    GATE_METRICS,
+    N_RESAMPLES,
+    EpisodeMetrics,
+    Estimate,
+    as_episode_metrics,
+)
 from pytest_emrd.report._build import group_cells
 from pytest_emrd.report._document import (
     Block,

@@ -2,7 +2,6 @@
 feeds :mod:`pytest_emrd.gate` and uses ``cassette``; neither imports it)."""
 
 from pytest_emrd.run._grid import cell_specs, episode_specs, gate_cells, shard
-from pytest_emrd.run._head import EpisodeHead, EpisodeSummary, usage_rows
 from pytest_emrd.run._identity import (
     RunIdentity,
     check_resume,
@@ -13,6 +12,7 @@ from pytest_emrd.run._identity import (
 )
 from pytest_emrd.run._settings import OPTIONS, MatchingWarning, RunSettings, resolve_settings
 from pytest_emrd.run._store import (
+    EpisodeHead,
     Prefetcher,
     ResultsStore,
     StoredEpisode,
@@ -24,6 +24,7 @@ from pytest_emrd.run._store import (
     read_episode,
     start_prefetch,
 )
+from pytest_emrd.run._summary import EpisodeSummary, usage_rows
 from pytest_emrd.trajectory import RECORD_MODES
 
 __all__ = [

@@ -4,8 +4,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 
-from pytest_emrd.gate._thresholds import Thresholds
-from pytest_emrd.gate._verdict import GateCell
+from pytest_emrd.gate import GateCell, Thresholds
 from pytest_emrd.run._settings import SPAWNS, RunSettings
 from pytest_emrd.trajectory import CONDITIONS, EpisodeSpec
 

@@ -22,11 +22,11 @@ from pytest_emrd import __version__
 from pytest_emrd._atomic import write_bytes_atomic
 from pytest_emrd._fork import available_cores, fork_map
 from pytest_emrd._scrub import scrub, scrub_bytes
+from pytest_emrd._serde import JsonRecord, Schema
 from pytest_emrd.errors import ConfigError, EmrdError, ProtocolError
-from pytest_emrd.run._head import EpisodeHead
 from pytest_emrd.run._identity import RunIdentity, run_lock, write_identity
 from pytest_emrd.run._settings import RunSettings
-from pytest_emrd.trajectory import OLDER_SCHEMAS, SCHEMA_VERSION, EpisodeSpec, Trajectory
+from pytest_emrd.trajectory import OLDER_SCHEMAS, SCHEMA_VERSION, EpisodeSpec, Trajectory, Usage
 
 if TYPE_CHECKING:
     from filelock import FileLock
@@ -38,6 +38,71 @@ STORE_SCHEMA: Final = 2
 #: The layout before heads moved into the episode file (read, never written).
 LEGACY_STORE_SCHEMA: Final = 1
 _COMPACT: Final = {"separators": (",", ":")}
+
+
+HEAD_SCHEMA: Final = 1
+
+
+@dataclass(frozen=True)
+class EpisodeHead(JsonRecord):
+    """The facts about a stored episode a run reads without decoding its trajectory: the first
+    line of the episode file, written with the trajectory in one atomic write (it cannot
+    describe another file); field names are the file's format."""
+
+    schema = Schema(HEAD_SCHEMA, "episode head", "it is recomputed.")
+
+    spec: EpisodeSpec
+    protocol: str
+    """World + prompt protocol version the episode ran under."""
+    status: str
+    """``terminated``, ``budget`` or ``errored``."""
+    steps: int
+    chosen_room: str | None
+    final_map_entries: int
+    """Entries of the terminal cognitive map (0: the map figure cannot show this episode)."""
+    usage: Usage
+    error: str | None
+    """The stored (scrubbed) error text of an errored episode."""
+    session: str
+    recorded: bool
+    """New model traffic was recorded for it (a live episode)."""
+    frame_drift: int
+    seconds: float
+    retries: int
+    schema_version: int = HEAD_SCHEMA
+
+    @classmethod
+    def of(
+        cls,
+        trajectory: Trajectory,
+        *,
+        session: str,
+        recorded: bool,
+        frame_drift: int,
+        seconds: float,
+        retries: int = 0,
+    ) -> EpisodeHead:
+        return cls(
+            spec=trajectory.spec,
+            protocol=trajectory.protocol,
+            status=trajectory.status,
+            steps=len(trajectory.steps),
+            chosen_room=trajectory.chosen_room,
+            final_map_entries=len(trajectory.final_map),
+            usage=trajectory.usage,
+            error=scrub(trajectory.error) if trajectory.error else trajectory.error,
+            session=session,
+            recorded=recorded,
+            frame_drift=frame_drift,
+            seconds=round(seconds, 3),
+            retries=retries,
+        )
+
+    def describes(self, trajectory: Trajectory) -> bool:
+        """Whether this head states what ``trajectory`` holds (how it was obtained aside)."""
+        facts = {k: getattr(self, k) for k in ("session", "recorded", "frame_drift", "retries")}
+        head = EpisodeHead.of(trajectory, seconds=self.seconds, **facts)
+        return replace(head, error=self.error) == self
 
 
 @dataclass(frozen=True)
@@ -175,16 +240,15 @@ class ResultsStore:
         """Whether the store has a reusable episode for ``spec``."""
         return self.reusable(spec) is not None
 
-    def _lock(self, spec: EpisodeSpec, *, timeout: float = -1) -> FileLock:
-        return run_lock(self.run_dir, spec.case_id, timeout=timeout)
-
-    def _compute(
-        self, spec: EpisodeSpec, compute: Callable[[EpisodeSpec], EpisodeRun]
-    ) -> StoredEpisode:
-        # the caller holds ``spec``'s lock
+    def lock(self, spec: EpisodeSpec, *, timeout: float = -1) -> FileLock:
+        """``spec``'s lock across processes, held while it is computed and saved (the run's
+        identity is recorded in ``run.json`` before any episode is)."""
         if self.identity is not None:
             write_identity(self.run_dir, self.identity)
-        run = compute(spec)
+        return run_lock(self.run_dir, spec.case_id, timeout=timeout)
+
+    def save(self, spec: EpisodeSpec, run: EpisodeRun) -> StoredEpisode:
+        """Store ``run``, the episode of ``spec`` computed under its :meth:`lock`."""
         facts = {k: getattr(run, k) for k in ("recorded", "frame_drift", "seconds", "retries")}
         stored = StoredEpisode.of(run.trajectory, session=self.session, **facts)
         write_bytes_atomic(episode_path(self.run_dir, spec), stored.to_json())
@@ -197,23 +261,8 @@ class ResultsStore:
         stored = self.reusable(spec)
         if stored is not None:
             return stored
-        with self._lock(spec):
-            return self.reusable(spec) or self._compute(spec, compute)
-
-    def compute_if_free(
-        self, spec: EpisodeSpec, compute: Callable[[EpisodeSpec], EpisodeRun]
-    ) -> bool:
-        """Whether this call computed ``spec`` (never waits: stored or locked is skipped)."""
-        from filelock import Timeout
-
-        try:
-            with self._lock(spec, timeout=0):
-                if self.reusable(spec) is not None:
-                    return False
-                self._compute(spec, compute)
-                return True
-        except Timeout:
-            return False
+        with self.lock(spec):
+            return self.reusable(spec) or self.save(spec, compute(spec))
 
 
 class Prefetcher:
@@ -238,10 +287,17 @@ class Prefetcher:
         self._futures = [self._pool.submit(self._one, spec) for spec in specs]
 
     def _one(self, spec: EpisodeSpec) -> bool:
+        """Whether this call computed ``spec`` (never waits: stored or locked is skipped)."""
+        from filelock import Timeout
+
         try:
-            return self._store.compute_if_free(spec, self._compute)
-        except EmrdError:
-            return False  # the test asking for this episode computes it and reports the error
+            with self._store.lock(spec, timeout=0):
+                if self._store.reusable(spec) is not None:
+                    return False
+                self._store.save(spec, self._compute(spec))
+                return True
+        except (Timeout, EmrdError):
+            return False  # an error: the test asking for this episode computes it and reports it
 
     def wait(self) -> None:
         """Block until every episode was computed or skipped."""

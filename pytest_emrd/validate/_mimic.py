@@ -43,11 +43,11 @@ from pytest_emrd.metrics import (
     EpisodeMetrics,
     bootstrap_ci,
     episode_metrics,
+    layout_scale,
     match_map,
     pa_coverage,
+    track_episode,
 )
-from pytest_emrd.metrics._match import layout_scale
-from pytest_emrd.metrics._tracking import track_episode
 from pytest_emrd.trajectory import Trajectory
 from pytest_emrd.validate._check import Check, fmt, judged, max_gap, pct
 

@@ -19,14 +19,15 @@ from pathlib import Path
 from typing import Any
 
 from pytest_emrd.agent import build_system_prompt
-from pytest_emrd.cassette import LATENCY, FormatError, found_cassette, read_cassette
-from pytest_emrd.cassette._redact import DIGEST
+from pytest_emrd.cassette import DIGEST, LATENCY, FormatError, found_cassette, read_cassette
 from pytest_emrd.episode import build_simulator, start_world, user_turn, world_action
 from pytest_emrd.errors import ConfigError, EmrdError
 from pytest_emrd.trajectory import Trajectory
 from pytest_emrd.view._page import (
+    Frame,
     FrameCheck,
     IndexRow,
+    Recorded,
     episode_data,
     episode_gif,
     episode_page,
@@ -57,18 +58,6 @@ class Replay:
     """The spawn pose in the office's own frame (the page draws the plan in it, north up)."""
     system: str = ""
     """The system prompt the episode loop sends for this spec (the same for every step)."""
-
-
-@dataclass(frozen=True)
-class Frame:
-    """One re-rendered observation ``o_{t-1}``, the frame shown at step ``t``."""
-
-    jpeg: bytes
-    digest: str
-    """Pixel digest the world computed (``pixels:`` + SHA-256), as a cassette records it."""
-    text: str = ""
-    """The user turn's text shown with this frame (feedback of the previous action, pose,
-    step counter, and under ``text``/``both`` the symbolic list), as the loop built it."""
 
 
 def replay_frames(traj: Trajectory) -> Replay:
@@ -110,17 +99,6 @@ def _json(body: Any) -> Any:
         return json.loads(body or b"null")
     except ValueError:
         return None
-
-
-@dataclass(frozen=True)
-class Recorded:
-    """The frame digests a cassette holds for one episode, or why there are none."""
-
-    digests: tuple[str | None, ...]
-    """Per request (= per step), the digest of the newest image it carries (None: none)."""
-    note: str | None = None
-    latencies: tuple[float | None, ...] = ()
-    """Per request, the seconds the live request took when it was recorded (None: unknown)."""
 
 
 def recorded_digests(traj: Trajectory, cassettes: Path | None) -> Recorded:

@@ -21,7 +21,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from importlib import resources
 from itertools import chain, repeat
-from typing import TYPE_CHECKING, Any, Final
+from typing import Any, Final
 
 from PIL import Image, ImageDraw, ImageFont
 
@@ -36,8 +36,28 @@ from pytest_emrd.report import align_map
 from pytest_emrd.trajectory import Trajectory
 from pytest_emrd.world import WorldPose, local_to_world
 
-if TYPE_CHECKING:
-    from pytest_emrd.view import Frame, Recorded
+
+@dataclass(frozen=True)
+class Frame:
+    """One re-rendered observation ``o_{t-1}``, the frame shown at step ``t``."""
+
+    jpeg: bytes
+    digest: str
+    """Pixel digest the world computed (``pixels:`` + SHA-256), as a cassette records it."""
+    text: str = ""
+    """The user turn's text shown with this frame (feedback of the previous action, pose,
+    step counter, and under ``text``/``both`` the symbolic list), as the loop built it."""
+
+
+@dataclass(frozen=True)
+class Recorded:
+    """The frame digests a cassette holds for one episode, or why there are none."""
+
+    digests: tuple[str | None, ...]
+    """Per request (= per step), the digest of the newest image it carries (None: none)."""
+    note: str | None = None
+    latencies: tuple[float | None, ...] = ()
+    """Per request, the seconds the live request took when it was recorded (None: unknown)."""
 
 
 @dataclass(frozen=True)

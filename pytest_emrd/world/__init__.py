@@ -37,6 +37,7 @@ __getattr__, __dir__, __all__ = lazy_exports(
         ),
         "_registry": ("BACKENDS", "WORLD_VERSION", "make_simulator", "world_version"),
         "_simulator": ("BuiltinSimulator",),
+        "_topdown": ("plan_png",),
         "_visibility": ("discoverable_ids",),
     },
 )

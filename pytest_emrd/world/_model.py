@@ -156,9 +156,9 @@ class View:
     def jpeg(self) -> bytes:
         """The frame as the JPEG the model is sent."""
         if self._jpeg is None:
-            from pytest_emrd.world import _render  # Pillow: imported by the first JPEG only
+            from pytest_emrd.world import _jpeg  # Pillow: imported by the first JPEG only
 
-            self._jpeg = _render.encode_jpeg(self.pixels, self._quality)
+            self._jpeg = _jpeg.encode_jpeg(self.pixels, self._quality)
         return self._jpeg
 
 

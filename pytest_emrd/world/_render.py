@@ -19,7 +19,6 @@ scene renders to identical bytes on every machine and numpy version.
 from __future__ import annotations
 
 import functools
-import io
 import threading
 
 import numpy as np
@@ -318,13 +317,6 @@ def _rays(heading: float) -> tuple[np.ndarray, np.ndarray]:
     fx, fz = unit(heading)
     rx, rz = right_of(heading)
     return fx + rx * _U, fz + rz * _U
-
-
-def encode_jpeg(frame: np.ndarray, quality: int) -> bytes:
-    """``frame`` as the JPEG at ``quality`` the model is sent."""
-    out = io.BytesIO()
-    Image.fromarray(frame).save(out, format="JPEG", quality=quality)
-    return out.getvalue()
 
 
 _LOCAL = threading.local()

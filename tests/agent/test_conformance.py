@@ -34,9 +34,10 @@ from pytest_emrd.agent import (
     load_registry,
 )
 from pytest_emrd.agent._config import MAX_TOKENS_PARAMS, REASONING_EFFORTS
-from pytest_emrd.cassette import cassette_path, run_with_cassette
-from pytest_emrd.episode import agent_runner, protocol_version, run_episode
+from pytest_emrd.cassette import cassette_path
+from pytest_emrd.episode import protocol_version, run_episode
 from pytest_emrd.trajectory import MODALITIES, EpisodeSpec, Usage
+from tests._episodes import agent_runner, run_with_cassette
 
 from .test_config import PAPER_MODELS
 

@@ -170,14 +170,3 @@ class FakeRunner:
 @pytest.fixture
 def spec() -> EpisodeSpec:
     return EpisodeSpec(model="fake", condition="baseline", spawn="office", episode=3)
-
-
-def traffic(blob: bytes) -> tuple[str, list[dict[str, Any]]]:
-    """A cassette's protocol and interactions without the latencies a live recording measured
-    (which differ between two recordings of the same traffic)."""
-    from pytest_emrd.cassette import LATENCY, decompress
-
-    document = json.loads(decompress(blob))
-    for interaction in document["interactions"]:
-        interaction["response"].pop(LATENCY)
-    return document["metadata"]["emrd"]["protocol"], document["interactions"]

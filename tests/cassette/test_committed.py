@@ -15,10 +15,11 @@ from pathlib import Path
 import pytest
 
 from pytest_emrd.agent import load_registry
-from pytest_emrd.cassette import cassette_path, decode, encode, run_with_cassette
-from pytest_emrd.episode import agent_runner, protocol_version
+from pytest_emrd.cassette import cassette_path, decode, encode
+from pytest_emrd.episode import protocol_version
 from pytest_emrd.errors import CassetteError
 from pytest_emrd.trajectory import EpisodeSpec
+from tests._episodes import agent_runner, run_with_cassette
 
 ROOT = Path(__file__).resolve().parents[2] / "cassettes"
 SPEC = EpisodeSpec("scout", "baseline", "kitchen", 4, modality="both")
@@ -77,7 +78,7 @@ def test_a_replay_sends_frames_by_digest_and_matches_as_the_recording_sent_them(
     episode replayed with real JPEG frames, as a recording sends them, matches the same
     cassette interaction by interaction and gives the same trajectory."""
     from pytest_emrd.episode import run_episode
-    from pytest_emrd.world import _render
+    from pytest_emrd.world import _jpeg
 
     def as_recorded(spec: EpisodeSpec, **kwargs: object):
         return run_episode(spec, **{**kwargs, "replay": False})  # type: ignore[arg-type]
@@ -93,7 +94,7 @@ def test_a_replay_sends_frames_by_digest_and_matches_as_the_recording_sent_them(
     def never(frame: object, quality: int) -> bytes:
         raise AssertionError("a replay encoded a JPEG")
 
-    monkeypatch.setattr(_render, "encode_jpeg", never)
+    monkeypatch.setattr(_jpeg, "encode_jpeg", never)
     by_digest = _replay(SPEC, ROOT)
     assert by_digest.trajectory.status == "terminated"
     assert by_digest.trajectory == sent_as_jpeg.trajectory

@@ -7,8 +7,9 @@ from pathlib import Path
 
 import pytest
 
-from pytest_emrd.cassette import LATENCY, cassette_path, decode, run_with_cassette
+from pytest_emrd.cassette import LATENCY, cassette_path, decode
 from pytest_emrd.errors import CassetteError
+from tests._episodes import run_with_cassette
 
 from .conftest import FAKE_KEY, PROTOCOL, FakeRunner, FakeServer
 

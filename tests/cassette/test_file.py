@@ -15,17 +15,12 @@ import vcr
 from vcr.serialize import deserialize
 from vcr.serializers import jsonserializer
 
-from pytest_emrd.cassette import (
-    EpisodePersister,
-    cassette_path,
-    decode,
-    encode,
-    run_with_cassette,
-)
+from pytest_emrd.cassette import EpisodePersister, cassette_path, decode, encode
 from pytest_emrd.cli import main
 from pytest_emrd.errors import CassetteError
+from tests._episodes import run_with_cassette, traffic
 
-from .conftest import PROTOCOL, FakeRunner, FakeServer, traffic
+from .conftest import PROTOCOL, FakeRunner, FakeServer
 
 
 @pytest.fixture

@@ -12,9 +12,10 @@ from pathlib import Path
 import pytest
 
 from pytest_emrd.agent import load_registry
-from pytest_emrd.cassette import cassette_path, decode, found_cassette, run_with_cassette
-from pytest_emrd.episode import agent_runner, protocol_version
+from pytest_emrd.cassette import cassette_path, decode, found_cassette
+from pytest_emrd.episode import protocol_version
 from pytest_emrd.trajectory import EpisodeSpec
+from tests._episodes import agent_runner, run_with_cassette
 
 from .conftest import PROTOCOL, FakeRunner, FakeServer
 

@@ -12,8 +12,9 @@ from pathlib import Path
 import pytest
 
 from pytest_emrd.agent import ModelConfig, OpenAICompatibleClient, RetryPolicy
-from pytest_emrd.cassette import cassette_path, run_with_cassette
+from pytest_emrd.cassette import cassette_path
 from pytest_emrd.trajectory import EpisodeSpec, Trajectory
+from tests._episodes import run_with_cassette
 
 from .conftest import PROTOCOL, FakeServer, trajectory
 

@@ -20,11 +20,11 @@ from pytest_emrd.cassette import (
     EpisodeRun,
     cassette_path,
     decode,
-    run_with_cassette,
 )
 from pytest_emrd.trajectory import EpisodeSpec, Trajectory
+from tests._episodes import run_with_cassette, traffic
 
-from .conftest import FAKE_KEY, PROTOCOL, FakeRunner, FakeServer, traffic
+from .conftest import FAKE_KEY, PROTOCOL, FakeRunner, FakeServer
 
 
 def _folder_in_the_way(path: Path, monkeypatch: pytest.MonkeyPatch) -> None:

@@ -15,9 +15,10 @@ from pathlib import Path
 
 import pytest
 
-from pytest_emrd.cassette import SCRATCH, EpisodeRun, cassette_path, decode, run_with_cassette
+from pytest_emrd.cassette import SCRATCH, EpisodeRun, cassette_path, decode
 from pytest_emrd.errors import CassetteError
 from pytest_emrd.trajectory import EpisodeSpec, Trajectory
+from tests._episodes import run_with_cassette
 
 from .conftest import PROTOCOL, FakeRunner, FakeServer
 

@@ -15,11 +15,12 @@ from typing import Any
 import pytest
 
 from pytest_emrd.agent import load_registry
-from pytest_emrd.cassette import cassette_path, decode, run_with_cassette
-from pytest_emrd.episode import agent_runner, protocol_version, run_episode
+from pytest_emrd.cassette import cassette_path, decode
+from pytest_emrd.episode import protocol_version, run_episode
 from pytest_emrd.rooms import ROOM_NAMES
 from pytest_emrd.trajectory import EpisodeSpec
 from pytest_emrd.world import episode_world
+from tests._episodes import agent_runner, run_with_cassette
 
 ROOM_NAME = re.compile(r"\b(" + "|".join(re.escape(n) for n in ROOM_NAMES) + r")\b")
 #: Actions that walk every error path a model can trigger (Term last: it ends the episode).

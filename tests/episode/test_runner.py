@@ -1,14 +1,14 @@
-"""The real runner keeps one client per model and key mode, and closes them with itself."""
+"""The executor keeps one client per model and key mode, and closes them when it closes."""
 
 from __future__ import annotations
 
-import gc
+from pathlib import Path
 
 import pytest
 
 import pytest_emrd.episode
 from pytest_emrd.agent import load_registry
-from pytest_emrd.episode import agent_runner
+from pytest_emrd.episode import Executor
 
 
 class _Client:
@@ -32,16 +32,15 @@ def built(monkeypatch) -> list[_Client]:
 
 
 def test_one_client_per_model_and_key_mode_serves_every_episode(built):
-    runner = agent_runner(load_registry())
+    runner = Executor(load_registry(), cassettes=Path("cassettes"), protocol="p")
     for _ in range(3):
         runner._client("scout", False)
     runner._client("scout", True)
     assert [(c.name, c.require_key) for c in built] == [("scout", False), ("scout", True)]
 
 
-def test_clients_close_when_the_runner_is_collected(built):
-    runner = agent_runner(load_registry())
+def test_clients_close_with_the_executor(built):
+    runner = Executor(load_registry(), cassettes=Path("cassettes"), protocol="p")
     runner._client("scout", False)
-    del runner
-    gc.collect()
+    runner.close()
     assert [c.closed for c in built] == [True]

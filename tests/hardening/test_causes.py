@@ -11,10 +11,11 @@ from pathlib import Path
 import pytest
 
 from pytest_emrd.agent import load_registry
-from pytest_emrd.cassette import Invocation, cassette_path, decode, encode, run_with_cassette
+from pytest_emrd.cassette import Invocation, cassette_path, decode, encode
 from pytest_emrd.cassette._paths import text_context
-from pytest_emrd.episode import agent_runner, protocol_version
+from pytest_emrd.episode import protocol_version
 from pytest_emrd.trajectory import EpisodeSpec
+from tests._episodes import agent_runner, run_with_cassette
 
 SPEC = EpisodeSpec("scout", "baseline", "office", 0, modality="text")
 HOW = Invocation(paths=("suite/test_emrd.py",), models_file=Path("my-models.yaml"))

@@ -102,8 +102,10 @@ def test_a_folder_that_cannot_be_written_is_one_line(suite, setup, option, messa
     assert "Traceback" not in output
 
 
-def test_a_cassette_path_under_a_file_is_refused_before_the_model_is_called(tmp_path):
+def test_a_cassette_path_under_a_file_is_refused_before_the_model_is_called(tmp_path, monkeypatch):
+    from pytest_emrd.episode import SimulatorPool
     from pytest_emrd.errors import CassetteError
+    from pytest_emrd.plugin._endpoint import EndpointWatch
     from pytest_emrd.plugin._run import Run
     from pytest_emrd.run import resolve_settings
 
@@ -111,7 +113,9 @@ def test_a_cassette_path_under_a_file_is_refused_before_the_model_is_called(tmp_
     settings = resolve_settings({"model": ["scout"]}, {}, rootdir=tmp_path, env={})
     run = Run(None, settings, tmp_path / "run", "s")  # type: ignore[arg-type]
     calls = []
-    run.__dict__["runner"] = lambda *a, **k: calls.append(a)
+    monkeypatch.setattr(SimulatorPool, "run", lambda *a, **k: calls.append(a))
+    run.__dict__["invocation"] = None  # no pytest session here
+    run.__dict__["endpoints"] = EndpointWatch(tmp_path / "run", "s", [])
     run.__dict__["settings"] = replace(settings, cassettes=tmp_path / "notes.txt" / "c")
     spec = run.episode_specs[0]
     with pytest.raises(CassetteError, match=r"Nothing was sent to the model\.$"):

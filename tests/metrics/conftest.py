@@ -124,8 +124,8 @@ SPARSE_EARLY = [
 def _replay(episodes: list[tuple[str, int]]) -> list[Trajectory]:
     """Committed scout baseline episodes, replayed offline from cassettes/scout."""
     from pytest_emrd.agent import load_registry
-    from pytest_emrd.cassette import run_with_cassette
-    from pytest_emrd.episode import agent_runner, protocol_version
+    from pytest_emrd.episode import protocol_version
+    from tests._episodes import agent_runner, run_with_cassette
 
     root = Path(__file__).resolve().parents[2] / "cassettes"
     runner = agent_runner(load_registry())

@@ -47,9 +47,9 @@ def small() -> Callable[..., list[str]]:
 
 def _record(root: Path) -> None:
     from pytest_emrd.agent import load_registry
-    from pytest_emrd.cassette import run_with_cassette
-    from pytest_emrd.episode import agent_runner, protocol_version
+    from pytest_emrd.episode import protocol_version
     from pytest_emrd.trajectory import EpisodeSpec
+    from tests._episodes import agent_runner, run_with_cassette
 
     runner = agent_runner(load_registry())
     for episode in (0, 1):

@@ -8,19 +8,27 @@ from pathlib import Path
 import pytest
 
 from pytest_emrd.agent import load_registry
-from pytest_emrd.cassette import run_with_cassette
-from pytest_emrd.episode import agent_runner, protocol_version
+from pytest_emrd.episode import Executor, protocol_version
 from pytest_emrd.progress import (
+    EpisodeWatch,
     LiveBoard,
     StatusFile,
     WorkerStatus,
     read_statuses,
     render_line,
-    watch_episode,
 )
 from pytest_emrd.trajectory import EpisodeSpec
 
 ROOT = Path(__file__).resolve().parents[2]
+
+
+def _watched(executor: Executor, spec: EpisodeSpec, status: StatusFile | None = None):
+    """The episode as the plugin runs it: through the executor, watched; and its retries."""
+    tape = executor.tape(spec)
+    with EpisodeWatch(spec, live=tape.live, status=status) as watch:
+        episode = executor.run(tape, on_step=watch.on_step)
+        watch.finish(episode.trajectory)
+    return episode, watch.retries
 
 
 def test_a_watched_live_episode_logs_steps_counts_retries_and_publishes(
@@ -29,28 +37,19 @@ def test_a_watched_live_episode_logs_steps_counts_retries_and_publishes(
     monkeypatch.setenv("PYTEST_XDIST_WORKER", "gw7")
     registry = load_registry(flaky.registry_file(tmp_path))
     spec = EpisodeSpec("flaky", "baseline", "office", 0, modality="both")
-    runner = agent_runner(registry)
+    executor = Executor(registry, cassettes=tmp_path / "cassettes", protocol=protocol_version())
     status = StatusFile(tmp_path / "run")
-
-    def run(on_step):
-        return run_with_cassette(
-            spec,
-            lambda s, *, live: runner(s, live=live, on_step=on_step),
-            cassettes=tmp_path / "cassettes",
-            protocol=protocol_version(),
-        )
-
     with caplog.at_level(logging.INFO, logger="pytest_emrd"):
-        episode = watch_episode(spec, run, live=True, status=status)
-    runner.close()
+        episode, retries = _watched(executor, spec, status)
+    executor.close()
     assert episode.recorded and episode.trajectory.status == "terminated"
-    assert episode.retries == 2
+    assert retries == 2
     messages = [r.getMessage() for r in caplog.records]
     steps = len(episode.trajectory.steps)
     assert "flaky-baseline-office-ep00 step 1/50: " in "\n".join(messages)
     assert any(m.startswith(f"flaky-baseline-office-ep00 step {steps}/50: Term(") for m in messages)
-    retries = [r for r in caplog.records if r.levelno == logging.WARNING]
-    said = [r.getMessage() for r in retries]
+    retried = [r for r in caplog.records if r.levelno == logging.WARNING]
+    said = [r.getMessage() for r in retried]
     assert [m.split(" attempt ")[1][:3] for m in said] == ["1/4", "2/4"], said
     assert "retrying in" in said[0] and "Cause: HTTP 503" in said[0]
     (published,) = read_statuses(tmp_path / "run")
@@ -62,22 +61,15 @@ def test_a_replay_is_unchanged_and_logs_only_at_debug(flaky, tmp_path, caplog):
     """Watching changes nothing the model sees: the replay of a watched recording matches."""
     registry = load_registry(flaky.registry_file(tmp_path))
     spec = EpisodeSpec("flaky", "baseline", "kitchen", 1, modality="both")
-    runner = agent_runner(registry)
     kwargs = {"cassettes": tmp_path / "cassettes", "protocol": protocol_version()}
-
-    def run(mode):
-        return lambda on_step: run_with_cassette(
-            spec,
-            lambda s, *, live: runner(s, live=live, on_step=on_step),
-            record_mode=mode,
-            **kwargs,
-        )
-
-    recorded = watch_episode(spec, run("once"), live=True)
+    recorder = Executor(registry, record_mode="once", **kwargs)
+    recorded, _ = _watched(recorder, spec)
+    recorder.close()
     caplog.clear()
+    replayer = Executor(registry, record_mode="none", **kwargs)
     with caplog.at_level(logging.INFO, logger="pytest_emrd"):
-        replayed = watch_episode(spec, run("none"), live=False)
-    runner.close()
+        replayed, _ = _watched(replayer, spec)
+    replayer.close()
     assert replayed.trajectory == recorded.trajectory and not replayed.recorded
     assert caplog.records == [], "replays log steps at DEBUG only"
 

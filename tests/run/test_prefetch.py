@@ -6,10 +6,10 @@ from pathlib import Path
 
 from pytest_emrd.agent import OpenAICompatibleClient, load_registry
 from pytest_emrd.agent.reference import ReferenceServer
-from pytest_emrd.cassette import run_with_cassette
 from pytest_emrd.episode import protocol_version, run_episode
 from pytest_emrd.run import Prefetcher, ResultsStore, resolve_settings, start_prefetch
 from pytest_emrd.trajectory import EpisodeSpec
+from tests._episodes import run_with_cassette, traffic
 
 SPECS = [
     EpisodeSpec("scout", condition, spawn, 0, modality="both", max_steps=3)
@@ -54,7 +54,9 @@ def test_concurrent_recording_writes_the_cassettes_a_lone_episode_writes(tmp_pat
         p.relative_to(tmp_path / "alone") for p in alone_files
     ]
     assert len(together_files) == len(SPECS)
-    assert [p.read_bytes() for p in together_files] == [p.read_bytes() for p in alone_files]
+    assert [traffic(p.read_bytes()) for p in together_files] == [
+        traffic(p.read_bytes()) for p in alone_files
+    ]
     for spec in SPECS:
         assert store.get_or_compute(spec, together).trajectory.status != "errored"
     assert len(calls) == len(SPECS), "stored episodes are read back, not recomputed"
@@ -63,8 +65,10 @@ def test_concurrent_recording_writes_the_cassettes_a_lone_episode_writes(tmp_pat
 def test_an_episode_locked_elsewhere_is_skipped_not_waited_for(tmp_path: Path):
     store = ResultsStore(tmp_path, session="s", protocol="p")
     calls: list[EpisodeSpec] = []
-    with store._lock(SPECS[0]):
-        assert store.compute_if_free(SPECS[0], calls.append) is False
+    with store.lock(SPECS[0]):
+        prefetcher = Prefetcher(store, calls.append, SPECS[:1], workers=1)
+        prefetcher.wait()
+    prefetcher.close()
     assert calls == []
 
 

@@ -15,7 +15,7 @@ from pytest_emrd.world import (
     BuiltinSimulator,
     Layout,
     WorldPose,
-    _render,
+    _jpeg,
     _simulator,
     make_simulator,
 )
@@ -53,13 +53,13 @@ def test_the_jpeg_is_encoded_on_first_read_only_and_once(
     """A replay never reads a frame's JPEG, so stepping must not encode one; a recording
     reads it (and a revisited pose's cached frame) without encoding it twice."""
     encoded: list[np.ndarray] = []
-    encode = _render.encode_jpeg
+    encode = _jpeg.encode_jpeg
 
     def counting(frame: np.ndarray, quality: int) -> bytes:
         encoded.append(frame)
         return encode(frame, quality)
 
-    monkeypatch.setattr(_render, "encode_jpeg", counting)
+    monkeypatch.setattr(_jpeg, "encode_jpeg", counting)
     sim = new_sim()
     observations = [*_run(sim, office), sim.step("Turn(Around)")]  # back to a cached frame
     assert encoded == []

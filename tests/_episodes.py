@@ -1,0 +1,60 @@
+"""Episodes run the way tests need them: :func:`run_with_cassette` runs a loop of the test's
+own in the product's cassette handling; :func:`agent_runner` is the real loop as such a
+``runner(spec, live=...)``, one model client per model and key mode (a replay's without a
+key), as the executor keeps them."""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Callable
+from typing import Any
+
+from pytest_emrd.agent import ChatClient, Registry, make_client
+from pytest_emrd.cassette import LATENCY, EpisodeRun, Tape, decompress
+from pytest_emrd.episode import run_episode
+from pytest_emrd.trajectory import EpisodeSpec, Trajectory
+
+
+class AgentRunner:
+    def __init__(self, registry: Registry, run: Callable[..., Trajectory] = run_episode) -> None:
+        self.registry, self.run = registry, run
+        self.clients: dict[tuple[str, bool], ChatClient] = {}
+
+    def __call__(self, spec: Any, *, live: bool, on_step: Any = None) -> Trajectory:
+        key = (spec.model, live)
+        if key not in self.clients:
+            self.clients[key] = make_client(self.registry.get(spec.model), require_key=live)
+        client = self.clients[key]
+        return self.run(
+            spec, registry=self.registry, client=client, on_step=on_step, replay=not live
+        )
+
+    def close(self) -> None:
+        for client in self.clients.values():
+            client.close()
+        self.clients.clear()
+
+
+def agent_runner(
+    registry: Registry, *, run: Callable[..., Trajectory] = run_episode
+) -> AgentRunner:
+    return AgentRunner(registry, run)
+
+
+def run_with_cassette(spec: EpisodeSpec, run: Callable[..., Trajectory], **tape: Any) -> EpisodeRun:
+    """``run(spec, live=...)`` in each take of ``spec``'s :class:`~pytest_emrd.cassette.Tape`
+    (built with ``tape``): a loop of one's own with the product's cassette handling."""
+    taken = Tape(spec, **tape)
+    for take in taken.takes():
+        with take:
+            take.trajectory = run(spec, live=taken.live)
+    return take.result
+
+
+def traffic(blob: bytes) -> tuple[str, list[dict[str, Any]]]:
+    """A cassette's protocol and interactions without the latencies a live recording measured
+    (which differ between two recordings of the same traffic)."""
+    document = json.loads(decompress(blob))
+    for interaction in document["interactions"]:
+        interaction["response"].pop(LATENCY)
+    return document["metadata"]["emrd"]["protocol"], document["interactions"]
