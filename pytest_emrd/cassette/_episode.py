@@ -80,7 +80,18 @@ class Tape:
     raises ``CassetteError``; an unwritable one the ``OSError``, unless ``keep_unsaved`` hands
     it back in ``unsaved``. Under ``new_episodes`` a drifting replay is recorded again whole. An
     episode that may record holds its cassette's lock (:func:`~._persister.writer_lock`) up to
-    ``lock_timeout_s`` seconds."""
+    ``lock_timeout_s`` seconds.
+
+    :param spec: The episode.
+    :param cassettes: The cassette folder.
+    :param protocol: The protocol version recorded and checked.
+    :param record_mode: ``none``, ``once``, ``new_episodes`` or ``all``.
+    :param matching: ``strict`` or ``lenient`` request matching.
+    :param invocation: The pytest invocation the fix commands repeat.
+    :param modality_of: Default modality per model (:func:`cassette_path`).
+    :param keep_unsaved: Return an unwritable recording in ``unsaved`` instead of raising.
+    :param lock_timeout_s: Seconds to wait for another writer of the same cassette.
+    """
 
     def __init__(
         self,
@@ -126,7 +137,12 @@ class Tape:
 class Take(ExitStack):
     """One attempt at an episode inside its cassette (a ``with`` block, see :class:`Tape`):
     the network blocked when replaying only, the episode's HTTP traffic routed to its
-    cassette. Set :attr:`trajectory` in the block; :attr:`result` is there after it."""
+    cassette. Set :attr:`trajectory` in the block; :attr:`result` is there after it.
+
+    :param tape: The episode's :class:`Tape`.
+    :param record_mode: This attempt's record mode (``all`` for a redo).
+    :param start: ``time.perf_counter()`` when the first attempt began.
+    """
 
     trajectory: Trajectory
     result: EpisodeRun
