@@ -9,6 +9,7 @@ import re
 import subprocess
 import sys
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -64,6 +65,17 @@ def test_the_performance_page_holds_the_generated_table(site: Path) -> None:
     assert "<!-- performance-table -->" not in page
     assert re.search(r"<th[^>]*>warm</th>", page) and re.search(r"<th[^>]*>cold</th>", page)
     assert "<code>metrics.grid_240_s</code>" in page
+
+
+@pytest.mark.slow
+def test_the_catalogue_page_lists_every_kind_of_object(site: Path) -> None:
+    from pytest_emrd.world import KINDS
+
+    page = (site / "reference" / "catalogue" / "index.html").read_text()
+    assert "<!-- emrd-catalogue -->" not in page
+    rows = re.findall(r"<tr>\s*<td>(\w+)</td>", page)
+    assert rows == list(KINDS)
+    assert "<td>Office (4)</td>" in page  # the paper office's four desks
 
 
 def test_every_pytest_option_is_in_the_options_reference() -> None:
@@ -151,3 +163,58 @@ def test_the_interpretation_script_imports_what_it_measures_with() -> None:
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
     assert callable(module.main) and callable(module.serial_ties)
+
+
+FACES = sorted(p.parent.name for p in (ROOT / "pytest_emrd").glob("*/__init__.py"))
+
+
+def _docstring_style() -> str:
+    found = re.search(r"^\s+docstring_style: (\w+)$", (ROOT / "mkdocs.yml").read_text(), re.M)
+    assert found, "mkdocs.yml names no docstring_style"
+    return found.group(1)
+
+
+@pytest.fixture(scope="module")
+def package() -> Any:
+    """The package as griffe (mkdocstrings' loader) reads it from this checkout."""
+    import griffe
+
+    return griffe.load("pytest_emrd", search_paths=[str(ROOT)], resolve_aliases=False)
+
+
+@pytest.mark.parametrize("face", FACES)
+def test_every_public_function_documents_its_parameters_and_returns(
+    face: str, package: Any
+) -> None:
+    """Habit 13, parsed in the style the site renders (pytest_emrd.metrics first of all):
+    every parameter named, and what comes back unless the function returns None."""
+    import importlib
+    import inspect
+
+    module = importlib.import_module(f"pytest_emrd.{face}")
+    style, gaps = _docstring_style(), {}
+    for name in module.__all__:
+        function = getattr(module, name)
+        if not inspect.isfunction(function):
+            continue
+        path = function.__module__.removeprefix("pytest_emrd.")
+        obj = package[f"{path}.{function.__qualname__}"]
+        sections = obj.docstring.parse(style) if obj.docstring else []
+        named = {p.name for s in sections if s.kind.value == "parameters" for p in s.value}
+        missing = [p.name for p in obj.parameters if p.name not in named | {"self", "cls"}]
+        returns = obj.returns is not None and str(obj.returns) == "None"
+        if not returns and all(s.kind.value != "returns" for s in sections):
+            missing.append("(returns)")
+        if missing:
+            gaps[name] = missing
+    assert gaps == {}
+
+
+def test_every_package_face_declares_all() -> None:
+    import importlib
+
+    faces = {n: importlib.import_module(f"pytest_emrd.{n}") for n in FACES}
+    assert [n for n, face in faces.items() if not hasattr(face, "__all__")] == []
+    assert {n: [a for a in f.__all__ if not hasattr(f, a)] for n, f in faces.items()} == {
+        n: [] for n in faces
+    }

@@ -58,7 +58,12 @@ class ChatClient(Protocol):
 
 def endpoint_url(base_url: str, path: str) -> str:
     """``base_url`` with ``path`` appended to its path, query and fragment kept
-    (``https://x.azure.com/v1?api-version=1`` -> ``.../v1/chat/completions?api-version=1``)."""
+    (``https://x.azure.com/v1?api-version=1`` -> ``.../v1/chat/completions?api-version=1``).
+
+    :param base_url: The endpoint, perhaps with a query.
+    :param path: The path to append (``/chat/completions``).
+    :returns: The joined URL.
+    """
     base = httpx.URL(base_url)
     return str(base.copy_with(path=base.path.rstrip("/") + path))
 
@@ -219,7 +224,14 @@ class _HttpClient:
 
 
 class OpenAICompatibleClient(_HttpClient):
-    """``POST {base_url}/chat/completions``: vLLM, OpenAI, Gemini, the reference server."""
+    """``POST {base_url}/chat/completions``: vLLM, OpenAI, Gemini, the reference server.
+
+    :param config: The model's registry entry.
+    :param base_url: The endpoint, without ``/chat/completions``.
+    :param policy: Retries and timeouts; None for ``config.max_retries`` with the defaults.
+    :param transport: An httpx transport to use instead of the network (tests).
+    :param require_key: Raise :class:`ConfigError` when the key's variable is unset.
+    """
 
     _key_header = ("Authorization", "Bearer ")
 
@@ -261,7 +273,14 @@ def to_anthropic(messages: list[dict[str, Any]]) -> tuple[str, list[dict[str, An
 
 
 class AnthropicClient(_HttpClient):
-    """``POST {base_url}/v1/messages`` (Anthropic Messages API)."""
+    """``POST {base_url}/v1/messages`` (Anthropic Messages API).
+
+    :param config: The Anthropic model's registry entry.
+    :param base_url: The endpoint, without ``/v1/messages``.
+    :param policy: Retries and timeouts, as for :class:`OpenAICompatibleClient`.
+    :param transport: A transport replacing the network.
+    :param require_key: Whether an unset key is an error.
+    """
 
     _key_header = ("x-api-key", "")
 
@@ -294,7 +313,12 @@ def _sampling(config: ModelConfig) -> dict[str, Any]:
 
 def build_request(config: ModelConfig, messages: list[dict[str, Any]]) -> ProviderRequest:
     """The path, headers (no key) and JSON body ``config``'s provider is sent for ``messages``;
-    key order is fixed: cassettes match on the body."""
+    key order is fixed: cassettes match on the body.
+
+    :param config: The model's registry entry (provider, model name, sampling settings).
+    :param messages: The chat messages, OpenAI-style.
+    :returns: The :class:`ProviderRequest` to send.
+    """
     if config.provider == "anthropic":
         system, converted = to_anthropic(messages)
         body = {"model": config.model_id, "system": system, "messages": converted}
@@ -312,7 +336,13 @@ def make_client(
     config: ModelConfig, *, policy: RetryPolicy | None = None, require_key: bool = True
 ) -> ChatClient:
     """The client for ``config`` (reference agents: the built-in server, started on demand);
-    :class:`ConfigError` when the API-key variable is unset, unless ``require_key=False``."""
+    :class:`ConfigError` when the API-key variable is unset, unless ``require_key=False``.
+
+    :param config: The model's registry entry.
+    :param policy: Retries and timeouts; None for the default policy.
+    :param require_key: Raise when the API-key variable is unset.
+    :returns: A :class:`ChatClient` ready to send.
+    """
     client = AnthropicClient if config.provider == "anthropic" else OpenAICompatibleClient
     base_url = config.base_url
     if base_url is None:  # a reference agent (every other provider has one)

@@ -419,7 +419,11 @@ def _parametric(name: str) -> tuple[str, dict[str, Any]] | None:
 
 
 def load_registry(user_file: Path | None = None) -> Registry:
-    """The shipped registry, updated by ``user_file`` (entries merged field by field)."""
+    """The shipped registry, updated by ``user_file`` (entries merged field by field).
+
+    :param user_file: A ``models.yaml``; None for the shipped registry alone.
+    :returns: The merged :class:`Registry`.
+    """
     source = "pytest_emrd/agent/models.yaml"
     shipped_text = resources.files("pytest_emrd.agent").joinpath("models.yaml").read_text()
     entries, lines = _read_yaml(shipped_text, source)

@@ -56,7 +56,11 @@ def _user_message(turn: UserTurn, *, image: bool) -> dict[str, Any]:
 class Conversation:
     """The episode's dialogue, rendered through the sliding window. Each message is built
     once and the same dict is sent again while it stays in the window (clients encode and
-    redact each one once)."""
+    redact each one once).
+
+    :param system: The system prompt.
+    :param single_image: Whether only the newest turn keeps its frame.
+    """
 
     def __init__(self, system: str, *, single_image: bool) -> None:
         self.single_image = single_image

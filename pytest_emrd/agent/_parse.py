@@ -288,7 +288,11 @@ def _cognitive_map(raw: Any) -> tuple[tuple[MapEntry, ...], set[str]] | str:
 
 
 def parse_reply(text: str) -> Reply:
-    """Read one reply. Never raises; an unreadable reply has ``error`` set."""
+    """Read one reply. Never raises; an unreadable reply has ``error`` set.
+
+    :param text: The model's reply as received.
+    :returns: The :class:`Reply`: its fields, action and map, or ``error``.
+    """
     if not isinstance(text, str) or not text.strip():
         return Reply(error="empty reply")
     if len(text) > MAX_REPLY_CHARS:

@@ -130,7 +130,11 @@ your own labels for the objects, "facing" is one of "+x", "-x", "+z", "-z".
 
 
 def room_aliases(variant: str) -> dict[str, str]:
-    """Alias the prompt uses -> canonical room name (identity except under ``neutral``)."""
+    """Alias the prompt uses -> canonical room name (identity except under ``neutral``).
+
+    :param variant: The prompt variant.
+    :returns: Alias -> canonical room name.
+    """
     check_choice("variant", variant, VARIANTS)
     if variant == "neutral":
         return dict(NEUTRAL_NAMES)
@@ -139,7 +143,12 @@ def room_aliases(variant: str) -> dict[str, str]:
 
 def resolve_room(text: str, variant: str) -> str | None:
     """Canonical room for a room name or alias as a model wrote it (case, quotes and spaces
-    ignored; canonical names and slugs under every variant), or None."""
+    ignored; canonical names and slugs under every variant), or None.
+
+    :param text: The room as the model wrote it.
+    :param variant: The prompt variant whose aliases apply.
+    :returns: The canonical room name, or None when ``text`` names no room.
+    """
     key = " ".join(text.strip().strip("'\"`").split()).casefold()
     table = {alias.casefold(): room for alias, room in room_aliases(variant).items()}
     table.update({name.casefold(): name for name in rooms.ROOM_NAMES})
@@ -205,7 +214,14 @@ def build_system_prompt(
     max_steps: int = MAX_STEPS,
 ) -> str:
     """The system prompt for one episode: role, goals, building overview, actions, format.
-    ``inventory`` is canonical room -> object type -> count (``Layout.inventory()``)."""
+    ``inventory`` is canonical room -> object type -> count (``Layout.inventory()``).
+
+    :param inventory: Room -> object type -> count; left out under ``no_inventory``.
+    :param variant: The prompt variant (``default``, ``B1``-``B4``, ``neutral``, ``no_inventory``).
+    :param modality: ``vision``, ``text`` or ``both``: what each step shows the model.
+    :param max_steps: The action budget stated to the model.
+    :returns: The prompt text.
+    """
     check_choice("variant", variant, VARIANTS)
     check_choice("modality", modality, MODALITIES)
     actions = _ACTIONS.format(goto=_GOTO[modality != "vision"], seen=_SEEN[modality])
@@ -218,7 +234,14 @@ def step_text(
     *, step: int, max_steps: int, feedback: str, visible: Sequence[VisibleObject] | None
 ) -> str:
     """The text part of the user message at step ``step`` (1-based): ``feedback`` ends with the
-    pose line; ``visible`` is the symbolic list (``text``/``both``) or None (``vision``)."""
+    pose line; ``visible`` is the symbolic list (``text``/``both``) or None (``vision``).
+
+    :param step: The step number, from 1.
+    :param max_steps: The budget, for the ``step/max`` header.
+    :param feedback: The engine's feedback for the last action.
+    :param visible: The objects in view as text, or None when the frame is sent instead.
+    :returns: The user message's text.
+    """
     lines = [f"Step {step} of {max_steps}.", f"Engine feedback: {feedback}"]
     if visible is not None:
         lines.append(VISIBLE_HEADING)

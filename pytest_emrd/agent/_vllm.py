@@ -31,7 +31,12 @@ IMAGE_LIMIT_FLAG: Final = f"--limit-mm-per-prompt '{{\"image\": {HISTORY_TURNS}}
 
 
 def serve_command(config: ModelConfig, *, port: int = 8000) -> str:
-    """The ``vllm serve`` command for a shipped open model (``KeyError`` for any other)."""
+    """The ``vllm serve`` command for a shipped open model (``KeyError`` for any other).
+
+    :param config: A shipped open model's registry entry.
+    :param port: The port the server listens on.
+    :returns: The shell command line.
+    """
     context, gpus, model_flags = SERVED[config.model_id]
     flags = (
         *model_flags,

@@ -10,3 +10,6 @@ A model team runs it from its own repository, which holds only its registry
 checked into the repository. pytest-emrd's own checkout reaches the same tests through
 ``benchmarks/test_emrd.py``.
 """
+
+#: The suite is collected by pytest, not imported: nothing to export.
+__all__: list[str] = []

@@ -54,7 +54,14 @@ class _Discard(Exception):
 def is_live(
     spec: EpisodeSpec, *, cassettes: Path, record_mode: str, modality_of: ModalityOf | None = None
 ) -> bool:
-    """Whether running ``spec`` calls the model (records), rather than replaying only."""
+    """Whether running ``spec`` calls the model (records), rather than replaying only.
+
+    :param spec: The episode.
+    :param cassettes: The cassette folder.
+    :param record_mode: The run's record mode.
+    :param modality_of: Default modality per model (:func:`cassette_path`).
+    :returns: True when the episode records.
+    """
     if record_mode in ("all", "new_episodes"):
         return True
     path = cassette_path(cassettes, spec, modality_of=modality_of)
@@ -73,7 +80,18 @@ class Tape:
     raises ``CassetteError``; an unwritable one the ``OSError``, unless ``keep_unsaved`` hands
     it back in ``unsaved``. Under ``new_episodes`` a drifting replay is recorded again whole. An
     episode that may record holds its cassette's lock (:func:`~._persister.writer_lock`) up to
-    ``lock_timeout_s`` seconds."""
+    ``lock_timeout_s`` seconds.
+
+    :param spec: The episode.
+    :param cassettes: The cassette folder.
+    :param protocol: The protocol version recorded and checked.
+    :param record_mode: ``none``, ``once``, ``new_episodes`` or ``all``.
+    :param matching: ``strict`` or ``lenient`` request matching.
+    :param invocation: The pytest invocation the fix commands repeat.
+    :param modality_of: Default modality per model (:func:`cassette_path`).
+    :param keep_unsaved: Return an unwritable recording in ``unsaved`` instead of raising.
+    :param lock_timeout_s: Seconds to wait for another writer of the same cassette.
+    """
 
     def __init__(
         self,
@@ -119,7 +137,12 @@ class Tape:
 class Take(ExitStack):
     """One attempt at an episode inside its cassette (a ``with`` block, see :class:`Tape`):
     the network blocked when replaying only, the episode's HTTP traffic routed to its
-    cassette. Set :attr:`trajectory` in the block; :attr:`result` is there after it."""
+    cassette. Set :attr:`trajectory` in the block; :attr:`result` is there after it.
+
+    :param tape: The episode's :class:`Tape`.
+    :param record_mode: This attempt's record mode (``all`` for a redo).
+    :param start: ``time.perf_counter()`` when the first attempt began.
+    """
 
     trajectory: Trajectory
     result: EpisodeRun
@@ -194,7 +217,10 @@ def _is_loopback(sock: socket.socket, address: Any) -> bool:
 
 @contextmanager
 def network_blocked() -> Iterator[None]:
-    """In the block, a connection to anything but loopback raises :class:`CassetteError`."""
+    """In the block, a connection to anything but loopback raises :class:`CassetteError`.
+
+    :returns: A context manager; sockets are restored on exit.
+    """
     connect, connect_ex = socket.socket.connect, socket.socket.connect_ex
 
     def guarded(original: Callable[..., Any]) -> Callable[..., Any]:

@@ -130,7 +130,11 @@ def _digest(text: str, recorded: str) -> str:
 
 
 def encode(data: CassetteData) -> bytes:
-    """The xz-compressed vcrpy JSON cassette of ``data`` (deterministic)."""
+    """The xz-compressed vcrpy JSON cassette of ``data`` (deterministic).
+
+    :param data: The cassette.
+    :returns: The file's bytes.
+    """
     text = jsonserializer.serialize(document(data))
     head, _, tail = text.rpartition(_UNSET)
     text = head + _digest(text, _UNSET) + tail
@@ -142,7 +146,12 @@ def encode(data: CassetteData) -> bytes:
 def decompress(source: bytes | BinaryIO, *, cap: int = MAX_TEXT_BYTES) -> str:
     """The text inside ``source`` (bytes or a binary file), xz or gzip (told by the magic
     bytes), inflated a chunk at a time: more than ``cap`` bytes of text is a
-    :class:`FormatError` before any more is inflated."""
+    :class:`FormatError` before any more is inflated.
+
+    :param source: Compressed bytes or a binary file.
+    :param cap: Largest text accepted, in bytes.
+    :returns: The decompressed text.
+    """
     stream = io.BytesIO(source) if isinstance(source, bytes) else source
     pending = stream.read(_CHUNK)
     if pending.startswith(_XZ_MAGIC):
@@ -225,7 +234,11 @@ _SCHEMA: Final = {
 
 
 def decode(blob: bytes) -> CassetteData:
-    """:func:`parse` of the text :func:`decompress` finds in ``blob``."""
+    """:func:`parse` of the text :func:`decompress` finds in ``blob``.
+
+    :param blob: A compressed cassette file's bytes.
+    :returns: The parsed :class:`CassetteData`.
+    """
     return parse(decompress(blob))
 
 

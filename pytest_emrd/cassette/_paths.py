@@ -39,7 +39,13 @@ def cassette_path(root: Path, spec: EpisodeSpec, *, modality_of: ModalityOf | No
     """``<root>/<model>/<condition>/<variant>/<spawn>/ep<NN>.json.xz`` on the builtin world under
     the paper protocol; another backend or layouts get their own tree (``<root>/<backend>/``,
     ``layouts-generated/``), another modality than the model's default (``modality_of``; else
-    ``spec.modality``) a ``<variant>+<modality>`` folder (docs/cassettes.md)."""
+    ``spec.modality``) a ``<variant>+<modality>`` folder (docs/cassettes.md).
+
+    :param root: The cassette folder.
+    :param spec: The episode.
+    :param modality_of: Model name -> its default modality; None to take ``spec.modality``.
+    :returns: The cassette's path (it need not exist).
+    """
     base = root if spec.backend == "builtin" else root / spec.backend
     if spec.layouts != "paper":
         base = base / f"layouts-{spec.layouts}"
@@ -52,7 +58,12 @@ def cassette_path(root: Path, spec: EpisodeSpec, *, modality_of: ModalityOf | No
 
 def found_cassette(root: Path, spec: EpisodeSpec) -> Path:
     """The cassette of ``spec`` where no registry tells the default modality (a viewer): its
-    ``<variant>+<modality>`` file when there is one, else the plain one."""
+    ``<variant>+<modality>`` file when there is one, else the plain one.
+
+    :param root: The cassette folder.
+    :param spec: The episode.
+    :returns: The path of the modality file if present, else the plain path.
+    """
     own = cassette_path(root, spec, modality_of=lambda model: "")  # "": never the default
     return own if own.is_file() else cassette_path(root, spec)
 
@@ -94,7 +105,15 @@ def record_command(
     """The exact ``pytest`` command that records (``once``) or re-records (``all``) one
     episode, or every episode of ``specs`` in one run (``once`` records only what is missing),
     working verbatim for this ``invocation`` (``cassettes`` overrides its folder; ``episodes``
-    the run's ``--emrd-episodes``, else the highest episode of ``specs`` + 1)."""
+    the run's ``--emrd-episodes``, else the highest episode of ``specs`` + 1).
+
+    :param specs: One episode or several.
+    :param record_mode: ``once`` or ``all``.
+    :param cassettes: The cassette folder, if not the invocation's.
+    :param invocation: The pytest invocation to repeat; None for a plain one.
+    :param episodes: The ``--emrd-episodes`` value to pass.
+    :returns: The shell command line.
+    """
     one = isinstance(specs, EpisodeSpec)
     group = [specs] if one else list(specs)
     how = invocation or Invocation()
@@ -137,7 +156,16 @@ def missing_summary(
     """The one message for a replay-only run where episodes of ``specs`` have no cassette
     under ``root``: how many, for which models, and one command that records them all; when
     the run asks for more ``episodes`` per spawn room than every missing one's folder holds,
-    how many are recorded and the setting to change."""
+    how many are recorded and the setting to change.
+
+    :param specs: The episodes without a cassette.
+    :param total: Episodes in the run, for "N of M".
+    :param root: The cassette folder.
+    :param invocation: How pytest was started, for the record command.
+    :param modality_of: Default modality per model, as for :func:`cassette_path`.
+    :param episodes: Episodes per spawn room the run asks for; None when not set.
+    :returns: The message, or None when nothing is missing.
+    """
     paths = {s: cassette_path(root, s, modality_of=modality_of) for s in specs}
     missing = [s for s in specs if not paths[s].is_file()]
     if not missing:

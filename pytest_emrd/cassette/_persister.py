@@ -29,7 +29,12 @@ from pytest_emrd.errors import CassetteError
 def read_cassette(path: Path, *, root: Path | None = None) -> tuple[CassetteData, str]:
     """The cassette at ``path`` and its text (bounded, schema-checked, digest-checked: see
     :mod:`._file`); ``path`` must lie inside ``root`` (default: its own folder) with no
-    symbolic link on the way, else a one-line ConfigError before it is opened."""
+    symbolic link on the way, else a one-line ConfigError before it is opened.
+
+    :param path: The cassette file.
+    :param root: The folder it must lie in; None for its own folder.
+    :returns: ``(data, text)``.
+    """
     check_inside(path.parent if root is None else root, path, what="cassette")
     with path.open("rb") as handle:
         text = decompress(handle)
@@ -127,7 +132,13 @@ LOCK_TIMEOUT_S = 1800.0
 def writer_lock(root: Path, path: Path, *, timeout: float = LOCK_TIMEOUT_S) -> Iterator[None]:
     """Hold the lock of the cassette ``path`` (one writer per cassette across processes; an OS
     file lock, released when its holder ends), then remove what an earlier writer left
-    unfinished. Waiting longer than ``timeout`` seconds is a one-line :class:`CassetteError`."""
+    unfinished. Waiting longer than ``timeout`` seconds is a one-line :class:`CassetteError`.
+
+    :param root: The cassette folder, where the lock files live.
+    :param path: The cassette the lock is for.
+    :param timeout: Seconds to wait for the lock.
+    :returns: A context manager holding the lock.
+    """
     from filelock import FileLock, Timeout
 
     lock_file = scratch_path(root, path, ".lock")

@@ -148,7 +148,11 @@ def _canonical_sent(tree: Any, pieces: dict[str, Any]) -> bytes:
 
 
 def redact_body(body: bytes | str | None) -> Redacted:
-    """Canonical form of a request body (pure; see the module docstring)."""
+    """Canonical form of a request body (pure; see the module docstring).
+
+    :param body: The request body as sent.
+    :returns: Its :class:`Redacted` canonical form.
+    """
     raw = body.encode() if isinstance(body, str) else (body or b"")
     sent = _wire.sent(raw)
     if sent is not None:
@@ -162,7 +166,13 @@ def redact_body(body: bytes | str | None) -> Redacted:
 
 
 def match_keys(method: str, path: str, redacted: Redacted) -> MatchKeys:
-    """The strict and lenient keys of a canonical request."""
+    """The strict and lenient keys of a canonical request.
+
+    :param method: The HTTP method.
+    :param path: The request path.
+    :param redacted: The body's canonical form (:func:`redact_body`).
+    :returns: The :class:`MatchKeys`.
+    """
     return MatchKeys(f"{method.upper()} {path}\n", redacted)
 
 

@@ -38,7 +38,10 @@ _users = 0
 
 def clear_caches() -> None:
     """Forget every cached message encoding and redaction, as at the start of a run
-    (cold benchmarks, tests)."""
+    (cold benchmarks, tests).
+
+    :returns: Nothing; the caches are empty afterwards.
+    """
     _wire.clear()
 
 
@@ -282,7 +285,17 @@ def episode_cassette(
     keep_unsaved: bool = False,
 ) -> Iterator[EpisodeCassette]:
     """Route httpx to the episode's cassette for the block (raise inside it to discard a
-    failed episode); ``root`` and ``keep_unsaved``: :class:`~._persister.EpisodePersister`."""
+    failed episode); ``root`` and ``keep_unsaved``: :class:`~._persister.EpisodePersister`.
+
+    :param path: The episode's cassette file.
+    :param protocol: The protocol version the cassette must carry.
+    :param record_mode: ``none``, ``once``, ``new_episodes`` or ``all``.
+    :param matching: ``strict`` or ``lenient`` request matching.
+    :param rerecord_command: The command a drift message recommends.
+    :param root: The folder ``path`` must lie in; None for ``path``'s own.
+    :param keep_unsaved: Hand an unwritable recording back instead of raising.
+    :returns: A context manager yielding the :class:`EpisodeCassette`.
+    """
     cassette = EpisodeCassette.load(
         path=str(path),
         persister=EpisodePersister(

@@ -10,6 +10,8 @@ from pathlib import Path
 
 from pytest_emrd.errors import ConfigError, EmrdError
 
+__all__ = ["COMMANDS", "build_parser", "check_run_dirs", "main", "version_text"]
+
 #: Subcommand modules, in the order ``emrd --help`` lists them.
 COMMANDS: tuple[str, ...] = (
     "models", "check", "render", "serve", "gate", "thresholds", "report", "view", "cassettes",
@@ -18,7 +20,10 @@ COMMANDS: tuple[str, ...] = (
 
 
 def version_text() -> str:
-    """``emrd 0.1.0 (protocol builtin-6+p3, reference agents ref-4)``: what cassettes apply."""
+    """``emrd 0.1.0 (protocol builtin-6+p3, reference agents ref-4)``: what cassettes apply.
+
+    :returns: The version line ``emrd --version`` prints.
+    """
     from pytest_emrd import __version__
     from pytest_emrd.agent.reference import REFERENCE_VERSION
     from pytest_emrd.protocol import protocol_version
@@ -40,6 +45,10 @@ class _Version(argparse.Action):
 
 
 def build_parser() -> argparse.ArgumentParser:
+    """The ``emrd`` parser with every subcommand of :data:`COMMANDS` registered.
+
+    :returns: The parser; each subcommand sets ``func``.
+    """
     parser = argparse.ArgumentParser(
         prog="emrd", description="pytest-emrd: Explore, Map, Remember, Decide benchmark tools."
     )
@@ -51,7 +60,11 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def check_run_dirs(run_dirs: list[Path]) -> None:
-    """A one-line :class:`ConfigError` for a RUN_DIR argument that is not a folder."""
+    """A one-line :class:`ConfigError` for a RUN_DIR argument that is not a folder.
+
+    :param run_dirs: The RUN_DIR arguments.
+    :raises ConfigError: For the first that is not a folder.
+    """
     for run_dir in (d for d in run_dirs if not d.is_dir()):
         file = run_dir.exists()
         raise ConfigError(
@@ -67,7 +80,11 @@ _WRITES: frozenset[str] = frozenset({"view", "report", "render"})
 
 def main(argv: list[str] | None = None) -> int:
     """Run one command; an :class:`EmrdError` or a file system failure (full disk, read-only
-    folder, a file where a folder belongs) ends it in one scrubbed line and exit status 2."""
+    folder, a file where a folder belongs) ends it in one scrubbed line and exit status 2.
+
+    :param argv: The arguments; None for ``sys.argv[1:]``.
+    :returns: The exit status.
+    """
     from pytest_emrd._scrub import install_log_scrub, scrub
 
     install_log_scrub()

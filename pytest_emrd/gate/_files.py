@@ -23,7 +23,13 @@ REGISTER_MODEL_HINT: Final = (
 
 def load_thresholds(path: Path, *, registry: Registry, metrics: Collection[str]) -> Thresholds:
     """Read and validate a thresholds file against a model registry (``registry.get``: parametric
-    names such as ``scout-decay-8`` pass) and metric names; a missing file is a ConfigError."""
+    names such as ``scout-decay-8`` pass) and metric names; a missing file is a ConfigError.
+
+    :param path: The ``thresholds.yaml``.
+    :param registry: The models its gates may name.
+    :param metrics: The metric names its gates may use.
+    :returns: The validated :class:`Thresholds`.
+    """
 
     def is_model(name: str) -> bool:
         try:

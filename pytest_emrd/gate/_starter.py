@@ -28,7 +28,13 @@ def starter_thresholds(
     :data:`STARTER_METRICS` metric at its bootstrap 95 % CI end moved :data:`MARGIN` further
     (the lower end for higher-is-better, the upper for lower-is-better; the loosest over
     prompt variants), rounded outward to 2 decimals and kept in [0, 1]: ``episodes``
-    (``EpisodeMetrics``) pass it and a clear regression fails. ``command`` made it."""
+    (``EpisodeMetrics``) pass it and a clear regression fails. ``command`` made it.
+
+    :param episodes: :class:`EpisodeMetrics` of a run the file should pass.
+    :param metrics: Metric name -> :class:`GateMetric`, for each bound's CI.
+    :param command: The command line quoted in the file's header.
+    :returns: The thresholds YAML text.
+    """
     cells: dict[tuple[str, str], dict[str, list[Any]]] = defaultdict(lambda: defaultdict(list))
     for m in episodes:
         s = m.spec

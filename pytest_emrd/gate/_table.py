@@ -24,14 +24,23 @@ class UsageRow:
 
 
 def render_table(header: Sequence[str], rows: Sequence[Sequence[str]]) -> list[str]:
-    """Left-aligned columns two spaces apart, header first (trailing spaces stripped)."""
+    """Left-aligned columns two spaces apart, header first (trailing spaces stripped).
+
+    :param header: The column titles.
+    :param rows: The cells, row by row.
+    :returns: The table's lines.
+    """
     widths = [max(len(r[i]) for r in [header, *rows]) for i in range(len(header))]
     line = "  ".join(f"{{:<{w}}}" for w in widths)
     return [line.format(*header).rstrip(), *(line.format(*r).rstrip() for r in rows)]
 
 
 def gate_tables(verdicts: Sequence[Verdict]) -> list[str]:
-    """One table per model: condition x metric, value, CI, n, bound, PASS/FAIL."""
+    """One table per model: condition x metric, value, CI, n, bound, PASS/FAIL.
+
+    :param verdicts: The verdicts to print.
+    :returns: The tables' lines, Markdown.
+    """
     lines: list[str] = []
     for model in sorted({v.model for v in verdicts}):
         mine = sorted(
@@ -60,7 +69,11 @@ def gate_tables(verdicts: Sequence[Verdict]) -> list[str]:
 
 
 def usage_table(rows: Sequence[UsageRow]) -> list[str]:
-    """Tokens, estimated cost where known, retries and errored episodes per model."""
+    """Tokens, estimated cost where known, retries and errored episodes per model.
+
+    :param rows: One :class:`UsageRow` per model.
+    :returns: The table's lines, Markdown.
+    """
     body = [
         [
             r.model,

@@ -133,7 +133,16 @@ def parse_thresholds(
 ) -> Thresholds:
     """Parse and validate thresholds YAML text (``source`` names the file in messages). When
     ``metrics`` maps names to objects with a ``unit`` (``GATE_METRICS``), each bound is checked
-    against its :func:`domain`; ``unknown_model_hint`` ends an unknown model's message."""
+    against its :func:`domain`; ``unknown_model_hint`` ends an unknown model's message.
+
+    :param text: The YAML.
+    :param source: The file's name for messages.
+    :param is_model: Whether a model name is known (parametric names included).
+    :param model_names: Known names, for the did-you-mean hint.
+    :param metrics: Metric names, or name -> metric with a ``unit``.
+    :param unknown_model_hint: The sentence ending an unknown model's message.
+    :returns: The validated :class:`Thresholds`.
+    """
     reader = _Reader(source)
     root = _yaml.compose(text, source)
     bounds: list[Bound] = []

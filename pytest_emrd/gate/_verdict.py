@@ -104,7 +104,12 @@ def format_number(x: float | None) -> str:
 
 
 def judge(cell: GateCell, estimate: Estimate) -> Verdict:
-    """Compare an estimate with the cell's bound."""
+    """Compare an estimate with the cell's bound.
+
+    :param cell: The gate whose bound applies.
+    :param estimate: The metric's value, CI and n.
+    :returns: The :class:`Verdict`: passed, or why not.
+    """
     b = cell.bound
     compared = {None: estimate.value, "lower": estimate.ci_low, "upper": estimate.ci_high}[b.ci]
     what = "value" if b.ci is None else f"CI {b.ci} end"
@@ -191,7 +196,14 @@ def evaluate_cell(
 ) -> Verdict:
     """The verdict of one gate over its episodes (any order in, sorted by case id): trajectories
     or anything with a ``spec`` the metric accepts (such as ``EpisodeMetrics``); a failed one
-    names its worst episodes (:func:`worst_episodes`)."""
+    names its worst episodes (:func:`worst_episodes`).
+
+    :param cell: The gate and prompt variant.
+    :param trajectories: The cell's episodes.
+    :param metrics: Metric name -> :class:`GateMetric`.
+    :param run_dir_of: Case id -> run directory, as for :func:`evaluate_all`.
+    :returns: The cell's :class:`Verdict`.
+    """
     ordered = sorted(trajectories, key=lambda t: t.spec.case_id)
     metric = metrics[cell.bound.metric]
     verdict = judge(cell, metric.compute(ordered, rng_seed=0))
@@ -205,7 +217,14 @@ def evaluate_all(
     *,
     run_dir_of: Callable[[str], str] = lambda case: "RUN_DIR",
 ) -> list[Verdict]:
-    """Every gate whose cell has episodes: the gate tests' verdicts, for ``emrd gate``."""
+    """Every gate whose cell has episodes: the gate tests' verdicts, for ``emrd gate``.
+
+    :param trajectories: Every episode of the run, any cell.
+    :param thresholds: The gates.
+    :param metrics: Metric name -> :class:`GateMetric` (:data:`GATE_METRICS`).
+    :param run_dir_of: Case id -> the run directory its episode is in, for worst-episode links.
+    :returns: One :class:`Verdict` per gate with episodes, in the file's order.
+    """
     cells: dict[tuple[str, str, str, str], list[Any]] = defaultdict(list)
     for t in trajectories:
         cells[(t.spec.model, t.spec.condition, t.spec.variant, t.spec.layouts)].append(t)

@@ -40,7 +40,11 @@ from pytest_emrd.rooms import FOCAL_COLUMNS, OTHER_LETTER, ROOM_LETTERS, SLUG_RO
 
 def positional_accuracy(items: Iterable[EpisodeLike]) -> tuple[float | None, ...]:
     """Positional Accuracy (Eq. PA) of each episode, in input order: None for an errored
-    episode or ``|G_base| = 0`` (formula and edge cases: :func:`positional_accuracy_score`)."""
+    episode or ``|G_base| = 0`` (formula and edge cases: :func:`positional_accuracy_score`).
+
+    :param items: Trajectories or their :class:`EpisodeMetrics`.
+    :returns: ``PA`` in [0, 1] or None, one per item.
+    """
     return tuple(m.pa for m in as_episode_metrics(items))
 
 
@@ -77,6 +81,10 @@ def tbs_curve(items: Iterable[EpisodeLike], *, t_max: int | None = None) -> TBSC
     good map is not averaged as if it had forgotten everything; its curve is flat from then on.
     ``t_max`` defaults to the largest ``max_steps`` of the episodes. No usable episode: empty
     curve.
+
+    :param items: The episodes to average; errored ones are left out.
+    :param t_max: Last step of the curve; None for the largest ``max_steps``.
+    :returns: A :class:`TBSCurve`: mean and sd of ``TBS(t)`` for ``t = 0..t_max``, and ``n``.
     """
     kept, errored = split_errored(items)
     usable = [m for m in kept if m.tbs]
@@ -90,7 +98,11 @@ def tbs_curve(items: Iterable[EpisodeLike], *, t_max: int | None = None) -> TBSC
 
 
 def forgetting_spells(items: Iterable[EpisodeLike]) -> tuple[Spell, ...]:
-    """Every out-of-view spell of every non-errored episode (see :mod:`._tracking`)."""
+    """Every out-of-view spell of every non-errored episode (see :mod:`._tracking`).
+
+    :param items: Trajectories or :class:`EpisodeMetrics`; errored episodes contribute none.
+    :returns: The spells, episode by episode in input order.
+    """
     kept, _ = split_errored(items)
     return tuple(s for m in kept for s in m.spells)
 
@@ -114,6 +126,9 @@ def time_to_forget(items: Iterable[EpisodeLike]) -> TimeToForget:
     One spell per object (its first), so frequently re-seen objects do not weigh more. The
     naive mean treats censored spells as if they ended there; use :func:`ebbinghaus` for the
     censoring-aware estimate. No spells: ``mean_observed`` None.
+
+    :param items: The episodes whose objects' first spells are pooled.
+    :returns: A :class:`TimeToForget`: the first spells, their events and the naive mean.
     """
     kept, excluded = split_errored(items)
     spells = tuple(s for m in kept for s in m.ttf_spells)
@@ -157,6 +172,9 @@ def kaplan_meier_anchored(items: Iterable[EpisodeLike]) -> dict[str, AnchoredKM]
     (see :func:`time_to_forget`); see :func:`anchored_km` for censoring and ties. A category
     with ground truth but no spell gives the single point ``(0, C)``. Categories: those in the
     ground truth (landmark, salient, clutter first). No episodes: an empty dict.
+
+    :param items: The episodes pooled into each category's curve and anchor ``C``.
+    :returns: Category name -> :class:`AnchoredKM`, ground-truth categories only.
     """
     kept, _ = split_errored(items)
     pooled = {category: _pooled(kept, category) for category in categories_of(kept)}
@@ -180,6 +198,10 @@ def ebbinghaus(items: Iterable[EpisodeLike], *, points: str = "durations") -> Eb
     No events in a category: EFC ``inf`` with a reason, never a crash; no spells: None. See
     :func:`ebbinghaus_fit` for the R^2 definition and its evaluation ``points`` (negative
     values are expected for abrupt, non-exponential forgetting).
+
+    :param items: The episodes whose first spells are pooled per category.
+    :param points: Where ``R^2`` is evaluated: ``"durations"``, ``"steps"`` or ``"events"``.
+    :returns: An :class:`Ebbinghaus`: EFC and ``R^2`` per category and pooled, with reasons.
     """
     kept, excluded = split_errored(items)
     by_category = {c: pooled_fit(kept, c, points) for c in categories_of(kept)}
@@ -235,6 +257,9 @@ def serial_position(items: Iterable[EpisodeLike]) -> SerialPosition:
 
     No episode for a bin: None. Thirds are those of :func:`discovery_thirds` over each
     episode's discovered objects.
+
+    :param items: The episodes; each contributes its own bin means and its first spells.
+    :returns: A :class:`SerialPosition`: both estimators per third, with ``n`` per bin.
     """
     kept, excluded = split_errored(items)
     bins = [[v for m in kept if (v := m.serial_position[b]) is not None] for b in range(3)]
@@ -298,6 +323,11 @@ def miller_curve(
     Edge cases: no positive rise (a curve that is 0 everywhere, or only falls) gives ``b*``
     and ``m*`` None with a reason; no eligible bin gives None with a reason; no step at all
     gives an empty curve with a reason.
+
+    :param items: The episodes whose steps are binned by previous-map load.
+    :param width: ``w``, the labels per load bin (the paper's 5).
+    :param min_steps: Steps a bin needs to be eligible for the inflection.
+    :returns: A :class:`MillerCurve`: ``ML(b)`` and steps per bin, ``b*`` and ``m*`` or a reason.
     """
     check_positive_int("width", width)
     check_positive_int("min_steps", min_steps)
@@ -342,7 +372,11 @@ class SpatialIdentityResolution:
 
 
 def spatial_identity_resolution(items: Iterable[EpisodeLike]) -> SpatialIdentityResolution:
-    """SIR per episode (see :func:`sir_score`), with undefined episodes counted by reason."""
+    """SIR per episode (see :func:`sir_score`), with undefined episodes counted by reason.
+
+    :param items: The episodes, each scored by :func:`sir_score`.
+    :returns: A :class:`SpatialIdentityResolution`: the defined values and the count per reason.
+    """
     kept, excluded = split_errored(items)
     values = tuple(m.sir for m in kept if m.sir is not None)
     undefined = Counter(m.reasons.get("sir", "undefined") for m in kept if m.sir is None)
@@ -356,6 +390,9 @@ def anova_conditions(items: Iterable[EpisodeLike]) -> Anova:
     Each episode's EFC is ``sum t_j / d`` over its objects' first spells. Episodes with no
     spell (None) or no forgetting event (``inf``) carry no finite strength and are left out
     (the ``groups`` sizes show what was used). See :func:`anova_groups` for degenerate cases.
+
+    :param items: The episodes, grouped by their spec's condition.
+    :returns: The :class:`Anova` of :func:`anova_groups` over the finite strengths.
     """
     kept, _ = split_errored(items)
     groups: dict[str, list[float]] = {}
@@ -425,6 +462,9 @@ def focal_distribution(items: Iterable[EpisodeLike]) -> FocalDistribution:
     (``named_other``: a ``Term`` naming another room; ``no_term``: the budget ran out) and the
     episodes that chose their spawn room (Appendix F's share; an ``X`` never counts).
     Errored episodes are excluded and counted. No episodes: empty ``by_spawn``, ``n = 0``.
+
+    :param items: The episodes, grouped by spawn room.
+    :returns: A :class:`FocalDistribution`: a :class:`FocalRow` per spawn room and overall.
     """
     kept, excluded = split_errored(items)
     by_spawn: dict[str, list[EpisodeMetrics]] = {}
@@ -451,6 +491,9 @@ def consensus(items: Iterable[EpisodeLike]) -> Consensus:
     The mode is taken among the four rooms (``X`` is a failure to choose, never a consensus);
     ties go to the first letter in C, O, K, E order. The denominator is every non-errored
     episode, ``X`` included. No episode: share None; no room ever chosen: letter None, share 0.
+
+    :param items: The episodes whose chosen rooms are pooled over every spawn.
+    :returns: A :class:`Consensus`: the modal room's letter and share, and ``n``.
     """
     kept, _ = split_errored(items)
     if not kept:
@@ -507,6 +550,9 @@ def fpsg(items: Iterable[EpisodeLike]) -> FPSGSummary:
     Means and sample standard deviations over episodes where each is defined; Never-Visited
     and Any-Bias are shares of episodes with a chosen room (Any-Bias: the final map holds no
     object of the chosen room). No such episode: None. One episode: sd None.
+
+    :param items: The episodes, each scored by :func:`grounding_scores`.
+    :returns: An :class:`FPSGSummary`: means and sds of every variant, Never-Visited and Any-Bias.
     """
     kept, excluded = split_errored(items)
     local = [m.fpsg_local for m in kept if m.fpsg_local is not None]

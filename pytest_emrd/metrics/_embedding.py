@@ -29,5 +29,9 @@ def _model() -> Any:
 
 
 def minilm_embed(texts: Sequence[str]) -> np.ndarray:
-    """Sentence embeddings of ``texts`` from all-MiniLM-L6-v2, shape ``(n, 384)``."""
+    """Sentence embeddings of ``texts`` from all-MiniLM-L6-v2, shape ``(n, 384)``.
+
+    :param texts: The texts to embed.
+    :returns: The embeddings, one row per text.
+    """
     return np.asarray(_model().encode(list(texts), convert_to_numpy=True), dtype=float)

@@ -52,6 +52,10 @@ def aec_score(matching: Matching, n_objects: int) -> float | None:
     enters (PA and precision judge where). A fraction in [0, 1]. Empty map: 0.0 (a real
     zero). ``|E| = 0``: None. Worked example: 3 chairs and a table, a map with 4 chairs and a
     sofa the office lacks: ``(min(4, 3) + 0) / 4 = 0.75``.
+
+    :param matching: The terminal map matched to ground truth (:func:`match_map`).
+    :param n_objects: ``|E|``, the objects of the office.
+    :returns: ``AEC`` in [0, 1]; 0.0 for an empty map; None when ``|E| = 0``.
     """
     if n_objects == 0:
         return None
@@ -64,6 +68,9 @@ def te_score(traj: Trajectory) -> int:
     The number of actions executed before ``Term`` or until the budget ran out. Invalid and
     unparseable actions consume a step and count; the ``Term`` action itself does not. A
     ``Term`` on the first step gives 0; an episode without steps gives 0.
+
+    :param traj: The episode.
+    :returns: ``|tau|``, the actions before ``Term`` (0 for none).
     """
     terminal = 1 if traj.status == "terminated" and traj.steps else 0
     return len(traj.steps) - terminal
@@ -84,6 +91,10 @@ def positional_accuracy_score(matching: Matching, g_base: int) -> float | None:
     0.0 otherwise; ``|G_base| = 0`` gives None. Worked example (Appendix B): 5 discoverable
     objects, 3 mapped exactly: ``exp(0) * 3 / 5 = 0.6``; add 3 entries standing for nothing:
     ``u = 3``, ``c = 0``, PA 0.
+
+    :param matching: The terminal map's :class:`Matching`, pairs and unmatched entries.
+    :param g_base: ``|G_base|``, the objects discoverable under the baseline.
+    :returns: ``PA`` in [0, 1]; None when ``g_base = 0``.
     """
     if g_base == 0:
         return None
@@ -103,15 +114,8 @@ def precision_score(matching: Matching) -> float | None:
     (:func:`match_map`). Copies, entries beyond a type's count or far from every object of
     their type, and hallucinated types all lower it.
 
-    Parameters
-    ----------
-    matching
-        The terminal map's :class:`Matching`.
-
-    Returns
-    -------
-    float or None
-        A fraction in [0, 1]; None for an empty map. Worked example: 41 correct entries and
+    :param matching: The terminal map's :class:`Matching`.
+    :returns: ``P`` in [0, 1]; None for an empty map. Worked example: 41 correct entries and
         one "exit sign": ``41 / 42 = 0.976``; 41 correct entries each followed by a copy of
         its label written far from every object of its type: ``41 / 82 = 0.5``.
     """
@@ -133,15 +137,8 @@ def hallucination_score(matching: Matching) -> float | None:
     of that type takes it (:attr:`Matching.unmatched`: an invented instance, beyond the
     type's count or far from every object of its type). So ``H = 1 - P``.
 
-    Parameters
-    ----------
-    matching
-        The terminal map's :class:`Matching`.
-
-    Returns
-    -------
-    float or None
-        A fraction in [0, 1]; None for an empty map. Worked example: 40 chairs and desks of
+    :param matching: The terminal map's :class:`Matching`, unrecognised entries included.
+    :returns: ``H`` in [0, 1]; None for an empty map. Worked example: 40 chairs and desks of
         the office, 2 sofas it lacks and 2 chairs 6 m from every chair: ``4 / 44``; a grid of
         every type over the office is nearly all hallucination.
     """
@@ -161,17 +158,9 @@ def ungrounded_pairs(traj: Trajectory, final: Matching) -> tuple[MatchedPair, ..
     puts ``o`` there, so the entry came from elsewhere (the office's published layout, a
     prompt's inventory, a guess).
 
-    Parameters
-    ----------
-    traj
-        The episode: every step's map and ``visible_ids``.
-    final
-        The matching of its terminal map (:func:`match_map`).
-
-    Returns
-    -------
-    tuple[MatchedPair, ...]
-        The ungrounded pairs, in ``final.pairs`` order; empty when every pair is grounded.
+    :param traj: The episode: every step's map and ``visible_ids``.
+    :param final: The matching of its terminal map (:func:`match_map`).
+    :returns: The ungrounded pairs, in ``final.pairs`` order; empty when every pair is grounded.
     """
     first: dict[str, int] = {}
     shown: dict[str, int] = {}
@@ -202,19 +191,11 @@ def grounded_scores(
     ``AEC_g`` at most the share of objects those two frames showed, and ``UR`` the share it
     did not see; a model that explores and maps what it sees scores ``UR = 0``.
 
-    Parameters
-    ----------
-    traj
-        The episode.
-    final
-        The matching of its terminal map.
-
-    Returns
-    -------
-    tuple
-        ``(grounded_aec, ungrounded_rate, reasons)``: fractions in [0, 1].
-        ``grounded_aec`` is None when ``|E| = 0``; ``ungrounded_rate`` is None when no entry
-        is matched (``|K| = 0``); ``reasons`` says why for each None.
+    :param traj: The episode, read as by :func:`ungrounded_pairs`.
+    :param final: The matching of its terminal map.
+    :returns: ``(grounded_aec, ungrounded_rate, reasons)``, fractions in [0, 1]:
+        ``grounded_aec`` is None when ``|E| = 0``, ``ungrounded_rate`` when no entry is matched
+        (``|K| = 0``); ``reasons`` says why for each None.
     """
     reasons: dict[str, str] = {}
     ungrounded = ungrounded_pairs(traj, final)
@@ -263,6 +244,10 @@ def grounding_scores(traj: Trajectory, final: Matching) -> Grounding:
     ``any_bias``: the final map holds no confirmed object of ``O_F``. Edge cases: no chosen
     room (no ``Term``, or a name that resolves to none) makes all of them None; ``|O_F| = 0``
     makes the local scores None; ``|N_base| = 0`` the global ones.
+
+    :param traj: The episode: its ``Term`` room, the rooms it stood in and ``visible_ids``.
+    :param final: The terminal map's matching, whose pairs are the candidate evidence.
+    :returns: A :class:`Grounding` with the six scores, each None as the edge cases say.
     """
     room = traj.chosen_room
     if room is None:
@@ -307,6 +292,11 @@ def sir_score(traj: Trajectory, track: Track, aec: float | None) -> tuple[float 
     non-empty ``M_first`` and multiplied by the episode's AEC. Returns ``(value, "")`` or
     ``(None, reason)``: no room re-entered, nothing of a re-entered room mapped on the first
     visit, or AEC undefined. Invariant under rigid motions of the map.
+
+    :param traj: The episode, for the rooms the agent stood in step by step.
+    :param track: What the temporal metrics read from it: the label held per object and step.
+    :param aec: The episode's AEC, the anchor (:func:`aec_score`).
+    :returns: ``(SIR, "")`` with SIR in [0, 1], or ``(None, reason)``.
     """
     room_of = {o.object_id: o.room for o in traj.ground_truth.objects}
     held = track.held
@@ -383,6 +373,9 @@ def discovery_thirds(n: int) -> np.ndarray:
 
     Three consecutive bins whose sizes differ by at most one, larger bins first
     (``numpy.array_split``: 30 -> 10/10/10, 10 -> 4/3/3, 2 -> 1/1/0).
+
+    :param n: The number of discovered objects.
+    :returns: An int array of length ``n`` holding 0, 1 or 2 per rank.
     """
     return np.repeat(np.arange(3), [len(b) for b in np.array_split(np.arange(n), 3)])
 
@@ -400,6 +393,9 @@ def serial_position_bins(
     left view while mapped). Ranks are split into thirds by :func:`discovery_thirds`. A bin's
     mean is over its objects with a TTF; a bin with none, or no bin at all (fewer than three
     discovered objects leave later bins empty), gives None for that bin.
+
+    :param ttf_by_rank: TTF per discovery rank, None where the object never left view.
+    :returns: ``(early, middle, late)`` mean TTF in steps, each None when its bin has no TTF.
     """
     third = discovery_thirds(len(ttf_by_rank))
     out: list[float | None] = []
@@ -511,7 +507,11 @@ class EpisodeMetrics(JsonRecord):
 
 
 def episode_metrics(traj: Trajectory) -> EpisodeMetrics:
-    """Compute every per-episode score of ``traj`` (one pass over its steps)."""
+    """Compute every per-episode score of ``traj`` (one pass over its steps).
+
+    :param traj: The episode, errored or not.
+    :returns: Its :class:`EpisodeMetrics`: every per-episode score, with reasons for the None ones.
+    """
     objects_by_category = dict(Counter(o.category for o in traj.ground_truth.objects))
     g_base = len(traj.ground_truth.discoverable_ids)
     if traj.status == "errored":
@@ -637,7 +637,11 @@ EpisodeLike = Trajectory | EpisodeMetrics
 
 
 def as_episode_metrics(items: Iterable[EpisodeLike]) -> list[EpisodeMetrics]:
-    """Episode metrics of each item: computed for a trajectory, passed through otherwise."""
+    """Episode metrics of each item: computed for a trajectory, passed through otherwise.
+
+    :param items: Trajectories, :class:`EpisodeMetrics`, or a mix.
+    :returns: One :class:`EpisodeMetrics` per item, in input order.
+    """
     return [i if isinstance(i, EpisodeMetrics) else episode_metrics(i) for i in items]
 
 

@@ -316,6 +316,11 @@ def evaluate_gates(
     """Compute several gate metrics over the same episodes, matching each episode once.
 
     ``names`` defaults to every registered metric; an unknown name raises ConfigError.
+
+    :param items: Trajectories or :class:`EpisodeMetrics`, matched once and shared.
+    :param names: Gate metrics of :data:`GATE_METRICS` to compute; None for all.
+    :param rng_seed: Seed of every metric's bootstrap CI.
+    :returns: Metric name -> its :class:`Estimate`, in ``names`` order.
     """
     selected = list(GATE_METRICS) if names is None else list(names)
     for name in selected:

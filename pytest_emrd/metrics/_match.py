@@ -151,9 +151,12 @@ def rigid_fit(pred: np.ndarray, true: np.ndarray) -> tuple[np.ndarray, np.ndarra
 
     2-D orthogonal Procrustes without scaling or reflection (Kabsch with ``det R = +1``):
     for centred points ``a_j``, ``b_j`` the rotation maximising ``sum_j b_j . R a_j`` has
-    angle ``atan2(sum a x b, sum a . b)``, and ``t = mean(b) - R mean(a)``. Returns
-    ``(R, t)`` with ``aligned = pred @ R.T + t``. One point, or all points coincident:
-    the identity rotation and the translation between centroids.
+    angle ``atan2(sum a x b, sum a . b)``, and ``t = mean(b) - R mean(a)``. One point, or all
+    points coincident: the identity rotation and the translation between centroids.
+
+    :param pred: The matched entries' positions, k x 2.
+    :param true: Their objects' positions, row by row.
+    :returns: ``(R, t)``: a 2 x 2 rotation and a translation, ``aligned = pred @ R.T + t``.
     """
     pred = np.asarray(pred, dtype=float).reshape(-1, 2)
     true = np.asarray(true, dtype=float).reshape(-1, 2)
@@ -162,7 +165,11 @@ def rigid_fit(pred: np.ndarray, true: np.ndarray) -> tuple[np.ndarray, np.ndarra
 
 
 def layout_scale(xy: np.ndarray) -> float:
-    """RMS distance of points from their centroid (``L_gt``); 0.0 for fewer than 2 points."""
+    """RMS distance of points from their centroid (``L_gt``); 0.0 for fewer than 2 points.
+
+    :param xy: Points, k x 2.
+    :returns: ``L_gt`` in metres.
+    """
     if len(xy) < 2:
         return 0.0
     return float(np.sqrt(np.mean(np.sum((xy - xy.mean(axis=0)) ** 2, axis=1))))
@@ -190,17 +197,10 @@ def pa_coverage(matched: int, unmatched: int, g_base: int) -> float:
     guesses land within the gate of a free object. Without unmatched entries this is the
     paper's factor.
 
-    Parameters
-    ----------
-    matched, unmatched
-        ``|K|`` and ``|U|``.
-    g_base
-        ``|G_base|``, the objects discoverable under the baseline.
-
-    Returns
-    -------
-    float
-        ``c`` in [0, 1]; 0.0 when ``g_base = 0``.
+    :param matched: ``|K|``, entries matched to an object.
+    :param unmatched: ``|U|``, recognised entries left without one.
+    :param g_base: ``|G_base|``, the objects discoverable under the baseline.
+    :returns: ``c`` in [0, 1]; 0.0 when ``g_base = 0``.
     """
     if g_base == 0:
         return 0.0
@@ -212,19 +212,11 @@ def pa_value(pred: np.ndarray, true: np.ndarray, unmatched: int, g_base: int) ->
     """Eq. PA of matched points ``pred`` -> ``true`` (k x 2): what
     :func:`~pytest_emrd.metrics.positional_accuracy_score` reports and step 3 maximises.
 
-    Parameters
-    ----------
-    pred, true
-        The matched entries as written and their objects, row by row.
-    unmatched
-        ``|U|``, recognised entries left without an object.
-    g_base
-        ``|G_base|``.
-
-    Returns
-    -------
-    float
-        ``exp(-RMSE / L_gt) * c`` in [0, 1]; 0.0 without pairs or with ``g_base = 0``.
+    :param pred: The matched entries as written, k x 2.
+    :param true: Their objects, row by row.
+    :param unmatched: ``|U|``, charged by :func:`pa_coverage`.
+    :param g_base: ``|G_base|``.
+    :returns: ``exp(-RMSE / L_gt) * c`` in [0, 1]; 0.0 without pairs or with ``g_base = 0``.
     """
     if not len(pred) or g_base == 0:
         return 0.0
@@ -470,15 +462,8 @@ class StepMatch(NamedTuple):
 def keyed(entries: Sequence[MapEntry]) -> dict[str, MapEntry]:
     """Every entry of a map under a key of its own (step 1 of the module docstring).
 
-    Parameters
-    ----------
-    entries
-        The map as written, in the model's order.
-
-    Returns
-    -------
-    dict[str, MapEntry]
-        The label for its first entry, ``"<label> #<n>"`` for the ``n``-th (the next free
+    :param entries: The map as written, in the model's order.
+    :returns: The label for its first entry, ``"<label> #<n>"`` for the ``n``-th (the next free
         key when a label already is that text), in the model's order.
     """
     out: dict[str, MapEntry] = {}
@@ -652,7 +637,12 @@ def step_matchings(
     steps: Sequence[Sequence[MapEntry]], objects: Sequence[GroundTruthObject]
 ) -> tuple[Matching, ...]:
     """The matching of every step's map of an episode, as the per-step metrics see them
-    (previous frame tried first, previous identities winning exact ties)."""
+    (previous frame tried first, previous identities winning exact ties).
+
+    :param steps: Every step's map, in step order.
+    :param objects: The episode's ground truth.
+    :returns: One :class:`Matching` per step.
+    """
     matcher = Matcher(objects)
     out: list[Matching] = []
     previous: StepMatch | None = None
@@ -681,6 +671,11 @@ def match_map(
     "exit sign" of type ``Door`` at (10, 25), 15 m from the desks where the door is 4 m from
     them: the desks are matched (``d1`` -> ``Desk_1``), the sign is ``unmatched`` (no motion
     puts it within :data:`GATE_M` of the door while keeping the desks).
+
+    :param entries: The cognitive map's entries.
+    :param objects: The ground-truth objects.
+    :param g_base: ``|G_base|`` for the coverage charge; None for ``len(objects)``.
+    :returns: The :class:`Matching`: pairs, unmatched and unrecognised entries.
     """
     return Matcher(objects, g_base).match(entries)
 
@@ -694,6 +689,13 @@ def reframe(
     ``x -> -x`` when ``mirror`` (an improper motion, which no metric forgives). One motion
     for the whole episode, as a model that picked another origin and heading would write.
     Steps that share a map object (a parse failure repeats the last map) still share it.
+
+    :param traj: The episode whose maps move.
+    :param theta: Rotation in radians.
+    :param dx: Translation along x, metres.
+    :param dz: Translation along z, metres.
+    :param mirror: Mirror ``x -> -x`` before rotating.
+    :returns: A new trajectory; everything but the map coordinates unchanged.
     """
     c, s = math.cos(theta), math.sin(theta)
     sign = -1.0 if mirror else 1.0
@@ -712,7 +714,12 @@ def reframe(
 
 def random_reframe(traj: Trajectory, rng: np.random.Generator) -> Trajectory:
     """:func:`reframe` with a proper motion drawn from ``rng``: a uniform heading and an
-    origin uniform in ``[-100, 100]^2`` metres."""
+    origin uniform in ``[-100, 100]^2`` metres.
+
+    :param traj: The episode to move, as for :func:`reframe`.
+    :param rng: The generator the motion is drawn from.
+    :returns: The reframed trajectory.
+    """
     theta = float(rng.uniform(0.0, 2.0 * math.pi))
     dx, dz = (float(v) for v in rng.uniform(-100.0, 100.0, 2))
     return reframe(traj, theta, dx, dz)

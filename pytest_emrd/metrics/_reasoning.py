@@ -46,6 +46,10 @@ def representative_reasoning(
     ``d-bar = 0``; a zero embedding vector, or a zero centroid (opposite vectors), raises
     ConfigError since cosine distance is undefined. Without the extra and without ``embed``:
     MissingExtraError carrying the pip command.
+
+    :param rationales: One rationale per episode, None where it gave none.
+    :param embed: Texts -> ``(n, k)`` embeddings; None for the ``nlp`` extra's encoder.
+    :returns: A :class:`Representative`: the statement, its index, ``d-bar`` and the skipped count.
     """
     kept = [(i, r) for i, r in enumerate(rationales) if r is not None and r.strip()]
     skipped = len(rationales) - len(kept)

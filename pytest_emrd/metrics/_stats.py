@@ -68,6 +68,12 @@ def bootstrap_ci(
     axis 1. Edge cases: ``n < 2`` gives ``(None, None)``; identical values give a zero-width
     interval; resamples whose statistic is NaN are dropped, and all NaN gives
     ``(None, None)``; ``inf`` is kept (an unbounded end stays unbounded).
+
+    :param data: The sample, one row per unit resampled (an episode).
+    :param statistic: Resamples -> one value each; None for the mean over axis 1.
+    :param rng_seed: Seed of the resampling generator.
+    :param n_resamples: Number of bootstrap resamples.
+    :returns: ``(low, high)``, the 95 % percentile interval, or ``(None, None)``.
     """
     arr = np.asarray(data, dtype=float)
     if len(arr) < 2:
@@ -129,6 +135,9 @@ def chi_square(table: Sequence[Sequence[float]] | np.ndarray) -> ChiSquare:
     carry no information and make ``E_ij = 0``; they are dropped and listed. If fewer than two
     rows or columns remain the statistic is None with a reason. Engine:
     :func:`scipy.stats.chi2_contingency` with ``correction=False`` (the paper's Pearson test).
+
+    :param table: A k x c table of counts, rows groups, columns outcomes.
+    :returns: A :class:`ChiSquare`: statistic, dof, p-value, dropped rows and columns, reason.
     """
     arr = _table(table, "table")
     rows = arr.sum(axis=1) > 0
@@ -161,6 +170,9 @@ def fisher_exact_2x2(table: Sequence[Sequence[float]] | np.ndarray) -> FisherExa
 
     Rows are the reference and the compared group, columns the binary outcome (e.g. chose the
     Conference Room vs any other room). An all-zero row or column gives ``p = 1``.
+
+    :param table: The 2 x 2 counts.
+    :returns: A :class:`FisherExact`: odds ratio and two-sided p-value.
     """
     arr = _table(table, "table")
     if arr.shape != (2, 2):
@@ -183,6 +195,9 @@ def cramers_v(table: Sequence[Sequence[float]] | np.ndarray) -> float | None:
     ``min(k, c)`` counts what is left); agrees with
     :func:`scipy.stats.contingency.association` (``method="cramer"``). An untestable table
     (fewer than two non-empty rows or columns) gives None.
+
+    :param table: A k x c table of counts, as for :func:`chi_square`.
+    :returns: ``V`` in [0, 1], or None for an untestable table.
     """
     res = chi_square(table)
     if res.statistic is None:
@@ -216,6 +231,9 @@ def anova_groups(groups: Mapping[str, Sequence[float]]) -> Anova:
     Non-finite values are dropped; groups left empty are dropped. Fewer than two groups, or no
     within-group variation (every group has a single value), gives None with a reason; all
     values identical gives ``F = 0``-style degeneracy reported as None with a reason.
+
+    :param groups: Group name -> its values.
+    :returns: An :class:`Anova`: F, p-value, group sizes, or None with a reason.
     """
     clean = {
         name: np.asarray([v for v in values if math.isfinite(v)], dtype=float)
@@ -271,6 +289,10 @@ def efc(
     the mean retention time (steps) of an exponential forgetting process under
     non-informative right-censoring. Edge cases: no spell gives None; spells but no event
     gives ``inf`` (nothing was ever forgotten).
+
+    :param durations: Spell lengths ``t_j`` in steps.
+    :param observed: True where the spell ended in forgetting (``delta_j = 1``), False if censored.
+    :returns: ``EFC`` in steps; ``inf`` without events; None without spells.
     """
     t, e = _spell_arrays(durations, observed)
     if t.size == 0:
@@ -333,6 +355,11 @@ def anchored_km(
     ``C`` and never increases. Edge cases: no spells gives the single point ``(0, C)``; no
     events a flat curve at ``C``; ties are counted together. ``coverage`` must lie in
     [0, 1]; durations must be finite and > 0.
+
+    :param durations: Spell lengths in steps, finite and > 0.
+    :param observed: True for a forgetting event, False for a censored spell.
+    :param coverage: The anchor ``C`` in [0, 1].
+    :returns: An :class:`AnchoredKM`: timeline, anchored survival and its 95 % band.
     """
     check_range("coverage", coverage, 0.0, 1.0)
     t, e = _spell_arrays(durations, observed)
@@ -403,6 +430,12 @@ def ebbinghaus_fit(
     mean predicts the KM curve better than the exponential (abrupt forgetting). Edge cases:
     no spells -> efc and r2 None; no events -> efc ``inf`` (reason given), the curve flat at
     ``C``; a KM curve with no variation at the evaluation points -> r2 None with a reason.
+
+    :param durations: Spell lengths in steps, as for :func:`anchored_km`.
+    :param observed: Event flags, one per spell.
+    :param coverage: The anchor ``C`` of both curves.
+    :param points: Evaluation grid of ``R^2``: ``"durations"``, ``"steps"`` or ``"events"``.
+    :returns: An :class:`EbbinghausFit`: EFC, ``R^2`` and the reason for any None or ``inf``.
     """
     check_choice("points", points, R2_POINTS)
     t, e = _spell_arrays(durations, observed)

@@ -108,7 +108,11 @@ def first_spells(spells: tuple[Spell, ...]) -> tuple[Spell, ...]:
 
 
 def track_episode(traj: Trajectory) -> Track:
-    """Walk the steps once (see the module docstring for every definition)."""
+    """Walk the steps once (see the module docstring for every definition).
+
+    :param traj: The episode.
+    :returns: Its :class:`Track`: what the temporal metrics read.
+    """
     gt = traj.ground_truth
     matcher = Matcher(gt.objects, len(gt.discoverable_ids))
     category = {o.object_id: o.category for o in gt.objects}

@@ -296,6 +296,9 @@ def candidate_types(text: str) -> tuple[str, ...]:
     ``("DiningTable", "CoffeeTable", "SideTable", "Desk")``; ``candidate_types("ghost")`` and
     ``candidate_types("exit sign")`` are ``()``; ``candidate_types("chiar")`` is
     ``("Chair",)``.
+
+    :param text: A label or type name as the model wrote it.
+    :returns: Engine types, most likely first; ``()`` for none.
     """
     return _denotes(noun_phrase(head_words(text)))
 
@@ -318,6 +321,10 @@ def canonical_type(text: str, *, present: Iterable[str] | None = None) -> str | 
     layout holds none of the candidates (``canonical_type("sofa", present={"ArmChair"})`` is
     None). Without it, the most likely engine type is returned. None means the text names no
     engine type (or none the layout holds): a hallucination.
+
+    :param text: A label or type name as the model wrote it.
+    :param present: The types the layout holds; None to take the most likely engine type.
+    :returns: The ``objectType``, or None for a hallucination.
     """
     candidates = candidate_types(text)
     if present is None:

@@ -32,6 +32,17 @@ from pytest_emrd.run import (
 )
 from pytest_emrd.trajectory import EpisodeSpec, Trajectory
 
+__all__ = [
+    "emrd_cassette_dir",
+    "emrd_episode",
+    "emrd_record_mode",
+    "emrd_settings",
+    "emrd_store",
+    "emrd_trajectories",
+    "emrd_trajectory",
+    "emrd_verdict",
+]
+
 
 def pytest_addoption(parser: pytest.Parser) -> None:
     group = parser.getgroup("emrd", "pytest-emrd (Explore, Map, Remember, Decide benchmark)")

@@ -297,7 +297,15 @@ def preflight(
 ) -> PreflightReport:
     """Check that ``config`` can run ``episodes`` live episodes like ``spec`` (its modality,
     variant and budget); ``probe=False`` checks the key and estimates without any network.
-    ``models_file``: the user registry that defines it, for the check-again command."""
+    ``models_file``: the user registry that defines it, for the check-again command.
+
+    :param config: The model's registry entry.
+    :param spec: An episode like those to run.
+    :param episodes: How many live episodes.
+    :param probe: Ask the endpoint (one listing, one sample request).
+    :param models_file: The user registry file, if any.
+    :returns: The :class:`PreflightReport`: checks, estimates and refusals.
+    """
     window: Sweep = sweep(spec, single_image=config.single_image)
     messages = window.request(HISTORY_TURNS, sample_reply())
     tokens = request_tokens(messages, image_tokens=config.image_tokens)

@@ -33,7 +33,10 @@ CHARS_PER_TOKEN: Final = 4
 
 
 def sample_reply() -> str:
-    """A reply in the protocol the system prompt asks for (the window's assistant turns)."""
+    """A reply in the protocol the system prompt asks for (the window's assistant turns).
+
+    :returns: The reply text.
+    """
     return json.dumps(
         {
             "observation": "A desk and a chair ahead, a doorway on the right wall.",
@@ -71,7 +74,12 @@ class Sweep:
 
 def sweep(spec: EpisodeSpec, *, single_image: bool) -> Sweep:
     """The first :data:`~pytest_emrd.agent.HISTORY_TURNS` user turns of ``spec`` on the
-    built-in world, turning right."""
+    built-in world, turning right.
+
+    :param spec: The episode whose modality, variant and budget apply.
+    :param single_image: Whether each request carries only the newest frame.
+    :returns: The :class:`Sweep`: system prompt and user turns.
+    """
     sim = build_simulator("builtin")
     try:
         layout, obs = start_world(spec, sim)
@@ -93,13 +101,22 @@ def _parts(message: dict[str, Any]) -> list[dict[str, Any]]:
 
 
 def count_images(messages: list[dict[str, Any]]) -> int:
-    """Image parts in OpenAI-format messages."""
+    """Image parts in OpenAI-format messages.
+
+    :param messages: The chat messages.
+    :returns: The number of image parts.
+    """
     return sum(part.get("type") == "image_url" for m in messages for part in _parts(m))
 
 
 def request_tokens(messages: list[dict[str, Any]], *, image_tokens: int) -> int:
     """Estimated prompt tokens: text characters / :data:`CHARS_PER_TOKEN`, plus
-    ``image_tokens`` per image (the registry's figure for the provider)."""
+    ``image_tokens`` per image (the registry's figure for the provider).
+
+    :param messages: The chat messages of one request.
+    :param image_tokens: Tokens charged per image.
+    :returns: The estimate.
+    """
     texts = [p["text"] for m in messages for p in _parts(m) if p.get("type") == "text"]
     chars = sum(map(len, texts))
     return math.ceil(chars / CHARS_PER_TOKEN) + image_tokens * count_images(messages)

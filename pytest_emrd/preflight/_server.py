@@ -54,7 +54,12 @@ class ServerInfo:
 
 def models_url(provider: str, base_url: str) -> str:
     """The model listing of an endpoint (Anthropic's lives under ``/v1``), joined as the
-    clients join their endpoints: after the base path, the base query kept."""
+    clients join their endpoints: after the base path, the base query kept.
+
+    :param provider: The provider's name (``openai``, ``anthropic``, ...).
+    :param base_url: The endpoint's base URL.
+    :returns: The listing's URL.
+    """
     from pytest_emrd.agent import endpoint_url
 
     return endpoint_url(base_url, "/v1/models" if provider == "anthropic" else "/models")
@@ -67,7 +72,13 @@ def _entries(data: Any) -> list[dict[str, Any]]:
 
 def server_info(url: str, model_id: str, *, headers: dict[str, str] | None = None) -> ServerInfo:
     """``GET url`` with ``headers`` (the key, when there is one); never raises for a network
-    or protocol failure."""
+    or protocol failure.
+
+    :param url: The model listing's URL (:func:`models_url`).
+    :param model_id: The model whose entry is looked for.
+    :param headers: Request headers, the key included.
+    :returns: The :class:`ServerInfo`: what the server said, or the failure.
+    """
     try:
         response = httpx.get(url, timeout=LIST_TIMEOUT_S, headers=headers)
     except httpx.HTTPError as exc:
@@ -135,6 +146,12 @@ def vllm_refusal(
 
     ``images`` is how many frames the window sends; ``max_tokens`` the completion budget;
     ``prompt_tokens`` our estimate of the largest request, used when vLLM does not say.
+
+    :param message: The HTTP error text.
+    :param images: Frames per request.
+    :param max_tokens: The completion budget.
+    :param prompt_tokens: Our estimate of the largest prompt.
+    :returns: The :class:`Refusal` with its fix, or None.
     """
     if match := _IMAGES.search(message):
         limit = json.dumps({"image": images})

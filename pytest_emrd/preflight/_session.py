@@ -27,7 +27,15 @@ def live_grid(
     modality_of: Callable[[str], str] | None = None,
 ) -> dict[str, list[EpisodeSpec]]:
     """Model -> its episodes that will be recorded live (in order, without duplicates);
-    ``modality_of``: each model's default modality, which places a cassette."""
+    ``modality_of``: each model's default modality, which places a cassette.
+
+    :param specs: The run's episodes.
+    :param cassettes: The cassette folder.
+    :param record_mode: The run's record mode.
+    :param holds: Whether the store already holds an episode (it will not run).
+    :param modality_of: Model name -> default modality; None for each spec's own.
+    :returns: Model -> its live episodes; models without one left out.
+    """
     grid: dict[str, list[EpisodeSpec]] = {}
     for spec in dict.fromkeys(specs):
         live = is_live(spec, cassettes=cassettes, record_mode=record_mode, modality_of=modality_of)
@@ -40,7 +48,13 @@ def preflight_live(
     grid: Mapping[str, Sequence[EpisodeSpec]], registry: Any, models_file: Path | None = None
 ) -> list[PreflightReport]:
     """One preflight per model of ``grid``, estimating exactly its live episodes
-    (``models_file``: the user registry, named in the check-again command)."""
+    (``models_file``: the user registry, named in the check-again command).
+
+    :param grid: Model -> its live episodes (:func:`live_grid`).
+    :param registry: The model registry.
+    :param models_file: The user registry file, if any.
+    :returns: One :class:`PreflightReport` per model.
+    """
     where = None if models_file is None else str(models_file)
     return [
         preflight(registry.get(model), specs[0], episodes=len(specs), models_file=where)
@@ -95,6 +109,10 @@ def params_of_node_ids(ids: Iterable[str], by_id: Callable[[], Mapping[str, Any]
     when some id has an EMRD shape, so other sessions stay untouched) maps each case and
     gate id to its parameter; an id that combines it with other parameters
     (``[scout-baseline-office-ep00-fast]``) is matched on ``-`` boundaries.
+
+    :param ids: pytest node ids.
+    :param by_id: Returns case or gate id -> parameter; called at most once.
+    :returns: The parameters found, in id order.
     """
     found = [m["id"] for i in ids if (m := _EMRD_ID.search(i))]
     if not found:

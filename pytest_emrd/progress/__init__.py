@@ -27,6 +27,19 @@ from pytest_emrd._logging import RETRY_ATTR, ROOT_LOGGER
 from pytest_emrd._serde import from_dict, to_dict
 from pytest_emrd.trajectory import EpisodeSpec, Step, Trajectory
 
+__all__ = [
+    "INTERVAL_S",
+    "LIVE_FOLDER",
+    "POLL_S",
+    "EpisodeWatch",
+    "LiveBoard",
+    "StatusFile",
+    "Ticker",
+    "WorkerStatus",
+    "read_statuses",
+    "render_line",
+]
+
 LIVE_FOLDER: Final = "live"
 #: Seconds between two lines when nothing urgent happened.
 INTERVAL_S: Final = 10.0
@@ -61,6 +74,8 @@ class StatusFile:
 
     Episodes computed ahead in threads (``--emrd-concurrency``) each get their own file,
     ``<worker>-t<n>.json``: one status per running episode.
+
+    :param folder: The session folder; the files go to its ``live`` subfolder.
     """
 
     def __init__(self, folder: Path) -> None:
@@ -89,7 +104,11 @@ class StatusFile:
 
 
 def read_statuses(folder: Path) -> list[WorkerStatus]:
-    """Every readable status file under ``folder``, by worker name."""
+    """Every readable status file under ``folder``, by worker name.
+
+    :param folder: The session's live folder.
+    :returns: The :class:`WorkerStatus` of each worker; unreadable files skipped.
+    """
     statuses = []
     for path in sorted((folder / LIVE_FOLDER).glob("*.json")):
         try:
@@ -104,7 +123,12 @@ def _retries(statuses: Sequence[WorkerStatus]) -> int:
 
 
 def render_line(statuses: Sequence[WorkerStatus], total: int) -> str:
-    """The live line for ``statuses`` (``total`` live episodes planned in this session)."""
+    """The live line for ``statuses`` (``total`` live episodes planned in this session).
+
+    :param statuses: Every worker's status.
+    :param total: Live episodes planned this session.
+    :returns: The one-line summary.
+    """
     finished = sum(s.finished for s in statuses)
     errored = sum(s.errored for s in statuses)
     retries = _retries(statuses)
@@ -153,7 +177,12 @@ class LiveBoard:
 
 
 class Ticker:
-    """Polls a :class:`LiveBoard` from a daemon thread and hands each line to ``write``."""
+    """Polls a :class:`LiveBoard` from a daemon thread and hands each line to ``write``.
+
+    :param board: The board to poll.
+    :param write: Prints a line on the controller's terminal.
+    :param poll: Seconds between polls.
+    """
 
     def __init__(self, board: LiveBoard, write: Callable[[str], None], *, poll: float = POLL_S):
         self.board, self.write, self.poll = board, write, poll
@@ -182,7 +211,12 @@ log = logging.getLogger(f"{ROOT_LOGGER}.episode")
 class EpisodeWatch(logging.Handler):
     """Progress of one episode, started on the calling thread: step logging (its
     :meth:`on_step` is the loop's ``on_step``), retry counting (in a ``with`` block: added to
-    the package's logger), optional status publishing."""
+    the package's logger), optional status publishing.
+
+    :param spec: The episode.
+    :param live: Whether it asks the model (steps then log at INFO and the status is published).
+    :param status: Where to publish; None for nowhere.
+    """
 
     def __init__(self, spec: EpisodeSpec, *, live: bool, status: StatusFile | None = None):
         super().__init__(level=logging.DEBUG)

@@ -73,7 +73,11 @@ TEXT_SUFFIXES: Final = frozenset({".md", ".html", ".json", ".txt", ".csv"})
 
 
 def check_formats(formats: Iterable[str]) -> list[str]:
-    """The requested formats, deduplicated; ConfigError naming an unknown one."""
+    """The requested formats, deduplicated; ConfigError naming an unknown one.
+
+    :param formats: Names among ``md``, ``html``, ``json``.
+    :returns: The formats, in first-seen order.
+    """
     wanted = list(dict.fromkeys(formats))
     for f in wanted:
         check_choice("format", f, FORMATS, hint="Use a comma-separated list such as md,html.")
@@ -84,7 +88,13 @@ def render_files(
     report: Report, formats: Iterable[str] = FORMATS, *, processes: int = 1
 ) -> dict[str, bytes]:
     """File name -> content: ``report.md`` with its PNGs, ``report.html``, ``report.json``;
-    ``processes`` > 1 draws the figures in that many worker processes (same bytes)."""
+    ``processes`` > 1 draws the figures in that many worker processes (same bytes).
+
+    :param report: The report to render.
+    :param formats: Which files to render (:func:`check_formats`).
+    :param processes: Processes drawing the figures.
+    :returns: File name -> bytes.
+    """
     wanted = check_formats(formats)
     doc: Document | None = None
     pngs: dict[str, bytes] = {}
@@ -127,7 +137,16 @@ def step_summary_markdown(
     the gate table, Exploration Competence and FPSG (no figures, no sentence encoder);
     ``thresholds_source`` names the thresholds file (default ``thresholds`` when there are
     verdicts); ``episode_metrics`` and ``prices`` as :func:`build_report` takes them;
-    ``gates_note`` says why no gate ran (a shard)."""
+    ``gates_note`` says why no gate ran (a shard).
+
+    :param episodes: The run's episodes.
+    :param verdicts: Its gate verdicts.
+    :param thresholds_source: The thresholds file's name.
+    :param episode_metrics: The episodes' metrics, if measured already.
+    :param prices: Model -> USD per million tokens, for the usage table.
+    :param gates_note: Why no gate ran, if none did.
+    :returns: The Markdown text.
+    """
     source = thresholds_source or ("thresholds" if verdicts else None)
     report = build_report(
         episodes,
@@ -143,19 +162,34 @@ def step_summary_markdown(
 
 def registry_prices(registry: Registry, models: Iterable[str]) -> Prices:
     """Model -> (USD per million input tokens, per million output) of each model ``registry``
-    knows (a model it does not know has no price)."""
+    knows (a model it does not know has no price).
+
+    :param registry: The model registry.
+    :param models: The models of the run.
+    :returns: Model -> ``(input, output)`` USD per million tokens.
+    """
     configs = {m: registry.get(m) for m in models if m in registry.names()}
     return {m: (c.price_per_mtok_in, c.price_per_mtok_out) for m, c in configs.items()}
 
 
 def render_comparison(comparison: Comparison, formats: Iterable[str] = FORMATS) -> dict[str, bytes]:
-    """File name -> content of a run comparison: ``compare.md``, ``.html``, ``.json``."""
+    """File name -> content of a run comparison: ``compare.md``, ``.html``, ``.json``.
+
+    :param comparison: The result of :func:`compare_runs`.
+    :param formats: Which files to render.
+    :returns: File name -> bytes.
+    """
     return _files("compare", check_formats(formats), compare_document(comparison), {}, comparison)
 
 
 def write_files(files: Mapping[str, bytes], out_dir: Path) -> list[Path]:
     """Write each ``name -> content`` into ``out_dir`` (created if needed), atomically; text
-    files are scrubbed of secrets first (a report quotes errored episodes' causes)."""
+    files are scrubbed of secrets first (a report quotes errored episodes' causes).
+
+    :param files: File name -> content.
+    :param out_dir: The folder to write into.
+    :returns: The paths written.
+    """
     for name, content in files.items():
         text = Path(name).suffix in TEXT_SUFFIXES
         write_bytes_atomic(out_dir / name, scrub_bytes(content) if text else content)
@@ -164,7 +198,11 @@ def write_files(files: Mapping[str, bytes], out_dir: Path) -> list[Path]:
 
 def append_step_summary(text: str) -> bool:
     """Append ``text`` (Markdown, scrubbed of secrets) to ``$GITHUB_STEP_SUMMARY``; ``False``
-    when it is not set."""
+    when it is not set.
+
+    :param text: Markdown to append.
+    :returns: Whether it was written.
+    """
     target = os.environ.get("GITHUB_STEP_SUMMARY")
     if not target:
         return False
@@ -178,5 +216,12 @@ def write_report(
     report: Report, out_dir: Path, formats: Iterable[str] = FORMATS, *, processes: int = 1
 ) -> list[Path]:
     """Render ``report`` in ``formats`` (figures drawn in ``processes`` processes) and write it
-    into ``out_dir``; the paths written."""
+    into ``out_dir``; the paths written.
+
+    :param report: The report.
+    :param out_dir: The folder to write into.
+    :param formats: Which files to write.
+    :param processes: Processes drawing the figures.
+    :returns: The paths written.
+    """
     return write_files(render_files(report, formats, processes=processes), out_dir)

@@ -201,7 +201,12 @@ def align_map(
 ) -> tuple[tuple[MapPoint, ...], float, float | None]:
     """A cognitive map moved by :func:`rigid_fit` of its matched pairs onto the ground truth
     (unmatched entries move with it; a repeated label is shown once): the points, the fit's
-    rotation in degrees and the RMS residual of the pairs (None without pairs)."""
+    rotation in degrees and the RMS residual of the pairs (None without pairs).
+
+    :param entries: The map as written.
+    :param matching: Its matching to ground truth.
+    :returns: ``(points, rotation_deg, rms)``.
+    """
     matched = {p.label: p.object_id for p in matching.pairs}
     rot, shift = np.eye(2), np.zeros(2)
     rmse = None
@@ -251,7 +256,11 @@ def group_cells(
 ) -> dict[tuple[str, str, str], list[EpisodeMetrics]]:
     """Episodes by (model, variant, condition): models sorted (:func:`cell_model`, so generated
     layouts form cells of their own), variants and conditions in the paper's order, episodes in
-    case-id order within a cell."""
+    case-id order within a cell.
+
+    :param measured: The episodes' metrics.
+    :returns: ``(model, variant, condition)`` -> its episodes, in the order above.
+    """
     cells: dict[tuple[str, str, str], list[EpisodeMetrics]] = {}
     for m in sorted(measured, key=lambda m: m.spec.case_id):
         cells.setdefault((cell_model(m.spec), m.spec.variant, m.spec.condition), []).append(m)
@@ -361,7 +370,19 @@ def build_report(
     ``prices`` adds estimated cost to the usage table; ``with_reasoning=False`` leaves the
     reasoning table empty (no encoder loaded); ``episode``: the case id the map figure shows
     (default: the first baseline episode with a map); ``processes`` > 1 aligns that episode
-    in a forked worker while the tables are computed (same result)."""
+    in a forked worker while the tables are computed (same result).
+
+    :param episodes: Trajectories or stored episodes of one or several runs.
+    :param verdicts: The gate verdicts, or None for no gate table.
+    :param thresholds_source: The thresholds file the verdicts come from.
+    :param embed: Texts -> embeddings; None for the ``nlp`` extra's encoder.
+    :param prices: Model -> USD per million input and output tokens.
+    :param with_reasoning: Build the reasoning table (loads the encoder).
+    :param episode_metrics: The episodes' metrics, in ``episodes`` order, if measured already.
+    :param episode: Case id of the map figure's episode.
+    :param processes: Processes that align the map figure's steps.
+    :returns: The :class:`Report`.
+    """
     stored = [e if isinstance(e, StoredEpisode) else _wrap(e) for e in episodes]
     heads = [e.head for e in stored]
     overview = _overview(heads, prices)

@@ -289,7 +289,11 @@ def _te_with_aec(diffs: tuple[Difference, ...]) -> tuple[Difference, ...]:
 
 def compare_lines(c: Comparison) -> list[str]:
     """One terminal line per metric and cell: both values, ``B - A`` with its CI, the Holm p
-    and the verdict (and why, when there is a reason)."""
+    and the verdict (and why, when there is a reason).
+
+    :param c: The comparison.
+    :returns: The lines, without newlines.
+    """
     lines = []
     for d in c.differences:
         who = d.model if d.model == d.model_b else f"{d.model} vs {d.model_b}"
@@ -316,6 +320,13 @@ def compare_runs(
     ``models=(A, B)`` compares model ``A`` of ``run_a`` with model ``B`` of ``run_b`` (pass
     the same trajectories twice to compare two models of one run); without it, cells are
     matched by model name.
+
+    :param run_a: The reference run's trajectories.
+    :param run_b: The compared run's trajectories.
+    :param names: How the two runs are named in the output.
+    :param models: ``(A, B)``, the model of each run to compare; None to match by name.
+    :param rng_seed: Seed of the bootstrap CIs.
+    :returns: The :class:`Comparison`.
     """
     cells_a = group_cells(as_episode_metrics(run_a))
     cells_b = group_cells(as_episode_metrics(run_b))

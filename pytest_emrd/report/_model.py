@@ -23,7 +23,12 @@ SCHEMA_VERSION: Final = 1
 
 
 def row_label(model: str, variant: str) -> str:
-    """``gemini`` for the default prompt, ``gemini [B3]`` for a prompt variant."""
+    """``gemini`` for the default prompt, ``gemini [B3]`` for a prompt variant.
+
+    :param model: The model name.
+    :param variant: The prompt variant.
+    :returns: The row label.
+    """
     return model if variant == "default" else f"{model} [{variant}]"
 
 

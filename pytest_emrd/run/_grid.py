@@ -15,7 +15,14 @@ ModalityOf = Callable[[str], str]
 def cell_specs(
     settings: RunSettings, model: str, condition: str, modality_of: ModalityOf
 ) -> list[EpisodeSpec]:
-    """The episodes of one model x condition cell: spawns x episodes, in grid order."""
+    """The episodes of one model x condition cell: spawns x episodes, in grid order.
+
+    :param settings: The run's settings.
+    :param model: The cell's model.
+    :param condition: The cell's condition.
+    :param modality_of: Model name -> default modality.
+    :returns: The cell's :class:`EpisodeSpec` list.
+    """
     shared = {
         "variant": settings.variant,
         "modality": settings.modality or modality_of(model),
@@ -34,7 +41,12 @@ def _cells(settings: RunSettings) -> list[tuple[str, str]]:
 
 
 def episode_specs(settings: RunSettings, modality_of: ModalityOf) -> list[EpisodeSpec]:
-    """Every episode of the run (all shards), sorted: model, condition, spawn, episode."""
+    """Every episode of the run (all shards), sorted: model, condition, spawn, episode.
+
+    :param settings: The run's settings: models, conditions, spawns, episodes.
+    :param modality_of: Default modality per model, as for :func:`cell_specs`.
+    :returns: The sorted specs.
+    """
     return [
         spec
         for model, condition in _cells(settings)
@@ -43,13 +55,24 @@ def episode_specs(settings: RunSettings, modality_of: ModalityOf) -> list[Episod
 
 
 def shard(specs: Sequence[EpisodeSpec], k: int, n: int) -> list[EpisodeSpec]:
-    """The k-th of n round-robin slices (1-based): balanced across models and conditions."""
+    """The k-th of n round-robin slices (1-based): balanced across models and conditions.
+
+    :param specs: Every episode, in grid order.
+    :param k: This shard, from 1.
+    :param n: The number of shards.
+    :returns: The shard's episodes.
+    """
     return list(specs[k - 1 :: n])
 
 
 def gate_cells(settings: RunSettings, thresholds: Thresholds) -> list[GateCell]:
     """One gate per selected model x condition x thresholded metric, in file order: the bounds
-    of the run's layouts only (``baseline`` for paper, ``baseline@generated`` for generated)."""
+    of the run's layouts only (``baseline`` for paper, ``baseline@generated`` for generated).
+
+    :param settings: The run's settings.
+    :param thresholds: The gates.
+    :returns: The :class:`GateCell` list.
+    """
     return [
         GateCell(bound, settings.variant)
         for model, condition in _cells(settings)

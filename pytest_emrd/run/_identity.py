@@ -76,7 +76,11 @@ class RunIdentity:
 
 
 def read_identity(run_dir: Path) -> RunIdentity | None:
-    """The identity recorded in ``run_dir``, or ``None`` when it has none."""
+    """The identity recorded in ``run_dir``, or ``None`` when it has none.
+
+    :param run_dir: A run directory.
+    :returns: Its :class:`RunIdentity`, or None.
+    """
     path = run_dir / RUN_FILE
     try:
         identity = RunIdentity.from_dict(json.loads(path.read_bytes()))
@@ -97,7 +101,12 @@ def read_identity(run_dir: Path) -> RunIdentity | None:
 
 
 def check_resume(run_dir: Path, shard: tuple[int, int] | None) -> None:
-    """Refuse to write shard ``shard`` into a run directory that holds another shard."""
+    """Refuse to write shard ``shard`` into a run directory that holds another shard.
+
+    :param run_dir: The run directory resumed.
+    :param shard: ``(k, n)``, or None for an unsharded run.
+    :raises ConfigError: When the directory holds another shard.
+    """
     found = read_identity(run_dir)
     if found is not None and found.shard != shard:
         wanted = f"{shard[0]}/{shard[1]}" if shard else "the whole grid"
@@ -109,7 +118,12 @@ def check_resume(run_dir: Path, shard: tuple[int, int] | None) -> None:
 
 
 def write_identity(run_dir: Path, identity: RunIdentity) -> None:
-    """Record ``identity`` in ``run_dir`` under its lock, refusing another shard's directory."""
+    """Record ``identity`` in ``run_dir`` under its lock, refusing another shard's directory.
+
+    :param run_dir: The run directory.
+    :param identity: The grid and shard to record.
+    :raises ConfigError: When the directory holds another shard.
+    """
     path = run_dir / RUN_FILE
     blob = json.dumps(identity.to_dict(), sort_keys=True, indent=1).encode()
     with run_lock(run_dir, RUN_FILE):
@@ -120,7 +134,12 @@ def write_identity(run_dir: Path, identity: RunIdentity) -> None:
 
 def check_shard_set(run_dirs: Sequence[Path], *, allow_partial: bool = False) -> list[str]:
     """The problems of ``run_dirs`` as shard sets (missing or repeated shards and their
-    directories; empty when complete), a :class:`ConfigError` unless ``allow_partial``."""
+    directories; empty when complete), a :class:`ConfigError` unless ``allow_partial``.
+
+    :param run_dirs: The directories of one sharded run.
+    :param allow_partial: Return the problems instead of raising.
+    :returns: The problems, one line each; empty when the set is complete.
+    """
     problems: list[str] = []
     seen: dict[Path, Path] = {}
     groups: dict[str, list[tuple[Path, RunIdentity]]] = defaultdict(list)
@@ -175,7 +194,11 @@ def _group_problems(members: list[tuple[Path, RunIdentity]]) -> list[str]:
 
 def scratch_dir(run_dir: Path) -> Path:
     """The folder of ``run_dir``'s locks and session state, not created here (create it with
-    mode 0700): ``<OS temp dir>/pytest-emrd-<uid>/<SHA-256 of the resolved run_dir, 16 hex>``."""
+    mode 0700): ``<OS temp dir>/pytest-emrd-<uid>/<SHA-256 of the resolved run_dir, 16 hex>``.
+
+    :param run_dir: A run directory.
+    :returns: The scratch folder's path.
+    """
     mine = f"pytest-emrd-{os.getuid()}" if hasattr(os, "getuid") else "pytest-emrd"  # Windows:
     key = hashlib.sha256(str(run_dir.resolve()).encode()).hexdigest()[:16]  # a per-user TEMP
     return Path(tempfile.gettempdir()) / mine / key

@@ -246,7 +246,14 @@ def resolve_settings(
 ) -> RunSettings:
     """Apply command line > ini > default, validate, and freeze. ``cli`` and ``ini`` map option
     names to raw values (``None``/empty when not given); relative paths are resolved against
-    ``rootdir``. Warns :class:`MatchingWarning` for ``strict`` on a backend not bit-stable."""
+    ``rootdir``. Warns :class:`MatchingWarning` for ``strict`` on a backend not bit-stable.
+
+    :param cli: Option name -> command-line value.
+    :param ini: Option name -> ini value.
+    :param rootdir: The pytest rootdir.
+    :param env: The environment; None for ``os.environ``.
+    :returns: The frozen :class:`RunSettings`.
+    """
     env = os.environ if env is None else env
     by_name = {o.name: o for o in OPTIONS}
     raw = {name: _pick(option, cli, ini) for name, option in by_name.items()}

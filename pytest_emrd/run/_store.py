@@ -191,17 +191,32 @@ def _unreadable(path: Path, exc: Exception) -> ProtocolError:
 
 
 def episode_path(run_dir: Path, spec: EpisodeSpec) -> Path:
-    """Where a run directory stores ``spec``'s episode."""
+    """Where a run directory stores ``spec``'s episode.
+
+    :param run_dir: The run directory.
+    :param spec: The episode.
+    :returns: The episode file's path.
+    """
     return run_dir / "episodes" / f"{spec.case_id}.json"
 
 
 def new_run_dir(parent: Path) -> Path:
-    """A fresh, not yet created run directory name under ``parent`` (time + random suffix)."""
+    """A fresh, not yet created run directory name under ``parent`` (time + random suffix).
+
+    :param parent: The folder of runs (``.emrd/runs``).
+    :returns: The new directory's path.
+    """
     return parent / f"{time.strftime('%Y%m%d-%H%M%S')}-{secrets.token_hex(3)}"
 
 
 class ResultsStore:
-    """Episodes of one run directory, computed at most once across processes."""
+    """Episodes of one run directory, computed at most once across processes.
+
+    :param run_dir: The run directory.
+    :param session: This pytest session's id (an episode errored in another session is retried).
+    :param protocol: The protocol version a reusable episode must carry.
+    :param identity: The grid and shard recorded before the first episode; None to record none.
+    """
 
     def __init__(
         self, run_dir: Path, *, session: str, protocol: str, identity: RunIdentity | None = None
@@ -251,7 +266,13 @@ class ResultsStore:
 
 
 class Prefetcher:
-    """Computes ``specs`` ahead with ``workers`` threads until :meth:`close`."""
+    """Computes ``specs`` ahead with ``workers`` threads until :meth:`close`.
+
+    :param store: The store the episodes are computed into.
+    :param compute: Runs one episode.
+    :param specs: The episodes to compute ahead.
+    :param workers: Threads.
+    """
 
     def __init__(
         self,
@@ -297,7 +318,15 @@ def start_prefetch(
 ) -> Prefetcher | None:
     """A :class:`Prefetcher` of the live episodes among ``specs`` (those whose cassette will
     be recorded), or None when ``--emrd-concurrency`` is 1 or every episode replays (then the
-    cassette stage is not even imported: a resumed run reads everything from the store)."""
+    cassette stage is not even imported: a resumed run reads everything from the store).
+
+    :param settings: The run's settings (concurrency, cassettes, record mode).
+    :param store: Where finished episodes are written.
+    :param compute: Runs one episode.
+    :param specs: The episodes of this process.
+    :param modality_of: Default modality per model; None for each spec's own.
+    :returns: The started :class:`Prefetcher`, or None.
+    """
     if settings.concurrency <= 1 or settings.replays_only:
         return None
     from pytest_emrd.cassette import is_live
@@ -309,7 +338,11 @@ def start_prefetch(
 
 def read_episode(path: Path) -> StoredEpisode:
     """The episode stored in file ``path``: its head read from the first line, the trajectory
-    decoded on first use (a file of the older layout: decoded and validated in full)."""
+    decoded on first use (a file of the older layout: decoded and validated in full).
+
+    :param path: An episode file of a run directory.
+    :returns: The :class:`StoredEpisode`.
+    """
     with path.open("rb") as file:
         first = file.readline()
         if first.endswith(b",\n"):
@@ -323,7 +356,11 @@ def read_episode(path: Path) -> StoredEpisode:
 
 def load_run_episodes(run_dirs: Sequence[Path]) -> list[StoredEpisode]:
     """The episodes of several run directories (shards), read as :func:`read_episode` reads them
-    and sorted by case id; the first copy of a case wins."""
+    and sorted by case id; the first copy of a case wins.
+
+    :param run_dirs: The run directories, shards of one run or several runs.
+    :returns: The :class:`StoredEpisode` list.
+    """
     seen: dict[str, StoredEpisode] = {}
     for run_dir in run_dirs:
         if not (run_dir / "episodes").is_dir():
@@ -341,7 +378,11 @@ def load_run_episodes(run_dirs: Sequence[Path]) -> list[StoredEpisode]:
 
 
 def load_run_dirs(run_dirs: Sequence[Path]) -> list[Trajectory]:
-    """Trajectories of several run directories (shards); the first copy of a case wins."""
+    """Trajectories of several run directories (shards); the first copy of a case wins.
+
+    :param run_dirs: The run directories.
+    :returns: The trajectories, sorted by case id (:func:`load_run_episodes`).
+    """
     return [stored.trajectory for stored in load_run_episodes(run_dirs)]
 
 
@@ -350,7 +391,12 @@ def measure_episodes(
 ) -> list[EpisodeMetrics]:
     """Each episode's :func:`~pytest_emrd.metrics.episode_metrics`, in order, decoded and
     measured in ``processes`` forked workers (default: every available core; one inside an
-    xdist worker, whose siblings hold the other cores)."""
+    xdist worker, whose siblings hold the other cores).
+
+    :param episodes: The stored episodes.
+    :param processes: Worker processes; None for the default above.
+    :returns: One :class:`EpisodeMetrics` per episode.
+    """
     if processes is None:
         processes = 1 if os.environ.get("PYTEST_XDIST_WORKER") else available_cores()
     return fork_map(_measure, episodes, processes)

@@ -41,7 +41,11 @@ class EpisodeSummary(JsonRecord):
 
 
 def usage_rows(summaries: Iterable[EpisodeSummary]) -> list[UsageRow]:
-    """Tokens, cost (``None`` once an episode has no price), retries and errors per model."""
+    """Tokens, cost (``None`` once an episode has no price), retries and errors per model.
+
+    :param summaries: Every episode's :class:`EpisodeSummary`.
+    :returns: One :class:`UsageRow` per model, sorted by model.
+    """
     rows: dict[str, UsageRow] = {}
     for s in summaries:
         head, model = s.head, s.head.spec.model

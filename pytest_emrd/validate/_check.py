@@ -122,7 +122,11 @@ def _cell(text: str) -> str:
 
 
 def markdown(report: ValidationReport) -> str:
-    """One Markdown table per paper phase, then a one-line summary."""
+    """One Markdown table per paper phase, then a one-line summary.
+
+    :param report: The validation report.
+    :returns: The Markdown text.
+    """
     lines: list[str] = []
     section = None
     for c in report.checks:
@@ -145,5 +149,9 @@ def markdown(report: ValidationReport) -> str:
 
 def to_json(report: ValidationReport) -> str:
     """The report as indented, strict JSON (:meth:`ValidationReport.to_dict`); unbounded and
-    undefined numbers (an EFC with no forgetting event) are the strings ``"inf"``/``"nan"``."""
+    undefined numbers (an EFC with no forgetting event) are the strings ``"inf"``/``"nan"``.
+
+    :param report: The validation report.
+    :returns: The JSON text.
+    """
     return json.dumps(json_safe(report.to_dict()), indent=2, allow_nan=False) + "\n"

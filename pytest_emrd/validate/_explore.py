@@ -50,7 +50,12 @@ def _mean(values: Sequence[float]) -> float:
 
 def exploration_checks(baseline: Sequence[Trajectory], low_light: Sequence[Episode]) -> list[Check]:
     """Scout AEC equals the fraction it was shown, per episode; low_light lowers AEC and
-    raises TE. ``baseline`` must be trajectories (the first row reads the visible ids)."""
+    raises TE. ``baseline`` must be trajectories (the first row reads the visible ids).
+
+    :param baseline: The scout's baseline trajectories.
+    :param low_light: Its ``low_light`` episodes.
+    :returns: The Explore :class:`Check` rows.
+    """
     aec, te = GATE_METRICS["aec"], GATE_METRICS["te"]
     metrics = as_episode_metrics(baseline)
     base_aec, dark_aec = aec.compute(metrics), aec.compute(low_light)
@@ -91,7 +96,11 @@ SCOUT_MIN_LOCAL: Final = 0.9
 
 def prior_checks(trajectories: Sequence[Episode]) -> list[Check]:
     """``prior`` names a room it never entered, from the prompt alone: Never-Visited and
-    Any-Bias 100 %, FPSG 0."""
+    Any-Bias 100 %, FPSG 0.
+
+    :param trajectories: The ``prior`` agent's episodes.
+    :returns: The Decide rows of ``prior``.
+    """
     s = fpsg(trajectories)
     note = f"{s.runs} episodes"
     return [
@@ -106,7 +115,11 @@ def prior_checks(trajectories: Sequence[Episode]) -> list[Check]:
 
 
 def scout_decide_checks(trajectories: Sequence[Episode]) -> list[Check]:
-    """``scout`` chooses a room it swept and remembers: Never-Visited 0 %, FPSG local ~ 1."""
+    """``scout`` chooses a room it swept and remembers: Never-Visited 0 %, FPSG local ~ 1.
+
+    :param trajectories: The ``scout`` agent's episodes.
+    :returns: The Decide rows of ``scout``.
+    """
     s = fpsg(trajectories)
     note = f"{s.runs} episodes"
     return [

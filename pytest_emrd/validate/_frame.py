@@ -59,6 +59,9 @@ def frame_checks(groups: Mapping[str, Sequence[Episode]]) -> list[Check]:
 
     Only trajectories can be re-expressed; metrics-only episodes are skipped (counted in the
     note). No trajectory at all: no row.
+
+    :param groups: Group name -> its episodes.
+    :returns: One :class:`Check` per metric.
     """
     rng = np.random.default_rng(FRAME_SEED)
     worst = dict.fromkeys([*EPISODE_METRICS, *_pooled([])], 0.0)

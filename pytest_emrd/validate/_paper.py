@@ -210,5 +210,8 @@ def appendix_f_checks() -> list[Check]:
 
 
 def statistics_checks() -> list[Check]:
-    """Every statistics row, in table order."""
+    """Every statistics row, in table order.
+
+    :returns: The statistics :class:`Check` rows.
+    """
     return [*inventory_free_checks(), *appendix_e_checks(), *appendix_f_checks()]

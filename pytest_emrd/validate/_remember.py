@@ -50,7 +50,12 @@ _SPAWN_ORDER: Final = {slug: i for i, slug in enumerate(ROOM_SLUGS.values())}
 
 def error_curve(trajectories: Sequence[Episode], planted: float) -> list[tuple[int, float]]:
     """``(N, |EFC_N - planted| / planted)`` over spawn-balanced prefixes of N = 4, 8, ...
-    episodes; a prefix whose EFC is undefined has error ``inf``."""
+    episodes; a prefix whose EFC is undefined has error ``inf``.
+
+    :param trajectories: One group's episodes, spawn-major.
+    :param planted: The planted mean EFC.
+    :returns: ``(N, relative error)`` pairs.
+    """
     ordered = sorted(trajectories, key=lambda t: (t.spec.episode, _SPAWN_ORDER[t.spec.spawn]))
     curve = []
     for n in range(4, len(ordered) + 1, 4):
@@ -60,7 +65,12 @@ def error_curve(trajectories: Sequence[Episode], planted: float) -> list[tuple[i
 
 
 def episodes_needed(curve: Sequence[tuple[int, float]], tolerance: float) -> int | None:
-    """Smallest N from which every larger prefix stays within ``tolerance`` (None: never)."""
+    """Smallest N from which every larger prefix stays within ``tolerance`` (None: never).
+
+    :param curve: ``(N, error)`` pairs by increasing N (:func:`error_curve`).
+    :param tolerance: The largest relative error accepted.
+    :returns: The smallest such N, or None.
+    """
     needed = None
     for n, error in reversed(curve):
         if error > tolerance:
@@ -70,7 +80,11 @@ def episodes_needed(curve: Sequence[tuple[int, float]], tolerance: float) -> int
 
 
 def decay_checks(groups: Mapping[float, Sequence[Episode]]) -> list[Check]:
-    """EFC within 25 % of the planted mean and R^2 >= 0.8, per ``scout-decay-<m>`` group."""
+    """EFC within 25 % of the planted mean and R^2 >= 0.8, per ``scout-decay-<m>`` group.
+
+    :param groups: Planted mean -> its ``scout-decay`` episodes.
+    :returns: One :class:`Check` per group.
+    """
     rows: list[Check] = []
     for mean, trajs in groups.items():
         fit = ebbinghaus(trajs).pooled
@@ -114,7 +128,12 @@ def window_fit_checks(
     windows: Mapping[int, Sequence[Episode]], decays: Mapping[float, Sequence[Episode]]
 ) -> list[Check]:
     """Each ``scout-window-<k>`` fits the exponential visibly worse than the ``scout-decay``
-    whose recovered EFC is nearest its own (matched mean)."""
+    whose recovered EFC is nearest its own (matched mean).
+
+    :param windows: Capacity -> ``scout-window`` episodes.
+    :param decays: Planted mean -> ``scout-decay`` episodes, the comparison.
+    :returns: One :class:`Check` per window.
+    """
     decay_fits = {m: ebbinghaus(t).pooled for m, t in decays.items()}
     rows = []
     for k, trajs in windows.items():
@@ -146,7 +165,12 @@ def miller_checks(
     windows: Mapping[int, Sequence[Episode]], perfect: Sequence[Episode]
 ) -> list[Check]:
     """Inflection ``m*`` within one bin of each planted capacity; perfect memory never
-    forgets at any load."""
+    forgets at any load.
+
+    :param windows: Planted capacity -> its ``scout-window`` episodes.
+    :param perfect: Episodes with perfect memory.
+    :returns: One :class:`Check` per capacity, then the perfect-memory row.
+    """
     rows = []
     for k, trajs in windows.items():
         curve = miller_curve(trajs, width=MILLER_WIDTH)
@@ -186,6 +210,11 @@ def monotone(early: float | None, middle: float | None, late: float | None) -> b
     """Monotone within ``tau`` (:data:`SERIAL_TOLERANCE`): all thirds defined and
     ``min(E, L) / (1 + tau) <= M <= max(E, L) (1 + tau)``. Admits non-decreasing,
     non-increasing and flat profiles (``inf``: no forgetting), rejects a U or an inverted U.
+
+    :param early: Early third's value.
+    :param middle: Middle third's value.
+    :param late: Late third's value.
+    :returns: Whether the profile is monotone within the tolerance.
     """
     if early is None or middle is None or late is None:
         return False
@@ -195,7 +224,13 @@ def monotone(early: float | None, middle: float | None, late: float | None) -> b
 
 def u_depth(early: float | None, middle: float | None, late: float | None) -> float | None:
     """How deep the Middle third dips below the nearer end: ``max(0, 1 - M / min(E, L))``;
-    0 for no dip, 1 for ``inf`` ends and a finite ``M``, None when a third is undefined."""
+    0 for no dip, 1 for ``inf`` ends and a finite ``M``, None when a third is undefined.
+
+    :param early: Early third's value (``inf`` allowed).
+    :param middle: Middle third's value.
+    :param late: Late third's value.
+    :returns: The depth in [0, 1], or None.
+    """
     if early is None or middle is None or late is None:
         return None
     ends = min(early, late)
@@ -233,7 +268,13 @@ def serial_checks(
     """Serial position on the censoring-aware estimate (``mle_*``, the paper's beside it):
     ``scout-serial`` shows the U (E, L > M); no ``scout-window`` does (:func:`u_depth` below
     :data:`MAX_U_DEPTH`, :func:`monotone` noted); with ``perfect`` episodes, a row on the
-    paper's estimator under perfect memory (its censoring bias)."""
+    paper's estimator under perfect memory (its censoring bias).
+
+    :param serial: The ``scout-serial`` episodes.
+    :param windows: Capacity -> ``scout-window`` episodes.
+    :param perfect: Episodes with perfect memory; empty for no such row.
+    :returns: The serial-position :class:`Check` rows.
+    """
     spe = serial_position(serial)
     e, m, late = spe.mle_early, spe.mle_middle, spe.mle_late
     u_shape = e is not None and m is not None and late is not None and min(e, late) > m
@@ -286,7 +327,13 @@ def r2_points_checks(
     windows: Mapping[int, Sequence[Episode]],
     serial: Sequence[Episode],
 ) -> list[Check]:
-    """One row per grid of :data:`~pytest_emrd.metrics.R2_POINTS` (the default first)."""
+    """One row per grid of :data:`~pytest_emrd.metrics.R2_POINTS` (the default first).
+
+    :param decays: Planted mean -> ``scout-decay`` episodes.
+    :param windows: Capacity -> ``scout-window`` episodes.
+    :param serial: The ``scout-serial`` episodes.
+    :returns: One :class:`Check` per grid.
+    """
     rows = []
     for points in R2_POINTS:
         decay = {m: ebbinghaus(t, points=points).pooled for m, t in decays.items()}

@@ -53,7 +53,14 @@ def run_plan(
     plan: Plan, out: Path, *, jobs: int = 2, on_episode: Callable[[Progress], None]
 ) -> dict[str, list[Trajectory]]:
     """Trajectories of every group of ``plan`` (group name -> spawn-major list); cached
-    episodes under ``out`` are reused, the rest run on ``jobs`` processes."""
+    episodes under ``out`` are reused, the rest run on ``jobs`` processes.
+
+    :param plan: The groups and episodes to run.
+    :param out: The folder of cached episodes.
+    :param jobs: Worker processes.
+    :param on_episode: Called with the :class:`Progress` after each episode.
+    :returns: Group name -> its trajectories.
+    """
     check_positive_int("jobs", jobs)
     specs = plan.specs()
     session = secrets.token_hex(6)

@@ -57,7 +57,11 @@ def mimic_checks(groups: Groups) -> list[Check]:
 
 def episode_checks(groups: Groups) -> list[Check]:
     """Every row whose groups were run, in table order: the scout family's rows (Explore,
-    Remember, Decide), then the mimic family's (Map, Explore, Remember, Replies)."""
+    Remember, Decide), then the mimic family's (Map, Explore, Remember, Replies).
+
+    :param groups: Group name -> its episodes.
+    :returns: The :class:`Check` rows.
+    """
     rows = scout_checks(groups) if "scout" in groups else []
     return rows + (mimic_checks(groups) if "mimic" in groups else [])
 
@@ -82,5 +86,11 @@ def scout_checks(groups: Groups) -> list[Check]:
 
 
 def validation_report(groups: Groups, *, episodes: int, protocol: str) -> ValidationReport:
-    """Episode checks followed by the statistics rows."""
+    """Episode checks followed by the statistics rows.
+
+    :param groups: Group name -> its episodes.
+    :param episodes: Episodes per group, as planned.
+    :param protocol: The protocol version the episodes ran under.
+    :returns: The :class:`ValidationReport`.
+    """
     return ValidationReport((*episode_checks(groups), *statistics_checks()), episodes, protocol)

@@ -63,7 +63,11 @@ class Replay:
 def replay_frames(traj: Trajectory) -> Replay:
     """The frame and user text shown at each step of ``traj``, the system prompt and the spawn
     pose; :class:`EmrdError` when the spec's backend cannot be built here (AI2-THOR without
-    its extra or a GPU)."""
+    its extra or a GPU).
+
+    :param traj: The episode to replay.
+    :returns: The :class:`Replay`.
+    """
     sim = build_simulator(traj.spec.backend)
     try:
         spec = traj.spec
@@ -99,7 +103,12 @@ def _json(body: Any) -> Any:
 
 def recorded_digests(traj: Trajectory, cassettes: Path | None) -> Recorded:
     """Frame digests of ``traj``'s cassette under ``cassettes``: the newest image of each
-    request is the frame of that step (a history window carries older ones before it)."""
+    request is the frame of that step (a history window carries older ones before it).
+
+    :param traj: The episode.
+    :param cassettes: The cassette folder; None when there is none.
+    :returns: The :class:`Recorded` digests, or a note why there are none.
+    """
     if traj.spec.modality == "text":
         return Recorded((), "text modality: the model was shown no frame; the frames are what "
                         "its camera would have shown")  # fmt: skip
@@ -148,7 +157,13 @@ class EpisodeView:
 
 def render_episode(traj: Trajectory, *, cassettes: Path | None, gif: bool = False) -> EpisodeView:
     """Re-render, check and lay out one episode (see the module docstring); a backend this
-    machine cannot run leaves the frames out and says why."""
+    machine cannot run leaves the frames out and says why.
+
+    :param traj: The episode.
+    :param cassettes: The cassette folder the frames are checked against; None to skip.
+    :param gif: Also render an animated GIF.
+    :returns: The :class:`EpisodeView`: HTML, GIF and index row.
+    """
     try:
         replay = replay_frames(traj)
         frames, spawn, system, note = replay.frames, replay.spawn, replay.system, None

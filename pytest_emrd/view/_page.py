@@ -89,6 +89,14 @@ def episode_data(
     when ``spawn`` (the spawn pose in it) is known, so every episode of an office reads north
     up; the pose line keeps the spawn-frame odometry the model was shown. ``system`` is the
     system prompt of the episode (None: not rebuilt).
+
+    :param traj: The episode.
+    :param frames: The re-rendered frames.
+    :param recorded: The cassette's frame digests, for the check.
+    :param note: Why frames are missing, if they are.
+    :param spawn: The spawn pose in the office's frame, if known.
+    :param system: The system prompt, if rebuilt.
+    :returns: ``(data, check)``: the page's JSON and the :class:`FrameCheck`.
     """
 
     def place(x: float, z: float) -> tuple[float, float]:
@@ -174,7 +182,12 @@ def _rationale(data: dict[str, Any]) -> str:
 
 
 def episode_page(data: dict[str, Any], frames: Sequence[Frame]) -> str:
-    """The HTML page of one episode (``data`` from :func:`episode_data`)."""
+    """The HTML page of one episode (``data`` from :func:`episode_data`).
+
+    :param data: The page's JSON.
+    :param frames: The frames it indexes.
+    :returns: The HTML text.
+    """
     e = html.escape
     notes = "".join(
         f'<div class="note{" bad" if "differ" in n else ""}">⚠ {e(n)}</div>' for n in data["notes"]
@@ -281,7 +294,11 @@ def _cell(value: Any) -> str:
 
 
 def index_page(rows: Sequence[IndexRow]) -> str:
-    """The index of every episode page written; a click on a column header sorts by it."""
+    """The index of every episode page written; a click on a column header sorts by it.
+
+    :param rows: One :class:`IndexRow` per episode page.
+    :returns: The HTML text.
+    """
     e = html.escape
     header = ["episode", "status", "steps", "chosen room", *INDEX_METRICS]
     header += ["parse failures", "failed actions", "tokens", "error", "frames vs cassette"]

@@ -45,6 +45,10 @@ _TABLE: Final[Mapping[str, ConditionParams]] = {
 
 
 def condition_params(name: str) -> ConditionParams:
-    """The parameters of condition ``name``; ConfigError for an unknown name."""
+    """The parameters of condition ``name``; ConfigError for an unknown name.
+
+    :param name: ``baseline``, ``low_light`` or ``texture``.
+    :returns: The condition's :class:`ConditionParams`.
+    """
     check_choice("condition", name, CONDITIONS, hint="Pick one of the paper's conditions.")
     return _TABLE[name]

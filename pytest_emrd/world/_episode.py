@@ -44,13 +44,22 @@ class EpisodeWorld:
 
 
 def episode_layout(layouts: str, seed: int) -> Layout:
-    """The office of an episode with ``seed`` under ``layouts`` (``paper`` or ``generated``)."""
+    """The office of an episode with ``seed`` under ``layouts`` (``paper`` or ``generated``).
+
+    :param layouts: ``paper`` for the paper's fixed office, ``generated`` for one per seed.
+    :param seed: The episode's seed (unused under ``paper``).
+    :returns: The episode's :class:`Layout`.
+    """
     check_choice("layouts", layouts, LAYOUTS, hint="Use --emrd-layouts=paper or generated.")
     return paper_office() if layouts == "paper" else generate_layout(seed)
 
 
 def episode_world(spec: EpisodeSpec) -> EpisodeWorld:
-    """The world of ``spec``: its office, spawn room and seed."""
+    """The world of ``spec``: its office, spawn room and seed.
+
+    :param spec: The episode.
+    :returns: Its :class:`EpisodeWorld`.
+    """
     check_choice("spawn", spec.spawn, SLUG_ROOMS)
     return EpisodeWorld(episode_layout(spec.layouts, spec.seed), SLUG_ROOMS[spec.spawn], spec.seed)
 
@@ -84,6 +93,11 @@ def ground_truth(layout: Layout, spawn_pose: WorldPose, spawn_room: str) -> Grou
 
     ``spawn_room`` may be a canonical name or a slug; ``discoverable_ids`` is ``G_base``
     (:func:`~pytest_emrd.world.discoverable_ids`), the same for every condition.
+
+    :param layout: The office.
+    :param spawn_pose: The pose whose frame the positions are given in.
+    :param spawn_room: The room the agent starts in.
+    :returns: The :class:`GroundTruth` the metrics compare maps against.
     """
     objects = tuple(
         GroundTruthObject(

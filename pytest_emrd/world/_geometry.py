@@ -37,7 +37,11 @@ def right_of(heading: float) -> tuple[float, float]:
 
 
 def footprint(obj: WorldObject) -> Rect:
-    """The object's axis-aligned floor footprint."""
+    """The object's axis-aligned floor footprint.
+
+    :param obj: The object, rotated by its ``rotation``.
+    :returns: Its footprint rectangle in world coordinates.
+    """
     return rect_at(obj.x, obj.z, obj.width, obj.depth, obj.rotation)
 
 
@@ -59,7 +63,15 @@ def rects_at(
 
 
 def local_to_world(x: float, z: float, rotation: float, u: float, v: float) -> tuple[float, float]:
-    """World point at ``u`` metres right and ``v`` metres forward of a frame at ``(x, z)``."""
+    """World point at ``u`` metres right and ``v`` metres forward of a frame at ``(x, z)``.
+
+    :param x: The frame's origin, world x.
+    :param z: The frame's origin, world z.
+    :param rotation: The frame's heading in degrees.
+    :param u: Metres to the frame's right.
+    :param v: Metres forward.
+    :returns: The world ``(x, z)``.
+    """
     fx, fz = unit(rotation)
     rx, rz = right_of(rotation)
     return x + u * rx + v * fx, z + u * rz + v * fz
@@ -67,7 +79,13 @@ def local_to_world(x: float, z: float, rotation: float, u: float, v: float) -> t
 
 def to_spawn_frame(spawn_pose: WorldPose, x: float, z: float) -> tuple[float, float]:
     """World ``(x, z)`` -> spawn frame: origin at the spawn position, ``+z`` along the spawn
-    heading, ``+x`` to the agent's right."""
+    heading, ``+x`` to the agent's right.
+
+    :param spawn_pose: The spawn pose defining the frame.
+    :param x: World x.
+    :param z: World z.
+    :returns: ``(x, z)`` in the spawn frame, metres.
+    """
     dx, dz = x - spawn_pose.x, z - spawn_pose.z
     fx, fz = unit(spawn_pose.heading)
     rx, rz = right_of(spawn_pose.heading)
@@ -75,7 +93,12 @@ def to_spawn_frame(spawn_pose: WorldPose, x: float, z: float) -> tuple[float, fl
 
 
 def heading_in_spawn_frame(spawn_pose: WorldPose, heading: float) -> float:
-    """World heading -> degrees clockwise from the spawn heading, in ``[0, 360)``."""
+    """World heading -> degrees clockwise from the spawn heading, in ``[0, 360)``.
+
+    :param spawn_pose: The spawn pose the heading is measured from.
+    :param heading: A world heading in degrees.
+    :returns: Degrees in ``[0, 360)``.
+    """
     relative = (heading - spawn_pose.heading) % 360
     return 0.0 if relative >= 360 else relative  # -1e-20 % 360 rounds up to 360.0
 

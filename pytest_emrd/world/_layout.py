@@ -46,7 +46,11 @@ def _dim(rng: StableRng, low: float, high: float) -> float:
 
 
 def generate_layout(seed: int) -> Layout:
-    """The office for ``seed``: deterministic, bit for bit."""
+    """The office for ``seed``: deterministic, bit for bit.
+
+    :param seed: Any integer.
+    :returns: The generated :class:`Layout`.
+    """
     rng = StableRng(seed)
     top, bottom = _dim(rng, 4.8, 6.2), _dim(rng, 4.2, 5.6)
     w_office, w_conf = _dim(rng, 5.2, 7.0), _dim(rng, 5.5, 7.0)

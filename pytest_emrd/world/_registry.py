@@ -37,7 +37,12 @@ BACKENDS: Final[dict[str, Callable[..., Simulator]]] = {"builtin": _builtin, "ai
 
 
 def make_simulator(backend: str = "builtin", **options: Any) -> Simulator:
-    """A new simulator of ``backend`` (``builtin`` or ``ai2thor``) built with ``options``."""
+    """A new simulator of ``backend`` (``builtin`` or ``ai2thor``) built with ``options``.
+
+    :param backend: A name of :data:`BACKENDS`.
+    :param options: Keyword arguments of the backend's simulator.
+    :returns: A fresh :class:`Simulator`.
+    """
     check_choice(
         "backend", backend, BACKENDS, hint="Use --emrd-backend builtin for the numpy world."
     )
@@ -46,7 +51,11 @@ def make_simulator(backend: str = "builtin", **options: Any) -> Simulator:
 
 def world_version(backend: str = "builtin") -> str:
     """The world version a recording on ``backend`` depends on: for ``ai2thor`` joined with the
-    builtin one, whose layouts, spawns and wording THOR episodes use (``ai2thor-2+builtin-6``)."""
+    builtin one, whose layouts, spawns and wording THOR episodes use (``ai2thor-2+builtin-6``).
+
+    :param backend: The backend the recording ran on.
+    :returns: The version string cassettes are keyed on.
+    """
     check_choice("backend", backend, BACKENDS)
     if backend == "builtin":
         return WORLD_VERSION

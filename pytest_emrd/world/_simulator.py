@@ -70,6 +70,10 @@ class BuiltinSimulator(SemanticStep):
     ``room_aliases`` maps extra names ``Term`` accepts to canonical room names (``{"Room A":
     "Office"}``). ``frame_cache`` is how many recent frames of an episode are kept (0: only
     the current one).
+
+    :param room_aliases: Extra room name -> canonical room, for ``Term``.
+    :param jpeg_quality: JPEG quality of the frames, 1-95.
+    :param frame_cache: Recent frames kept per episode.
     """
 
     def __init__(

@@ -23,7 +23,13 @@ ROOM_FILL = {
 
 
 def plan_png(layout: Layout, pose: WorldPose, *, visibility: float) -> bytes:
-    """The plan of ``layout`` with the agent at ``pose`` as PNG bytes."""
+    """The plan of ``layout`` with the agent at ``pose`` as PNG bytes.
+
+    :param layout: The office.
+    :param pose: The agent's pose, drawn with its view.
+    :param visibility: How far the agent sees, metres.
+    :returns: The PNG file's bytes.
+    """
     import matplotlib
 
     matplotlib.use("Agg")
