@@ -26,16 +26,40 @@ from urllib.parse import parse_qsl, quote, quote_plus, urlencode, urlsplit, urlu
 
 REDACTED: Final = "<redacted>"
 #: Query parameters whose value is a credential (compared case-insensitively).
-SECRET_PARAMS: Final = frozenset({
-    "key", "api_key", "apikey", "api-key", "token", "access_token", "refresh_token", "id_token",
-    "auth", "sig", "signature", "secret", "client_secret", "password", "x-goog-api-key",
-    "x-amz-signature", "x-amz-security-token",
-})  # fmt: skip
+SECRET_PARAMS: Final = frozenset(
+    {
+        "key",
+        "api_key",
+        "apikey",
+        "api-key",
+        "token",
+        "access_token",
+        "refresh_token",
+        "id_token",
+        "auth",
+        "sig",
+        "signature",
+        "secret",
+        "client_secret",
+        "password",
+        "x-goog-api-key",
+        "x-amz-signature",
+        "x-amz-security-token",
+    }
+)
 #: Header (and JSON field) names whose value is a credential.
 SECRET_HEADERS: Final = (
-    "authorization", "proxy-authorization", "x-api-key", "api-key", "api_key", "x-goog-api-key",
-    "cookie", "set-cookie", "access_token", "client_secret",
-)  # fmt: skip
+    "authorization",
+    "proxy-authorization",
+    "x-api-key",
+    "api-key",
+    "api_key",
+    "x-goog-api-key",
+    "cookie",
+    "set-cookie",
+    "access_token",
+    "client_secret",
+)
 #: Environment variable names treated as credentials without being registered.
 SECRET_ENV: Final = re.compile(r"(?:^|_)(?:API_KEY|APIKEY|TOKEN|SECRET|SECRET_KEY|ACCESS_KEY)$")
 MIN_SECRET_CHARS: Final = 8

@@ -14,9 +14,18 @@ __all__ = ["COMMANDS", "build_parser", "check_run_dirs", "main", "version_text"]
 
 #: Subcommand modules, in the order ``emrd --help`` lists them.
 COMMANDS: tuple[str, ...] = (
-    "models", "check", "render", "serve", "gate", "thresholds", "report", "view", "cassettes",
-    "validate", "thor_smoke",
-)  # fmt: skip
+    "models",
+    "check",
+    "render",
+    "serve",
+    "gate",
+    "thresholds",
+    "report",
+    "view",
+    "cassettes",
+    "validate",
+    "thor_smoke",
+)
 
 
 def version_text() -> str:

@@ -35,9 +35,12 @@ def _run(args: argparse.Namespace) -> int:
     from pytest_emrd.world import condition_params, episode_world, make_simulator, plan_png
 
     spec = EpisodeSpec(
-        model="-", condition=args.condition, spawn=args.spawn, episode=args.episode,
+        model="-",
+        condition=args.condition,
+        spawn=args.spawn,
+        episode=args.episode,
         layouts=args.layouts,
-    )  # fmt: skip
+    )
     world = episode_world(spec)
     layout = world.layout
     sim = make_simulator("builtin")

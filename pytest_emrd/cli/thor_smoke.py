@@ -89,9 +89,14 @@ def run_smoke(
             runs = {}
             for backend in ("builtin", "ai2thor"):
                 spec = EpisodeSpec(
-                    "scout", condition, spawn, episode, modality="both", layouts=layouts,
+                    "scout",
+                    condition,
+                    spawn,
+                    episode,
+                    modality="both",
+                    layouts=layouts,
                     backend=backend,
-                )  # fmt: skip
+                )
                 traj = pool.run(spec) if backend == "ai2thor" else run_episode(spec)
                 path = out / f"{condition}-{backend}.json"
                 path.write_text(json.dumps(traj.to_dict(), indent=1), encoding="utf-8")

@@ -62,8 +62,11 @@ def _run(args: argparse.Namespace) -> int:
 
     def progress(p: Progress) -> None:
         if p.done % 20 == 0 or p.done == p.total:
-            print(f"[{p.done}/{p.total}] {p.case_id} {p.status} ({p.seconds:.0f} s)",
-                  file=sys.stderr, flush=True)  # fmt: skip
+            print(
+                f"[{p.done}/{p.total}] {p.case_id} {p.status} ({p.seconds:.0f} s)",
+                file=sys.stderr,
+                flush=True,
+            )
 
     groups = run_plan(plan, args.out, jobs=args.jobs, on_episode=progress)
     report = build(groups, episodes=args.episodes, protocol=protocol_version("builtin"))

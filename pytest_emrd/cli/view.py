@@ -20,8 +20,12 @@ _DEFAULT_CASSETTES = Path("cassettes")
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("view", help="HTML pages to step through episodes of a run")
     p.add_argument("run_dir", type=Path, metavar="RUN_DIR", help="run directory")
-    p.add_argument("episodes", nargs="*", metavar="EPISODE",
-                   help="case ids or shell patterns (default: every episode)")  # fmt: skip
+    p.add_argument(
+        "episodes",
+        nargs="*",
+        metavar="EPISODE",
+        help="case ids or shell patterns (default: every episode)",
+    )
     p.add_argument("--out", type=Path, default=None, help="output folder (default RUN_DIR/view)")
     p.add_argument(
         "--cassettes",
@@ -66,9 +70,13 @@ def _run(args: argparse.Namespace) -> int:
         if view.gif:
             write_bytes_atomic(page.with_suffix(".gif"), view.gif)
         check = view.row.check
-        status = (f"{len(check.mismatched)} of {check.checked} frames DIFFER from the cassette"
-                  if check.mismatched else f"{check.checked} frames match the cassette"
-                  if check.checked else f"frames not checked ({check.note})")  # fmt: skip
+        status = (
+            f"{len(check.mismatched)} of {check.checked} frames DIFFER from the cassette"
+            if check.mismatched
+            else f"{check.checked} frames match the cassette"
+            if check.checked
+            else f"frames not checked ({check.note})"
+        )
         print(f"{page} ({page.stat().st_size / 1e6:.2f} MB): {status}")
         rows.append(view.row)
     index = out / "index.html"

@@ -272,11 +272,21 @@ def serial_position(items: Iterable[EpisodeLike]) -> SerialPosition:
     mle = [efc([s.duration for s in ss], [s.forgotten for s in ss]) for ss in thirds]
     early, middle, late = thirds
     return SerialPosition(
-        means[0], means[1], means[2], (len(bins[0]), len(bins[1]), len(bins[2])), excluded,
-        mle[0], mle[1], mle[2], (len(early), len(middle), len(late)),
-        (sum(s.forgotten for s in early), sum(s.forgotten for s in middle),
-         sum(s.forgotten for s in late)),
-    )  # fmt: skip
+        means[0],
+        means[1],
+        means[2],
+        (len(bins[0]), len(bins[1]), len(bins[2])),
+        excluded,
+        mle[0],
+        mle[1],
+        mle[2],
+        (len(early), len(middle), len(late)),
+        (
+            sum(s.forgotten for s in early),
+            sum(s.forgotten for s in middle),
+            sum(s.forgotten for s in late),
+        ),
+    )
 
 
 @dataclass(frozen=True)
@@ -341,8 +351,9 @@ def miller_curve(
     events = np.bincount(b, weights=forgets.astype(float)).astype(np.int64)
     bins = np.flatnonzero(steps)
     probs = events[bins] / steps[bins]
-    eligible = [(0, 0.0)] + [(int(bins[i]), float(probs[i])) for i in range(len(bins))
-                             if steps[bins[i]] >= min_steps]  # fmt: skip
+    eligible = [(0, 0.0)] + [
+        (int(bins[i]), float(probs[i])) for i in range(len(bins)) if steps[bins[i]] >= min_steps
+    ]
     rises = [(p - p_prev, b_now) for (_, p_prev), (b_now, p) in pairwise(eligible)]
     best = max(rises, key=lambda r: r[0], default=(0.0, 0))
     b_star = int(best[1]) if best[0] > 0 else None
@@ -353,9 +364,15 @@ def miller_curve(
             reason = f"no load bin with >= {min_steps} steps: no inflection"
     m_star = None if b_star is None else b_star * width
     return MillerCurve(
-        width, tuple(bins.tolist()), tuple(float(p) for p in probs), tuple(steps[bins].tolist()),
-        tuple(events[bins].tolist()), b_star, m_star, reason,
-    )  # fmt: skip
+        width,
+        tuple(bins.tolist()),
+        tuple(float(p) for p in probs),
+        tuple(steps[bins].tolist()),
+        tuple(events[bins].tolist()),
+        b_star,
+        m_star,
+        reason,
+    )
 
 
 @dataclass(frozen=True)

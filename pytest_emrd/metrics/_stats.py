@@ -256,8 +256,9 @@ def anova_groups(groups: Mapping[str, Sequence[float]]) -> Anova:
     from statsmodels.stats.oneway import anova_oneway  # heavy: imported on first use
 
     res = anova_oneway(list(clean.values()), use_var="equal")
-    return Anova(float(res.statistic), float(res.pvalue), float(res.df_num), float(res.df_denom),
-                 sizes)  # fmt: skip
+    return Anova(
+        float(res.statistic), float(res.pvalue), float(res.df_num), float(res.df_denom), sizes
+    )
 
 
 def _spell_arrays(

@@ -143,8 +143,17 @@ def track_episode(traj: Trajectory) -> Track:
     kind_of = {o.object_id: matcher.types.index[o.object_type] for o in gt.objects}
     spells = _spells(traj, held, matches, kind_of, category, discovery)
     visits = _visits([s.room for s in traj.steps])
-    return Track(tuple(held), final, spells, discovery, tuple(tbs), tuple(loads), tuple(forgets),
-                 visits, matcher)  # fmt: skip
+    return Track(
+        tuple(held),
+        final,
+        spells,
+        discovery,
+        tuple(tbs),
+        tuple(loads),
+        tuple(forgets),
+        visits,
+        matcher,
+    )
 
 
 def discovered(
@@ -180,8 +189,10 @@ def _unchanged_since(written: list[dict[str, MapEntry]], label: str, t: int) -> 
     while since > 0:
         before = written[since - 1].get(label)
         if before is None or (before.object_type, before.x, before.z) != (
-            entry.object_type, entry.x, entry.z,
-        ):  # fmt: skip
+            entry.object_type,
+            entry.x,
+            entry.z,
+        ):
             break
         since -= 1
     return since

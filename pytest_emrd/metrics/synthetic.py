@@ -64,16 +64,33 @@ _DOORWAYS: Final[tuple[tuple[str, str, float, float], ...]] = (
     (KITCHEN, ENTRANCE, 6.0, 2.5),
 )
 _FURNITURE: Final[dict[str, tuple[tuple[str, int, str], ...]]] = {
-    OFFICE: (("Desk", 3, "salient"), ("Chair", 3, "clutter"), ("Laptop", 3, "clutter"),
-             ("ShelvingUnit", 2, "salient"), ("HousePlant", 1, "clutter")),
-    CONFERENCE: (("DiningTable", 1, "salient"), ("Chair", 8, "clutter"),
-                 ("Television", 1, "salient")),
-    KITCHEN: (("Fridge", 1, "salient"), ("CounterTop", 2, "salient"), ("Sink", 1, "clutter"),
-              ("Microwave", 1, "clutter"), ("CoffeeMachine", 1, "clutter"),
-              ("Stool", 2, "clutter")),
-    ENTRANCE: (("Desk", 1, "salient"), ("ArmChair", 2, "salient"), ("HousePlant", 1, "clutter"),
-               ("Door", 1, "landmark")),
-}  # fmt: skip
+    OFFICE: (
+        ("Desk", 3, "salient"),
+        ("Chair", 3, "clutter"),
+        ("Laptop", 3, "clutter"),
+        ("ShelvingUnit", 2, "salient"),
+        ("HousePlant", 1, "clutter"),
+    ),
+    CONFERENCE: (
+        ("DiningTable", 1, "salient"),
+        ("Chair", 8, "clutter"),
+        ("Television", 1, "salient"),
+    ),
+    KITCHEN: (
+        ("Fridge", 1, "salient"),
+        ("CounterTop", 2, "salient"),
+        ("Sink", 1, "clutter"),
+        ("Microwave", 1, "clutter"),
+        ("CoffeeMachine", 1, "clutter"),
+        ("Stool", 2, "clutter"),
+    ),
+    ENTRANCE: (
+        ("Desk", 1, "salient"),
+        ("ArmChair", 2, "salient"),
+        ("HousePlant", 1, "clutter"),
+        ("Door", 1, "landmark"),
+    ),
+}
 _SPELLINGS: Final[dict[str, tuple[str, ...]]] = {
     "DiningTable": ("DiningTable", "dining table", "table"),
     "Television": ("Television", "TV"),
@@ -122,10 +139,15 @@ def _layout(
                 add(kind, room, category, *rng.uniform((x0 + 0.5, z0 + 0.5), (x1 - 0.5, z1 - 0.5)))
     hidden = rng.random(len(objects)) < 0.05
     outlines = tuple(
-        RoomOutline(name, tuple((float(x - origin[0]), float(z - origin[1]))
-                                for x, z in ((x0, z0), (x1, z0), (x1, z1), (x0, z1))))
+        RoomOutline(
+            name,
+            tuple(
+                (float(x - origin[0]), float(z - origin[1]))
+                for x, z in ((x0, z0), (x1, z0), (x1, z1), (x0, z1))
+            ),
+        )
         for name, (x0, z0, x1, z1) in _ROOMS.items()
-    )  # fmt: skip
+    )
     discoverable = tuple(sorted(o.object_id for o, h in zip(objects, hidden, strict=True) if not h))
     return GroundTruth(tuple(objects), outlines, discoverable, spawn_room), doorways
 
@@ -194,18 +216,30 @@ def synthetic_trajectory(
         px, pz = rng.uniform((cx0 + 1, cz0 + 1), (cx1 - 1, cz1 - 1)) - origin
         is_term = terminate and t == n_steps
         steps.append(
-            Step(index=t, pose=Pose(float(px), float(pz), float(90 * rng.integers(0, 4))),
-                 room=room, visible_ids=tuple(sorted(visible)), cognitive_map=cog_map,
-                 action="" if failed else ("Term" if is_term else "Turn(Right)"),
-                 success=not failed, feedback="could not read the reply" if failed else "ok",
-                 parse_error="no JSON object in the reply" if failed else None)
-        )  # fmt: skip
+            Step(
+                index=t,
+                pose=Pose(float(px), float(pz), float(90 * rng.integers(0, 4))),
+                room=room,
+                visible_ids=tuple(sorted(visible)),
+                cognitive_map=cog_map,
+                action="" if failed else ("Term" if is_term else "Turn(Right)"),
+                success=not failed,
+                feedback="could not read the reply" if failed else "ok",
+                parse_error="no JSON object in the reply" if failed else None,
+            )
+        )
     chosen = _CHOICES[int(rng.choice(len(_CHOICES), p=_CHOICE_P))] if terminate else None
     return Trajectory(
-        spec=spec, protocol="synthetic-1", ground_truth=truth, steps=tuple(steps),
-        status="terminated" if terminate else "budget", final_room=room, chosen_room=chosen,
-        chosen_room_raw=chosen, rationale=_RATIONALES[chosen] if chosen else None,
-    )  # fmt: skip
+        spec=spec,
+        protocol="synthetic-1",
+        ground_truth=truth,
+        steps=tuple(steps),
+        status="terminated" if terminate else "budget",
+        final_room=room,
+        chosen_room=chosen,
+        chosen_room_raw=chosen,
+        rationale=_RATIONALES[chosen] if chosen else None,
+    )
 
 
 def synthetic_grid(

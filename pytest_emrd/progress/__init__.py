@@ -244,10 +244,18 @@ class EpisodeWatch(logging.Handler):
         if log.isEnabledFor(self.level_of_steps):
             outcome = "ok" if step.success else "failed"
             unread = f" (reply unreadable: {step.parse_error})" if step.parse_error else ""
-            log.log(self.level_of_steps, "%s step %d/%d: %s %s%s, %s+%s tokens",
-                    self.spec.case_id, step.index, self.spec.max_steps, step.action or "-",
-                    outcome, unread, f"{step.usage.prompt_tokens:,}",
-                    f"{step.usage.completion_tokens:,}")  # fmt: skip
+            log.log(
+                self.level_of_steps,
+                "%s step %d/%d: %s %s%s, %s+%s tokens",
+                self.spec.case_id,
+                step.index,
+                self.spec.max_steps,
+                step.action or "-",
+                outcome,
+                unread,
+                f"{step.usage.prompt_tokens:,}",
+                f"{step.usage.completion_tokens:,}",
+            )
         self._publish(step=step.index)
 
     def emit(self, record: logging.LogRecord) -> None:
@@ -263,13 +271,24 @@ class EpisodeWatch(logging.Handler):
         retries = f", {self.retries} retr{'y' if self.retries == 1 else 'ies'}"
         error = f": {trajectory.error}" if trajectory.error else ""
         level = logging.WARNING if trajectory.status == "errored" else self.level_of_steps
-        log.log(level, "%s: %s after %d steps%s%s", self.spec.case_id, trajectory.status,
-                len(trajectory.steps), retries if self.retries else "", error)  # fmt: skip
+        log.log(
+            level,
+            "%s: %s after %d steps%s%s",
+            self.spec.case_id,
+            trajectory.status,
+            len(trajectory.steps),
+            retries if self.retries else "",
+            error,
+        )
         if self.status is not None:
             totals = self.status.status
-            self.status.update(case=None, retries=0, finished=totals.finished + 1,
-                               errored=totals.errored + (trajectory.status == "errored"),
-                               retries_total=totals.retries_total + self.retries)  # fmt: skip
+            self.status.update(
+                case=None,
+                retries=0,
+                finished=totals.finished + 1,
+                errored=totals.errored + (trajectory.status == "errored"),
+                retries_total=totals.retries_total + self.retries,
+            )
 
     def _publish(self, **changes: object) -> None:
         if self.status is not None:

@@ -107,9 +107,12 @@ def render_files(
 
 
 def _files(
-    stem: str, wanted: list[str], doc: Document | None, pngs: dict[str, bytes],
+    stem: str,
+    wanted: list[str],
+    doc: Document | None,
+    pngs: dict[str, bytes],
     data: Report | Comparison,
-) -> dict[str, bytes]:  # fmt: skip
+) -> dict[str, bytes]:
     """``<stem>.md`` with the PNGs, ``<stem>.html`` and ``<stem>.json`` (every aggregate as
     strict JSON, non-finite floats as strings), as ``wanted``."""
     files: dict[str, bytes] = {}

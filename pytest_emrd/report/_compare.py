@@ -183,8 +183,9 @@ def _sign_flips(n: int, resamples: int, rng: np.random.Generator) -> tuple[np.nd
     return rng.random((resamples, n)) < 0.5, False
 
 
-def _test(a: np.ndarray, b: np.ndarray, diff: float, rng_seed: int, resamples: int
-          ) -> tuple[float, float, float] | str:  # fmt: skip
+def _test(
+    a: np.ndarray, b: np.ndarray, diff: float, rng_seed: int, resamples: int
+) -> tuple[float, float, float] | str:
     """Paired bootstrap CI and sign-flip p of ``diff`` (module docstring), or why none."""
     rng = np.random.default_rng(rng_seed)
     n = a.shape[1]
@@ -195,7 +196,8 @@ def _test(a: np.ndarray, b: np.ndarray, diff: float, rng_seed: int, resamples: i
     low, high = (float(q) for q in np.percentile(boot, [2.5, 97.5]))
     swap, exact = _sign_flips(n, resamples, rng)
     flipped = _ratio(np.where(swap, a[:, None], b[:, None])) - _ratio(
-        np.where(swap, b[:, None], a[:, None]))  # fmt: skip
+        np.where(swap, b[:, None], a[:, None])
+    )
     # identical pairs give flipped == diff == 0: every pattern is as extreme, p = 1
     extreme = np.count_nonzero(np.abs(flipped) >= abs(diff) - 1e-12)
     p = extreme / len(swap) if exact else (1 + extreme) / (len(swap) + 1)
@@ -203,18 +205,29 @@ def _test(a: np.ndarray, b: np.ndarray, diff: float, rng_seed: int, resamples: i
 
 
 def _difference(
-    key: tuple[str, str, str], model_b: str, name: str, a: Sequence[EpisodeMetrics],
-    b: Sequence[EpisodeMetrics], rng_seed: int, resamples: int,
-) -> Difference:  # fmt: skip
+    key: tuple[str, str, str],
+    model_b: str,
+    name: str,
+    a: Sequence[EpisodeMetrics],
+    b: Sequence[EpisodeMetrics],
+    rng_seed: int,
+    resamples: int,
+) -> Difference:
     pairs, unpaired = _pairs(a, b)
     used = _used(name, pairs)
     ea = GATE_METRICS[name].compute([x for x, _ in used], rng_seed=rng_seed)
     eb = GATE_METRICS[name].compute([y for _, y in used], rng_seed=rng_seed)
 
-    def result(diff: float | None, low: float | None = None, high: float | None = None,
-               p: float | None = None, why: str | None = None) -> Difference:  # fmt: skip
-        return Difference(*key, name, ea, eb, diff, low, high, p, None, "n/a", model_b,
-                          unpaired, why, len(used))  # fmt: skip
+    def result(
+        diff: float | None,
+        low: float | None = None,
+        high: float | None = None,
+        p: float | None = None,
+        why: str | None = None,
+    ) -> Difference:
+        return Difference(
+            *key, name, ea, eb, diff, low, high, p, None, "n/a", model_b, unpaired, why, len(used)
+        )
 
     if not pairs:
         return result(None, why="no paired episodes (same condition, spawn room and episode)")
@@ -252,8 +265,10 @@ def _verdict(d: Difference, p_holm: float, reachable: float) -> Difference:
         verdict = "better" if (d.diff > 0) == (better == "higher") else "worse"
     elif reachable >= ALPHA and not d.diff == d.ci_low == d.ci_high == 0:  # not identical
         verdict = "inconclusive"
-        why = (f"{d.pairs} pairs cannot reach Holm p < {ALPHA}: the smallest reachable is "
-               f"{reachable:.3g}; more episodes per cell can")  # fmt: skip
+        why = (
+            f"{d.pairs} pairs cannot reach Holm p < {ALPHA}: the smallest reachable is "
+            f"{reachable:.3g}; more episodes per cell can"
+        )
     return replace(d, p_holm=p_holm, verdict=verdict, p_reachable=reachable, reason=why)
 
 
@@ -265,8 +280,9 @@ def holm(differences: Sequence[Difference], resamples: int = N_RESAMPLES) -> tup
     if tested:
         from statsmodels.stats.multitest import multipletests  # heavy: imported on first use
 
-        adjusted = multipletests([differences[i].p_value for i in tested], alpha=ALPHA,
-                                 method="holm")[1]  # fmt: skip
+        adjusted = multipletests(
+            [differences[i].p_value for i in tested], alpha=ALPHA, method="holm"
+        )[1]
         for i, p in zip(tested, adjusted, strict=True):
             n = differences[i].pairs  # the smallest p its pairs can give: p_min(n)
             p_min = 2.0 / 2**n if 2**n <= resamples else 1.0 / (resamples + 1)
@@ -345,11 +361,15 @@ def compare_runs(
         for name in COMPARED
     )
     return Comparison(
-        names[0], names[1], _te_with_aec(holm(diffs, resamples)),
+        names[0],
+        names[1],
+        _te_with_aec(holm(diffs, resamples)),
         tuple("/".join((model(k, 0), *k[1:])) for k in cells_a if k not in cells_b),
         tuple("/".join((model(k, 1), *k[1:])) for k in cells_b if k not in cells_a),
-        rng_seed, resamples, models,
-    )  # fmt: skip
+        rng_seed,
+        resamples,
+        models,
+    )
 
 
 _HEADER = ("Metric", "Better", "A", "B", "B - A", "95% CI", "p (Holm)", "Verdict", "Note")
@@ -360,10 +380,17 @@ def _row(d: Difference) -> Row:
     if d.unpaired:
         note = f"{d.unpaired} unpaired episode(s) left out. {note}".strip()
     ci = "n/a" if d.ci_low is None else f"[{num(d.ci_low)}, {num(d.ci_high)}]"
-    return (d.metric, GATE_METRICS[d.metric].better, f"{num(d.a.value)} (n={d.a.n})",
-            f"{num(d.b.value)} (n={d.b.n})", num(d.diff), ci, pval(d.p_holm),
-            Cell(d.verdict, bold=d.verdict != "no change"),
-            note)  # fmt: skip
+    return (
+        d.metric,
+        GATE_METRICS[d.metric].better,
+        f"{num(d.a.value)} (n={d.a.n})",
+        f"{num(d.b.value)} (n={d.b.n})",
+        num(d.diff),
+        ci,
+        pval(d.p_holm),
+        Cell(d.verdict, bold=d.verdict != "no change"),
+        note,
+    )
 
 
 def compare_document(c: Comparison) -> Document:
@@ -396,6 +423,7 @@ def compare_document(c: Comparison) -> Document:
     for (model, model_b, variant, condition), rows in by_cell.items():
         who = model if model == model_b else f"{model} vs {model_b}"
         label = f"{row_label(who, variant)}, {CONDITION_NAMES.get(condition, condition)}"
-        blocks.append(Table(f"compare-{model}-{model_b}-{variant}-{condition}", label, _HEADER,
-                            tuple(rows)))  # fmt: skip
+        blocks.append(
+            Table(f"compare-{model}-{model_b}-{variant}-{condition}", label, _HEADER, tuple(rows))
+        )
     return Document("EMRD comparison", (Section("compare", "Differences", tuple(blocks)),))

@@ -268,16 +268,34 @@ class FigureSpec:
 
 
 FIGURES: Final[tuple[FigureSpec, ...]] = (
-    FigureSpec("tbs.png", "Temporal Belief Stability",
-               "Mean TBS(t) per step (band: ± 1 sd across episodes; Eq. TBS)."),
-    FigureSpec("pa_by_spawn.png", "Positional Accuracy by spawn room and condition",
-               "Mean per-episode PA (Eq. PA) with ± 1 sd, per spawn room."),
-    FigureSpec("miller.png", "Miller's law: forgetting probability by load",
-               "Share of steps that lose at least one mapped object, by map size (bins of w)."),
-    FigureSpec("km.png", "Coverage-anchored Kaplan-Meier survival per category",
-               "Anchored KM (steps) with the Ebbinghaus curve C exp(-t / EFC) dashed."),
-    FigureSpec("sir.png", "Spatial Identity Resolution",
-               "Per-episode SIR on room re-entry (episodes with a re-entry)."),
-    FigureSpec("episode_map.png", "One episode, top down",
-               "Ground truth, the agent's path and its terminal map after rigid alignment."),
-)  # fmt: skip
+    FigureSpec(
+        "tbs.png",
+        "Temporal Belief Stability",
+        "Mean TBS(t) per step (band: ± 1 sd across episodes; Eq. TBS).",
+    ),
+    FigureSpec(
+        "pa_by_spawn.png",
+        "Positional Accuracy by spawn room and condition",
+        "Mean per-episode PA (Eq. PA) with ± 1 sd, per spawn room.",
+    ),
+    FigureSpec(
+        "miller.png",
+        "Miller's law: forgetting probability by load",
+        "Share of steps that lose at least one mapped object, by map size (bins of w).",
+    ),
+    FigureSpec(
+        "km.png",
+        "Coverage-anchored Kaplan-Meier survival per category",
+        "Anchored KM (steps) with the Ebbinghaus curve C exp(-t / EFC) dashed.",
+    ),
+    FigureSpec(
+        "sir.png",
+        "Spatial Identity Resolution",
+        "Per-episode SIR on room re-entry (episodes with a re-entry).",
+    ),
+    FigureSpec(
+        "episode_map.png",
+        "One episode, top down",
+        "Ground truth, the agent's path and its terminal map after rigid alignment.",
+    ),
+)

@@ -55,9 +55,14 @@ def line_style(condition: str, n_points: int = 0) -> dict[str, Any]:
     _, ls, marker, _ = _style(condition)
     place = rank(condition, CONDITIONS)[0]
     style: dict[str, Any] = {
-        "color": colour(condition), "ls": ls, "marker": marker, "ms": 4.5 + 2.5 * place,
-        "mfc": colour(condition) if place == 0 else "none", "mew": 1.5, "zorder": 3 - 0.1 * place,
-    }  # fmt: skip
+        "color": colour(condition),
+        "ls": ls,
+        "marker": marker,
+        "ms": 4.5 + 2.5 * place,
+        "mfc": colour(condition) if place == 0 else "none",
+        "mew": 1.5,
+        "zorder": 3 - 0.1 * place,
+    }
     if n_points:
         every = max(1, n_points // 8)
         style["markevery"] = ((place * max(1, every // 3)) % every, every)
@@ -99,9 +104,15 @@ def _png(fig: Figure) -> bytes:
 
 
 def _finish(
-    fig: Figure, axes: dict[str, Axes], title: str, conditions: Sequence[str], *,
-    bars: bool = False, grid: str = "both", **axis: Any,
-) -> Figure:  # fmt: skip
+    fig: Figure,
+    axes: dict[str, Axes],
+    title: str,
+    conditions: Sequence[str],
+    *,
+    bars: bool = False,
+    grid: str = "both",
+    **axis: Any,
+) -> Figure:
     """Every panel titled with its key, ``axis`` properties set and a grid; the figure's title
     and its legend of ``conditions`` (patches with ``bars``, else lines)."""
     for label, ax in axes.items():
@@ -110,11 +121,16 @@ def _finish(
         ax.grid(axis=grid, alpha=0.3)
     fig.suptitle(_wrap(title, fig.get_figwidth() - 0.2, 12.0), fontsize=12)
     handles: list[Artist] = [
-        Patch(facecolor=colour(c), hatch=_style(c)[3],
-              edgecolor="white", label=CONDITION_NAMES.get(c, c))
-        if bars else Line2D([], [], lw=2, label=CONDITION_NAMES.get(c, c), **line_style(c))
+        Patch(
+            facecolor=colour(c),
+            hatch=_style(c)[3],
+            edgecolor="white",
+            label=CONDITION_NAMES.get(c, c),
+        )
+        if bars
+        else Line2D([], [], lw=2, label=CONDITION_NAMES.get(c, c), **line_style(c))
         for c in conditions
-    ]  # fmt: skip
+    ]
     fig.legend(handles=handles, loc="outside lower center", ncols=len(handles), frameon=False)
     return fig
 
@@ -137,8 +153,15 @@ def _tbs(report: Report) -> Figure | None:
         t, mean, sd = np.array(s.curve.t), np.array(s.curve.mean), np.array(s.curve.sd)
         ax.plot(t, mean, lw=2, **line_style(s.condition, len(t)))
         ax.fill_between(t, mean - sd, mean + sd, color=colour(s.condition), alpha=0.12, lw=0)
-    return _finish(fig, axes, "Temporal Belief Stability (mean ± 1 sd)", _conditions(series),
-                   xlabel="step t", ylabel="TBS(t) (0-1)", ylim=(-0.02, 1.02))  # fmt: skip
+    return _finish(
+        fig,
+        axes,
+        "Temporal Belief Stability (mean ± 1 sd)",
+        _conditions(series),
+        xlabel="step t",
+        ylabel="TBS(t) (0-1)",
+        ylim=(-0.02, 1.02),
+    )
 
 
 def _pa(report: Report) -> Figure | None:
@@ -155,13 +178,30 @@ def _pa(report: Report) -> Figure | None:
         x = spawns.index(g.spawn) + offset * width
         sd = float(np.std(g.values, ddof=1)) if len(g.values) > 1 else 0.0
         hue, _, _, hatch = _style(g.condition)
-        ax.bar(x, float(np.mean(g.values)), width * 0.95, yerr=sd, capsize=3, color=hue,
-               alpha=0.85, hatch=hatch, edgecolor="white")  # fmt: skip
+        ax.bar(
+            x,
+            float(np.mean(g.values)),
+            width * 0.95,
+            yerr=sd,
+            capsize=3,
+            color=hue,
+            alpha=0.85,
+            hatch=hatch,
+            edgecolor="white",
+        )
     for ax in axes.values():
         ax.set_xticks(range(len(spawns)), [SLUG_ROOMS[s] for s in spawns])
-    return _finish(fig, axes, "Positional Accuracy by spawn room and condition (mean ± 1 sd)",
-                   conditions, bars=True, grid="y", xlabel="spawn room",
-                   ylabel="Positional Accuracy (0-1)", ylim=(0, 1.05))  # fmt: skip
+    return _finish(
+        fig,
+        axes,
+        "Positional Accuracy by spawn room and condition (mean ± 1 sd)",
+        conditions,
+        bars=True,
+        grid="y",
+        xlabel="spawn room",
+        ylabel="Positional Accuracy (0-1)",
+        ylim=(0, 1.05),
+    )
 
 
 def _miller(report: Report) -> Figure | None:
@@ -179,10 +219,15 @@ def _miller(report: Report) -> Figure | None:
     loads = [b * width for s in series for b in s.curve.bins]
     for ax in axes.values():  # a bin of margin each side, never an axis around one point
         ax.set_xlim(max(0, min(loads) - width), max(loads) + width)
-    return _finish(fig, axes,
-                   "Miller's law: forgetting probability by cognitive load (dotted: m*)",
-                   _conditions(series), xlabel=f"map size m (objects, bin upper edge, w={width})",
-                   ylabel="P(forget >= 1 object)", ylim=(-0.02, 1.02))  # fmt: skip
+    return _finish(
+        fig,
+        axes,
+        "Miller's law: forgetting probability by cognitive load (dotted: m*)",
+        _conditions(series),
+        xlabel=f"map size m (objects, bin upper edge, w={width})",
+        ylabel="P(forget >= 1 object)",
+        ylim=(-0.02, 1.02),
+    )
 
 
 def _km(report: Report) -> Figure | None:
@@ -195,21 +240,44 @@ def _km(report: Report) -> Figure | None:
     grid = fig.subplots(len(labels), len(categories), squeeze=False)
     for s in series:
         ax = grid[labels.index(row_label(s.model, s.variant))][categories.index(s.category)]
-        ax.step(s.km.times, s.km.survival, where="post", lw=2,
-                **line_style(s.condition, len(s.km.times)))  # fmt: skip
+        ax.step(
+            s.km.times,
+            s.km.survival,
+            where="post",
+            lw=2,
+            **line_style(s.condition, len(s.km.times)),
+        )
         if s.km.ci_low:  # Greenwood 95 % band (lifelines), anchored like the curve
-            ax.fill_between(s.km.times, s.km.ci_low, s.km.ci_high, step="post", lw=0,
-                            color=colour(s.condition), alpha=0.15)  # fmt: skip
+            ax.fill_between(
+                s.km.times,
+                s.km.ci_low,
+                s.km.ci_high,
+                step="post",
+                lw=0,
+                color=colour(s.condition),
+                alpha=0.15,
+            )
         efc = s.fit.efc
         if efc is not None and math.isfinite(efc):
             t = np.linspace(0, max(s.km.times), 100)
-            ax.plot(t, s.km.coverage * np.exp(-t / efc), color=colour(s.condition), ls=(0, (2, 2)),
-                    lw=1)  # fmt: skip
-    panels = {f"{label}: {c}": grid[i][j] for i, label in enumerate(labels)
-              for j, c in enumerate(categories)}  # fmt: skip
+            ax.plot(
+                t, s.km.coverage * np.exp(-t / efc), color=colour(s.condition), ls=(0, (2, 2)), lw=1
+            )
+    panels = {
+        f"{label}: {c}": grid[i][j]
+        for i, label in enumerate(labels)
+        for j, c in enumerate(categories)
+    }
     title = "Coverage-anchored Kaplan-Meier survival, 95 % band (thin dashed: Ebbinghaus fit)"
-    return _finish(fig, panels, title, _conditions(series), xlabel="steps out of view t",
-                   ylabel="S(t) (discovered & held)", ylim=(-0.02, 1.02))  # fmt: skip
+    return _finish(
+        fig,
+        panels,
+        title,
+        _conditions(series),
+        xlabel="steps out of view t",
+        ylabel="S(t) (discovered & held)",
+        ylim=(-0.02, 1.02),
+    )
 
 
 def _sir(report: Report) -> Figure | None:
@@ -229,13 +297,26 @@ def _sir(report: Report) -> Figure | None:
             for key in ("cmeans", "cmins", "cmaxes", "cbars"):
                 body[key].set(color=colour(s.condition))
         jitter = np.linspace(-0.08, 0.08, len(values)) if len(values) > 1 else np.zeros(1)
-        ax.scatter(pos + jitter, values, s=14, marker=_style(s.condition)[2],
-                   color=colour(s.condition), alpha=0.6)  # fmt: skip
+        ax.scatter(
+            pos + jitter,
+            values,
+            s=14,
+            marker=_style(s.condition)[2],
+            color=colour(s.condition),
+            alpha=0.6,
+        )
     for ax in axes.values():
         ax.set_xticks(range(len(conditions)), [CONDITION_NAMES.get(c, c) for c in conditions])
-    return _finish(fig, axes, "Coverage-anchored Spatial Identity Resolution per episode",
-                   conditions, grid="y", xlabel="condition", ylabel="SIR (0-1)",
-                   ylim=(-0.02, 1.02))  # fmt: skip
+    return _finish(
+        fig,
+        axes,
+        "Coverage-anchored Spatial Identity Resolution per episode",
+        conditions,
+        grid="y",
+        xlabel="condition",
+        ylabel="SIR (0-1)",
+        ylim=(-0.02, 1.02),
+    )
 
 
 def _episode_map(report: Report) -> Figure | None:
@@ -250,16 +331,31 @@ def _episode_map(report: Report) -> Figure | None:
         # the name sits inside the room's top edge, under every marker, on a white ground:
         # it never prints over an object, an entry or another room's name
         cx, top = poly[:-1, 0].mean(), poly[:-1, 1].max()
-        ax.annotate(room.name, (cx, top), xytext=(0, -4), textcoords="offset points",
-                    ha="center", va="top", fontsize=9, color="#777777", zorder=1,
-                    bbox={"boxstyle": "round,pad=0.15", "fc": "white", "ec": "none",
-                          "alpha": 0.8})  # fmt: skip
+        ax.annotate(
+            room.name,
+            (cx, top),
+            xytext=(0, -4),
+            textcoords="offset points",
+            ha="center",
+            va="top",
+            fontsize=9,
+            color="#777777",
+            zorder=1,
+            bbox={"boxstyle": "round,pad=0.15", "fc": "white", "ec": "none", "alpha": 0.8},
+        )
     truth = {o.object_id: o for o in m.objects}
     for category, marker in _CATEGORY_MARKERS.items():
         objs = [o for o in m.objects if o.category == category]
         if objs:
-            ax.scatter([o.x for o in objs], [o.z for o in objs], marker=marker, s=40,
-                       color="#333333", label=f"ground truth: {category}", zorder=3)  # fmt: skip
+            ax.scatter(
+                [o.x for o in objs],
+                [o.z for o in objs],
+                marker=marker,
+                s=40,
+                color="#333333",
+                label=f"ground truth: {category}",
+                zorder=3,
+            )
     path = np.array(m.path)
     if len(path):
         ax.plot(path[:, 0], path[:, 1], color="#1f5fbf", lw=1.5, alpha=0.7, label="agent path")
@@ -271,14 +367,29 @@ def _episode_map(report: Report) -> Figure | None:
             ax.plot([e.x, o.x], [e.z, o.z], color="#d62728", lw=0.8, alpha=0.6, zorder=2)
     matched = [e for e in m.entries if e.object_id is not None]
     unmatched = [e for e in m.entries if e.object_id is None]
-    ax.scatter([e.x for e in matched], [e.z for e in matched], marker="x", s=45,
-               color="#d62728", label="cognitive map (matched)", zorder=5)  # fmt: skip
+    ax.scatter(
+        [e.x for e in matched],
+        [e.z for e in matched],
+        marker="x",
+        s=45,
+        color="#d62728",
+        label="cognitive map (matched)",
+        zorder=5,
+    )
     if unmatched:
-        ax.scatter([e.x for e in unmatched], [e.z for e in unmatched], marker="x", s=45,
-                   color="#ff9900", label="cognitive map (unmatched)", zorder=5)  # fmt: skip
+        ax.scatter(
+            [e.x for e in unmatched],
+            [e.z for e in unmatched],
+            marker="x",
+            s=45,
+            color="#ff9900",
+            label="cognitive map (unmatched)",
+            zorder=5,
+        )
     rmse = "n/a" if m.rmse is None else f"{m.rmse:.2f} m"
-    _axes_title(ax, f"{m.case_id}: terminal map aligned (rotation {m.rotation_deg:.1f} deg, "
-                f"RMSE {rmse})")  # fmt: skip
+    _axes_title(
+        ax, f"{m.case_id}: terminal map aligned (rotation {m.rotation_deg:.1f} deg, RMSE {rmse})"
+    )
     ax.set(xlabel="x (m, spawn frame)", ylabel="z (m, spawn frame)")
     ax.set_aspect("equal")
     ax.grid(alpha=0.2)

@@ -83,18 +83,26 @@ def overview(report: Report) -> Section:
     ]
     if o.usage:
         rows = tuple(
-            (u.model, str(u.episodes), f"{u.prompt_tokens:,}", f"{u.completion_tokens:,}",
-             "n/a" if u.cost_usd is None else f"${u.cost_usd:,.2f}")
+            (
+                u.model,
+                str(u.episodes),
+                f"{u.prompt_tokens:,}",
+                f"{u.completion_tokens:,}",
+                "n/a" if u.cost_usd is None else f"${u.cost_usd:,.2f}",
+            )
             for u in o.usage
-        )  # fmt: skip
+        )
         header = ("Model", "Episodes", "Prompt tokens", "Completion tokens", "Est. cost")
         blocks.append(Table("usage", "Token usage per model", header, rows))
         unpriced = [u.model for u in o.usage if u.cost_usd is None]
         if unpriced:
-            blocks.append(Paragraph(
-                f"Est. cost n/a for {', '.join(unpriced)}: the registry this report read has no "
-                "price for it (a self-hosted model; or a model of your own registry: pass "
-                "`--models FILE` to `emrd report`, as to the run)."))  # fmt: skip
+            blocks.append(
+                Paragraph(
+                    f"Est. cost n/a for {', '.join(unpriced)}: the registry this report read "
+                    "has no price for it (a self-hosted model; or a model of your own registry: "
+                    "pass `--models FILE` to `emrd report`, as to the run)."
+                )
+            )
     if report.missing:
         blocks.append(Paragraph("**What this run is missing:**"))
         blocks.append(Bullets(report.missing))
@@ -109,32 +117,70 @@ def gates(report: Report) -> Section:
         return Section("gates", "Gates", (Paragraph(why),))
     passed = sum(v.passed for v in g.verdicts)
     rows = tuple(
-        (v.model if v.layouts == "paper" else f"{v.model}@{v.layouts}", _cond(v.condition),
-         v.variant, v.metric, num(v.value), f"[{num(v.ci_low)}, {num(v.ci_high)}]", str(v.n),
-         v.bound_text, Cell("PASS" if v.passed else "FAIL", bold=not v.passed), v.reason)
+        (
+            v.model if v.layouts == "paper" else f"{v.model}@{v.layouts}",
+            _cond(v.condition),
+            v.variant,
+            v.metric,
+            num(v.value),
+            f"[{num(v.ci_low)}, {num(v.ci_high)}]",
+            str(v.n),
+            v.bound_text,
+            Cell("PASS" if v.passed else "FAIL", bold=not v.passed),
+            v.reason,
+        )
         for v in g.verdicts
-    )  # fmt: skip
-    header = ("Model", "Condition", "Prompt", "Metric", "Value", "95% CI", "n", "Bound",
-              "Result", "Why")  # fmt: skip
-    return Section("gates", "Gates", (
-        Paragraph(f"{passed}/{len(g.verdicts)} gates pass ({g.source}). Values, CIs and bounds "
-                  "are in the units of the thresholds file: rates and shares as fractions "
-                  "(0.9), which the tables below print as percentages (90.0)."),
-        Table("gates", "Every threshold: value, bootstrap 95% CI, n, bound, verdict", header,
-              rows),
-        *(Bullets(tuple(f"{v.gate_id}: {e}" for e in v.evidence())) for v in g.verdicts
-          if v.evidence()),
-    ))  # fmt: skip
+    )
+    header = (
+        "Model",
+        "Condition",
+        "Prompt",
+        "Metric",
+        "Value",
+        "95% CI",
+        "n",
+        "Bound",
+        "Result",
+        "Why",
+    )
+    return Section(
+        "gates",
+        "Gates",
+        (
+            Paragraph(
+                f"{passed}/{len(g.verdicts)} gates pass ({g.source}). Values, CIs and bounds "
+                "are in the units of the thresholds file: rates and shares as fractions "
+                "(0.9), which the tables below print as percentages (90.0)."
+            ),
+            Table(
+                "gates", "Every threshold: value, bootstrap 95% CI, n, bound, verdict", header, rows
+            ),
+            *(
+                Bullets(tuple(f"{v.gate_id}: {e}" for e in v.evidence()))
+                for v in g.verdicts
+                if v.evidence()
+            ),
+        ),
+    )
 
 
 def exploration(report: Report) -> Section:
-    rows = _pivot(report, report.exploration, lambda r: (
-        f"{mean_sd(r.aec.value, r.aec_sd, scale=100)} (n={r.aec.n})",
-        f"{mean_sd(r.te.value, r.te_sd)} (n={r.te.n})"), 2)  # fmt: skip
+    rows = _pivot(
+        report,
+        report.exploration,
+        lambda r: (
+            f"{mean_sd(r.aec.value, r.aec_sd, scale=100)} (n={r.aec.n})",
+            f"{mean_sd(r.te.value, r.te_sd)} (n={r.te.n})",
+        ),
+        2,
+    )
     header = ("Model", *_per_condition(report, "AEC (%)", "TE (steps)"))
     caption = "Exploration Competence: AEC (%) and TE (actions), mean ± sd (Eq. AEC, TE)"
-    return Section("exploration", "Exploration Competence",
-                   (Table("exploration", caption, header, tuple(rows)),))  # fmt: skip
+    return Section(
+        "exploration",
+        "Exploration Competence",
+        (Table("exploration", caption, header, tuple(rows)),),
+    )
 
 
 def positional_accuracy(report: Report) -> Section:
@@ -145,8 +191,9 @@ def positional_accuracy(report: Report) -> Section:
         sd = float(np.std(values, ddof=1)) if len(values) > 1 else None
         mean = float(values.mean()) if len(values) else None
         room, shown = SLUG_ROOMS.get(g.spawn, g.spawn), mean_sd(mean, sd, digits=3)
-        rows.append((row_label(g.model, g.variant), _cond(g.condition), room,
-                     f"{shown} (n={len(values)})"))  # fmt: skip
+        rows.append(
+            (row_label(g.model, g.variant), _cond(g.condition), room, f"{shown} (n={len(values)})")
+        )
     if not rows:
         text = "Positional Accuracy is undefined in every episode (|G_base| = 0)."
         return Section("pa", "Positional Accuracy", (Paragraph(text),))
@@ -180,33 +227,72 @@ def focal(report: Report) -> Section:
         rows = []
         for t in (t for t in report.focal if row_label(t.model, t.variant) == label):
             for spawn, row in sorted(t.distribution.by_spawn.items(), key=_spawn_order):
-                rows.append((_cond(t.condition), SLUG_ROOMS.get(spawn, spawn), str(row.n),
-                             *_focal_cells(row), *_x_split(row), ""))  # fmt: skip
+                rows.append(
+                    (
+                        _cond(t.condition),
+                        SLUG_ROOMS.get(spawn, spawn),
+                        str(row.n),
+                        *_focal_cells(row),
+                        *_x_split(row),
+                        "",
+                    )
+                )
             c = t.consensus
             share = "n/a" if c.share is None else f"{c.letter or '—'} {pct(c.share)}%"
             overall = t.distribution.overall
-            rows.append((_cond(t.condition), Cell("all spawns", bold=True), str(overall.n),
-                         *_focal_cells(overall), *_x_split(overall), share))  # fmt: skip
-        header = ("Condition", "Start", "n", *FOCAL_COLUMNS, "X: other room", "X: no Term",
-                  "Spawn room (%)", "Consensus")  # fmt: skip
-        caption = (f"{label}: chosen focal point (%) by spawn room — C Conference, O Office, "
-                   "K Kitchen, E Entrance, X other: counted apart as a Term naming another "
-                   "room and no Term (budget spent); Spawn room: the share that chose the room "
-                   "they started in (Appendix F: 50.6 %, chance 25 %)")  # fmt: skip
+            rows.append(
+                (
+                    _cond(t.condition),
+                    Cell("all spawns", bold=True),
+                    str(overall.n),
+                    *_focal_cells(overall),
+                    *_x_split(overall),
+                    share,
+                )
+            )
+        header = (
+            "Condition",
+            "Start",
+            "n",
+            *FOCAL_COLUMNS,
+            "X: other room",
+            "X: no Term",
+            "Spawn room (%)",
+            "Consensus",
+        )
+        caption = (
+            f"{label}: chosen focal point (%) by spawn room — C Conference, O Office, "
+            "K Kitchen, E Entrance, X other: counted apart as a Term naming another "
+            "room and no Term (budget spent); Spawn room: the share that chose the room "
+            "they started in (Appendix F: 50.6 %, chance 25 %)"
+        )
         tables.append(Table(f"focal-{label}", caption, header, tuple(rows)))
     return Section("focal", "Focal-Point distribution", tuple(tables))
 
 
 def fpsg(report: Report) -> Section:
     rows = tuple(
-        (_cond(r.condition), row_label(r.model, r.variant), str(s.runs), pct(s.never_visited),
-         pct(s.any_bias), mean_sd(s.local_mean, s.local_sd, digits=3),
-         mean_sd(s.global_mean, s.global_sd, digits=3))
+        (
+            _cond(r.condition),
+            row_label(r.model, r.variant),
+            str(s.runs),
+            pct(s.never_visited),
+            pct(s.any_bias),
+            mean_sd(s.local_mean, s.local_sd, digits=3),
+            mean_sd(s.global_mean, s.global_sd, digits=3),
+        )
         for r in report.fpsg
         for s in (r.summary,)
-    )  # fmt: skip
-    header = ("Condition", "Model", "Runs", "Never Visited (%)", "Any Bias (%)",
-              "FPSG local", "FPSG global")  # fmt: skip
+    )
+    header = (
+        "Condition",
+        "Model",
+        "Runs",
+        "Never Visited (%)",
+        "Any Bias (%)",
+        "FPSG local",
+        "FPSG global",
+    )
     caption = "Focal-Point Spatial Grounding (Eq. FSPG), mean ± sd"
     return Section("fpsg", "Focal-Point Spatial Grounding", (Table("fpsg", caption, header, rows),))
 
@@ -216,8 +302,10 @@ def ebbinghaus(report: Report) -> Section:
     r2 = _pivot(report, report.ebbinghaus, lambda r: (num(r.fit.pooled.r2, 2),), 1)
     rows = tuple((*a, *b[1:]) for a, b in zip(efc, r2, strict=True))
     header = ("Model", *_per_condition(report, "EFC"), *_per_condition(report, "R²"))
-    caption = ("Ebbinghaus memory strength EFC (steps; inf: nothing forgotten) and R² of "
-               "C exp(-t/EFC) against the anchored KM")  # fmt: skip
+    caption = (
+        "Ebbinghaus memory strength EFC (steps; inf: nothing forgotten) and R² of "
+        "C exp(-t/EFC) against the anchored KM"
+    )
     blocks: list[Block] = [Table("ebbinghaus", caption, header, rows)]
     poor = sorted(
         f"{row_label(r.model, r.variant)}, {_cond(r.condition)} (R² {num(r.fit.pooled.r2, 2)})"
@@ -225,18 +313,25 @@ def ebbinghaus(report: Report) -> Section:
         if r.fit.pooled.r2 is not None and r.fit.pooled.r2 < R2_MEANINGLESS
     )
     if poor:
-        blocks.append(Paragraph(
-            "**R² below 0 means the exponential fits the KM curve worse than a flat line at "
-            "its mean: the EFC of these cells describes no forgetting curve and is not to be "
-            f"compared:** {'; '.join(poor)}."))  # fmt: skip
+        blocks.append(
+            Paragraph(
+                "**R² below 0 means the exponential fits the KM curve worse than a flat line at "
+                "its mean: the EFC of these cells describes no forgetting curve and is not to be "
+                f"compared:** {'; '.join(poor)}."
+            )
+        )
     if report.anova:
         anova_rows = tuple(
-            (row_label(a.model, a.variant), num(a.anova.statistic, 2),
-             f"{a.anova.df_between:g}, {a.anova.df_within:g}", pval(a.anova.p_value),
-             ", ".join(f"{_cond(c)} {n}" for c, n in a.anova.groups.items()) or "—",
-             a.anova.reason or "")
+            (
+                row_label(a.model, a.variant),
+                num(a.anova.statistic, 2),
+                f"{a.anova.df_between:g}, {a.anova.df_within:g}",
+                pval(a.anova.p_value),
+                ", ".join(f"{_cond(c)} {n}" for c, n in a.anova.groups.items()) or "—",
+                a.anova.reason or "",
+            )
             for a in report.anova
-        )  # fmt: skip
+        )
         header = ("Model", "F", "df", "p", "Episodes used", "Note")
         caption = "One-way ANOVA of per-episode memory strength across conditions"
         blocks.append(Table("anova", caption, header, anova_rows))
@@ -247,20 +342,29 @@ def serial_position(report: Report) -> Section:
     """Both estimators: the paper's Eq. SPE and the censoring-aware MLE per third."""
 
     def thirds(*fields: str) -> list[Row]:
-        return _pivot(report, report.serial_position,
-                      lambda r: [num(getattr(r.spe, f), 1) for f in fields], 3)  # fmt: skip
+        return _pivot(
+            report, report.serial_position, lambda r: [num(getattr(r.spe, f), 1) for f in fields], 3
+        )
 
     paper, mle = thirds("early", "middle", "late"), thirds("mle_early", "mle_middle", "mle_late")
     header = ("Model", *_per_condition(report, "E", "M", "L"))
-    caption = ("Serial Position Effect (paper's Eq. SPE): mean observed TTF (steps) of Early / "
-               "Middle / Late discoveries, episode-end censoring ignored")  # fmt: skip
-    caption_mle = ("Serial Position Effect, censoring-aware: Σ durations / forgetting events "
-                   "(steps) per third, the MLE of Eq. SMLE; inf: nothing of that third was "
-                   "forgotten")  # fmt: skip
-    return Section("serial-position", "Serial Position Effect", (
-        Table("serial-position", caption, header, tuple(paper)),
-        Table("serial-position-mle", caption_mle, header, tuple(mle)),
-    ))  # fmt: skip
+    caption = (
+        "Serial Position Effect (paper's Eq. SPE): mean observed TTF (steps) of Early / "
+        "Middle / Late discoveries, episode-end censoring ignored"
+    )
+    caption_mle = (
+        "Serial Position Effect, censoring-aware: Σ durations / forgetting events "
+        "(steps) per third, the MLE of Eq. SMLE; inf: nothing of that third was "
+        "forgotten"
+    )
+    return Section(
+        "serial-position",
+        "Serial Position Effect",
+        (
+            Table("serial-position", caption, header, tuple(paper)),
+            Table("serial-position-mle", caption_mle, header, tuple(mle)),
+        ),
+    )
 
 
 def _intervention(t: InterventionTable) -> list[Block]:
@@ -272,30 +376,53 @@ def _intervention(t: InterventionTable) -> list[Block]:
     rows = [("default", *shares(t.reference), *("—",) * 4)]
     for v in t.variants:
         chi = v.chi_square
-        rows.append((v.variant, *shares(v.choices), pval(v.fisher.p_value) if v.fisher else "n/a",
-                     f"{num(chi.statistic, 2)} ({chi.dof})", pval(chi.p_value),
-                     num(v.cramers_v, 2)))  # fmt: skip
-    header = ("Prompt", "n", "Conf. (%)", "Entr. (%)", "Other (%)", "p (Fisher, Conf. vs other)",
-              "χ² (df), C/O/K/E/X", "p (χ²)", "Cramér's V")  # fmt: skip
+        rows.append(
+            (
+                v.variant,
+                *shares(v.choices),
+                pval(v.fisher.p_value) if v.fisher else "n/a",
+                f"{num(chi.statistic, 2)} ({chi.dof})",
+                pval(chi.p_value),
+                num(v.cramers_v, 2),
+            )
+        )
+    header = (
+        "Prompt",
+        "n",
+        "Conf. (%)",
+        "Entr. (%)",
+        "Other (%)",
+        "p (Fisher, Conf. vs other)",
+        "χ² (df), C/O/K/E/X",
+        "p (χ²)",
+        "Cramér's V",
+    )
     caption = f"{t.model}, {_cond(t.condition)}: prompt variants against the default prompt"
-    blocks: list[Block] = [Table(f"intervention-{t.model}-{t.condition}", caption, header,
-                                 tuple(rows))]  # fmt: skip
+    blocks: list[Block] = [
+        Table(f"intervention-{t.model}-{t.condition}", caption, header, tuple(rows))
+    ]
     if t.overall is not None:
         o = t.overall
-        text = (f"Overall ({', '.join(t.overall_variants)}; Conference vs other): "
-                f"χ² = {num(o.statistic, 2)}, df = {o.dof}, p = {pval(o.p_value)}"
-                + (f" ({o.reason})" if o.reason else ""))  # fmt: skip
+        text = (
+            f"Overall ({', '.join(t.overall_variants)}; Conference vs other): "
+            f"χ² = {num(o.statistic, 2)}, df = {o.dof}, p = {pval(o.p_value)}"
+            + (f" ({o.reason})" if o.reason else "")
+        )
         blocks.append(Paragraph(text))
     inventory = next((v for v in t.variants if v.variant == "no_inventory"), None)
     if inventory is not None:
         with_, without = t.reference, inventory.choices
         inv_rows = tuple(
-            (_LETTER_ROOMS[c], str(with_.counts[c]), pct(with_.fractions[c]),
-             str(without.counts[c]), pct(without.fractions[c]))
+            (
+                _LETTER_ROOMS[c],
+                str(with_.counts[c]),
+                pct(with_.fractions[c]),
+                str(without.counts[c]),
+                pct(without.fractions[c]),
+            )
             for c in ("C", "K", "E", "O", "X")
-        )  # fmt: skip
-        header = ("Chosen room", "n with inventory", "% with", "n without inventory",
-                  "% without")  # fmt: skip
+        )
+        header = ("Chosen room", "n with inventory", "% with", "n without inventory", "% without")
         caption = f"{t.model}, {_cond(t.condition)}: inventory-free intervention"
         blocks.append(Table(f"inventory-{t.model}-{t.condition}", caption, header, inv_rows))
     return blocks
@@ -303,8 +430,10 @@ def _intervention(t: InterventionTable) -> list[Block]:
 
 def interventions(report: Report) -> Section:
     if not report.interventions:
-        why = ("No model and condition holds both the default prompt and a prompt variant, so "
-               "there is no intervention to test.")  # fmt: skip
+        why = (
+            "No model and condition holds both the default prompt and a prompt variant, so "
+            "there is no intervention to test."
+        )
         return Section("interventions", "Controlled interventions", (Paragraph(why),))
     blocks = [b for t in report.interventions for b in _intervention(t)]
     return Section("interventions", "Controlled interventions", tuple(blocks))
@@ -315,15 +444,19 @@ def reasoning(report: Report) -> Section:
     if r.unavailable:
         return Section("reasoning", "Representative reasoning", (Paragraph(r.unavailable),))
     rows = tuple(
-        (x.model, num(x.representative.mean_cosine_distance, 2),
-         f"{x.representative.n} ({x.representative.skipped} without)",
-         x.representative.statement or "no terminal reasoning")
+        (
+            x.model,
+            num(x.representative.mean_cosine_distance, 2),
+            f"{x.representative.n} ({x.representative.skipped} without)",
+            x.representative.statement or "no terminal reasoning",
+        )
         for x in r.rows
-    )  # fmt: skip
+    )
     header = ("Model", "d̄ (cohesion)", "Rationales", "Most representative terminal reasoning")
     caption = "Statement closest to the semantic centroid (all-MiniLM-L6-v2)"
-    return Section("reasoning", "Representative reasoning",
-                   (Table("reasoning", caption, header, rows),))  # fmt: skip
+    return Section(
+        "reasoning", "Representative reasoning", (Table("reasoning", caption, header, rows),)
+    )
 
 
 def figures(report: Report, skipped: dict[str, str]) -> Section:
@@ -331,25 +464,45 @@ def figures(report: Report, skipped: dict[str, str]) -> Section:
     shown = report.episode_map and report.episode_map.case_id
     named = f" Episode {shown} (choose another with --episode CASE_ID)." if shown else ""
     refs = tuple(
-        FigureRef(f.name, f.title, f.caption + (named if f.name == "episode_map.png" else ""),
-                  skipped.get(f.name))
+        FigureRef(
+            f.name,
+            f.title,
+            f.caption + (named if f.name == "episode_map.png" else ""),
+            skipped.get(f.name),
+        )
         for f in FIGURES
-    )  # fmt: skip
+    )
     return Section("figures", "Figures", refs)
 
 
 def report_document(report: Report, skipped: dict[str, str]) -> Document:
     """The full report: overview, gates, every table, every figure."""
-    return Document("EMRD report", (
-        overview(report), gates(report), exploration(report), positional_accuracy(report),
-        focal(report), fpsg(report), ebbinghaus(report), serial_position(report),
-        interventions(report), reasoning(report),
-        figures(report, skipped),
-    ))  # fmt: skip
+    return Document(
+        "EMRD report",
+        (
+            overview(report),
+            gates(report),
+            exploration(report),
+            positional_accuracy(report),
+            focal(report),
+            fpsg(report),
+            ebbinghaus(report),
+            serial_position(report),
+            interventions(report),
+            reasoning(report),
+            figures(report, skipped),
+        ),
+    )
 
 
 def summary_document(report: Report) -> Document:
     """The short form for PR comments and ``$GITHUB_STEP_SUMMARY``: no figures."""
-    return Document("EMRD results", (
-        overview(report), gates(report), exploration(report), fpsg(report),
-    ))  # fmt: skip
+    return Document(
+        "EMRD results",
+        (
+            overview(report),
+            gates(report),
+            exploration(report),
+            fpsg(report),
+        ),
+    )

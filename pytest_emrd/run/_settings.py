@@ -73,49 +73,92 @@ class Option:
 
 
 OPTIONS: Final[tuple[Option, ...]] = (
-    Option("model", "model to benchmark, repeatable (default: the built-in reference agents "
-           "scout, under every condition, and mimic, under baseline); any name of the model "
-           "registry", repeatable=True, metavar="NAME"),
-    Option("condition", "environmental condition, repeatable (default: all three)",
-           CONDITIONS, repeatable=True),
+    Option(
+        "model",
+        "model to benchmark, repeatable (default: the built-in reference agents "
+        "scout, under every condition, and mimic, under baseline); any name of the model "
+        "registry",
+        repeatable=True,
+        metavar="NAME",
+    ),
+    Option(
+        "condition",
+        "environmental condition, repeatable (default: all three)",
+        CONDITIONS,
+        repeatable=True,
+    ),
     Option("spawn", "spawn room, repeatable (default: all four)", SPAWNS, repeatable=True),
-    Option("episodes", "episodes per spawn room (default: 20, the paper's setting; at most "
-           "1000)",
-           metavar="N"),
+    Option(
+        "episodes",
+        "episodes per spawn room (default: 20, the paper's setting; at most 1000)",
+        metavar="N",
+    ),
     Option("variant", "prompt variant (default: default)", VARIANTS),
-    Option("layouts", "offices the episodes run in: paper is the paper's protocol, one fixed "
-           "office for every episode; generated gives every spawn x episode its own "
-           "procedurally generated office, a generalisation study gated and reported as its "
-           "own cells (default: paper)", LAYOUTS),
+    Option(
+        "layouts",
+        "offices the episodes run in: paper is the paper's protocol, one fixed "
+        "office for every episode; generated gives every spawn x episode its own "
+        "procedurally generated office, a generalisation study gated and reported as its "
+        "own cells (default: paper)",
+        LAYOUTS,
+    ),
     Option("backend", "world backend (default: builtin)", BACKENDS),
-    Option("backend_option", "simulator option KEY=VALUE for the backend, repeatable (e.g. "
-           "local_executable_path=/path/to/thor, gpu_device=1, start_timeout=300); VALUE is "
-           "read as JSON when it parses (1, 2.5, true) and kept as text otherwise",
-           repeatable=True, metavar="KEY=VALUE"),
-    Option("modality", "what the model is shown (default: the model's registry entry)",
-           MODALITIES),
-    Option("record_mode", "cassette record mode: none replays only with the network blocked, "
-           "once records missing cassettes, new_episodes also re-records a drifted episode "
-           "whole, all re-records (default: once, or none when the CI environment variable is set)",
-           RECORD_MODES),
-    Option("matching", "request matching: strict keys frames by pixel digest, lenient only "
-           "warns on differing frames (default: lenient on ai2thor, strict otherwise)",
-           MATCHING_MODES),
-    Option("results", "run directory to write or resume (default: a fresh directory under "
-           "<rootdir>/.emrd/runs)", metavar="DIR"),
-    Option("thresholds", "release gates file (default: <rootdir>/thresholds.yaml if it exists; "
-           "without one the run has episodes and no gates)",
-           metavar="FILE"),
-    Option("models", "user model registry YAML extending/overriding the shipped one",
-           metavar="FILE"),
+    Option(
+        "backend_option",
+        "simulator option KEY=VALUE for the backend, repeatable (e.g. "
+        "local_executable_path=/path/to/thor, gpu_device=1, start_timeout=300); VALUE is "
+        "read as JSON when it parses (1, 2.5, true) and kept as text otherwise",
+        repeatable=True,
+        metavar="KEY=VALUE",
+    ),
+    Option("modality", "what the model is shown (default: the model's registry entry)", MODALITIES),
+    Option(
+        "record_mode",
+        "cassette record mode: none replays only with the network blocked, "
+        "once records missing cassettes, new_episodes also re-records a drifted episode "
+        "whole, all re-records (default: once, or none when the CI environment variable is set)",
+        RECORD_MODES,
+    ),
+    Option(
+        "matching",
+        "request matching: strict keys frames by pixel digest, lenient only "
+        "warns on differing frames (default: lenient on ai2thor, strict otherwise)",
+        MATCHING_MODES,
+    ),
+    Option(
+        "results",
+        "run directory to write or resume (default: a fresh directory under <rootdir>/.emrd/runs)",
+        metavar="DIR",
+    ),
+    Option(
+        "thresholds",
+        "release gates file (default: <rootdir>/thresholds.yaml if it exists; "
+        "without one the run has episodes and no gates)",
+        metavar="FILE",
+    ),
+    Option(
+        "models", "user model registry YAML extending/overriding the shipped one", metavar="FILE"
+    ),
     Option("cassettes", "cassette folder (default: <rootdir>/cassettes)", metavar="DIR"),
-    Option("shard", "run the K-th of N deterministic slices of the episodes (gates are then "
-           "evaluated with `emrd gate RUN_DIR...`)", metavar="K/N"),
-    Option("concurrency", "live episodes each process records at once, in threads, against "
-           "a remote model (default: 1, at most 32); replays are not affected", metavar="N"),
-    Option("preflight", "check each model once before its first live recording: key, "
-           "endpoint, one probe request, context, cost (default: on)", ("on", "off")),
-)  # fmt: skip
+    Option(
+        "shard",
+        "run the K-th of N deterministic slices of the episodes (gates are then "
+        "evaluated with `emrd gate RUN_DIR...`)",
+        metavar="K/N",
+    ),
+    Option(
+        "concurrency",
+        "live episodes each process records at once, in threads, against "
+        "a remote model (default: 1, at most 32); replays are not affected",
+        metavar="N",
+    ),
+    Option(
+        "preflight",
+        "check each model once before its first live recording: key, "
+        "endpoint, one probe request, context, cost (default: on)",
+        ("on", "off"),
+    ),
+)
 
 
 @dataclass(frozen=True)

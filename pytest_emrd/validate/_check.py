@@ -132,8 +132,13 @@ def markdown(report: ValidationReport) -> str:
     for c in report.checks:
         if c.section != section:
             section = c.section
-            lines += ["", f"### {section}", "", "| " + " | ".join(_COLUMNS) + " |",
-                      "|" + "---|" * len(_COLUMNS)]  # fmt: skip
+            lines += [
+                "",
+                f"### {section}",
+                "",
+                "| " + " | ".join(_COLUMNS) + " |",
+                "|" + "---|" * len(_COLUMNS),
+            ]
         verdict = f"**{c.verdict}**" if c.verdict != "pass" else c.verdict
         cells = (c.name, c.planted, c.recovered, c.tolerance, verdict, c.note)
         lines.append("| " + " | ".join(_cell(x) for x in cells) + " |")

@@ -69,25 +69,44 @@ def exploration_checks(baseline: Sequence[Trajectory], low_light: Sequence[Episo
     discoverable = _mean([g for _, _, g in pairs])
     worst = max((abs(a - s) for a, s, _ in pairs), default=math.nan)
     return [
-        Check("Explore", "AEC vs fraction shown, scout", fmt(planted, 3),
-              f"{fmt(base_aec.value, 3)}; max |diff| {worst:.1e}",
-              f"exactly, per episode (<= {COVERAGE_TOL:g})", judged(worst <= COVERAGE_TOL),
-              f"{len(pairs)} episodes; shown = |union_t V_t|/|E| (ids in view at some step); "
-              f"mean |G_base|/|E| {fmt(discoverable, 3)} (the rest of G_base was never in "
-              f"view); {_ci(base_aec)}",
-              {"aec": base_aec.value, "shown": planted, "max_diff": worst,
-               "discoverable": discoverable}),
-        Check("Explore", "AEC, scout: low_light vs baseline", "lower",
-              f"{fmt(dark_aec.value, 3)} vs {fmt(base_aec.value, 3)}", "strictly lower",
-              judged(_value(dark_aec) < _value(base_aec)),
-              f"{dark_aec.n} paired episodes; low_light {_ci(dark_aec)}",
-              {"aec_low_light": dark_aec.value, "aec_baseline": base_aec.value}),
-        Check("Explore", "TE, scout: low_light vs baseline", "higher",
-              f"{fmt(dark_te.value, 1)} vs {fmt(base_te.value, 1)} steps", "strictly higher",
-              judged(_value(dark_te) > _value(base_te)),
-              f"{dark_te.n} paired episodes; low_light {_ci(dark_te)}",
-              {"te_low_light": dark_te.value, "te_baseline": base_te.value}),
-    ]  # fmt: skip
+        Check(
+            "Explore",
+            "AEC vs fraction shown, scout",
+            fmt(planted, 3),
+            f"{fmt(base_aec.value, 3)}; max |diff| {worst:.1e}",
+            f"exactly, per episode (<= {COVERAGE_TOL:g})",
+            judged(worst <= COVERAGE_TOL),
+            f"{len(pairs)} episodes; shown = |union_t V_t|/|E| (ids in view at some step); "
+            f"mean |G_base|/|E| {fmt(discoverable, 3)} (the rest of G_base was never in "
+            f"view); {_ci(base_aec)}",
+            {
+                "aec": base_aec.value,
+                "shown": planted,
+                "max_diff": worst,
+                "discoverable": discoverable,
+            },
+        ),
+        Check(
+            "Explore",
+            "AEC, scout: low_light vs baseline",
+            "lower",
+            f"{fmt(dark_aec.value, 3)} vs {fmt(base_aec.value, 3)}",
+            "strictly lower",
+            judged(_value(dark_aec) < _value(base_aec)),
+            f"{dark_aec.n} paired episodes; low_light {_ci(dark_aec)}",
+            {"aec_low_light": dark_aec.value, "aec_baseline": base_aec.value},
+        ),
+        Check(
+            "Explore",
+            "TE, scout: low_light vs baseline",
+            "higher",
+            f"{fmt(dark_te.value, 1)} vs {fmt(base_te.value, 1)} steps",
+            "strictly higher",
+            judged(_value(dark_te) > _value(base_te)),
+            f"{dark_te.n} paired episodes; low_light {_ci(dark_te)}",
+            {"te_low_light": dark_te.value, "te_baseline": base_te.value},
+        ),
+    ]
 
 
 #: ``FPSG_local`` of the perfect-memory scout's chosen room must be at least this.
@@ -104,14 +123,37 @@ def prior_checks(trajectories: Sequence[Episode]) -> list[Check]:
     s = fpsg(trajectories)
     note = f"{s.runs} episodes"
     return [
-        Check("Decide", "Never-Visited, prior", "100 %", pct(s.never_visited), "exactly 100 %",
-              judged(s.never_visited == 1.0), note, {"never_visited": s.never_visited}),
-        Check("Decide", "Any-Bias, prior", "100 %", pct(s.any_bias), "exactly 100 %",
-              judged(s.any_bias == 1.0), note, {"any_bias": s.any_bias}),
-        Check("Decide", "FPSG global, prior", "0", fmt(s.global_mean, 3), "exactly 0",
-              judged(s.global_mean == 0.0), f"{note}; local {fmt(s.local_mean, 3)}",
-              {"fpsg_global": s.global_mean, "fpsg_local": s.local_mean}),
-    ]  # fmt: skip
+        Check(
+            "Decide",
+            "Never-Visited, prior",
+            "100 %",
+            pct(s.never_visited),
+            "exactly 100 %",
+            judged(s.never_visited == 1.0),
+            note,
+            {"never_visited": s.never_visited},
+        ),
+        Check(
+            "Decide",
+            "Any-Bias, prior",
+            "100 %",
+            pct(s.any_bias),
+            "exactly 100 %",
+            judged(s.any_bias == 1.0),
+            note,
+            {"any_bias": s.any_bias},
+        ),
+        Check(
+            "Decide",
+            "FPSG global, prior",
+            "0",
+            fmt(s.global_mean, 3),
+            "exactly 0",
+            judged(s.global_mean == 0.0),
+            f"{note}; local {fmt(s.local_mean, 3)}",
+            {"fpsg_global": s.global_mean, "fpsg_local": s.local_mean},
+        ),
+    ]
 
 
 def scout_decide_checks(trajectories: Sequence[Episode]) -> list[Check]:
@@ -123,11 +165,24 @@ def scout_decide_checks(trajectories: Sequence[Episode]) -> list[Check]:
     s = fpsg(trajectories)
     note = f"{s.runs} episodes"
     return [
-        Check("Decide", "Never-Visited, scout", "0 %", pct(s.never_visited), "exactly 0 %",
-              judged(s.never_visited == 0.0), note, {"never_visited": s.never_visited}),
-        Check("Decide", "FPSG local, scout", "1 (near)", fmt(s.local_mean, 3),
-              f">= {SCOUT_MIN_LOCAL}",
-              judged(s.local_mean is not None and s.local_mean >= SCOUT_MIN_LOCAL),
-              f"{note}; sd {fmt(s.local_sd, 3)}, global {fmt(s.global_mean, 3)}",
-              {"fpsg_local": s.local_mean, "fpsg_global": s.global_mean}),
-    ]  # fmt: skip
+        Check(
+            "Decide",
+            "Never-Visited, scout",
+            "0 %",
+            pct(s.never_visited),
+            "exactly 0 %",
+            judged(s.never_visited == 0.0),
+            note,
+            {"never_visited": s.never_visited},
+        ),
+        Check(
+            "Decide",
+            "FPSG local, scout",
+            "1 (near)",
+            fmt(s.local_mean, 3),
+            f">= {SCOUT_MIN_LOCAL}",
+            judged(s.local_mean is not None and s.local_mean >= SCOUT_MIN_LOCAL),
+            f"{note}; sd {fmt(s.local_sd, 3)}, global {fmt(s.global_mean, 3)}",
+            {"fpsg_local": s.local_mean, "fpsg_global": s.global_mean},
+        ),
+    ]

@@ -87,8 +87,15 @@ def frame_checks(groups: Mapping[str, Sequence[Episode]]) -> list[Check]:
         + (f"; {skipped} errored or metrics-only episodes skipped" if skipped else "")
     )
     return [
-        Check("Map", f"frame invariance: {name}", "0", f"max |Δ| = {delta:.1e}",
-              f"<= {FRAME_TOLERANCE:.0e}", judged(delta <= FRAME_TOLERANCE), note,
-              {"max_abs_delta": delta, "episodes": n})
+        Check(
+            "Map",
+            f"frame invariance: {name}",
+            "0",
+            f"max |Δ| = {delta:.1e}",
+            f"<= {FRAME_TOLERANCE:.0e}",
+            judged(delta <= FRAME_TOLERANCE),
+            note,
+            {"max_abs_delta": delta, "episodes": n},
+        )
         for name, delta in worst.items()
-    ]  # fmt: skip
+    ]

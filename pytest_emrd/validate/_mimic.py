@@ -130,16 +130,27 @@ def own_frame_checks(spawn: Paired, own: Paired) -> list[Check]:
     same = all(o.matched == s.matched for (_, o), (_, s) in zip(own, spawn, strict=True))
     note = f"{len(own)} paired episodes; the own frame is a seeded rotation + translation"
     return [
-        Check("Map", "PA, mimic: own frame vs spawn frame", "equal",
-              f"max |diff| {fmt(pa_gap, 4)}", "rounding: sqrt(2) * 0.01 m / L_gt per episode",
-              judged(same and max(excess, default=0.0) <= EXACT),
-              f"{note}; same |K| in every episode: {same}",
-              {"max_pa_gap": pa_gap, "max_excess_over_bound": max(excess, default=0.0)}),
-        Check("Map", "AEC and SIR, mimic: own frame vs spawn frame", "equal",
-              f"max |diff| {fmt(aec_gap, 4)} / {fmt(sir_gap, 4)}", "exactly",
-              judged(aec_gap <= EXACT and sir_gap <= EXACT), note,
-              {"max_aec_gap": aec_gap, "max_sir_gap": sir_gap}),
-    ]  # fmt: skip
+        Check(
+            "Map",
+            "PA, mimic: own frame vs spawn frame",
+            "equal",
+            f"max |diff| {fmt(pa_gap, 4)}",
+            "rounding: sqrt(2) * 0.01 m / L_gt per episode",
+            judged(same and max(excess, default=0.0) <= EXACT),
+            f"{note}; same |K| in every episode: {same}",
+            {"max_pa_gap": pa_gap, "max_excess_over_bound": max(excess, default=0.0)},
+        ),
+        Check(
+            "Map",
+            "AEC and SIR, mimic: own frame vs spawn frame",
+            "equal",
+            f"max |diff| {fmt(aec_gap, 4)} / {fmt(sir_gap, 4)}",
+            "exactly",
+            judged(aec_gap <= EXACT and sir_gap <= EXACT),
+            note,
+            {"max_aec_gap": aec_gap, "max_sir_gap": sir_gap},
+        ),
+    ]
 
 
 def sigma_check(noisy: Paired, clean: Paired, sigma: float) -> Check:
@@ -156,25 +167,32 @@ def sigma_check(noisy: Paired, clean: Paired, sigma: float) -> Check:
         data, lambda a: np.sqrt(np.clip(a[..., 0].sum(axis=1) / a[..., 1].sum(axis=1), 0, None))
     )
     error = abs(estimate - sigma) / sigma
-    return Check("Map", f"Position noise sigma from PA's RMSE, mimic-s{sigma:g}", f"{sigma:g} m",
-                 f"{fmt(estimate, 3)} m", f"within {SIGMA_TOLERANCE:.0%}",
-                 judged(error <= SIGMA_TOLERANCE),
-                 f"{len(data)} paired episodes; sigma_hat^2 = sum(SSR - SSR_0) / sum(2n - 3), "
-                 "RMSE = -L_gt ln(PA / coverage); bootstrap 95 % CI "
-                 f"{fmt(low, 3)}-{fmt(high, 3)}",
-                 {"sigma": sigma, "sigma_hat": estimate, "ci_low": low,
-                  "ci_high": high})  # fmt: skip
+    return Check(
+        "Map",
+        f"Position noise sigma from PA's RMSE, mimic-s{sigma:g}",
+        f"{sigma:g} m",
+        f"{fmt(estimate, 3)} m",
+        f"within {SIGMA_TOLERANCE:.0%}",
+        judged(error <= SIGMA_TOLERANCE),
+        f"{len(data)} paired episodes; sigma_hat^2 = sum(SSR - SSR_0) / sum(2n - 3), "
+        "RMSE = -L_gt ln(PA / coverage); bootstrap 95 % CI "
+        f"{fmt(low, 3)}-{fmt(high, 3)}",
+        {"sigma": sigma, "sigma_hat": estimate, "ci_low": low, "ci_high": high},
+    )
 
 
-def rate_check(section: str, name: str, planted: float, count: int, total: int,
-                note: str) -> Check:  # fmt: skip
+def rate_check(section: str, name: str, planted: float, count: int, total: int, note: str) -> Check:
     low, high = proportion_confint(count, total, alpha=0.05, method="beta") if total else (0, 1)
-    return Check(section, name, pct(planted), pct(count / total if total else None),
-                 "planted value inside the 95 % Clopper-Pearson interval",
-                 judged(low <= planted <= high),
-                 f"{count} of {total}; CI {pct(low)}-{pct(high)}; {note}",
-                 {"planted": planted, "count": count, "total": total, "ci_low": low,
-                  "ci_high": high})  # fmt: skip
+    return Check(
+        section,
+        name,
+        pct(planted),
+        pct(count / total if total else None),
+        "planted value inside the 95 % Clopper-Pearson interval",
+        judged(low <= planted <= high),
+        f"{count} of {total}; CI {pct(low)}-{pct(high)}; {note}",
+        {"planted": planted, "count": count, "total": total, "ci_low": low, "ci_high": high},
+    )
 
 
 def halluc_checks(halluc: Paired, clean: Paired, h: float) -> list[Check]:
@@ -191,14 +209,26 @@ def halluc_checks(halluc: Paired, clean: Paired, h: float) -> list[Check]:
     count = sum(unrecognised(th) - unrecognised(tc) for (th, _), (tc, _) in pairs)
     total = sum(len(t.steps) for t, _ in halluc)
     return [
-        Check("Explore", f"AEC, PA, SIR with hallucinations, mimic-h{h:g}", "unchanged",
-              " / ".join(f"{fmt(v, 4)}" for v in gaps.values()) + " max |diff|", "exactly",
-              judged(all(v <= EXACT for v in gaps.values())),
-              f"{len(halluc)} paired episodes; Eq. AEC's min cap: unrecognised entries count "
-              "for nothing", {f"max_{k}_gap": v for k, v in gaps.items()}),
-        rate_check("Explore", f"Hallucinated entries per step, mimic-h{h:g}", h, count, total,
-                    "unrecognised entries of the terminal map over steps"),
-    ]  # fmt: skip
+        Check(
+            "Explore",
+            f"AEC, PA, SIR with hallucinations, mimic-h{h:g}",
+            "unchanged",
+            " / ".join(f"{fmt(v, 4)}" for v in gaps.values()) + " max |diff|",
+            "exactly",
+            judged(all(v <= EXACT for v in gaps.values())),
+            f"{len(halluc)} paired episodes; Eq. AEC's min cap: unrecognised entries count "
+            "for nothing",
+            {f"max_{k}_gap": v for k, v in gaps.items()},
+        ),
+        rate_check(
+            "Explore",
+            f"Hallucinated entries per step, mimic-h{h:g}",
+            h,
+            count,
+            total,
+            "unrecognised entries of the terminal map over steps",
+        ),
+    ]
 
 
 def _copied_during(traj: Trajectory, start: int, end: int) -> set[str]:
@@ -250,24 +280,35 @@ def dup_checks(dup: Paired, clean: Paired, p: float) -> list[Check]:
     got = float(np.mean(measured)) if measured else math.nan
     sir_gap = max_gap(planted, measured) if planted else math.inf
     return [
-        Check("Explore", f"AEC with duplicates, mimic-p{p:g}: Eq. AEC", "sum_k min(|M_k| + D_k, "
-              "|E_k|) / |E|", f"max |diff| {fmt(gap, 4)}; mean rise {fmt(np.mean(rises), 4)}",
-              "exactly; never lower than clean", judged(gap <= EXACT and min(rises) >= -EXACT),
-              f"{len(dup)} paired episodes; D_k from the agent's state; a duplicate counts only "
-              "where type k has an unmapped instance", {"max_gap": gap,
-              "mean_rise": float(np.mean(rises))}),
-        Check("Remember", f"SIR / AEC with duplicates, mimic-p{p:g}", fmt(want, 3),
-              f"{fmt(got, 3)}; max |diff| {fmt(sir_gap, 4)}", "exactly, per episode",
-              judged(sir_gap <= EXACT),
-              f"{len(planted)} episodes with a re-entry; planted: share of M_first without a "
-              "duplicate at the re-entry's end (Appendix B: 'successfully deduplicated'); "
-              "recovered: copies found by position (metrics reentry_copies)",
-              {"planted_ratio": want, "recovered_ratio": got, "max_gap": sir_gap}),
-    ]  # fmt: skip
+        Check(
+            "Explore",
+            f"AEC with duplicates, mimic-p{p:g}: Eq. AEC",
+            "sum_k min(|M_k| + D_k, |E_k|) / |E|",
+            f"max |diff| {fmt(gap, 4)}; mean rise {fmt(np.mean(rises), 4)}",
+            "exactly; never lower than clean",
+            judged(gap <= EXACT and min(rises) >= -EXACT),
+            f"{len(dup)} paired episodes; D_k from the agent's state; a duplicate counts only "
+            "where type k has an unmapped instance",
+            {"max_gap": gap, "mean_rise": float(np.mean(rises))},
+        ),
+        Check(
+            "Remember",
+            f"SIR / AEC with duplicates, mimic-p{p:g}",
+            fmt(want, 3),
+            f"{fmt(got, 3)}; max |diff| {fmt(sir_gap, 4)}",
+            "exactly, per episode",
+            judged(sir_gap <= EXACT),
+            f"{len(planted)} episodes with a re-entry; planted: share of M_first without a "
+            "duplicate at the re-entry's end (Appendix B: 'successfully deduplicated'); "
+            "recovered: copies found by position (metrics reentry_copies)",
+            {"planted_ratio": want, "recovered_ratio": got, "max_gap": sir_gap},
+        ),
+    ]
 
 
-def reply_checks(default: Sequence[Trajectory], clean: Sequence[Trajectory],
-                 planted: Mapping[str, float]) -> list[Check]:  # fmt: skip
+def reply_checks(
+    default: Sequence[Trajectory], clean: Sequence[Trajectory], planted: Mapping[str, float]
+) -> list[Check]:
     """Parse failures, repaired replies and refused actions recover ``fail``, ``repair``,
     ``invalid`` of the default mimic."""
     steps = [s for t in default for s in t.steps]
@@ -279,13 +320,28 @@ def reply_checks(default: Sequence[Trajectory], clean: Sequence[Trajectory],
     net = round((refused - f0 * len(readable)) / (1.0 - f0))
     kinds = Counter(r for s in readable for r in s.repairs or ())
     return [
-        rate_check("Replies", "Parse failures, mimic", planted["fail"],
-                    sum(s.parse_error is not None for s in steps), len(steps),
-                    "over all steps"),
-        rate_check("Replies", "Replies read with a repair, mimic", planted["repair"], repaired,
-                    len(readable), "over readable replies; "
-                    + ", ".join(f"{k} {n}" for k, n in sorted(kinds.items()))),
-        rate_check("Replies", "Invalid actions, mimic", planted["invalid"], max(net, 0),
-                    len(readable), f"refused {refused}, net of the clean mimic's own refusal "
-                    f"rate {pct(f0)}"),
-    ]  # fmt: skip
+        rate_check(
+            "Replies",
+            "Parse failures, mimic",
+            planted["fail"],
+            sum(s.parse_error is not None for s in steps),
+            len(steps),
+            "over all steps",
+        ),
+        rate_check(
+            "Replies",
+            "Replies read with a repair, mimic",
+            planted["repair"],
+            repaired,
+            len(readable),
+            "over readable replies; " + ", ".join(f"{k} {n}" for k, n in sorted(kinds.items())),
+        ),
+        rate_check(
+            "Replies",
+            "Invalid actions, mimic",
+            planted["invalid"],
+            max(net, 0),
+            len(readable),
+            f"refused {refused}, net of the clean mimic's own refusal rate {pct(f0)}",
+        ),
+    ]

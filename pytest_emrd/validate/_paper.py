@@ -56,9 +56,15 @@ def _row(name: str, printed: str, value: float | None, same: Printed, note: str)
         return Check("Statistics", name, printed, "n/a", "printed precision", "fail", note)
     verdict = "pass" if same(value) else "finding"
     return Check(
-        "Statistics", name, printed, f"{value:.4g}", "printed precision", verdict, note,
+        "Statistics",
+        name,
+        printed,
+        f"{value:.4g}",
+        "printed precision",
+        verdict,
+        note,
         {"printed": printed, "recovered": value},
-    )  # fmt: skip
+    )
 
 
 def inventory_free_checks() -> list[Check]:
@@ -66,9 +72,14 @@ def inventory_free_checks() -> list[Check]:
     chi = chi_square(INVENTORY_FREE)
     counts = "counts 70/3/6/0 vs 22/31/21/6 (C/K/E/O)"
     rows = [
-        _row("Inventory-Free chi-square", "62.4", chi.statistic, _at_precision(62.4, 1),
-             f"{counts}; df = {chi.dof}"),
-    ]  # fmt: skip
+        _row(
+            "Inventory-Free chi-square",
+            "62.4",
+            chi.statistic,
+            _at_precision(62.4, 1),
+            f"{counts}; df = {chi.dof}",
+        ),
+    ]
     p = chi.p_value
     p_note = f"Pearson test, df = {chi.dof}, gives p = {p:.2e}" if p is not None else ""
     if p is not None and p >= 1e-13:
@@ -110,10 +121,13 @@ def _reproducing(printed: _Counts) -> _Counts:
     matches: list[_Counts] = []
     for base in spans[0]:
         per_row = [
-            [c for c in spans[i] if round(
-                _Counts((base, c), (printed.n[0], printed.n[i])).fisher(1), 3) == row[3]]
+            [
+                c
+                for c in spans[i]
+                if round(_Counts((base, c), (printed.n[0], printed.n[i])).fisher(1), 3) == row[3]
+            ]
             for i, row in enumerate(APPENDIX_E, start=1)
-        ]  # fmt: skip
+        ]
         for combo in itertools.product(*per_row):
             counts = _Counts((base, *combo), printed.n)
             stat = chi_square(counts.table()).statistic
@@ -146,12 +160,22 @@ def appendix_e_checks() -> list[Check]:
     )
     chi = chi_square(printed.table())
     rows = [
-        _row("Appendix E chi-square (5 x 2)", "17.81", chi.statistic,
-             _at_precision(APPENDIX_E_CHI2[0], 2), f"{source}; {why}"),
+        _row(
+            "Appendix E chi-square (5 x 2)",
+            "17.81",
+            chi.statistic,
+            _at_precision(APPENDIX_E_CHI2[0], 2),
+            f"{source}; {why}",
+        ),
         _row("Appendix E df", "4", float(chi.dof), _at_precision(APPENDIX_E_CHI2[1], 0), source),
-        _row("Appendix E p (chi-square)", "0.001", chi.p_value,
-             _at_precision(APPENDIX_E_CHI2[2], 3), f"p = {chi.p_value:.4f} from the printed %"),
-    ]  # fmt: skip
+        _row(
+            "Appendix E p (chi-square)",
+            "0.001",
+            chi.p_value,
+            _at_precision(APPENDIX_E_CHI2[2], 3),
+            f"p = {chi.p_value:.4f} from the printed %",
+        ),
+    ]
     for i, (name, n, _, target) in enumerate(APPENDIX_E, start=1):
         p = printed.fisher(i)
         note = (
@@ -163,8 +187,9 @@ def appendix_e_checks() -> list[Check]:
                 f"; the printed p needs Baseline {fit.conference[0]}/{fit.n[0]} vs "
                 f"{name} {fit.conference[i]}/{n}"
             )
-        rows.append(_row(f"Appendix E Fisher p, {name}", f"{target}", p,
-                         _at_precision(target, 3), note))  # fmt: skip
+        rows.append(
+            _row(f"Appendix E Fisher p, {name}", f"{target}", p, _at_precision(target, 3), note)
+        )
     label, n, pc, target = NEUTRAL
     neutral = _Counts((printed.conference[0], _count(n, pc)), (printed.n[0], n))
     p = neutral.fisher(1)
@@ -172,8 +197,9 @@ def appendix_e_checks() -> list[Check]:
     if round(p, 3) != target:
         fixed = _Counts((fit.conference[0], neutral.conference[1]), neutral.n).fisher(1)
         note += f"; with Baseline {fit.conference[0]}/79 it is {fixed:.3f}"
-    rows.append(_row(f"Appendix E Fisher p, {label}", f"{target}", p, _at_precision(target, 3),
-                     note))  # fmt: skip
+    rows.append(
+        _row(f"Appendix E Fisher p, {label}", f"{target}", p, _at_precision(target, 3), note)
+    )
     return rows
 
 
@@ -197,15 +223,24 @@ def appendix_f_checks() -> list[Check]:
         + (f"; column totals differ: {', '.join(mismatch)}" if mismatch else "")
         + f"; spawn x chosen chi-square = {chi.statistic:.2f} (df {chi.dof}, not printed)"
     )
-    verdict_share = _row("Appendix F spawn-room share (%)", f"{APPENDIX_F_SPAWN_SHARE}", share,
-                         _at_precision(APPENDIX_F_SPAWN_SHARE, 1),
-                         f"{stayed}/{n} choices name the spawn room")  # fmt: skip
+    verdict_share = _row(
+        "Appendix F spawn-room share (%)",
+        f"{APPENDIX_F_SPAWN_SHARE}",
+        share,
+        _at_precision(APPENDIX_F_SPAWN_SHARE, 1),
+        f"{stayed}/{n} choices name the spawn room",
+    )
     consistent = n == printed_n and not mismatch
     totals_row = Check(
-        "Statistics", "Appendix F totals vs Inventory-Free table", f"n = {printed_n}",
-        f"n = {n}", "exact", "pass" if consistent else "finding", note,
+        "Statistics",
+        "Appendix F totals vs Inventory-Free table",
+        f"n = {printed_n}",
+        f"n = {n}",
+        "exact",
+        "pass" if consistent else "finding",
+        note,
         {"printed": printed_n, "recovered": n},
-    )  # fmt: skip
+    )
     return [verdict_share, totals_row]
 
 

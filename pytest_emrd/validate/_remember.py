@@ -98,19 +98,35 @@ def decay_checks(groups: Mapping[float, Sequence[Episode]]) -> list[Check]:
             f"{mean:g}); within 25 % from N = {needed if needed is not None else 'never'} "
             f"(error {shrink})"
         )
-        data: dict[str, Value] = {"efc": fit.efc, "r2": fit.r2, "error": error,
-                                  "episodes_needed": needed}  # fmt: skip
+        data: dict[str, Value] = {
+            "efc": fit.efc,
+            "r2": fit.r2,
+            "error": error,
+            "episodes_needed": needed,
+        }
         data.update({f"error_n{n}": e for n, e in curve})
         rows += [
-            Check("Remember", f"Ebbinghaus EFC, scout-decay-{mean:g}", f"{mean:g} steps",
-                  f"{fmt(fit.efc)} steps ({100 * error:.0f} % off)", "within 25 %",
-                  judged(error <= EFC_TOLERANCE), note, data),
-            Check("Remember", f"Ebbinghaus R^2, scout-decay-{mean:g}", "exponential",
-                  f"R^2 = {fmt(fit.r2, 3)}", f">= {MIN_R2}",
-                  judged(fit.r2 is not None and fit.r2 >= MIN_R2),
-                  f"{len(trajs)} episodes; R^2 of C exp(-t/EFC) against the anchored KM",
-                  {"r2": fit.r2}),
-        ]  # fmt: skip
+            Check(
+                "Remember",
+                f"Ebbinghaus EFC, scout-decay-{mean:g}",
+                f"{mean:g} steps",
+                f"{fmt(fit.efc)} steps ({100 * error:.0f} % off)",
+                "within 25 %",
+                judged(error <= EFC_TOLERANCE),
+                note,
+                data,
+            ),
+            Check(
+                "Remember",
+                f"Ebbinghaus R^2, scout-decay-{mean:g}",
+                "exponential",
+                f"R^2 = {fmt(fit.r2, 3)}",
+                f">= {MIN_R2}",
+                judged(fit.r2 is not None and fit.r2 >= MIN_R2),
+                f"{len(trajs)} episodes; R^2 of C exp(-t/EFC) against the anchored KM",
+                {"r2": fit.r2},
+            ),
+        ]
     return rows
 
 
@@ -141,23 +157,38 @@ def window_fit_checks(
         m = nearest_decay(fit, decay_fits)
         if m is None:
             rows.append(
-                Check("Remember", f"Exponential fit, scout-window-{k} vs scout-decay",
-                      "worse fit", "n/a", f"R^2 gap >= {R2_GAP}", "fail",
-                      f"no finite EFC to match (window EFC {fmt(fit.efc)})")
-            )  # fmt: skip
+                Check(
+                    "Remember",
+                    f"Exponential fit, scout-window-{k} vs scout-decay",
+                    "worse fit",
+                    "n/a",
+                    f"R^2 gap >= {R2_GAP}",
+                    "fail",
+                    f"no finite EFC to match (window EFC {fmt(fit.efc)})",
+                )
+            )
             continue
         efc = fit.efc
         match = decay_fits[m]
         gap = (match.r2 or 0.0) - fit.r2 if fit.r2 is not None else math.inf
         rows.append(
-            Check("Remember", f"Exponential fit, scout-window-{k} vs scout-decay-{m:g}",
-                  f"R^2 below {fmt(match.r2, 3)}", f"R^2 = {fmt(fit.r2, 3)}",
-                  f"gap >= {R2_GAP}", judged(gap >= R2_GAP),
-                  f"matched mean: window EFC {fmt(efc)} vs decay EFC {fmt(match.efc)} steps; "
-                  f"{len(trajs)} + {len(decays[m])} episodes",
-                  {"r2_window": fit.r2, "r2_decay": match.r2, "efc_window": efc,
-                   "efc_decay": match.efc})
-        )  # fmt: skip
+            Check(
+                "Remember",
+                f"Exponential fit, scout-window-{k} vs scout-decay-{m:g}",
+                f"R^2 below {fmt(match.r2, 3)}",
+                f"R^2 = {fmt(fit.r2, 3)}",
+                f"gap >= {R2_GAP}",
+                judged(gap >= R2_GAP),
+                f"matched mean: window EFC {fmt(efc)} vs decay EFC {fmt(match.efc)} steps; "
+                f"{len(trajs)} + {len(decays[m])} episodes",
+                {
+                    "r2_window": fit.r2,
+                    "r2_decay": match.r2,
+                    "efc_window": efc,
+                    "efc_decay": match.efc,
+                },
+            )
+        )
     return rows
 
 
@@ -176,24 +207,36 @@ def miller_checks(
         curve = miller_curve(trajs, width=MILLER_WIDTH)
         want = math.ceil(k / MILLER_WIDTH)
         ok = curve.b_star is not None and abs(curve.b_star - want) <= MILLER_BINS
-        probs = ", ".join(f"{b}: {p:.2f}" for b, p in zip(curve.bins, curve.probabilities,
-                                                           strict=True))  # fmt: skip
+        probs = ", ".join(
+            f"{b}: {p:.2f}" for b, p in zip(curve.bins, curve.probabilities, strict=True)
+        )
         rows.append(
-            Check("Remember", f"Miller inflection, scout-window-{k}", f"m* = {k} (bin {want})",
-                  f"m* = {curve.m_star if curve.m_star is not None else 'none'}",
-                  f"within {MILLER_BINS} bin (w = {MILLER_WIDTH})", judged(ok),
-                  f"{len(trajs)} episodes; ML(bin) {probs}" + (
-                      f"; {curve.reason}" if curve.reason else ""),
-                  {"m_star": curve.m_star, "b_star": curve.b_star, "planted_bin": want})
-        )  # fmt: skip
+            Check(
+                "Remember",
+                f"Miller inflection, scout-window-{k}",
+                f"m* = {k} (bin {want})",
+                f"m* = {curve.m_star if curve.m_star is not None else 'none'}",
+                f"within {MILLER_BINS} bin (w = {MILLER_WIDTH})",
+                judged(ok),
+                f"{len(trajs)} episodes; ML(bin) {probs}"
+                + (f"; {curve.reason}" if curve.reason else ""),
+                {"m_star": curve.m_star, "b_star": curve.b_star, "planted_bin": want},
+            )
+        )
     curve = miller_curve(perfect, width=MILLER_WIDTH)
     worst = max(curve.probabilities, default=None)
     rows.append(
-        Check("Remember", "Miller forgetting, scout (perfect memory)", "0 at every load",
-              f"max ML = {fmt(worst)}", "exactly 0", judged(worst == 0.0),
-              f"{len(perfect)} episodes, {sum(curve.steps)} steps over {len(curve.bins)} load bins",
-              {"max_probability": worst, "bins": len(curve.bins)})
-    )  # fmt: skip
+        Check(
+            "Remember",
+            "Miller forgetting, scout (perfect memory)",
+            "0 at every load",
+            f"max ML = {fmt(worst)}",
+            "exactly 0",
+            judged(worst == 0.0),
+            f"{len(perfect)} episodes, {sum(curve.steps)} steps over {len(curve.bins)} load bins",
+            {"max_probability": worst, "bins": len(curve.bins)},
+        )
+    )
     return rows
 
 
@@ -280,23 +323,34 @@ def serial_checks(
     u_shape = e is not None and m is not None and late is not None and min(e, late) > m
     depth = u_depth(e, m, late)
     rows = [
-        Check("Remember", "Serial position, scout-serial", "U shape (E, L > M)",
-              f"MLE {_profile(e, m, late)}; U depth {fmt(depth)}", "E > M and L > M (MLE)",
-              judged(u_shape), _paper_note(spe, len(serial)), {**_data(spe), "u_depth": depth})
-    ]  # fmt: skip
+        Check(
+            "Remember",
+            "Serial position, scout-serial",
+            "U shape (E, L > M)",
+            f"MLE {_profile(e, m, late)}; U depth {fmt(depth)}",
+            "E > M and L > M (MLE)",
+            judged(u_shape),
+            _paper_note(spe, len(serial)),
+            {**_data(spe), "u_depth": depth},
+        )
+    ]
     for k, trajs in windows.items():
         spe = serial_position(trajs)
         values = (spe.mle_early, spe.mle_middle, spe.mle_late)
         depth = u_depth(*values)
         shape = "yes" if monotone(*values) else _LRU_SHAPE
         rows.append(
-            Check("Remember", f"Serial position, scout-window-{k}", "no U (LRU plants none)",
-                  f"MLE {_profile(*values)}; U depth {fmt(depth)}",
-                  f"U depth < {MAX_U_DEPTH:g} (planted U ~ 1)",
-                  judged(depth is not None and depth < MAX_U_DEPTH),
-                  f"{_paper_note(spe, len(trajs))}; monotone within "
-                  f"{SERIAL_TOLERANCE:.0%}: {shape}", {**_data(spe), "u_depth": depth})
-        )  # fmt: skip
+            Check(
+                "Remember",
+                f"Serial position, scout-window-{k}",
+                "no U (LRU plants none)",
+                f"MLE {_profile(*values)}; U depth {fmt(depth)}",
+                f"U depth < {MAX_U_DEPTH:g} (planted U ~ 1)",
+                judged(depth is not None and depth < MAX_U_DEPTH),
+                f"{_paper_note(spe, len(trajs))}; monotone within {SERIAL_TOLERANCE:.0%}: {shape}",
+                {**_data(spe), "u_depth": depth},
+            )
+        )
     if perfect:
         rows.append(_censoring_bias(serial_position(perfect), len(perfect)))
     return rows
@@ -315,11 +369,15 @@ def _censoring_bias(spe: SerialPosition, episodes: int) -> Check:
         "for the steps left: a memory that never forgets shows E > M > L"
     )
     return Check(
-        "Remember", "Serial position, Eq. SPE under perfect memory (scout)",
-        "flat: nothing forgotten", f"paper {_profile(*paper)}; MLE {_profile(*mle)}",
-        f"MLE inf in every third; paper flat within {SERIAL_TOLERANCE:.0%}", verdict, note,
+        "Remember",
+        "Serial position, Eq. SPE under perfect memory (scout)",
+        "flat: nothing forgotten",
+        f"paper {_profile(*paper)}; MLE {_profile(*mle)}",
+        f"MLE inf in every third; paper flat within {SERIAL_TOLERANCE:.0%}",
+        verdict,
+        note,
         _data(spe),
-    )  # fmt: skip
+    )
 
 
 def r2_points_checks(
@@ -348,21 +406,30 @@ def r2_points_checks(
         default = points == R2_POINTS[0]
         verdict = "pass" if survives else ("fail" if default else "finding")
         recovered = (
-            "decay " + " / ".join(fmt(f.r2, 2) for f in decay.values())
-            + "; window " + " / ".join(fmt(f.r2, 2) for f in window.values())
+            "decay "
+            + " / ".join(fmt(f.r2, 2) for f in decay.values())
+            + "; window "
+            + " / ".join(fmt(f.r2, 2) for f in window.values())
             + f"; serial {fmt(r2_serial, 2)}"
-        )  # fmt: skip
+        )
         rows.append(
-            Check("Remember", f"R^2 findings on evaluation points '{points}'"
-                  + (" (default)" if default else ""),
-                  f"decay R^2 >= {MIN_R2}; window gap >= {R2_GAP}", recovered,
-                  "both findings hold", verdict,
-                  f"decay {', '.join(f'{m:g}' for m in decay)}; window "
-                  f"{', '.join(str(k) for k in window)}; smallest gap "
-                  f"{fmt(min(gaps, default=math.nan), 2)}",
-                  {"points": points, "min_gap": min(gaps, default=math.nan),
-                   "serial_r2": r2_serial,
-                   **{f"r2_decay_{m:g}": f.r2 for m, f in decay.items()},
-                   **{f"r2_window_{k}": f.r2 for k, f in window.items()}})
-        )  # fmt: skip
+            Check(
+                "Remember",
+                f"R^2 findings on evaluation points '{points}'" + (" (default)" if default else ""),
+                f"decay R^2 >= {MIN_R2}; window gap >= {R2_GAP}",
+                recovered,
+                "both findings hold",
+                verdict,
+                f"decay {', '.join(f'{m:g}' for m in decay)}; window "
+                f"{', '.join(str(k) for k in window)}; smallest gap "
+                f"{fmt(min(gaps, default=math.nan), 2)}",
+                {
+                    "points": points,
+                    "min_gap": min(gaps, default=math.nan),
+                    "serial_r2": r2_serial,
+                    **{f"r2_decay_{m:g}": f.r2 for m, f in decay.items()},
+                    **{f"r2_window_{k}": f.r2 for k, f in window.items()},
+                },
+            )
+        )
     return rows

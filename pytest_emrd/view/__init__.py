@@ -110,8 +110,11 @@ def recorded_digests(traj: Trajectory, cassettes: Path | None) -> Recorded:
     :returns: The :class:`Recorded` digests, or a note why there are none.
     """
     if traj.spec.modality == "text":
-        return Recorded((), "text modality: the model was shown no frame; the frames are what "
-                        "its camera would have shown")  # fmt: skip
+        return Recorded(
+            (),
+            "text modality: the model was shown no frame; the frames are what "
+            "its camera would have shown",
+        )
     if cassettes is None:
         return Recorded((), "no cassette folder given (--cassettes): frames not checked")
     path = found_cassette(cassettes, traj.spec)
@@ -122,8 +125,11 @@ def recorded_digests(traj: Trajectory, cassettes: Path | None) -> Recorded:
     except (FormatError, ConfigError) as exc:
         return Recorded((), f"{path} is not a readable cassette ({exc}): frames not checked")
     if data.protocol != traj.protocol:
-        return Recorded((), f"{path} was recorded under protocol {data.protocol}, the episode "
-                        f"ran under {traj.protocol}: frames not checked")  # fmt: skip
+        return Recorded(
+            (),
+            f"{path} was recorded under protocol {data.protocol}, the episode "
+            f"ran under {traj.protocol}: frames not checked",
+        )
     replies = [set(_strings(_json(r["body"]["string"]))) for r in data.responses]
     pairs = zip(traj.steps, replies, strict=False)
     changed = [s.index for s, r in pairs if s.raw_reply and s.raw_reply not in r]
@@ -140,8 +146,10 @@ def recorded_digests(traj: Trajectory, cassettes: Path | None) -> Recorded:
         digests.append(found[-1] if found else None)
     note = None
     if len(digests) != len(traj.steps):
-        note = (f"{path} holds {len(digests)} requests for {len(traj.steps)} steps: steps "
-                "are checked in order up to the shorter")  # fmt: skip
+        note = (
+            f"{path} holds {len(digests)} requests for {len(traj.steps)} steps: steps "
+            "are checked in order up to the shorter"
+        )
     latencies = tuple(r.get(LATENCY) for r in data.responses)
     return Recorded(tuple(digests), note, latencies)
 

@@ -120,48 +120,78 @@ def episode_data(
         points, rotation, rmse = align_map(s.cognitive_map, matching)
         reply = parse_reply(s.raw_reply)
         after = traj.steps[i + 1] if i + 1 < len(traj.steps) else None
-        steps.append({
-            "t": s.index, "action": s.action, "success": s.success, "feedback": s.feedback,
-            "parse_error": s.parse_error, "observation": reply.observation,
-            "dedup": reply.dedup_check, "reasoning": reply.reasoning, "raw": s.raw_reply,
-            "pose": [round(s.pose.x, 3), round(s.pose.z, 3), round(s.pose.heading, 1)],
-            "at": [*place(s.pose.x, s.pose.z), round((s.pose.heading + turn) % 360.0, 1)],
-            "room": s.room, "visible": list(s.visible_ids),
-            "map": [[p.label, *place(p.x, p.z), p.object_id] for p in points],
-            "rotation": round(rotation, 1), "rmse": _round(rmse),
-            "coverage": _round(aec_score(matching, len(truth.objects))),
-            "pa": _round(positional_accuracy_score(matching, len(truth.discoverable_ids))),
-            "tbs": _round(tbs[i]) if i < len(tbs) else None,
-            "frame": i if i < len(frames) else None,
-            "frame_ok": status[i] if i < len(status) else None,
-            "prompt": frames[i].text or None if i < len(frames) else None,
-            "window": [j for j in range(max(0, i - HISTORY_TURNS + 1), i + 1) if j < len(frames)],
-            "tokens": [s.usage.prompt_tokens, s.usage.completion_tokens],
-            "latency": s.latency_s,
-            "recorded_latency": recorded.latencies[i] if i < len(recorded.latencies) else None,
-            "after": (f"{after.room} (x={after.pose.x:.2f} z={after.pose.z:.2f} "
-                      f"heading={after.pose.heading:.0f}°)" if after else traj.final_room),
-        })  # fmt: skip
+        steps.append(
+            {
+                "t": s.index,
+                "action": s.action,
+                "success": s.success,
+                "feedback": s.feedback,
+                "parse_error": s.parse_error,
+                "observation": reply.observation,
+                "dedup": reply.dedup_check,
+                "reasoning": reply.reasoning,
+                "raw": s.raw_reply,
+                "pose": [round(s.pose.x, 3), round(s.pose.z, 3), round(s.pose.heading, 1)],
+                "at": [*place(s.pose.x, s.pose.z), round((s.pose.heading + turn) % 360.0, 1)],
+                "room": s.room,
+                "visible": list(s.visible_ids),
+                "map": [[p.label, *place(p.x, p.z), p.object_id] for p in points],
+                "rotation": round(rotation, 1),
+                "rmse": _round(rmse),
+                "coverage": _round(aec_score(matching, len(truth.objects))),
+                "pa": _round(positional_accuracy_score(matching, len(truth.discoverable_ids))),
+                "tbs": _round(tbs[i]) if i < len(tbs) else None,
+                "frame": i if i < len(frames) else None,
+                "frame_ok": status[i] if i < len(status) else None,
+                "prompt": frames[i].text or None if i < len(frames) else None,
+                "window": [
+                    j for j in range(max(0, i - HISTORY_TURNS + 1), i + 1) if j < len(frames)
+                ],
+                "tokens": [s.usage.prompt_tokens, s.usage.completion_tokens],
+                "latency": s.latency_s,
+                "recorded_latency": recorded.latencies[i] if i < len(recorded.latencies) else None,
+                "after": (
+                    f"{after.room} (x={after.pose.x:.2f} z={after.pose.z:.2f} "
+                    f"heading={after.pose.heading:.0f}°)"
+                    if after
+                    else traj.final_room
+                ),
+            }
+        )
     notes = [n for n in (note, check.note) if n]
     if check.mismatched:
-        notes.insert(0, f"{len(check.mismatched)} re-rendered frame(s) differ from the recorded "
-                     f"digest (steps {', '.join(map(str, check.mismatched))}): the world changed "
-                     "since recording; those frames are not what the model saw")  # fmt: skip
+        notes.insert(
+            0,
+            f"{len(check.mismatched)} re-rendered frame(s) differ from the recorded "
+            f"digest (steps {', '.join(map(str, check.mismatched))}): the world changed "
+            "since recording; those frames are not what the model saw",
+        )
     data = {
-        "case_id": traj.spec.case_id, "model": traj.spec.model,
-        "condition": traj.spec.condition, "variant": traj.spec.variant,
-        "spawn": traj.spec.spawn, "episode": traj.spec.episode, "status": traj.status,
-        "protocol": traj.protocol, "chosen_room": traj.chosen_room,
-        "chosen_raw": traj.chosen_room_raw, "rationale": traj.rationale, "error": traj.error,
-        "final_room": traj.final_room, "notes": notes, "system": system,
+        "case_id": traj.spec.case_id,
+        "model": traj.spec.model,
+        "condition": traj.spec.condition,
+        "variant": traj.spec.variant,
+        "spawn": traj.spec.spawn,
+        "episode": traj.spec.episode,
+        "status": traj.status,
+        "protocol": traj.protocol,
+        "chosen_room": traj.chosen_room,
+        "chosen_raw": traj.chosen_room_raw,
+        "rationale": traj.rationale,
+        "error": traj.error,
+        "final_room": traj.final_room,
+        "notes": notes,
+        "system": system,
         "plan_frame": "the office's frame, north up" if spawn else "the spawn frame",
-        "rooms": [{"name": r.name, "polygon": [list(place(*p)) for p in r.polygon]}
-                  for r in truth.rooms],
-        "objects": [[o.object_id, o.object_type, o.category, *place(o.x, o.z)]
-                    for o in truth.objects],
+        "rooms": [
+            {"name": r.name, "polygon": [list(place(*p)) for p in r.polygon]} for r in truth.rooms
+        ],
+        "objects": [
+            [o.object_id, o.object_type, o.category, *place(o.x, o.z)] for o in truth.objects
+        ],
         "steps": steps,
         "metrics": {name: getattr(measured, name) for name in INDEX_METRICS},
-    }  # fmt: skip
+    }
     return data, check
 
 
@@ -334,6 +364,7 @@ def episode_gif(data: dict[str, Any], frames: Sequence[Frame], *, ms: int = 700)
         images.append(canvas.quantize(colors=128))
     buffer = io.BytesIO()
     if images:
-        images[0].save(buffer, format="GIF", save_all=True, append_images=images[1:],
-                       duration=ms, loop=0)  # fmt: skip
+        images[0].save(
+            buffer, format="GIF", save_all=True, append_images=images[1:], duration=ms, loop=0
+        )
     return buffer.getvalue()

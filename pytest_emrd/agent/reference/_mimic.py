@@ -93,9 +93,13 @@ class _Writer:
         return live[-1] if live else None
 
     def _new_label(self, object_type: str, name: str) -> str:
-        return label_for(object_type, self.map, style=self.state["style"],
-                         u_phrase=self.draw(f"{name}:phrase"),
-                         u_qualifier=self.draw(f"{name}:qualifier"))  # fmt: skip
+        return label_for(
+            object_type,
+            self.map,
+            style=self.state["style"],
+            u_phrase=self.draw(f"{name}:phrase"),
+            u_qualifier=self.draw(f"{name}:qualifier"),
+        )
 
     def position(self, object_id: str, entry: Mapping[str, Any]) -> tuple[float, float]:
         """Written position of a remembered object: frame, then noise of its last sighting."""
@@ -134,8 +138,9 @@ class _Writer:
         if step("halluc") >= float(self.planted.get("halluc", 0.0)):
             return
         phrase = pick(HALLUCINATIONS, step("halluc:what"))
-        label = label_for(phrase, self.map, style=self.state["style"], u_phrase=0.0,
-                          u_qualifier=1.0)  # fmt: skip
+        label = label_for(
+            phrase, self.map, style=self.state["style"], u_phrase=0.0, u_qualifier=1.0
+        )
         low, high = PHANTOM_RANGE_M
         distance = low + (high - low) * step("halluc:distance")
         bearing = math.radians(percept.pose.heading + 90.0 * step("halluc:bearing") - 45.0)
@@ -156,8 +161,12 @@ class _Writer:
             elif object_id in memory:
                 entry = memory[object_id]
                 x, z = self.position(object_id, entry)
-                fields = {"type": type_word(entry["type"]), "room": entry.get("room"), "x": x,
-                          "z": z}  # fmt: skip
+                fields = {
+                    "type": type_word(entry["type"]),
+                    "room": entry.get("room"),
+                    "x": x,
+                    "z": z,
+                }
             else:
                 continue
             out[label] = {k: v for k, v in fields.items() if v is not None}

@@ -97,8 +97,9 @@ def _spot(
         here = gap(plan["at"])
         closer = [o for o in candidates if gap(xz(o)) < here]
         return min(closer, key=lambda o: (gap(xz(o)), o), default="")
-    return max(candidates, key=lambda o: (min(math.dist(xz(o), p) for p in plan["sweeps"]), o),
-               default="")  # fmt: skip
+    return max(
+        candidates, key=lambda o: (min(math.dist(xz(o), p) for p in plan["sweeps"]), o), default=""
+    )
 
 
 def _reposition(plan: dict[str, Any], towards: list[list[float]]) -> bool:
