@@ -65,6 +65,7 @@ SECRET_ENV: Final = re.compile(r"(?:^|_)(?:API_KEY|APIKEY|TOKEN|SECRET|SECRET_KE
 MIN_SECRET_CHARS: Final = 8
 
 _watched: set[str] = set()
+_watched_values: set[str] = set()
 _cached: list[Any] = [None, ()]
 
 _USERINFO = re.compile(r"(?P<scheme>://)[^/\s@'\"<>`]+@")
@@ -87,28 +88,37 @@ def watch_env(names: Iterable[str | None]) -> None:
     _watched.update(name for name in names if name)
 
 
+def watch_value(value: str) -> None:
+    """Also treat ``value`` as a secret: the fallback a ``${VAR:-fallback}`` resolved to
+    stands where the variable's value would, so a recording made with the variable set and
+    a replay made without it redact the same place alike."""
+    _watched_values.add(value)
+
+
 def secret_values(env: Mapping[str, str] | None = None) -> tuple[str, ...]:
-    """The configured key values present in ``env`` (default: the process environment),
-    longest first so that a key containing another is removed whole. For the process
+    """The configured key values present in ``env`` (default: the process environment, with
+    the fallbacks of :func:`watch_value`), longest first so that a key containing another is removed whole. For the process
     environment the answer is cached against a fingerprint of its raw bytes (decoding
     ``os.environ`` costs 150 us for 40 variables, paid on every request otherwise)."""
     if env is not None:
         return _secret_values(env)
     raw = getattr(os.environ, "_data", None)
     if not isinstance(raw, dict):
-        return _secret_values(os.environ)
-    key = (hash(frozenset(raw.items())), frozenset(_watched))
+        return _secret_values(os.environ, _watched_values)
+    key = (hash(frozenset(raw.items())), frozenset(_watched), frozenset(_watched_values))
     if _cached[0] != key:
-        _cached[:] = [key, _secret_values(os.environ)]
+        _cached[:] = [key, _secret_values(os.environ, _watched_values)]
     return _cached[1]
 
 
-def _secret_values(env: Mapping[str, str]) -> tuple[str, ...]:
+def _secret_values(env: Mapping[str, str], fallbacks: Iterable[str] = ()) -> tuple[str, ...]:
+    named = [
+        value for name, value in env.items() if name in _watched or SECRET_ENV.search(name.upper())
+    ]
     values = {
         form
-        for name, value in env.items()
-        if (name in _watched or SECRET_ENV.search(name.upper()))
-        and len(value.strip()) >= MIN_SECRET_CHARS
+        for value in (*named, *fallbacks)
+        if len(value.strip()) >= MIN_SECRET_CHARS
         for form in encoded_forms(value.strip())
     }
     return tuple(sorted(values, key=lambda v: (-len(v), v)))

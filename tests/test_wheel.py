@@ -99,6 +99,7 @@ models:
   {MODEL}:
     provider: openai
     base_url: "${{MY_VLM_BASE_URL:-https://vlm.example.com/v1}}"
+    env: [MY_VLM_BASE_URL]
     model_id: scout@{reference_version}
     api_key_env: MY_VLM_API_KEY
     api_key_required: false

@@ -22,7 +22,7 @@ import yaml
 
 from pytest_emrd import _yaml
 from pytest_emrd._names import check_slug
-from pytest_emrd._scrub import scrub, watch_env
+from pytest_emrd._scrub import scrub, watch_env, watch_value
 from pytest_emrd.agent.reference._knobs import FAMILY, check_knobs, mimic_knobs
 from pytest_emrd.agent.reference._version import versioned_id
 from pytest_emrd.errors import ConfigError, check_choice, check_positive_int, check_range
@@ -258,6 +258,7 @@ def _expand_env(value: Any, where: str, field_name: str, declared: frozenset[str
                 f"{where}: {field_name} needs the environment variable {var}, which is not "
                 f"set; export {var}=..., or write ${{{var}:-default}} for a fallback."
             )
+        watch_value(default)
         return default
 
     return _ENV_REF.sub(sub, value)

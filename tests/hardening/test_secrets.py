@@ -152,3 +152,22 @@ def test_a_20_mb_reply_is_a_parse_failure_with_a_truncated_copy(tmp_path, provid
         assert step.raw_reply == capped_reply("x" * HUGE_CHARS)
         assert step.raw_reply.endswith(f"[... truncated: the reply had {HUGE_CHARS} characters]")
         assert len(step.raw_reply) < 200_100
+
+
+def test_a_fallback_url_is_redacted_like_the_variable_it_stands_for(tmp_path, monkeypatch):
+    """Recorded with ``MY_VLM_BASE_URL`` set, replayed in CI without it: both requests must
+    read ``<redacted>/chat/completions``, or the replay matches nothing."""
+    registry = tmp_path / "models.yaml"
+    registry.write_text(
+        "models:\n  mine:\n    provider: openai\n    model_id: m\n"
+        '    base_url: "${MY_VLM_BASE_URL:-https://vlm.example.com/v1}"\n'
+        "    env: [MY_VLM_BASE_URL]\n    api_key_env: MY_KEY\n    api_key_required: false\n"
+    )
+    monkeypatch.setenv("MY_VLM_BASE_URL", "http://127.0.0.1:9/v1")
+    recorded = load_registry(registry).get("mine").base_url
+    recorded_uri = scrub_uri(f"{recorded}/chat/completions")
+    monkeypatch.delenv("MY_VLM_BASE_URL")
+    replayed = load_registry(registry).get("mine").base_url
+    assert replayed == "https://vlm.example.com/v1"
+    assert scrub_uri(f"{replayed}/chat/completions") == recorded_uri
+    assert recorded_uri == f"{REDACTED}/chat/completions"
