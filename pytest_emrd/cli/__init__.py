@@ -20,7 +20,7 @@ COMMANDS: tuple[str, ...] = (
 def version_text() -> str:
     """``emrd 0.1.0 (protocol builtin-6+p3, reference agents ref-4)``: what cassettes apply."""
     from pytest_emrd import __version__
-    from pytest_emrd.agent.reference import REFERENCE_VERSION
+    from pytest_emrd.agent import REFERENCE_VERSION
     from pytest_emrd.protocol import protocol_version
 
     return (
