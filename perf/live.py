@@ -35,8 +35,8 @@ SPECS = tuple(
 def _record_all(root: Path) -> float:
     """Wall time / latency floor of recording :data:`SPECS` under ``root``."""
     from pytest_emrd.agent import OpenAICompatibleClient, load_registry
-    from pytest_emrd.agent.reference import ReferenceServer
     from pytest_emrd.episode import protocol_version, run_episode
+    from pytest_emrd.reference import ReferenceServer
     from pytest_emrd.run import Prefetcher, ResultsStore
 
     registry, protocol = load_registry(), protocol_version()

@@ -85,12 +85,14 @@ class _Replay:
 def _record() -> tuple[list[Observation], list[ChatResponse], str]:
     """Observations and replies of one real scout episode (its system prompt too)."""
     from pytest_emrd.agent import make_client
+    from pytest_emrd.reference import base_url_of
 
     episode = world.episode_world(SPEC)
     sim = world.make_simulator("builtin")
     obs = sim.reset(episode.layout, SPEC.condition, episode.spawn_room, episode.seed)
     system = build_system_prompt(episode.layout.inventory(), SPEC.variant, modality=SPEC.modality)
-    recorder = _Recorder(make_client(load_registry().get(SPEC.model)))
+    config = load_registry().get(SPEC.model)
+    recorder = _Recorder(make_client(config, base_url=base_url_of(config)))
     run = _Run(SPEC, sim, Conversation(system, single_image=False), replay=False)
     observations = [obs]
     try:

@@ -131,7 +131,7 @@ def _registry() -> Any:
 def _scout_client(transport: httpx.BaseTransport | None = None) -> Any:
     """The scout model's client as a replay builds it (no key), optionally on ``transport``."""
     from pytest_emrd.agent import OpenAICompatibleClient
-    from pytest_emrd.agent.reference import reference_base_url
+    from pytest_emrd.reference import reference_base_url
 
     config = _registry().get("scout")
     return OpenAICompatibleClient(

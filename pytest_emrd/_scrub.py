@@ -97,9 +97,10 @@ def watch_value(value: str) -> None:
 
 def secret_values(env: Mapping[str, str] | None = None) -> tuple[str, ...]:
     """The configured key values present in ``env`` (default: the process environment, with
-    the fallbacks of :func:`watch_value`), longest first so that a key containing another is removed whole. For the process
-    environment the answer is cached against a fingerprint of its raw bytes (decoding
-    ``os.environ`` costs 150 us for 40 variables, paid on every request otherwise)."""
+    the fallbacks of :func:`watch_value`), longest first so that a key containing another is
+    removed whole. For the process environment the answer is cached against a fingerprint of
+    its raw bytes (decoding ``os.environ`` costs 150 us for 40 variables, paid on every request
+    otherwise)."""
     if env is not None:
         return _secret_values(env)
     raw = getattr(os.environ, "_data", None)

@@ -24,7 +24,7 @@ from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any, Final
 
-from pytest_emrd import frames, world
+from pytest_emrd import frames, reference, world
 from pytest_emrd._disk import os_error_line
 from pytest_emrd.agent import (
     JPEG_DATA_URL,
@@ -225,7 +225,7 @@ def run_episode(
         )
         conversation = Conversation(system, single_image=config.single_image)
         run = _Run(spec, sim, conversation, replay=replay)
-        active = client or make_client(config)
+        active = client or make_client(config, base_url=reference.base_url_of(config))
         try:
             for t in range(1, spec.max_steps + 1):
                 step, obs = run.step(t, obs, active)
@@ -358,7 +358,9 @@ class Executor:
             client = self._clients.get((model, live))
             if client is None:
                 config = self.registry.get(model)
-                client = self._clients[(model, live)] = make_client(config, require_key=live)
+                url = reference.base_url_of(config)
+                client = make_client(config, base_url=url, require_key=live)
+                self._clients[(model, live)] = client
         return client
 
 

@@ -12,6 +12,7 @@ from typing import Any
 from pytest_emrd.agent import ChatClient, Registry, make_client
 from pytest_emrd.cassette import LATENCY, EpisodeRun, Tape, decompress
 from pytest_emrd.episode import run_episode
+from pytest_emrd.reference import base_url_of
 from pytest_emrd.trajectory import EpisodeSpec, Trajectory
 
 
@@ -23,7 +24,8 @@ class AgentRunner:
     def __call__(self, spec: Any, *, live: bool, on_step: Any = None) -> Trajectory:
         key = (spec.model, live)
         if key not in self.clients:
-            self.clients[key] = make_client(self.registry.get(spec.model), require_key=live)
+            config = self.registry.get(spec.model)
+            self.clients[key] = make_client(config, base_url=base_url_of(config), require_key=live)
         client = self.clients[key]
         return self.run(
             spec, registry=self.registry, client=client, on_step=on_step, replay=not live

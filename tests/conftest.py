@@ -164,6 +164,21 @@ def _outside_ci(monkeypatch: pytest.MonkeyPatch) -> None:
         monkeypatch.delenv(name, raising=False)
 
 
+#: A small office inventory in the shape of ``Layout.inventory()``.
+INVENTORY: dict[str, dict[str, int]] = {
+    "Office": {"Desk": 2, "Chair": 2, "Laptop": 2, "Shelf": 1, "HousePlant": 1},
+    "Conference Room": {"DiningTable": 1, "Chair": 8, "Television": 1},
+    "Kitchen": {"Fridge": 1, "CounterTop": 2, "Sink": 1, "Microwave": 1, "Stool": 1},
+    "Entrance": {"Desk": 1, "ArmChair": 2, "HousePlant": 1, "ExitDoor": 1},
+}
+
+
+@pytest.fixture
+def inventory() -> dict[str, dict[str, int]]:
+    """A small office inventory in the shape of ``Layout.inventory()`` (a fresh copy)."""
+    return {room: dict(counts) for room, counts in INVENTORY.items()}
+
+
 @pytest.fixture
 def json_server() -> Iterator[Callable[[Answer], str]]:
     """``json_server(answer)`` starts a loopback HTTP server and returns its ``/v1`` base URL.

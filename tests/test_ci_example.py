@@ -21,7 +21,7 @@ from typing import Any
 import pytest
 import yaml
 
-from pytest_emrd.agent.reference import REFERENCE_VERSION
+from pytest_emrd.agent import REFERENCE_VERSION
 from tests._workflow import LocalRunner
 
 ROOT = Path(__file__).resolve().parents[1]

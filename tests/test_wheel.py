@@ -148,7 +148,7 @@ def server(venv: Venv) -> Iterator[str]:
 def team_repo(venv: Venv, tmp_path_factory: pytest.TempPathFactory) -> Path:
     repo = tmp_path_factory.mktemp("team") / "repo"
     repo.mkdir()
-    version = _python(venv.root, "from pytest_emrd.agent.reference import REFERENCE_VERSION as v;"
+    version = _python(venv.root, "from pytest_emrd.agent import REFERENCE_VERSION as v;"
                             "print(v)")  # fmt: skip
     (repo / "models.yaml").write_text(_models_yaml(version), encoding="utf-8")
     (repo / "thresholds.yaml").write_text(THRESHOLDS, encoding="utf-8")

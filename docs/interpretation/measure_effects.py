@@ -28,7 +28,6 @@ from typing import Final
 
 import numpy as np
 
-from pytest_emrd.agent.reference._phrasing import PHRASES
 from pytest_emrd.metrics import (
     GATE_METRICS,
     EpisodeMetrics,
@@ -62,6 +61,7 @@ from pytest_emrd.metrics._match import (
 from pytest_emrd.metrics._tracking import discovered, first_spells, track_episode
 from pytest_emrd.metrics._vocab import _exact, _fuzzy, _lookup, _singulars, head_words, noun_phrase
 from pytest_emrd.metrics.synthetic import synthetic_grid
+from pytest_emrd.reference._phrasing import PHRASES
 from pytest_emrd.run import load_run_dirs
 from pytest_emrd.trajectory import GroundTruthObject, MapEntry, Trajectory
 from pytest_emrd.validate._mimic import _sir_ratio_planted

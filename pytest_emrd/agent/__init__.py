@@ -1,6 +1,7 @@
 """Agent stage: prompts, reply protocol, history window, model clients and registry.
 
-The built-in scripted agents live in :mod:`pytest_emrd.agent.reference`. Names are imported
+The built-in scripted agents live in :mod:`pytest_emrd.reference` (their behaviour version,
+which the registry writes into their model ids, lives here). Names are imported
 on first use (:mod:`pytest_emrd._lazy`): reading the model registry does not import the HTTP
 clients (httpx) or the reference agents.
 """
@@ -25,15 +26,18 @@ __getattr__, __dir__, __all__ = lazy_exports(
         "_parse": ("MAX_REPLY_CHARS", "REPAIRS", "Reply", "parse_reply"),
         "_prompt": (
             "NEUTRAL_NAMES",
+            "OVERVIEW_HEADING",
             "PROMPT_VERSION",
             "ROOM_SUFFIXES",
             "VISIBLE_HEADING",
             "build_system_prompt",
+            "read_profile",
             "resolve_room",
             "room_aliases",
             "step_text",
         ),
         "_retry": ("RetryPolicy",),
+        "_version": ("REFERENCE_VERSION", "agent_name", "versioned_id"),
         "_vllm": ("serve_command",),
     },
 )

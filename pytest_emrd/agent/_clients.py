@@ -333,20 +333,28 @@ def build_request(config: ModelConfig, messages: list[dict[str, Any]]) -> Provid
 
 
 def make_client(
-    config: ModelConfig, *, policy: RetryPolicy | None = None, require_key: bool = True
+    config: ModelConfig,
+    *,
+    base_url: str | None = None,
+    policy: RetryPolicy | None = None,
+    require_key: bool = True,
 ) -> ChatClient:
-    """The client for ``config`` (reference agents: the built-in server, started on demand);
-    :class:`ConfigError` when the API-key variable is unset, unless ``require_key=False``.
+    """The client for ``config``, sending to ``base_url`` (default: ``config.base_url``; a
+    reference agent has none: :func:`pytest_emrd.reference.base_url_of` gives the built-in
+    server's); :class:`ConfigError` when the API-key variable is unset, unless
+    ``require_key=False``, or when there is no URL.
 
     :param config: The model's registry entry.
     :param policy: Retries and timeouts; None for the default policy.
     :param require_key: Raise when the API-key variable is unset.
+    :param base_url: The endpoint to send to; None for ``config.base_url``.
     :returns: A :class:`ChatClient` ready to send.
     """
     client = AnthropicClient if config.provider == "anthropic" else OpenAICompatibleClient
-    base_url = config.base_url
-    if base_url is None:  # a reference agent (every other provider has one)
-        from pytest_emrd.agent.reference import reference_base_url
-
-        base_url = reference_base_url()
+    base_url = config.base_url if base_url is None else base_url
+    if base_url is None:
+        raise ConfigError(
+            f"model {config.name!r} has no base_url; pass base_url=, for a reference agent "
+            "pytest_emrd.reference.base_url_of(config) (the built-in server, started on demand)."
+        )
     return client(config, base_url=base_url, policy=policy, require_key=require_key)

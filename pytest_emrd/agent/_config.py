@@ -4,7 +4,7 @@ The registry ships as ``models.yaml`` next to this module and may be extended or
 by a user file, field by field (docs/reference/registry.md). Reference agents with planted
 parameters resolve from their name, without a YAML entry each (``scout-decay-<mean steps>``,
 ``scout-window-<k>``, ``mimic-<knobs>``); a reference agent's ``model_id`` carries the
-behaviour version (:mod:`pytest_emrd.agent.reference._version`).
+behaviour version (:mod:`pytest_emrd.agent._version`).
 """
 
 from __future__ import annotations
@@ -23,8 +23,8 @@ import yaml
 from pytest_emrd import _yaml
 from pytest_emrd._names import check_slug
 from pytest_emrd._scrub import scrub, watch_env, watch_value
-from pytest_emrd.agent.reference._knobs import FAMILY, check_knobs, mimic_knobs
-from pytest_emrd.agent.reference._version import versioned_id
+from pytest_emrd.agent._knobs import FAMILY, check_knobs, mimic_knobs
+from pytest_emrd.agent._version import versioned_id
 from pytest_emrd.errors import ConfigError, check_choice, check_positive_int, check_range
 from pytest_emrd.trajectory import MODALITIES
 

@@ -34,7 +34,7 @@ def version_text() -> str:
     :returns: The version line ``emrd --version`` prints.
     """
     from pytest_emrd import __version__
-    from pytest_emrd.agent.reference import REFERENCE_VERSION
+    from pytest_emrd.agent import REFERENCE_VERSION
     from pytest_emrd.protocol import protocol_version
 
     return (

@@ -25,7 +25,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def _run(args: argparse.Namespace) -> int:
     from pytest_emrd.agent import load_registry
-    from pytest_emrd.agent.reference import ReferenceServer
+    from pytest_emrd.reference import ReferenceServer
 
     check_range("--port", args.port, 0, 65535)
     registry = load_registry(args.registry)

@@ -117,14 +117,6 @@ def _key(config: ModelConfig) -> Check:
     )
 
 
-def _base_url(config: ModelConfig) -> str:
-    if config.base_url is not None:
-        return config.base_url
-    from pytest_emrd.agent.reference import reference_base_url
-
-    return reference_base_url()
-
-
 def _excerpt(text: str) -> str:
     text = " ".join(text.split())
     return text[:_EXCERPT] + ("..." if len(text) > _EXCERPT else "")
@@ -312,12 +304,15 @@ def preflight(
     state = _Probe(config, messages, count_images(messages), tokens)
     checks = [_key(config)]
     if probe:
-        url, max_model_len = _url(config, _base_url(config))
+        from pytest_emrd.reference import base_url_of  # a reference agent: the built-in server
+
+        base_url = base_url_of(config)
+        url, max_model_len = _url(config, base_url)
         checks.append(url)
         if checks[0].status == "fail" or url.status == "fail":
             checks.append(Check("probe", "skip", "needs the key and a reachable endpoint"))
         else:
-            checks += _send(state, make_client(config))
+            checks += _send(state, make_client(config, base_url=base_url))
             if all(c.name != "context" for c in checks):
                 checks.append(_context(state, max_model_len))
     estimate = estimate_cost(

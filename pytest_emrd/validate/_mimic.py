@@ -1,5 +1,5 @@
 """Map, Explore, Remember and reply rows for the ``mimic`` family: the metrics recover what a
-VLM-like writer plants (:mod:`pytest_emrd.agent.reference._mimic`).
+VLM-like writer plants (:mod:`pytest_emrd.reference._mimic`).
 
 Every group walks the same paths (the knobs do not touch navigation; damaged replies and
 invalid actions are off except in the default group), so groups are compared episode by
@@ -38,7 +38,6 @@ from typing import Final
 import numpy as np
 from statsmodels.stats.proportion import proportion_confint
 
-from pytest_emrd.agent.reference._malform import read_state
 from pytest_emrd.metrics import (
     EpisodeMetrics,
     bootstrap_ci,
@@ -48,6 +47,7 @@ from pytest_emrd.metrics import (
     pa_coverage,
     track_episode,
 )
+from pytest_emrd.reference import read_state
 from pytest_emrd.trajectory import Trajectory
 from pytest_emrd.validate._check import Check, fmt, judged, max_gap, pct
 

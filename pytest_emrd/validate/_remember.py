@@ -1,5 +1,5 @@
 """Remember rows: Ebbinghaus memory strength, Miller's law and serial position recover what
-the reference agents plant (:mod:`pytest_emrd.agent.reference._memory`).
+the reference agents plant (:mod:`pytest_emrd.reference._memory`).
 
 Do the R^2 findings survive the choice of evaluation points? The paper compares the
 Ebbinghaus and Kaplan-Meier curves by R^2 without saying at which times; our default uses

@@ -1,4 +1,4 @@
-"""Fixtures for the agent tests: a fixed inventory and a fault-injecting local HTTP server."""
+"""Fixtures for the agent tests: a fault-injecting local HTTP server."""
 
 from __future__ import annotations
 
@@ -12,14 +12,6 @@ from typing import Any
 
 import pytest
 
-#: A small office inventory in the shape of ``Layout.inventory()``.
-INVENTORY: dict[str, dict[str, int]] = {
-    "Office": {"Desk": 2, "Chair": 2, "Laptop": 2, "Shelf": 1, "HousePlant": 1},
-    "Conference Room": {"DiningTable": 1, "Chair": 8, "Television": 1},
-    "Kitchen": {"Fridge": 1, "CounterTop": 2, "Sink": 1, "Microwave": 1, "Stool": 1},
-    "Entrance": {"Desk": 1, "ArmChair": 2, "HousePlant": 1, "ExitDoor": 1},
-}
-
 OK_BODY = {
     "choices": [{"message": {"role": "assistant", "content": "hello"}}],
     "usage": {"prompt_tokens": 11, "completion_tokens": 3},
@@ -28,11 +20,6 @@ ANTHROPIC_OK = {
     "content": [{"type": "text", "text": "hello"}],
     "usage": {"input_tokens": 11, "output_tokens": 3},
 }
-
-
-@pytest.fixture
-def inventory() -> dict[str, dict[str, int]]:
-    return {room: dict(counts) for room, counts in INVENTORY.items()}
 
 
 @dataclass

@@ -169,6 +169,13 @@ def test_missing_api_key_names_the_variable(monkeypatch) -> None:
     make_client(_config(api_key_env="EMRD_TEST_KEY"), require_key=False).close()
 
 
+def test_a_model_without_base_url_needs_one_passed() -> None:
+    config = _config(provider="reference", base_url=None)
+    with pytest.raises(ConfigError, match=r"'local' has no base_url; .*base_url_of"):
+        make_client(config)
+    make_client(config, base_url="http://127.0.0.1:1/v1").close()
+
+
 def test_max_tokens_param_is_configurable(fault_server, sleeps) -> None:
     with _client(fault_server, sleeps, max_tokens_param="max_completion_tokens") as client:
         client.complete(MESSAGES)

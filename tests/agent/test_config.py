@@ -6,8 +6,7 @@ from pathlib import Path
 
 import pytest
 
-from pytest_emrd.agent import ModelConfig, load_registry
-from pytest_emrd.agent.reference import REFERENCE_VERSION
+from pytest_emrd.agent import REFERENCE_VERSION, ModelConfig, load_registry
 from pytest_emrd.errors import ConfigError
 
 PAPER_MODELS = [

@@ -27,7 +27,8 @@ import httpx
 import pytest
 
 from pytest_emrd._scrub import encoded_forms
-from pytest_emrd.agent.reference import reference_base_url, versioned_id
+from pytest_emrd.agent import versioned_id
+from pytest_emrd.reference import reference_base_url
 
 #: Planted credentials: none of them may reach a file or the terminal.
 PLANTED_KEY = "sk-planted-apikey-5f3c9a7e"  # the API key, in the env var of api_key_env

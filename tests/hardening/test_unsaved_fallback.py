@@ -18,8 +18,8 @@ from typing import Any
 import httpx
 import pytest
 
-from pytest_emrd.agent.reference import reference_base_url
 from pytest_emrd.cassette import SUFFIX, decode
+from pytest_emrd.reference import reference_base_url
 from pytest_emrd.run import read_episode
 from tests._sandbox import Sandbox
 

@@ -9,9 +9,10 @@ from pathlib import Path
 
 import pytest
 
-from pytest_emrd.agent.reference import REFERENCE_VERSION, ReferenceServer
+from pytest_emrd.agent import REFERENCE_VERSION
 from pytest_emrd.cassette import SUFFIX
 from pytest_emrd.plugin._endpoint import DEAD_AFTER, unreachable
+from pytest_emrd.reference import ReferenceServer
 from tests._sandbox import Sandbox
 
 ROOT = Path(__file__).resolve().parents[2]

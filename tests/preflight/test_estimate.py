@@ -91,13 +91,14 @@ def test_estimates_scale_with_episodes_and_grow_with_image_tokens(window, episod
 def test_our_estimate_matches_the_reference_servers_count():
     """The reference server bills chars // 4 + 255 per image: our estimate is within rounding."""
     from pytest_emrd.agent import make_client
+    from pytest_emrd.reference import base_url_of
 
     scout = load_registry().get("scout")
     window = sweep(
         EpisodeSpec("scout", "baseline", "kitchen", 1, modality="both"), single_image=False
     )
     messages = window.request(10, sample_reply())
-    client = make_client(scout)
+    client = make_client(scout, base_url=base_url_of(scout))
     try:
         usage = client.complete(messages).usage
     finally:

@@ -15,7 +15,7 @@ from typing import Any
 import pytest
 
 from pytest_emrd.agent import load_registry
-from pytest_emrd.agent.reference import complete
+from pytest_emrd.reference import complete
 
 
 @dataclass

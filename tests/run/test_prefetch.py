@@ -5,8 +5,8 @@ from __future__ import annotations
 from pathlib import Path
 
 from pytest_emrd.agent import OpenAICompatibleClient, load_registry
-from pytest_emrd.agent.reference import ReferenceServer
 from pytest_emrd.episode import protocol_version, run_episode
+from pytest_emrd.reference import ReferenceServer
 from pytest_emrd.run import Prefetcher, ResultsStore, resolve_settings, start_prefetch
 from pytest_emrd.trajectory import EpisodeSpec
 from tests._episodes import run_with_cassette, traffic

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from pytest_emrd.agent.reference import REFERENCE_VERSION, agent_name, versioned_id
+from pytest_emrd.agent import REFERENCE_VERSION, agent_name, versioned_id
 from pytest_emrd.errors import ConfigError
 
 

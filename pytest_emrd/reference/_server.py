@@ -14,9 +14,9 @@ from http import HTTPStatus
 from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 from typing import Any, Final
 
-from pytest_emrd.agent import _config  # the module: _config imports this package's version
-from pytest_emrd.agent.reference._agents import RequestError, complete, model_list
+from pytest_emrd.agent import ModelConfig, Registry, load_registry
 from pytest_emrd.errors import ProtocolError, check_range
+from pytest_emrd.reference._agents import RequestError, complete, model_list
 
 MAX_BODY_BYTES: Final = 64 * 1024 * 1024
 _POLL_S: Final = 0.05
@@ -80,10 +80,10 @@ class ReferenceServer(ThreadingHTTPServer):
         *,
         host: str = "127.0.0.1",
         port: int = 0,
-        registry: _config.Registry | None = None,
+        registry: Registry | None = None,
         latency_s: float = 0.0,
     ) -> None:
-        self.registry = registry or _config.load_registry()
+        self.registry = registry or load_registry()
         self.latency_s = check_range("latency_s", latency_s, 0, 60)
         super().__init__((host, port), _Handler)
         self._thread = threading.Thread(
@@ -123,3 +123,9 @@ def reference_base_url() -> str:
         if _shared is None:
             _shared = ReferenceServer().start()
         return _shared.base_url
+
+
+def base_url_of(config: ModelConfig) -> str:
+    """Where ``config``'s requests go: its own ``base_url``, else (a reference agent) the
+    process-wide reference server's."""
+    return config.base_url if config.base_url is not None else reference_base_url()

@@ -12,17 +12,17 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from pytest_emrd.agent import load_registry, parse_reply
-from pytest_emrd.agent.reference._malform import FAILING, REPAIRABLE, malform, read_state, render
-from pytest_emrd.agent.reference._phrasing import (
+from pytest_emrd.episode import run_episode
+from pytest_emrd.errors import ConfigError, ProtocolError
+from pytest_emrd.metrics import canonical_type, rigid_fit
+from pytest_emrd.reference._malform import FAILING, REPAIRABLE, malform, read_state, render
+from pytest_emrd.reference._phrasing import (
     HALLUCINATIONS,
     NUMBERING,
     PHRASES,
     label_for,
     type_word,
 )
-from pytest_emrd.episode import run_episode
-from pytest_emrd.errors import ConfigError, ProtocolError
-from pytest_emrd.metrics import canonical_type, rigid_fit
 from pytest_emrd.trajectory import EpisodeSpec, Trajectory
 from pytest_emrd.world import KINDS
 

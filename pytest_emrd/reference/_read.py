@@ -9,10 +9,10 @@ import re
 from dataclasses import dataclass
 from typing import Any, Final
 
-from pytest_emrd.agent._prompt import OVERVIEW_HEADING, VISIBLE_HEADING, read_profile
+from pytest_emrd.agent import OVERVIEW_HEADING, VISIBLE_HEADING, read_profile
 from pytest_emrd.errors import ProtocolError
 from pytest_emrd.trajectory import Pose
-from pytest_emrd.world._model import VisibleObject
+from pytest_emrd.world import VisibleObject
 
 _ROOMS_LINE = re.compile(r"^The building has four rooms: (?P<names>.+)\.$", re.MULTILINE)
 _ROOM_LINE = re.compile(r"^- (?P<room>[^:]+): (?P<items>.*?)\.(?: .*)?$")

@@ -10,7 +10,7 @@ from typing import Any
 import pytest
 
 from pytest_emrd.agent import build_system_prompt, load_registry, step_text
-from pytest_emrd.agent.reference import reply_text
+from pytest_emrd.reference import reply_text
 from pytest_emrd.trajectory import Pose
 from pytest_emrd.world import VisibleObject
 from pytest_emrd.world._feedback import with_pose

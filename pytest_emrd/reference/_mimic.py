@@ -22,10 +22,10 @@ import math
 from collections.abc import Callable, Mapping
 from typing import Any, Final
 
-from pytest_emrd.agent.reference._malform import FAILING, REPAIRABLE, malform, read_state, render
-from pytest_emrd.agent.reference._memory import uniform
-from pytest_emrd.agent.reference._perceive import fresh_plan, perceive, room_guess
-from pytest_emrd.agent.reference._phrasing import (
+from pytest_emrd.reference._malform import FAILING, REPAIRABLE, malform, read_state, render
+from pytest_emrd.reference._memory import uniform
+from pytest_emrd.reference._perceive import fresh_plan, perceive, room_guess
+from pytest_emrd.reference._phrasing import (
     HALLUCINATIONS,
     INVALID_ACTIONS,
     NUMBERING,
@@ -33,8 +33,8 @@ from pytest_emrd.agent.reference._phrasing import (
     pick,
     type_word,
 )
-from pytest_emrd.agent.reference._read import Briefing, Percept
-from pytest_emrd.agent.reference._scout import scout_action
+from pytest_emrd.reference._read import Briefing, Percept
+from pytest_emrd.reference._scout import scout_action
 
 #: Half-width (m) of the square the frame's translation is drawn from.
 FRAME_SHIFT_M: Final = 10.0

@@ -17,12 +17,14 @@ import copy
 import hashlib
 import json
 from collections.abc import Callable, Mapping
-from typing import TYPE_CHECKING, Any, Final
+from typing import Any, Final
 
-from pytest_emrd.agent.reference._memory import uniform
-from pytest_emrd.agent.reference._mimic import mimic_reply, request_seed
-from pytest_emrd.agent.reference._perceive import SWEEP_TURNS, fresh_plan, perceive, room_guess
-from pytest_emrd.agent.reference._read import (
+from pytest_emrd.agent import Registry, agent_name, versioned_id
+from pytest_emrd.errors import ConfigError, ProtocolError
+from pytest_emrd.reference._memory import uniform
+from pytest_emrd.reference._mimic import mimic_reply, request_seed
+from pytest_emrd.reference._perceive import SWEEP_TURNS, fresh_plan, perceive, room_guess
+from pytest_emrd.reference._read import (
     Briefing,
     Percept,
     last_reply_text,
@@ -31,12 +33,7 @@ from pytest_emrd.agent.reference._read import (
     read_briefing,
     read_percept,
 )
-from pytest_emrd.agent.reference._scout import scout_action
-from pytest_emrd.agent.reference._version import agent_name, versioned_id
-from pytest_emrd.errors import ConfigError, ProtocolError
-
-if TYPE_CHECKING:  # _config imports this package (for the version): no runtime import back
-    from pytest_emrd.agent._config import Registry
+from pytest_emrd.reference._scout import scout_action
 
 SEATS: Final = ("Chair", "Sofa", "Stool")
 

@@ -9,7 +9,7 @@ import sys
 import httpx
 import pytest
 
-from pytest_emrd.agent.reference import REFERENCE_VERSION
+from pytest_emrd.agent import REFERENCE_VERSION
 from pytest_emrd.cli import main
 
 

@@ -5,12 +5,12 @@ from __future__ import annotations
 import pytest
 
 from pytest_emrd.agent import NEUTRAL_NAMES, build_system_prompt, step_text
-from pytest_emrd.agent.reference._read import (
+from pytest_emrd.errors import ProtocolError
+from pytest_emrd.reference._read import (
     previous_reply,
     read_briefing,
     read_percept,
 )
-from pytest_emrd.errors import ProtocolError
 from pytest_emrd.rooms import ROOM_NAMES
 from pytest_emrd.trajectory import VARIANTS, Pose
 from pytest_emrd.world import VisibleObject

@@ -7,13 +7,13 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from pytest_emrd.agent.reference._memory import (
+from pytest_emrd.errors import ConfigError
+from pytest_emrd.reference._memory import (
     apply_memory,
     drop_probability,
     merge_view,
     uniform,
 )
-from pytest_emrd.errors import ConfigError
 
 
 def _memory(labels: list[str]) -> dict[str, dict]:

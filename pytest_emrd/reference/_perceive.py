@@ -15,9 +15,9 @@ import math
 from collections.abc import Callable, Mapping
 from typing import Any, Final
 
-from pytest_emrd.agent.reference._memory import apply_memory, merge_view
-from pytest_emrd.agent.reference._read import Briefing, Percept
-from pytest_emrd.world._model import VisibleObject
+from pytest_emrd.reference._memory import apply_memory, merge_view
+from pytest_emrd.reference._read import Briefing, Percept
+from pytest_emrd.world import VisibleObject
 
 DOORWAY: Final = "Doorway"
 #: A sweep: the view on arrival plus this many ``Turn(Right)``, 360 degrees in all.

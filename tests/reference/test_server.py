@@ -8,8 +8,8 @@ from collections.abc import Iterator
 import httpx
 import pytest
 
-from pytest_emrd.agent import build_system_prompt, parse_reply, step_text
-from pytest_emrd.agent.reference import REFERENCE_VERSION, ReferenceServer, reference_base_url
+from pytest_emrd.agent import REFERENCE_VERSION, build_system_prompt, parse_reply, step_text
+from pytest_emrd.reference import ReferenceServer, reference_base_url
 from pytest_emrd.trajectory import Pose
 from pytest_emrd.world import VisibleObject
 from pytest_emrd.world._feedback import with_pose

@@ -36,8 +36,8 @@ from collections import Counter
 from collections.abc import Mapping
 from typing import Any, Final
 
-from pytest_emrd.agent.reference._perceive import SWEEP_TURNS, room_guess
-from pytest_emrd.agent.reference._read import Briefing, Percept
+from pytest_emrd.reference._perceive import SWEEP_TURNS, room_guess
+from pytest_emrd.reference._read import Briefing, Percept
 
 MAX_FACE_TRIES: Final = 2
 #: Repositions per room visit (each costs about five actions of the 50).

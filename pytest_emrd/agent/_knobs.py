@@ -4,8 +4,8 @@
 overrides some of them, each token a letter of :data:`KNOBS` and a number (``s0.3``), or
 ``spawn`` (``frame: spawn``, the map in the spawn frame instead of a seeded frame of its own).
 What each knob plants and its default: the table in docs/user-guide/reference-agents.md.
-``mimic-spawn-s0-p0-h0-q0-r0-a0-b0`` is the clean reference: free-form labels only. This
-module has no imports from the agents so the registry can use it without import cycles.
+``mimic-spawn-s0-p0-h0-q0-r0-a0-b0`` is the clean reference: free-form labels only. The
+registry checks them here; the agents themselves (:mod:`pytest_emrd.reference`) plant them.
 """
 
 from __future__ import annotations

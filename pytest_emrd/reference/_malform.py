@@ -14,8 +14,8 @@ from __future__ import annotations
 import json
 from typing import Any, Final
 
-from pytest_emrd.agent.reference._phrasing import COMMENTS, PROSE, pick
 from pytest_emrd.errors import ProtocolError
+from pytest_emrd.reference._phrasing import COMMENTS, PROSE, pick
 
 REPAIRABLE: Final[tuple[str, ...]] = ("fence", "prose", "comment", "trailing_comma")
 FAILING: Final[tuple[str, ...]] = ("truncated", "missing_comma", "ellipsis")
