@@ -182,7 +182,11 @@ def furniture_profile(room: str, counts: Mapping[str, int]) -> str:
 
 
 def read_profile(text: str) -> dict[str, int]:
-    """Engine type -> count from a :func:`furniture_profile` (unreadable items are skipped)."""
+    """Engine type -> count from a :func:`furniture_profile` (unreadable items are skipped).
+
+    :param text: A room's furniture profile as the prompt writes it.
+    :returns: The count of each engine type.
+    """
     counts: dict[str, int] = {}
     for item in re.split(r", | \+ ", text):
         if match := _ITEM.match(item.strip()):

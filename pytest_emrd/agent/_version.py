@@ -17,13 +17,21 @@ REFERENCE_VERSION: Final = "ref-4"
 
 
 def versioned_id(name: str) -> str:
-    """The ``model`` field for reference agent ``name``: ``name@REFERENCE_VERSION``."""
+    """The ``model`` field for reference agent ``name``: ``name@REFERENCE_VERSION``.
+
+    :param name: The agent's registry name (``scout``).
+    :returns: The versioned model id (``scout@ref-4``).
+    """
     return f"{name}@{REFERENCE_VERSION}"
 
 
 def agent_name(model: str) -> str:
     """The registry name in a requested ``model`` field (``scout@ref-3`` -> ``scout``); a bare
-    name is the current version, another version a :class:`ConfigError` naming both."""
+    name is the current version, another version a :class:`ConfigError` naming both.
+
+    :param model: The ``model`` field of a request.
+    :returns: The agent's registry name.
+    """
     name, sep, version = model.partition("@")
     if sep and version != REFERENCE_VERSION:
         raise ConfigError(

@@ -87,7 +87,13 @@ def _usage(messages: list[dict[str, Any]], reply: str) -> dict[str, int]:
 
 
 def reply_text(model: str, planted: dict[str, Any], messages: list[dict[str, Any]]) -> str:
-    """The reply (compact JSON) of reference agent ``model`` (registry name) to ``messages``."""
+    """The reply (compact JSON) of reference agent ``model`` (registry name) to ``messages``.
+
+    :param model: The agent's registry name.
+    :param planted: The agent's planted knobs (registry ``planted:``).
+    :param messages: The conversation, in chat-completions form.
+    :returns: The reply text.
+    """
     system = next((message_text(m) for m in messages if m.get("role") == "system"), None)
     user = next((message_text(m) for m in reversed(messages) if m.get("role") == "user"), None)
     if system is None or user is None:
@@ -122,7 +128,12 @@ def reply_text(model: str, planted: dict[str, Any], messages: list[dict[str, Any
 
 def complete(body: Any, registry: Registry) -> dict[str, Any]:
     """An OpenAI ``chat.completion`` object answering ``body``; RequestError if unusable
-    (404 for an unknown agent or another behaviour version, :func:`agent_name`)."""
+    (404 for an unknown agent or another behaviour version, :func:`agent_name`).
+
+    :param body: The request body.
+    :param registry: The registry naming the reference agents.
+    :returns: The ``chat.completion`` object.
+    """
     if not isinstance(body, dict) or not isinstance(body.get("messages"), list):
         raise RequestError("body must be a JSON object with a 'messages' list.")
     model = str(body.get("model", ""))

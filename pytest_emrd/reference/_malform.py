@@ -62,7 +62,11 @@ def malform(text: str, kind: str, u: float) -> str:
 
 
 def read_state(text: str) -> dict[str, Any]:
-    """The ``state`` object of one of the agent's own replies, however it was malformed."""
+    """The ``state`` object of one of the agent's own replies, however it was malformed.
+
+    :param text: One of the agent's replies.
+    :returns: The state the agent carried in it.
+    """
     at = text.find(_STATE_LEAD)
     try:
         state = json.JSONDecoder().raw_decode(text, at + len(_STATE_LEAD))[0] if at >= 0 else None

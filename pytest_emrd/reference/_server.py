@@ -117,7 +117,10 @@ _shared: ReferenceServer | None = None
 
 
 def reference_base_url() -> str:
-    """Base URL of the process-wide reference server, started on first use."""
+    """Base URL of the process-wide reference server, started on first use.
+
+    :returns: The server's ``http://127.0.0.1:PORT/v1``.
+    """
     global _shared
     with _lock:
         if _shared is None:
@@ -127,5 +130,9 @@ def reference_base_url() -> str:
 
 def base_url_of(config: ModelConfig) -> str:
     """Where ``config``'s requests go: its own ``base_url``, else (a reference agent) the
-    process-wide reference server's."""
+    process-wide reference server's.
+
+    :param config: The model's registry entry.
+    :returns: The base URL its client sends to.
+    """
     return config.base_url if config.base_url is not None else reference_base_url()
