@@ -1,4 +1,5 @@
-"""Lazy re-exports for a package ``__init__`` (PEP 562).
+"""Made on demand: lazy re-exports for a package ``__init__`` (PEP 562), and the bounded,
+least-recently-used tables the in-process caches keep.
 
 A package names its public API and the private module defining each name, imported on first
 use: a light submodule (the model registry) then no longer imports its heavy siblings (httpx,
@@ -9,6 +10,7 @@ from __future__ import annotations
 
 import importlib
 import sys
+from collections import OrderedDict
 from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
@@ -31,3 +33,12 @@ def lazy_exports(
         return sorted(set(vars(sys.modules[package])) | owner.keys())
 
     return __getattr__, __dir__, sorted(owner)
+
+
+def remember(table: OrderedDict[Any, Any], key: Any, value: Any, capacity: int) -> None:
+    """Put ``key: value`` into ``table`` as its newest entry and drop the oldest entries past
+    ``capacity`` (the caller holds whatever lock guards ``table``)."""
+    table[key] = value
+    table.move_to_end(key)
+    while len(table) > capacity:
+        table.popitem(last=False)

@@ -23,7 +23,7 @@ from dataclasses import dataclass
 from json.encoder import encode_basestring
 from typing import Any, Final
 
-from pytest_emrd._bounded import remember
+from pytest_emrd._lazy import remember
 
 #: Fragments remembered (a window is 21 messages: this serves ~48 episodes at once).
 _FRAGMENTS: Final = 1024

@@ -25,7 +25,7 @@ from pathlib import Path
 from typing import Any, Final
 
 from pytest_emrd import frames, reference, world
-from pytest_emrd._disk import os_error_line
+from pytest_emrd._files import os_error_line
 from pytest_emrd.agent import (
     JPEG_DATA_URL,
     MAX_REPLY_CHARS,

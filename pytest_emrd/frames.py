@@ -15,7 +15,7 @@ import threading
 from collections import OrderedDict
 from typing import Final
 
-from pytest_emrd._bounded import remember
+from pytest_emrd._lazy import remember
 
 #: What a frame's pixel digest is prefixed with in a canonical request.
 PIXELS: Final = "pixels:"

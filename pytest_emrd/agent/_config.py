@@ -21,7 +21,7 @@ from urllib.parse import urlsplit
 import yaml
 
 from pytest_emrd import _yaml
-from pytest_emrd._names import check_slug
+from pytest_emrd._files import check_slug
 from pytest_emrd._scrub import scrub, watch_env, watch_value
 from pytest_emrd.agent._knobs import FAMILY, check_knobs, mimic_knobs
 from pytest_emrd.agent._version import versioned_id

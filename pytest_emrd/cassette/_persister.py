@@ -10,8 +10,7 @@ from typing import Any
 
 from vcr.persisters.filesystem import CassetteNotFoundError
 
-from pytest_emrd._atomic import write_bytes_atomic
-from pytest_emrd._names import check_inside
+from pytest_emrd._files import check_inside, write_bytes_atomic
 from pytest_emrd.cassette._file import (
     CassetteData,
     FormatError,

@@ -103,7 +103,7 @@ def main(argv: list[str] | None = None) -> int:
     except EmrdError as exc:
         message = str(exc)
     except OSError as exc:
-        from pytest_emrd._disk import os_error_line
+        from pytest_emrd._files import os_error_line
 
         doing = "read" if isinstance(exc, FileNotFoundError) else "write"
         option = "--out DIR" if args.command in _WRITES else ""

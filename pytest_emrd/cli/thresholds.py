@@ -22,7 +22,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def _run(args: argparse.Namespace) -> int:
-    from pytest_emrd._atomic import write_bytes_atomic
+    from pytest_emrd._files import write_bytes_atomic
     from pytest_emrd.cli import check_run_dirs
     from pytest_emrd.errors import ConfigError
     from pytest_emrd.gate import starter_thresholds

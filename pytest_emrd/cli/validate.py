@@ -50,7 +50,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def _run(args: argparse.Namespace) -> int:
-    from pytest_emrd._atomic import write_bytes_atomic
+    from pytest_emrd._files import write_bytes_atomic
     from pytest_emrd.protocol import protocol_version
     from pytest_emrd.validate import FAMILIES, Plan, Progress, markdown, run_plan, to_json
     from pytest_emrd.validate import validation_report as build

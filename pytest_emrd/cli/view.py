@@ -38,8 +38,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def _run(args: argparse.Namespace) -> int:
-    from pytest_emrd._atomic import write_bytes_atomic
-    from pytest_emrd._names import check_inside
+    from pytest_emrd._files import check_inside, write_bytes_atomic
     from pytest_emrd._scrub import scrub_bytes
     from pytest_emrd.cli import check_run_dirs
     from pytest_emrd.run import load_run_dirs

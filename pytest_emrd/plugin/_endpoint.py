@@ -15,7 +15,7 @@ from typing import Any, Final
 
 import pytest
 
-from pytest_emrd._atomic import write_bytes_atomic
+from pytest_emrd._files import write_bytes_atomic
 from pytest_emrd._scrub import scrub
 from pytest_emrd.run import scratch_dir
 

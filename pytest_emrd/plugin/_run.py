@@ -16,9 +16,7 @@ from typing import TYPE_CHECKING, Any
 
 import pytest
 
-from pytest_emrd._atomic import write_bytes_atomic
-from pytest_emrd._disk import os_error_line
-from pytest_emrd._names import check_inside
+from pytest_emrd._files import check_inside, os_error_line, write_bytes_atomic
 from pytest_emrd._scrub import scrub, scrub_bytes, watch_env
 from pytest_emrd.errors import ConfigError, EmrdError, check_choice
 from pytest_emrd.gate import GateCell, Verdict, evaluate_cell, load_thresholds

@@ -22,7 +22,7 @@ from dataclasses import KW_ONLY, dataclass, field, replace
 from pathlib import Path
 from typing import Any, Final
 
-from pytest_emrd._atomic import write_bytes_atomic
+from pytest_emrd._files import write_bytes_atomic
 from pytest_emrd._logging import RETRY_ATTR, ROOT_LOGGER
 from pytest_emrd._serde import from_dict, to_dict
 from pytest_emrd.trajectory import EpisodeSpec, Step, Trajectory

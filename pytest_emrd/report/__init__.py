@@ -20,7 +20,7 @@ from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Final
 
-from pytest_emrd._atomic import write_bytes_atomic
+from pytest_emrd._files import write_bytes_atomic
 from pytest_emrd._scrub import scrub, scrub_bytes
 from pytest_emrd._serde import json_safe
 from pytest_emrd.errors import check_choice

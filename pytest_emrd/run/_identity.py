@@ -18,7 +18,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, Final
 
 from pytest_emrd import __version__
-from pytest_emrd._atomic import write_bytes_atomic
+from pytest_emrd._files import write_bytes_atomic
 from pytest_emrd.errors import ConfigError
 from pytest_emrd.run._settings import RunSettings
 

@@ -12,7 +12,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Final
 
-from pytest_emrd._names import check_slug
+from pytest_emrd._files import check_slug
 from pytest_emrd.errors import ConfigError, check_choice, check_positive_int
 from pytest_emrd.rooms import ROOM_SLUGS
 from pytest_emrd.trajectory import (

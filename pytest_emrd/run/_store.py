@@ -19,7 +19,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, Final
 
 from pytest_emrd import __version__
-from pytest_emrd._atomic import write_bytes_atomic
+from pytest_emrd._files import write_bytes_atomic
 from pytest_emrd._fork import available_cores, fork_map
 from pytest_emrd._scrub import scrub, scrub_bytes
 from pytest_emrd._serde import JsonRecord, Schema

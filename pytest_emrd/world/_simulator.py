@@ -11,7 +11,7 @@ from typing import Any
 
 import numpy as np
 
-from pytest_emrd._bounded import remember
+from pytest_emrd._lazy import remember
 from pytest_emrd.errors import ConfigError, check_choice, check_range
 from pytest_emrd.rooms import ROOM_NAMES, SLUG_ROOMS
 from pytest_emrd.world._conditions import ConditionParams, condition_params

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pytest
 
-from pytest_emrd._names import check_inside
+from pytest_emrd._files import check_inside
 from pytest_emrd._scrub import scrub, watch_env
 from pytest_emrd._yaml import MAX_DEPTH, MAX_FILE_BYTES
 from pytest_emrd.agent import load_registry

@@ -142,7 +142,7 @@ def _is_private(module: str) -> bool:
 
 def _package_of(module: str) -> str:
     """The package whose own a private module is: ``pytest_emrd.gate`` for ``gate._table``,
-    ``pytest_emrd`` (every module) for a ground-floor module such as ``pytest_emrd._atomic``."""
+    ``pytest_emrd`` (every module) for a ground-floor module such as ``pytest_emrd._files``."""
     parts = module.split(".")
     return ".".join(parts[:2]) if len(parts) > 2 else parts[0]
 
