@@ -9,11 +9,14 @@ import json
 from collections.abc import Callable
 from typing import Any
 
+from perf import run_with_cassette
 from pytest_emrd.agent import ChatClient, Registry, make_client
-from pytest_emrd.cassette import LATENCY, EpisodeRun, Tape, decompress
+from pytest_emrd.cassette import LATENCY, decompress
 from pytest_emrd.episode import run_episode
 from pytest_emrd.reference import base_url_of
-from pytest_emrd.trajectory import EpisodeSpec, Trajectory
+from pytest_emrd.trajectory import Trajectory
+
+__all__ = ["AgentRunner", "agent_runner", "run_with_cassette", "traffic"]
 
 
 class AgentRunner:
@@ -41,16 +44,6 @@ def agent_runner(
     registry: Registry, *, run: Callable[..., Trajectory] = run_episode
 ) -> AgentRunner:
     return AgentRunner(registry, run)
-
-
-def run_with_cassette(spec: EpisodeSpec, run: Callable[..., Trajectory], **tape: Any) -> EpisodeRun:
-    """``run(spec, live=...)`` in each take of ``spec``'s :class:`~pytest_emrd.cassette.Tape`
-    (built with ``tape``): a loop of one's own with the product's cassette handling."""
-    taken = Tape(spec, **tape)
-    for take in taken.takes():
-        with take:
-            take.trajectory = run(spec, live=taken.live)
-    return take.result
 
 
 def traffic(blob: bytes) -> tuple[str, list[dict[str, Any]]]:
