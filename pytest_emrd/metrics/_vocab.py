@@ -22,107 +22,39 @@ which the paper defines on the map's labels.
 
 from __future__ import annotations
 
+import json
 import re
 from collections.abc import Iterable
 from fractions import Fraction
 from functools import lru_cache
+from importlib import resources
 from typing import Final
 
 from rapidfuzz import process
 from rapidfuzz.distance import OSA
 
-
-def _split(text: str) -> list[str]:
-    return text.split()
-
+#: The vocabulary as data (``vocab.json`` beside this module): engine types, synonyms, and the
+#: word lists of steps 2 and 4.
+_DATA: Final = json.loads(resources.files(__package__).joinpath("vocab.json").read_text("utf-8"))
 
 #: AI2-THOR ``objectType`` names (iTHOR + ProcTHOR, incl. ``Doorway``), the matcher's types.
-ENGINE_TYPES: Final[frozenset[str]] = frozenset(
-    _split(
-        "AlarmClock AluminumFoil Apple ArmChair BaseballBat BasketBall Bathtub BathtubBasin Bed "
-        "Blinds Book Boots Bottle Bowl Box Bread ButterKnife Cabinet Candle CD CellPhone Chair "
-        "Cloth CoffeeMachine CoffeeTable CounterTop CreditCard Cup Curtains Desk DeskLamp Desktop "
-        "DiningTable DishSponge DogBed Door Doorway Drawer Dresser Dumbbell Egg Faucet FloorLamp "
-        "Footstool Fork Fridge GarbageBag GarbageCan HandTowel HandTowelHolder HousePlant Kettle "
-        "KeyChain Knife Ladle Laptop LaundryHamper Lettuce LightSwitch Microwave Mirror Mug "
-        "Newspaper Ottoman Painting Pan PaperTowelRoll Pen Pencil PepperShaker Pillow Plate "
-        "Plunger Poster Pot Potato RemoteControl RoomDecor Safe SaltShaker ScrubBrush Shelf "
-        "ShelvingUnit ShowerCurtain ShowerDoor ShowerGlass ShowerHead SideTable Sink SinkBasin "
-        "SoapBar SoapBottle Sofa Spatula Spoon SprayBottle Statue Stool StoveBurner StoveKnob "
-        "TableTopDecor TeddyBear Television TennisRacket TissueBox Toaster Toilet ToiletPaper "
-        "ToiletPaperHanger Tomato Towel TowelHolder TVStand VacuumCleaner Vase Watch WateringCan "
-        "Window WineBottle"
-    )
-)
-
-#: Engine types (most likely first) -> the words VLMs use for them (joined, singular, lower
-#: case). A word lists only types it is a name for, never a look-alike: a type the layout
-#: lacks is a hallucination, not a licence to pick the nearest thing it has.
-_NAMED: Final[dict[tuple[str, ...], str]] = {
-    ("Chair",): "chair officechair deskchair swivelchair deckchair",
-    ("Chair", "Stool", "ArmChair", "Sofa"): "seat",
-    ("ArmChair",): "armchair loungechair easychair clubchair wingchair wingbackchair recliner",
-    ("Sofa",): "sofa couch loveseat settee",
-    ("Stool",): "stool barstool",
-    ("Footstool", "Ottoman"): "footrest",
-    ("Ottoman",): "pouf",
-    ("DiningTable", "CoffeeTable", "SideTable", "Desk"): "table",
-    ("DiningTable",): "conferencetable meetingtable boardroomtable longtable kitchentable",
-    ("SideTable",): "endtable bedsidetable nightstand",
-    ("Desk",): "desk officedesk workstation receptiondesk frontdesk reception receptioncounter",
-    ("CounterTop",): "counter kitchencounter kitchenisland worktop countertop",
-    ("ShelvingUnit", "Shelf"): "shelf shelving bookshelf bookcase",
-    ("Cabinet",): "cabinet cupboard filingcabinet",
-    ("TVStand",): "tvcabinet mediaconsole",
-    ("Television",): "tv television televisionset flatscreen smarttv display",
-    ("Television", "Laptop"): "screen",
-    ("Television", "Desktop", "Laptop"): "monitor",
-    ("Laptop", "Desktop"): "computer",
-    ("Laptop",): "laptopcomputer notebookcomputer notebook macbook",
-    ("Desktop",): "desktopcomputer",
-    ("Desktop", "Laptop"): "pc",
-    ("HousePlant",): "plant pottedplant plantpot indoorplant flowerpot fern ficus cactus succulent",
-    ("Fridge",): "fridge refrigerator freezer",
-    ("Microwave",): "microwaveoven",
-    ("CoffeeMachine",): "coffeemaker espressomachine coffeemachine coffeepot",
-    ("Sink",): "kitchensink",
-    ("Sink", "SinkBasin"): "basin",
-    ("StoveBurner",): "stove",
-    ("Faucet",): "tap",
-    ("GarbageCan",): "trashcan wastebasket dustbin bin",
-    ("DeskLamp", "FloorLamp"): "lamp",
-    ("DeskLamp",): "tablelamp readinglamp",
-    ("FloorLamp",): "standinglamp",
-    ("Painting", "Poster"): "picture",
-    ("Painting",): "pictureframe artwork photo photograph",
-    ("Statue",): "sculpture figurine",
-    ("Curtains",): "curtain drape",
-    ("Blinds",): "blind",
-    ("CellPhone",): "phone smartphone iphone mobilephone",
-    ("RemoteControl",): "remote",
-    ("Doorway",): "doorway opening passage passageway archway doorframe entryway",
-    ("Door", "Doorway"): "door",
-    ("Doorway", "Door"): "entrance",
-    ("Door",): "exit exitdoor frontdoor maindoor entrancedoor emergencyexit fireexit buildingexit",
-}
-#: Word VLMs use -> the engine types it names, most likely first (from ``_NAMED``). Engine
-#: type names need no entry (``diningtable`` denotes ``DiningTable``).
+ENGINE_TYPES: Final[frozenset[str]] = frozenset(_DATA["engine_types"])
+#: Word VLMs use -> the engine types it names, most likely first. ``vocab.json`` lists per
+#: engine types (most likely first) the words VLMs use for them (joined, singular, lower case);
+#: a word lists only types it is a name for, never a look-alike: a type the layout lacks is a
+#: hallucination, not a licence to pick the nearest thing it has. Engine type names need no
+#: entry (``diningtable`` denotes ``DiningTable``).
 SYNONYMS: Final[dict[str, tuple[str, ...]]] = {
-    word: types for types, words in _NAMED.items() for word in words.split()
+    word: tuple(types.split())
+    for types, words in _DATA["synonyms"].items()
+    for word in words.split()
 }
-
 #: Words that open a qualifier phrase; the label is cut before the first of them.
-QUALIFIER_WORDS: Final[frozenset[str]] = frozenset(
-    _split(
-        "near by next beside besides behind in inside on at under beneath below above against "
-        "from with of to toward towards facing opposite between along across left right close "
-        "around"
-    )
-)
+QUALIFIER_WORDS: Final[frozenset[str]] = frozenset(_DATA["qualifier_words"])
 #: Qualifier words that are also adjectives of position (``back left chair``).
 POSITION_WORDS: Final[frozenset[str]] = frozenset({"left", "right"})
 #: States written after the noun (``door open``), dropped from the end of the phrase.
-STATE_WORDS: Final[frozenset[str]] = frozenset(_split("open opened closed shut ajar off"))
+STATE_WORDS: Final[frozenset[str]] = frozenset(_DATA["state_words"])
 #: Head nouns that, after a modifier naming an object, name a part of it (``fridge door``).
 PART_WORDS: Final[frozenset[str]] = frozenset({"door", "seat"})
 #: Misspelling correction: least rapidfuzz OSA normalised similarity to a key (1 - edits /
@@ -135,55 +67,7 @@ FUZZY_MIN_LENGTH: Final = 5
 #: pyspellchecker's English frequency list, every word of at least 5 letters that step 4
 #: would otherwise correct, less misspellings and words naming the same thing). Never
 #: corrected: ``cable`` is a cable, not a misspelt table.
-REAL_WORDS: Final[frozenset[str]] = frozenset(
-    _split(
-        "alate ample applet applets applies apply baseball baseballs basic basics basie basil "
-        "basing basion basis batch batches battle battles billow billows binds bland blate "
-        "blend blendes blends blini blinis blink blinks blond blondes blonds blots blunger "
-        "boaster boasters boats bolts boobs booms boons boors boost boosts bootees booth booths "
-        "booties bootle booty bottled bottler bottlers bouts bowel bowels brawer break breaks "
-        "bream breams breda breed breeds bridge bridges broad broads cable cables cacus candies "
-        "candled candler candlers cantle cantles cantus catch catches caudle cellophane certain "
-        "chagres chain chains chaises charr choir choirs chunter chunters clair cloches clothe "
-        "clotho clots coach coaches coaster coasters coffeecake coffeecakes commuter commuters "
-        "compute computed computerizes computes conch conches conchs coots cough coughs coulter "
-        "coulters counted countermoves countertype courter couth crape crapes crouch crouches "
-        "curtail curtails dandle dandles dapple dapples deception deceptions decliner decliners "
-        "demote demotes displaces dobbed dogged dottle dottles douches dowel dowels drake "
-        "drakes draped drawee dread dreads dreiser dressed dresses dressier drupe drupes dustin "
-        "elate elates emote emotes entranced fable fables facet facets fainting fauces fettle "
-        "fichus figuring focus focuses foots forestation foster fosters freeze freezes fringe "
-        "fringes fucus fucuses gable gables garbageman grape grapes handle handles hatch "
-        "hatches holograph holographs homograph homographs hoots kittle knifed ladies ladled "
-        "ladler latch latches loots lunger lungers mable massage massages match matches "
-        "mellophone mettle microwaved misplay misplays monitory moots mottle mottles mounter "
-        "mounters natch nettle nettles nightshades opining oread paginating paining palate "
-        "palates panting pantograph pantographs passade patch patches penetrance perception "
-        "perceptions pester pesters phobos phoned phonemes phoney phoneys phonies phonograph "
-        "phonographs phonography phons phony photogram photographed photographer photographers "
-        "photographic photography photon photons phots phytography pictograph pictographs "
-        "pictured pilate pilates pillowy place places plage plages plaint plaints plait plaits "
-        "planet planets plank planks plano plans plata plated platen platens plater plath "
-        "platies plato plats platte platy platys pliant plunder plunders plunge plunged plunges "
-        "plunker plunkers pointing porter porters poser posers posher posted postern posterns "
-        "postures potter potters pottle pottles potto pottos pouch pouches pouter pouters prate "
-        "prates presser pressers printing printings prone racketball rawer recaption recline "
-        "reclined reclines recreation recreations redemption reentrance refrigerate "
-        "refrigerated refrigerates refrigeration remoter remove removes repainting rephotograph "
-        "rephotographs rhone ridge ridges roaster roasters roots roster rosters rowel rowels "
-        "sable sables sasin scree screed screeds screes sculptural sculptured setter setters "
-        "sheaf sheaves sheaving shell shelling shellings shells shone shool shoon shove "
-        "shovelhead shovelheads shoves showbread showered slant slants slate slates sloth "
-        "sloths soapbark spoof spoofs spook spooks spoony spoor spoors stable stables state "
-        "states statued stature statures status statuses statute statutes stave staves steve "
-        "stoke stokes stole stoles stone stones stood stooges stook stoop stoops stope store "
-        "stores stover stovers stowe strove succulence succulency succulently suttee suttees "
-        "swatch swatches swoon swoons tabla tablas tabled tablet tablets tainting taster "
-        "tasters televising toasted toastier toile toiled toiler toilers toots touch touches "
-        "towed tower towers trapes tread treads trowel trowels vouch vouches vowel vowels widow "
-        "widows willow willows windrow windrows winnow winnows witch witches zoster zosters"
-    )
-)
+REAL_WORDS: Final[frozenset[str]] = frozenset(_DATA["real_words"])
 
 _CAMEL = re.compile(r"(?<=[a-z0-9])(?=[A-Z])|(?<=[A-Z])(?=[A-Z][a-z]{2})")
 _ASIDE = re.compile(r"\(.*?\)|\[.*?\]|\{.*?\}")
