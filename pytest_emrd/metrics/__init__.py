@@ -48,7 +48,7 @@ from pytest_emrd.metrics._episode import (
     te_score,
     ungrounded_pairs,
 )
-from pytest_emrd.metrics._gates import GATE_METRICS, GateMetric, evaluate_gates
+from pytest_emrd.metrics._gates import GATE_METRICS, RATIO_METRICS, GateMetric, evaluate_gates
 from pytest_emrd.metrics._match import (
     GATE_M,
     MatchedPair,
@@ -89,6 +89,7 @@ __all__ = [
     "GATE_METRICS",
     "N_RESAMPLES",
     "R2_POINTS",
+    "RATIO_METRICS",
     "SYNONYMS",
     "AnchoredKM",
     "Anova",

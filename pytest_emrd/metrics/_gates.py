@@ -10,12 +10,14 @@ errored episodes (counted in ``excluded``) and attaches a seeded percentile boot
 from __future__ import annotations
 
 import functools
+import json
 import math
 from collections import Counter
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
+from importlib import resources
 from types import MappingProxyType
-from typing import Literal, Protocol
+from typing import Final, Literal, Protocol
 
 import numpy as np
 
@@ -185,127 +187,34 @@ def _errored_rate(items: Sequence[EpisodeLike], *, rng_seed: int = 0) -> Estimat
     return Estimate(math.fsum(flags) / len(flags), low, high, len(flags))
 
 
-#: Metric name -> gate metric. thresholds.yaml metric names must be keys of this mapping.
+#: Pooled ratios among the gate metrics: name -> (numerator, denominator) EpisodeMetrics fields.
+RATIO_METRICS: Final[Mapping[str, tuple[str, str]]] = {
+    "memory_strength": ("retained_steps", "forget_events"),
+    "parse_failure_rate": ("parse_failures", "steps"),
+}
+#: Gate metrics with an estimator of their own; every other one is the mean of its
+#: per-episode score (:func:`_mean_of`) or a pooled ratio (:data:`RATIO_METRICS`).
+_ESTIMATORS: Final[Mapping[str, Compute]] = {
+    "ebbinghaus_r2": _r2,
+    "consensus": _consensus,
+    "errored_rate": _errored_rate,
+}
+
+
+def _estimator(name: str) -> Compute:
+    if name in RATIO_METRICS:
+        return _ratio_of(name, *RATIO_METRICS[name])
+    return _ESTIMATORS.get(name) or _mean_of(name)
+
+
+#: Metric name -> gate metric. thresholds.yaml metric names must be keys of this mapping. Name,
+#: description, direction and unit of each are data (``gate_metrics.json`` beside this module).
 GATE_METRICS: Mapping[str, GateMetric] = MappingProxyType(
     {
-        m.name: m
-        for m in (
-            GateMetric(
-                "aec",
-                "Absolute Environment Coverage of the terminal map (Eq. AEC)",
-                "higher",
-                "fraction",
-                _mean_of("aec"),
-            ),
-            GateMetric(
-                "te",
-                "Temporal Efficiency: actions before Term or the budget (Eq. TE)",
-                "lower",
-                "steps",
-                _mean_of("te"),
-            ),
-            GateMetric(
-                "pa",
-                "Positional Accuracy of the terminal map (Eq. PA)",
-                "higher",
-                "fraction",
-                _mean_of("pa"),
-            ),
-            GateMetric(
-                "precision",
-                "Map precision: share of terminal-map entries standing for an object",
-                "higher",
-                "fraction",
-                _mean_of("precision"),
-            ),
-            GateMetric(
-                "hallucination_rate",
-                "Share of terminal-map entries standing for no object",
-                "lower",
-                "fraction",
-                _mean_of("hallucination_rate"),
-            ),
-            GateMetric(
-                "grounded_aec",
-                "AEC over entries of objects the frames showed before they were written",
-                "higher",
-                "fraction",
-                _mean_of("grounded_aec"),
-            ),
-            GateMetric(
-                "ungrounded_rate",
-                "Share of matched entries of objects not shown before they were written",
-                "lower",
-                "fraction",
-                _mean_of("ungrounded_rate"),
-            ),
-            GateMetric(
-                "fpsg_local",
-                "Focal-Point Spatial Grounding, local to the chosen room",
-                "higher",
-                "fraction",
-                _mean_of("fpsg_local"),
-            ),
-            GateMetric(
-                "fpsg_global",
-                "Focal-Point Spatial Grounding against all observed objects",
-                "higher",
-                "fraction",
-                _mean_of("fpsg_global"),
-            ),
-            GateMetric(
-                "never_visited",
-                "Share of choices naming a room the agent never entered",
-                "lower",
-                "fraction",
-                _mean_of("never_visited"),
-            ),
-            GateMetric(
-                "any_bias",
-                "Share of choices with no object of the chosen room in the map",
-                "lower",
-                "fraction",
-                _mean_of("any_bias"),
-            ),
-            GateMetric(
-                "sir",
-                "Spatial Identity Resolution on room re-entry (episodes with re-entry)",
-                "higher",
-                "fraction",
-                _mean_of("sir"),
-            ),
-            GateMetric(
-                "memory_strength",
-                "Ebbinghaus memory strength EFC, pooled over categories",
-                "higher",
-                "steps",
-                _ratio_of("memory_strength", "retained_steps", "forget_events"),
-            ),
-            GateMetric(
-                "ebbinghaus_r2",
-                "R^2 of the Ebbinghaus curve against the anchored KM (pooled)",
-                "higher",
-                "R^2",
-                _r2,
-            ),
-            GateMetric(
-                "consensus",
-                "Share of episodes choosing the modal room",
-                "higher",
-                "fraction",
-                _consensus,
-            ),
-            GateMetric(
-                "parse_failure_rate",
-                "Share of steps whose reply could not be read",
-                "lower",
-                "fraction",
-                _ratio_of("parse_failure_rate", "parse_failures", "steps"),
-            ),
-            GateMetric(
-                "errored_rate", "Share of episodes that errored", "lower", "fraction", _errored_rate
-            ),
-        )
+        name: GateMetric(name, *row, _estimator(name))
+        for name, row in json.loads(
+            resources.files(__package__).joinpath("gate_metrics.json").read_text("utf-8")
+        ).items()
     }
 )
 

@@ -34,6 +34,7 @@ from pytest_emrd._serde import JsonRecord
 from pytest_emrd.metrics import (
     GATE_METRICS,
     N_RESAMPLES,
+    RATIO_METRICS,
     EpisodeMetrics,
     Estimate,
     as_episode_metrics,
@@ -71,13 +72,8 @@ _MEANS: Final = (
     "any_bias",
     "sir",
 )
-#: Pooled ratios: name -> (numerator, denominator) EpisodeMetrics fields.
-_RATIOS: Final = {
-    "memory_strength": ("retained_steps", "forget_events"),
-    "parse_failure_rate": ("parse_failures", "steps"),
-}
 #: Compared metrics, in report order (every one a key of GATE_METRICS).
-COMPARED: Final[tuple[str, ...]] = (*_MEANS, *_RATIOS, "errored_rate")
+COMPARED: Final[tuple[str, ...]] = (*_MEANS, *RATIO_METRICS, "errored_rate")
 
 Pair = tuple[EpisodeMetrics, EpisodeMetrics]
 
@@ -161,8 +157,8 @@ def _columns(name: str, pairs: list[Pair]) -> tuple[np.ndarray, np.ndarray]:
     metric (a mean is a ratio with denominator 1)."""
 
     def side(k: int) -> np.ndarray:
-        if name in _RATIOS:
-            return np.array([[getattr(p[k], f) for p in pairs] for f in _RATIOS[name]], float)
+        if name in RATIO_METRICS:
+            return np.array([[getattr(p[k], f) for p in pairs] for f in RATIO_METRICS[name]], float)
         field = name if name in _MEANS else "errored"
         return np.array([[float(getattr(p[k], field)) for p in pairs], [1.0] * len(pairs)])
 
