@@ -438,7 +438,8 @@ model's frame, nor the order it writes entries in, nor (but for entries of one t
 from the centroid) what it calls them changes."""
 
 
-class StepMatch(NamedTuple):
+@dataclass(frozen=True, kw_only=True)
+class StepMatch:
     """One map matched (what :meth:`Matcher.step` returns and takes back)."""
 
     entries: dict[str, MapEntry]
@@ -455,8 +456,13 @@ class StepMatch(NamedTuple):
     """The frame found (None: no recognised entry, or a frame whose rotation the map does
     not determine: one point, or points giving no direction; such a frame is not carried)."""
     key: Key
-    solved: int = 0
+    solved: int
     """Recognised entries when the frame was last searched for (:meth:`Matcher._match`)."""
+
+
+_Found = tuple[dict[str, int], tuple[str, ...], Motion | None, int]
+"""What a map's matching adds to its entries: ``identity``, ``unmatched``, ``motion`` and
+``solved`` of :class:`StepMatch`."""
 
 
 def keyed(entries: Sequence[MapEntry]) -> dict[str, MapEntry]:
@@ -500,7 +506,6 @@ class Matcher:
         exact ties in favour of the labels' previous objects (module docstring)."""
         seen = keyed(entries)
         counts = Counter(e.label for e in entries)
-        duplicates = tuple(sorted(lb for lb, n in counts.items() if n > 1))
         kind_of = {lb: self.types.resolve(e.object_type, e.label) for lb, e in seen.items()}
         rows = [
             (lb, k, float(seen[lb].x), float(seen[lb].z)) for lb, k in kind_of.items() if k >= 0
@@ -509,21 +514,24 @@ class Matcher:
         spread = _units(np.sum((xz - xz.mean(axis=0)) ** 2, axis=1)).tolist() if rows else []
         order = sorted(range(len(rows)), key=lambda i: (rows[i][1], spread[i], rows[i][0]))
         key = tuple(rows[i] for i in order)
-        unrecognised = tuple(sorted(lb for lb, k in kind_of.items() if k < 0))
-        extra = {
-            "entries": seen,
-            "kind_of": kind_of,
-            "unrecognised": unrecognised,
-            "duplicates": duplicates,
-        }
         if previous is not None and previous.key == key:
-            return previous._replace(**extra)
-        found = None if previous is None else self._extend(previous, key)
-        if found is None:
-            found = self._match(key, previous)
-        return found._replace(**extra)
+            found = previous.identity, previous.unmatched, previous.motion, previous.solved
+        else:
+            found = (previous and self._extend(previous, key)) or self._match(key, previous)
+        identity, unmatched, motion, solved = found
+        return StepMatch(
+            entries=seen,
+            kind_of=kind_of,
+            identity=identity,
+            unmatched=unmatched,
+            unrecognised=tuple(sorted(lb for lb, k in kind_of.items() if k < 0)),
+            duplicates=tuple(sorted(lb for lb, n in counts.items() if n > 1)),
+            motion=motion,
+            key=key,
+            solved=solved,
+        )
 
-    def _extend(self, previous: StepMatch, key: Key) -> StepMatch | None:
+    def _extend(self, previous: StepMatch, key: Key) -> _Found | None:
         """The previous matching extended to the entries written or moved since, when each
         has a free object of its type within the gate and no freed object could take an
         unmatched entry; None otherwise."""
@@ -551,7 +559,7 @@ class Matcher:
                 return None
             identity[lb] = best
             taken.add(best)
-        return StepMatch({}, {}, identity, unmatched, (), (), motion, key, previous.solved)
+        return identity, unmatched, motion, previous.solved
 
     def _nearest(self, motion: Motion, x: float, z: float, cols: list[int]) -> int:
         """The object of ``cols`` nearest to ``(x, z)`` after ``motion`` within the gate (-1:
@@ -567,11 +575,11 @@ class Matcher:
                 best, least = j, d2
         return best
 
-    def _match(self, key: Key, previous: StepMatch | None) -> StepMatch:
+    def _match(self, key: Key, previous: StepMatch | None) -> _Found:
         """Steps 3-4 on the recognised entries ``key`` (see :meth:`step`)."""
         labels = [lb for lb, _, _, _ in key]
         if not labels:
-            return StepMatch({}, {}, {}, (), (), (), None, key)
+            return {}, (), None, 0
         problem = _Problem(
             labels,
             [k for _, k, _, _ in key],
@@ -594,7 +602,7 @@ class Matcher:
         # A rotation the map did not determine is the model frame's own: carried to the next
         # step as a seed it would make that step's matching depend on the frame.
         kept = motion if read else None
-        return StepMatch({}, {}, identity, unmatched, (), (), kept, key, len(key))
+        return identity, unmatched, kept, len(key)
 
     def matching(self, found: StepMatch) -> Matching:
         """The :class:`Matching` of one matched map."""
