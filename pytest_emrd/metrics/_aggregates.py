@@ -208,7 +208,7 @@ def ebbinghaus(items: Iterable[EpisodeLike], *, points: str = "durations") -> Eb
     return Ebbinghaus(by_category, pooled_fit(kept, None, points), excluded)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class SerialPosition:
     """Mean TTF of the Early / Middle / Late discovery thirds (Eq. SPE), and our
     censoring-aware estimate beside it (``mle_*``)."""
@@ -270,42 +270,38 @@ def serial_position(items: Iterable[EpisodeLike]) -> SerialPosition:
         for s in m.ttf_spells:
             thirds[int(third[s.discovery_rank - 1])].append(s)
     mle = [efc([s.duration for s in ss], [s.forgotten for s in ss]) for ss in thirds]
-    early, middle, late = thirds
+    early, middle, late = ([s.forgotten for s in ss] for ss in thirds)
     return SerialPosition(
-        means[0],
-        means[1],
-        means[2],
-        (len(bins[0]), len(bins[1]), len(bins[2])),
-        excluded,
-        mle[0],
-        mle[1],
-        mle[2],
-        (len(early), len(middle), len(late)),
-        (
-            sum(s.forgotten for s in early),
-            sum(s.forgotten for s in middle),
-            sum(s.forgotten for s in late),
-        ),
+        early=means[0],
+        middle=means[1],
+        late=means[2],
+        n=(len(bins[0]), len(bins[1]), len(bins[2])),
+        excluded=excluded,
+        mle_early=mle[0],
+        mle_middle=mle[1],
+        mle_late=mle[2],
+        spells=(len(early), len(middle), len(late)),
+        events=(sum(early), sum(middle), sum(late)),
     )
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class MillerCurve:
     """Forgetting probability by cognitive-load bin (Eq. MillerLaw)."""
 
     width: int
     """Bin width ``w``."""
-    bins: tuple[int, ...]
-    """Non-empty bins ``b = ceil(m / w)``, ascending."""
-    probabilities: tuple[float, ...]
+    bins: tuple[int, ...] = ()
+    """Non-empty bins ``b = ceil(m / w)``, ascending (none: an empty curve)."""
+    probabilities: tuple[float, ...] = ()
     """``ML(b)`` per bin, in [0, 1]."""
-    steps: tuple[int, ...]
+    steps: tuple[int, ...] = ()
     """Steps per bin (the denominator)."""
-    events: tuple[int, ...]
+    events: tuple[int, ...] = ()
     """Steps with a forgetting event per bin (the numerator)."""
-    b_star: int | None
+    b_star: int | None = None
     """Inflection bin (see :func:`miller_curve`)."""
-    m_star: int | None
+    m_star: int | None = None
     """Effective capacity ``m* = b* w``."""
     reason: str | None = None
 
@@ -345,7 +341,7 @@ def miller_curve(
     loads = np.array([x for m in kept for x in m.miller_loads], dtype=np.int64)
     forgets = np.array([x for m in kept for x in m.miller_forgets], dtype=bool)
     if not len(loads):
-        return MillerCurve(width, (), (), (), (), None, None, "no step with a non-empty map")
+        return MillerCurve(width=width, reason="no step with a non-empty map")
     b = -(-loads // width)
     steps = np.bincount(b)
     events = np.bincount(b, weights=forgets.astype(float)).astype(np.int64)
@@ -362,16 +358,15 @@ def miller_curve(
         reason = "no rise between consecutive load bins (from ML(0) = 0): no inflection"
         if len(eligible) < 2:
             reason = f"no load bin with >= {min_steps} steps: no inflection"
-    m_star = None if b_star is None else b_star * width
     return MillerCurve(
-        width,
-        tuple(bins.tolist()),
-        tuple(float(p) for p in probs),
-        tuple(steps[bins].tolist()),
-        tuple(events[bins].tolist()),
-        b_star,
-        m_star,
-        reason,
+        width=width,
+        bins=tuple(bins.tolist()),
+        probabilities=tuple(float(p) for p in probs),
+        steps=tuple(steps[bins].tolist()),
+        events=tuple(events[bins].tolist()),
+        b_star=b_star,
+        m_star=None if b_star is None else b_star * width,
+        reason=reason,
     )
 
 
@@ -522,7 +517,7 @@ def consensus(items: Iterable[EpisodeLike]) -> Consensus:
     return Consensus(letter, counts[letter] / len(kept), len(kept))
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class FPSGSummary:
     """One row of the paper's FPSG table (Appendix G)."""
 
@@ -572,14 +567,27 @@ def fpsg(items: Iterable[EpisodeLike]) -> FPSGSummary:
     :returns: An :class:`FPSGSummary`: means and sds of every variant, Never-Visited and Any-Bias.
     """
     kept, excluded = split_errored(items)
-    local = [m.fpsg_local for m in kept if m.fpsg_local is not None]
-    glob = [m.fpsg_global for m in kept if m.fpsg_global is not None]
-    never = [m.never_visited for m in kept if m.never_visited is not None]
-    bias = [m.any_bias for m in kept if m.any_bias is not None]
-    lm, ls = _mean_sd(local)
-    gm, gs = _mean_sd(glob)
-    lx, _ = _mean_sd([v for m in kept if (v := m.fpsg_local_ex_doorways) is not None])
-    gx, _ = _mean_sd([v for m in kept if (v := m.fpsg_global_ex_doorways) is not None])
-    never_share = sum(never) / len(never) if never else None
-    bias_share = sum(bias) / len(bias) if bias else None
-    return FPSGSummary(len(kept), never_share, bias_share, lm, ls, gm, gs, excluded, lx, gx)
+
+    def mean_sd(name: str) -> tuple[float | None, float | None]:
+        return _mean_sd([v for m in kept if (v := getattr(m, name)) is not None])
+
+    local_mean, local_sd = mean_sd("fpsg_local")
+    global_mean, global_sd = mean_sd("fpsg_global")
+    return FPSGSummary(
+        runs=len(kept),
+        never_visited=_share([m.never_visited for m in kept]),
+        any_bias=_share([m.any_bias for m in kept]),
+        local_mean=local_mean,
+        local_sd=local_sd,
+        global_mean=global_mean,
+        global_sd=global_sd,
+        excluded=excluded,
+        local_mean_ex_doorways=mean_sd("fpsg_local_ex_doorways")[0],
+        global_mean_ex_doorways=mean_sd("fpsg_global_ex_doorways")[0],
+    )
+
+
+def _share(flags: Sequence[bool | None]) -> float | None:
+    """The share of True among the flags that are not None (None without any)."""
+    known = [f for f in flags if f is not None]
+    return sum(known) / len(known) if known else None

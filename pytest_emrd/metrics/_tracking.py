@@ -71,7 +71,7 @@ class RoomVisits:
     """First step of the re-entry (None without one)."""
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class Track:
     """Everything the temporal metrics read from one episode."""
 
@@ -144,15 +144,15 @@ def track_episode(traj: Trajectory) -> Track:
     spells = _spells(traj, held, matches, kind_of, category, discovery)
     visits = _visits([s.room for s in traj.steps])
     return Track(
-        tuple(held),
-        final,
-        spells,
-        discovery,
-        tuple(tbs),
-        tuple(loads),
-        tuple(forgets),
-        visits,
-        matcher,
+        held=tuple(held),
+        final=final,
+        spells=spells,
+        discovery=discovery,
+        tbs=tuple(tbs),
+        miller_loads=tuple(loads),
+        miller_forgets=tuple(forgets),
+        visits=visits,
+        matcher=matcher,
     )
 
 

@@ -78,7 +78,7 @@ COMPARED: Final[tuple[str, ...]] = (*_MEANS, *RATIO_METRICS, "errored_rate")
 Pair = tuple[EpisodeMetrics, EpisodeMetrics]
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class Difference:
     """One metric of one cell on side A and side B, over paired episodes."""
 
@@ -118,7 +118,7 @@ class Difference:
         return None if self.p_holm is None else self.p_holm < ALPHA
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class Comparison(JsonRecord):
     """Every :class:`Difference` of a comparison and what could not be compared."""
 
@@ -214,15 +214,25 @@ def _difference(
     ea = GATE_METRICS[name].compute([x for x, _ in used], rng_seed=rng_seed)
     eb = GATE_METRICS[name].compute([y for _, y in used], rng_seed=rng_seed)
 
-    def result(
-        diff: float | None,
-        low: float | None = None,
-        high: float | None = None,
-        p: float | None = None,
-        why: str | None = None,
-    ) -> Difference:
+    def result(diff: float | None, *test: float, why: str | None = None) -> Difference:
+        low, high, p = test or (None, None, None)
         return Difference(
-            *key, name, ea, eb, diff, low, high, p, None, "n/a", model_b, unpaired, why, len(used)
+            model=key[0],
+            variant=key[1],
+            condition=key[2],
+            metric=name,
+            a=ea,
+            b=eb,
+            diff=diff,
+            ci_low=low,
+            ci_high=high,
+            p_value=p,
+            p_holm=None,
+            verdict="n/a",
+            model_b=model_b,
+            unpaired=unpaired,
+            reason=why,
+            pairs=len(used),
         )
 
     if not pairs:
@@ -357,14 +367,14 @@ def compare_runs(
         for name in COMPARED
     )
     return Comparison(
-        names[0],
-        names[1],
-        _te_with_aec(holm(diffs, resamples)),
-        tuple("/".join((model(k, 0), *k[1:])) for k in cells_a if k not in cells_b),
-        tuple("/".join((model(k, 1), *k[1:])) for k in cells_b if k not in cells_a),
-        rng_seed,
-        resamples,
-        models,
+        run_a=names[0],
+        run_b=names[1],
+        differences=_te_with_aec(holm(diffs, resamples)),
+        only_a=tuple("/".join((model(k, 0), *k[1:])) for k in cells_a if k not in cells_b),
+        only_b=tuple("/".join((model(k, 1), *k[1:])) for k in cells_b if k not in cells_a),
+        rng_seed=rng_seed,
+        n_resamples=resamples,
+        models=models,
     )
 
 

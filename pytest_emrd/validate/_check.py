@@ -29,7 +29,7 @@ Value = float | int | str | None
 Episode = Trajectory | EpisodeMetrics
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class Check:
     """One validation check, as the table shows it and the JSON stores it."""
 

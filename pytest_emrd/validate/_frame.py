@@ -88,14 +88,14 @@ def frame_checks(groups: Mapping[str, Sequence[Episode]]) -> list[Check]:
     )
     return [
         Check(
-            "Map",
-            f"frame invariance: {name}",
-            "0",
-            f"max |Δ| = {delta:.1e}",
-            f"<= {FRAME_TOLERANCE:.0e}",
-            judged(delta <= FRAME_TOLERANCE),
-            note,
-            {"max_abs_delta": delta, "episodes": n},
+            section="Map",
+            name=f"frame invariance: {name}",
+            planted="0",
+            recovered=f"max |Δ| = {delta:.1e}",
+            tolerance=f"<= {FRAME_TOLERANCE:.0e}",
+            verdict=judged(delta <= FRAME_TOLERANCE),
+            note=note,
+            data={"max_abs_delta": delta, "episodes": n},
         )
         for name, delta in worst.items()
     ]

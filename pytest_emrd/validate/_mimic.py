@@ -131,24 +131,24 @@ def own_frame_checks(spawn: Paired, own: Paired) -> list[Check]:
     note = f"{len(own)} paired episodes; the own frame is a seeded rotation + translation"
     return [
         Check(
-            "Map",
-            "PA, mimic: own frame vs spawn frame",
-            "equal",
-            f"max |diff| {fmt(pa_gap, 4)}",
-            "rounding: sqrt(2) * 0.01 m / L_gt per episode",
-            judged(same and max(excess, default=0.0) <= EXACT),
-            f"{note}; same |K| in every episode: {same}",
-            {"max_pa_gap": pa_gap, "max_excess_over_bound": max(excess, default=0.0)},
+            section="Map",
+            name="PA, mimic: own frame vs spawn frame",
+            planted="equal",
+            recovered=f"max |diff| {fmt(pa_gap, 4)}",
+            tolerance="rounding: sqrt(2) * 0.01 m / L_gt per episode",
+            verdict=judged(same and max(excess, default=0.0) <= EXACT),
+            note=f"{note}; same |K| in every episode: {same}",
+            data={"max_pa_gap": pa_gap, "max_excess_over_bound": max(excess, default=0.0)},
         ),
         Check(
-            "Map",
-            "AEC and SIR, mimic: own frame vs spawn frame",
-            "equal",
-            f"max |diff| {fmt(aec_gap, 4)} / {fmt(sir_gap, 4)}",
-            "exactly",
-            judged(aec_gap <= EXACT and sir_gap <= EXACT),
-            note,
-            {"max_aec_gap": aec_gap, "max_sir_gap": sir_gap},
+            section="Map",
+            name="AEC and SIR, mimic: own frame vs spawn frame",
+            planted="equal",
+            recovered=f"max |diff| {fmt(aec_gap, 4)} / {fmt(sir_gap, 4)}",
+            tolerance="exactly",
+            verdict=judged(aec_gap <= EXACT and sir_gap <= EXACT),
+            note=note,
+            data={"max_aec_gap": aec_gap, "max_sir_gap": sir_gap},
         ),
     ]
 
@@ -168,30 +168,30 @@ def sigma_check(noisy: Paired, clean: Paired, sigma: float) -> Check:
     )
     error = abs(estimate - sigma) / sigma
     return Check(
-        "Map",
-        f"Position noise sigma from PA's RMSE, mimic-s{sigma:g}",
-        f"{sigma:g} m",
-        f"{fmt(estimate, 3)} m",
-        f"within {SIGMA_TOLERANCE:.0%}",
-        judged(error <= SIGMA_TOLERANCE),
-        f"{len(data)} paired episodes; sigma_hat^2 = sum(SSR - SSR_0) / sum(2n - 3), "
+        section="Map",
+        name=f"Position noise sigma from PA's RMSE, mimic-s{sigma:g}",
+        planted=f"{sigma:g} m",
+        recovered=f"{fmt(estimate, 3)} m",
+        tolerance=f"within {SIGMA_TOLERANCE:.0%}",
+        verdict=judged(error <= SIGMA_TOLERANCE),
+        note=f"{len(data)} paired episodes; sigma_hat^2 = sum(SSR - SSR_0) / sum(2n - 3), "
         "RMSE = -L_gt ln(PA / coverage); bootstrap 95 % CI "
         f"{fmt(low, 3)}-{fmt(high, 3)}",
-        {"sigma": sigma, "sigma_hat": estimate, "ci_low": low, "ci_high": high},
+        data={"sigma": sigma, "sigma_hat": estimate, "ci_low": low, "ci_high": high},
     )
 
 
 def rate_check(section: str, name: str, planted: float, count: int, total: int, note: str) -> Check:
     low, high = proportion_confint(count, total, alpha=0.05, method="beta") if total else (0, 1)
     return Check(
-        section,
-        name,
-        pct(planted),
-        pct(count / total if total else None),
-        "planted value inside the 95 % Clopper-Pearson interval",
-        judged(low <= planted <= high),
-        f"{count} of {total}; CI {pct(low)}-{pct(high)}; {note}",
-        {"planted": planted, "count": count, "total": total, "ci_low": low, "ci_high": high},
+        section=section,
+        name=name,
+        planted=pct(planted),
+        recovered=pct(count / total if total else None),
+        tolerance="planted value inside the 95 % Clopper-Pearson interval",
+        verdict=judged(low <= planted <= high),
+        note=f"{count} of {total}; CI {pct(low)}-{pct(high)}; {note}",
+        data={"planted": planted, "count": count, "total": total, "ci_low": low, "ci_high": high},
     )
 
 
@@ -210,15 +210,15 @@ def halluc_checks(halluc: Paired, clean: Paired, h: float) -> list[Check]:
     total = sum(len(t.steps) for t, _ in halluc)
     return [
         Check(
-            "Explore",
-            f"AEC, PA, SIR with hallucinations, mimic-h{h:g}",
-            "unchanged",
-            " / ".join(f"{fmt(v, 4)}" for v in gaps.values()) + " max |diff|",
-            "exactly",
-            judged(all(v <= EXACT for v in gaps.values())),
-            f"{len(halluc)} paired episodes; Eq. AEC's min cap: unrecognised entries count "
+            section="Explore",
+            name=f"AEC, PA, SIR with hallucinations, mimic-h{h:g}",
+            planted="unchanged",
+            recovered=" / ".join(f"{fmt(v, 4)}" for v in gaps.values()) + " max |diff|",
+            tolerance="exactly",
+            verdict=judged(all(v <= EXACT for v in gaps.values())),
+            note=f"{len(halluc)} paired episodes; Eq. AEC's min cap: unrecognised entries count "
             "for nothing",
-            {f"max_{k}_gap": v for k, v in gaps.items()},
+            data={f"max_{k}_gap": v for k, v in gaps.items()},
         ),
         rate_check(
             "Explore",
@@ -281,27 +281,27 @@ def dup_checks(dup: Paired, clean: Paired, p: float) -> list[Check]:
     sir_gap = max_gap(planted, measured) if planted else math.inf
     return [
         Check(
-            "Explore",
-            f"AEC with duplicates, mimic-p{p:g}: Eq. AEC",
-            "sum_k min(|M_k| + D_k, |E_k|) / |E|",
-            f"max |diff| {fmt(gap, 4)}; mean rise {fmt(np.mean(rises), 4)}",
-            "exactly; never lower than clean",
-            judged(gap <= EXACT and min(rises) >= -EXACT),
-            f"{len(dup)} paired episodes; D_k from the agent's state; a duplicate counts only "
+            section="Explore",
+            name=f"AEC with duplicates, mimic-p{p:g}: Eq. AEC",
+            planted="sum_k min(|M_k| + D_k, |E_k|) / |E|",
+            recovered=f"max |diff| {fmt(gap, 4)}; mean rise {fmt(np.mean(rises), 4)}",
+            tolerance="exactly; never lower than clean",
+            verdict=judged(gap <= EXACT and min(rises) >= -EXACT),
+            note=f"{len(dup)} paired episodes; D_k from the agent's state; a duplicate counts only "
             "where type k has an unmapped instance",
-            {"max_gap": gap, "mean_rise": float(np.mean(rises))},
+            data={"max_gap": gap, "mean_rise": float(np.mean(rises))},
         ),
         Check(
-            "Remember",
-            f"SIR / AEC with duplicates, mimic-p{p:g}",
-            fmt(want, 3),
-            f"{fmt(got, 3)}; max |diff| {fmt(sir_gap, 4)}",
-            "exactly, per episode",
-            judged(sir_gap <= EXACT),
-            f"{len(planted)} episodes with a re-entry; planted: share of M_first without a "
+            section="Remember",
+            name=f"SIR / AEC with duplicates, mimic-p{p:g}",
+            planted=fmt(want, 3),
+            recovered=f"{fmt(got, 3)}; max |diff| {fmt(sir_gap, 4)}",
+            tolerance="exactly, per episode",
+            verdict=judged(sir_gap <= EXACT),
+            note=f"{len(planted)} episodes with a re-entry; planted: share of M_first without a "
             "duplicate at the re-entry's end (Appendix B: 'successfully deduplicated'); "
             "recovered: copies found by position (metrics reentry_copies)",
-            {"planted_ratio": want, "recovered_ratio": got, "max_gap": sir_gap},
+            data={"planted_ratio": want, "recovered_ratio": got, "max_gap": sir_gap},
         ),
     ]
 

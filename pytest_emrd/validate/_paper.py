@@ -52,18 +52,15 @@ def _at_precision(printed: float, digits: int) -> Printed:
 
 
 def _row(name: str, printed: str, value: float | None, same: Printed, note: str) -> Check:
-    if value is None:
-        return Check("Statistics", name, printed, "n/a", "printed precision", "fail", note)
-    verdict = "pass" if same(value) else "finding"
     return Check(
-        "Statistics",
-        name,
-        printed,
-        f"{value:.4g}",
-        "printed precision",
-        verdict,
-        note,
-        {"printed": printed, "recovered": value},
+        section="Statistics",
+        name=name,
+        planted=printed,
+        recovered="n/a" if value is None else f"{value:.4g}",
+        tolerance="printed precision",
+        verdict="fail" if value is None else "pass" if same(value) else "finding",
+        note=note,
+        data={} if value is None else {"printed": printed, "recovered": value},
     )
 
 
@@ -232,14 +229,14 @@ def appendix_f_checks() -> list[Check]:
     )
     consistent = n == printed_n and not mismatch
     totals_row = Check(
-        "Statistics",
-        "Appendix F totals vs Inventory-Free table",
-        f"n = {printed_n}",
-        f"n = {n}",
-        "exact",
-        "pass" if consistent else "finding",
-        note,
-        {"printed": printed_n, "recovered": n},
+        section="Statistics",
+        name="Appendix F totals vs Inventory-Free table",
+        planted=f"n = {printed_n}",
+        recovered=f"n = {n}",
+        tolerance="exact",
+        verdict="pass" if consistent else "finding",
+        note=note,
+        data={"printed": printed_n, "recovered": n},
     )
     return [verdict_share, totals_row]
 

@@ -107,24 +107,24 @@ def decay_checks(groups: Mapping[float, Sequence[Episode]]) -> list[Check]:
         data.update({f"error_n{n}": e for n, e in curve})
         rows += [
             Check(
-                "Remember",
-                f"Ebbinghaus EFC, scout-decay-{mean:g}",
-                f"{mean:g} steps",
-                f"{fmt(fit.efc)} steps ({100 * error:.0f} % off)",
-                "within 25 %",
-                judged(error <= EFC_TOLERANCE),
-                note,
-                data,
+                section="Remember",
+                name=f"Ebbinghaus EFC, scout-decay-{mean:g}",
+                planted=f"{mean:g} steps",
+                recovered=f"{fmt(fit.efc)} steps ({100 * error:.0f} % off)",
+                tolerance="within 25 %",
+                verdict=judged(error <= EFC_TOLERANCE),
+                note=note,
+                data=data,
             ),
             Check(
-                "Remember",
-                f"Ebbinghaus R^2, scout-decay-{mean:g}",
-                "exponential",
-                f"R^2 = {fmt(fit.r2, 3)}",
-                f">= {MIN_R2}",
-                judged(fit.r2 is not None and fit.r2 >= MIN_R2),
-                f"{len(trajs)} episodes; R^2 of C exp(-t/EFC) against the anchored KM",
-                {"r2": fit.r2},
+                section="Remember",
+                name=f"Ebbinghaus R^2, scout-decay-{mean:g}",
+                planted="exponential",
+                recovered=f"R^2 = {fmt(fit.r2, 3)}",
+                tolerance=f">= {MIN_R2}",
+                verdict=judged(fit.r2 is not None and fit.r2 >= MIN_R2),
+                note=f"{len(trajs)} episodes; R^2 of C exp(-t/EFC) against the anchored KM",
+                data={"r2": fit.r2},
             ),
         ]
     return rows
@@ -158,13 +158,13 @@ def window_fit_checks(
         if m is None:
             rows.append(
                 Check(
-                    "Remember",
-                    f"Exponential fit, scout-window-{k} vs scout-decay",
-                    "worse fit",
-                    "n/a",
-                    f"R^2 gap >= {R2_GAP}",
-                    "fail",
-                    f"no finite EFC to match (window EFC {fmt(fit.efc)})",
+                    section="Remember",
+                    name=f"Exponential fit, scout-window-{k} vs scout-decay",
+                    planted="worse fit",
+                    recovered="n/a",
+                    tolerance=f"R^2 gap >= {R2_GAP}",
+                    verdict="fail",
+                    note=f"no finite EFC to match (window EFC {fmt(fit.efc)})",
                 )
             )
             continue
@@ -173,15 +173,15 @@ def window_fit_checks(
         gap = (match.r2 or 0.0) - fit.r2 if fit.r2 is not None else math.inf
         rows.append(
             Check(
-                "Remember",
-                f"Exponential fit, scout-window-{k} vs scout-decay-{m:g}",
-                f"R^2 below {fmt(match.r2, 3)}",
-                f"R^2 = {fmt(fit.r2, 3)}",
-                f"gap >= {R2_GAP}",
-                judged(gap >= R2_GAP),
-                f"matched mean: window EFC {fmt(efc)} vs decay EFC {fmt(match.efc)} steps; "
+                section="Remember",
+                name=f"Exponential fit, scout-window-{k} vs scout-decay-{m:g}",
+                planted=f"R^2 below {fmt(match.r2, 3)}",
+                recovered=f"R^2 = {fmt(fit.r2, 3)}",
+                tolerance=f"gap >= {R2_GAP}",
+                verdict=judged(gap >= R2_GAP),
+                note=f"matched mean: window EFC {fmt(efc)} vs decay EFC {fmt(match.efc)} steps; "
                 f"{len(trajs)} + {len(decays[m])} episodes",
-                {
+                data={
                     "r2_window": fit.r2,
                     "r2_decay": match.r2,
                     "efc_window": efc,
@@ -212,29 +212,30 @@ def miller_checks(
         )
         rows.append(
             Check(
-                "Remember",
-                f"Miller inflection, scout-window-{k}",
-                f"m* = {k} (bin {want})",
-                f"m* = {curve.m_star if curve.m_star is not None else 'none'}",
-                f"within {MILLER_BINS} bin (w = {MILLER_WIDTH})",
-                judged(ok),
-                f"{len(trajs)} episodes; ML(bin) {probs}"
+                section="Remember",
+                name=f"Miller inflection, scout-window-{k}",
+                planted=f"m* = {k} (bin {want})",
+                recovered=f"m* = {curve.m_star if curve.m_star is not None else 'none'}",
+                tolerance=f"within {MILLER_BINS} bin (w = {MILLER_WIDTH})",
+                verdict=judged(ok),
+                note=f"{len(trajs)} episodes; ML(bin) {probs}"
                 + (f"; {curve.reason}" if curve.reason else ""),
-                {"m_star": curve.m_star, "b_star": curve.b_star, "planted_bin": want},
+                data={"m_star": curve.m_star, "b_star": curve.b_star, "planted_bin": want},
             )
         )
     curve = miller_curve(perfect, width=MILLER_WIDTH)
     worst = max(curve.probabilities, default=None)
     rows.append(
         Check(
-            "Remember",
-            "Miller forgetting, scout (perfect memory)",
-            "0 at every load",
-            f"max ML = {fmt(worst)}",
-            "exactly 0",
-            judged(worst == 0.0),
-            f"{len(perfect)} episodes, {sum(curve.steps)} steps over {len(curve.bins)} load bins",
-            {"max_probability": worst, "bins": len(curve.bins)},
+            section="Remember",
+            name="Miller forgetting, scout (perfect memory)",
+            planted="0 at every load",
+            recovered=f"max ML = {fmt(worst)}",
+            tolerance="exactly 0",
+            verdict=judged(worst == 0.0),
+            note=f"{len(perfect)} episodes, {sum(curve.steps)} steps over {len(curve.bins)} load "
+            "bins",
+            data={"max_probability": worst, "bins": len(curve.bins)},
         )
     )
     return rows
@@ -324,14 +325,14 @@ def serial_checks(
     depth = u_depth(e, m, late)
     rows = [
         Check(
-            "Remember",
-            "Serial position, scout-serial",
-            "U shape (E, L > M)",
-            f"MLE {_profile(e, m, late)}; U depth {fmt(depth)}",
-            "E > M and L > M (MLE)",
-            judged(u_shape),
-            _paper_note(spe, len(serial)),
-            {**_data(spe), "u_depth": depth},
+            section="Remember",
+            name="Serial position, scout-serial",
+            planted="U shape (E, L > M)",
+            recovered=f"MLE {_profile(e, m, late)}; U depth {fmt(depth)}",
+            tolerance="E > M and L > M (MLE)",
+            verdict=judged(u_shape),
+            note=_paper_note(spe, len(serial)),
+            data={**_data(spe), "u_depth": depth},
         )
     ]
     for k, trajs in windows.items():
@@ -341,14 +342,15 @@ def serial_checks(
         shape = "yes" if monotone(*values) else _LRU_SHAPE
         rows.append(
             Check(
-                "Remember",
-                f"Serial position, scout-window-{k}",
-                "no U (LRU plants none)",
-                f"MLE {_profile(*values)}; U depth {fmt(depth)}",
-                f"U depth < {MAX_U_DEPTH:g} (planted U ~ 1)",
-                judged(depth is not None and depth < MAX_U_DEPTH),
-                f"{_paper_note(spe, len(trajs))}; monotone within {SERIAL_TOLERANCE:.0%}: {shape}",
-                {**_data(spe), "u_depth": depth},
+                section="Remember",
+                name=f"Serial position, scout-window-{k}",
+                planted="no U (LRU plants none)",
+                recovered=f"MLE {_profile(*values)}; U depth {fmt(depth)}",
+                tolerance=f"U depth < {MAX_U_DEPTH:g} (planted U ~ 1)",
+                verdict=judged(depth is not None and depth < MAX_U_DEPTH),
+                note=f"{_paper_note(spe, len(trajs))}; monotone within "
+                f"{SERIAL_TOLERANCE:.0%}: {shape}",
+                data={**_data(spe), "u_depth": depth},
             )
         )
     if perfect:
@@ -369,14 +371,14 @@ def _censoring_bias(spe: SerialPosition, episodes: int) -> Check:
         "for the steps left: a memory that never forgets shows E > M > L"
     )
     return Check(
-        "Remember",
-        "Serial position, Eq. SPE under perfect memory (scout)",
-        "flat: nothing forgotten",
-        f"paper {_profile(*paper)}; MLE {_profile(*mle)}",
-        f"MLE inf in every third; paper flat within {SERIAL_TOLERANCE:.0%}",
-        verdict,
-        note,
-        _data(spe),
+        section="Remember",
+        name="Serial position, Eq. SPE under perfect memory (scout)",
+        planted="flat: nothing forgotten",
+        recovered=f"paper {_profile(*paper)}; MLE {_profile(*mle)}",
+        tolerance=f"MLE inf in every third; paper flat within {SERIAL_TOLERANCE:.0%}",
+        verdict=verdict,
+        note=note,
+        data=_data(spe),
     )
 
 
@@ -414,16 +416,17 @@ def r2_points_checks(
         )
         rows.append(
             Check(
-                "Remember",
-                f"R^2 findings on evaluation points '{points}'" + (" (default)" if default else ""),
-                f"decay R^2 >= {MIN_R2}; window gap >= {R2_GAP}",
-                recovered,
-                "both findings hold",
-                verdict,
-                f"decay {', '.join(f'{m:g}' for m in decay)}; window "
+                section="Remember",
+                name=f"R^2 findings on evaluation points '{points}'"
+                + (" (default)" if default else ""),
+                planted=f"decay R^2 >= {MIN_R2}; window gap >= {R2_GAP}",
+                recovered=recovered,
+                tolerance="both findings hold",
+                verdict=verdict,
+                note=f"decay {', '.join(f'{m:g}' for m in decay)}; window "
                 f"{', '.join(str(k) for k in window)}; smallest gap "
                 f"{fmt(min(gaps, default=math.nan), 2)}",
-                {
+                data={
                     "points": points,
                     "min_gap": min(gaps, default=math.nan),
                     "serial_r2": r2_serial,

@@ -24,14 +24,36 @@ from pytest_emrd.validate import (
 def _report() -> ValidationReport:
     return ValidationReport(
         (
-            Check("Remember", "EFC | pooled", "8 steps", "inf steps", "within 25 %", "fail",
-                  "no event", {"efc": math.inf}),
-            Check("Statistics", "chi-square", "62.4", "62.43", "printed precision", "pass"),
-            Check("Statistics", "p", "< 1e-13", "1.8e-13", "printed precision", "finding"),
+            Check(
+                section="Remember",
+                name="EFC | pooled",
+                planted="8 steps",
+                recovered="inf steps",
+                tolerance="within 25 %",
+                verdict="fail",
+                note="no event",
+                data={"efc": math.inf},
+            ),
+            Check(
+                section="Statistics",
+                name="chi-square",
+                planted="62.4",
+                recovered="62.43",
+                tolerance="printed precision",
+                verdict="pass",
+            ),
+            Check(
+                section="Statistics",
+                name="p",
+                planted="< 1e-13",
+                recovered="1.8e-13",
+                tolerance="printed precision",
+                verdict="finding",
+            ),
         ),
         episodes=2,
         protocol="builtin-1+p1",
-    )  # fmt: skip
+    )
 
 
 def test_json_is_strict_and_round_trips() -> None:
