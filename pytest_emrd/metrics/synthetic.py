@@ -30,12 +30,14 @@ What is planted:
 
 from __future__ import annotations
 
+import json
 from collections.abc import Sequence
+from importlib import resources
 from typing import Final
 
 import numpy as np
 
-from pytest_emrd.rooms import CONFERENCE, ENTRANCE, KITCHEN, OFFICE, ROOM_SLUGS, SLUG_ROOMS
+from pytest_emrd.rooms import ROOM_SLUGS, SLUG_ROOMS
 from pytest_emrd.trajectory import (
     CONDITIONS,
     MAX_STEPS,
@@ -51,65 +53,14 @@ from pytest_emrd.trajectory import (
 
 __all__ = ["synthetic_grid", "synthetic_trajectory"]
 
-_ROOMS: Final[dict[str, tuple[float, float, float, float]]] = {
-    OFFICE: (0.0, 5.0, 6.0, 10.0),
-    CONFERENCE: (6.0, 5.0, 12.0, 10.0),
-    KITCHEN: (0.0, 0.0, 6.0, 5.0),
-    ENTRANCE: (6.0, 0.0, 12.0, 5.0),
-}
-_DOORWAYS: Final[tuple[tuple[str, str, float, float], ...]] = (
-    (OFFICE, CONFERENCE, 6.0, 7.5),
-    (OFFICE, KITCHEN, 3.0, 5.0),
-    (CONFERENCE, ENTRANCE, 9.0, 5.0),
-    (KITCHEN, ENTRANCE, 6.0, 2.5),
+#: The planted office and model as data (``synthetic.json`` beside this module): rooms as
+#: ``(x0, z0, x1, z1)``, doorways, furniture ``(type, count, category)`` per room, spellings per
+#: type, visibility per condition, the chosen rooms' probabilities and their rationales.
+_DATA: Final = json.loads(
+    resources.files(__package__).joinpath("synthetic.json").read_text("utf-8")
 )
-_FURNITURE: Final[dict[str, tuple[tuple[str, int, str], ...]]] = {
-    OFFICE: (
-        ("Desk", 3, "salient"),
-        ("Chair", 3, "clutter"),
-        ("Laptop", 3, "clutter"),
-        ("ShelvingUnit", 2, "salient"),
-        ("HousePlant", 1, "clutter"),
-    ),
-    CONFERENCE: (
-        ("DiningTable", 1, "salient"),
-        ("Chair", 8, "clutter"),
-        ("Television", 1, "salient"),
-    ),
-    KITCHEN: (
-        ("Fridge", 1, "salient"),
-        ("CounterTop", 2, "salient"),
-        ("Sink", 1, "clutter"),
-        ("Microwave", 1, "clutter"),
-        ("CoffeeMachine", 1, "clutter"),
-        ("Stool", 2, "clutter"),
-    ),
-    ENTRANCE: (
-        ("Desk", 1, "salient"),
-        ("ArmChair", 2, "salient"),
-        ("HousePlant", 1, "clutter"),
-        ("Door", 1, "landmark"),
-    ),
-}
-_SPELLINGS: Final[dict[str, tuple[str, ...]]] = {
-    "DiningTable": ("DiningTable", "dining table", "table"),
-    "Television": ("Television", "TV"),
-    "HousePlant": ("HousePlant", "plant"),
-    "Fridge": ("Fridge", "refrigerator"),
-    "ArmChair": ("ArmChair", "armchair"),
-    "Doorway": ("Doorway", "door frame"),
-    "Door": ("Door", "exit"),
-    "CounterTop": ("CounterTop", "counter"),
-}
-_VISIBILITY: Final[dict[str, float]] = {"baseline": 0.5, "low_light": 0.3, "texture": 0.45}
-_CHOICES: Final = (CONFERENCE, ENTRANCE, KITCHEN, OFFICE)
-_CHOICE_P: Final = (0.6, 0.3, 0.05, 0.05)
-_RATIONALES: Final[dict[str, str]] = {
-    CONFERENCE: "The conference room is the safest gathering point: large, open and central.",
-    ENTRANCE: "The entrance is closest to the building exit, so it is the safest gathering point.",
-    KITCHEN: "The kitchen has counter space and is central.",
-    OFFICE: "The office has desks and chairs and ample space.",
-}
+_ROOMS: Final[dict[str, list[float]]] = _DATA["rooms"]
+_DOORWAYS: Final[list[tuple[str, str, float, float]]] = _DATA["doorways"]
 
 
 def _layout(
@@ -132,7 +83,7 @@ def _layout(
         door = add("Doorway", room_a, "landmark", x, z)
         doorways[room_a].append(door)
         doorways[room_b].append(door)
-    for room, items in _FURNITURE.items():
+    for room, items in _DATA["furniture"].items():
         x0, z0, x1, z1 = _ROOMS[room]
         for kind, count, category in items:
             for _ in range(count):
@@ -170,7 +121,7 @@ def synthetic_trajectory(
     sx0, sz0, sx1, sz1 = _ROOMS[spawn_room]
     origin = np.array([(sx0 + sx1) / 2, (sz0 + sz1) / 2])
     hazard = 1.0 / max(mean_memory, 1.0)
-    p_visible = _VISIBILITY.get(spec.condition, 0.5)
+    p_visible = _DATA["visibility"].get(spec.condition, 0.5)
     discoverable = set(truth.discoverable_ids)
     by_room = {r: [o for o in truth.objects if o.room == r] for r in _ROOMS}
     terminate = rng.random() < 0.6
@@ -195,7 +146,7 @@ def synthetic_trajectory(
         for o in seen:
             if o.object_id not in held and rng.random() < 0.85:
                 type_counts[o.object_type] = type_counts.get(o.object_type, 0) + 1
-                spelling = str(rng.choice(_SPELLINGS.get(o.object_type, (o.object_type,))))
+                spelling = str(rng.choice(_DATA["spellings"].get(o.object_type, [o.object_type])))
                 x, z = rng.normal((o.x, o.z), 0.3)
                 label = f"{o.object_type}_{type_counts[o.object_type]}"
                 held[o.object_id] = (label, spelling, float(x), float(z))
@@ -228,7 +179,8 @@ def synthetic_trajectory(
                 parse_error="no JSON object in the reply" if failed else None,
             )
         )
-    chosen = _CHOICES[int(rng.choice(len(_CHOICES), p=_CHOICE_P))] if terminate else None
+    rooms, p = zip(*_DATA["choices"].items(), strict=True)
+    chosen = rooms[rng.choice(len(rooms), p=p)] if terminate else None
     return Trajectory(
         spec=spec,
         protocol="synthetic-1",
@@ -238,7 +190,7 @@ def synthetic_trajectory(
         final_room=room,
         chosen_room=chosen,
         chosen_room_raw=chosen,
-        rationale=_RATIONALES[chosen] if chosen else None,
+        rationale=_DATA["rationales"][chosen] if chosen else None,
     )
 
 
