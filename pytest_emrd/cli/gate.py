@@ -25,12 +25,11 @@ def register(sub: argparse._SubParsersAction) -> None:
         default=Path("thresholds.yaml"),
         help="gates file (default: ./thresholds.yaml)",
     )
-    p.add_argument("--models", type=Path, default=None, help="user model registry YAML")
+    p.add_argument("--models", type=Path, help="user model registry YAML")
     p.add_argument("--json", action="store_true", help="print the verdicts as one JSON list")
     p.add_argument(
         "--jobs",
         type=int,
-        default=None,
         metavar="J",
         help="processes decoding and measuring the episodes (default: every available core)",
     )

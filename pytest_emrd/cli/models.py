@@ -20,7 +20,7 @@ PARAMETRIC = ("scout-decay-<mean steps>", "scout-window-<k>")
 
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("models", help="list the model registry and whether each key is set")
-    p.add_argument("--models", type=Path, default=None, help="user model registry YAML")
+    p.add_argument("--models", type=Path, help="user model registry YAML")
     p.add_argument("--json", action="store_true", help="print one JSON list of models")
     p.set_defaults(func=_run)
 

@@ -37,22 +37,18 @@ def register(sub: argparse._SubParsersAction) -> None:
         help="compare two model names: within RUN_DIR..., or model A of RUN_A with model B "
         "of RUN_B together with --compare",
     )
-    p.add_argument(
-        "--out", type=Path, default=None, help="output folder (default: FIRST_RUN_DIR/report)"
-    )
+    p.add_argument("--out", type=Path, help="output folder (default: FIRST_RUN_DIR/report)")
     p.add_argument(
         "--format", default="md,html,json", help="comma-separated: md, html, json (default: all)"
     )
     p.add_argument(
         "--thresholds",
         type=Path,
-        default=None,
         help="gates file for the gate section (default: ./thresholds.yaml if it exists)",
     )
-    p.add_argument("--models", type=Path, default=None, help="user model registry YAML")
+    p.add_argument("--models", type=Path, help="user model registry YAML")
     p.add_argument(
         "--episode",
-        default=None,
         metavar="CASE_ID",
         help="episode the map figure shows, e.g. scout-low_light-kitchen-ep07 (default: the "
         "first baseline episode with a non-empty map)",

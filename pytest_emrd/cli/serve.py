@@ -19,7 +19,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument("--port", type=int, default=8765, help="port to bind (default 8765; 0 = any)")
     p.add_argument("--host", default="127.0.0.1", help="address to bind (default 127.0.0.1)")
-    p.add_argument("--registry", type=Path, default=None, help="user model registry YAML")
+    p.add_argument("--registry", type=Path, help="user model registry YAML")
     p.set_defaults(func=_run)
 
 

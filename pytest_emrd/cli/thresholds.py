@@ -17,7 +17,7 @@ from pathlib import Path
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("thresholds", help="write a starter thresholds.yaml from run directories")
     p.add_argument("run_dirs", nargs="+", type=Path, metavar="RUN_DIR", help="run directories")
-    p.add_argument("--out", type=Path, default=None, help="file to write (default: print it)")
+    p.add_argument("--out", type=Path, help="file to write (default: print it)")
     p.set_defaults(func=_run)
 
 

@@ -26,11 +26,10 @@ def register(sub: argparse._SubParsersAction) -> None:
         metavar="EPISODE",
         help="case ids or shell patterns (default: every episode)",
     )
-    p.add_argument("--out", type=Path, default=None, help="output folder (default RUN_DIR/view)")
+    p.add_argument("--out", type=Path, help="output folder (default RUN_DIR/view)")
     p.add_argument(
         "--cassettes",
         type=Path,
-        default=None,
         help="cassette folder the frames are checked against (default ./cassettes)",
     )
     p.add_argument("--gif", action="store_true", help="also write an animated GIF per episode")
