@@ -408,9 +408,10 @@ def serial_position_bins(
 SCHEMA_VERSION: Final = 3
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class EpisodeMetrics(JsonRecord):
-    """Every per-episode EMRD score of one trajectory. Fractions are in [0, 1]."""
+    """Every per-episode EMRD score of one trajectory. Fractions are in [0, 1]. A score's
+    default is its value for an errored episode: none."""
 
     schema = Schema(
         SCHEMA_VERSION,
@@ -427,49 +428,49 @@ class EpisodeMetrics(JsonRecord):
     """Decision cycles recorded."""
     parse_failures: int
     """Steps whose reply could not be read."""
-    te: int | None
+    te: int | None = None
     """Temporal Efficiency: actions before ``Term`` or the budget (Eq. TE)."""
-    aec: float | None
+    aec: float | None = None
     """Absolute Environment Coverage of the terminal map (Eq. AEC)."""
-    pa: float | None
+    pa: float | None = None
     """Positional Accuracy of the terminal map (Eq. PA)."""
-    matched: int
+    matched: int = 0
     """``|K|``: terminal-map entries matched to ground truth."""
     g_base: int
     """``|G_base|``: objects discoverable under the unperturbed baseline."""
-    unmatched: int
+    unmatched: int = 0
     """``|U|``: recognised terminal-map entries left without an object (PA's charge)."""
-    precision: float | None
+    precision: float | None = None
     """Map precision: share of the terminal map's entries standing for a real object."""
-    hallucination_rate: float | None
+    hallucination_rate: float | None = None
     """Share of the terminal map's entries that stand for no object (``1 - precision``)."""
-    grounded_aec: float | None
+    grounded_aec: float | None = None
     """AEC over entries matched to an object shown by the step they first appeared."""
-    ungrounded_rate: float | None
+    ungrounded_rate: float | None = None
     """Share of the terminal map's matched entries whose object was not shown by then."""
-    tbs: tuple[float, ...]
+    tbs: tuple[float, ...] = ()
     """Temporal Belief Stability ``TBS(t)`` for ``t = 1..steps`` (Eq. TBS)."""
-    fpsg_local: float | None
-    fpsg_global: float | None
-    never_visited: bool | None
+    fpsg_local: float | None = None
+    fpsg_global: float | None = None
+    never_visited: bool | None = None
     """The chosen room is one the agent never stood in (None: no chosen room)."""
-    any_bias: bool | None
+    any_bias: bool | None = None
     """The final map holds no confirmed object of the chosen room (None: no chosen room)."""
     chosen_letter: str
     """Focal-point column: ``C``, ``O``, ``K``, ``E`` or ``X`` (anything else, incl. no Term)."""
-    sir: float | None
+    sir: float | None = None
     """Spatial Identity Resolution (None when no room was re-entered; see ``reasons``)."""
-    spells: tuple[Spell, ...]
+    spells: tuple[Spell, ...] = ()
     """Every out-of-view spell of every mapped object, in start order."""
-    mapped_by_category: dict[str, int]
+    mapped_by_category: dict[str, int] = field(default_factory=dict)
     """Objects ever held in the map, per memory category (coverage numerator ``C_X``)."""
     objects_by_category: dict[str, int]
     """Ground-truth objects per memory category (coverage denominator ``C_X``)."""
-    serial_position: tuple[float | None, float | None, float | None]
+    serial_position: tuple[float | None, float | None, float | None] = (None, None, None)
     """Mean TTF of the Early / Middle / Late discovery thirds (Eq. SPE)."""
-    miller_loads: tuple[int, ...]
+    miller_loads: tuple[int, ...] = ()
     """Map size ``m = |M_{t-1}|`` for each step ``t >= 2`` with ``m >= 1``."""
-    miller_forgets: tuple[bool, ...]
+    miller_forgets: tuple[bool, ...] = ()
     """Forgetting indicator of those steps (Eq. MillerLaw)."""
     rationale: str | None = None
     """The terminal reasoning, for representative-reasoning analysis."""
@@ -506,16 +507,49 @@ class EpisodeMetrics(JsonRecord):
         return self.retained_steps / d if d else math.inf
 
 
+#: The scores an errored episode leaves undefined (its ``reasons`` say why for each).
+_UNDEFINED_WHEN_ERRORED: Final = (
+    "te",
+    "aec",
+    "pa",
+    "precision",
+    "hallucination_rate",
+    "grounded_aec",
+    "ungrounded_rate",
+    "tbs",
+    "fpsg_local",
+    "fpsg_global",
+    "never_visited",
+    "any_bias",
+    "sir",
+    "memory_strength",
+)
+
+
 def episode_metrics(traj: Trajectory) -> EpisodeMetrics:
     """Compute every per-episode score of ``traj`` (one pass over its steps).
 
     :param traj: The episode, errored or not.
     :returns: Its :class:`EpisodeMetrics`: every per-episode score, with reasons for the None ones.
     """
-    objects_by_category = dict(Counter(o.category for o in traj.ground_truth.objects))
     g_base = len(traj.ground_truth.discoverable_ids)
+    common = {
+        "spec": traj.spec,
+        "status": traj.status,
+        "steps": len(traj.steps),
+        "parse_failures": sum(s.parse_error is not None for s in traj.steps),
+        "g_base": g_base,
+        "objects_by_category": dict(Counter(o.category for o in traj.ground_truth.objects)),
+        "rationale": traj.rationale,
+    }
     if traj.status == "errored":
-        return _errored(traj, objects_by_category, g_base)
+        why = f"episode errored: {traj.error or 'no cause recorded'}"
+        return EpisodeMetrics(
+            **common,
+            errored=True,
+            chosen_letter=room_letter(None),
+            reasons=dict.fromkeys(_UNDEFINED_WHEN_ERRORED, why),
+        )
     track = track_episode(traj)
     final = track.final
     reasons: dict[str, str] = {}
@@ -546,16 +580,12 @@ def episode_metrics(traj: Trajectory) -> EpisodeMetrics:
     ttf = {s.object_id: float(s.duration) for s in first_spells(track.spells)}
     by_rank = sorted(track.discovery, key=track.discovery.__getitem__)
     return EpisodeMetrics(
-        spec=traj.spec,
-        status=traj.status,
+        **common,
         errored=False,
-        steps=len(traj.steps),
-        parse_failures=sum(s.parse_error is not None for s in traj.steps),
         te=te_score(traj),
         aec=aec,
         pa=pa,
         matched=len(final.pairs),
-        g_base=g_base,
         unmatched=len(final.unmatched),
         precision=precision,
         hallucination_rate=hallucination,
@@ -570,66 +600,12 @@ def episode_metrics(traj: Trajectory) -> EpisodeMetrics:
         sir=sir,
         spells=track.spells,
         mapped_by_category=dict(Counter(category[o] for o in track.discovery)),
-        objects_by_category=objects_by_category,
         serial_position=serial_position_bins([ttf.get(o) for o in by_rank]),
         miller_loads=track.miller_loads,
         miller_forgets=track.miller_forgets,
-        rationale=traj.rationale,
         reasons=reasons,
         fpsg_local_ex_doorways=grounding.fpsg_local_ex_doorways,
         fpsg_global_ex_doorways=grounding.fpsg_global_ex_doorways,
-    )
-
-
-def _errored(traj: Trajectory, objects_by_category: dict[str, int], g_base: int) -> EpisodeMetrics:
-    why = f"episode errored: {traj.error or 'no cause recorded'}"
-    names = (
-        "te",
-        "aec",
-        "pa",
-        "precision",
-        "hallucination_rate",
-        "grounded_aec",
-        "ungrounded_rate",
-        "tbs",
-        "fpsg_local",
-        "fpsg_global",
-        "never_visited",
-        "any_bias",
-        "sir",
-        "memory_strength",
-    )
-    return EpisodeMetrics(
-        spec=traj.spec,
-        status=traj.status,
-        errored=True,
-        steps=len(traj.steps),
-        parse_failures=sum(s.parse_error is not None for s in traj.steps),
-        te=None,
-        aec=None,
-        pa=None,
-        matched=0,
-        g_base=g_base,
-        unmatched=0,
-        precision=None,
-        hallucination_rate=None,
-        grounded_aec=None,
-        ungrounded_rate=None,
-        tbs=(),
-        fpsg_local=None,
-        fpsg_global=None,
-        never_visited=None,
-        any_bias=None,
-        chosen_letter=room_letter(None),
-        sir=None,
-        spells=(),
-        mapped_by_category={},
-        objects_by_category=objects_by_category,
-        serial_position=(None, None, None),
-        miller_loads=(),
-        miller_forgets=(),
-        rationale=traj.rationale,
-        reasons=dict.fromkeys(names, why),
     )
 
 

@@ -151,13 +151,11 @@ def _unique(embed: Embed | None) -> Embed:
 
 def pa_by_spawn(cells: Cells) -> tuple[PASpawn, ...]:
     """Per-episode Positional Accuracy grouped by spawn room (``positional_accuracy``)."""
-    out = []
-    for key, ems in cells.items():
-        for spawn in dict.fromkeys(m.spec.spawn for m in ems):
-            group = [m for m in ems if m.spec.spawn == spawn]
-            values = tuple(v for v in metrics.positional_accuracy(group) if v is not None)
-            out.append(PASpawn(*key, spawn, values))
-    return tuple(out)
+    return tuple(
+        PASpawn(*key, spawn, tuple(m.pa for m in ems if m.spec.spawn == spawn and m.pa is not None))
+        for key, ems in cells.items()
+        for spawn in dict.fromkeys(m.spec.spawn for m in ems)
+    )
 
 
 def km_series(cells: Cells, fits: Mapping[tuple[str, str, str], Any]) -> tuple[KMSeries, ...]:

@@ -205,15 +205,6 @@ def positional_accuracy(report: Report) -> Section:
     return Section("pa", "Positional Accuracy", (Table("pa", caption, header, tuple(rows)),))
 
 
-def _focal_cells(row: FocalRow) -> Row:
-    return tuple(Cell(pct(row.fractions[c]), shade=row.fractions[c]) for c in FOCAL_COLUMNS)
-
-
-def _x_split(row: FocalRow) -> Row:
-    share = row.spawn_share
-    return str(row.named_other), str(row.no_term), "n/a" if share is None else pct(share)
-
-
 def _spawn_order(item: tuple[str, FocalRow]) -> int:
     """The paper's row order of start rooms: C, O, K, E."""
     letter = ROOM_LETTERS.get(SLUG_ROOMS.get(item[0], ""), "X")
@@ -226,30 +217,26 @@ def focal(report: Report) -> Section:
     for label in labels:
         rows = []
         for t in (t for t in report.focal if row_label(t.model, t.variant) == label):
-            for spawn, row in sorted(t.distribution.by_spawn.items(), key=_spawn_order):
+            most = t.consensus
+            share = "n/a" if most.share is None else f"{most.letter or '—'} {pct(most.share)}%"
+            spawns = sorted(t.distribution.by_spawn.items(), key=_spawn_order)
+            for start, row, consensus in (
+                *((SLUG_ROOMS.get(spawn, spawn), row, "") for spawn, row in spawns),
+                (Cell("all spawns", bold=True), t.distribution.overall, share),
+            ):
+                shares = (Cell(pct(f), shade=f) for f in map(row.fractions.get, FOCAL_COLUMNS))
                 rows.append(
                     (
                         _cond(t.condition),
-                        SLUG_ROOMS.get(spawn, spawn),
+                        start,
                         str(row.n),
-                        *_focal_cells(row),
-                        *_x_split(row),
-                        "",
+                        *shares,
+                        str(row.named_other),
+                        str(row.no_term),
+                        pct(row.spawn_share),
+                        consensus,
                     )
                 )
-            c = t.consensus
-            share = "n/a" if c.share is None else f"{c.letter or '—'} {pct(c.share)}%"
-            overall = t.distribution.overall
-            rows.append(
-                (
-                    _cond(t.condition),
-                    Cell("all spawns", bold=True),
-                    str(overall.n),
-                    *_focal_cells(overall),
-                    *_x_split(overall),
-                    share,
-                )
-            )
         header = (
             "Condition",
             "Start",
