@@ -9,6 +9,7 @@ excludes errored episodes and reports how many it excluded.
 from __future__ import annotations
 
 import math
+import statistics
 from collections import Counter
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
@@ -35,7 +36,7 @@ from pytest_emrd.metrics._stats import (
     efc,
 )
 from pytest_emrd.metrics._tracking import Spell
-from pytest_emrd.rooms import FOCAL_COLUMNS, OTHER_LETTER, ROOM_LETTERS, SLUG_ROOMS
+from pytest_emrd.rooms import FOCAL_COLUMNS, OTHER_LETTER, SLUG_ROOMS, room_letter
 
 
 def positional_accuracy(items: Iterable[EpisodeLike]) -> tuple[float | None, ...]:
@@ -132,7 +133,7 @@ def time_to_forget(items: Iterable[EpisodeLike]) -> TimeToForget:
     """
     kept, excluded = split_errored(items)
     spells = tuple(s for m in kept for s in m.ttf_spells)
-    mean = math.fsum(s.duration for s in spells) / len(spells) if spells else None
+    mean = statistics.fmean(s.duration for s in spells) if spells else None
     return TimeToForget(spells, sum(s.forgotten for s in spells), mean, excluded)
 
 
@@ -263,7 +264,7 @@ def serial_position(items: Iterable[EpisodeLike]) -> SerialPosition:
     """
     kept, excluded = split_errored(items)
     bins = [[v for m in kept if (v := m.serial_position[b]) is not None] for b in range(3)]
-    means = [math.fsum(values) / len(values) if values else None for values in bins]
+    means = [statistics.fmean(values) if values else None for values in bins]
     thirds: tuple[list[Spell], list[Spell], list[Spell]] = ([], [], [])
     for m in kept:
         third = discovery_thirds(sum(m.mapped_by_category.values()))
@@ -392,7 +393,7 @@ def spatial_identity_resolution(items: Iterable[EpisodeLike]) -> SpatialIdentity
     kept, excluded = split_errored(items)
     values = tuple(m.sir for m in kept if m.sir is not None)
     undefined = Counter(m.reasons.get("sir", "undefined") for m in kept if m.sir is None)
-    mean = math.fsum(values) / len(values) if values else None
+    mean = statistics.fmean(values) if values else None
     return SpatialIdentityResolution(values, mean, dict(undefined), excluded)
 
 
@@ -438,22 +439,20 @@ class FocalRow:
 
 
 def _row(items: Sequence[EpisodeMetrics]) -> FocalRow:
-    letters = [m.chosen_letter for m in items]
-    counts = Counter(letters)
-    n = len(letters)
+    counts = Counter(m.chosen_letter for m in items)
+    n = len(items)
     other = [m for m in items if m.chosen_letter == OTHER_LETTER]
     return FocalRow(
         n,
-        {c: counts.get(c, 0) for c in FOCAL_COLUMNS},
-        {c: (counts.get(c, 0) / n if n else 0.0) for c in FOCAL_COLUMNS},
+        {c: counts[c] for c in FOCAL_COLUMNS},
+        {c: (counts[c] / n if n else 0.0) for c in FOCAL_COLUMNS},
         named_other=sum(m.status == "terminated" for m in other),
         no_term=sum(m.status != "terminated" for m in other),
-        chose_spawn=sum(m.chosen_letter == _spawn_letter(m.spec.spawn) for m in items),
+        chose_spawn=sum(
+            m.chosen_letter == room_letter(SLUG_ROOMS.get(m.spec.spawn, m.spec.spawn))
+            for m in items
+        ),
     )
-
-
-def _spawn_letter(spawn: str) -> str:
-    return ROOM_LETTERS.get(SLUG_ROOMS.get(spawn, spawn), OTHER_LETTER)
 
 
 @dataclass(frozen=True)
@@ -541,7 +540,7 @@ class FPSGSummary:
 def _mean_sd(values: Sequence[float]) -> tuple[float | None, float | None]:
     if not values:
         return None, None
-    mean = math.fsum(values) / len(values)
+    mean = statistics.fmean(values)
     if len(values) < 2:
         return mean, None
     var = math.fsum((v - mean) ** 2 for v in values) / (len(values) - 1)

@@ -8,6 +8,7 @@ asked for. "Undefined" is ``None`` together with a reason, never a silent 0.0.
 from __future__ import annotations
 
 import math
+import statistics
 from collections import Counter
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
@@ -401,7 +402,7 @@ def serial_position_bins(
     out: list[float | None] = []
     for b in range(3):
         values = [v for v, t in zip(ttf_by_rank, third, strict=True) if t == b and v is not None]
-        out.append(math.fsum(values) / len(values) if values else None)
+        out.append(statistics.fmean(values) if values else None)
     return out[0], out[1], out[2]
 
 

@@ -12,6 +12,7 @@ from __future__ import annotations
 import functools
 import json
 import math
+import statistics
 from collections import Counter
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
@@ -67,7 +68,7 @@ def _mean_of(name: str) -> Compute:
             return Estimate(None, None, None, 0, _why_none(kept, name), excluded)
         low, high = bootstrap_ci(values, rng_seed=rng_seed)
         reason = None if low is not None else "one episode: no confidence interval"
-        return Estimate(math.fsum(values) / len(values), low, high, len(values), reason, excluded)
+        return Estimate(statistics.fmean(values), low, high, len(values), reason, excluded)
 
     return compute
 
@@ -184,7 +185,7 @@ def _errored_rate(items: Sequence[EpisodeLike], *, rng_seed: int = 0) -> Estimat
     if not flags:
         return Estimate(None, None, None, 0, "no episode")
     low, high = bootstrap_ci(flags, rng_seed=rng_seed)
-    return Estimate(math.fsum(flags) / len(flags), low, high, len(flags))
+    return Estimate(statistics.fmean(flags), low, high, len(flags))
 
 
 #: Pooled ratios among the gate metrics: name -> (numerator, denominator) EpisodeMetrics fields.

@@ -243,14 +243,16 @@ Pairs = tuple[tuple[int, int], ...]
 
 
 class _Problem:
-    """One map's recognised entries against the layout."""
+    """One map's recognised entries (:data:`Key`) against the layout."""
 
-    def __init__(self, labels: list[str], kinds: list[int], pred: np.ndarray, layout: _Layout):
-        self.labels, self.kinds, self.pred, self.layout = labels, kinds, pred, layout
-        self.same = np.asarray(kinds, dtype=int)[:, None] == layout.kinds[None, :]
+    def __init__(self, key: Key, layout: _Layout):
+        self.kinds = [k for _, k, _, _ in key]
+        self.pred = np.array([(x, z) for _, _, x, z in key], dtype=float)
+        self.layout = layout
+        self.same = np.asarray(self.kinds, dtype=int)[:, None] == layout.kinds[None, :]
         rows, cols = np.nonzero(self.same)
         self.candidates = rows, cols  # every (entry, object of its type), by entry
-        self.starts = np.searchsorted(rows, np.arange(len(kinds)))  # each entry's first one
+        self.starts = np.searchsorted(rows, np.arange(len(key)))  # each entry's first one
 
 
 @dataclass(frozen=True)
@@ -580,12 +582,7 @@ class Matcher:
         labels = [lb for lb, _, _, _ in key]
         if not labels:
             return {}, (), None, 0
-        problem = _Problem(
-            labels,
-            [k for _, k, _, _ in key],
-            np.array([(x, z) for _, _, x, z in key], dtype=float),
-            self._layout,
-        )
+        problem = _Problem(key, self._layout)
         prefer = None
         if previous is not None and previous.identity:
             prefer = np.zeros(problem.same.shape)

@@ -365,27 +365,18 @@ def _episode_map(report: Report) -> Figure | None:
         if e.object_id in truth:
             o = truth[e.object_id]
             ax.plot([e.x, o.x], [e.z, o.z], color="#d62728", lw=0.8, alpha=0.6, zorder=2)
-    matched = [e for e in m.entries if e.object_id is not None]
-    unmatched = [e for e in m.entries if e.object_id is None]
-    ax.scatter(
-        [e.x for e in matched],
-        [e.z for e in matched],
-        marker="x",
-        s=45,
-        color="#d62728",
-        label="cognitive map (matched)",
-        zorder=5,
-    )
-    if unmatched:
-        ax.scatter(
-            [e.x for e in unmatched],
-            [e.z for e in unmatched],
-            marker="x",
-            s=45,
-            color="#ff9900",
-            label="cognitive map (unmatched)",
-            zorder=5,
-        )
+    for which, hue in (("matched", "#d62728"), ("unmatched", "#ff9900")):
+        shown = [e for e in m.entries if (e.object_id is None) == (which == "unmatched")]
+        if shown or which == "matched":  # the matched entries are in the legend even when none
+            ax.scatter(
+                [e.x for e in shown],
+                [e.z for e in shown],
+                marker="x",
+                s=45,
+                color=hue,
+                label=f"cognitive map ({which})",
+                zorder=5,
+            )
     rmse = "n/a" if m.rmse is None else f"{m.rmse:.2f} m"
     _axes_title(
         ax, f"{m.case_id}: terminal map aligned (rotation {m.rotation_deg:.1f} deg, RMSE {rmse})"

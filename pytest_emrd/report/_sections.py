@@ -31,7 +31,7 @@ from pytest_emrd.report._model import (
     Report,
     row_label,
 )
-from pytest_emrd.rooms import FOCAL_COLUMNS, ROOM_LETTERS, SLUG_ROOMS
+from pytest_emrd.rooms import FOCAL_COLUMNS, ROOM_LETTERS, SLUG_ROOMS, room_letter
 
 _LETTER_ROOMS = {letter: room for room, letter in ROOM_LETTERS.items()} | {"X": "Other"}
 
@@ -207,8 +207,7 @@ def positional_accuracy(report: Report) -> Section:
 
 def _spawn_order(item: tuple[str, FocalRow]) -> int:
     """The paper's row order of start rooms: C, O, K, E."""
-    letter = ROOM_LETTERS.get(SLUG_ROOMS.get(item[0], ""), "X")
-    return FOCAL_COLUMNS.index(letter)
+    return FOCAL_COLUMNS.index(room_letter(SLUG_ROOMS.get(item[0])))
 
 
 def focal(report: Report) -> Section:

@@ -15,6 +15,7 @@ textual prior, no evidence) and ``scout`` (chooses where it mapped the most).
 from __future__ import annotations
 
 import math
+import statistics
 from collections.abc import Sequence
 from typing import Final
 
@@ -45,7 +46,7 @@ def shown_fraction(traj: Trajectory) -> float | None:
 
 
 def _mean(values: Sequence[float]) -> float:
-    return math.fsum(values) / len(values) if values else math.nan
+    return statistics.fmean(values) if values else math.nan
 
 
 def exploration_checks(baseline: Sequence[Trajectory], low_light: Sequence[Episode]) -> list[Check]:
