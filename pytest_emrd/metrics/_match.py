@@ -302,7 +302,7 @@ def assign_rows(cost: np.ndarray, allowed: np.ndarray) -> list[tuple[int, int]]:
     ]
 
 
-def _assign(problem: _Problem, motion: Motion, prefer: np.ndarray | None = None) -> Pairs:
+def _assign(problem: _Problem, motion: Motion, prefer: np.ndarray | None) -> Pairs:
     """Step 4: the gated one-to-one assignment after ``motion`` (most pairs, then least
     rounded squared distance; ``prefer`` (n x m) lowers a carried pair by half a unit)."""
     moved = _moved(problem.pred, motion)
@@ -398,9 +398,9 @@ def _scores(problem: _Problem, motions: np.ndarray) -> np.ndarray:
 
 def _solve(
     problem: _Problem,
-    seeds: Sequence[Motion] = (),
-    prefer: np.ndarray | None = None,
-    named: frozenset[tuple[int, int]] = frozenset(),
+    seeds: Sequence[Motion],
+    prefer: np.ndarray | None,
+    named: frozenset[tuple[int, int]],
 ) -> tuple[Pairs, Motion, bool]:
     """Step 3: of ``seeds`` and the best-scored hypotheses, refined, the matching PA scores
     highest, then with most pairs, then with most ``named`` pairs (labels that are the
