@@ -14,6 +14,8 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Final
 
+import numpy as np
+
 from pytest_emrd import metrics
 from pytest_emrd._serde import JsonRecord, Schema
 from pytest_emrd.gate import UsageRow, Verdict
@@ -181,6 +183,14 @@ class PASpawn(CellRow):
     spawn: str
     values: tuple[float, ...]
     """``positional_accuracy`` of each episode where it is defined, in case-id order."""
+
+    @property
+    def mean_sd(self) -> tuple[float | None, float | None]:
+        """Mean and sample standard deviation of :attr:`values` (None without values; the sd
+        None with one value)."""
+        n = len(self.values)
+        sd = float(np.std(self.values, ddof=1)) if n > 1 else None
+        return (float(np.mean(self.values)) if n else None), sd
 
 
 @dataclass(frozen=True)

@@ -176,13 +176,13 @@ def _pa(report: Report) -> Figure | None:
         ax = axes[row_label(g.model, g.variant)]
         offset = conditions.index(g.condition) - (len(conditions) - 1) / 2
         x = spawns.index(g.spawn) + offset * width
-        sd = float(np.std(g.values, ddof=1)) if len(g.values) > 1 else 0.0
+        mean, sd = g.mean_sd
         hue, _, _, hatch = _style(g.condition)
         ax.bar(
             x,
-            float(np.mean(g.values)),
+            mean,
             width * 0.95,
-            yerr=sd,
+            yerr=sd or 0.0,
             capsize=3,
             color=hue,
             alpha=0.85,

@@ -5,8 +5,6 @@ from __future__ import annotations
 from collections.abc import Callable, Sequence
 from typing import Any, Final
 
-import numpy as np
-
 from pytest_emrd.metrics import FocalRow
 from pytest_emrd.report._document import (
     Block,
@@ -185,15 +183,15 @@ def exploration(report: Report) -> Section:
 
 def positional_accuracy(report: Report) -> Section:
     """PA (Eq. PA) per spawn room and condition: the numbers behind pa_by_spawn.png."""
-    rows = []
-    for g in report.pa:
-        values = np.asarray(g.values, float)
-        sd = float(np.std(values, ddof=1)) if len(values) > 1 else None
-        mean = float(values.mean()) if len(values) else None
-        room, shown = SLUG_ROOMS.get(g.spawn, g.spawn), mean_sd(mean, sd, digits=3)
-        rows.append(
-            (row_label(g.model, g.variant), _cond(g.condition), room, f"{shown} (n={len(values)})")
+    rows = tuple(
+        (
+            row_label(g.model, g.variant),
+            _cond(g.condition),
+            SLUG_ROOMS.get(g.spawn, g.spawn),
+            f"{mean_sd(*g.mean_sd, digits=3)} (n={len(g.values)})",
         )
+        for g in report.pa
+    )
     if not rows:
         text = "Positional Accuracy is undefined in every episode (|G_base| = 0)."
         return Section("pa", "Positional Accuracy", (Paragraph(text),))
@@ -202,7 +200,7 @@ def positional_accuracy(report: Report) -> Section:
         "Positional Accuracy per spawn room (Eq. PA; episodes where it is defined), "
         "the figure pa_by_spawn.png in numbers"
     )
-    return Section("pa", "Positional Accuracy", (Table("pa", caption, header, tuple(rows)),))
+    return Section("pa", "Positional Accuracy", (Table("pa", caption, header, rows),))
 
 
 def _spawn_order(item: tuple[str, FocalRow]) -> int:
