@@ -19,7 +19,7 @@ import statistics
 from collections.abc import Sequence
 from typing import Final
 
-from pytest_emrd.metrics import GATE_METRICS, Estimate, as_episode_metrics, fpsg
+from pytest_emrd.metrics import GATE_METRICS, Estimate, FPSGSummary, as_episode_metrics, fpsg
 from pytest_emrd.trajectory import Trajectory
 from pytest_emrd.validate._check import Check, Episode, fmt, judged, pct
 
@@ -114,6 +114,23 @@ def exploration_checks(baseline: Sequence[Trajectory], low_light: Sequence[Episo
 SCOUT_MIN_LOCAL: Final = 0.9
 
 
+def _share(name: str, agent: str, s: FPSGSummary, planted: float) -> Check:
+    """``agent``'s share ``name`` (``Never-Visited``, ``Any-Bias``: a field of ``s``) is
+    exactly ``planted``."""
+    field = name.lower().replace("-", "_")
+    share, want = getattr(s, field), f"{100 * planted:g} %"
+    return Check(
+        section="Decide",
+        name=f"{name}, {agent}",
+        planted=want,
+        recovered=pct(share),
+        tolerance=f"exactly {want}",
+        verdict=judged(share == planted),
+        note=f"{s.runs} episodes",
+        data={field: share},
+    )
+
+
 def prior_checks(trajectories: Sequence[Episode]) -> list[Check]:
     """``prior`` names a room it never entered, from the prompt alone: Never-Visited and
     Any-Bias 100 %, FPSG 0.
@@ -122,28 +139,9 @@ def prior_checks(trajectories: Sequence[Episode]) -> list[Check]:
     :returns: The Decide rows of ``prior``.
     """
     s = fpsg(trajectories)
-    note = f"{s.runs} episodes"
     return [
-        Check(
-            section="Decide",
-            name="Never-Visited, prior",
-            planted="100 %",
-            recovered=pct(s.never_visited),
-            tolerance="exactly 100 %",
-            verdict=judged(s.never_visited == 1.0),
-            note=note,
-            data={"never_visited": s.never_visited},
-        ),
-        Check(
-            section="Decide",
-            name="Any-Bias, prior",
-            planted="100 %",
-            recovered=pct(s.any_bias),
-            tolerance="exactly 100 %",
-            verdict=judged(s.any_bias == 1.0),
-            note=note,
-            data={"any_bias": s.any_bias},
-        ),
+        _share("Never-Visited", "prior", s, 1.0),
+        _share("Any-Bias", "prior", s, 1.0),
         Check(
             section="Decide",
             name="FPSG global, prior",
@@ -151,7 +149,7 @@ def prior_checks(trajectories: Sequence[Episode]) -> list[Check]:
             recovered=fmt(s.global_mean, 3),
             tolerance="exactly 0",
             verdict=judged(s.global_mean == 0.0),
-            note=f"{note}; local {fmt(s.local_mean, 3)}",
+            note=f"{s.runs} episodes; local {fmt(s.local_mean, 3)}",
             data={"fpsg_global": s.global_mean, "fpsg_local": s.local_mean},
         ),
     ]
@@ -164,18 +162,8 @@ def scout_decide_checks(trajectories: Sequence[Episode]) -> list[Check]:
     :returns: The Decide rows of ``scout``.
     """
     s = fpsg(trajectories)
-    note = f"{s.runs} episodes"
     return [
-        Check(
-            section="Decide",
-            name="Never-Visited, scout",
-            planted="0 %",
-            recovered=pct(s.never_visited),
-            tolerance="exactly 0 %",
-            verdict=judged(s.never_visited == 0.0),
-            note=note,
-            data={"never_visited": s.never_visited},
-        ),
+        _share("Never-Visited", "scout", s, 0.0),
         Check(
             section="Decide",
             name="FPSG local, scout",
@@ -183,7 +171,7 @@ def scout_decide_checks(trajectories: Sequence[Episode]) -> list[Check]:
             recovered=fmt(s.local_mean, 3),
             tolerance=f">= {SCOUT_MIN_LOCAL}",
             verdict=judged(s.local_mean is not None and s.local_mean >= SCOUT_MIN_LOCAL),
-            note=f"{note}; sd {fmt(s.local_sd, 3)}, global {fmt(s.global_mean, 3)}",
+            note=f"{s.runs} episodes; sd {fmt(s.local_sd, 3)}, global {fmt(s.global_mean, 3)}",
             data={"fpsg_local": s.local_mean, "fpsg_global": s.global_mean},
         ),
     ]
