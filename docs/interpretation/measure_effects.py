@@ -278,7 +278,10 @@ def vlm_maps(trajs: Sequence[Trajectory]) -> None:
                 "relabelled + 7 hallucinations": relabelled
                 + [
                     MapEntry(p, "", e.x + rng.gauss(0, 0.3), e.z + rng.gauss(0, 0.3))
-                    for p, e in zip(PHRASES_OF_ISSUE, rng.sample(cmap, 7), strict=True)
+                    # a map of fewer than 7 entries gets one hallucination per entry
+                    for p, e in zip(
+                        PHRASES_OF_ISSUE, rng.sample(cmap, min(7, len(cmap))), strict=False
+                    )
                 ],
                 "misspelt": [
                     MapEntry(f"{TYPOS.get(e.object_type, p)} {i}", "", e.x, e.z)

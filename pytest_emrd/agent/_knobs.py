@@ -2,7 +2,8 @@
 
 ``mimic`` is the registry entry with the shipped defaults; ``mimic-<token>-<token>...``
 overrides some of them, each token a letter of :data:`KNOBS` and a number (``s0.3``), or
-``spawn`` (``frame: spawn``, the map in the spawn frame instead of a seeded frame of its own).
+``spawn`` (``frame: spawn``, the map in the spawn frame instead of a seeded frame of its own)
+or ``reckon`` (``odometry: reckon``, the pose dead-reckoned instead of read off the feedback).
 What each knob plants and its default: the table in docs/user-guide/reference-agents.md.
 ``mimic-spawn-s0-p0-h0-q0-r0-a0-b0`` is the clean reference: free-form labels only. The
 registry checks them here; the agents themselves (:mod:`pytest_emrd.reference`) plant them.
@@ -28,7 +29,13 @@ KNOBS: Final[dict[str, tuple[str, float]]] = {
     "b": ("back", 1.0),
 }
 FRAMES: Final[tuple[str, ...]] = ("own", "spawn")
-_NAME = re.compile(rf"^{FAMILY}((?:-(?:spawn|[{''.join(KNOBS)}]\d+(?:\.\d+)?))+)$")
+ODOMETRY: Final[tuple[str, ...]] = ("engine", "reckon")
+#: Name tokens without a number -> (planted key, value).
+WORDS: Final[dict[str, tuple[str, str]]] = {
+    "spawn": ("frame", "spawn"),
+    "reckon": ("odometry", "reckon"),
+}
+_NAME = re.compile(rf"^{FAMILY}((?:-(?:{'|'.join(WORDS)}|[{''.join(KNOBS)}]\d+(?:\.\d+)?))+)$")
 
 
 def mimic_knobs(name: str) -> dict[str, Any] | None:
@@ -39,10 +46,11 @@ def mimic_knobs(name: str) -> dict[str, Any] | None:
         return None
     planted: dict[str, Any] = {}
     for token in match.group(1).split("-")[1:]:
-        key, value = ("frame", "spawn") if token == "spawn" else (KNOBS[token[0]][0], token[1:])
+        word = WORDS.get(token)
+        key, value = word if word else (KNOBS[token[0]][0], float(token[1:]))
         if key in planted:
             raise ConfigError(f"model={name!r} sets {key} twice; give each knob once.")
-        planted[key] = value if key == "frame" else float(value)
+        planted[key] = value
     check_knobs(f"model={name!r}", planted)
     return planted
 
@@ -55,7 +63,8 @@ def check_knobs(where: str, planted: Mapping[str, Any]) -> None:
             if isinstance(value, bool) or not isinstance(value, int | float):
                 raise ConfigError(f"{where}: {key}={value!r} must be a number.")
             check_range(f"{where}: {key}", value, 0.0, top)
-    if planted.get("frame", "own") not in FRAMES:
-        raise ConfigError(
-            f"{where}: frame={planted['frame']!r} must be one of {', '.join(FRAMES)}."
-        )
+    for key, allowed, default in (("frame", FRAMES, "own"), ("odometry", ODOMETRY, "engine")):
+        if planted.get(key, default) not in allowed:
+            raise ConfigError(
+                f"{where}: {key}={planted[key]!r} must be one of {', '.join(allowed)}."
+            )

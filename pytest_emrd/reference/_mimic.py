@@ -24,6 +24,7 @@ from typing import Any, Final
 
 from pytest_emrd.reference._malform import FAILING, REPAIRABLE, malform, read_state, render
 from pytest_emrd.reference._memory import uniform
+from pytest_emrd.reference._odometry import aim, fresh_odometry, reckon
 from pytest_emrd.reference._perceive import fresh_plan, perceive, room_guess
 from pytest_emrd.reference._phrasing import (
     HALLUCINATIONS,
@@ -58,7 +59,7 @@ def fresh_state(key: str, planted: Mapping[str, Any]) -> dict[str, Any]:
     if planted.get("frame", "own") == "own":
         frame = [round(360.0 * draw("theta"), 4)]
         frame += [round(FRAME_SHIFT_M * (2.0 * draw(axis) - 1.0), 4) for axis in ("tx", "tz")]
-    return {
+    state = {
         "key": key,
         "frame": frame,  # [theta_deg, tx, tz]
         "style": pick(NUMBERING, draw("style")),
@@ -67,6 +68,9 @@ def fresh_state(key: str, planted: Mapping[str, Any]) -> dict[str, Any]:
         "map": {},
         "seen": {},  # object id -> last step in view
     }
+    if planted.get("odometry") == "reckon":
+        state["odometry"] = fresh_odometry()
+    return state
 
 
 def _episode_draw(key: str) -> Draw:
@@ -186,6 +190,8 @@ def mimic_reply(
     seed = hashlib.sha256(request).digest()
     step: Draw = lambda name: uniform(seed, name)  # noqa: E731
     state = read_state(previous) if previous else fresh_state(seed[:8].hex(), planted)
+    if "odometry" in state:
+        percept = reckon(state["odometry"], percept, state["nav"]["memory"])
     before = copy.deepcopy(state["nav"])
     nav = state["nav"]
     plan = nav["plan"]
@@ -214,6 +220,8 @@ def mimic_reply(
         )
     if damaged or invalid:  # the world will not move: decide again from the same view
         state["nav"] = before
+    if "odometry" in state:
+        aim(state["odometry"], action, percept)
     body = {
         "observation": f"I can see: {', '.join(in_view)}." if in_view else "Nothing new in view.",
         "dedup_check": f"{len(new)} new, {len(in_view) - len(new)} already in my map.",

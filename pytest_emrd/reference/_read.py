@@ -21,6 +21,7 @@ _POSE = re.compile(
     r"Pose: x=(?P<x>-?\d+(?:\.\d+)?) z=(?P<z>-?\d+(?:\.\d+)?) heading=(?P<h>-?\d+(?:\.\d+)?)\.?$",
     re.MULTILINE,
 )
+_CONFIRMED = re.compile(r"^Engine feedback: \S.*? succeeded", re.MULTILINE)
 _VISIBLE = re.compile(
     r"^- (?P<id>\S+) \| (?P<type>\S+) \| (?P<b>-?\d+(?:\.\d+)?) \| (?P<d>\d+(?:\.\d+)?)$"
 )
@@ -47,6 +48,8 @@ class Percept:
     max_steps: int
     pose: Pose
     visible: tuple[VisibleObject, ...]
+    confirmed: bool
+    """The feedback says the last action succeeded."""
 
 
 def read_briefing(system: str) -> Briefing:
@@ -67,7 +70,7 @@ def read_briefing(system: str) -> Briefing:
 
 
 def read_percept(text: str) -> Percept:
-    """Step counter, pose and visible list from a user message's text part."""
+    """Step counter, pose, visible list and confirmation from a user message's text part."""
     step, pose = _STEP.search(text), _POSE.search(text)
     if step is None or pose is None:
         raise ProtocolError("user message lacks the 'Step k of N.' line or the 'Pose:' feedback.")
@@ -80,7 +83,8 @@ def read_percept(text: str) -> Percept:
         if (m := _VISIBLE.match(line))
     )
     at = Pose(float(pose["x"]), float(pose["z"]), float(pose["h"]))
-    return Percept(int(step["k"]), int(step["n"]), at, visible)
+    confirmed = _CONFIRMED.search(text) is not None
+    return Percept(int(step["k"]), int(step["n"]), at, visible, confirmed)
 
 
 def message_text(message: dict[str, Any]) -> str:

@@ -36,6 +36,7 @@ PLANTED_INVALID = re.compile(r"^(MoveAhead|Turn\(Back\)|Goto\(the .*\)|Goto\(nea
         ("mimic-s0.3", {"sigma": 0.3}),
         ("mimic-spawn-p0.5-h0", {"frame": "spawn", "dup": 0.5, "halluc": 0.0}),
         ("mimic-q0.1-r1-a0.02", {"fail": 0.1, "repair": 1.0, "invalid": 0.02}),
+        ("mimic-spawn-reckon", {"frame": "spawn", "odometry": "reckon"}),
     ],
 )
 def test_knobs_in_the_name_override_the_mimic_entry(name: str, planted: dict) -> None:
@@ -51,6 +52,7 @@ def test_knobs_in_the_name_override_the_mimic_entry(name: str, planted: dict) ->
         pytest.param("mimic-p1.5", r"dup=1.5 must lie in \[0.0, 1.0\]", id="rate-above-1"),
         pytest.param("mimic-s9", r"sigma=9.0 must lie in \[0.0, 5.0\]", id="sigma-too-large"),
         pytest.param("mimic-p0.1-p0.2", "sets dup twice", id="knob-twice"),
+        pytest.param("mimic-reckon-reckon", "sets odometry twice", id="word-twice"),
         pytest.param("mimic-x3", "mimic-<knobs>", id="unknown-knob"),
     ],
 )
