@@ -359,7 +359,7 @@ def _boxes(
     c0, at, w, two = lo.tolist(), offset.tolist(), width.tolist(), (extra != 0).tolist()
     shown = buf.view(np.uint8)[:, 3::4]
     # A run of boxes of one object keeps what it covers in one copy, not one per box.
-    for owner, run in itertools.groupby(range(lo.size), key=owners.tolist().__getitem__):
+    for _, run in itertools.groupby(range(lo.size), key=owners.tolist().__getitem__):
         drawn = [b for b in run if r1[b] > r0[b]]
         if not drawn:
             continue
@@ -373,10 +373,9 @@ def _boxes(
             np.copyto(region, first[cut], where=counted < span[cut])
             if two[b]:
                 np.copyto(region, second[cut], where=counted < over[cut])
-        if owner:  # the room's boxes (a doorway's wall above it) keep nothing
-            mine = shown[rows, cols] == owner
-            mine &= before.view(np.uint8)[:, 3::4] != owner
-            np.copyto(under[rows, cols], before, where=mine)
+        # Pixels the run's object took from another object or the room.
+        taken = shown[rows, cols] != before.view(np.uint8)[:, 3::4]
+        np.copyto(under[rows, cols], before, where=taken)
     return slice(min(r0), max(r1))
 
 
