@@ -137,11 +137,9 @@ _CEILING_DEPTH = FOCAL * (WALL_HEIGHT - EYE) / (HORIZON - (_ROWS[:HORIZON] + 0.5
 """Depth of each ceiling row (each row of the ceiling lies at one depth)."""
 _FLOOR_DEPTH = FOCAL * EYE / ((_ROWS[HORIZON:] + 0.5) - HORIZON)
 """Depth of each floor row."""
-_K_TOP = FOCAL * (WALL_HEIGHT - EYE)
-_K_SKIRT = FOCAL * (EYE - SKIRTING_HEIGHT)
-_K_BOTTOM = FOCAL * EYE
-"""The wall's top, the skirting's top and the wall's foot as ``focal * height above or below
-the eye``: at depth ``t`` they lie ``k / t`` rows from the horizon."""
+_K_EDGES = FOCAL * np.array([[EYE - WALL_HEIGHT], [EYE - SKIRTING_HEIGHT], [EYE]])
+"""The wall's top, the skirting's top and the wall's foot as ``focal * depth below the eye``:
+at depth ``t`` they lie ``k / t`` rows below the horizon."""
 
 
 def palette(scene: Scene, params: ConditionParams, seed: int) -> np.ndarray:
@@ -229,9 +227,7 @@ def _background(
     dx, dz, t_wall, along_x, ox, oz = view
     room = scene.room_raster
     nz, nx = room.shape
-    top = first_row(HORIZON - _K_TOP / t_wall)
-    bottom = first_row(HORIZON + _K_BOTTOM / t_wall)
-    skirt = first_row(HORIZON + _K_SKIRT / t_wall)
+    top, skirt, bottom = first_row(HORIZON + _K_EDGES / t_wall)
     hx = _cell(ox, t_wall - WALL_BACK, dx, nx)
     hz = _cell(oz, t_wall - WALL_BACK, dz, nz)
     face = np.where(along_x, Z_FACE, X_FACE)
@@ -354,29 +350,29 @@ def _boxes(
     # so ``counted < span`` is ``start <= row < start + span`` in one comparison.
     span = np.maximum(end - start, 0).view(np.uint16)
     over = np.maximum(np.minimum(over, end) - start, 0).view(np.uint16)
-    r0 = np.minimum.reduceat(start, offset).tolist()
-    r1 = np.maximum.reduceat(end, offset).tolist()
-    c0, at, w, two = lo.tolist(), offset.tolist(), width.tolist(), (extra != 0).tolist()
+    r0, r1 = np.minimum.reduceat(start, offset), np.maximum.reduceat(end, offset)
+    drawn = np.flatnonzero(r1 > r0)
+    if drawn.size == 0:
+        return slice(0, 0)
+    painted = np.stack([r0, r1, lo, width, offset, extra])[:, drawn].T.tolist()
+    # A run of boxes of one object keeps what it takes over in one copy, not one per box.
+    cuts = [0, *(np.flatnonzero(np.diff(owners[drawn])) + 1).tolist(), len(painted)]
     shown = buf.view(np.uint8)[:, 3::4]
-    # A run of boxes of one object keeps what it covers in one copy, not one per box.
-    for _, run in itertools.groupby(range(lo.size), key=owners.tolist().__getitem__):
-        drawn = [b for b in run if r1[b] > r0[b]]
-        if not drawn:
-            continue
-        rows = slice(min(r0[b] for b in drawn), max(r1[b] for b in drawn))
-        cols = slice(min(c0[b] for b in drawn), max(c0[b] + w[b] for b in drawn))
+    for run in (painted[i:j] for i, j in itertools.pairwise(cuts)):
+        rows = slice(min(b[0] for b in run), max(b[1] for b in run))
+        cols = slice(min(b[2] for b in run), max(b[2] + b[3] for b in run))
         before = buf[rows, cols].copy()
-        for b in drawn:
-            cut = slice(at[b], at[b] + w[b])
-            region = buf[r0[b] : r1[b], c0[b] : c0[b] + w[b]]
-            counted = (_ROWS[r0[b] : r1[b], None] - start[cut]).view(np.uint16)
+        for z0, z1, c0, w, at, two in run:
+            cut = slice(at, at + w)
+            counted = (_ROWS[z0:z1, None] - start[cut]).view(np.uint16)
+            region = buf[z0:z1, c0 : c0 + w]
             np.copyto(region, first[cut], where=counted < span[cut])
-            if two[b]:
+            if two:
                 np.copyto(region, second[cut], where=counted < over[cut])
         # Pixels the run's object took from another object or the room.
         taken = shown[rows, cols] != before.view(np.uint8)[:, 3::4]
         np.copyto(under[rows, cols], before, where=taken)
-    return slice(min(r0), max(r1))
+    return slice(int(r0[drawn].min()), int(r1[drawn].max()))
 
 
 @functools.lru_cache(maxsize=16)
