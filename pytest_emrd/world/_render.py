@@ -183,13 +183,10 @@ def render(
     _background(buf, scene, params, table, (dx, dz, t_wall, along_x, ox, oz))
     boxes = object_boxes(scene, pose, params)
     rows = _boxes(buf, under, table, (dx, dz, t_wall), boxes, scene.owners[boxes[4]])
-    return _rgb(buf), _legible(buf[rows], under[rows], len(scene.centres))
-
-
-def _rgb(buf: np.ndarray) -> np.ndarray:
-    """The frame's R, G, B bytes (Pillow reads the buffer in place and packs them)."""
+    # R, G, B, owner per pixel; Pillow reads the buffer in place and packs R, G, B.
     image = Image.frombuffer("RGBX", (SIZE, SIZE), buf, "raw", "RGBX", 0, 1)
-    return np.frombuffer(image.tobytes("raw", "RGB"), dtype=np.uint8).reshape(SIZE, SIZE, 3)
+    frame = np.frombuffer(image.tobytes("raw", "RGB"), dtype=np.uint8).reshape(SIZE, SIZE, 3)
+    return frame, _legible(buf[rows], under[rows], len(scene.centres))
 
 
 def _legible(shown: np.ndarray, under: np.ndarray, objects: int) -> np.ndarray:
