@@ -12,7 +12,7 @@ from pytest_emrd.world.thor import THOR_VERSION
 
 
 def test_the_protocol_joins_the_world_and_prompt_versions() -> None:
-    assert protocol_version() == f"{WORLD_VERSION}+{PROMPT_VERSION}" == "builtin-6+p3"
+    assert protocol_version() == f"{WORLD_VERSION}+{PROMPT_VERSION}" == "builtin-7+p3"
     assert protocol_version("ai2thor") == f"{THOR_VERSION}+{WORLD_VERSION}+{PROMPT_VERSION}"
 
 

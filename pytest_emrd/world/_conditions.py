@@ -1,8 +1,8 @@
 """The environmental conditions: what ``baseline``, ``low_light`` and ``texture`` change.
 
-The one table both backends read. A surface at distance ``d`` is mixed with the fog colour
-in proportion ``min(1, fog * (d / reach)^4)``, its reach the visibility distance (landmarks:
-the drawn distance); a pixel is legible while that proportion is at most ``fog``.
+The one table both backends read. A surface at depth ``d`` is mixed with the fog colour in
+proportion ``min(1, (d / reach)^4)``, its reach the visibility distance (landmarks: the drawn
+distance): clear near, total at the reach, so the fog hides what lies beyond it.
 Why these numbers and what low light costs: ``docs/interpretation/world.md`` ("Visibility").
 """
 
@@ -22,25 +22,22 @@ class ConditionParams:
 
     name: str
     visibility_distance: float
-    """Metres: the fog's scale; beyond it, within a few tenths of a metre, fog hides what
-    is not a landmark (THOR: ``visibilityDistance`` of such objects)."""
+    """Metres: where the fog becomes total for what is not a landmark (THOR:
+    ``visibilityDistance`` of such objects)."""
     draw_distance: float
-    """Metres: the fog's scale for landmarks (doorways, the exit); objects farther than
-    this are not drawn."""
+    """Metres: where the fog becomes total for landmarks (doorways, the exit); nothing
+    farther is drawn."""
     light_factor: float
     """Multiplier on all surface brightness (1.0 = baseline)."""
-    fog: float
-    """Fraction of fog colour mixed into a surface at its reach: the most fog a pixel holds
-    and still shows its surface legibly."""
     fog_color: tuple[int, int, int]
     randomize_palette: bool
     """Whether wall, floor and object colours are drawn at random per episode seed."""
 
 
 _TABLE: Final[Mapping[str, ConditionParams]] = {
-    "baseline": ConditionParams("baseline", 3.1, 7.0, 1.0, 0.85, (214, 216, 220), False),
-    "low_light": ConditionParams("low_light", 2.9, 7.0, 0.5, 0.5, (56, 56, 60), False),
-    "texture": ConditionParams("texture", 3.1, 7.0, 1.0, 0.85, (214, 216, 220), True),
+    "baseline": ConditionParams("baseline", 3.25, 7.0, 1.0, (214, 216, 220), False),
+    "low_light": ConditionParams("low_light", 3.25, 7.0, 0.5, (56, 56, 60), False),
+    "texture": ConditionParams("texture", 3.25, 7.0, 1.0, (214, 216, 220), True),
 }
 
 

@@ -9,10 +9,10 @@ from typing import Any, Final
 from pytest_emrd.errors import check_choice, missing_extra
 from pytest_emrd.world._model import Simulator
 
-WORLD_VERSION: Final = "builtin-6"
+WORLD_VERSION: Final = "builtin-7"
 """Bump whenever layouts, rendering, visibility or feedback text change: a recorded cassette
-holds frame digests and feedback strings. ``builtin-6``: an object is visible when the frame
-shows it legibly; fog hides objects beyond 3.1 m (low light 2.9 m), landmarks beyond 7 m
+holds frame digests and feedback strings. ``builtin-7``: a pixel is legible when it differs
+from what the frame shows there without its object; fog is total at the visibility distance
 (``docs/interpretation/world.md``)."""
 
 
@@ -51,7 +51,7 @@ def make_simulator(backend: str = "builtin", **options: Any) -> Simulator:
 
 def world_version(backend: str = "builtin") -> str:
     """The world version a recording on ``backend`` depends on: for ``ai2thor`` joined with the
-    builtin one, whose layouts, spawns and wording THOR episodes use (``ai2thor-2+builtin-6``).
+    builtin one, whose layouts, spawns and wording THOR episodes use (``ai2thor-2+builtin-7``).
 
     :param backend: The backend the recording ran on.
     :returns: The version string cassettes are keyed on.

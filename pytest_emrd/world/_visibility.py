@@ -1,12 +1,12 @@
 """What the agent sees: the objects its frame shows legibly.
 
 One rule, read off the frame the agent is sent (:func:`~pytest_emrd.world._render.render`):
-an object is visible at a step if and only if at least :data:`LEGIBLE_PIXELS` pixels of
-that frame show it legibly: its own pixels (the renderer paints back to front, so what
-hides it owns the pixels), in a fog weight at most the condition's ``fog`` (the pixel lies
-within the object's reach: the visibility distance, for landmarks the drawn distance).
-Why these constants: ``docs/interpretation/world.md`` ("Visibility"). A visible object's
-bearing is that of its centre, clipped to ``[-45, 45]``, its distance to its centre.
+an object is visible at a step if and only if at least :data:`LEGIBLE_PIXELS` pixels of that
+frame show it and differ by at least :data:`~pytest_emrd.world._render.MIN_CONTRAST` levels
+in some channel from what the frame would show there without it. What hides it owns the
+pixels; fog and darkness take the contrast. Why these constants:
+``docs/interpretation/world.md`` ("Visibility"). A visible object's bearing is that of its
+centre, clipped to ``[-45, 45]``, its distance to its centre.
 """
 
 from __future__ import annotations

@@ -18,20 +18,20 @@ from pytest_emrd._serde import to_dict
 from pytest_emrd.world import WORLD_VERSION, Layout, make_simulator, paper_office
 
 GOLDEN = {
-    "builtin-6": {
+    "builtin-7": {
         "layout": "522fa1ecba82114fe61e836f680c8efdd62cdca36f37b052d1831c06ff7e0957",
         "paper_office": "2407f20637b377faf8accafb8689803cb37456ab7903a39c0629ad0963ebb162",
         "baseline": (
-            "234adc7b59f3d09a12fcd275e665bd7a0c76669544b83c41030ae53da6ca6175",
-            "c45974e824a01e979cfe3e672222e91fcfef7bcc4eb289c2b82d747461ba0cab",
+            "80c8946e927d6a302d79044fad645927f90aa508a959c63215c45813492800c8",
+            "d4eae113a4098a3898c18f8244a560d2a0858b7f78c1a17c65b7fca123ebbbc9",
         ),
         "low_light": (
-            "b03c1cf40be77df28d21b86f32008a003d0660e1a4f5245dd1ea60e187fe7e98",
-            "799525d768a97e674136e27a97e4853434cc3f90ef81cc488e7290a389cae745",
+            "220dad75fd159f454aa792554c7aa8f251427bfc8a2d08872b26043168b55322",
+            "25d8a7f0d1be1d429773dae86b2ed7945ece2a385b1af2fab64b8a23ebdaafda",
         ),
         "texture": (
-            "d09db01aee28ff895f9ed0f69e8898b897115ec7977bb4a48e192f8d008e622f",
-            "a4bcb5957de1699bddba82562889f724566c6065a7b80d023a0780b4e8bdee6a",
+            "9f81cf66966f5be283adfd1a343a65527b70e2eeef2d6cb395a35c1013b52b04",
+            "fb1cc0be3755091e7d8573029acb26761def4a3c10b22f6b2c2c2cb4b2046ee4",
         ),
     }
 }

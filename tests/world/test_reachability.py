@@ -47,9 +47,9 @@ def test_every_room_reachable_through_doorways_under_baseline(seed: int) -> None
 
 @pytest.mark.parametrize("spawn", ROOM_NAMES)
 def test_low_light_keeps_every_room_of_the_paper_office_reachable(spawn: str) -> None:
-    """In low light (objects legible to 2.9 m at most, doorways to 7 m) an agent that walks from
-    object to object still finds every doorway of the paper's office (low light costs time
-    and coverage, never a room)."""
+    """In low light (objects legible to 3.25 m at most, doorways to 7 m) an agent that walks
+    from object to object still finds every doorway of the paper's office (low light costs
+    time and coverage, never a room)."""
     assert _reachable_rooms(paper_office(), spawn, "low_light", False) == set(ROOM_NAMES)
 
 

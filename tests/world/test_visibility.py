@@ -54,6 +54,22 @@ def test_object_behind_a_wall_is_hidden_one_through_the_doorway_is_seen(
     assert np.array_equal(frame, _look(_without(two_rooms, "Stool_1"), pose)[0])
 
 
+@pytest.mark.parametrize(
+    "pose", [WorldPose(3.0, 6.5, 180.0), WorldPose(3.0, 3.5, 180.0), WorldPose(2.5, 2.0, 270.0)]
+)
+@pytest.mark.parametrize("condition", ["baseline", "low_light"])
+def test_an_object_is_listed_iff_the_frame_without_it_differs_legibly(
+    two_rooms: Layout, pose: WorldPose, condition: str
+) -> None:
+    """The rule, object by object: listed iff removing it changes 150+ pixels by 24+ levels."""
+    params = condition_params(condition)
+    frame, listing = _look(two_rooms, pose, params)
+    for obj in two_rooms.objects:
+        without = _look(_without(two_rooms, obj.object_id), pose, params)[0]
+        changed = (np.abs(frame.astype(np.int16) - without).max(axis=2) >= 24).sum()
+        assert (changed >= 150) == (obj.object_id in {v.object_id for v in listing}), obj
+
+
 def test_nothing_behind_the_agent_is_seen(two_rooms: Layout) -> None:
     assert _seen(two_rooms, WorldPose(3.0, 6.5, 0.0)) == []
 
