@@ -301,9 +301,9 @@ def _boxes(
     above the eye, else the front face's; then rows ``[start, over)`` again: a box below the
     eye shows its top down to the top edge's row at ``tn``, one above it its front down to
     the bottom edge's row at ``tn``. All (box, column) pairs are computed at once, laid end
-    to end; the painting is one masked copy per face and box. Where a box of object ``o``
-    (``owners``) covers a pixel another object or the room showed, ``under`` keeps what that
-    pixel showed: what the frame shows there without ``o``.
+    to end; the painting is one masked copy per face and box. Where a run of boxes of one
+    object ``o`` (``owners``) takes a pixel over from another object or the room, ``under``
+    keeps what that pixel showed: what the frame shows there without ``o``.
     """
     rel, y, lo, hi, label, extra, reach = boxes
     if lo.size == 0:
@@ -356,9 +356,9 @@ def _boxes(
     cuts = [0, *(np.flatnonzero(np.diff(owners[drawn])) + 1).tolist(), len(painted)]
     shown = buf.view(np.uint8)[:, 3::4]
     for run in (painted[i:j] for i, j in itertools.pairwise(cuts)):
-        rows = slice(min(b[0] for b in run), max(b[1] for b in run))
-        cols = slice(min(b[2] for b in run), max(b[2] + b[3] for b in run))
-        before = buf[rows, cols].copy()
+        ys = slice(min(b[0] for b in run), max(b[1] for b in run))
+        xs = slice(min(b[2] for b in run), max(b[2] + b[3] for b in run))
+        before = buf[ys, xs].copy()
         for z0, z1, c0, w, at, two in run:
             cut = slice(at, at + w)
             counted = (_ROWS[z0:z1, None] - start[cut]).view(np.uint16)
@@ -367,8 +367,8 @@ def _boxes(
             if two:
                 np.copyto(region, second[cut], where=counted < over[cut])
         # Pixels the run's object took from another object or the room.
-        taken = shown[rows, cols] != before.view(np.uint8)[:, 3::4]
-        np.copyto(under[rows, cols], before, where=taken)
+        taken = shown[ys, xs] != before.view(np.uint8)[:, 3::4]
+        np.copyto(under[ys, xs], before, where=taken)
     return slice(int(r0[drawn].min()), int(r1[drawn].max()))
 
 

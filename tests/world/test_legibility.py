@@ -13,6 +13,9 @@ landmarks (doorways, the exit) not counted: they keep a longer reach, as the fra
 them legibly farther (``docs/interpretation/world.md``, "Visibility");
 * the visible list and the legible objects agree on at least :data:`AGREEMENT` of the
   (frame, object) pairs either of them calls seen.
+
+The view from inside a doorway's gap is not held (no agent stands there; the Entrance side
+of Doorway_3 shows 5 Conference Room objects): ``docs/interpretation/world.md``.
 """
 
 from __future__ import annotations
