@@ -16,7 +16,7 @@ from collections.abc import Callable, Mapping
 from typing import Any, Final
 
 from pytest_emrd.reference._memory import apply_memory, merge_view
-from pytest_emrd.reference._read import Briefing, Percept
+from pytest_emrd.reference._read import Briefing, Percept, placed
 from pytest_emrd.world import VisibleObject
 
 DOORWAY: Final = "Doorway"
@@ -61,13 +61,6 @@ def fresh_plan() -> dict[str, Any]:
         "tries": 0,  # turns made to face the target
         "at": [0.0, 0.0],  # pose at the last step
     }
-
-
-def _place(percept: Percept, seen: VisibleObject) -> tuple[float, float]:
-    angle = math.radians(percept.pose.heading + seen.bearing)
-    x = percept.pose.x + seen.distance * math.sin(angle)
-    z = percept.pose.z + seen.distance * math.cos(angle)
-    return round(x, 2), round(z, 2)
 
 
 def room_guess(plan: Mapping[str, Any]) -> str:
@@ -146,7 +139,7 @@ def perceive(
     room = room_guess(plan)
     view = []
     for seen in sorted(percept.visible, key=lambda s: (-s.distance, s.object_id)):
-        x, z = _place(percept, seen)
+        x, z = (round(v, 2) for v in placed(percept, seen))
         if seen.object_type == DOORWAY:
             plan["doors"][seen.object_id] = [x, z]
             plan["reach"] = max(plan["reach"], round(seen.distance, 2))

@@ -105,10 +105,15 @@ def _spot(
 def _reposition(plan: dict[str, Any], towards: list[list[float]]) -> bool:
     """Rule 4's move towards ``towards``, if the visit has a reposition left."""
     limit = MAX_MOVES if plan["here"] else LOST_MOVES
-    spot = _spot(plan, towards) if plan["moves"] < limit else ""
+    return _go_spot(plan, _spot(plan, towards) if plan["moves"] < limit else "", "moves")
+
+
+def _go_spot(plan: dict[str, Any], spot: str, counter: str) -> bool:
+    """Target ``spot`` (if any), counting the move in ``counter`` (``moves`` or ``clears``)."""
     if spot:
         plan["tried"].append(spot)
-        plan.update(target=spot, goal="spot", moves=plan["moves"] + 1, phase="face", tries=0)
+        plan.update(target=spot, goal="spot", phase="face", tries=0)
+        plan[counter] += 1
     return bool(spot)
 
 
@@ -121,11 +126,7 @@ def _clear(plan: dict[str, Any], briefing: Briefing, percept: Percept) -> bool:
     # a wasted step (a planted invalid action) changes nothing.
     left = percept.max_steps - plan["acted"] - RESERVE
     affordable = left > PER_ROOM * (len(briefing.rooms) - len(plan["visited"]))
-    spot = _spot(plan, [], doors) if affordable else ""
-    if spot:
-        plan["tried"].append(spot)
-        plan.update(target=spot, goal="spot", clears=plan["clears"] + 1, phase="face", tries=0)
-    return bool(spot)
+    return _go_spot(plan, _spot(plan, [], doors) if affordable else "", "clears")
 
 
 def _choose(plan: dict[str, Any], briefing: Briefing, percept: Percept) -> None:
