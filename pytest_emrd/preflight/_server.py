@@ -135,10 +135,6 @@ def _first(patterns: tuple[re.Pattern[str], ...], text: str, group: str) -> int 
     return None
 
 
-def _power_of_two_at_least(n: int) -> int:
-    return 1 << max(n - 1, 1).bit_length()
-
-
 def vllm_refusal(
     message: str, *, images: int, max_tokens: int, prompt_tokens: int
 ) -> Refusal | None:
@@ -165,10 +161,10 @@ def vllm_refusal(
     if context is None:
         return None
     prompt = _first(_PROMPT, message, "prompt") or prompt_tokens
-    needed = prompt + max_tokens
+    power = 1 << max(prompt + max_tokens - 1, 1).bit_length()  # the power of 2 >= their sum
     return Refusal(
         "context",
         f"maximum context length {context} tokens",
-        f"restart vLLM with --max-model-len {_power_of_two_at_least(needed)} (a full window is "
+        f"restart vLLM with --max-model-len {power} (a full window is "
         f"~{prompt:,} prompt tokens plus max_tokens={max_tokens}; this server holds {context:,})",
     )
