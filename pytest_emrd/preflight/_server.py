@@ -13,7 +13,7 @@ from __future__ import annotations
 import json
 import re
 from dataclasses import dataclass
-from typing import Any, Final
+from typing import Final
 
 import httpx
 
@@ -65,11 +65,6 @@ def models_url(provider: str, base_url: str) -> str:
     return endpoint_url(base_url, "/v1/models" if provider == "anthropic" else "/models")
 
 
-def _entries(data: Any) -> list[dict[str, Any]]:
-    items = data.get("data") if isinstance(data, dict) else None
-    return [i for i in items if isinstance(i, dict)] if isinstance(items, list) else []
-
-
 def server_info(url: str, model_id: str, *, headers: dict[str, str] | None = None) -> ServerInfo:
     """``GET url`` with ``headers`` (the key, when there is one); never raises for a network
     or protocol failure.
@@ -86,9 +81,11 @@ def server_info(url: str, model_id: str, *, headers: dict[str, str] | None = Non
     if response.status_code != 200:
         return ServerInfo(url, response.status_code)
     try:
-        entries = _entries(response.json())
+        data = response.json()
     except ValueError:
         return ServerInfo(url, 200)
+    items = data.get("data") if isinstance(data, dict) else None
+    entries = [i for i in items if isinstance(i, dict)] if isinstance(items, list) else []
     served = tuple(str(e.get("id")) for e in entries if e.get("id"))
     ours = next((e for e in entries if str(e.get("id")).removeprefix("models/") == model_id), {})
     length = ours.get("max_model_len")
