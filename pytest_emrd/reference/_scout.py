@@ -79,26 +79,23 @@ def _spot(
     point of ``towards`` and nearer to it than the scout, else the one farthest from this
     visit's sweeps; ``within``: only objects no farther from one of these points than the
     farthest a doorway has been seen (``reach``)."""
-    spots: dict[str, list[Any]] = plan["spots"]
+    xz = {o: plan["spots"][o][:2] for o in plan["near"]}  # each object's [x, z]
 
-    def xz(label: str) -> tuple[float, float]:
-        return spots[label][0], spots[label][1]
-
-    def gap(point: tuple[float, float]) -> float:
+    def gap(point: list[float]) -> float:
         return min(math.dist(point, p) for p in towards)
 
-    far = [o for o in plan["near"] if math.dist(xz(o), plan["at"]) >= MIN_MOVE_M]
+    far = [o for o in plan["near"] if math.dist(xz[o], plan["at"]) >= MIN_MOVE_M]
     candidates = [o for o in far if o not in plan["tried"]]
     if within is not None:
         candidates = [
-            o for o in candidates if any(math.dist(xz(o), p) <= plan["reach"] for p in within)
+            o for o in candidates if any(math.dist(xz[o], p) <= plan["reach"] for p in within)
         ]
     if towards:
         here = gap(plan["at"])
-        closer = [o for o in candidates if gap(xz(o)) < here]
-        return min(closer, key=lambda o: (gap(xz(o)), o), default="")
+        closer = [o for o in candidates if gap(xz[o]) < here]
+        return min(closer, key=lambda o: (gap(xz[o]), o), default="")
     return max(
-        candidates, key=lambda o: (min(math.dist(xz(o), p) for p in plan["sweeps"]), o), default=""
+        candidates, key=lambda o: (min(math.dist(xz[o], p) for p in plan["sweeps"]), o), default=""
     )
 
 
