@@ -139,32 +139,33 @@ def perceive(
     room = room_guess(plan)
     view = []
     for seen in sorted(percept.visible, key=lambda s: (-s.distance, s.object_id)):
+        oid = seen.object_id
         x, z = (round(v, 2) for v in placed(percept, seen))
         if seen.object_type == DOORWAY:
-            plan["doors"][seen.object_id] = [x, z]
+            plan["doors"][oid] = [x, z]
             plan["reach"] = max(plan["reach"], round(seen.distance, 2))
-            rooms = plan["door_rooms"].setdefault(seen.object_id, [])
-            if seen.object_id in inside:  # Goto of a doorway seen through another stops short
-                plan["here"].setdefault(seen.object_id, round(seen.distance, 2))
+            rooms = plan["door_rooms"].setdefault(oid, [])
+            if oid in inside:  # Goto of a doorway seen through another stops short
+                plan["here"].setdefault(oid, round(seen.distance, 2))
                 if room and room not in rooms:
                     rooms.append(room)
-        elif seen.object_id in inside:
-            plan["spots"][seen.object_id] = [x, z, seen.object_type]
-            if seen.object_id not in plan["near"]:
-                plan["near"].append(seen.object_id)
+        elif oid in inside:
+            plan["spots"][oid] = [x, z, seen.object_type]
+            if oid not in plan["near"]:
+                plan["near"].append(oid)
         entry: dict[str, Any] = {"type": seen.object_type, "x": x, "z": z}
-        old = memory.get(seen.object_id, {})
+        old = memory.get(oid, {})
         if abs(seen.bearing) >= EDGE_DEG:
-            if seen.object_id not in plan["rough"] and "x" in old:
+            if oid not in plan["rough"] and "x" in old:
                 entry.update(x=old["x"], z=old["z"])
-            elif seen.object_id not in plan["rough"]:
-                plan["rough"].append(seen.object_id)
-        elif seen.object_id in plan["rough"]:
-            plan["rough"].remove(seen.object_id)
+            elif oid not in plan["rough"]:
+                plan["rough"].append(oid)
+        elif oid in plan["rough"]:
+            plan["rough"].remove(oid)
         old_room = old.get("room")
-        if old_room or (room and seen.object_id in inside):
+        if old_room or (room and oid in inside):
             entry["room"] = old_room or room
-        view.append((seen.object_id, entry))
+        view.append((oid, entry))
     new = [label for label, _ in reversed(view) if label not in plan["order"]]
     plan["order"] += new
     plan["found"] += len(new)
