@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import functools
 import json
+import operator
 import threading
 from collections import OrderedDict
 from collections.abc import Callable
@@ -116,14 +117,6 @@ def fragment(item: Any) -> Fragment:
     return made
 
 
-def _wire_bytes(value: Any) -> bytes:
-    return wire_json(value).encode("utf-8")
-
-
-def _fragment_wire(piece: Fragment) -> bytes:
-    return piece.wire
-
-
 def encode_body(body: Any) -> bytes:
     """The bytes ``httpx`` sends for ``json=body``, each list item encoded once; the redactor
     can then find ``body`` and its fragments again from the bytes (:func:`sent`)."""
@@ -132,7 +125,13 @@ def encode_body(body: Any) -> bytes:
         _remember(_bodies, id(raw), (raw, body, {}), _BODIES)
         return raw
     pieces = {k: [fragment(x) for x in v] if isinstance(v, list) else v for k, v in body.items()}
-    raw = splice(pieces, value=_wire_bytes, item=_fragment_wire, sort_keys=False, binary=True)
+    raw = splice(
+        pieces,
+        value=lambda v: wire_json(v).encode("utf-8"),
+        item=operator.attrgetter("wire"),
+        sort_keys=False,
+        binary=True,
+    )
     _remember(_bodies, id(raw), (raw, body, pieces), _BODIES)
     return raw
 

@@ -92,13 +92,10 @@ class _Reader:
             raise self.fail(
                 node, f"{what} must be a mapping of name: value, got {_yaml.describe(node)}."
             )
-        seen: set[str] = set()
+        # a duplicate key never gets here: _yaml.compose refuses it, naming the line
         for key, value in node.value:
             if not isinstance(key, yaml.ScalarNode):
                 raise self.fail(key, f"{what} keys must be plain names.")
-            if key.value in seen:
-                raise self.fail(key, f"{key.value!r} appears twice in {what}.")
-            seen.add(key.value)
             yield key.value, key, value
 
     def number(self, node: yaml.Node, what: str, allowed: Domain) -> float:

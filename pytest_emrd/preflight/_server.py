@@ -13,7 +13,7 @@ from __future__ import annotations
 import json
 import re
 from dataclasses import dataclass
-from typing import Any, Final
+from typing import Final
 
 import httpx
 
@@ -65,11 +65,6 @@ def models_url(provider: str, base_url: str) -> str:
     return endpoint_url(base_url, "/v1/models" if provider == "anthropic" else "/models")
 
 
-def _entries(data: Any) -> list[dict[str, Any]]:
-    items = data.get("data") if isinstance(data, dict) else None
-    return [i for i in items if isinstance(i, dict)] if isinstance(items, list) else []
-
-
 def server_info(url: str, model_id: str, *, headers: dict[str, str] | None = None) -> ServerInfo:
     """``GET url`` with ``headers`` (the key, when there is one); never raises for a network
     or protocol failure.
@@ -86,9 +81,11 @@ def server_info(url: str, model_id: str, *, headers: dict[str, str] | None = Non
     if response.status_code != 200:
         return ServerInfo(url, response.status_code)
     try:
-        entries = _entries(response.json())
+        data = response.json()
     except ValueError:
         return ServerInfo(url, 200)
+    items = data.get("data") if isinstance(data, dict) else None
+    entries = [i for i in items if isinstance(i, dict)] if isinstance(items, list) else []
     served = tuple(str(e.get("id")) for e in entries if e.get("id"))
     ours = next((e for e in entries if str(e.get("id")).removeprefix("models/") == model_id), {})
     length = ours.get("max_model_len")
@@ -135,10 +132,6 @@ def _first(patterns: tuple[re.Pattern[str], ...], text: str, group: str) -> int 
     return None
 
 
-def _power_of_two_at_least(n: int) -> int:
-    return 1 << max(n - 1, 1).bit_length()
-
-
 def vllm_refusal(
     message: str, *, images: int, max_tokens: int, prompt_tokens: int
 ) -> Refusal | None:
@@ -165,10 +158,10 @@ def vllm_refusal(
     if context is None:
         return None
     prompt = _first(_PROMPT, message, "prompt") or prompt_tokens
-    needed = prompt + max_tokens
+    power = 1 << max(prompt + max_tokens - 1, 1).bit_length()  # the power of 2 >= their sum
     return Refusal(
         "context",
         f"maximum context length {context} tokens",
-        f"restart vLLM with --max-model-len {_power_of_two_at_least(needed)} (a full window is "
+        f"restart vLLM with --max-model-len {power} (a full window is "
         f"~{prompt:,} prompt tokens plus max_tokens={max_tokens}; this server holds {context:,})",
     )

@@ -56,11 +56,6 @@ def drop_probability(mean_steps: float) -> float:
     return 1.0 / mean_steps
 
 
-def _middle_third(discovery: Sequence[str], expected: int | None) -> set[str]:
-    n = expected if expected else len(discovery)
-    return {label for rank, label in enumerate(discovery) if n / 3 <= rank < 2 * n / 3}
-
-
 def apply_memory(
     memory: dict[str, Entry],
     *,
@@ -85,5 +80,6 @@ def apply_memory(
     p = drop_probability(float(planted["mean_steps"]))
     exposed = set(memory) - in_view
     if kind == "serial":
-        exposed &= _middle_third(discovery, expected)
+        n = expected or len(discovery)
+        exposed &= {label for rank, label in enumerate(discovery) if n / 3 <= rank < 2 * n / 3}
     return {label: e for label, e in memory.items() if label not in exposed or draw(label) >= p}

@@ -200,10 +200,10 @@ def mimic_reply(
     nav["memory"] = memory
     if crossing and plan["phase"] == "sweep":
         nav["visit"] += 1
-    homing = _episode_draw(state["key"])("back") < float(planted.get("back", 0.0))
+    writer = _Writer(state, planted)
+    homing = writer.draw("back") < float(planted.get("back", 0.0))
     action, reasoning = scout_action(plan, briefing, percept, homing=homing)
 
-    writer = _Writer(state, planted)
     room, visit = room_guess(plan), nav["visit"]
     writer.label_new(memory, visit)
     state["seen"].update(dict.fromkeys((s.object_id for s in percept.visible), percept.step))

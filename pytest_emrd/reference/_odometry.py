@@ -27,7 +27,7 @@ from typing import Any, Final
 
 import numpy as np
 
-from pytest_emrd.reference._read import Percept
+from pytest_emrd.reference._read import Percept, placed
 from pytest_emrd.trajectory import Pose
 
 #: Where a confirmed ``Goto`` of an object is taken to end, short of the object's placement:
@@ -101,9 +101,4 @@ def aim(odometry: dict[str, Any], action: str, percept: Percept) -> None:
     )
     target = (named or typed or [None])[0]
     if target is not None:
-        angle = math.radians(percept.pose.heading + target.bearing)
-        odometry["goal"] = [
-            percept.pose.x + target.distance * math.sin(angle),
-            percept.pose.z + target.distance * math.cos(angle),
-            target.object_type == "Doorway",
-        ]
+        odometry["goal"] = [*placed(percept, target), target.object_type == "Doorway"]

@@ -16,7 +16,7 @@ from collections.abc import Callable, Mapping
 from typing import Any, Final
 
 from pytest_emrd.reference._memory import apply_memory, merge_view
-from pytest_emrd.reference._read import Briefing, Percept
+from pytest_emrd.reference._read import Briefing, Percept, placed
 from pytest_emrd.world import VisibleObject
 
 DOORWAY: Final = "Doorway"
@@ -61,13 +61,6 @@ def fresh_plan() -> dict[str, Any]:
         "tries": 0,  # turns made to face the target
         "at": [0.0, 0.0],  # pose at the last step
     }
-
-
-def _place(percept: Percept, seen: VisibleObject) -> tuple[float, float]:
-    angle = math.radians(percept.pose.heading + seen.bearing)
-    x = percept.pose.x + seen.distance * math.sin(angle)
-    z = percept.pose.z + seen.distance * math.cos(angle)
-    return round(x, 2), round(z, 2)
 
 
 def room_guess(plan: Mapping[str, Any]) -> str:
@@ -146,32 +139,33 @@ def perceive(
     room = room_guess(plan)
     view = []
     for seen in sorted(percept.visible, key=lambda s: (-s.distance, s.object_id)):
-        x, z = _place(percept, seen)
+        oid = seen.object_id
+        x, z = (round(v, 2) for v in placed(percept, seen))
         if seen.object_type == DOORWAY:
-            plan["doors"][seen.object_id] = [x, z]
+            plan["doors"][oid] = [x, z]
             plan["reach"] = max(plan["reach"], round(seen.distance, 2))
-            rooms = plan["door_rooms"].setdefault(seen.object_id, [])
-            if seen.object_id in inside:  # Goto of a doorway seen through another stops short
-                plan["here"].setdefault(seen.object_id, round(seen.distance, 2))
+            rooms = plan["door_rooms"].setdefault(oid, [])
+            if oid in inside:  # Goto of a doorway seen through another stops short
+                plan["here"].setdefault(oid, round(seen.distance, 2))
                 if room and room not in rooms:
                     rooms.append(room)
-        elif seen.object_id in inside:
-            plan["spots"][seen.object_id] = [x, z, seen.object_type]
-            if seen.object_id not in plan["near"]:
-                plan["near"].append(seen.object_id)
+        elif oid in inside:
+            plan["spots"][oid] = [x, z, seen.object_type]
+            if oid not in plan["near"]:
+                plan["near"].append(oid)
         entry: dict[str, Any] = {"type": seen.object_type, "x": x, "z": z}
-        old = memory.get(seen.object_id, {})
+        old = memory.get(oid, {})
         if abs(seen.bearing) >= EDGE_DEG:
-            if seen.object_id not in plan["rough"] and "x" in old:
+            if oid not in plan["rough"] and "x" in old:
                 entry.update(x=old["x"], z=old["z"])
-            elif seen.object_id not in plan["rough"]:
-                plan["rough"].append(seen.object_id)
-        elif seen.object_id in plan["rough"]:
-            plan["rough"].remove(seen.object_id)
+            elif oid not in plan["rough"]:
+                plan["rough"].append(oid)
+        elif oid in plan["rough"]:
+            plan["rough"].remove(oid)
         old_room = old.get("room")
-        if old_room or (room and seen.object_id in inside):
+        if old_room or (room and oid in inside):
             entry["room"] = old_room or room
-        view.append((seen.object_id, entry))
+        view.append((oid, entry))
     new = [label for label, _ in reversed(view) if label not in plan["order"]]
     plan["order"] += new
     plan["found"] += len(new)

@@ -5,6 +5,7 @@ newest user message and its own previous reply, exactly what a VLM is sent and n
 from __future__ import annotations
 
 import json
+import math
 import re
 from dataclasses import dataclass
 from typing import Any, Final
@@ -50,6 +51,15 @@ class Percept:
     visible: tuple[VisibleObject, ...]
     confirmed: bool
     """The feedback says the last action succeeded."""
+
+
+def placed(percept: Percept, seen: VisibleObject) -> tuple[float, float]:
+    """Where ``seen`` lies in the spawn frame, from the pose and its bearing and distance."""
+    angle = math.radians(percept.pose.heading + seen.bearing)
+    return (
+        percept.pose.x + seen.distance * math.sin(angle),
+        percept.pose.z + seen.distance * math.cos(angle),
+    )
 
 
 def read_briefing(system: str) -> Briefing:

@@ -79,36 +79,38 @@ def _spot(
     point of ``towards`` and nearer to it than the scout, else the one farthest from this
     visit's sweeps; ``within``: only objects no farther from one of these points than the
     farthest a doorway has been seen (``reach``)."""
-    spots: dict[str, list[Any]] = plan["spots"]
+    xz = {o: plan["spots"][o][:2] for o in plan["near"]}  # each object's [x, z]
 
-    def xz(label: str) -> tuple[float, float]:
-        return spots[label][0], spots[label][1]
-
-    def gap(point: tuple[float, float]) -> float:
+    def gap(point: list[float]) -> float:
         return min(math.dist(point, p) for p in towards)
 
-    far = [o for o in plan["near"] if math.dist(xz(o), plan["at"]) >= MIN_MOVE_M]
+    far = [o for o in plan["near"] if math.dist(xz[o], plan["at"]) >= MIN_MOVE_M]
     candidates = [o for o in far if o not in plan["tried"]]
     if within is not None:
         candidates = [
-            o for o in candidates if any(math.dist(xz(o), p) <= plan["reach"] for p in within)
+            o for o in candidates if any(math.dist(xz[o], p) <= plan["reach"] for p in within)
         ]
     if towards:
         here = gap(plan["at"])
-        closer = [o for o in candidates if gap(xz(o)) < here]
-        return min(closer, key=lambda o: (gap(xz(o)), o), default="")
+        closer = [o for o in candidates if gap(xz[o]) < here]
+        return min(closer, key=lambda o: (gap(xz[o]), o), default="")
     return max(
-        candidates, key=lambda o: (min(math.dist(xz(o), p) for p in plan["sweeps"]), o), default=""
+        candidates, key=lambda o: (min(math.dist(xz[o], p) for p in plan["sweeps"]), o), default=""
     )
 
 
 def _reposition(plan: dict[str, Any], towards: list[list[float]]) -> bool:
     """Rule 4's move towards ``towards``, if the visit has a reposition left."""
     limit = MAX_MOVES if plan["here"] else LOST_MOVES
-    spot = _spot(plan, towards) if plan["moves"] < limit else ""
+    return _go_spot(plan, _spot(plan, towards) if plan["moves"] < limit else "", "moves")
+
+
+def _go_spot(plan: dict[str, Any], spot: str, counter: str) -> bool:
+    """Target ``spot`` (if any), counting the move in ``counter`` (``moves`` or ``clears``)."""
     if spot:
         plan["tried"].append(spot)
-        plan.update(target=spot, goal="spot", moves=plan["moves"] + 1, phase="face", tries=0)
+        plan.update(target=spot, goal="spot", phase="face", tries=0)
+        plan[counter] += 1
     return bool(spot)
 
 
@@ -121,11 +123,7 @@ def _clear(plan: dict[str, Any], briefing: Briefing, percept: Percept) -> bool:
     # a wasted step (a planted invalid action) changes nothing.
     left = percept.max_steps - plan["acted"] - RESERVE
     affordable = left > PER_ROOM * (len(briefing.rooms) - len(plan["visited"]))
-    spot = _spot(plan, [], doors) if affordable else ""
-    if spot:
-        plan["tried"].append(spot)
-        plan.update(target=spot, goal="spot", clears=plan["clears"] + 1, phase="face", tries=0)
-    return bool(spot)
+    return _go_spot(plan, _spot(plan, [], doors) if affordable else "", "clears")
 
 
 def _choose(plan: dict[str, Any], briefing: Briefing, percept: Percept) -> None:

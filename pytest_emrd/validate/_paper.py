@@ -130,11 +130,12 @@ def _reproducing(printed: _Counts) -> _Counts:
             stat = chi_square(counts.table()).statistic
             if stat is not None and round(stat, 2) == APPENDIX_E_CHI2[0]:
                 matches.append(counts)
-    return min(matches, key=lambda c: _distance(c, printed))
-
-
-def _distance(a: _Counts, b: _Counts) -> int:
-    return sum(abs(x - y) for x, y in zip(a.conference, b.conference, strict=True))
+    return min(
+        matches,
+        key=lambda c: sum(
+            abs(x - y) for x, y in zip(c.conference, printed.conference, strict=True)
+        ),
+    )
 
 
 def _describe(counts: _Counts, names: Sequence[str]) -> str:

@@ -293,9 +293,14 @@ def _paper_note(spe: SerialPosition, episodes: int) -> str:
 
 
 def _data(spe: SerialPosition) -> dict[str, Value]:
-    mle = {"early": spe.mle_early, "middle": spe.mle_middle, "late": spe.mle_late}
-    paper = {"paper_early": spe.early, "paper_middle": spe.middle, "paper_late": spe.late}
-    return {**mle, **paper}
+    return {
+        "early": spe.mle_early,
+        "middle": spe.mle_middle,
+        "late": spe.mle_late,
+        "paper_early": spe.early,
+        "paper_middle": spe.middle,
+        "paper_late": spe.late,
+    }
 
 
 _LRU_SHAPE: Final = (

@@ -384,8 +384,14 @@ def _exterior_door(
 
 
 def _lights(layout: Layout, factor: float) -> list[dict[str, Any]]:
-    shadow = {"type": "Soft", "strength": 1, "normalBias": 0, "bias": 0.05, "nearPlane": 0.2}
-    shadow["resolution"] = "FromQualitySettings"
+    shadow = {
+        "type": "Soft",
+        "strength": 1,
+        "normalBias": 0,
+        "bias": 0.05,
+        "nearPlane": 0.2,
+        "resolution": "FromQualitySettings",
+    }
     lights: list[dict[str, Any]] = [
         {
             "id": "DirectionalLight",

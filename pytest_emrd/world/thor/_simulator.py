@@ -72,14 +72,18 @@ def _in_room(points: np.ndarray, room: Room) -> np.ndarray:
     return (x > room.x0 + m) & (x < room.x1 - m) & (z > room.z0 + m) & (z < room.z1 - m)
 
 
-def _pick(points: np.ndarray, *choices: tuple[np.ndarray, np.ndarray]) -> int | None:
-    """Index of the lowest score under the first ``(score, mask)`` of ``choices`` any point
-    passes; ties broken by (x, z) so it is stable."""
+def _pick(
+    points: np.ndarray, heading: float | np.ndarray, *choices: tuple[np.ndarray, np.ndarray]
+) -> WorldPose | None:
+    """The point with the lowest score under the first ``(score, mask)`` of ``choices`` any
+    point passes, facing ``heading`` (one for all, or per point); ties broken by (x, z) so it
+    is stable."""
     for score, mask in choices:
         idx = np.flatnonzero(mask)
         if idx.size:
-            order = np.lexsort((points[idx, 1], points[idx, 0], np.round(score[idx], 6)))
-            return int(idx[order[0]])
+            best = idx[np.lexsort((points[idx, 1], points[idx, 0], np.round(score[idx], 6)))[0]]
+            facing = np.broadcast_to(heading, len(points))[best]
+            return WorldPose(float(points[best, 0]), float(points[best, 1]), float(facing))
     return None
 
 
@@ -87,8 +91,9 @@ def nearest_in_room(
     points: np.ndarray, x: float, z: float, room: Room
 ) -> tuple[float, float] | None:
     """The reachable position in ``room`` nearest ``(x, z)`` (None if the room has none)."""
-    best = _pick(points, (np.hypot(points[:, 0] - x, points[:, 1] - z), _in_room(points, room)))
-    return None if best is None else (float(points[best, 0]), float(points[best, 1]))
+    dist = np.hypot(points[:, 0] - x, points[:, 1] - z)
+    best = _pick(points, 0.0, (dist, _in_room(points, room)))
+    return None if best is None else (best.x, best.z)
 
 
 def viewpoint(points: np.ndarray, x: float, z: float, room: Room) -> WorldPose | None:
@@ -105,11 +110,7 @@ def viewpoint(points: np.ndarray, x: float, z: float, room: Room) -> WorldPose |
     off_axis = np.abs(wrap180(heading - snapped))
     inside = _in_room(points, room)
     facing = inside & (dist >= CLEARANCE) & (off_axis <= MAX_OFF_AXIS)
-    best = _pick(points, (dist + OFF_AXIS_COST * off_axis, facing), (dist, inside))
-    if best is None:
-        return None
-    px, pz = points[best]
-    return WorldPose(float(px), float(pz), float(snapped[best]))
+    return _pick(points, snapped, (dist + OFF_AXIS_COST * off_axis, facing), (dist, inside))
 
 
 def entry(points: np.ndarray, doorway: Doorway, into: Room) -> WorldPose | None:
@@ -126,11 +127,7 @@ def entry(points: np.ndarray, doorway: Doorway, into: Room) -> WorldPose | None:
         )
     dist = np.hypot(points[:, 0] - doorway.x, points[:, 1] - doorway.z)
     inside = _in_room(points, into)
-    best = _pick(points, (dist, inside & (depth >= CLEARANCE)), (dist, inside))
-    if best is None:
-        return None
-    px, pz = points[best]
-    return WorldPose(float(px), float(pz), heading)
+    return _pick(points, heading, (dist, inside & (depth >= CLEARANCE)), (dist, inside))
 
 
 def agent_pose(metadata: Mapping[str, Any]) -> WorldPose:
