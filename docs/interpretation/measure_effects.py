@@ -144,10 +144,7 @@ def untruncated(entries: Sequence[MapEntry], objects: Sequence[GroundTruthObject
     labels = [lb for lb, _, _, _ in found.key]
     if len(labels) < 2:
         return gated
-    problem = _Problem(
-        labels, [k for _, k, _, _ in found.key],
-        np.array([(x, z) for _, _, x, z in found.key]), matcher._layout,
-    )  # fmt: skip
+    problem = _Problem(found.key, matcher._layout)
     motions, read = _hypotheses(problem)
     c, s, tx, tz = (motions[:, k : k + 1] for k in range(4))
     rows, cols = problem.candidates
