@@ -65,7 +65,10 @@ class Venv:
 def _built_wheel(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """The wheel of this checkout, built once per session under a file lock: setuptools builds
     in the source tree (``build/``), so two xdist workers building at once collide."""
-    shared = tmp_path_factory.getbasetemp().parent  # one folder for every worker of a session
+    base = tmp_path_factory.getbasetemp()
+    # An xdist worker's base lies in the session's folder; without xdist the parent is shared
+    # by every session, where a wheel of an older checkout would be found.
+    shared = base.parent if os.environ.get("PYTEST_XDIST_WORKER") else base
     with FileLock(shared / "emrd-wheel.lock"):
         out = shared / "emrd-wheel"
         if not any(out.glob("pytest_emrd-*.whl")):
