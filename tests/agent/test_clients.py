@@ -37,7 +37,9 @@ def _config(**overrides: object) -> ModelConfig:
         "provider": "openai",
         "model_id": "m",
         "base_url": "http://127.0.0.1:1/v1",
-        "timeout_s": 0.5,
+        # A loaded CI machine can take longer than half a second to answer a loopback request,
+        # which the retry tests would count as a timeout: only the stall below should time out.
+        "timeout_s": 3.0,
         "max_retries": 3,
     }
     fields.update(overrides)
@@ -80,7 +82,7 @@ def test_success_reads_text_and_usage(fault_server, sleeps) -> None:
         ("status", 503, {}),
         ("garbage", 200),
         ("garbage", 502),
-        ("stall", 1.0),
+        ("stall", 4.0),
     ],
     ids=["429", "500", "503", "garbage-200", "garbage-502", "timeout"],
 )
