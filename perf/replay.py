@@ -129,11 +129,15 @@ def _registry() -> Any:
 
 
 def _scout_client(transport: httpx.BaseTransport | None = None) -> Any:
-    """The scout model's client as a replay builds it (no key), optionally on ``transport``."""
+    """The scout model's client as a replay builds it (:func:`~pytest_emrd.episode.
+    episode_client`), or on ``transport``."""
     from pytest_emrd.agent import OpenAICompatibleClient
+    from pytest_emrd.episode import episode_client
     from pytest_emrd.reference import reference_base_url
 
     config = _registry().get("scout")
+    if transport is None:
+        return episode_client(config, live=False)
     return OpenAICompatibleClient(
         config, base_url=reference_base_url(), transport=transport, require_key=False
     )

@@ -17,6 +17,7 @@ root logger's handlers and to the ``httpx``, ``httpcore``, ``urllib3`` and ``vcr
 from __future__ import annotations
 
 import base64
+import functools
 import logging
 import os
 import re
@@ -159,11 +160,13 @@ def scrub(text: str, secrets: Iterable[str] | None = None) -> str:
     return text
 
 
-def scrub_bytes(data: bytes, *, literal_only: bool = False) -> bytes:
-    """:func:`scrub_secrets` of raw bytes (any encoding), then, unless ``literal_only``, the
-    pattern passes of :func:`scrub` when the bytes are UTF-8 text."""
-    for secret in secret_values():
-        data = data.replace(secret.encode(), REDACTED.encode())
+def scrub_bytes(
+    data: bytes, *, literal_only: bool = False, secrets: Iterable[str] | None = None
+) -> bytes:
+    """:func:`scrub_secrets` of raw bytes (any encoding; ``secrets`` as there), then, unless
+    ``literal_only``, the pattern passes of :func:`scrub` when the bytes are UTF-8 text."""
+    for secret in _encoded(secret_values() if secrets is None else tuple(secrets)):
+        data = data.replace(secret, _REDACTED_BYTES)
     if literal_only:
         return data
     try:
@@ -172,6 +175,15 @@ def scrub_bytes(data: bytes, *, literal_only: bool = False) -> bytes:
         return data
     clean = scrub(text, ())
     return data if clean == text else clean.encode()
+
+
+_REDACTED_BYTES: Final = REDACTED.encode()
+
+
+@functools.lru_cache(maxsize=8)
+def _encoded(secrets: tuple[str, ...]) -> tuple[bytes, ...]:
+    """``secrets`` in UTF-8, encoded once per set (bodies are scrubbed member by member)."""
+    return tuple(secret.encode() for secret in secrets)
 
 
 def scrub_uri(uri: str) -> str:

@@ -77,6 +77,8 @@ _METRES_PER_UNIT: Final[dict[str, float]] = {
     **dict.fromkeys(("m", "metre", "metres", "meter", "meters"), 1.0),
     **dict.fromkeys(("cm", "centimetre", "centimetres", "centimeter", "centimeters"), 0.01),
 }
+#: The repairs of a coordinate written as a JSON number (one shared set: most are).
+_NO_REPAIR: Final[frozenset[str]] = frozenset()
 #: Keys under which an entry may give its position as a list ``[x, z]``.
 _POSITION_KEYS: Final = ("position", "pos", "xz", "coords", "coordinates", "location")
 
@@ -204,11 +206,11 @@ def _find_object(text: str) -> tuple[dict[str, Any] | None, set[str]]:
     return obj, repairs.union(_wrapping(text, start, end))
 
 
-def _coordinate(value: Any) -> tuple[float, set[str]] | None:
+def _coordinate(value: Any) -> tuple[float, frozenset[str]] | None:
     """One coordinate in metres and the repairs that read it (``unit``, ``decimal_comma``);
     None when it is no finite number, written or as a string."""
     if isinstance(value, int | float) and not isinstance(value, bool):
-        return (float(value), set()) if math.isfinite(value) else None
+        return (float(value), _NO_REPAIR) if math.isfinite(value) else None
     written = _WRITTEN_NUMBER.fullmatch(value.strip()) if isinstance(value, str) else None
     if written is None:
         return None
@@ -218,13 +220,13 @@ def _coordinate(value: Any) -> tuple[float, set[str]] | None:
     if unit:
         metres *= _METRES_PER_UNIT[unit]
         repairs.add("unit")
-    return (metres, repairs) if math.isfinite(metres) else None
+    return (metres, frozenset(repairs)) if math.isfinite(metres) else None
 
 
-def _position(fields: Any) -> tuple[float, float, set[str]] | str:
+def _position(fields: Any) -> tuple[float, float, frozenset[str]] | str:
     """``(x, z, repairs)`` of an entry (``x``/``z`` keys, else a list ``[x, z]``: the entry
     itself or under :data:`_POSITION_KEYS`), or why it has none."""
-    repairs: set[str] = set()
+    repairs = _NO_REPAIR
     if isinstance(fields, dict) and ("x" in fields or "z" in fields):
         x, z = fields.get("x"), fields.get("z")
     else:
@@ -234,7 +236,7 @@ def _position(fields: Any) -> tuple[float, float, set[str]] | str:
         if not isinstance(pair, list) or len(pair) != 2:
             written = json.dumps(fields, sort_keys=True)[:80]
             return f"has no x and z (nor a [x, z] list): {written}"
-        (x, z), repairs = pair, {"position_list"}
+        (x, z), repairs = pair, frozenset({"position_list"})
     read_x, read_z = _coordinate(x), _coordinate(z)
     if read_x is None or read_z is None:
         bad = ("x", x) if read_x is None else ("z", z)
@@ -248,18 +250,16 @@ def _text(value: Any) -> str:
     return value if isinstance(value, str) else json.dumps(value, sort_keys=True)
 
 
-def _entry(label: str, fields: Any) -> tuple[MapEntry, set[str]] | str:
+def _entry(label: str, fields: Any) -> tuple[MapEntry, frozenset[str]] | str:
     """The entry ``label`` and the repairs that read its position, or why it cannot be read."""
     position = _position(fields)
     if isinstance(position, str):
         return f"cognitive_map entry {label!r} {position}"
     x, z, repairs = position
-
-    def text(key: str) -> str:
-        return _text(fields.get(key) if isinstance(fields, dict) else None).strip()
-
-    entry = MapEntry(label, text("type"), x, z, text("room") or None, text("facing") or None)
-    return entry, repairs
+    named = fields if isinstance(fields, dict) else {}  # a bare [x, z] names nothing
+    kind = _text(named.get("type")).strip()
+    room, facing = _text(named.get("room")).strip(), _text(named.get("facing")).strip()
+    return MapEntry(label, kind, x, z, room or None, facing or None), repairs
 
 
 def _cognitive_map(raw: Any) -> tuple[tuple[MapEntry, ...], set[str]] | str:
