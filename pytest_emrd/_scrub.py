@@ -189,15 +189,22 @@ def _encoded(secrets: tuple[str, ...]) -> tuple[bytes, ...]:
 def scrub_uri(uri: str) -> str:
     """``uri`` without userinfo and without secret query parameters (dropped, not masked),
     for files that store URIs as data (cassettes)."""
+    return _scrub_uri(uri, secret_values())
+
+
+@functools.lru_cache(maxsize=64)
+def _scrub_uri(uri: str, secrets: tuple[str, ...]) -> str:
+    """:func:`scrub_uri` of ``uri`` for these ``secrets`` (every request of a model goes to
+    one URI: parsed once)."""
     parts = urlsplit(uri)
     netloc = parts.netloc.rpartition("@")[2]
     query = parts.query
     if query:
         pairs = parse_qsl(query, keep_blank_values=True)
         query = urlencode([(k, v) for k, v in pairs if k.lower() not in SECRET_PARAMS])
-    if netloc == parts.netloc and query == parts.query:
-        return scrub_secrets(uri)
-    return scrub_secrets(urlunsplit(parts._replace(netloc=netloc, query=query)))
+    if netloc != parts.netloc or query != parts.query:
+        uri = urlunsplit(parts._replace(netloc=netloc, query=query))
+    return scrub_secrets(uri, secrets)
 
 
 def scrub_report(report: Any) -> None:
