@@ -127,9 +127,13 @@ def _without_images(node: Any) -> Any:
 
 
 def _canonical_bytes(value: Any, secrets: tuple[str, ...]) -> bytes:
-    """``value`` redacted, serialised and scrubbed of ``secrets``."""
-    text = canonical_json(_redact_tree(value)).encode()
-    return scrub_bytes(text, literal_only=True, secrets=secrets)
+    """``value`` redacted, serialised and scrubbed of ``secrets``. Redacting rebuilds the whole
+    tree, so it runs only where the serialised text may hold an image (a data URL, an image
+    MIME type): elsewhere it would change nothing (a replay's frames are digests already)."""
+    text = canonical_json(value)
+    if '"data:image/' in text or '"image/' in text:
+        text = canonical_json(_redact_tree(value))
+    return scrub_bytes(text.encode(), literal_only=True, secrets=secrets)
 
 
 #: What a key value needs to lie across two members of a spliced body: every seam has one of
