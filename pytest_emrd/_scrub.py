@@ -17,7 +17,6 @@ root logger's handlers and to the ``httpx``, ``httpcore``, ``urllib3`` and ``vcr
 from __future__ import annotations
 
 import base64
-import functools
 import logging
 import os
 import re
@@ -160,13 +159,11 @@ def scrub(text: str, secrets: Iterable[str] | None = None) -> str:
     return text
 
 
-def scrub_bytes(
-    data: bytes, *, literal_only: bool = False, secrets: Iterable[str] | None = None
-) -> bytes:
-    """:func:`scrub_secrets` of raw bytes (any encoding; ``secrets`` as there), then, unless
-    ``literal_only``, the pattern passes of :func:`scrub` when the bytes are UTF-8 text."""
-    for secret in _encoded(secret_values() if secrets is None else tuple(secrets)):
-        data = data.replace(secret, _REDACTED_BYTES)
+def scrub_bytes(data: bytes, *, literal_only: bool = False) -> bytes:
+    """:func:`scrub_secrets` of raw bytes (any encoding), then, unless ``literal_only``, the
+    pattern passes of :func:`scrub` when the bytes are UTF-8 text."""
+    for secret in secret_values():
+        data = data.replace(secret.encode(), REDACTED.encode())
     if literal_only:
         return data
     try:
@@ -177,34 +174,18 @@ def scrub_bytes(
     return data if clean == text else clean.encode()
 
 
-_REDACTED_BYTES: Final = REDACTED.encode()
-
-
-@functools.lru_cache(maxsize=8)
-def _encoded(secrets: tuple[str, ...]) -> tuple[bytes, ...]:
-    """``secrets`` in UTF-8, encoded once per set (bodies are scrubbed member by member)."""
-    return tuple(secret.encode() for secret in secrets)
-
-
 def scrub_uri(uri: str) -> str:
     """``uri`` without userinfo and without secret query parameters (dropped, not masked),
     for files that store URIs as data (cassettes)."""
-    return _scrub_uri(uri, secret_values())
-
-
-@functools.lru_cache(maxsize=64)
-def _scrub_uri(uri: str, secrets: tuple[str, ...]) -> str:
-    """:func:`scrub_uri` of ``uri`` for these ``secrets`` (every request of a model goes to
-    one URI: parsed once)."""
     parts = urlsplit(uri)
     netloc = parts.netloc.rpartition("@")[2]
     query = parts.query
     if query:
         pairs = parse_qsl(query, keep_blank_values=True)
         query = urlencode([(k, v) for k, v in pairs if k.lower() not in SECRET_PARAMS])
-    if netloc != parts.netloc or query != parts.query:
-        uri = urlunsplit(parts._replace(netloc=netloc, query=query))
-    return scrub_secrets(uri, secrets)
+    if netloc == parts.netloc and query == parts.query:
+        return scrub_secrets(uri)
+    return scrub_secrets(urlunsplit(parts._replace(netloc=netloc, query=query)))
 
 
 def scrub_report(report: Any) -> None:

@@ -11,7 +11,7 @@ import copy
 import functools
 import threading
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from contextvars import ContextVar
 from pathlib import Path
 from typing import Any, Final
@@ -58,6 +58,23 @@ def _keys(request: Request) -> MatchKeys:
     return keys
 
 
+def _key(request: Request, strict: bool) -> Any:
+    keys = _keys(request)
+    return keys.strict if strict else keys.lenient
+
+
+def _matcher(strict: bool) -> Callable[[Request, Request], bool]:
+    """vcrpy's one matcher for a cassette: key equality (unparseable never matches). Not a
+    method: a cassette holding its own bound method would live until the garbage collector
+    finds the cycle, its recording (a few MB) with it."""
+
+    def emrd_body(new: Request, recorded: Request) -> bool:
+        key = _key(new, strict)
+        return key is not None and key == _key(recorded, strict)
+
+    return emrd_body
+
+
 class EpisodeCassette(Cassette):
     """A vcrpy cassette that remembers why a replay failed (see :mod:`._paths`): the first request
     that cannot be played while write-protected is explained as an unreadable recorded response
@@ -69,7 +86,7 @@ class EpisodeCassette(Cassette):
     ) -> None:
         self.frame_drift: set[tuple[Any, Any]] = set()
         self.strict = matching == "strict"
-        super().__init__(*args, match_on=(self.emrd_body,), **kwargs)
+        super().__init__(*args, match_on=(_matcher(self.strict),), **kwargs)
         self.requests_made = 0
         self.drift: str | None = None
         self.rerecord_command = rerecord_command
@@ -83,17 +100,12 @@ class EpisodeCassette(Cassette):
         self._asked = 0.0
         self._index: dict[str, list[int]] | None = None
 
-    def key(self, request: Request) -> str | None:
+    def key(self, request: Request) -> Any:
         """The key ``request`` is matched by: strict or lenient (``None``: unparseable)."""
-        keys = _keys(request)
-        return keys.strict if self.strict else keys.lenient
-
-    def emrd_body(self, new: Request, recorded: Request) -> bool:
-        """The one vcrpy matcher: key equality (unparseable never matches)."""
-        return self.key(new) is not None and self.key(new) == self.key(recorded)
+        return _key(request, self.strict)
 
     def _responses(self, request: Request) -> Iterator[tuple[int, dict[str, Any]]]:
-        """vcrpy's lookup of the interactions :meth:`emrd_body` matches, in order, from an index
+        """vcrpy's lookup of the interactions :func:`_matcher` matches, in order, from an index
         by key (vcrpy runs the matcher on every interaction, three times per request); a lenient
         match whose frames differ adds its pair of strict keys to :attr:`frame_drift`."""
         new = self._before_record_request(request)

@@ -266,7 +266,7 @@ class ResultsStore:
         ``measure``, its :meth:`metrics` are kept too, also once across processes (measured
         under the episode's lock, from the trajectory in memory when computed here)."""
         stored = self.reusable(spec)
-        if stored is not None and not (measure and not self._kept(stored.head).is_file()):
+        if stored is not None and (not measure or self._kept(stored.head).is_file()):
             return stored
         with self.lock(spec):
             stored = self.reusable(spec) or self.save(spec, compute(spec))
