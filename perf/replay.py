@@ -4,8 +4,8 @@
   over the full reference grid (scout x 3 conditions x 4 spawns x 20 episodes, committed
   cassettes, gates included), in a fresh run directory. Target 20 s. And
   ``replay.resume_240_s``: the same command again on that finished run directory (every
-  episode checked against the results store from its head line, every gate evaluated again:
-  each worker decodes and measures the episodes of the cells it gates). Target 3 s.
+  episode checked against the results store from its head line, every gate evaluated again
+  over the metrics kept when the first command measured each episode). Target 3 s.
   ``replay.grid_240_cpu_s`` and ``replay.resume_240_cpu_s``: the CPU time of those
   commands (controller and workers), which other load on the machine stretches less than
   wall time. All under Python's default bytecode policy (:func:`~perf.python_env`; warm: one
@@ -129,11 +129,15 @@ def _registry() -> Any:
 
 
 def _scout_client(transport: httpx.BaseTransport | None = None) -> Any:
-    """The scout model's client as a replay builds it (no key), optionally on ``transport``."""
+    """The scout model's client as a replay builds it (:func:`~pytest_emrd.episode.
+    episode_client`), or on ``transport``."""
     from pytest_emrd.agent import OpenAICompatibleClient
+    from pytest_emrd.episode import episode_client
     from pytest_emrd.reference import reference_base_url
 
     config = _registry().get("scout")
+    if transport is None:
+        return episode_client(config, live=False)
     return OpenAICompatibleClient(
         config, base_url=reference_base_url(), transport=transport, require_key=False
     )

@@ -3,11 +3,12 @@
 A request carries the whole history window every step (a base64 JPEG in each user turn), so
 encoding the body, parsing it back to redact it and hashing its frames would handle each
 message up to ten times. :func:`encode_body` gives the exact bytes ``httpx`` sends for
-``json=body``, joining the UTF-8 encoding of each item of the body's top-level lists, each
-computed once (a :class:`Fragment`), and remembers them (:func:`sent`), so the redactor
-builds the canonical body from the same fragments, each redacted once, instead of parsing.
+``json=body``, joining the UTF-8 encoding of each member of the body (each item of a
+top-level list), each computed once (a :class:`Fragment`), and remembers them (:func:`sent`),
+so the redactor builds the canonical body from the same fragments, each redacted once,
+instead of parsing.
 
-Items are immutable once encoded (:class:`~pytest_emrd.agent.Conversation` never changes a
+Members are immutable once encoded (:class:`~pytest_emrd.agent.Conversation` never changes a
 message). Both tables are bounded, thread-safe, hold a reference to what they key (an ``id``
 is never reused while remembered) and are checked by identity: a miss only costs time.
 """
@@ -16,7 +17,6 @@ from __future__ import annotations
 
 import functools
 import json
-import operator
 import threading
 from collections import OrderedDict
 from collections.abc import Callable
@@ -46,12 +46,13 @@ wire_json: Final = encoder(sort_keys=False, ensure_ascii=False, allow_nan=False)
 
 @dataclass(slots=True, eq=False)
 class Fragment:
-    """One item of a sent body's top-level list: the item, the UTF-8 bytes of its wire JSON,
-    and its canonical (redacted) bytes once the redactor has computed them."""
+    """One member of a sent body (or item of a top-level list): the item, the UTF-8 bytes of its
+    wire JSON, and its canonical (redacted) bytes once the redactor has computed them, with the
+    secret values they are scrubbed of."""
 
     item: Any
     wire: bytes
-    canonical: bytes | None = None
+    canonical: tuple[tuple[str, ...], bytes] | None = None
 
 
 _lock = threading.Lock()
@@ -69,42 +70,23 @@ def spliced(tree: Any) -> bool:
     return isinstance(tree, dict) and all(isinstance(k, str) for k in tree)
 
 
-#: Punctuation of a spliced object, as text and as bytes: comma, colon, brackets, braces.
-_PUNCTUATION: Final = {
-    False: (",", ":", "[", "]", "{", "}"),
-    True: (b",", b":", b"[", b"]", b"{", b"}"),
-}
-
-
 def splice(
-    tree: dict[str, Any],
+    pieces: dict[str, Fragment | list[Fragment]],
     *,
-    value: Callable[[Any], Any],
-    item: Callable[[Any], Any],
+    piece: Callable[[Fragment], bytes],
     sort_keys: bool,
-    binary: bool = False,
-) -> Any:
-    """``tree`` as compact JSON exactly as ``json.dumps`` joins an object (``ensure_ascii``
-    off), each top-level list from its items' texts ``item(x)``, every other member from
-    ``value(v)``, joined once. ``binary``: pieces and result are UTF-8 bytes."""
-    comma, colon, left, right, opening, closing = _PUNCTUATION[binary]
-    pieces = []
-    for key in sorted(tree) if sort_keys else tree:
-        name = encode_basestring(key)
-        pieces += (comma, name.encode() if binary else name, colon)
-        v = tree[key]
-        if isinstance(v, list):
-            pieces.append(left)
-            for n, x in enumerate(v):
-                pieces += (comma, item(x)) if n else (item(x),)
-            pieces.append(right)
-        else:
-            pieces.append(value(v))
-    if not pieces:
-        return opening + closing
-    pieces[0] = opening  # the first member's comma
-    pieces.append(closing)
-    return (b"" if binary else "").join(pieces)
+) -> bytes:
+    """The object :func:`encode_body` split into ``pieces`` as compact UTF-8 JSON, exactly as
+    ``json.dumps`` joins an object (``ensure_ascii`` off), each fragment's bytes from
+    ``piece(fragment)``."""
+    members = []
+    for key in sorted(pieces) if sort_keys else pieces:
+        member = pieces[key]
+        value = (
+            b"[%b]" % b",".join(map(piece, member)) if isinstance(member, list) else piece(member)
+        )
+        members.append(b"%b:%b" % (encode_basestring(key).encode(), value))
+    return b"{%b}" % b",".join(members)
 
 
 def fragment(item: Any) -> Fragment:
@@ -117,29 +99,30 @@ def fragment(item: Any) -> Fragment:
     return made
 
 
+def _fragment_wire(piece: Fragment) -> bytes:
+    return piece.wire
+
+
 def encode_body(body: Any) -> bytes:
-    """The bytes ``httpx`` sends for ``json=body``, each list item encoded once; the redactor
-    can then find ``body`` and its fragments again from the bytes (:func:`sent`)."""
+    """The bytes ``httpx`` sends for ``json=body``, each member (each item of a top-level
+    list) encoded once; the redactor can then find ``body`` and its fragments again from the
+    bytes (:func:`sent`)."""
     if not spliced(body):
         raw = wire_json(body).encode("utf-8")
         _remember(_bodies, id(raw), (raw, body, {}), _BODIES)
         return raw
-    pieces = {k: [fragment(x) for x in v] if isinstance(v, list) else v for k, v in body.items()}
-    raw = splice(
-        pieces,
-        value=lambda v: wire_json(v).encode("utf-8"),
-        item=operator.attrgetter("wire"),
-        sort_keys=False,
-        binary=True,
-    )
+    pieces = {
+        k: [fragment(x) for x in v] if isinstance(v, list) else fragment(v) for k, v in body.items()
+    }
+    raw = splice(pieces, piece=_fragment_wire, sort_keys=False)
     _remember(_bodies, id(raw), (raw, body, pieces), _BODIES)
     return raw
 
 
 def sent(raw: bytes) -> tuple[Any, dict[str, Any]] | None:
     """``(tree, pieces)`` :func:`encode_body` encoded into exactly this ``raw`` object (the
-    pieces: the tree's members, each top-level list as its :class:`Fragment` list; empty
-    when the tree was not spliced), else None."""
+    pieces: the tree's members as :class:`Fragment`, each top-level list as a list of them;
+    empty when the tree was not spliced), else None."""
     hit = _bodies.get(id(raw))
     return (hit[1], hit[2]) if hit is not None and hit[0] is raw else None
 

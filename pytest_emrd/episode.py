@@ -31,6 +31,7 @@ from pytest_emrd.agent import (
     MAX_REPLY_CHARS,
     ChatClient,
     Conversation,
+    ModelConfig,
     Registry,
     UserTurn,
     build_system_prompt,
@@ -357,11 +358,23 @@ class Executor:
         with self._lock:
             client = self._clients.get((model, live))
             if client is None:
-                config = self.registry.get(model)
-                url = reference.base_url_of(config)
-                client = make_client(config, base_url=url, require_key=live)
-                self._clients[(model, live)] = client
+                client = self._clients[(model, live)] = episode_client(
+                    self.registry.get(model), live=live
+                )
         return client
+
+
+def episode_client(config: ModelConfig, *, live: bool) -> ChatClient:
+    """The client an episode of ``config`` sends through: live, with its API key and a deadline
+    on each attempt; a replay's with neither (recorded requests carry no key, and the cassette
+    answers before any connection is made).
+
+    :param config: The model's registry entry.
+    :param live: Whether the episode calls the model.
+    :returns: A new client; the caller closes it.
+    """
+    url = reference.base_url_of(config)
+    return make_client(config, base_url=url, require_key=live, deadline=live)
 
 
 def _check_writable(path: Path) -> None:

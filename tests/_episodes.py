@@ -10,10 +10,9 @@ from collections.abc import Callable
 from typing import Any
 
 from perf import run_with_cassette
-from pytest_emrd.agent import ChatClient, Registry, make_client
+from pytest_emrd.agent import ChatClient, Registry
 from pytest_emrd.cassette import LATENCY, decompress
-from pytest_emrd.episode import run_episode
-from pytest_emrd.reference import base_url_of
+from pytest_emrd.episode import episode_client, run_episode
 from pytest_emrd.trajectory import Trajectory
 
 __all__ = ["AgentRunner", "agent_runner", "run_with_cassette", "traffic"]
@@ -27,8 +26,7 @@ class AgentRunner:
     def __call__(self, spec: Any, *, live: bool, on_step: Any = None) -> Trajectory:
         key = (spec.model, live)
         if key not in self.clients:
-            config = self.registry.get(spec.model)
-            self.clients[key] = make_client(config, base_url=base_url_of(config), require_key=live)
+            self.clients[key] = episode_client(self.registry.get(spec.model), live=live)
         client = self.clients[key]
         return self.run(
             spec, registry=self.registry, client=client, on_step=on_step, replay=not live

@@ -2,7 +2,10 @@
 
 from __future__ import annotations
 
+import os
+
 import httpx
+import hypothesis
 import pytest
 from hypothesis import given
 from hypothesis import strategies as st
@@ -11,6 +14,8 @@ from pytest_emrd import _wire, frames
 from pytest_emrd.cassette import redact_body
 
 PIXELS = "cd" * 32
+#: A variable named like a credential: its value is a key the scrubber removes.
+KEY_ENV = "EMRD_WIRE_TEST_API_KEY"
 
 _scalars = (
     st.none()
@@ -53,6 +58,20 @@ def test_redacting_a_sent_body_equals_parsing_and_redacting_it(body):
     assert _wire.sent(raw)[0] is body
     parsed = redact_body(bytes(bytearray(raw)))  # equal bytes, another object: parsed
     assert redact_body(raw) == parsed
+
+
+@given(_body, st.data())
+def test_a_key_anywhere_in_a_sent_body_is_scrubbed_as_from_the_parsed_body(body, data):
+    raw = _wire.encode_body(body)
+    canonical = redact_body(bytes(bytearray(raw))).body.decode()
+    start = data.draw(st.integers(0, max(0, len(canonical) - 8)))
+    key = canonical[start : start + data.draw(st.integers(8, 40))].strip()
+    hypothesis.assume(len(key) >= 8)  # a key within one member, or across two (a seam)
+    os.environ[KEY_ENV] = key
+    try:
+        assert redact_body(raw) == redact_body(bytes(bytearray(raw)))
+    finally:
+        del os.environ[KEY_ENV]
 
 
 def test_a_message_is_encoded_and_redacted_once_however_many_windows_carry_it(monkeypatch):

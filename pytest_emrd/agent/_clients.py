@@ -155,7 +155,8 @@ class _HttpClient:
 
     Without a ``transport``, httpx's transports (proxies included) go under
     :class:`DeadlineTransport`, without keep-alive so that each attempt's connection is its
-    own and can be shut at its deadline."""
+    own and can be shut at its deadline; with ``deadline=False`` (a replay, which the cassette
+    answers before any connection) they are httpx's own."""
 
     _key_header: tuple[str, str]
     _read: Callable[[Any], ChatResponse]
@@ -168,6 +169,7 @@ class _HttpClient:
         policy: RetryPolicy | None = None,
         transport: httpx.BaseTransport | None = None,
         require_key: bool = True,
+        deadline: bool = True,
     ) -> None:
         self.config = config
         self.base_url = base_url
@@ -181,7 +183,7 @@ class _HttpClient:
             )
         self._key = key or None
         timeout = httpx.Timeout(config.timeout_s)
-        if transport is not None:
+        if transport is not None or not deadline:
             self._http = httpx.Client(timeout=timeout, transport=transport)
         else:
             self._http = httpx.Client(
@@ -231,6 +233,7 @@ class OpenAICompatibleClient(_HttpClient):
     :param policy: Retries and timeouts; None for ``config.max_retries`` with the defaults.
     :param transport: An httpx transport to use instead of the network (tests).
     :param require_key: Raise :class:`ConfigError` when the key's variable is unset.
+    :param deadline: Give each attempt ``timeout_s`` (without a ``transport``).
     """
 
     _key_header = ("Authorization", "Bearer ")
@@ -280,6 +283,7 @@ class AnthropicClient(_HttpClient):
     :param policy: Retries and timeouts, as for :class:`OpenAICompatibleClient`.
     :param transport: A transport replacing the network.
     :param require_key: Whether an unset key is an error.
+    :param deadline: Whether each attempt has a deadline, as for :class:`OpenAICompatibleClient`.
     """
 
     _key_header = ("x-api-key", "")
@@ -338,6 +342,7 @@ def make_client(
     base_url: str | None = None,
     policy: RetryPolicy | None = None,
     require_key: bool = True,
+    deadline: bool = True,
 ) -> ChatClient:
     """The client for ``config``, sending to ``base_url`` (default: ``config.base_url``; a
     reference agent has none: :func:`pytest_emrd.reference.base_url_of` gives the built-in
@@ -347,6 +352,8 @@ def make_client(
     :param config: The model's registry entry.
     :param policy: Retries and timeouts; None for the default policy.
     :param require_key: Raise when the API-key variable is unset.
+    :param deadline: Give each attempt ``timeout_s``, connect to last byte
+        (:class:`DeadlineTransport`); a replay's client needs none.
     :param base_url: The endpoint to send to; None for ``config.base_url``.
     :returns: A :class:`ChatClient` ready to send.
     """
@@ -357,4 +364,6 @@ def make_client(
             f"model {config.name!r} has no base_url; pass base_url=, for a reference agent "
             "pytest_emrd.reference.base_url_of(config) (the built-in server, started on demand)."
         )
-    return client(config, base_url=base_url, policy=policy, require_key=require_key)
+    return client(
+        config, base_url=base_url, policy=policy, require_key=require_key, deadline=deadline
+    )

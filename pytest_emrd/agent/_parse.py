@@ -77,6 +77,8 @@ _METRES_PER_UNIT: Final[dict[str, float]] = {
     **dict.fromkeys(("m", "metre", "metres", "meter", "meters"), 1.0),
     **dict.fromkeys(("cm", "centimetre", "centimetres", "centimeter", "centimeters"), 0.01),
 }
+#: A coordinate written as a JSON number is one of these (a tuple: ``isinstance`` is faster).
+_NUMBERS: Final = (int, float)
 #: Keys under which an entry may give its position as a list ``[x, z]``.
 _POSITION_KEYS: Final = ("position", "pos", "xz", "coords", "coordinates", "location")
 
@@ -204,27 +206,31 @@ def _find_object(text: str) -> tuple[dict[str, Any] | None, set[str]]:
     return obj, repairs.union(_wrapping(text, start, end))
 
 
-def _coordinate(value: Any) -> tuple[float, set[str]] | None:
-    """One coordinate in metres and the repairs that read it (``unit``, ``decimal_comma``);
-    None when it is no finite number, written or as a string."""
-    if isinstance(value, int | float) and not isinstance(value, bool):
-        return (float(value), set()) if math.isfinite(value) else None
+def _coordinate(value: Any, repairs: set[str]) -> float | None:
+    """One coordinate in metres, the repairs that read it (``unit``, ``decimal_comma``) added
+    to ``repairs``; None when it is no finite number, written or as a string."""
+    if isinstance(value, _NUMBERS) and not isinstance(value, bool):
+        return float(value) if math.isfinite(value) else None
     written = _WRITTEN_NUMBER.fullmatch(value.strip()) if isinstance(value, str) else None
     if written is None:
         return None
     number, unit = written.group("number"), (written.group("unit") or "").lower()
-    repairs = {"decimal_comma"} if "," in number else set()
     metres = float(number.replace(",", "."))
     if unit:
         metres *= _METRES_PER_UNIT[unit]
+    if not math.isfinite(metres):
+        return None
+    if "," in number:
+        repairs.add("decimal_comma")
+    if unit:
         repairs.add("unit")
-    return (metres, repairs) if math.isfinite(metres) else None
+    return metres
 
 
-def _position(fields: Any) -> tuple[float, float, set[str]] | str:
-    """``(x, z, repairs)`` of an entry (``x``/``z`` keys, else a list ``[x, z]``: the entry
-    itself or under :data:`_POSITION_KEYS`), or why it has none."""
-    repairs: set[str] = set()
+def _position(fields: Any, repairs: set[str]) -> tuple[float, float] | str:
+    """``(x, z)`` of an entry (``x``/``z`` keys, else a list ``[x, z]``: the entry itself or
+    under :data:`_POSITION_KEYS`), the repairs that read it added to ``repairs``; or why it has
+    none."""
     if isinstance(fields, dict) and ("x" in fields or "z" in fields):
         x, z = fields.get("x"), fields.get("z")
     else:
@@ -234,12 +240,13 @@ def _position(fields: Any) -> tuple[float, float, set[str]] | str:
         if not isinstance(pair, list) or len(pair) != 2:
             written = json.dumps(fields, sort_keys=True)[:80]
             return f"has no x and z (nor a [x, z] list): {written}"
-        (x, z), repairs = pair, {"position_list"}
-    read_x, read_z = _coordinate(x), _coordinate(z)
+        x, z = pair
+        repairs.add("position_list")
+    read_x, read_z = _coordinate(x, repairs), _coordinate(z, repairs)
     if read_x is None or read_z is None:
         bad = ("x", x) if read_x is None else ("z", z)
         return f"has no number of metres as {bad[0]}: {json.dumps(bad[1])[:80]}"
-    return read_x[0], read_z[0], repairs | read_x[1] | read_z[1]
+    return read_x, read_z
 
 
 def _text(value: Any) -> str:
@@ -248,18 +255,16 @@ def _text(value: Any) -> str:
     return value if isinstance(value, str) else json.dumps(value, sort_keys=True)
 
 
-def _entry(label: str, fields: Any) -> tuple[MapEntry, set[str]] | str:
-    """The entry ``label`` and the repairs that read its position, or why it cannot be read."""
-    position = _position(fields)
+def _entry(label: str, fields: Any, repairs: set[str]) -> MapEntry | str:
+    """The entry ``label``, the repairs that read its position added to ``repairs``; or why it
+    cannot be read."""
+    position = _position(fields, repairs)
     if isinstance(position, str):
         return f"cognitive_map entry {label!r} {position}"
-    x, z, repairs = position
-
-    def text(key: str) -> str:
-        return _text(fields.get(key) if isinstance(fields, dict) else None).strip()
-
-    entry = MapEntry(label, text("type"), x, z, text("room") or None, text("facing") or None)
-    return entry, repairs
+    named = fields if isinstance(fields, dict) else {}  # a bare [x, z] names nothing
+    kind = _text(named.get("type")).strip()
+    room, facing = _text(named.get("room")).strip(), _text(named.get("facing")).strip()
+    return MapEntry(label, kind, *position, room or None, facing or None)
 
 
 def _cognitive_map(raw: Any) -> tuple[tuple[MapEntry, ...], set[str]] | str:
@@ -279,11 +284,10 @@ def _cognitive_map(raw: Any) -> tuple[tuple[MapEntry, ...], set[str]] | str:
         return f"cognitive_map is {type(raw).__name__}, not an object"
     entries, repairs = [], set()
     for label, fields in items:
-        read = _entry(label.strip(), fields)
-        if isinstance(read, str):
-            return read
-        entries.append(read[0])
-        repairs.update(read[1])
+        entry = _entry(label.strip(), fields, repairs)
+        if isinstance(entry, str):
+            return entry
+        entries.append(entry)
     return tuple(entries), repairs
 
 

@@ -123,10 +123,17 @@ def document(data: CassetteData) -> dict[str, Any]:
 
 def _digest(text: str, recorded: str) -> str:
     """SHA-256 of the whole document ``text`` with its last ``recorded`` (the digest, in
-    ``metadata``, which sorts after ``interactions``) read as :data:`_UNSET`."""
-    head, found, tail = text.rpartition(recorded)
-    whole = head + _UNSET + tail if found else text
-    return DIGEST_PREFIX + hashlib.sha256(whole.encode()).hexdigest()
+    ``metadata``, which sorts after ``interactions``) read as :data:`_UNSET`. The document
+    (a few MB) is encoded once and hashed around ``recorded`` in place, not copied again."""
+    whole, mark = text.encode(), recorded.encode()
+    at = whole.rfind(mark)
+    if at < 0:
+        return DIGEST_PREFIX + hashlib.sha256(whole).hexdigest()
+    view = memoryview(whole)
+    digest = hashlib.sha256(view[:at])
+    digest.update(_UNSET.encode())
+    digest.update(view[at + len(mark) :])
+    return DIGEST_PREFIX + digest.hexdigest()
 
 
 def encode(data: CassetteData) -> bytes:

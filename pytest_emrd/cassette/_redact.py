@@ -6,15 +6,17 @@ placeholders); a body that is not JSON never matches."""
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import json
 import re
 from dataclasses import dataclass
 from functools import cached_property
+from json.encoder import encode_basestring
 from typing import Any, Final
 
 from pytest_emrd import _wire, frames
-from pytest_emrd._scrub import scrub_bytes
+from pytest_emrd._scrub import scrub_bytes, secret_values
 
 #: Request headers kept in a cassette; everything else (credentials included) is dropped.
 KEPT_HEADERS: Final = frozenset({"content-type"})
@@ -125,25 +127,46 @@ def _without_images(node: Any) -> Any:
 
 
 def _canonical_bytes(value: Any) -> bytes:
-    return canonical_json(_redact_tree(value)).encode()
+    """``value`` redacted, serialised and scrubbed of key values. Redacting rebuilds the whole
+    tree, so it runs only where the serialised text may hold an image (a data URL, an image
+    MIME type): elsewhere it would change nothing (a replay's frames are digests already)."""
+    text = canonical_json(value)
+    if '"data:image/' in text or '"image/' in text:
+        text = canonical_json(_redact_tree(value))
+    return scrub_bytes(text.encode(), literal_only=True)
 
 
-def _canonical_fragment(piece: _wire.Fragment) -> bytes:
-    """A list item's canonical bytes, redacted once and kept on its fragment however many
-    requests carry it (two threads may both compute it: the same bytes)."""
-    if piece.canonical is None:
-        piece.canonical = _canonical_bytes(piece.item)
-    return piece.canonical
+#: What a key value needs to lie across two members of a spliced body: every seam has one of
+#: these characters on a side, or is the ``:`` before a value, where a value starts with ``:``.
+_SEAMS: Final = frozenset('"{}[],')
 
 
-def _canonical_sent(tree: Any, pieces: dict[str, Any]) -> bytes:
-    """Canonical form of a body this process encoded (:mod:`pytest_emrd._wire`): each item of a
-    top-level list redacted and serialised once, however many requests carry it. Byte for
-    byte what parsing the body and redacting the whole tree gives."""
+@functools.lru_cache(maxsize=64)
+def _member_wise(names: tuple[str, ...], secrets: tuple[str, ...]) -> bool:
+    """Whether scrubbing each member of a body with members ``names`` alone removes every one
+    of ``secrets`` as scrubbing the whole body does: none lies across a seam or in a name."""
+    seams = any(_SEAMS.intersection(s) or s.startswith(":") for s in secrets)
+    return not seams and not any(s in encode_basestring(n) for s in secrets for n in names)
+
+
+def _canonical_fragment(piece: _wire.Fragment, secrets: tuple[str, ...]) -> bytes:
+    """A member's canonical bytes, redacted and scrubbed once and kept on its fragment with the
+    key values of the time, however many requests carry it (two threads may both compute it:
+    the same bytes)."""
+    if piece.canonical is None or piece.canonical[0] is not secrets:
+        piece.canonical = secrets, _canonical_bytes(piece.item)
+    return piece.canonical[1]
+
+
+def _canonical_sent(tree: Any, pieces: dict[str, Any], secrets: tuple[str, ...]) -> bytes:
+    """Canonical form of a body this process encoded (:mod:`pytest_emrd._wire`), its members
+    scrubbed of ``secrets`` one by one (:func:`_member_wise`): each once, however many requests
+    carry it. Byte for byte what parsing the body, redacting the whole tree and scrubbing it
+    gives."""
     if not pieces or _image_mime(tree):
         return _canonical_bytes(tree)
     return _wire.splice(
-        pieces, value=_canonical_bytes, item=_canonical_fragment, sort_keys=True, binary=True
+        pieces, piece=lambda member: _canonical_fragment(member, secrets), sort_keys=True
     )
 
 
@@ -154,15 +177,15 @@ def redact_body(body: bytes | str | None) -> Redacted:
     :returns: Its :class:`Redacted` canonical form.
     """
     raw = body.encode() if isinstance(body, str) else (body or b"")
+    secrets = secret_values()
     sent = _wire.sent(raw)
-    if sent is not None:
-        canonical = _canonical_sent(*sent)
-        return Redacted(body=scrub_bytes(canonical, literal_only=True), parsed=True)
+    if sent is not None and _member_wise(tuple(sent[1]), secrets):
+        return Redacted(body=_canonical_sent(*sent, secrets), parsed=True)
     try:
-        tree = json.loads(raw)
+        tree = json.loads(raw) if sent is None else sent[0]
     except (ValueError, UnicodeDecodeError):
         return Redacted(body=scrub_bytes(raw, literal_only=True), parsed=False)
-    return Redacted(body=scrub_bytes(_canonical_bytes(tree), literal_only=True), parsed=True)
+    return Redacted(body=_canonical_bytes(tree), parsed=True)
 
 
 def match_keys(method: str, path: str, redacted: Redacted) -> MatchKeys:

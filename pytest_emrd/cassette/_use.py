@@ -8,12 +8,14 @@ from __future__ import annotations
 
 import contextlib
 import copy
+import functools
 import threading
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from contextvars import ContextVar
 from pathlib import Path
 from typing import Any, Final
+from urllib.parse import urlparse
 
 from vcr import filters
 from vcr.cassette import Cassette
@@ -46,11 +48,31 @@ def clear_caches() -> None:
 
 
 def _keys(request: Request) -> MatchKeys:
+    """The keys ``request`` is matched on (of its canonical body and of its path as a cassette
+    stores it), computed once and kept on it."""
     keys = getattr(request, "emrd_keys", None)
     if keys is None:
-        keys = match_keys(request.method, request.path, redact_body(request.body))
+        path = urlparse(scrub_uri(request.uri)).path
+        keys = match_keys(request.method, path, redact_body(request.body))
         request.emrd_keys = keys  # type: ignore[attr-defined]
     return keys
+
+
+def _key(request: Request, strict: bool) -> Any:
+    keys = _keys(request)
+    return keys.strict if strict else keys.lenient
+
+
+def _matcher(strict: bool) -> Callable[[Request, Request], bool]:
+    """vcrpy's one matcher for a cassette: key equality (unparseable never matches). Not a
+    method: a cassette holding its own bound method would live until the garbage collector
+    finds the cycle, its recording (a few MB) with it."""
+
+    def emrd_body(new: Request, recorded: Request) -> bool:
+        key = _key(new, strict)
+        return key is not None and key == _key(recorded, strict)
+
+    return emrd_body
 
 
 class EpisodeCassette(Cassette):
@@ -64,7 +86,7 @@ class EpisodeCassette(Cassette):
     ) -> None:
         self.frame_drift: set[tuple[Any, Any]] = set()
         self.strict = matching == "strict"
-        super().__init__(*args, match_on=(self.emrd_body,), **kwargs)
+        super().__init__(*args, match_on=(_matcher(self.strict),), **kwargs)
         self.requests_made = 0
         self.drift: str | None = None
         self.rerecord_command = rerecord_command
@@ -78,17 +100,12 @@ class EpisodeCassette(Cassette):
         self._asked = 0.0
         self._index: dict[str, list[int]] | None = None
 
-    def key(self, request: Request) -> str | None:
+    def key(self, request: Request) -> Any:
         """The key ``request`` is matched by: strict or lenient (``None``: unparseable)."""
-        keys = _keys(request)
-        return keys.strict if self.strict else keys.lenient
-
-    def emrd_body(self, new: Request, recorded: Request) -> bool:
-        """The one vcrpy matcher: key equality (unparseable never matches)."""
-        return self.key(new) is not None and self.key(new) == self.key(recorded)
+        return _key(request, self.strict)
 
     def _responses(self, request: Request) -> Iterator[tuple[int, dict[str, Any]]]:
-        """vcrpy's lookup of the interactions :meth:`emrd_body` matches, in order, from an index
+        """vcrpy's lookup of the interactions :func:`_matcher` matches, in order, from an index
         by key (vcrpy runs the matcher on every interaction, three times per request); a lenient
         match whose frames differ adds its pair of strict keys to :attr:`frame_drift`."""
         new = self._before_record_request(request)
@@ -119,7 +136,11 @@ class EpisodeCassette(Cassette):
         if not self._loading:
             response = copy.deepcopy(response)
             response[LATENCY] = round(time.perf_counter() - self._asked, 3)
-        kept = self._before_record_request(request), self._before_record_response(response)
+        read_back = self._loading and getattr(request, "emrd_keys", None) is not None
+        kept = (
+            (request if read_back else _redacted(request)),
+            self._before_record_response(response),
+        )
         if not kept[0] or kept[1] is None:
             return
         if not self._loading and self._retried(kept[0]):
@@ -189,20 +210,22 @@ class EpisodeCassette(Cassette):
 
 
 def _before_record_request(request: Request) -> Request:
-    """vcrpy ``before_record_request``: canonical body, secrets dropped, match keys attached.
+    """vcrpy ``before_record_request``, asked three or four times per request: the request itself,
+    keyed (:func:`_keys`); the copy a cassette stores is made only when it records one
+    (:func:`_redacted`)."""
+    _keys(request)
+    return request
 
-    vcrpy asks three or four times per request, so the redacted copy is kept on the request
-    (a shallow copy: redaction assigns new attributes, never mutates shared ones)."""
-    if getattr(request, "emrd_keys", None) is not None:
-        return request  # read back from the cassette (already canonical) or redacted before
-    redacted: Request | None = request.__dict__.get("emrd_redacted")
-    if redacted is None:
-        redacted = request.emrd_redacted = copy.copy(request)  # type: ignore[attr-defined]
-        uri = scrub_uri(request.uri)
-        if uri != request.uri:  # vcrpy parses the URI again on every assignment
-            redacted.uri = uri
-        redacted.body = _keys(redacted).redacted.body
-        redacted.headers = scrub_headers(redacted.headers)
+
+def _redacted(request: Request) -> Request:
+    """The copy of ``request`` a cassette stores: canonical body, secrets dropped (a shallow
+    copy: redaction assigns new attributes, never mutates shared ones)."""
+    redacted = copy.copy(request)
+    uri = scrub_uri(request.uri)
+    if uri != request.uri:  # vcrpy parses the URI again on every assignment
+        redacted.uri = uri
+    redacted.body = _keys(request).redacted.body
+    redacted.headers = scrub_headers(request.headers)
     return redacted
 
 
@@ -250,6 +273,13 @@ class _Router:
         return len(self.__getattr__("data"))
 
 
+@functools.cache
+def _patchers() -> tuple[Any, ...]:
+    """vcrpy's patches of the HTTP libraries, bound to the router: built once (building tries
+    to import every library vcrpy knows), entered and left again with each first block."""
+    return tuple(CassettePatcherBuilder(_Router()).build())
+
+
 @contextlib.contextmanager
 def _routing() -> Iterator[None]:
     """Keep vcrpy's patches on the HTTP libraries while any block is open (re-entrant, from any
@@ -261,7 +291,7 @@ def _routing() -> Iterator[None]:
     global _users
     with _lock:
         if _users == 0:
-            for patcher in CassettePatcherBuilder(_Router()).build():
+            for patcher in _patchers():
                 _patches.enter_context(patcher)
         _users += 1
     try:

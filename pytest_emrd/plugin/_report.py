@@ -131,7 +131,7 @@ class RunReport:
         if not (self.episodes or self.verdicts) or not (run_dir / "episodes").is_dir():
             return
         from pytest_emrd.report import append_step_summary, registry_prices, step_summary_markdown
-        from pytest_emrd.run import load_run_episodes, measure_episodes
+        from pytest_emrd.run import load_run_episodes
 
         settings = self.run.settings
         source = settings.thresholds
@@ -139,7 +139,7 @@ class RunReport:
             source = source.relative_to(self.config.rootpath)
         try:
             stored = load_run_episodes([run_dir])
-            metrics = measure_episodes(stored)
+            metrics = self.run.store.metrics(stored)  # kept by whoever measured them
         except EmrdError as exc:
             warnings.warn(f"pytest-emrd wrote no step summary: {exc}", stacklevel=1)
             return

@@ -32,7 +32,6 @@ from pytest_emrd.run import (
     episode_path,
     episode_specs,
     gate_cells,
-    measure_episodes,
     scratch_dir,
     shard,
     start_prefetch,
@@ -268,7 +267,10 @@ class Run:
             self._prefetcher = start_prefetch(
                 self.settings, self.store, self.compute, self.episode_specs, self.modality_of
             )
-        stored = self.call(lambda run: run.store_episode(spec), spec.case_id)
+        measure = self.gated(spec)  # a gate here reads its metrics: measured with it, once
+        stored = self.call(
+            lambda run: run.store.get_or_compute(spec, run.compute, measure=measure), spec.case_id
+        )
         self._stored[spec] = stored
         if spec in self._unsaved:
             warnings.warn(CassetteNotSavedWarning(scrub(self._unsaved.pop(spec))), stacklevel=2)
@@ -284,13 +286,13 @@ class Run:
             )
         return stored
 
-    def store_episode(self, spec: EpisodeSpec) -> StoredEpisode:
-        """``spec``'s episode from the store, else computed and stored (once across processes)."""
-        stored = self.store.reusable(spec)
-        if stored is None:
-            with self.store.lock(spec):
-                stored = self.store.reusable(spec) or self.store.save(spec, self.compute(spec))
-        return stored
+    def gated(self, spec: EpisodeSpec) -> bool:
+        """Whether a gate this process collected reads ``spec``'s metrics (then whoever computes
+        or first reuses the episode measures it, once, and every process reads them back)."""
+        cells = self.__dict__.get("gate_cells", ())  # parametrised gates only: nothing loaded
+        return any(
+            (c.bound.model, c.bound.condition) == (spec.model, spec.condition) for c in cells
+        )
 
     def cell_specs(self, cell: GateCell) -> list[EpisodeSpec]:
         return self.cell_specs_of(cell.bound.model, cell.bound.condition)
@@ -306,8 +308,8 @@ class Run:
 
         specs = self.cell_specs(cell)
         missing = [spec for spec in specs if spec not in self._metrics]
-        stored = [self.episode(spec) for spec in missing]  # computed here, if at all
-        self._metrics.update(zip(missing, measure_episodes(stored), strict=True))
+        stored = [self.episode(spec) for spec in missing]  # computed and measured here, if at all
+        self._metrics.update(zip(missing, self.store.metrics(stored), strict=True))
         episodes = [self._metrics[spec] for spec in specs]
         run_dir = str(self.run_dir)
         return evaluate_cell(cell, episodes, GATE_METRICS, run_dir_of=lambda case: run_dir)

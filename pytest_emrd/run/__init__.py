@@ -10,10 +10,10 @@ from pytest_emrd.run._identity import (
     scratch_dir,
     write_identity,
 )
+from pytest_emrd.run._prefetch import Prefetcher, start_prefetch
 from pytest_emrd.run._settings import OPTIONS, MatchingWarning, RunSettings, resolve_settings
 from pytest_emrd.run._store import (
     EpisodeHead,
-    Prefetcher,
     ResultsStore,
     StoredEpisode,
     episode_path,
@@ -22,7 +22,6 @@ from pytest_emrd.run._store import (
     measure_episodes,
     new_run_dir,
     read_episode,
-    start_prefetch,
 )
 from pytest_emrd.run._summary import EpisodeSummary, usage_rows
 from pytest_emrd.trajectory import RECORD_MODES

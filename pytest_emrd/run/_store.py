@@ -1,18 +1,20 @@
 """The results store: one file per episode under a run directory (layout and locking:
 docs/user-guide/running.md), computed at most once across processes and scrubbed of secrets.
 An episode is reused when its spec and protocol match and it finished (an ``errored`` one
-only within its own session, so a rerun retries failures). With ``--emrd-concurrency N`` a
-:class:`Prefetcher` computes live episodes ahead, ``N`` at once in threads (a live episode
-mostly waits for the model); HTTP traffic is routed per thread to each episode's cassette."""
+only within its own session, so a rerun retries failures). An episode's metrics are measured
+once too and kept outside the run directory, beside its locks (:meth:`ResultsStore.metrics`).
+"""
 
 from __future__ import annotations
 
+import functools
+import hashlib
 import json
 import os
+import platform
 import secrets
 import time
-from collections.abc import Callable, Iterable, Sequence
-from concurrent.futures import ThreadPoolExecutor
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
 from functools import cached_property
 from pathlib import Path
@@ -23,9 +25,8 @@ from pytest_emrd._files import write_bytes_atomic
 from pytest_emrd._fork import available_cores, fork_map
 from pytest_emrd._scrub import scrub, scrub_bytes
 from pytest_emrd._serde import JsonRecord, Schema
-from pytest_emrd.errors import ConfigError, EmrdError, ProtocolError
-from pytest_emrd.run._identity import RunIdentity, run_lock, write_identity
-from pytest_emrd.run._settings import RunSettings
+from pytest_emrd.errors import ConfigError, ProtocolError
+from pytest_emrd.run._identity import RunIdentity, run_lock, scratch_dir, write_identity
 from pytest_emrd.trajectory import OLDER_SCHEMAS, SCHEMA_VERSION, EpisodeSpec, Trajectory, Usage
 
 if TYPE_CHECKING:
@@ -255,85 +256,78 @@ class ResultsStore:
         return replace(stored, computed_now=True)
 
     def get_or_compute(
-        self, spec: EpisodeSpec, compute: Callable[[EpisodeSpec], EpisodeRun]
+        self,
+        spec: EpisodeSpec,
+        compute: Callable[[EpisodeSpec], EpisodeRun],
+        *,
+        measure: bool = False,
     ) -> StoredEpisode:
-        """The stored episode for ``spec``, computed if needed (a reusable one is final)."""
+        """The stored episode for ``spec``, computed if needed (a reusable one is final); with
+        ``measure``, its :meth:`metrics` are kept too, also once across processes (measured
+        under the episode's lock, from the trajectory in memory when computed here)."""
         stored = self.reusable(spec)
-        if stored is not None:
+        if stored is not None and (not measure or self._kept(stored.head).is_file()):
             return stored
         with self.lock(spec):
-            return self.reusable(spec) or self.save(spec, compute(spec))
+            stored = self.reusable(spec) or self.save(spec, compute(spec))
+            if measure:
+                self.metrics([stored])
+        return stored
+
+    def metrics(self, episodes: Sequence[StoredEpisode]) -> list[EpisodeMetrics]:
+        """Each episode's metrics: read back where this store kept them for the same episode
+        file and code, else measured (:func:`measure_episodes`) and kept.
+
+        They are kept in the run's scratch folder (:func:`~pytest_emrd.run.scratch_dir`), so
+        the run directory holds results only, keyed by the episode's head (which write of the
+        episode file was measured) and by what measured it (this package's sources, Python's
+        and numpy's versions): a rewritten episode or another pytest-emrd measures again.
+
+        :param episodes: Stored episodes of this run directory.
+        :returns: One :class:`~pytest_emrd.metrics.EpisodeMetrics` per episode, in order.
+        """
+        paths = [self._kept(stored.head) for stored in episodes]
+        kept = {i: m for i, path in enumerate(paths) if (m := _read_kept(path)) is not None}
+        missing = [i for i in range(len(episodes)) if i not in kept]
+        measured = measure_episodes([episodes[i] for i in missing])
+        if missing:  # private like the locks beside it
+            paths[0].parent.parent.mkdir(mode=0o700, parents=True, exist_ok=True)
+            paths[0].parent.mkdir(mode=0o700, exist_ok=True)
+        for i, metrics in zip(missing, measured, strict=True):
+            for other in paths[i].parent.glob(f"{episodes[i].head.spec.case_id}.*.json"):
+                other.unlink(missing_ok=True)  # an earlier write's or code's: never read again
+            write_bytes_atomic(paths[i], json.dumps(metrics.to_dict()).encode())
+            kept[i] = metrics
+        return [kept[i] for i in range(len(episodes))]
+
+    def _kept(self, head: EpisodeHead) -> Path:
+        """Where :meth:`metrics` keeps the metrics of the episode file with ``head``."""
+        text = json.dumps(head.to_dict(), sort_keys=True).encode()
+        key = hashlib.sha256(_code_key() + text).hexdigest()[:16]
+        return scratch_dir(self.run_dir) / "metrics" / f"{head.spec.case_id}.{key}.json"
 
 
-class Prefetcher:
-    """Computes ``specs`` ahead with ``workers`` threads until :meth:`close`.
+@functools.cache
+def _code_key() -> bytes:
+    """What measuring an episode depends on besides the episode: the sources of this package
+    and the versions of Python and numpy (read once per process)."""
+    import numpy
 
-    :param store: The store the episodes are computed into.
-    :param compute: Runs one episode.
-    :param specs: The episodes to compute ahead.
-    :param workers: Threads.
-    """
-
-    def __init__(
-        self,
-        store: ResultsStore,
-        compute: Callable[[EpisodeSpec], EpisodeRun],
-        specs: Iterable[EpisodeSpec],
-        *,
-        workers: int,
-    ) -> None:
-        self._store, self._compute = store, compute
-        self._pool = ThreadPoolExecutor(workers, thread_name_prefix="emrd-episode")
-        self._futures = [self._pool.submit(self._one, spec) for spec in specs]
-
-    def _one(self, spec: EpisodeSpec) -> bool:
-        """Whether this call computed ``spec`` (never waits: stored or locked is skipped)."""
-        from filelock import Timeout
-
-        try:
-            with self._store.lock(spec, timeout=0):
-                if self._store.reusable(spec) is not None:
-                    return False
-                self._store.save(spec, self._compute(spec))
-                return True
-        except (Timeout, EmrdError):
-            return False  # an error: the test asking for this episode computes it and reports it
-
-    def wait(self) -> None:
-        """Block until every episode was computed or skipped."""
-        for future in self._futures:
-            future.result()
-
-    def close(self) -> None:
-        """Drop the episodes not started, wait for the running ones."""
-        self._pool.shutdown(wait=True, cancel_futures=True)
+    root = Path(__file__).resolve().parents[1]
+    digest = hashlib.sha256(f"{platform.python_version()} {numpy.__version__}".encode())
+    for path in sorted(root.rglob("*.py")):
+        digest.update(f"\0{path.relative_to(root).as_posix()}\0".encode() + path.read_bytes())
+    return digest.digest()
 
 
-def start_prefetch(
-    settings: RunSettings,
-    store: ResultsStore,
-    compute: Callable[[EpisodeSpec], EpisodeRun],
-    specs: Iterable[EpisodeSpec],
-    modality_of: Callable[[str], str] | None = None,
-) -> Prefetcher | None:
-    """A :class:`Prefetcher` of the live episodes among ``specs`` (those whose cassette will
-    be recorded), or None when ``--emrd-concurrency`` is 1 or every episode replays (then the
-    cassette stage is not even imported: a resumed run reads everything from the store).
+def _read_kept(path: Path) -> EpisodeMetrics | None:
+    """The metrics kept in ``path``; None if there are none (or unreadable: measured again)."""
+    from pytest_emrd.metrics import EpisodeMetrics
 
-    :param settings: The run's settings (concurrency, cassettes, record mode).
-    :param store: Where finished episodes are written.
-    :param compute: Runs one episode.
-    :param specs: The episodes of this process.
-    :param modality_of: Default modality per model; None for each spec's own.
-    :returns: The started :class:`Prefetcher`, or None.
-    """
-    if settings.concurrency <= 1 or settings.replays_only:
+    try:
+        return EpisodeMetrics.from_dict(json.loads(path.read_bytes()))
+    except (OSError, ValueError, KeyError, TypeError, ProtocolError):
         return None
-    from pytest_emrd.cassette import is_live
-
-    how = {"cassettes": settings.cassettes, "record_mode": settings.record_mode}
-    live = [s for s in specs if is_live(s, **how, modality_of=modality_of)]
-    return Prefetcher(store, compute, live, workers=settings.concurrency) if live else None
 
 
 def read_episode(path: Path) -> StoredEpisode:

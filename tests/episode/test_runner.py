@@ -23,7 +23,8 @@ class _Client:
 def built(monkeypatch) -> list[_Client]:
     clients: list[_Client] = []
 
-    def make_client(config, *, base_url=None, require_key=True):
+    def make_client(config, *, base_url=None, require_key=True, deadline=True):
+        assert deadline == require_key  # a replay's client: no key, no deadline
         clients.append(_Client(config.name, require_key))
         return clients[-1]
 

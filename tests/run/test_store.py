@@ -1,13 +1,18 @@
-"""The results store: atomic, computed once across concurrent askers, resumable."""
+"""The results store: atomic, computed once across concurrent askers, resumable; metrics
+measured once and kept for the same episode file."""
 
 from __future__ import annotations
 
 import threading
 import time
+from typing import Any
+
+import pytest
 
 from pytest_emrd.cassette import EpisodeRun
-from pytest_emrd.run import ResultsStore, episode_path, load_run_dirs
-from pytest_emrd.trajectory import EpisodeSpec
+from pytest_emrd.metrics import episode_metrics
+from pytest_emrd.run import ResultsStore, episode_path, load_run_dirs, scratch_dir
+from pytest_emrd.trajectory import EpisodeSpec, Trajectory
 
 from .conftest import make_trajectory
 
@@ -84,3 +89,38 @@ def test_several_run_dirs_merge_by_case(tmp_path):
     ResultsStore(tmp_path / "b", session="s", protocol="p1").get_or_compute(SPEC, Counter())
     merged = load_run_dirs([tmp_path / "a", tmp_path / "b"])
     assert [t.spec for t in merged] == [other, SPEC]
+
+
+@pytest.fixture
+def measured(monkeypatch) -> list[Trajectory]:
+    """The trajectories ``episode_metrics`` measures from now on."""
+    import pytest_emrd.metrics as metrics
+
+    seen: list[Trajectory] = []
+    real = metrics.episode_metrics
+
+    def counted(trajectory: Trajectory) -> Any:
+        seen.append(trajectory)
+        return real(trajectory)
+
+    monkeypatch.setattr(metrics, "episode_metrics", counted)
+    return seen
+
+
+def test_metrics_are_measured_once_and_read_back_by_later_processes(tmp_path, measured):
+    first = ResultsStore(tmp_path, session="s1", protocol="p1")
+    stored = first.get_or_compute(SPEC, Counter(), measure=True)
+    assert measured == [stored.trajectory]  # the one in memory, under the episode's lock
+    again = ResultsStore(tmp_path, session="s2", protocol="p1")
+    reused = again.get_or_compute(SPEC, Counter(), measure=True)
+    assert again.metrics([reused]) == [episode_metrics(stored.trajectory)]
+    assert len(measured) == 1
+
+
+def test_metrics_of_a_rewritten_episode_are_measured_again(tmp_path, measured):
+    store = ResultsStore(tmp_path, session="s1", protocol="p1")
+    store.metrics([store.get_or_compute(SPEC, Counter(status="errored"))])
+    rerun = ResultsStore(tmp_path, session="s2", protocol="p1")  # retries the errored one
+    (fresh,) = rerun.metrics([rerun.get_or_compute(SPEC, Counter())])
+    assert [t.status for t in measured] == ["errored", "budget"] and not fresh.errored
+    assert len(list((scratch_dir(tmp_path) / "metrics").iterdir())) == 1  # the stale one gone
