@@ -100,13 +100,7 @@ def max_gap(a: Sequence[float | None], b: Sequence[float | None]) -> float:
     if len(a) != len(b) or any((x is None) != (y is None) for x, y in zip(a, b, strict=True)):
         return math.inf
     pairs = [(x, y) for x, y in zip(a, b, strict=True) if x is not None and y is not None]
-    return max([0.0, *(_gap(x, y) for x, y in pairs)])
-
-
-def _gap(x: float, y: float) -> float:
-    if x == y:
-        return 0.0
-    return math.inf if math.isinf(x) or math.isinf(y) else abs(x - y)
+    return max([0.0, *(abs(x - y) for x, y in pairs if x != y)])  # inf - inf would be nan
 
 
 def pct(value: float | None) -> str:
