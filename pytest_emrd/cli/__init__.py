@@ -84,7 +84,7 @@ def check_run_dirs(run_dirs: list[Path]) -> None:
 
 
 #: The commands whose ``--out DIR`` picks where they write, named in a file system error.
-_WRITES: frozenset[str] = frozenset({"view", "report", "render"})
+_WRITES = ("view", "report", "render")
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -105,8 +105,10 @@ def main(argv: list[str] | None = None) -> int:
     except OSError as exc:
         from pytest_emrd._files import os_error_line
 
-        doing = "read" if isinstance(exc, FileNotFoundError) else "write"
-        option = "--out DIR" if args.command in _WRITES else ""
-        message = os_error_line(exc, doing=doing, option=option)
+        message = os_error_line(
+            exc,
+            doing="read" if isinstance(exc, FileNotFoundError) else "write",
+            option="--out DIR" if args.command in _WRITES else "",
+        )
     print(f"emrd {args.command}: error: {scrub(message)}", file=sys.stderr)
     return 2

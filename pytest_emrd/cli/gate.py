@@ -87,12 +87,12 @@ def _run(args: argparse.Namespace) -> int:
         append_step_summary(summary)
     if args.json:
         print(json.dumps([v.to_dict() for v in verdicts]))
-        return 0 if all(v.passed for v in verdicts) else 1
-    print(f"{len(stored)} episodes from {len(args.run_dirs)} run director(ies)")
-    print("\n".join(gate_tables(verdicts)) or "no gate applies to these episodes")
-    priced = ((s, prices.get(s.head.spec.model, (None, None))) for s in stored)
-    summaries = [
-        EpisodeSummary.of(s, price_in=p_in, price_out=p_out) for s, (p_in, p_out) in priced
-    ]
-    print("tokens per model:", *usage_table(usage_rows(summaries)), sep="\n")
+    else:
+        print(f"{len(stored)} episodes from {len(args.run_dirs)} run director(ies)")
+        print("\n".join(gate_tables(verdicts)) or "no gate applies to these episodes")
+        priced = ((s, prices.get(s.head.spec.model, (None, None))) for s in stored)
+        summaries = [
+            EpisodeSummary.of(s, price_in=p_in, price_out=p_out) for s, (p_in, p_out) in priced
+        ]
+        print("tokens per model:", *usage_table(usage_rows(summaries)), sep="\n")
     return 0 if all(v.passed for v in verdicts) else 1

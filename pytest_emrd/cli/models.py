@@ -41,25 +41,20 @@ def _price(value: float | None) -> str:
 def model_rows(registry: Any) -> list[dict[str, Any]]:
     """One plain dict per registered model (no secret: whether the key is set, the endpoint
     scrubbed)."""
-    rows = []
-    for name in registry.names():
-        config = registry.get(name)
-        rows.append(
-            {
-                "name": name,
-                "provider": config.provider,
-                "modality": config.modality,
-                "model_id": config.model_id,
-                "base_url": scrub(config.base_url)
-                if config.base_url
-                else "built-in reference server",
-                "api_key_env": config.api_key_env,
-                "key": key_state(config),
-                "price_per_mtok_in": config.price_per_mtok_in,
-                "price_per_mtok_out": config.price_per_mtok_out,
-            }
-        )
-    return rows
+    return [
+        {
+            "name": name,
+            "provider": config.provider,
+            "modality": config.modality,
+            "model_id": config.model_id,
+            "base_url": scrub(config.base_url) if config.base_url else "built-in reference server",
+            "api_key_env": config.api_key_env,
+            "key": key_state(config),
+            "price_per_mtok_in": config.price_per_mtok_in,
+            "price_per_mtok_out": config.price_per_mtok_out,
+        }
+        for name, config in sorted(registry.models.items())
+    ]
 
 
 def _run(args: argparse.Namespace) -> int:

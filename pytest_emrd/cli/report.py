@@ -105,8 +105,9 @@ def _report(args: argparse.Namespace, formats: list[str]) -> int:
         episode=args.episode,
         processes=processes,
     )
-    out = args.out if args.out is not None else args.run_dirs[0] / "report"
-    written = write_report(report, out, formats, processes=processes)
+    written = write_report(
+        report, args.out or args.run_dirs[0] / "report", formats, processes=processes
+    )
     print(f"{len(episodes)} episodes from {len(args.run_dirs)} run director(ies)")
     for note in report.missing:
         print(f"note: {note}")

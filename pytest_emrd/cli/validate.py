@@ -52,8 +52,15 @@ def register(sub: argparse._SubParsersAction) -> None:
 def _run(args: argparse.Namespace) -> int:
     from pytest_emrd._files import write_bytes_atomic
     from pytest_emrd.protocol import protocol_version
-    from pytest_emrd.validate import FAMILIES, Plan, Progress, markdown, run_plan, to_json
-    from pytest_emrd.validate import validation_report as build
+    from pytest_emrd.validate import (
+        FAMILIES,
+        Plan,
+        Progress,
+        markdown,
+        run_plan,
+        to_json,
+        validation_report,
+    )
 
     check_positive_int("--episodes", args.episodes)
     check_positive_int("--jobs", args.jobs)
@@ -69,7 +76,7 @@ def _run(args: argparse.Namespace) -> int:
             )
 
     groups = run_plan(plan, args.out, jobs=args.jobs, on_episode=progress)
-    report = build(groups, episodes=args.episodes, protocol=protocol_version("builtin"))
+    report = validation_report(groups, episodes=args.episodes, protocol=protocol_version("builtin"))
     text = markdown(report)
     print(text, end="")
     write_bytes_atomic(args.out / "validation.md", text.encode())

@@ -46,8 +46,11 @@ def _run(args: argparse.Namespace) -> int:
     check_run_dirs([args.run_dir])
     trajectories = sorted(load_run_dirs([args.run_dir]), key=lambda t: t.spec.case_id)
     if args.episodes:
-        match = fnmatch.fnmatchcase
-        chosen = [t for t in trajectories if any(match(t.spec.case_id, p) for p in args.episodes)]
+        chosen = [
+            t
+            for t in trajectories
+            if any(fnmatch.fnmatchcase(t.spec.case_id, p) for p in args.episodes)
+        ]
         if not chosen:
             raise ConfigError(
                 f"episodes={args.episodes} match no episode of {args.run_dir} (it holds e.g. "
@@ -58,7 +61,7 @@ def _run(args: argparse.Namespace) -> int:
     cassettes = args.cassettes
     if cassettes is None and _DEFAULT_CASSETTES.is_dir():
         cassettes = _DEFAULT_CASSETTES
-    out = args.out if args.out is not None else args.run_dir / "view"
+    out = args.out or args.run_dir / "view"
     out.mkdir(parents=True, exist_ok=True)
     rows = []
     for t in trajectories:
