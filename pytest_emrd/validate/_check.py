@@ -21,8 +21,8 @@ SCHEMA_VERSION: Final = 1
 #: paper prints is not reproducible from the counts it prints (the note says which value,
 #: what the printed counts give, and what would reproduce it), or the paper's estimator
 #: misreads a planted truth that our estimator recovers (the note says how).
-VERDICTS: Final[tuple[str, ...]] = ("pass", "fail", "finding")
-SECTIONS: Final[tuple[str, ...]] = ("Explore", "Map", "Remember", "Decide", "Replies", "Statistics")
+VERDICTS: Final = ("pass", "fail", "finding")
+SECTIONS: Final = ("Explore", "Map", "Remember", "Decide", "Replies", "Statistics")
 
 Value = float | int | str | None
 #: What the checks read: a trajectory, or its metrics computed once (much faster).
@@ -137,7 +137,7 @@ def markdown(report: ValidationReport) -> str:
         cells = (c.name, c.planted, c.recovered, c.tolerance, verdict, c.note)
         lines.append("| " + " | ".join(_cell(x) for x in cells) + " |")
     counts = Counter(c.verdict for c in report.checks)
-    summary = ", ".join(f"{counts[v]} {v}" for v in ("pass", "fail", "finding") if counts[v])
+    summary = ", ".join(f"{counts[v]} {v}" for v in VERDICTS if counts[v])
     head = f"{len(report.checks)} checks: {summary}"
     if report.episodes:
         head += (

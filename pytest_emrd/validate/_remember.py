@@ -98,13 +98,6 @@ def decay_checks(groups: Mapping[float, Sequence[Episode]]) -> list[Check]:
             f"{mean:g}); within 25 % from N = {needed if needed is not None else 'never'} "
             f"(error {shrink})"
         )
-        data: dict[str, Value] = {
-            "efc": fit.efc,
-            "r2": fit.r2,
-            "error": error,
-            "episodes_needed": needed,
-        }
-        data.update({f"error_n{n}": e for n, e in curve})
         rows += [
             Check(
                 section="Remember",
@@ -114,7 +107,13 @@ def decay_checks(groups: Mapping[float, Sequence[Episode]]) -> list[Check]:
                 tolerance="within 25 %",
                 verdict=judged(error <= EFC_TOLERANCE),
                 note=note,
-                data=data,
+                data={
+                    "efc": fit.efc,
+                    "r2": fit.r2,
+                    "error": error,
+                    "episodes_needed": needed,
+                    **{f"error_n{n}": e for n, e in curve},
+                },
             ),
             Check(
                 section="Remember",
@@ -168,7 +167,6 @@ def window_fit_checks(
                 )
             )
             continue
-        efc = fit.efc
         match = decay_fits[m]
         gap = (match.r2 or 0.0) - fit.r2 if fit.r2 is not None else math.inf
         rows.append(
@@ -179,12 +177,12 @@ def window_fit_checks(
                 recovered=f"R^2 = {fmt(fit.r2, 3)}",
                 tolerance=f"gap >= {R2_GAP}",
                 verdict=judged(gap >= R2_GAP),
-                note=f"matched mean: window EFC {fmt(efc)} vs decay EFC {fmt(match.efc)} steps; "
-                f"{len(trajs)} + {len(decays[m])} episodes",
+                note=f"matched mean: window EFC {fmt(fit.efc)} vs decay EFC {fmt(match.efc)} "
+                f"steps; {len(trajs)} + {len(decays[m])} episodes",
                 data={
                     "r2_window": fit.r2,
                     "r2_decay": match.r2,
-                    "efc_window": efc,
+                    "efc_window": fit.efc,
                     "efc_decay": match.efc,
                 },
             )
