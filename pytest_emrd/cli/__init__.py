@@ -1,5 +1,6 @@
-"""The ``emrd`` console script: one module per subcommand, each with ``register(subparsers)``;
-heavy imports happen inside the command, not at start-up."""
+"""The ``emrd`` console script: one module per subcommand, each with its ``HELP`` line (and
+optional ``DESCRIPTION``), ``add_arguments(parser)`` and ``run(args)``, which returns the exit
+status; heavy imports happen inside ``run``, not at start-up."""
 
 from __future__ import annotations
 
@@ -12,7 +13,7 @@ from pytest_emrd.errors import ConfigError, EmrdError
 
 __all__ = ["COMMANDS", "build_parser", "check_run_dirs", "main", "version_text"]
 
-#: Subcommand modules, in the order ``emrd --help`` lists them.
+#: Subcommand modules, in the order ``emrd --help`` lists them (``_`` spelled ``-``).
 COMMANDS: tuple[str, ...] = (
     "models",
     "check",
@@ -64,7 +65,14 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--version", action=_Version)
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     for name in COMMANDS:
-        importlib.import_module(f"pytest_emrd.cli.{name}").register(sub)
+        command = importlib.import_module(f"pytest_emrd.cli.{name}")
+        p = sub.add_parser(
+            name.replace("_", "-"),
+            help=command.HELP,
+            description=getattr(command, "DESCRIPTION", None),
+        )
+        command.add_arguments(p)
+        p.set_defaults(func=command.run)
     return parser
 
 

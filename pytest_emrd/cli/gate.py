@@ -15,9 +15,10 @@ import os
 import sys
 from pathlib import Path
 
+HELP = "evaluate thresholds.yaml over one or more run directories"
 
-def register(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("gate", help="evaluate thresholds.yaml over one or more run directories")
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("run_dirs", nargs="+", type=Path, metavar="RUN_DIR", help="run directories")
     p.add_argument(
         "--thresholds",
@@ -38,10 +39,9 @@ def register(sub: argparse._SubParsersAction) -> None:
         action="store_true",
         help="gate an incomplete or duplicated set of shards (the problems go to stderr)",
     )
-    p.set_defaults(func=_run)
 
 
-def _run(args: argparse.Namespace) -> int:
+def run(args: argparse.Namespace) -> int:
     from pytest_emrd.agent import load_registry
     from pytest_emrd.cli import check_run_dirs
     from pytest_emrd.errors import ConfigError, check_positive_int

@@ -18,11 +18,12 @@ from pytest_emrd._scrub import scrub
 PARAMETRIC = ("scout-decay-<mean steps>", "scout-window-<k>")
 
 
-def register(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("models", help="list the model registry and whether each key is set")
+HELP = "list the model registry and whether each key is set"
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--models", type=Path, help="user model registry YAML")
     p.add_argument("--json", action="store_true", help="print one JSON list of models")
-    p.set_defaults(func=_run)
 
 
 def key_state(config: Any) -> str:
@@ -57,7 +58,7 @@ def model_rows(registry: Any) -> list[dict[str, Any]]:
     ]
 
 
-def _run(args: argparse.Namespace) -> int:
+def run(args: argparse.Namespace) -> int:
     from pytest_emrd.agent import load_registry
     from pytest_emrd.gate import render_table
 

@@ -17,13 +17,12 @@ from pathlib import Path
 
 from pytest_emrd.errors import check_positive_int
 
+HELP = "check that the metrics recover the reference agents' planted cognition"
 
-def register(sub: argparse._SubParsersAction) -> None:
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
     from pytest_emrd.validate import FAMILIES, FULL_EPISODES
 
-    p = sub.add_parser(
-        "validate", help="check that the metrics recover the reference agents' planted cognition"
-    )
     p.add_argument(
         "--episodes",
         type=int,
@@ -46,10 +45,9 @@ def register(sub: argparse._SubParsersAction) -> None:
         help="agent family to validate, repeatable (default: all): scout (memory, exploration "
         "and decision metrics, with prior) or mimic (VLM-like map writing)",
     )
-    p.set_defaults(func=_run)
 
 
-def _run(args: argparse.Namespace) -> int:
+def run(args: argparse.Namespace) -> int:
     from pytest_emrd._files import write_bytes_atomic
     from pytest_emrd.protocol import protocol_version
     from pytest_emrd.validate import (
