@@ -31,7 +31,6 @@ from pytest_emrd.errors import EmrdError
 from pytest_emrd.preflight._estimate import (
     CostEstimate,
     Measured,
-    Sweep,
     count_images,
     estimate_cost,
     request_tokens,
@@ -298,7 +297,7 @@ def preflight(
     :param models_file: The user registry file, if any.
     :returns: The :class:`PreflightReport`: checks, estimates and refusals.
     """
-    window: Sweep = sweep(spec, single_image=config.single_image)
+    window = sweep(spec, single_image=config.single_image)
     messages = window.request(HISTORY_TURNS, sample_reply())
     tokens = request_tokens(messages, image_tokens=config.image_tokens)
     state = _Probe(config, messages, count_images(messages), tokens)
