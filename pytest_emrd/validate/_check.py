@@ -3,6 +3,7 @@ and the table as Markdown (printed and written) and JSON text."""
 
 from __future__ import annotations
 
+import itertools
 import json
 import math
 from collections import Counter
@@ -111,8 +112,8 @@ def pct(value: float | None) -> str:
 _COLUMNS: Final = ("Check", "Planted", "Recovered", "Tolerance", "Verdict", "Note")
 
 
-def _cell(text: str) -> str:
-    return text.replace("|", "\\|").replace("\n", " ")
+def _row(cells: Sequence[str]) -> str:
+    return "| " + " | ".join(c.replace("|", "\\|").replace("\n", " ") for c in cells) + " |"
 
 
 def markdown(report: ValidationReport) -> str:
@@ -122,20 +123,11 @@ def markdown(report: ValidationReport) -> str:
     :returns: The Markdown text.
     """
     lines: list[str] = []
-    section = None
-    for c in report.checks:
-        if c.section != section:
-            section = c.section
-            lines += [
-                "",
-                f"### {section}",
-                "",
-                "| " + " | ".join(_COLUMNS) + " |",
-                "|" + "---|" * len(_COLUMNS),
-            ]
-        verdict = f"**{c.verdict}**" if c.verdict != "pass" else c.verdict
-        cells = (c.name, c.planted, c.recovered, c.tolerance, verdict, c.note)
-        lines.append("| " + " | ".join(_cell(x) for x in cells) + " |")
+    for section, checks in itertools.groupby(report.checks, key=lambda c: c.section):
+        lines += ["", f"### {section}", "", _row(_COLUMNS), "|" + "---|" * len(_COLUMNS)]
+        for c in checks:
+            verdict = f"**{c.verdict}**" if c.verdict != "pass" else c.verdict
+            lines.append(_row((c.name, c.planted, c.recovered, c.tolerance, verdict, c.note)))
     counts = Counter(c.verdict for c in report.checks)
     summary = ", ".join(f"{counts[v]} {v}" for v in VERDICTS if counts[v])
     head = f"{len(report.checks)} checks: {summary}"

@@ -97,17 +97,12 @@ class _Counts:
         return [[c, n - c] for c, n in zip(self.conference, self.n, strict=True)]
 
     def fisher(self, i: int) -> float:
-        base, row = self.table()[0], self.table()[i]
-        return fisher_exact_2x2([base, row]).p_value
+        table = self.table()
+        return fisher_exact_2x2([table[0], table[i]]).p_value
 
 
 def _count(n: int, percent: float) -> int:
     return round(percent * n / 100)
-
-
-def _from_percentages() -> _Counts:
-    rows = [APPENDIX_E_BASELINE[1:], *(r[1:3] for r in APPENDIX_E)]
-    return _Counts(tuple(_count(n, pc) for n, pc in rows), tuple(n for n, _ in rows))
 
 
 def _reproducing(printed: _Counts) -> _Counts:
@@ -147,7 +142,10 @@ def _describe(counts: _Counts, names: Sequence[str]) -> str:
 def appendix_e_checks() -> list[Check]:
     """Chi-square (5 x 2), df, p and pairwise Fisher p of Appendix E, from the printed %."""
     names = [APPENDIX_E_BASELINE[0], *(r[0] for r in APPENDIX_E)]
-    printed = _from_percentages()
+    percentages = [APPENDIX_E_BASELINE[1:], *(r[1:3] for r in APPENDIX_E)]  # (n, %) per row
+    printed = _Counts(
+        tuple(_count(n, pc) for n, pc in percentages), tuple(n for n, _ in percentages)
+    )
     fit = _reproducing(printed)
     source = f"counts from the printed %: {_describe(printed, names)}"
     diff = [n for n, a, b in zip(names, printed.conference, fit.conference, strict=True) if a != b]
