@@ -28,6 +28,8 @@ SECTIONS: Final = ("Explore", "Map", "Remember", "Decide", "Replies", "Statistic
 Value = float | int | str | None
 #: What the checks read: a trajectory, or its metrics computed once (much faster).
 Episode = Trajectory | EpisodeMetrics
+#: One group's episodes.
+Episodes = Sequence[Episode]
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -88,7 +90,7 @@ def judged(ok: bool) -> str:
 
 def fmt(value: float | None, digits: int = 2) -> str:
     """A number for the table: fixed ``digits``, ``inf`` and ``n/a`` spelled out."""
-    if value is None or (isinstance(value, float) and math.isnan(value)):
+    if value is None or math.isnan(value):
         return "n/a"
     if math.isinf(value):
         return "inf"

@@ -21,7 +21,7 @@ from pytest_emrd.metrics import (
     random_reframe,
 )
 from pytest_emrd.trajectory import Trajectory
-from pytest_emrd.validate._check import Check, Episode, judged, max_gap
+from pytest_emrd.validate._check import Check, Episodes, judged, max_gap
 
 #: A metric may move by at most this much when only the model's frame changes.
 FRAME_TOLERANCE: Final = 1e-9
@@ -54,7 +54,7 @@ def _pooled(ems: Sequence[EpisodeMetrics]) -> dict[str, list[float | None]]:
     }
 
 
-def frame_checks(groups: Mapping[str, Sequence[Episode]]) -> list[Check]:
+def frame_checks(groups: Mapping[str, Episodes]) -> list[Check]:
     """One row per metric: max |change| when every trajectory's maps move to a random frame.
 
     Only trajectories can be re-expressed; metrics-only episodes are skipped (counted in the

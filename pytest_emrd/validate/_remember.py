@@ -25,7 +25,12 @@ from pytest_emrd.metrics import (
     serial_position,
 )
 from pytest_emrd.rooms import ROOM_SLUGS
-from pytest_emrd.validate._check import Check, Episode, Value, fmt, judged
+from pytest_emrd.validate._check import Check, Episodes, Value, fmt, judged
+
+#: Planted mean -> its ``scout-decay`` episodes.
+Decays = Mapping[float, Episodes]
+#: Planted capacity -> its ``scout-window`` episodes.
+Windows = Mapping[int, Episodes]
 
 #: Ebbinghaus EFC must recover the planted mean within this relative error.
 EFC_TOLERANCE: Final = 0.25
@@ -48,7 +53,7 @@ MAX_U_DEPTH: Final = 0.5
 _SPAWN_ORDER: Final = {slug: i for i, slug in enumerate(ROOM_SLUGS.values())}
 
 
-def error_curve(trajectories: Sequence[Episode], planted: float) -> list[tuple[int, float]]:
+def error_curve(trajectories: Episodes, planted: float) -> list[tuple[int, float]]:
     """``(N, |EFC_N - planted| / planted)`` over spawn-balanced prefixes of N = 4, 8, ...
     episodes; a prefix whose EFC is undefined has error ``inf``.
 
@@ -79,7 +84,7 @@ def episodes_needed(curve: Sequence[tuple[int, float]], tolerance: float) -> int
     return needed
 
 
-def decay_checks(groups: Mapping[float, Sequence[Episode]]) -> list[Check]:
+def decay_checks(groups: Decays) -> list[Check]:
     """EFC within 25 % of the planted mean and R^2 >= 0.8, per ``scout-decay-<m>`` group.
 
     :param groups: Planted mean -> its ``scout-decay`` episodes.
@@ -139,9 +144,7 @@ def nearest_decay(fit: EbbinghausFit, decays: Mapping[float, EbbinghausFit]) -> 
     return min(finite, key=lambda m: abs(math.log(decays[m].efc or 1.0) - math.log(efc)))
 
 
-def window_fit_checks(
-    windows: Mapping[int, Sequence[Episode]], decays: Mapping[float, Sequence[Episode]]
-) -> list[Check]:
+def window_fit_checks(windows: Windows, decays: Decays) -> list[Check]:
     """Each ``scout-window-<k>`` fits the exponential visibly worse than the ``scout-decay``
     whose recovered EFC is nearest its own (matched mean).
 
@@ -190,9 +193,7 @@ def window_fit_checks(
     return rows
 
 
-def miller_checks(
-    windows: Mapping[int, Sequence[Episode]], perfect: Sequence[Episode]
-) -> list[Check]:
+def miller_checks(windows: Windows, perfect: Episodes) -> list[Check]:
     """Inflection ``m*`` within one bin of each planted capacity; perfect memory never
     forgets at any load.
 
@@ -241,11 +242,6 @@ def miller_checks(
 
 def _profile(early: float | None, middle: float | None, late: float | None) -> str:
     return f"E {fmt(early)}, M {fmt(middle)}, L {fmt(late)}"
-
-
-def _flat(values: Sequence[float | None]) -> bool:
-    defined = [v for v in values if v is not None]
-    return len(defined) == len(values) and max(defined) <= min(defined) * (1.0 + SERIAL_TOLERANCE)
 
 
 def monotone(early: float | None, middle: float | None, late: float | None) -> bool:
@@ -308,9 +304,9 @@ _LRU_SHAPE: Final = (
 
 
 def serial_checks(
-    serial: Sequence[Episode],
-    windows: Mapping[int, Sequence[Episode]],
-    perfect: Sequence[Episode] = (),
+    serial: Episodes,
+    windows: Windows,
+    perfect: Episodes = (),
 ) -> list[Check]:
     """Serial position on the censoring-aware estimate (``mle_*``, the paper's beside it):
     ``scout-serial`` shows the U (E, L > M); no ``scout-window`` does (:func:`u_depth` below
@@ -367,7 +363,9 @@ def _censoring_bias(spe: SerialPosition, episodes: int) -> Check:
     mle = (spe.mle_early, spe.mle_middle, spe.mle_late)
     paper = (spe.early, spe.middle, spe.late)
     never = all(v is not None and math.isinf(v) for v in mle)
-    verdict = "fail" if not never else ("pass" if _flat(paper) else "finding")
+    defined = [v for v in paper if v is not None]
+    flat = len(defined) == len(paper) and max(defined) <= min(defined) * (1.0 + SERIAL_TOLERANCE)
+    verdict = "fail" if not never else ("pass" if flat else "finding")
     note = (
         f"{episodes} episodes, {sum(spe.events)} of {sum(spe.spells)} first spells forgotten; "
         "Eq. SPE averages right-censored TTF, so an object found late can only be retained "
@@ -386,9 +384,9 @@ def _censoring_bias(spe: SerialPosition, episodes: int) -> Check:
 
 
 def r2_points_checks(
-    decays: Mapping[float, Sequence[Episode]],
-    windows: Mapping[int, Sequence[Episode]],
-    serial: Sequence[Episode],
+    decays: Decays,
+    windows: Windows,
+    serial: Episodes,
 ) -> list[Check]:
     """One row per grid of :data:`~pytest_emrd.metrics.R2_POINTS` (the default first).
 
@@ -410,20 +408,15 @@ def r2_points_checks(
         survives = exponential and all(g >= R2_GAP for g in gaps)
         default = points == R2_POINTS[0]
         verdict = "pass" if survives else ("fail" if default else "finding")
-        recovered = (
-            "decay "
-            + " / ".join(fmt(f.r2, 2) for f in decay.values())
-            + "; window "
-            + " / ".join(fmt(f.r2, 2) for f in window.values())
-            + f"; serial {fmt(r2_serial, 2)}"
-        )
+        decay_r2 = " / ".join(fmt(f.r2, 2) for f in decay.values())
+        window_r2 = " / ".join(fmt(f.r2, 2) for f in window.values())
         rows.append(
             Check(
                 section="Remember",
                 name=f"R^2 findings on evaluation points '{points}'"
                 + (" (default)" if default else ""),
                 planted=f"decay R^2 >= {MIN_R2}; window gap >= {R2_GAP}",
-                recovered=recovered,
+                recovered=f"decay {decay_r2}; window {window_r2}; serial {fmt(r2_serial, 2)}",
                 tolerance="both findings hold",
                 verdict=verdict,
                 note=f"decay {', '.join(f'{m:g}' for m in decay)}; window "
