@@ -159,10 +159,23 @@ def vllm_refusal(
     if context is None:
         return None
     prompt = _first(_PROMPT, message) or prompt_tokens
-    power = 1 << max(prompt + max_tokens - 1, 1).bit_length()  # the power of 2 >= their sum
     return Refusal(
         "context",
         f"maximum context length {context} tokens",
+        context_fix(prompt, max_tokens, context),
+    )
+
+
+def context_fix(prompt: int, max_tokens: int, context: int) -> str:
+    """The ``vllm serve`` flag that makes a ``context``-token server hold the window.
+
+    :param prompt: Prompt tokens of the largest request.
+    :param max_tokens: The completion budget.
+    :param context: The server's context length.
+    :returns: The fix, in words.
+    """
+    power = 1 << max(prompt + max_tokens - 1, 1).bit_length()  # the power of 2 >= their sum
+    return (
         f"restart vLLM with --max-model-len {power} (a full window is "
-        f"~{prompt:,} prompt tokens plus max_tokens={max_tokens}; this server holds {context:,})",
+        f"~{prompt:,} prompt tokens plus max_tokens={max_tokens}; this server holds {context:,})"
     )
