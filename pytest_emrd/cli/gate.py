@@ -63,10 +63,10 @@ def run(args: argparse.Namespace) -> int:
         print(f"emrd gate: warning: partial shard set: {problem}", file=sys.stderr)
     registry = load_registry(args.models)
     if not args.thresholds.exists():
-        runs = " ".join(map(str, args.run_dirs))
         raise ConfigError(
             f"--thresholds {args.thresholds} does not exist, so no gate ran; start one from "
-            f"these runs: emrd thresholds {runs} --out {args.thresholds}"
+            f"these runs: emrd thresholds {' '.join(map(str, args.run_dirs))} --out "
+            f"{args.thresholds}"
         )
     thresholds = load_thresholds(args.thresholds, registry=registry, metrics=GATE_METRICS)
     stored = load_run_episodes(args.run_dirs)
@@ -77,14 +77,15 @@ def run(args: argparse.Namespace) -> int:
     if os.environ.get("GITHUB_STEP_SUMMARY"):
         from pytest_emrd.report import append_step_summary, step_summary_markdown
 
-        summary = step_summary_markdown(
-            stored,
-            verdicts,
-            thresholds_source=str(args.thresholds),
-            episode_metrics=metrics,
-            prices=prices,
+        append_step_summary(
+            step_summary_markdown(
+                stored,
+                verdicts,
+                thresholds_source=str(args.thresholds),
+                episode_metrics=metrics,
+                prices=prices,
+            )
         )
-        append_step_summary(summary)
     if args.json:
         print(json.dumps([v.to_dict() for v in verdicts]))
     else:

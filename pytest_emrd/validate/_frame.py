@@ -8,7 +8,7 @@ egocentric origins" with a rigid Procrustes alignment, so the planted truth is a
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterable, Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from typing import Final
 
 import numpy as np
@@ -28,7 +28,7 @@ FRAME_TOLERANCE: Final = 1e-9
 #: Seed of the random frames (one proper rigid motion per episode, drawn in run order).
 FRAME_SEED: Final = 20260
 
-Numbers = Callable[[EpisodeMetrics], Iterable[float | None]]
+Numbers = Callable[[EpisodeMetrics], Sequence[float | None]]
 
 #: Per-episode metric -> the numbers it reports for one episode.
 EPISODE_METRICS: Final[dict[str, Numbers]] = {
@@ -74,7 +74,7 @@ def frame_checks(groups: Mapping[str, Episodes]) -> list[Check]:
         n += len(trajs)
         for a, b in zip(here, there, strict=True):
             for name, numbers in EPISODE_METRICS.items():
-                worst[name] = max(worst[name], max_gap(list(numbers(a)), list(numbers(b))))
+                worst[name] = max(worst[name], max_gap(numbers(a), numbers(b)))
         if trajs:
             before, after = _pooled(here), _pooled(there)
             for name in before:

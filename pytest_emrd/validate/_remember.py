@@ -205,7 +205,6 @@ def miller_checks(windows: Windows, perfect: Episodes) -> list[Check]:
     for k, trajs in windows.items():
         curve = miller_curve(trajs, width=MILLER_WIDTH)
         want = math.ceil(k / MILLER_WIDTH)
-        ok = curve.b_star is not None and abs(curve.b_star - want) <= MILLER_BINS
         probs = ", ".join(
             f"{b}: {p:.2f}" for b, p in zip(curve.bins, curve.probabilities, strict=True)
         )
@@ -216,7 +215,9 @@ def miller_checks(windows: Windows, perfect: Episodes) -> list[Check]:
                 planted=f"m* = {k} (bin {want})",
                 recovered=f"m* = {curve.m_star if curve.m_star is not None else 'none'}",
                 tolerance=f"within {MILLER_BINS} bin (w = {MILLER_WIDTH})",
-                verdict=judged(ok),
+                verdict=judged(
+                    curve.b_star is not None and abs(curve.b_star - want) <= MILLER_BINS
+                ),
                 note=f"{len(trajs)} episodes; ML(bin) {probs}"
                 + (f"; {curve.reason}" if curve.reason else ""),
                 data={"m_star": curve.m_star, "b_star": curve.b_star, "planted_bin": want},
