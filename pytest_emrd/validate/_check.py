@@ -100,10 +100,15 @@ def fmt(value: float | None, digits: int = 2) -> str:
 def max_gap(a: Sequence[float | None], b: Sequence[float | None]) -> float:
     """Largest ``|a_i - b_i|``; ``inf`` when the two differ in length, in which are undefined,
     or in an infinite value (equal infinities differ by 0)."""
-    if len(a) != len(b) or any((x is None) != (y is None) for x, y in zip(a, b, strict=True)):
+    if len(a) != len(b):
         return math.inf
-    pairs = [(x, y) for x, y in zip(a, b, strict=True) if x is not None and y is not None]
-    return max([0.0, *(abs(x - y) for x, y in pairs if x != y)])  # inf - inf would be nan
+    gaps = [0.0]
+    for x, y in zip(a, b, strict=True):
+        if (x is None) != (y is None):
+            return math.inf
+        if x is not None and y is not None and x != y:  # inf - inf would be nan
+            gaps.append(abs(x - y))
+    return max(gaps)
 
 
 def pct(value: float | None) -> str:
