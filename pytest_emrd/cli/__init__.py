@@ -1,5 +1,6 @@
-"""The ``emrd`` console script: one module per subcommand, each with ``register(subparsers)``;
-heavy imports happen inside the command, not at start-up."""
+"""The ``emrd`` console script: one module per subcommand, each with its ``HELP`` line (and
+optional ``DESCRIPTION``), ``add_arguments(parser)`` and ``run(args)``, which returns the exit
+status; heavy imports happen inside ``run``, not at start-up."""
 
 from __future__ import annotations
 
@@ -12,7 +13,7 @@ from pytest_emrd.errors import ConfigError, EmrdError
 
 __all__ = ["COMMANDS", "build_parser", "check_run_dirs", "main", "version_text"]
 
-#: Subcommand modules, in the order ``emrd --help`` lists them.
+#: Subcommand modules, in the order ``emrd --help`` lists them (``_`` spelled ``-``).
 COMMANDS: tuple[str, ...] = (
     "models",
     "check",
@@ -45,9 +46,6 @@ def version_text() -> str:
 class _Version(argparse.Action):
     """``--version``: computed only when asked (it imports the world and the prompt)."""
 
-    def __init__(self, option_strings: list[str], dest: str, **kwargs: object) -> None:
-        super().__init__(option_strings, dest, nargs=0, help="print the version and exit")
-
     def __call__(self, parser: argparse.ArgumentParser, *args: object) -> None:
         print(version_text())
         parser.exit()
@@ -61,10 +59,17 @@ def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="emrd", description="pytest-emrd: Explore, Map, Remember, Decide benchmark tools."
     )
-    parser.add_argument("--version", action=_Version)
+    parser.add_argument("--version", action=_Version, nargs=0, help="print the version and exit")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     for name in COMMANDS:
-        importlib.import_module(f"pytest_emrd.cli.{name}").register(sub)
+        command = importlib.import_module(f"pytest_emrd.cli.{name}")
+        p = sub.add_parser(
+            name.replace("_", "-"),
+            help=command.HELP,
+            description=getattr(command, "DESCRIPTION", None),
+        )
+        command.add_arguments(p)
+        p.set_defaults(func=command.run)
     return parser
 
 
@@ -84,7 +89,7 @@ def check_run_dirs(run_dirs: list[Path]) -> None:
 
 
 #: The commands whose ``--out DIR`` picks where they write, named in a file system error.
-_WRITES: frozenset[str] = frozenset({"view", "report", "render"})
+_WRITES = ("view", "report", "render")
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -105,8 +110,10 @@ def main(argv: list[str] | None = None) -> int:
     except OSError as exc:
         from pytest_emrd._files import os_error_line
 
-        doing = "read" if isinstance(exc, FileNotFoundError) else "write"
-        option = "--out DIR" if args.command in _WRITES else ""
-        message = os_error_line(exc, doing=doing, option=option)
+        message = os_error_line(
+            exc,
+            doing="read" if isinstance(exc, FileNotFoundError) else "write",
+            option="--out DIR" if args.command in _WRITES else "",
+        )
     print(f"emrd {args.command}: error: {scrub(message)}", file=sys.stderr)
     return 2

@@ -12,20 +12,18 @@ import os
 import sys
 from pathlib import Path
 
+HELP = "show a cassette as the vcrpy JSON it holds"
+DESCRIPTION = __doc__.split("\n\n")[1]
 
-def register(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser(
-        "cassettes",
-        help="show a cassette as the vcrpy JSON it holds",
-        description=__doc__.split("\n\n")[1],
-    )
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
     actions = p.add_subparsers(dest="action", required=True, metavar="ACTION")
     show = actions.add_parser("show", help="print a cassette as the vcrpy JSON it holds")
     show.add_argument("file", type=Path, help="cassette file (ep<NN>.json.xz)")
-    show.set_defaults(func=_show)
 
 
-def _show(args: argparse.Namespace) -> int:
+def run(args: argparse.Namespace) -> int:
+    """``show`` (the only action)."""
     from pytest_emrd.cassette import FormatError, read_cassette
     from pytest_emrd.errors import CassetteError, ConfigError
 

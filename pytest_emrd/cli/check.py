@@ -21,20 +21,18 @@ from pytest_emrd.run import OPTIONS
 GRID_OPTIONS = ("model", "condition", "spawn", "episodes", "variant", "modality", "models")
 
 
-def register(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser(
-        "check",
-        help="preflight a model before a live run: key, endpoint, probe, context, cost",
-        description=__doc__.split("\n\n")[1],
-    )
+HELP = "preflight a model before a live run: key, endpoint, probe, context, cost"
+DESCRIPTION = __doc__.split("\n\n")[1]
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
     for option in (o for o in OPTIONS if o.name in GRID_OPTIONS):
         p.add_argument(option.flag, **option.argparse_kwargs(option.name))
     p.add_argument("--no-probe", action="store_true", help="no network: key and estimate only")
     p.add_argument("--json", action="store_true", help="print the reports as one JSON list")
-    p.set_defaults(func=_run)
 
 
-def _run(args: argparse.Namespace) -> int:
+def run(args: argparse.Namespace) -> int:
     from pytest_emrd._scrub import scrub
     from pytest_emrd.agent import load_registry
     from pytest_emrd.preflight import preflight

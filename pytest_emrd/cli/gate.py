@@ -15,9 +15,10 @@ import os
 import sys
 from pathlib import Path
 
+HELP = "evaluate thresholds.yaml over one or more run directories"
 
-def register(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("gate", help="evaluate thresholds.yaml over one or more run directories")
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("run_dirs", nargs="+", type=Path, metavar="RUN_DIR", help="run directories")
     p.add_argument(
         "--thresholds",
@@ -38,10 +39,9 @@ def register(sub: argparse._SubParsersAction) -> None:
         action="store_true",
         help="gate an incomplete or duplicated set of shards (the problems go to stderr)",
     )
-    p.set_defaults(func=_run)
 
 
-def _run(args: argparse.Namespace) -> int:
+def run(args: argparse.Namespace) -> int:
     from pytest_emrd.agent import load_registry
     from pytest_emrd.cli import check_run_dirs
     from pytest_emrd.errors import ConfigError, check_positive_int
@@ -63,10 +63,10 @@ def _run(args: argparse.Namespace) -> int:
         print(f"emrd gate: warning: partial shard set: {problem}", file=sys.stderr)
     registry = load_registry(args.models)
     if not args.thresholds.exists():
-        runs = " ".join(map(str, args.run_dirs))
         raise ConfigError(
             f"--thresholds {args.thresholds} does not exist, so no gate ran; start one from "
-            f"these runs: emrd thresholds {runs} --out {args.thresholds}"
+            f"these runs: emrd thresholds {' '.join(map(str, args.run_dirs))} --out "
+            f"{args.thresholds}"
         )
     thresholds = load_thresholds(args.thresholds, registry=registry, metrics=GATE_METRICS)
     stored = load_run_episodes(args.run_dirs)
@@ -77,22 +77,23 @@ def _run(args: argparse.Namespace) -> int:
     if os.environ.get("GITHUB_STEP_SUMMARY"):
         from pytest_emrd.report import append_step_summary, step_summary_markdown
 
-        summary = step_summary_markdown(
-            stored,
-            verdicts,
-            thresholds_source=str(args.thresholds),
-            episode_metrics=metrics,
-            prices=prices,
+        append_step_summary(
+            step_summary_markdown(
+                stored,
+                verdicts,
+                thresholds_source=str(args.thresholds),
+                episode_metrics=metrics,
+                prices=prices,
+            )
         )
-        append_step_summary(summary)
     if args.json:
         print(json.dumps([v.to_dict() for v in verdicts]))
-        return 0 if all(v.passed for v in verdicts) else 1
-    print(f"{len(stored)} episodes from {len(args.run_dirs)} run director(ies)")
-    print("\n".join(gate_tables(verdicts)) or "no gate applies to these episodes")
-    priced = ((s, prices.get(s.head.spec.model, (None, None))) for s in stored)
-    summaries = [
-        EpisodeSummary.of(s, price_in=p_in, price_out=p_out) for s, (p_in, p_out) in priced
-    ]
-    print("tokens per model:", *usage_table(usage_rows(summaries)), sep="\n")
+    else:
+        print(f"{len(stored)} episodes from {len(args.run_dirs)} run director(ies)")
+        print("\n".join(gate_tables(verdicts)) or "no gate applies to these episodes")
+        priced = ((s, prices.get(s.head.spec.model, (None, None))) for s in stored)
+        summaries = [
+            EpisodeSummary.of(s, price_in=p_in, price_out=p_out) for s, (p_in, p_out) in priced
+        ]
+        print("tokens per model:", *usage_table(usage_rows(summaries)), sep="\n")
     return 0 if all(v.passed for v in verdicts) else 1

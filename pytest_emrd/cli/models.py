@@ -18,11 +18,12 @@ from pytest_emrd._scrub import scrub
 PARAMETRIC = ("scout-decay-<mean steps>", "scout-window-<k>")
 
 
-def register(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("models", help="list the model registry and whether each key is set")
+HELP = "list the model registry and whether each key is set"
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--models", type=Path, help="user model registry YAML")
     p.add_argument("--json", action="store_true", help="print one JSON list of models")
-    p.set_defaults(func=_run)
 
 
 def key_state(config: Any) -> str:
@@ -41,28 +42,23 @@ def _price(value: float | None) -> str:
 def model_rows(registry: Any) -> list[dict[str, Any]]:
     """One plain dict per registered model (no secret: whether the key is set, the endpoint
     scrubbed)."""
-    rows = []
-    for name in registry.names():
-        config = registry.get(name)
-        rows.append(
-            {
-                "name": name,
-                "provider": config.provider,
-                "modality": config.modality,
-                "model_id": config.model_id,
-                "base_url": scrub(config.base_url)
-                if config.base_url
-                else "built-in reference server",
-                "api_key_env": config.api_key_env,
-                "key": key_state(config),
-                "price_per_mtok_in": config.price_per_mtok_in,
-                "price_per_mtok_out": config.price_per_mtok_out,
-            }
-        )
-    return rows
+    return [
+        {
+            "name": name,
+            "provider": config.provider,
+            "modality": config.modality,
+            "model_id": config.model_id,
+            "base_url": scrub(config.base_url) if config.base_url else "built-in reference server",
+            "api_key_env": config.api_key_env,
+            "key": key_state(config),
+            "price_per_mtok_in": config.price_per_mtok_in,
+            "price_per_mtok_out": config.price_per_mtok_out,
+        }
+        for name, config in sorted(registry.models.items())
+    ]
 
 
-def _run(args: argparse.Namespace) -> int:
+def run(args: argparse.Namespace) -> int:
     from pytest_emrd.agent import load_registry
     from pytest_emrd.gate import render_table
 

@@ -16,8 +16,10 @@ from pytest_emrd.trajectory import CONDITIONS, LAYOUTS, EpisodeSpec
 VIEWS = ("spawn", "right", "behind", "left")
 
 
-def register(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("render", help="write frames and a top-down map of the built-in world")
+HELP = "write frames and a top-down map of the built-in world"
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--spawn", choices=list(SLUG_ROOMS), default="office", help="spawn room slug")
     p.add_argument("--episode", type=int, default=0, help="episode index (spawn pose), default 0")
     p.add_argument("--condition", choices=CONDITIONS, default="baseline", help="default baseline")
@@ -28,10 +30,9 @@ def register(sub: argparse._SubParsersAction) -> None:
         help="paper (the fixed office, default) or generated (the episode's own office)",
     )
     p.add_argument("--out", type=Path, required=True, help="directory to write into")
-    p.set_defaults(func=_run)
 
 
-def _run(args: argparse.Namespace) -> int:
+def run(args: argparse.Namespace) -> int:
     from pytest_emrd.world import condition_params, episode_world, make_simulator, plan_png
 
     spec = EpisodeSpec(

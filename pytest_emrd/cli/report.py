@@ -19,8 +19,10 @@ from pytest_emrd.errors import ConfigError, check_choice
 _DEFAULT_THRESHOLDS = Path("thresholds.yaml")
 
 
-def register(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("report", help="tables and figures of one or more run directories")
+HELP = "tables and figures of one or more run directories"
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("run_dirs", nargs="*", type=Path, metavar="RUN_DIR", help="run directories")
     p.add_argument(
         "--compare",
@@ -54,10 +56,9 @@ def register(sub: argparse._SubParsersAction) -> None:
         "first baseline episode with a non-empty map)",
     )
     p.add_argument("--seed", type=int, default=0, help="bootstrap seed of --compare (default 0)")
-    p.set_defaults(func=_run)
 
 
-def _run(args: argparse.Namespace) -> int:
+def run(args: argparse.Namespace) -> int:
     from pytest_emrd.report import check_formats
 
     formats = check_formats(f.strip() for f in args.format.split(",") if f.strip())
@@ -105,8 +106,9 @@ def _report(args: argparse.Namespace, formats: list[str]) -> int:
         episode=args.episode,
         processes=processes,
     )
-    out = args.out if args.out is not None else args.run_dirs[0] / "report"
-    written = write_report(report, out, formats, processes=processes)
+    written = write_report(
+        report, args.out or args.run_dirs[0] / "report", formats, processes=processes
+    )
     print(f"{len(episodes)} episodes from {len(args.run_dirs)} run director(ies)")
     for note in report.missing:
         print(f"note: {note}")

@@ -8,22 +8,21 @@ from pathlib import Path
 
 from pytest_emrd.errors import ConfigError, check_range
 
+HELP = "serve the built-in reference agents on an OpenAI-compatible endpoint"
+DESCRIPTION = (
+    "Run the scripted reference agents (scout, scout-decay-<m>, scout-window-<k>, "
+    "scout-serial, prior) behind POST /v1/chat/completions and GET /v1/models, in the "
+    "foreground until interrupted."
+)
 
-def register(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser(
-        "serve",
-        help="serve the built-in reference agents on an OpenAI-compatible endpoint",
-        description="Run the scripted reference agents (scout, scout-decay-<m>, "
-        "scout-window-<k>, scout-serial, prior) behind POST /v1/chat/completions and "
-        "GET /v1/models, in the foreground until interrupted.",
-    )
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--port", type=int, default=8765, help="port to bind (default 8765; 0 = any)")
     p.add_argument("--host", default="127.0.0.1", help="address to bind (default 127.0.0.1)")
     p.add_argument("--registry", type=Path, help="user model registry YAML")
-    p.set_defaults(func=_run)
 
 
-def _run(args: argparse.Namespace) -> int:
+def run(args: argparse.Namespace) -> int:
     from pytest_emrd.agent import load_registry
     from pytest_emrd.reference import ReferenceServer
 

@@ -127,8 +127,10 @@ def run(args: argparse.Namespace) -> int:
     return 0 if all(r.ok for r in results) else 1
 
 
-def register(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("thor-smoke", help="confirm the ai2thor backend on a GPU machine")
+HELP = "confirm the ai2thor backend on a GPU machine"
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--out", type=Path, required=True, help="directory for the trajectories")
     p.add_argument("--spawn", choices=list(SLUG_ROOMS), default="office", help="default office")
     p.add_argument("--episode", type=int, default=0, help="episode index, default 0")
@@ -141,4 +143,3 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--allow-download", action="store_true", help="let ai2thor download a missing build"
     )
-    p.set_defaults(func=run)

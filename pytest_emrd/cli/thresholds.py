@@ -13,15 +13,15 @@ import shlex
 import sys
 from pathlib import Path
 
+HELP = "write a starter thresholds.yaml from run directories"
 
-def register(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("thresholds", help="write a starter thresholds.yaml from run directories")
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("run_dirs", nargs="+", type=Path, metavar="RUN_DIR", help="run directories")
     p.add_argument("--out", type=Path, help="file to write (default: print it)")
-    p.set_defaults(func=_run)
 
 
-def _run(args: argparse.Namespace) -> int:
+def run(args: argparse.Namespace) -> int:
     from pytest_emrd._files import write_bytes_atomic
     from pytest_emrd.cli import check_run_dirs
     from pytest_emrd.errors import ConfigError

@@ -17,13 +17,12 @@ from pathlib import Path
 
 from pytest_emrd.errors import check_positive_int
 
+HELP = "check that the metrics recover the reference agents' planted cognition"
 
-def register(sub: argparse._SubParsersAction) -> None:
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
     from pytest_emrd.validate import FAMILIES, FULL_EPISODES
 
-    p = sub.add_parser(
-        "validate", help="check that the metrics recover the reference agents' planted cognition"
-    )
     p.add_argument(
         "--episodes",
         type=int,
@@ -46,14 +45,20 @@ def register(sub: argparse._SubParsersAction) -> None:
         help="agent family to validate, repeatable (default: all): scout (memory, exploration "
         "and decision metrics, with prior) or mimic (VLM-like map writing)",
     )
-    p.set_defaults(func=_run)
 
 
-def _run(args: argparse.Namespace) -> int:
+def run(args: argparse.Namespace) -> int:
     from pytest_emrd._files import write_bytes_atomic
     from pytest_emrd.protocol import protocol_version
-    from pytest_emrd.validate import FAMILIES, Plan, Progress, markdown, run_plan, to_json
-    from pytest_emrd.validate import validation_report as build
+    from pytest_emrd.validate import (
+        FAMILIES,
+        Plan,
+        Progress,
+        markdown,
+        run_plan,
+        to_json,
+        validation_report,
+    )
 
     check_positive_int("--episodes", args.episodes)
     check_positive_int("--jobs", args.jobs)
@@ -69,7 +74,7 @@ def _run(args: argparse.Namespace) -> int:
             )
 
     groups = run_plan(plan, args.out, jobs=args.jobs, on_episode=progress)
-    report = build(groups, episodes=args.episodes, protocol=protocol_version("builtin"))
+    report = validation_report(groups, episodes=args.episodes, protocol=protocol_version("builtin"))
     text = markdown(report)
     print(text, end="")
     write_bytes_atomic(args.out / "validation.md", text.encode())

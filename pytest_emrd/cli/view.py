@@ -17,8 +17,10 @@ from pytest_emrd.errors import ConfigError
 _DEFAULT_CASSETTES = Path("cassettes")
 
 
-def register(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("view", help="HTML pages to step through episodes of a run")
+HELP = "HTML pages to step through episodes of a run"
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("run_dir", type=Path, metavar="RUN_DIR", help="run directory")
     p.add_argument(
         "episodes",
@@ -33,10 +35,9 @@ def register(sub: argparse._SubParsersAction) -> None:
         help="cassette folder the frames are checked against (default ./cassettes)",
     )
     p.add_argument("--gif", action="store_true", help="also write an animated GIF per episode")
-    p.set_defaults(func=_run)
 
 
-def _run(args: argparse.Namespace) -> int:
+def run(args: argparse.Namespace) -> int:
     from pytest_emrd._files import check_inside, write_bytes_atomic
     from pytest_emrd._scrub import scrub_bytes
     from pytest_emrd.cli import check_run_dirs
@@ -46,8 +47,11 @@ def _run(args: argparse.Namespace) -> int:
     check_run_dirs([args.run_dir])
     trajectories = sorted(load_run_dirs([args.run_dir]), key=lambda t: t.spec.case_id)
     if args.episodes:
-        match = fnmatch.fnmatchcase
-        chosen = [t for t in trajectories if any(match(t.spec.case_id, p) for p in args.episodes)]
+        chosen = [
+            t
+            for t in trajectories
+            if any(fnmatch.fnmatchcase(t.spec.case_id, p) for p in args.episodes)
+        ]
         if not chosen:
             raise ConfigError(
                 f"episodes={args.episodes} match no episode of {args.run_dir} (it holds e.g. "
@@ -58,7 +62,7 @@ def _run(args: argparse.Namespace) -> int:
     cassettes = args.cassettes
     if cassettes is None and _DEFAULT_CASSETTES.is_dir():
         cassettes = _DEFAULT_CASSETTES
-    out = args.out if args.out is not None else args.run_dir / "view"
+    out = args.out or args.run_dir / "view"
     out.mkdir(parents=True, exist_ok=True)
     rows = []
     for t in trajectories:

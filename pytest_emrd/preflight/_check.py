@@ -31,14 +31,13 @@ from pytest_emrd.errors import EmrdError
 from pytest_emrd.preflight._estimate import (
     CostEstimate,
     Measured,
-    Sweep,
     count_images,
     estimate_cost,
     request_tokens,
     sample_reply,
     sweep,
 )
-from pytest_emrd.preflight._server import Refusal, models_url, server_info, vllm_refusal
+from pytest_emrd.preflight._server import context_fix, models_url, server_info, vllm_refusal
 from pytest_emrd.trajectory import EpisodeSpec
 
 _EXCERPT: Final = 160
@@ -136,15 +135,6 @@ class _Probe:
     estimated: int
     measured: Measured | None = None
 
-    def refusal(self, message: str, prompt_tokens: int | None = None) -> Refusal | None:
-        """The vLLM refusal in ``message`` for this probe's window."""
-        return vllm_refusal(
-            message,
-            images=self.images,
-            max_tokens=self.config.max_tokens,
-            prompt_tokens=self.estimated if prompt_tokens is None else prompt_tokens,
-        )
-
 
 def _send(probe: _Probe, client: ChatClient) -> list[Check]:
     start = time.perf_counter()
@@ -188,7 +178,9 @@ def _send(probe: _Probe, client: ChatClient) -> list[Check]:
 
 def _refused(probe: _Probe, message: str) -> list[Check]:
     config, said = probe.config, _excerpt(message)
-    refusal = probe.refusal(message)
+    refusal = vllm_refusal(
+        message, images=probe.images, max_tokens=config.max_tokens, prompt_tokens=probe.estimated
+    )
     if refusal is not None:
         return [
             Check("probe", "fail", f"the server refused the request: {refusal.said}", refusal.fix),
@@ -219,8 +211,7 @@ def _context(probe: _Probe, max_model_len: int | None) -> Check:
     )
     if prompt + max_tokens <= max_model_len:
         return Check("context", "pass", detail)
-    refusal = probe.refusal(f"maximum context length is {max_model_len} tokens", prompt)
-    return Check("context", "fail", detail, refusal.fix if refusal else "")
+    return Check("context", "fail", detail, context_fix(prompt, max_tokens, max_model_len))
 
 
 def _listing_headers(config: ModelConfig) -> dict[str, str]:
@@ -298,7 +289,7 @@ def preflight(
     :param models_file: The user registry file, if any.
     :returns: The :class:`PreflightReport`: checks, estimates and refusals.
     """
-    window: Sweep = sweep(spec, single_image=config.single_image)
+    window = sweep(spec, single_image=config.single_image)
     messages = window.request(HISTORY_TURNS, sample_reply())
     tokens = request_tokens(messages, image_tokens=config.image_tokens)
     state = _Probe(config, messages, count_images(messages), tokens)

@@ -117,8 +117,7 @@ def request_tokens(messages: list[dict[str, Any]], *, image_tokens: int) -> int:
     :param image_tokens: Tokens charged per image.
     :returns: The estimate.
     """
-    texts = [p["text"] for m in messages for p in _parts(m) if p.get("type") == "text"]
-    chars = sum(map(len, texts))
+    chars = sum(len(p["text"]) for m in messages for p in _parts(m) if p.get("type") == "text")
     return math.ceil(chars / CHARS_PER_TOKEN) + image_tokens * count_images(messages)
 
 
@@ -213,11 +212,12 @@ def estimate_cost(
         completion, reply = max(measured.completion_tokens, 1), measured.reply
         scale = max(measured.prompt_tokens, 0) / max(measured.estimated_prompt_tokens, 1)
         if not 1 / TRUSTED_RATIO <= scale <= TRUSTED_RATIO:
+            ratio = "0x" if scale == 0 else f"{scale:.2g}x ours"
             warning = (
                 f"the server reported {measured.prompt_tokens:,} prompt tokens for the probe, "
                 f"our count of its text and frames is {measured.estimated_prompt_tokens:,} "
-                f"({_ratio(scale)}): more than {TRUSTED_RATIO:g}x apart, so the estimate uses "
-                f"our count; check image_tokens for {config.name!r} in the registry, or the "
+                f"(the server's is {ratio}): more than {TRUSTED_RATIO:g}x apart, so the estimate "
+                f"uses our count; check image_tokens for {config.name!r} in the registry, or the "
                 "server's usage report"
             )
             scale = 1.0
@@ -249,8 +249,3 @@ def estimate_cost(
         cost_bound_usd=cost_bound,
         warning=warning,
     )
-
-
-def _ratio(scale: float) -> str:
-    """``0.0001x`` / ``12x``: how the server's count compares with ours."""
-    return "the server's is 0x" if scale == 0 else f"the server's is {scale:.2g}x ours"

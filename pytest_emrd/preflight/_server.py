@@ -93,7 +93,7 @@ def server_info(url: str, model_id: str, *, headers: dict[str, str] | None = Non
         url,
         200,
         served=served,
-        max_model_len=length if isinstance(length, int) and not isinstance(length, bool) else None,
+        max_model_len=length if type(length) is int else None,  # not a bool either
     )
 
 
@@ -125,10 +125,11 @@ class Refusal:
     """What to restart the server with."""
 
 
-def _first(patterns: tuple[re.Pattern[str], ...], text: str, group: str) -> int | None:
+def _first(patterns: tuple[re.Pattern[str], ...], text: str) -> int | None:
+    """The number the first matching pattern captures (each captures one)."""
     for pattern in patterns:
         if match := pattern.search(text):
-            return int(match[group])
+            return int(match[1])
     return None
 
 
@@ -154,14 +155,27 @@ def vllm_refusal(
             f"restart vLLM with --limit-mm-per-prompt '{limit}' (the window sends {images} "
             f"frames; this server takes {match['limit']})",
         )
-    context = _first(_CONTEXT, message, "context")
+    context = _first(_CONTEXT, message)
     if context is None:
         return None
-    prompt = _first(_PROMPT, message, "prompt") or prompt_tokens
-    power = 1 << max(prompt + max_tokens - 1, 1).bit_length()  # the power of 2 >= their sum
+    prompt = _first(_PROMPT, message) or prompt_tokens
     return Refusal(
         "context",
         f"maximum context length {context} tokens",
+        context_fix(prompt, max_tokens, context),
+    )
+
+
+def context_fix(prompt: int, max_tokens: int, context: int) -> str:
+    """The ``vllm serve`` flag that makes a ``context``-token server hold the window.
+
+    :param prompt: Prompt tokens of the largest request.
+    :param max_tokens: The completion budget.
+    :param context: The server's context length.
+    :returns: The fix, in words.
+    """
+    power = 1 << max(prompt + max_tokens - 1, 1).bit_length()  # the power of 2 >= their sum
+    return (
         f"restart vLLM with --max-model-len {power} (a full window is "
-        f"~{prompt:,} prompt tokens plus max_tokens={max_tokens}; this server holds {context:,})",
+        f"~{prompt:,} prompt tokens plus max_tokens={max_tokens}; this server holds {context:,})"
     )

@@ -3,6 +3,7 @@ and the table as Markdown (printed and written) and JSON text."""
 
 from __future__ import annotations
 
+import itertools
 import json
 import math
 from collections import Counter
@@ -21,12 +22,14 @@ SCHEMA_VERSION: Final = 1
 #: paper prints is not reproducible from the counts it prints (the note says which value,
 #: what the printed counts give, and what would reproduce it), or the paper's estimator
 #: misreads a planted truth that our estimator recovers (the note says how).
-VERDICTS: Final[tuple[str, ...]] = ("pass", "fail", "finding")
-SECTIONS: Final[tuple[str, ...]] = ("Explore", "Map", "Remember", "Decide", "Replies", "Statistics")
+VERDICTS: Final = ("pass", "fail", "finding")
+SECTIONS: Final = ("Explore", "Map", "Remember", "Decide", "Replies", "Statistics")
 
 Value = float | int | str | None
 #: What the checks read: a trajectory, or its metrics computed once (much faster).
 Episode = Trajectory | EpisodeMetrics
+#: One group's episodes.
+Episodes = Sequence[Episode]
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -87,7 +90,7 @@ def judged(ok: bool) -> str:
 
 def fmt(value: float | None, digits: int = 2) -> str:
     """A number for the table: fixed ``digits``, ``inf`` and ``n/a`` spelled out."""
-    if value is None or (isinstance(value, float) and math.isnan(value)):
+    if value is None or math.isnan(value):
         return "n/a"
     if math.isinf(value):
         return "inf"
@@ -97,16 +100,15 @@ def fmt(value: float | None, digits: int = 2) -> str:
 def max_gap(a: Sequence[float | None], b: Sequence[float | None]) -> float:
     """Largest ``|a_i - b_i|``; ``inf`` when the two differ in length, in which are undefined,
     or in an infinite value (equal infinities differ by 0)."""
-    if len(a) != len(b) or any((x is None) != (y is None) for x, y in zip(a, b, strict=True)):
+    if len(a) != len(b):
         return math.inf
-    pairs = [(x, y) for x, y in zip(a, b, strict=True) if x is not None and y is not None]
-    return max([0.0, *(_gap(x, y) for x, y in pairs)])
-
-
-def _gap(x: float, y: float) -> float:
-    if x == y:
-        return 0.0
-    return math.inf if math.isinf(x) or math.isinf(y) else abs(x - y)
+    gaps = [0.0]
+    for x, y in zip(a, b, strict=True):
+        if (x is None) != (y is None):
+            return math.inf
+        if x is not None and y is not None and x != y:  # inf - inf would be nan
+            gaps.append(abs(x - y))
+    return max(gaps)
 
 
 def pct(value: float | None) -> str:
@@ -117,8 +119,8 @@ def pct(value: float | None) -> str:
 _COLUMNS: Final = ("Check", "Planted", "Recovered", "Tolerance", "Verdict", "Note")
 
 
-def _cell(text: str) -> str:
-    return text.replace("|", "\\|").replace("\n", " ")
+def _row(cells: Sequence[str]) -> str:
+    return "| " + " | ".join(c.replace("|", "\\|").replace("\n", " ") for c in cells) + " |"
 
 
 def markdown(report: ValidationReport) -> str:
@@ -128,22 +130,13 @@ def markdown(report: ValidationReport) -> str:
     :returns: The Markdown text.
     """
     lines: list[str] = []
-    section = None
-    for c in report.checks:
-        if c.section != section:
-            section = c.section
-            lines += [
-                "",
-                f"### {section}",
-                "",
-                "| " + " | ".join(_COLUMNS) + " |",
-                "|" + "---|" * len(_COLUMNS),
-            ]
-        verdict = f"**{c.verdict}**" if c.verdict != "pass" else c.verdict
-        cells = (c.name, c.planted, c.recovered, c.tolerance, verdict, c.note)
-        lines.append("| " + " | ".join(_cell(x) for x in cells) + " |")
+    for section, checks in itertools.groupby(report.checks, key=lambda c: c.section):
+        lines += ["", f"### {section}", "", _row(_COLUMNS), "|" + "---|" * len(_COLUMNS)]
+        for c in checks:
+            verdict = f"**{c.verdict}**" if c.verdict != "pass" else c.verdict
+            lines.append(_row((c.name, c.planted, c.recovered, c.tolerance, verdict, c.note)))
     counts = Counter(c.verdict for c in report.checks)
-    summary = ", ".join(f"{counts[v]} {v}" for v in ("pass", "fail", "finding") if counts[v])
+    summary = ", ".join(f"{counts[v]} {v}" for v in VERDICTS if counts[v])
     head = f"{len(report.checks)} checks: {summary}"
     if report.episodes:
         head += (

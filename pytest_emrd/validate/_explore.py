@@ -21,7 +21,7 @@ from typing import Final
 
 from pytest_emrd.metrics import GATE_METRICS, Estimate, FPSGSummary, as_episode_metrics, fpsg
 from pytest_emrd.trajectory import Trajectory
-from pytest_emrd.validate._check import Check, Episode, fmt, judged, pct
+from pytest_emrd.validate._check import Check, Episodes, fmt, judged, pct
 
 #: Per episode, the scout's AEC may differ from the fraction it was shown by at most this
 #: (numbers agree to 1e-9 across CPUs).
@@ -49,7 +49,7 @@ def _mean(values: Sequence[float]) -> float:
     return statistics.fmean(values) if values else math.nan
 
 
-def exploration_checks(baseline: Sequence[Trajectory], low_light: Sequence[Episode]) -> list[Check]:
+def exploration_checks(baseline: Sequence[Trajectory], low_light: Episodes) -> list[Check]:
     """Scout AEC equals the fraction it was shown, per episode; low_light lowers AEC and
     raises TE. ``baseline`` must be trajectories (the first row reads the visible ids).
 
@@ -131,7 +131,7 @@ def _share(name: str, agent: str, s: FPSGSummary, planted: float) -> Check:
     )
 
 
-def prior_checks(trajectories: Sequence[Episode]) -> list[Check]:
+def prior_checks(trajectories: Episodes) -> list[Check]:
     """``prior`` names a room it never entered, from the prompt alone: Never-Visited and
     Any-Bias 100 %, FPSG 0.
 
@@ -155,7 +155,7 @@ def prior_checks(trajectories: Sequence[Episode]) -> list[Check]:
     ]
 
 
-def scout_decide_checks(trajectories: Sequence[Episode]) -> list[Check]:
+def scout_decide_checks(trajectories: Episodes) -> list[Check]:
     """``scout`` chooses a room it swept and remembers: Never-Visited 0 %, FPSG local ~ 1.
 
     :param trajectories: The ``scout`` agent's episodes.

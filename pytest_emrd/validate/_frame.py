@@ -8,7 +8,7 @@ egocentric origins" with a rigid Procrustes alignment, so the planted truth is a
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterable, Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from typing import Final
 
 import numpy as np
@@ -21,14 +21,14 @@ from pytest_emrd.metrics import (
     random_reframe,
 )
 from pytest_emrd.trajectory import Trajectory
-from pytest_emrd.validate._check import Check, Episode, judged, max_gap
+from pytest_emrd.validate._check import Check, Episodes, judged, max_gap
 
 #: A metric may move by at most this much when only the model's frame changes.
 FRAME_TOLERANCE: Final = 1e-9
 #: Seed of the random frames (one proper rigid motion per episode, drawn in run order).
 FRAME_SEED: Final = 20260
 
-Numbers = Callable[[EpisodeMetrics], Iterable[float | None]]
+Numbers = Callable[[EpisodeMetrics], Sequence[float | None]]
 
 #: Per-episode metric -> the numbers it reports for one episode.
 EPISODE_METRICS: Final[dict[str, Numbers]] = {
@@ -54,7 +54,7 @@ def _pooled(ems: Sequence[EpisodeMetrics]) -> dict[str, list[float | None]]:
     }
 
 
-def frame_checks(groups: Mapping[str, Sequence[Episode]]) -> list[Check]:
+def frame_checks(groups: Mapping[str, Episodes]) -> list[Check]:
     """One row per metric: max |change| when every trajectory's maps move to a random frame.
 
     Only trajectories can be re-expressed; metrics-only episodes are skipped (counted in the
@@ -74,7 +74,7 @@ def frame_checks(groups: Mapping[str, Sequence[Episode]]) -> list[Check]:
         n += len(trajs)
         for a, b in zip(here, there, strict=True):
             for name, numbers in EPISODE_METRICS.items():
-                worst[name] = max(worst[name], max_gap(list(numbers(a)), list(numbers(b))))
+                worst[name] = max(worst[name], max_gap(numbers(a), numbers(b)))
         if trajs:
             before, after = _pooled(here), _pooled(there)
             for name in before:

@@ -117,6 +117,11 @@ def _rmse(traj: Trajectory, m: EpisodeMetrics) -> tuple[int, float, float]:
     return m.matched, rmse, layout_scale(truth)
 
 
+def _gaps(a: Paired, b: Paired, *names: str) -> dict[str, float]:
+    """The :func:`max_gap` of each metric in ``names`` between paired episodes."""
+    return {n: max_gap([getattr(m, n) for _, m in a], [getattr(m, n) for _, m in b]) for n in names}
+
+
 def own_frame_checks(spawn: Paired, own: Paired) -> list[Check]:
     """PA within the rounding bound, AEC and SIR exactly, own frame vs spawn frame."""
     excess = []
@@ -124,10 +129,8 @@ def own_frame_checks(spawn: Paired, own: Paired) -> list[Check]:
         _, _, scale = _rmse(traj, s)
         bound = math.sqrt(2.0) * WRITTEN_M / scale if scale else 0.0
         excess.append(abs((o.pa or 0.0) - (s.pa or 0.0)) - bound)
-    pa_gap = max_gap([m.pa for _, m in own], [m.pa for _, m in spawn])
-    aec_gap = max_gap([m.aec for _, m in own], [m.aec for _, m in spawn])
-    sir_gap = max_gap([m.sir for _, m in own], [m.sir for _, m in spawn])
-    same = all(o.matched == s.matched for (_, o), (_, s) in zip(own, spawn, strict=True))
+    pa_gap, aec_gap, sir_gap, k_gap = _gaps(own, spawn, "pa", "aec", "sir", "matched").values()
+    same = k_gap == 0
     note = f"{len(own)} paired episodes; the own frame is a seeded rotation + translation"
     return [
         Check(
@@ -197,16 +200,14 @@ def rate_check(section: str, name: str, planted: float, count: int, total: int, 
 
 def halluc_checks(halluc: Paired, clean: Paired, h: float) -> list[Check]:
     """Hallucinations change no score and are counted as unrecognised, Binomial(T, h)."""
-    gaps = {
-        name: max_gap([getattr(m, name) for _, m in halluc], [getattr(m, name) for _, m in clean])
-        for name in ("aec", "pa", "sir")
-    }
+    gaps = _gaps(halluc, clean, "aec", "pa", "sir")
 
     def unrecognised(t: Trajectory) -> int:
         return len(match_map(t.final_map, t.ground_truth.objects).unrecognised)
 
-    pairs = zip(halluc, clean, strict=True)
-    count = sum(unrecognised(th) - unrecognised(tc) for (th, _), (tc, _) in pairs)
+    count = sum(
+        unrecognised(th) - unrecognised(tc) for (th, _), (tc, _) in zip(halluc, clean, strict=True)
+    )
     total = sum(len(t.steps) for t, _ in halluc)
     return [
         Check(
@@ -265,8 +266,7 @@ def dup_checks(dup: Paired, clean: Paired, p: float) -> list[Check]:
         mapped = Counter(types[o] for o in set(_planted_ids(tc, -1).values()))
         written = list(_planted_ids(td, -1).values())  # one id per label: copies repeat it
         extra = Counter(types[o] for o in written) - Counter(types[o] for o in set(written))
-        total = sum(capacity.values())
-        predicted.append(sum(min(mapped[k] + extra[k], capacity[k]) for k in capacity) / total)
+        predicted.append(sum(min(mapped[k] + extra[k], capacity[k]) for k in capacity) / len(types))
         recovered.append(md.aec)
         rises.append((md.aec or 0.0) - (mc.aec or 0.0))
     gap = max_gap(predicted, recovered)

@@ -47,10 +47,6 @@ SEARCH_RADIUS: Final = 3
 Printed = Callable[[float], bool]
 
 
-def _at_precision(printed: float, digits: int) -> Printed:
-    return lambda value: round(value, digits) == round(printed, digits)
-
-
 def _row(name: str, printed: str, value: float | None, same: Printed, note: str) -> Check:
     return Check(
         section="Statistics",
@@ -64,27 +60,28 @@ def _row(name: str, printed: str, value: float | None, same: Printed, note: str)
     )
 
 
+def _printed_row(name: str, printed: float, digits: int, value: float | None, note: str) -> Check:
+    """A row whose printed value is compared at the ``digits`` decimals it is printed with."""
+    return _row(
+        name, f"{printed}", value, lambda v: round(v, digits) == round(printed, digits), note
+    )
+
+
 def inventory_free_checks() -> list[Check]:
     """Chi-square, p and Cramer's V of the 2 x 4 Inventory-Free table."""
     chi = chi_square(INVENTORY_FREE)
     counts = "counts 70/3/6/0 vs 22/31/21/6 (C/K/E/O)"
-    rows = [
-        _row(
-            "Inventory-Free chi-square",
-            "62.4",
-            chi.statistic,
-            _at_precision(62.4, 1),
-            f"{counts}; df = {chi.dof}",
-        ),
-    ]
     p = chi.p_value
     p_note = f"Pearson test, df = {chi.dof}, gives p = {p:.2e}" if p is not None else ""
     if p is not None and p >= 1e-13:
         p_note += ": the printed bound p < 1e-13 does not follow from the printed counts"
-    rows.append(_row("Inventory-Free p", "< 1e-13", p, lambda v: v < 1e-13, p_note))
-    v = cramers_v(INVENTORY_FREE)
-    rows.append(_row("Inventory-Free Cramer's V", "0.63", v, _at_precision(0.63, 2), counts))
-    return rows
+    return [
+        _printed_row(
+            "Inventory-Free chi-square", 62.4, 1, chi.statistic, f"{counts}; df = {chi.dof}"
+        ),
+        _row("Inventory-Free p", "< 1e-13", p, lambda v: v < 1e-13, p_note),
+        _printed_row("Inventory-Free Cramer's V", 0.63, 2, cramers_v(INVENTORY_FREE), counts),
+    ]
 
 
 @dataclass(frozen=True)
@@ -98,17 +95,12 @@ class _Counts:
         return [[c, n - c] for c, n in zip(self.conference, self.n, strict=True)]
 
     def fisher(self, i: int) -> float:
-        base, row = self.table()[0], self.table()[i]
-        return fisher_exact_2x2([base, row]).p_value
+        table = self.table()
+        return fisher_exact_2x2([table[0], table[i]]).p_value
 
 
 def _count(n: int, percent: float) -> int:
     return round(percent * n / 100)
-
-
-def _from_percentages() -> _Counts:
-    rows = [APPENDIX_E_BASELINE[1:], *(r[1:3] for r in APPENDIX_E)]
-    return _Counts(tuple(_count(n, pc) for n, pc in rows), tuple(n for n, _ in rows))
 
 
 def _reproducing(printed: _Counts) -> _Counts:
@@ -148,7 +140,10 @@ def _describe(counts: _Counts, names: Sequence[str]) -> str:
 def appendix_e_checks() -> list[Check]:
     """Chi-square (5 x 2), df, p and pairwise Fisher p of Appendix E, from the printed %."""
     names = [APPENDIX_E_BASELINE[0], *(r[0] for r in APPENDIX_E)]
-    printed = _from_percentages()
+    percentages = [APPENDIX_E_BASELINE[1:], *(r[1:3] for r in APPENDIX_E)]  # (n, %) per row
+    printed = _Counts(
+        tuple(_count(n, pc) for n, pc in percentages), tuple(n for n, _ in percentages)
+    )
     fit = _reproducing(printed)
     source = f"counts from the printed %: {_describe(printed, names)}"
     diff = [n for n, a, b in zip(names, printed.conference, fit.conference, strict=True) if a != b]
@@ -157,20 +152,17 @@ def appendix_e_checks() -> list[Check]:
         f"from the printed percentages in {', '.join(diff) or 'no row'}"
     )
     chi = chi_square(printed.table())
+    statistic, dof, p_value = APPENDIX_E_CHI2
     rows = [
-        _row(
-            "Appendix E chi-square (5 x 2)",
-            "17.81",
-            chi.statistic,
-            _at_precision(APPENDIX_E_CHI2[0], 2),
-            f"{source}; {why}",
+        _printed_row(
+            "Appendix E chi-square (5 x 2)", statistic, 2, chi.statistic, f"{source}; {why}"
         ),
-        _row("Appendix E df", "4", float(chi.dof), _at_precision(APPENDIX_E_CHI2[1], 0), source),
-        _row(
+        _printed_row("Appendix E df", dof, 0, float(chi.dof), source),
+        _printed_row(
             "Appendix E p (chi-square)",
-            "0.001",
+            p_value,
+            3,
             chi.p_value,
-            _at_precision(APPENDIX_E_CHI2[2], 3),
             f"p = {chi.p_value:.4f} from the printed %",
         ),
     ]
@@ -185,9 +177,7 @@ def appendix_e_checks() -> list[Check]:
                 f"; the printed p needs Baseline {fit.conference[0]}/{fit.n[0]} vs "
                 f"{name} {fit.conference[i]}/{n}"
             )
-        rows.append(
-            _row(f"Appendix E Fisher p, {name}", f"{target}", p, _at_precision(target, 3), note)
-        )
+        rows.append(_printed_row(f"Appendix E Fisher p, {name}", target, 3, p, note))
     label, n, pc, target = NEUTRAL
     neutral = _Counts((printed.conference[0], _count(n, pc)), (printed.n[0], n))
     p = neutral.fisher(1)
@@ -195,9 +185,7 @@ def appendix_e_checks() -> list[Check]:
     if round(p, 3) != target:
         fixed = _Counts((fit.conference[0], neutral.conference[1]), neutral.n).fisher(1)
         note += f"; with Baseline {fit.conference[0]}/79 it is {fixed:.3f}"
-    rows.append(
-        _row(f"Appendix E Fisher p, {label}", f"{target}", p, _at_precision(target, 3), note)
-    )
+    rows.append(_printed_row(f"Appendix E Fisher p, {label}", target, 3, p, note))
     return rows
 
 
@@ -221,25 +209,25 @@ def appendix_f_checks() -> list[Check]:
         + (f"; column totals differ: {', '.join(mismatch)}" if mismatch else "")
         + f"; spawn x chosen chi-square = {chi.statistic:.2f} (df {chi.dof}, not printed)"
     )
-    verdict_share = _row(
-        "Appendix F spawn-room share (%)",
-        f"{APPENDIX_F_SPAWN_SHARE}",
-        share,
-        _at_precision(APPENDIX_F_SPAWN_SHARE, 1),
-        f"{stayed}/{n} choices name the spawn room",
-    )
-    consistent = n == printed_n and not mismatch
-    totals_row = Check(
-        section="Statistics",
-        name="Appendix F totals vs Inventory-Free table",
-        planted=f"n = {printed_n}",
-        recovered=f"n = {n}",
-        tolerance="exact",
-        verdict="pass" if consistent else "finding",
-        note=note,
-        data={"printed": printed_n, "recovered": n},
-    )
-    return [verdict_share, totals_row]
+    return [
+        _printed_row(
+            "Appendix F spawn-room share (%)",
+            APPENDIX_F_SPAWN_SHARE,
+            1,
+            share,
+            f"{stayed}/{n} choices name the spawn room",
+        ),
+        Check(
+            section="Statistics",
+            name="Appendix F totals vs Inventory-Free table",
+            planted=f"n = {printed_n}",
+            recovered=f"n = {n}",
+            tolerance="exact",
+            verdict="pass" if n == printed_n and not mismatch else "finding",
+            note=note,
+            data={"printed": printed_n, "recovered": n},
+        ),
+    ]
 
 
 def statistics_checks() -> list[Check]:

@@ -14,9 +14,9 @@ from pytest_emrd.rooms import ROOM_SLUGS
 from pytest_emrd.trajectory import EpisodeSpec
 
 #: Planted exponential retention means (steps) whose recovery the Ebbinghaus rows check.
-DECAY_MEANS: Final[tuple[int, ...]] = (3, 8, 20)
+DECAY_MEANS: Final = (3, 8, 20)
 #: Planted working-memory capacities whose recovery the Miller rows check.
-WINDOW_SIZES: Final[tuple[int, ...]] = (5, 10, 20)
+WINDOW_SIZES: Final = (5, 10, 20)
 #: Knobs of the mimic groups: each moves one planted behaviour away from the clean mimic.
 MIMIC_SIGMA: Final = 0.3
 MIMIC_DUP: Final = 0.5
@@ -24,7 +24,7 @@ MIMIC_HALLUC: Final = 0.1
 #: The mimic group of each role: the clean mimic in the spawn frame and in its own frame, one
 #: knob moved at a time, and the shipped defaults. The knob groups walk back into the room
 #: they name (``b1``), so every episode re-enters a room and SIR is defined.
-MIMIC_MODELS: Final[dict[str, str]] = {
+MIMIC_MODELS: Final = {
     "spawn": "mimic-spawn-s0-p0-h0-q0-r0-a0-b1",
     "own": "mimic-s0-p0-h0-q0-r0-a0-b1",
     "sigma": f"mimic-s{MIMIC_SIGMA:g}-p0-h0-q0-r0-a0-b1",
@@ -66,7 +66,7 @@ class Group:
         )
 
 
-SCOUT_GROUPS: Final[tuple[Group, ...]] = (
+SCOUT_GROUPS: Final = (
     Group("scout", "baseline"),
     Group("scout", "low_light"),
     *(Group(f"scout-decay-{m}", "baseline") for m in DECAY_MEANS),
@@ -76,13 +76,13 @@ SCOUT_GROUPS: Final[tuple[Group, ...]] = (
 )
 #: The knob groups run on generated offices (many layouts test the frame, noise and
 #: duplicate rows harder than one); the default mimic runs the benchmark's own office.
-MIMIC_GROUPS: Final[tuple[Group, ...]] = tuple(
+MIMIC_GROUPS: Final = tuple(
     Group(m, "baseline", "paper" if role == "default" else "generated")
     for role, m in MIMIC_MODELS.items()
 )
 #: Agent families ``emrd validate --family`` selects: scout (with ``prior``) and mimic.
-FAMILIES: Final[dict[str, tuple[Group, ...]]] = {"scout": SCOUT_GROUPS, "mimic": MIMIC_GROUPS}
-GROUPS: Final[tuple[Group, ...]] = SCOUT_GROUPS + MIMIC_GROUPS
+FAMILIES: Final = {"scout": SCOUT_GROUPS, "mimic": MIMIC_GROUPS}
+GROUPS: Final = SCOUT_GROUPS + MIMIC_GROUPS
 
 
 @dataclass(frozen=True)

@@ -25,7 +25,12 @@ from pytest_emrd.metrics import (
     serial_position,
 )
 from pytest_emrd.rooms import ROOM_SLUGS
-from pytest_emrd.validate._check import Check, Episode, Value, fmt, judged
+from pytest_emrd.validate._check import Check, Episodes, Value, fmt, judged
+
+#: Planted mean -> its ``scout-decay`` episodes.
+Decays = Mapping[float, Episodes]
+#: Planted capacity -> its ``scout-window`` episodes.
+Windows = Mapping[int, Episodes]
 
 #: Ebbinghaus EFC must recover the planted mean within this relative error.
 EFC_TOLERANCE: Final = 0.25
@@ -48,7 +53,7 @@ MAX_U_DEPTH: Final = 0.5
 _SPAWN_ORDER: Final = {slug: i for i, slug in enumerate(ROOM_SLUGS.values())}
 
 
-def error_curve(trajectories: Sequence[Episode], planted: float) -> list[tuple[int, float]]:
+def error_curve(trajectories: Episodes, planted: float) -> list[tuple[int, float]]:
     """``(N, |EFC_N - planted| / planted)`` over spawn-balanced prefixes of N = 4, 8, ...
     episodes; a prefix whose EFC is undefined has error ``inf``.
 
@@ -79,7 +84,7 @@ def episodes_needed(curve: Sequence[tuple[int, float]], tolerance: float) -> int
     return needed
 
 
-def decay_checks(groups: Mapping[float, Sequence[Episode]]) -> list[Check]:
+def decay_checks(groups: Decays) -> list[Check]:
     """EFC within 25 % of the planted mean and R^2 >= 0.8, per ``scout-decay-<m>`` group.
 
     :param groups: Planted mean -> its ``scout-decay`` episodes.
@@ -98,13 +103,6 @@ def decay_checks(groups: Mapping[float, Sequence[Episode]]) -> list[Check]:
             f"{mean:g}); within 25 % from N = {needed if needed is not None else 'never'} "
             f"(error {shrink})"
         )
-        data: dict[str, Value] = {
-            "efc": fit.efc,
-            "r2": fit.r2,
-            "error": error,
-            "episodes_needed": needed,
-        }
-        data.update({f"error_n{n}": e for n, e in curve})
         rows += [
             Check(
                 section="Remember",
@@ -114,7 +112,13 @@ def decay_checks(groups: Mapping[float, Sequence[Episode]]) -> list[Check]:
                 tolerance="within 25 %",
                 verdict=judged(error <= EFC_TOLERANCE),
                 note=note,
-                data=data,
+                data={
+                    "efc": fit.efc,
+                    "r2": fit.r2,
+                    "error": error,
+                    "episodes_needed": needed,
+                    **{f"error_n{n}": e for n, e in curve},
+                },
             ),
             Check(
                 section="Remember",
@@ -140,9 +144,7 @@ def nearest_decay(fit: EbbinghausFit, decays: Mapping[float, EbbinghausFit]) -> 
     return min(finite, key=lambda m: abs(math.log(decays[m].efc or 1.0) - math.log(efc)))
 
 
-def window_fit_checks(
-    windows: Mapping[int, Sequence[Episode]], decays: Mapping[float, Sequence[Episode]]
-) -> list[Check]:
+def window_fit_checks(windows: Windows, decays: Decays) -> list[Check]:
     """Each ``scout-window-<k>`` fits the exponential visibly worse than the ``scout-decay``
     whose recovered EFC is nearest its own (matched mean).
 
@@ -168,7 +170,6 @@ def window_fit_checks(
                 )
             )
             continue
-        efc = fit.efc
         match = decay_fits[m]
         gap = (match.r2 or 0.0) - fit.r2 if fit.r2 is not None else math.inf
         rows.append(
@@ -179,12 +180,12 @@ def window_fit_checks(
                 recovered=f"R^2 = {fmt(fit.r2, 3)}",
                 tolerance=f"gap >= {R2_GAP}",
                 verdict=judged(gap >= R2_GAP),
-                note=f"matched mean: window EFC {fmt(efc)} vs decay EFC {fmt(match.efc)} steps; "
-                f"{len(trajs)} + {len(decays[m])} episodes",
+                note=f"matched mean: window EFC {fmt(fit.efc)} vs decay EFC {fmt(match.efc)} "
+                f"steps; {len(trajs)} + {len(decays[m])} episodes",
                 data={
                     "r2_window": fit.r2,
                     "r2_decay": match.r2,
-                    "efc_window": efc,
+                    "efc_window": fit.efc,
                     "efc_decay": match.efc,
                 },
             )
@@ -192,9 +193,7 @@ def window_fit_checks(
     return rows
 
 
-def miller_checks(
-    windows: Mapping[int, Sequence[Episode]], perfect: Sequence[Episode]
-) -> list[Check]:
+def miller_checks(windows: Windows, perfect: Episodes) -> list[Check]:
     """Inflection ``m*`` within one bin of each planted capacity; perfect memory never
     forgets at any load.
 
@@ -206,7 +205,6 @@ def miller_checks(
     for k, trajs in windows.items():
         curve = miller_curve(trajs, width=MILLER_WIDTH)
         want = math.ceil(k / MILLER_WIDTH)
-        ok = curve.b_star is not None and abs(curve.b_star - want) <= MILLER_BINS
         probs = ", ".join(
             f"{b}: {p:.2f}" for b, p in zip(curve.bins, curve.probabilities, strict=True)
         )
@@ -217,7 +215,9 @@ def miller_checks(
                 planted=f"m* = {k} (bin {want})",
                 recovered=f"m* = {curve.m_star if curve.m_star is not None else 'none'}",
                 tolerance=f"within {MILLER_BINS} bin (w = {MILLER_WIDTH})",
-                verdict=judged(ok),
+                verdict=judged(
+                    curve.b_star is not None and abs(curve.b_star - want) <= MILLER_BINS
+                ),
                 note=f"{len(trajs)} episodes; ML(bin) {probs}"
                 + (f"; {curve.reason}" if curve.reason else ""),
                 data={"m_star": curve.m_star, "b_star": curve.b_star, "planted_bin": want},
@@ -243,11 +243,6 @@ def miller_checks(
 
 def _profile(early: float | None, middle: float | None, late: float | None) -> str:
     return f"E {fmt(early)}, M {fmt(middle)}, L {fmt(late)}"
-
-
-def _flat(values: Sequence[float | None]) -> bool:
-    defined = [v for v in values if v is not None]
-    return len(defined) == len(values) and max(defined) <= min(defined) * (1.0 + SERIAL_TOLERANCE)
 
 
 def monotone(early: float | None, middle: float | None, late: float | None) -> bool:
@@ -310,9 +305,9 @@ _LRU_SHAPE: Final = (
 
 
 def serial_checks(
-    serial: Sequence[Episode],
-    windows: Mapping[int, Sequence[Episode]],
-    perfect: Sequence[Episode] = (),
+    serial: Episodes,
+    windows: Windows,
+    perfect: Episodes = (),
 ) -> list[Check]:
     """Serial position on the censoring-aware estimate (``mle_*``, the paper's beside it):
     ``scout-serial`` shows the U (E, L > M); no ``scout-window`` does (:func:`u_depth` below
@@ -369,7 +364,9 @@ def _censoring_bias(spe: SerialPosition, episodes: int) -> Check:
     mle = (spe.mle_early, spe.mle_middle, spe.mle_late)
     paper = (spe.early, spe.middle, spe.late)
     never = all(v is not None and math.isinf(v) for v in mle)
-    verdict = "fail" if not never else ("pass" if _flat(paper) else "finding")
+    defined = [v for v in paper if v is not None]
+    flat = len(defined) == len(paper) and max(defined) <= min(defined) * (1.0 + SERIAL_TOLERANCE)
+    verdict = "fail" if not never else ("pass" if flat else "finding")
     note = (
         f"{episodes} episodes, {sum(spe.events)} of {sum(spe.spells)} first spells forgotten; "
         "Eq. SPE averages right-censored TTF, so an object found late can only be retained "
@@ -388,9 +385,9 @@ def _censoring_bias(spe: SerialPosition, episodes: int) -> Check:
 
 
 def r2_points_checks(
-    decays: Mapping[float, Sequence[Episode]],
-    windows: Mapping[int, Sequence[Episode]],
-    serial: Sequence[Episode],
+    decays: Decays,
+    windows: Windows,
+    serial: Episodes,
 ) -> list[Check]:
     """One row per grid of :data:`~pytest_emrd.metrics.R2_POINTS` (the default first).
 
@@ -412,20 +409,15 @@ def r2_points_checks(
         survives = exponential and all(g >= R2_GAP for g in gaps)
         default = points == R2_POINTS[0]
         verdict = "pass" if survives else ("fail" if default else "finding")
-        recovered = (
-            "decay "
-            + " / ".join(fmt(f.r2, 2) for f in decay.values())
-            + "; window "
-            + " / ".join(fmt(f.r2, 2) for f in window.values())
-            + f"; serial {fmt(r2_serial, 2)}"
-        )
+        decay_r2 = " / ".join(fmt(f.r2, 2) for f in decay.values())
+        window_r2 = " / ".join(fmt(f.r2, 2) for f in window.values())
         rows.append(
             Check(
                 section="Remember",
                 name=f"R^2 findings on evaluation points '{points}'"
                 + (" (default)" if default else ""),
                 planted=f"decay R^2 >= {MIN_R2}; window gap >= {R2_GAP}",
-                recovered=recovered,
+                recovered=f"decay {decay_r2}; window {window_r2}; serial {fmt(r2_serial, 2)}",
                 tolerance="both findings hold",
                 verdict=verdict,
                 note=f"decay {', '.join(f'{m:g}' for m in decay)}; window "

@@ -2,22 +2,22 @@
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 
 from pytest_emrd.agent import load_registry
 from pytest_emrd.errors import ConfigError
 from pytest_emrd.metrics import EpisodeMetrics, as_episode_metrics
 from pytest_emrd.trajectory import Trajectory
 from pytest_emrd.validate import _mimic, _plan, _remember
-from pytest_emrd.validate._check import Check, Episode, ValidationReport
+from pytest_emrd.validate._check import Check, Episodes, ValidationReport
 from pytest_emrd.validate._explore import exploration_checks, prior_checks, scout_decide_checks
 from pytest_emrd.validate._frame import frame_checks
 from pytest_emrd.validate._paper import statistics_checks
 
-Groups = Mapping[str, Sequence[Episode]]
+Groups = Mapping[str, Episodes]
 
 
-def _episodes(groups: Groups, name: str) -> Sequence[Episode]:
+def _episodes(groups: Groups, name: str) -> Episodes:
     trajs = groups.get(name)
     if not trajs:
         raise ConfigError(
@@ -41,9 +41,9 @@ def _trajectories(groups: Groups, name: str) -> list[Trajectory]:
 
 def mimic_checks(groups: Groups) -> list[Check]:
     """Frame, noise, hallucination, duplicate and reply rows of the mimic groups."""
-    role = {
-        r: _trajectories(groups, next(g.name for g in _plan.MIMIC_GROUPS if g.model == m))
-        for r, m in _plan.MIMIC_MODELS.items()
+    role = {  # MIMIC_GROUPS lists the models of MIMIC_MODELS in its order
+        r: _trajectories(groups, g.name)
+        for r, g in zip(_plan.MIMIC_MODELS, _plan.MIMIC_GROUPS, strict=True)
     }
     clean = _mimic.paired(role["own"])
     return [
