@@ -56,7 +56,7 @@ def _pivot(
     """One line per model row, ``width`` cells per condition of the run (blank when absent)."""
     table: dict[str, dict[str, Sequence[str]]] = {}
     for r in rows:
-        table.setdefault(row_label(r.model, r.variant), {})[r.condition] = fmt(r)
+        table.setdefault(r.label, {})[r.condition] = fmt(r)
     blank = ("—",) * width
     return [
         (label, *(t for c in report.overview.conditions for t in by_c.get(c, blank)))
@@ -80,16 +80,7 @@ def overview(report: Report) -> Section:
         )
     ]
     if o.usage:
-        rows = tuple(
-            (
-                u.model,
-                str(u.episodes),
-                f"{u.prompt_tokens:,}",
-                f"{u.completion_tokens:,}",
-                "n/a" if u.cost_usd is None else f"${u.cost_usd:,.2f}",
-            )
-            for u in o.usage
-        )
+        rows = tuple(u.cells() for u in o.usage)
         header = ("Model", "Episodes", "Prompt tokens", "Completion tokens", "Est. cost")
         blocks.append(Table("usage", "Token usage per model", header, rows))
         unpriced = [u.model for u in o.usage if u.cost_usd is None]
@@ -185,7 +176,7 @@ def positional_accuracy(report: Report) -> Section:
     """PA (Eq. PA) per spawn room and condition: the numbers behind pa_by_spawn.png."""
     rows = tuple(
         (
-            row_label(g.model, g.variant),
+            g.label,
             _cond(g.condition),
             SLUG_ROOMS.get(g.spawn, g.spawn),
             f"{mean_sd(*g.mean_sd, digits=3)} (n={len(g.values)})",
@@ -208,49 +199,54 @@ def _spawn_order(item: tuple[str, FocalRow]) -> int:
     return FOCAL_COLUMNS.index(room_letter(SLUG_ROOMS.get(item[0])))
 
 
+_FOCAL_HEADER: Final = (
+    "Condition",
+    "Start",
+    "n",
+    *FOCAL_COLUMNS,
+    "X: other room",
+    "X: no Term",
+    "Spawn room (%)",
+    "Consensus",
+)
+
+
 def focal(report: Report) -> Section:
-    tables: list[Block] = []
-    labels = list(dict.fromkeys(row_label(t.model, t.variant) for t in report.focal))
-    for label in labels:
-        rows = []
-        for t in (t for t in report.focal if row_label(t.model, t.variant) == label):
-            most = t.consensus
-            share = "n/a" if most.share is None else f"{most.letter or '—'} {pct(most.share)}%"
-            spawns = sorted(t.distribution.by_spawn.items(), key=_spawn_order)
-            for start, row, consensus in (
-                *((SLUG_ROOMS.get(spawn, spawn), row, "") for spawn, row in spawns),
-                (Cell("all spawns", bold=True), t.distribution.overall, share),
-            ):
-                shares = (Cell(pct(f), shade=f) for f in map(row.fractions.get, FOCAL_COLUMNS))
-                rows.append(
-                    (
-                        _cond(t.condition),
-                        start,
-                        str(row.n),
-                        *shares,
-                        str(row.named_other),
-                        str(row.no_term),
-                        pct(row.spawn_share),
-                        consensus,
-                    )
+    """One table per model row: the chosen rooms by spawn room, then over all spawns."""
+    by_label: dict[str, list[Row]] = {}
+    for t in report.focal:
+        most = t.consensus
+        share = "n/a" if most.share is None else f"{most.letter or '—'} {pct(most.share)}%"
+        spawns = sorted(t.distribution.by_spawn.items(), key=_spawn_order)
+        for start, row, consensus in (
+            *((SLUG_ROOMS.get(spawn, spawn), row, "") for spawn, row in spawns),
+            (Cell("all spawns", bold=True), t.distribution.overall, share),
+        ):
+            shares = (Cell(pct(f), shade=f) for f in map(row.fractions.get, FOCAL_COLUMNS))
+            by_label.setdefault(t.label, []).append(
+                (
+                    _cond(t.condition),
+                    start,
+                    str(row.n),
+                    *shares,
+                    str(row.named_other),
+                    str(row.no_term),
+                    pct(row.spawn_share),
+                    consensus,
                 )
-        header = (
-            "Condition",
-            "Start",
-            "n",
-            *FOCAL_COLUMNS,
-            "X: other room",
-            "X: no Term",
-            "Spawn room (%)",
-            "Consensus",
-        )
-        caption = (
+            )
+    tables = (
+        Table(
+            f"focal-{label}",
             f"{label}: chosen focal point (%) by spawn room — C Conference, O Office, "
             "K Kitchen, E Entrance, X other: counted apart as a Term naming another "
             "room and no Term (budget spent); Spawn room: the share that chose the room "
-            "they started in (Appendix F: 50.6 %, chance 25 %)"
+            "they started in (Appendix F: 50.6 %, chance 25 %)",
+            _FOCAL_HEADER,
+            tuple(rows),
         )
-        tables.append(Table(f"focal-{label}", caption, header, tuple(rows)))
+        for label, rows in by_label.items()
+    )
     return Section("focal", "Focal-Point distribution", tuple(tables))
 
 
@@ -258,7 +254,7 @@ def fpsg(report: Report) -> Section:
     rows = tuple(
         (
             _cond(r.condition),
-            row_label(r.model, r.variant),
+            r.label,
             str(s.runs),
             pct(s.never_visited),
             pct(s.any_bias),
@@ -292,7 +288,7 @@ def ebbinghaus(report: Report) -> Section:
     )
     blocks: list[Block] = [Table("ebbinghaus", caption, header, rows)]
     poor = sorted(
-        f"{row_label(r.model, r.variant)}, {_cond(r.condition)} (R² {num(r.fit.pooled.r2, 2)})"
+        f"{r.label}, {_cond(r.condition)} (R² {num(r.fit.pooled.r2, 2)})"
         for r in report.ebbinghaus
         if r.fit.pooled.r2 is not None and r.fit.pooled.r2 < R2_MEANINGLESS
     )
