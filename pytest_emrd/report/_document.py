@@ -8,7 +8,7 @@ import base64
 import html
 import math
 import re
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 
 
@@ -20,7 +20,7 @@ class Cell:
     bold: bool = False
 
 
-Row = tuple[Cell | str, ...]
+Row = Sequence[Cell | str]
 
 
 @dataclass(frozen=True)
@@ -28,8 +28,8 @@ class Table:
     table_id: str
     """Stable id (HTML ``id``; tests look tables up by it)."""
     caption: str
-    header: tuple[str, ...]
-    rows: tuple[Row, ...]
+    header: Sequence[str]
+    rows: Sequence[Row]
 
 
 @dataclass(frozen=True)
@@ -39,7 +39,7 @@ class Paragraph:
 
 @dataclass(frozen=True)
 class Bullets:
-    items: tuple[str, ...]
+    items: Sequence[str]
 
 
 @dataclass(frozen=True)
@@ -59,13 +59,13 @@ Block = Paragraph | Bullets | Table | FigureRef
 class Section:
     anchor: str
     title: str
-    blocks: tuple[Block, ...]
+    blocks: Sequence[Block]
 
 
 @dataclass(frozen=True)
 class Document:
     title: str
-    sections: tuple[Section, ...]
+    sections: Sequence[Section]
 
 
 def num(x: float | None, digits: int = 3) -> str:

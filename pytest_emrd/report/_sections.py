@@ -80,7 +80,7 @@ def overview(report: Report) -> Section:
         )
     ]
     if o.usage:
-        rows = tuple(u.cells() for u in o.usage)
+        rows = [u.cells() for u in o.usage]
         header = ("Model", "Episodes", "Prompt tokens", "Completion tokens", "Est. cost")
         blocks.append(Table("usage", "Token usage per model", header, rows))
         unpriced = [u.model for u in o.usage if u.cost_usd is None]
@@ -95,7 +95,7 @@ def overview(report: Report) -> Section:
     if report.missing:
         blocks.append(Paragraph("**What this run is missing:**"))
         blocks.append(Bullets(report.missing))
-    return Section("overview", "Run overview", tuple(blocks))
+    return Section("overview", "Run overview", blocks)
 
 
 def gates(report: Report) -> Section:
@@ -105,7 +105,7 @@ def gates(report: Report) -> Section:
         why = g.note or (f"No gate of {g.source} applies to this run." if g.source else started)
         return Section("gates", "Gates", (Paragraph(why),))
     passed = sum(v.passed for v in g.verdicts)
-    rows = tuple(
+    rows = [
         (
             v.model if v.layouts == "paper" else f"{v.model}@{v.layouts}",
             _cond(v.condition),
@@ -119,7 +119,7 @@ def gates(report: Report) -> Section:
             v.reason,
         )
         for v in g.verdicts
-    )
+    ]
     header = (
         "Model",
         "Condition",
@@ -145,7 +145,7 @@ def gates(report: Report) -> Section:
                 "gates", "Every threshold: value, bootstrap 95% CI, n, bound, verdict", header, rows
             ),
             *(
-                Bullets(tuple(f"{v.gate_id}: {e}" for e in v.evidence()))
+                Bullets([f"{v.gate_id}: {e}" for e in v.evidence()])
                 for v in g.verdicts
                 if v.evidence()
             ),
@@ -168,13 +168,13 @@ def exploration(report: Report) -> Section:
     return Section(
         "exploration",
         "Exploration Competence",
-        (Table("exploration", caption, header, tuple(rows)),),
+        (Table("exploration", caption, header, rows),),
     )
 
 
 def positional_accuracy(report: Report) -> Section:
     """PA (Eq. PA) per spawn room and condition: the numbers behind pa_by_spawn.png."""
-    rows = tuple(
+    rows = [
         (
             g.label,
             _cond(g.condition),
@@ -182,7 +182,7 @@ def positional_accuracy(report: Report) -> Section:
             f"{mean_sd(*g.mean_sd, digits=3)} (n={len(g.values)})",
         )
         for g in report.pa
-    )
+    ]
     if not rows:
         text = "Positional Accuracy is undefined in every episode (|G_base| = 0)."
         return Section("pa", "Positional Accuracy", (Paragraph(text),))
@@ -235,7 +235,7 @@ def focal(report: Report) -> Section:
                     consensus,
                 )
             )
-    tables = (
+    tables = [
         Table(
             f"focal-{label}",
             f"{label}: chosen focal point (%) by spawn room — C Conference, O Office, "
@@ -243,15 +243,15 @@ def focal(report: Report) -> Section:
             "room and no Term (budget spent); Spawn room: the share that chose the room "
             "they started in (Appendix F: 50.6 %, chance 25 %)",
             _FOCAL_HEADER,
-            tuple(rows),
+            rows,
         )
         for label, rows in by_label.items()
-    )
-    return Section("focal", "Focal-Point distribution", tuple(tables))
+    ]
+    return Section("focal", "Focal-Point distribution", tables)
 
 
 def fpsg(report: Report) -> Section:
-    rows = tuple(
+    rows = [
         (
             _cond(r.condition),
             r.label,
@@ -263,7 +263,7 @@ def fpsg(report: Report) -> Section:
         )
         for r in report.fpsg
         for s in (r.summary,)
-    )
+    ]
     header = (
         "Condition",
         "Model",
@@ -280,7 +280,7 @@ def fpsg(report: Report) -> Section:
 def ebbinghaus(report: Report) -> Section:
     efc = _pivot(report, report.ebbinghaus, lambda r: (num(r.fit.pooled.efc, 1),), 1)
     r2 = _pivot(report, report.ebbinghaus, lambda r: (num(r.fit.pooled.r2, 2),), 1)
-    rows = tuple((*a, *b[1:]) for a, b in zip(efc, r2, strict=True))
+    rows = [(*a, *b[1:]) for a, b in zip(efc, r2, strict=True)]
     header = ("Model", *_per_condition(report, "EFC"), *_per_condition(report, "R²"))
     caption = (
         "Ebbinghaus memory strength EFC (steps; inf: nothing forgotten) and R² of "
@@ -301,7 +301,7 @@ def ebbinghaus(report: Report) -> Section:
             )
         )
     if report.anova:
-        anova_rows = tuple(
+        anova_rows = [
             (
                 row_label(a.model, a.variant),
                 num(a.anova.statistic, 2),
@@ -311,11 +311,11 @@ def ebbinghaus(report: Report) -> Section:
                 a.anova.reason or "",
             )
             for a in report.anova
-        )
+        ]
         header = ("Model", "F", "df", "p", "Episodes used", "Note")
         caption = "One-way ANOVA of per-episode memory strength across conditions"
         blocks.append(Table("anova", caption, header, anova_rows))
-    return Section("ebbinghaus", "Ebbinghaus memory strength", tuple(blocks))
+    return Section("ebbinghaus", "Ebbinghaus memory strength", blocks)
 
 
 def serial_position(report: Report) -> Section:
@@ -341,8 +341,8 @@ def serial_position(report: Report) -> Section:
         "serial-position",
         "Serial Position Effect",
         (
-            Table("serial-position", caption, header, tuple(paper)),
-            Table("serial-position-mle", caption_mle, header, tuple(mle)),
+            Table("serial-position", caption, header, paper),
+            Table("serial-position-mle", caption_mle, header, mle),
         ),
     )
 
@@ -378,9 +378,7 @@ def _intervention(t: InterventionTable) -> list[Block]:
         "Cramér's V",
     )
     caption = f"{t.model}, {_cond(t.condition)}: prompt variants against the default prompt"
-    blocks: list[Block] = [
-        Table(f"intervention-{t.model}-{t.condition}", caption, header, tuple(rows))
-    ]
+    blocks: list[Block] = [Table(f"intervention-{t.model}-{t.condition}", caption, header, rows)]
     if t.overall is not None:
         o = t.overall
         text = (
@@ -392,7 +390,7 @@ def _intervention(t: InterventionTable) -> list[Block]:
     inventory = next((v for v in t.variants if v.variant == "no_inventory"), None)
     if inventory is not None:
         with_, without = t.reference, inventory.choices
-        inv_rows = tuple(
+        inv_rows = [
             (
                 _LETTER_ROOMS[c],
                 str(with_.counts[c]),
@@ -401,7 +399,7 @@ def _intervention(t: InterventionTable) -> list[Block]:
                 pct(without.fractions[c]),
             )
             for c in ("C", "K", "E", "O", "X")
-        )
+        ]
         header = ("Chosen room", "n with inventory", "% with", "n without inventory", "% without")
         caption = f"{t.model}, {_cond(t.condition)}: inventory-free intervention"
         blocks.append(Table(f"inventory-{t.model}-{t.condition}", caption, header, inv_rows))
@@ -416,14 +414,14 @@ def interventions(report: Report) -> Section:
         )
         return Section("interventions", "Controlled interventions", (Paragraph(why),))
     blocks = [b for t in report.interventions for b in _intervention(t)]
-    return Section("interventions", "Controlled interventions", tuple(blocks))
+    return Section("interventions", "Controlled interventions", blocks)
 
 
 def reasoning(report: Report) -> Section:
     r = report.reasoning
     if r.unavailable:
         return Section("reasoning", "Representative reasoning", (Paragraph(r.unavailable),))
-    rows = tuple(
+    rows = [
         (
             x.model,
             num(x.representative.mean_cosine_distance, 2),
@@ -431,7 +429,7 @@ def reasoning(report: Report) -> Section:
             x.representative.statement or "no terminal reasoning",
         )
         for x in r.rows
-    )
+    ]
     header = ("Model", "d̄ (cohesion)", "Rationales", "Most representative terminal reasoning")
     caption = "Statement closest to the semantic centroid (all-MiniLM-L6-v2)"
     return Section(
@@ -443,7 +441,7 @@ def figures(report: Report, skipped: dict[str, str]) -> Section:
     """Every figure; the episode map's caption names its episode (``emrd report --episode``)."""
     shown = report.episode_map and report.episode_map.case_id
     named = f" Episode {shown} (choose another with --episode CASE_ID)." if shown else ""
-    refs = tuple(
+    refs = [
         FigureRef(
             f.name,
             f.title,
@@ -451,7 +449,7 @@ def figures(report: Report, skipped: dict[str, str]) -> Section:
             skipped.get(f.name),
         )
         for f in FIGURES
-    )
+    ]
     return Section("figures", "Figures", refs)
 
 
