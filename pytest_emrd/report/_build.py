@@ -184,7 +184,7 @@ def pick_episode(
     none. Chosen from the episodes' heads: no trajectory is decoded."""
     heads = [e.head for e in episodes]
     if case_id is not None:
-        found = [e for e, h in zip(episodes, heads, strict=True) if h.spec.case_id == case_id]
+        found = [e for e in episodes if e.head.spec.case_id == case_id]
         if not found:
             held = sorted(h.spec.case_id for h in heads)
             shown = ", ".join(held[:3]) + (", ..." if len(held) > 3 else "")
@@ -276,9 +276,9 @@ def group_cells(
 def _usage(heads: Sequence[EpisodeHead], prices: Prices | None) -> tuple[UsageRow, ...]:
     rows = []
     for model in sorted({h.spec.model for h in heads}):
-        mine = [h for h in heads if h.spec.model == model]
-        prompt = sum(h.usage.prompt_tokens for h in mine)
-        completion = sum(h.usage.completion_tokens for h in mine)
+        mine = [h.usage for h in heads if h.spec.model == model]
+        prompt = sum(u.prompt_tokens for u in mine)
+        completion = sum(u.completion_tokens for u in mine)
         price_in, price_out = (prices or {}).get(model, (None, None))
         priced = price_in is not None and price_out is not None
         cost = (prompt * price_in + completion * price_out) / 1e6 if priced else None
