@@ -90,16 +90,16 @@ class Difference:
     a: Estimate
     """Side A over the pairs used (``n`` = pairs)."""
     b: Estimate
-    diff: float | None
+    diff: float | None = None
     """``b.value - a.value``; None when either is undefined or unbounded."""
-    ci_low: float | None
+    ci_low: float | None = None
     """Paired percentile bootstrap 95 % CI of ``diff``."""
-    ci_high: float | None
-    p_value: float | None
+    ci_high: float | None = None
+    p_value: float | None = None
     """Two-sided paired sign-flip p-value of ``diff = 0`` (None without a test)."""
-    p_holm: float | None
+    p_holm: float | None = None
     """``p_value`` after Holm's correction across every test of the comparison."""
-    verdict: str
+    verdict: str = "n/a"
     """``better``, ``worse``, ``no change``, ``inconclusive``, ``flagged`` or ``n/a`` (module
     docstring)."""
     model_b: str
@@ -219,44 +219,37 @@ def _difference(
     used = _used(name, pairs)
     ea, eb = (GATE_METRICS[name].compute([p[k] for p in used], rng_seed=rng_seed) for k in (0, 1))
 
-    def result(diff: float | None, *test: float, why: str | None = None) -> Difference:
-        low, high, p = test or (None, None, None)
-        return Difference(
-            model=key[0],
-            variant=key[1],
-            condition=key[2],
-            metric=name,
-            a=ea,
-            b=eb,
-            diff=diff,
-            ci_low=low,
-            ci_high=high,
-            p_value=p,
-            p_holm=None,
-            verdict="n/a",
-            model_b=model_b,
-            unpaired=unpaired,
-            reason=why,
-            pairs=len(used),
-        )
-
+    untested = Difference(  # verdict n/a; holm() sets the verdict of a tested one
+        model=key[0],
+        variant=key[1],
+        condition=key[2],
+        metric=name,
+        a=ea,
+        b=eb,
+        model_b=model_b,
+        unpaired=unpaired,
+        pairs=len(used),
+    )
     if not pairs:
-        return result(None, why="no paired episodes (same condition, spawn room and episode)")
+        return replace(
+            untested, reason="no paired episodes (same condition, spawn room and episode)"
+        )
     if not used:
-        return result(None, why=_why_no_pair(name, pairs))
+        return replace(untested, reason=_why_no_pair(name, pairs))
     if ea.value is None or eb.value is None:
         undefined = ea if ea.value is None else eb
-        return result(None, why=f"undefined in every pair ({undefined.reason})")
+        return replace(untested, reason=f"undefined in every pair ({undefined.reason})")
     if math.isinf(ea.value) or math.isinf(eb.value):
         side = "both sides" if math.isinf(ea.value) and math.isinf(eb.value) else "one side"
-        return result(None, why=f"unbounded on {side} (no forgetting event)")
+        return replace(untested, reason=f"unbounded on {side} (no forgetting event)")
     diff = eb.value - ea.value
     if len(used) < 2:
-        return result(diff, why="fewer than two pairs: no test")
+        return replace(untested, diff=diff, reason="fewer than two pairs: no test")
     tested = _test(*_columns(name, used), diff, rng_seed, resamples)
     if isinstance(tested, str):
-        return result(diff, why=tested)
-    return result(diff, *tested)
+        return replace(untested, diff=diff, reason=tested)
+    low, high, p = tested
+    return replace(untested, diff=diff, ci_low=low, ci_high=high, p_value=p)
 
 
 def _why_no_pair(name: str, pairs: list[Pair]) -> str:

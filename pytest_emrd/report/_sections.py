@@ -51,21 +51,23 @@ R2_MEANINGLESS: Final = 0.0
 
 
 def _pivot(
-    report: Report, rows: Sequence[CellRow], fmt: Callable[[Any], Sequence[str]], width: int
-) -> list[Row]:
-    """One line per model row, ``width`` cells per condition of the run (blank when absent)."""
+    report: Report,
+    rows: Sequence[CellRow],
+    names: Sequence[str],
+    fmt: Callable[[Any], Sequence[str]],
+) -> tuple[tuple[str, ...], list[Row]]:
+    """Header and lines of a table with one line per model row and, per condition of the run,
+    a column per name (``fmt`` of the row's cell gives them; blank where it has no cell)."""
+    conditions = report.overview.conditions
     table: dict[str, dict[str, Sequence[str]]] = {}
     for r in rows:
         table.setdefault(r.label, {})[r.condition] = fmt(r)
-    blank = ("—",) * width
-    return [
-        (label, *(t for c in report.overview.conditions for t in by_c.get(c, blank)))
+    blank = ("—",) * len(names)
+    header = ("Model", *(f"{n} {_cond(c)}" for c in conditions for n in names))
+    return header, [
+        (label, *(t for c in conditions for t in by_c.get(c, blank)))
         for label, by_c in table.items()
     ]
-
-
-def _per_condition(report: Report, *names: str) -> tuple[str, ...]:
-    return tuple(f"{n} {_cond(c)}" for c in report.overview.conditions for n in names)
 
 
 def overview(report: Report) -> Section:
@@ -154,16 +156,15 @@ def gates(report: Report) -> Section:
 
 
 def exploration(report: Report) -> Section:
-    rows = _pivot(
+    header, rows = _pivot(
         report,
         report.exploration,
+        ("AEC (%)", "TE (steps)"),
         lambda r: (
             f"{mean_sd(r.aec.value, r.aec_sd, scale=100)} (n={r.aec.n})",
             f"{mean_sd(r.te.value, r.te_sd)} (n={r.te.n})",
         ),
-        2,
     )
-    header = ("Model", *_per_condition(report, "AEC (%)", "TE (steps)"))
     caption = "Exploration Competence: AEC (%) and TE (actions), mean ± sd (Eq. AEC, TE)"
     return Section(
         "exploration",
@@ -278,10 +279,12 @@ def fpsg(report: Report) -> Section:
 
 
 def ebbinghaus(report: Report) -> Section:
-    efc = _pivot(report, report.ebbinghaus, lambda r: (num(r.fit.pooled.efc, 1),), 1)
-    r2 = _pivot(report, report.ebbinghaus, lambda r: (num(r.fit.pooled.r2, 2),), 1)
+    efc_header, efc = _pivot(
+        report, report.ebbinghaus, ["EFC"], lambda r: [num(r.fit.pooled.efc, 1)]
+    )
+    r2_header, r2 = _pivot(report, report.ebbinghaus, ["R²"], lambda r: [num(r.fit.pooled.r2, 2)])
+    header = (*efc_header, *r2_header[1:])  # the EFC columns, then the R² ones
     rows = [(*a, *b[1:]) for a, b in zip(efc, r2, strict=True)]
-    header = ("Model", *_per_condition(report, "EFC"), *_per_condition(report, "R²"))
     caption = (
         "Ebbinghaus memory strength EFC (steps; inf: nothing forgotten) and R² of "
         "C exp(-t/EFC) against the anchored KM"
@@ -321,13 +324,16 @@ def ebbinghaus(report: Report) -> Section:
 def serial_position(report: Report) -> Section:
     """Both estimators: the paper's Eq. SPE and the censoring-aware MLE per third."""
 
-    def thirds(*fields: str) -> list[Row]:
+    def thirds(*fields: str) -> tuple[tuple[str, ...], list[Row]]:
         return _pivot(
-            report, report.serial_position, lambda r: [num(getattr(r.spe, f), 1) for f in fields], 3
+            report,
+            report.serial_position,
+            ("E", "M", "L"),
+            lambda r: [num(getattr(r.spe, f), 1) for f in fields],
         )
 
-    paper, mle = thirds("early", "middle", "late"), thirds("mle_early", "mle_middle", "mle_late")
-    header = ("Model", *_per_condition(report, "E", "M", "L"))
+    header, paper = thirds("early", "middle", "late")
+    _, mle = thirds("mle_early", "mle_middle", "mle_late")
     caption = (
         "Serial Position Effect (paper's Eq. SPE): mean observed TTF (steps) of Early / "
         "Middle / Late discoveries, episode-end censoring ignored"
