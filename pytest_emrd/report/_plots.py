@@ -51,7 +51,7 @@ def colour(condition: str) -> str:
 
 
 def line_style(condition: str, n_points: int = 0) -> dict[str, Any]:
-    """Colour, line style and marker of ``condition``'s series; with ``n_points``, markers
+    """Colour, line style, width and marker of ``condition``'s series; with ``n_points``, markers
     every ~n/8 points, staggered per condition so coinciding lines all show theirs. The
     baseline is drawn above the others with the smallest, filled markers."""
     hue, ls, marker, _ = _style(condition)
@@ -59,6 +59,7 @@ def line_style(condition: str, n_points: int = 0) -> dict[str, Any]:
     style: dict[str, Any] = {
         "color": hue,
         "ls": ls,
+        "lw": 2,
         "marker": marker,
         "ms": 4.5 + 2.5 * place,
         "mfc": hue if place == 0 else "none",
@@ -130,7 +131,7 @@ def _finish(
             label=CONDITION_NAMES.get(c, c),
         )
         if bars
-        else Line2D([], [], lw=2, label=CONDITION_NAMES.get(c, c), **line_style(c))
+        else Line2D([], [], label=CONDITION_NAMES.get(c, c), **line_style(c))
         for c in conditions
     ]
     fig.legend(handles=handles, loc="outside lower center", ncols=len(handles), frameon=False)
@@ -153,7 +154,7 @@ def _tbs(report: Report) -> Figure | None:
     for s in series:
         ax = axes[s.label]
         t, mean, sd = np.array(s.curve.t), np.array(s.curve.mean), np.array(s.curve.sd)
-        ax.plot(t, mean, lw=2, **line_style(s.condition, len(t)))
+        ax.plot(t, mean, **line_style(s.condition, len(t)))
         ax.fill_between(t, mean - sd, mean + sd, color=colour(s.condition), alpha=0.12, lw=0)
     return _finish(
         fig,
@@ -215,7 +216,7 @@ def _miller(report: Report) -> Figure | None:
     for s in series:
         ax = axes[s.label]
         loads = np.array(s.curve.bins) * s.curve.width
-        ax.plot(loads, s.curve.probabilities, lw=2, **line_style(s.condition, len(loads)))
+        ax.plot(loads, s.curve.probabilities, **line_style(s.condition, len(loads)))
         if s.curve.m_star is not None:
             ax.axvline(s.curve.m_star, color=colour(s.condition), ls=":", lw=1.2)
     loads = [b * width for s in series for b in s.curve.bins]
@@ -248,7 +249,7 @@ def _km(report: Report) -> Figure | None:
     for s in series:
         km, hue = s.km, colour(s.condition)
         ax = panels[f"{s.label}: {s.category}"]
-        ax.step(km.times, km.survival, where="post", lw=2, **line_style(s.condition, len(km.times)))
+        ax.step(km.times, km.survival, where="post", **line_style(s.condition, len(km.times)))
         if km.ci_low:  # Greenwood 95 % band (lifelines), anchored like the curve
             ax.fill_between(
                 km.times, km.ci_low, km.ci_high, step="post", lw=0, color=hue, alpha=0.15
