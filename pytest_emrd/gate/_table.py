@@ -54,8 +54,7 @@ def gate_tables(verdicts: Sequence[Verdict]) -> list[str]:
             (v for v in verdicts if v.model == model),
             key=lambda v: (v.layouts != "paper", v.condition, v.variant, v.metric),
         )
-        broken = sum(not v.passed for v in mine)
-        lines.append(f"{model}: {len(mine) - broken}/{len(mine)} gates pass")
+        lines.append(f"{model}: {sum(v.passed for v in mine)}/{len(mine)} gates pass")
         rows = [
             [
                 v.cell_label,
