@@ -329,12 +329,31 @@ def index_page(rows: Sequence[IndexRow]) -> str:
     :returns: The HTML text.
     """
     e = html.escape
-    header = ["episode", "status", "steps", "chosen room", *INDEX_METRICS]
-    header += ["parse failures", "failed actions", "tokens", "error", "frames vs cassette"]
+    header = [
+        "episode",
+        "status",
+        "steps",
+        "chosen room",
+        *INDEX_METRICS,
+        "parse failures",
+        "failed actions",
+        "tokens",
+        "error",
+        "frames vs cassette",
+    ]
     body = ""
     for r in rows:
-        cells = [r.status, r.steps, r.chosen, *(r.metrics.get(m) for m in INDEX_METRICS)]
-        cells += [r.parse_failures, r.failed_actions, r.tokens, r.error, _check_text(r.check)]
+        cells = [
+            r.status,
+            r.steps,
+            r.chosen,
+            *(r.metrics.get(m) for m in INDEX_METRICS),
+            r.parse_failures,
+            r.failed_actions,
+            r.tokens,
+            r.error,
+            _check_text(r.check),
+        ]
         link = f'<td><a href="{e(r.case_id)}.html">{e(r.case_id)}</a></td>'
         body += f"<tr>{link}{''.join(map(_cell, cells))}</tr>"
     heads = "".join(f'<th title="sort">{e(h)}</th>' for h in header)
