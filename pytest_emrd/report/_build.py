@@ -112,8 +112,8 @@ def intervention_tables(focal: Sequence[FocalTable]) -> tuple[InterventionTable,
             table = [[r.counts[c] for c in FOCAL_COLUMNS] for r in (reference, row)]
             split = [_conference_split(reference), _conference_split(row)]
             fisher = metrics.fisher_exact_2x2(split) if reference.n and row.n else None
-            chi, v = metrics.chi_square(table), metrics.cramers_v(table)
-            tests.append(VariantTest(variant, row, fisher, chi, v))
+            chi = metrics.chi_square(table)
+            tests.append(VariantTest(variant, row, fisher, chi, metrics.cramers_v(table)))
         body = [t for t in tests if t.variant in _BODY_VARIANTS]
         splits = [_conference_split(r) for r in (reference, *(t.choices for t in body))]
         overall = metrics.chi_square(splits) if body else None
