@@ -61,20 +61,16 @@ def starter_thresholds(
             lines.append(f"{name}:")
         lines.append(f"  {condition}:")
         for metric in names:
-            lines += _bound(metrics[metric], _ordered(variants.values()))
+            lines += _bound(metrics[metric], variants.values())
     return "\n".join(lines) + "\n"
 
 
-def _ordered(groups: Iterable[list[Any]]) -> list[list[Any]]:
-    return [sorted(g, key=lambda m: m.spec.case_id) for g in groups]
-
-
-def _bound(metric: GateMetric, groups: list[list[Any]]) -> list[str]:
+def _bound(metric: GateMetric, groups: Iterable[list[Any]]) -> list[str]:
     """``    aec: {min: 0.78}  # value ...`` for the loosest prompt variant, or nothing."""
     higher = metric.better == "higher"
     found = []
     for group in groups:
-        e = metric.compute(group, rng_seed=0)
+        e = metric.compute(sorted(group, key=lambda m: m.spec.case_id), rng_seed=0)
         if e.value is None or not math.isfinite(e.value):
             continue
         end = e.ci_low if higher else e.ci_high
@@ -82,7 +78,7 @@ def _bound(metric: GateMetric, groups: list[list[Any]]) -> list[str]:
         found.append((edge, e))
     if not found:
         return []
-    edge, e = min(found, key=lambda f: f[0]) if higher else max(found, key=lambda f: f[0])
+    edge, e = (min if higher else max)(found, key=lambda f: f[0])
     bound = min(1.0, max(0.0, (math.floor if higher else math.ceil)(edge * 100) / 100))
     ci = f"[{format_number(e.ci_low)}, {format_number(e.ci_high)}]"
     kind = "min" if higher else "max"

@@ -22,6 +22,13 @@ class UsageRow:
     errors: int = 0
     """Episodes that ended ``errored``."""
 
+    def cells(self) -> tuple[str, ...]:
+        """Model, episodes, prompt and completion tokens and the cost as usage tables print
+        them (``n/a`` without a price)."""
+        cost = "n/a" if self.cost_usd is None else f"${self.cost_usd:,.2f}"
+        tokens = f"{self.prompt_tokens:,}", f"{self.completion_tokens:,}"
+        return (self.model, str(self.episodes), *tokens, cost)
+
 
 def render_table(header: Sequence[str], rows: Sequence[Sequence[str]]) -> list[str]:
     """Left-aligned columns two spaces apart, header first (trailing spaces stripped).
@@ -47,8 +54,7 @@ def gate_tables(verdicts: Sequence[Verdict]) -> list[str]:
             (v for v in verdicts if v.model == model),
             key=lambda v: (v.layouts != "paper", v.condition, v.variant, v.metric),
         )
-        broken = sum(not v.passed for v in mine)
-        lines.append(f"{model}: {len(mine) - broken}/{len(mine)} gates pass")
+        lines.append(f"{model}: {sum(v.passed for v in mine)}/{len(mine)} gates pass")
         rows = [
             [
                 v.cell_label,
@@ -75,16 +81,7 @@ def usage_table(rows: Sequence[UsageRow]) -> list[str]:
     :returns: The table's lines, Markdown.
     """
     body = [
-        [
-            r.model,
-            str(r.episodes),
-            f"{r.prompt_tokens:,}",
-            f"{r.completion_tokens:,}",
-            "n/a" if r.cost_usd is None else f"${r.cost_usd:,.2f}",
-            str(r.retries),
-            str(r.errors),
-        ]
-        for r in sorted(rows, key=lambda r: r.model)
+        [*r.cells(), str(r.retries), str(r.errors)] for r in sorted(rows, key=lambda r: r.model)
     ]
     header = ["model", "episodes", "prompt tokens", "completion tokens", "est. cost"]
     header += ["retries", "errored"]

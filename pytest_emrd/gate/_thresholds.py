@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Collection, Iterator, Mapping
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from typing import Any, Final
 
 import yaml
@@ -36,17 +36,19 @@ class Domain:
         return self.low <= value <= self.high
 
 
-def domain(metric: str, unit: str | None, *, max_steps: int = MAX_STEPS) -> Domain:
+#: Metric unit -> its domain (a metric of no listed unit: any finite number).
+_UNIT_DOMAINS: Final = {
+    "fraction": Domain(0.0, 1.0, "a fraction in [0, 1]"),
+    "steps": Domain(0.0, math.inf, "steps >= 0"),
+    "R^2": Domain(-math.inf, 1.0, "an R^2 <= 1"),
+}
+
+
+def domain(metric: str, unit: str | None) -> Domain:
     """The domain of ``metric`` from its unit (``fraction``, ``steps``, ``R^2``)."""
-    if unit == "fraction":
-        return Domain(0.0, 1.0, "a fraction in [0, 1]")
     if unit == "steps" and metric in BUDGET_METRICS:
-        return Domain(0.0, float(max_steps), f"steps in [0, {max_steps}] (the action budget)")
-    if unit == "steps":
-        return Domain(0.0, math.inf, "steps >= 0")
-    if unit == "R^2":
-        return Domain(-math.inf, 1.0, "an R^2 <= 1")
-    return Domain(-math.inf, math.inf, "a finite number")
+        return Domain(0.0, float(MAX_STEPS), f"steps in [0, {MAX_STEPS}] (the action budget)")
+    return _UNIT_DOMAINS.get(unit, Domain(-math.inf, math.inf, "a finite number"))
 
 
 @dataclass(frozen=True)
@@ -83,9 +85,8 @@ class Thresholds:
 class _Reader:
     source: str
 
-    def fail(self, node: yaml.Node | None, message: str) -> ConfigError:
-        line = f", line {node.start_mark.line + 1}" if node is not None else ""
-        return ConfigError(f"{self.source}{line}: {message}")
+    def fail(self, node: yaml.Node, message: str) -> ConfigError:
+        return ConfigError(f"{self.source}, line {node.start_mark.line + 1}: {message}")
 
     def mapping(self, node: yaml.Node, what: str) -> Iterator[tuple[str, yaml.Node, yaml.Node]]:
         if not isinstance(node, yaml.MappingNode):
@@ -156,8 +157,12 @@ def parse_thresholds(
             for metric, metric_key, spec in reader.mapping(metric_map, f"{model}.{key}"):
                 reader.choice(metric_key, "metric", metric, metrics)
                 allowed = domain(metric, _unit(metrics, metric))
-                bound = _bound(reader, model, condition, metric, metric_key, spec, allowed)
-                bounds.append(replace(bound, layouts=layouts or "paper"))
+                where = f"{model}.{condition}.{metric}"
+                kind, value, ci = _bound(reader, where, metric_key, spec, allowed)
+                line = metric_key.start_mark.line + 1
+                bounds.append(
+                    Bound(model, condition, metric, kind, value, ci, line, layouts or "paper")
+                )
     if not bounds:
         raise ConfigError(
             f"{source} holds no gate, so a run would pass with nothing checked; write one "
@@ -172,15 +177,10 @@ def _unit(metrics: Collection[str], name: str) -> str | None:
 
 
 def _bound(
-    reader: _Reader,
-    model: str,
-    condition: str,
-    metric: str,
-    key: yaml.Node,
-    spec: Any,
-    allowed: Domain,
-) -> Bound:
-    where = f"{model}.{condition}.{metric}"
+    reader: _Reader, where: str, key: yaml.Node, spec: Any, allowed: Domain
+) -> tuple[str, float, str | None]:
+    """The bound ``spec`` of metric ``where`` (``model.condition.metric``): kind, value and
+    the CI end it compares (None: the value)."""
     fields = {name: (k, v) for name, k, v in reader.mapping(spec, where)}
     for name, (k, _) in fields.items():
         reader.choice(k, f"key in {where}", name, (*BOUND_KINDS, "ci"))
@@ -196,4 +196,4 @@ def _bound(
             raise reader.fail(ci_node, f"{where}.ci must be one of lower, upper.")
         ci = str(ci_node.value)
         reader.choice(ci_node, f"ci side in {where}", ci, CI_SIDES)
-    return Bound(model, condition, metric, kind, value, ci, key.start_mark.line + 1)
+    return kind, value, ci

@@ -175,7 +175,7 @@ def worst_episodes(
     the metric has per-episode values (``EpisodeMetrics``); ``run_dir_of`` maps a case id to
     the run directory holding it."""
     get = _PER_EPISODE.get(verdict.metric, lambda m: getattr(m, verdict.metric, None))
-    values = [(m.spec.case_id, get(m)) for m in items] if not verdict.passed else []
+    values = [] if verdict.passed else [(m.spec.case_id, get(m)) for m in items]
     scored = [(case, float(v)) for case, v in values if isinstance(v, int | float)]
     if not scored:
         return verdict

@@ -56,8 +56,13 @@ _CONFERENCE = ROOM_LETTERS["Conference Room"]
 _BODY_VARIANTS = ("B1", "B2", "B3", "B4")
 
 
-def per_cell(cells: Cells, row: Callable[..., Any], *compute: Callable[[Any], Any]) -> tuple:
-    """``row(model, variant, condition, *(f(episodes) for f in compute))`` for every cell."""
+def per_cell(
+    cells: Mapping[tuple[str, ...], Sequence[EpisodeMetrics]],
+    row: Callable[..., Any],
+    *compute: Callable[[Any], Any],
+) -> tuple:
+    """``row(*key, *(f(episodes) for f in compute))`` for every cell (key: model, variant,
+    condition) or model row (:func:`model_rows`, key: model, variant)."""
     return tuple(row(*key, *(f(ems) for f in compute)) for key, ems in cells.items())
 
 
@@ -72,62 +77,64 @@ def sd_of(field: str) -> Callable[[Sequence[EpisodeMetrics]], float | None]:
     return sd
 
 
-def anova_rows(cells: Cells) -> tuple[AnovaRow, ...]:
-    """ANOVA across the conditions of each model x variant (all its cells pooled)."""
+def model_rows(cells: Cells) -> dict[tuple[str, str], list[EpisodeMetrics]]:
+    """The episodes of each model x variant, its cells (conditions) pooled."""
     pooled: dict[tuple[str, str], list[EpisodeMetrics]] = {}
     for (model, variant, _), ems in cells.items():
         pooled.setdefault((model, variant), []).extend(ems)
-    return tuple(AnovaRow(*k, metrics.anova_conditions(ems)) for k, ems in pooled.items())
+    return pooled
 
 
-def _conference_split(counts: Mapping[str, int]) -> list[int]:
-    chose = counts.get(_CONFERENCE, 0)
-    return [chose, sum(counts.values()) - chose]
+def _conference_split(row: metrics.FocalRow) -> list[int]:
+    chose = row.counts.get(_CONFERENCE, 0)
+    return [chose, sum(row.counts.values()) - chose]
 
 
-def intervention_tables(cells: Cells) -> tuple[InterventionTable, ...]:
-    """Prompt variants vs the default prompt, per model x condition holding both.
+def intervention_tables(focal: Sequence[FocalTable]) -> tuple[InterventionTable, ...]:
+    """Prompt variants vs the default prompt, per model x condition holding both, from the
+    cells' focal-point tables.
 
     Per variant: two-sided Fisher exact test on Conference vs other choices, Pearson
     chi-square and Cramer's V on the C/O/K/E/X distribution. Overall: Pearson chi-square of
     Conference vs other across the default prompt and the B1-B4 variants present (the paper's
     5 x 2 table). Errored episodes are excluded, as in every focal-point count.
     """
-    by_cell: dict[tuple[str, str], dict[str, Sequence[EpisodeMetrics]]] = {}
-    for (model, variant, condition), ems in cells.items():  # variants in the paper's order
-        by_cell.setdefault((model, condition), {})[variant] = ems
+    by_cell: dict[tuple[str, str], dict[str, metrics.FocalRow]] = {}
+    for t in focal:  # variants in the paper's order
+        by_cell.setdefault((t.model, t.condition), {})[t.variant] = t.distribution.overall
     tables = []
     for (model, condition), variants in by_cell.items():
         if "default" not in variants or len(variants) < 2:
             continue
-        reference = metrics.focal_distribution(variants.pop("default")).overall
+        reference = variants.pop("default")
         tests = []
-        for variant, ems in variants.items():
-            row = metrics.focal_distribution(ems).overall
+        for variant, row in variants.items():
             table = [[r.counts[c] for c in FOCAL_COLUMNS] for r in (reference, row)]
-            split = [_conference_split(reference.counts), _conference_split(row.counts)]
+            split = [_conference_split(reference), _conference_split(row)]
             fisher = metrics.fisher_exact_2x2(split) if reference.n and row.n else None
-            chi, v = metrics.chi_square(table), metrics.cramers_v(table)
-            tests.append(VariantTest(variant, row, fisher, chi, v))
+            chi = metrics.chi_square(table)
+            tests.append(VariantTest(variant, row, fisher, chi, metrics.cramers_v(table)))
         body = [t for t in tests if t.variant in _BODY_VARIANTS]
-        splits = [_conference_split(r.counts) for r in (reference, *(t.choices for t in body))]
+        splits = [_conference_split(r) for r in (reference, *(t.choices for t in body))]
         overall = metrics.chi_square(splits) if body else None
         names = ("default", *(t.variant for t in body)) if body else ()
         tables.append(InterventionTable(model, condition, reference, tuple(tests), overall, names))
     return tuple(tables)
 
 
-def reasoning(by_label: Mapping[str, Sequence[EpisodeMetrics]], embed: Embed | None) -> Reasoning:
+def reasoning(
+    pooled: Mapping[tuple[str, str], Sequence[EpisodeMetrics]], embed: Embed | None
+) -> Reasoning:
     """Representative terminal reasoning per model row (all its conditions pooled, as the
     paper); without the ``nlp`` extra, why not."""
     rows = []
-    for label, ems in by_label.items():
+    for (model, variant), ems in pooled.items():
         rationales = [m.rationale for m in ems if not m.errored]
         try:
             rep = metrics.representative_reasoning(rationales, embed=_unique(embed))
         except MissingExtraError as exc:
             return Reasoning((), str(exc))
-        rows.append(ReasoningRow(label, rep))
+        rows.append(ReasoningRow(row_label(model, variant), rep))
     return Reasoning(tuple(rows))
 
 
@@ -158,12 +165,12 @@ def pa_by_spawn(cells: Cells) -> tuple[PASpawn, ...]:
     )
 
 
-def km_series(cells: Cells, fits: Mapping[tuple[str, str, str], Any]) -> tuple[KMSeries, ...]:
-    """Anchored KM per category with the Ebbinghaus fit of the same category (``fits``: the
-    cells' :func:`~pytest_emrd.metrics.ebbinghaus`, computed once for their table)."""
+def km_series(cells: Cells, ebbinghaus: Sequence[EbbinghausRow]) -> tuple[KMSeries, ...]:
+    """Anchored KM per category with the Ebbinghaus fit of the same category (``ebbinghaus``:
+    the cells' rows in cell order, computed once for their table)."""
     return tuple(
-        KMSeries(*key, category, km, fits[key].by_category[category])
-        for key, ems in cells.items()
+        KMSeries(*key, category, km, row.fit.by_category[category])
+        for (key, ems), row in zip(cells.items(), ebbinghaus, strict=True)
         for category, km in metrics.kaplan_meier_anchored(ems).items()
     )
 
@@ -177,7 +184,7 @@ def pick_episode(
     none. Chosen from the episodes' heads: no trajectory is decoded."""
     heads = [e.head for e in episodes]
     if case_id is not None:
-        found = [e for e, h in zip(episodes, heads, strict=True) if h.spec.case_id == case_id]
+        found = [e for e in episodes if e.head.spec.case_id == case_id]
         if not found:
             held = sorted(h.spec.case_id for h in heads)
             shown = ", ".join(held[:3]) + (", ..." if len(held) > 3 else "")
@@ -269,13 +276,12 @@ def group_cells(
 def _usage(heads: Sequence[EpisodeHead], prices: Prices | None) -> tuple[UsageRow, ...]:
     rows = []
     for model in sorted({h.spec.model for h in heads}):
-        mine = [h for h in heads if h.spec.model == model]
-        prompt = sum(h.usage.prompt_tokens for h in mine)
-        completion = sum(h.usage.completion_tokens for h in mine)
+        mine = [h.usage for h in heads if h.spec.model == model]
+        prompt = sum(u.prompt_tokens for u in mine)
+        completion = sum(u.completion_tokens for u in mine)
         price_in, price_out = (prices or {}).get(model, (None, None))
-        cost = None
-        if price_in is not None and price_out is not None:
-            cost = (prompt * price_in + completion * price_out) / 1e6
+        priced = price_in is not None and price_out is not None
+        cost = (prompt * price_in + completion * price_out) / 1e6 if priced else None
         rows.append(UsageRow(model, len(mine), prompt, completion, cost))
     return tuple(rows)
 
@@ -381,22 +387,26 @@ def build_report(
     :param processes: Processes that align the map figure's steps.
     :returns: The :class:`Report`.
     """
-    stored = [e if isinstance(e, StoredEpisode) else _wrap(e) for e in episodes]
+    stored = [  # a trajectory handed in directly: its head is computed from it
+        e
+        if isinstance(e, StoredEpisode)
+        else StoredEpisode.of(e, session="", recorded=False, frame_drift=0, seconds=0.0)
+        for e in episodes
+    ]
     heads = [e.head for e in stored]
     overview = _overview(heads, prices)
     gates = Gates(thresholds_source, tuple(verdicts or ()))
     measured = [e.trajectory for e in stored] if episode_metrics is None else episode_metrics
     cells: Cells = group_cells(metrics.as_episode_metrics(measured))
-    by_label: dict[str, list[EpisodeMetrics]] = {}
-    for (model, variant, _), ems in cells.items():
-        by_label.setdefault(row_label(model, variant), []).extend(ems)
+    pooled = model_rows(cells)
     chosen = pick_episode(stored, episode)
     fork = processes > 1 and chosen is not None
     if fork:  # the alignment and lifelines both use it: imported once, before the fork
         import scipy.optimize  # noqa: F401
     with beside(episode_map, chosen, fork=fork) as mapped:
-        reasons = reasoning(by_label, embed) if with_reasoning else Reasoning(())
+        reasons = reasoning(pooled, embed) if with_reasoning else Reasoning(())
         ebbinghaus = per_cell(cells, EbbinghausRow, metrics.ebbinghaus)
+        focal = per_cell(cells, FocalTable, metrics.focal_distribution, metrics.consensus)
         aec, te = metrics.GATE_METRICS["aec"], metrics.GATE_METRICS["te"]
         return Report(
             overview=overview,
@@ -404,18 +414,18 @@ def build_report(
             exploration=per_cell(
                 cells, ExplorationRow, aec.compute, sd_of("aec"), te.compute, sd_of("te")
             ),
-            focal=per_cell(cells, FocalTable, metrics.focal_distribution, metrics.consensus),
+            focal=focal,
             fpsg=per_cell(cells, FPSGRow, metrics.fpsg),
             ebbinghaus=ebbinghaus,
             serial_position=per_cell(cells, SerialRow, metrics.serial_position),
-            anova=anova_rows(cells),
-            interventions=intervention_tables(cells),
+            anova=per_cell(pooled, AnovaRow, metrics.anova_conditions),
+            interventions=intervention_tables(focal),
             reasoning=reasons,
             gates=gates,
             tbs=per_cell(cells, TBSSeries, _tbs_to_last_step),
             pa=pa_by_spawn(cells),
             miller=per_cell(cells, MillerSeries, metrics.miller_curve),
-            km=km_series(cells, {(r.model, r.variant, r.condition): r.fit for r in ebbinghaus}),
+            km=km_series(cells, ebbinghaus),
             sir=per_cell(cells, SIRSeries, metrics.spatial_identity_resolution),
             episode_map=mapped(),
         )
@@ -425,8 +435,3 @@ def _tbs_to_last_step(ems: Sequence[EpisodeMetrics]) -> metrics.TBSCurve:
     """The cell's TBS curve up to the last step its longest episode reached (not the budget:
     a cell whose episodes all ended at step 4 is drawn to step 4)."""
     return metrics.tbs_curve(ems, t_max=max((len(m.tbs) for m in ems), default=0))
-
-
-def _wrap(trajectory: Trajectory) -> StoredEpisode:
-    """A trajectory handed in directly, as a stored episode (its head computed from it)."""
-    return StoredEpisode.of(trajectory, session="", recorded=False, frame_drift=0, seconds=0.0)

@@ -90,16 +90,16 @@ class Difference:
     a: Estimate
     """Side A over the pairs used (``n`` = pairs)."""
     b: Estimate
-    diff: float | None
+    diff: float | None = None
     """``b.value - a.value``; None when either is undefined or unbounded."""
-    ci_low: float | None
+    ci_low: float | None = None
     """Paired percentile bootstrap 95 % CI of ``diff``."""
-    ci_high: float | None
-    p_value: float | None
+    ci_high: float | None = None
+    p_value: float | None = None
     """Two-sided paired sign-flip p-value of ``diff = 0`` (None without a test)."""
-    p_holm: float | None
+    p_holm: float | None = None
     """``p_value`` after Holm's correction across every test of the comparison."""
-    verdict: str
+    verdict: str = "n/a"
     """``better``, ``worse``, ``no change``, ``inconclusive``, ``flagged`` or ``n/a`` (module
     docstring)."""
     model_b: str
@@ -111,6 +111,12 @@ class Difference:
     """Pairs the metric is compared on (both episodes define it)."""
     p_reachable: float | None = None
     """The smallest Holm-adjusted p this test's pairs could give (None without a test)."""
+
+    @property
+    def label(self) -> str:
+        """The compared model row: ``scout [B3]``, or ``scout vs gemini`` for two models."""
+        who = self.model if self.model == self.model_b else f"{self.model} vs {self.model_b}"
+        return row_label(who, self.variant)
 
     @property
     def significant(self) -> bool | None:
@@ -211,47 +217,39 @@ def _difference(
 ) -> Difference:
     pairs, unpaired = _pairs(a, b)
     used = _used(name, pairs)
-    ea = GATE_METRICS[name].compute([x for x, _ in used], rng_seed=rng_seed)
-    eb = GATE_METRICS[name].compute([y for _, y in used], rng_seed=rng_seed)
+    ea, eb = (GATE_METRICS[name].compute([p[k] for p in used], rng_seed=rng_seed) for k in (0, 1))
 
-    def result(diff: float | None, *test: float, why: str | None = None) -> Difference:
-        low, high, p = test or (None, None, None)
-        return Difference(
-            model=key[0],
-            variant=key[1],
-            condition=key[2],
-            metric=name,
-            a=ea,
-            b=eb,
-            diff=diff,
-            ci_low=low,
-            ci_high=high,
-            p_value=p,
-            p_holm=None,
-            verdict="n/a",
-            model_b=model_b,
-            unpaired=unpaired,
-            reason=why,
-            pairs=len(used),
-        )
-
+    untested = Difference(  # verdict n/a; holm() sets the verdict of a tested one
+        model=key[0],
+        variant=key[1],
+        condition=key[2],
+        metric=name,
+        a=ea,
+        b=eb,
+        model_b=model_b,
+        unpaired=unpaired,
+        pairs=len(used),
+    )
     if not pairs:
-        return result(None, why="no paired episodes (same condition, spawn room and episode)")
+        return replace(
+            untested, reason="no paired episodes (same condition, spawn room and episode)"
+        )
     if not used:
-        return result(None, why=_why_no_pair(name, pairs))
+        return replace(untested, reason=_why_no_pair(name, pairs))
     if ea.value is None or eb.value is None:
         undefined = ea if ea.value is None else eb
-        return result(None, why=f"undefined in every pair ({undefined.reason})")
+        return replace(untested, reason=f"undefined in every pair ({undefined.reason})")
     if math.isinf(ea.value) or math.isinf(eb.value):
         side = "both sides" if math.isinf(ea.value) and math.isinf(eb.value) else "one side"
-        return result(None, why=f"unbounded on {side} (no forgetting event)")
+        return replace(untested, reason=f"unbounded on {side} (no forgetting event)")
     diff = eb.value - ea.value
     if len(used) < 2:
-        return result(diff, why="fewer than two pairs: no test")
+        return replace(untested, diff=diff, reason="fewer than two pairs: no test")
     tested = _test(*_columns(name, used), diff, rng_seed, resamples)
     if isinstance(tested, str):
-        return result(diff, why=tested)
-    return result(diff, *tested)
+        return replace(untested, diff=diff, reason=tested)
+    low, high, p = tested
+    return replace(untested, diff=diff, ci_low=low, ci_high=high, p_value=p)
 
 
 def _why_no_pair(name: str, pairs: list[Pair]) -> str:
@@ -318,11 +316,10 @@ def compare_lines(c: Comparison) -> list[str]:
     """
     lines = []
     for d in c.differences:
-        who = d.model if d.model == d.model_b else f"{d.model} vs {d.model_b}"
         ci = "" if d.ci_low is None else f" [{num(d.ci_low)}, {num(d.ci_high)}]"
         why = f" ({d.reason})" if d.reason and d.verdict != "no change" else ""
         lines.append(
-            f"{row_label(who, d.variant)} {d.condition} {d.metric}: {num(d.a.value)} -> "
+            f"{d.label} {d.condition} {d.metric}: {num(d.a.value)} -> "
             f"{num(d.b.value)}, B - A {num(d.diff)}{ci}, Holm p {pval(d.p_holm)}: "
             f"{d.verdict}{why}"
         )
@@ -350,19 +347,18 @@ def compare_runs(
     :param rng_seed: Seed of the bootstrap CIs.
     :returns: The :class:`Comparison`.
     """
-    cells_a = group_cells(as_episode_metrics(run_a))
-    cells_b = group_cells(as_episode_metrics(run_b))
-    if models is not None:
-        cells_a = {(models[0], *k[1:]): v for k, v in cells_a.items() if k[0] == models[0]}
+    cells_a, cells_b = (group_cells(as_episode_metrics(run)) for run in (run_a, run_b))
+    if models is not None:  # side B's cells keyed by model A, as side A's
+        cells_a = {k: v for k, v in cells_a.items() if k[0] == models[0]}
         cells_b = {(models[0], *k[1:]): v for k, v in cells_b.items() if k[0] == models[1]}
     shared = [k for k in cells_a if k in cells_b]
     resamples = max(N_RESAMPLES, math.ceil(10 * len(shared) * len(COMPARED) / ALPHA))
 
-    def model(k: tuple[str, str, str], side: int) -> str:
-        return models[side] if models else k[0]
+    def model_b(k: tuple[str, str, str]) -> str:
+        return models[1] if models else k[0]
 
     diffs = tuple(
-        _difference(k, model(k, 1), name, cells_a[k], cells_b[k], rng_seed, resamples)
+        _difference(k, model_b(k), name, cells_a[k], cells_b[k], rng_seed, resamples)
         for k in shared
         for name in COMPARED
     )
@@ -370,8 +366,8 @@ def compare_runs(
         run_a=names[0],
         run_b=names[1],
         differences=_te_with_aec(holm(diffs, resamples)),
-        only_a=tuple("/".join((model(k, 0), *k[1:])) for k in cells_a if k not in cells_b),
-        only_b=tuple("/".join((model(k, 1), *k[1:])) for k in cells_b if k not in cells_a),
+        only_a=tuple("/".join(k) for k in cells_a if k not in cells_b),
+        only_b=tuple("/".join((model_b(k), *k[1:])) for k in cells_b if k not in cells_a),
         rng_seed=rng_seed,
         n_resamples=resamples,
         models=models,
@@ -420,16 +416,13 @@ def compare_document(c: Comparison) -> Document:
     if c.only_a or c.only_b:
         notes = [f"only in A (not compared): {k}" for k in c.only_a]
         notes += [f"only in B (not compared): {k}" for k in c.only_b]
-        blocks.append(Bullets(tuple(notes)))
+        blocks.append(Bullets(notes))
     if not c.differences:
         blocks.append(Paragraph("The two sides share no model x prompt x condition cell."))
-    by_cell: dict[tuple[str, str, str, str], list[Row]] = {}
+    by_cell: dict[tuple[str, str], list[Row]] = {}  # (table id, caption) -> rows
     for d in c.differences:
-        by_cell.setdefault((d.model, d.model_b, d.variant, d.condition), []).append(_row(d))
-    for (model, model_b, variant, condition), rows in by_cell.items():
-        who = model if model == model_b else f"{model} vs {model_b}"
-        label = f"{row_label(who, variant)}, {CONDITION_NAMES.get(condition, condition)}"
-        blocks.append(
-            Table(f"compare-{model}-{model_b}-{variant}-{condition}", label, _HEADER, tuple(rows))
-        )
-    return Document("EMRD comparison", (Section("compare", "Differences", tuple(blocks)),))
+        table_id = f"compare-{d.model}-{d.model_b}-{d.variant}-{d.condition}"
+        caption = f"{d.label}, {CONDITION_NAMES.get(d.condition, d.condition)}"
+        by_cell.setdefault((table_id, caption), []).append(_row(d))
+    blocks += [Table(*key, _HEADER, rows) for key, rows in by_cell.items()]
+    return Document("EMRD comparison", [Section("compare", "Differences", blocks)])

@@ -8,7 +8,7 @@ import base64
 import html
 import math
 import re
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 
 
@@ -20,7 +20,7 @@ class Cell:
     bold: bool = False
 
 
-Row = tuple[Cell | str, ...]
+Row = Sequence[Cell | str]
 
 
 @dataclass(frozen=True)
@@ -28,8 +28,8 @@ class Table:
     table_id: str
     """Stable id (HTML ``id``; tests look tables up by it)."""
     caption: str
-    header: tuple[str, ...]
-    rows: tuple[Row, ...]
+    header: Sequence[str]
+    rows: Sequence[Row]
 
 
 @dataclass(frozen=True)
@@ -39,7 +39,7 @@ class Paragraph:
 
 @dataclass(frozen=True)
 class Bullets:
-    items: tuple[str, ...]
+    items: Sequence[str]
 
 
 @dataclass(frozen=True)
@@ -59,13 +59,13 @@ Block = Paragraph | Bullets | Table | FigureRef
 class Section:
     anchor: str
     title: str
-    blocks: tuple[Block, ...]
+    blocks: Sequence[Block]
 
 
 @dataclass(frozen=True)
 class Document:
     title: str
-    sections: tuple[Section, ...]
+    sections: Sequence[Section]
 
 
 def num(x: float | None, digits: int = 3) -> str:
@@ -105,14 +105,14 @@ def _md_cell(c: Cell | str) -> str:
     return f"**{text}**" if c.bold and text else text
 
 
+def _md_row(cells: Iterable[str]) -> str:
+    return f"| {' | '.join(cells)} |"
+
+
 def _md_table(t: Table) -> list[str]:
-    lines = [f"*{t.caption}*", ""]
-    lines.append("| " + " | ".join(h.replace("|", "\\|") for h in t.header) + " |")
-    lines.append("|" + "|".join([" --- "] * len(t.header)) + "|")
-    lines += ["| " + " | ".join(_md_cell(c) for c in row) + " |" for row in t.rows]
-    if not t.rows:
-        lines.append("| " + " | ".join(["—"] * len(t.header)) + " |")
-    return lines
+    rule = "|".join([" --- "] * len(t.header))
+    rows = [_md_row(map(_md_cell, row)) for row in t.rows] or [_md_row(["—"] * len(t.header))]
+    return [f"*{t.caption}*", "", _md_row(map(_md_cell, t.header)), f"|{rule}|", *rows]
 
 
 def render_markdown(doc: Document) -> str:
@@ -130,8 +130,11 @@ def render_markdown(doc: Document) -> str:
             elif block.missing is not None:
                 lines.append(f"**{block.title}**: not drawn ({block.missing}).")
             else:
-                lines += [f"![{block.title}]({block.name})", ""]
-                lines.append(f"*{block.title}.* {block.caption}")
+                lines += [
+                    f"![{block.title}]({block.name})",
+                    "",
+                    f"*{block.title}.* {block.caption}",
+                ]
             lines.append("")
     return "\n".join(lines).rstrip() + "\n"
 
@@ -181,7 +184,7 @@ def _td(c: Cell | str) -> str:
 
 def _html_table(t: Table) -> str:
     head = "".join(f"<th>{html.escape(h)}</th>" for h in t.header)
-    body = "".join("<tr>" + "".join(_td(c) for c in row) + "</tr>" for row in t.rows)
+    body = "".join(f"<tr>{''.join(map(_td, row))}</tr>" for row in t.rows)
     return (
         f'<table id="{html.escape(t.table_id)}"><caption>{html.escape(t.caption)}</caption>'
         f"<thead><tr>{head}</tr></thead><tbody>{body}</tbody></table>"

@@ -71,6 +71,11 @@ class CellRow:
     variant: str
     condition: str
 
+    @property
+    def label(self) -> str:
+        """The model row it belongs to (:func:`row_label`)."""
+        return row_label(self.model, self.variant)
+
 
 @dataclass(frozen=True)
 class ExplorationRow(CellRow):

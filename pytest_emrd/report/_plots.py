@@ -24,7 +24,7 @@ from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
 from pytest_emrd._fork import pool
-from pytest_emrd.report._model import CONDITION_NAMES, FIGURES, EpisodeMap, Report, rank, row_label
+from pytest_emrd.report._model import CONDITION_NAMES, FIGURES, EpisodeMap, Report, rank
 from pytest_emrd.rooms import ROOM_SLUGS, SLUG_ROOMS
 from pytest_emrd.trajectory import CONDITIONS
 
@@ -38,6 +38,8 @@ _DPI: Final = 100
 _OTHER_STYLE: Final = ("#7f7f7f", ":", "D", "xx")
 #: Average glyph width of the default font, in units of its size (for wrapping titles).
 _GLYPH: Final = 0.62
+#: Y range of a share in [0, 1], with room for a line or marker at either end.
+_SHARE_LIMITS: Final = (-0.02, 1.02)
 
 
 def _style(condition: str) -> tuple[str, str, str, str]:
@@ -49,17 +51,18 @@ def colour(condition: str) -> str:
 
 
 def line_style(condition: str, n_points: int = 0) -> dict[str, Any]:
-    """Colour, line style and marker of ``condition``'s series; with ``n_points``, markers
+    """Colour, line style, width and marker of ``condition``'s series; with ``n_points``, markers
     every ~n/8 points, staggered per condition so coinciding lines all show theirs. The
     baseline is drawn above the others with the smallest, filled markers."""
-    _, ls, marker, _ = _style(condition)
+    hue, ls, marker, _ = _style(condition)
     place = rank(condition, CONDITIONS)[0]
     style: dict[str, Any] = {
-        "color": colour(condition),
+        "color": hue,
         "ls": ls,
+        "lw": 2,
         "marker": marker,
         "ms": 4.5 + 2.5 * place,
-        "mfc": colour(condition) if place == 0 else "none",
+        "mfc": hue if place == 0 else "none",
         "mew": 1.5,
         "zorder": 3 - 0.1 * place,
     }
@@ -128,7 +131,7 @@ def _finish(
             label=CONDITION_NAMES.get(c, c),
         )
         if bars
-        else Line2D([], [], lw=2, label=CONDITION_NAMES.get(c, c), **line_style(c))
+        else Line2D([], [], label=CONDITION_NAMES.get(c, c), **line_style(c))
         for c in conditions
     ]
     fig.legend(handles=handles, loc="outside lower center", ncols=len(handles), frameon=False)
@@ -140,7 +143,7 @@ def _conditions(series: Sequence[Any]) -> list[str]:
 
 
 def _labels(items: Sequence[Any]) -> list[str]:
-    return list(dict.fromkeys(row_label(i.model, i.variant) for i in items))
+    return list(dict.fromkeys(i.label for i in items))
 
 
 def _tbs(report: Report) -> Figure | None:
@@ -149,9 +152,9 @@ def _tbs(report: Report) -> Figure | None:
         return None
     fig, axes = _panels(series)
     for s in series:
-        ax = axes[row_label(s.model, s.variant)]
+        ax = axes[s.label]
         t, mean, sd = np.array(s.curve.t), np.array(s.curve.mean), np.array(s.curve.sd)
-        ax.plot(t, mean, lw=2, **line_style(s.condition, len(t)))
+        ax.plot(t, mean, **line_style(s.condition, len(t)))
         ax.fill_between(t, mean - sd, mean + sd, color=colour(s.condition), alpha=0.12, lw=0)
     return _finish(
         fig,
@@ -160,7 +163,7 @@ def _tbs(report: Report) -> Figure | None:
         _conditions(series),
         xlabel="step t",
         ylabel="TBS(t) (0-1)",
-        ylim=(-0.02, 1.02),
+        ylim=_SHARE_LIMITS,
     )
 
 
@@ -173,7 +176,7 @@ def _pa(report: Report) -> Figure | None:
     spawns = [s for s in ROOM_SLUGS.values() if any(g.spawn == s for g in groups)]
     width = 0.8 / len(conditions)
     for g in groups:
-        ax = axes[row_label(g.model, g.variant)]
+        ax = axes[g.label]
         offset = conditions.index(g.condition) - (len(conditions) - 1) / 2
         x = spawns.index(g.spawn) + offset * width
         mean, sd = g.mean_sd
@@ -211,9 +214,9 @@ def _miller(report: Report) -> Figure | None:
     fig, axes = _panels(series)
     width = series[0].curve.width
     for s in series:
-        ax = axes[row_label(s.model, s.variant)]
+        ax = axes[s.label]
         loads = np.array(s.curve.bins) * s.curve.width
-        ax.plot(loads, s.curve.probabilities, lw=2, **line_style(s.condition, len(loads)))
+        ax.plot(loads, s.curve.probabilities, **line_style(s.condition, len(loads)))
         if s.curve.m_star is not None:
             ax.axvline(s.curve.m_star, color=colour(s.condition), ls=":", lw=1.2)
     loads = [b * width for s in series for b in s.curve.bins]
@@ -226,7 +229,7 @@ def _miller(report: Report) -> Figure | None:
         _conditions(series),
         xlabel=f"map size m (objects, bin upper edge, w={width})",
         ylabel="P(forget >= 1 object)",
-        ylim=(-0.02, 1.02),
+        ylim=_SHARE_LIMITS,
     )
 
 
@@ -238,36 +241,23 @@ def _km(report: Report) -> Figure | None:
     categories = list(dict.fromkeys(s.category for s in series))
     fig = Figure(figsize=(4.6 * len(categories), 3.4 * len(labels) + 0.6), layout="constrained")
     grid = fig.subplots(len(labels), len(categories), squeeze=False)
+    panels = {
+        f"{label}: {c}": ax
+        for label, row in zip(labels, grid, strict=True)
+        for c, ax in zip(categories, row, strict=True)
+    }
     for s in series:
-        ax = grid[labels.index(row_label(s.model, s.variant))][categories.index(s.category)]
-        ax.step(
-            s.km.times,
-            s.km.survival,
-            where="post",
-            lw=2,
-            **line_style(s.condition, len(s.km.times)),
-        )
-        if s.km.ci_low:  # Greenwood 95 % band (lifelines), anchored like the curve
+        km, hue = s.km, colour(s.condition)
+        ax = panels[f"{s.label}: {s.category}"]
+        ax.step(km.times, km.survival, where="post", **line_style(s.condition, len(km.times)))
+        if km.ci_low:  # Greenwood 95 % band (lifelines), anchored like the curve
             ax.fill_between(
-                s.km.times,
-                s.km.ci_low,
-                s.km.ci_high,
-                step="post",
-                lw=0,
-                color=colour(s.condition),
-                alpha=0.15,
+                km.times, km.ci_low, km.ci_high, step="post", lw=0, color=hue, alpha=0.15
             )
         efc = s.fit.efc
         if efc is not None and math.isfinite(efc):
-            t = np.linspace(0, max(s.km.times), 100)
-            ax.plot(
-                t, s.km.coverage * np.exp(-t / efc), color=colour(s.condition), ls=(0, (2, 2)), lw=1
-            )
-    panels = {
-        f"{label}: {c}": grid[i][j]
-        for i, label in enumerate(labels)
-        for j, c in enumerate(categories)
-    }
+            t = np.linspace(0, max(km.times), 100)
+            ax.plot(t, km.coverage * np.exp(-t / efc), color=hue, ls=(0, (2, 2)), lw=1)
     title = "Coverage-anchored Kaplan-Meier survival, 95 % band (thin dashed: Ebbinghaus fit)"
     return _finish(
         fig,
@@ -276,7 +266,7 @@ def _km(report: Report) -> Figure | None:
         _conditions(series),
         xlabel="steps out of view t",
         ylabel="S(t) (discovered & held)",
-        ylim=(-0.02, 1.02),
+        ylim=_SHARE_LIMITS,
     )
 
 
@@ -287,24 +277,18 @@ def _sir(report: Report) -> Figure | None:
     fig, axes = _panels(series)
     conditions = _conditions(series)
     for s in series:
-        ax = axes[row_label(s.model, s.variant)]
+        ax = axes[s.label]
+        hue, _, marker, _ = _style(s.condition)
         pos = conditions.index(s.condition)
         values = np.array(s.sir.values)
         if len(values) > 1 and np.ptp(values) > 0:
             body = ax.violinplot(values, [pos], showmeans=True, widths=0.8)
             for part in body["bodies"]:
-                part.set(facecolor=colour(s.condition), edgecolor=colour(s.condition), alpha=0.45)
+                part.set(facecolor=hue, edgecolor=hue, alpha=0.45)
             for key in ("cmeans", "cmins", "cmaxes", "cbars"):
-                body[key].set(color=colour(s.condition))
+                body[key].set(color=hue)
         jitter = np.linspace(-0.08, 0.08, len(values)) if len(values) > 1 else np.zeros(1)
-        ax.scatter(
-            pos + jitter,
-            values,
-            s=14,
-            marker=_style(s.condition)[2],
-            color=colour(s.condition),
-            alpha=0.6,
-        )
+        ax.scatter(pos + jitter, values, s=14, marker=marker, color=hue, alpha=0.6)
     for ax in axes.values():
         ax.set_xticks(range(len(conditions)), [CONDITION_NAMES.get(c, c) for c in conditions])
     return _finish(
@@ -315,7 +299,7 @@ def _sir(report: Report) -> Figure | None:
         grid="y",
         xlabel="condition",
         ylabel="SIR (0-1)",
-        ylim=(-0.02, 1.02),
+        ylim=_SHARE_LIMITS,
     )
 
 

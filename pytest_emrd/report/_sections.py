@@ -51,21 +51,23 @@ R2_MEANINGLESS: Final = 0.0
 
 
 def _pivot(
-    report: Report, rows: Sequence[CellRow], fmt: Callable[[Any], Sequence[str]], width: int
-) -> list[Row]:
-    """One line per model row, ``width`` cells per condition of the run (blank when absent)."""
+    report: Report,
+    rows: Sequence[CellRow],
+    names: Sequence[str],
+    fmt: Callable[[Any], Sequence[str]],
+) -> tuple[tuple[str, ...], list[Row]]:
+    """Header and lines of a table with one line per model row and, per condition of the run,
+    a column per name (``fmt`` of the row's cell gives them; blank where it has no cell)."""
+    conditions = report.overview.conditions
     table: dict[str, dict[str, Sequence[str]]] = {}
     for r in rows:
-        table.setdefault(row_label(r.model, r.variant), {})[r.condition] = fmt(r)
-    blank = ("—",) * width
-    return [
-        (label, *(t for c in report.overview.conditions for t in by_c.get(c, blank)))
+        table.setdefault(r.label, {})[r.condition] = fmt(r)
+    blank = ("—",) * len(names)
+    header = ("Model", *(f"{n} {_cond(c)}" for c in conditions for n in names))
+    return header, [
+        (label, *(t for c in conditions for t in by_c.get(c, blank)))
         for label, by_c in table.items()
     ]
-
-
-def _per_condition(report: Report, *names: str) -> tuple[str, ...]:
-    return tuple(f"{n} {_cond(c)}" for c in report.overview.conditions for n in names)
 
 
 def overview(report: Report) -> Section:
@@ -80,16 +82,7 @@ def overview(report: Report) -> Section:
         )
     ]
     if o.usage:
-        rows = tuple(
-            (
-                u.model,
-                str(u.episodes),
-                f"{u.prompt_tokens:,}",
-                f"{u.completion_tokens:,}",
-                "n/a" if u.cost_usd is None else f"${u.cost_usd:,.2f}",
-            )
-            for u in o.usage
-        )
+        rows = [u.cells() for u in o.usage]
         header = ("Model", "Episodes", "Prompt tokens", "Completion tokens", "Est. cost")
         blocks.append(Table("usage", "Token usage per model", header, rows))
         unpriced = [u.model for u in o.usage if u.cost_usd is None]
@@ -104,7 +97,7 @@ def overview(report: Report) -> Section:
     if report.missing:
         blocks.append(Paragraph("**What this run is missing:**"))
         blocks.append(Bullets(report.missing))
-    return Section("overview", "Run overview", tuple(blocks))
+    return Section("overview", "Run overview", blocks)
 
 
 def gates(report: Report) -> Section:
@@ -114,7 +107,7 @@ def gates(report: Report) -> Section:
         why = g.note or (f"No gate of {g.source} applies to this run." if g.source else started)
         return Section("gates", "Gates", (Paragraph(why),))
     passed = sum(v.passed for v in g.verdicts)
-    rows = tuple(
+    rows = [
         (
             v.model if v.layouts == "paper" else f"{v.model}@{v.layouts}",
             _cond(v.condition),
@@ -128,7 +121,7 @@ def gates(report: Report) -> Section:
             v.reason,
         )
         for v in g.verdicts
-    )
+    ]
     header = (
         "Model",
         "Condition",
@@ -154,7 +147,7 @@ def gates(report: Report) -> Section:
                 "gates", "Every threshold: value, bootstrap 95% CI, n, bound, verdict", header, rows
             ),
             *(
-                Bullets(tuple(f"{v.gate_id}: {e}" for e in v.evidence()))
+                Bullets([f"{v.gate_id}: {e}" for e in v.evidence()])
                 for v in g.verdicts
                 if v.evidence()
             ),
@@ -163,35 +156,34 @@ def gates(report: Report) -> Section:
 
 
 def exploration(report: Report) -> Section:
-    rows = _pivot(
+    header, rows = _pivot(
         report,
         report.exploration,
+        ("AEC (%)", "TE (steps)"),
         lambda r: (
             f"{mean_sd(r.aec.value, r.aec_sd, scale=100)} (n={r.aec.n})",
             f"{mean_sd(r.te.value, r.te_sd)} (n={r.te.n})",
         ),
-        2,
     )
-    header = ("Model", *_per_condition(report, "AEC (%)", "TE (steps)"))
     caption = "Exploration Competence: AEC (%) and TE (actions), mean ± sd (Eq. AEC, TE)"
     return Section(
         "exploration",
         "Exploration Competence",
-        (Table("exploration", caption, header, tuple(rows)),),
+        (Table("exploration", caption, header, rows),),
     )
 
 
 def positional_accuracy(report: Report) -> Section:
     """PA (Eq. PA) per spawn room and condition: the numbers behind pa_by_spawn.png."""
-    rows = tuple(
+    rows = [
         (
-            row_label(g.model, g.variant),
+            g.label,
             _cond(g.condition),
             SLUG_ROOMS.get(g.spawn, g.spawn),
             f"{mean_sd(*g.mean_sd, digits=3)} (n={len(g.values)})",
         )
         for g in report.pa
-    )
+    ]
     if not rows:
         text = "Positional Accuracy is undefined in every episode (|G_base| = 0)."
         return Section("pa", "Positional Accuracy", (Paragraph(text),))
@@ -208,57 +200,62 @@ def _spawn_order(item: tuple[str, FocalRow]) -> int:
     return FOCAL_COLUMNS.index(room_letter(SLUG_ROOMS.get(item[0])))
 
 
+_FOCAL_HEADER: Final = (
+    "Condition",
+    "Start",
+    "n",
+    *FOCAL_COLUMNS,
+    "X: other room",
+    "X: no Term",
+    "Spawn room (%)",
+    "Consensus",
+)
+
+
 def focal(report: Report) -> Section:
-    tables: list[Block] = []
-    labels = list(dict.fromkeys(row_label(t.model, t.variant) for t in report.focal))
-    for label in labels:
-        rows = []
-        for t in (t for t in report.focal if row_label(t.model, t.variant) == label):
-            most = t.consensus
-            share = "n/a" if most.share is None else f"{most.letter or '—'} {pct(most.share)}%"
-            spawns = sorted(t.distribution.by_spawn.items(), key=_spawn_order)
-            for start, row, consensus in (
-                *((SLUG_ROOMS.get(spawn, spawn), row, "") for spawn, row in spawns),
-                (Cell("all spawns", bold=True), t.distribution.overall, share),
-            ):
-                shares = (Cell(pct(f), shade=f) for f in map(row.fractions.get, FOCAL_COLUMNS))
-                rows.append(
-                    (
-                        _cond(t.condition),
-                        start,
-                        str(row.n),
-                        *shares,
-                        str(row.named_other),
-                        str(row.no_term),
-                        pct(row.spawn_share),
-                        consensus,
-                    )
+    """One table per model row: the chosen rooms by spawn room, then over all spawns."""
+    by_label: dict[str, list[Row]] = {}
+    for t in report.focal:
+        most = t.consensus
+        share = "n/a" if most.share is None else f"{most.letter or '—'} {pct(most.share)}%"
+        spawns = sorted(t.distribution.by_spawn.items(), key=_spawn_order)
+        for start, row, consensus in (
+            *((SLUG_ROOMS.get(spawn, spawn), row, "") for spawn, row in spawns),
+            (Cell("all spawns", bold=True), t.distribution.overall, share),
+        ):
+            shares = (Cell(pct(f), shade=f) for f in map(row.fractions.get, FOCAL_COLUMNS))
+            by_label.setdefault(t.label, []).append(
+                (
+                    _cond(t.condition),
+                    start,
+                    str(row.n),
+                    *shares,
+                    str(row.named_other),
+                    str(row.no_term),
+                    pct(row.spawn_share),
+                    consensus,
                 )
-        header = (
-            "Condition",
-            "Start",
-            "n",
-            *FOCAL_COLUMNS,
-            "X: other room",
-            "X: no Term",
-            "Spawn room (%)",
-            "Consensus",
-        )
-        caption = (
+            )
+    tables = [
+        Table(
+            f"focal-{label}",
             f"{label}: chosen focal point (%) by spawn room — C Conference, O Office, "
             "K Kitchen, E Entrance, X other: counted apart as a Term naming another "
             "room and no Term (budget spent); Spawn room: the share that chose the room "
-            "they started in (Appendix F: 50.6 %, chance 25 %)"
+            "they started in (Appendix F: 50.6 %, chance 25 %)",
+            _FOCAL_HEADER,
+            rows,
         )
-        tables.append(Table(f"focal-{label}", caption, header, tuple(rows)))
-    return Section("focal", "Focal-Point distribution", tuple(tables))
+        for label, rows in by_label.items()
+    ]
+    return Section("focal", "Focal-Point distribution", tables)
 
 
 def fpsg(report: Report) -> Section:
-    rows = tuple(
+    rows = [
         (
             _cond(r.condition),
-            row_label(r.model, r.variant),
+            r.label,
             str(s.runs),
             pct(s.never_visited),
             pct(s.any_bias),
@@ -267,7 +264,7 @@ def fpsg(report: Report) -> Section:
         )
         for r in report.fpsg
         for s in (r.summary,)
-    )
+    ]
     header = (
         "Condition",
         "Model",
@@ -282,17 +279,19 @@ def fpsg(report: Report) -> Section:
 
 
 def ebbinghaus(report: Report) -> Section:
-    efc = _pivot(report, report.ebbinghaus, lambda r: (num(r.fit.pooled.efc, 1),), 1)
-    r2 = _pivot(report, report.ebbinghaus, lambda r: (num(r.fit.pooled.r2, 2),), 1)
-    rows = tuple((*a, *b[1:]) for a, b in zip(efc, r2, strict=True))
-    header = ("Model", *_per_condition(report, "EFC"), *_per_condition(report, "R²"))
+    efc_header, efc = _pivot(
+        report, report.ebbinghaus, ["EFC"], lambda r: [num(r.fit.pooled.efc, 1)]
+    )
+    r2_header, r2 = _pivot(report, report.ebbinghaus, ["R²"], lambda r: [num(r.fit.pooled.r2, 2)])
+    header = (*efc_header, *r2_header[1:])  # the EFC columns, then the R² ones
+    rows = [(*a, *b[1:]) for a, b in zip(efc, r2, strict=True)]
     caption = (
         "Ebbinghaus memory strength EFC (steps; inf: nothing forgotten) and R² of "
         "C exp(-t/EFC) against the anchored KM"
     )
     blocks: list[Block] = [Table("ebbinghaus", caption, header, rows)]
     poor = sorted(
-        f"{row_label(r.model, r.variant)}, {_cond(r.condition)} (R² {num(r.fit.pooled.r2, 2)})"
+        f"{r.label}, {_cond(r.condition)} (R² {num(r.fit.pooled.r2, 2)})"
         for r in report.ebbinghaus
         if r.fit.pooled.r2 is not None and r.fit.pooled.r2 < R2_MEANINGLESS
     )
@@ -305,7 +304,7 @@ def ebbinghaus(report: Report) -> Section:
             )
         )
     if report.anova:
-        anova_rows = tuple(
+        anova_rows = [
             (
                 row_label(a.model, a.variant),
                 num(a.anova.statistic, 2),
@@ -315,23 +314,26 @@ def ebbinghaus(report: Report) -> Section:
                 a.anova.reason or "",
             )
             for a in report.anova
-        )
+        ]
         header = ("Model", "F", "df", "p", "Episodes used", "Note")
         caption = "One-way ANOVA of per-episode memory strength across conditions"
         blocks.append(Table("anova", caption, header, anova_rows))
-    return Section("ebbinghaus", "Ebbinghaus memory strength", tuple(blocks))
+    return Section("ebbinghaus", "Ebbinghaus memory strength", blocks)
 
 
 def serial_position(report: Report) -> Section:
     """Both estimators: the paper's Eq. SPE and the censoring-aware MLE per third."""
 
-    def thirds(*fields: str) -> list[Row]:
+    def thirds(*fields: str) -> tuple[tuple[str, ...], list[Row]]:
         return _pivot(
-            report, report.serial_position, lambda r: [num(getattr(r.spe, f), 1) for f in fields], 3
+            report,
+            report.serial_position,
+            ("E", "M", "L"),
+            lambda r: [num(getattr(r.spe, f), 1) for f in fields],
         )
 
-    paper, mle = thirds("early", "middle", "late"), thirds("mle_early", "mle_middle", "mle_late")
-    header = ("Model", *_per_condition(report, "E", "M", "L"))
+    header, paper = thirds("early", "middle", "late")
+    _, mle = thirds("mle_early", "mle_middle", "mle_late")
     caption = (
         "Serial Position Effect (paper's Eq. SPE): mean observed TTF (steps) of Early / "
         "Middle / Late discoveries, episode-end censoring ignored"
@@ -345,8 +347,8 @@ def serial_position(report: Report) -> Section:
         "serial-position",
         "Serial Position Effect",
         (
-            Table("serial-position", caption, header, tuple(paper)),
-            Table("serial-position-mle", caption_mle, header, tuple(mle)),
+            Table("serial-position", caption, header, paper),
+            Table("serial-position-mle", caption_mle, header, mle),
         ),
     )
 
@@ -382,9 +384,7 @@ def _intervention(t: InterventionTable) -> list[Block]:
         "Cramér's V",
     )
     caption = f"{t.model}, {_cond(t.condition)}: prompt variants against the default prompt"
-    blocks: list[Block] = [
-        Table(f"intervention-{t.model}-{t.condition}", caption, header, tuple(rows))
-    ]
+    blocks: list[Block] = [Table(f"intervention-{t.model}-{t.condition}", caption, header, rows)]
     if t.overall is not None:
         o = t.overall
         text = (
@@ -396,7 +396,7 @@ def _intervention(t: InterventionTable) -> list[Block]:
     inventory = next((v for v in t.variants if v.variant == "no_inventory"), None)
     if inventory is not None:
         with_, without = t.reference, inventory.choices
-        inv_rows = tuple(
+        inv_rows = [
             (
                 _LETTER_ROOMS[c],
                 str(with_.counts[c]),
@@ -405,7 +405,7 @@ def _intervention(t: InterventionTable) -> list[Block]:
                 pct(without.fractions[c]),
             )
             for c in ("C", "K", "E", "O", "X")
-        )
+        ]
         header = ("Chosen room", "n with inventory", "% with", "n without inventory", "% without")
         caption = f"{t.model}, {_cond(t.condition)}: inventory-free intervention"
         blocks.append(Table(f"inventory-{t.model}-{t.condition}", caption, header, inv_rows))
@@ -420,14 +420,14 @@ def interventions(report: Report) -> Section:
         )
         return Section("interventions", "Controlled interventions", (Paragraph(why),))
     blocks = [b for t in report.interventions for b in _intervention(t)]
-    return Section("interventions", "Controlled interventions", tuple(blocks))
+    return Section("interventions", "Controlled interventions", blocks)
 
 
 def reasoning(report: Report) -> Section:
     r = report.reasoning
     if r.unavailable:
         return Section("reasoning", "Representative reasoning", (Paragraph(r.unavailable),))
-    rows = tuple(
+    rows = [
         (
             x.model,
             num(x.representative.mean_cosine_distance, 2),
@@ -435,7 +435,7 @@ def reasoning(report: Report) -> Section:
             x.representative.statement or "no terminal reasoning",
         )
         for x in r.rows
-    )
+    ]
     header = ("Model", "d̄ (cohesion)", "Rationales", "Most representative terminal reasoning")
     caption = "Statement closest to the semantic centroid (all-MiniLM-L6-v2)"
     return Section(
@@ -447,7 +447,7 @@ def figures(report: Report, skipped: dict[str, str]) -> Section:
     """Every figure; the episode map's caption names its episode (``emrd report --episode``)."""
     shown = report.episode_map and report.episode_map.case_id
     named = f" Episode {shown} (choose another with --episode CASE_ID)." if shown else ""
-    refs = tuple(
+    refs = [
         FigureRef(
             f.name,
             f.title,
@@ -455,7 +455,7 @@ def figures(report: Report, skipped: dict[str, str]) -> Section:
             skipped.get(f.name),
         )
         for f in FIGURES
-    )
+    ]
     return Section("figures", "Figures", refs)
 
 

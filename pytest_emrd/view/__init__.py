@@ -130,7 +130,7 @@ def recorded_digests(traj: Trajectory, cassettes: Path | None) -> Recorded:
             f"{path} was recorded under protocol {data.protocol}, the episode "
             f"ran under {traj.protocol}: frames not checked",
         )
-    replies = [set(_strings(_json(r["body"]["string"]))) for r in data.responses]
+    replies = (_strings(_json(r["body"]["string"])) for r in data.responses)
     pairs = zip(traj.steps, replies, strict=False)
     changed = [s.index for s, r in pairs if s.raw_reply and s.raw_reply not in r]
     if changed:
@@ -144,12 +144,12 @@ def recorded_digests(traj: Trajectory, cassettes: Path | None) -> Recorded:
     for request in data.requests:
         found = [d for d in _strings(_json(request.body)) if DIGEST.match(d)]
         digests.append(found[-1] if found else None)
-    note = None
-    if len(digests) != len(traj.steps):
-        note = (
-            f"{path} holds {len(digests)} requests for {len(traj.steps)} steps: steps "
-            "are checked in order up to the shorter"
-        )
+    note = (
+        f"{path} holds {len(digests)} requests for {len(traj.steps)} steps: steps "
+        "are checked in order up to the shorter"
+        if len(digests) != len(traj.steps)
+        else None
+    )
     latencies = tuple(r.get(LATENCY) for r in data.responses)
     return Recorded(tuple(digests), note, latencies)
 

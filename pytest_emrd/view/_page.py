@@ -106,7 +106,7 @@ def episode_data(
         return round(x, 3), round(z, 3)
 
     turn = spawn.heading if spawn else 0.0
-    truth = traj.ground_truth
+    spec, truth = traj.spec, traj.ground_truth
     measured = episode_metrics(traj)
     tbs = measured.tbs
     # per step: True (digest equal), False (mismatch) or None (not checked)
@@ -116,10 +116,11 @@ def episode_data(
     check = FrameCheck(sum(s is not None for s in status), bad, recorded.note)
     steps = []
     matchings = step_matchings([s.cognitive_map for s in traj.steps], truth.objects)
-    for i, (s, matching) in enumerate(zip(traj.steps, matchings, strict=True)):
+    following = [*traj.steps[1:], None]
+    for i, (s, matching, after) in enumerate(zip(traj.steps, matchings, following, strict=True)):
         points, rotation, rmse = align_map(s.cognitive_map, matching)
         reply = parse_reply(s.raw_reply)
-        after = traj.steps[i + 1] if i + 1 < len(traj.steps) else None
+        pose, shown = s.pose, i < len(frames)  # shown: a frame was re-rendered for the step
         steps.append(
             {
                 "t": s.index,
@@ -131,8 +132,8 @@ def episode_data(
                 "dedup": reply.dedup_check,
                 "reasoning": reply.reasoning,
                 "raw": s.raw_reply,
-                "pose": [round(s.pose.x, 3), round(s.pose.z, 3), round(s.pose.heading, 1)],
-                "at": [*place(s.pose.x, s.pose.z), round((s.pose.heading + turn) % 360.0, 1)],
+                "pose": [round(pose.x, 3), round(pose.z, 3), round(pose.heading, 1)],
+                "at": [*place(pose.x, pose.z), round((pose.heading + turn) % 360.0, 1)],
                 "room": s.room,
                 "visible": list(s.visible_ids),
                 "map": [[p.label, *place(p.x, p.z), p.object_id] for p in points],
@@ -141,12 +142,10 @@ def episode_data(
                 "coverage": _round(aec_score(matching, len(truth.objects))),
                 "pa": _round(positional_accuracy_score(matching, len(truth.discoverable_ids))),
                 "tbs": _round(tbs[i]) if i < len(tbs) else None,
-                "frame": i if i < len(frames) else None,
-                "frame_ok": status[i] if i < len(status) else None,
-                "prompt": frames[i].text or None if i < len(frames) else None,
-                "window": [
-                    j for j in range(max(0, i - HISTORY_TURNS + 1), i + 1) if j < len(frames)
-                ],
+                "frame": i if shown else None,
+                "frame_ok": status[i] if shown else None,
+                "prompt": frames[i].text or None if shown else None,
+                "window": list(range(max(0, i - HISTORY_TURNS + 1), min(i + 1, len(frames)))),
                 "tokens": [s.usage.prompt_tokens, s.usage.completion_tokens],
                 "latency": s.latency_s,
                 "recorded_latency": recorded.latencies[i] if i < len(recorded.latencies) else None,
@@ -167,12 +166,12 @@ def episode_data(
             "since recording; those frames are not what the model saw",
         )
     data = {
-        "case_id": traj.spec.case_id,
-        "model": traj.spec.model,
-        "condition": traj.spec.condition,
-        "variant": traj.spec.variant,
-        "spawn": traj.spec.spawn,
-        "episode": traj.spec.episode,
+        "case_id": spec.case_id,
+        "model": spec.model,
+        "condition": spec.condition,
+        "variant": spec.variant,
+        "spawn": spec.spawn,
+        "episode": spec.episode,
         "status": traj.status,
         "protocol": traj.protocol,
         "chosen_room": traj.chosen_room,
@@ -330,12 +329,31 @@ def index_page(rows: Sequence[IndexRow]) -> str:
     :returns: The HTML text.
     """
     e = html.escape
-    header = ["episode", "status", "steps", "chosen room", *INDEX_METRICS]
-    header += ["parse failures", "failed actions", "tokens", "error", "frames vs cassette"]
+    header = [
+        "episode",
+        "status",
+        "steps",
+        "chosen room",
+        *INDEX_METRICS,
+        "parse failures",
+        "failed actions",
+        "tokens",
+        "error",
+        "frames vs cassette",
+    ]
     body = ""
     for r in rows:
-        cells = [r.status, r.steps, r.chosen, *(r.metrics.get(m) for m in INDEX_METRICS)]
-        cells += [r.parse_failures, r.failed_actions, r.tokens, r.error, _check_text(r.check)]
+        cells = [
+            r.status,
+            r.steps,
+            r.chosen,
+            *(r.metrics.get(m) for m in INDEX_METRICS),
+            r.parse_failures,
+            r.failed_actions,
+            r.tokens,
+            r.error,
+            _check_text(r.check),
+        ]
         link = f'<td><a href="{e(r.case_id)}.html">{e(r.case_id)}</a></td>'
         body += f"<tr>{link}{''.join(map(_cell, cells))}</tr>"
     heads = "".join(f'<th title="sort">{e(h)}</th>' for h in header)
