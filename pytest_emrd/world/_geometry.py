@@ -9,6 +9,7 @@ built-in world produces, so rendered pixels are bit-stable.
 from __future__ import annotations
 
 import math
+from collections import defaultdict
 from dataclasses import dataclass
 from functools import lru_cache
 
@@ -157,21 +158,19 @@ def _nearest(
 @lru_cache(maxsize=64)
 def walls_of(layout: Layout) -> Walls:
     """The layout's walls: every room edge, merged, with the doorway gaps cut out."""
-    lines: dict[tuple[str, float], list[tuple[float, float]]] = {}
+    lines: defaultdict[tuple[str, float], list[tuple[float, float]]] = defaultdict(list)
     for r in layout.rooms:
-        lines.setdefault(("x", r.z0), []).append((r.x0, r.x1))
-        lines.setdefault(("x", r.z1), []).append((r.x0, r.x1))
-        lines.setdefault(("z", r.x0), []).append((r.z0, r.z1))
-        lines.setdefault(("z", r.x1), []).append((r.z0, r.z1))
-    gaps: dict[tuple[str, float], list[tuple[float, float]]] = {}
+        for z in (r.z0, r.z1):
+            lines["x", z].append((r.x0, r.x1))
+        for x in (r.x0, r.x1):
+            lines["z", x].append((r.z0, r.z1))
+    gaps: defaultdict[tuple[str, float], list[tuple[float, float]]] = defaultdict(list)
     for d in layout.doorways:
-        key, centre = ("x", d.z) if d.axis == "x" else ("z", d.x)
-        mid = d.x if d.axis == "x" else d.z
-        gaps.setdefault((key, centre), []).append((mid - d.width / 2, mid + d.width / 2))
+        at, mid = (d.z, d.x) if d.axis == "x" else (d.x, d.z)
+        gaps[d.axis, at].append((mid - d.width / 2, mid + d.width / 2))
     rows: dict[str, list[tuple[float, float, float]]] = {"x": [], "z": []}
     for (axis, at), spans in sorted(lines.items()):
-        for lo, hi in _subtract(_merge(spans), gaps.get((axis, at), [])):
-            rows[axis].append((at, lo, hi))
+        rows[axis] += [(at, lo, hi) for lo, hi in _subtract(_merge(spans), gaps[axis, at])]
     return Walls(
         along_x=np.array(rows["x"], dtype=float).reshape(-1, 3),
         along_z=np.array(rows["z"], dtype=float).reshape(-1, 3),

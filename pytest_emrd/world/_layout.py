@@ -64,20 +64,19 @@ def generate_layout(seed: int) -> Layout:
         ENTRANCE: Room(ENTRANCE, w_kitchen, 0.0, width, bottom),
     }
     doorways = _doorways(rng, rooms)
+    landmarks = [
+        _object("Doorway", d.object_id, d.room_a, d.x, d.z, d.width, 0.0 if d.axis == "x" else 90.0)
+        for d in doorways
+    ]
+    landmarks.append(_exit(rng, rooms[ENTRANCE]))
     planner = Planner(rng)
     approach = (DOOR_WIDTH + 0.4, 2 * APPROACH_DEPTH)  # kept walkable before every door
-    for d in doorways:
-        planner.clear.append(rect_at(d.x, d.z, *approach, _rot(d.axis)))
-    exit_door = _exit(rng, rooms[ENTRANCE])
-    planner.clear.append(rect_at(exit_door.x, exit_door.z, *approach, exit_door.rotation))
+    planner.clear += [rect_at(o.x, o.z, *approach, o.rotation) for o in landmarks]
     _office(planner, rooms[OFFICE])
     _conference(planner, rooms[CONFERENCE])
     _kitchen(planner, rooms[KITCHEN])
     _entrance(planner, rooms[ENTRANCE])
-    doorway_objects = [
-        _object("Doorway", d.object_id, d.room_a, d.x, d.z, d.width, _rot(d.axis)) for d in doorways
-    ]
-    objects = [*doorway_objects, exit_door, *_number(planner.placed)]
+    objects = [*landmarks, *_number(planner.placed)]
     return Layout(
         seed=seed,
         width=width,
@@ -88,8 +87,9 @@ def generate_layout(seed: int) -> Layout:
     )
 
 
-def _rot(axis: str) -> float:
-    return 0.0 if axis == "x" else 90.0
+def _along(rng: StableRng, lo: float, hi: float) -> float:
+    """A point of the wall from ``lo`` to ``hi``, :data:`CORNER_CLEARANCE` clear of its ends."""
+    return round(rng.uniform(lo + CORNER_CLEARANCE, hi - CORNER_CLEARANCE), 2)
 
 
 def _doorways(rng: StableRng, rooms: dict[str, Room]) -> tuple[Doorway, ...]:
@@ -97,15 +97,12 @@ def _doorways(rng: StableRng, rooms: dict[str, Room]) -> tuple[Doorway, ...]:
     for i, (a, b) in enumerate(PAIRS, start=1):
         ra, rb = rooms[a], rooms[b]
         if ra.z0 == rb.z0:  # side by side: the wall runs along z at the shared x
-            lo, hi = max(ra.z0, rb.z0), min(ra.z1, rb.z1)
             x = ra.x1 if ra.x1 == rb.x0 else ra.x0
-            z = round(rng.uniform(lo + CORNER_CLEARANCE, hi - CORNER_CLEARANCE), 2)
-            out.append(Doorway(f"Doorway_{i}", a, b, x, z, DOOR_WIDTH, "z"))
+            z, axis = _along(rng, max(ra.z0, rb.z0), min(ra.z1, rb.z1)), "z"
         else:  # stacked: the wall runs along x at the shared z
-            lo, hi = max(ra.x0, rb.x0), min(ra.x1, rb.x1)
             z = ra.z0 if ra.z0 == rb.z1 else ra.z1
-            x = round(rng.uniform(lo + CORNER_CLEARANCE, hi - CORNER_CLEARANCE), 2)
-            out.append(Doorway(f"Doorway_{i}", a, b, x, z, DOOR_WIDTH, "x"))
+            x, axis = _along(rng, max(ra.x0, rb.x0), min(ra.x1, rb.x1)), "x"
+        out.append(Doorway(f"Doorway_{i}", a, b, x, z, DOOR_WIDTH, axis))
     return tuple(out)
 
 
@@ -132,16 +129,14 @@ def _object(
 def _exit(rng: StableRng, room: Room) -> WorldObject:
     inset = KINDS["Door"].depth / 2
     if rng.random() < 0.5:  # south wall, facing north into the room
-        x = round(rng.uniform(room.x0 + CORNER_CLEARANCE, room.x1 - CORNER_CLEARANCE), 2)
-        z, rotation = room.z0 + inset, 0.0
+        x, z, rotation = _along(rng, room.x0, room.x1), room.z0 + inset, 0.0
     else:  # east wall, facing west
-        z = round(rng.uniform(room.z0 + CORNER_CLEARANCE, room.z1 - CORNER_CLEARANCE), 2)
-        x, rotation = room.x1 - inset, 270.0
+        x, z, rotation = room.x1 - inset, _along(rng, room.z0, room.z1), 270.0
     return _object("Door", "Door_1", room.name, x, z, DOOR_WIDTH, rotation)
 
 
 def _number(placed: list[Placed]) -> list[WorldObject]:
-    counts: Counter[str] = Counter({"Doorway": 0, "Door": 1})
+    counts: Counter[str] = Counter({"Door": 1})  # the exit is Door_1
     out = []
     for p in placed:
         object_type = KINDS[p.kind].object_type
@@ -339,12 +334,7 @@ class Planner:
             access = rects_at(x + fx * reach, z + fz * reach, unit.width, unit.access, rot)
         room_rect = np.array([room.x0, room.z0, room.x1, room.z1])
         ok = _inside(body, room_rect) & _inside(access, room_rect)
-        if self.solid:
-            solid = np.array(self.solid)
-            ok &= ~rects_overlap(body, solid).any(axis=1)
-            ok &= ~rects_overlap(access, solid).any(axis=1)
-        if self.clear:
-            ok &= ~rects_overlap(body, np.array(self.clear)).any(axis=1)
+        ok &= ~(_hits(body, self.solid) | _hits(access, self.solid) | _hits(body, self.clear))
         hits = np.flatnonzero(ok)
         if hits.size == 0:
             return False
@@ -363,6 +353,11 @@ class Planner:
             self.placed.append(placed)
             if kind.elevation == 0.0:
                 self.solid.append(rect_at(placed.x, placed.z, width, kind.depth, mrot))
+
+
+def _hits(rects: np.ndarray, others: list[Rect]) -> np.ndarray:
+    """Whether each of ``rects`` overlaps any of ``others``."""
+    return rects_overlap(rects, np.reshape(others, (-1, 4))).any(axis=1)
 
 
 def _inside(rects: np.ndarray, room: np.ndarray) -> np.ndarray:
