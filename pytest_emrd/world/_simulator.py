@@ -12,10 +12,15 @@ from typing import Any
 import numpy as np
 
 from pytest_emrd._lazy import remember
-from pytest_emrd.errors import ConfigError, check_choice, check_range
-from pytest_emrd.rooms import ROOM_NAMES, SLUG_ROOMS
+from pytest_emrd.errors import ConfigError, check_range
 from pytest_emrd.world._conditions import ConditionParams, condition_params
-from pytest_emrd.world._feedback import Action, SemanticStep, room_table, turn_degrees
+from pytest_emrd.world._feedback import (
+    Action,
+    SemanticStep,
+    room_table,
+    spawn_room_name,
+    turn_degrees,
+)
 from pytest_emrd.world._model import Layout, Observation, View, VisibleObject, WorldPose
 from pytest_emrd.world._motion import approach, spawn_pose, through
 from pytest_emrd.world._render import palette, render, shade_table
@@ -101,15 +106,13 @@ class BuiltinSimulator(SemanticStep):
         self, layout: Layout, condition: str, spawn_room: str, seed: int, *, symbolic: bool = True
     ) -> Observation:
         """Start an episode in ``spawn_room`` (canonical name or slug) under ``condition``."""
-        room = SLUG_ROOMS.get(spawn_room, spawn_room)
-        check_choice("spawn_room", room, [*ROOM_NAMES, *SLUG_ROOMS])
+        room = spawn_room_name(spawn_room)
         self._params = condition_params(condition)
         self._scene = scene_of(layout)
         self._table = _shades(self._scene, self._params, seed)
         self._spawn = self._pose = spawn_pose(self._scene, layout.room(room), seed)
-        self._steps, self._ended, self._terminal, self._symbolic = 0, False, None, symbolic
         self._frames.clear()
-        return self._observe(True, "Episode started.")
+        return self._begin(symbolic)
 
     @property
     def agent_pose(self) -> WorldPose:
@@ -123,20 +126,12 @@ class BuiltinSimulator(SemanticStep):
             raise ConfigError(f"agent pose={self._pose} lies outside every room of the layout.")
         return room
 
-    def visible_ids(self) -> tuple[str, ...]:
-        return tuple(v.object_id for v in self._render()[0][1])
-
     def close(self) -> None:
         self._scene = None
         self._frames.clear()
 
-    def _in_view(self) -> tuple[list[str], list[str], list[float]]:
-        seen = self._render()[0][1]
-        return (
-            [v.object_id for v in seen],
-            [v.object_type for v in seen],
-            [v.distance for v in seen],
-        )
+    def _in_view(self) -> tuple[VisibleObject, ...]:
+        return self._render()[0][1]
 
     def _reach(self, object_id: str) -> bool:
         scene = self._require()
@@ -147,21 +142,18 @@ class BuiltinSimulator(SemanticStep):
         else:
             pose = approach(scene, index, self._pose)
         if pose is not None:
-            self._move(pose)
+            self._pose = pose
         return pose is not None
 
     def _turn(self, action: Action) -> str:
         delta = turn_degrees(action)
-        self._move(WorldPose(self._pose.x, self._pose.z, (self._pose.heading + delta) % 360))
+        self._pose = WorldPose(self._pose.x, self._pose.z, (self._pose.heading + delta) % 360)
         return ""
 
     def _require(self) -> Scene:
         if self._scene is None:
             raise ConfigError("BuiltinSimulator used before reset(); call reset(...) first.")
         return self._scene
-
-    def _move(self, pose: WorldPose) -> None:
-        self._pose = pose
 
     def _render(self) -> tuple[_Seen, View]:
         """Pixel digest, visible objects and view of the current pose. The views of recent

@@ -16,10 +16,16 @@ from typing import Any
 
 import numpy as np
 
-from pytest_emrd.errors import ConfigError, TransportError, check_choice
-from pytest_emrd.rooms import ROOM_NAMES, SLUG_ROOMS
+from pytest_emrd.errors import ConfigError, TransportError
 from pytest_emrd.world._conditions import condition_params
-from pytest_emrd.world._feedback import Action, ActionFailed, SemanticStep, room_table, turn_degrees
+from pytest_emrd.world._feedback import (
+    Action,
+    ActionFailed,
+    SemanticStep,
+    room_table,
+    spawn_room_name,
+    turn_degrees,
+)
 from pytest_emrd.world._model import (
     Doorway,
     Layout,
@@ -319,8 +325,7 @@ class ThorSimulator(SemanticStep):
         self, layout: Layout, condition: str, spawn_room: str, seed: int, *, symbolic: bool = True
     ) -> Observation:
         """Start an episode in ``spawn_room`` (canonical name or slug) under ``condition``."""
-        name = SLUG_ROOMS.get(spawn_room, spawn_room)
-        check_choice("spawn_room", name, [*ROOM_NAMES, *SLUG_ROOMS])
+        name = spawn_room_name(spawn_room)
         self._condition = condition_params(condition)
         room = layout.room(name)
         wanted = spawn_pose(scene_of(layout), room, seed)
@@ -354,8 +359,7 @@ class ThorSimulator(SemanticStep):
             self._teleport(WorldPose(spot[0], spot[1], wanted.heading)), "the spawn TeleportFull"
         )
         self._spawn = agent_pose(event.metadata)
-        self._steps, self._ended, self._terminal, self._symbolic = 0, False, None, symbolic
-        return self._observe(True, "Episode started.")
+        return self._begin(symbolic)
 
     @property
     def agent_pose(self) -> WorldPose:
@@ -375,10 +379,6 @@ class ThorSimulator(SemanticStep):
             raise TransportError(f"AI2-THOR put the agent outside every room at {pose}.")
         return room
 
-    def visible_ids(self) -> tuple[str, ...]:
-        self._require()
-        return tuple(v.object_id for v in self._visible)
-
     def close(self) -> None:
         controller, self._controller, self._layout = self._controller, None, None
         if controller is not None:
@@ -387,9 +387,8 @@ class ThorSimulator(SemanticStep):
             finally:
                 _launch.kill_unity(controller)
 
-    def _in_view(self) -> tuple[list[str], list[str], list[float]]:
-        ids = [v.object_id for v in self._visible]
-        return ids, [v.object_type for v in self._visible], [v.distance for v in self._visible]
+    def _in_view(self) -> tuple[VisibleObject, ...]:
+        return self._visible
 
     def _reach(self, object_id: str) -> bool:
         layout = self._require()
