@@ -124,9 +124,9 @@ class Walls:
         """Ray parameter of the nearest wall hit along ``o + t d`` (``inf`` if none), and
         whether that wall runs along x (True on a tie and when nothing is hit); the arguments
         broadcast to one shape."""
-        rays = np.broadcast_arrays(*(np.asarray(a, dtype=np.float64) for a in (ox, oz, dx, dz)))
-        t_x = _nearest(rays[1], rays[0], rays[3], rays[2], self.along_x)
-        t_z = _nearest(rays[0], rays[1], rays[2], rays[3], self.along_z)
+        ox, oz, dx, dz = np.broadcast_arrays(*(np.asarray(a, np.float64) for a in (ox, oz, dx, dz)))
+        t_x = _nearest(oz, ox, dz, dx, self.along_x)
+        t_z = _nearest(ox, oz, dx, dz, self.along_z)
         return np.minimum(t_x, t_z), t_x <= t_z
 
     def blocks(self, ax: np.ndarray, az: np.ndarray, bx: np.ndarray, bz: np.ndarray) -> np.ndarray:
@@ -190,15 +190,7 @@ def _merge(spans: list[tuple[float, float]]) -> list[tuple[float, float]]:
 def _subtract(
     spans: list[tuple[float, float]], holes: list[tuple[float, float]]
 ) -> list[tuple[float, float]]:
-    for h_lo, h_hi in holes:
-        cut: list[tuple[float, float]] = []
-        for lo, hi in spans:
-            if h_hi <= lo or h_lo >= hi:
-                cut.append((lo, hi))
-                continue
-            if lo < h_lo:
-                cut.append((lo, h_lo))
-            if h_hi < hi:
-                cut.append((h_hi, hi))
-        spans = cut
+    for h_lo, h_hi in holes:  # keep what lies left and right of the hole
+        parts = [((lo, min(hi, h_lo)), (max(lo, h_hi), hi)) for lo, hi in spans]
+        spans = [(lo, hi) for pair in parts for lo, hi in pair if lo < hi]
     return spans

@@ -44,12 +44,11 @@ def approach(scene: Scene, index: int, pose: WorldPose) -> WorldPose | None:
     room = scene.layout.room(scene.layout.objects[index].room)
     x0, z0, x1, z1 = scene.rects[scene.support[index]]
     cx, cz = (x0 + x1) / 2, (z0 + z1) / 2
-    half = {(0.0, 1.0): (x1 - x0) / 2, (0.0, -1.0): (x1 - x0) / 2}
     sides = sorted(_SIDES, key=lambda s: -((pose.x - cx) * s[0][0] + (pose.z - cz) * s[0][1]))
     for (nx, nz), heading in sides:
         mx = x1 if nx > 0 else x0 if nx < 0 else cx
         mz = z1 if nz > 0 else z0 if nz < 0 else cz
-        span = half.get((nx, nz), (z1 - z0) / 2) + 0.2
+        span = ((x1 - x0) / 2 if nx == 0 else (z1 - z0) / 2) + 0.2  # half the side, + 0.2 m
         for off in STAND_OFF:
             for slide in SLIDES:
                 if abs(slide) > span:

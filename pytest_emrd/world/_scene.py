@@ -132,6 +132,8 @@ def scene_of(layout: Layout) -> Scene:
             part_label.append(label)
             face_v = b.v1 if b.facing > 0 else b.v0
             facing.append((b.facing * fx, b.facing * fz, face_v * b.facing))
+    owners = np.zeros(len(colors), dtype=np.int64)
+    owners[list(labels.values())] = [i + 1 for i, _ in labels]
     return Scene(
         layout=layout,
         walls=walls_of(layout),
@@ -145,19 +147,12 @@ def scene_of(layout: Layout) -> Scene:
         part_label=np.array(part_label, dtype=np.int64),
         part_facing=np.array(facing, dtype=float).reshape(-1, 3),
         colors=np.array(colors, dtype=np.uint8),
-        owners=_owners(len(colors), labels),
+        owners=owners,
         index={o.object_id: i for i, o in enumerate(objs)},
         room_raster=(rooms := _raster(layout)),
         floor_raster=_floor(rooms),
         landmarks=np.array([o.category == "landmark" for o in objs], dtype=bool),
     )
-
-
-def _owners(size: int, labels: dict[tuple[int, str], int]) -> np.ndarray:
-    owners = np.zeros(size, dtype=np.int64)
-    for (i, _), label in labels.items():
-        owners[label] = i + 1
-    return owners
 
 
 def _floor(rooms: np.ndarray) -> np.ndarray:

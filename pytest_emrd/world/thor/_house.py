@@ -196,21 +196,19 @@ def place(layout: Layout, overrides: Mapping[str, str] | None = None) -> dict[st
     solid = [o for o in layout.objects if o.object_type not in DOOR_TYPES]
     floor = [o for o in solid if o.elevation == 0]
     placed: dict[str, Placed] = {}
-    shift: dict[str, tuple[float, float]] = {}
     for obj in sorted(solid, key=lambda o: o.elevation > 0):
         asset = choose_asset(obj.object_type, obj.width, obj.depth, obj.height, overrides)
         base, dx, dz = obj.elevation, 0.0, 0.0
         if obj.elevation > 0:
             support = _support(obj, floor)
-            if support is not None:
-                base = placed[support.object_id].asset.height
-                dx, dz = shift[support.object_id]
+            if support is not None:  # moved with its support
+                below = placed[support.object_id]
+                base, dx, dz = below.asset.height, below.x - support.x, below.z - support.z
         x, z = obj.x + dx, obj.z + dz
         x0, z0, x1, z1 = rect_at(x, z, asset.width, asset.depth, obj.rotation)
         room = rooms[obj.room]
         x += _shift(x0, x1, room.x0 + margin, room.x1 - margin)
         z += _shift(z0, z1, room.z0 + margin, room.z1 - margin)
-        shift[obj.object_id] = (x - obj.x, z - obj.z)
         rect = rect_at(x, z, asset.width, asset.depth, obj.rotation)
         placed[obj.object_id] = Placed(
             asset, x, base + asset.height / 2, z, obj.rotation % 360, rect
@@ -232,8 +230,6 @@ def spawn_point(
     lo_z = math.ceil((room.z0 + CLEARANCE) / GRID) * GRID
     xs = np.arange(lo_x, room.x1 - CLEARANCE + 1e-9, GRID)
     zs = np.arange(lo_z, room.z1 - CLEARANCE + 1e-9, GRID)
-    if xs.size == 0 or zs.size == 0:
-        return None
     gx, gz = (a.ravel() for a in np.meshgrid(xs, zs))
     free = np.ones(gx.shape, dtype=bool)
     for x0, z0, x1, z1 in footprints:
