@@ -22,13 +22,20 @@ from __future__ import annotations
 
 from collections import Counter
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from pytest_emrd.rooms import CONFERENCE, ENTRANCE, KITCHEN, OFFICE
 from pytest_emrd.world._catalog import KINDS
-from pytest_emrd.world._geometry import Rect, local_to_world, rect_at, rects_at, rects_overlap
+from pytest_emrd.world._geometry import (
+    Rect,
+    footprint,
+    local_to_world,
+    rect_at,
+    rects_at,
+    rects_overlap,
+)
 from pytest_emrd.world._geometry import unit as unit_vector
 from pytest_emrd.world._model import Doorway, Layout, Room, WorldObject
 from pytest_emrd.world._rng import StableRng
@@ -135,14 +142,13 @@ def _exit(rng: StableRng, room: Room) -> WorldObject:
     return _object("Door", "Door_1", room.name, x, z, DOOR_WIDTH, rotation)
 
 
-def _number(placed: list[Placed]) -> list[WorldObject]:
+def _number(placed: list[WorldObject]) -> list[WorldObject]:
+    """The placed objects with their ids, ``Type_N`` in placement order."""
     counts: Counter[str] = Counter({"Door": 1})  # the exit is Door_1
     out = []
-    for p in placed:
-        object_type = KINDS[p.kind].object_type
-        counts[object_type] += 1
-        object_id = f"{object_type}_{counts[object_type]}"
-        out.append(_object(p.kind, object_id, p.room, p.x, p.z, p.width, p.rotation))
+    for o in placed:
+        counts[o.object_type] += 1
+        out.append(replace(o, object_id=f"{o.object_type}_{counts[o.object_type]}"))
     return out
 
 
@@ -262,18 +268,6 @@ class Unit:
     """Keep the access zone on every side instead of the front only."""
 
 
-@dataclass(frozen=True)
-class Placed:
-    """An object the planner placed (ids are assigned later)."""
-
-    kind: str
-    room: str
-    x: float
-    z: float
-    rotation: float
-    width: float
-
-
 class Planner:
     """Accumulates placements for one layout."""
 
@@ -281,7 +275,8 @@ class Planner:
         self.rng = rng
         self.solid: list[Rect] = []
         self.clear: list[Rect] = []
-        self.placed: list[Placed] = []
+        self.placed: list[WorldObject] = []
+        """Objects placed so far, without ids (:func:`_number` assigns them)."""
 
     def against_wall(self, room: Room, unit: Unit, sides: str = "NESW") -> bool:
         """Place ``unit`` with its back to one of ``sides`` of ``room``; False if no room."""
@@ -345,14 +340,14 @@ class Planner:
     def _commit(self, room: Room, unit: Unit, x: float, z: float, rot: float, access: Rect) -> None:
         self.clear.append(access)
         for m in unit.members:
-            kind = KINDS[m.kind]
             mx, mz = local_to_world(x, z, rot, m.u, m.v)
-            mrot = (rot + m.turn) % 360
-            width = m.width if m.width is not None else kind.width
-            placed = Placed(m.kind, room.name, round(mx, 2), round(mz, 2), mrot, width)
-            self.placed.append(placed)
-            if kind.elevation == 0.0:
-                self.solid.append(rect_at(placed.x, placed.z, width, kind.depth, mrot))
+            width = m.width if m.width is not None else KINDS[m.kind].width
+            obj = _object(
+                m.kind, "", room.name, round(mx, 2), round(mz, 2), width, (rot + m.turn) % 360
+            )
+            self.placed.append(obj)
+            if obj.elevation == 0.0:
+                self.solid.append(footprint(obj))
 
 
 def _hits(rects: np.ndarray, others: list[Rect]) -> np.ndarray:
