@@ -102,44 +102,34 @@ def corners(room: Room) -> tuple[tuple[float, float], ...]:
     return ((room.x0, room.z0), (room.x0, room.z1), (room.x1, room.z1), (room.x1, room.z0))
 
 
-def _covers(other: Room, a: tuple[float, float], b: tuple[float, float]) -> bool:
-    """Whether ``other`` has a side containing the segment's midpoint on the same line."""
-    mid = ((a[0] + b[0]) / 2, (a[1] + b[1]) / 2)
-    axis = 0 if abs(b[1] - a[1]) < EPS else 1  # the coordinate the segment runs along
-    spans = ((other.x0, other.x1), (other.z0, other.z1))
-    lo, hi = spans[axis]
-    on_line = any(abs(side - mid[1 - axis]) < EPS for side in spans[1 - axis])
-    return on_line and lo + EPS < mid[axis] < hi - EPS
-
-
-def _breaks(
-    rooms: tuple[Room, ...], a: tuple[float, float], b: tuple[float, float]
-) -> list[tuple[float, float]]:
-    """Points from ``a`` to ``b`` (ends included, in order) where other rooms' corners cut it."""
-    horizontal = abs(b[1] - a[1]) < EPS
-    axis = 0 if horizontal else 1
-    lo, hi = sorted((a[axis], b[axis]))
-    inner = {
-        c[axis]
-        for other in rooms
-        for c in corners(other)
-        if abs(c[1 - axis] - a[1 - axis]) < EPS and lo + EPS < c[axis] < hi - EPS
-    }
-    along = sorted(inner, reverse=b[axis] < a[axis])
-    cuts = [(v, a[1]) if horizontal else (a[0], v) for v in along]
-    return [a, *cuts, b]
+def _span(room: Room, axis: int) -> tuple[float, float]:
+    """The room's extent along x (``axis`` 0) or z (``axis`` 1)."""
+    return (room.x0, room.x1) if axis == 0 else (room.z0, room.z1)
 
 
 def wall_pieces(layout: Layout) -> tuple[WallPiece, ...]:
-    """Every wall piece of every room, rooms numbered from 1 in layout order."""
+    """Every wall piece of every room, rooms numbered from 1 in layout order: a side is cut
+    where another room's side on the same line ends; a piece's neighbour is the room whose
+    side holds the piece's midpoint."""
     pieces: list[WallPiece] = []
     for n, room in enumerate(layout.rooms, start=1):
-        others = [(i, r) for i, r in enumerate(layout.rooms, start=1) if r is not room]
         poly = corners(room)
         for a, b in zip(poly, poly[1:] + poly[:1], strict=True):
-            cuts = _breaks(tuple(r for _, r in others), a, b)
-            for start, end in itertools.pairwise(cuts):
-                covering = (i for i, other in others if _covers(other, start, end))
+            i = 0 if abs(b[1] - a[1]) < EPS else 1  # the coordinate the side runs along
+            on_line = {  # the other rooms with a side on this line -> where that side runs
+                m: _span(other, i)
+                for m, other in enumerate(layout.rooms, start=1)
+                if other is not room and any(abs(c - a[1 - i]) < EPS for c in _span(other, 1 - i))
+            }
+            lo, hi = sorted((a[i], b[i]))
+            cuts = {end for span in on_line.values() for end in span if lo + EPS < end < hi - EPS}
+            stops = [a[i], *sorted(cuts, reverse=b[i] < a[i]), b[i]]
+            for s, e in itertools.pairwise(stops):
+                mid = (s + e) / 2
+                covering = (
+                    m for m, (s_lo, s_hi) in on_line.items() if s_lo + EPS < mid < s_hi - EPS
+                )
+                start, end = ((s, a[1]), (e, a[1])) if i == 0 else ((a[0], s), (a[0], e))
                 pieces.append(WallPiece(n, *start, *end, next(covering, None)))
     return tuple(pieces)
 
