@@ -311,31 +311,26 @@ class Planner:
     def _search(
         self, room: Room, unit: Unit, candidate: Callable[[], tuple[float, float, float]]
     ) -> bool:
-        """Try candidates in batches until one fits."""
+        """Try candidates in batches; commit the first that fits (False if none does)."""
+        room_rect = np.array([room.x0, room.z0, room.x1, room.z1])
         for _ in range(CANDIDATES // BATCH):
-            if self._first_fit(room, unit, np.array([candidate() for _ in range(BATCH)])):
+            cands = np.array([candidate() for _ in range(BATCH)])
+            x, z, rot = np.round(cands[:, 0], 2), np.round(cands[:, 1], 2), cands[:, 2]
+            body = rects_at(x, z, unit.width, unit.depth, rot)
+            if unit.around:
+                grown = (unit.width + 2 * unit.access, unit.depth + 2 * unit.access)
+                access = rects_at(x, z, *grown, rot)
+            else:
+                fx, fz = np.array([unit_vector(r) for r in rot]).T
+                reach = (unit.depth + unit.access) / 2
+                access = rects_at(x + fx * reach, z + fz * reach, unit.width, unit.access, rot)
+            ok = _inside(body, room_rect) & _inside(access, room_rect)
+            ok &= ~(_hits(body, self.solid) | _hits(access, self.solid) | _hits(body, self.clear))
+            if ok.any():
+                k = int(ok.argmax())
+                self._commit(room, unit, float(x[k]), float(z[k]), float(rot[k]), tuple(access[k]))
                 return True
         return False
-
-    def _first_fit(self, room: Room, unit: Unit, cands: np.ndarray) -> bool:
-        x, z = np.round(cands[:, 0], 2), np.round(cands[:, 1], 2)
-        rot = cands[:, 2]
-        body = rects_at(x, z, unit.width, unit.depth, rot)
-        if unit.around:
-            access = rects_at(x, z, unit.width + 2 * unit.access, unit.depth + 2 * unit.access, rot)
-        else:
-            fx, fz = np.array([unit_vector(r) for r in rot]).T
-            reach = (unit.depth + unit.access) / 2
-            access = rects_at(x + fx * reach, z + fz * reach, unit.width, unit.access, rot)
-        room_rect = np.array([room.x0, room.z0, room.x1, room.z1])
-        ok = _inside(body, room_rect) & _inside(access, room_rect)
-        ok &= ~(_hits(body, self.solid) | _hits(access, self.solid) | _hits(body, self.clear))
-        hits = np.flatnonzero(ok)
-        if hits.size == 0:
-            return False
-        k = int(hits[0])
-        self._commit(room, unit, float(x[k]), float(z[k]), float(rot[k]), tuple(access[k]))
-        return True
 
     def _commit(self, room: Room, unit: Unit, x: float, z: float, rot: float, access: Rect) -> None:
         self.clear.append(access)

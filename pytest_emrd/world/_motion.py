@@ -33,10 +33,13 @@ SPAWN_POSES = 20
 _SIDES = (((0.0, 1.0), 180.0), ((0.0, -1.0), 0.0), ((1.0, 0.0), 270.0), ((-1.0, 0.0), 90.0))
 
 
-def is_free(scene: Scene, room: Room, x: float, z: float, r: float = AGENT_RADIUS) -> bool:
-    """Whether a disc of radius ``r`` (the agent) fits at ``(x, z)`` inside ``room``."""
-    inside = room.x0 + r <= x <= room.x1 - r and room.z0 + r <= z <= room.z1 - r
-    return inside and not bool(scene.crowded(x, z, r))
+def is_free(
+    scene: Scene, room: Room, x: float | np.ndarray, z: float | np.ndarray, r: float = AGENT_RADIUS
+) -> np.ndarray:
+    """Whether a disc of radius ``r`` (the agent) fits at ``(x, z)`` inside ``room`` (per point
+    when ``x`` and ``z`` are arrays)."""
+    inside = (x >= room.x0 + r) & (x <= room.x1 - r) & (z >= room.z0 + r) & (z <= room.z1 - r)
+    return inside & ~scene.crowded(x, z, r)
 
 
 def approach(scene: Scene, index: int, pose: WorldPose) -> WorldPose | None:
@@ -104,9 +107,7 @@ def spawn_points(scene: Scene, room: Room) -> list[tuple[float, float]]:
     d2 = (gx - cx) ** 2 + (gz - cz) ** 2
     order = np.lexsort((gz, gx, d2))  # nearest the centre first, ties by position
     for clearance in (SPAWN_CLEARANCE, AGENT_RADIUS):
-        ok = ~scene.crowded(gx, gz, clearance)
-        ok &= (gx >= room.x0 + clearance) & (gx <= room.x1 - clearance)
-        ok &= (gz >= room.z0 + clearance) & (gz <= room.z1 - clearance)
+        ok = is_free(scene, room, gx, gz, clearance)
         free = order[ok[order]]
         if free.size:
             near = free[d2[free] <= SPAWN_RADIUS**2]
