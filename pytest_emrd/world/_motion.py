@@ -16,7 +16,7 @@ from __future__ import annotations
 import numpy as np
 
 from pytest_emrd.errors import ConfigError
-from pytest_emrd.world._model import Doorway, Room, WorldPose
+from pytest_emrd.world._model import Doorway, Layout, Room, WorldPose
 from pytest_emrd.world._rng import StableRng
 from pytest_emrd.world._scene import AGENT_RADIUS, Scene
 
@@ -63,19 +63,31 @@ def approach(scene: Scene, index: int, pose: WorldPose) -> WorldPose | None:
     return None
 
 
-def through(scene: Scene, doorway: Doorway, pose: WorldPose, current: str) -> WorldPose | None:
-    """Where ``Goto(doorway)`` puts an agent at ``pose`` in room ``current`` (None: blocked)."""
-    a, b = scene.layout.room(doorway.room_a), scene.layout.room(doorway.room_b)
-    along_x = doorway.axis == "x"  # the wall runs along x: the rooms lie north and south
-    at = doorway.z if along_x else doorway.x
-    plus = a if (a.z0 if along_x else a.x0) >= at else b
-    minus = b if plus is a else a
-    near_plus = (pose.z if along_x else pose.x) >= at
+def doorway_target(
+    layout: Layout, doorway: Doorway, pose: WorldPose, current: str
+) -> tuple[Room, bool]:
+    """The room ``Goto(doorway)`` leads an agent at ``pose`` in room ``current`` to, and
+    whether it passes through (from one of the doorway's rooms into the other) rather than
+    walks up to the doorway (from a third room, into the doorway's room on its side)."""
+    a, b = layout.room(doorway.room_a), layout.room(doorway.room_b)
     if current in (a.name, b.name):
-        target, facing_plus = (minus, False) if current == plus.name else (plus, True)
+        return (b if current == a.name else a), True
+    if doorway.axis == "x":  # rooms lie north and south of the wall at z = doorway.z
+        near_a = (pose.z >= doorway.z) == ((a.z0 + a.z1) / 2 >= doorway.z)
     else:
-        target, facing_plus = (plus, False) if near_plus else (minus, True)
-    sign = 1.0 if target is plus else -1.0
+        near_a = (pose.x >= doorway.x) == ((a.x0 + a.x1) / 2 >= doorway.x)
+    return (a if near_a else b), False
+
+
+def through(scene: Scene, doorway: Doorway, pose: WorldPose, current: str) -> WorldPose | None:
+    """Where ``Goto(doorway)`` puts an agent at ``pose`` in room ``current`` (None: blocked):
+    :data:`THROUGH` metres into the :func:`doorway_target` room, facing away from the doorway
+    when passing through, towards it when walking up."""
+    target, passing = doorway_target(scene.layout, doorway, pose, current)
+    along_x = doorway.axis == "x"  # the wall runs along x: the rooms lie north and south
+    plus = (target.z0 if along_x else target.x0) >= (doorway.z if along_x else doorway.x)
+    sign = 1.0 if plus else -1.0
+    facing_plus = plus == passing
     if along_x:
         x, z = doorway.x, round(doorway.z + sign * THROUGH, 2)
         heading = 0.0 if facing_plus else 180.0

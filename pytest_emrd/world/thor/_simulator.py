@@ -35,7 +35,7 @@ from pytest_emrd.world._model import (
     VisibleObject,
     WorldPose,
 )
-from pytest_emrd.world._motion import spawn_pose
+from pytest_emrd.world._motion import doorway_target, spawn_pose
 from pytest_emrd.world._scene import scene_of
 from pytest_emrd.world.thor import _launch
 from pytest_emrd.world.thor._house import IdTable, build_house
@@ -410,16 +410,10 @@ class ThorSimulator(SemanticStep):
 
     def _door_pose(self, layout: Layout, doorway: Doorway) -> WorldPose | None:
         """Through the doorway from one of its rooms; up to it from a third room."""
-        here = self.current_room()
-        a, b = layout.room(doorway.room_a), layout.room(doorway.room_b)
-        if here in (a.name, b.name):
-            return entry(self._points, doorway, b if here == a.name else a)
-        pose = self.agent_pose
-        if doorway.axis == "x":  # rooms lie north and south of the wall at z = doorway.z
-            near_a = (pose.z >= doorway.z) == ((a.z0 + a.z1) / 2 >= doorway.z)
-        else:
-            near_a = (pose.x >= doorway.x) == ((a.x0 + a.x1) / 2 >= doorway.x)
-        return viewpoint(self._points, doorway.x, doorway.z, a if near_a else b)
+        target, passing = doorway_target(layout, doorway, self.agent_pose, self.current_room())
+        if passing:
+            return entry(self._points, doorway, target)
+        return viewpoint(self._points, doorway.x, doorway.z, target)
 
     def _require(self) -> Layout:
         if self._layout is None:
