@@ -90,7 +90,7 @@ def _support(layout: Layout, rects: np.ndarray, floor: np.ndarray) -> np.ndarray
             inside = floor & (rects[:, 0] <= o.x) & (rects[:, 2] >= o.x)
             inside &= (rects[:, 1] <= o.z) & (rects[:, 3] >= o.z)
             if inside.any():
-                support[i] = int(np.flatnonzero(inside)[0])
+                support[i] = inside.argmax()  # the first
     return support
 
 
@@ -114,11 +114,9 @@ def scene_of(layout: Layout) -> Scene:
         kind_colors = COLORS_OF.get(o.object_type, {})
         fx, fz = unit(o.rotation)
         for b in boxes_of(o):
-            (ax, az), (bx, bz) = (
-                local_to_world(o.x, o.z, o.rotation, b.u0, b.v0),
-                local_to_world(o.x, o.z, o.rotation, b.u1, b.v1),
-            )
-            x0, x1, z0, z1 = min(ax, bx), max(ax, bx), min(az, bz), max(az, bz)
+            ax, az = local_to_world(o.x, o.z, o.rotation, b.u0, b.v0)
+            bx, bz = local_to_world(o.x, o.z, o.rotation, b.u1, b.v1)
+            (x0, x1), (z0, z1) = sorted((ax, bx)), sorted((az, bz))
             parts.append((x0, z0, x1, z1, o.elevation + b.y0, o.elevation + b.y1))
             if b.role == "wall":
                 room = layout.room_at((ax + bx) / 2, (az + bz) / 2) or o.room

@@ -9,7 +9,7 @@ that side.
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 from pytest_emrd.world._catalog import DOOR_HEIGHT, WALL_HEIGHT
 from pytest_emrd.world._model import WorldObject
@@ -34,6 +34,11 @@ def _full(o: WorldObject, y0: float, y1: float, role: str) -> Box:
     return Box(-o.width / 2, o.width / 2, -o.depth / 2, o.depth / 2, y0, y1, role)
 
 
+def _mirrored(left: Box) -> list[Box]:
+    """``left`` and its mirror image across the object's centre line (a pair of legs)."""
+    return [left, replace(left, u0=-left.u1, u1=-left.u0)]
+
+
 def _legs(o: WorldObject, top: float, size: float, inset: float, role: str) -> list[Box]:
     hu, hv = o.width / 2 - inset, o.depth / 2 - inset
     us, vs = ((-hu, -hu + size), (hu - size, hu)), ((-hv, -hv + size), (hv - size, hv))
@@ -44,15 +49,13 @@ def _desk(o: WorldObject) -> list[Box]:
     hw, hd, h = o.width / 2, o.depth / 2, o.height
     if h > 0.9:  # reception desk: a tall panel towards the room, a work top behind it
         return [
-            Box(-hw, -hw + 0.04, -hd, hd - 0.06, 0.0, 0.72, "leg"),
-            Box(hw - 0.04, hw, -hd, hd - 0.06, 0.0, 0.72, "leg"),
+            *_mirrored(Box(-hw, -hw + 0.04, -hd, hd - 0.06, 0.0, 0.72, "leg")),
             Box(-hw, hw, -hd, hd - 0.06, 0.72, 0.76, "counter"),
             Box(-hw, hw, hd - 0.06, hd, 0.0, h - 0.03, "front"),
             Box(-hw, hw, hd - 0.22, hd, h - 0.03, h, "counter"),
         ]
     return [
-        Box(-hw + 0.03, -hw + 0.07, -hd + 0.03, hd - 0.03, 0.0, h - 0.04, "leg"),
-        Box(hw - 0.07, hw - 0.03, -hd + 0.03, hd - 0.03, 0.0, h - 0.04, "leg"),
+        *_mirrored(Box(-hw + 0.03, -hw + 0.07, -hd + 0.03, hd - 0.03, 0.0, h - 0.04, "leg")),
         Box(-hw + 0.07, hw - 0.07, -hd + 0.03, -hd + 0.06, 0.3, h - 0.04, "leg"),
         _full(o, h - 0.04, h, "top"),
     ]
@@ -86,8 +89,7 @@ def _armchair(o: WorldObject) -> list[Box]:
         *_legs(o, 0.1, 0.05, 0.04, "leg"),
         Box(-hw, hw, -hd, hd, 0.1, 0.45, "fabric"),
         Box(-hw, hw, -hd, -hd + 0.2, 0.45, h, "fabric"),
-        Box(-hw, -hw + 0.14, -hd + 0.2, hd, 0.45, 0.66, "fabric"),
-        Box(hw - 0.14, hw, -hd + 0.2, hd, 0.45, 0.66, "fabric"),
+        *_mirrored(Box(-hw, -hw + 0.14, -hd + 0.2, hd, 0.45, 0.66, "fabric")),
     ]
 
 
@@ -105,11 +107,7 @@ def _shelf(o: WorldObject) -> list[Box]:
                 u0 = -hw + 0.05 + ((start + 0.11 * i) % 0.62)
                 tall = 0.24 + 0.04 * ((i + j) % 3)
                 boxes.append(Box(u0, u0 + span, -hd + 0.03, hd - 0.08, y + 0.03, y + tall, role))
-    boxes += [
-        Box(-hw, -hw + 0.03, -hd, hd, 0.0, h, "frame"),
-        Box(hw - 0.03, hw, -hd, hd, 0.0, h, "frame"),
-    ]
-    return boxes
+    return [*boxes, *_mirrored(Box(-hw, -hw + 0.03, -hd, hd, 0.0, h, "frame"))]
 
 
 def _television(o: WorldObject) -> list[Box]:
@@ -194,8 +192,7 @@ def _plant(o: WorldObject) -> list[Box]:
 def _doorway(o: WorldObject) -> list[Box]:
     hw, top = o.width / 2, DOOR_HEIGHT
     return [
-        Box(-hw - 0.07, -hw, -0.08, 0.08, 0.0, top + 0.07, "frame"),
-        Box(hw, hw + 0.07, -0.08, 0.08, 0.0, top + 0.07, "frame"),
+        *_mirrored(Box(-hw - 0.07, -hw, -0.08, 0.08, 0.0, top + 0.07, "frame")),
         Box(-hw, hw, -0.08, 0.08, top, top + 0.07, "frame"),
         Box(-hw, hw, -0.005, 0.0, top + 0.07, WALL_HEIGHT, "wall"),
         Box(-hw, hw, 0.0, 0.005, top + 0.07, WALL_HEIGHT, "wall"),
@@ -206,8 +203,7 @@ def _door(o: WorldObject) -> list[Box]:
     hw, hd, top = o.width / 2, o.depth / 2, o.height
     return [
         Box(-hw + 0.06, hw - 0.06, -hd, hd, 0.0, top - 0.06, "panel"),
-        Box(-hw, -hw + 0.06, -hd, hd + 0.03, 0.0, top, "frame"),
-        Box(hw - 0.06, hw, -hd, hd + 0.03, 0.0, top, "frame"),
+        *_mirrored(Box(-hw, -hw + 0.06, -hd, hd + 0.03, 0.0, top, "frame")),
         Box(-hw, hw, -hd, hd + 0.03, top - 0.06, top, "frame"),
         Box(-hw + 0.16, hw - 0.16, hd, hd + 0.05, 0.95, 1.02, "bar", 1.0),
         Box(-0.25, 0.25, -hd, hd + 0.06, top + 0.15, top + 0.37, "sign"),

@@ -25,7 +25,7 @@ from pytest_emrd.trajectory import CONDITIONS
 from pytest_emrd.world._catalog import DOOR_HEIGHT
 from pytest_emrd.world._catalog import WALL_HEIGHT as CEILING_HEIGHT
 from pytest_emrd.world._conditions import condition_params
-from pytest_emrd.world._geometry import Rect, rect_at
+from pytest_emrd.world._geometry import Rect, footprint, rect_at
 from pytest_emrd.world._model import Doorway, Layout, Room, WorldObject, WorldPose
 from pytest_emrd.world._rng import StableRng
 from pytest_emrd.world.thor._assets import (
@@ -168,7 +168,7 @@ def _support(obj: WorldObject, floor: list[WorldObject]) -> WorldObject | None:
     """The floor object ``obj`` stands on: same room, its footprint holds ``obj``'s centre
     and its EMRD top is ``obj``'s elevation."""
     for other in floor:
-        x0, z0, x1, z1 = rect_at(other.x, other.z, other.width, other.depth, other.rotation)
+        x0, z0, x1, z1 = footprint(other)
         if (
             other.room == obj.room
             and abs(other.height - obj.elevation) <= SUPPORT_TOLERANCE
