@@ -57,14 +57,10 @@ def wrap180(angle: float | np.ndarray) -> Any:
     return (np.asarray(angle) + 180.0) % 360.0 - 180.0
 
 
-def heading_to(x0: float, z0: float, x1: float, z1: float) -> float:
-    """Heading (deg clockwise from +z, in [0, 360)) from ``(x0, z0)`` towards ``(x1, z1)``."""
-    return math.degrees(math.atan2(x1 - x0, z1 - z0)) % 360.0
-
-
 def bearing(agent: WorldPose, x: float, z: float) -> float:
     """Bearing of ``(x, z)`` relative to the agent's view axis, negative to the left."""
-    return float(wrap180(heading_to(agent.x, agent.z, x, z) - agent.heading))
+    heading = math.degrees(math.atan2(x - agent.x, z - agent.z)) % 360.0  # clockwise from +z
+    return float(wrap180(heading - agent.heading))
 
 
 def grid(positions: Iterable[Mapping[str, float]]) -> np.ndarray:
@@ -252,8 +248,6 @@ class ThorSimulator(SemanticStep):
         self._layout: Layout | None = None
         self._house: dict[str, Any] = {}
         self._ids = IdTable({})
-        self._types: dict[str, str] = {}
-        self._landmarks: frozenset[str] = frozenset()
         self._condition = condition_params("baseline")
         self._points = np.empty((0, 2))
         self._heights: dict[tuple[float, float], float] = {}
@@ -339,8 +333,6 @@ class ThorSimulator(SemanticStep):
             vis = self._condition.draw_distance
             self._call("reset", lambda: self._controller.reset(scene=house, visibilityDistance=vis))
         self._layout, self._house, self._ids = layout, house, IdTable.from_house(house)
-        self._types = {o.object_id: o.object_type for o in layout.objects}
-        self._landmarks = frozenset(o.object_id for o in layout.objects if o.category == "landmark")
         _check(self._controller.last_event, f"CreateHouse of house {house['id']!r}")
         self._lattice()
         if self._condition.randomize_palette:
@@ -423,12 +415,13 @@ class ThorSimulator(SemanticStep):
     def _view(self) -> tuple[WorldPose, tuple[VisibleObject, ...], str, View]:
         event = self._controller.last_event
         world = agent_pose(event.metadata)
+        objects = self._require().objects
         self._visible = visible_objects(
             event.metadata["objects"],
             world,
             ids=self._ids,
-            types=self._types,
-            landmarks=self._landmarks,
+            types={o.object_id: o.object_type for o in objects},
+            landmarks=frozenset(o.object_id for o in objects if o.category == "landmark"),
             visibility_distance=self._condition.visibility_distance,
         )
         frame = np.ascontiguousarray(event.frame, dtype=np.uint8)
