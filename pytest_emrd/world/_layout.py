@@ -88,7 +88,7 @@ def generate_layout(seed: int) -> Layout:
         seed=seed,
         width=width,
         depth=depth,
-        rooms=tuple(rooms[name] for name in (OFFICE, CONFERENCE, KITCHEN, ENTRANCE)),
+        rooms=tuple(rooms.values()),
         doorways=doorways,
         objects=tuple(objects),
     )

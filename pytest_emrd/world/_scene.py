@@ -44,8 +44,6 @@ _TILE_SHIFT = 12
 class Scene:
     layout: Layout
     walls: Walls
-    rooms: np.ndarray
-    """``(4, 4)`` room rectangles in ROOM_NAMES order."""
     rects: np.ndarray
     """``(N, 4)`` object footprints."""
     centres: np.ndarray
@@ -135,7 +133,6 @@ def scene_of(layout: Layout) -> Scene:
     return Scene(
         layout=layout,
         walls=walls_of(layout),
-        rooms=np.array([[r.x0, r.z0, r.x1, r.z1] for r in layout.rooms], dtype=float),
         rects=rects,
         centres=np.array([[o.x, o.z] for o in objs], dtype=float),
         floor=floor,

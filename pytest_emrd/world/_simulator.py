@@ -179,9 +179,7 @@ class BuiltinSimulator(SemanticStep):
             entry = seen, View.of(pixels, self._quality)
             if shared:
                 _remember(_digests, key, (scene, table, seen), VIEW_DIGESTS)
-        self._frames[pose] = entry
-        while len(self._frames) > max(self._cache_size, 1):  # the current view, at least
-            self._frames.popitem(last=False)
+        remember(self._frames, pose, entry, max(self._cache_size, 1))  # the current view, at least
         return entry
 
     def _view(self) -> tuple[WorldPose, tuple[VisibleObject, ...], str, View]:

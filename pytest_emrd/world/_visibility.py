@@ -58,9 +58,9 @@ def standing_points(scene: Scene) -> np.ndarray:
     for d in scene.layout.doorways:
         nx, nz = (0.0, 1.0) if d.axis == "x" else (1.0, 0.0)
         pts.append(np.array([[d.x + nx, d.z + nz], [d.x - nx, d.z - nz]]))
-    for x0, z0, x1, z1 in scene.rooms:
-        xs = np.arange(x0 + 0.4, x1 - 0.39, STAND_SPACING)
-        zs = np.arange(z0 + 0.4, z1 - 0.39, STAND_SPACING)
+    for r in scene.layout.rooms:
+        xs = np.arange(r.x0 + 0.4, r.x1 - 0.39, STAND_SPACING)
+        zs = np.arange(r.z0 + 0.4, r.z1 - 0.39, STAND_SPACING)
         gx, gz = np.meshgrid(xs, zs)
         pts.append(np.stack([gx.ravel(), gz.ravel()], axis=1))
     grid = np.round(np.concatenate(pts), 2)  # centimetre positions, as the world's poses

@@ -182,7 +182,6 @@ def _support(obj: WorldObject, floor: list[WorldObject]) -> WorldObject | None:
 def place(layout: Layout, overrides: Mapping[str, str] | None = None) -> dict[str, Placed]:
     """EMRD object id -> its THOR placement, for every object that is not a wall hole."""
     margin = layout.wall_thickness / 2
-    rooms = {r.name: r for r in layout.rooms}
     solid = [o for o in layout.objects if o.object_type not in DOOR_TYPES]
     floor = [o for o in solid if o.elevation == 0]
     placed: dict[str, Placed] = {}
@@ -196,7 +195,7 @@ def place(layout: Layout, overrides: Mapping[str, str] | None = None) -> dict[st
                 base, dx, dz = below.asset.height, below.x - support.x, below.z - support.z
         x, z = obj.x + dx, obj.z + dz
         x0, z0, x1, z1 = rect_at(x, z, asset.width, asset.depth, obj.rotation)
-        room = rooms[obj.room]
+        room = layout.room(obj.room)
         x += _shift(x0, x1, room.x0 + margin, room.x1 - margin)
         z += _shift(z0, z1, room.z0 + margin, room.z1 - margin)
         rect = rect_at(x, z, asset.width, asset.depth, obj.rotation)
