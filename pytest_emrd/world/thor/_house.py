@@ -377,7 +377,7 @@ def _lights(layout: Layout, factor: float) -> list[dict[str, Any]]:
         "nearPlane": 0.2,
         "resolution": "FromQualitySettings",
     }
-    lights: list[dict[str, Any]] = [
+    return [
         {
             "id": "DirectionalLight",
             "type": "directional",
@@ -387,19 +387,19 @@ def _lights(layout: Layout, factor: float) -> list[dict[str, Any]]:
             "indirectMultiplier": 1.0,
             "rgb": _rgb((1.0, 1.0, 1.0)),
             "shadow": shadow,
-        }
-    ]
-    return lights + [
-        {
-            "id": f"light_{n}",
-            "type": "point",
-            "position": _xyz((r.x0 + r.x1) / 2, CEILING_HEIGHT - 0.2, (r.z0 + r.z1) / 2),
-            "intensity": round(0.75 * factor, 4),
-            "range": 15,
-            "rgb": _rgb((1.0, 0.855, 0.722)),
-            "shadow": shadow,
-        }
-        for n, r in enumerate(layout.rooms, start=1)
+        },
+        *(
+            {
+                "id": f"light_{n}",
+                "type": "point",
+                "position": _xyz((r.x0 + r.x1) / 2, CEILING_HEIGHT - 0.2, (r.z0 + r.z1) / 2),
+                "intensity": round(0.75 * factor, 4),
+                "range": 15,
+                "rgb": _rgb((1.0, 0.855, 0.722)),
+                "shadow": shadow,
+            }
+            for n, r in enumerate(layout.rooms, start=1)
+        ),
     ]
 
 
