@@ -129,11 +129,6 @@ class Walls:
         t_z = _nearest(ox, oz, dx, dz, self.along_z)
         return np.minimum(t_x, t_z), t_x <= t_z
 
-    def blocks(self, ax: np.ndarray, az: np.ndarray, bx: np.ndarray, bz: np.ndarray) -> np.ndarray:
-        """Whether a wall crosses the open segment from ``a`` to ``b`` (broadcast shapes)."""
-        t, _ = self.first_hit(ax, az, bx - ax, bz - az)
-        return t < 1.0 - 1e-9
-
 
 def _nearest(
     across: np.ndarray,

@@ -389,7 +389,11 @@ class ThorSimulator(SemanticStep):
             obj = next(o for o in layout.objects if o.object_id == object_id)
             pose = viewpoint(self._points, obj.x, obj.z, layout.room(obj.room))
         else:
-            pose = self._door_pose(layout, doorway)
+            target, passing = doorway_target(layout, doorway, self.agent_pose, self.current_room())
+            if passing:  # through the doorway
+                pose = entry(self._points, doorway, target)
+            else:  # up to it from a third room
+                pose = viewpoint(self._points, doorway.x, doorway.z, target)
         if pose is not None:
             _accepted(self._teleport(pose))
         return pose is not None
@@ -399,13 +403,6 @@ class ThorSimulator(SemanticStep):
         for _ in range(int(abs(degrees)) // 90):
             _accepted(self._act("RotateLeft" if degrees < 0 else "RotateRight", degrees=90))
         return ""
-
-    def _door_pose(self, layout: Layout, doorway: Doorway) -> WorldPose | None:
-        """Through the doorway from one of its rooms; up to it from a third room."""
-        target, passing = doorway_target(layout, doorway, self.agent_pose, self.current_room())
-        if passing:
-            return entry(self._points, doorway, target)
-        return viewpoint(self._points, doorway.x, doorway.z, target)
 
     def _require(self) -> Layout:
         if self._layout is None:
