@@ -104,7 +104,7 @@ def spawn_pose(scene: Scene, room: Room, seed: int) -> WorldPose:
     points = spawn_points(scene, room)
     rng = StableRng(f"emrd-spawn:{seed}:{room.name}")
     index = episode_index(room.name, seed)
-    x, z = points[index % len(points) if index is not None else rng.integer(0, len(points) - 1)]
+    x, z = points[index % len(points)] if index is not None else rng.choice(points)
     return WorldPose(x, z, rng.choice((0.0, 90.0, 180.0, 270.0)))
 
 
