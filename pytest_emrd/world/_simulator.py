@@ -135,12 +135,11 @@ class BuiltinSimulator(SemanticStep):
 
     def _reach(self, object_id: str) -> bool:
         scene = self._require()
-        index = scene.index[object_id]
-        if scene.layout.objects[index].object_type == "Doorway":
-            doorway = next(d for d in scene.layout.doorways if d.object_id == object_id)
-            pose = through(scene, doorway, self._pose, self.current_room())
+        doorway = next((d for d in scene.layout.doorways if d.object_id == object_id), None)
+        if doorway is None:
+            pose = approach(scene, scene.index[object_id], self._pose)
         else:
-            pose = approach(scene, index, self._pose)
+            pose = through(scene, doorway, self._pose, self.current_room())
         if pose is not None:
             self._pose = pose
         return pose is not None

@@ -156,10 +156,8 @@ def visible_objects(
     (``docs/ai2thor.md``); ``types`` maps EMRD id -> EMRD type."""
     seen: dict[str, VisibleObject] = {}
     for obj in objects:
-        if not obj.get("visible"):
-            continue
-        ours = ids.emrd(str(obj["objectId"]))
-        if ours is None:
+        ours = ids.emrd(str(obj["objectId"])) if obj.get("visible") else None
+        if ours is None:  # not visible, or not an object of the layout
             continue
         x, z = float(obj["position"]["x"]), float(obj["position"]["z"])
         if ours not in landmarks and _box_distance(obj, agent) > visibility_distance:
@@ -242,7 +240,7 @@ class ThorSimulator(SemanticStep):
         self._allow_download = bool(allow_download)
         self._asset_ids = dict(asset_ids or {})
         self._rooms = room_table(room_aliases)
-        self._user_options = dict(controller_options)
+        self._options = {**DEFAULTS, **controller_options}
         self._controller: Any = None
         self._started: list[Any] = []
         self._layout: Layout | None = None
@@ -255,7 +253,7 @@ class ThorSimulator(SemanticStep):
         self._visible: tuple[VisibleObject, ...] = ()
 
     def _start(self, house: dict[str, Any]) -> None:
-        options = {**DEFAULTS, **self._user_options}
+        options = dict(self._options)
         options.update(
             scene=house,
             visibilityDistance=self._condition.draw_distance,
@@ -323,7 +321,7 @@ class ThorSimulator(SemanticStep):
         self._condition = condition_params(condition)
         room = layout.room(name)
         wanted = spawn_pose(scene_of(layout), room, seed)
-        mode = str({**DEFAULTS, **self._user_options}["agentMode"])
+        mode = str(self._options["agentMode"])
         house = build_house(
             layout, condition, seed, agent=wanted, asset_ids=self._asset_ids, agent_mode=mode
         )
