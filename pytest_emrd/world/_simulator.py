@@ -38,12 +38,12 @@ SHADE_TABLES = 64
 _lock = threading.Lock()
 _Seen = tuple[str, tuple[VisibleObject, ...]]
 """A view's pixel digest and the objects it shows legibly."""
-#: (scene, table, pose) -> digest and visible objects, keyed by the identities of a memoised
-#: scene and table (each entry holds them, so an id is not reused while the entry lives).
-_digests: OrderedDict[tuple[int, int, WorldPose], tuple[Scene, np.ndarray, _Seen]] = OrderedDict()
-_tables: OrderedDict[tuple[int, ConditionParams, int | None], tuple[Scene, np.ndarray]] = (
-    OrderedDict()
-)
+#: (scene, id of a shade table, pose) -> the table and the view's digest and visible objects
+#: (the entry holds the table, so its id is not reused while the entry lives). Scenes hash
+#: by identity: an entry is only found with the memoised scene object it was made with.
+_digests: OrderedDict[tuple[Scene, int, WorldPose], tuple[np.ndarray, _Seen]] = OrderedDict()
+#: (scene, condition, ``texture`` seed or None) -> shade table.
+_tables: OrderedDict[tuple[Scene, ConditionParams, int | None], np.ndarray] = OrderedDict()
 
 
 def _remember(table: OrderedDict[Any, Any], key: Any, value: Any, capacity: int) -> None:
@@ -60,12 +60,11 @@ def forget_views() -> None:
 
 def _shades(scene: Scene, params: ConditionParams, seed: int) -> np.ndarray:
     """The episode's shade table, one object per scene, condition and (``texture``) seed."""
-    key = (id(scene), params, seed if params.randomize_palette else None)
-    hit = _tables.get(key)
-    if hit is not None and hit[0] is scene:
-        return hit[1]
-    table = shade_table(palette(scene, params, seed), params, scene.owners)
-    _remember(_tables, key, (scene, table), SHADE_TABLES)
+    key = (scene, params, seed if params.randomize_palette else None)
+    table = _tables.get(key)
+    if table is None:
+        table = shade_table(palette(scene, params, seed), params, scene.owners)
+        _remember(_tables, key, table, SHADE_TABLES)
     return table
 
 
@@ -168,16 +167,16 @@ class BuiltinSimulator(SemanticStep):
         draw = functools.partial(render, scene, pose, self._params, table)
         # A texture episode's table is its own: no other episode can share its views.
         shared = self._cache_size > 0 and not self._params.randomize_palette
-        key = (id(scene), id(table), pose)
+        key = (scene, id(table), pose)
         known = _digests.get(key) if shared else None
-        if known is not None and known[0] is scene and known[1] is table:
-            entry = known[2], View(lambda: draw()[0], self._quality)
+        if known is not None and known[0] is table:
+            entry = known[1], View(lambda: draw()[0], self._quality)
         else:
             pixels, legible = draw()
             seen = hashlib.sha256(pixels.data).hexdigest(), in_view(scene, pose, legible)
             entry = seen, View.of(pixels, self._quality)
             if shared:
-                _remember(_digests, key, (scene, table, seen), VIEW_DIGESTS)
+                _remember(_digests, key, (table, seen), VIEW_DIGESTS)
         remember(self._frames, pose, entry, max(self._cache_size, 1))  # the current view, at least
         return entry
 
