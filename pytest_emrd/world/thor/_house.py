@@ -91,10 +91,9 @@ class WallPiece:
 
     def distance_to(self, x: float, z: float) -> float:
         """Euclidean distance from ``(x, z)`` to the piece."""
-        dx, dz = self.x1 - self.x0, self.z1 - self.z0
-        t = ((x - self.x0) * dx + (z - self.z0) * dz) / (dx * dx + dz * dz)
-        t = min(1.0, max(0.0, t))
-        return math.hypot(x - (self.x0 + t * dx), z - (self.z0 + t * dz))
+        dx = max(min(self.x0, self.x1) - x, x - max(self.x0, self.x1), 0.0)
+        dz = max(min(self.z0, self.z1) - z, z - max(self.z0, self.z1), 0.0)
+        return math.hypot(dx, dz)  # the piece is axis-aligned
 
 
 def corners(room: Room) -> tuple[tuple[float, float], ...]:
