@@ -23,7 +23,7 @@ from dataclasses import dataclass
 from pytest_emrd.errors import check_choice
 from pytest_emrd.rooms import ROOM_NAMES, SLUG_ROOMS
 from pytest_emrd.trajectory import Pose
-from pytest_emrd.world._geometry import heading_in_spawn_frame, to_spawn_frame
+from pytest_emrd.world._geometry import heading_in_spawn_frame, spawn_frame_point
 from pytest_emrd.world._model import Observation, View, VisibleObject, WorldPose
 
 _ACTION = re.compile(r"^\s*(goto|turn|term)\s*\(\s*(.*?)\s*\)\s*\.?\s*$", re.IGNORECASE | re.DOTALL)
@@ -218,9 +218,8 @@ def choose_target(
 
 def observed_pose(spawn: WorldPose, pose: WorldPose) -> Pose:
     """The agent's odometry: ``pose`` in the spawn frame, to 0.1 mm, never ``-0.0``."""
-    x, z = to_spawn_frame(spawn, pose.x, pose.z)
-    heading = heading_in_spawn_frame(spawn, pose.heading)
-    return Pose(round(x, 4) + 0.0, round(z, 4) + 0.0, heading)
+    x, z = spawn_frame_point(spawn, pose.x, pose.z)
+    return Pose(x, z, heading_in_spawn_frame(spawn, pose.heading))
 
 
 def with_pose(message: str, pose: Pose) -> str:

@@ -93,6 +93,12 @@ def to_spawn_frame(spawn_pose: WorldPose, x: float, z: float) -> tuple[float, fl
     return dx * rx + dz * rz, dx * fx + dz * fz
 
 
+def spawn_frame_point(spawn_pose: WorldPose, x: float, z: float) -> tuple[float, float]:
+    """:func:`to_spawn_frame` as positions are reported: to 0.1 mm, never ``-0.0``."""
+    sx, sz = to_spawn_frame(spawn_pose, x, z)
+    return round(sx, 4) + 0.0, round(sz, 4) + 0.0
+
+
 def heading_in_spawn_frame(spawn_pose: WorldPose, heading: float) -> float:
     """World heading -> degrees clockwise from the spawn heading, in ``[0, 360)``.
 

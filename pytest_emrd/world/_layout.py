@@ -297,7 +297,7 @@ class Planner:
         self, room: Room, unit: Unit, rotations: tuple[float, ...], *, spread: float | None = None
     ) -> bool:
         """Place ``unit`` anywhere in ``room`` (or within ``spread`` m of its centre)."""
-        cx, cz = (room.x0 + room.x1) / 2, (room.z0 + room.z1) / 2
+        cx, cz = room.centre
 
         def candidate() -> tuple[float, float, float]:
             rot = self.rng.choice(rotations)

@@ -73,9 +73,9 @@ def doorway_target(
     if current in (a.name, b.name):
         return (b if current == a.name else a), True
     if doorway.axis == "x":  # rooms lie north and south of the wall at z = doorway.z
-        near_a = (pose.z >= doorway.z) == ((a.z0 + a.z1) / 2 >= doorway.z)
+        near_a = (pose.z >= doorway.z) == (a.centre[1] >= doorway.z)
     else:
-        near_a = (pose.x >= doorway.x) == ((a.x0 + a.x1) / 2 >= doorway.x)
+        near_a = (pose.x >= doorway.x) == (a.centre[0] >= doorway.x)
     return (a if near_a else b), False
 
 
@@ -112,7 +112,7 @@ def spawn_points(scene: Scene, room: Room) -> list[tuple[float, float]]:
     """The spawn points of ``room`` in the order episodes take them (shuffled once per room):
     episode ``i`` stands on point ``i``, its cardinal heading drawn from the episode seed; a
     seed of no episode (a benchmark's) picks a point by the seed."""
-    cx, cz = (room.x0 + room.x1) / 2, (room.z0 + room.z1) / 2
+    cx, cz = room.centre
     xs = np.arange(room.x0 + AGENT_RADIUS, room.x1 - AGENT_RADIUS + 1e-9, SPAWN_STEP)
     zs = np.arange(room.z0 + AGENT_RADIUS, room.z1 - AGENT_RADIUS + 1e-9, SPAWN_STEP)
     gx, gz = (np.round(g.ravel(), 2) for g in np.meshgrid(xs, zs))

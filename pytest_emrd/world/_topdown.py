@@ -44,7 +44,7 @@ def plan_png(layout: Layout, pose: WorldPose, *, visibility: float) -> bytes:
         ax.add_patch(
             patches.Rectangle((r.x0, r.z0), r.x1 - r.x0, r.z1 - r.z0, color=fill, zorder=0)
         )
-        ax.text((r.x0 + r.x1) / 2, (r.z0 + r.z1) / 2, r.name, **centred, **label)
+        ax.text(*r.centre, r.name, **centred, **label)
     walls = walls_of(layout)
     wall = {"color": "black", "lw": 3, "solid_capstyle": "butt", "zorder": 3}
     for z, x0, x1 in walls.along_x:

@@ -391,7 +391,7 @@ def _lights(layout: Layout, factor: float) -> list[dict[str, Any]]:
             {
                 "id": f"light_{n}",
                 "type": "point",
-                "position": _xyz((r.x0 + r.x1) / 2, CEILING_HEIGHT - 0.2, (r.z0 + r.z1) / 2),
+                "position": _xyz(r.centre[0], CEILING_HEIGHT - 0.2, r.centre[1]),
                 "intensity": round(0.75 * factor, 4),
                 "range": 15,
                 "rgb": _rgb((1.0, 0.855, 0.722)),
@@ -415,8 +415,7 @@ def _object_dict(placed: Placed, thor_id: str) -> dict[str, Any]:
 
 def _start(layout: Layout, placed: Mapping[str, Placed], agent: WorldPose | None) -> dict[str, Any]:
     """The agent's start on THOR's grid, clear of every asset (:func:`spawn_point`)."""
-    first = layout.rooms[0]
-    wanted = agent or WorldPose((first.x0 + first.x1) / 2, (first.z0 + first.z1) / 2, 0.0)
+    wanted = agent or WorldPose(*layout.rooms[0].centre, 0.0)
     name = layout.room_at(wanted.x, wanted.z)
     footprints = [p.rect for p in placed.values()]
     spot = None if name is None else spawn_point(layout.room(name), footprints, wanted.x, wanted.z)
