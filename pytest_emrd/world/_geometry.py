@@ -20,6 +20,8 @@ from pytest_emrd.world._model import Layout, WorldObject, WorldPose
 Rect = tuple[float, float, float, float]
 """Axis-aligned rectangle ``(x0, z0, x1, z1)`` with ``x0 <= x1`` and ``z0 <= z1``."""
 
+HEADINGS = (0.0, 90.0, 180.0, 270.0)
+"""The cardinal headings, the only ones the built-in world's poses and turns produce."""
 _CARDINAL = {0: (0.0, 1.0), 90: (1.0, 0.0), 180: (0.0, -1.0), 270: (-1.0, 0.0)}
 
 

@@ -29,6 +29,7 @@ import numpy as np
 from pytest_emrd.rooms import CONFERENCE, ENTRANCE, KITCHEN, OFFICE
 from pytest_emrd.world._catalog import KINDS
 from pytest_emrd.world._geometry import (
+    HEADINGS,
     Rect,
     footprint,
     local_to_world,
@@ -83,14 +84,13 @@ def generate_layout(seed: int) -> Layout:
     _conference(planner, rooms[CONFERENCE])
     _kitchen(planner, rooms[KITCHEN])
     _entrance(planner, rooms[ENTRANCE])
-    objects = [*landmarks, *_number(planner.placed)]
     return Layout(
         seed=seed,
         width=width,
         depth=depth,
         rooms=tuple(rooms.values()),
         doorways=doorways,
-        objects=tuple(objects),
+        objects=(*landmarks, *_number(planner.placed)),
     )
 
 
@@ -225,7 +225,7 @@ def _kitchen(p: Planner, room: Room) -> None:
     length = rng.choice(COUNTER_LENGTHS)
     micro_u = round(rng.uniform(-(length / 2 - 0.4), length / 2 - 0.4), 2)
     p.against_wall(room, _counter_unit(length, (Member("Microwave", u=micro_u, v=0.05),)))
-    p.free(room, _single("Stool", 0.45, around=True), (0.0, 90.0, 180.0, 270.0))
+    p.free(room, _single("Stool", 0.45, around=True), HEADINGS)
 
 
 def _entrance(p: Planner, room: Room) -> None:

@@ -16,6 +16,7 @@ from __future__ import annotations
 import numpy as np
 
 from pytest_emrd.errors import ConfigError
+from pytest_emrd.world._geometry import HEADINGS
 from pytest_emrd.world._model import Doorway, Layout, Room, WorldPose
 from pytest_emrd.world._rng import StableRng
 from pytest_emrd.world._scene import AGENT_RADIUS, Scene
@@ -105,7 +106,7 @@ def spawn_pose(scene: Scene, room: Room, seed: int) -> WorldPose:
     rng = StableRng(f"emrd-spawn:{seed}:{room.name}")
     index = episode_index(room.name, seed)
     x, z = points[index % len(points)] if index is not None else rng.choice(points)
-    return WorldPose(x, z, rng.choice((0.0, 90.0, 180.0, 270.0)))
+    return WorldPose(x, z, rng.choice(HEADINGS))
 
 
 def spawn_points(scene: Scene, room: Room) -> list[tuple[float, float]]:

@@ -16,7 +16,7 @@ from functools import lru_cache
 import numpy as np
 
 from pytest_emrd.world._conditions import condition_params
-from pytest_emrd.world._geometry import right_of, unit
+from pytest_emrd.world._geometry import HEADINGS, right_of, unit
 from pytest_emrd.world._model import Layout, VisibleObject, WorldPose
 from pytest_emrd.world._scene import Scene, scene_of
 
@@ -81,7 +81,7 @@ def discoverable_ids(layout: Layout) -> tuple[str, ...]:
     points = standing_points(scene)
     order = np.concatenate([np.arange(start, len(points), SPREAD) for start in range(SPREAD)])
     for x, z in points[order]:
-        for heading in (0.0, 90.0, 180.0, 270.0):
+        for heading in HEADINGS:
             seen |= render(scene, WorldPose(float(x), float(z), heading), params, table)[1] >= (
                 LEGIBLE_PIXELS
             )
