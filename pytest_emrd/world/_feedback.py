@@ -123,9 +123,9 @@ class SemanticStep:
         key = key if symbolic else _INSTANCE.sub("", key)
         seen = self._in_view()
         chosen = choose_target(key, seen, symbolic=symbolic)
-        if chosen is None and not symbolic:
-            raise ActionFailed(f"no object of type {action.arg!r} is visible")
         if chosen is None:
+            if not symbolic:
+                raise ActionFailed(f"no object of type {action.arg!r} is visible")
             shown = ", ".join(sorted(v.object_id for v in seen)) or "nothing"
             raise ActionFailed(f"no visible object matches {action.arg!r}. Visible: {shown}")
         target = chosen.object_id

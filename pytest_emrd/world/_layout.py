@@ -190,12 +190,18 @@ def _office(p: Planner, room: Room) -> None:
 def _table_unit(length: float) -> Unit:
     table, chair = KINDS["DiningTable"], KINDS["Chair"]
     offset = table.depth / 2 + 0.05 + chair.depth / 2
-    members = [Member("DiningTable", width=length)]
-    for side, turn in ((offset, 180.0), (-offset, 0.0)):
-        for i in range(4):
-            u = round(-length / 2 + length / 8 + i * length / 4, 2)
-            members.append(Member("Chair", u=u, v=side, turn=turn))
-    return Unit(tuple(members), length, round(2 * offset + chair.depth, 2), 0.75, around=True)
+    chairs = [
+        Member("Chair", u=round(-length / 2 + length / 8 + i * length / 4, 2), v=side, turn=turn)
+        for side, turn in ((offset, 180.0), (-offset, 0.0))
+        for i in range(4)
+    ]
+    return Unit(
+        (Member("DiningTable", width=length), *chairs),
+        length,
+        round(2 * offset + chair.depth, 2),
+        0.75,
+        around=True,
+    )
 
 
 def _conference(p: Planner, room: Room) -> None:

@@ -481,15 +481,14 @@ def build_house(
         if obj.object_id in doorway_ids:
             continue
         n = numbers[obj.room]
-        if obj.object_type in DOOR_TYPES:
-            door = _exterior_door(obj, n, len(doors), pieces, assets)
-            doors.append(door)
-            ids[door["id"]] = obj.object_id
-            continue
-        thor_id = f"{obj.object_type}|{n}|{per_room[n]}"
-        per_room[n] += 1
-        objects.append(_object_dict(placed[obj.object_id], thor_id))
-        ids[thor_id] = obj.object_id
+        if obj.object_type in DOOR_TYPES:  # the exit: a hole in an outside wall
+            built = _exterior_door(obj, n, len(doors), pieces, assets)
+            doors.append(built)
+        else:
+            built = _object_dict(placed[obj.object_id], f"{obj.object_type}|{n}|{per_room[n]}")
+            per_room[n] += 1
+            objects.append(built)
+        ids[built["id"]] = obj.object_id
 
     start = _start(layout, placed, agent)
     return {
