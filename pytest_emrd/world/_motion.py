@@ -85,16 +85,14 @@ def through(scene: Scene, doorway: Doorway, pose: WorldPose, current: str) -> Wo
     :data:`THROUGH` metres into the :func:`doorway_target` room, facing away from the doorway
     when passing through, towards it when walking up."""
     target, passing = doorway_target(scene.layout, doorway, pose, current)
-    along_x = doorway.axis == "x"  # the wall runs along x: the rooms lie north and south
-    plus = (target.z0 if along_x else target.x0) >= (doorway.z if along_x else doorway.x)
-    sign = 1.0 if plus else -1.0
-    facing_plus = plus == passing
-    if along_x:
-        x, z = doorway.x, round(doorway.z + sign * THROUGH, 2)
-        heading = 0.0 if facing_plus else 180.0
+    if doorway.axis == "x":  # the wall runs along x: the rooms lie north and south
+        north = target.z0 >= doorway.z
+        x, z = doorway.x, round(doorway.z + (THROUGH if north else -THROUGH), 2)
+        heading = 0.0 if north == passing else 180.0
     else:
-        x, z = round(doorway.x + sign * THROUGH, 2), doorway.z
-        heading = 90.0 if facing_plus else 270.0
+        east = target.x0 >= doorway.x
+        x, z = round(doorway.x + (THROUGH if east else -THROUGH), 2), doorway.z
+        heading = 90.0 if east == passing else 270.0
     return WorldPose(x, z, heading) if is_free(scene, target, x, z) else None
 
 

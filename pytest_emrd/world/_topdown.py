@@ -55,8 +55,10 @@ def plan_png(layout: Layout, pose: WorldPose, *, visibility: float) -> bytes:
         x0, z0, x1, z1 = footprint(o)
         fill = CATEGORY_COLORS.get(o.category, "grey")
         layer = {"alpha": 0.55, "zorder": 4} if o.elevation else {"alpha": 0.85, "zorder": 2}
-        edges = {"facecolor": fill, "edgecolor": "black", "lw": 0.6}
-        ax.add_patch(patches.Rectangle((x0, z0), x1 - x0, z1 - z0, **edges, **layer))
+        box = patches.Rectangle(
+            (x0, z0), x1 - x0, z1 - z0, facecolor=fill, edgecolor="black", lw=0.6, **layer
+        )
+        ax.add_patch(box)
         ax.text(o.x, o.z, o.object_id, **centred, fontsize=5.5, zorder=6)
     # matplotlib angles are counter-clockwise from +x; headings clockwise from +z
     theta = 90.0 - pose.heading

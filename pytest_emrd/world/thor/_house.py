@@ -224,11 +224,10 @@ def spawn_point(
         dx = np.maximum(np.maximum(x0 - gx, gx - x1), 0.0)
         dz = np.maximum(np.maximum(z0 - gz, gz - z1), 0.0)
         free &= np.hypot(dx, dz) >= CLEARANCE
-    if not free.any():
+    gx, gz = gx[free], gz[free]
+    if gx.size == 0:
         return None
-    dist = np.round(np.hypot(gx - x, gz - z), 6)
-    idx = np.flatnonzero(free)
-    best = idx[np.lexsort((gz[idx], gx[idx], dist[idx]))[0]]
+    best = np.lexsort((gz, gx, np.round(np.hypot(gx - x, gz - z), 6)))[0]  # nearest, then by x, z
     return snap(float(gx[best])), snap(float(gz[best]))
 
 
