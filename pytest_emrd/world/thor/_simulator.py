@@ -117,17 +117,14 @@ def viewpoint(points: np.ndarray, x: float, z: float, room: Room) -> WorldPose |
 
 def entry(points: np.ndarray, doorway: Doorway, into: Room) -> WorldPose | None:
     """Reachable spot in ``into`` nearest the doorway, facing into the room, away from the gap."""
+    x, z = points[:, 0], points[:, 1]
     if doorway.axis == "x":  # wall runs along x at z = doorway.z
         north = abs(into.z0 - doorway.z) < abs(into.z1 - doorway.z)
-        heading, depth = (
-            (0.0, points[:, 1] - doorway.z) if north else (180.0, doorway.z - points[:, 1])
-        )
+        heading, depth = (0.0, z - doorway.z) if north else (180.0, doorway.z - z)
     else:  # wall runs along z at x = doorway.x
         east = abs(into.x0 - doorway.x) < abs(into.x1 - doorway.x)
-        heading, depth = (
-            (90.0, points[:, 0] - doorway.x) if east else (270.0, doorway.x - points[:, 0])
-        )
-    dist = np.hypot(points[:, 0] - doorway.x, points[:, 1] - doorway.z)
+        heading, depth = (90.0, x - doorway.x) if east else (270.0, doorway.x - x)
+    dist = np.hypot(x - doorway.x, z - doorway.z)
     inside = _in_room(points, into)
     return _pick(points, heading, (dist, inside & (depth >= CLEARANCE)), (dist, inside))
 
@@ -253,13 +250,13 @@ class ThorSimulator(SemanticStep):
         self._visible: tuple[VisibleObject, ...] = ()
 
     def _start(self, house: dict[str, Any]) -> None:
-        options = dict(self._options)
-        options.update(
-            scene=house,
-            visibilityDistance=self._condition.draw_distance,
-            server_timeout=self._step_timeout,
-            server_start_timeout=self._start_timeout,
-        )
+        options = {
+            **self._options,
+            "scene": house,
+            "visibilityDistance": self._condition.draw_distance,
+            "server_timeout": self._step_timeout,
+            "server_start_timeout": self._start_timeout,
+        }
         self._started = []
         if self._factory is None:
             thor = _launch.import_ai2thor()
