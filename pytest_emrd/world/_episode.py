@@ -16,7 +16,7 @@ from typing import Final
 from pytest_emrd.errors import check_choice
 from pytest_emrd.rooms import ROOM_SLUGS, SLUG_ROOMS
 from pytest_emrd.trajectory import LAYOUTS, EpisodeSpec, GroundTruth, GroundTruthObject, RoomOutline
-from pytest_emrd.world._geometry import spawn_frame_point
+from pytest_emrd.world._geometry import Point, spawn_frame_point
 from pytest_emrd.world._layout import generate_layout
 from pytest_emrd.world._model import Layout, Room, WorldPose
 from pytest_emrd.world._visibility import discoverable_ids
@@ -79,7 +79,7 @@ def episode_index(spawn_room: str, seed: int) -> int | None:
     return _indices(spawn_room).get(seed)
 
 
-def _corners(r: Room) -> tuple[tuple[float, float], ...]:
+def _corners(r: Room) -> tuple[Point, ...]:
     return ((r.x0, r.z0), (r.x1, r.z0), (r.x1, r.z1), (r.x0, r.z1))
 
 

@@ -19,6 +19,10 @@ from pytest_emrd.world._model import Layout, WorldObject, WorldPose
 
 Rect = tuple[float, float, float, float]
 """Axis-aligned rectangle ``(x0, z0, x1, z1)`` with ``x0 <= x1`` and ``z0 <= z1``."""
+Point = tuple[float, float]
+"""A point ``(x, z)`` of the floor, metres."""
+Span = tuple[float, float]
+"""An interval ``(lo, hi)`` along one axis."""
 
 HEADINGS = (0.0, 90.0, 180.0, 270.0)
 """The cardinal headings, the only ones the built-in world's poses and turns produce."""
@@ -65,7 +69,7 @@ def rects_at(
     return np.stack([x - hw, z - hd, x + hw, z + hd], axis=1)
 
 
-def local_to_world(x: float, z: float, rotation: float, u: float, v: float) -> tuple[float, float]:
+def local_to_world(x: float, z: float, rotation: float, u: float, v: float) -> Point:
     """World point at ``u`` metres right and ``v`` metres forward of a frame at ``(x, z)``.
 
     :param x: The frame's origin, world x.
@@ -80,7 +84,7 @@ def local_to_world(x: float, z: float, rotation: float, u: float, v: float) -> t
     return x + u * rx + v * fx, z + u * rz + v * fz
 
 
-def to_spawn_frame(spawn_pose: WorldPose, x: float, z: float) -> tuple[float, float]:
+def to_spawn_frame(spawn_pose: WorldPose, x: float, z: float) -> Point:
     """World ``(x, z)`` -> spawn frame: origin at the spawn position, ``+z`` along the spawn
     heading, ``+x`` to the agent's right.
 
@@ -95,7 +99,7 @@ def to_spawn_frame(spawn_pose: WorldPose, x: float, z: float) -> tuple[float, fl
     return dx * rx + dz * rz, dx * fx + dz * fz
 
 
-def spawn_frame_point(spawn_pose: WorldPose, x: float, z: float) -> tuple[float, float]:
+def spawn_frame_point(spawn_pose: WorldPose, x: float, z: float) -> Point:
     """:func:`to_spawn_frame` as positions are reported: to 0.1 mm, never ``-0.0``."""
     sx, sz = to_spawn_frame(spawn_pose, x, z)
     return round(sx, 4) + 0.0, round(sz, 4) + 0.0
@@ -161,13 +165,13 @@ def _nearest(
 @lru_cache(maxsize=64)
 def walls_of(layout: Layout) -> Walls:
     """The layout's walls: every room edge, merged, with the doorway gaps cut out."""
-    lines: defaultdict[tuple[str, float], list[tuple[float, float]]] = defaultdict(list)
+    lines: defaultdict[tuple[str, float], list[Span]] = defaultdict(list)
     for r in layout.rooms:
         for z in (r.z0, r.z1):
             lines["x", z].append((r.x0, r.x1))
         for x in (r.x0, r.x1):
             lines["z", x].append((r.z0, r.z1))
-    gaps: defaultdict[tuple[str, float], list[tuple[float, float]]] = defaultdict(list)
+    gaps: defaultdict[tuple[str, float], list[Span]] = defaultdict(list)
     for d in layout.doorways:
         at, mid = (d.z, d.x) if d.axis == "x" else (d.x, d.z)
         gaps[d.axis, at].append((mid - d.width / 2, mid + d.width / 2))
@@ -180,8 +184,8 @@ def walls_of(layout: Layout) -> Walls:
     )
 
 
-def _merge(spans: list[tuple[float, float]]) -> list[tuple[float, float]]:
-    out: list[tuple[float, float]] = []
+def _merge(spans: list[Span]) -> list[Span]:
+    out: list[Span] = []
     for lo, hi in sorted(spans):
         if out and lo <= out[-1][1]:
             out[-1] = (out[-1][0], max(out[-1][1], hi))
@@ -190,9 +194,7 @@ def _merge(spans: list[tuple[float, float]]) -> list[tuple[float, float]]:
     return out
 
 
-def _subtract(
-    spans: list[tuple[float, float]], holes: list[tuple[float, float]]
-) -> list[tuple[float, float]]:
+def _subtract(spans: list[Span], holes: list[Span]) -> list[Span]:
     for h_lo, h_hi in holes:  # keep what lies left and right of the hole
         parts = [((lo, min(hi, h_lo)), (max(lo, h_hi), hi)) for lo, hi in spans]
         spans = [(lo, hi) for pair in parts for lo, hi in pair if lo < hi]

@@ -16,7 +16,7 @@ from __future__ import annotations
 import numpy as np
 
 from pytest_emrd.errors import ConfigError
-from pytest_emrd.world._geometry import HEADINGS
+from pytest_emrd.world._geometry import HEADINGS, Point
 from pytest_emrd.world._model import Doorway, Layout, Room, WorldPose
 from pytest_emrd.world._rng import StableRng
 from pytest_emrd.world._scene import AGENT_RADIUS, Scene
@@ -107,7 +107,7 @@ def spawn_pose(scene: Scene, room: Room, seed: int) -> WorldPose:
     return WorldPose(x, z, rng.choice(HEADINGS))
 
 
-def spawn_points(scene: Scene, room: Room) -> list[tuple[float, float]]:
+def spawn_points(scene: Scene, room: Room) -> list[Point]:
     """The spawn points of ``room`` in the order episodes take them (shuffled once per room):
     episode ``i`` stands on point ``i``, its cardinal heading drawn from the episode seed; a
     seed of no episode (a benchmark's) picks a point by the seed."""

@@ -25,7 +25,7 @@ from pytest_emrd.trajectory import CONDITIONS
 from pytest_emrd.world._catalog import DOOR_HEIGHT
 from pytest_emrd.world._catalog import WALL_HEIGHT as CEILING_HEIGHT
 from pytest_emrd.world._conditions import condition_params
-from pytest_emrd.world._geometry import Rect, footprint, rect_at
+from pytest_emrd.world._geometry import Point, Rect, Span, footprint, rect_at
 from pytest_emrd.world._model import Doorway, Layout, Room, WorldObject, WorldPose
 from pytest_emrd.world._rng import StableRng
 from pytest_emrd.world.thor._assets import (
@@ -96,12 +96,12 @@ class WallPiece:
         return math.hypot(dx, dz)  # the piece is axis-aligned
 
 
-def corners(room: Room) -> tuple[tuple[float, float], ...]:
+def corners(room: Room) -> tuple[Point, ...]:
     """The floor polygon in ProcTHOR's winding: from the south-west corner, north first."""
     return ((room.x0, room.z0), (room.x0, room.z1), (room.x1, room.z1), (room.x1, room.z0))
 
 
-def _span(room: Room, axis: int) -> tuple[float, float]:
+def _span(room: Room, axis: int) -> Span:
     """The room's extent along x (``axis`` 0) or z (``axis`` 1)."""
     return (room.x0, room.x1) if axis == 0 else (room.z0, room.z1)
 
@@ -209,9 +209,7 @@ def snap(value: float) -> float:
     return round(round(value / GRID) * GRID, 4)
 
 
-def spawn_point(
-    room: Room, footprints: list[Rect], x: float, z: float
-) -> tuple[float, float] | None:
+def spawn_point(room: Room, footprints: list[Rect], x: float, z: float) -> Point | None:
     """The grid point in ``room`` nearest ``(x, z)`` at least :data:`CLEARANCE` from the
     room's walls and every footprint (None if the room has none)."""
     lo_x = math.ceil((room.x0 + CLEARANCE) / GRID) * GRID

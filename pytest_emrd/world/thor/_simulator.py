@@ -26,6 +26,7 @@ from pytest_emrd.world._feedback import (
     spawn_room_name,
     turn_degrees,
 )
+from pytest_emrd.world._geometry import Point
 from pytest_emrd.world._model import (
     Doorway,
     Layout,
@@ -89,9 +90,7 @@ def _pick(
     return None
 
 
-def nearest_in_room(
-    points: np.ndarray, x: float, z: float, room: Room
-) -> tuple[float, float] | None:
+def nearest_in_room(points: np.ndarray, x: float, z: float, room: Room) -> Point | None:
     """The reachable position in ``room`` nearest ``(x, z)`` (None if the room has none)."""
     dist = np.hypot(points[:, 0] - x, points[:, 1] - z)
     best = _pick(points, 0.0, (dist, _in_room(points, room)))
@@ -245,7 +244,7 @@ class ThorSimulator(SemanticStep):
         self._ids = IdTable({})
         self._condition = condition_params("baseline")
         self._points = np.empty((0, 2))
-        self._heights: dict[tuple[float, float], float] = {}
+        self._heights: dict[Point, float] = {}
         self._spawn = WorldPose(0.0, 0.0, 0.0)
         self._visible: tuple[VisibleObject, ...] = ()
 
