@@ -22,7 +22,7 @@ from __future__ import annotations
 
 from collections import Counter
 from collections.abc import Callable
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -90,7 +90,7 @@ def generate_layout(seed: int) -> Layout:
         depth=depth,
         rooms=tuple(rooms.values()),
         doorways=doorways,
-        objects=(*landmarks, *_number(planner.placed)),
+        objects=(*landmarks, *planner.placed),
     )
 
 
@@ -140,16 +140,6 @@ def _exit(rng: StableRng, room: Room) -> WorldObject:
     else:  # east wall, facing west
         x, z, rotation = room.x1 - inset, _along(rng, room.z0, room.z1), 270.0
     return _object("Door", "Door_1", room.name, x, z, DOOR_WIDTH, rotation)
-
-
-def _number(placed: list[WorldObject]) -> list[WorldObject]:
-    """The placed objects with their ids, ``Type_N`` in placement order."""
-    counts: Counter[str] = Counter({"Door": 1})  # the exit is Door_1
-    out = []
-    for o in placed:
-        counts[o.object_type] += 1
-        out.append(replace(o, object_id=f"{o.object_type}_{counts[o.object_type]}"))
-    return out
 
 
 TABLE_LENGTHS = (3.2, 3.04, 2.8, 2.64)
@@ -282,7 +272,9 @@ class Planner:
         self.solid: list[Rect] = []
         self.clear: list[Rect] = []
         self.placed: list[WorldObject] = []
-        """Objects placed so far, without ids (:func:`_number` assigns them)."""
+        self.counts: Counter[str] = Counter({"Door": 1})
+        """Objects placed per ``objectType``: ids are ``Type_N`` in placement order (the exit
+        is ``Door_1``)."""
 
     def against_wall(self, room: Room, unit: Unit, sides: str = "NESW") -> bool:
         """Place ``unit`` with its back to one of ``sides`` of ``room``; False if no room."""
@@ -331,7 +323,10 @@ class Planner:
                 reach = (unit.depth + unit.access) / 2
                 access = rects_at(x + fx * reach, z + fz * reach, unit.width, unit.access, rot)
             ok = _inside(body, room_rect) & _inside(access, room_rect)
-            ok &= ~(_hits(body, self.solid) | _hits(access, self.solid) | _hits(body, self.clear))
+            solid, clear = (
+                np.array(r, dtype=float).reshape(-1, 4) for r in (self.solid, self.clear)
+            )
+            ok &= ~(_hits(body, solid) | _hits(access, solid) | _hits(body, clear))
             if ok.any():
                 k = int(ok.argmax())
                 self._commit(room, unit, float(x[k]), float(z[k]), float(rot[k]), tuple(access[k]))
@@ -341,19 +336,28 @@ class Planner:
     def _commit(self, room: Room, unit: Unit, x: float, z: float, rot: float, access: Rect) -> None:
         self.clear.append(access)
         for m in unit.members:
+            kind = KINDS[m.kind]
+            self.counts[kind.object_type] += 1
+            object_id = f"{kind.object_type}_{self.counts[kind.object_type]}"
             mx, mz = local_to_world(x, z, rot, m.u, m.v)
-            width = m.width if m.width is not None else KINDS[m.kind].width
+            width = m.width if m.width is not None else kind.width
             obj = _object(
-                m.kind, "", room.name, round(mx, 2), round(mz, 2), width, (rot + m.turn) % 360
+                m.kind,
+                object_id,
+                room.name,
+                round(mx, 2),
+                round(mz, 2),
+                width,
+                (rot + m.turn) % 360,
             )
             self.placed.append(obj)
             if obj.elevation == 0.0:
                 self.solid.append(footprint(obj))
 
 
-def _hits(rects: np.ndarray, others: list[Rect]) -> np.ndarray:
+def _hits(rects: np.ndarray, others: np.ndarray) -> np.ndarray:
     """Whether each of ``rects`` overlaps any of ``others``."""
-    return rects_overlap(rects, np.reshape(others, (-1, 4))).any(axis=1)
+    return rects_overlap(rects, others).any(axis=1)
 
 
 def _inside(rects: np.ndarray, room: np.ndarray) -> np.ndarray:
