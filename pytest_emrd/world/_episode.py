@@ -16,7 +16,7 @@ from typing import Final
 from pytest_emrd.errors import check_choice
 from pytest_emrd.rooms import ROOM_SLUGS, SLUG_ROOMS
 from pytest_emrd.trajectory import LAYOUTS, EpisodeSpec, GroundTruth, GroundTruthObject, RoomOutline
-from pytest_emrd.world._geometry import to_spawn_frame
+from pytest_emrd.world._geometry import Point, spawn_frame_point
 from pytest_emrd.world._layout import generate_layout
 from pytest_emrd.world._model import Layout, Room, WorldPose
 from pytest_emrd.world._visibility import discoverable_ids
@@ -79,12 +79,7 @@ def episode_index(spawn_room: str, seed: int) -> int | None:
     return _indices(spawn_room).get(seed)
 
 
-def _point(spawn_pose: WorldPose, x: float, z: float) -> tuple[float, float]:
-    sx, sz = to_spawn_frame(spawn_pose, x, z)
-    return round(sx, 4) + 0.0, round(sz, 4) + 0.0
-
-
-def _corners(r: Room) -> tuple[tuple[float, float], ...]:
+def _corners(r: Room) -> tuple[Point, ...]:
     return ((r.x0, r.z0), (r.x1, r.z0), (r.x1, r.z1), (r.x0, r.z1))
 
 
@@ -101,12 +96,12 @@ def ground_truth(layout: Layout, spawn_pose: WorldPose, spawn_room: str) -> Grou
     """
     objects = tuple(
         GroundTruthObject(
-            o.object_id, o.object_type, o.room, o.category, *_point(spawn_pose, o.x, o.z)
+            o.object_id, o.object_type, o.room, o.category, *spawn_frame_point(spawn_pose, o.x, o.z)
         )
         for o in layout.objects
     )
     rooms = tuple(
-        RoomOutline(r.name, tuple(_point(spawn_pose, x, z) for x, z in _corners(r)))
+        RoomOutline(r.name, tuple(spawn_frame_point(spawn_pose, x, z) for x, z in _corners(r)))
         for r in layout.rooms
     )
     return GroundTruth(

@@ -21,9 +21,9 @@ from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 
 from pytest_emrd.errors import check_choice
-from pytest_emrd.rooms import ROOM_NAMES
+from pytest_emrd.rooms import ROOM_NAMES, SLUG_ROOMS
 from pytest_emrd.trajectory import Pose
-from pytest_emrd.world._geometry import heading_in_spawn_frame, to_spawn_frame
+from pytest_emrd.world._geometry import heading_in_spawn_frame, spawn_frame_point
 from pytest_emrd.world._model import Observation, View, VisibleObject, WorldPose
 
 _ACTION = re.compile(r"^\s*(goto|turn|term)\s*\(\s*(.*?)\s*\)\s*\.?\s*$", re.IGNORECASE | re.DOTALL)
@@ -89,7 +89,7 @@ def execute(text: str, handlers: Mapping[str, Handler], *, over: bool) -> tuple[
 class SemanticStep:
     """The ``step``, ``Goto`` and ``Term`` of both backends: an action text -> :meth:`_goto`,
     the backend's ``_turn`` or :meth:`_term` (via :func:`execute`) -> :meth:`_observe`. The
-    backend provides ``_in_view()`` (ids, types and distances of the objects in view),
+    backend provides ``_in_view()`` (the objects in view),
     ``_reach(object_id)`` (moves for ``Goto``; False: no spot to stand), ``_view()`` (world
     pose, objects in view, frame digest and view), ``_require()`` and the attributes below."""
 
@@ -100,7 +100,7 @@ class SemanticStep:
     _spawn: WorldPose
     _rooms: Mapping[str, str]
     _turn: Handler
-    _in_view: Callable[[], tuple[list[str], list[str], list[float]]]
+    _in_view: Callable[[], tuple[VisibleObject, ...]]
     _reach: Callable[[str], bool]
     _view: Callable[[], tuple[WorldPose, tuple[VisibleObject, ...], str, View]]
     _require: Callable[[], object]
@@ -121,24 +121,34 @@ class SemanticStep:
             raise ActionFailed(f"Goto needs a target: {example}, e.g. Goto(Desk)")
         key = normalise(action.arg)
         key = key if symbolic else _INSTANCE.sub("", key)
-        ids, types, distances = self._in_view()
-        chosen = choose_target(key, ids, types, distances, symbolic=symbolic)
-        if chosen is None and not symbolic:
-            raise ActionFailed(f"no object of type {action.arg!r} is visible")
+        seen = self._in_view()
+        chosen = choose_target(key, seen, symbolic=symbolic)
         if chosen is None:
-            shown = ", ".join(sorted(ids)) or "nothing"
+            if not symbolic:
+                raise ActionFailed(f"no object of type {action.arg!r} is visible")
+            shown = ", ".join(sorted(v.object_id for v in seen)) or "nothing"
             raise ActionFailed(f"no visible object matches {action.arg!r}. Visible: {shown}")
-        target = ids[chosen]
+        target = chosen.object_id
         if not self._reach(target):
-            where = target if symbolic else f"the nearest {types[chosen]}"
+            where = target if symbolic else f"the nearest {chosen.object_type}"
             raise ActionFailed(f"there is no free spot to stand at {where}")
         return "" if not symbolic or normalise(target) == key else f": moved to {target}"
+
+    def visible_ids(self) -> tuple[str, ...]:
+        """Ids of the objects in view, sorted."""
+        self._require()
+        return tuple(v.object_id for v in self._in_view())
 
     @property
     def spawn_pose(self) -> WorldPose:
         """Where the episode started, world frame."""
         self._require()
         return self._spawn
+
+    def _begin(self, symbolic: bool) -> Observation:
+        """The first observation of a new episode: no step taken, no Term yet."""
+        self._steps, self._ended, self._terminal, self._symbolic = 0, False, None, symbolic
+        return self._observe(True, "Episode started.")
 
     def _observe(self, success: bool, message: str) -> Observation:
         world, visible, digest, view = self._view()
@@ -171,6 +181,13 @@ def turn_degrees(action: Action) -> float:
     return delta
 
 
+def spawn_room_name(spawn_room: str) -> str:
+    """The canonical name of ``spawn_room``, given as a name or a slug (ConfigError else)."""
+    name = SLUG_ROOMS.get(spawn_room, spawn_room)
+    check_choice("spawn_room", name, [*ROOM_NAMES, *SLUG_ROOMS])
+    return name
+
+
 def room_table(aliases: Mapping[str, str] | None = None) -> dict[str, str]:
     """Matching key -> canonical room for ``Term``: the four rooms plus ``aliases``."""
     rooms = {normalise(r): r for r in ROOM_NAMES}
@@ -188,28 +205,21 @@ def term(rooms: Mapping[str, str], action: Action) -> tuple[str | None, str]:
 
 
 def choose_target(
-    key: str,
-    ids: Sequence[str],
-    types: Sequence[str],
-    distances: Sequence[float],
-    *,
-    symbolic: bool,
-) -> int | None:
-    """Index of the object in view (one entry per object in each sequence) ``Goto`` of
-    ``key`` means, or None: with ``symbolic`` ids an instance id wins, else the nearest
-    object of that type (ties by id)."""
-    for i, object_id in enumerate(ids if symbolic else ()):
-        if normalise(object_id) == key:
-            return i
-    typed = [i for i, t in enumerate(types) if normalise(t) == key]
-    return min(typed, key=lambda i: (distances[i], ids[i])) if typed else None
+    key: str, seen: Sequence[VisibleObject], *, symbolic: bool
+) -> VisibleObject | None:
+    """The object in view ``Goto`` of ``key`` means, or None: with ``symbolic`` ids an
+    instance id wins, else the nearest object of that type (ties by id)."""
+    for v in seen if symbolic else ():
+        if normalise(v.object_id) == key:
+            return v
+    typed = [v for v in seen if normalise(v.object_type) == key]
+    return min(typed, key=lambda v: (v.distance, v.object_id), default=None)
 
 
 def observed_pose(spawn: WorldPose, pose: WorldPose) -> Pose:
     """The agent's odometry: ``pose`` in the spawn frame, to 0.1 mm, never ``-0.0``."""
-    x, z = to_spawn_frame(spawn, pose.x, pose.z)
-    heading = heading_in_spawn_frame(spawn, pose.heading)
-    return Pose(round(x, 4) + 0.0, round(z, 4) + 0.0, heading)
+    x, z = spawn_frame_point(spawn, pose.x, pose.z)
+    return Pose(x, z, heading_in_spawn_frame(spawn, pose.heading))
 
 
 def with_pose(message: str, pose: Pose) -> str:

@@ -9,6 +9,7 @@ built-in world produces, so rendered pixels are bit-stable.
 from __future__ import annotations
 
 import math
+from collections import defaultdict
 from dataclasses import dataclass
 from functools import lru_cache
 
@@ -18,7 +19,13 @@ from pytest_emrd.world._model import Layout, WorldObject, WorldPose
 
 Rect = tuple[float, float, float, float]
 """Axis-aligned rectangle ``(x0, z0, x1, z1)`` with ``x0 <= x1`` and ``z0 <= z1``."""
+Point = tuple[float, float]
+"""A point ``(x, z)`` of the floor, metres."""
+Span = tuple[float, float]
+"""An interval ``(lo, hi)`` along one axis."""
 
+HEADINGS = (0.0, 90.0, 180.0, 270.0)
+"""The cardinal headings, the only ones the built-in world's poses and turns produce."""
 _CARDINAL = {0: (0.0, 1.0), 90: (1.0, 0.0), 180: (0.0, -1.0), 270: (-1.0, 0.0)}
 
 
@@ -62,7 +69,7 @@ def rects_at(
     return np.stack([x - hw, z - hd, x + hw, z + hd], axis=1)
 
 
-def local_to_world(x: float, z: float, rotation: float, u: float, v: float) -> tuple[float, float]:
+def local_to_world(x: float, z: float, rotation: float, u: float, v: float) -> Point:
     """World point at ``u`` metres right and ``v`` metres forward of a frame at ``(x, z)``.
 
     :param x: The frame's origin, world x.
@@ -77,7 +84,7 @@ def local_to_world(x: float, z: float, rotation: float, u: float, v: float) -> t
     return x + u * rx + v * fx, z + u * rz + v * fz
 
 
-def to_spawn_frame(spawn_pose: WorldPose, x: float, z: float) -> tuple[float, float]:
+def to_spawn_frame(spawn_pose: WorldPose, x: float, z: float) -> Point:
     """World ``(x, z)`` -> spawn frame: origin at the spawn position, ``+z`` along the spawn
     heading, ``+x`` to the agent's right.
 
@@ -90,6 +97,12 @@ def to_spawn_frame(spawn_pose: WorldPose, x: float, z: float) -> tuple[float, fl
     fx, fz = unit(spawn_pose.heading)
     rx, rz = right_of(spawn_pose.heading)
     return dx * rx + dz * rz, dx * fx + dz * fz
+
+
+def spawn_frame_point(spawn_pose: WorldPose, x: float, z: float) -> Point:
+    """:func:`to_spawn_frame` as positions are reported: to 0.1 mm, never ``-0.0``."""
+    sx, sz = to_spawn_frame(spawn_pose, x, z)
+    return round(sx, 4) + 0.0, round(sz, 4) + 0.0
 
 
 def heading_in_spawn_frame(spawn_pose: WorldPose, heading: float) -> float:
@@ -123,15 +136,10 @@ class Walls:
         """Ray parameter of the nearest wall hit along ``o + t d`` (``inf`` if none), and
         whether that wall runs along x (True on a tie and when nothing is hit); the arguments
         broadcast to one shape."""
-        rays = np.broadcast_arrays(*(np.asarray(a, dtype=np.float64) for a in (ox, oz, dx, dz)))
-        t_x = _nearest(rays[1], rays[0], rays[3], rays[2], self.along_x)
-        t_z = _nearest(rays[0], rays[1], rays[2], rays[3], self.along_z)
+        ox, oz, dx, dz = np.broadcast_arrays(*(np.asarray(a, np.float64) for a in (ox, oz, dx, dz)))
+        t_x = _nearest(oz, ox, dz, dx, self.along_x)
+        t_z = _nearest(ox, oz, dx, dz, self.along_z)
         return np.minimum(t_x, t_z), t_x <= t_z
-
-    def blocks(self, ax: np.ndarray, az: np.ndarray, bx: np.ndarray, bz: np.ndarray) -> np.ndarray:
-        """Whether a wall crosses the open segment from ``a`` to ``b`` (broadcast shapes)."""
-        t, _ = self.first_hit(ax, az, bx - ax, bz - az)
-        return t < 1.0 - 1e-9
 
 
 def _nearest(
@@ -157,29 +165,27 @@ def _nearest(
 @lru_cache(maxsize=64)
 def walls_of(layout: Layout) -> Walls:
     """The layout's walls: every room edge, merged, with the doorway gaps cut out."""
-    lines: dict[tuple[str, float], list[tuple[float, float]]] = {}
+    lines: defaultdict[tuple[str, float], list[Span]] = defaultdict(list)
     for r in layout.rooms:
-        lines.setdefault(("x", r.z0), []).append((r.x0, r.x1))
-        lines.setdefault(("x", r.z1), []).append((r.x0, r.x1))
-        lines.setdefault(("z", r.x0), []).append((r.z0, r.z1))
-        lines.setdefault(("z", r.x1), []).append((r.z0, r.z1))
-    gaps: dict[tuple[str, float], list[tuple[float, float]]] = {}
+        for z in (r.z0, r.z1):
+            lines["x", z].append((r.x0, r.x1))
+        for x in (r.x0, r.x1):
+            lines["z", x].append((r.z0, r.z1))
+    gaps: defaultdict[tuple[str, float], list[Span]] = defaultdict(list)
     for d in layout.doorways:
-        key, centre = ("x", d.z) if d.axis == "x" else ("z", d.x)
-        mid = d.x if d.axis == "x" else d.z
-        gaps.setdefault((key, centre), []).append((mid - d.width / 2, mid + d.width / 2))
+        at, mid = (d.z, d.x) if d.axis == "x" else (d.x, d.z)
+        gaps[d.axis, at].append((mid - d.width / 2, mid + d.width / 2))
     rows: dict[str, list[tuple[float, float, float]]] = {"x": [], "z": []}
     for (axis, at), spans in sorted(lines.items()):
-        for lo, hi in _subtract(_merge(spans), gaps.get((axis, at), [])):
-            rows[axis].append((at, lo, hi))
+        rows[axis] += [(at, lo, hi) for lo, hi in _subtract(_merge(spans), gaps[axis, at])]
     return Walls(
         along_x=np.array(rows["x"], dtype=float).reshape(-1, 3),
         along_z=np.array(rows["z"], dtype=float).reshape(-1, 3),
     )
 
 
-def _merge(spans: list[tuple[float, float]]) -> list[tuple[float, float]]:
-    out: list[tuple[float, float]] = []
+def _merge(spans: list[Span]) -> list[Span]:
+    out: list[Span] = []
     for lo, hi in sorted(spans):
         if out and lo <= out[-1][1]:
             out[-1] = (out[-1][0], max(out[-1][1], hi))
@@ -188,18 +194,8 @@ def _merge(spans: list[tuple[float, float]]) -> list[tuple[float, float]]:
     return out
 
 
-def _subtract(
-    spans: list[tuple[float, float]], holes: list[tuple[float, float]]
-) -> list[tuple[float, float]]:
-    for h_lo, h_hi in holes:
-        cut: list[tuple[float, float]] = []
-        for lo, hi in spans:
-            if h_hi <= lo or h_lo >= hi:
-                cut.append((lo, hi))
-                continue
-            if lo < h_lo:
-                cut.append((lo, h_lo))
-            if h_hi < hi:
-                cut.append((h_hi, hi))
-        spans = cut
+def _subtract(spans: list[Span], holes: list[Span]) -> list[Span]:
+    for h_lo, h_hi in holes:  # keep what lies left and right of the hole
+        parts = [((lo, min(hi, h_lo)), (max(lo, h_hi), hi)) for lo, hi in spans]
+        spans = [(lo, hi) for pair in parts for lo, hi in pair if lo < hi]
     return spans

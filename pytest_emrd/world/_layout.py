@@ -28,7 +28,15 @@ import numpy as np
 
 from pytest_emrd.rooms import CONFERENCE, ENTRANCE, KITCHEN, OFFICE
 from pytest_emrd.world._catalog import KINDS
-from pytest_emrd.world._geometry import Rect, local_to_world, rect_at, rects_at, rects_overlap
+from pytest_emrd.world._geometry import (
+    HEADINGS,
+    Rect,
+    footprint,
+    local_to_world,
+    rect_at,
+    rects_at,
+    rects_overlap,
+)
 from pytest_emrd.world._geometry import unit as unit_vector
 from pytest_emrd.world._model import Doorway, Layout, Room, WorldObject
 from pytest_emrd.world._rng import StableRng
@@ -64,32 +72,31 @@ def generate_layout(seed: int) -> Layout:
         ENTRANCE: Room(ENTRANCE, w_kitchen, 0.0, width, bottom),
     }
     doorways = _doorways(rng, rooms)
+    landmarks = [
+        _object("Doorway", d.object_id, d.room_a, d.x, d.z, d.width, 0.0 if d.axis == "x" else 90.0)
+        for d in doorways
+    ]
+    landmarks.append(_exit(rng, rooms[ENTRANCE]))
     planner = Planner(rng)
     approach = (DOOR_WIDTH + 0.4, 2 * APPROACH_DEPTH)  # kept walkable before every door
-    for d in doorways:
-        planner.clear.append(rect_at(d.x, d.z, *approach, _rot(d.axis)))
-    exit_door = _exit(rng, rooms[ENTRANCE])
-    planner.clear.append(rect_at(exit_door.x, exit_door.z, *approach, exit_door.rotation))
+    planner.clear += [rect_at(o.x, o.z, *approach, o.rotation) for o in landmarks]
     _office(planner, rooms[OFFICE])
     _conference(planner, rooms[CONFERENCE])
     _kitchen(planner, rooms[KITCHEN])
     _entrance(planner, rooms[ENTRANCE])
-    doorway_objects = [
-        _object("Doorway", d.object_id, d.room_a, d.x, d.z, d.width, _rot(d.axis)) for d in doorways
-    ]
-    objects = [*doorway_objects, exit_door, *_number(planner.placed)]
     return Layout(
         seed=seed,
         width=width,
         depth=depth,
-        rooms=tuple(rooms[name] for name in (OFFICE, CONFERENCE, KITCHEN, ENTRANCE)),
+        rooms=tuple(rooms.values()),
         doorways=doorways,
-        objects=tuple(objects),
+        objects=(*landmarks, *planner.placed),
     )
 
 
-def _rot(axis: str) -> float:
-    return 0.0 if axis == "x" else 90.0
+def _along(rng: StableRng, lo: float, hi: float) -> float:
+    """A point of the wall from ``lo`` to ``hi``, :data:`CORNER_CLEARANCE` clear of its ends."""
+    return round(rng.uniform(lo + CORNER_CLEARANCE, hi - CORNER_CLEARANCE), 2)
 
 
 def _doorways(rng: StableRng, rooms: dict[str, Room]) -> tuple[Doorway, ...]:
@@ -97,15 +104,12 @@ def _doorways(rng: StableRng, rooms: dict[str, Room]) -> tuple[Doorway, ...]:
     for i, (a, b) in enumerate(PAIRS, start=1):
         ra, rb = rooms[a], rooms[b]
         if ra.z0 == rb.z0:  # side by side: the wall runs along z at the shared x
-            lo, hi = max(ra.z0, rb.z0), min(ra.z1, rb.z1)
             x = ra.x1 if ra.x1 == rb.x0 else ra.x0
-            z = round(rng.uniform(lo + CORNER_CLEARANCE, hi - CORNER_CLEARANCE), 2)
-            out.append(Doorway(f"Doorway_{i}", a, b, x, z, DOOR_WIDTH, "z"))
+            z, axis = _along(rng, max(ra.z0, rb.z0), min(ra.z1, rb.z1)), "z"
         else:  # stacked: the wall runs along x at the shared z
-            lo, hi = max(ra.x0, rb.x0), min(ra.x1, rb.x1)
             z = ra.z0 if ra.z0 == rb.z1 else ra.z1
-            x = round(rng.uniform(lo + CORNER_CLEARANCE, hi - CORNER_CLEARANCE), 2)
-            out.append(Doorway(f"Doorway_{i}", a, b, x, z, DOOR_WIDTH, "x"))
+            x, axis = _along(rng, max(ra.x0, rb.x0), min(ra.x1, rb.x1)), "x"
+        out.append(Doorway(f"Doorway_{i}", a, b, x, z, DOOR_WIDTH, axis))
     return tuple(out)
 
 
@@ -132,23 +136,10 @@ def _object(
 def _exit(rng: StableRng, room: Room) -> WorldObject:
     inset = KINDS["Door"].depth / 2
     if rng.random() < 0.5:  # south wall, facing north into the room
-        x = round(rng.uniform(room.x0 + CORNER_CLEARANCE, room.x1 - CORNER_CLEARANCE), 2)
-        z, rotation = room.z0 + inset, 0.0
+        x, z, rotation = _along(rng, room.x0, room.x1), room.z0 + inset, 0.0
     else:  # east wall, facing west
-        z = round(rng.uniform(room.z0 + CORNER_CLEARANCE, room.z1 - CORNER_CLEARANCE), 2)
-        x, rotation = room.x1 - inset, 270.0
+        x, z, rotation = room.x1 - inset, _along(rng, room.z0, room.z1), 270.0
     return _object("Door", "Door_1", room.name, x, z, DOOR_WIDTH, rotation)
-
-
-def _number(placed: list[Placed]) -> list[WorldObject]:
-    counts: Counter[str] = Counter({"Doorway": 0, "Door": 1})
-    out = []
-    for p in placed:
-        object_type = KINDS[p.kind].object_type
-        counts[object_type] += 1
-        object_id = f"{object_type}_{counts[object_type]}"
-        out.append(_object(p.kind, object_id, p.room, p.x, p.z, p.width, p.rotation))
-    return out
 
 
 TABLE_LENGTHS = (3.2, 3.04, 2.8, 2.64)
@@ -189,12 +180,18 @@ def _office(p: Planner, room: Room) -> None:
 def _table_unit(length: float) -> Unit:
     table, chair = KINDS["DiningTable"], KINDS["Chair"]
     offset = table.depth / 2 + 0.05 + chair.depth / 2
-    members = [Member("DiningTable", width=length)]
-    for side, turn in ((offset, 180.0), (-offset, 0.0)):
-        for i in range(4):
-            u = round(-length / 2 + length / 8 + i * length / 4, 2)
-            members.append(Member("Chair", u=u, v=side, turn=turn))
-    return Unit(tuple(members), length, round(2 * offset + chair.depth, 2), 0.75, around=True)
+    chairs = [
+        Member("Chair", u=round(-length / 2 + length / 8 + i * length / 4, 2), v=side, turn=turn)
+        for side, turn in ((offset, 180.0), (-offset, 0.0))
+        for i in range(4)
+    ]
+    return Unit(
+        (Member("DiningTable", width=length), *chairs),
+        length,
+        round(2 * offset + chair.depth, 2),
+        0.75,
+        around=True,
+    )
 
 
 def _conference(p: Planner, room: Room) -> None:
@@ -224,7 +221,7 @@ def _kitchen(p: Planner, room: Room) -> None:
     length = rng.choice(COUNTER_LENGTHS)
     micro_u = round(rng.uniform(-(length / 2 - 0.4), length / 2 - 0.4), 2)
     p.against_wall(room, _counter_unit(length, (Member("Microwave", u=micro_u, v=0.05),)))
-    p.free(room, _single("Stool", 0.45, around=True), (0.0, 90.0, 180.0, 270.0))
+    p.free(room, _single("Stool", 0.45, around=True), HEADINGS)
 
 
 def _entrance(p: Planner, room: Room) -> None:
@@ -267,18 +264,6 @@ class Unit:
     """Keep the access zone on every side instead of the front only."""
 
 
-@dataclass(frozen=True)
-class Placed:
-    """An object the planner placed (ids are assigned later)."""
-
-    kind: str
-    room: str
-    x: float
-    z: float
-    rotation: float
-    width: float
-
-
 class Planner:
     """Accumulates placements for one layout."""
 
@@ -286,7 +271,10 @@ class Planner:
         self.rng = rng
         self.solid: list[Rect] = []
         self.clear: list[Rect] = []
-        self.placed: list[Placed] = []
+        self.placed: list[WorldObject] = []
+        self.counts: Counter[str] = Counter({"Door": 1})
+        """Objects placed per ``objectType``: ids are ``Type_N`` in placement order (the exit
+        is ``Door_1``)."""
 
     def against_wall(self, room: Room, unit: Unit, sides: str = "NESW") -> bool:
         """Place ``unit`` with its back to one of ``sides`` of ``room``; False if no room."""
@@ -307,7 +295,7 @@ class Planner:
         self, room: Room, unit: Unit, rotations: tuple[float, ...], *, spread: float | None = None
     ) -> bool:
         """Place ``unit`` anywhere in ``room`` (or within ``spread`` m of its centre)."""
-        cx, cz = (room.x0 + room.x1) / 2, (room.z0 + room.z1) / 2
+        cx, cz = room.centre
 
         def candidate() -> tuple[float, float, float]:
             rot = self.rng.choice(rotations)
@@ -321,48 +309,55 @@ class Planner:
     def _search(
         self, room: Room, unit: Unit, candidate: Callable[[], tuple[float, float, float]]
     ) -> bool:
-        """Try candidates in batches until one fits."""
+        """Try candidates in batches; commit the first that fits (False if none does)."""
+        room_rect = np.array([room.x0, room.z0, room.x1, room.z1])
         for _ in range(CANDIDATES // BATCH):
-            if self._first_fit(room, unit, np.array([candidate() for _ in range(BATCH)])):
+            cands = np.array([candidate() for _ in range(BATCH)])
+            x, z, rot = np.round(cands[:, 0], 2), np.round(cands[:, 1], 2), cands[:, 2]
+            body = rects_at(x, z, unit.width, unit.depth, rot)
+            if unit.around:
+                grown = (unit.width + 2 * unit.access, unit.depth + 2 * unit.access)
+                access = rects_at(x, z, *grown, rot)
+            else:
+                fx, fz = np.array([unit_vector(r) for r in rot]).T
+                reach = (unit.depth + unit.access) / 2
+                access = rects_at(x + fx * reach, z + fz * reach, unit.width, unit.access, rot)
+            ok = _inside(body, room_rect) & _inside(access, room_rect)
+            solid, clear = (
+                np.array(r, dtype=float).reshape(-1, 4) for r in (self.solid, self.clear)
+            )
+            ok &= ~(_hits(body, solid) | _hits(access, solid) | _hits(body, clear))
+            if ok.any():
+                k = int(ok.argmax())
+                self._commit(room, unit, float(x[k]), float(z[k]), float(rot[k]), tuple(access[k]))
                 return True
         return False
-
-    def _first_fit(self, room: Room, unit: Unit, cands: np.ndarray) -> bool:
-        x, z = np.round(cands[:, 0], 2), np.round(cands[:, 1], 2)
-        rot = cands[:, 2]
-        body = rects_at(x, z, unit.width, unit.depth, rot)
-        if unit.around:
-            access = rects_at(x, z, unit.width + 2 * unit.access, unit.depth + 2 * unit.access, rot)
-        else:
-            fx, fz = np.array([unit_vector(r) for r in rot]).T
-            reach = (unit.depth + unit.access) / 2
-            access = rects_at(x + fx * reach, z + fz * reach, unit.width, unit.access, rot)
-        room_rect = np.array([room.x0, room.z0, room.x1, room.z1])
-        ok = _inside(body, room_rect) & _inside(access, room_rect)
-        if self.solid:
-            solid = np.array(self.solid)
-            ok &= ~rects_overlap(body, solid).any(axis=1)
-            ok &= ~rects_overlap(access, solid).any(axis=1)
-        if self.clear:
-            ok &= ~rects_overlap(body, np.array(self.clear)).any(axis=1)
-        hits = np.flatnonzero(ok)
-        if hits.size == 0:
-            return False
-        k = int(hits[0])
-        self._commit(room, unit, float(x[k]), float(z[k]), float(rot[k]), tuple(access[k]))
-        return True
 
     def _commit(self, room: Room, unit: Unit, x: float, z: float, rot: float, access: Rect) -> None:
         self.clear.append(access)
         for m in unit.members:
             kind = KINDS[m.kind]
+            self.counts[kind.object_type] += 1
+            object_id = f"{kind.object_type}_{self.counts[kind.object_type]}"
             mx, mz = local_to_world(x, z, rot, m.u, m.v)
-            mrot = (rot + m.turn) % 360
             width = m.width if m.width is not None else kind.width
-            placed = Placed(m.kind, room.name, round(mx, 2), round(mz, 2), mrot, width)
-            self.placed.append(placed)
-            if kind.elevation == 0.0:
-                self.solid.append(rect_at(placed.x, placed.z, width, kind.depth, mrot))
+            obj = _object(
+                m.kind,
+                object_id,
+                room.name,
+                round(mx, 2),
+                round(mz, 2),
+                width,
+                (rot + m.turn) % 360,
+            )
+            self.placed.append(obj)
+            if obj.elevation == 0.0:
+                self.solid.append(footprint(obj))
+
+
+def _hits(rects: np.ndarray, others: np.ndarray) -> np.ndarray:
+    """Whether each of ``rects`` overlaps any of ``others``."""
+    return rects_overlap(rects, others).any(axis=1)
 
 
 def _inside(rects: np.ndarray, room: np.ndarray) -> np.ndarray:

@@ -26,6 +26,11 @@ class Room:
     x1: float
     z1: float
 
+    @property
+    def centre(self) -> tuple[float, float]:
+        """The ``(x, z)`` centre of the floor."""
+        return (self.x0 + self.x1) / 2, (self.z0 + self.z1) / 2
+
     def contains(self, x: float, z: float) -> bool:
         return self.x0 <= x <= self.x1 and self.z0 <= z <= self.z1
 

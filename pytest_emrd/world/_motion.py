@@ -16,7 +16,8 @@ from __future__ import annotations
 import numpy as np
 
 from pytest_emrd.errors import ConfigError
-from pytest_emrd.world._model import Doorway, Room, WorldPose
+from pytest_emrd.world._geometry import HEADINGS, Point
+from pytest_emrd.world._model import Doorway, Layout, Room, WorldPose
 from pytest_emrd.world._rng import StableRng
 from pytest_emrd.world._scene import AGENT_RADIUS, Scene
 
@@ -33,10 +34,13 @@ SPAWN_POSES = 20
 _SIDES = (((0.0, 1.0), 180.0), ((0.0, -1.0), 0.0), ((1.0, 0.0), 270.0), ((-1.0, 0.0), 90.0))
 
 
-def is_free(scene: Scene, room: Room, x: float, z: float, r: float = AGENT_RADIUS) -> bool:
-    """Whether a disc of radius ``r`` (the agent) fits at ``(x, z)`` inside ``room``."""
-    inside = room.x0 + r <= x <= room.x1 - r and room.z0 + r <= z <= room.z1 - r
-    return inside and not bool(scene.crowded(x, z, r))
+def is_free(
+    scene: Scene, room: Room, x: float | np.ndarray, z: float | np.ndarray, r: float = AGENT_RADIUS
+) -> np.ndarray:
+    """Whether a disc of radius ``r`` (the agent) fits at ``(x, z)`` inside ``room`` (per point
+    when ``x`` and ``z`` are arrays)."""
+    inside = (x >= room.x0 + r) & (x <= room.x1 - r) & (z >= room.z0 + r) & (z <= room.z1 - r)
+    return inside & ~scene.crowded(x, z, r)
 
 
 def approach(scene: Scene, index: int, pose: WorldPose) -> WorldPose | None:
@@ -44,12 +48,11 @@ def approach(scene: Scene, index: int, pose: WorldPose) -> WorldPose | None:
     room = scene.layout.room(scene.layout.objects[index].room)
     x0, z0, x1, z1 = scene.rects[scene.support[index]]
     cx, cz = (x0 + x1) / 2, (z0 + z1) / 2
-    half = {(0.0, 1.0): (x1 - x0) / 2, (0.0, -1.0): (x1 - x0) / 2}
     sides = sorted(_SIDES, key=lambda s: -((pose.x - cx) * s[0][0] + (pose.z - cz) * s[0][1]))
     for (nx, nz), heading in sides:
         mx = x1 if nx > 0 else x0 if nx < 0 else cx
         mz = z1 if nz > 0 else z0 if nz < 0 else cz
-        span = half.get((nx, nz), (z1 - z0) / 2) + 0.2
+        span = ((x1 - x0) / 2 if nx == 0 else (z1 - z0) / 2) + 0.2  # half the side, + 0.2 m
         for off in STAND_OFF:
             for slide in SLIDES:
                 if abs(slide) > span:
@@ -61,25 +64,35 @@ def approach(scene: Scene, index: int, pose: WorldPose) -> WorldPose | None:
     return None
 
 
-def through(scene: Scene, doorway: Doorway, pose: WorldPose, current: str) -> WorldPose | None:
-    """Where ``Goto(doorway)`` puts an agent at ``pose`` in room ``current`` (None: blocked)."""
-    a, b = scene.layout.room(doorway.room_a), scene.layout.room(doorway.room_b)
-    along_x = doorway.axis == "x"  # the wall runs along x: the rooms lie north and south
-    at = doorway.z if along_x else doorway.x
-    plus = a if (a.z0 if along_x else a.x0) >= at else b
-    minus = b if plus is a else a
-    near_plus = (pose.z if along_x else pose.x) >= at
+def doorway_target(
+    layout: Layout, doorway: Doorway, pose: WorldPose, current: str
+) -> tuple[Room, bool]:
+    """The room ``Goto(doorway)`` leads an agent at ``pose`` in room ``current`` to, and
+    whether it passes through (from one of the doorway's rooms into the other) rather than
+    walks up to the doorway (from a third room, into the doorway's room on its side)."""
+    a, b = layout.room(doorway.room_a), layout.room(doorway.room_b)
     if current in (a.name, b.name):
-        target, facing_plus = (minus, False) if current == plus.name else (plus, True)
+        return (b if current == a.name else a), True
+    if doorway.axis == "x":  # rooms lie north and south of the wall at z = doorway.z
+        near_a = (pose.z >= doorway.z) == (a.centre[1] >= doorway.z)
     else:
-        target, facing_plus = (plus, False) if near_plus else (minus, True)
-    sign = 1.0 if target is plus else -1.0
-    if along_x:
-        x, z = doorway.x, round(doorway.z + sign * THROUGH, 2)
-        heading = 0.0 if facing_plus else 180.0
+        near_a = (pose.x >= doorway.x) == (a.centre[0] >= doorway.x)
+    return (a if near_a else b), False
+
+
+def through(scene: Scene, doorway: Doorway, pose: WorldPose, current: str) -> WorldPose | None:
+    """Where ``Goto(doorway)`` puts an agent at ``pose`` in room ``current`` (None: blocked):
+    :data:`THROUGH` metres into the :func:`doorway_target` room, facing away from the doorway
+    when passing through, towards it when walking up."""
+    target, passing = doorway_target(scene.layout, doorway, pose, current)
+    if doorway.axis == "x":  # the wall runs along x: the rooms lie north and south
+        north = target.z0 >= doorway.z
+        x, z = doorway.x, round(doorway.z + (THROUGH if north else -THROUGH), 2)
+        heading = 0.0 if north == passing else 180.0
     else:
-        x, z = round(doorway.x + sign * THROUGH, 2), doorway.z
-        heading = 90.0 if facing_plus else 270.0
+        east = target.x0 >= doorway.x
+        x, z = round(doorway.x + (THROUGH if east else -THROUGH), 2), doorway.z
+        heading = 90.0 if east == passing else 270.0
     return WorldPose(x, z, heading) if is_free(scene, target, x, z) else None
 
 
@@ -90,24 +103,22 @@ def spawn_pose(scene: Scene, room: Room, seed: int) -> WorldPose:
     points = spawn_points(scene, room)
     rng = StableRng(f"emrd-spawn:{seed}:{room.name}")
     index = episode_index(room.name, seed)
-    x, z = points[index % len(points) if index is not None else rng.integer(0, len(points) - 1)]
-    return WorldPose(x, z, rng.choice((0.0, 90.0, 180.0, 270.0)))
+    x, z = points[index % len(points)] if index is not None else rng.choice(points)
+    return WorldPose(x, z, rng.choice(HEADINGS))
 
 
-def spawn_points(scene: Scene, room: Room) -> list[tuple[float, float]]:
+def spawn_points(scene: Scene, room: Room) -> list[Point]:
     """The spawn points of ``room`` in the order episodes take them (shuffled once per room):
     episode ``i`` stands on point ``i``, its cardinal heading drawn from the episode seed; a
     seed of no episode (a benchmark's) picks a point by the seed."""
-    cx, cz = (room.x0 + room.x1) / 2, (room.z0 + room.z1) / 2
+    cx, cz = room.centre
     xs = np.arange(room.x0 + AGENT_RADIUS, room.x1 - AGENT_RADIUS + 1e-9, SPAWN_STEP)
     zs = np.arange(room.z0 + AGENT_RADIUS, room.z1 - AGENT_RADIUS + 1e-9, SPAWN_STEP)
     gx, gz = (np.round(g.ravel(), 2) for g in np.meshgrid(xs, zs))
     d2 = (gx - cx) ** 2 + (gz - cz) ** 2
     order = np.lexsort((gz, gx, d2))  # nearest the centre first, ties by position
     for clearance in (SPAWN_CLEARANCE, AGENT_RADIUS):
-        ok = ~scene.crowded(gx, gz, clearance)
-        ok &= (gx >= room.x0 + clearance) & (gx <= room.x1 - clearance)
-        ok &= (gz >= room.z0 + clearance) & (gz <= room.z1 - clearance)
+        ok = is_free(scene, room, gx, gz, clearance)
         free = order[ok[order]]
         if free.size:
             near = free[d2[free] <= SPAWN_RADIUS**2]

@@ -44,8 +44,6 @@ _TILE_SHIFT = 12
 class Scene:
     layout: Layout
     walls: Walls
-    rooms: np.ndarray
-    """``(4, 4)`` room rectangles in ROOM_NAMES order."""
     rects: np.ndarray
     """``(N, 4)`` object footprints."""
     centres: np.ndarray
@@ -90,7 +88,7 @@ def _support(layout: Layout, rects: np.ndarray, floor: np.ndarray) -> np.ndarray
             inside = floor & (rects[:, 0] <= o.x) & (rects[:, 2] >= o.x)
             inside &= (rects[:, 1] <= o.z) & (rects[:, 3] >= o.z)
             if inside.any():
-                support[i] = int(np.flatnonzero(inside)[0])
+                support[i] = inside.argmax()  # the first
     return support
 
 
@@ -114,11 +112,9 @@ def scene_of(layout: Layout) -> Scene:
         kind_colors = COLORS_OF.get(o.object_type, {})
         fx, fz = unit(o.rotation)
         for b in boxes_of(o):
-            (ax, az), (bx, bz) = (
-                local_to_world(o.x, o.z, o.rotation, b.u0, b.v0),
-                local_to_world(o.x, o.z, o.rotation, b.u1, b.v1),
-            )
-            x0, x1, z0, z1 = min(ax, bx), max(ax, bx), min(az, bz), max(az, bz)
+            ax, az = local_to_world(o.x, o.z, o.rotation, b.u0, b.v0)
+            bx, bz = local_to_world(o.x, o.z, o.rotation, b.u1, b.v1)
+            (x0, x1), (z0, z1) = sorted((ax, bx)), sorted((az, bz))
             parts.append((x0, z0, x1, z1, o.elevation + b.y0, o.elevation + b.y1))
             if b.role == "wall":
                 room = layout.room_at((ax + bx) / 2, (az + bz) / 2) or o.room
@@ -132,10 +128,11 @@ def scene_of(layout: Layout) -> Scene:
             part_label.append(label)
             face_v = b.v1 if b.facing > 0 else b.v0
             facing.append((b.facing * fx, b.facing * fz, face_v * b.facing))
+    owners = np.zeros(len(colors), dtype=np.int64)
+    owners[list(labels.values())] = [i + 1 for i, _ in labels]
     return Scene(
         layout=layout,
         walls=walls_of(layout),
-        rooms=np.array([[r.x0, r.z0, r.x1, r.z1] for r in layout.rooms], dtype=float),
         rects=rects,
         centres=np.array([[o.x, o.z] for o in objs], dtype=float),
         floor=floor,
@@ -145,19 +142,12 @@ def scene_of(layout: Layout) -> Scene:
         part_label=np.array(part_label, dtype=np.int64),
         part_facing=np.array(facing, dtype=float).reshape(-1, 3),
         colors=np.array(colors, dtype=np.uint8),
-        owners=_owners(len(colors), labels),
+        owners=owners,
         index={o.object_id: i for i, o in enumerate(objs)},
         room_raster=(rooms := _raster(layout)),
         floor_raster=_floor(rooms),
         landmarks=np.array([o.category == "landmark" for o in objs], dtype=bool),
     )
-
-
-def _owners(size: int, labels: dict[tuple[int, str], int]) -> np.ndarray:
-    owners = np.zeros(size, dtype=np.int64)
-    for (i, _), label in labels.items():
-        owners[label] = i + 1
-    return owners
 
 
 def _floor(rooms: np.ndarray) -> np.ndarray:

@@ -12,10 +12,15 @@ from typing import Any
 import numpy as np
 
 from pytest_emrd._lazy import remember
-from pytest_emrd.errors import ConfigError, check_choice, check_range
-from pytest_emrd.rooms import ROOM_NAMES, SLUG_ROOMS
+from pytest_emrd.errors import ConfigError, check_range
 from pytest_emrd.world._conditions import ConditionParams, condition_params
-from pytest_emrd.world._feedback import Action, SemanticStep, room_table, turn_degrees
+from pytest_emrd.world._feedback import (
+    Action,
+    SemanticStep,
+    room_table,
+    spawn_room_name,
+    turn_degrees,
+)
 from pytest_emrd.world._model import Layout, Observation, View, VisibleObject, WorldPose
 from pytest_emrd.world._motion import approach, spawn_pose, through
 from pytest_emrd.world._render import palette, render, shade_table
@@ -33,12 +38,12 @@ SHADE_TABLES = 64
 _lock = threading.Lock()
 _Seen = tuple[str, tuple[VisibleObject, ...]]
 """A view's pixel digest and the objects it shows legibly."""
-#: (scene, table, pose) -> digest and visible objects, keyed by the identities of a memoised
-#: scene and table (each entry holds them, so an id is not reused while the entry lives).
-_digests: OrderedDict[tuple[int, int, WorldPose], tuple[Scene, np.ndarray, _Seen]] = OrderedDict()
-_tables: OrderedDict[tuple[int, ConditionParams, int | None], tuple[Scene, np.ndarray]] = (
-    OrderedDict()
-)
+#: (scene, id of a shade table, pose) -> the table and the view's digest and visible objects
+#: (the entry holds the table, so its id is not reused while the entry lives). Scenes hash
+#: by identity: an entry is only found with the memoised scene object it was made with.
+_digests: OrderedDict[tuple[Scene, int, WorldPose], tuple[np.ndarray, _Seen]] = OrderedDict()
+#: (scene, condition, ``texture`` seed or None) -> shade table.
+_tables: OrderedDict[tuple[Scene, ConditionParams, int | None], np.ndarray] = OrderedDict()
 
 
 def _remember(table: OrderedDict[Any, Any], key: Any, value: Any, capacity: int) -> None:
@@ -55,12 +60,11 @@ def forget_views() -> None:
 
 def _shades(scene: Scene, params: ConditionParams, seed: int) -> np.ndarray:
     """The episode's shade table, one object per scene, condition and (``texture``) seed."""
-    key = (id(scene), params, seed if params.randomize_palette else None)
-    hit = _tables.get(key)
-    if hit is not None and hit[0] is scene:
-        return hit[1]
-    table = shade_table(palette(scene, params, seed), params, scene.owners)
-    _remember(_tables, key, (scene, table), SHADE_TABLES)
+    key = (scene, params, seed if params.randomize_palette else None)
+    table = _tables.get(key)
+    if table is None:
+        table = shade_table(palette(scene, params, seed), params, scene.owners)
+        _remember(_tables, key, table, SHADE_TABLES)
     return table
 
 
@@ -101,15 +105,13 @@ class BuiltinSimulator(SemanticStep):
         self, layout: Layout, condition: str, spawn_room: str, seed: int, *, symbolic: bool = True
     ) -> Observation:
         """Start an episode in ``spawn_room`` (canonical name or slug) under ``condition``."""
-        room = SLUG_ROOMS.get(spawn_room, spawn_room)
-        check_choice("spawn_room", room, [*ROOM_NAMES, *SLUG_ROOMS])
+        room = spawn_room_name(spawn_room)
         self._params = condition_params(condition)
         self._scene = scene_of(layout)
         self._table = _shades(self._scene, self._params, seed)
         self._spawn = self._pose = spawn_pose(self._scene, layout.room(room), seed)
-        self._steps, self._ended, self._terminal, self._symbolic = 0, False, None, symbolic
         self._frames.clear()
-        return self._observe(True, "Episode started.")
+        return self._begin(symbolic)
 
     @property
     def agent_pose(self) -> WorldPose:
@@ -123,45 +125,33 @@ class BuiltinSimulator(SemanticStep):
             raise ConfigError(f"agent pose={self._pose} lies outside every room of the layout.")
         return room
 
-    def visible_ids(self) -> tuple[str, ...]:
-        return tuple(v.object_id for v in self._render()[0][1])
-
     def close(self) -> None:
         self._scene = None
         self._frames.clear()
 
-    def _in_view(self) -> tuple[list[str], list[str], list[float]]:
-        seen = self._render()[0][1]
-        return (
-            [v.object_id for v in seen],
-            [v.object_type for v in seen],
-            [v.distance for v in seen],
-        )
+    def _in_view(self) -> tuple[VisibleObject, ...]:
+        return self._render()[0][1]
 
     def _reach(self, object_id: str) -> bool:
         scene = self._require()
-        index = scene.index[object_id]
-        if scene.layout.objects[index].object_type == "Doorway":
-            doorway = next(d for d in scene.layout.doorways if d.object_id == object_id)
-            pose = through(scene, doorway, self._pose, self.current_room())
+        doorway = next((d for d in scene.layout.doorways if d.object_id == object_id), None)
+        if doorway is None:
+            pose = approach(scene, scene.index[object_id], self._pose)
         else:
-            pose = approach(scene, index, self._pose)
+            pose = through(scene, doorway, self._pose, self.current_room())
         if pose is not None:
-            self._move(pose)
+            self._pose = pose
         return pose is not None
 
     def _turn(self, action: Action) -> str:
         delta = turn_degrees(action)
-        self._move(WorldPose(self._pose.x, self._pose.z, (self._pose.heading + delta) % 360))
+        self._pose = WorldPose(self._pose.x, self._pose.z, (self._pose.heading + delta) % 360)
         return ""
 
     def _require(self) -> Scene:
         if self._scene is None:
             raise ConfigError("BuiltinSimulator used before reset(); call reset(...) first.")
         return self._scene
-
-    def _move(self, pose: WorldPose) -> None:
-        self._pose = pose
 
     def _render(self) -> tuple[_Seen, View]:
         """Pixel digest, visible objects and view of the current pose. The views of recent
@@ -177,19 +167,17 @@ class BuiltinSimulator(SemanticStep):
         draw = functools.partial(render, scene, pose, self._params, table)
         # A texture episode's table is its own: no other episode can share its views.
         shared = self._cache_size > 0 and not self._params.randomize_palette
-        key = (id(scene), id(table), pose)
+        key = (scene, id(table), pose)
         known = _digests.get(key) if shared else None
-        if known is not None and known[0] is scene and known[1] is table:
-            entry = known[2], View(lambda: draw()[0], self._quality)
+        if known is not None and known[0] is table:
+            entry = known[1], View(lambda: draw()[0], self._quality)
         else:
             pixels, legible = draw()
             seen = hashlib.sha256(pixels.data).hexdigest(), in_view(scene, pose, legible)
             entry = seen, View.of(pixels, self._quality)
             if shared:
-                _remember(_digests, key, (scene, table, seen), VIEW_DIGESTS)
-        self._frames[pose] = entry
-        while len(self._frames) > max(self._cache_size, 1):  # the current view, at least
-            self._frames.popitem(last=False)
+                _remember(_digests, key, (table, seen), VIEW_DIGESTS)
+        remember(self._frames, pose, entry, max(self._cache_size, 1))  # the current view, at least
         return entry
 
     def _view(self) -> tuple[WorldPose, tuple[VisibleObject, ...], str, View]:

@@ -44,34 +44,37 @@ def plan_png(layout: Layout, pose: WorldPose, *, visibility: float) -> bytes:
         ax.add_patch(
             patches.Rectangle((r.x0, r.z0), r.x1 - r.x0, r.z1 - r.z0, color=fill, zorder=0)
         )
-        ax.text((r.x0 + r.x1) / 2, (r.z0 + r.z1) / 2, r.name, **centred, **label)
+        ax.text(*r.centre, r.name, **centred, **label)
     walls = walls_of(layout)
+    wall = {"color": "black", "lw": 3, "solid_capstyle": "butt", "zorder": 3}
     for z, x0, x1 in walls.along_x:
-        ax.plot([x0, x1], [z, z], color="black", lw=3, solid_capstyle="butt", zorder=3)
+        ax.plot([x0, x1], [z, z], **wall)
     for x, z0, z1 in walls.along_z:
-        ax.plot([x, x], [z0, z1], color="black", lw=3, solid_capstyle="butt", zorder=3)
+        ax.plot([x, x], [z0, z1], **wall)
     for o in layout.objects:
         x0, z0, x1, z1 = footprint(o)
         fill = CATEGORY_COLORS.get(o.category, "grey")
         layer = {"alpha": 0.55, "zorder": 4} if o.elevation else {"alpha": 0.85, "zorder": 2}
-        edges = {"facecolor": fill, "edgecolor": "black", "lw": 0.6}
-        ax.add_patch(patches.Rectangle((x0, z0), x1 - x0, z1 - z0, **edges, **layer))
+        box = patches.Rectangle(
+            (x0, z0), x1 - x0, z1 - z0, facecolor=fill, edgecolor="black", lw=0.6, **layer
+        )
+        ax.add_patch(box)
         ax.text(o.x, o.z, o.object_id, **centred, fontsize=5.5, zorder=6)
     # matplotlib angles are counter-clockwise from +x; headings clockwise from +z
     theta = 90.0 - pose.heading
-    wedge = (theta - 45, theta + 45)
-    ax.add_patch(
-        patches.Wedge((pose.x, pose.z), visibility, *wedge, color="#ffd84d", alpha=0.25, zorder=1)
-    )
+    view = {"color": "#ffd84d", "alpha": 0.25, "zorder": 1}
+    ax.add_patch(patches.Wedge((pose.x, pose.z), visibility, theta - 45, theta + 45, **view))
     dx, dz = math.cos(math.radians(theta)) * 0.6, math.sin(math.radians(theta)) * 0.6
     ax.add_patch(patches.Circle((pose.x, pose.z), 0.25, color="#d62728", zorder=7))
     ax.arrow(pose.x, pose.z, dx, dz, width=0.06, color="#d62728", zorder=7)
-    ax.set_xlim(-0.3, layout.width + 0.3)
-    ax.set_ylim(-0.3, layout.depth + 0.3)
-    ax.set_aspect("equal")
-    ax.set_xlabel("x (m, east)")
-    ax.set_ylabel("z (m, north)")
-    ax.set_title(f"EMRD office, seed {layout.seed}")
+    ax.set(
+        xlim=(-0.3, layout.width + 0.3),
+        ylim=(-0.3, layout.depth + 0.3),
+        aspect="equal",
+        xlabel="x (m, east)",
+        ylabel="z (m, north)",
+        title=f"EMRD office, seed {layout.seed}",
+    )
     buf = io.BytesIO()
     fig.savefig(buf, format="png", dpi=110, bbox_inches="tight")
     plt.close(fig)

@@ -16,7 +16,7 @@ from functools import lru_cache
 import numpy as np
 
 from pytest_emrd.world._conditions import condition_params
-from pytest_emrd.world._geometry import right_of, unit
+from pytest_emrd.world._geometry import HEADINGS, right_of, unit
 from pytest_emrd.world._model import Layout, VisibleObject, WorldPose
 from pytest_emrd.world._scene import Scene, scene_of
 
@@ -58,9 +58,9 @@ def standing_points(scene: Scene) -> np.ndarray:
     for d in scene.layout.doorways:
         nx, nz = (0.0, 1.0) if d.axis == "x" else (1.0, 0.0)
         pts.append(np.array([[d.x + nx, d.z + nz], [d.x - nx, d.z - nz]]))
-    for x0, z0, x1, z1 in scene.rooms:
-        xs = np.arange(x0 + 0.4, x1 - 0.39, STAND_SPACING)
-        zs = np.arange(z0 + 0.4, z1 - 0.39, STAND_SPACING)
+    for r in scene.layout.rooms:
+        xs = np.arange(r.x0 + 0.4, r.x1 - 0.39, STAND_SPACING)
+        zs = np.arange(r.z0 + 0.4, r.z1 - 0.39, STAND_SPACING)
         gx, gz = np.meshgrid(xs, zs)
         pts.append(np.stack([gx.ravel(), gz.ravel()], axis=1))
     grid = np.round(np.concatenate(pts), 2)  # centimetre positions, as the world's poses
@@ -81,7 +81,7 @@ def discoverable_ids(layout: Layout) -> tuple[str, ...]:
     points = standing_points(scene)
     order = np.concatenate([np.arange(start, len(points), SPREAD) for start in range(SPREAD)])
     for x, z in points[order]:
-        for heading in (0.0, 90.0, 180.0, 270.0):
+        for heading in HEADINGS:
             seen |= render(scene, WorldPose(float(x), float(z), heading), params, table)[1] >= (
                 LEGIBLE_PIXELS
             )

@@ -8,7 +8,7 @@ from hypothesis import strategies as st
 
 from pytest_emrd.errors import ConfigError
 from pytest_emrd.trajectory import Pose
-from pytest_emrd.world import WorldPose
+from pytest_emrd.world import VisibleObject, WorldPose
 from pytest_emrd.world._feedback import (
     Action,
     ActionFailed,
@@ -63,12 +63,20 @@ def test_an_alias_for_an_unknown_room_is_a_config_error() -> None:
         room_table({"Room A": "Garage"})
 
 
+def _seen(*distances: float) -> tuple[VisibleObject, ...]:
+    """``Desk_1``, ``Desk_2`` and ``Chair_1`` at ``distances``."""
+    ids = ("Desk_1", "Desk_2", "Chair_1")
+    return tuple(
+        VisibleObject(i, i.split("_")[0], 0.0, d) for i, d in zip(ids, distances, strict=True)
+    )
+
+
 def test_goto_prefers_the_instance_then_the_nearest_of_the_type() -> None:
-    ids, types = ["Desk_1", "Desk_2", "Chair_1"], ["Desk", "Desk", "Chair"]
-    assert choose_target("desk2", ids, types, [1.0, 3.0, 2.0], symbolic=True) == 1
-    assert choose_target("desk", ids, types, [3.0, 1.0, 2.0], symbolic=True) == 1
-    assert choose_target("desk", ids, types, [2.0, 2.0, 2.0], symbolic=True) == 0  # tie: by id
-    assert choose_target("fridge", ids, types, [1.0, 1.0, 1.0], symbolic=True) is None
+    assert choose_target("desk2", _seen(1.0, 3.0, 2.0), symbolic=True) == _seen(1.0, 3.0, 2.0)[1]
+    assert choose_target("desk", _seen(3.0, 1.0, 2.0), symbolic=True) == _seen(3.0, 1.0, 2.0)[1]
+    tie = choose_target("desk", _seen(2.0, 2.0, 2.0), symbolic=True)
+    assert tie is not None and tie.object_id == "Desk_1"  # tie: by id
+    assert choose_target("fridge", _seen(1.0, 1.0, 1.0), symbolic=True) is None
 
 
 class _Backend(SemanticStep):
@@ -78,8 +86,8 @@ class _Backend(SemanticStep):
         self._steps, self._ended, self._symbolic = 0, False, symbolic
         self._rooms, self._reachable, self.reached = room_table(), reachable, ""
 
-    def _in_view(self) -> tuple[list[str], list[str], list[float]]:
-        return ["Desk_1", "Desk_2", "Chair_1"], ["Desk", "Desk", "Chair"], [1.0, 3.0, 2.0]
+    def _in_view(self) -> tuple[VisibleObject, ...]:
+        return _seen(1.0, 3.0, 2.0)
 
     def _reach(self, object_id: str) -> bool:
         self.reached = object_id
@@ -99,8 +107,7 @@ def test_vision_goto_reads_types_only() -> None:
     backend = _Backend(symbolic=False)
     assert backend.step("Goto(Desk_2)") == (True, "Goto(Desk_2) succeeded.")
     assert backend.reached == "Desk_1"
-    ids, types = ["Desk_1", "Desk_2", "Chair_1"], ["Desk", "Desk", "Chair"]
-    assert choose_target("desk2", ids, types, [1.0, 3.0, 2.0], symbolic=False) is None
+    assert choose_target("desk2", _seen(1.0, 3.0, 2.0), symbolic=False) is None
     symbolic = _Backend(symbolic=True)
     assert symbolic.step("Goto(Desk_2)") == (True, "Goto(Desk_2) succeeded.")
     assert symbolic.reached == "Desk_2"

@@ -25,7 +25,7 @@ from pytest_emrd.trajectory import CONDITIONS
 from pytest_emrd.world._catalog import DOOR_HEIGHT
 from pytest_emrd.world._catalog import WALL_HEIGHT as CEILING_HEIGHT
 from pytest_emrd.world._conditions import condition_params
-from pytest_emrd.world._geometry import Rect, rect_at
+from pytest_emrd.world._geometry import Point, Rect, Span, footprint, rect_at
 from pytest_emrd.world._model import Doorway, Layout, Room, WorldObject, WorldPose
 from pytest_emrd.world._rng import StableRng
 from pytest_emrd.world.thor._assets import (
@@ -91,55 +91,44 @@ class WallPiece:
 
     def distance_to(self, x: float, z: float) -> float:
         """Euclidean distance from ``(x, z)`` to the piece."""
-        dx, dz = self.x1 - self.x0, self.z1 - self.z0
-        t = ((x - self.x0) * dx + (z - self.z0) * dz) / (dx * dx + dz * dz)
-        t = min(1.0, max(0.0, t))
-        return math.hypot(x - (self.x0 + t * dx), z - (self.z0 + t * dz))
+        dx = max(min(self.x0, self.x1) - x, x - max(self.x0, self.x1), 0.0)
+        dz = max(min(self.z0, self.z1) - z, z - max(self.z0, self.z1), 0.0)
+        return math.hypot(dx, dz)  # the piece is axis-aligned
 
 
-def corners(room: Room) -> tuple[tuple[float, float], ...]:
+def corners(room: Room) -> tuple[Point, ...]:
     """The floor polygon in ProcTHOR's winding: from the south-west corner, north first."""
     return ((room.x0, room.z0), (room.x0, room.z1), (room.x1, room.z1), (room.x1, room.z0))
 
 
-def _covers(other: Room, a: tuple[float, float], b: tuple[float, float]) -> bool:
-    """Whether ``other`` has a side containing the segment's midpoint on the same line."""
-    mid = ((a[0] + b[0]) / 2, (a[1] + b[1]) / 2)
-    axis = 0 if abs(b[1] - a[1]) < EPS else 1  # the coordinate the segment runs along
-    spans = ((other.x0, other.x1), (other.z0, other.z1))
-    lo, hi = spans[axis]
-    on_line = any(abs(side - mid[1 - axis]) < EPS for side in spans[1 - axis])
-    return on_line and lo + EPS < mid[axis] < hi - EPS
-
-
-def _breaks(
-    rooms: tuple[Room, ...], a: tuple[float, float], b: tuple[float, float]
-) -> list[tuple[float, float]]:
-    """Points from ``a`` to ``b`` (ends included, in order) where other rooms' corners cut it."""
-    horizontal = abs(b[1] - a[1]) < EPS
-    axis = 0 if horizontal else 1
-    lo, hi = sorted((a[axis], b[axis]))
-    inner = {
-        c[axis]
-        for other in rooms
-        for c in corners(other)
-        if abs(c[1 - axis] - a[1 - axis]) < EPS and lo + EPS < c[axis] < hi - EPS
-    }
-    along = sorted(inner, reverse=b[axis] < a[axis])
-    cuts = [(v, a[1]) if horizontal else (a[0], v) for v in along]
-    return [a, *cuts, b]
+def _span(room: Room, axis: int) -> Span:
+    """The room's extent along x (``axis`` 0) or z (``axis`` 1)."""
+    return (room.x0, room.x1) if axis == 0 else (room.z0, room.z1)
 
 
 def wall_pieces(layout: Layout) -> tuple[WallPiece, ...]:
-    """Every wall piece of every room, rooms numbered from 1 in layout order."""
+    """Every wall piece of every room, rooms numbered from 1 in layout order: a side is cut
+    where another room's side on the same line ends; a piece's neighbour is the room whose
+    side holds the piece's midpoint."""
     pieces: list[WallPiece] = []
     for n, room in enumerate(layout.rooms, start=1):
-        others = [(i, r) for i, r in enumerate(layout.rooms, start=1) if r is not room]
         poly = corners(room)
         for a, b in zip(poly, poly[1:] + poly[:1], strict=True):
-            cuts = _breaks(tuple(r for _, r in others), a, b)
-            for start, end in itertools.pairwise(cuts):
-                covering = (i for i, other in others if _covers(other, start, end))
+            i = 0 if abs(b[1] - a[1]) < EPS else 1  # the coordinate the side runs along
+            on_line = {  # the other rooms with a side on this line -> where that side runs
+                m: _span(other, i)
+                for m, other in enumerate(layout.rooms, start=1)
+                if other is not room and any(abs(c - a[1 - i]) < EPS for c in _span(other, 1 - i))
+            }
+            lo, hi = sorted((a[i], b[i]))
+            cuts = {end for span in on_line.values() for end in span if lo + EPS < end < hi - EPS}
+            stops = [a[i], *sorted(cuts, reverse=b[i] < a[i]), b[i]]
+            for s, e in itertools.pairwise(stops):
+                mid = (s + e) / 2
+                covering = (
+                    m for m, (s_lo, s_hi) in on_line.items() if s_lo + EPS < mid < s_hi - EPS
+                )
+                start, end = ((s, a[1]), (e, a[1])) if i == 0 else ((a[0], s), (a[0], e))
                 pieces.append(WallPiece(n, *start, *end, next(covering, None)))
     return tuple(pieces)
 
@@ -178,7 +167,7 @@ def _support(obj: WorldObject, floor: list[WorldObject]) -> WorldObject | None:
     """The floor object ``obj`` stands on: same room, its footprint holds ``obj``'s centre
     and its EMRD top is ``obj``'s elevation."""
     for other in floor:
-        x0, z0, x1, z1 = rect_at(other.x, other.z, other.width, other.depth, other.rotation)
+        x0, z0, x1, z1 = footprint(other)
         if (
             other.room == obj.room
             and abs(other.height - obj.elevation) <= SUPPORT_TOLERANCE
@@ -192,25 +181,22 @@ def _support(obj: WorldObject, floor: list[WorldObject]) -> WorldObject | None:
 def place(layout: Layout, overrides: Mapping[str, str] | None = None) -> dict[str, Placed]:
     """EMRD object id -> its THOR placement, for every object that is not a wall hole."""
     margin = layout.wall_thickness / 2
-    rooms = {r.name: r for r in layout.rooms}
     solid = [o for o in layout.objects if o.object_type not in DOOR_TYPES]
     floor = [o for o in solid if o.elevation == 0]
     placed: dict[str, Placed] = {}
-    shift: dict[str, tuple[float, float]] = {}
     for obj in sorted(solid, key=lambda o: o.elevation > 0):
         asset = choose_asset(obj.object_type, obj.width, obj.depth, obj.height, overrides)
         base, dx, dz = obj.elevation, 0.0, 0.0
         if obj.elevation > 0:
             support = _support(obj, floor)
-            if support is not None:
-                base = placed[support.object_id].asset.height
-                dx, dz = shift[support.object_id]
+            if support is not None:  # moved with its support
+                below = placed[support.object_id]
+                base, dx, dz = below.asset.height, below.x - support.x, below.z - support.z
         x, z = obj.x + dx, obj.z + dz
         x0, z0, x1, z1 = rect_at(x, z, asset.width, asset.depth, obj.rotation)
-        room = rooms[obj.room]
+        room = layout.room(obj.room)
         x += _shift(x0, x1, room.x0 + margin, room.x1 - margin)
         z += _shift(z0, z1, room.z0 + margin, room.z1 - margin)
-        shift[obj.object_id] = (x - obj.x, z - obj.z)
         rect = rect_at(x, z, asset.width, asset.depth, obj.rotation)
         placed[obj.object_id] = Placed(
             asset, x, base + asset.height / 2, z, obj.rotation % 360, rect
@@ -223,28 +209,23 @@ def snap(value: float) -> float:
     return round(round(value / GRID) * GRID, 4)
 
 
-def spawn_point(
-    room: Room, footprints: list[Rect], x: float, z: float
-) -> tuple[float, float] | None:
+def spawn_point(room: Room, footprints: list[Rect], x: float, z: float) -> Point | None:
     """The grid point in ``room`` nearest ``(x, z)`` at least :data:`CLEARANCE` from the
     room's walls and every footprint (None if the room has none)."""
     lo_x = math.ceil((room.x0 + CLEARANCE) / GRID) * GRID
     lo_z = math.ceil((room.z0 + CLEARANCE) / GRID) * GRID
     xs = np.arange(lo_x, room.x1 - CLEARANCE + 1e-9, GRID)
     zs = np.arange(lo_z, room.z1 - CLEARANCE + 1e-9, GRID)
-    if xs.size == 0 or zs.size == 0:
-        return None
     gx, gz = (a.ravel() for a in np.meshgrid(xs, zs))
     free = np.ones(gx.shape, dtype=bool)
     for x0, z0, x1, z1 in footprints:
         dx = np.maximum(np.maximum(x0 - gx, gx - x1), 0.0)
         dz = np.maximum(np.maximum(z0 - gz, gz - z1), 0.0)
         free &= np.hypot(dx, dz) >= CLEARANCE
-    if not free.any():
+    gx, gz = gx[free], gz[free]
+    if gx.size == 0:
         return None
-    dist = np.round(np.hypot(gx - x, gz - z), 6)
-    idx = np.flatnonzero(free)
-    best = idx[np.lexsort((gz[idx], gx[idx], dist[idx]))[0]]
+    best = np.lexsort((gz, gx, np.round(np.hypot(gx - x, gz - z), 6)))[0]  # nearest, then by x, z
     return snap(float(gx[best])), snap(float(gz[best]))
 
 
@@ -392,7 +373,7 @@ def _lights(layout: Layout, factor: float) -> list[dict[str, Any]]:
         "nearPlane": 0.2,
         "resolution": "FromQualitySettings",
     }
-    lights: list[dict[str, Any]] = [
+    return [
         {
             "id": "DirectionalLight",
             "type": "directional",
@@ -402,19 +383,19 @@ def _lights(layout: Layout, factor: float) -> list[dict[str, Any]]:
             "indirectMultiplier": 1.0,
             "rgb": _rgb((1.0, 1.0, 1.0)),
             "shadow": shadow,
-        }
-    ]
-    return lights + [
-        {
-            "id": f"light_{n}",
-            "type": "point",
-            "position": _xyz((r.x0 + r.x1) / 2, CEILING_HEIGHT - 0.2, (r.z0 + r.z1) / 2),
-            "intensity": round(0.75 * factor, 4),
-            "range": 15,
-            "rgb": _rgb((1.0, 0.855, 0.722)),
-            "shadow": shadow,
-        }
-        for n, r in enumerate(layout.rooms, start=1)
+        },
+        *(
+            {
+                "id": f"light_{n}",
+                "type": "point",
+                "position": _xyz(r.centre[0], CEILING_HEIGHT - 0.2, r.centre[1]),
+                "intensity": round(0.75 * factor, 4),
+                "range": 15,
+                "rgb": _rgb((1.0, 0.855, 0.722)),
+                "shadow": shadow,
+            }
+            for n, r in enumerate(layout.rooms, start=1)
+        ),
     ]
 
 
@@ -431,8 +412,7 @@ def _object_dict(placed: Placed, thor_id: str) -> dict[str, Any]:
 
 def _start(layout: Layout, placed: Mapping[str, Placed], agent: WorldPose | None) -> dict[str, Any]:
     """The agent's start on THOR's grid, clear of every asset (:func:`spawn_point`)."""
-    first = layout.rooms[0]
-    wanted = agent or WorldPose((first.x0 + first.x1) / 2, (first.z0 + first.z1) / 2, 0.0)
+    wanted = agent or WorldPose(*layout.rooms[0].centre, 0.0)
     name = layout.room_at(wanted.x, wanted.z)
     footprints = [p.rect for p in placed.values()]
     spot = None if name is None else spawn_point(layout.room(name), footprints, wanted.x, wanted.z)
@@ -498,15 +478,14 @@ def build_house(
         if obj.object_id in doorway_ids:
             continue
         n = numbers[obj.room]
-        if obj.object_type in DOOR_TYPES:
-            door = _exterior_door(obj, n, len(doors), pieces, assets)
-            doors.append(door)
-            ids[door["id"]] = obj.object_id
-            continue
-        thor_id = f"{obj.object_type}|{n}|{per_room[n]}"
-        per_room[n] += 1
-        objects.append(_object_dict(placed[obj.object_id], thor_id))
-        ids[thor_id] = obj.object_id
+        if obj.object_type in DOOR_TYPES:  # the exit: a hole in an outside wall
+            built = _exterior_door(obj, n, len(doors), pieces, assets)
+            doors.append(built)
+        else:
+            built = _object_dict(placed[obj.object_id], f"{obj.object_type}|{n}|{per_room[n]}")
+            per_room[n] += 1
+            objects.append(built)
+        ids[built["id"]] = obj.object_id
 
     start = _start(layout, placed, agent)
     return {

@@ -77,9 +77,8 @@ def preflight(thor: ModuleType, options: Mapping[str, Any], *, allow_download: b
                 "thor-<platform>-<commit> executable inside an unpacked AI2-THOR build."
             )
         return
-    platform = options.get("platform")
-    name = platform if isinstance(platform, str) else getattr(platform, "__name__", str(platform))
-    if platform is None or name != "CloudRendering":
+    platform = options.get("platform")  # a class, or its name
+    if getattr(platform, "__name__", str(platform)) != "CloudRendering":
         return
     width, height = options.get("width", 300), options.get("height", 300)
     problems = thor.platform.CloudRendering.validate(

@@ -16,10 +16,17 @@ from typing import Any
 
 import numpy as np
 
-from pytest_emrd.errors import ConfigError, TransportError, check_choice
-from pytest_emrd.rooms import ROOM_NAMES, SLUG_ROOMS
+from pytest_emrd.errors import ConfigError, TransportError
 from pytest_emrd.world._conditions import condition_params
-from pytest_emrd.world._feedback import Action, ActionFailed, SemanticStep, room_table, turn_degrees
+from pytest_emrd.world._feedback import (
+    Action,
+    ActionFailed,
+    SemanticStep,
+    room_table,
+    spawn_room_name,
+    turn_degrees,
+)
+from pytest_emrd.world._geometry import Point
 from pytest_emrd.world._model import (
     Doorway,
     Layout,
@@ -29,7 +36,7 @@ from pytest_emrd.world._model import (
     VisibleObject,
     WorldPose,
 )
-from pytest_emrd.world._motion import spawn_pose
+from pytest_emrd.world._motion import doorway_target, spawn_pose
 from pytest_emrd.world._scene import scene_of
 from pytest_emrd.world.thor import _launch
 from pytest_emrd.world.thor._house import IdTable, build_house
@@ -51,14 +58,10 @@ def wrap180(angle: float | np.ndarray) -> Any:
     return (np.asarray(angle) + 180.0) % 360.0 - 180.0
 
 
-def heading_to(x0: float, z0: float, x1: float, z1: float) -> float:
-    """Heading (deg clockwise from +z, in [0, 360)) from ``(x0, z0)`` towards ``(x1, z1)``."""
-    return math.degrees(math.atan2(x1 - x0, z1 - z0)) % 360.0
-
-
 def bearing(agent: WorldPose, x: float, z: float) -> float:
     """Bearing of ``(x, z)`` relative to the agent's view axis, negative to the left."""
-    return float(wrap180(heading_to(agent.x, agent.z, x, z) - agent.heading))
+    heading = math.degrees(math.atan2(x - agent.x, z - agent.z)) % 360.0  # clockwise from +z
+    return float(wrap180(heading - agent.heading))
 
 
 def grid(positions: Iterable[Mapping[str, float]]) -> np.ndarray:
@@ -87,9 +90,7 @@ def _pick(
     return None
 
 
-def nearest_in_room(
-    points: np.ndarray, x: float, z: float, room: Room
-) -> tuple[float, float] | None:
+def nearest_in_room(points: np.ndarray, x: float, z: float, room: Room) -> Point | None:
     """The reachable position in ``room`` nearest ``(x, z)`` (None if the room has none)."""
     dist = np.hypot(points[:, 0] - x, points[:, 1] - z)
     best = _pick(points, 0.0, (dist, _in_room(points, room)))
@@ -115,17 +116,14 @@ def viewpoint(points: np.ndarray, x: float, z: float, room: Room) -> WorldPose |
 
 def entry(points: np.ndarray, doorway: Doorway, into: Room) -> WorldPose | None:
     """Reachable spot in ``into`` nearest the doorway, facing into the room, away from the gap."""
+    x, z = points[:, 0], points[:, 1]
     if doorway.axis == "x":  # wall runs along x at z = doorway.z
         north = abs(into.z0 - doorway.z) < abs(into.z1 - doorway.z)
-        heading, depth = (
-            (0.0, points[:, 1] - doorway.z) if north else (180.0, doorway.z - points[:, 1])
-        )
+        heading, depth = (0.0, z - doorway.z) if north else (180.0, doorway.z - z)
     else:  # wall runs along z at x = doorway.x
         east = abs(into.x0 - doorway.x) < abs(into.x1 - doorway.x)
-        heading, depth = (
-            (90.0, points[:, 0] - doorway.x) if east else (270.0, doorway.x - points[:, 0])
-        )
-    dist = np.hypot(points[:, 0] - doorway.x, points[:, 1] - doorway.z)
+        heading, depth = (90.0, x - doorway.x) if east else (270.0, doorway.x - x)
+    dist = np.hypot(x - doorway.x, z - doorway.z)
     inside = _in_room(points, into)
     return _pick(points, heading, (dist, inside & (depth >= CLEARANCE)), (dist, inside))
 
@@ -154,10 +152,8 @@ def visible_objects(
     (``docs/ai2thor.md``); ``types`` maps EMRD id -> EMRD type."""
     seen: dict[str, VisibleObject] = {}
     for obj in objects:
-        if not obj.get("visible"):
-            continue
-        ours = ids.emrd(str(obj["objectId"]))
-        if ours is None:
+        ours = ids.emrd(str(obj["objectId"])) if obj.get("visible") else None
+        if ours is None:  # not visible, or not an object of the layout
             continue
         x, z = float(obj["position"]["x"]), float(obj["position"]["z"])
         if ours not in landmarks and _box_distance(obj, agent) > visibility_distance:
@@ -240,28 +236,26 @@ class ThorSimulator(SemanticStep):
         self._allow_download = bool(allow_download)
         self._asset_ids = dict(asset_ids or {})
         self._rooms = room_table(room_aliases)
-        self._user_options = dict(controller_options)
+        self._options = {**DEFAULTS, **controller_options}
         self._controller: Any = None
         self._started: list[Any] = []
         self._layout: Layout | None = None
         self._house: dict[str, Any] = {}
         self._ids = IdTable({})
-        self._types: dict[str, str] = {}
-        self._landmarks: frozenset[str] = frozenset()
         self._condition = condition_params("baseline")
         self._points = np.empty((0, 2))
-        self._heights: dict[tuple[float, float], float] = {}
+        self._heights: dict[Point, float] = {}
         self._spawn = WorldPose(0.0, 0.0, 0.0)
         self._visible: tuple[VisibleObject, ...] = ()
 
     def _start(self, house: dict[str, Any]) -> None:
-        options = {**DEFAULTS, **self._user_options}
-        options.update(
-            scene=house,
-            visibilityDistance=self._condition.draw_distance,
-            server_timeout=self._step_timeout,
-            server_start_timeout=self._start_timeout,
-        )
+        options = {
+            **self._options,
+            "scene": house,
+            "visibilityDistance": self._condition.draw_distance,
+            "server_timeout": self._step_timeout,
+            "server_start_timeout": self._start_timeout,
+        }
         self._started = []
         if self._factory is None:
             thor = _launch.import_ai2thor()
@@ -319,12 +313,11 @@ class ThorSimulator(SemanticStep):
         self, layout: Layout, condition: str, spawn_room: str, seed: int, *, symbolic: bool = True
     ) -> Observation:
         """Start an episode in ``spawn_room`` (canonical name or slug) under ``condition``."""
-        name = SLUG_ROOMS.get(spawn_room, spawn_room)
-        check_choice("spawn_room", name, [*ROOM_NAMES, *SLUG_ROOMS])
+        name = spawn_room_name(spawn_room)
         self._condition = condition_params(condition)
         room = layout.room(name)
         wanted = spawn_pose(scene_of(layout), room, seed)
-        mode = str({**DEFAULTS, **self._user_options}["agentMode"])
+        mode = str(self._options["agentMode"])
         house = build_house(
             layout, condition, seed, agent=wanted, asset_ids=self._asset_ids, agent_mode=mode
         )
@@ -334,8 +327,6 @@ class ThorSimulator(SemanticStep):
             vis = self._condition.draw_distance
             self._call("reset", lambda: self._controller.reset(scene=house, visibilityDistance=vis))
         self._layout, self._house, self._ids = layout, house, IdTable.from_house(house)
-        self._types = {o.object_id: o.object_type for o in layout.objects}
-        self._landmarks = frozenset(o.object_id for o in layout.objects if o.category == "landmark")
         _check(self._controller.last_event, f"CreateHouse of house {house['id']!r}")
         self._lattice()
         if self._condition.randomize_palette:
@@ -354,8 +345,7 @@ class ThorSimulator(SemanticStep):
             self._teleport(WorldPose(spot[0], spot[1], wanted.heading)), "the spawn TeleportFull"
         )
         self._spawn = agent_pose(event.metadata)
-        self._steps, self._ended, self._terminal, self._symbolic = 0, False, None, symbolic
-        return self._observe(True, "Episode started.")
+        return self._begin(symbolic)
 
     @property
     def agent_pose(self) -> WorldPose:
@@ -375,10 +365,6 @@ class ThorSimulator(SemanticStep):
             raise TransportError(f"AI2-THOR put the agent outside every room at {pose}.")
         return room
 
-    def visible_ids(self) -> tuple[str, ...]:
-        self._require()
-        return tuple(v.object_id for v in self._visible)
-
     def close(self) -> None:
         controller, self._controller, self._layout = self._controller, None, None
         if controller is not None:
@@ -387,9 +373,8 @@ class ThorSimulator(SemanticStep):
             finally:
                 _launch.kill_unity(controller)
 
-    def _in_view(self) -> tuple[list[str], list[str], list[float]]:
-        ids = [v.object_id for v in self._visible]
-        return ids, [v.object_type for v in self._visible], [v.distance for v in self._visible]
+    def _in_view(self) -> tuple[VisibleObject, ...]:
+        return self._visible
 
     def _reach(self, object_id: str) -> bool:
         layout = self._require()
@@ -398,7 +383,11 @@ class ThorSimulator(SemanticStep):
             obj = next(o for o in layout.objects if o.object_id == object_id)
             pose = viewpoint(self._points, obj.x, obj.z, layout.room(obj.room))
         else:
-            pose = self._door_pose(layout, doorway)
+            target, passing = doorway_target(layout, doorway, self.agent_pose, self.current_room())
+            if passing:  # through the doorway
+                pose = entry(self._points, doorway, target)
+            else:  # up to it from a third room
+                pose = viewpoint(self._points, doorway.x, doorway.z, target)
         if pose is not None:
             _accepted(self._teleport(pose))
         return pose is not None
@@ -409,19 +398,6 @@ class ThorSimulator(SemanticStep):
             _accepted(self._act("RotateLeft" if degrees < 0 else "RotateRight", degrees=90))
         return ""
 
-    def _door_pose(self, layout: Layout, doorway: Doorway) -> WorldPose | None:
-        """Through the doorway from one of its rooms; up to it from a third room."""
-        here = self.current_room()
-        a, b = layout.room(doorway.room_a), layout.room(doorway.room_b)
-        if here in (a.name, b.name):
-            return entry(self._points, doorway, b if here == a.name else a)
-        pose = self.agent_pose
-        if doorway.axis == "x":  # rooms lie north and south of the wall at z = doorway.z
-            near_a = (pose.z >= doorway.z) == ((a.z0 + a.z1) / 2 >= doorway.z)
-        else:
-            near_a = (pose.x >= doorway.x) == ((a.x0 + a.x1) / 2 >= doorway.x)
-        return viewpoint(self._points, doorway.x, doorway.z, a if near_a else b)
-
     def _require(self) -> Layout:
         if self._layout is None:
             raise ConfigError("ThorSimulator used before reset(); call reset(layout, ...) first.")
@@ -430,12 +406,13 @@ class ThorSimulator(SemanticStep):
     def _view(self) -> tuple[WorldPose, tuple[VisibleObject, ...], str, View]:
         event = self._controller.last_event
         world = agent_pose(event.metadata)
+        objects = self._require().objects
         self._visible = visible_objects(
             event.metadata["objects"],
             world,
             ids=self._ids,
-            types=self._types,
-            landmarks=self._landmarks,
+            types={o.object_id: o.object_type for o in objects},
+            landmarks=frozenset(o.object_id for o in objects if o.category == "landmark"),
             visibility_distance=self._condition.visibility_distance,
         )
         frame = np.ascontiguousarray(event.frame, dtype=np.uint8)

@@ -15,7 +15,6 @@ from pytest_emrd.world.thor._simulator import (
     bearing,
     entry,
     grid,
-    heading_to,
     viewpoint,
     visible_objects,
     wrap180,
@@ -39,7 +38,7 @@ POINTS = _grid(0.25, 7.75, 0.25, 3.75)
     ids=["north", "east", "south", "west", "north-east"],
 )
 def test_heading_is_clockwise_from_north(dx: float, dz: float, expected: float) -> None:
-    assert heading_to(0, 0, dx, dz) == pytest.approx(expected)
+    assert bearing(WorldPose(5.0, 5.0, 0.0), 5.0 + dx, 5.0 + dz) % 360 == pytest.approx(expected)
 
 
 def test_bearing_is_negative_to_the_left() -> None:
