@@ -9,7 +9,6 @@ errored episodes (counted in ``excluded``) and attaches a seeded percentile boot
 
 from __future__ import annotations
 
-import functools
 import json
 import math
 import statistics
@@ -30,7 +29,13 @@ from pytest_emrd.metrics._episode import (
     as_episode_metrics,
     split_errored,
 )
-from pytest_emrd.metrics._stats import N_RESAMPLES, Estimate, bootstrap_ci, draw_counts
+from pytest_emrd.metrics._stats import (
+    N_RESAMPLES,
+    Estimate,
+    bootstrap_ci,
+    draw_counts,
+    resample_rows,
+)
 from pytest_emrd.rooms import FOCAL_COLUMNS, OTHER_LETTER
 
 
@@ -123,35 +128,27 @@ def _r2(items: Sequence[EpisodeLike], *, rng_seed: int = 0) -> Estimate:
     if not kept:
         return Estimate(None, None, None, 0, "no non-errored episode", errored)
     full = pooled_fit(kept, None)
-    spells = [m.ttf_spells for m in kept]
-    mapped = np.array([sum(m.mapped_by_category.values()) for m in kept], dtype=float)
-    total = np.array([sum(m.objects_by_category.values()) for m in kept], dtype=float)
     if full.r2 is None:
         return Estimate(None, None, None, len(kept), full.reason, errored)
     if len(kept) < 2:
         return Estimate(full.r2, None, None, 1, "one episode: no confidence interval", errored)
-    horizon = max(s.duration for ss in spells for s in ss)
-    leave = np.zeros((len(kept), horizon + 1))
-    death = np.zeros((len(kept), horizon + 1))
-    for i, ss in enumerate(spells):
-        for s in ss:
-            leave[i, s.duration] += 1
-            death[i, s.duration] += s.forgotten
-    weights = _histogram_weights(rng_seed, len(kept))
+    # Per episode, the first spells ending at each duration, and the events among them.
+    cells = np.array(
+        [(i, s.duration, s.forgotten) for i, m in enumerate(kept) for s in m.ttf_spells]
+    )
+    at = (cells[:, 0], cells[:, 1])
+    leave, death = np.zeros((2, len(kept), cells[:, 1].max() + 1))
+    np.add.at(leave, at, 1.0)
+    np.add.at(death, at, cells[:, 2])
+    mapped = np.array([sum(m.mapped_by_category.values()) for m in kept], dtype=float)
+    total = np.array([sum(m.objects_by_category.values()) for m in kept], dtype=float)
+    weights = draw_counts(resample_rows(rng_seed, len(kept), N_RESAMPLES))
     draws = _r2_of_histograms(weights @ leave, weights @ death, weights @ mapped, weights @ total)
     draws = draws[np.isfinite(draws)]
     if not len(draws):
         return Estimate(full.r2, None, None, len(kept), "R^2 undefined in every resample", errored)
     low, high = np.quantile(draws, [0.025, 0.975])
     return Estimate(full.r2, float(low), float(high), len(kept), None, errored)
-
-
-@functools.lru_cache(maxsize=4)
-def _histogram_weights(rng_seed: int, n: int) -> np.ndarray:
-    """Draw counts of ``n`` episodes in :func:`_r2`'s resamples (read-only, computed once),
-    one ``default_rng(rng_seed).integers(0, n, n)`` per resample."""
-    rng = np.random.default_rng(rng_seed)
-    return draw_counts(np.stack([rng.integers(0, n, n) for _ in range(N_RESAMPLES)]))
 
 
 def _r2_of_histograms(

@@ -140,20 +140,23 @@ def chi_square(table: Sequence[Sequence[float]] | np.ndarray) -> ChiSquare:
     :returns: A :class:`ChiSquare`: statistic, dof, p-value, dropped rows and columns, reason.
     """
     arr = _table(table, "table")
-    rows = arr.sum(axis=1) > 0
-    cols = arr.sum(axis=0) > 0
-    dropped = tuple(f"row {i}" for i in np.flatnonzero(~rows)) + tuple(
-        f"column {j}" for j in np.flatnonzero(~cols)
-    )
-    kept = arr[rows][:, cols]
+    kept, dropped = _drop_empty(arr)
     n = round(float(arr.sum()))
-    if kept.shape[0] < 2 or kept.shape[1] < 2:
+    if min(kept.shape) < 2:
         why = "fewer than two non-empty rows or columns: independence is untestable"
         return ChiSquare(None, 0, None, n, dropped, why)
     from scipy.stats import chi2_contingency  # heavy: imported on first use
 
     res = chi2_contingency(kept, correction=False)
     return ChiSquare(float(res.statistic), int(res.dof), float(res.pvalue), n, dropped)
+
+
+def _drop_empty(arr: np.ndarray) -> tuple[np.ndarray, tuple[str, ...]]:
+    """``arr`` without its all-zero rows and columns, and their names (``row 2``, ``column 0``)."""
+    rows, cols = arr.sum(axis=1) > 0, arr.sum(axis=0) > 0
+    dropped = [f"row {i}" for i in np.flatnonzero(~rows)]
+    dropped += [f"column {j}" for j in np.flatnonzero(~cols)]
+    return arr[rows][:, cols], tuple(dropped)
 
 
 @dataclass(frozen=True)
@@ -203,8 +206,8 @@ def cramers_v(table: Sequence[Sequence[float]] | np.ndarray) -> float | None:
     if res.statistic is None:
         return None
     arr = _table(table, "table")
-    shape = (int(np.sum(arr.sum(axis=1) > 0)), int(np.sum(arr.sum(axis=0) > 0)))
-    return math.sqrt(res.statistic / (float(arr.sum()) * (min(shape) - 1)))
+    kept, _ = _drop_empty(arr)
+    return math.sqrt(res.statistic / (float(arr.sum()) * (min(kept.shape) - 1)))
 
 
 @dataclass(frozen=True)
@@ -454,7 +457,7 @@ def ebbinghaus_fit(
         grid = np.arange(0.0, math.floor(km.times[-1]) + 1.0)
     s_hat = np.array([km.at(x) for x in grid])
     reason = None if n_events else "no forgetting event: memory strength is unbounded"
-    ss_tot = float(np.sum((s_hat - s_hat.mean()) ** 2)) if len(s_hat) else 0.0
+    ss_tot = float(np.sum((s_hat - s_hat.mean()) ** 2))  # every grid holds a point
     if ss_tot <= 1e-15:
         why = "the Kaplan-Meier curve does not vary: R^2 is undefined"
         return EbbinghausFit(coverage, strength, None, len(t), n_events, reason or why, points)
