@@ -9,6 +9,7 @@ errored episodes (counted in ``excluded``) and attaches a seeded percentile boot
 
 from __future__ import annotations
 
+import functools
 import json
 import math
 import statistics
@@ -62,47 +63,40 @@ def _why_none(kept: list[EpisodeMetrics], name: str) -> str:
     return f"undefined in every episode ({reasons.most_common(1)[0][0]})"
 
 
-def _mean_of(name: str) -> Compute:
+def _mean(name: str, items: Sequence[EpisodeLike], *, rng_seed: int = 0) -> Estimate:
     """Mean over episodes of the per-episode score ``name`` (where defined)."""
-
-    def compute(items: Sequence[EpisodeLike], *, rng_seed: int = 0) -> Estimate:
-        kept, errored = split_errored(items)
-        values = [float(v) for m in kept if (v := getattr(m, name)) is not None]
-        excluded = errored + len(kept) - len(values)
-        if not values:
-            return Estimate(None, None, None, 0, _why_none(kept, name), excluded)
-        low, high = bootstrap_ci(values, rng_seed=rng_seed)
-        reason = None if low is not None else "one episode: no confidence interval"
-        return Estimate(statistics.fmean(values), low, high, len(values), reason, excluded)
-
-    return compute
+    kept, errored = split_errored(items)
+    values = [float(v) for m in kept if (v := getattr(m, name)) is not None]
+    excluded = errored + len(kept) - len(values)
+    if not values:
+        return Estimate(None, None, None, 0, _why_none(kept, name), excluded)
+    low, high = bootstrap_ci(values, rng_seed=rng_seed)
+    reason = None if low is not None else "one episode: no confidence interval"
+    return Estimate(statistics.fmean(values), low, high, len(values), reason, excluded)
 
 
-def _ratio_of(name: str, num: str, den: str) -> Compute:
+def _ratio(
+    name: str, num: str, den: str, items: Sequence[EpisodeLike], *, rng_seed: int = 0
+) -> Estimate:
     """Pooled ``sum num / sum den`` of two per-episode counts, bootstrapped by episode."""
+    kept, errored = split_errored(items)
+    if not kept:
+        return Estimate(None, None, None, 0, "no non-errored episode", errored)
+    pairs = np.array([(getattr(m, num), getattr(m, den)) for m in kept], dtype=float)
+    total_num, total_den = pairs.sum(axis=0)
+    if total_den == 0 and total_num == 0:
+        why = kept[0].reasons.get(name) or f"{name} has an empty denominator"
+        return Estimate(None, None, None, len(kept), why, errored)
 
-    def compute(items: Sequence[EpisodeLike], *, rng_seed: int = 0) -> Estimate:
-        kept, errored = split_errored(items)
-        if not kept:
-            return Estimate(None, None, None, 0, _why_none(kept, name), errored)
-        pairs = np.array([(getattr(m, num), getattr(m, den)) for m in kept], dtype=float)
-        total_num, total_den = pairs.sum(axis=0)
-        if total_den == 0 and total_num == 0:
-            why = kept[0].reasons.get(name) or f"{name} has an empty denominator"
-            return Estimate(None, None, None, len(kept), why, errored)
+    def ratio(rows: np.ndarray) -> np.ndarray:  # exact sums: the counts are whole numbers
+        sums = rows.sum(axis=1)
+        return sums[:, 0] / sums[:, 1]
 
-        def ratio(rows: np.ndarray) -> np.ndarray:  # exact sums: the counts are whole numbers
-            sums = rows.sum(axis=1)
-            return np.divide(sums[:, 0], sums[:, 1])
-
-        low, high = bootstrap_ci(pairs, ratio, rng_seed=rng_seed)
-        value = math.inf if total_den == 0 else float(total_num / total_den)
-        reason = None
-        if math.isinf(value):
-            reason = f"{name}: no event in any episode, the estimate is unbounded"
-        return Estimate(value, low, high, len(kept), reason, errored)
-
-    return compute
+    low, high = bootstrap_ci(pairs, ratio, rng_seed=rng_seed)
+    if total_den == 0:
+        reason = f"{name}: no event in any episode, the estimate is unbounded"
+        return Estimate(math.inf, low, high, len(kept), reason, errored)
+    return Estimate(float(total_num / total_den), low, high, len(kept), None, errored)
 
 
 def _consensus(items: Sequence[EpisodeLike], *, rng_seed: int = 0) -> Estimate:
@@ -111,14 +105,13 @@ def _consensus(items: Sequence[EpisodeLike], *, rng_seed: int = 0) -> Estimate:
     result = consensus(kept)
     if result.share is None:
         return Estimate(None, None, None, 0, "no non-errored episode", errored)
-    onehot = np.zeros((len(kept), len(FOCAL_COLUMNS)))
-    onehot[np.arange(len(kept)), [FOCAL_COLUMNS.index(m.chosen_letter) for m in kept]] = 1.0
-    rooms = [FOCAL_COLUMNS.index(c) for c in FOCAL_COLUMNS if c != OTHER_LETTER]
+    rooms = [c for c in FOCAL_COLUMNS if c != OTHER_LETTER]
+    chose = np.array([[m.chosen_letter == c for c in rooms] for m in kept], dtype=float)
 
     def share(rows: np.ndarray) -> np.ndarray:
-        return rows.sum(axis=1)[:, rooms].max(axis=1) / len(kept)
+        return rows.sum(axis=1).max(axis=1) / len(kept)
 
-    low, high = bootstrap_ci(onehot, share, rng_seed=rng_seed)
+    low, high = bootstrap_ci(chose, share, rng_seed=rng_seed)
     return Estimate(result.share, low, high, len(kept), None, errored)
 
 
@@ -191,7 +184,7 @@ RATIO_METRICS: Final[Mapping[str, tuple[str, str]]] = {
     "parse_failure_rate": ("parse_failures", "steps"),
 }
 #: Gate metrics with an estimator of their own; every other one is the mean of its
-#: per-episode score (:func:`_mean_of`) or a pooled ratio (:data:`RATIO_METRICS`).
+#: per-episode score (:func:`_mean`) or a pooled ratio (:data:`RATIO_METRICS`).
 _ESTIMATORS: Final[Mapping[str, Compute]] = {
     "ebbinghaus_r2": _r2,
     "consensus": _consensus,
@@ -201,8 +194,8 @@ _ESTIMATORS: Final[Mapping[str, Compute]] = {
 
 def _estimator(name: str) -> Compute:
     if name in RATIO_METRICS:
-        return _ratio_of(name, *RATIO_METRICS[name])
-    return _ESTIMATORS.get(name) or _mean_of(name)
+        return functools.partial(_ratio, name, *RATIO_METRICS[name])
+    return _ESTIMATORS.get(name) or functools.partial(_mean, name)
 
 
 #: Metric name -> gate metric. thresholds.yaml metric names must be keys of this mapping. Name,
