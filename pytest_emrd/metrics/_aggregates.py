@@ -349,7 +349,7 @@ def miller_curve(
     bins = np.flatnonzero(steps)
     probs = events[bins] / steps[bins]
     eligible = [(0, 0.0)] + [
-        (int(bins[i]), float(probs[i])) for i in range(len(bins)) if steps[bins[i]] >= min_steps
+        (int(b), float(p)) for b, p in zip(bins, probs, strict=True) if steps[b] >= min_steps
     ]
     rises = [(p - p_prev, b_now) for (_, p_prev), (b_now, p) in pairwise(eligible)]
     best = max(rises, key=lambda r: r[0], default=(0.0, 0))
@@ -362,7 +362,7 @@ def miller_curve(
     return MillerCurve(
         width=width,
         bins=tuple(bins.tolist()),
-        probabilities=tuple(float(p) for p in probs),
+        probabilities=tuple(probs.tolist()),
         steps=tuple(steps[bins].tolist()),
         events=tuple(events[bins].tolist()),
         b_star=b_star,
@@ -410,9 +410,8 @@ def anova_conditions(items: Iterable[EpisodeLike]) -> Anova:
     kept, _ = split_errored(items)
     groups: dict[str, list[float]] = {}
     for m in kept:
-        strength = m.memory_strength
-        if strength is not None and math.isfinite(strength):
-            groups.setdefault(m.spec.condition, []).append(strength)
+        if m.memory_strength is not None:  # anova_groups leaves out the unbounded ones
+            groups.setdefault(m.spec.condition, []).append(m.memory_strength)
     return anova_groups(groups)
 
 

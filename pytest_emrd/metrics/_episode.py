@@ -399,11 +399,12 @@ def serial_position_bins(
     :returns: ``(early, middle, late)`` mean TTF in steps, each None when its bin has no TTF.
     """
     third = discovery_thirds(len(ttf_by_rank))
-    out: list[float | None] = []
-    for b in range(3):
-        values = [v for v, t in zip(ttf_by_rank, third, strict=True) if t == b and v is not None]
-        out.append(statistics.fmean(values) if values else None)
-    return out[0], out[1], out[2]
+    bins = (
+        [v for v, t in zip(ttf_by_rank, third, strict=True) if t == b and v is not None]
+        for b in range(3)
+    )
+    early, middle, late = (statistics.fmean(values) if values else None for values in bins)
+    return early, middle, late
 
 
 SCHEMA_VERSION: Final = 3

@@ -322,8 +322,8 @@ def _refit(problem: _Problem, pairs: Pairs, motion: Motion) -> tuple[Motion, boo
     if len(pairs) >= 2 and np.ptp(p, axis=0).max() > COINCIDENT_M:
         return _procrustes(p, q), True
     moved = _moved(p[:1], motion)[0]
-    return Motion(
-        motion.c, motion.s, motion.tx + q[0, 0] - moved[0], motion.tz + q[0, 1] - moved[1]
+    return motion._replace(
+        tx=motion.tx + q[0, 0] - moved[0], tz=motion.tz + q[0, 1] - moved[1]
     ), False
 
 
@@ -353,11 +353,11 @@ def _hypotheses(problem: _Problem) -> tuple[np.ndarray, bool]:
     spread = _units(np.sum((pred - pred.mean(axis=0)) ** 2, axis=1)).tolist()
     order = sorted(range(len(kinds)), key=lambda i: (len(layout.cols_of[kinds[i]]), -spread[i], i))
     taken: Counter[int] = Counter()  # one entry of each type in turn: copies of a type
-    turn = []  # cannot crowd the others out
+    turn: dict[int, int] = {}  # cannot crowd the others out
     for i in order:
         taken[kinds[i]] += 1
-        turn.append(taken[kinds[i]])
-    base = [order[p] for p in sorted(range(len(order)), key=turn.__getitem__)][:BASE_ENTRIES]
+        turn[i] = taken[kinds[i]]
+    base = sorted(order, key=turn.__getitem__)[:BASE_ENTRIES]
     found = [
         (a, b, dist, *layout.pairs_of(kinds[a], kinds[b]))
         for a, b in combinations(base, 2)
@@ -500,7 +500,7 @@ class Matcher:
         true = np.array([(o.x, o.z) for o in ordered], dtype=float).reshape(-1, 2)
         g = len(ordered) if g_base is None else g_base
         self._layout = _Layout(true, np.array(kinds, dtype=int), cols_of, g)
-        self._points: list[tuple[float, float]] = [(o.x, o.z) for o in ordered]
+        self._points: list[list[float]] = true.tolist()  # for per-point arithmetic in Python
         self._index = {o.object_id: j for j, o in enumerate(ordered)}
 
     def step(self, entries: Sequence[MapEntry], previous: StepMatch | None = None) -> StepMatch:

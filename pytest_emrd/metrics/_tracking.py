@@ -114,10 +114,10 @@ def track_episode(traj: Trajectory) -> Track:
     :returns: Its :class:`Track`: what the temporal metrics read.
     """
     gt = traj.ground_truth
-    matcher = Matcher(gt.objects, len(gt.discoverable_ids))
+    g_base = len(gt.discoverable_ids)
+    matcher = Matcher(gt.objects, g_base)
     category = {o.object_id: o.category for o in gt.objects}
     scale = layout_scale(np.array([(o.x, o.z) for o in gt.objects], dtype=float).reshape(-1, 2))
-    g_base = len(gt.discoverable_ids)
     held: list[dict[str, str]] = []
     matches: list[StepMatch] = []
     tbs: list[float] = []

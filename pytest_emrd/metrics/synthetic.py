@@ -129,7 +129,9 @@ def synthetic_trajectory(
     hazard = 1.0 / max(mean_memory, 1.0)
     p_visible = _DATA["visibility"].get(spec.condition, 0.5)
     discoverable = set(truth.discoverable_ids)
-    by_room = {r: [o for o in truth.objects if o.room == r] for r in _ROOMS}
+    furniture = {  # what a room can show besides its doorways
+        r: [o for o in truth.objects if o.room == r and o.object_type != "Doorway"] for r in _ROOMS
+    }
     terminate = rng.random() < 0.6
     n_steps = int(rng.integers(25, spec.max_steps + 1)) if terminate else spec.max_steps
     held: dict[str, tuple[str, str, float, float]] = {}  # object id -> (label, type text, x, z)
@@ -142,8 +144,9 @@ def synthetic_trajectory(
         if stay == 0:
             room, stay = str(rng.choice(_neighbours(room))), int(rng.integers(3, 8))
         stay -= 1
-        candidates = [o for o in by_room[room] if o.object_type != "Doorway"]
-        seen = [o for o in candidates if o.object_id in discoverable and rng.random() < p_visible]
+        seen = [
+            o for o in furniture[room] if o.object_id in discoverable and rng.random() < p_visible
+        ]
         seen += [o for o in doorways[room] if rng.random() < 0.7]
         visible = {o.object_id for o in seen}
         for oid in list(held):
