@@ -265,7 +265,7 @@ def serial_position(items: Iterable[EpisodeLike]) -> SerialPosition:
     kept, excluded = split_errored(items)
     bins = [[v for m in kept if (v := m.serial_position[b]) is not None] for b in range(3)]
     means = [statistics.fmean(values) if values else None for values in bins]
-    thirds: tuple[list[Spell], list[Spell], list[Spell]] = ([], [], [])
+    thirds: list[list[Spell]] = [[], [], []]
     for m in kept:
         third = discovery_thirds(sum(m.mapped_by_category.values()))
         for s in m.ttf_spells:
@@ -345,7 +345,7 @@ def miller_curve(
         return MillerCurve(width=width, reason="no step with a non-empty map")
     b = -(-loads // width)
     steps = np.bincount(b)
-    events = np.bincount(b, weights=forgets.astype(float)).astype(np.int64)
+    events = np.bincount(b[forgets], minlength=len(steps))
     bins = np.flatnonzero(steps)
     probs = events[bins] / steps[bins]
     eligible = [(0, 0.0)] + [
@@ -353,7 +353,7 @@ def miller_curve(
     ]
     rises = [(p - p_prev, b_now) for (_, p_prev), (b_now, p) in pairwise(eligible)]
     best = max(rises, key=lambda r: r[0], default=(0.0, 0))
-    b_star = int(best[1]) if best[0] > 0 else None
+    b_star = best[1] if best[0] > 0 else None
     reason = None
     if b_star is None:
         reason = "no rise between consecutive load bins (from ML(0) = 0): no inflection"
@@ -536,7 +536,9 @@ class FPSGSummary:
     """``global_mean`` with doorways left out of ``O_F``."""
 
 
-def _mean_sd(values: Sequence[float]) -> tuple[float | None, float | None]:
+def _mean_sd(kept: list[EpisodeMetrics], name: str) -> tuple[float | None, float | None]:
+    """Mean and sample standard deviation of the score ``name`` where it is defined."""
+    values = [v for m in kept if (v := getattr(m, name)) is not None]
     if not values:
         return None, None
     mean = statistics.fmean(values)
@@ -565,12 +567,8 @@ def fpsg(items: Iterable[EpisodeLike]) -> FPSGSummary:
     :returns: An :class:`FPSGSummary`: means and sds of every variant, Never-Visited and Any-Bias.
     """
     kept, excluded = split_errored(items)
-
-    def mean_sd(name: str) -> tuple[float | None, float | None]:
-        return _mean_sd([v for m in kept if (v := getattr(m, name)) is not None])
-
-    local_mean, local_sd = mean_sd("fpsg_local")
-    global_mean, global_sd = mean_sd("fpsg_global")
+    local_mean, local_sd = _mean_sd(kept, "fpsg_local")
+    global_mean, global_sd = _mean_sd(kept, "fpsg_global")
     return FPSGSummary(
         runs=len(kept),
         never_visited=_share([m.never_visited for m in kept]),
@@ -580,8 +578,8 @@ def fpsg(items: Iterable[EpisodeLike]) -> FPSGSummary:
         global_mean=global_mean,
         global_sd=global_sd,
         excluded=excluded,
-        local_mean_ex_doorways=mean_sd("fpsg_local_ex_doorways")[0],
-        global_mean_ex_doorways=mean_sd("fpsg_global_ex_doorways")[0],
+        local_mean_ex_doorways=_mean_sd(kept, "fpsg_local_ex_doorways")[0],
+        global_mean_ex_doorways=_mean_sd(kept, "fpsg_global_ex_doorways")[0],
     )
 
 

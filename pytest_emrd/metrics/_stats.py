@@ -16,6 +16,7 @@ from dataclasses import dataclass
 from typing import Final
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from pytest_emrd.errors import ConfigError, check_choice, check_range
 
@@ -51,7 +52,7 @@ def resample_rows(rng_seed: int, n: int, n_resamples: int) -> np.ndarray:
 
 
 def bootstrap_ci(
-    data: Sequence[float] | np.ndarray,
+    data: ArrayLike,
     statistic: Callable[[np.ndarray], np.ndarray] | None = None,
     *,
     rng_seed: int = 0,
@@ -115,7 +116,7 @@ class ChiSquare:
     reason: str | None = None
 
 
-def _table(table: Sequence[Sequence[float]] | np.ndarray, name: str) -> np.ndarray:
+def _table(table: ArrayLike, name: str) -> np.ndarray:
     arr = np.asarray(table, dtype=float)
     if arr.ndim != 2 or arr.size == 0:
         raise ConfigError(f"{name} shape={arr.shape} must be a non-empty 2-D table of counts.")
@@ -124,7 +125,7 @@ def _table(table: Sequence[Sequence[float]] | np.ndarray, name: str) -> np.ndarr
     return arr
 
 
-def chi_square(table: Sequence[Sequence[float]] | np.ndarray) -> ChiSquare:
+def chi_square(table: ArrayLike) -> ChiSquare:
     r"""Pearson chi-square test of independence (no continuity correction).
 
     .. math::
@@ -168,7 +169,7 @@ class FisherExact:
     p_value: float
 
 
-def fisher_exact_2x2(table: Sequence[Sequence[float]] | np.ndarray) -> FisherExact:
+def fisher_exact_2x2(table: ArrayLike) -> FisherExact:
     """Two-sided Fisher exact test (:func:`scipy.stats.fisher_exact`) of a 2 x 2 count table.
 
     Rows are the reference and the compared group, columns the binary outcome (e.g. chose the
@@ -188,7 +189,7 @@ def fisher_exact_2x2(table: Sequence[Sequence[float]] | np.ndarray) -> FisherExa
     return FisherExact(float(res.statistic), float(res.pvalue))
 
 
-def cramers_v(table: Sequence[Sequence[float]] | np.ndarray) -> float | None:
+def cramers_v(table: ArrayLike) -> float | None:
     r"""Cramer's V effect size of a k x c table (no bias correction).
 
     .. math::
@@ -264,9 +265,7 @@ def anova_groups(groups: Mapping[str, Sequence[float]]) -> Anova:
     )
 
 
-def _spell_arrays(
-    durations: Sequence[float] | np.ndarray, observed: Sequence[bool] | np.ndarray
-) -> tuple[np.ndarray, np.ndarray]:
+def _spell_arrays(durations: ArrayLike, observed: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
     t = np.asarray(durations, dtype=float).reshape(-1)
     e = np.asarray(observed, dtype=bool).reshape(-1)
     if t.shape != e.shape:
@@ -281,9 +280,7 @@ def _spell_arrays(
     return t, e
 
 
-def efc(
-    durations: Sequence[float] | np.ndarray, observed: Sequence[bool] | np.ndarray
-) -> float | None:
+def efc(durations: ArrayLike, observed: ArrayLike) -> float | None:
     r"""Ebbinghaus memory strength: the censored exponential MLE (Eq. SMLE).
 
     .. math::
@@ -341,8 +338,8 @@ class AnchoredKM:
 
 
 def anchored_km(
-    durations: Sequence[float] | np.ndarray,
-    observed: Sequence[bool] | np.ndarray,
+    durations: ArrayLike,
+    observed: ArrayLike,
     *,
     coverage: float,
 ) -> AnchoredKM:
@@ -410,8 +407,8 @@ class EbbinghausFit:
 
 
 def ebbinghaus_fit(
-    durations: Sequence[float] | np.ndarray,
-    observed: Sequence[bool] | np.ndarray,
+    durations: ArrayLike,
+    observed: ArrayLike,
     *,
     coverage: float,
     points: str = "durations",
