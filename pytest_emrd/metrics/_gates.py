@@ -56,32 +56,37 @@ class GateMetric:
     compute: Compute
 
 
-def _why_none(kept: list[EpisodeMetrics], name: str) -> str:
-    if not kept:
-        return "no non-errored episode"
-    reasons = Counter(m.reasons.get(name, "undefined") for m in kept)
-    return f"undefined in every episode ({reasons.most_common(1)[0][0]})"
-
-
-def _mean(name: str, items: Sequence[EpisodeLike], *, rng_seed: int = 0) -> Estimate:
-    """Mean over episodes of the per-episode score ``name`` (where defined)."""
+def _estimate(name: str, items: Sequence[EpisodeLike], *, rng_seed: int = 0) -> Estimate:
+    """Gate metric ``name`` over the non-errored episodes (the errored ones are ``excluded``)."""
     kept, errored = split_errored(items)
+    if not kept:
+        return Estimate(None, None, None, 0, "no non-errored episode", errored)
+    if name == "ebbinghaus_r2":
+        return _r2(kept, errored, rng_seed)
+    if name == "consensus":
+        return _consensus(kept, errored, rng_seed)
+    if name in RATIO_METRICS:
+        return _ratio(name, kept, errored, rng_seed)
+    return _mean(name, kept, errored, rng_seed)
+
+
+def _mean(name: str, kept: list[EpisodeMetrics], errored: int, rng_seed: int) -> Estimate:
+    """Mean over episodes of the per-episode score ``name`` (where defined)."""
     values = [float(v) for m in kept if (v := getattr(m, name)) is not None]
     excluded = errored + len(kept) - len(values)
     if not values:
-        return Estimate(None, None, None, 0, _why_none(kept, name), excluded)
+        reasons = Counter(m.reasons.get(name, "undefined") for m in kept)
+        why = f"undefined in every episode ({reasons.most_common(1)[0][0]})"
+        return Estimate(None, None, None, 0, why, excluded)
     low, high = bootstrap_ci(values, rng_seed=rng_seed)
     reason = None if low is not None else "one episode: no confidence interval"
     return Estimate(statistics.fmean(values), low, high, len(values), reason, excluded)
 
 
-def _ratio(
-    name: str, num: str, den: str, items: Sequence[EpisodeLike], *, rng_seed: int = 0
-) -> Estimate:
-    """Pooled ``sum num / sum den`` of two per-episode counts, bootstrapped by episode."""
-    kept, errored = split_errored(items)
-    if not kept:
-        return Estimate(None, None, None, 0, "no non-errored episode", errored)
+def _ratio(name: str, kept: list[EpisodeMetrics], errored: int, rng_seed: int) -> Estimate:
+    """Pooled ``sum num / sum den`` of two per-episode counts (:data:`RATIO_METRICS`),
+    bootstrapped by episode."""
+    num, den = RATIO_METRICS[name]
     pairs = np.array([(getattr(m, num), getattr(m, den)) for m in kept], dtype=float)
     total_num, total_den = pairs.sum(axis=0)
     if total_den == 0 and total_num == 0:
@@ -99,12 +104,8 @@ def _ratio(
     return Estimate(float(total_num / total_den), low, high, len(kept), None, errored)
 
 
-def _consensus(items: Sequence[EpisodeLike], *, rng_seed: int = 0) -> Estimate:
+def _consensus(kept: list[EpisodeMetrics], errored: int, rng_seed: int) -> Estimate:
     """:func:`consensus` share, bootstrapped over episodes."""
-    kept, errored = split_errored(items)
-    result = consensus(kept)
-    if result.share is None:
-        return Estimate(None, None, None, 0, "no non-errored episode", errored)
     rooms = [c for c in FOCAL_COLUMNS if c != OTHER_LETTER]
     chose = np.array([[m.chosen_letter == c for c in rooms] for m in kept], dtype=float)
 
@@ -112,14 +113,11 @@ def _consensus(items: Sequence[EpisodeLike], *, rng_seed: int = 0) -> Estimate:
         return rows.sum(axis=1).max(axis=1) / len(kept)
 
     low, high = bootstrap_ci(chose, share, rng_seed=rng_seed)
-    return Estimate(result.share, low, high, len(kept), None, errored)
+    return Estimate(consensus(kept).share, low, high, len(kept), None, errored)
 
 
-def _r2(items: Sequence[EpisodeLike], *, rng_seed: int = 0) -> Estimate:
+def _r2(kept: list[EpisodeMetrics], errored: int, rng_seed: int) -> Estimate:
     """Pooled R^2 (value from :func:`ebbinghaus_fit`); CI from resampled episode histograms."""
-    kept, errored = split_errored(items)
-    if not kept:
-        return Estimate(None, None, None, 0, "no non-errored episode", errored)
     full = pooled_fit(kept, None)
     if full.r2 is None:
         return Estimate(None, None, None, len(kept), full.reason, errored)
@@ -183,19 +181,12 @@ RATIO_METRICS: Final[Mapping[str, tuple[str, str]]] = {
     "memory_strength": ("retained_steps", "forget_events"),
     "parse_failure_rate": ("parse_failures", "steps"),
 }
-#: Gate metrics with an estimator of their own; every other one is the mean of its
-#: per-episode score (:func:`_mean`) or a pooled ratio (:data:`RATIO_METRICS`).
-_ESTIMATORS: Final[Mapping[str, Compute]] = {
-    "ebbinghaus_r2": _r2,
-    "consensus": _consensus,
-    "errored_rate": _errored_rate,
-}
 
 
 def _estimator(name: str) -> Compute:
-    if name in RATIO_METRICS:
-        return functools.partial(_ratio, name, *RATIO_METRICS[name])
-    return _ESTIMATORS.get(name) or functools.partial(_mean, name)
+    if name == "errored_rate":
+        return _errored_rate
+    return functools.partial(_estimate, name)
 
 
 #: Metric name -> gate metric. thresholds.yaml metric names must be keys of this mapping. Name,
