@@ -20,10 +20,10 @@ import numpy as np
 from pytest_emrd._serde import JsonRecord, Schema
 from pytest_emrd.metrics._match import (
     COINCIDENT_M,
-    TIE_M2,
     MatchedPair,
     Matcher,
     Matching,
+    _units,
     assign_rows,
     keyed,
     pa_value,
@@ -336,7 +336,7 @@ def reentry_copies(
     entries at distinct positions leave the rotation undetermined: no copy is found.
     """
     entries = keyed(traj.steps[end].cognitive_map)
-    before = set(keyed(traj.steps[start - 1].cognitive_map)) if start > 0 else set()
+    before = keyed(traj.steps[start - 1].cognitive_map)  # a re-entry never starts at step 0
     by_type: dict[int, list[str]] = {}
     for lb in sorted(entries.keys() - before):
         k = matcher.types.resolve(entries[lb].object_type, entries[lb].label)
@@ -349,23 +349,23 @@ def reentry_copies(
     pred = np.array([(entries[lb].x, entries[lb].z) for _, lb in pairs], dtype=float)
     if np.ptp(pred, axis=0).max() <= COINCIDENT_M:
         return frozenset()
-    layout, ids = matcher._layout, [o.object_id for o in matcher.objects]
+    layout = matcher._layout
     rot, shift = rigid_fit(pred, layout.true[[matcher._index[o] for o, _ in pairs]])
     copies: set[str] = set()
     for k, labels in by_type.items():
         cols = np.flatnonzero(layout.kinds == k)
         new = np.array([(entries[lb].x, entries[lb].z) for lb in labels], dtype=float)
         diff = (new @ rot.T + shift)[:, None, :] - layout.true[cols][None, :, :]
-        cost = np.round(np.sum(diff * diff, axis=2) / TIE_M2)
+        cost = _units(np.sum(diff * diff, axis=2))
         if not np.isfinite(cost).all():
             raise ValueError(f"a written coordinate of {labels} is not finite")
         meant = cols[cost.argmin(axis=1)]
-        for r, j in assign_rows(cost, np.ones(cost.shape, dtype=bool)):
+        for r, j in assign_rows(cost, np.ones_like(cost, dtype=bool)):
             meant[r] = cols[j]
         for lb, c in zip(labels, meant.tolist(), strict=True):
-            holder = label_of.get(ids[c])
-            if holder is not None and holder != lb:
-                copies.add(ids[c])
+            oid = matcher.objects[c].object_id
+            if label_of.get(oid, lb) != lb:  # another label holds it
+                copies.add(oid)
     return frozenset(copies)
 
 
@@ -574,12 +574,13 @@ def episode_metrics(traj: Trajectory) -> EpisodeMetrics:
     sir, why = sir_score(traj, track, aec)
     if sir is None:
         reasons["sir"] = why
-    if not track.spells:
+    first = first_spells(track.spells)
+    if not first:
         reasons["memory_strength"] = "no mapped object ever left view"
-    elif not any(s.forgotten for s in first_spells(track.spells)):
+    elif not any(s.forgotten for s in first):
         reasons["memory_strength"] = "no forgetting event: memory strength is unbounded"
     category = {o.object_id: o.category for o in traj.ground_truth.objects}
-    ttf = {s.object_id: float(s.duration) for s in first_spells(track.spells)}
+    ttf = {s.object_id: float(s.duration) for s in first}
     by_rank = sorted(track.discovery, key=track.discovery.__getitem__)
     return EpisodeMetrics(
         **common,

@@ -116,7 +116,6 @@ def track_episode(traj: Trajectory) -> Track:
     gt = traj.ground_truth
     g_base = len(gt.discoverable_ids)
     matcher = Matcher(gt.objects, g_base)
-    category = {o.object_id: o.category for o in gt.objects}
     scale = layout_scale(np.array([(o.x, o.z) for o in gt.objects], dtype=float).reshape(-1, 2))
     held: list[dict[str, str]] = []
     matches: list[StepMatch] = []
@@ -140,8 +139,7 @@ def track_episode(traj: Trajectory) -> Track:
     when = discovered(held, [m.entries for m in matches])
     discovery = {oid: rank for rank, oid in enumerate(sorted(when, key=when.__getitem__), 1)}
     final = matcher.match(traj.steps[-1].cognitive_map) if traj.steps else EMPTY_MATCHING
-    kind_of = {o.object_id: matcher.types.index[o.object_type] for o in gt.objects}
-    spells = _spells(traj, held, matches, kind_of, category, discovery)
+    spells = _spells(traj, held, matches, matcher, discovery)
     visits = _visits([s.room for s in traj.steps])
     return Track(
         held=tuple(held),
@@ -224,37 +222,35 @@ def _spells(
     traj: Trajectory,
     held: list[dict[str, str]],
     matches: list[StepMatch],
-    kind_of: dict[str, int],
-    category: dict[str, str],
+    matcher: Matcher,
     discovery: dict[str, int],
 ) -> tuple[Spell, ...]:
     """Every spell, following each object's holder label (module docstring)."""
+    objects = {o.object_id: o for o in traj.ground_truth.objects}
     open_at: dict[str, tuple[int, str]] = {}  # object -> (start, holder label)
     done: list[tuple[int, str, int, bool]] = []  # (start, object, duration, forgotten)
     prev_visible: frozenset[str] = frozenset()
     for i, step in enumerate(traj.steps):
         t = step.index
         visible = frozenset(step.visible_ids)
-        if i > 0:
-            for oid in (prev_visible - visible) & held[i - 1].keys():
-                open_at[oid] = (t, held[i - 1][oid])
-        if open_at:
-            kinds = matches[i].kind_of
-            for oid, (start, label) in list(open_at.items()):
-                if oid in visible:
-                    done.append((start, oid, t - start, False))
-                elif kinds.get(label, -1) != kind_of[oid]:  # dropped or relabelled away
-                    done.append((start, oid, t - start + 1, True))
-                else:
-                    continue
-                del open_at[oid]
+        for oid in (prev_visible - visible) & held[i - 1].keys():  # none at i = 0
+            open_at[oid] = (t, held[i - 1][oid])
+        kinds = matches[i].kind_of
+        for oid, (start, label) in list(open_at.items()):
+            if oid in visible:
+                done.append((start, oid, t - start, False))
+            elif kinds.get(label, -1) != matcher.types.index[objects[oid].object_type]:
+                done.append((start, oid, t - start + 1, True))  # dropped, or relabelled away
+            else:
+                continue
+            del open_at[oid]
         prev_visible = visible
     if traj.steps:
         last = traj.steps[-1].index
         done.extend((s, oid, last - s + 1, False) for oid, (s, _) in open_at.items())
     done.sort()  # by start, then object: an object has one spell open at a time
     return tuple(
-        Spell(oid, category[oid], start, duration, forgotten, discovery[oid])
+        Spell(oid, objects[oid].category, start, duration, forgotten, discovery[oid])
         for start, oid, duration, forgotten in done
     )
 
