@@ -36,6 +36,7 @@ has grown by :data:`REVISIT`); a label keeps its previous object on exact ties. 
 
 from __future__ import annotations
 
+import functools
 import math
 from collections import Counter
 from collections.abc import Sequence
@@ -172,7 +173,12 @@ def layout_scale(xy: np.ndarray) -> float:
     """
     if len(xy) < 2:
         return 0.0
-    return float(np.sqrt(np.mean(np.sum((xy - xy.mean(axis=0)) ** 2, axis=1))))
+    return float(np.sqrt(np.mean(_spread(xy))))
+
+
+def _spread(xy: np.ndarray) -> np.ndarray:
+    """Squared distance of each point (k x 2) from the points' centroid."""
+    return np.sum((xy - xy.mean(axis=0)) ** 2, axis=1)
 
 
 def exp_ratio(error: float, scale: float) -> float:
@@ -350,7 +356,7 @@ def _hypotheses(problem: _Problem) -> tuple[np.ndarray, bool]:
     of entries gives a direction (translations only, the model frame's own rotation)."""
     layout, pred = problem.layout, problem.pred
     kinds = problem.kinds
-    spread = _units(np.sum((pred - pred.mean(axis=0)) ** 2, axis=1)).tolist()
+    spread = _units(_spread(pred)).tolist()
     order = sorted(range(len(kinds)), key=lambda i: (len(layout.cols_of[kinds[i]]), -spread[i], i))
     taken: Counter[int] = Counter()  # one entry of each type in turn: copies of a type
     turn: dict[int, int] = {}  # cannot crowd the others out
@@ -358,23 +364,20 @@ def _hypotheses(problem: _Problem) -> tuple[np.ndarray, bool]:
         taken[kinds[i]] += 1
         turn[i] = taken[kinds[i]]
     base = sorted(order, key=turn.__getitem__)[:BASE_ENTRIES]
-    found = [
-        (a, b, dist, *layout.pairs_of(kinds[a], kinds[b]))
-        for a, b in combinations(base, 2)
-        if (dist := math.dist(pred[a], pred[b])) > COINCIDENT_M
-    ]
     true = layout.true
-    if found:
-        sizes = [len(pairs) for *_, pairs, _ in found]
-        keep = np.concatenate([np.abs(span - d) for _, _, d, _, span in found]) <= 2 * GATE_M
-        oab = np.concatenate([pairs for *_, pairs, _ in found])[keep]
-        pa = pred[np.repeat([a for a, *_ in found], sizes)[keep]]
-        pb = pred[np.repeat([b for _, b, *_ in found], sizes)[keep]]
-    if not found or not len(oab):  # one entry, or coincident entries: no direction to read
+    rows = [np.zeros((0, 4), dtype=int)]  # (entry a, entry b, object o_a, object o_b)
+    for a, b in combinations(base, 2):
+        dist = math.dist(pred[a], pred[b])
+        if dist > COINCIDENT_M:
+            pairs, span = layout.pairs_of(kinds[a], kinds[b])
+            near = pairs[np.abs(span - dist) <= 2 * GATE_M]
+            rows.append(np.column_stack([np.full((len(near), 2), (a, b)), near]))
+    ab = np.concatenate(rows)
+    if not len(ab):  # one entry, or coincident entries: no direction to read
         cols = list(layout.cols_of[kinds[base[0]]])
         shift = true[cols] - pred[base[0]]
         return np.column_stack([np.ones(len(cols)), np.zeros(len(cols)), shift]), False
-    qa, qb = true[oab[:, 0]], true[oab[:, 1]]
+    pa, pb, qa, qb = pred[ab[:, 0]], pred[ab[:, 1]], true[ab[:, 2]], true[ab[:, 3]]
     u, v = pb - pa, qb - qa
     theta = np.arctan2(u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0], np.sum(u * v, axis=1))
     c, s = np.cos(theta), np.sin(theta)
@@ -412,13 +415,9 @@ def _solve(
         agree -= _units(d2.sum(axis=1)) <= _UNITS_GATE
     order = np.lexsort((agree, _scores(problem, motions)))[:CANDIDATES]
     starts = [(m, True) for m in seeds] + [(Motion(*motions[i].tolist()), read) for i in order]
-    best: tuple[tuple[float, int, int], Pairs, Motion, bool] | None = None
-    tried: set[Pairs] = set()
-    for motion, was_read in starts:
-        pairs, motion, was_read = _refine(problem, motion, prefer, was_read)
-        if pairs in tried:
-            continue
-        tried.add(pairs)
+
+    @functools.cache  # matchings refined from several starts often repeat
+    def rank(pairs: Pairs) -> tuple[float, int, int]:
         rows, cols = [i for i, _ in pairs], [j for _, j in pairs]
         value = pa_value(
             problem.pred[rows],
@@ -426,11 +425,10 @@ def _solve(
             len(problem.kinds) - len(pairs),
             problem.layout.g_base,
         )
-        rank = (round(value / TIE_PA), len(pairs), len(named.intersection(pairs)))
-        if best is None or rank > best[0]:
-            best = (rank, pairs, motion, was_read)
-    assert best is not None
-    return best[1], best[2], best[3]
+        return round(value / TIE_PA), len(pairs), len(named.intersection(pairs))
+
+    refined = [_refine(problem, motion, prefer, was_read) for motion, was_read in starts]
+    return max(refined, key=lambda found: rank(found[0]))  # the first of the best
 
 
 Key = tuple[tuple[str, int, float, float], ...]
@@ -513,7 +511,7 @@ class Matcher:
             (lb, k, float(seen[lb].x), float(seen[lb].z)) for lb, k in kind_of.items() if k >= 0
         ]
         xz = np.array([r[2:] for r in rows], dtype=float).reshape(-1, 2)
-        spread = _units(np.sum((xz - xz.mean(axis=0)) ** 2, axis=1)).tolist() if rows else []
+        spread = _units(_spread(xz)).tolist() if rows else []
         order = sorted(range(len(rows)), key=lambda i: (rows[i][1], spread[i], rows[i][0]))
         key = tuple(rows[i] for i in order)
         if previous is not None and previous.key == key:
