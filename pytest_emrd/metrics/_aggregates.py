@@ -440,13 +440,13 @@ class FocalRow:
 def _row(items: Sequence[EpisodeMetrics]) -> FocalRow:
     counts = Counter(m.chosen_letter for m in items)
     n = len(items)
-    other = [m for m in items if m.chosen_letter == OTHER_LETTER]
+    named_other = sum(m.chosen_letter == OTHER_LETTER and m.status == "terminated" for m in items)
     return FocalRow(
         n,
         {c: counts[c] for c in FOCAL_COLUMNS},
         {c: (counts[c] / n if n else 0.0) for c in FOCAL_COLUMNS},
-        named_other=sum(m.status == "terminated" for m in other),
-        no_term=sum(m.status != "terminated" for m in other),
+        named_other=named_other,
+        no_term=counts[OTHER_LETTER] - named_other,
         chose_spawn=sum(
             m.chosen_letter == room_letter(SLUG_ROOMS.get(m.spec.spawn, m.spec.spawn))
             for m in items

@@ -450,8 +450,6 @@ class StepMatch:
     identity: dict[str, int]
     """Label -> object index (objects sorted by id) of the object it stands for."""
     unmatched: tuple[str, ...]
-    unrecognised: tuple[str, ...]
-    duplicates: tuple[str, ...]
     motion: Motion | None
     """The frame found (None: no recognised entry, or a frame whose rotation the map does
     not determine: one point, or points giving no direction; such a frame is not carried)."""
@@ -505,7 +503,6 @@ class Matcher:
         """Match one step's map; ``previous`` (the step before) seeds the frame and breaks
         exact ties in favour of the labels' previous objects (module docstring)."""
         seen = keyed(entries)
-        counts = Counter(e.label for e in entries)
         kind_of = {lb: self.types.resolve(e.object_type, e.label) for lb, e in seen.items()}
         rows = [
             (lb, k, float(seen[lb].x), float(seen[lb].z)) for lb, k in kind_of.items() if k >= 0
@@ -515,17 +512,14 @@ class Matcher:
         order = sorted(range(len(rows)), key=lambda i: (rows[i][1], spread[i], rows[i][0]))
         key = tuple(rows[i] for i in order)
         if previous is not None and previous.key == key:
-            found = previous.identity, previous.unmatched, previous.motion, previous.solved
-        else:
-            found = (previous and self._extend(previous, key)) or self._match(key, previous)
+            return replace(previous, entries=seen, kind_of=kind_of)
+        found = (previous and self._extend(previous, key)) or self._match(key, previous)
         identity, unmatched, motion, solved = found
         return StepMatch(
             entries=seen,
             kind_of=kind_of,
             identity=identity,
             unmatched=unmatched,
-            unrecognised=tuple(sorted(lb for lb, k in kind_of.items() if k < 0)),
-            duplicates=tuple(sorted(lb for lb, n in counts.items() if n > 1)),
             motion=motion,
             key=key,
             solved=solved,
@@ -623,9 +617,10 @@ class Matcher:
         per_type = Counter(k for k in first_kind.values() if k >= 0)
         capacity = self._layout.cols_of
         covered = sum(min(n, len(capacity[k])) for k, n in per_type.items())
-        return Matching(
-            tuple(pairs), found.unmatched, found.unrecognised, found.duplicates, covered
-        )
+        unrecognised = tuple(sorted(lb for lb, k in found.kind_of.items() if k < 0))
+        counts = Counter(e.label for e in found.entries.values())
+        duplicates = tuple(sorted(lb for lb, n in counts.items() if n > 1))
+        return Matching(tuple(pairs), found.unmatched, unrecognised, duplicates, covered)
 
     def held(self, found: StepMatch) -> dict[str, str]:
         """Object id -> label of one matched map."""

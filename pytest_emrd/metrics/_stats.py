@@ -9,6 +9,7 @@ right-censored); censoring is assumed non-informative, as Kaplan-Meier and the M
 
 from __future__ import annotations
 
+import bisect
 import functools
 import math
 from collections.abc import Callable, Mapping, Sequence
@@ -79,7 +80,7 @@ def bootstrap_ci(
     arr = np.asarray(data, dtype=float)
     if len(arr) < 2:
         return None, None
-    fn = statistic if statistic is not None else (lambda a: a.mean(axis=1))
+    fn = statistic or (lambda a: a.mean(axis=1))
     idx = resample_rows(rng_seed, len(arr), n_resamples)
     with np.errstate(divide="ignore", invalid="ignore"):  # also inf - inf between inf values
         values = np.asarray(fn(arr[idx]), dtype=float)
@@ -333,8 +334,7 @@ class AnchoredKM:
 
     def at(self, t: float) -> float:
         """Anchored survival at time ``t`` (right-continuous step function, ``S(t<0) = C``)."""
-        i = int(np.searchsorted(np.asarray(self.times), t, side="right")) - 1
-        return self.survival[max(i, 0)]
+        return self.survival[max(bisect.bisect_right(self.times, t) - 1, 0)]
 
 
 def anchored_km(
