@@ -72,35 +72,27 @@ REAL_WORDS: Final[frozenset[str]] = frozenset(_DATA["real_words"])
 _CAMEL = re.compile(r"(?<=[a-z0-9])(?=[A-Z])|(?<=[A-Z])(?=[A-Z][a-z]{2})")
 _ASIDE = re.compile(r"\(.*?\)|\[.*?\]|\{.*?\}")
 _WORDS = re.compile(r"[a-z]+|[0-9]+")
-_TYPE_OF_KEY: Final[dict[str, str]] = {t.lower(): t for t in ENGINE_TYPES}
+#: Every key of steps 3 and 4 -> the types it denotes: engine type names, then SYNONYMS.
+_KEYS: Final = {**{t.lower(): (t,) for t in ENGINE_TYPES}, **SYNONYMS}
 _MAX_RUN: Final = 4
 _EDITS_PER_LETTER: Final = Fraction(1) - Fraction(str(FUZZY_THRESHOLD))
-_FUZZY_KEYS: Final[tuple[str, ...]] = tuple(
-    sorted(k for k in {*SYNONYMS, *_TYPE_OF_KEY} if len(k) >= FUZZY_MIN_LENGTH)
-)
+_FUZZY_KEYS: Final = tuple(sorted(k for k in _KEYS if len(k) >= FUZZY_MIN_LENGTH))
+#: Plural endings -> their singular, and the fewest letters a word needs for each.
+_PLURALS: Final = (("ives", "ife", 5), ("ves", "f", 4), ("es", "", 4), ("s", "", 3))
 
 
 def _singulars(word: str) -> tuple[str, ...]:
     """``word`` then its plausible singulars (``shelves`` -> ``shelf``, ``knives`` ->
     ``knife``, ``couches`` -> ``couch``)."""
-    forms = [word]
-    if len(word) > 4 and word.endswith("ives"):
-        forms.append(word[:-3] + "fe")
-    if len(word) > 3 and word.endswith("ves"):
-        forms.append(word[:-3] + "f")
-    if len(word) > 3 and word.endswith("es"):
-        forms.append(word[:-2])
-    if len(word) > 2 and word.endswith("s") and not word.endswith("ss"):
-        forms.append(word[:-1])
-    return tuple(forms)
+    return word, *(
+        word.removesuffix(end) + singular
+        for end, singular, least in _PLURALS
+        if len(word) >= least and word.endswith(end) and not word.endswith("ss")  # glass
+    )
 
 
 def _lookup(key: str) -> tuple[str, ...]:
-    hit = SYNONYMS.get(key)
-    if hit is not None:
-        return hit
-    engine = _TYPE_OF_KEY.get(key)
-    return (engine,) if engine is not None else ()
+    return _KEYS.get(key, ())
 
 
 def head_words(text: str) -> tuple[str, ...]:
