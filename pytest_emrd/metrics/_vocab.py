@@ -105,14 +105,12 @@ def head_words(text: str) -> tuple[str, ...]:
 def noun_phrase(words: tuple[str, ...]) -> tuple[str, ...]:
     """Step 2: ``words`` up to the first qualifier word (not counting the first word), read
     past ``left``/``right`` when the words before them name no type; trailing states dropped."""
-    end = len(words)
-    for i in range(1, len(words)):
-        if words[i] in QUALIFIER_WORDS:
-            if words[i] in POSITION_WORDS and not _denotes(_trimmed(words[:i])):
-                continue
-            end = i
-            break
-    return _trimmed(words[:end])
+    for i, word in enumerate(words[1:], 1):
+        if word in QUALIFIER_WORDS and (
+            word not in POSITION_WORDS or _denotes(_trimmed(words[:i]))  # "back left chair"
+        ):
+            return _trimmed(words[:i])
+    return _trimmed(words)
 
 
 def _trimmed(words: tuple[str, ...]) -> tuple[str, ...]:
@@ -126,7 +124,7 @@ def _exact(words: tuple[str, ...]) -> tuple[str, ...]:
     """Step 3: candidates of the longest run ending at the head noun that is a key (longest
     first, each with the last word as written and then made singular)."""
     for size in range(min(_MAX_RUN, len(words)), 0, -1):
-        run = words[len(words) - size :]
+        run = words[-size:]
         for last in _singulars(run[-1]):
             hit = _lookup("".join(run[:-1]) + last)
             if hit:
