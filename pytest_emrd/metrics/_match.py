@@ -543,10 +543,9 @@ class Matcher:
         cols_of = self._layout.cols_of
         taken = set(identity.values())
         freed = set(previous.identity.values()) - taken
-        if freed and unmatched:
-            for _, k, x, z in (e for e in key if e[0] in unmatched):
-                if self._nearest(motion, x, z, [j for j in cols_of[k] if j in freed]) >= 0:
-                    return None
+        for _, k, x, z in (e for e in key if e[0] in unmatched):
+            if self._nearest(motion, x, z, [j for j in cols_of[k] if j in freed]) >= 0:
+                return None
         for lb, k, x, z in changed:
             best = self._nearest(motion, x, z, [j for j in cols_of[k] if j not in taken])
             if best < 0:

@@ -373,15 +373,15 @@ def anchored_km(
     table = fitter.event_table
     factor = fitter.survival_function_.to_numpy()[:, 0]
     band = fitter.confidence_interval_survival_function_.to_numpy()
-    band = np.where(np.isfinite(band), band, factor[:, None])
+    low, high = (c * np.where(np.isfinite(band), band, factor[:, None])).T.tolist()
     return AnchoredKM(
         coverage=c,
         times=tuple(table.index.to_numpy(dtype=float).tolist()),
         survival=tuple((c * factor).tolist()),
         at_risk=tuple(table["at_risk"].to_numpy(dtype=int).tolist()),
         events=tuple(table["observed"].to_numpy(dtype=int).tolist()),
-        ci_low=tuple((c * band[:, 0]).tolist()),
-        ci_high=tuple((c * band[:, 1]).tolist()),
+        ci_low=tuple(low),
+        ci_high=tuple(high),
     )
 
 

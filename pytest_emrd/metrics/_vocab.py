@@ -52,11 +52,11 @@ SYNONYMS: Final[dict[str, tuple[str, ...]]] = {
 #: Words that open a qualifier phrase; the label is cut before the first of them.
 QUALIFIER_WORDS: Final[frozenset[str]] = frozenset(_DATA["qualifier_words"])
 #: Qualifier words that are also adjectives of position (``back left chair``).
-POSITION_WORDS: Final[frozenset[str]] = frozenset({"left", "right"})
+POSITION_WORDS: Final = frozenset({"left", "right"})
 #: States written after the noun (``door open``), dropped from the end of the phrase.
 STATE_WORDS: Final[frozenset[str]] = frozenset(_DATA["state_words"])
 #: Head nouns that, after a modifier naming an object, name a part of it (``fridge door``).
-PART_WORDS: Final[frozenset[str]] = frozenset({"door", "seat"})
+PART_WORDS: Final = frozenset({"door", "seat"})
 #: Misspelling correction: least rapidfuzz OSA normalised similarity to a key (1 - edits /
 #: longer length; 0.8 is one edit in 5 to 9 letters, two in 10 to 14).
 FUZZY_THRESHOLD: Final = 0.8
