@@ -11,7 +11,7 @@ import math
 import statistics
 from collections import Counter
 from collections.abc import Iterable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 from functools import cached_property
 from typing import Final
 
@@ -556,21 +556,19 @@ def episode_metrics(traj: Trajectory) -> EpisodeMetrics:
     final = track.final
     reasons: dict[str, str] = {}
     aec = aec_score(final, len(traj.ground_truth.objects))
-    pa = positional_accuracy_score(final, g_base)
+    no_base = "no object is discoverable under the baseline (|G_base| = 0)"
     if aec is None:
         reasons["aec"] = "the ground truth lists no object (|E| = 0)"
-    if pa is None:
-        reasons["pa"] = "no object is discoverable under the baseline (|G_base| = 0)"
+    if g_base == 0:
+        reasons["pa"] = no_base
     grounded_aec, ungrounded_rate, why_ungrounded = grounded_scores(traj, final)
     reasons.update(why_ungrounded)
-    precision = precision_score(final)
-    hallucination = hallucination_score(final)
-    if precision is None:
+    if not final.entries:
         reasons["precision"] = reasons["hallucination_rate"] = "the terminal map is empty"
     if g_base == 0:
-        reasons["tbs"] = "no object is discoverable under the baseline (|G_base| = 0)"
-    grounding = grounding_scores(traj, final)
-    reasons.update(grounding.reasons)
+        reasons["tbs"] = no_base
+    grounding = asdict(grounding_scores(traj, final))  # fields of EpisodeMetrics
+    reasons.update(grounding.pop("reasons"))
     sir, why = sir_score(traj, track, aec)
     if sir is None:
         reasons["sir"] = why
@@ -587,18 +585,15 @@ def episode_metrics(traj: Trajectory) -> EpisodeMetrics:
         errored=False,
         te=te_score(traj),
         aec=aec,
-        pa=pa,
+        pa=positional_accuracy_score(final, g_base),
         matched=len(final.pairs),
         unmatched=len(final.unmatched),
-        precision=precision,
-        hallucination_rate=hallucination,
+        precision=precision_score(final),
+        hallucination_rate=hallucination_score(final),
         grounded_aec=grounded_aec,
         ungrounded_rate=ungrounded_rate,
         tbs=track.tbs,
-        fpsg_local=grounding.fpsg_local,
-        fpsg_global=grounding.fpsg_global,
-        never_visited=grounding.never_visited,
-        any_bias=grounding.any_bias,
+        **grounding,
         chosen_letter=room_letter(traj.chosen_room),
         sir=sir,
         spells=track.spells,
@@ -607,8 +602,6 @@ def episode_metrics(traj: Trajectory) -> EpisodeMetrics:
         miller_loads=track.miller_loads,
         miller_forgets=track.miller_forgets,
         reasons=reasons,
-        fpsg_local_ex_doorways=grounding.fpsg_local_ex_doorways,
-        fpsg_global_ex_doorways=grounding.fpsg_global_ex_doorways,
     )
 
 

@@ -240,24 +240,20 @@ def anova_groups(groups: Mapping[str, Sequence[float]]) -> Anova:
     :param groups: Group name -> its values.
     :returns: An :class:`Anova`: F, p-value, group sizes, or None with a reason.
     """
-    clean = {
-        name: np.asarray([v for v in values if math.isfinite(v)], dtype=float)
-        for name, values in groups.items()
-    }
-    clean = {name: v for name, v in clean.items() if len(v)}
+    finite = {name: [v for v in values if math.isfinite(v)] for name, values in groups.items()}
+    clean = {name: np.asarray(v, dtype=float) for name, v in finite.items() if v}
     sizes = {name: len(v) for name, v in clean.items()}
-    n = sum(sizes.values())
-    if len(clean) < 2:
+    k, n = len(clean), sum(sizes.values())
+    if k < 2:
         return Anova(None, None, 0.0, 0.0, sizes, "fewer than two conditions with finite values")
-    if n - len(clean) < 1:
-        return Anova(None, None, len(clean) - 1.0, 0.0, sizes, "no within-condition variation")
-    pooled = np.concatenate(list(clean.values()))
+    if n == k:
+        return Anova(None, None, k - 1.0, 0.0, sizes, "no within-condition variation")
     within = sum(float(np.sum((v - v.mean()) ** 2)) for v in clean.values())
     if within == 0.0:
         why = "every condition is constant: F is undefined"
-        if np.ptp(pooled) == 0.0:
+        if np.ptp(np.concatenate(list(clean.values()))) == 0.0:
             why = "all values are identical: F is undefined"
-        return Anova(None, None, len(clean) - 1.0, n - len(clean) + 0.0, sizes, why)
+        return Anova(None, None, k - 1.0, float(n - k), sizes, why)
     from statsmodels.stats.oneway import anova_oneway  # heavy: imported on first use
 
     res = anova_oneway(list(clean.values()), use_var="equal")
