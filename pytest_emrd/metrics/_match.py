@@ -144,7 +144,8 @@ def _procrustes(pred: np.ndarray, true: np.ndarray) -> Motion:
     cross = float(np.sum(a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]))
     theta = math.atan2(cross, dot) if math.hypot(dot, cross) > COINCIDENT_M**2 else 0.0
     c, s = math.cos(theta), math.sin(theta)
-    return Motion(c, s, cq[0] - (c * cp[0] - s * cp[1]), cq[1] - (s * cp[0] + c * cp[1]))
+    tx, tz = cq - _moved(cp[None], Motion(c, s, 0.0, 0.0))[0]
+    return Motion(c, s, tx, tz)
 
 
 def rigid_fit(pred: np.ndarray, true: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -381,20 +382,16 @@ def _hypotheses(problem: _Problem) -> tuple[np.ndarray, bool]:
     u, v = pb - pa, qb - qa
     theta = np.arctan2(u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0], np.sum(u * v, axis=1))
     c, s = np.cos(theta), np.sin(theta)
-    m, n = (pa + pb) / 2, (qa + qb) / 2
-    return np.column_stack(
-        [c, s, n[:, 0] - (c * m[:, 0] - s * m[:, 1]), n[:, 1] - (s * m[:, 0] + c * m[:, 1])]
-    ), True
+    shift = (qa + qb) / 2 - _moved((pa + pb) / 2, Motion(c, s, 0.0, 0.0))  # midpoint onto midpoint
+    return np.column_stack([c, s, shift]), True
 
 
 def _scores(problem: _Problem, motions: np.ndarray) -> np.ndarray:
     """MSAC score of each motion (rows ``(c, s, tx, tz)``): summed capped squared distance of
     every entry to the nearest object of its type, in rounded units."""
-    c, s, tx, tz = (motions[:, k : k + 1] for k in range(4))
     rows, cols = problem.candidates
-    x, z = problem.pred[rows, 0], problem.pred[rows, 1]
-    true = problem.layout.true
-    d2 = (c * x - s * z + tx - true[cols, 0]) ** 2 + (s * x + c * z + tz - true[cols, 1]) ** 2
+    moved = _moved(problem.pred[rows], Motion(*motions.T[:, :, None]))  # motion x axis x candidate
+    d2 = np.sum((moved - problem.layout.true[cols].T) ** 2, axis=1)
     nearest = np.minimum.reduceat(d2, problem.starts, axis=1)
     return np.minimum(_units(nearest), _UNITS_GATE).sum(axis=1)
 
