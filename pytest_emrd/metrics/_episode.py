@@ -23,11 +23,12 @@ from pytest_emrd.metrics._match import (
     MatchedPair,
     Matcher,
     Matching,
+    _moved,
+    _procrustes,
     _units,
     assign_rows,
     keyed,
     pa_value,
-    rigid_fit,
 )
 from pytest_emrd.metrics._tracking import (
     Spell,
@@ -350,12 +351,12 @@ def reentry_copies(
     if np.ptp(pred, axis=0).max() <= COINCIDENT_M:
         return frozenset()
     layout = matcher._layout
-    rot, shift = rigid_fit(pred, layout.true[[matcher._index[o] for o, _ in pairs]])
+    motion = _procrustes(pred, layout.true[[matcher._index[o] for o, _ in pairs]])
     copies: set[str] = set()
     for k, labels in by_type.items():
         cols = np.flatnonzero(layout.kinds == k)
         new = np.array([(entries[lb].x, entries[lb].z) for lb in labels], dtype=float)
-        diff = (new @ rot.T + shift)[:, None, :] - layout.true[cols][None, :, :]
+        diff = _moved(new, motion)[:, None, :] - layout.true[cols][None, :, :]
         cost = _units(np.sum(diff * diff, axis=2))
         if not np.isfinite(cost).all():
             raise ValueError(f"a written coordinate of {labels} is not finite")

@@ -28,7 +28,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from itertools import groupby
+from itertools import groupby, pairwise
 
 import numpy as np
 
@@ -117,39 +117,33 @@ def track_episode(traj: Trajectory) -> Track:
     g_base = len(gt.discoverable_ids)
     matcher = Matcher(gt.objects, g_base)
     scale = layout_scale(np.array([(o.x, o.z) for o in gt.objects], dtype=float).reshape(-1, 2))
-    held: list[dict[str, str]] = []
     matches: list[StepMatch] = []
     tbs: list[float] = []
     first_pos: dict[str, tuple[float, float]] = {}
-    loads: list[int] = []
-    forgets: list[bool] = []
     found: StepMatch | None = None
     for step in traj.steps:
         found = matcher.step(step.cognitive_map, found)
-        entries = found.entries  # label -> its first entry, in the model's order
-        for lb, e in entries.items():
-            first_pos.setdefault(lb, (e.x, e.z))
-        if matches and matches[-1].entries:  # Miller: m = |M_{t-1}| labels, M_{t-1} \ M_t
-            loads.append(len(matches[-1].entries))
-            forgets.append(not matches[-1].entries.keys() <= entries.keys())
         matches.append(found)
-        held.append(matcher.held(found))
+        for lb, e in found.entries.items():
+            first_pos.setdefault(lb, (e.x, e.z))
         if g_base:
             tbs.append(_tbs_value(found, first_pos, scale, g_base))
-    when = discovered(held, [m.entries for m in matches])
+    held = [matcher.held(m) for m in matches]
+    written = [m.entries for m in matches]  # label -> its first entry, in the model's order
+    # Miller's law: m = |M_{t-1}| labels for every non-empty M_{t-1}, and whether M_{t-1} \ M_t
+    loads = tuple(len(before) for before, _ in pairwise(written) if before)
+    forgets = tuple(not before.keys() <= now.keys() for before, now in pairwise(written) if before)
+    when = discovered(held, written)
     discovery = {oid: rank for rank, oid in enumerate(sorted(when, key=when.__getitem__), 1)}
-    final = matcher.match(traj.steps[-1].cognitive_map) if traj.steps else EMPTY_MATCHING
-    spells = _spells(traj, held, matches, matcher, discovery)
-    visits = _visits([s.room for s in traj.steps])
     return Track(
         held=tuple(held),
-        final=final,
-        spells=spells,
+        final=matcher.match(traj.steps[-1].cognitive_map) if traj.steps else EMPTY_MATCHING,
+        spells=_spells(traj, held, matches, matcher, discovery),
         discovery=discovery,
         tbs=tuple(tbs),
-        miller_loads=tuple(loads),
-        miller_forgets=tuple(forgets),
-        visits=visits,
+        miller_loads=loads,
+        miller_forgets=forgets,
+        visits=_visits([s.room for s in traj.steps]),
         matcher=matcher,
     )
 
