@@ -59,9 +59,7 @@ def aec_score(matching: Matching, n_objects: int) -> float | None:
     :param n_objects: ``|E|``, the objects of the office.
     :returns: ``AEC`` in [0, 1]; 0.0 for an empty map; None when ``|E| = 0``.
     """
-    if n_objects == 0:
-        return None
-    return matching.covered / n_objects
+    return matching.covered / n_objects if n_objects else None
 
 
 def te_score(traj: Trajectory) -> int:
@@ -121,9 +119,7 @@ def precision_score(matching: Matching) -> float | None:
         one "exit sign": ``41 / 42 = 0.976``; 41 correct entries each followed by a copy of
         its label written far from every object of its type: ``41 / 82 = 0.5``.
     """
-    if not matching.entries:
-        return None
-    return len(matching.pairs) / matching.entries
+    return len(matching.pairs) / matching.entries if matching.entries else None
 
 
 def hallucination_score(matching: Matching) -> float | None:
@@ -144,9 +140,7 @@ def hallucination_score(matching: Matching) -> float | None:
         the office, 2 sofas it lacks and 2 chairs 6 m from every chair: ``4 / 44``; a grid of
         every type over the office is nearly all hallucination.
     """
-    if not matching.entries:
-        return None
-    return (matching.entries - len(matching.pairs)) / matching.entries
+    return (matching.entries - len(matching.pairs)) / matching.entries if matching.entries else None
 
 
 def ungrounded_pairs(traj: Trajectory, final: Matching) -> tuple[MatchedPair, ...]:
@@ -201,10 +195,8 @@ def grounded_scores(
     """
     reasons: dict[str, str] = {}
     ungrounded = ungrounded_pairs(traj, final)
-    if final.pairs:
-        rate: float | None = len(ungrounded) / len(final.pairs)
-    else:
-        rate = None
+    rate = len(ungrounded) / len(final.pairs) if final.pairs else None
+    if rate is None:
         reasons["ungrounded_rate"] = "no entry of the terminal map is matched (|K| = 0)"
     n_objects = len(traj.ground_truth.objects)
     if not n_objects:

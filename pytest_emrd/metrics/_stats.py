@@ -88,7 +88,7 @@ def bootstrap_ci(
         if not len(values):
             return None, None
         alpha = (1.0 - CONFIDENCE) / 2.0
-        ends = np.quantile(values, [alpha, 1.0 - alpha], method="linear")
+        ends = np.quantile(values, [alpha, 1.0 - alpha])
     low, high = np.where(np.isnan(ends), math.inf, ends).tolist()
     return low, high
 
@@ -451,9 +451,10 @@ def ebbinghaus_fit(
     s_hat = np.array([km.at(x) for x in grid])
     reason = None if n_events else "no forgetting event: memory strength is unbounded"
     ss_tot = float(np.sum((s_hat - s_hat.mean()) ** 2))  # every grid holds a point
-    if ss_tot <= 1e-15:
-        why = "the Kaplan-Meier curve does not vary: R^2 is undefined"
-        return EbbinghausFit(coverage, strength, None, len(t), n_events, reason or why, points)
-    model = coverage * np.exp(-grid / strength)
-    r2 = 1.0 - float(np.sum((s_hat - model) ** 2)) / ss_tot
+    r2 = None
+    if ss_tot > 1e-15:
+        model = coverage * np.exp(-grid / strength)
+        r2 = 1.0 - float(np.sum((s_hat - model) ** 2)) / ss_tot
+    else:
+        reason = reason or "the Kaplan-Meier curve does not vary: R^2 is undefined"
     return EbbinghausFit(coverage, strength, r2, len(t), n_events, reason, points)
