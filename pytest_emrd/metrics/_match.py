@@ -591,22 +591,11 @@ class Matcher:
 
     def matching(self, found: StepMatch) -> Matching:
         """The :class:`Matching` of one matched map."""
-        true = self._layout.true
-        pairs = sorted(
-            (
-                MatchedPair(
-                    lb,
-                    self.objects[j].object_id,
-                    self.objects[j].object_type,
-                    float(found.entries[lb].x),
-                    float(found.entries[lb].z),
-                    float(true[j, 0]),
-                    float(true[j, 1]),
-                )
-                for lb, j in found.identity.items()
-            ),
-            key=lambda p: p.object_id,
-        )
+        pairs = []
+        for lb, j in sorted(found.identity.items(), key=lambda item: item[1]):  # by object id
+            o, e = self.objects[j], found.entries[lb]
+            x, z = self._points[j]
+            pairs.append(MatchedPair(lb, o.object_id, o.object_type, float(e.x), float(e.z), x, z))
         first_kind: dict[str, int] = {}  # Eq. AEC counts distinct labels: a label's first entry
         for lb, k in found.kind_of.items():
             first_kind.setdefault(found.entries[lb].label, k)
