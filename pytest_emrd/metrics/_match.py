@@ -482,8 +482,7 @@ class Matcher:
     """:func:`match_map` bound to one episode's ground truth, reusable across its steps."""
 
     def __init__(self, objects: Sequence[GroundTruthObject], g_base: int | None = None) -> None:
-        ordered = sorted(objects, key=lambda o: o.object_id)
-        self.objects = ordered
+        self.objects = ordered = sorted(objects, key=lambda o: o.object_id)
         self.types = TypeResolver(o.object_type for o in ordered)
         kinds = [self.types.index[o.object_type] for o in ordered]
         cols_of = {
@@ -491,8 +490,8 @@ class Matcher:
             for k in range(len(self.types.names))
         }
         true = np.array([(o.x, o.z) for o in ordered], dtype=float).reshape(-1, 2)
-        g = len(ordered) if g_base is None else g_base
-        self._layout = _Layout(true, np.array(kinds, dtype=int), cols_of, g)
+        g_base = len(ordered) if g_base is None else g_base
+        self._layout = _Layout(true, np.array(kinds, dtype=int), cols_of, g_base)
         self._points: list[list[float]] = true.tolist()  # for per-point arithmetic in Python
         self._index = {o.object_id: j for j, o in enumerate(ordered)}
 

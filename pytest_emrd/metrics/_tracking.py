@@ -101,9 +101,7 @@ def first_spells(spells: tuple[Spell, ...]) -> tuple[Spell, ...]:
     One spell per object: later spells are conditional on re-discovery and would weight
     frequently re-seen objects (doorways) more than the rest.
     """
-    first: dict[str, Spell] = {}
-    for s in spells:
-        first.setdefault(s.object_id, s)
+    first = {s.object_id: s for s in reversed(spells)}  # reversed: the earliest is kept
     return tuple(sorted(first.values(), key=lambda s: s.discovery_rank))
 
 
@@ -201,7 +199,7 @@ def _kept_pairings(
     writes it (walked backwards; :data:`_WITHDRAWN` marks a label whose later objects differ)."""
     later: dict[str, str] = {}
     kept: list[set[tuple[str, str]]] = [set() for _ in held]
-    for t in range(len(held) - 1, -1, -1):
+    for t in reversed(range(len(held))):
         holds = {label: oid for oid, label in held[t].items()}
         for oid, label in held[t].items():
             if later.get(label, oid) == oid:
