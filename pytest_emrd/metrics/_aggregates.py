@@ -410,8 +410,9 @@ def anova_conditions(items: Iterable[EpisodeLike]) -> Anova:
     kept, _ = split_errored(items)
     groups: dict[str, list[float]] = {}
     for m in kept:
-        if m.memory_strength is not None:  # anova_groups leaves out the unbounded ones
-            groups.setdefault(m.spec.condition, []).append(m.memory_strength)
+        strength = m.memory_strength
+        if strength is not None and math.isfinite(strength):
+            groups.setdefault(m.spec.condition, []).append(strength)
     return anova_groups(groups)
 
 
