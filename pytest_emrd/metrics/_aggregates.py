@@ -265,7 +265,7 @@ def serial_position(items: Iterable[EpisodeLike]) -> SerialPosition:
     kept, excluded = split_errored(items)
     bins = [[v for m in kept if (v := m.serial_position[b]) is not None] for b in range(3)]
     means = [statistics.fmean(values) if values else None for values in bins]
-    thirds: tuple[list[Spell], list[Spell], list[Spell]] = ([], [], [])
+    thirds: list[list[Spell]] = [[], [], []]
     for m in kept:
         third = discovery_thirds(sum(m.mapped_by_category.values()))
         for s in m.ttf_spells:
@@ -345,15 +345,15 @@ def miller_curve(
         return MillerCurve(width=width, reason="no step with a non-empty map")
     b = -(-loads // width)
     steps = np.bincount(b)
-    events = np.bincount(b, weights=forgets.astype(float)).astype(np.int64)
+    events = np.bincount(b[forgets], minlength=len(steps))
     bins = np.flatnonzero(steps)
     probs = events[bins] / steps[bins]
     eligible = [(0, 0.0)] + [
-        (int(bins[i]), float(probs[i])) for i in range(len(bins)) if steps[bins[i]] >= min_steps
+        (int(b), float(p)) for b, p in zip(bins, probs, strict=True) if steps[b] >= min_steps
     ]
     rises = [(p - p_prev, b_now) for (_, p_prev), (b_now, p) in pairwise(eligible)]
     best = max(rises, key=lambda r: r[0], default=(0.0, 0))
-    b_star = int(best[1]) if best[0] > 0 else None
+    b_star = best[1] if best[0] > 0 else None
     reason = None
     if b_star is None:
         reason = "no rise between consecutive load bins (from ML(0) = 0): no inflection"
@@ -362,7 +362,7 @@ def miller_curve(
     return MillerCurve(
         width=width,
         bins=tuple(bins.tolist()),
-        probabilities=tuple(float(p) for p in probs),
+        probabilities=tuple(probs.tolist()),
         steps=tuple(steps[bins].tolist()),
         events=tuple(events[bins].tolist()),
         b_star=b_star,
@@ -441,13 +441,13 @@ class FocalRow:
 def _row(items: Sequence[EpisodeMetrics]) -> FocalRow:
     counts = Counter(m.chosen_letter for m in items)
     n = len(items)
-    other = [m for m in items if m.chosen_letter == OTHER_LETTER]
+    named_other = sum(m.chosen_letter == OTHER_LETTER and m.status == "terminated" for m in items)
     return FocalRow(
         n,
         {c: counts[c] for c in FOCAL_COLUMNS},
         {c: (counts[c] / n if n else 0.0) for c in FOCAL_COLUMNS},
-        named_other=sum(m.status == "terminated" for m in other),
-        no_term=sum(m.status != "terminated" for m in other),
+        named_other=named_other,
+        no_term=counts[OTHER_LETTER] - named_other,
         chose_spawn=sum(
             m.chosen_letter == room_letter(SLUG_ROOMS.get(m.spec.spawn, m.spec.spawn))
             for m in items
@@ -537,7 +537,9 @@ class FPSGSummary:
     """``global_mean`` with doorways left out of ``O_F``."""
 
 
-def _mean_sd(values: Sequence[float]) -> tuple[float | None, float | None]:
+def _mean_sd(kept: list[EpisodeMetrics], name: str) -> tuple[float | None, float | None]:
+    """Mean and sample standard deviation of the score ``name`` where it is defined."""
+    values = [v for m in kept if (v := getattr(m, name)) is not None]
     if not values:
         return None, None
     mean = statistics.fmean(values)
@@ -566,12 +568,8 @@ def fpsg(items: Iterable[EpisodeLike]) -> FPSGSummary:
     :returns: An :class:`FPSGSummary`: means and sds of every variant, Never-Visited and Any-Bias.
     """
     kept, excluded = split_errored(items)
-
-    def mean_sd(name: str) -> tuple[float | None, float | None]:
-        return _mean_sd([v for m in kept if (v := getattr(m, name)) is not None])
-
-    local_mean, local_sd = mean_sd("fpsg_local")
-    global_mean, global_sd = mean_sd("fpsg_global")
+    local_mean, local_sd = _mean_sd(kept, "fpsg_local")
+    global_mean, global_sd = _mean_sd(kept, "fpsg_global")
     return FPSGSummary(
         runs=len(kept),
         never_visited=_share([m.never_visited for m in kept]),
@@ -581,8 +579,8 @@ def fpsg(items: Iterable[EpisodeLike]) -> FPSGSummary:
         global_mean=global_mean,
         global_sd=global_sd,
         excluded=excluded,
-        local_mean_ex_doorways=mean_sd("fpsg_local_ex_doorways")[0],
-        global_mean_ex_doorways=mean_sd("fpsg_global_ex_doorways")[0],
+        local_mean_ex_doorways=_mean_sd(kept, "fpsg_local_ex_doorways")[0],
+        global_mean_ex_doorways=_mean_sd(kept, "fpsg_global_ex_doorways")[0],
     )
 
 

@@ -11,7 +11,7 @@ import math
 import statistics
 from collections import Counter
 from collections.abc import Iterable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 from functools import cached_property
 from typing import Final
 
@@ -20,14 +20,15 @@ import numpy as np
 from pytest_emrd._serde import JsonRecord, Schema
 from pytest_emrd.metrics._match import (
     COINCIDENT_M,
-    TIE_M2,
     MatchedPair,
     Matcher,
     Matching,
+    _moved,
+    _procrustes,
+    _units,
     assign_rows,
     keyed,
     pa_value,
-    rigid_fit,
 )
 from pytest_emrd.metrics._tracking import (
     Spell,
@@ -58,9 +59,7 @@ def aec_score(matching: Matching, n_objects: int) -> float | None:
     :param n_objects: ``|E|``, the objects of the office.
     :returns: ``AEC`` in [0, 1]; 0.0 for an empty map; None when ``|E| = 0``.
     """
-    if n_objects == 0:
-        return None
-    return matching.covered / n_objects
+    return matching.covered / n_objects if n_objects else None
 
 
 def te_score(traj: Trajectory) -> int:
@@ -120,9 +119,7 @@ def precision_score(matching: Matching) -> float | None:
         one "exit sign": ``41 / 42 = 0.976``; 41 correct entries each followed by a copy of
         its label written far from every object of its type: ``41 / 82 = 0.5``.
     """
-    if not matching.entries:
-        return None
-    return len(matching.pairs) / matching.entries
+    return len(matching.pairs) / matching.entries if matching.entries else None
 
 
 def hallucination_score(matching: Matching) -> float | None:
@@ -143,9 +140,7 @@ def hallucination_score(matching: Matching) -> float | None:
         the office, 2 sofas it lacks and 2 chairs 6 m from every chair: ``4 / 44``; a grid of
         every type over the office is nearly all hallucination.
     """
-    if not matching.entries:
-        return None
-    return (matching.entries - len(matching.pairs)) / matching.entries
+    return (matching.entries - len(matching.pairs)) / matching.entries if matching.entries else None
 
 
 def ungrounded_pairs(traj: Trajectory, final: Matching) -> tuple[MatchedPair, ...]:
@@ -200,10 +195,8 @@ def grounded_scores(
     """
     reasons: dict[str, str] = {}
     ungrounded = ungrounded_pairs(traj, final)
-    if final.pairs:
-        rate: float | None = len(ungrounded) / len(final.pairs)
-    else:
-        rate = None
+    rate = len(ungrounded) / len(final.pairs) if final.pairs else None
+    if rate is None:
         reasons["ungrounded_rate"] = "no entry of the terminal map is matched (|K| = 0)"
     n_objects = len(traj.ground_truth.objects)
     if not n_objects:
@@ -336,7 +329,7 @@ def reentry_copies(
     entries at distinct positions leave the rotation undetermined: no copy is found.
     """
     entries = keyed(traj.steps[end].cognitive_map)
-    before = set(keyed(traj.steps[start - 1].cognitive_map)) if start > 0 else set()
+    before = keyed(traj.steps[start - 1].cognitive_map)  # a re-entry never starts at step 0
     by_type: dict[int, list[str]] = {}
     for lb in sorted(entries.keys() - before):
         k = matcher.types.resolve(entries[lb].object_type, entries[lb].label)
@@ -349,23 +342,23 @@ def reentry_copies(
     pred = np.array([(entries[lb].x, entries[lb].z) for _, lb in pairs], dtype=float)
     if np.ptp(pred, axis=0).max() <= COINCIDENT_M:
         return frozenset()
-    layout, ids = matcher._layout, [o.object_id for o in matcher.objects]
-    rot, shift = rigid_fit(pred, layout.true[[matcher._index[o] for o, _ in pairs]])
+    layout = matcher._layout
+    motion = _procrustes(pred, layout.true[[matcher._index[o] for o, _ in pairs]])
     copies: set[str] = set()
     for k, labels in by_type.items():
         cols = np.flatnonzero(layout.kinds == k)
         new = np.array([(entries[lb].x, entries[lb].z) for lb in labels], dtype=float)
-        diff = (new @ rot.T + shift)[:, None, :] - layout.true[cols][None, :, :]
-        cost = np.round(np.sum(diff * diff, axis=2) / TIE_M2)
+        diff = _moved(new, motion)[:, None, :] - layout.true[cols][None, :, :]
+        cost = _units(np.sum(diff * diff, axis=2))
         if not np.isfinite(cost).all():
             raise ValueError(f"a written coordinate of {labels} is not finite")
         meant = cols[cost.argmin(axis=1)]
-        for r, j in assign_rows(cost, np.ones(cost.shape, dtype=bool)):
+        for r, j in assign_rows(cost, np.ones_like(cost, dtype=bool)):
             meant[r] = cols[j]
         for lb, c in zip(labels, meant.tolist(), strict=True):
-            holder = label_of.get(ids[c])
-            if holder is not None and holder != lb:
-                copies.add(ids[c])
+            oid = matcher.objects[c].object_id
+            if label_of.get(oid, lb) != lb:  # another label holds it
+                copies.add(oid)
     return frozenset(copies)
 
 
@@ -399,11 +392,12 @@ def serial_position_bins(
     :returns: ``(early, middle, late)`` mean TTF in steps, each None when its bin has no TTF.
     """
     third = discovery_thirds(len(ttf_by_rank))
-    out: list[float | None] = []
-    for b in range(3):
-        values = [v for v, t in zip(ttf_by_rank, third, strict=True) if t == b and v is not None]
-        out.append(statistics.fmean(values) if values else None)
-    return out[0], out[1], out[2]
+    bins = (
+        [v for v, t in zip(ttf_by_rank, third, strict=True) if t == b and v is not None]
+        for b in range(3)
+    )
+    early, middle, late = (statistics.fmean(values) if values else None for values in bins)
+    return early, middle, late
 
 
 SCHEMA_VERSION: Final = 3
@@ -555,48 +549,44 @@ def episode_metrics(traj: Trajectory) -> EpisodeMetrics:
     final = track.final
     reasons: dict[str, str] = {}
     aec = aec_score(final, len(traj.ground_truth.objects))
-    pa = positional_accuracy_score(final, g_base)
+    no_base = "no object is discoverable under the baseline (|G_base| = 0)"
     if aec is None:
         reasons["aec"] = "the ground truth lists no object (|E| = 0)"
-    if pa is None:
-        reasons["pa"] = "no object is discoverable under the baseline (|G_base| = 0)"
+    if g_base == 0:
+        reasons["pa"] = no_base
     grounded_aec, ungrounded_rate, why_ungrounded = grounded_scores(traj, final)
     reasons.update(why_ungrounded)
-    precision = precision_score(final)
-    hallucination = hallucination_score(final)
-    if precision is None:
+    if not final.entries:
         reasons["precision"] = reasons["hallucination_rate"] = "the terminal map is empty"
     if g_base == 0:
-        reasons["tbs"] = "no object is discoverable under the baseline (|G_base| = 0)"
-    grounding = grounding_scores(traj, final)
-    reasons.update(grounding.reasons)
+        reasons["tbs"] = no_base
+    grounding = asdict(grounding_scores(traj, final))  # fields of EpisodeMetrics
+    reasons.update(grounding.pop("reasons"))
     sir, why = sir_score(traj, track, aec)
     if sir is None:
         reasons["sir"] = why
-    if not track.spells:
+    first = first_spells(track.spells)
+    if not first:
         reasons["memory_strength"] = "no mapped object ever left view"
-    elif not any(s.forgotten for s in first_spells(track.spells)):
+    elif not any(s.forgotten for s in first):
         reasons["memory_strength"] = "no forgetting event: memory strength is unbounded"
     category = {o.object_id: o.category for o in traj.ground_truth.objects}
-    ttf = {s.object_id: float(s.duration) for s in first_spells(track.spells)}
+    ttf = {s.object_id: float(s.duration) for s in first}
     by_rank = sorted(track.discovery, key=track.discovery.__getitem__)
     return EpisodeMetrics(
         **common,
         errored=False,
         te=te_score(traj),
         aec=aec,
-        pa=pa,
+        pa=positional_accuracy_score(final, g_base),
         matched=len(final.pairs),
         unmatched=len(final.unmatched),
-        precision=precision,
-        hallucination_rate=hallucination,
+        precision=precision_score(final),
+        hallucination_rate=hallucination_score(final),
         grounded_aec=grounded_aec,
         ungrounded_rate=ungrounded_rate,
         tbs=track.tbs,
-        fpsg_local=grounding.fpsg_local,
-        fpsg_global=grounding.fpsg_global,
-        never_visited=grounding.never_visited,
-        any_bias=grounding.any_bias,
+        **grounding,
         chosen_letter=room_letter(traj.chosen_room),
         sir=sir,
         spells=track.spells,
@@ -605,8 +595,6 @@ def episode_metrics(traj: Trajectory) -> EpisodeMetrics:
         miller_loads=track.miller_loads,
         miller_forgets=track.miller_forgets,
         reasons=reasons,
-        fpsg_local_ex_doorways=grounding.fpsg_local_ex_doorways,
-        fpsg_global_ex_doorways=grounding.fpsg_global_ex_doorways,
     )
 
 

@@ -30,7 +30,13 @@ from pytest_emrd.metrics._episode import (
     as_episode_metrics,
     split_errored,
 )
-from pytest_emrd.metrics._stats import N_RESAMPLES, Estimate, bootstrap_ci, draw_counts
+from pytest_emrd.metrics._stats import (
+    N_RESAMPLES,
+    Estimate,
+    bootstrap_ci,
+    draw_counts,
+    resample_rows,
+)
 from pytest_emrd.rooms import FOCAL_COLUMNS, OTHER_LETTER
 
 
@@ -50,108 +56,90 @@ class GateMetric:
     compute: Compute
 
 
-def _why_none(kept: list[EpisodeMetrics], name: str) -> str:
-    if not kept:
-        return "no non-errored episode"
-    reasons = Counter(m.reasons.get(name, "undefined") for m in kept)
-    return f"undefined in every episode ({reasons.most_common(1)[0][0]})"
-
-
-def _mean_of(name: str) -> Compute:
-    """Mean over episodes of the per-episode score ``name`` (where defined)."""
-
-    def compute(items: Sequence[EpisodeLike], *, rng_seed: int = 0) -> Estimate:
-        kept, errored = split_errored(items)
-        values = [float(v) for m in kept if (v := getattr(m, name)) is not None]
-        excluded = errored + len(kept) - len(values)
-        if not values:
-            return Estimate(None, None, None, 0, _why_none(kept, name), excluded)
-        low, high = bootstrap_ci(values, rng_seed=rng_seed)
-        reason = None if low is not None else "one episode: no confidence interval"
-        return Estimate(statistics.fmean(values), low, high, len(values), reason, excluded)
-
-    return compute
-
-
-def _ratio_of(name: str, num: str, den: str) -> Compute:
-    """Pooled ``sum num / sum den`` of two per-episode counts, bootstrapped by episode."""
-
-    def compute(items: Sequence[EpisodeLike], *, rng_seed: int = 0) -> Estimate:
-        kept, errored = split_errored(items)
-        if not kept:
-            return Estimate(None, None, None, 0, _why_none(kept, name), errored)
-        pairs = np.array([(getattr(m, num), getattr(m, den)) for m in kept], dtype=float)
-        total_num, total_den = pairs.sum(axis=0)
-        if total_den == 0 and total_num == 0:
-            why = kept[0].reasons.get(name) or f"{name} has an empty denominator"
-            return Estimate(None, None, None, len(kept), why, errored)
-
-        def ratio(rows: np.ndarray) -> np.ndarray:  # exact sums: the counts are whole numbers
-            sums = rows.sum(axis=1)
-            return np.divide(sums[:, 0], sums[:, 1])
-
-        low, high = bootstrap_ci(pairs, ratio, rng_seed=rng_seed)
-        value = math.inf if total_den == 0 else float(total_num / total_den)
-        reason = None
-        if math.isinf(value):
-            reason = f"{name}: no event in any episode, the estimate is unbounded"
-        return Estimate(value, low, high, len(kept), reason, errored)
-
-    return compute
-
-
-def _consensus(items: Sequence[EpisodeLike], *, rng_seed: int = 0) -> Estimate:
-    """:func:`consensus` share, bootstrapped over episodes."""
+def _estimate(name: str, items: Sequence[EpisodeLike], *, rng_seed: int = 0) -> Estimate:
+    """Gate metric ``name`` over the non-errored episodes (the errored ones are ``excluded``)."""
     kept, errored = split_errored(items)
-    result = consensus(kept)
-    if result.share is None:
+    if not kept:
         return Estimate(None, None, None, 0, "no non-errored episode", errored)
-    onehot = np.zeros((len(kept), len(FOCAL_COLUMNS)))
-    onehot[np.arange(len(kept)), [FOCAL_COLUMNS.index(m.chosen_letter) for m in kept]] = 1.0
-    rooms = [FOCAL_COLUMNS.index(c) for c in FOCAL_COLUMNS if c != OTHER_LETTER]
+    if name == "ebbinghaus_r2":
+        return _r2(kept, errored, rng_seed)
+    if name == "consensus":
+        return _consensus(kept, errored, rng_seed)
+    if name in RATIO_METRICS:
+        return _ratio(name, kept, errored, rng_seed)
+    return _mean(name, kept, errored, rng_seed)
+
+
+def _mean(name: str, kept: list[EpisodeMetrics], errored: int, rng_seed: int) -> Estimate:
+    """Mean over episodes of the per-episode score ``name`` (where defined)."""
+    values = [float(v) for m in kept if (v := getattr(m, name)) is not None]
+    excluded = errored + len(kept) - len(values)
+    if not values:
+        reasons = Counter(m.reasons.get(name, "undefined") for m in kept)
+        why = f"undefined in every episode ({reasons.most_common(1)[0][0]})"
+        return Estimate(None, None, None, 0, why, excluded)
+    low, high = bootstrap_ci(values, rng_seed=rng_seed)
+    reason = None if low is not None else "one episode: no confidence interval"
+    return Estimate(statistics.fmean(values), low, high, len(values), reason, excluded)
+
+
+def _ratio(name: str, kept: list[EpisodeMetrics], errored: int, rng_seed: int) -> Estimate:
+    """Pooled ``sum num / sum den`` of two per-episode counts (:data:`RATIO_METRICS`),
+    bootstrapped by episode."""
+    num, den = RATIO_METRICS[name]
+    pairs = np.array([(getattr(m, num), getattr(m, den)) for m in kept], dtype=float)
+    total_num, total_den = pairs.sum(axis=0)
+    if total_den == 0 and total_num == 0:
+        why = kept[0].reasons.get(name) or f"{name} has an empty denominator"
+        return Estimate(None, None, None, len(kept), why, errored)
+
+    def ratio(rows: np.ndarray) -> np.ndarray:  # exact sums: the counts are whole numbers
+        sums = rows.sum(axis=1)
+        return sums[:, 0] / sums[:, 1]
+
+    low, high = bootstrap_ci(pairs, ratio, rng_seed=rng_seed)
+    if total_den == 0:
+        reason = f"{name}: no event in any episode, the estimate is unbounded"
+        return Estimate(math.inf, low, high, len(kept), reason, errored)
+    return Estimate(float(total_num / total_den), low, high, len(kept), None, errored)
+
+
+def _consensus(kept: list[EpisodeMetrics], errored: int, rng_seed: int) -> Estimate:
+    """:func:`consensus` share, bootstrapped over episodes."""
+    rooms = [c for c in FOCAL_COLUMNS if c != OTHER_LETTER]
+    chose = np.array([[m.chosen_letter == c for c in rooms] for m in kept], dtype=float)
 
     def share(rows: np.ndarray) -> np.ndarray:
-        return rows.sum(axis=1)[:, rooms].max(axis=1) / len(kept)
+        return rows.sum(axis=1).max(axis=1) / len(kept)
 
-    low, high = bootstrap_ci(onehot, share, rng_seed=rng_seed)
-    return Estimate(result.share, low, high, len(kept), None, errored)
+    low, high = bootstrap_ci(chose, share, rng_seed=rng_seed)
+    return Estimate(consensus(kept).share, low, high, len(kept), None, errored)
 
 
-def _r2(items: Sequence[EpisodeLike], *, rng_seed: int = 0) -> Estimate:
+def _r2(kept: list[EpisodeMetrics], errored: int, rng_seed: int) -> Estimate:
     """Pooled R^2 (value from :func:`ebbinghaus_fit`); CI from resampled episode histograms."""
-    kept, errored = split_errored(items)
-    if not kept:
-        return Estimate(None, None, None, 0, "no non-errored episode", errored)
     full = pooled_fit(kept, None)
-    spells = [m.ttf_spells for m in kept]
-    mapped = np.array([sum(m.mapped_by_category.values()) for m in kept], dtype=float)
-    total = np.array([sum(m.objects_by_category.values()) for m in kept], dtype=float)
     if full.r2 is None:
         return Estimate(None, None, None, len(kept), full.reason, errored)
     if len(kept) < 2:
         return Estimate(full.r2, None, None, 1, "one episode: no confidence interval", errored)
-    horizon = max(s.duration for ss in spells for s in ss)
-    leave = np.zeros((len(kept), horizon + 1))
-    death = np.zeros((len(kept), horizon + 1))
-    for i, ss in enumerate(spells):
-        for s in ss:
-            leave[i, s.duration] += 1
-            death[i, s.duration] += s.forgotten
-    weights = _histogram_weights(rng_seed, len(kept))
+    # Per episode, the first spells ending at each duration, and the events among them.
+    cells = np.array(
+        [(i, s.duration, s.forgotten) for i, m in enumerate(kept) for s in m.ttf_spells]
+    )
+    at = (cells[:, 0], cells[:, 1])
+    leave, death = np.zeros((2, len(kept), cells[:, 1].max() + 1))
+    np.add.at(leave, at, 1.0)
+    np.add.at(death, at, cells[:, 2])
+    mapped = np.array([sum(m.mapped_by_category.values()) for m in kept], dtype=float)
+    total = np.array([sum(m.objects_by_category.values()) for m in kept], dtype=float)
+    weights = draw_counts(resample_rows(rng_seed, len(kept), N_RESAMPLES))
     draws = _r2_of_histograms(weights @ leave, weights @ death, weights @ mapped, weights @ total)
     draws = draws[np.isfinite(draws)]
     if not len(draws):
         return Estimate(full.r2, None, None, len(kept), "R^2 undefined in every resample", errored)
     low, high = np.quantile(draws, [0.025, 0.975])
     return Estimate(full.r2, float(low), float(high), len(kept), None, errored)
-
-
-@functools.lru_cache(maxsize=4)
-def _histogram_weights(rng_seed: int, n: int) -> np.ndarray:
-    """Draw counts of ``n`` episodes in :func:`_r2`'s resamples (read-only, computed once),
-    one ``default_rng(rng_seed).integers(0, n, n)`` per resample."""
-    rng = np.random.default_rng(rng_seed)
-    return draw_counts(np.stack([rng.integers(0, n, n) for _ in range(N_RESAMPLES)]))
 
 
 def _r2_of_histograms(
@@ -193,19 +181,12 @@ RATIO_METRICS: Final[Mapping[str, tuple[str, str]]] = {
     "memory_strength": ("retained_steps", "forget_events"),
     "parse_failure_rate": ("parse_failures", "steps"),
 }
-#: Gate metrics with an estimator of their own; every other one is the mean of its
-#: per-episode score (:func:`_mean_of`) or a pooled ratio (:data:`RATIO_METRICS`).
-_ESTIMATORS: Final[Mapping[str, Compute]] = {
-    "ebbinghaus_r2": _r2,
-    "consensus": _consensus,
-    "errored_rate": _errored_rate,
-}
 
 
 def _estimator(name: str) -> Compute:
-    if name in RATIO_METRICS:
-        return _ratio_of(name, *RATIO_METRICS[name])
-    return _ESTIMATORS.get(name) or _mean_of(name)
+    if name == "errored_rate":
+        return _errored_rate
+    return functools.partial(_estimate, name)
 
 
 #: Metric name -> gate metric. thresholds.yaml metric names must be keys of this mapping. Name,

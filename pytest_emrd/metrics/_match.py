@@ -36,6 +36,7 @@ has grown by :data:`REVISIT`); a label keeps its previous object on exact ties. 
 
 from __future__ import annotations
 
+import functools
 import math
 from collections import Counter
 from collections.abc import Sequence
@@ -143,7 +144,8 @@ def _procrustes(pred: np.ndarray, true: np.ndarray) -> Motion:
     cross = float(np.sum(a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]))
     theta = math.atan2(cross, dot) if math.hypot(dot, cross) > COINCIDENT_M**2 else 0.0
     c, s = math.cos(theta), math.sin(theta)
-    return Motion(c, s, cq[0] - (c * cp[0] - s * cp[1]), cq[1] - (s * cp[0] + c * cp[1]))
+    tx, tz = cq - _moved(cp[None], Motion(c, s, 0.0, 0.0))[0]
+    return Motion(c, s, tx, tz)
 
 
 def rigid_fit(pred: np.ndarray, true: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -172,7 +174,12 @@ def layout_scale(xy: np.ndarray) -> float:
     """
     if len(xy) < 2:
         return 0.0
-    return float(np.sqrt(np.mean(np.sum((xy - xy.mean(axis=0)) ** 2, axis=1))))
+    return float(np.sqrt(np.mean(_spread(xy))))
+
+
+def _spread(xy: np.ndarray) -> np.ndarray:
+    """Squared distance of each point (k x 2) from the points' centroid."""
+    return np.sum((xy - xy.mean(axis=0)) ** 2, axis=1)
 
 
 def exp_ratio(error: float, scale: float) -> float:
@@ -322,8 +329,8 @@ def _refit(problem: _Problem, pairs: Pairs, motion: Motion) -> tuple[Motion, boo
     if len(pairs) >= 2 and np.ptp(p, axis=0).max() > COINCIDENT_M:
         return _procrustes(p, q), True
     moved = _moved(p[:1], motion)[0]
-    return Motion(
-        motion.c, motion.s, motion.tx + q[0, 0] - moved[0], motion.tz + q[0, 1] - moved[1]
+    return motion._replace(
+        tx=motion.tx + q[0, 0] - moved[0], tz=motion.tz + q[0, 1] - moved[1]
     ), False
 
 
@@ -350,48 +357,41 @@ def _hypotheses(problem: _Problem) -> tuple[np.ndarray, bool]:
     of entries gives a direction (translations only, the model frame's own rotation)."""
     layout, pred = problem.layout, problem.pred
     kinds = problem.kinds
-    spread = _units(np.sum((pred - pred.mean(axis=0)) ** 2, axis=1)).tolist()
+    spread = _units(_spread(pred)).tolist()
     order = sorted(range(len(kinds)), key=lambda i: (len(layout.cols_of[kinds[i]]), -spread[i], i))
     taken: Counter[int] = Counter()  # one entry of each type in turn: copies of a type
-    turn = []  # cannot crowd the others out
+    turn: dict[int, int] = {}  # cannot crowd the others out
     for i in order:
         taken[kinds[i]] += 1
-        turn.append(taken[kinds[i]])
-    base = [order[p] for p in sorted(range(len(order)), key=turn.__getitem__)][:BASE_ENTRIES]
-    found = [
-        (a, b, dist, *layout.pairs_of(kinds[a], kinds[b]))
-        for a, b in combinations(base, 2)
-        if (dist := math.dist(pred[a], pred[b])) > COINCIDENT_M
-    ]
+        turn[i] = taken[kinds[i]]
+    base = sorted(order, key=turn.__getitem__)[:BASE_ENTRIES]
     true = layout.true
-    if found:
-        sizes = [len(pairs) for *_, pairs, _ in found]
-        keep = np.concatenate([np.abs(span - d) for _, _, d, _, span in found]) <= 2 * GATE_M
-        oab = np.concatenate([pairs for *_, pairs, _ in found])[keep]
-        pa = pred[np.repeat([a for a, *_ in found], sizes)[keep]]
-        pb = pred[np.repeat([b for _, b, *_ in found], sizes)[keep]]
-    if not found or not len(oab):  # one entry, or coincident entries: no direction to read
+    rows = [np.zeros((0, 4), dtype=int)]  # (entry a, entry b, object o_a, object o_b)
+    for a, b in combinations(base, 2):
+        dist = math.dist(pred[a], pred[b])
+        if dist > COINCIDENT_M:
+            pairs, span = layout.pairs_of(kinds[a], kinds[b])
+            near = pairs[np.abs(span - dist) <= 2 * GATE_M]
+            rows.append(np.column_stack([np.full((len(near), 2), (a, b)), near]))
+    ab = np.concatenate(rows)
+    if not len(ab):  # one entry, or coincident entries: no direction to read
         cols = list(layout.cols_of[kinds[base[0]]])
         shift = true[cols] - pred[base[0]]
         return np.column_stack([np.ones(len(cols)), np.zeros(len(cols)), shift]), False
-    qa, qb = true[oab[:, 0]], true[oab[:, 1]]
+    pa, pb, qa, qb = pred[ab[:, 0]], pred[ab[:, 1]], true[ab[:, 2]], true[ab[:, 3]]
     u, v = pb - pa, qb - qa
     theta = np.arctan2(u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0], np.sum(u * v, axis=1))
     c, s = np.cos(theta), np.sin(theta)
-    m, n = (pa + pb) / 2, (qa + qb) / 2
-    return np.column_stack(
-        [c, s, n[:, 0] - (c * m[:, 0] - s * m[:, 1]), n[:, 1] - (s * m[:, 0] + c * m[:, 1])]
-    ), True
+    shift = (qa + qb) / 2 - _moved((pa + pb) / 2, Motion(c, s, 0.0, 0.0))  # midpoint onto midpoint
+    return np.column_stack([c, s, shift]), True
 
 
 def _scores(problem: _Problem, motions: np.ndarray) -> np.ndarray:
     """MSAC score of each motion (rows ``(c, s, tx, tz)``): summed capped squared distance of
     every entry to the nearest object of its type, in rounded units."""
-    c, s, tx, tz = (motions[:, k : k + 1] for k in range(4))
     rows, cols = problem.candidates
-    x, z = problem.pred[rows, 0], problem.pred[rows, 1]
-    true = problem.layout.true
-    d2 = (c * x - s * z + tx - true[cols, 0]) ** 2 + (s * x + c * z + tz - true[cols, 1]) ** 2
+    moved = _moved(problem.pred[rows], Motion(*motions.T[:, :, None]))  # motion x axis x candidate
+    d2 = np.sum((moved - problem.layout.true[cols].T) ** 2, axis=1)
     nearest = np.minimum.reduceat(d2, problem.starts, axis=1)
     return np.minimum(_units(nearest), _UNITS_GATE).sum(axis=1)
 
@@ -412,13 +412,9 @@ def _solve(
         agree -= _units(d2.sum(axis=1)) <= _UNITS_GATE
     order = np.lexsort((agree, _scores(problem, motions)))[:CANDIDATES]
     starts = [(m, True) for m in seeds] + [(Motion(*motions[i].tolist()), read) for i in order]
-    best: tuple[tuple[float, int, int], Pairs, Motion, bool] | None = None
-    tried: set[Pairs] = set()
-    for motion, was_read in starts:
-        pairs, motion, was_read = _refine(problem, motion, prefer, was_read)
-        if pairs in tried:
-            continue
-        tried.add(pairs)
+
+    @functools.cache  # matchings refined from several starts often repeat
+    def rank(pairs: Pairs) -> tuple[float, int, int]:
         rows, cols = [i for i, _ in pairs], [j for _, j in pairs]
         value = pa_value(
             problem.pred[rows],
@@ -426,11 +422,10 @@ def _solve(
             len(problem.kinds) - len(pairs),
             problem.layout.g_base,
         )
-        rank = (round(value / TIE_PA), len(pairs), len(named.intersection(pairs)))
-        if best is None or rank > best[0]:
-            best = (rank, pairs, motion, was_read)
-    assert best is not None
-    return best[1], best[2], best[3]
+        return round(value / TIE_PA), len(pairs), len(named.intersection(pairs))
+
+    refined = [_refine(problem, motion, prefer, was_read) for motion, was_read in starts]
+    return max(refined, key=lambda found: rank(found[0]))  # the first of the best
 
 
 Key = tuple[tuple[str, int, float, float], ...]
@@ -452,8 +447,6 @@ class StepMatch:
     identity: dict[str, int]
     """Label -> object index (objects sorted by id) of the object it stands for."""
     unmatched: tuple[str, ...]
-    unrecognised: tuple[str, ...]
-    duplicates: tuple[str, ...]
     motion: Motion | None
     """The frame found (None: no recognised entry, or a frame whose rotation the map does
     not determine: one point, or points giving no direction; such a frame is not carried)."""
@@ -489,8 +482,7 @@ class Matcher:
     """:func:`match_map` bound to one episode's ground truth, reusable across its steps."""
 
     def __init__(self, objects: Sequence[GroundTruthObject], g_base: int | None = None) -> None:
-        ordered = sorted(objects, key=lambda o: o.object_id)
-        self.objects = ordered
+        self.objects = ordered = sorted(objects, key=lambda o: o.object_id)
         self.types = TypeResolver(o.object_type for o in ordered)
         kinds = [self.types.index[o.object_type] for o in ordered]
         cols_of = {
@@ -498,36 +490,32 @@ class Matcher:
             for k in range(len(self.types.names))
         }
         true = np.array([(o.x, o.z) for o in ordered], dtype=float).reshape(-1, 2)
-        g = len(ordered) if g_base is None else g_base
-        self._layout = _Layout(true, np.array(kinds, dtype=int), cols_of, g)
-        self._points: list[tuple[float, float]] = [(o.x, o.z) for o in ordered]
+        g_base = len(ordered) if g_base is None else g_base
+        self._layout = _Layout(true, np.array(kinds, dtype=int), cols_of, g_base)
+        self._points: list[list[float]] = true.tolist()  # for per-point arithmetic in Python
         self._index = {o.object_id: j for j, o in enumerate(ordered)}
 
     def step(self, entries: Sequence[MapEntry], previous: StepMatch | None = None) -> StepMatch:
         """Match one step's map; ``previous`` (the step before) seeds the frame and breaks
         exact ties in favour of the labels' previous objects (module docstring)."""
         seen = keyed(entries)
-        counts = Counter(e.label for e in entries)
         kind_of = {lb: self.types.resolve(e.object_type, e.label) for lb, e in seen.items()}
         rows = [
             (lb, k, float(seen[lb].x), float(seen[lb].z)) for lb, k in kind_of.items() if k >= 0
         ]
         xz = np.array([r[2:] for r in rows], dtype=float).reshape(-1, 2)
-        spread = _units(np.sum((xz - xz.mean(axis=0)) ** 2, axis=1)).tolist() if rows else []
+        spread = _units(_spread(xz)).tolist() if rows else []
         order = sorted(range(len(rows)), key=lambda i: (rows[i][1], spread[i], rows[i][0]))
         key = tuple(rows[i] for i in order)
         if previous is not None and previous.key == key:
-            found = previous.identity, previous.unmatched, previous.motion, previous.solved
-        else:
-            found = (previous and self._extend(previous, key)) or self._match(key, previous)
+            return replace(previous, entries=seen, kind_of=kind_of)
+        found = (previous and self._extend(previous, key)) or self._match(key, previous)
         identity, unmatched, motion, solved = found
         return StepMatch(
             entries=seen,
             kind_of=kind_of,
             identity=identity,
             unmatched=unmatched,
-            unrecognised=tuple(sorted(lb for lb, k in kind_of.items() if k < 0)),
-            duplicates=tuple(sorted(lb for lb, n in counts.items() if n > 1)),
             motion=motion,
             key=key,
             solved=solved,
@@ -551,10 +539,9 @@ class Matcher:
         cols_of = self._layout.cols_of
         taken = set(identity.values())
         freed = set(previous.identity.values()) - taken
-        if freed and unmatched:
-            for _, k, x, z in (e for e in key if e[0] in unmatched):
-                if self._nearest(motion, x, z, [j for j in cols_of[k] if j in freed]) >= 0:
-                    return None
+        for _, k, x, z in (e for e in key if e[0] in unmatched):
+            if self._nearest(motion, x, z, [j for j in cols_of[k] if j in freed]) >= 0:
+                return None
         for lb, k, x, z in changed:
             best = self._nearest(motion, x, z, [j for j in cols_of[k] if j not in taken])
             if best < 0:
@@ -603,31 +590,21 @@ class Matcher:
 
     def matching(self, found: StepMatch) -> Matching:
         """The :class:`Matching` of one matched map."""
-        true = self._layout.true
-        pairs = sorted(
-            (
-                MatchedPair(
-                    lb,
-                    self.objects[j].object_id,
-                    self.objects[j].object_type,
-                    float(found.entries[lb].x),
-                    float(found.entries[lb].z),
-                    float(true[j, 0]),
-                    float(true[j, 1]),
-                )
-                for lb, j in found.identity.items()
-            ),
-            key=lambda p: p.object_id,
-        )
+        pairs = []
+        for lb, j in sorted(found.identity.items(), key=lambda item: item[1]):  # by object id
+            o, e = self.objects[j], found.entries[lb]
+            x, z = self._points[j]
+            pairs.append(MatchedPair(lb, o.object_id, o.object_type, float(e.x), float(e.z), x, z))
         first_kind: dict[str, int] = {}  # Eq. AEC counts distinct labels: a label's first entry
         for lb, k in found.kind_of.items():
             first_kind.setdefault(found.entries[lb].label, k)
         per_type = Counter(k for k in first_kind.values() if k >= 0)
         capacity = self._layout.cols_of
         covered = sum(min(n, len(capacity[k])) for k, n in per_type.items())
-        return Matching(
-            tuple(pairs), found.unmatched, found.unrecognised, found.duplicates, covered
-        )
+        unrecognised = tuple(sorted(lb for lb, k in found.kind_of.items() if k < 0))
+        counts = Counter(e.label for e in found.entries.values())
+        duplicates = tuple(sorted(lb for lb, n in counts.items() if n > 1))
+        return Matching(tuple(pairs), found.unmatched, unrecognised, duplicates, covered)
 
     def held(self, found: StepMatch) -> dict[str, str]:
         """Object id -> label of one matched map."""

@@ -8,6 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from pytest_emrd.errors import ConfigError
+from pytest_emrd.metrics._embedding import minilm_embed
 
 Embed = Callable[[Sequence[str]], np.ndarray]
 
@@ -55,11 +56,7 @@ def representative_reasoning(
     skipped = len(rationales) - len(kept)
     if not kept:
         return Representative(None, None, None, 0, skipped)
-    if embed is None:
-        from pytest_emrd.metrics._embedding import minilm_embed
-
-        embed = minilm_embed
-    vectors = np.asarray(embed([r for _, r in kept]), dtype=float)
+    vectors = np.asarray((embed or minilm_embed)([r for _, r in kept]), dtype=float)
     if vectors.ndim != 2 or vectors.shape[0] != len(kept):
         raise ConfigError(
             f"embed returned shape={vectors.shape}; it must return one row per text "

@@ -9,6 +9,7 @@ right-censored); censoring is assumed non-informative, as Kaplan-Meier and the M
 
 from __future__ import annotations
 
+import bisect
 import functools
 import math
 from collections.abc import Callable, Mapping, Sequence
@@ -16,6 +17,7 @@ from dataclasses import dataclass
 from typing import Final
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from pytest_emrd.errors import ConfigError, check_choice, check_range
 
@@ -51,7 +53,7 @@ def resample_rows(rng_seed: int, n: int, n_resamples: int) -> np.ndarray:
 
 
 def bootstrap_ci(
-    data: Sequence[float] | np.ndarray,
+    data: ArrayLike,
     statistic: Callable[[np.ndarray], np.ndarray] | None = None,
     *,
     rng_seed: int = 0,
@@ -78,7 +80,7 @@ def bootstrap_ci(
     arr = np.asarray(data, dtype=float)
     if len(arr) < 2:
         return None, None
-    fn = statistic if statistic is not None else (lambda a: a.mean(axis=1))
+    fn = statistic or (lambda a: a.mean(axis=1))
     idx = resample_rows(rng_seed, len(arr), n_resamples)
     with np.errstate(divide="ignore", invalid="ignore"):  # also inf - inf between inf values
         values = np.asarray(fn(arr[idx]), dtype=float)
@@ -86,7 +88,7 @@ def bootstrap_ci(
         if not len(values):
             return None, None
         alpha = (1.0 - CONFIDENCE) / 2.0
-        ends = np.quantile(values, [alpha, 1.0 - alpha], method="linear")
+        ends = np.quantile(values, [alpha, 1.0 - alpha])
     low, high = np.where(np.isnan(ends), math.inf, ends).tolist()
     return low, high
 
@@ -115,7 +117,7 @@ class ChiSquare:
     reason: str | None = None
 
 
-def _table(table: Sequence[Sequence[float]] | np.ndarray, name: str) -> np.ndarray:
+def _table(table: ArrayLike, name: str) -> np.ndarray:
     arr = np.asarray(table, dtype=float)
     if arr.ndim != 2 or arr.size == 0:
         raise ConfigError(f"{name} shape={arr.shape} must be a non-empty 2-D table of counts.")
@@ -124,7 +126,7 @@ def _table(table: Sequence[Sequence[float]] | np.ndarray, name: str) -> np.ndarr
     return arr
 
 
-def chi_square(table: Sequence[Sequence[float]] | np.ndarray) -> ChiSquare:
+def chi_square(table: ArrayLike) -> ChiSquare:
     r"""Pearson chi-square test of independence (no continuity correction).
 
     .. math::
@@ -140,20 +142,23 @@ def chi_square(table: Sequence[Sequence[float]] | np.ndarray) -> ChiSquare:
     :returns: A :class:`ChiSquare`: statistic, dof, p-value, dropped rows and columns, reason.
     """
     arr = _table(table, "table")
-    rows = arr.sum(axis=1) > 0
-    cols = arr.sum(axis=0) > 0
-    dropped = tuple(f"row {i}" for i in np.flatnonzero(~rows)) + tuple(
-        f"column {j}" for j in np.flatnonzero(~cols)
-    )
-    kept = arr[rows][:, cols]
+    kept, dropped = _drop_empty(arr)
     n = round(float(arr.sum()))
-    if kept.shape[0] < 2 or kept.shape[1] < 2:
+    if min(kept.shape) < 2:
         why = "fewer than two non-empty rows or columns: independence is untestable"
         return ChiSquare(None, 0, None, n, dropped, why)
     from scipy.stats import chi2_contingency  # heavy: imported on first use
 
     res = chi2_contingency(kept, correction=False)
     return ChiSquare(float(res.statistic), int(res.dof), float(res.pvalue), n, dropped)
+
+
+def _drop_empty(arr: np.ndarray) -> tuple[np.ndarray, tuple[str, ...]]:
+    """``arr`` without its all-zero rows and columns, and their names (``row 2``, ``column 0``)."""
+    rows, cols = arr.sum(axis=1) > 0, arr.sum(axis=0) > 0
+    dropped = [f"row {i}" for i in np.flatnonzero(~rows)]
+    dropped += [f"column {j}" for j in np.flatnonzero(~cols)]
+    return arr[rows][:, cols], tuple(dropped)
 
 
 @dataclass(frozen=True)
@@ -165,7 +170,7 @@ class FisherExact:
     p_value: float
 
 
-def fisher_exact_2x2(table: Sequence[Sequence[float]] | np.ndarray) -> FisherExact:
+def fisher_exact_2x2(table: ArrayLike) -> FisherExact:
     """Two-sided Fisher exact test (:func:`scipy.stats.fisher_exact`) of a 2 x 2 count table.
 
     Rows are the reference and the compared group, columns the binary outcome (e.g. chose the
@@ -185,7 +190,7 @@ def fisher_exact_2x2(table: Sequence[Sequence[float]] | np.ndarray) -> FisherExa
     return FisherExact(float(res.statistic), float(res.pvalue))
 
 
-def cramers_v(table: Sequence[Sequence[float]] | np.ndarray) -> float | None:
+def cramers_v(table: ArrayLike) -> float | None:
     r"""Cramer's V effect size of a k x c table (no bias correction).
 
     .. math::
@@ -203,8 +208,8 @@ def cramers_v(table: Sequence[Sequence[float]] | np.ndarray) -> float | None:
     if res.statistic is None:
         return None
     arr = _table(table, "table")
-    shape = (int(np.sum(arr.sum(axis=1) > 0)), int(np.sum(arr.sum(axis=0) > 0)))
-    return math.sqrt(res.statistic / (float(arr.sum()) * (min(shape) - 1)))
+    kept, _ = _drop_empty(arr)
+    return math.sqrt(res.statistic / (float(arr.sum()) * (min(kept.shape) - 1)))
 
 
 @dataclass(frozen=True)
@@ -235,24 +240,20 @@ def anova_groups(groups: Mapping[str, Sequence[float]]) -> Anova:
     :param groups: Group name -> its values.
     :returns: An :class:`Anova`: F, p-value, group sizes, or None with a reason.
     """
-    clean = {
-        name: np.asarray([v for v in values if math.isfinite(v)], dtype=float)
-        for name, values in groups.items()
-    }
-    clean = {name: v for name, v in clean.items() if len(v)}
+    finite = {name: [v for v in values if math.isfinite(v)] for name, values in groups.items()}
+    clean = {name: np.asarray(v, dtype=float) for name, v in finite.items() if v}
     sizes = {name: len(v) for name, v in clean.items()}
-    n = sum(sizes.values())
-    if len(clean) < 2:
+    k, n = len(clean), sum(sizes.values())
+    if k < 2:
         return Anova(None, None, 0.0, 0.0, sizes, "fewer than two conditions with finite values")
-    if n - len(clean) < 1:
-        return Anova(None, None, len(clean) - 1.0, 0.0, sizes, "no within-condition variation")
-    pooled = np.concatenate(list(clean.values()))
+    if n == k:
+        return Anova(None, None, k - 1.0, 0.0, sizes, "no within-condition variation")
     within = sum(float(np.sum((v - v.mean()) ** 2)) for v in clean.values())
     if within == 0.0:
         why = "every condition is constant: F is undefined"
-        if np.ptp(pooled) == 0.0:
+        if np.ptp(np.concatenate(list(clean.values()))) == 0.0:
             why = "all values are identical: F is undefined"
-        return Anova(None, None, len(clean) - 1.0, n - len(clean) + 0.0, sizes, why)
+        return Anova(None, None, k - 1.0, float(n - k), sizes, why)
     from statsmodels.stats.oneway import anova_oneway  # heavy: imported on first use
 
     res = anova_oneway(list(clean.values()), use_var="equal")
@@ -261,9 +262,7 @@ def anova_groups(groups: Mapping[str, Sequence[float]]) -> Anova:
     )
 
 
-def _spell_arrays(
-    durations: Sequence[float] | np.ndarray, observed: Sequence[bool] | np.ndarray
-) -> tuple[np.ndarray, np.ndarray]:
+def _spell_arrays(durations: ArrayLike, observed: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
     t = np.asarray(durations, dtype=float).reshape(-1)
     e = np.asarray(observed, dtype=bool).reshape(-1)
     if t.shape != e.shape:
@@ -278,9 +277,7 @@ def _spell_arrays(
     return t, e
 
 
-def efc(
-    durations: Sequence[float] | np.ndarray, observed: Sequence[bool] | np.ndarray
-) -> float | None:
+def efc(durations: ArrayLike, observed: ArrayLike) -> float | None:
     r"""Ebbinghaus memory strength: the censored exponential MLE (Eq. SMLE).
 
     .. math::
@@ -333,13 +330,12 @@ class AnchoredKM:
 
     def at(self, t: float) -> float:
         """Anchored survival at time ``t`` (right-continuous step function, ``S(t<0) = C``)."""
-        i = int(np.searchsorted(np.asarray(self.times), t, side="right")) - 1
-        return self.survival[max(i, 0)]
+        return self.survival[max(bisect.bisect_right(self.times, t) - 1, 0)]
 
 
 def anchored_km(
-    durations: Sequence[float] | np.ndarray,
-    observed: Sequence[bool] | np.ndarray,
+    durations: ArrayLike,
+    observed: ArrayLike,
     *,
     coverage: float,
 ) -> AnchoredKM:
@@ -373,15 +369,15 @@ def anchored_km(
     table = fitter.event_table
     factor = fitter.survival_function_.to_numpy()[:, 0]
     band = fitter.confidence_interval_survival_function_.to_numpy()
-    band = np.where(np.isfinite(band), band, factor[:, None])
+    low, high = (c * np.where(np.isfinite(band), band, factor[:, None])).T.tolist()
     return AnchoredKM(
         coverage=c,
         times=tuple(table.index.to_numpy(dtype=float).tolist()),
         survival=tuple((c * factor).tolist()),
         at_risk=tuple(table["at_risk"].to_numpy(dtype=int).tolist()),
         events=tuple(table["observed"].to_numpy(dtype=int).tolist()),
-        ci_low=tuple((c * band[:, 0]).tolist()),
-        ci_high=tuple((c * band[:, 1]).tolist()),
+        ci_low=tuple(low),
+        ci_high=tuple(high),
     )
 
 
@@ -407,8 +403,8 @@ class EbbinghausFit:
 
 
 def ebbinghaus_fit(
-    durations: Sequence[float] | np.ndarray,
-    observed: Sequence[bool] | np.ndarray,
+    durations: ArrayLike,
+    observed: ArrayLike,
     *,
     coverage: float,
     points: str = "durations",
@@ -454,10 +450,11 @@ def ebbinghaus_fit(
         grid = np.arange(0.0, math.floor(km.times[-1]) + 1.0)
     s_hat = np.array([km.at(x) for x in grid])
     reason = None if n_events else "no forgetting event: memory strength is unbounded"
-    ss_tot = float(np.sum((s_hat - s_hat.mean()) ** 2)) if len(s_hat) else 0.0
-    if ss_tot <= 1e-15:
-        why = "the Kaplan-Meier curve does not vary: R^2 is undefined"
-        return EbbinghausFit(coverage, strength, None, len(t), n_events, reason or why, points)
-    model = coverage * np.exp(-grid / strength)
-    r2 = 1.0 - float(np.sum((s_hat - model) ** 2)) / ss_tot
+    ss_tot = float(np.sum((s_hat - s_hat.mean()) ** 2))  # every grid holds a point
+    r2 = None
+    if ss_tot > 1e-15:
+        model = coverage * np.exp(-grid / strength)
+        r2 = 1.0 - float(np.sum((s_hat - model) ** 2)) / ss_tot
+    else:
+        reason = reason or "the Kaplan-Meier curve does not vary: R^2 is undefined"
     return EbbinghausFit(coverage, strength, r2, len(t), n_events, reason, points)

@@ -28,7 +28,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from itertools import groupby
+from itertools import groupby, pairwise
 
 import numpy as np
 
@@ -101,9 +101,7 @@ def first_spells(spells: tuple[Spell, ...]) -> tuple[Spell, ...]:
     One spell per object: later spells are conditional on re-discovery and would weight
     frequently re-seen objects (doorways) more than the rest.
     """
-    first: dict[str, Spell] = {}
-    for s in spells:
-        first.setdefault(s.object_id, s)
+    first = {s.object_id: s for s in reversed(spells)}  # reversed: the earliest is kept
     return tuple(sorted(first.values(), key=lambda s: s.discovery_rank))
 
 
@@ -114,44 +112,36 @@ def track_episode(traj: Trajectory) -> Track:
     :returns: Its :class:`Track`: what the temporal metrics read.
     """
     gt = traj.ground_truth
-    matcher = Matcher(gt.objects, len(gt.discoverable_ids))
-    category = {o.object_id: o.category for o in gt.objects}
-    scale = layout_scale(np.array([(o.x, o.z) for o in gt.objects], dtype=float).reshape(-1, 2))
     g_base = len(gt.discoverable_ids)
-    held: list[dict[str, str]] = []
+    matcher = Matcher(gt.objects, g_base)
+    scale = layout_scale(np.array([(o.x, o.z) for o in gt.objects], dtype=float).reshape(-1, 2))
     matches: list[StepMatch] = []
     tbs: list[float] = []
     first_pos: dict[str, tuple[float, float]] = {}
-    loads: list[int] = []
-    forgets: list[bool] = []
     found: StepMatch | None = None
     for step in traj.steps:
         found = matcher.step(step.cognitive_map, found)
-        entries = found.entries  # label -> its first entry, in the model's order
-        for lb, e in entries.items():
-            first_pos.setdefault(lb, (e.x, e.z))
-        if matches and matches[-1].entries:  # Miller: m = |M_{t-1}| labels, M_{t-1} \ M_t
-            loads.append(len(matches[-1].entries))
-            forgets.append(not matches[-1].entries.keys() <= entries.keys())
         matches.append(found)
-        held.append(matcher.held(found))
+        for lb, e in found.entries.items():
+            first_pos.setdefault(lb, (e.x, e.z))
         if g_base:
             tbs.append(_tbs_value(found, first_pos, scale, g_base))
-    when = discovered(held, [m.entries for m in matches])
+    held = [matcher.held(m) for m in matches]
+    written = [m.entries for m in matches]  # label -> its first entry, in the model's order
+    # Miller's law: m = |M_{t-1}| labels for every non-empty M_{t-1}, and whether M_{t-1} \ M_t
+    loads = tuple(len(before) for before, _ in pairwise(written) if before)
+    forgets = tuple(not before.keys() <= now.keys() for before, now in pairwise(written) if before)
+    when = discovered(held, written)
     discovery = {oid: rank for rank, oid in enumerate(sorted(when, key=when.__getitem__), 1)}
-    final = matcher.match(traj.steps[-1].cognitive_map) if traj.steps else EMPTY_MATCHING
-    kind_of = {o.object_id: matcher.types.index[o.object_type] for o in gt.objects}
-    spells = _spells(traj, held, matches, kind_of, category, discovery)
-    visits = _visits([s.room for s in traj.steps])
     return Track(
         held=tuple(held),
-        final=final,
-        spells=spells,
+        final=matcher.match(traj.steps[-1].cognitive_map) if traj.steps else EMPTY_MATCHING,
+        spells=_spells(traj, held, matches, matcher, discovery),
         discovery=discovery,
         tbs=tuple(tbs),
-        miller_loads=tuple(loads),
-        miller_forgets=tuple(forgets),
-        visits=visits,
+        miller_loads=loads,
+        miller_forgets=forgets,
+        visits=_visits([s.room for s in traj.steps]),
         matcher=matcher,
     )
 
@@ -209,7 +199,7 @@ def _kept_pairings(
     writes it (walked backwards; :data:`_WITHDRAWN` marks a label whose later objects differ)."""
     later: dict[str, str] = {}
     kept: list[set[tuple[str, str]]] = [set() for _ in held]
-    for t in range(len(held) - 1, -1, -1):
+    for t in reversed(range(len(held))):
         holds = {label: oid for oid, label in held[t].items()}
         for oid, label in held[t].items():
             if later.get(label, oid) == oid:
@@ -224,37 +214,35 @@ def _spells(
     traj: Trajectory,
     held: list[dict[str, str]],
     matches: list[StepMatch],
-    kind_of: dict[str, int],
-    category: dict[str, str],
+    matcher: Matcher,
     discovery: dict[str, int],
 ) -> tuple[Spell, ...]:
     """Every spell, following each object's holder label (module docstring)."""
+    objects = {o.object_id: o for o in traj.ground_truth.objects}
     open_at: dict[str, tuple[int, str]] = {}  # object -> (start, holder label)
     done: list[tuple[int, str, int, bool]] = []  # (start, object, duration, forgotten)
     prev_visible: frozenset[str] = frozenset()
     for i, step in enumerate(traj.steps):
         t = step.index
         visible = frozenset(step.visible_ids)
-        if i > 0:
-            for oid in (prev_visible - visible) & held[i - 1].keys():
-                open_at[oid] = (t, held[i - 1][oid])
-        if open_at:
-            kinds = matches[i].kind_of
-            for oid, (start, label) in list(open_at.items()):
-                if oid in visible:
-                    done.append((start, oid, t - start, False))
-                elif kinds.get(label, -1) != kind_of[oid]:  # dropped or relabelled away
-                    done.append((start, oid, t - start + 1, True))
-                else:
-                    continue
-                del open_at[oid]
+        for oid in (prev_visible - visible) & held[i - 1].keys():  # none at i = 0
+            open_at[oid] = (t, held[i - 1][oid])
+        kinds = matches[i].kind_of
+        for oid, (start, label) in list(open_at.items()):
+            if oid in visible:
+                done.append((start, oid, t - start, False))
+            elif kinds.get(label, -1) != matcher.types.index[objects[oid].object_type]:
+                done.append((start, oid, t - start + 1, True))  # dropped, or relabelled away
+            else:
+                continue
+            del open_at[oid]
         prev_visible = visible
     if traj.steps:
         last = traj.steps[-1].index
         done.extend((s, oid, last - s + 1, False) for oid, (s, _) in open_at.items())
     done.sort()  # by start, then object: an object has one spell open at a time
     return tuple(
-        Spell(oid, category[oid], start, duration, forgotten, discovery[oid])
+        Spell(oid, objects[oid].category, start, duration, forgotten, discovery[oid])
         for start, oid, duration, forgotten in done
     )
 

@@ -52,11 +52,11 @@ SYNONYMS: Final[dict[str, tuple[str, ...]]] = {
 #: Words that open a qualifier phrase; the label is cut before the first of them.
 QUALIFIER_WORDS: Final[frozenset[str]] = frozenset(_DATA["qualifier_words"])
 #: Qualifier words that are also adjectives of position (``back left chair``).
-POSITION_WORDS: Final[frozenset[str]] = frozenset({"left", "right"})
+POSITION_WORDS: Final = frozenset({"left", "right"})
 #: States written after the noun (``door open``), dropped from the end of the phrase.
 STATE_WORDS: Final[frozenset[str]] = frozenset(_DATA["state_words"])
 #: Head nouns that, after a modifier naming an object, name a part of it (``fridge door``).
-PART_WORDS: Final[frozenset[str]] = frozenset({"door", "seat"})
+PART_WORDS: Final = frozenset({"door", "seat"})
 #: Misspelling correction: least rapidfuzz OSA normalised similarity to a key (1 - edits /
 #: longer length; 0.8 is one edit in 5 to 9 letters, two in 10 to 14).
 FUZZY_THRESHOLD: Final = 0.8
@@ -72,35 +72,27 @@ REAL_WORDS: Final[frozenset[str]] = frozenset(_DATA["real_words"])
 _CAMEL = re.compile(r"(?<=[a-z0-9])(?=[A-Z])|(?<=[A-Z])(?=[A-Z][a-z]{2})")
 _ASIDE = re.compile(r"\(.*?\)|\[.*?\]|\{.*?\}")
 _WORDS = re.compile(r"[a-z]+|[0-9]+")
-_TYPE_OF_KEY: Final[dict[str, str]] = {t.lower(): t for t in ENGINE_TYPES}
+#: Every key of steps 3 and 4 -> the types it denotes: engine type names, then SYNONYMS.
+_KEYS: Final = {**{t.lower(): (t,) for t in ENGINE_TYPES}, **SYNONYMS}
 _MAX_RUN: Final = 4
 _EDITS_PER_LETTER: Final = Fraction(1) - Fraction(str(FUZZY_THRESHOLD))
-_FUZZY_KEYS: Final[tuple[str, ...]] = tuple(
-    sorted(k for k in {*SYNONYMS, *_TYPE_OF_KEY} if len(k) >= FUZZY_MIN_LENGTH)
-)
+_FUZZY_KEYS: Final = tuple(sorted(k for k in _KEYS if len(k) >= FUZZY_MIN_LENGTH))
+#: Plural endings -> their singular, and the fewest letters a word needs for each.
+_PLURALS: Final = (("ives", "ife", 5), ("ves", "f", 4), ("es", "", 4), ("s", "", 3))
 
 
 def _singulars(word: str) -> tuple[str, ...]:
     """``word`` then its plausible singulars (``shelves`` -> ``shelf``, ``knives`` ->
     ``knife``, ``couches`` -> ``couch``)."""
-    forms = [word]
-    if len(word) > 4 and word.endswith("ives"):
-        forms.append(word[:-3] + "fe")
-    if len(word) > 3 and word.endswith("ves"):
-        forms.append(word[:-3] + "f")
-    if len(word) > 3 and word.endswith("es"):
-        forms.append(word[:-2])
-    if len(word) > 2 and word.endswith("s") and not word.endswith("ss"):
-        forms.append(word[:-1])
-    return tuple(forms)
+    return word, *(
+        word.removesuffix(end) + singular
+        for end, singular, least in _PLURALS
+        if len(word) >= least and word.endswith(end) and not word.endswith("ss")  # glass
+    )
 
 
 def _lookup(key: str) -> tuple[str, ...]:
-    hit = SYNONYMS.get(key)
-    if hit is not None:
-        return hit
-    engine = _TYPE_OF_KEY.get(key)
-    return (engine,) if engine is not None else ()
+    return _KEYS.get(key, ())
 
 
 def head_words(text: str) -> tuple[str, ...]:
@@ -113,14 +105,12 @@ def head_words(text: str) -> tuple[str, ...]:
 def noun_phrase(words: tuple[str, ...]) -> tuple[str, ...]:
     """Step 2: ``words`` up to the first qualifier word (not counting the first word), read
     past ``left``/``right`` when the words before them name no type; trailing states dropped."""
-    end = len(words)
-    for i in range(1, len(words)):
-        if words[i] in QUALIFIER_WORDS:
-            if words[i] in POSITION_WORDS and not _denotes(_trimmed(words[:i])):
-                continue
-            end = i
-            break
-    return _trimmed(words[:end])
+    for i, word in enumerate(words[1:], 1):
+        if word in QUALIFIER_WORDS and (
+            word not in POSITION_WORDS or _denotes(_trimmed(words[:i]))  # "back left chair"
+        ):
+            return _trimmed(words[:i])
+    return _trimmed(words)
 
 
 def _trimmed(words: tuple[str, ...]) -> tuple[str, ...]:
@@ -134,7 +124,7 @@ def _exact(words: tuple[str, ...]) -> tuple[str, ...]:
     """Step 3: candidates of the longest run ending at the head noun that is a key (longest
     first, each with the last word as written and then made singular)."""
     for size in range(min(_MAX_RUN, len(words)), 0, -1):
-        run = words[len(words) - size :]
+        run = words[-size:]
         for last in _singulars(run[-1]):
             hit = _lookup("".join(run[:-1]) + last)
             if hit:

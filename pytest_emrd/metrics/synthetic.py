@@ -31,6 +31,7 @@ What is planted:
 from __future__ import annotations
 
 import json
+from collections import Counter
 from collections.abc import Sequence
 from importlib import resources
 from typing import Final
@@ -63,16 +64,22 @@ _ROOMS: Final[dict[str, list[float]]] = _DATA["rooms"]
 _DOORWAYS: Final[list[tuple[str, str, float, float]]] = _DATA["doorways"]
 
 
+def _corners(room: str) -> np.ndarray:
+    """The lower-left ``(x0, z0)`` and upper-right ``(x1, z1)`` corners of ``room``, as rows."""
+    return np.reshape(_ROOMS[room], (2, 2))
+
+
 def _layout(
     rng: np.random.Generator, spawn_room: str
-) -> tuple[GroundTruth, dict[str, list[GroundTruthObject]]]:
-    cx0, cz0, cx1, cz1 = _ROOMS[spawn_room]
-    origin = np.array([(cx0 + cx1) / 2, (cz0 + cz1) / 2])
-    counters: dict[str, int] = {}
+) -> tuple[GroundTruth, dict[str, list[GroundTruthObject]], np.ndarray]:
+    """The office in the spawn frame, each room's doorways, and the spawn frame's origin."""
+    low, high = _corners(spawn_room)
+    origin = (low + high) / 2
+    counters: Counter[str] = Counter()
     objects: list[GroundTruthObject] = []
 
     def add(kind: str, room: str, category: str, x: float, z: float) -> GroundTruthObject:
-        counters[kind] = counters.get(kind, 0) + 1
+        counters[kind] += 1
         oid = f"{kind}_{counters[kind]}"
         obj = GroundTruthObject(oid, kind, room, category, x - origin[0], z - origin[1])
         objects.append(obj)
@@ -84,10 +91,10 @@ def _layout(
         doorways[room_a].append(door)
         doorways[room_b].append(door)
     for room, items in _DATA["furniture"].items():
-        x0, z0, x1, z1 = _ROOMS[room]
+        low, high = _corners(room)
         for kind, count, category in items:
             for _ in range(count):
-                add(kind, room, category, *rng.uniform((x0 + 0.5, z0 + 0.5), (x1 - 0.5, z1 - 0.5)))
+                add(kind, room, category, *rng.uniform(low + 0.5, high - 0.5))
     hidden = rng.random(len(objects)) < 0.05
     outlines = tuple(
         RoomOutline(
@@ -100,7 +107,8 @@ def _layout(
         for name, (x0, z0, x1, z1) in _ROOMS.items()
     )
     discoverable = tuple(sorted(o.object_id for o, h in zip(objects, hidden, strict=True) if not h))
-    return GroundTruth(tuple(objects), outlines, discoverable, spawn_room), doorways
+    truth = GroundTruth(tuple(objects), outlines, discoverable, spawn_room)
+    return truth, doorways, origin
 
 
 def _neighbours(room: str) -> list[str]:
@@ -117,18 +125,18 @@ def synthetic_trajectory(
     """
     rng = np.random.default_rng([seed, spec.seed, sum(map(ord, spec.model + spec.condition))])
     spawn_room = SLUG_ROOMS[spec.spawn]
-    truth, doorways = _layout(np.random.default_rng(spec.seed), spawn_room)
-    sx0, sz0, sx1, sz1 = _ROOMS[spawn_room]
-    origin = np.array([(sx0 + sx1) / 2, (sz0 + sz1) / 2])
+    truth, doorways, origin = _layout(np.random.default_rng(spec.seed), spawn_room)
     hazard = 1.0 / max(mean_memory, 1.0)
     p_visible = _DATA["visibility"].get(spec.condition, 0.5)
     discoverable = set(truth.discoverable_ids)
-    by_room = {r: [o for o in truth.objects if o.room == r] for r in _ROOMS}
+    furniture = {  # what a room can show besides its doorways
+        r: [o for o in truth.objects if o.room == r and o.object_type != "Doorway"] for r in _ROOMS
+    }
     terminate = rng.random() < 0.6
     n_steps = int(rng.integers(25, spec.max_steps + 1)) if terminate else spec.max_steps
     held: dict[str, tuple[str, str, float, float]] = {}  # object id -> (label, type text, x, z)
     extras: dict[str, MapEntry] = {}
-    type_counts: dict[str, int] = {}
+    type_counts: Counter[str] = Counter()
     room, stay = spawn_room, int(rng.integers(3, 8))
     steps: list[Step] = []
     cog_map: tuple[MapEntry, ...] = ()
@@ -136,8 +144,9 @@ def synthetic_trajectory(
         if stay == 0:
             room, stay = str(rng.choice(_neighbours(room))), int(rng.integers(3, 8))
         stay -= 1
-        candidates = [o for o in by_room[room] if o.object_type != "Doorway"]
-        seen = [o for o in candidates if o.object_id in discoverable and rng.random() < p_visible]
+        seen = [
+            o for o in furniture[room] if o.object_id in discoverable and rng.random() < p_visible
+        ]
         seen += [o for o in doorways[room] if rng.random() < 0.7]
         visible = {o.object_id for o in seen}
         for oid in list(held):
@@ -145,7 +154,7 @@ def synthetic_trajectory(
                 del held[oid]
         for o in seen:
             if o.object_id not in held and rng.random() < 0.85:
-                type_counts[o.object_type] = type_counts.get(o.object_type, 0) + 1
+                type_counts[o.object_type] += 1
                 spelling = str(rng.choice(_DATA["spellings"].get(o.object_type, [o.object_type])))
                 x, z = rng.normal((o.x, o.z), 0.3)
                 label = f"{o.object_type}_{type_counts[o.object_type]}"
@@ -163,8 +172,8 @@ def synthetic_trajectory(
                 MapEntry(label, spelling, round(x, 3), round(z, 3), room)
                 for label, spelling, x, z in held.values()
             ) + tuple(extras.values())
-        cx0, cz0, cx1, cz1 = _ROOMS[room]
-        px, pz = rng.uniform((cx0 + 1, cz0 + 1), (cx1 - 1, cz1 - 1)) - origin
+        low, high = _corners(room)
+        px, pz = rng.uniform(low + 1, high - 1) - origin
         is_term = terminate and t == n_steps
         steps.append(
             Step(
