@@ -98,17 +98,17 @@ def watch_value(value: str) -> None:
 def secret_values(env: Mapping[str, str] | None = None) -> tuple[str, ...]:
     """The configured key values present in ``env`` (default: the process environment, with
     the fallbacks of :func:`watch_value`), longest first so that a key containing another is
-    removed whole. For the process environment the answer is cached against a fingerprint of
-    its raw bytes (decoding ``os.environ`` costs 150 us for 40 variables, paid on every request
-    otherwise)."""
+    removed whole. For the process environment the answer is cached against a copy of its
+    raw bytes, compared without hashing them (decoding ``os.environ`` costs 150 us for 40
+    variables, paid on every request otherwise)."""
     if env is not None:
         return _secret_values(env)
     raw = getattr(os.environ, "_data", None)
     if not isinstance(raw, dict):
         return _secret_values(os.environ, _watched_values)
-    key = (hash(frozenset(raw.items())), frozenset(_watched), frozenset(_watched_values))
-    if _cached[0] != key:
-        _cached[:] = [key, _secret_values(os.environ, _watched_values)]
+    if _cached[0] != (raw, _watched, _watched_values):
+        seen = (dict(raw), set(_watched), set(_watched_values))
+        _cached[:] = [seen, _secret_values(os.environ, _watched_values)]
     return _cached[1]
 
 
@@ -162,8 +162,9 @@ def scrub(text: str, secrets: Iterable[str] | None = None) -> str:
 def scrub_bytes(data: bytes, *, literal_only: bool = False) -> bytes:
     """:func:`scrub_secrets` of raw bytes (any encoding), then, unless ``literal_only``, the
     pattern passes of :func:`scrub` when the bytes are UTF-8 text."""
+    redacted = REDACTED.encode()
     for secret in secret_values():
-        data = data.replace(secret.encode(), REDACTED.encode())
+        data = data.replace(secret.encode(), redacted)
     if literal_only:
         return data
     try:
