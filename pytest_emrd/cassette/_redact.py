@@ -179,13 +179,32 @@ def redact_body(body: bytes | str | None) -> Redacted:
     raw = body.encode() if isinstance(body, str) else (body or b"")
     secrets = secret_values()
     sent = _wire.sent(raw)
+    if sent is not None and sent[2] is secrets:  # made by canonical_body, under these values
+        return Redacted(body=raw, parsed=True)
     if sent is not None and _member_wise(tuple(sent[1]), secrets):
-        return Redacted(body=_canonical_sent(*sent, secrets), parsed=True)
+        return Redacted(body=_canonical_sent(*sent[:2], secrets), parsed=True)
     try:
         tree = json.loads(raw) if sent is None else sent[0]
     except (ValueError, UnicodeDecodeError):
         return Redacted(body=scrub_bytes(raw, literal_only=True), parsed=False)
     return Redacted(body=_canonical_bytes(tree), parsed=True)
+
+
+def canonical_body(body: Any) -> bytes:
+    """The canonical form of what a client sends for the JSON ``body`` (:func:`redact_body` of
+    its wire bytes), made from ``body`` itself. A replay sends its requests in this form, as it
+    sends its frames as their digests (nothing it sends leaves the process): no member is
+    encoded for the wire, and :func:`redact_body` takes these bytes as they are.
+
+    :param body: The request body, before encoding.
+    :returns: Its canonical bytes.
+    """
+    secrets, pieces = secret_values(), _wire.pieces_of(body)
+    if not _member_wise(tuple(pieces), secrets):
+        pieces = {}  # a key value could lie across two members: the body is scrubbed whole
+    raw = _canonical_sent(body, pieces, secrets)
+    _wire.keep(raw, body, pieces, secrets)
+    return raw
 
 
 def match_keys(method: str, path: str, redacted: Redacted) -> MatchKeys:
