@@ -13,6 +13,7 @@ bodies that are plain JSON.
 from __future__ import annotations
 
 import contextlib
+import http.cookiejar
 import os
 import socket
 import threading
@@ -149,6 +150,14 @@ class DeadlineTransport(httpx.BaseTransport):
         self.inner.close()
 
 
+class _NoCookies(http.cookiejar.CookieJar):
+    """A cookie jar that keeps nothing: requests are built without the client's cookies (see
+    :mod:`._retry`), so parsing each reply's ``Set-Cookie`` headers would be wasted."""
+
+    def extract_cookies(self, response: Any, request: Any) -> None:
+        """Keep no cookie of ``response``."""
+
+
 class _HttpClient:
     """One httpx client, a retry policy and the API key; a subclass gives ``_key_header`` (the
     key's header and the prefix of its value) and ``_read`` (reply text and usage from the
@@ -185,12 +194,14 @@ class _HttpClient:
                 "(record mode none)."
             )
         self._key = key or None
-        timeout = httpx.Timeout(config.timeout_s)
+        timeout, cookies = httpx.Timeout(config.timeout_s), _NoCookies()
         if transport is not None or not deadline:
-            self._http = httpx.Client(timeout=timeout, transport=transport)
+            self._http = httpx.Client(timeout=timeout, transport=transport, cookies=cookies)
         else:
             self._http = httpx.Client(
-                timeout=timeout, limits=httpx.Limits(max_keepalive_connections=0)
+                timeout=timeout,
+                cookies=cookies,
+                limits=httpx.Limits(max_keepalive_connections=0),
             )
             self._http._transport = DeadlineTransport(self._http._transport, config.timeout_s)
             self._http._mounts = {
