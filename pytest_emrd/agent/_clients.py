@@ -13,7 +13,6 @@ bodies that are plain JSON.
 from __future__ import annotations
 
 import contextlib
-import http.cookiejar
 import os
 import socket
 import threading
@@ -150,11 +149,11 @@ class DeadlineTransport(httpx.BaseTransport):
         self.inner.close()
 
 
-class _NoCookies(http.cookiejar.CookieJar):
-    """A cookie jar that keeps nothing: requests are built without the client's cookies (see
-    :mod:`._retry`), so parsing each reply's ``Set-Cookie`` headers would be wasted."""
+class _NoCookies(httpx.Cookies):
+    """Cookies that keep nothing: requests are built without the client's cookies (see
+    :mod:`._retry`), so reading each reply's ``Set-Cookie`` headers would be wasted."""
 
-    def extract_cookies(self, response: Any, request: Any) -> None:
+    def extract_cookies(self, response: httpx.Response) -> None:
         """Keep no cookie of ``response``."""
 
 
@@ -194,20 +193,19 @@ class _HttpClient:
                 "(record mode none)."
             )
         self._key = key or None
-        timeout, cookies = httpx.Timeout(config.timeout_s), _NoCookies()
+        timeout = httpx.Timeout(config.timeout_s)
         if transport is not None or not deadline:
-            self._http = httpx.Client(timeout=timeout, transport=transport, cookies=cookies)
+            self._http = httpx.Client(timeout=timeout, transport=transport)
         else:
             self._http = httpx.Client(
-                timeout=timeout,
-                cookies=cookies,
-                limits=httpx.Limits(max_keepalive_connections=0),
+                timeout=timeout, limits=httpx.Limits(max_keepalive_connections=0)
             )
             self._http._transport = DeadlineTransport(self._http._transport, config.timeout_s)
             self._http._mounts = {
                 pattern: None if mounted is None else DeadlineTransport(mounted, config.timeout_s)
                 for pattern, mounted in self._http._mounts.items()
             }
+        self._http._cookies = _NoCookies()  # httpx has no public switch for its cookie jar
         self._urls: dict[str, tuple[httpx.URL, str]] = {}
 
     def complete(self, messages: list[dict[str, Any]]) -> ChatResponse:
