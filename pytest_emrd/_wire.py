@@ -77,10 +77,10 @@ def splice(
     piece: Callable[[Fragment], bytes],
     sort_keys: bool,
 ) -> bytes:
-    """The object :func:`encode_body` split into ``pieces`` as compact UTF-8 JSON, exactly as
-    ``json.dumps`` joins an object (``ensure_ascii`` off), each fragment's bytes from
-    ``piece(fragment)``. The fragments are joined once (a body is tens of KB): a list's
-    brackets and a member's name go on its first and last fragments."""
+    """The object :func:`encode_body` split into ``pieces`` (not empty) as compact UTF-8 JSON,
+    exactly as ``json.dumps`` joins an object (``ensure_ascii`` off), each fragment's bytes from
+    ``piece(fragment)``. The fragments are joined once (a body is tens of KB): the braces, a
+    list's brackets and a member's name go on the first and last fragments."""
     members = []
     for key in sorted(pieces) if sort_keys else pieces:
         member, name = pieces[key], encode_basestring(key).encode()
@@ -91,7 +91,9 @@ def splice(
         values[0] = b"%b:[%b" % (name, values[0])
         values[-1] += b"]"
         members += values
-    return b"{%b}" % b",".join(members)
+    members[0] = b"{" + members[0]
+    members[-1] += b"}"
+    return b",".join(members)
 
 
 def fragment(item: Any) -> Fragment:
