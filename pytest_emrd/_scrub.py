@@ -159,11 +159,13 @@ def scrub(text: str, secrets: Iterable[str] | None = None) -> str:
     return text
 
 
-def scrub_bytes(data: bytes, *, literal_only: bool = False) -> bytes:
+def scrub_bytes(
+    data: bytes, *, literal_only: bool = False, secrets: Iterable[str] | None = None
+) -> bytes:
     """:func:`scrub_secrets` of raw bytes (any encoding), then, unless ``literal_only``, the
     pattern passes of :func:`scrub` when the bytes are UTF-8 text."""
     redacted = REDACTED.encode()
-    for secret in secret_values():
+    for secret in secret_values() if secrets is None else secrets:
         data = data.replace(secret.encode(), redacted)
     if literal_only:
         return data
