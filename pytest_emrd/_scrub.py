@@ -17,6 +17,7 @@ root logger's handlers and to the ``httpx``, ``httpcore``, ``urllib3`` and ``vcr
 from __future__ import annotations
 
 import base64
+import functools
 import logging
 import os
 import re
@@ -159,14 +160,24 @@ def scrub(text: str, secrets: Iterable[str] | None = None) -> str:
     return text
 
 
+@functools.lru_cache(maxsize=8)
+def _heads(secrets: tuple[str, ...]) -> frozenset[bytes]:
+    """The first bytes of each of ``secrets``: where none of them is found, no key value is."""
+    return frozenset(secret.encode()[:4] for secret in secrets)
+
+
 def scrub_bytes(
     data: bytes, *, literal_only: bool = False, secrets: Iterable[str] | None = None
 ) -> bytes:
     """:func:`scrub_secrets` of raw bytes (any encoding), then, unless ``literal_only``, the
-    pattern passes of :func:`scrub` when the bytes are UTF-8 text."""
-    redacted = REDACTED.encode()
-    for secret in secret_values() if secrets is None else secrets:
-        data = data.replace(secret.encode(), redacted)
+    pattern passes of :func:`scrub` when the bytes are UTF-8 text. The key values are looked
+    for one by one only where the first bytes of one of them are (a few searches, not one
+    per encoded form of each key)."""
+    values = secret_values() if secrets is None else tuple(secrets)
+    if any(head in data for head in _heads(values)):
+        redacted = REDACTED.encode()
+        for secret in values:
+            data = data.replace(secret.encode(), redacted)
     if literal_only:
         return data
     try:
