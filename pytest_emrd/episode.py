@@ -26,6 +26,7 @@ from typing import Any, Final
 
 from pytest_emrd import frames, reference, world
 from pytest_emrd._files import os_error_line
+from pytest_emrd._wire import encode_body
 from pytest_emrd.agent import (
     JPEG_DATA_URL,
     MAX_REPLY_CHARS,
@@ -41,7 +42,7 @@ from pytest_emrd.agent import (
     resolve_room,
     step_text,
 )
-from pytest_emrd.cassette import EpisodeRun, Tape
+from pytest_emrd.cassette import EpisodeRun, Tape, canonical_body
 from pytest_emrd.errors import (
     CassetteError,
     ConfigError,
@@ -367,14 +368,16 @@ class Executor:
 def episode_client(config: ModelConfig, *, live: bool) -> ChatClient:
     """The client an episode of ``config`` sends through: live, with its API key and a deadline
     on each attempt; a replay's with neither (recorded requests carry no key, and the cassette
-    answers before any connection is made).
+    answers before any connection is made), sending each request in the canonical form its
+    recording holds (:func:`~pytest_emrd.cassette.canonical_body`).
 
     :param config: The model's registry entry.
     :param live: Whether the episode calls the model.
     :returns: A new client; the caller closes it.
     """
     url = reference.base_url_of(config)
-    return make_client(config, base_url=url, require_key=live, deadline=live)
+    encode = encode_body if live else canonical_body
+    return make_client(config, base_url=url, require_key=live, deadline=live, encode=encode)
 
 
 def _check_writable(path: Path) -> None:

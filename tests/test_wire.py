@@ -11,7 +11,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from pytest_emrd import _wire, frames
-from pytest_emrd.cassette import redact_body
+from pytest_emrd.cassette import canonical_body, redact_body
 
 PIXELS = "cd" * 32
 #: A variable named like a credential: its value is a key the scrubber removes.
@@ -69,9 +69,18 @@ def test_a_key_anywhere_in_a_sent_body_is_scrubbed_as_from_the_parsed_body(body,
     hypothesis.assume(len(key) >= 8)  # a key within one member, or across two (a seam)
     os.environ[KEY_ENV] = key
     try:
-        assert redact_body(raw) == redact_body(bytes(bytearray(raw)))
+        parsed = redact_body(bytes(bytearray(raw)))
+        assert redact_body(raw) == parsed
+        assert canonical_body(body) == parsed.body
     finally:
         del os.environ[KEY_ENV]
+
+
+@given(_body)
+def test_a_replay_sends_the_canonical_body_which_the_redactor_takes_as_it_is(body):
+    canonical = canonical_body(body)
+    assert canonical == redact_body(bytes(bytearray(_wire.encode_body(body)))).body
+    assert redact_body(canonical).body is canonical
 
 
 def test_a_message_is_encoded_and_redacted_once_however_many_windows_carry_it(monkeypatch):

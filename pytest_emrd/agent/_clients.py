@@ -24,6 +24,7 @@ from typing import Any, Final, Protocol
 import httpx
 
 from pytest_emrd import frames
+from pytest_emrd._wire import encode_body
 from pytest_emrd.agent._config import ANTHROPIC_VERSION, SAMPLING_FIELDS, ModelConfig
 from pytest_emrd.agent._history import JPEG_DATA_URL
 from pytest_emrd.agent._retry import RetryPolicy, post_json
@@ -148,6 +149,14 @@ class DeadlineTransport(httpx.BaseTransport):
         self.inner.close()
 
 
+class _NoCookies(httpx.Cookies):
+    """Cookies that keep nothing: requests are built without the client's cookies (see
+    :mod:`._retry`), so reading each reply's ``Set-Cookie`` headers would be wasted."""
+
+    def extract_cookies(self, response: httpx.Response) -> None:
+        """Keep no cookie of ``response``."""
+
+
 class _HttpClient:
     """One httpx client, a retry policy and the API key; a subclass gives ``_key_header`` (the
     key's header and the prefix of its value) and ``_read`` (reply text and usage from the
@@ -156,7 +165,8 @@ class _HttpClient:
     Without a ``transport``, httpx's transports (proxies included) go under
     :class:`DeadlineTransport`, without keep-alive so that each attempt's connection is its
     own and can be shut at its deadline; with ``deadline=False`` (a replay, which the cassette
-    answers before any connection) they are httpx's own."""
+    answers before any connection) they are httpx's own. ``encode`` makes a body the bytes
+    sent: its wire JSON, or in a replay its canonical form."""
 
     _key_header: tuple[str, str]
     _read: Callable[[Any], ChatResponse]
@@ -170,8 +180,9 @@ class _HttpClient:
         transport: httpx.BaseTransport | None = None,
         require_key: bool = True,
         deadline: bool = True,
+        encode: Callable[[Any], bytes] = encode_body,
     ) -> None:
-        self.config = config
+        self.config, self._encode = config, encode
         self.base_url = base_url
         self.policy = policy or RetryPolicy(max_retries=config.max_retries)
         key = os.environ.get(config.api_key_env, "").strip() if config.api_key_env else ""
@@ -194,6 +205,7 @@ class _HttpClient:
                 pattern: None if mounted is None else DeadlineTransport(mounted, config.timeout_s)
                 for pattern, mounted in self._http._mounts.items()
             }
+        self._http._cookies = _NoCookies()  # httpx has no public switch for its cookie jar
         self._urls: dict[str, tuple[httpx.URL, str]] = {}
 
     def complete(self, messages: list[dict[str, Any]]) -> ChatResponse:
@@ -208,7 +220,7 @@ class _HttpClient:
         return post_json(
             self._http,
             *self._urls[request.path],
-            body=request.body,
+            content=self._encode(request.body),
             headers=headers,
             policy=self.policy,
             read=self._read,
@@ -234,6 +246,7 @@ class OpenAICompatibleClient(_HttpClient):
     :param transport: An httpx transport to use instead of the network (tests).
     :param require_key: Raise :class:`ConfigError` when the key's variable is unset.
     :param deadline: Give each attempt ``timeout_s`` (without a ``transport``).
+    :param encode: The bytes sent for a body (a replay's client: its canonical form).
     """
 
     _key_header = ("Authorization", "Bearer ")
@@ -284,6 +297,7 @@ class AnthropicClient(_HttpClient):
     :param transport: A transport replacing the network.
     :param require_key: Whether an unset key is an error.
     :param deadline: Whether each attempt has a deadline, as for :class:`OpenAICompatibleClient`.
+    :param encode: The bytes sent for a body, as for :class:`OpenAICompatibleClient`.
     """
 
     _key_header = ("x-api-key", "")
@@ -343,6 +357,7 @@ def make_client(
     policy: RetryPolicy | None = None,
     require_key: bool = True,
     deadline: bool = True,
+    encode: Callable[[Any], bytes] = encode_body,
 ) -> ChatClient:
     """The client for ``config``, sending to ``base_url`` (default: ``config.base_url``; a
     reference agent has none: :func:`pytest_emrd.reference.base_url_of` gives the built-in
@@ -354,6 +369,8 @@ def make_client(
     :param require_key: Raise when the API-key variable is unset.
     :param deadline: Give each attempt ``timeout_s``, connect to last byte
         (:class:`DeadlineTransport`); a replay's client needs none.
+    :param encode: The bytes sent for a body: its wire JSON, or for a replay's client its
+        canonical form (:func:`pytest_emrd.cassette.canonical_body`).
     :param base_url: The endpoint to send to; None for ``config.base_url``.
     :returns: A :class:`ChatClient` ready to send.
     """
@@ -365,5 +382,10 @@ def make_client(
             "pytest_emrd.reference.base_url_of(config) (the built-in server, started on demand)."
         )
     return client(
-        config, base_url=base_url, policy=policy, require_key=require_key, deadline=deadline
+        config,
+        base_url=base_url,
+        policy=policy,
+        require_key=require_key,
+        deadline=deadline,
+        encode=encode,
     )

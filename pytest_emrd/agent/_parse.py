@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import ast
 import contextlib
+import functools
 import json
 import math
 import re
@@ -233,6 +234,8 @@ def _position(fields: Any, repairs: set[str]) -> tuple[float, float] | str:
     none."""
     if isinstance(fields, dict) and ("x" in fields or "z" in fields):
         x, z = fields.get("x"), fields.get("z")
+        if type(x) is float is type(z) and math.isfinite(x) and math.isfinite(z):
+            return x, z  # what _coordinate reads them as, without a call per coordinate
     else:
         pair = fields
         if isinstance(fields, dict):
@@ -255,6 +258,11 @@ def _text(value: Any) -> str:
     return value if isinstance(value, str) else json.dumps(value, sort_keys=True)
 
 
+#: An entry built once while remembered: a reply mostly repeats the last one's map, and a frozen
+#: dataclass takes a microsecond to build. Not for a zero coordinate: -0.0 == 0.0.
+_remembered_entry: Final = functools.lru_cache(maxsize=1024)(MapEntry)
+
+
 def _entry(label: str, fields: Any, repairs: set[str]) -> MapEntry | str:
     """The entry ``label``, the repairs that read its position added to ``repairs``; or why it
     cannot be read."""
@@ -264,7 +272,8 @@ def _entry(label: str, fields: Any, repairs: set[str]) -> MapEntry | str:
     named = fields if isinstance(fields, dict) else {}  # a bare [x, z] names nothing
     kind = _text(named.get("type")).strip()
     room, facing = _text(named.get("room")).strip(), _text(named.get("facing")).strip()
-    return MapEntry(label, kind, *position, room or None, facing or None)
+    make = _remembered_entry if all(position) else MapEntry
+    return make(label, kind, *position, room or None, facing or None)
 
 
 def _cognitive_map(raw: Any) -> tuple[tuple[MapEntry, ...], set[str]] | str:

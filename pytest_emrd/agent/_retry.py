@@ -22,7 +22,6 @@ import httpx
 
 from pytest_emrd import __version__
 from pytest_emrd._logging import RETRY_ATTR
-from pytest_emrd._wire import encode_body
 from pytest_emrd.errors import TransportError
 
 RETRY_STATUSES: Final = frozenset({429, 500, 502, 503, 504, 520, 522, 524, 529})
@@ -114,14 +113,14 @@ def post_json(
     url: httpx.URL,
     shown: str,
     *,
-    body: dict[str, Any],
+    content: bytes,
     headers: dict[str, str],
     policy: RetryPolicy,
     read: Callable[[Any], Any],
     secrets: Iterable[str | None] = (),
 ) -> Any:
-    """POST ``body`` to ``url`` and return ``read(json)`` (which raises on a garbage body),
-    retrying per ``policy``; exhausted retries or a non-retryable status raise
+    """POST the JSON ``content`` to ``url`` and return ``read(json)`` (which raises on a garbage
+    body), retrying per ``policy``; exhausted retries or a non-retryable status raise
     :class:`TransportError` naming the URL as ``shown`` (logged), the attempts and the last
     cause, with ``secrets`` masked."""
     given = {name.lower() for name in headers}
@@ -129,7 +128,7 @@ def post_json(
     request = httpx.Request(
         "POST",
         url,
-        content=encode_body(body),
+        content=content,
         headers=defaults | headers,
         extensions={"timeout": http.timeout.as_dict()},
     )

@@ -24,7 +24,13 @@ from pytest_emrd.cassette._persister import (
     read_cassette,
     writer_lock,
 )
-from pytest_emrd.cassette._redact import DIGEST, canonical_json, match_keys, redact_body
+from pytest_emrd.cassette._redact import (
+    DIGEST,
+    canonical_body,
+    canonical_json,
+    match_keys,
+    redact_body,
+)
 from pytest_emrd.cassette._use import LATENCY, clear_caches, episode_cassette
 
 __all__ = [
@@ -41,6 +47,7 @@ __all__ = [
     "Take",
     "Tape",
     "UnsavedCassette",
+    "canonical_body",
     "canonical_json",
     "cassette_path",
     "clear_caches",

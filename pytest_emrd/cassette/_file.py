@@ -121,11 +121,11 @@ def document(data: CassetteData) -> dict[str, Any]:
     }
 
 
-def _digest(text: str, recorded: str) -> str:
-    """SHA-256 of the whole document ``text`` with its last ``recorded`` (the digest, in
+def _digest(whole: bytes, recorded: str) -> str:
+    """SHA-256 of the whole encoded document with its last ``recorded`` (the digest, in
     ``metadata``, which sorts after ``interactions``) read as :data:`_UNSET`. The document
-    (a few MB) is encoded once and hashed around ``recorded`` in place, not copied again."""
-    whole, mark = text.encode(), recorded.encode()
+    (a few MB) is hashed around ``recorded`` in place, not copied again."""
+    mark = recorded.encode()
     at = whole.rfind(mark)
     if at < 0:
         return DIGEST_PREFIX + hashlib.sha256(whole).hexdigest()
@@ -144,7 +144,7 @@ def encode(data: CassetteData) -> bytes:
     """
     text = jsonserializer.serialize(document(data))
     head, _, tail = text.rpartition(_UNSET)
-    text = head + _digest(text, _UNSET) + tail
+    text = head + _digest(text.encode(), _UNSET) + tail
     return lzma.compress(
         text.encode(), format=lzma.FORMAT_XZ, check=lzma.CHECK_CRC32, filters=_XZ_FILTERS
     )
@@ -159,6 +159,11 @@ def decompress(source: bytes | BinaryIO, *, cap: int = MAX_TEXT_BYTES) -> str:
     :param cap: Largest text accepted, in bytes.
     :returns: The decompressed text.
     """
+    return inflated(source, cap=cap)[0]
+
+
+def inflated(source: bytes | BinaryIO, *, cap: int = MAX_TEXT_BYTES) -> tuple[str, bytes]:
+    """:func:`decompress`, and the text still encoded (what the digest covers)."""
     stream = io.BytesIO(source) if isinstance(source, bytes) else source
     pending = stream.read(_CHUNK)
     if pending.startswith(_XZ_MAGIC):
@@ -184,7 +189,8 @@ def decompress(source: bytes | BinaryIO, *, cap: int = MAX_TEXT_BYTES) -> str:
                 pending = stream.read(_CHUNK)
                 if not (pending or piece):
                     raise EOFError("the compressed data ends early")
-        return b"".join(pieces).decode()
+        whole = b"".join(pieces)
+        return whole.decode(), whole
     except (EOFError, zlib.error, lzma.LZMAError, UnicodeDecodeError) as exc:
         raise FormatError(f"not a readable xz or gzip file ({exc})") from exc
 
@@ -246,14 +252,14 @@ def decode(blob: bytes) -> CassetteData:
     :param blob: A compressed cassette file's bytes.
     :returns: The parsed :class:`CassetteData`.
     """
-    return parse(decompress(blob))
+    return parse(*inflated(blob))
 
 
-def parse(text: str) -> CassetteData:
-    """Inverse of :func:`encode` (after :func:`decompress`): :class:`LegacyFormatError` for a
-    file an older release wrote, :class:`IntegrityError` when the file no longer matches its
-    digest, :class:`FormatError` for anything else that is not a cassette (checked against
-    :data:`_SCHEMA` before use)."""
+def parse(text: str, whole: bytes) -> CassetteData:
+    """Inverse of :func:`encode` (after :func:`inflated`, ``whole`` being ``text`` encoded):
+    :class:`LegacyFormatError` for a file an older release wrote, :class:`IntegrityError` when
+    the file no longer matches its digest, :class:`FormatError` for anything else that is not
+    a cassette (checked against :data:`_SCHEMA` before use)."""
     if text.startswith(LEGACY_HEAD):
         raise LegacyFormatError("its format is emrd-cassette/1 or /2")
     try:
@@ -264,7 +270,7 @@ def parse(text: str) -> CassetteData:
     emrd, interactions = loaded["metadata"]["emrd"], loaded["interactions"]
     if not emrd["digest"].startswith(DIGEST_PREFIX):
         raise LegacyFormatError("its digest covers its interactions only")
-    if _digest(text, emrd["digest"]) != emrd["digest"]:
+    if _digest(whole, emrd["digest"]) != emrd["digest"]:
         raise IntegrityError("its bytes do not match the digest recorded with them")
     requests = tuple(
         Request(r["method"], r["uri"], r["body"], r["headers"])

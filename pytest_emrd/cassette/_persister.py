@@ -16,8 +16,8 @@ from pytest_emrd.cassette._file import (
     FormatError,
     IntegrityError,
     LegacyFormatError,
-    decompress,
     encode,
+    inflated,
     parse,
 )
 from pytest_emrd.cassette._paths import scratch_path
@@ -36,8 +36,8 @@ def read_cassette(path: Path, *, root: Path | None = None) -> tuple[CassetteData
     """
     check_inside(path.parent if root is None else root, path, what="cassette")
     with path.open("rb") as handle:
-        text = decompress(handle)
-    return parse(text), text
+        text, whole = inflated(handle)
+    return parse(text, whole), text
 
 
 @dataclass(frozen=True)

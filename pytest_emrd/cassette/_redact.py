@@ -126,14 +126,14 @@ def _without_images(node: Any) -> Any:
     return node
 
 
-def _canonical_bytes(value: Any) -> bytes:
-    """``value`` redacted, serialised and scrubbed of key values. Redacting rebuilds the whole
+def _canonical_bytes(value: Any, secrets: tuple[str, ...]) -> bytes:
+    """``value`` redacted, serialised and scrubbed of ``secrets``. Redacting rebuilds the whole
     tree, so it runs only where the serialised text may hold an image (a data URL, an image
     MIME type): elsewhere it would change nothing (a replay's frames are digests already)."""
     text = canonical_json(value)
     if '"data:image/' in text or '"image/' in text:
         text = canonical_json(_redact_tree(value))
-    return scrub_bytes(text.encode(), literal_only=True)
+    return scrub_bytes(text.encode(), literal_only=True, secrets=secrets)
 
 
 #: What a key value needs to lie across two members of a spliced body: every seam has one of
@@ -154,7 +154,7 @@ def _canonical_fragment(piece: _wire.Fragment, secrets: tuple[str, ...]) -> byte
     key values of the time, however many requests carry it (two threads may both compute it:
     the same bytes)."""
     if piece.canonical is None or piece.canonical[0] is not secrets:
-        piece.canonical = secrets, _canonical_bytes(piece.item)
+        piece.canonical = secrets, _canonical_bytes(piece.item, secrets)
     return piece.canonical[1]
 
 
@@ -164,7 +164,7 @@ def _canonical_sent(tree: Any, pieces: dict[str, Any], secrets: tuple[str, ...])
     carry it. Byte for byte what parsing the body, redacting the whole tree and scrubbing it
     gives."""
     if not pieces or _image_mime(tree):
-        return _canonical_bytes(tree)
+        return _canonical_bytes(tree, secrets)
     return _wire.splice(
         pieces, piece=lambda member: _canonical_fragment(member, secrets), sort_keys=True
     )
@@ -179,13 +179,32 @@ def redact_body(body: bytes | str | None) -> Redacted:
     raw = body.encode() if isinstance(body, str) else (body or b"")
     secrets = secret_values()
     sent = _wire.sent(raw)
+    if sent is not None and sent[2] is secrets:  # made by canonical_body, under these values
+        return Redacted(body=raw, parsed=True)
     if sent is not None and _member_wise(tuple(sent[1]), secrets):
-        return Redacted(body=_canonical_sent(*sent, secrets), parsed=True)
+        return Redacted(body=_canonical_sent(*sent[:2], secrets), parsed=True)
     try:
         tree = json.loads(raw) if sent is None else sent[0]
     except (ValueError, UnicodeDecodeError):
         return Redacted(body=scrub_bytes(raw, literal_only=True), parsed=False)
-    return Redacted(body=_canonical_bytes(tree), parsed=True)
+    return Redacted(body=_canonical_bytes(tree, secrets), parsed=True)
+
+
+def canonical_body(body: Any) -> bytes:
+    """The canonical form of what a client sends for the JSON ``body`` (:func:`redact_body` of
+    its wire bytes), made from ``body`` itself. A replay sends its requests in this form, as it
+    sends its frames as their digests (nothing it sends leaves the process): no member is
+    encoded for the wire, and :func:`redact_body` takes these bytes as they are.
+
+    :param body: The request body, before encoding.
+    :returns: Its canonical bytes.
+    """
+    secrets, pieces = secret_values(), _wire.pieces_of(body)
+    if not _member_wise(tuple(pieces), secrets):
+        pieces = {}  # a key value could lie across two members: the body is scrubbed whole
+    raw = _canonical_sent(body, pieces, secrets)
+    _wire.keep(raw, body, pieces, secrets)
+    return raw
 
 
 def match_keys(method: str, path: str, redacted: Redacted) -> MatchKeys:

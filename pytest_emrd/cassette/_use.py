@@ -63,6 +63,12 @@ def _key(request: Request, strict: bool) -> Any:
     return keys.strict if strict else keys.lenient
 
 
+def _slot(key: Any) -> Any:
+    """Where :class:`EpisodeCassette`'s index files a key: a strict ``(head, body)`` by its
+    head and body length, a lenient key (a short digest) as it is."""
+    return (key[0], len(key[1])) if isinstance(key, tuple) else key
+
+
 def _matcher(strict: bool) -> Callable[[Request, Request], bool]:
     """vcrpy's one matcher for a cassette: key equality (unparseable never matches). Not a
     method: a cassette holding its own bound method would live until the garbage collector
@@ -106,16 +112,23 @@ class EpisodeCassette(Cassette):
 
     def _responses(self, request: Request) -> Iterator[tuple[int, dict[str, Any]]]:
         """vcrpy's lookup of the interactions :func:`_matcher` matches, in order, from an index
-        by key (vcrpy runs the matcher on every interaction, three times per request); a lenient
-        match whose frames differ adds its pair of strict keys to :attr:`frame_drift`."""
-        new = self._before_record_request(request)
+        (vcrpy runs the matcher on every interaction, three times per request) that files a
+        strict key by its head and body length: hashing a body of tens of KB costs more than
+        comparing it. A lenient match whose frames differ adds its pair of strict keys to
+        :attr:`frame_drift`."""
+        key = self.key(self._before_record_request(request))
         if self._index is None:
             self._index = {}
             for index, (stored, _) in enumerate(self.data):
-                self._index.setdefault(self.key(stored), []).append(index)
-        for index in self._index.get(self.key(new), []) if self.key(new) is not None else []:
+                self._index.setdefault(_slot(self.key(stored)), []).append(index)
+        for index in self._index.get(_slot(key), []) if key is not None else []:
             stored, response = self.data[index]
-            if (pair := (_keys(new).strict, _keys(stored).strict))[0] != pair[1]:
+            if self.key(stored) != key:
+                continue
+            if (
+                not self.strict
+                and (pair := (_keys(request).strict, _keys(stored).strict))[0] != pair[1]
+            ):
                 self.frame_drift.add(pair)
             yield index, response
 

@@ -74,6 +74,15 @@ def test_success_reads_text_and_usage(fault_server, sleeps) -> None:
     assert sleeps == []
 
 
+def test_a_cookie_the_server_sets_is_neither_kept_nor_sent(fault_server, sleeps) -> None:
+    fault_server.script = [("status", 500, {"Set-Cookie": "session=abc; Path=/"})]
+    with _client(fault_server, sleeps) as client:
+        client.complete(MESSAGES)
+        client.complete(MESSAGES)
+    assert len(fault_server.headers) == 3
+    assert not any("cookie" in headers for headers in fault_server.headers)
+
+
 @pytest.mark.parametrize(
     "fault",
     [

@@ -282,6 +282,15 @@ def test_well_formed_maps_round_trip(cmap: dict, wrapping: str) -> None:
     ]
 
 
+def test_a_repeated_entry_reads_alike_and_a_zero_keeps_its_sign() -> None:
+    assert parse_reply(json.dumps(GOOD)).cognitive_map == (DESK,)
+    assert parse_reply(json.dumps(GOOD)).cognitive_map == (DESK,)
+    for x in (0.0, -0.0, 0.0):
+        cmap = {"Desk_1": {"type": "Desk", "x": x, "z": 1.5}}
+        (entry,) = parse_reply(json.dumps({"action": "Stop", "cognitive_map": cmap})).cognitive_map
+        assert str(entry.x) == str(x)
+
+
 _JSON_VALUES = st.recursive(
     st.none() | st.booleans() | st.floats(allow_nan=False) | st.text(max_size=8),
     lambda inner: st.lists(inner, max_size=3) | st.dictionaries(st.text(max_size=6), inner),

@@ -10,6 +10,8 @@ import sys
 from pathlib import Path
 
 import pytest
+from hypothesis import given
+from hypothesis import strategies as st
 
 from pytest_emrd._scrub import (
     REDACTED,
@@ -131,6 +133,16 @@ def test_scrub_removes_each_kind_of_credential(planted_env):
     uri = f"https://u:{PLANTED_PASSWORD}@h.example/v1/m?key={PLANTED_QUERY}&sig=s&alt=sse"
     assert scrub_uri(uri) == "https://h.example/v1/m?alt=sse"
     assert scrub_bytes(b"\xff" + PLANTED_KEY.encode()) == b"\xff" + REDACTED.encode()
+
+
+@given(st.lists(st.text(min_size=1, max_size=9), max_size=4), st.data())
+def test_scrub_bytes_replaces_each_key_value_in_turn(secrets, data):
+    pieces = st.sampled_from([s.encode() for s in secrets]) | st.binary(max_size=6)
+    raw = b"".join(data.draw(st.lists(pieces if secrets else st.binary(max_size=6))))
+    expected = raw
+    for secret in secrets:
+        expected = expected.replace(secret.encode(), REDACTED.encode())
+    assert scrub_bytes(raw, literal_only=True, secrets=secrets) == expected
 
 
 def test_only_values_long_enough_to_be_keys_are_scrubbed():
