@@ -66,11 +66,6 @@ def _remember(table: OrderedDict[Any, Any], key: Any, value: Any, capacity: int)
         remember(table, key, value, capacity)
 
 
-def spliced(tree: Any) -> bool:
-    """Whether :func:`splice` applies: a JSON object with string keys only."""
-    return isinstance(tree, dict) and all(isinstance(k, str) for k in tree)
-
-
 def splice(
     pieces: dict[str, Fragment | list[Fragment]],
     *,
@@ -114,8 +109,8 @@ def _fragment_wire(piece: Fragment) -> bytes:
 
 def pieces_of(body: Any) -> dict[str, Any]:
     """``body``'s members as :class:`Fragment` (each top-level list as a list of them); empty
-    when :func:`splice` does not apply."""
-    if not spliced(body):
+    unless :func:`splice` applies (a JSON object with string keys only)."""
+    if not (isinstance(body, dict) and all(isinstance(k, str) for k in body)):
         return {}
     return {
         k: [fragment(x) for x in v] if isinstance(v, list) else fragment(v) for k, v in body.items()
@@ -127,10 +122,10 @@ def encode_body(body: Any) -> bytes:
     list) encoded once; the redactor can then find ``body`` and its fragments again from the
     bytes (:func:`sent`)."""
     pieces = pieces_of(body)
-    if pieces:
-        raw = splice(pieces, piece=_fragment_wire, sort_keys=False)
-    else:
+    if not pieces:
         raw = wire_json(body).encode("utf-8")
+    else:
+        raw = splice(pieces, piece=_fragment_wire, sort_keys=False)
     keep(raw, body, pieces)
     return raw
 

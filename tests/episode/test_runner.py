@@ -8,6 +8,7 @@ import pytest
 
 import pytest_emrd.episode
 from pytest_emrd.agent import load_registry
+from pytest_emrd.cassette import canonical_body
 from pytest_emrd.episode import Executor
 
 
@@ -23,8 +24,9 @@ class _Client:
 def built(monkeypatch) -> list[_Client]:
     clients: list[_Client] = []
 
-    def make_client(config, *, base_url=None, require_key=True, deadline=True):
-        assert deadline == require_key  # a replay's client: no key, no deadline
+    def make_client(config, *, base_url=None, require_key=True, deadline=True, encode=None):
+        # a replay's client: no key, no deadline, requests in their recorded form
+        assert deadline == require_key == (encode is not canonical_body)
         clients.append(_Client(config.name, require_key))
         return clients[-1]
 
