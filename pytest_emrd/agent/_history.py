@@ -46,8 +46,8 @@ class UserTurn:
         return cls(step, text, frames.by_digest(frame_digest), frame_digest)
 
 
-def _user_message(turn: UserTurn, *, image: bool) -> dict[str, Any]:
-    if turn.image_url is None or not image:
+def _user_message(turn: UserTurn) -> dict[str, Any]:
+    if turn.image_url is None:
         return {"role": "user", "content": turn.text}
     frame = {"type": "image_url", "image_url": {"url": turn.image_url}}
     return {"role": "user", "content": [{"type": "text", "text": turn.text}, frame]}
@@ -72,21 +72,19 @@ class Conversation:
 
     def request(self, current: UserTurn) -> list[dict[str, Any]]:
         """System prompt, the answered turns still in the window, then ``current``."""
-        messages = [self._system, *(message for turn in self._answered for message in turn)]
         if self._pending is None or self._pending[0] is not current:
-            self._pending = (current, _user_message(current, image=True))
-        messages.append(self._pending[1])
-        return messages
+            self._pending = (current, _user_message(current))
+        answered = (message for turn in self._answered for message in turn)
+        return [self._system, *answered, self._pending[1]]
 
     def record(self, current: UserTurn, reply: str) -> None:
         """Append the answered turn; the oldest pair leaves the window first."""
-        pending = self._pending if self._pending and self._pending[0] is current else None
-        if pending is not None and not self.single_image:
-            user = pending[1]
-        elif self.single_image and current.image_url is not None:
+        if self.single_image and current.image_url is not None:
             user = _summarised(current, reply)
+        elif self._pending and self._pending[0] is current:
+            user = self._pending[1]  # as sent: it keeps its frame (single-image mode: it had none)
         else:
-            user = _user_message(current, image=not self.single_image)
+            user = _user_message(current)
         self._pending = None
         self._answered.append((user, {"role": "assistant", "content": reply}))
 
