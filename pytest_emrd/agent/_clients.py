@@ -224,7 +224,7 @@ class _HttpClient:
             headers=headers,
             policy=self.policy,
             read=self._read,
-            secrets=(self._key,),
+            key=self._key,
         )
 
     def close(self) -> None:
@@ -304,11 +304,11 @@ class AnthropicClient(_HttpClient):
 
     @staticmethod
     def _read(data: Any) -> ChatResponse:
-        blocks = data["content"]
-        text = "".join(b["text"] for b in blocks if b.get("type") == "text")
-        if not any(b.get("type") == "text" for b in blocks):
+        texts = [b["text"] for b in data["content"] if b.get("type") == "text"]
+        if not texts:
             raise ValueError("no text block in content")
-        return ChatResponse(text, _usage(data.get("usage"), "input_tokens", "output_tokens"))
+        usage = _usage(data.get("usage"), "input_tokens", "output_tokens")
+        return ChatResponse("".join(texts), usage)
 
 
 #: Most tokens one reply may report per field (a bound far above any context window).

@@ -14,7 +14,7 @@ import email.utils
 import logging
 import random
 import time
-from collections.abc import Callable, Iterable
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any, Final
 
@@ -117,27 +117,20 @@ def post_json(
     headers: dict[str, str],
     policy: RetryPolicy,
     read: Callable[[Any], Any],
-    secrets: Iterable[str | None] = (),
+    key: str | None,
 ) -> Any:
     """POST the JSON ``content`` to ``url`` and return ``read(json)`` (which raises on a garbage
     body), retrying per ``policy``; exhausted retries or a non-retryable status raise
     :class:`TransportError` naming the URL as ``shown`` (logged), the attempts and the last
-    cause, with ``secrets`` masked."""
-    given = {name.lower() for name in headers}
-    defaults = {k: v for k, v in _DEFAULT_HEADERS.items() if k.lower() not in given}
+    cause, with the API ``key`` masked."""
+    sent = httpx.Headers(_DEFAULT_HEADERS)
+    sent.update(headers)  # a default is dropped where ``headers`` sets it, in any case
     request = httpx.Request(
-        "POST",
-        url,
-        content=content,
-        headers=defaults | headers,
-        extensions={"timeout": http.timeout.as_dict()},
+        "POST", url, content=content, headers=sent, extensions={"timeout": http.timeout.as_dict()}
     )
-    values = [s for s in secrets if s]
 
     def mask(text: str) -> str:
-        for value in values:
-            text = text.replace(value, "***")
-        return text
+        return text.replace(key, "***") if key else text
 
     attempts = policy.max_retries + 1
     for attempt in range(1, attempts + 1):
