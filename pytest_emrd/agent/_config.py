@@ -264,6 +264,13 @@ def _expand_env(value: Any, where: str, field_name: str, declared: frozenset[str
     return _ENV_REF.sub(sub, value)
 
 
+def _written_out(value: Any) -> bool:
+    """Whether a credential-like value is written out, not a bare ``${VAR}`` reference (a
+    ``${VAR:-default}`` writes its default out)."""
+    ref = _ENV_REF.fullmatch(value) if isinstance(value, str) else None
+    return ref is None or ref.group("default") is not None
+
+
 def _check_header_credentials(entry: dict[str, Any], where: str) -> None:
     """Credential-like ``extra_headers`` take only a ``${VAR}`` reference, never a value."""
     headers = entry.get("extra_headers")
@@ -274,8 +281,7 @@ def _check_header_credentials(entry: dict[str, Any], where: str) -> None:
             or not _CREDENTIAL_HEADER.search(header)
         ):
             continue  # (the four key headers are refused with or without a reference)
-        ref = _ENV_REF.fullmatch(value) if isinstance(value, str) else None
-        if ref is None or ref.group("default") is not None:
+        if _written_out(value):
             raise ConfigError(
                 f"{where}: extra_headers.{header} looks like a credential and is written out; "
                 "write it as a reference to a declared variable, ${MY_SECRET} with "
@@ -287,8 +293,7 @@ def _check_header_credentials(entry: dict[str, Any], where: str) -> None:
 def _check_body_credentials(entry: dict[str, Any], where: str) -> None:
     """Credential-like ``extra_body`` fields must be ``${VAR}`` references (then watched)."""
     for at, value in _credential_fields(entry.get("extra_body") or {}):
-        ref = _ENV_REF.fullmatch(value) if isinstance(value, str) else None
-        if ref is None or ref.group("default") is not None:  # a default is a written value
+        if _written_out(value):
             raise ConfigError(
                 f"{where}: {at} looks like a credential and is written out; a request body "
                 "is stored in every cassette, so write the value as an environment variable "
@@ -355,12 +360,13 @@ def _read_yaml(text: str, source: str) -> tuple[dict[str, dict[str, Any]], Lines
     """The ``models:`` mapping of a registry file, and where each model and field is written."""
     root = _yaml.compose(text, source)
     data = _yaml.scalar(root) if root is not None else None
-    models = (data or {}).get("models") if isinstance(data, dict | None) else None
-    if not isinstance(models, dict):
+    models = data.get("models") if isinstance(data, dict) else None
+    if root is None or not isinstance(models, dict):
         raise ConfigError(f"{source} must hold a top-level 'models:' mapping of name -> fields.")
     lines: Lines = {}
-    for key, value in root.value if root is not None else ():
-        if key.value != "models" or not isinstance(value, yaml.MappingNode):
+    # ``models`` is a mapping, so its one key node (duplicates are refused) holds a mapping node
+    for key, value in root.value:
+        if key.value != "models":
             continue
         for model_key, model in value.value:
             lines[(str(model_key.value), None)] = model_key.start_mark.line + 1
@@ -428,7 +434,7 @@ def load_registry(user_file: Path | None = None) -> Registry:
     source = "pytest_emrd/agent/models.yaml"
     shipped_text = resources.files("pytest_emrd.agent").joinpath("models.yaml").read_text()
     entries, lines = _read_yaml(shipped_text, source)
-    merged: dict[str, dict[str, Any]] = {k: dict(v) for k, v in entries.items()}
+    merged = dict(entries)  # entries are replaced, never changed in place
     if user_file is not None:
         source = str(user_file)
         user_text = _yaml.read_text(
@@ -441,4 +447,4 @@ def load_registry(user_file: Path | None = None) -> Registry:
                     f"{_at(source, lines, str(name))}: model {name!r} must be a mapping of fields."
                 )
             merged[str(name)] = {**merged.get(str(name), {}), **entry}
-    return Registry({str(n): _build(str(n), e, source, lines) for n, e in merged.items()})
+    return Registry({n: _build(n, e, source, lines) for n, e in merged.items()})
