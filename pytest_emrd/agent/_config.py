@@ -389,9 +389,9 @@ class Registry:
         """The configuration of ``name``; unknown names raise ConfigError listing the known."""
         if name in self.models:
             return self.models[name]
-        parametric = _parametric(name)
-        if parametric is not None and parametric[0] in self.models:
-            base, planted = self.models[parametric[0]], parametric[1]
+        base_name, planted = _parametric(name) or (None, {})
+        if base_name in self.models:
+            base = self.models[base_name]
             return replace(
                 base, name=name, model_id=versioned_id(name), planted={**base.planted, **planted}
             )

@@ -46,8 +46,7 @@ def mimic_knobs(name: str) -> dict[str, Any] | None:
         return None
     planted: dict[str, Any] = {}
     for token in match.group(1).split("-")[1:]:
-        word = WORDS.get(token)
-        key, value = word if word else (KNOBS[token[0]][0], float(token[1:]))
+        key, value = WORDS.get(token) or (KNOBS[token[0]][0], float(token[1:]))
         if key in planted:
             raise ConfigError(f"model={name!r} sets {key} twice; give each knob once.")
         planted[key] = value

@@ -161,17 +161,14 @@ def _count(n: int, singular: str, plural: str, object_type: str) -> str:
     return f"{article if n == 1 else n} {singular if n == 1 else plural} ({object_type})"
 
 
-def _type_order(object_type: str) -> tuple[int, str]:
-    order = list(FURNITURE)
-    return (order.index(object_type) if object_type in FURNITURE else len(order), object_type)
-
-
 def furniture_profile(room: str, counts: Mapping[str, int]) -> str:
     """A room's furniture profile, ``a large conference table (DiningTable) + 8 chairs
     (Chair), a wall-mounted television (Television)``, in :data:`FURNITURE` order (unknown
     types last); "nothing listed" when empty. :func:`read_profile` inverts it."""
+    present = {t for t, n in counts.items() if n > 0}
+    unknown = sorted(present - FURNITURE.keys())
     items: dict[str, str] = {}
-    for object_type in sorted((t for t, n in counts.items() if n > 0), key=_type_order):
+    for object_type in [t for t in FURNITURE if t in present] + unknown:
         words = ROOM_FURNITURE.get((room, object_type)) or FURNITURE.get(object_type)
         singular, plural = (words, f"{words}s") if words else (object_type, object_type)
         items[object_type] = _count(counts[object_type], singular, plural, object_type)
