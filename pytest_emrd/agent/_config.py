@@ -12,6 +12,7 @@ from __future__ import annotations
 import json
 import os
 import re
+from collections.abc import Iterator
 from dataclasses import dataclass, field, fields, replace
 from importlib import resources
 from pathlib import Path
@@ -42,8 +43,16 @@ REASONING_EFFORTS: Final = ("none", "minimal", "low", "medium", "high", "xhigh",
 OpenAPI spec, github:openai/openai-openapi commit f85dbe2, 2026-08-21)."""
 VERBOSITIES: Final = ("low", "medium", "high")
 MAX_TOKENS_PARAMS: Final[tuple[str, ...]] = ("max_tokens", "max_completion_tokens")
-#: Body keys the client writes itself.
-_CLIENT_KEYS: Final = {"model", "messages", "system", "stream", "top_k", *MAX_TOKENS_PARAMS}
+#: Body keys the client writes itself (the sampling ones from the registry fields of that name).
+_CLIENT_KEYS: Final = {
+    "model",
+    "messages",
+    "system",
+    "stream",
+    "top_k",
+    *MAX_TOKENS_PARAMS,
+    *SAMPLING_FIELDS,
+}
 _CREDENTIAL_HEADERS: Final = frozenset({"authorization", "x-api-key", "api-key", "x-goog-api-key"})
 _CREDENTIAL_FIELD: Final = re.compile(
     r"api[_-]?key|secret|passw(?:or)?d|credential|private[_-]?key|access[_-]?key"
@@ -177,17 +186,15 @@ def _check_base_url(config: ModelConfig, where: str) -> None:
         )
 
 
-def _credential_fields(body: Any, path: str = "extra_body") -> list[tuple[str, Any]]:
+def _credential_fields(body: Any, path: str = "extra_body") -> Iterator[tuple[str, Any]]:
     """``(dotted path, value)`` of every field of ``body`` whose name looks like a credential."""
-    found: list[tuple[str, Any]] = []
     if isinstance(body, list):
         body = dict(enumerate(body))
     for key, value in body.items() if isinstance(body, dict) else ():
         at = f"{path}.{key}" if isinstance(key, str) else f"{path}[{key}]"
         if isinstance(key, str) and _CREDENTIAL_FIELD.search(key):
-            found.append((at, value))
-        found += _credential_fields(value, at)
-    return found
+            yield at, value
+        yield from _credential_fields(value, at)
 
 
 def _check_extras(config: ModelConfig, where: str) -> None:
@@ -196,7 +203,7 @@ def _check_extras(config: ModelConfig, where: str) -> None:
             raise ConfigError(
                 f"{where}: {name} must be a mapping of name -> value, got {type(value).__name__}."
             )
-    owned = sorted(set(config.extra_body) & (_CLIENT_KEYS | set(SAMPLING_FIELDS)))
+    owned = sorted(set(config.extra_body) & _CLIENT_KEYS)
     if owned:
         raise ConfigError(
             f"{where}: extra_body may not set {owned[0]!r}: the client writes it "

@@ -270,8 +270,7 @@ def _entry(label: str, fields: Any, repairs: set[str]) -> MapEntry | str:
     if isinstance(position, str):
         return f"cognitive_map entry {label!r} {position}"
     named = fields if isinstance(fields, dict) else {}  # a bare [x, z] names nothing
-    kind = _text(named.get("type")).strip()
-    room, facing = _text(named.get("room")).strip(), _text(named.get("facing")).strip()
+    kind, room, facing = (_text(named.get(key)).strip() for key in ("type", "room", "facing"))
     make = _remembered_entry if all(position) else MapEntry
     return make(label, kind, *position, room or None, facing or None)
 
