@@ -156,11 +156,6 @@ def resolve_room(text: str, variant: str) -> str | None:
     return table.get(key)
 
 
-def _count(n: int, singular: str, plural: str, object_type: str) -> str:
-    article = "an" if singular[0].lower() in "aeiou" else "a"
-    return f"{article if n == 1 else n} {singular if n == 1 else plural} ({object_type})"
-
-
 def furniture_profile(room: str, counts: Mapping[str, int]) -> str:
     """A room's furniture profile, ``a large conference table (DiningTable) + 8 chairs
     (Chair), a wall-mounted television (Television)``, in :data:`FURNITURE` order (unknown
@@ -171,7 +166,10 @@ def furniture_profile(room: str, counts: Mapping[str, int]) -> str:
     for object_type in [t for t in FURNITURE if t in present] + unknown:
         words = ROOM_FURNITURE.get((room, object_type)) or FURNITURE.get(object_type)
         singular, plural = (words, f"{words}s") if words else (object_type, object_type)
-        items[object_type] = _count(counts[object_type], singular, plural, object_type)
+        article = "an" if singular[0].lower() in "aeiou" else "a"
+        n = counts[object_type]
+        count = f"{article} {singular}" if n == 1 else f"{n} {plural}"
+        items[object_type] = f"{count} ({object_type})"
     table = next((t for t in _TABLES if t in items), None)
     if table is not None and "Chair" in items:
         items[table] += f" + {items.pop('Chair')}"
