@@ -28,6 +28,19 @@ MOVED_M: Final = 0.3
 EDGE_DEG: Final = 44.9
 #: Lateral half-width (m) of the cone behind a visible doorway treated as the next room.
 GAP_HALF_WIDTH_M: Final = 1.0
+#: Plan keys that outlive a room visit; entering a room resets the others to :func:`fresh_plan`.
+EPISODE_KEYS: Final = (
+    "acted",
+    "reach",
+    "visited",
+    "used",
+    "doors",
+    "door_rooms",
+    "order",
+    "rough",
+    "sizes",
+    "at",
+)
 
 
 def fresh_plan() -> dict[str, Any]:
@@ -66,7 +79,7 @@ def fresh_plan() -> dict[str, Any]:
 def room_guess(plan: Mapping[str, Any]) -> str:
     """The room the votes point to ("" before any vote; ties: prompt order)."""
     votes: dict[str, float] = plan["votes"]
-    return max(votes, key=lambda r: (votes[r], -list(votes).index(r)), default="")
+    return max(votes, key=votes.__getitem__, default="")  # max keeps the first of equals
 
 
 def _inside(visible: tuple[VisibleObject, ...]) -> tuple[VisibleObject, ...]:
@@ -85,23 +98,17 @@ def _inside(visible: tuple[VisibleObject, ...]) -> tuple[VisibleObject, ...]:
 
 
 def _vote(plan: dict[str, Any], briefing: Briefing, visible: tuple[VisibleObject, ...]) -> None:
-    holders: dict[str, list[str]] = {}
-    for room, counts in briefing.inventory.items():
-        for t in counts:
-            holders.setdefault(t, []).append(room)
-    votes = plan["votes"] or {room: 0.0 for room in briefing.inventory}
+    votes = plan["votes"] or dict.fromkeys(briefing.inventory, 0.0)
     for seen in visible:
-        rooms = holders.get(seen.object_type, [])
+        rooms = [room for room, counts in briefing.inventory.items() if seen.object_type in counts]
         for room in rooms:
             votes[room] = round(votes[room] + 1.0 / len(rooms) / (1.0 + seen.distance), 4)
     plan["votes"] = votes if any(votes.values()) else {}
 
 
 def _enter_room(plan: dict[str, Any]) -> None:
-    plan.update(phase="sweep", turns=0, votes={}, here={}, found=0, tries=0, moves=0, clears=0)
-    plan.update(spots={}, near=[], sweeps=[], tried=[], blocked=[])
     plan["used"] = [d for d in plan["used"] if d != plan["target"]] + [plan["target"]]
-    plan.update(target="", goal="")
+    plan.update((key, value) for key, value in fresh_plan().items() if key not in EPISODE_KEYS)
 
 
 def _after_goto(plan: dict[str, Any], moved: bool) -> None:
@@ -134,8 +141,9 @@ def perceive(
     if plan["phase"] == "sweep" and plan["turns"] == 0:  # a sweep begins with this view
         plan["sweeps"].append(plan["at"])
         plan["near"] = []
-    inside = {s.object_id for s in _inside(percept.visible)}
-    _vote(plan, briefing, tuple(s for s in percept.visible if s.object_id in inside))
+    inside_view = _inside(percept.visible)
+    inside = {s.object_id for s in inside_view}
+    _vote(plan, briefing, inside_view)
     room = room_guess(plan)
     view = []
     for seen in sorted(percept.visible, key=lambda s: (-s.distance, s.object_id)):
@@ -155,13 +163,14 @@ def perceive(
                 plan["near"].append(oid)
         entry: dict[str, Any] = {"type": seen.object_type, "x": x, "z": z}
         old = memory.get(oid, {})
-        if abs(seen.bearing) >= EDGE_DEG:
-            if oid not in plan["rough"] and "x" in old:
+        if abs(seen.bearing) < EDGE_DEG:
+            if oid in plan["rough"]:
+                plan["rough"].remove(oid)
+        elif oid not in plan["rough"]:  # a first edge sighting: keep a clear one if any
+            if "x" in old:
                 entry.update(x=old["x"], z=old["z"])
-            elif oid not in plan["rough"]:
+            else:
                 plan["rough"].append(oid)
-        elif oid in plan["rough"]:
-            plan["rough"].remove(oid)
         old_room = old.get("room")
         if old_room or (room and oid in inside):
             entry["room"] = old_room or room
