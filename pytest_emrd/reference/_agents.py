@@ -17,6 +17,7 @@ import copy
 import hashlib
 import json
 from collections.abc import Callable, Mapping
+from functools import partial
 from typing import Any, Final
 
 from pytest_emrd.agent import Registry, agent_name, versioned_id
@@ -27,7 +28,7 @@ from pytest_emrd.reference._perceive import SWEEP_TURNS, fresh_plan, perceive, r
 from pytest_emrd.reference._read import (
     Briefing,
     Percept,
-    last_reply_text,
+    last_text,
     message_text,
     previous_reply,
     read_briefing,
@@ -49,13 +50,12 @@ def prior_action(plan: dict[str, Any], briefing: Briefing, percept: Percept) -> 
         plan["turns"] += 1
         return "Turn(Right)", f"Looking around to tell where I am ({plan['turns']}/{SWEEP_TURNS})."
     here = room_guess(plan)
-    others = [r for r in briefing.rooms if r != here]
-    inventory = briefing.inventory
-    room = max(others, key=lambda r: (seats(inventory.get(r, {})), -others.index(r)))
+    seating = {r: seats(briefing.inventory.get(r, {})) for r in briefing.rooms if r != here}
+    room = max(seating, key=seating.__getitem__)  # max keeps the first of equals: prompt order
     where = f"the {here} where I stand" if here else "this room"
     return (
         f"Term({room})",
-        f"{room} has the most seating for a gathering ({seats(inventory.get(room, {}))} "
+        f"{room} has the most seating for a gathering ({seating[room]} "
         f"seats by the building overview), more than any room other than {where}.",
     )
 
@@ -77,8 +77,12 @@ class RequestError(ProtocolError):
 
 def _usage(messages: list[dict[str, Any]], reply: str) -> dict[str, int]:
     chars = sum(len(message_text(m)) for m in messages)
-    parts = [p for m in messages if isinstance(m.get("content"), list) for p in m["content"]]
-    images = sum(p.get("type") == "image_url" for p in parts)
+    images = sum(
+        p.get("type") == "image_url"
+        for m in messages
+        if isinstance(m.get("content"), list)
+        for p in m["content"]
+    )
     prompt = chars // CHARS_PER_TOKEN + TOKENS_PER_IMAGE * images
     completion = len(reply) // CHARS_PER_TOKEN
     return dict(
@@ -95,12 +99,12 @@ def reply_text(model: str, planted: dict[str, Any], messages: list[dict[str, Any
     :returns: The reply text.
     """
     system = next((message_text(m) for m in messages if m.get("role") == "system"), None)
-    user = next((message_text(m) for m in reversed(messages) if m.get("role") == "user"), None)
+    user = last_text(messages, "user")
     if system is None or user is None:
         raise RequestError("request needs a system message and a user message.")
     briefing, percept = read_briefing(system), read_percept(user)
     if planted.get("writer") == "vlm":
-        seed, last = request_seed(system, user), last_reply_text(messages)
+        seed, last = request_seed(system, user), last_text(messages, "assistant")
         return mimic_reply(planted, briefing, percept, request=seed, previous=last)
     previous = previous_reply(messages) or {}
     plan = copy.deepcopy(previous.get("plan")) or fresh_plan()
@@ -109,7 +113,7 @@ def reply_text(model: str, planted: dict[str, Any], messages: list[dict[str, Any
         "\x1e".join((model, user, json.dumps(previous, sort_keys=True))).encode()
     ).digest()
     kept, new = perceive(
-        plan, memory, briefing, percept, planted=planted, draw=lambda label: uniform(seed, label)
+        plan, memory, briefing, percept, planted=planted, draw=partial(uniform, seed)
     )
     policy = POLICIES.get(planted.get("policy", "scout"))
     if policy is None:
@@ -162,6 +166,9 @@ def complete(body: Any, registry: Registry) -> dict[str, Any]:
 
 def model_list(registry: Registry) -> dict[str, Any]:
     """The ``/v1/models`` listing: every registered reference agent, by versioned id."""
-    names = [versioned_id(n) for n in registry.names() if registry.get(n).provider == "reference"]
-    data = [{"id": n, "object": "model", "created": 0, "owned_by": "pytest-emrd"} for n in names]
+    data = [
+        {"id": versioned_id(n), "object": "model", "created": 0, "owned_by": "pytest-emrd"}
+        for n in registry.names()
+        if registry.get(n).provider == "reference"
+    ]
     return {"object": "list", "data": data}

@@ -107,15 +107,15 @@ def message_text(message: dict[str, Any]) -> str:
     raise ProtocolError(f"message content is {type(content).__name__}, not text or parts.")
 
 
-def last_reply_text(messages: list[dict[str, Any]]) -> str | None:
-    """The text of the agent's own last reply, or None at the first step."""
-    replies = (m for m in reversed(messages) if m.get("role") == "assistant")
-    return next((message_text(m) for m in replies), None)
+def last_text(messages: list[dict[str, Any]], role: str) -> str | None:
+    """The text of the newest message from ``role`` (the agent's own last reply for
+    ``assistant``), or None when there is none (the first step)."""
+    return next((message_text(m) for m in reversed(messages) if m.get("role") == role), None)
 
 
 def previous_reply(messages: list[dict[str, Any]]) -> dict[str, Any] | None:
     """The agent's own last reply (decoded JSON), or None at the first step."""
-    text = last_reply_text(messages)
+    text = last_text(messages, "assistant")
     if text is None:
         return None
     try:
