@@ -40,10 +40,8 @@ def uniform(seed: bytes, label: str) -> float:
 
 def merge_view(memory: Mapping[str, Entry], view: Sequence[tuple[str, Entry]]) -> dict[str, Entry]:
     """Memory with ``view`` (label, entry; farthest first) refreshed to the end."""
-    seen = {label for label, _ in view}
-    merged = {label: entry for label, entry in memory.items() if label not in seen}
-    merged.update(view)
-    return merged
+    fresh = dict(view)
+    return {label: entry for label, entry in memory.items() if label not in fresh} | fresh
 
 
 def drop_probability(mean_steps: float) -> float:

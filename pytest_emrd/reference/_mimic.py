@@ -20,6 +20,7 @@ import hashlib
 import json
 import math
 from collections.abc import Callable, Mapping
+from functools import partial
 from typing import Any, Final
 
 from pytest_emrd.reference._malform import FAILING, REPAIRABLE, malform, read_state, render
@@ -74,8 +75,7 @@ def fresh_state(key: str, planted: Mapping[str, Any]) -> dict[str, Any]:
 
 
 def _episode_draw(key: str) -> Draw:
-    seed = bytes.fromhex(key)
-    return lambda name: uniform(seed, name)
+    return partial(uniform, bytes.fromhex(key))
 
 
 def _to_frame(frame: list[float], x: float, z: float) -> tuple[float, float]:
@@ -93,8 +93,9 @@ class _Writer:
         self.map: dict[str, dict[str, Any]] = state["map"]
 
     def live_label(self, object_id: str) -> str | None:
-        live = [lb for lb, rec in self.map.items() if rec.get("id") == object_id and "x" not in rec]
-        return live[-1] if live else None
+        # at most one: a duplicate freezes the live label (it gets an ``x``) before a new one
+        live = (lb for lb, rec in self.map.items() if rec.get("id") == object_id and "x" not in rec)
+        return next(live, None)
 
     def _new_label(self, object_type: str, name: str) -> str:
         return label_for(
@@ -127,7 +128,8 @@ class _Writer:
     def duplicate(self, object_id: str, entry: Mapping[str, Any], room: str, visit: int) -> None:
         """On re-entry into ``room``: maybe write ``object_id`` again under a new label."""
         label = self.live_label(object_id)
-        if label is None or not room or entry.get("room") != room:
+        # an entry's room is never "" (:func:`perceive`), so an unknown ``room`` never matches
+        if label is None or entry.get("room") != room:
             return
         if self.map[label].get("visit", visit) >= visit:
             return
@@ -188,7 +190,7 @@ def mimic_reply(
     """The reply of a mimic with ``planted`` knobs to the step seeded by ``request``, after its
     ``previous`` reply (None at the first step)."""
     seed = hashlib.sha256(request).digest()
-    step: Draw = lambda name: uniform(seed, name)  # noqa: E731
+    step = partial(uniform, seed)
     state = read_state(previous) if previous else fresh_state(seed[:8].hex(), planted)
     if "odometry" in state:
         percept = reckon(state["odometry"], percept, state["nav"]["memory"])
@@ -206,8 +208,8 @@ def mimic_reply(
 
     room, visit = room_guess(plan), nav["visit"]
     writer.label_new(memory, visit)
-    state["seen"].update(dict.fromkeys((s.object_id for s in percept.visible), percept.step))
     for seen in percept.visible:
+        state["seen"][seen.object_id] = percept.step
         writer.duplicate(seen.object_id, memory[seen.object_id], room, visit)
     writer.hallucinate(percept, room, step)
 
