@@ -68,8 +68,7 @@ def _complete(plan: Mapping[str, Any], briefing: Briefing) -> bool:
     counts = briefing.inventory.get(room_guess(plan))
     if not counts or not plan["here"]:
         return False
-    seen = Counter(spot[2] for spot in plan["spots"].values())
-    return all(seen[t] >= n for t, n in counts.items())
+    return Counter(spot[2] for spot in plan["spots"].values()) >= Counter(counts)
 
 
 def _spot(
@@ -84,15 +83,18 @@ def _spot(
     def gap(point: list[float]) -> float:
         return min(math.dist(point, p) for p in towards)
 
-    far = [o for o in plan["near"] if math.dist(xz[o], plan["at"]) >= MIN_MOVE_M]
-    candidates = [o for o in far if o not in plan["tried"]]
+    candidates = [
+        o
+        for o in plan["near"]
+        if math.dist(xz[o], plan["at"]) >= MIN_MOVE_M and o not in plan["tried"]
+    ]
     if within is not None:
         candidates = [
             o for o in candidates if any(math.dist(xz[o], p) <= plan["reach"] for p in within)
         ]
     if towards:
         here = gap(plan["at"])
-        closer = [o for o in candidates if gap(xz[o]) < here]
+        closer = (o for o in candidates if gap(xz[o]) < here)
         return min(closer, key=lambda o: (gap(xz[o]), o), default="")
     return max(
         candidates, key=lambda o: (min(math.dist(xz[o], p) for p in plan["sweeps"]), o), default=""
@@ -142,7 +144,7 @@ def _choose(plan: dict[str, Any], briefing: Briefing, percept: Percept) -> None:
     doors = [
         plan["doors"][d]
         for d, rooms in plan["door_rooms"].items()
-        if room and room in rooms and d not in plan["used"]
+        if room in rooms and d not in used  # rooms never holds "" (no room identified)
     ]
     unvisited = len(plan["visited"]) < len(briefing.rooms)
     if unvisited and not _complete(plan, briefing) and _reposition(plan, doors):
@@ -165,7 +167,7 @@ def term_choice(plan: Mapping[str, Any], briefing: Briefing) -> tuple[str, str]:
     sizes: dict[str, int] = plan["sizes"]
     if not sizes:
         return briefing.rooms[0], "No room could be identified; naming the first room listed."
-    order = list(briefing.rooms)
+    order = briefing.rooms
     room = max(sizes, key=lambda r: (sizes[r], -order.index(r) if r in order else 0))
     return room, f"Term rule: the room where I mapped the most objects ({room}: {sizes[room]})."
 
