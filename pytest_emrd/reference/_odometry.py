@@ -77,7 +77,7 @@ def _resight(
     bearing = np.radians([s.bearing for s in again])
     distance = np.array([s.distance for s in again])
     candidates = []
-    for heading in (expected[2], *(h for h in (0.0, 90.0, 180.0, 270.0) if h != expected[2])):
+    for heading in dict.fromkeys((expected[2], 0.0, 90.0, 180.0, 270.0)):  # expected first, once
         angle = np.radians(heading) + bearing
         stands = known - distance[:, None] * np.stack([np.sin(angle), np.cos(angle)], axis=1)
         x, z = np.median(stands, axis=0)
@@ -96,9 +96,7 @@ def aim(odometry: dict[str, Any], action: str, percept: Percept) -> None:
         return
     name = asked["arg"].strip().lower()
     named = [s for s in percept.visible if s.object_id.lower() == name]
-    typed = sorted(
-        (s for s in percept.visible if s.object_type.lower() == name), key=lambda s: s.distance
-    )
-    target = (named or typed or [None])[0]
+    typed = [s for s in percept.visible if s.object_type.lower() == name]
+    target = min(named or typed, key=lambda s: s.distance, default=None)
     if target is not None:
         odometry["goal"] = [*placed(percept, target), target.object_type == "Doorway"]
