@@ -106,14 +106,20 @@ class _Writer:
             u_qualifier=self.draw(f"{name}:qualifier"),
         )
 
-    def position(self, object_id: str, entry: Mapping[str, Any]) -> tuple[float, float]:
-        """Written position of a remembered object: frame, then noise of its last sighting."""
+    def entry_of(self, object_id: str, entry: Mapping[str, Any]) -> dict[str, Any]:
+        """How a remembered object is written: its type word, its room (None: none) and its
+        position in the frame plus the noise of its last sighting."""
         x, z = _to_frame(self.state["frame"], entry["x"], entry["z"])
         sigma = float(self.planted.get("sigma", 0.0))
         if sigma:
             nx, nz = _normal(self.draw, f"noise:{object_id}:{self.state['seen'][object_id]}")
             x, z = x + sigma * nx, z + sigma * nz
-        return round(x, 2), round(z, 2)
+        return {
+            "type": type_word(entry["type"]),
+            "room": entry.get("room"),
+            "x": round(x, 2),
+            "z": round(z, 2),
+        }
 
     def label_new(self, memory: Mapping[str, Mapping[str, Any]], visit: int) -> None:
         """Label what is new; note the visit in which an object was first placed in a room."""
@@ -135,8 +141,7 @@ class _Writer:
             return
         if self.draw(f"dup:{object_id}:{visit}") >= float(self.planted.get("dup", 0.0)):
             return
-        x, z = self.position(object_id, entry)
-        self.map[label].update(x=x, z=z, type=type_word(entry["type"]), room=room)
+        self.map[label].update(self.entry_of(object_id, entry))  # frozen as written now
         label = self._new_label(entry["type"], f"{object_id}:{visit}")
         self.map[label] = {"id": object_id, "visit": visit}
 
@@ -161,18 +166,10 @@ class _Writer:
         """The cognitive map as reported: ``{label: {type, room, x, z}}``."""
         out: dict[str, dict[str, Any]] = {}
         for label, rec in self.map.items():
-            object_id = rec.get("id")
             if "x" in rec:
                 fields = {k: rec[k] for k in ("type", "room", "x", "z")}
-            elif object_id in memory:
-                entry = memory[object_id]
-                x, z = self.position(object_id, entry)
-                fields = {
-                    "type": type_word(entry["type"]),
-                    "room": entry.get("room"),
-                    "x": x,
-                    "z": z,
-                }
+            elif rec.get("id") in memory:
+                fields = self.entry_of(rec["id"], memory[rec["id"]])
             else:
                 continue
             out[label] = {k: v for k, v in fields.items() if v is not None}
