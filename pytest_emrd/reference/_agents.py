@@ -13,7 +13,6 @@ prior the paper found behind the Conference Room choice (Never-Visited and Any-B
 
 from __future__ import annotations
 
-import copy
 import hashlib
 import json
 from collections.abc import Callable, Mapping
@@ -107,11 +106,12 @@ def reply_text(model: str, planted: dict[str, Any], messages: list[dict[str, Any
         seed, last = request_seed(system, user), last_text(messages, "assistant")
         return mimic_reply(planted, briefing, percept, request=seed, previous=last)
     previous = previous_reply(messages) or {}
-    plan = copy.deepcopy(previous.get("plan")) or fresh_plan()
-    memory = dict(previous.get("cognitive_map") or {})
     seed = hashlib.sha256(
         "\x1e".join((model, user, json.dumps(previous, sort_keys=True))).encode()
     ).digest()
+    # freshly decoded for this request, so the plan is updated in place (after the seed)
+    plan = previous.get("plan") or fresh_plan()
+    memory = previous.get("cognitive_map") or {}
     kept, new = perceive(
         plan, memory, briefing, percept, planted=planted, draw=partial(uniform, seed)
     )

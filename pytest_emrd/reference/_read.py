@@ -66,7 +66,7 @@ def read_briefing(system: str) -> Briefing:
     """Room names and inventory from the system prompt's building overview."""
     if OVERVIEW_HEADING not in system:
         raise ProtocolError("system prompt has no building overview; is this an EMRD request?")
-    overview = system.split(OVERVIEW_HEADING, 1)[1].split("\n\n", 1)[0]
+    overview = system.partition(OVERVIEW_HEADING)[2].partition("\n\n")[0]
     names = _ROOMS_LINE.search(overview)
     if names is None:
         raise ProtocolError("building overview does not list the rooms.")
@@ -86,7 +86,7 @@ def read_percept(text: str) -> Percept:
         raise ProtocolError("user message lacks the 'Step k of N.' line or the 'Pose:' feedback.")
     if VISIBLE_HEADING not in text:
         raise ProtocolError(NOT_SYMBOLIC)
-    listing = text.split(VISIBLE_HEADING, 1)[1]
+    listing = text.partition(VISIBLE_HEADING)[2]
     visible = tuple(
         VisibleObject(m["id"], m["type"], float(m["b"]), float(m["d"]))
         for line in listing.splitlines()
