@@ -38,10 +38,9 @@ def uniform(seed: bytes, label: str) -> float:
     return int.from_bytes(digest[:8], "big") / 2**64
 
 
-def merge_view(memory: Mapping[str, Entry], view: Sequence[tuple[str, Entry]]) -> dict[str, Entry]:
-    """Memory with ``view`` (label, entry; farthest first) refreshed to the end."""
-    fresh = dict(view)
-    return {label: entry for label, entry in memory.items() if label not in fresh} | fresh
+def merge_view(memory: Mapping[str, Entry], view: dict[str, Entry]) -> dict[str, Entry]:
+    """Memory with ``view`` (label -> entry; farthest first) refreshed to the end."""
+    return {label: entry for label, entry in memory.items() if label not in view} | view
 
 
 def drop_probability(mean_steps: float) -> float:

@@ -145,7 +145,7 @@ def perceive(
     inside = {s.object_id for s in inside_view}
     _vote(plan, briefing, inside_view)
     room = room_guess(plan)
-    view = []
+    view: dict[str, dict[str, Any]] = {}  # label -> entry, farthest first
     for seen in sorted(percept.visible, key=lambda s: (-s.distance, s.object_id)):
         oid = seen.object_id
         x, z = (round(v, 2) for v in placed(percept, seen))
@@ -174,13 +174,13 @@ def perceive(
         old_room = old.get("room")
         if old_room or (room and oid in inside):
             entry["room"] = old_room or room
-        view.append((oid, entry))
-    new = [label for label, _ in reversed(view) if label not in plan["order"]]
+        view[oid] = entry
+    new = [label for label in reversed(view) if label not in plan["order"]]
     plan["order"] += new
     plan["found"] += len(new)
     kept = apply_memory(
         merge_view(memory, view),
-        in_view=frozenset(label for label, _ in view),
+        in_view=frozenset(view),
         planted=planted,
         discovery=plan["order"],
         draw=draw,
