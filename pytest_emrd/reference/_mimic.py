@@ -35,7 +35,7 @@ from pytest_emrd.reference._phrasing import (
     pick,
     type_word,
 )
-from pytest_emrd.reference._read import Briefing, Percept
+from pytest_emrd.reference._read import Briefing, Percept, along
 from pytest_emrd.reference._scout import scout_action
 
 #: Half-width (m) of the square the frame's translation is drawn from.
@@ -154,11 +154,9 @@ class _Writer:
         )
         low, high = PHANTOM_RANGE_M
         distance = low + (high - low) * step("halluc:distance")
-        bearing = math.radians(percept.pose.heading + 90.0 * step("halluc:bearing") - 45.0)
+        heading = percept.pose.heading + 90.0 * step("halluc:bearing") - 45.0
         x, z = _to_frame(
-            self.state["frame"],
-            percept.pose.x + distance * math.sin(bearing),
-            percept.pose.z + distance * math.cos(bearing),
+            self.state["frame"], *along(percept.pose.x, percept.pose.z, heading, distance)
         )
         self.map[label] = {"type": phrase, "x": round(x, 2), "z": round(z, 2), "room": room}
 

@@ -27,7 +27,7 @@ from typing import Any, Final
 
 import numpy as np
 
-from pytest_emrd.reference._read import Percept, placed
+from pytest_emrd.reference._read import Percept, along, placed
 from pytest_emrd.trajectory import Pose
 
 #: Where a confirmed ``Goto`` of an object is taken to end, short of the object's placement:
@@ -58,8 +58,7 @@ def reckon(
         gx, gz, doorway = odometry["goal"]
         heading = round(math.degrees(math.atan2(gx - x, gz - z)) / 90.0) * 90.0 % 360.0
         ahead = THROUGH_M if doorway else -STAND_OFF_M
-        rad = math.radians(heading)
-        x, z = gx + ahead * math.sin(rad), gz + ahead * math.cos(rad)
+        x, z = along(gx, gz, heading, ahead)
         x, z, heading = _resight(percept, placed, (x, z, heading))
     odometry["pose"] = [round(x, 4), round(z, 4), heading]
     return dataclasses.replace(percept, pose=Pose(*odometry["pose"]))

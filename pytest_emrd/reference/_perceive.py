@@ -90,8 +90,7 @@ def _inside(visible: tuple[VisibleObject, ...]) -> tuple[VisibleObject, ...]:
             seen.distance > d.distance
             and abs(seen.bearing - d.bearing)
             <= math.degrees(math.atan2(GAP_HALF_WIDTH_M, d.distance))
-            for d in doors
-            if d is not seen
+            for d in doors  # seen itself is no farther than seen
         )
 
     return tuple(s for s in visible if not behind(s))

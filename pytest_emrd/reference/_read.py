@@ -53,13 +53,15 @@ class Percept:
     """The feedback says the last action succeeded."""
 
 
+def along(x: float, z: float, heading: float, distance: float) -> tuple[float, float]:
+    """The point ``distance`` m from ``(x, z)`` towards ``heading`` (degrees clockwise from +z)."""
+    angle = math.radians(heading)
+    return x + distance * math.sin(angle), z + distance * math.cos(angle)
+
+
 def placed(percept: Percept, seen: VisibleObject) -> tuple[float, float]:
     """Where ``seen`` lies in the spawn frame, from the pose and its bearing and distance."""
-    angle = math.radians(percept.pose.heading + seen.bearing)
-    return (
-        percept.pose.x + seen.distance * math.sin(angle),
-        percept.pose.z + seen.distance * math.cos(angle),
-    )
+    return along(percept.pose.x, percept.pose.z, percept.pose.heading + seen.bearing, seen.distance)
 
 
 def read_briefing(system: str) -> Briefing:

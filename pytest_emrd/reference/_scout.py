@@ -196,11 +196,10 @@ def _door_home(plan: Mapping[str, Any], home: str) -> str:
 def _homing(plan: dict[str, Any], briefing: Briefing) -> bool:
     """Rule 1 of a homing scout: set a doorway towards ``home`` as the target (True), or
     False when it is home or knows no way there."""
-    if "home" not in plan:
-        plan["home"] = term_choice(plan, briefing)[0]
-    if room_guess(plan) == plan["home"]:
+    home = plan.setdefault("home", term_choice(plan, briefing)[0])
+    if room_guess(plan) == home:
         return False
-    door = _door_home(plan, plan["home"])
+    door = _door_home(plan, home)
     plan.update(target=door, goal="door" if door else "", phase="face", tries=0)
     return bool(door)
 
