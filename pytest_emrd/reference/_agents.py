@@ -23,7 +23,7 @@ from pytest_emrd.agent import Registry, agent_name, versioned_id
 from pytest_emrd.errors import ConfigError, ProtocolError
 from pytest_emrd.reference._memory import uniform
 from pytest_emrd.reference._mimic import mimic_reply, request_seed
-from pytest_emrd.reference._perceive import SWEEP_TURNS, fresh_plan, perceive, room_guess
+from pytest_emrd.reference._perceive import SWEEP_TURNS, Plan, fresh_plan, perceive, room_guess
 from pytest_emrd.reference._read import (
     Briefing,
     Percept,
@@ -43,7 +43,7 @@ def seats(counts: Mapping[str, int]) -> int:
     return sum(n for t, n in counts.items() if any(s in t for s in SEATS))
 
 
-def prior_action(plan: dict[str, Any], briefing: Briefing, percept: Percept) -> tuple[str, str]:
+def prior_action(plan: Plan, briefing: Briefing, percept: Percept) -> tuple[str, str]:
     """(action, reasoning) of the prior agent: look around in place, then name another room."""
     if plan["turns"] < SWEEP_TURNS and percept.step < percept.max_steps:
         plan["turns"] += 1
@@ -59,7 +59,7 @@ def prior_action(plan: dict[str, Any], briefing: Briefing, percept: Percept) -> 
     )
 
 
-Policy = Callable[[dict[str, Any], Briefing, Percept], tuple[str, str]]
+Policy = Callable[[Plan, Briefing, Percept], tuple[str, str]]
 POLICIES: Final[dict[str, Policy]] = {"scout": scout_action, "prior": prior_action}
 #: Deterministic usage estimate: characters per token, tokens per image.
 CHARS_PER_TOKEN: Final = 4

@@ -29,6 +29,8 @@ from typing import Any, Final
 from pytest_emrd.errors import ConfigError
 
 Entry = dict[str, Any]
+#: A uniform number in [0, 1) per name, fixed by the request (:func:`uniform`).
+Draw = Callable[[str], float]
 MEMORIES: Final[tuple[str, ...]] = ("perfect", "none", "decay", "window", "serial")
 
 
@@ -59,7 +61,7 @@ def apply_memory(
     in_view: frozenset[str],
     planted: Mapping[str, Any],
     discovery: Sequence[str],
-    draw: Callable[[str], float],
+    draw: Draw,
     expected: int | None = None,
 ) -> dict[str, Entry]:
     """The entries the planted memory keeps this step (``memory`` already merged):

@@ -19,12 +19,12 @@ import copy
 import hashlib
 import json
 import math
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping
 from functools import partial
 from typing import Any, Final
 
 from pytest_emrd.reference._malform import FAILING, REPAIRABLE, malform, read_state, render
-from pytest_emrd.reference._memory import uniform
+from pytest_emrd.reference._memory import Draw, Entry, uniform
 from pytest_emrd.reference._odometry import aim, fresh_odometry, reckon
 from pytest_emrd.reference._perceive import fresh_plan, perceive, room_guess
 from pytest_emrd.reference._phrasing import (
@@ -42,8 +42,6 @@ from pytest_emrd.reference._scout import scout_action
 FRAME_SHIFT_M: Final = 10.0
 #: Hallucinated objects appear this far ahead (m), within +-45 degrees of the heading.
 PHANTOM_RANGE_M: Final = (1.0, 4.0)
-
-Draw = Callable[[str], float]
 
 
 def _normal(draw: Draw, name: str) -> tuple[float, float]:
@@ -90,7 +88,7 @@ class _Writer:
     def __init__(self, state: dict[str, Any], planted: Mapping[str, Any]) -> None:
         self.state, self.planted = state, planted
         self.draw = _episode_draw(state["key"])
-        self.map: dict[str, dict[str, Any]] = state["map"]
+        self.map: dict[str, Entry] = state["map"]
 
     def live_label(self, object_id: str) -> str | None:
         # at most one: a duplicate freezes the live label (it gets an ``x``) before a new one
@@ -160,9 +158,9 @@ class _Writer:
         )
         self.map[label] = {"type": phrase, "x": round(x, 2), "z": round(z, 2), "room": room}
 
-    def written(self, memory: Mapping[str, Mapping[str, Any]]) -> dict[str, dict[str, Any]]:
+    def written(self, memory: Mapping[str, Mapping[str, Any]]) -> dict[str, Entry]:
         """The cognitive map as reported: ``{label: {type, room, x, z}}``."""
-        out: dict[str, dict[str, Any]] = {}
+        out: dict[str, Entry] = {}
         for label, rec in self.map.items():
             if "x" in rec:
                 fields = {k: rec[k] for k in ("type", "room", "x", "z")}

@@ -12,10 +12,10 @@ every memory variant of an agent walks the same path.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping
 from typing import Any, Final
 
-from pytest_emrd.reference._memory import apply_memory, merge_view
+from pytest_emrd.reference._memory import Draw, Entry, apply_memory, merge_view
 from pytest_emrd.reference._read import Briefing, Percept, placed
 from pytest_emrd.world import VisibleObject
 
@@ -28,6 +28,8 @@ MOVED_M: Final = 0.3
 EDGE_DEG: Final = 44.9
 #: Lateral half-width (m) of the cone behind a visible doorway treated as the next room.
 GAP_HALF_WIDTH_M: Final = 1.0
+#: The navigation state (:func:`fresh_plan`), carried in the ``plan`` key of every reply.
+Plan = dict[str, Any]
 #: Plan keys that outlive a room visit; entering a room resets the others to :func:`fresh_plan`.
 EPISODE_KEYS: Final = (
     "acted",
@@ -43,7 +45,7 @@ EPISODE_KEYS: Final = (
 )
 
 
-def fresh_plan() -> dict[str, Any]:
+def fresh_plan() -> Plan:
     """Navigation state at the first step, carried in the ``plan`` key of every reply."""
     return {
         # sweep (turning in place), decide, face (turning towards the target), cross / walk
@@ -96,7 +98,7 @@ def _inside(visible: tuple[VisibleObject, ...]) -> tuple[VisibleObject, ...]:
     return tuple(s for s in visible if not behind(s))
 
 
-def _vote(plan: dict[str, Any], briefing: Briefing, visible: tuple[VisibleObject, ...]) -> None:
+def _vote(plan: Plan, briefing: Briefing, visible: tuple[VisibleObject, ...]) -> None:
     votes = plan["votes"] or dict.fromkeys(briefing.inventory, 0.0)
     for seen in visible:
         rooms = [room for room, counts in briefing.inventory.items() if seen.object_type in counts]
@@ -105,12 +107,12 @@ def _vote(plan: dict[str, Any], briefing: Briefing, visible: tuple[VisibleObject
     plan["votes"] = votes if any(votes.values()) else {}
 
 
-def _enter_room(plan: dict[str, Any]) -> None:
+def _enter_room(plan: Plan) -> None:
     plan["used"] = [d for d in plan["used"] if d != plan["target"]] + [plan["target"]]
     plan.update((key, value) for key, value in fresh_plan().items() if key not in EPISODE_KEYS)
 
 
-def _after_goto(plan: dict[str, Any], moved: bool) -> None:
+def _after_goto(plan: Plan, moved: bool) -> None:
     """Bookkeeping at the step after a ``Goto`` (``phase`` ``cross`` or ``walk``)."""
     if plan["phase"] == "cross":
         if moved:
@@ -125,14 +127,14 @@ def _after_goto(plan: dict[str, Any], moved: bool) -> None:
 
 
 def perceive(
-    plan: dict[str, Any],
-    memory: dict[str, dict[str, Any]],
+    plan: Plan,
+    memory: dict[str, Entry],
     briefing: Briefing,
     percept: Percept,
     *,
     planted: Mapping[str, Any],
-    draw: Callable[[str], float],
-) -> tuple[dict[str, dict[str, Any]], list[str]]:
+    draw: Draw,
+) -> tuple[dict[str, Entry], list[str]]:
     """Update the plan with this view; return the remembered map and the new labels."""
     pose = percept.pose
     _after_goto(plan, math.dist(plan["at"], (pose.x, pose.z)) > MOVED_M)
@@ -144,7 +146,7 @@ def perceive(
     inside = {s.object_id for s in inside_view}
     _vote(plan, briefing, inside_view)
     room = room_guess(plan)
-    view: dict[str, dict[str, Any]] = {}  # label -> entry, farthest first
+    view: dict[str, Entry] = {}  # label -> entry, farthest first
     for seen in sorted(percept.visible, key=lambda s: (-s.distance, s.object_id)):
         oid = seen.object_id
         x, z = (round(v, 2) for v in placed(percept, seen))
@@ -160,7 +162,7 @@ def perceive(
             plan["spots"][oid] = [x, z, seen.object_type]
             if oid not in plan["near"]:
                 plan["near"].append(oid)
-        entry: dict[str, Any] = {"type": seen.object_type, "x": x, "z": z}
+        entry: Entry = {"type": seen.object_type, "x": x, "z": z}
         old = memory.get(oid, {})
         if abs(seen.bearing) < EDGE_DEG:
             if oid in plan["rough"]:

@@ -36,7 +36,7 @@ from collections import Counter
 from collections.abc import Mapping
 from typing import Any, Final
 
-from pytest_emrd.reference._perceive import SWEEP_TURNS, room_guess
+from pytest_emrd.reference._perceive import SWEEP_TURNS, Plan, room_guess
 from pytest_emrd.reference._read import Briefing, Percept
 
 MAX_FACE_TRIES: Final = 2
@@ -54,7 +54,7 @@ RESERVE: Final = 6
 PER_ROOM: Final = 6
 
 
-def _close_room(plan: dict[str, Any]) -> None:
+def _close_room(plan: Plan) -> None:
     room = room_guess(plan)
     if room:
         if room not in plan["visited"]:
@@ -101,13 +101,13 @@ def _spot(
     )
 
 
-def _reposition(plan: dict[str, Any], towards: list[list[float]]) -> bool:
+def _reposition(plan: Plan, towards: list[list[float]]) -> bool:
     """Rule 4's move towards ``towards``, if the visit has a reposition left."""
     limit = MAX_MOVES if plan["here"] else LOST_MOVES
     return _go_spot(plan, _spot(plan, towards) if plan["moves"] < limit else "", "moves")
 
 
-def _go_spot(plan: dict[str, Any], spot: str, counter: str) -> bool:
+def _go_spot(plan: Plan, spot: str, counter: str) -> bool:
     """Target ``spot`` (if any), counting the move in ``counter`` (``moves`` or ``clears``)."""
     if spot:
         plan["tried"].append(spot)
@@ -116,7 +116,7 @@ def _go_spot(plan: dict[str, Any], spot: str, counter: str) -> bool:
     return bool(spot)
 
 
-def _clear(plan: dict[str, Any], briefing: Briefing, percept: Percept) -> bool:
+def _clear(plan: Plan, briefing: Briefing, percept: Percept) -> bool:
     """Rule 2, if the visit has a clearing move left and the budget affords it."""
     if plan["clears"] >= MAX_CLEARS or _complete(plan, briefing):
         return False
@@ -128,7 +128,7 @@ def _clear(plan: dict[str, Any], briefing: Briefing, percept: Percept) -> bool:
     return _go_spot(plan, _spot(plan, [], doors) if affordable else "", "clears")
 
 
-def _choose(plan: dict[str, Any], briefing: Briefing, percept: Percept) -> None:
+def _choose(plan: Plan, briefing: Briefing, percept: Percept) -> None:
     """Set ``target`` and ``goal`` by rules 2-6; an empty target means ``Term``."""
     plan.update(phase="face", tries=0)
     if _clear(plan, briefing, percept):
@@ -193,7 +193,7 @@ def _door_home(plan: Mapping[str, Any], home: str) -> str:
     return ""
 
 
-def _homing(plan: dict[str, Any], briefing: Briefing) -> bool:
+def _homing(plan: Plan, briefing: Briefing) -> bool:
     """Rule 1 of a homing scout: set a doorway towards ``home`` as the target (True), or
     False when it is home or knows no way there."""
     home = plan.setdefault("home", term_choice(plan, briefing)[0])
@@ -205,7 +205,7 @@ def _homing(plan: dict[str, Any], briefing: Briefing) -> bool:
 
 
 def scout_action(
-    plan: dict[str, Any], briefing: Briefing, percept: Percept, *, homing: bool = False
+    plan: Plan, briefing: Briefing, percept: Percept, *, homing: bool = False
 ) -> tuple[str, str]:
     """(action, reasoning) of the room-clearing scout (``homing``: see the module docstring)."""
     plan["acted"] += 1
