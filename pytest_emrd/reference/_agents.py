@@ -26,6 +26,7 @@ from pytest_emrd.reference._mimic import mimic_reply, request_seed
 from pytest_emrd.reference._perceive import SWEEP_TURNS, Plan, fresh_plan, perceive, room_guess
 from pytest_emrd.reference._read import (
     Briefing,
+    Message,
     Percept,
     last_text,
     message_text,
@@ -74,7 +75,7 @@ class RequestError(ProtocolError):
         self.status = status
 
 
-def _usage(messages: list[dict[str, Any]], reply: str) -> dict[str, int]:
+def _usage(messages: list[Message], reply: str) -> dict[str, int]:
     chars = sum(len(message_text(m)) for m in messages)
     images = sum(
         p.get("type") == "image_url"
@@ -89,7 +90,7 @@ def _usage(messages: list[dict[str, Any]], reply: str) -> dict[str, int]:
     )
 
 
-def reply_text(model: str, planted: dict[str, Any], messages: list[dict[str, Any]]) -> str:
+def reply_text(model: str, planted: dict[str, Any], messages: list[Message]) -> str:
     """The reply (compact JSON) of reference agent ``model`` (registry name) to ``messages``.
 
     :param model: The agent's registry name.

@@ -26,6 +26,8 @@ _CONFIRMED = re.compile(r"^Engine feedback: \S.*? succeeded", re.MULTILINE)
 _VISIBLE = re.compile(
     r"^- (?P<id>\S+) \| (?P<type>\S+) \| (?P<b>-?\d+(?:\.\d+)?) \| (?P<d>\d+(?:\.\d+)?)$"
 )
+#: One chat-completions message (``role``, ``content``: a string or a list of parts).
+Message = dict[str, Any]
 NOT_SYMBOLIC: Final = (
     "reference agents act on the symbolic visible list; run them with modality 'text' or "
     "'both' (their registry default), not 'vision'."
@@ -99,7 +101,7 @@ def read_percept(text: str) -> Percept:
     return Percept(int(step["k"]), int(step["n"]), at, visible, confirmed)
 
 
-def message_text(message: dict[str, Any]) -> str:
+def message_text(message: Message) -> str:
     """The text of an OpenAI-format message (string content or the text parts)."""
     content = message.get("content")
     if isinstance(content, str):
@@ -109,13 +111,13 @@ def message_text(message: dict[str, Any]) -> str:
     raise ProtocolError(f"message content is {type(content).__name__}, not text or parts.")
 
 
-def last_text(messages: list[dict[str, Any]], role: str) -> str | None:
+def last_text(messages: list[Message], role: str) -> str | None:
     """The text of the newest message from ``role`` (the agent's own last reply for
     ``assistant``), or None when there is none (the first step)."""
     return next((message_text(m) for m in reversed(messages) if m.get("role") == role), None)
 
 
-def previous_reply(messages: list[dict[str, Any]]) -> dict[str, Any] | None:
+def previous_reply(messages: list[Message]) -> dict[str, Any] | None:
     """The agent's own last reply (decoded JSON), or None at the first step."""
     text = last_text(messages, "assistant")
     if text is None:
