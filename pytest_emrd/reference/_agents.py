@@ -22,7 +22,7 @@ from typing import Any, Final
 from pytest_emrd.agent import Registry, agent_name, versioned_id
 from pytest_emrd.errors import ConfigError, ProtocolError
 from pytest_emrd.reference._memory import uniform
-from pytest_emrd.reference._mimic import mimic_reply, request_seed
+from pytest_emrd.reference._mimic import mimic_reply
 from pytest_emrd.reference._perceive import SWEEP_TURNS, Plan, fresh_plan, perceive, room_guess
 from pytest_emrd.reference._read import (
     Briefing,
@@ -104,8 +104,9 @@ def reply_text(model: str, planted: dict[str, Any], messages: list[Message]) -> 
         raise RequestError("request needs a system message and a user message.")
     briefing, percept = read_briefing(system), read_percept(user)
     if planted.get("writer") == "vlm":
-        seed, last = request_seed(system, user), last_text(messages, "assistant")
-        return mimic_reply(planted, briefing, percept, request=seed, previous=last)
+        request = json.dumps([system, user]).encode()  # a step: system prompt and user message
+        last = last_text(messages, "assistant")
+        return mimic_reply(planted, briefing, percept, request=request, previous=last)
     previous = previous_reply(messages) or {}
     seed = hashlib.sha256(
         "\x1e".join((model, user, json.dumps(previous, sort_keys=True))).encode()

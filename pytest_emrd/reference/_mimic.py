@@ -17,7 +17,6 @@ from __future__ import annotations
 
 import copy
 import hashlib
-import json
 import math
 from collections.abc import Mapping
 from functools import partial
@@ -230,8 +229,3 @@ def mimic_reply(
     if step("repair") < float(planted.get("repair", 0.0)):
         return malform(text, pick(REPAIRABLE, step("repair:kind")), step("repair:wording"))
     return text
-
-
-def request_seed(system: str, user: str) -> bytes:
-    """Seed material of one step: the system prompt and the step's user message."""
-    return json.dumps([system, user]).encode()
