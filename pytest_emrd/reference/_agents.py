@@ -13,21 +13,22 @@ prior the paper found behind the Conference Room choice (Never-Visited and Any-B
 
 from __future__ import annotations
 
-import copy
 import hashlib
 import json
 from collections.abc import Callable, Mapping
+from functools import partial
 from typing import Any, Final
 
 from pytest_emrd.agent import Registry, agent_name, versioned_id
 from pytest_emrd.errors import ConfigError, ProtocolError
 from pytest_emrd.reference._memory import uniform
-from pytest_emrd.reference._mimic import mimic_reply, request_seed
-from pytest_emrd.reference._perceive import SWEEP_TURNS, fresh_plan, perceive, room_guess
+from pytest_emrd.reference._mimic import mimic_reply
+from pytest_emrd.reference._perceive import SWEEP_TURNS, Plan, fresh_plan, perceive, room_guess
 from pytest_emrd.reference._read import (
     Briefing,
+    Message,
     Percept,
-    last_reply_text,
+    last_text,
     message_text,
     previous_reply,
     read_briefing,
@@ -43,24 +44,23 @@ def seats(counts: Mapping[str, int]) -> int:
     return sum(n for t, n in counts.items() if any(s in t for s in SEATS))
 
 
-def prior_action(plan: dict[str, Any], briefing: Briefing, percept: Percept) -> tuple[str, str]:
+def prior_action(plan: Plan, briefing: Briefing, percept: Percept) -> tuple[str, str]:
     """(action, reasoning) of the prior agent: look around in place, then name another room."""
     if plan["turns"] < SWEEP_TURNS and percept.step < percept.max_steps:
         plan["turns"] += 1
         return "Turn(Right)", f"Looking around to tell where I am ({plan['turns']}/{SWEEP_TURNS})."
     here = room_guess(plan)
-    others = [r for r in briefing.rooms if r != here]
-    inventory = briefing.inventory
-    room = max(others, key=lambda r: (seats(inventory.get(r, {})), -others.index(r)))
+    seating = {r: seats(briefing.inventory.get(r, {})) for r in briefing.rooms if r != here}
+    room = max(seating, key=seating.__getitem__)  # max keeps the first of equals: prompt order
     where = f"the {here} where I stand" if here else "this room"
     return (
         f"Term({room})",
-        f"{room} has the most seating for a gathering ({seats(inventory.get(room, {}))} "
+        f"{room} has the most seating for a gathering ({seating[room]} "
         f"seats by the building overview), more than any room other than {where}.",
     )
 
 
-Policy = Callable[[dict[str, Any], Briefing, Percept], tuple[str, str]]
+Policy = Callable[[Plan, Briefing, Percept], tuple[str, str]]
 POLICIES: Final[dict[str, Policy]] = {"scout": scout_action, "prior": prior_action}
 #: Deterministic usage estimate: characters per token, tokens per image.
 CHARS_PER_TOKEN: Final = 4
@@ -75,10 +75,14 @@ class RequestError(ProtocolError):
         self.status = status
 
 
-def _usage(messages: list[dict[str, Any]], reply: str) -> dict[str, int]:
+def _usage(messages: list[Message], reply: str) -> dict[str, int]:
     chars = sum(len(message_text(m)) for m in messages)
-    parts = [p for m in messages if isinstance(m.get("content"), list) for p in m["content"]]
-    images = sum(p.get("type") == "image_url" for p in parts)
+    images = sum(
+        p.get("type") == "image_url"
+        for m in messages
+        if isinstance(m.get("content"), list)
+        for p in m["content"]
+    )
     prompt = chars // CHARS_PER_TOKEN + TOKENS_PER_IMAGE * images
     completion = len(reply) // CHARS_PER_TOKEN
     return dict(
@@ -86,7 +90,7 @@ def _usage(messages: list[dict[str, Any]], reply: str) -> dict[str, int]:
     )
 
 
-def reply_text(model: str, planted: dict[str, Any], messages: list[dict[str, Any]]) -> str:
+def reply_text(model: str, planted: dict[str, Any], messages: list[Message]) -> str:
     """The reply (compact JSON) of reference agent ``model`` (registry name) to ``messages``.
 
     :param model: The agent's registry name.
@@ -95,21 +99,23 @@ def reply_text(model: str, planted: dict[str, Any], messages: list[dict[str, Any
     :returns: The reply text.
     """
     system = next((message_text(m) for m in messages if m.get("role") == "system"), None)
-    user = next((message_text(m) for m in reversed(messages) if m.get("role") == "user"), None)
+    user = last_text(messages, "user")
     if system is None or user is None:
         raise RequestError("request needs a system message and a user message.")
     briefing, percept = read_briefing(system), read_percept(user)
     if planted.get("writer") == "vlm":
-        seed, last = request_seed(system, user), last_reply_text(messages)
-        return mimic_reply(planted, briefing, percept, request=seed, previous=last)
+        request = json.dumps([system, user]).encode()  # a step: system prompt and user message
+        last = last_text(messages, "assistant")
+        return mimic_reply(planted, briefing, percept, request=request, previous=last)
     previous = previous_reply(messages) or {}
-    plan = copy.deepcopy(previous.get("plan")) or fresh_plan()
-    memory = dict(previous.get("cognitive_map") or {})
     seed = hashlib.sha256(
         "\x1e".join((model, user, json.dumps(previous, sort_keys=True))).encode()
     ).digest()
+    # freshly decoded for this request, so the plan is updated in place (after the seed)
+    plan = previous.get("plan") or fresh_plan()
+    memory = previous.get("cognitive_map") or {}
     kept, new = perceive(
-        plan, memory, briefing, percept, planted=planted, draw=lambda label: uniform(seed, label)
+        plan, memory, briefing, percept, planted=planted, draw=partial(uniform, seed)
     )
     policy = POLICIES.get(planted.get("policy", "scout"))
     if policy is None:
@@ -162,6 +168,9 @@ def complete(body: Any, registry: Registry) -> dict[str, Any]:
 
 def model_list(registry: Registry) -> dict[str, Any]:
     """The ``/v1/models`` listing: every registered reference agent, by versioned id."""
-    names = [versioned_id(n) for n in registry.names() if registry.get(n).provider == "reference"]
-    data = [{"id": n, "object": "model", "created": 0, "owned_by": "pytest-emrd"} for n in names]
+    data = [
+        {"id": versioned_id(n), "object": "model", "created": 0, "owned_by": "pytest-emrd"}
+        for n in registry.names()
+        if registry.get(n).provider == "reference"
+    ]
     return {"object": "list", "data": data}

@@ -29,6 +29,8 @@ from typing import Any, Final
 from pytest_emrd.errors import ConfigError
 
 Entry = dict[str, Any]
+#: A uniform number in [0, 1) per name, fixed by the request (:func:`uniform`).
+Draw = Callable[[str], float]
 MEMORIES: Final[tuple[str, ...]] = ("perfect", "none", "decay", "window", "serial")
 
 
@@ -38,12 +40,9 @@ def uniform(seed: bytes, label: str) -> float:
     return int.from_bytes(digest[:8], "big") / 2**64
 
 
-def merge_view(memory: Mapping[str, Entry], view: Sequence[tuple[str, Entry]]) -> dict[str, Entry]:
-    """Memory with ``view`` (label, entry; farthest first) refreshed to the end."""
-    seen = {label for label, _ in view}
-    merged = {label: entry for label, entry in memory.items() if label not in seen}
-    merged.update(view)
-    return merged
+def merge_view(memory: Mapping[str, Entry], view: dict[str, Entry]) -> dict[str, Entry]:
+    """Memory with ``view`` (label -> entry; farthest first) refreshed to the end."""
+    return {label: entry for label, entry in memory.items() if label not in view} | view
 
 
 def drop_probability(mean_steps: float) -> float:
@@ -62,7 +61,7 @@ def apply_memory(
     in_view: frozenset[str],
     planted: Mapping[str, Any],
     discovery: Sequence[str],
-    draw: Callable[[str], float],
+    draw: Draw,
     expected: int | None = None,
 ) -> dict[str, Entry]:
     """The entries the planted memory keeps this step (``memory`` already merged):

@@ -17,13 +17,13 @@ from __future__ import annotations
 
 import copy
 import hashlib
-import json
 import math
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping
+from functools import partial
 from typing import Any, Final
 
 from pytest_emrd.reference._malform import FAILING, REPAIRABLE, malform, read_state, render
-from pytest_emrd.reference._memory import uniform
+from pytest_emrd.reference._memory import Draw, Entry, uniform
 from pytest_emrd.reference._odometry import aim, fresh_odometry, reckon
 from pytest_emrd.reference._perceive import fresh_plan, perceive, room_guess
 from pytest_emrd.reference._phrasing import (
@@ -34,15 +34,13 @@ from pytest_emrd.reference._phrasing import (
     pick,
     type_word,
 )
-from pytest_emrd.reference._read import Briefing, Percept
+from pytest_emrd.reference._read import Briefing, Percept, along
 from pytest_emrd.reference._scout import scout_action
 
 #: Half-width (m) of the square the frame's translation is drawn from.
 FRAME_SHIFT_M: Final = 10.0
 #: Hallucinated objects appear this far ahead (m), within +-45 degrees of the heading.
 PHANTOM_RANGE_M: Final = (1.0, 4.0)
-
-Draw = Callable[[str], float]
 
 
 def _normal(draw: Draw, name: str) -> tuple[float, float]:
@@ -74,8 +72,7 @@ def fresh_state(key: str, planted: Mapping[str, Any]) -> dict[str, Any]:
 
 
 def _episode_draw(key: str) -> Draw:
-    seed = bytes.fromhex(key)
-    return lambda name: uniform(seed, name)
+    return partial(uniform, bytes.fromhex(key))
 
 
 def _to_frame(frame: list[float], x: float, z: float) -> tuple[float, float]:
@@ -90,11 +87,12 @@ class _Writer:
     def __init__(self, state: dict[str, Any], planted: Mapping[str, Any]) -> None:
         self.state, self.planted = state, planted
         self.draw = _episode_draw(state["key"])
-        self.map: dict[str, dict[str, Any]] = state["map"]
+        self.map: dict[str, Entry] = state["map"]
 
     def live_label(self, object_id: str) -> str | None:
-        live = [lb for lb, rec in self.map.items() if rec.get("id") == object_id and "x" not in rec]
-        return live[-1] if live else None
+        # at most one: a duplicate freezes the live label (it gets an ``x``) before a new one
+        live = (lb for lb, rec in self.map.items() if rec.get("id") == object_id and "x" not in rec)
+        return next(live, None)
 
     def _new_label(self, object_type: str, name: str) -> str:
         return label_for(
@@ -105,14 +103,20 @@ class _Writer:
             u_qualifier=self.draw(f"{name}:qualifier"),
         )
 
-    def position(self, object_id: str, entry: Mapping[str, Any]) -> tuple[float, float]:
-        """Written position of a remembered object: frame, then noise of its last sighting."""
+    def entry_of(self, object_id: str, entry: Mapping[str, Any]) -> dict[str, Any]:
+        """How a remembered object is written: its type word, its room (None: none) and its
+        position in the frame plus the noise of its last sighting."""
         x, z = _to_frame(self.state["frame"], entry["x"], entry["z"])
         sigma = float(self.planted.get("sigma", 0.0))
         if sigma:
             nx, nz = _normal(self.draw, f"noise:{object_id}:{self.state['seen'][object_id]}")
             x, z = x + sigma * nx, z + sigma * nz
-        return round(x, 2), round(z, 2)
+        return {
+            "type": type_word(entry["type"]),
+            "room": entry.get("room"),
+            "x": round(x, 2),
+            "z": round(z, 2),
+        }
 
     def label_new(self, memory: Mapping[str, Mapping[str, Any]], visit: int) -> None:
         """Label what is new; note the visit in which an object was first placed in a room."""
@@ -127,14 +131,14 @@ class _Writer:
     def duplicate(self, object_id: str, entry: Mapping[str, Any], room: str, visit: int) -> None:
         """On re-entry into ``room``: maybe write ``object_id`` again under a new label."""
         label = self.live_label(object_id)
-        if label is None or not room or entry.get("room") != room:
+        # an entry's room is never "" (:func:`perceive`), so an unknown ``room`` never matches
+        if label is None or entry.get("room") != room:
             return
         if self.map[label].get("visit", visit) >= visit:
             return
         if self.draw(f"dup:{object_id}:{visit}") >= float(self.planted.get("dup", 0.0)):
             return
-        x, z = self.position(object_id, entry)
-        self.map[label].update(x=x, z=z, type=type_word(entry["type"]), room=room)
+        self.map[label].update(self.entry_of(object_id, entry))  # frozen as written now
         label = self._new_label(entry["type"], f"{object_id}:{visit}")
         self.map[label] = {"id": object_id, "visit": visit}
 
@@ -147,30 +151,20 @@ class _Writer:
         )
         low, high = PHANTOM_RANGE_M
         distance = low + (high - low) * step("halluc:distance")
-        bearing = math.radians(percept.pose.heading + 90.0 * step("halluc:bearing") - 45.0)
+        heading = percept.pose.heading + 90.0 * step("halluc:bearing") - 45.0
         x, z = _to_frame(
-            self.state["frame"],
-            percept.pose.x + distance * math.sin(bearing),
-            percept.pose.z + distance * math.cos(bearing),
+            self.state["frame"], *along(percept.pose.x, percept.pose.z, heading, distance)
         )
         self.map[label] = {"type": phrase, "x": round(x, 2), "z": round(z, 2), "room": room}
 
-    def written(self, memory: Mapping[str, Mapping[str, Any]]) -> dict[str, dict[str, Any]]:
+    def written(self, memory: Mapping[str, Mapping[str, Any]]) -> dict[str, Entry]:
         """The cognitive map as reported: ``{label: {type, room, x, z}}``."""
-        out: dict[str, dict[str, Any]] = {}
+        out: dict[str, Entry] = {}
         for label, rec in self.map.items():
-            object_id = rec.get("id")
             if "x" in rec:
                 fields = {k: rec[k] for k in ("type", "room", "x", "z")}
-            elif object_id in memory:
-                entry = memory[object_id]
-                x, z = self.position(object_id, entry)
-                fields = {
-                    "type": type_word(entry["type"]),
-                    "room": entry.get("room"),
-                    "x": x,
-                    "z": z,
-                }
+            elif rec.get("id") in memory:
+                fields = self.entry_of(rec["id"], memory[rec["id"]])
             else:
                 continue
             out[label] = {k: v for k, v in fields.items() if v is not None}
@@ -188,7 +182,7 @@ def mimic_reply(
     """The reply of a mimic with ``planted`` knobs to the step seeded by ``request``, after its
     ``previous`` reply (None at the first step)."""
     seed = hashlib.sha256(request).digest()
-    step: Draw = lambda name: uniform(seed, name)  # noqa: E731
+    step = partial(uniform, seed)
     state = read_state(previous) if previous else fresh_state(seed[:8].hex(), planted)
     if "odometry" in state:
         percept = reckon(state["odometry"], percept, state["nav"]["memory"])
@@ -206,8 +200,8 @@ def mimic_reply(
 
     room, visit = room_guess(plan), nav["visit"]
     writer.label_new(memory, visit)
-    state["seen"].update(dict.fromkeys((s.object_id for s in percept.visible), percept.step))
     for seen in percept.visible:
+        state["seen"][seen.object_id] = percept.step
         writer.duplicate(seen.object_id, memory[seen.object_id], room, visit)
     writer.hallucinate(percept, room, step)
 
@@ -235,8 +229,3 @@ def mimic_reply(
     if step("repair") < float(planted.get("repair", 0.0)):
         return malform(text, pick(REPAIRABLE, step("repair:kind")), step("repair:wording"))
     return text
-
-
-def request_seed(system: str, user: str) -> bytes:
-    """Seed material of one step: the system prompt and the step's user message."""
-    return json.dumps([system, user]).encode()

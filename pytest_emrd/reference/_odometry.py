@@ -27,7 +27,7 @@ from typing import Any, Final
 
 import numpy as np
 
-from pytest_emrd.reference._read import Percept, placed
+from pytest_emrd.reference._read import Percept, along, placed
 from pytest_emrd.trajectory import Pose
 
 #: Where a confirmed ``Goto`` of an object is taken to end, short of the object's placement:
@@ -58,8 +58,7 @@ def reckon(
         gx, gz, doorway = odometry["goal"]
         heading = round(math.degrees(math.atan2(gx - x, gz - z)) / 90.0) * 90.0 % 360.0
         ahead = THROUGH_M if doorway else -STAND_OFF_M
-        rad = math.radians(heading)
-        x, z = gx + ahead * math.sin(rad), gz + ahead * math.cos(rad)
+        x, z = along(gx, gz, heading, ahead)
         x, z, heading = _resight(percept, placed, (x, z, heading))
     odometry["pose"] = [round(x, 4), round(z, 4), heading]
     return dataclasses.replace(percept, pose=Pose(*odometry["pose"]))
@@ -77,7 +76,7 @@ def _resight(
     bearing = np.radians([s.bearing for s in again])
     distance = np.array([s.distance for s in again])
     candidates = []
-    for heading in (expected[2], *(h for h in (0.0, 90.0, 180.0, 270.0) if h != expected[2])):
+    for heading in dict.fromkeys((expected[2], 0.0, 90.0, 180.0, 270.0)):  # expected first, once
         angle = np.radians(heading) + bearing
         stands = known - distance[:, None] * np.stack([np.sin(angle), np.cos(angle)], axis=1)
         x, z = np.median(stands, axis=0)
@@ -96,9 +95,7 @@ def aim(odometry: dict[str, Any], action: str, percept: Percept) -> None:
         return
     name = asked["arg"].strip().lower()
     named = [s for s in percept.visible if s.object_id.lower() == name]
-    typed = sorted(
-        (s for s in percept.visible if s.object_type.lower() == name), key=lambda s: s.distance
-    )
-    target = (named or typed or [None])[0]
+    typed = [s for s in percept.visible if s.object_type.lower() == name]
+    target = min(named or typed, key=lambda s: s.distance, default=None)
     if target is not None:
         odometry["goal"] = [*placed(percept, target), target.object_type == "Doorway"]

@@ -12,10 +12,10 @@ every memory variant of an agent walks the same path.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping
 from typing import Any, Final
 
-from pytest_emrd.reference._memory import apply_memory, merge_view
+from pytest_emrd.reference._memory import Draw, Entry, apply_memory, merge_view
 from pytest_emrd.reference._read import Briefing, Percept, placed
 from pytest_emrd.world import VisibleObject
 
@@ -28,9 +28,24 @@ MOVED_M: Final = 0.3
 EDGE_DEG: Final = 44.9
 #: Lateral half-width (m) of the cone behind a visible doorway treated as the next room.
 GAP_HALF_WIDTH_M: Final = 1.0
+#: The navigation state (:func:`fresh_plan`), carried in the ``plan`` key of every reply.
+Plan = dict[str, Any]
+#: Plan keys that outlive a room visit; entering a room resets the others to :func:`fresh_plan`.
+EPISODE_KEYS: Final = (
+    "acted",
+    "reach",
+    "visited",
+    "used",
+    "doors",
+    "door_rooms",
+    "order",
+    "rough",
+    "sizes",
+    "at",
+)
 
 
-def fresh_plan() -> dict[str, Any]:
+def fresh_plan() -> Plan:
     """Navigation state at the first step, carried in the ``plan`` key of every reply."""
     return {
         # sweep (turning in place), decide, face (turning towards the target), cross / walk
@@ -66,7 +81,7 @@ def fresh_plan() -> dict[str, Any]:
 def room_guess(plan: Mapping[str, Any]) -> str:
     """The room the votes point to ("" before any vote; ties: prompt order)."""
     votes: dict[str, float] = plan["votes"]
-    return max(votes, key=lambda r: (votes[r], -list(votes).index(r)), default="")
+    return max(votes, key=votes.__getitem__, default="")  # max keeps the first of equals
 
 
 def _inside(visible: tuple[VisibleObject, ...]) -> tuple[VisibleObject, ...]:
@@ -77,34 +92,27 @@ def _inside(visible: tuple[VisibleObject, ...]) -> tuple[VisibleObject, ...]:
             seen.distance > d.distance
             and abs(seen.bearing - d.bearing)
             <= math.degrees(math.atan2(GAP_HALF_WIDTH_M, d.distance))
-            for d in doors
-            if d is not seen
+            for d in doors  # seen itself is no farther than seen
         )
 
     return tuple(s for s in visible if not behind(s))
 
 
-def _vote(plan: dict[str, Any], briefing: Briefing, visible: tuple[VisibleObject, ...]) -> None:
-    holders: dict[str, list[str]] = {}
-    for room, counts in briefing.inventory.items():
-        for t in counts:
-            holders.setdefault(t, []).append(room)
-    votes = plan["votes"] or {room: 0.0 for room in briefing.inventory}
+def _vote(plan: Plan, briefing: Briefing, visible: tuple[VisibleObject, ...]) -> None:
+    votes = plan["votes"] or dict.fromkeys(briefing.inventory, 0.0)
     for seen in visible:
-        rooms = holders.get(seen.object_type, [])
+        rooms = [room for room, counts in briefing.inventory.items() if seen.object_type in counts]
         for room in rooms:
             votes[room] = round(votes[room] + 1.0 / len(rooms) / (1.0 + seen.distance), 4)
     plan["votes"] = votes if any(votes.values()) else {}
 
 
-def _enter_room(plan: dict[str, Any]) -> None:
-    plan.update(phase="sweep", turns=0, votes={}, here={}, found=0, tries=0, moves=0, clears=0)
-    plan.update(spots={}, near=[], sweeps=[], tried=[], blocked=[])
+def _enter_room(plan: Plan) -> None:
     plan["used"] = [d for d in plan["used"] if d != plan["target"]] + [plan["target"]]
-    plan.update(target="", goal="")
+    plan.update((key, value) for key, value in fresh_plan().items() if key not in EPISODE_KEYS)
 
 
-def _after_goto(plan: dict[str, Any], moved: bool) -> None:
+def _after_goto(plan: Plan, moved: bool) -> None:
     """Bookkeeping at the step after a ``Goto`` (``phase`` ``cross`` or ``walk``)."""
     if plan["phase"] == "cross":
         if moved:
@@ -119,14 +127,14 @@ def _after_goto(plan: dict[str, Any], moved: bool) -> None:
 
 
 def perceive(
-    plan: dict[str, Any],
-    memory: dict[str, dict[str, Any]],
+    plan: Plan,
+    memory: dict[str, Entry],
     briefing: Briefing,
     percept: Percept,
     *,
     planted: Mapping[str, Any],
-    draw: Callable[[str], float],
-) -> tuple[dict[str, dict[str, Any]], list[str]]:
+    draw: Draw,
+) -> tuple[dict[str, Entry], list[str]]:
     """Update the plan with this view; return the remembered map and the new labels."""
     pose = percept.pose
     _after_goto(plan, math.dist(plan["at"], (pose.x, pose.z)) > MOVED_M)
@@ -134,10 +142,11 @@ def perceive(
     if plan["phase"] == "sweep" and plan["turns"] == 0:  # a sweep begins with this view
         plan["sweeps"].append(plan["at"])
         plan["near"] = []
-    inside = {s.object_id for s in _inside(percept.visible)}
-    _vote(plan, briefing, tuple(s for s in percept.visible if s.object_id in inside))
+    inside_view = _inside(percept.visible)
+    inside = {s.object_id for s in inside_view}
+    _vote(plan, briefing, inside_view)
     room = room_guess(plan)
-    view = []
+    view: dict[str, Entry] = {}  # label -> entry, farthest first
     for seen in sorted(percept.visible, key=lambda s: (-s.distance, s.object_id)):
         oid = seen.object_id
         x, z = (round(v, 2) for v in placed(percept, seen))
@@ -153,25 +162,26 @@ def perceive(
             plan["spots"][oid] = [x, z, seen.object_type]
             if oid not in plan["near"]:
                 plan["near"].append(oid)
-        entry: dict[str, Any] = {"type": seen.object_type, "x": x, "z": z}
+        entry: Entry = {"type": seen.object_type, "x": x, "z": z}
         old = memory.get(oid, {})
-        if abs(seen.bearing) >= EDGE_DEG:
-            if oid not in plan["rough"] and "x" in old:
+        if abs(seen.bearing) < EDGE_DEG:
+            if oid in plan["rough"]:
+                plan["rough"].remove(oid)
+        elif oid not in plan["rough"]:  # a first edge sighting: keep a clear one if any
+            if "x" in old:
                 entry.update(x=old["x"], z=old["z"])
-            elif oid not in plan["rough"]:
+            else:
                 plan["rough"].append(oid)
-        elif oid in plan["rough"]:
-            plan["rough"].remove(oid)
         old_room = old.get("room")
         if old_room or (room and oid in inside):
             entry["room"] = old_room or room
-        view.append((oid, entry))
-    new = [label for label, _ in reversed(view) if label not in plan["order"]]
+        view[oid] = entry
+    new = [label for label in reversed(view) if label not in plan["order"]]
     plan["order"] += new
     plan["found"] += len(new)
     kept = apply_memory(
         merge_view(memory, view),
-        in_view=frozenset(label for label, _ in view),
+        in_view=frozenset(view),
         planted=planted,
         discovery=plan["order"],
         draw=draw,

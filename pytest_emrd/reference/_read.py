@@ -26,6 +26,8 @@ _CONFIRMED = re.compile(r"^Engine feedback: \S.*? succeeded", re.MULTILINE)
 _VISIBLE = re.compile(
     r"^- (?P<id>\S+) \| (?P<type>\S+) \| (?P<b>-?\d+(?:\.\d+)?) \| (?P<d>\d+(?:\.\d+)?)$"
 )
+#: One chat-completions message (``role``, ``content``: a string or a list of parts).
+Message = dict[str, Any]
 NOT_SYMBOLIC: Final = (
     "reference agents act on the symbolic visible list; run them with modality 'text' or "
     "'both' (their registry default), not 'vision'."
@@ -53,20 +55,22 @@ class Percept:
     """The feedback says the last action succeeded."""
 
 
+def along(x: float, z: float, heading: float, distance: float) -> tuple[float, float]:
+    """The point ``distance`` m from ``(x, z)`` towards ``heading`` (degrees clockwise from +z)."""
+    angle = math.radians(heading)
+    return x + distance * math.sin(angle), z + distance * math.cos(angle)
+
+
 def placed(percept: Percept, seen: VisibleObject) -> tuple[float, float]:
     """Where ``seen`` lies in the spawn frame, from the pose and its bearing and distance."""
-    angle = math.radians(percept.pose.heading + seen.bearing)
-    return (
-        percept.pose.x + seen.distance * math.sin(angle),
-        percept.pose.z + seen.distance * math.cos(angle),
-    )
+    return along(percept.pose.x, percept.pose.z, percept.pose.heading + seen.bearing, seen.distance)
 
 
 def read_briefing(system: str) -> Briefing:
     """Room names and inventory from the system prompt's building overview."""
     if OVERVIEW_HEADING not in system:
         raise ProtocolError("system prompt has no building overview; is this an EMRD request?")
-    overview = system.split(OVERVIEW_HEADING, 1)[1].split("\n\n", 1)[0]
+    overview = system.partition(OVERVIEW_HEADING)[2].partition("\n\n")[0]
     names = _ROOMS_LINE.search(overview)
     if names is None:
         raise ProtocolError("building overview does not list the rooms.")
@@ -86,7 +90,7 @@ def read_percept(text: str) -> Percept:
         raise ProtocolError("user message lacks the 'Step k of N.' line or the 'Pose:' feedback.")
     if VISIBLE_HEADING not in text:
         raise ProtocolError(NOT_SYMBOLIC)
-    listing = text.split(VISIBLE_HEADING, 1)[1]
+    listing = text.partition(VISIBLE_HEADING)[2]
     visible = tuple(
         VisibleObject(m["id"], m["type"], float(m["b"]), float(m["d"]))
         for line in listing.splitlines()
@@ -97,7 +101,7 @@ def read_percept(text: str) -> Percept:
     return Percept(int(step["k"]), int(step["n"]), at, visible, confirmed)
 
 
-def message_text(message: dict[str, Any]) -> str:
+def message_text(message: Message) -> str:
     """The text of an OpenAI-format message (string content or the text parts)."""
     content = message.get("content")
     if isinstance(content, str):
@@ -107,15 +111,15 @@ def message_text(message: dict[str, Any]) -> str:
     raise ProtocolError(f"message content is {type(content).__name__}, not text or parts.")
 
 
-def last_reply_text(messages: list[dict[str, Any]]) -> str | None:
-    """The text of the agent's own last reply, or None at the first step."""
-    replies = (m for m in reversed(messages) if m.get("role") == "assistant")
-    return next((message_text(m) for m in replies), None)
+def last_text(messages: list[Message], role: str) -> str | None:
+    """The text of the newest message from ``role`` (the agent's own last reply for
+    ``assistant``), or None when there is none (the first step)."""
+    return next((message_text(m) for m in reversed(messages) if m.get("role") == role), None)
 
 
-def previous_reply(messages: list[dict[str, Any]]) -> dict[str, Any] | None:
+def previous_reply(messages: list[Message]) -> dict[str, Any] | None:
     """The agent's own last reply (decoded JSON), or None at the first step."""
-    text = last_reply_text(messages)
+    text = last_text(messages, "assistant")
     if text is None:
         return None
     try:

@@ -36,7 +36,7 @@ from collections import Counter
 from collections.abc import Mapping
 from typing import Any, Final
 
-from pytest_emrd.reference._perceive import SWEEP_TURNS, room_guess
+from pytest_emrd.reference._perceive import SWEEP_TURNS, Plan, room_guess
 from pytest_emrd.reference._read import Briefing, Percept
 
 MAX_FACE_TRIES: Final = 2
@@ -54,7 +54,7 @@ RESERVE: Final = 6
 PER_ROOM: Final = 6
 
 
-def _close_room(plan: dict[str, Any]) -> None:
+def _close_room(plan: Plan) -> None:
     room = room_guess(plan)
     if room:
         if room not in plan["visited"]:
@@ -68,8 +68,7 @@ def _complete(plan: Mapping[str, Any], briefing: Briefing) -> bool:
     counts = briefing.inventory.get(room_guess(plan))
     if not counts or not plan["here"]:
         return False
-    seen = Counter(spot[2] for spot in plan["spots"].values())
-    return all(seen[t] >= n for t, n in counts.items())
+    return Counter(spot[2] for spot in plan["spots"].values()) >= Counter(counts)
 
 
 def _spot(
@@ -84,28 +83,31 @@ def _spot(
     def gap(point: list[float]) -> float:
         return min(math.dist(point, p) for p in towards)
 
-    far = [o for o in plan["near"] if math.dist(xz[o], plan["at"]) >= MIN_MOVE_M]
-    candidates = [o for o in far if o not in plan["tried"]]
+    candidates = [
+        o
+        for o in plan["near"]
+        if math.dist(xz[o], plan["at"]) >= MIN_MOVE_M and o not in plan["tried"]
+    ]
     if within is not None:
         candidates = [
             o for o in candidates if any(math.dist(xz[o], p) <= plan["reach"] for p in within)
         ]
     if towards:
         here = gap(plan["at"])
-        closer = [o for o in candidates if gap(xz[o]) < here]
+        closer = (o for o in candidates if gap(xz[o]) < here)
         return min(closer, key=lambda o: (gap(xz[o]), o), default="")
     return max(
         candidates, key=lambda o: (min(math.dist(xz[o], p) for p in plan["sweeps"]), o), default=""
     )
 
 
-def _reposition(plan: dict[str, Any], towards: list[list[float]]) -> bool:
+def _reposition(plan: Plan, towards: list[list[float]]) -> bool:
     """Rule 4's move towards ``towards``, if the visit has a reposition left."""
     limit = MAX_MOVES if plan["here"] else LOST_MOVES
     return _go_spot(plan, _spot(plan, towards) if plan["moves"] < limit else "", "moves")
 
 
-def _go_spot(plan: dict[str, Any], spot: str, counter: str) -> bool:
+def _go_spot(plan: Plan, spot: str, counter: str) -> bool:
     """Target ``spot`` (if any), counting the move in ``counter`` (``moves`` or ``clears``)."""
     if spot:
         plan["tried"].append(spot)
@@ -114,7 +116,7 @@ def _go_spot(plan: dict[str, Any], spot: str, counter: str) -> bool:
     return bool(spot)
 
 
-def _clear(plan: dict[str, Any], briefing: Briefing, percept: Percept) -> bool:
+def _clear(plan: Plan, briefing: Briefing, percept: Percept) -> bool:
     """Rule 2, if the visit has a clearing move left and the budget affords it."""
     if plan["clears"] >= MAX_CLEARS or _complete(plan, briefing):
         return False
@@ -126,7 +128,7 @@ def _clear(plan: dict[str, Any], briefing: Briefing, percept: Percept) -> bool:
     return _go_spot(plan, _spot(plan, [], doors) if affordable else "", "clears")
 
 
-def _choose(plan: dict[str, Any], briefing: Briefing, percept: Percept) -> None:
+def _choose(plan: Plan, briefing: Briefing, percept: Percept) -> None:
     """Set ``target`` and ``goal`` by rules 2-6; an empty target means ``Term``."""
     plan.update(phase="face", tries=0)
     if _clear(plan, briefing, percept):
@@ -142,7 +144,7 @@ def _choose(plan: dict[str, Any], briefing: Briefing, percept: Percept) -> None:
     doors = [
         plan["doors"][d]
         for d, rooms in plan["door_rooms"].items()
-        if room and room in rooms and d not in plan["used"]
+        if room in rooms and d not in used  # rooms never holds "" (no room identified)
     ]
     unvisited = len(plan["visited"]) < len(briefing.rooms)
     if unvisited and not _complete(plan, briefing) and _reposition(plan, doors):
@@ -165,7 +167,7 @@ def term_choice(plan: Mapping[str, Any], briefing: Briefing) -> tuple[str, str]:
     sizes: dict[str, int] = plan["sizes"]
     if not sizes:
         return briefing.rooms[0], "No room could be identified; naming the first room listed."
-    order = list(briefing.rooms)
+    order = briefing.rooms
     room = max(sizes, key=lambda r: (sizes[r], -order.index(r) if r in order else 0))
     return room, f"Term rule: the room where I mapped the most objects ({room}: {sizes[room]})."
 
@@ -191,20 +193,19 @@ def _door_home(plan: Mapping[str, Any], home: str) -> str:
     return ""
 
 
-def _homing(plan: dict[str, Any], briefing: Briefing) -> bool:
+def _homing(plan: Plan, briefing: Briefing) -> bool:
     """Rule 1 of a homing scout: set a doorway towards ``home`` as the target (True), or
     False when it is home or knows no way there."""
-    if "home" not in plan:
-        plan["home"] = term_choice(plan, briefing)[0]
-    if room_guess(plan) == plan["home"]:
+    home = plan.setdefault("home", term_choice(plan, briefing)[0])
+    if room_guess(plan) == home:
         return False
-    door = _door_home(plan, plan["home"])
+    door = _door_home(plan, home)
     plan.update(target=door, goal="door" if door else "", phase="face", tries=0)
     return bool(door)
 
 
 def scout_action(
-    plan: dict[str, Any], briefing: Briefing, percept: Percept, *, homing: bool = False
+    plan: Plan, briefing: Briefing, percept: Percept, *, homing: bool = False
 ) -> tuple[str, str]:
     """(action, reasoning) of the room-clearing scout (``homing``: see the module docstring)."""
     plan["acted"] += 1

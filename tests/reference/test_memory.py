@@ -21,7 +21,7 @@ def _memory(labels: list[str]) -> dict[str, dict]:
 
 
 def test_merge_view_refreshes_seen_objects_to_the_end() -> None:
-    merged = merge_view(_memory(["a", "b", "c"]), [("a", {"x": 1}), ("d", {"x": 2})])
+    merged = merge_view(_memory(["a", "b", "c"]), {"a": {"x": 1}, "d": {"x": 2}})
     assert list(merged) == ["b", "c", "a", "d"]
     assert merged["a"] == {"x": 1}
 
