@@ -15,8 +15,8 @@ import pytest
 
 from pytest_emrd._scrub import scrub
 from pytest_emrd.errors import EmrdError
-from pytest_emrd.gate import GateCell, Verdict
-from pytest_emrd.plugin._run import Run, failure_line
+from pytest_emrd.gate import Verdict
+from pytest_emrd.plugin._run import Run, emrd_params, failure_line
 from pytest_emrd.run import EpisodeSummary
 
 
@@ -34,9 +34,7 @@ class RunReport:
     def pytest_collection_finish(self, session: pytest.Session) -> None:
         if hasattr(self.config, "workerinput") or self.config.option.collectonly:
             return
-        names = ("emrd_spec", "emrd_gate")
-        params = [getattr(i, "callspec", None) for i in session.items]
-        self.preflight([c.params[n] for c in params if c for n in names if n in c.params])
+        self.preflight(emrd_params(session.items))
 
     @pytest.hookimpl(optionalhook=True)
     def pytest_xdist_node_collection_finished(self, node: Any, ids: list[str]) -> None:
@@ -74,8 +72,7 @@ class RunReport:
             return
         from pytest_emrd.progress import LiveBoard, Ticker
 
-        cells = (run.cell_specs(p) if isinstance(p, GateCell) else [p] for p in params)
-        specs = [spec for group in cells for spec in group]
+        specs = run.specs_of(params)
         try:
             reports, live = self.preflights.run(specs)
         except (EmrdError, OSError) as exc:  # during collection: end the session in one line
