@@ -108,8 +108,8 @@ def pytest_collection_modifyitems(
     if empty:
         config.hook.pytest_deselected(items=empty)
         items[:] = [item for item in items if item not in empty]
-    run = config.stash.get(RUN, None)
-    summary = run.call(lambda r: r.missing_summary(items)) if run and items else None
+    run = config.stash[RUN]  # pytest_configure put it there, or stopped the session
+    summary = run.call(lambda r: r.missing_summary(items)) if items else None
     if summary is None:
         return
     if hasattr(config, "workerinput"):  # xdist: the controller prints it once, as the stop reason
@@ -144,14 +144,7 @@ def pytest_sessionstart() -> None:
     install_log_scrub()
 
 
-@pytest.hookimpl(tryfirst=True)
-def pytest_collection() -> None:
-    install_log_scrub()
-
-
-@pytest.hookimpl(tryfirst=True)
-def pytest_runtest_setup() -> None:
-    install_log_scrub()
+pytest_collection = pytest_runtest_setup = pytest_sessionstart
 
 
 def pytest_unconfigure() -> None:

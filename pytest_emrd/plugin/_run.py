@@ -302,11 +302,11 @@ class Run:
 
     def specs_of(self, params: Iterable[EpisodeSpec | GateCell]) -> list[EpisodeSpec]:
         """The episodes behind EMRD test parameters: a spec's own, a gate's whole cell."""
-        cells = (self.cell_specs(p) if isinstance(p, GateCell) else [p] for p in params)
+        cells = (
+            self.cell_specs_of(p.bound.model, p.bound.condition) if isinstance(p, GateCell) else [p]
+            for p in params
+        )
         return [spec for cell in cells for spec in cell]
-
-    def cell_specs(self, cell: GateCell) -> list[EpisodeSpec]:
-        return self.cell_specs_of(cell.bound.model, cell.bound.condition)
 
     def cell_specs_of(self, model: str, condition: str) -> list[EpisodeSpec]:
         self.registry.get(model)
@@ -316,7 +316,7 @@ class Run:
     def verdict(self, cell: GateCell) -> Verdict:
         from pytest_emrd.metrics import GATE_METRICS
 
-        specs = self.cell_specs(cell)
+        specs = self.cell_specs_of(cell.bound.model, cell.bound.condition)
         missing = [spec for spec in specs if spec not in self._metrics]
         stored = [self.episode(spec) for spec in missing]  # computed and measured here, if at all
         self._metrics.update(zip(missing, self.store.metrics(stored), strict=True))
