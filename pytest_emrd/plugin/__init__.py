@@ -76,8 +76,8 @@ def pytest_configure(config: pytest.Config) -> None:
     run = Run(config, settings, run_dir, session)
     config.stash[RUN] = run
     config.pluginmanager.register(run, "emrd-run")
-    config.pluginmanager.register(RunReport(run), "emrd-report")
-    if workerinput is None:  # the controller names a stopped model's endpoint once, at the end
+    if workerinput is None:  # the controller reports, and names a stopped model's endpoint once
+        config.pluginmanager.register(RunReport(run), "emrd-report")
         config.pluginmanager.register(run.endpoints, "emrd-endpoints")
 
 

@@ -22,7 +22,8 @@ from pytest_emrd.run import EpisodeSummary
 
 class RunReport:
     """The controller's preflight and live line for one :class:`Run`, and the EMRD tests'
-    results (``user_properties``), printed as they come and at the end."""
+    results (``user_properties``), printed as they come and at the end (registered on the
+    controller only: an xdist worker has no terminal to show them on)."""
 
     def __init__(self, run: Run) -> None:
         self.run = run
@@ -32,7 +33,7 @@ class RunReport:
         self.verdicts: list[Verdict] = []
 
     def pytest_collection_finish(self, session: pytest.Session) -> None:
-        if hasattr(self.config, "workerinput") or self.config.option.collectonly:
+        if self.config.option.collectonly:
             return
         self.preflight(emrd_params(session.items))
 
@@ -77,8 +78,9 @@ class RunReport:
             reports, live = self.preflights.run(specs)
         except (EmrdError, OSError) as exc:  # during collection: end the session in one line
             pytest.exit(failure_line(exc), returncode=pytest.ExitCode.USAGE_ERROR)
-        for line in (line for report in reports for line in report.lines()):
-            self.write_line(line)
+        for report in reports:
+            for line in report.lines():
+                self.write_line(line)
         failed = next((r for r in reports if r.failed), None)
         if failed is not None:
             message = scrub(f"pytest-emrd: {failed.message()}")
@@ -109,8 +111,7 @@ class RunReport:
         summary = EpisodeSummary.from_dict(props["emrd_episode"])
         self.episodes[summary.head.spec.case_id] = summary
         reporter = self.config.pluginmanager.get_plugin("terminalreporter")
-        controller = not hasattr(self.config, "workerinput")
-        if summary.head.recorded and reporter is not None and controller:
+        if summary.head.recorded and reporter is not None:
             reporter.ensure_newline()
             reporter.write_line(summary.progress_line(len(self.episodes)))
 
@@ -123,7 +124,7 @@ class RunReport:
 
     def _step_summary(self) -> None:
         run_dir = self.run.run_dir
-        if not os.environ.get("GITHUB_STEP_SUMMARY") or hasattr(self.config, "workerinput"):
+        if not os.environ.get("GITHUB_STEP_SUMMARY"):
             return
         if not (self.episodes or self.verdicts) or not (run_dir / "episodes").is_dir():
             return
