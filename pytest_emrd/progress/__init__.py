@@ -217,7 +217,7 @@ class EpisodeWatch(logging.Handler):
     """
 
     def __init__(self, spec: EpisodeSpec, *, live: bool, status: StatusFile | None = None):
-        super().__init__(level=logging.DEBUG)
+        super().__init__()
         self.spec = spec
         self.status = status if live else None
         self.retries = 0

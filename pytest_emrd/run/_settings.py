@@ -7,7 +7,7 @@ from __future__ import annotations
 import json
 import os
 import warnings
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Final
@@ -269,9 +269,10 @@ def _pick(option: Option, cli: Mapping[str, Any], ini: Mapping[str, Any]) -> Any
     return value
 
 
-def _listed(option: Option, value: Any, default: Sequence[str]) -> tuple[str, ...]:
+def _listed(option: Option, value: Any) -> tuple[str, ...]:
+    """The items given (comma-separated or repeated, in order, once each), else every choice."""
     if value is None:
-        return tuple(default)
+        return option.choices or ()
     items = [part.strip() for item in value for part in str(item).split(",") if part.strip()]
     if option.choices:
         for item in items:
@@ -335,12 +336,12 @@ def resolve_settings(
             "backend (one simulator process per worker) does not support; use -n N instead."
         )
     thresholds = _path(raw["thresholds"] or "thresholds.yaml", rootdir)  # the default if it exists
-    conditions = _listed(by_name["condition"], raw["condition"], CONDITIONS)
+    conditions = _listed(by_name["condition"], raw["condition"])
     if raw["model"] is None:
         cells = tuple((m, c) for m, cs in DEFAULT_CELLS for c in cs if c in conditions)
         models = tuple(dict.fromkeys(m for m, _ in cells))
     else:
-        models = _listed(by_name["model"], raw["model"], ())
+        models = _listed(by_name["model"], raw["model"])
         for model in models:
             check_slug("--emrd-model", model, becomes="a model name is a cassette folder")
         cells = tuple((m, c) for m in models for c in conditions)
@@ -348,7 +349,7 @@ def resolve_settings(
         models=models,
         conditions=conditions,
         cells=cells,
-        spawns=_listed(by_name["spawn"], raw["spawn"], SPAWNS),
+        spawns=_listed(by_name["spawn"], raw["spawn"]),
         episodes=episodes or 20,
         variant=raw["variant"] or "default",
         layouts=raw["layouts"] or "paper",
