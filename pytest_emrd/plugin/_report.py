@@ -15,9 +15,10 @@ import pytest
 
 from pytest_emrd._scrub import scrub
 from pytest_emrd.errors import EmrdError
-from pytest_emrd.gate import Verdict
+from pytest_emrd.gate import Verdict, gate_tables, usage_table
 from pytest_emrd.plugin._run import Run, emrd_params, failure_line
-from pytest_emrd.run import EpisodeSummary
+from pytest_emrd.progress import LiveBoard, Ticker
+from pytest_emrd.run import EpisodeSummary, load_run_episodes, usage_rows
 
 
 class RunReport:
@@ -71,8 +72,6 @@ class RunReport:
         run = self.run
         if not params or run.settings.replays_only:  # nobody called: nothing to check or show
             return
-        from pytest_emrd.progress import LiveBoard, Ticker
-
         specs = run.specs_of(params)
         try:
             reports, live = self.preflights.run(specs)
@@ -129,7 +128,6 @@ class RunReport:
         if not (self.episodes or self.verdicts) or not (run_dir / "episodes").is_dir():
             return
         from pytest_emrd.report import append_step_summary, registry_prices, step_summary_markdown
-        from pytest_emrd.run import load_run_episodes
 
         settings = self.run.settings
         source = settings.thresholds
@@ -156,9 +154,7 @@ class RunReport:
         )
 
     def pytest_terminal_summary(self, terminalreporter: Any) -> None:
-        from pytest_emrd.gate import gate_tables, usage_table
         from pytest_emrd.report import START_GATES
-        from pytest_emrd.run import usage_rows
 
         if not (self.episodes or self.verdicts):
             return

@@ -270,7 +270,8 @@ class EpisodeWatch(logging.Handler):
         """Log the outcome and add the episode to this process's live totals."""
         retries = f", {self.retries} retr{'y' if self.retries == 1 else 'ies'}"
         error = f": {trajectory.error}" if trajectory.error else ""
-        level = logging.WARNING if trajectory.status == "errored" else self.level_of_steps
+        errored = trajectory.status == "errored"
+        level = logging.WARNING if errored else self.level_of_steps
         log.log(
             level,
             "%s: %s after %d steps%s%s",
@@ -286,7 +287,7 @@ class EpisodeWatch(logging.Handler):
                 case=None,
                 retries=0,
                 finished=totals.finished + 1,
-                errored=totals.errored + (trajectory.status == "errored"),
+                errored=totals.errored + errored,
                 retries_total=totals.retries_total + self.retries,
             )
 
