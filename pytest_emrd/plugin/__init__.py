@@ -108,8 +108,7 @@ def pytest_collection_modifyitems(
     if empty:
         config.hook.pytest_deselected(items=empty)
         items[:] = [item for item in items if item not in empty]
-    run = config.stash[RUN]  # pytest_configure put it there, or stopped the session
-    summary = run.call(lambda r: r.missing_summary(items)) if items else None
+    summary = config.stash[RUN].call(lambda run: run.missing_summary(items))
     if summary is None:
         return
     if hasattr(config, "workerinput"):  # xdist: the controller prints it once, as the stop reason
