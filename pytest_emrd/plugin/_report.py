@@ -29,7 +29,7 @@ class RunReport:
     def __init__(self, run: Run) -> None:
         self.run = run
         self.config = run.config
-        self._ticker: Any = None
+        self._ticker: Ticker | None = None
         self.episodes: dict[str, EpisodeSummary] = {}
         self.verdicts: list[Verdict] = []
 
@@ -119,7 +119,6 @@ class RunReport:
         self._step_summary()
         if self._ticker is not None:
             self._ticker.stop()
-            self._ticker = None
 
     def _step_summary(self) -> None:
         run_dir = self.run.run_dir
