@@ -120,7 +120,7 @@ def pytest_collection_modifyitems(
 
 
 @pytest.hookimpl(wrapper=True)
-def pytest_runtest_makereport(item: pytest.Item, call: pytest.CallInfo[None]) -> Any:
+def pytest_runtest_makereport(item: pytest.Item) -> Any:
     """No secret in what the terminal and ``--junitxml`` print for an EMRD test."""
     report = yield
     if any(name.startswith("emrd_") for name in getattr(item, "fixturenames", ())):

@@ -39,7 +39,7 @@ class RunReport:
         self.preflight(emrd_params(session.items))
 
     @pytest.hookimpl(optionalhook=True)
-    def pytest_xdist_node_collection_finished(self, node: Any, ids: list[str]) -> None:
+    def pytest_xdist_node_collection_finished(self, ids: list[str]) -> None:
         if self.config.option.collectonly or self.run.settings.replays_only:
             return
         from pytest_emrd.preflight import params_of_node_ids
