@@ -13,8 +13,6 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any, Final
 
-import pytest
-
 from pytest_emrd._files import write_bytes_atomic
 from pytest_emrd._scrub import scrub
 from pytest_emrd.run import scratch_dir
@@ -85,12 +83,6 @@ class EndpointWatch:
             "episodes were not attempted; every recorded episode is kept. When the endpoint "
             f"answers again, resume with: {self.resume_command()}"
         )
-
-    def skip_if_stopped(self, model: str) -> None:
-        """Skip the calling test when ``model`` was stopped (one reason for all of them)."""
-        reason = self.stop_reason(model)
-        if reason is not None:
-            pytest.skip(reason)
 
     def pytest_terminal_summary(self, terminalreporter: Any) -> None:
         for path in sorted(self.folder.glob("*.json")):  # none before an episode ran
