@@ -76,8 +76,8 @@ def pytest_configure(config: pytest.Config) -> None:
     run = Run(config, settings, run_dir, session)
     config.stash[RUN] = run
     config.pluginmanager.register(run, "emrd-run")
-    config.pluginmanager.register(RunReport(run), "emrd-report")
-    if workerinput is None:  # the controller names a stopped model's endpoint once, at the end
+    if workerinput is None:  # the controller reports, and names a stopped model's endpoint once
+        config.pluginmanager.register(RunReport(run), "emrd-report")
         config.pluginmanager.register(run.endpoints, "emrd-endpoints")
 
 
@@ -108,8 +108,7 @@ def pytest_collection_modifyitems(
     if empty:
         config.hook.pytest_deselected(items=empty)
         items[:] = [item for item in items if item not in empty]
-    run = config.stash.get(RUN, None)
-    summary = run.call(lambda r: r.missing_summary(items)) if run and items else None
+    summary = config.stash[RUN].call(lambda run: run.missing_summary(items))
     if summary is None:
         return
     if hasattr(config, "workerinput"):  # xdist: the controller prints it once, as the stop reason
@@ -121,7 +120,7 @@ def pytest_collection_modifyitems(
 
 
 @pytest.hookimpl(wrapper=True)
-def pytest_runtest_makereport(item: pytest.Item, call: pytest.CallInfo[None]) -> Any:
+def pytest_runtest_makereport(item: pytest.Item) -> Any:
     """No secret in what the terminal and ``--junitxml`` print for an EMRD test."""
     report = yield
     if any(name.startswith("emrd_") for name in getattr(item, "fixturenames", ())):
@@ -144,14 +143,7 @@ def pytest_sessionstart() -> None:
     install_log_scrub()
 
 
-@pytest.hookimpl(tryfirst=True)
-def pytest_collection() -> None:
-    install_log_scrub()
-
-
-@pytest.hookimpl(tryfirst=True)
-def pytest_runtest_setup() -> None:
-    install_log_scrub()
+pytest_collection = pytest_runtest_setup = pytest_sessionstart
 
 
 def pytest_unconfigure() -> None:

@@ -13,8 +13,6 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any, Final
 
-import pytest
-
 from pytest_emrd._files import write_bytes_atomic
 from pytest_emrd._scrub import scrub
 from pytest_emrd.run import scratch_dir
@@ -65,11 +63,12 @@ class EndpointWatch:
 
     def resume_command(self) -> str:
         """This session's ``pytest`` command, resuming its run directory."""
-        args, skip = [], False
-        for arg in self.args:  # without the run directory given (it is added back)
-            if not (skip or arg == "--emrd-results" or arg.startswith("--emrd-results=")):
+        args, given = [], iter(self.args)
+        for arg in given:  # without the run directory given (it is added back)
+            if arg == "--emrd-results":
+                next(given, None)  # its value
+            elif not arg.startswith("--emrd-results="):
                 args.append(arg)
-            skip = not skip and arg == "--emrd-results"
         return shlex.join(["pytest", *args, f"--emrd-results={self.run_dir}"])
 
     def stop_reason(self, model: str) -> str | None:
@@ -85,16 +84,8 @@ class EndpointWatch:
             f"answers again, resume with: {self.resume_command()}"
         )
 
-    def skip_if_stopped(self, model: str) -> None:
-        """Skip the calling test when ``model`` was stopped (one reason for all of them)."""
-        reason = self.stop_reason(model)
-        if reason is not None:
-            pytest.skip(reason)
-
     def pytest_terminal_summary(self, terminalreporter: Any) -> None:
-        if not self.folder.is_dir():
-            return
-        for path in sorted(self.folder.glob("*.json")):
+        for path in sorted(self.folder.glob("*.json")):  # none before an episode ran
             reason = self.stop_reason(path.stem)
             if reason is not None:
                 terminalreporter.write_line(reason, red=True)

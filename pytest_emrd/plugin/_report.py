@@ -15,31 +15,31 @@ import pytest
 
 from pytest_emrd._scrub import scrub
 from pytest_emrd.errors import EmrdError
-from pytest_emrd.gate import GateCell, Verdict
-from pytest_emrd.plugin._run import Run, failure_line
-from pytest_emrd.run import EpisodeSummary
+from pytest_emrd.gate import Verdict, gate_tables, usage_table
+from pytest_emrd.plugin._run import Run, emrd_params, failure_line
+from pytest_emrd.progress import LiveBoard, Ticker
+from pytest_emrd.run import EpisodeSummary, load_run_episodes, usage_rows
 
 
 class RunReport:
     """The controller's preflight and live line for one :class:`Run`, and the EMRD tests'
-    results (``user_properties``), printed as they come and at the end."""
+    results (``user_properties``), printed as they come and at the end (registered on the
+    controller only: an xdist worker has no terminal to show them on)."""
 
     def __init__(self, run: Run) -> None:
         self.run = run
         self.config = run.config
-        self._ticker: Any = None
+        self._ticker: Ticker | None = None
         self.episodes: dict[str, EpisodeSummary] = {}
         self.verdicts: list[Verdict] = []
 
     def pytest_collection_finish(self, session: pytest.Session) -> None:
-        if hasattr(self.config, "workerinput") or self.config.option.collectonly:
+        if self.config.option.collectonly:
             return
-        names = ("emrd_spec", "emrd_gate")
-        params = [getattr(i, "callspec", None) for i in session.items]
-        self.preflight([c.params[n] for c in params if c for n in names if n in c.params])
+        self.preflight(emrd_params(session.items))
 
     @pytest.hookimpl(optionalhook=True)
-    def pytest_xdist_node_collection_finished(self, node: Any, ids: list[str]) -> None:
+    def pytest_xdist_node_collection_finished(self, ids: list[str]) -> None:
         if self.config.option.collectonly or self.run.settings.replays_only:
             return
         from pytest_emrd.preflight import params_of_node_ids
@@ -72,16 +72,14 @@ class RunReport:
         run = self.run
         if not params or run.settings.replays_only:  # nobody called: nothing to check or show
             return
-        from pytest_emrd.progress import LiveBoard, Ticker
-
-        cells = (run.cell_specs(p) if isinstance(p, GateCell) else [p] for p in params)
-        specs = [spec for group in cells for spec in group]
+        specs = run.specs_of(params)
         try:
             reports, live = self.preflights.run(specs)
         except (EmrdError, OSError) as exc:  # during collection: end the session in one line
             pytest.exit(failure_line(exc), returncode=pytest.ExitCode.USAGE_ERROR)
-        for line in (line for report in reports for line in report.lines()):
-            self.write_line(line)
+        for report in reports:
+            for line in report.lines():
+                self.write_line(line)
         failed = next((r for r in reports if r.failed), None)
         if failed is not None:
             message = scrub(f"pytest-emrd: {failed.message()}")
@@ -112,8 +110,7 @@ class RunReport:
         summary = EpisodeSummary.from_dict(props["emrd_episode"])
         self.episodes[summary.head.spec.case_id] = summary
         reporter = self.config.pluginmanager.get_plugin("terminalreporter")
-        controller = not hasattr(self.config, "workerinput")
-        if summary.head.recorded and reporter is not None and controller:
+        if summary.head.recorded and reporter is not None:
             reporter.ensure_newline()
             reporter.write_line(summary.progress_line(len(self.episodes)))
 
@@ -122,16 +119,14 @@ class RunReport:
         self._step_summary()
         if self._ticker is not None:
             self._ticker.stop()
-            self._ticker = None
 
     def _step_summary(self) -> None:
         run_dir = self.run.run_dir
-        if not os.environ.get("GITHUB_STEP_SUMMARY") or hasattr(self.config, "workerinput"):
+        if not os.environ.get("GITHUB_STEP_SUMMARY"):
             return
         if not (self.episodes or self.verdicts) or not (run_dir / "episodes").is_dir():
             return
         from pytest_emrd.report import append_step_summary, registry_prices, step_summary_markdown
-        from pytest_emrd.run import load_run_episodes
 
         settings = self.run.settings
         source = settings.thresholds
@@ -158,9 +153,7 @@ class RunReport:
         )
 
     def pytest_terminal_summary(self, terminalreporter: Any) -> None:
-        from pytest_emrd.gate import gate_tables, usage_table
         from pytest_emrd.report import START_GATES
-        from pytest_emrd.run import usage_rows
 
         if not (self.episodes or self.verdicts):
             return

@@ -9,6 +9,7 @@ import dataclasses
 import json
 import shlex
 import warnings
+from collections.abc import Iterable
 from dataclasses import dataclass
 from functools import cached_property
 from pathlib import Path
@@ -61,6 +62,12 @@ def failure_line(exc: EmrdError | OSError, what: str = "pytest-emrd") -> str:
     if isinstance(exc, OSError):
         return f"{what}: {scrub(os_error_line(exc, doing='write', option='--emrd-results DIR'))}"
     return f"{what}: {scrub(str(exc))}"
+
+
+def emrd_params(items: Iterable[pytest.Item]) -> list[EpisodeSpec | GateCell]:
+    """The episodes and gates the EMRD tests among ``items`` are parametrised with, in order."""
+    params = (getattr(getattr(item, "callspec", None), "params", {}) for item in items)
+    return [p[name] for p in params for name in ("emrd_spec", "emrd_gate") if name in p]
 
 
 @dataclass(eq=False)
@@ -163,13 +170,7 @@ class Run:
         neither store nor cassette holds, or ``None``."""
         if not self.settings.replays_only:
             return None
-        needed: dict[EpisodeSpec, None] = {}
-        for item in items:
-            params = getattr(getattr(item, "callspec", None), "params", {})
-            if isinstance(spec := params.get("emrd_spec"), EpisodeSpec):
-                needed[spec] = None
-            elif isinstance(cell := params.get("emrd_gate"), GateCell):
-                needed.update(dict.fromkeys(self.cell_specs(cell)))
+        needed = dict.fromkeys(self.specs_of(emrd_params(items)))
         unstored = [spec for spec in needed if not episode_path(self.run_dir, spec).is_file()]
         if not unstored:  # a resumed run: the cassette stage is not even imported
             return None
@@ -222,7 +223,9 @@ class Run:
         check_inside(self.run_dir, episode_path(self.run_dir, spec), what="episode file")
         tape = self.executor.tape(spec)
         check_inside(self.settings.cassettes, tape.path, what="cassette")
-        self.endpoints.skip_if_stopped(spec.model)
+        stopped = self.endpoints.stop_reason(spec.model)
+        if stopped is not None:  # a dead endpoint: the model's other episodes skip with its reason
+            pytest.skip(stopped)
         with EpisodeWatch(spec, live=tape.live, status=self.status_file) as watch:
             done = self.executor.run(tape, on_step=watch.on_step)
             watch.finish(done.trajectory)
@@ -245,9 +248,14 @@ class Run:
             unsaved.cause, doing="write", path=unsaved.path, option="--emrd-cassettes DIR"
         )
         write_bytes_atomic(traffic, unsaved.blob)
-        record: dict[str, Any] = {"case_id": spec.case_id, "cassette": str(unsaved.path)}
-        record |= {"cause": cause, "interactions": str(traffic), "retries": retries}
-        record["trajectory"] = trajectory.to_dict()
+        record = {
+            "case_id": spec.case_id,
+            "cassette": str(unsaved.path),
+            "cause": cause,
+            "interactions": str(traffic),
+            "retries": retries,
+            "trajectory": trajectory.to_dict(),
+        }
         write_bytes_atomic(fallback, scrub_bytes(json.dumps(record).encode()))
         move = shlex.join(["mv", str(traffic), str(unsaved.path)])
         parent = shlex.join(["mkdir", "-p", str(unsaved.path.parent)])
@@ -294,11 +302,15 @@ class Run:
             (c.bound.model, c.bound.condition) == (spec.model, spec.condition) for c in cells
         )
 
-    def cell_specs(self, cell: GateCell) -> list[EpisodeSpec]:
-        return self.cell_specs_of(cell.bound.model, cell.bound.condition)
+    def specs_of(self, params: Iterable[EpisodeSpec | GateCell]) -> list[EpisodeSpec]:
+        """The episodes behind EMRD test parameters: a spec's own, a gate's whole cell."""
+        cells = (
+            self.cell_specs_of(p.bound.model, p.bound.condition) if isinstance(p, GateCell) else [p]
+            for p in params
+        )
+        return [spec for cell in cells for spec in cell]
 
     def cell_specs_of(self, model: str, condition: str) -> list[EpisodeSpec]:
-
         self.registry.get(model)
         check_choice("condition", condition, CONDITIONS)
         return cell_specs(self.settings, model, condition, self.modality_of)
@@ -306,7 +318,7 @@ class Run:
     def verdict(self, cell: GateCell) -> Verdict:
         from pytest_emrd.metrics import GATE_METRICS
 
-        specs = self.cell_specs(cell)
+        specs = self.cell_specs_of(cell.bound.model, cell.bound.condition)
         missing = [spec for spec in specs if spec not in self._metrics]
         stored = [self.episode(spec) for spec in missing]  # computed and measured here, if at all
         self._metrics.update(zip(missing, self.store.metrics(stored), strict=True))

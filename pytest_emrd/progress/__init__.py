@@ -95,12 +95,11 @@ class StatusFile:
                 self._by_thread[ident] = WorkerStatus(name, None, 0, 0, 0, None, 0, 0, 0)
             return self._by_thread[ident]
 
-    def update(self, **changes: Any) -> WorkerStatus:
+    def update(self, **changes: Any) -> None:
         status = replace(self.status, **changes)
         self._by_thread[threading.get_ident()] = status
         path = self.folder / f"{status.worker}.json"
         write_bytes_atomic(path, json.dumps(to_dict(status)).encode())
-        return status
 
 
 def read_statuses(folder: Path) -> list[WorkerStatus]:
@@ -179,13 +178,12 @@ class LiveBoard:
 class Ticker:
     """Polls a :class:`LiveBoard` from a daemon thread and hands each line to ``write``.
 
-    :param board: The board to poll.
+    :param board: The board to poll (every :data:`POLL_S` seconds).
     :param write: Prints a line on the controller's terminal.
-    :param poll: Seconds between polls.
     """
 
-    def __init__(self, board: LiveBoard, write: Callable[[str], None], *, poll: float = POLL_S):
-        self.board, self.write, self.poll = board, write, poll
+    def __init__(self, board: LiveBoard, write: Callable[[str], None]):
+        self.board, self.write = board, write
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._loop, name="emrd-live-line", daemon=True)
 
@@ -199,7 +197,7 @@ class Ticker:
         self._thread.join()
 
     def _loop(self) -> None:
-        while not self._stop.wait(self.poll):
+        while not self._stop.wait(POLL_S):
             line = self.board.poll()
             if line is not None:
                 self.write(line)
@@ -219,7 +217,7 @@ class EpisodeWatch(logging.Handler):
     """
 
     def __init__(self, spec: EpisodeSpec, *, live: bool, status: StatusFile | None = None):
-        super().__init__(level=logging.DEBUG)
+        super().__init__()
         self.spec = spec
         self.status = status if live else None
         self.retries = 0
@@ -230,7 +228,9 @@ class EpisodeWatch(logging.Handler):
         self._thread = threading.get_ident()
         how = "recording live" if live else "replaying"
         log.log(self.level_of_steps, "%s: %s", spec.case_id, how)
-        self._publish(case=spec.case_id, step=0, retries=0, last_retry=None)
+        self._publish(
+            case=spec.case_id, step=0, max_steps=spec.max_steps, retries=0, last_retry=None
+        )
 
     def __enter__(self) -> EpisodeWatch:
         logging.getLogger(ROOT_LOGGER).addHandler(self)
@@ -270,7 +270,8 @@ class EpisodeWatch(logging.Handler):
         """Log the outcome and add the episode to this process's live totals."""
         retries = f", {self.retries} retr{'y' if self.retries == 1 else 'ies'}"
         error = f": {trajectory.error}" if trajectory.error else ""
-        level = logging.WARNING if trajectory.status == "errored" else self.level_of_steps
+        errored = trajectory.status == "errored"
+        level = logging.WARNING if errored else self.level_of_steps
         log.log(
             level,
             "%s: %s after %d steps%s%s",
@@ -286,10 +287,10 @@ class EpisodeWatch(logging.Handler):
                 case=None,
                 retries=0,
                 finished=totals.finished + 1,
-                errored=totals.errored + (trajectory.status == "errored"),
+                errored=totals.errored + errored,
                 retries_total=totals.retries_total + self.retries,
             )
 
     def _publish(self, **changes: object) -> None:
         if self.status is not None:
-            self.status.update(max_steps=self.spec.max_steps, **changes)
+            self.status.update(**changes)

@@ -38,18 +38,16 @@ class Prefetcher:
         self._pool = ThreadPoolExecutor(workers, thread_name_prefix="emrd-episode")
         self._futures = [self._pool.submit(self._one, spec) for spec in specs]
 
-    def _one(self, spec: EpisodeSpec) -> bool:
-        """Whether this call computed ``spec`` (never waits: stored or locked is skipped)."""
+    def _one(self, spec: EpisodeSpec) -> None:
+        """Compute and save ``spec`` (never waits: stored or locked elsewhere is skipped)."""
         from filelock import Timeout
 
         try:
             with self._store.lock(spec, timeout=0):
-                if self._store.reusable(spec) is not None:
-                    return False
-                self._store.save(spec, self._compute(spec))
-                return True
+                if self._store.reusable(spec) is None:
+                    self._store.save(spec, self._compute(spec))
         except (Timeout, EmrdError):
-            return False  # an error: the test asking for this episode computes it and reports it
+            pass  # an error: the test asking for this episode computes it and reports it
 
     def wait(self) -> None:
         """Block until every episode was computed or skipped."""

@@ -7,7 +7,7 @@ from __future__ import annotations
 import json
 import os
 import warnings
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Final
@@ -206,21 +206,21 @@ class RunSettings:
 
 def parse_shard(text: str) -> tuple[int, int]:
     """``"2/4"`` -> ``(2, 4)``; :class:`ConfigError` unless ``1 <= K <= N``."""
-    k, sep, n = text.partition("/")
-    if not (sep and k.strip().isdigit() and n.strip().isdigit()):
+    k_text, sep, n_text = text.partition("/")
+    if not (sep and k_text.strip().isdigit() and n_text.strip().isdigit()):
         raise ConfigError(f"--emrd-shard={text!r} must look like K/N, e.g. --emrd-shard=2/4.")
-    pair = int(k), int(n)
-    if pair[1] < 1:
+    k, n = int(k_text), int(n_text)
+    if n < 1:
         raise ConfigError(
-            f"--emrd-shard={text!r} splits the episodes into N={pair[1]} slices; N must be at "
+            f"--emrd-shard={text!r} splits the episodes into N={n} slices; N must be at "
             "least 1, e.g. --emrd-shard=1/4 for the first of four slices."
         )
-    if not 1 <= pair[0] <= pair[1]:
+    if not 1 <= k <= n:
         raise ConfigError(
-            f"--emrd-shard={text!r} needs 1 <= K <= N; the slices of N={pair[1]} are "
-            f"--emrd-shard=1/{pair[1]} to --emrd-shard={pair[1]}/{pair[1]}."
+            f"--emrd-shard={text!r} needs 1 <= K <= N; the slices of N={n} are "
+            f"--emrd-shard=1/{n} to --emrd-shard={n}/{n}."
         )
-    return pair
+    return k, n
 
 
 def parse_backend_option(text: str) -> tuple[str, Any]:
@@ -262,15 +262,20 @@ def _pick(option: Option, cli: Mapping[str, Any], ini: Mapping[str, Any]) -> Any
     value = cli.get(option.name)
     if value in (None, []):
         value = ini.get(option.name)
-    return None if value in (None, "", []) else value
+    if value in (None, "", []):
+        return None
+    if option.choices and not option.repeatable:  # a repeatable option's items: _listed
+        check_choice(option.flag, value, option.choices)
+    return value
 
 
-def _listed(option: Option, value: Any, default: Sequence[str]) -> tuple[str, ...]:
+def _listed(option: Option, value: Any) -> tuple[str, ...]:
+    """The items given (comma-separated or repeated, in order, once each), else every choice."""
     if value is None:
-        return tuple(default)
+        return option.choices or ()
     items = [part.strip() for item in value for part in str(item).split(",") if part.strip()]
-    for item in items:
-        if option.choices is not None:
+    if option.choices:
+        for item in items:
             check_choice(option.flag, item, option.choices)
     return tuple(dict.fromkeys(items))
 
@@ -300,9 +305,6 @@ def resolve_settings(
     env = os.environ if env is None else env
     by_name = {o.name: o for o in OPTIONS}
     raw = {name: _pick(option, cli, ini) for name, option in by_name.items()}
-    for option in OPTIONS:  # a repeatable option's items are checked by _listed
-        if option.choices and not option.repeatable and raw[option.name] is not None:
-            check_choice(option.flag, raw[option.name], option.choices)
     episodes = _count(
         "--emrd-episodes",
         raw["episodes"],
@@ -333,15 +335,13 @@ def resolve_settings(
             f"--emrd-concurrency={concurrency} runs episodes in threads, which the {backend} "
             "backend (one simulator process per worker) does not support; use -n N instead."
         )
-    thresholds = rootdir / "thresholds.yaml"  # the default, used if it exists
-    if raw["thresholds"] is not None:
-        thresholds = _path(raw["thresholds"], rootdir)
-    conditions = _listed(by_name["condition"], raw["condition"], CONDITIONS)
+    thresholds = _path(raw["thresholds"] or "thresholds.yaml", rootdir)  # the default if it exists
+    conditions = _listed(by_name["condition"], raw["condition"])
     if raw["model"] is None:
         cells = tuple((m, c) for m, cs in DEFAULT_CELLS for c in cs if c in conditions)
         models = tuple(dict.fromkeys(m for m, _ in cells))
     else:
-        models = _listed(by_name["model"], raw["model"], ())
+        models = _listed(by_name["model"], raw["model"])
         for model in models:
             check_slug("--emrd-model", model, becomes="a model name is a cassette folder")
         cells = tuple((m, c) for m in models for c in conditions)
@@ -349,7 +349,7 @@ def resolve_settings(
         models=models,
         conditions=conditions,
         cells=cells,
-        spawns=_listed(by_name["spawn"], raw["spawn"], SPAWNS),
+        spawns=_listed(by_name["spawn"], raw["spawn"]),
         episodes=episodes or 20,
         variant=raw["variant"] or "default",
         layouts=raw["layouts"] or "paper",

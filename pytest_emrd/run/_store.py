@@ -39,6 +39,8 @@ STORE_SCHEMA: Final = 2
 #: The layout before heads moved into the episode file (read, never written).
 LEGACY_STORE_SCHEMA: Final = 1
 _COMPACT: Final = {"separators": (",", ":")}
+#: What decoding a damaged, half-written or foreign stored file raises.
+_DAMAGED: Final = (ValueError, KeyError, TypeError, ProtocolError)
 
 
 HEAD_SCHEMA: Final = 1
@@ -135,7 +137,7 @@ class StoredEpisode:
         path = self.source
         try:
             stored = StoredEpisode.from_json(path.read_bytes())
-        except (ValueError, KeyError, TypeError, ProtocolError) as exc:
+        except _DAMAGED as exc:
             raise _unreadable(path, exc) from exc
         if stored.head != self.head:
             raise ProtocolError(
@@ -230,7 +232,7 @@ class ResultsStore:
         in this session), else None."""
         try:
             stored = read_episode(episode_path(self.run_dir, spec))
-        except (FileNotFoundError, ValueError, KeyError, TypeError, ProtocolError):
+        except (FileNotFoundError, *_DAMAGED):
             return None  # none yet, or unreadable leftovers (recomputed and overwritten)
         head = stored.head
         stale = head.spec != spec or head.protocol != self.protocol
@@ -326,7 +328,7 @@ def _read_kept(path: Path) -> EpisodeMetrics | None:
 
     try:
         return EpisodeMetrics.from_dict(json.loads(path.read_bytes()))
-    except (OSError, ValueError, KeyError, TypeError, ProtocolError):
+    except (OSError, *_DAMAGED):
         return None
 
 
@@ -365,7 +367,7 @@ def load_run_episodes(run_dirs: Sequence[Path]) -> list[StoredEpisode]:
         for path in sorted((run_dir / "episodes").glob("*.json")):
             try:
                 stored = read_episode(path)
-            except (ValueError, KeyError, TypeError, ProtocolError) as exc:
+            except _DAMAGED as exc:
                 raise _unreadable(path, exc) from exc
             seen.setdefault(stored.head.spec.case_id, stored)
     return [seen[key] for key in sorted(seen)]
