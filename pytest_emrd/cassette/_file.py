@@ -3,8 +3,9 @@
 included), so a file changed by accident is refused on load (a digest anyone can recompute
 detects accidents, not forgery: docs/security.md). A file is inflated up to a cap and checked
 against a small schema before any field is used. JSON, not YAML: it loads ten times
-faster; it is read with orjson, which parses an episode's few MB of escaped request bodies in
-half the time ``json`` takes (the same objects: a cassette holds only text and whole numbers). The same traffic always gives the same bytes (sorted keys; xz single-threaded,
+faster. It is read with orjson, which parses an episode's few MB of escaped request bodies
+in half the time ``json`` takes (the same objects: a cassette holds text and whole numbers
+only). The same traffic always gives the same bytes (sorted keys; xz single-threaded,
 LZMA2, 1 MiB dictionary, CRC32, no timestamp). A gzip cassette is read too."""
 
 from __future__ import annotations
