@@ -270,7 +270,8 @@ def _entry(label: str, fields: Any, repairs: set[str]) -> MapEntry | str:
     if isinstance(position, str):
         return f"cognitive_map entry {label!r} {position}"
     named = fields if isinstance(fields, dict) else {}  # a bare [x, z] names nothing
-    kind, room, facing = (_text(named.get(key)).strip() for key in ("type", "room", "facing"))
+    kind = _text(named.get("type")).strip()  # per entry of every reply: no generator
+    room, facing = _text(named.get("room")).strip(), _text(named.get("facing")).strip()
     make = _remembered_entry if all(position) else MapEntry
     return make(label, kind, *position, room or None, facing or None)
 
